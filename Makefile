@@ -1,0 +1,137 @@
+# btfcar — build, test, benchmark, install.  `make help` lists the targets.
+#
+# The two commands of the README:  make demo   and   make test
+# Both install missing Debian packages first (make deps).
+
+PREFIX    ?= /usr/local
+BUILD     ?= build
+CC        ?= cc
+CXX       ?= c++
+OPT       ?= -O2 -g
+SAN       ?=
+PKGS      := OpenEXR vulkan cmocka
+
+# -ffp-contract=off: no FMA contraction, so the CPU reference can match the
+# GPU shaders bit for bit (docs/design.md, "Determinism").
+COMMON    := -Wall -Wextra -Werror -ffp-contract=off -fPIC -pthread $(OPT) $(SAN)
+CPPFLAGS  := -Iinclude -Isrc -I$(BUILD)/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE
+CFLAGS    := -std=c11 $(COMMON)
+CXXFLAGS  := -std=c++17 $(COMMON) -I/usr/include/opencv4
+LDLIBS    := -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
+             -lvulkan -lstdc++ -lm -lpthread
+
+LIB_C     := $(sort $(wildcard src/*.c) $(wildcard gpu/*.c))
+LIB_CXX   := $(sort $(wildcard src/*.cpp))
+LIB_OBJ   := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
+CLI_OBJ   := $(patsubst %.c,$(BUILD)/%.o,$(sort $(wildcard cli/*.c)))
+TEST_SRC  := $(sort $(wildcard tests/test_*.c))
+TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+TEST_HELP := $(BUILD)/tests/testutil.o
+BENCH_SRC := $(sort $(wildcard tests/bench_*.c))
+BENCH_BIN := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
+SHADERS   := $(sort $(wildcard gpu/*.comp))
+SPIRV_H   := $(SHADERS:gpu/%.comp=$(BUILD)/gen/%_spv.h)
+
+STATIC    := $(BUILD)/libbtfcar.a
+SHARED    := $(BUILD)/libbtfcar.so
+CLI       := $(BUILD)/btfcar
+
+.PHONY: all deps test test-run asan bench demo install uninstall fuzz clean help check-shaders
+
+all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN)
+
+help:
+	@echo "make deps     install missing Debian packages (apt-get; needs root)"
+	@echo "make          build the libraries, the btfcar command and the tests"
+	@echo "make test     deps + build + run the whole test suite"
+	@echo "make asan     the whole test suite under ASan + UBSan (build-asan/)"
+	@echo "make demo     deps + build + generate a material and analyse it end to end"
+	@echo "make bench    benchmarks (figures; never fails on time)"
+	@echo "make fuzz     libFuzzer targets with clang (FUZZ_SECONDS=30 each)"
+	@echo "make install  PREFIX=/usr/local: library, header, btfcar, pkg-config file"
+
+deps:
+	@sh tools/install-deps.sh
+
+$(BUILD)/%.o: %.c $(wildcard include/*.h src/*.h gpu/*.h tests/*.h) $(SPIRV_H)
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
+
+$(BUILD)/%.o: %.cpp $(wildcard include/*.h src/*.h)
+	@mkdir -p $(dir $@)
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c $< -o $@
+
+# Shaders: GLSL -> SPIR-V as a C array, validated by spirv-val.
+$(BUILD)/gen/%_spv.h: gpu/%.comp $(wildcard gpu/*.glsl gpu/*.h)
+	@mkdir -p $(dir $@)
+	glslangValidator -V --target-env vulkan1.1 -Igpu --vn $*_spv -o $@.spv.h $<
+	glslangValidator -V --target-env vulkan1.1 -Igpu -o $@.spv $<
+	spirv-val --target-env vulkan1.1 $@.spv
+	mv $@.spv.h $@
+
+$(STATIC): $(LIB_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+$(SHARED): $(LIB_OBJ)
+	$(CXX) -shared -Wl,-soname,libbtfcar.so.0 $(SAN) -o $@ $^ $(LDLIBS)
+
+$(CLI): $(CLI_OBJ) $(STATIC)
+	$(CC) $(SAN) -pthread -o $@ $(CLI_OBJ) $(STATIC) $(LDLIBS)
+
+$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_HELP) $(STATIC)
+	$(CC) $(SAN) -pthread -o $@ $< $(TEST_HELP) $(STATIC) $(LDLIBS) -lcmocka
+
+# Run every test program; tests/run.sh prints the final "N passed, N failed".
+test-run: $(TEST_BIN) $(CLI)
+	@BTF_CLI=$(abspath $(CLI)) sh tests/run.sh $(TEST_BIN)
+
+test: deps
+	@$(MAKE) --no-print-directory all
+	@$(MAKE) --no-print-directory test-run
+
+asan: deps
+	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
+	  SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
+	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  BTF_ASAN=1 $(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
+	  SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" test-run
+
+bench: deps
+	@$(MAKE) --no-print-directory all
+	@BTF_CLI=$(abspath $(CLI)) sh tests/bench.sh $(BENCH_BIN)
+
+demo: deps
+	@$(MAKE) --no-print-directory all
+	@sh examples/demo.sh $(abspath $(CLI))
+
+FUZZ_SECONDS ?= 30
+FUZZ_SRC := $(sort $(wildcard tests/fuzz_*.c))
+fuzz: deps
+	@mkdir -p build-fuzz
+	@for f in $(FUZZ_SRC); do \
+	  n=$$(basename $$f .c); \
+	  clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -ffp-contract=off \
+	    $(CPPFLAGS) -o build-fuzz/$$n $$f $(LIB_C) $(LIB_CXX:%.cpp=) \
+	    build-fuzz/cv_bridge.o $(LDLIBS) 2>/dev/null || true; \
+	done
+	@sh tests/fuzz.sh $(FUZZ_SECONDS) $(FUZZ_SRC)
+
+install: $(STATIC) $(SHARED) $(CLI)
+	install -d $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include $(DESTDIR)$(PREFIX)/bin \
+	  $(DESTDIR)$(PREFIX)/lib/pkgconfig
+	install -m 644 $(STATIC) $(DESTDIR)$(PREFIX)/lib/
+	install -m 755 $(SHARED) $(DESTDIR)$(PREFIX)/lib/libbtfcar.so.0
+	ln -sf libbtfcar.so.0 $(DESTDIR)$(PREFIX)/lib/libbtfcar.so
+	install -m 644 include/btfcar.h $(DESTDIR)$(PREFIX)/include/
+	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(shell sed -n 's/.*BTF_VERSION_STRING "\(.*\)"/\1/p' include/btfcar.h)|' \
+	  btfcar.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/btfcar.pc
+
+uninstall:
+	rm -f $(DESTDIR)$(PREFIX)/lib/libbtfcar.a $(DESTDIR)$(PREFIX)/lib/libbtfcar.so* \
+	  $(DESTDIR)$(PREFIX)/include/btfcar.h $(DESTDIR)$(PREFIX)/bin/btfcar \
+	  $(DESTDIR)$(PREFIX)/lib/pkgconfig/btfcar.pc
+
+clean:
+	rm -rf build build-asan build-fuzz

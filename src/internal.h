@@ -42,10 +42,80 @@ int btf_path_join(char *out, size_t n, const char *dir, const char *name, btf_er
 /* Number of online CPUs (at least 1). */
 int btf_cpu_count(void);
 
+/* Tab-separated manifests: src/tsv.c */
+typedef struct btf_tsv {
+    char *text;          /* the file, split in place */
+    int ncols, nrows;
+    const char *names[64];
+    char **cells;        /* nrows * ncols */
+    int *line_no;        /* file line of each row, for messages */
+} btf_tsv;
+int btf_tsv_read(const char *path, btf_tsv *t, btf_error *err);
+void btf_tsv_free(btf_tsv *t);
+int btf_tsv_column(const btf_tsv *t, const char *name); /* -1 if absent */
+const char *btf_tsv_cell(const btf_tsv *t, int row, int col);
+int btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
+                   btf_error *err);
+
 /* EXR (OpenEXR core C API): src/exr_io.c */
 int btf_exr_probe(const char *path, btf_image_header *hdr, btf_error *err);
 int btf_exr_read(const char *path, int channels, btf_image *out, btf_error *err);
 int btf_exr_write(const char *path, const btf_image *img, int half, btf_error *err);
+/* Streaming scanline writer (synthesis of images larger than memory): rows
+ * arrive top to bottom in batches of any size; only one chunk (16 rows, ZIP)
+ * is buffered. Like btf_exr_write it is atomic: the file appears at path only
+ * when close succeeds. Any error is final for the writer: close (which then
+ * fails) or abort frees it and removes the temporary file. */
+typedef struct btf_exr_writer btf_exr_writer;
+int btf_exr_writer_open(const char *path, int width, int height, int channels, int half,
+                        btf_exr_writer **out, btf_error *err);
+/* rows: nrows*width*channels floats, interleaved channels; finite values. */
+int btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nrows, btf_error *err);
+/* Finishes and renames into place; an error if not all rows were given.
+ * Always frees w. */
+int btf_exr_writer_close(btf_exr_writer *w, btf_error *err);
+/* Frees w and removes the temporary file; NULL is fine. */
+void btf_exr_writer_abort(btf_exr_writer *w);
+
+/* Procedural materials (src/material.c): precomputation for rendering many
+ * (view, light) pairs. What a view sees depends only on the view, and what a
+ * light shadows only on the light, so a generator builds one view map per
+ * view and one light map per light and combines them per pair with
+ * btf_material_render_maps (cheap: one shading per texel). All coordinates are
+ * texture coordinates: u = column, w = row (row 0 at the top); the reference
+ * plane is z = 0 (btf_material_make's heights have zero mean). Directions and
+ * stored normals use the frame x right, y UP in the image (row index grows
+ * towards -y), z towards the camera. The maps are read-only once made, so any
+ * number of threads may share them. */
+typedef struct btf_view_map {
+    int size;
+    float *hit;    /* size*size*2: (u, w) of the surface point the view ray
+                      through texel (x, y) of the reference plane hits,
+                      wrapped into [0, size) */
+    float *normal; /* size*size*3: unit normal at the hit */
+    float *albedo; /* size*size*3: albedo at the hit */
+} btf_view_map;
+int btf_view_map_make(const btf_material *m, btf_dir view, btf_view_map **out,
+                      btf_error *err);
+void btf_view_map_free(btf_view_map *vm);
+
+typedef struct btf_light_map {
+    int size;
+    float *vis;    /* size*size: visibility of the light from the surface point
+                      above texel (x, y): 0 in cast shadow .. 1 lit (soft edge) */
+} btf_light_map;
+int btf_light_map_make(const btf_material *m, btf_dir light, btf_light_map **out,
+                       btf_error *err);
+void btf_light_map_free(btf_light_map *lm);
+
+/* Shades one (view, light) pair from its maps into out (allocated here, size x
+ * size x 3; the caller frees it). view and light must be the directions the
+ * maps were made for. */
+int btf_material_render_maps(const btf_material *m, const btf_view_map *vm,
+                             const btf_light_map *lm, btf_dir view, btf_dir light,
+                             btf_image *out, btf_error *err);
+/* Recomputes m->normal from m->height (central differences, wrapping). */
+void btf_material_normals_from_height(btf_material *m);
 
 /* The OpenCV bridge (src/cv_bridge.cpp), a C interface. Error text goes to
  * errbuf; return 0 on success. */

@@ -47,7 +47,8 @@ void *btf_alloc(size_t count, size_t size, btf_error *err)
         btf_fail(err, BTF_E_NOMEM, "allocation of %zu x %zu bytes overflows", count, size);
         return NULL;
     }
-    void *p = malloc(count * size ? count * size : 1);
+    size_t bytes = count * size;
+    void *p = malloc(bytes > 0 ? bytes : 1);
     if (!p)
         btf_fail(err, BTF_E_NOMEM, "out of memory allocating %zu bytes", count * size);
     return p;

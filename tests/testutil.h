@@ -17,7 +17,8 @@
 /* A fresh temporary folder (under $TMPDIR or /tmp), removed by tu_rmtree. */
 char *tu_tmpdir(void);
 void tu_rmtree(const char *path);
-/* printf into a static rotating buffer (8 slots): for building paths. */
+/* printf into a static rotating buffer (8 slots): for building paths that
+ * are used at once; copy a path that must outlive 8 more calls. */
 const char *tu_fmt(const char *fmt, ...);
 /* Runs a shell command line, returns its exit status; its stderr is captured
  * into *stderr_text (malloc'd; may be NULL) when non-NULL. */

@@ -1,0 +1,120 @@
+/* common.c — see cli.h. */
+#include "cli.h"
+
+#include <errno.h>
+#include <inttypes.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+int cli_error(const cli_ctx *c, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "btfcar %s: ", c->cmd);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    va_end(ap);
+    return 1;
+}
+
+int cli_lib_error(const cli_ctx *c, const btf_error *err)
+{
+    cli_progress_done();
+    return cli_error(c, "%s", err->msg[0] ? err->msg : btf_status_name(err->code));
+}
+
+int cli_usage_error(const cli_ctx *c, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "btfcar %s: ", c->cmd);
+    vfprintf(stderr, fmt, ap);
+    fprintf(stderr, " (see 'btfcar %s --help')\n", c->cmd);
+    va_end(ap);
+    return 2;
+}
+
+int cli_parse_int(const char *s, long lo, long hi, long *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (end == s || *end || errno || v < lo || v > hi)
+        return -1;
+    *out = v;
+    return 0;
+}
+
+int cli_parse_u64(const char *s, uint64_t *out)
+{
+    char *end;
+    errno = 0;
+    if (*s == '-')
+        return -1;
+    unsigned long long v = strtoull(s, &end, 0);
+    if (end == s || *end || errno)
+        return -1;
+    *out = (uint64_t)v;
+    return 0;
+}
+
+int cli_parse_size(const char *s, int *w, int *h)
+{
+    char buf[64];
+    const char *x = strchr(s, 'x');
+    if (!x || (size_t)(x - s) >= sizeof buf)
+        return -1;
+    memcpy(buf, s, (size_t)(x - s));
+    buf[x - s] = '\0';
+    long a, b;
+    if (cli_parse_int(buf, 1, 1L << 30, &a) || cli_parse_int(x + 1, 1, 1L << 30, &b))
+        return -1;
+    *w = (int)a;
+    *h = (int)b;
+    return 0;
+}
+
+static int progress_drawn;
+
+void cli_progress(void *user, double fraction, const char *what)
+{
+    (void)user;
+    int width = 30, fill = (int)(fraction * width + 0.5);
+    if (fill > width)
+        fill = width;
+    fprintf(stderr, "\r%-22s [", what);
+    for (int i = 0; i < width; i++)
+        fputc(i < fill ? '#' : '.', stderr);
+    fprintf(stderr, "] %3d%%", (int)(fraction * 100.0 + 0.5));
+    fflush(stderr);
+    progress_drawn = 1;
+}
+
+btf_progress_fn cli_progress_fn(const cli_ctx *c)
+{
+    return (!c->quiet && isatty(2)) ? cli_progress : NULL;
+}
+
+void cli_progress_done(void)
+{
+    if (progress_drawn)
+        fputc('\n', stderr);
+    progress_drawn = 0;
+}
+
+void cli_format_bytes(uint64_t bytes, char *buf, size_t n)
+{
+    const char *unit[] = {"B", "KB", "MB", "GB", "TB"};
+    double v = (double)bytes;
+    int u = 0;
+    while (v >= 1000.0 && u < 4) {
+        v /= 1000.0;
+        u++;
+    }
+    if (u == 0)
+        snprintf(buf, n, "%" PRIu64 " B", bytes);
+    else
+        snprintf(buf, n, "%.1f %s (%" PRIu64 " bytes)", v, unit[u], bytes);
+}

@@ -1,0 +1,46 @@
+/*
+ * main.c — the btfcar command: dispatches to one file per subcommand.
+ * The command is thin: every stage is a library function (include/btfcar.h).
+ */
+#include "cli.h"
+
+#include <string.h>
+
+static const struct {
+    const char *name;
+    int (*run)(int, char **);
+    const char *summary;
+} commands[] = {
+    {"generate", cmd_generate, "write a procedural BTF (81 x 81 images) in the UBO2003 layout"},
+    {"info", cmd_info, "describe a BTF dataset (layout, images, directions, size)"},
+};
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: btfcar COMMAND [OPTIONS] ...\n\n"
+               "Probabilistic modelling of Bidirectional Texture Functions.\n\ncommands:\n");
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(f, "  %-10s %s\n", commands[i].name, commands[i].summary);
+    fprintf(f, "\n'btfcar COMMAND --help' describes a command; 'btfcar --version' prints the version.\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+        usage(stdout);
+        return 0;
+    }
+    if (!strcmp(argv[1], "--version")) {
+        printf("btfcar %s\n", BTF_VERSION_STRING);
+        return 0;
+    }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (!strcmp(argv[1], commands[i].name))
+            return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "btfcar: unknown command '%s' (see 'btfcar --help')\n", argv[1]);
+    return 2;
+}

@@ -1,0 +1,202 @@
+/* test_cli.c — the btfcar command end to end: generate, info, errors. */
+#include "testutil.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+static char *dir;
+
+static int setup(void **state)
+{
+    (void)state;
+    dir = tu_tmpdir();
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    tu_rmtree(dir);
+    free(dir);
+    return 0;
+}
+
+/* Runs a command line and returns its stdout (malloc'd). */
+static char *capture(const char *cmd, int *status)
+{
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char *out = calloc(1, 1 << 16);
+    size_t n = fread(out, 1, (1 << 16) - 1, p);
+    out[n] = 0;
+    int st = pclose(p);
+    *status = WEXITSTATUS(st);
+    return out;
+}
+
+static void help_and_version(void **state)
+{
+    (void)state;
+    int st;
+    char *out = capture(tu_fmt("%s --help", tu_cli()), &st);
+    assert_int_equal(st, 0);
+    assert_non_null(strstr(out, "generate"));
+    free(out);
+    out = capture(tu_fmt("%s --version", tu_cli()), &st);
+    assert_int_equal(st, 0);
+    assert_non_null(strstr(out, BTF_VERSION_STRING));
+    free(out);
+    const char *cmds[] = {"generate", "info"};
+    for (int i = 0; i < 2; i++) {
+        out = capture(tu_fmt("%s %s --help", tu_cli(), cmds[i]), &st);
+        assert_int_equal(st, 0);
+        assert_non_null(strstr(out, "usage: btfcar"));
+        free(out);
+    }
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s frobnicate", tu_cli()), &err), 2);
+    assert_non_null(strstr(err, "unknown command"));
+    free(err);
+}
+
+static void generate_then_info(void **state)
+{
+    (void)state;
+    char out[4096];
+    snprintf(out, sizeof out, "%s/leather", dir);
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s generate --quiet --material leather --size 16 --seed 7 %s",
+                                   tu_cli(), out), &err), 0);
+    free(err);
+    assert_int_equal(tu_count_files(out), 6561 + 3);
+    struct stat st;
+    assert_int_equal(stat(tu_fmt("%s/truth/height.exr", out), &st), 0);
+    assert_int_equal(stat(tu_fmt("%s/truth/normals.exr", out), &st), 0);
+    assert_int_equal(stat(tu_fmt("%s/truth/albedo.exr", out), &st), 0);
+    /* The UBO2003 naming with the running index light * 81 + view. */
+    assert_int_equal(stat(tu_fmt("%s/tv075_pv345/06560 tl075 pl345 tv075 pv345.jpg", out), &st), 0);
+    assert_int_equal(stat(tu_fmt("%s/tv015_pv000/00001 tl000 pl000 tv015 pv000.jpg", out), &st), 0);
+    int status;
+    char *text = capture(tu_fmt("%s info %s", tu_cli(), out), &status);
+    assert_int_equal(status, 0);
+    assert_non_null(strstr(text, "UBO2003"));
+    assert_non_null(strstr(text, "6561 (81 views x 81 lights)"));
+    assert_non_null(strstr(text, "16 x 16"));
+    assert_non_null(strstr(text, "ubo81"));
+    free(text);
+    /* --verify decodes every image. */
+    text = capture(tu_fmt("%s info --verify %s", tu_cli(), out), &status);
+    assert_int_equal(status, 0);
+    free(text);
+}
+
+static int files_equal(const char *a, const char *b)
+{
+    unsigned char *x, *y;
+    size_t nx, ny;
+    FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
+    if (!fa || !fb)
+        return 0;
+    x = malloc(1 << 20);
+    y = malloc(1 << 20);
+    nx = fread(x, 1, 1 << 20, fa);
+    ny = fread(y, 1, 1 << 20, fb);
+    fclose(fa);
+    fclose(fb);
+    int eq = nx == ny && memcmp(x, y, nx) == 0;
+    free(x);
+    free(y);
+    return eq;
+}
+
+static void generate_is_deterministic(void **state)
+{
+    (void)state;
+    char a[4096], b[4096], c[4096];
+    snprintf(a, sizeof a, "%s/a", dir);
+    snprintf(b, sizeof b, "%s/b", dir);
+    snprintf(c, sizeof c, "%s/c", dir);
+    assert_int_equal(tu_run(tu_fmt("%s generate -q --material fabric --size 8 --seed 3 --threads 1 %s",
+                                   tu_cli(), a), NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("%s generate -q --material fabric --size 8 --seed 3 --threads 2 %s",
+                                   tu_cli(), b), NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("%s generate -q --material fabric --size 8 --seed 4 %s",
+                                   tu_cli(), c), NULL), 0);
+    const char *names[] = {"tv045_pv020/03260 tl060 pl054 tv045 pv020.jpg", "truth/height.exr",
+                           "truth/albedo.exr"};
+    for (int i = 0; i < 3; i++) {
+        assert_true(files_equal(tu_fmt("%s/%s", a, names[i]), tu_fmt("%s/%s", b, names[i])));
+    }
+    /* Another seed gives another sample of the material. */
+    assert_false(files_equal(tu_fmt("%s/%s", a, names[0]), tu_fmt("%s/%s", c, names[0])));
+    assert_false(files_equal(tu_fmt("%s/%s", a, names[2]), tu_fmt("%s/%s", c, names[2])));
+}
+
+static void generate_errors(void **state)
+{
+    (void)state;
+    char *err = NULL;
+    assert_int_not_equal(tu_run(tu_fmt("%s generate --material velvet %s/v", tu_cli(), dir), &err), 0);
+    assert_non_null(strstr(err, "velvet"));
+    free(err);
+    /* A non-empty OUTDIR is refused and left as it was. */
+    char full[4096];
+    snprintf(full, sizeof full, "%s/full", dir);
+    mkdir(full, 0777);
+    tu_write_file(tu_fmt("%s/keep.txt", full), "mine", 4);
+    assert_int_not_equal(tu_run(tu_fmt("%s generate --material wood --size 4 %s", tu_cli(), full),
+                                &err), 0);
+    assert_non_null(strstr(err, "not empty"));
+    free(err);
+    assert_int_equal(tu_count_files(full), 1);
+    assert_int_equal(tu_run(tu_fmt("%s generate --material wood --size 0 %s/z", tu_cli(), dir), &err), 2);
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s generate --size 4 %s/z", tu_cli(), dir), &err), 2);
+    assert_non_null(strstr(err, "--material"));
+    free(err);
+}
+
+static void info_names_truncated_jpeg(void **state)
+{
+    (void)state;
+    char out[4096], victim[4096];
+    snprintf(out, sizeof out, "%s/trunc", dir);
+    assert_int_equal(tu_run(tu_fmt("%s generate -q --material wood --size 8 %s", tu_cli(), out),
+                            NULL), 0);
+    snprintf(victim, sizeof victim, "%s/tv060_pv018/02387 tl045 pl200 tv060 pv018.jpg", out);
+    struct stat st;
+    assert_int_equal(stat(victim, &st), 0);
+    assert_int_equal(truncate(victim, st.st_size - 30), 0);
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s info %s", tu_cli(), out), &err), 1);
+    assert_non_null(strstr(err, "02387 tl045 pl200 tv060 pv018.jpg"));
+    assert_non_null(strstr(err, "truncated"));
+    /* One line: the only newline is the last character. */
+    assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    free(err);
+    /* A missing file is named too. */
+    remove(victim);
+    assert_int_equal(tu_run(tu_fmt("%s info %s", tu_cli(), out), &err), 1);
+    assert_non_null(strstr(err, "02387 tl045 pl200 tv060 pv018.jpg"));
+    assert_non_null(strstr(err, "missing"));
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s info %s/does-not-exist", tu_cli(), dir), &err), 1);
+    assert_non_null(strstr(err, "does-not-exist"));
+    free(err);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(help_and_version),
+        cmocka_unit_test(generate_then_info),
+        cmocka_unit_test(generate_is_deterministic),
+        cmocka_unit_test(generate_errors),
+        cmocka_unit_test(info_names_truncated_jpeg),
+    };
+    return cmocka_run_group_tests_name("cli", tests, setup, teardown);
+}

@@ -1,0 +1,856 @@
+/*
+ * test_exr.c — src/exr_io.c: EXR round trips (half/float, 1/3 channels, odd
+ * sizes, extreme values), the streaming writer, atomic writes, and reading
+ * hostile input (NaN/Inf, truncation, garbage, unsupported layouts). Files
+ * the writer cannot produce (Inf, tiles, UINT, other compressions, offset
+ * data windows) are made here directly with the OpenEXR core API.
+ */
+#include "testutil.h"
+
+#include "internal.h"
+
+#include <openexr.h>
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static char *dir;
+
+static int setup(void **state)
+{
+    (void)state;
+    dir = tu_tmpdir();
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    tu_rmtree(dir);
+    free(dir);
+    return 0;
+}
+
+/* ------------------------------------------------------------ helpers */
+
+static uint32_t rng_next(uint32_t *s)
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 17;
+    *s ^= *s << 5;
+    return *s;
+}
+
+/* Values in [lo, hi). */
+static void random_image(btf_image *img, int w, int h, int c, uint32_t seed, float lo, float hi)
+{
+    btf_error e = {0};
+    TU_OK(btf_image_alloc(img, w, h, c, &e), &e);
+    uint32_t s = seed ? seed : 1;
+    for (size_t i = 0; i < (size_t)w * h * c; i++)
+        img->data[i] = lo + (hi - lo) * (float)(rng_next(&s) >> 8) / 16777216.0f;
+}
+
+/* Values exactly representable in half (multiples of 1/1024 in [0, 4)). */
+static void half_exact_image(btf_image *img, int w, int h, int c, uint32_t seed)
+{
+    btf_error e = {0};
+    TU_OK(btf_image_alloc(img, w, h, c, &e), &e);
+    uint32_t s = seed ? seed : 1;
+    for (size_t i = 0; i < (size_t)w * h * c; i++)
+        img->data[i] = (float)(rng_next(&s) % 4096) / 1024.0f;
+}
+
+static void assert_same_image(const btf_image *a, const btf_image *b)
+{
+    assert_int_equal(a->width, b->width);
+    assert_int_equal(a->height, b->height);
+    assert_int_equal(a->channels, b->channels);
+    size_t n = (size_t)a->width * a->height * a->channels;
+    assert_memory_equal(a->data, b->data, n * sizeof(float));
+}
+
+static unsigned char *slurp(const char *path, size_t *n)
+{
+    unsigned char *d = NULL;
+    btf_error e = {0};
+    TU_OK(btf_read_file(path, (size_t)1 << 30, &d, n, &e), &e);
+    return d;
+}
+
+/* Files in dir whose name is not `keep` (temporary files left behind). */
+static int stray_files(const char *keep)
+{
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    int n = 0;
+    struct dirent *ent;
+    while ((ent = readdir(d)))
+        if (strcmp(ent->d_name, ".") && strcmp(ent->d_name, "..") &&
+            (!keep || strcmp(ent->d_name, keep)))
+            n++;
+    closedir(d);
+    return n;
+}
+
+static int file_exists(const char *path)
+{
+    return access(path, F_OK) == 0;
+}
+
+/* Writes an EXR file directly with the core API, for layouts btf_exr_write
+ * never produces. Channel c of pixel (x, y) (data-window relative) is
+ * value(c, x, y); UINT channels store it truncated. */
+typedef struct raw_spec {
+    exr_storage_t storage;         /* SCANLINE or TILED */
+    exr_compression_t compression;
+    int tile;                      /* tile side when TILED */
+    int x0, y0;                    /* data window origin */
+    int width, height;
+    int nch;
+    const char *names[4];          /* sorted by name, as EXR requires */
+    exr_pixel_type_t types[4];
+} raw_spec;
+
+typedef float (*value_fn)(int c, int x, int y);
+
+static void raw_quiet(exr_const_context_t ctxt, exr_result_t code, const char *msg)
+{
+    (void)ctxt, (void)code;
+    print_error("openexr (test writer): %s\n", msg);
+}
+
+/* Encodes the block (bx, by, bw, bh) of the planar source buffers. */
+static void raw_encode(exr_context_t ctx, exr_encode_pipeline_t *enc, int *started,
+                       const exr_chunk_info_t *ci, const raw_spec *s, void **planes, int bx,
+                       int by)
+{
+    if (*started)
+        assert_int_equal(exr_encoding_update(ctx, 0, ci, enc), EXR_ERR_SUCCESS);
+    else
+        assert_int_equal(exr_encoding_initialize(ctx, 0, ci, enc), EXR_ERR_SUCCESS);
+    *started = 1;
+    for (int c = 0; c < enc->channel_count; c++) {
+        exr_coding_channel_info_t *ch = &enc->channels[c];
+        int k = -1;
+        for (int j = 0; j < s->nch; j++)
+            if (!strcmp(ch->channel_name, s->names[j]))
+                k = j;
+        assert_true(k >= 0);
+        ch->encode_from_ptr = (const uint8_t *)planes[k] + ((size_t)by * s->width + bx) * 4;
+        ch->user_pixel_stride = 4;
+        ch->user_line_stride = s->width * 4;
+        ch->user_bytes_per_element = 4;
+        ch->user_data_type = s->types[k] == EXR_PIXEL_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+    }
+    assert_int_equal(exr_encoding_choose_default_routines(ctx, 0, enc), EXR_ERR_SUCCESS);
+    assert_int_equal(exr_encoding_run(ctx, 0, enc), EXR_ERR_SUCCESS);
+}
+
+static void raw_write(const char *path, const raw_spec *s, value_fn value)
+{
+    void *planes[4];
+    for (int k = 0; k < s->nch; k++) {
+        planes[k] = malloc((size_t)s->width * s->height * 4);
+        assert_non_null(planes[k]);
+        for (int y = 0; y < s->height; y++)
+            for (int x = 0; x < s->width; x++) {
+                size_t i = (size_t)y * s->width + x;
+                float v = value(k, x, y);
+                if (s->types[k] == EXR_PIXEL_UINT)
+                    ((uint32_t *)planes[k])[i] = (uint32_t)v;
+                else
+                    ((float *)planes[k])[i] = v;
+            }
+    }
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = raw_quiet;
+    exr_context_t ctx = NULL;
+    assert_int_equal(exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init), EXR_ERR_SUCCESS);
+    int part = -1;
+    assert_int_equal(exr_add_part(ctx, NULL, s->storage, &part), EXR_ERR_SUCCESS);
+    exr_attr_box2i_t box;
+    box.min.x = s->x0;
+    box.min.y = s->y0;
+    box.max.x = s->x0 + s->width - 1;
+    box.max.y = s->y0 + s->height - 1;
+    exr_attr_v2f_t center;
+    center.x = center.y = 0.0f;
+    assert_int_equal(exr_initialize_required_attr(ctx, part, &box, &box, 1.0f, &center, 1.0f,
+                                                  EXR_LINEORDER_INCREASING_Y, s->compression),
+                     EXR_ERR_SUCCESS);
+    if (s->storage == EXR_STORAGE_TILED)
+        assert_int_equal(exr_set_tile_descriptor(ctx, part, (uint32_t)s->tile, (uint32_t)s->tile,
+                                                 EXR_TILE_ONE_LEVEL, EXR_TILE_ROUND_DOWN),
+                         EXR_ERR_SUCCESS);
+    for (int k = 0; k < s->nch; k++)
+        assert_int_equal(exr_add_channel(ctx, part, s->names[k], s->types[k],
+                                         EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1),
+                         EXR_ERR_SUCCESS);
+    assert_int_equal(exr_write_header(ctx), EXR_ERR_SUCCESS);
+    exr_encode_pipeline_t enc;
+    memset(&enc, 0, sizeof enc);
+    int started = 0;
+    exr_chunk_info_t ci;
+    if (s->storage == EXR_STORAGE_TILED) {
+        int ntx = (s->width + s->tile - 1) / s->tile, nty = (s->height + s->tile - 1) / s->tile;
+        for (int ty = 0; ty < nty; ty++)
+            for (int tx = 0; tx < ntx; tx++) {
+                assert_int_equal(exr_write_tile_chunk_info(ctx, part, tx, ty, 0, 0, &ci),
+                                 EXR_ERR_SUCCESS);
+                raw_encode(ctx, &enc, &started, &ci, s, planes, tx * s->tile, ty * s->tile);
+            }
+    } else {
+        int32_t lines = 0;
+        assert_int_equal(exr_get_scanlines_per_chunk(ctx, part, &lines), EXR_ERR_SUCCESS);
+        for (int y = 0; y < s->height; y += lines) {
+            assert_int_equal(exr_write_scanline_chunk_info(ctx, part, s->y0 + y, &ci),
+                             EXR_ERR_SUCCESS);
+            raw_encode(ctx, &enc, &started, &ci, s, planes, 0, y);
+        }
+    }
+    if (started)
+        exr_encoding_destroy(ctx, &enc);
+    assert_int_equal(exr_finish(&ctx), EXR_ERR_SUCCESS);
+    for (int k = 0; k < s->nch; k++)
+        free(planes[k]);
+}
+
+/* A smooth test pattern, exact in half: channel c of (x, y). */
+static float pattern(int c, int x, int y)
+{
+    return (float)((x * 3 + y * 5 + c * 7) % 64) / 32.0f;
+}
+
+static float inf_at_3_2(int c, int x, int y)
+{
+    return (x == 3 && y == 2 && c == 0) ? INFINITY : pattern(c, x, y);
+}
+
+static float nan_at_0_4(int c, int x, int y)
+{
+    return (x == 0 && y == 4 && c == 0) ? NAN : pattern(c, x, y);
+}
+
+static void assert_pattern(const btf_image *img, int nsrc)
+{
+    for (int y = 0; y < img->height; y++)
+        for (int x = 0; x < img->width; x++)
+            for (int k = 0; k < img->channels; k++)
+                assert_true(img->data[((size_t)y * img->width + x) * img->channels + k] ==
+                            pattern(nsrc == 1 ? 0 : k, x, y));
+}
+
+/* ------------------------------------------------------------ round trips */
+
+static void round_trip_sizes(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    int sizes[][2] = {{1, 1}, {7, 13}, {1000, 3}, {3, 100}, {17, 16}, {5, 33}};
+    const char *p = tu_fmt("%s/rt.exr", dir);
+    for (int s = 0; s < 6; s++)
+        for (int c = 1; c <= 3; c += 2)
+            for (int half = 0; half <= 1; half++) {
+                btf_image a, b;
+                int w = sizes[s][0], h = sizes[s][1];
+                if (half)
+                    half_exact_image(&a, w, h, c, (uint32_t)(s * 7 + c));
+                else
+                    random_image(&a, w, h, c, (uint32_t)(s * 7 + c), -1000.0f, 1000.0f);
+                TU_OK(btf_exr_write(p, &a, half, &e), &e);
+                btf_image_header hd;
+                TU_OK(btf_exr_probe(p, &hd, &e), &e);
+                assert_int_equal(hd.format, BTF_FILE_EXR);
+                assert_int_equal(hd.width, w);
+                assert_int_equal(hd.height, h);
+                assert_int_equal(hd.channels, c);
+                assert_int_equal(hd.bits, half ? 16 : 32);
+                assert_true(hd.file_bytes > 0);
+                /* Through the public API too: it dispatches on the signature. */
+                TU_OK(btf_image_probe(p, &hd, &e), &e);
+                assert_int_equal(hd.format, BTF_FILE_EXR);
+                TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+                assert_same_image(&a, &b);
+                btf_image_free(&a);
+                btf_image_free(&b);
+            }
+    assert_int_equal(stray_files("rt.exr"), 0);
+}
+
+static void half_rounds_to_nearest(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image a, b;
+    random_image(&a, 31, 9, 3, 5, 0.0f, 8.0f);
+    const char *p = tu_fmt("%s/h.exr", dir);
+    TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    for (size_t i = 0; i < (size_t)31 * 9 * 3; i++)
+        assert_true(fabsf(a.data[i] - b.data[i]) <= a.data[i] * (1.0f / 2048.0f) + 1e-7f);
+    btf_image_free(&a);
+    btf_image_free(&b);
+}
+
+static void extreme_values(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const float in[] = {3e38f, -3e38f, FLT_MAX, -FLT_MAX, FLT_MIN, 1e-45f, -1e-40f, 0.0f,
+                        -0.0f, 1e6f,  65504.0f, 65519.0f, 70000.0f, -1e5f, 1e-8f, 6e-8f};
+    const int n = (int)(sizeof in / sizeof in[0]);
+    btf_image a, b;
+    TU_OK(btf_image_alloc(&a, n, 1, 1, &e), &e);
+    memcpy(a.data, in, sizeof in);
+    const char *p = tu_fmt("%s/x.exr", dir);
+
+    /* Float keeps every value bit for bit, subnormals and -0 included. */
+    TU_OK(btf_exr_write(p, &a, 0, &e), &e);
+    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    assert_memory_equal(a.data, b.data, sizeof in);
+    btf_image_free(&b);
+
+    /* Half clamps to +-65504 (never Inf); tiny values go to 0 or a half
+     * subnormal, keeping their sign. */
+    TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    for (int i = 0; i < n; i++) {
+        float v = b.data[i];
+        assert_true(isfinite(v));
+        if (in[i] >= 65504.0f)
+            assert_true(v == 65504.0f);
+        else if (in[i] <= -65504.0f)
+            assert_true(v == -65504.0f);
+        else if (fabsf(in[i]) < 1e-7f)
+            assert_true(fabsf(v) <= 6e-8f && (v == 0.0f || (v > 0) == (in[i] > 0)));
+        else
+            assert_true(fabsf(v - in[i]) <= fabsf(in[i]) / 1024.0f);
+    }
+    assert_true(b.data[15] > 0.0f); /* 6e-8 is about the smallest half subnormal */
+    btf_image_free(&a);
+    btf_image_free(&b);
+}
+
+static void channel_conversion(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image rgb, grey, b;
+    random_image(&rgb, 9, 4, 3, 11, 0.0f, 10.0f);
+    const char *p = tu_fmt("%s/c.exr", dir);
+    TU_OK(btf_exr_write(p, &rgb, 0, &e), &e);
+    TU_OK(btf_exr_read(p, 1, &b, &e), &e);
+    assert_int_equal(b.channels, 1);
+    for (int i = 0; i < 36; i++) {
+        const float *q = rgb.data + 3 * i;
+        float l = 0.2126f * q[0] + 0.7152f * q[1] + 0.0722f * q[2];
+        assert_true(fabsf(b.data[i] - l) <= 1e-5f * (1.0f + l));
+    }
+    btf_image_free(&b);
+    TU_OK(btf_exr_read(p, 3, &b, &e), &e);
+    assert_same_image(&rgb, &b);
+    btf_image_free(&b);
+
+    random_image(&grey, 5, 6, 1, 12, -5.0f, 5.0f);
+    TU_OK(btf_exr_write(p, &grey, 1, &e), &e);
+    TU_OK(btf_exr_read(p, 3, &b, &e), &e);
+    assert_int_equal(b.channels, 3);
+    for (int i = 0; i < 30; i++) {
+        assert_true(b.data[3 * i] == b.data[3 * i + 1] && b.data[3 * i] == b.data[3 * i + 2]);
+        assert_true(fabsf(b.data[3 * i] - grey.data[i]) <= fabsf(grey.data[i]) / 1024.0f);
+    }
+    btf_image_free(&b);
+    /* An RGB image of FLT_MAX has a luminance of FLT_MAX, not Inf. */
+    for (int i = 0; i < 36 * 3; i++)
+        rgb.data[i] = FLT_MAX;
+    TU_OK(btf_exr_write(p, &rgb, 0, &e), &e);
+    TU_OK(btf_exr_read(p, 1, &b, &e), &e);
+    for (int i = 0; i < 36; i++)
+        assert_true(isfinite(b.data[i]) && b.data[i] > 3e38f);
+    btf_image_free(&b);
+    assert_int_equal(btf_exr_read(p, 2, &b, &e), BTF_E_ARG);
+    assert_null(b.data);
+    btf_image_free(&rgb);
+    btf_image_free(&grey);
+}
+
+/* --------------------------------------------------- the streaming writer */
+
+static void streaming_equals_one_shot(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    for (int half = 0; half <= 1; half++) {
+        btf_image a, b;
+        int w = 37, h = 101, c = 3;
+        random_image(&a, w, h, c, 99 + half, -3.0f, 3.0f);
+        const char *p1 = tu_fmt("%s/one.exr", dir), *p2 = tu_fmt("%s/stream.exr", dir);
+        TU_OK(btf_exr_write(p1, &a, half, &e), &e);
+
+        btf_exr_writer *wr = NULL;
+        TU_OK(btf_exr_writer_open(p2, w, h, c, half, &wr, &e), &e);
+        /* Batches that straddle the 16-row chunks, and empty ones. */
+        const int batches[] = {1, 0, 2, 15, 16, 17, 3, 33, 0, 14};
+        int row = 0;
+        for (int i = 0; i < 10; i++) {
+            TU_OK(btf_exr_writer_put_rows(wr, a.data + (size_t)row * w * c, batches[i], &e), &e);
+            row += batches[i];
+            assert_false(file_exists(p2)); /* nothing visible before close */
+        }
+        assert_int_equal(row, h);
+        TU_OK(btf_exr_writer_close(wr, &e), &e);
+
+        size_t n1, n2;
+        unsigned char *d1 = slurp(p1, &n1), *d2 = slurp(p2, &n2);
+        assert_int_equal(n1, n2);
+        assert_memory_equal(d1, d2, n1);
+        free(d1);
+        free(d2);
+        TU_OK(btf_exr_read(p2, 0, &b, &e), &e);
+        assert_int_equal(b.width, w);
+        assert_int_equal(b.height, h);
+        if (!half)
+            assert_same_image(&a, &b);
+        btf_image_free(&a);
+        btf_image_free(&b);
+        remove(p1);
+        remove(p2);
+    }
+    assert_int_equal(stray_files(NULL), 0);
+}
+
+static void writer_closed_early(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const char *p = tu_fmt("%s/early.exr", dir);
+    float row[20 * 3] = {0};
+    btf_exr_writer *w = NULL;
+    TU_OK(btf_exr_writer_open(p, 20, 40, 3, 1, &w, &e), &e);
+    for (int i = 0; i < 17; i++)
+        TU_OK(btf_exr_writer_put_rows(w, row, 1, &e), &e);
+    assert_int_equal(btf_exr_writer_close(w, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "17 of 40"));
+    assert_false(file_exists(p));
+    assert_int_equal(stray_files(NULL), 0);
+
+    /* Abort removes the temporary file too, at any point. */
+    TU_OK(btf_exr_writer_open(p, 20, 40, 1, 0, &w, &e), &e);
+    assert_int_equal(stray_files(NULL), 1);
+    TU_OK(btf_exr_writer_put_rows(w, row, 3, &e), &e);
+    btf_exr_writer_abort(w);
+    btf_exr_writer_abort(NULL);
+    assert_int_equal(stray_files(NULL), 0);
+}
+
+static void writer_misuse(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const char *p = tu_fmt("%s/m.exr", dir);
+    float rows[4 * 10] = {0};
+    btf_exr_writer *w = (btf_exr_writer *)&e;
+    assert_int_equal(btf_exr_writer_open(p, 0, 5, 1, 0, &w, &e), BTF_E_ARG);
+    assert_null(w);
+    assert_int_equal(btf_exr_writer_open(p, 5, 65537, 1, 0, &w, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_open(p, 5, 5, 2, 0, &w, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_open(NULL, 5, 5, 1, 0, &w, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_open(p, 5, 5, 1, 0, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_put_rows(NULL, rows, 1, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_close(NULL, &e), BTF_E_ARG);
+    /* A folder that does not exist. */
+    assert_int_equal(btf_exr_writer_open(tu_fmt("%s/no/such/x.exr", dir), 4, 4, 1, 0, &w, &e),
+                     BTF_E_IO);
+    assert_non_null(strstr(e.msg, "no/such/x.exr"));
+
+    /* Too many rows: an error, final for the writer. */
+    TU_OK(btf_exr_writer_open(p, 4, 3, 1, 0, &w, &e), &e);
+    assert_int_equal(btf_exr_writer_put_rows(w, rows, 4, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_put_rows(w, rows, 3, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_close(w, &e), BTF_E_ARG);
+    assert_false(file_exists(p));
+    assert_int_equal(stray_files(NULL), 0);
+
+    /* No image. */
+    btf_image none = {0};
+    assert_int_equal(btf_exr_write(p, &none, 0, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_write(p, NULL, 0, &e), BTF_E_ARG);
+}
+
+static void non_finite_input_refused(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const char *p = tu_fmt("%s/nan.exr", dir);
+    for (int half = 0; half <= 1; half++)
+        for (int kind = 0; kind < 3; kind++) {
+            btf_image a;
+            random_image(&a, 6, 40, 3, 3, 0.0f, 1.0f);
+            /* Pixel (4, 35), past the first chunks, so some were written. */
+            a.data[(35 * 6 + 4) * 3 + 1] = kind == 0 ? NAN : kind == 1 ? INFINITY : -INFINITY;
+            assert_int_equal(btf_exr_write(p, &a, half, &e), BTF_E_ARG);
+            assert_non_null(strstr(e.msg, "(4, 35)"));
+            assert_non_null(strstr(e.msg, kind == 0 ? "NaN" : "Inf"));
+            assert_false(file_exists(p));
+            assert_int_equal(stray_files(NULL), 0);
+            btf_image_free(&a);
+        }
+}
+
+static void writes_are_atomic(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const char *p = tu_fmt("%s/atomic.exr", dir);
+    btf_image a, b, bad;
+    half_exact_image(&a, 12, 12, 3, 1);
+    TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+    assert_int_equal(stray_files("atomic.exr"), 0);
+    /* A failed rewrite leaves the old file as it was. */
+    random_image(&bad, 12, 12, 3, 2, 0.0f, 1.0f);
+    bad.data[100] = NAN;
+    assert_int_equal(btf_exr_write(p, &bad, 0, &e), BTF_E_ARG);
+    assert_int_equal(stray_files("atomic.exr"), 0);
+    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    assert_same_image(&a, &b);
+    btf_image_free(&b);
+    /* A successful rewrite replaces it. */
+    bad.data[100] = 0.5f;
+    TU_OK(btf_exr_write(p, &bad, 0, &e), &e);
+    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    assert_same_image(&bad, &b);
+    assert_int_equal(stray_files("atomic.exr"), 0);
+    btf_image_free(&a);
+    btf_image_free(&b);
+    btf_image_free(&bad);
+    remove(p);
+}
+
+/* --------------------------------------------- files made by other writers */
+
+static void inf_and_nan_in_file(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image b;
+    const char *p = tu_fmt("%s/inf.exr", dir);
+    raw_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 8, 6, 1, {"Y"},
+                  {EXR_PIXEL_FLOAT}};
+    raw_write(p, &s, inf_at_3_2);
+    TU_OK(btf_exr_probe(p, &(btf_image_header){0}, &e), &e); /* the header is fine */
+    assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_DATA);
+    assert_string_equal(e.msg, tu_fmt("%s: NaN or Inf at pixel (3, 2)", p));
+    assert_null(b.data);
+    /* Through the public reader as well. */
+    assert_int_equal(btf_image_read(p, NULL, &b, &e), BTF_E_DATA);
+
+    /* NaN in a half RGB file, with compression. */
+    raw_spec s2 = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 5, 20, 3, {"B", "G", "R"},
+                   {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
+    raw_write(p, &s2, nan_at_0_4);
+    assert_int_equal(btf_exr_read(p, 1, &b, &e), BTF_E_DATA);
+    assert_string_equal(e.msg, tu_fmt("%s: NaN or Inf at pixel (0, 4)", p));
+    assert_null(b.data);
+}
+
+static void other_layouts(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image b;
+    btf_image_header hd;
+    const char *p = tu_fmt("%s/layout.exr", dir);
+
+    /* Tiled, with partial tiles at the right and bottom edges. */
+    raw_spec t = {EXR_STORAGE_TILED, EXR_COMPRESSION_ZIP, 4, 0, 0, 10, 7, 3, {"B", "G", "R"},
+                  {EXR_PIXEL_FLOAT, EXR_PIXEL_HALF, EXR_PIXEL_FLOAT}};
+    raw_write(p, &t, pattern);
+    TU_OK(btf_exr_probe(p, &hd, &e), &e);
+    assert_int_equal(hd.width, 10);
+    assert_int_equal(hd.height, 7);
+    assert_int_equal(hd.channels, 3);
+    assert_int_equal(hd.bits, 32);
+    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    assert_pattern(&b, 3);
+    btf_image_free(&b);
+
+    /* A data window that does not start at (0, 0); an alpha channel that is
+     * ignored; a single-channel tiled file of any name. */
+    raw_spec o = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_PIZ, 0, -3, 5, 9, 40, 2, {"A", "Y"},
+                  {EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
+    raw_write(p, &o, pattern);
+    TU_OK(btf_exr_probe(p, &hd, &e), &e);
+    assert_int_equal(hd.channels, 1);
+    assert_int_equal(hd.bits, 16);
+    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    assert_int_equal(b.width, 9);
+    assert_int_equal(b.height, 40);
+    for (int y = 0; y < 40; y++)
+        for (int x = 0; x < 9; x++)
+            assert_true(b.data[y * 9 + x] == pattern(1, x, y));
+    btf_image_free(&b);
+
+    raw_spec z = {EXR_STORAGE_TILED, EXR_COMPRESSION_NONE, 3, 2, 2, 8, 8, 1, {"Z"},
+                  {EXR_PIXEL_FLOAT}};
+    raw_write(p, &z, pattern);
+    TU_OK(btf_exr_read(p, 3, &b, &e), &e);
+    assert_int_equal(b.channels, 3);
+    assert_pattern(&b, 1);
+    btf_image_free(&b);
+}
+
+static void every_compression(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const char *p = tu_fmt("%s/comp.exr", dir);
+    const exr_compression_t comp[] = {
+        EXR_COMPRESSION_NONE,  EXR_COMPRESSION_RLE, EXR_COMPRESSION_ZIPS,
+        EXR_COMPRESSION_ZIP,   EXR_COMPRESSION_PIZ, EXR_COMPRESSION_PXR24,
+        EXR_COMPRESSION_B44,   EXR_COMPRESSION_B44A, EXR_COMPRESSION_DWAA,
+        EXR_COMPRESSION_DWAB};
+    for (int i = 0; i < 10; i++) {
+        raw_spec s = {EXR_STORAGE_SCANLINE, comp[i], 0, 0, 0, 45, 70, 4, {"A", "B", "G", "R"},
+                      {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
+        raw_write(p, &s, pattern);
+        btf_image b;
+        TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+        assert_int_equal(b.channels, 3);
+        /* Exact for the lossless ones; B44 and DWA are lossy. */
+        int lossless = comp[i] <= EXR_COMPRESSION_PXR24;
+        for (int y = 0; y < 70; y++)
+            for (int x = 0; x < 45; x++)
+                for (int k = 0; k < 3; k++) {
+                    float want = pattern(k + 1, x, y), got = b.data[(y * 45 + x) * 3 + k];
+                    if (lossless)
+                        assert_true(got == want);
+                    else
+                        assert_true(fabsf(got - want) < 0.1f);
+                }
+        btf_image_free(&b);
+    }
+}
+
+static void unsupported_layouts(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image b;
+    btf_image_header hd;
+    const char *p = tu_fmt("%s/u.exr", dir);
+
+    raw_spec u = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 1, {"Y"},
+                  {EXR_PIXEL_UINT}};
+    raw_write(p, &u, pattern);
+    assert_int_equal(btf_exr_probe(p, &hd, &e), BTF_E_UNSUPPORTED);
+    assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
+    assert_non_null(strstr(e.msg, p));
+    assert_non_null(strstr(e.msg, "UINT"));
+
+    raw_spec uv = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 2, {"U", "V"},
+                   {EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
+    raw_write(p, &uv, pattern);
+    assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
+    assert_non_null(strstr(e.msg, "U, V"));
+
+    /* Luminance/chroma: reading only Y would lose the colour. */
+    raw_spec yc = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 3,
+                   {"BY", "RY", "Y"}, {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
+    raw_write(p, &yc, pattern);
+    assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
+
+    /* A UINT channel beside R, G, B is merely skipped. */
+    raw_spec id = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 6, 5, 4,
+                   {"B", "G", "R", "id"},
+                   {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_UINT}};
+    raw_write(p, &id, pattern);
+    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    for (int i = 0; i < 30; i++)
+        assert_true(b.data[3 * i] == pattern(2, i % 6, i / 6));
+    btf_image_free(&b);
+}
+
+/* ------------------------------------------------------- damaged files */
+
+/* Reading and probing must fail cleanly (never crash, leak or print). */
+static void assert_rejected(const char *p)
+{
+    btf_error e = {0};
+    btf_image b;
+    btf_image_header hd;
+    int rc = btf_exr_read(p, 0, &b, &e);
+    if (rc != BTF_E_FORMAT && rc != BTF_E_IO)
+        print_error("%s: read gave %d: %s\n", p, rc, e.msg);
+    assert_true(rc == BTF_E_FORMAT || rc == BTF_E_IO);
+    assert_null(b.data);
+    assert_int_equal(strncmp(e.msg, p, strlen(p)), 0);
+    assert_null(strchr(e.msg, '\n'));
+    rc = btf_exr_probe(p, &hd, &e);
+    assert_true(rc == BTF_E_FORMAT || rc == BTF_E_IO);
+}
+
+static void truncated_files(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image a;
+    random_image(&a, 64, 50, 3, 7, 0.0f, 1.0f);
+    const char *full = tu_fmt("%s/full.exr", dir);
+    TU_OK(btf_exr_write(full, &a, 0, &e), &e);
+    btf_image_free(&a);
+    size_t n;
+    unsigned char *d = slurp(full, &n);
+    const char *cut = tu_fmt("%s/cut.exr", dir);
+    /* Every length through the header and offset table, then a spread. */
+    for (size_t len = 0; len < n; len += len < 400 ? 1 : 97) {
+        tu_write_file(cut, d, len);
+        assert_rejected(cut);
+    }
+    tu_write_file(cut, d, n - 1);
+    assert_rejected(cut);
+    free(d);
+}
+
+static void corrupt_bytes(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image a, b;
+    random_image(&a, 40, 40, 3, 8, 0.0f, 1.0f);
+    const char *full = tu_fmt("%s/good.exr", dir), *bad = tu_fmt("%s/bad.exr", dir);
+    TU_OK(btf_exr_write(full, &a, 1, &e), &e);
+    btf_image_free(&a);
+    size_t n;
+    unsigned char *d = slurp(full, &n);
+    unsigned char *m = malloc(n);
+    assert_non_null(m);
+    uint32_t s = 12345;
+    /* Flipped bytes anywhere: any outcome but a crash, a leak or a partial
+     * image (decoding may succeed when only pixel data changed). */
+    for (int round = 0; round < 300; round++) {
+        memcpy(m, d, n);
+        int flips = 1 + (int)(rng_next(&s) % 4);
+        for (int f = 0; f < flips; f++)
+            m[rng_next(&s) % n] ^= (unsigned char)(1 + rng_next(&s) % 255);
+        tu_write_file(bad, m, n);
+        int rc = btf_exr_read(bad, 0, &b, &e);
+        if (rc == 0) {
+            assert_int_equal(b.width, 40);
+            btf_image_free(&b);
+        } else {
+            assert_null(b.data);
+            assert_int_equal(strncmp(e.msg, bad, strlen(bad)), 0);
+        }
+        btf_image_header hd;
+        btf_exr_probe(bad, &hd, &e);
+    }
+    free(m);
+    free(d);
+}
+
+static void garbage_and_missing(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image b;
+    btf_image_header hd;
+    const char *p = tu_fmt("%s/garbage.exr", dir);
+    unsigned char buf[4096];
+    uint32_t s = 777;
+    for (int round = 0; round < 50; round++) {
+        size_t n = 1 + rng_next(&s) % sizeof buf;
+        for (size_t i = 0; i < n; i++)
+            buf[i] = (unsigned char)rng_next(&s);
+        if (round % 2) /* the EXR magic number and version, then garbage */
+            memcpy(buf, "\x76\x2f\x31\x01\x02\x00\x00\x00", n < 8 ? n : 8);
+        tu_write_file(p, buf, n);
+        assert_rejected(p);
+    }
+    tu_write_file(p, "", 0);
+    assert_rejected(p);
+
+    const char *missing = tu_fmt("%s/missing.exr", dir);
+    assert_int_equal(btf_exr_read(missing, 0, &b, &e), BTF_E_IO);
+    assert_null(b.data);
+    assert_non_null(strstr(e.msg, missing));
+    assert_int_equal(btf_exr_probe(missing, &hd, &e), BTF_E_IO);
+    /* A folder is not a file. */
+    assert_int_equal(btf_exr_read(dir, 0, &b, &e), BTF_E_IO);
+    assert_int_equal(btf_exr_read(NULL, 0, &b, &e), BTF_E_ARG);
+}
+
+/* OpenEXR must report through btf_error, never on stderr. */
+static void library_is_silent(void **state)
+{
+    (void)state;
+    const char *errpath = tu_fmt("%s/stderr.txt", dir);
+    const char *p = tu_fmt("%s/noisy.exr", dir);
+    fflush(stderr);
+    int saved = dup(2);
+    assert_true(saved >= 0);
+    int fd = open(errpath, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    assert_true(fd >= 0);
+    assert_true(dup2(fd, 2) >= 0);
+    close(fd);
+
+    btf_error e = {0};
+    btf_image a, b;
+    random_image(&a, 30, 30, 3, 4, 0.0f, 1.0f);
+    int rc1 = btf_exr_write(p, &a, 0, &e);
+    size_t n = 0;
+    unsigned char *d = rc1 ? NULL : slurp(p, &n);
+    int rc2 = BTF_OK, rc3 = BTF_OK, rc4 = BTF_OK;
+    if (d) {
+        tu_write_file(p, d, n / 2);
+        rc2 = btf_exr_read(p, 0, &b, &e);
+        memset(d + 8, 0xff, 40);
+        tu_write_file(p, d, n);
+        rc3 = btf_exr_read(p, 0, &b, &e);
+        rc4 = btf_exr_probe(p, &(btf_image_header){0}, &e);
+    }
+    fflush(stderr);
+    dup2(saved, 2);
+    close(saved);
+    free(d);
+    btf_image_free(&a);
+
+    assert_int_equal(rc1, 0);
+    assert_true(rc2 != 0 && rc3 != 0 && rc4 != 0);
+    size_t m;
+    unsigned char *text = slurp(errpath, &m);
+    if (m)
+        print_error("unexpected stderr: %.*s\n", (int)m, (const char *)text);
+    assert_int_equal(m, 0);
+    free(text);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(round_trip_sizes),
+        cmocka_unit_test(half_rounds_to_nearest),
+        cmocka_unit_test(extreme_values),
+        cmocka_unit_test(channel_conversion),
+        cmocka_unit_test(streaming_equals_one_shot),
+        cmocka_unit_test(writer_closed_early),
+        cmocka_unit_test(writer_misuse),
+        cmocka_unit_test(non_finite_input_refused),
+        cmocka_unit_test(writes_are_atomic),
+        cmocka_unit_test(inf_and_nan_in_file),
+        cmocka_unit_test(other_layouts),
+        cmocka_unit_test(every_compression),
+        cmocka_unit_test(unsupported_layouts),
+        cmocka_unit_test(truncated_files),
+        cmocka_unit_test(corrupt_bytes),
+        cmocka_unit_test(garbage_and_missing),
+        cmocka_unit_test(library_is_silent),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}

@@ -41,5 +41,6 @@ void cli_format_bytes(uint64_t bytes, char *buf, size_t n);
 
 int cmd_generate(int argc, char **argv);
 int cmd_info(int argc, char **argv);
+int cmd_analyse(int argc, char **argv);
 
 #endif

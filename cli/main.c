@@ -13,6 +13,7 @@ static const struct {
 } commands[] = {
     {"generate", cmd_generate, "write a procedural BTF (81 x 81 images) in the UBO2003 layout"},
     {"info", cmd_info, "describe a BTF dataset (layout, images, directions, size)"},
+    {"analyse", cmd_analyse, "analyse a dataset (stage segment: subspace images, index table)"},
 };
 
 static void usage(FILE *f)

@@ -252,6 +252,97 @@ typedef struct btf_generate_opts {
 int btf_generate(const char *material, const char *outdir,
                  const btf_generate_opts *opts, btf_error *err);
 
+/* ------------------------------------------ analyse, stage 1: segmentation */
+/* Paper section II.A: the (view, light) images are clustered by k-means on
+ * their CIE Lab cumulative histograms; each cluster is represented by the
+ * member image closest to its centre (a real measured image). */
+
+/* A deterministic random stream (splitmix64) for seeded choices. */
+typedef struct btf_rng {
+    uint64_t state;
+} btf_rng;
+void btf_rng_seed(btf_rng *r, uint64_t seed);
+uint64_t btf_rng_next(btf_rng *r);
+double btf_rng_uniform(btf_rng *r); /* [0, 1), 53 bits */
+
+typedef struct btf_feature_opts {
+    int bins;                 /* per channel; 0: 32 */
+    int threads;              /* 0: all CPUs */
+    btf_progress_fn progress;
+    void *progress_user;
+} btf_feature_opts;
+
+/* Fixed ranges of the histograms: L* [0, 100], a* and b* [-64, 64] (values
+ * outside are counted in the end bins). */
+#define BTF_LAB_A_RANGE 64.0f
+
+/* The feature of one linear-RGB image: the cumulative histograms of L*, a*,
+ * b* (each normalised to end at 1), concatenated: 3 * bins floats. */
+int btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *err);
+
+/* Features of every image of a dataset, streamed (one image decoded at a time
+ * per thread): features[(view * n_lights + light) * dim + i], dim = 3 * bins. */
+int btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
+                         float **features, int *dim, btf_error *err);
+
+typedef struct btf_kmeans_opts {
+    int restarts;             /* 0: 5; the best run by distortion is kept */
+    int max_iter;             /* 0: 100 Lloyd iterations per run */
+    uint64_t seed;            /* 0 is a valid seed */
+} btf_kmeans_opts;
+
+typedef struct btf_kmeans_result {
+    int k;                    /* clusters produced: min(k asked, distinct points) */
+    int *labels;              /* n: cluster of each point, 0..k-1 */
+    float *centres;           /* k * dim; never NaN */
+    double distortion;        /* sum of squared distances to the centres */
+} btf_kmeans_result;
+
+/* k-means with k-means++ seeding and restarts. k larger than the number of
+ * distinct points is reduced to it; clusters that go empty are re-seeded at
+ * the point farthest from its centre. Same inputs and seed, same result. */
+int btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
+               btf_kmeans_result *out, btf_error *err);
+void btf_kmeans_free(btf_kmeans_result *r);
+
+typedef struct btf_segment_opts {
+    int subspaces;            /* K; 0: auto */
+    int max_subspaces;        /* cap for auto; 0: 20 (the paper's bound) */
+    double auto_threshold;    /* auto: smallest K whose distortion is at most
+                                 this fraction of the K = 1 distortion; 0: 0.10 */
+    btf_feature_opts features;
+    btf_kmeans_opts kmeans;
+} btf_segment_opts;
+
+typedef struct btf_segmentation {
+    int n_views, n_lights;
+    int k;                    /* subspaces */
+    uint8_t *index;           /* [view * n_lights + light] -> subspace id */
+    int *rep_view, *rep_light;/* per subspace: its representative image */
+    int *members;             /* per subspace: number of images */
+    double distortion;        /* of the chosen clustering */
+    double *distortion_by_k;  /* [0..max_k]: distortions tried (0: not tried) */
+    int max_k;
+    char reason[256];         /* why this K (one line) */
+} btf_segmentation;
+
+int btf_segment(const btf_dataset *ds, const btf_segment_opts *opts, btf_segmentation *out,
+                btf_error *err);
+/* The same from features already computed (n = n_views * n_lights). */
+int btf_segment_features(const float *features, int n_views, int n_lights, int dim,
+                         const btf_segment_opts *opts, btf_segmentation *out, btf_error *err);
+void btf_segmentation_free(btf_segmentation *s);
+
+/* The index table as a picture like the paper's Fig. 5: x = view index,
+ * y = light index, one colour per subspace, each cell cell x cell pixels
+ * (0: 6). Written atomically. */
+int btf_segmentation_write_png(const btf_segmentation *s, int cell, const char *path,
+                               btf_error *err);
+
+
+/* ------------------------------- analyse, stage 2: photometric stereo */
+/* (photometric stereo API: src/photostereo.c, src/integrate.c) */
+
 #ifdef __cplusplus
 }
 #endif

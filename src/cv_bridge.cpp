@@ -116,3 +116,77 @@ extern "C" int btfcv_encode(const char *ext, int w, int h, int c,
     }
     return -1;
 }
+
+/* Linear RGB (floats, interleaved, n pixels) to CIE L*a*b* (D65), using
+ * OpenCV's linear-RGB conversion: our pixels are already linearised, so the
+ * sRGB variant (COLOR_RGB2Lab) would apply the transfer function twice. */
+extern "C" int btfcv_rgb_to_lab(const float *rgb, size_t n, float *lab, char *errbuf,
+                                size_t errlen)
+{
+    try {
+        if (n == 0)
+            return 0;
+        if (n > (size_t)INT32_MAX) {
+            set_error(errbuf, errlen, "too many pixels");
+            return -1;
+        }
+        cv::Mat src(1, (int)n, CV_32FC3, const_cast<float *>(rgb));
+        cv::Mat dst(1, (int)n, CV_32FC3, lab);
+        cv::Mat clipped;
+        /* OpenCV expects [0, 1]; values above 1 (highlights) are clamped so
+         * that L stays in [0, 100]. */
+        cv::min(cv::max(src, 0.0), 1.0, clipped);
+        cv::cvtColor(clipped, dst, cv::COLOR_LRGB2Lab);
+        return 0;
+    } catch (const std::exception &e) {
+        set_error(errbuf, errlen, e.what());
+    } catch (...) {
+        set_error(errbuf, errlen, "unknown OpenCV failure");
+    }
+    return -1;
+}
+
+/* 2D discrete Fourier transform of a complex w x h array in double precision
+ * (re and im separate, row-major), in place. inverse != 0: the inverse,
+ * scaled by 1/(w*h). Any size (OpenCV uses mixed radix). */
+extern "C" int btfcv_dft2(double *re, double *im, int w, int h, int inverse, char *errbuf,
+                          size_t errlen)
+{
+    try {
+        cv::Mat planes[2] = {cv::Mat(h, w, CV_64F, re), cv::Mat(h, w, CV_64F, im)};
+        cv::Mat z;
+        cv::merge(planes, 2, z);
+        cv::dft(z, z, inverse ? (cv::DFT_INVERSE | cv::DFT_SCALE) : 0);
+        cv::Mat out[2];
+        cv::split(z, out);
+        out[0].copyTo(planes[0]);
+        out[1].copyTo(planes[1]);
+        return 0;
+    } catch (const std::exception &e) {
+        set_error(errbuf, errlen, e.what());
+    } catch (...) {
+        set_error(errbuf, errlen, "unknown OpenCV failure");
+    }
+    return -1;
+}
+
+/* 2D DCT-II (inverse != 0: DCT-III, its inverse) of a real w x h array in
+ * place, orthonormal scaling as OpenCV defines it. OpenCV requires even
+ * sizes (or 1); others are an error here. */
+extern "C" int btfcv_dct2(double *a, int w, int h, int inverse, char *errbuf, size_t errlen)
+{
+    try {
+        if ((w > 1 && (w & 1)) || (h > 1 && (h & 1))) {
+            set_error(errbuf, errlen, "DCT needs even sizes");
+            return -1;
+        }
+        cv::Mat m(h, w, CV_64F, a);
+        cv::dct(m, m, inverse ? cv::DCT_INVERSE : 0);
+        return 0;
+    } catch (const std::exception &e) {
+        set_error(errbuf, errlen, e.what());
+    } catch (...) {
+        set_error(errbuf, errlen, "unknown OpenCV failure");
+    }
+    return -1;
+}

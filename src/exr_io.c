@@ -673,6 +673,7 @@ struct btf_exr_writer {
     int rows_staged;            /* rows waiting in stage for their chunk */
     float *stage;               /* lines * width * channels floats */
     int failed;                 /* an error happened: only abort/close remain */
+    exr_result_t (*compress)(exr_encode_pipeline_t *); /* the library's */
 };
 
 /* Where a file channel's samples sit in an interleaved pixel. */
@@ -823,6 +824,28 @@ static int bind_inputs(btf_exr_writer *w, btf_error *err)
     return BTF_OK;
 }
 
+/* EXR stores a chunk raw when compression does not make it smaller, and
+ * readers decide by comparing sizes: equal sizes mean raw. OpenEXRCore 3.1.5
+ * keeps compressed output that is exactly as long as the raw data (seen with
+ * a 16-pixel half row), which every reader then misreads. So: the library's
+ * compressor, then the raw bytes whenever they are not larger. */
+static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
+{
+    btf_exr_writer *w = enc->encoding_user_data;
+    exr_result_t rv = w->compress(enc);
+    if (rv != EXR_ERR_SUCCESS || enc->compressed_bytes < enc->packed_bytes)
+        return rv;
+    if (enc->compressed_buffer != enc->packed_buffer) {
+        /* The compressed buffer is allocated for the worst case, which is
+         * never smaller than the packed data; checked all the same. */
+        if (!enc->compressed_buffer || enc->compressed_alloc_size < enc->packed_bytes)
+            return EXR_ERR_OUT_OF_MEMORY;
+        memcpy(enc->compressed_buffer, enc->packed_buffer, enc->packed_bytes);
+    }
+    enc->compressed_bytes = enc->packed_bytes;
+    return rv;
+}
+
 /* Compresses and writes the staged rows as one chunk. */
 static int flush_chunk(btf_exr_writer *w, btf_error *err)
 {
@@ -840,6 +863,11 @@ static int flush_chunk(btf_exr_writer *w, btf_error *err)
     if (rc)
         return rc;
     rv = exr_encoding_choose_default_routines(w->ctx, 0, &w->enc);
+    if (!rv && w->enc.compress_fn) {
+        w->compress = w->enc.compress_fn;
+        w->enc.compress_fn = compress_or_store;
+        w->enc.encoding_user_data = w;
+    }
     if (!rv)
         rv = exr_encoding_run(w->ctx, 0, &w->enc);
     if (rv)

@@ -124,5 +124,8 @@ int btfcv_read(const char *path, int *w, int *h, int *c, int *depth16,
 int btfcv_encode(const char *ext, int w, int h, int c, const unsigned char *pixels,
                  int jpeg_quality, unsigned char **out, size_t *outlen,
                  char *errbuf, size_t errlen);
+int btfcv_rgb_to_lab(const float *rgb, size_t n, float *lab, char *errbuf, size_t errlen);
+int btfcv_dft2(double *re, double *im, int w, int h, int inverse, char *errbuf, size_t errlen);
+int btfcv_dct2(double *a, int w, int h, int inverse, char *errbuf, size_t errlen);
 
 #endif

@@ -39,11 +39,15 @@
  * camera). That point is shaded
  *     ambient*albedo + vis * (kd * albedo * max(0, n.l) + ks * (n.h)^shininess)
  * with vis the light's visibility: a march from the surface point towards the
- * light, soft at the edge (the light subtends about 2 degrees), and, for a
- * coat, ks = specular * F(v.h) / F(1) and kd = 1 - F(v.h) (Schlick).
+ * light, soft at the edge (the light is a disc of radius ~2.3 degrees), and, for a
+ * coat, ks = specular * F(v.h) / F(1) and kd = 1 - F(v.h) (Schlick), else
+ * ks = specular and kd = 1. The lobe needs n.l > 0 and fades in over
+ * n.l < 0.1, so light at grazing incidence brings no highlight.
  * The view march depends only on the view and the shadow march only on the
  * light, so both are precomputed maps (src/internal.h) that a generator builds
  * once per direction; btf_material_render just builds both and combines them.
+ * A view map holds 32 bytes per texel (hit point, normal, albedo), a light
+ * map 4.
  */
 #include "internal.h"
 
@@ -293,31 +297,34 @@ static void make_fabric(btf_material *m, const noise *ns)
  * The lacquer levels the relief almost flat. */
 static void make_wood(btf_material *m, const noise *ns)
 {
-    int n = m->size, rings = cells_across(n, 14.0);
-    int streak_y = cells_across(n, 3.0), pore_x = cells_across(n, 8.0);
+    int n = m->size, rings = cells_across(n, 16.0);
+    int streak_y = cells_across(n, 1.5), pore_x = cells_across(n, 9.0);
     int pore_y = cells_across(n, 2.0);
     double phase = 2.0 * MAT_PI * hash01(ns->seed, 70, 0, 0);
     for (int row = 0; row < n; row++) {
         for (int col = 0; col < n; col++) {
             double x = col + 0.5, y = row + 0.5;
-            double warp = 0.6 * sin(2.0 * MAT_PI * x / n + phase) + 0.35 * fbm(ns, 71, 2, 2, 3, x, y);
-            double t = fract((y + warp * n / rings) * rings / n);
-            double late = t * t * t;
-            double streak = value_noise(ns, 75, 2, streak_y, x, y);
-            double gx = x * pore_x / n, gy = y * pore_y / n;
+            double warp = 0.3 * sin(2.0 * MAT_PI * x / n + phase) + 0.6 * fbm(ns, 71, 2, 2, 3, x, y);
+            double yw = y + warp * n / rings; /* y along the grain; periodic */
+            double t = fract(yw * rings / n);
+            double late = pow(smoothstep(0.3, 0.97, t), 1.5);
+            /* Fibres follow the grain: noise long along x, short across. */
+            double streak = value_noise(ns, 75, 3, streak_y, x, yw);
+            double gx = x * pore_x / n, gy = yw * pore_y / n;
             double fi = floor(gx), fj = floor(gy);
             int pi = wrap_int((int64_t)fi, pore_x), pj = wrap_int((int64_t)fj, pore_y);
             double pore = 0.0;
-            if (hash01(ns->seed, 76, pi, pj) < 0.05 + 0.15 * (1.0 - late)) {
-                double ex = (gx - fi - 0.5) / 0.4, ey = (gy - fj - 0.5) / 0.5;
+            if (hash01(ns->seed, 76, pi, pj) < 0.04 + 0.12 * (1.0 - late)) {
+                double ex = (gx - fi - 0.5) / 0.4, ey = (gy - fj - 0.5) / 0.45;
                 double d = ex * ex + ey * ey;
                 pore = d < 1.0 ? 1.0 - d : 0.0;
             }
             size_t k = (size_t)row * n + col;
-            m->height[k] = (float)(0.06 * streak - 0.2 * pore + 0.04 * late);
-            double s = (0.9 + 0.1 * streak) * (1.0 - 0.45 * pore);
-            set_rgb(m->albedo + 3 * k, (0.58 + (0.32 - 0.58) * late) * s,
-                    (0.36 + (0.16 - 0.36) * late) * s, (0.18 + (0.07 - 0.18) * late) * s);
+            /* The lacquer fills the pores and levels the fibres: tiny relief. */
+            m->height[k] = (float)(0.05 * streak - 0.08 * pore + 0.04 * late);
+            double s = (1.0 + 0.12 * streak) * (1.0 - 0.5 * pore);
+            set_rgb(m->albedo + 3 * k, (0.62 + (0.30 - 0.62) * late) * s,
+                    (0.40 + (0.15 - 0.40) * late) * s, (0.20 + (0.06 - 0.20) * late) * s);
         }
     }
     m->specular = 0.15f; /* lobe peak at normal incidence; grows with Fresnel */

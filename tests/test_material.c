@@ -74,7 +74,7 @@ static void test_names(void **state)
 static void test_sizes(void **state)
 {
     (void)state;
-    static const int sizes[] = {1, 2, 7, 64};
+    static const int sizes[] = {1, 2, 7, 64, 128, 256};
     static const btf_dir pairs[][2] = {{{0, 0}, {0, 0}}, {{45, 30}, {30, 200}},
                                        {{75, 345}, {75, 165}}, {{90, 10}, {90, 190}}};
     for (int i = 0; i < N_NAMES; i++) {

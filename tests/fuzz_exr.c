@@ -1,0 +1,131 @@
+/*
+ * fuzz_exr.c — libFuzzer target for the EXR reader (src/exr_io.c). Each input
+ * is written to a temporary file (the reader works on paths), probed, and,
+ * when the probe accepts it and the image is modest, read with each channel
+ * setting (as in file, grey, RGB). The reader must never crash, leak, print
+ * or return a half-filled image; failures must be one line naming the file.
+ *
+ * Build from the repository root (the whole library is linked, as `make fuzz`
+ * does; cv_bridge.cpp only because image.c refers to it):
+ *
+ *   mkdir -p build-fuzz
+ *   clang++ -std=c++17 -g -O1 -fsanitize=address,undefined -fno-sanitize=vptr -fPIC \
+ *       -Iinclude -Isrc -I/usr/include/opencv4 -c src/cv_bridge.cpp \
+ *       -o build-fuzz/cv_bridge.o
+ *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -ffp-contract=off \
+ *       -Iinclude -Isrc -Ibuild/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
+ *       -DBTF_EXR_MAX_CHUNK_BYTES='(64u << 20)' \
+ *       -o build-fuzz/fuzz_exr tests/fuzz_exr.c src/[a-z]*.c build-fuzz/cv_bridge.o \
+ *       -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
+ *       -lvulkan -lstdc++ -lm -lpthread
+ *
+ * (add the gpu/ sources if the library has them; -DBTF_EXR_MAX_CHUNK_BYTES
+ * keeps the library's per-chunk buffers under libFuzzer's memory limit.)
+ * Run with a seed corpus of small EXR files, e.g. those test_exr writes:
+ *
+ *   mkdir -p build-fuzz/corpus_exr   (and copy a few small .exr files there)
+ *   ./build-fuzz/fuzz_exr -max_total_time=60 -max_len=65536 build-fuzz/corpus_exr
+ *
+ * OpenEXRCore itself is not instrumented unless rebuilt with the sanitizers,
+ * so memory errors inside it show only where they reach our code.
+ */
+#include "internal.h"
+
+#include <fcntl.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* Images above this many pixels are only probed, not decoded: their output
+ * buffer alone could exceed libFuzzer's memory limit. */
+#define FUZZ_MAX_PIXELS (1u << 20)
+
+static char fuzz_path[512];
+
+static void remove_fuzz_file(void)
+{
+    if (fuzz_path[0])
+        unlink(fuzz_path);
+}
+
+static const char *input_path(void)
+{
+    if (!fuzz_path[0]) {
+        const char *tmp = getenv("TMPDIR");
+        snprintf(fuzz_path, sizeof fuzz_path, "%s/fuzz_exr.%ld.exr",
+                 tmp && *tmp ? tmp : "/tmp", (long)getpid());
+        atexit(remove_fuzz_file);
+    }
+    return fuzz_path;
+}
+
+static void write_input(const char *path, const uint8_t *data, size_t size)
+{
+    int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    if (fd < 0)
+        abort();
+    size_t done = 0;
+    while (done < size) {
+        ssize_t w = write(fd, data + done, size - done);
+        if (w <= 0)
+            abort();
+        done += (size_t)w;
+    }
+    close(fd);
+}
+
+/* Failures are one line that starts with the file name. */
+static void check_error(const char *path, int rc, const btf_error *e)
+{
+    if (rc >= 0 || rc < BTF_E_NUMERIC || e->code != rc)
+        abort();
+    if (strncmp(e->msg, path, strlen(path)) != 0 || strchr(e->msg, '\n'))
+        abort();
+}
+
+static void check_read(const char *path, int channels, const btf_image_header *h)
+{
+    btf_image img;
+    btf_error e = {0};
+    int rc = btf_exr_read(path, channels, &img, &e);
+    if (rc != 0) {
+        check_error(path, rc, &e);
+        if (img.data)
+            abort(); /* no half-filled image on failure */
+        return;
+    }
+    int want = channels ? channels : h->channels;
+    if (img.width != h->width || img.height != h->height || img.channels != want)
+        abort();
+    size_t n = (size_t)img.width * img.height * img.channels;
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(img.data[i]))
+            abort(); /* NaN/Inf must have been reported */
+    btf_image_free(&img);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    const char *path = input_path();
+    write_input(path, data, size);
+    btf_image_header h;
+    btf_error e = {0};
+    int rc = btf_exr_probe(path, &h, &e);
+    if (rc != 0) {
+        check_error(path, rc, &e);
+        return 0;
+    }
+    if (h.format != BTF_FILE_EXR || h.width < 1 || h.height < 1 ||
+        (h.channels != 1 && h.channels != 3) || (h.bits != 16 && h.bits != 32) ||
+        h.file_bytes != size)
+        abort();
+    if ((uint64_t)h.width * (uint64_t)h.height > FUZZ_MAX_PIXELS)
+        return 0;
+    check_read(path, 0, &h);
+    check_read(path, 1, &h);
+    check_read(path, 3, &h);
+    return 0;
+}

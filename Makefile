@@ -14,11 +14,11 @@ PKGS      := OpenEXR vulkan cmocka
 # -ffp-contract=off: no FMA contraction, so the CPU reference can match the
 # GPU shaders bit for bit (docs/design.md, "Determinism").
 COMMON    := -Wall -Wextra -Werror -Wno-format-truncation -ffp-contract=off -fPIC -pthread $(OPT) $(SAN)
-CPPFLAGS  := -Iinclude -Isrc -I$(BUILD)/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE
+CPPFLAGS  := -Iinclude -Isrc -Igpu -I$(BUILD)/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE
 CFLAGS    := -std=c11 $(COMMON)
 CXXFLAGS  := -std=c++17 $(COMMON) -I/usr/include/opencv4
 LDLIBS    := -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
-             -lvulkan -lstdc++ -lm -lpthread
+             -lvulkan -lz -lstdc++ -lm -lpthread
 
 LIB_C     := $(sort $(wildcard src/*.c) $(wildcard gpu/*.c))
 LIB_CXX   := $(sort $(wildcard src/*.cpp))

@@ -41,6 +41,19 @@ void cli_format_bytes(uint64_t bytes, char *buf, size_t n);
 
 int cmd_generate(int argc, char **argv);
 int cmd_info(int argc, char **argv);
+int cmd_photostereo(int argc, char **argv);
 int cmd_analyse(int argc, char **argv);
+int cmd_texture_fit(int argc, char **argv);
+int cmd_synthesise(int argc, char **argv);
+
+/* Model options (--levels, --neighbourhood) shared by analyse and
+ * texture-fit: returns 1 if argv[*i] was one (advancing *i), with *rc the
+ * exit status of a usage error (0 when fine). */
+int cli_model_option(const cli_ctx *c, int argc, char **argv, int *i, btf_fit_opts *fo, int *rc);
+/* A btf_warning_fn printing "btfcar CMD: warning: ..." (user: the cli_ctx). */
+void cli_warning(void *user, const char *message);
+/* The CAR parameters of one subspace, as text. */
+void cli_print_subspace(const btf_subspace_model *s, int index);
+
 
 #endif

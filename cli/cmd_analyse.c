@@ -5,20 +5,28 @@
 #include <string.h>
 #include <time.h>
 
-/* Internal helpers the command shares with the library. */
-int btf_mkdirs(const char *path, btf_error *err);
 
 static void help(void)
 {
-    printf("usage: btfcar analyse DATASET -o OUT --stage segment [--subspaces K|auto]\n"
-           "                      [--bins B] [--seed S] [--restarts R] [--threads T] [--quiet]\n\n"
-           "Analyses a BTF dataset (paper section II). Stages:\n"
-           "  segment  cluster the (view, light) images by k-means on CIE Lab cumulative\n"
-           "           histograms into K subspace images; OUT is a folder receiving\n"
-           "           index.png (x = view, y = light, one colour per subspace),\n"
-           "           index.tsv (view, light -> subspace), subspaces.tsv, and each\n"
-           "           subspace image as subspace_NN.exr (linear float) + .png preview.\n\n"
-           "  --stage S          stop after stage S (only 'segment' exists in this version)\n"
+    printf("usage: btfcar analyse DATASET -o MODEL.btfcar [--subspaces K|auto] [--levels L|auto]\n"
+           "                      [--neighbourhood SPEC|auto] [--seed S] [--no-range]\n"
+           "                      [--range-size N] [--bins B] [--restarts R] [--threads T]\n"
+           "       btfcar analyse DATASET -o OUTDIR --stage segment [options]\n\n"
+           "Analyses a BTF dataset (paper section II) into one model file:\n"
+           "  1. segment  k-means on CIE Lab cumulative histograms of the (view, light)\n"
+           "              images gives K subspace images and the index table;\n"
+           "  2. range    robust photometric stereo on the view closest to the normal\n"
+           "              gives the range map, kept as a small tile (--range-size, 64);\n"
+           "  3. model    each subspace image: spectral PCA, Gaussian-Laplacian pyramid,\n"
+           "              one 2D CAR model per band and level (docs/model.md).\n"
+           "With --stage segment it stops after stage 1 and writes to the folder OUT:\n"
+           "index.png (x = view, y = light, one colour per subspace), index.tsv,\n"
+           "subspaces.tsv, and each subspace image as subspace_NN.exr + .png preview.\n\n"
+           "  --stage segment    stop after the segmentation\n"
+           "  --levels L|auto    pyramid levels (auto: from size and correlation length, <= 3)\n"
+           "  --neighbourhood SPEC|auto  causal offsets row:col,...; auto: Bayesian choice\n"
+           "  --no-range         leave the range map out of the model\n"
+           "  --range-size N     side of the range tile kept in the model (default 64)\n"
            "  --subspaces K|auto number of subspace images, 1..255; auto (default) takes\n"
            "                     the smallest K whose k-means distortion is at most 10%% of\n"
            "                     the K = 1 distortion, at most 20 (docs/segmentation.md)\n"
@@ -95,15 +103,60 @@ static int write_subspace_images(const btf_segmentation *s, const btf_dataset *d
     return 0;
 }
 
+/* The whole analysis into a model file, with a report. */
+static int analyse_all(cli_ctx *c, const char *dataset, const char *out, const btf_segment_opts *so,
+                       const btf_fit_opts *fo, int no_range, int range_size)
+{
+    btf_error err = {0};
+    btf_dataset_opts dopts = {.progress = cli_progress_fn(c)};
+    btf_dataset *ds;
+    double t0 = now();
+    if (btf_dataset_open(dataset, &dopts, &ds, &err) != 0)
+        return cli_lib_error(c, &err);
+    btf_analyse_opts ao = {.segment = *so, .fit = *fo, .no_range = no_range,
+                           .range_size = range_size, .progress = cli_progress_fn(c)};
+    ao.fit.car.warn = c->quiet ? NULL : cli_warning;
+    ao.fit.car.warn_user = c;
+    ao.photostereo.progress = cli_progress_fn(c);
+    btf_model m;
+    int rc = btf_analyse(ds, &ao, &m, &err);
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    double raw = (double)in->n_views * in->n_lights * in->width * in->height * 3.0;
+    btf_dataset_close(ds);
+    if (rc)
+        return cli_lib_error(c, &err);
+    cli_progress_done();
+    rc = btf_model_write(out, &m, &err);
+    unsigned char *bytes = NULL;
+    size_t size = 0;
+    if (rc == 0)
+        rc = btf_model_encode(&m, &bytes, &size, &err);
+    free(bytes);
+    if (rc == 0 && !c->quiet) {
+        printf("model         %s: %zu bytes, %d subspace%s, range tile %dx%d\n", out, size,
+               m.n_subspaces, m.n_subspaces == 1 ? "" : "s", m.range_width, m.range_height);
+        printf("compression   1 : %.0f against the raw 8-bit images (%.0f bytes)\n",
+               raw / (double)size, raw);
+        printf("time          %.1f s\n", now() - t0);
+        for (int k = 0; k < m.n_subspaces; k++)
+            cli_print_subspace(&m.subspaces[k], k);
+    }
+    btf_model_free(&m);
+    return rc ? cli_lib_error(c, &err) : 0;
+}
+
 int cmd_analyse(int argc, char **argv)
 {
     cli_ctx c = {"analyse", 0};
     const char *dataset = NULL, *out = NULL, *stage = NULL;
     btf_segment_opts so = {.kmeans.seed = 1};
+    btf_fit_opts fo = {0};
+    int no_range = 0, range_size = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
         long n;
+        int rc;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             help();
             return 0;
@@ -139,6 +192,15 @@ int cmd_analyse(int argc, char **argv)
             if (!v || cli_parse_int(v, 1, 1000, &n))
                 return cli_usage_error(&c, "--restarts needs a whole number 1..1000");
             so.kmeans.restarts = (int)n, i++;
+        } else if (!strcmp(a, "--no-range")) {
+            no_range = 1;
+        } else if (!strcmp(a, "--range-size")) {
+            if (!v || cli_parse_int(v, 1, 4096, &n))
+                return cli_usage_error(&c, "--range-size needs a whole number 1..4096");
+            range_size = (int)n, i++;
+        } else if (cli_model_option(&c, argc, argv, &i, &fo, &rc)) {
+            if (rc)
+                return rc;
         } else if (!strcmp(a, "--threads")) {
             if (!v || cli_parse_int(v, 1, 64, &n))
                 return cli_usage_error(&c, "--threads needs a whole number 1..64");
@@ -156,8 +218,7 @@ int cmd_analyse(int argc, char **argv)
     if (!out)
         return cli_usage_error(&c, "-o OUT is required");
     if (!stage)
-        return cli_error(&c, "the full analysis (CAR model, model file) is not implemented in this "
-                             "version; run a single stage with --stage segment");
+        return analyse_all(&c, dataset, out, &so, &fo, no_range, range_size);
     if (strcmp(stage, "segment") != 0)
         return cli_usage_error(&c, "unknown stage '%s' (available: segment)", stage);
 

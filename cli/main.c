@@ -13,6 +13,9 @@ static const struct {
 } commands[] = {
     {"generate", cmd_generate, "write a procedural BTF (81 x 81 images) in the UBO2003 layout"},
     {"info", cmd_info, "describe a BTF dataset (layout, images, directions, size)"},
+    {"photostereo", cmd_photostereo, "normals, albedo and range map by robust photometric stereo"},
+    {"texture-fit", cmd_texture_fit, "model one colour texture with the multi-scale 2D CAR model"},
+    {"synthesise", cmd_synthesise, "generate subspace images of a model at any size"},
     {"analyse", cmd_analyse, "analyse a dataset (stage segment: subspace images, index table)"},
 };
 

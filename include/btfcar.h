@@ -103,6 +103,25 @@ int btf_image_write_jpeg(const char *path, const btf_image *img, int quality,
 int btf_image_write_exr(const char *path, const btf_image *img, int half,
                         btf_error *err);
 
+/* Streaming EXR scanline writer (synthesis of images larger than memory): rows
+ * arrive top to bottom in batches of any size; only one chunk (16 rows, ZIP)
+ * is buffered. Like btf_exr_write it is atomic: the file appears at path only
+ * when close succeeds. Any error is final for the writer: close (which then
+ * fails) or abort frees it and removes the temporary file. */
+typedef struct btf_exr_writer btf_exr_writer;
+int btf_exr_writer_open(const char *path, int width, int height, int channels, int half,
+                        btf_exr_writer **out, btf_error *err);
+/* rows: nrows*width*channels floats, interleaved channels; finite values. */
+int btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nrows, btf_error *err);
+/* Finishes and renames into place; an error if not all rows were given.
+ * Always frees w. */
+int btf_exr_writer_close(btf_exr_writer *w, btf_error *err);
+/* Frees w and removes the temporary file; NULL is fine. */
+void btf_exr_writer_abort(btf_exr_writer *w);
+
+/* mkdir -p; an existing folder is fine. */
+int btf_mkdirs(const char *path, btf_error *err);
+
 /* sRGB transfer function (IEC 61966-2-1), per value. */
 float btf_srgb_to_linear(float v);
 float btf_linear_to_srgb(float v);
@@ -341,7 +360,272 @@ int btf_segmentation_write_png(const btf_segmentation *s, int cell, const char *
 
 
 /* ------------------------------- analyse, stage 2: photometric stereo */
-/* (photometric stereo API: src/photostereo.c, src/integrate.c) */
+/* Paper section II.B: the range map of the material is recovered by
+ * photometric stereo from the images of one view under many lights. Normals
+ * and albedo come from a robust Lambertian least-squares fit per pixel
+ * (Woodham 1980); the normals are integrated into a height field. Directions
+ * and normals share one frame: x right, y UP in the image (the row index
+ * grows towards -y), z towards the camera — the frame of btf_dir_to_vec.
+ * Method, robust rule and fallback: docs/photostereo.md. */
+
+typedef enum btf_integrate_method {
+    BTF_INTEGRATE_DEFAULT = 0, /* = BTF_INTEGRATE_POISSON */
+    BTF_INTEGRATE_POISSON,     /* least squares, Neumann boundary: DCT solve
+                                  (Simchony et al. 1990); conjugate gradients
+                                  preconditioned by it when a mask has holes */
+    BTF_INTEGRATE_FC           /* Frankot & Chellappa 1988: FFT, treats the
+                                  surface as periodic (BTF tiles are) */
+} btf_integrate_method;
+
+typedef struct btf_integrate_opts {
+    btf_integrate_method method;
+    double max_slope;   /* 0: 10; |dz/dx| and |dz/dy| are clamped to it, so
+                           normals near the horizon (n_z -> 0) stay finite */
+    double tolerance;   /* 0: 1e-7; relative residual at which the masked
+                           Poisson solver stops */
+    int max_iter;       /* 0: 2000 conjugate-gradient iterations at most */
+} btf_integrate_opts;
+
+/* Integrates a normal map (3 channels x, y, z in the frame above) into a
+ * height field in pixel units: dz/dcolumn = -n_x/n_z, dz/drow = +n_y/n_z.
+ * mask: NULL (every pixel) or an image of the same size whose non-zero
+ * pixels are valid. Output: 1 channel, zero mean over the valid pixels, 0
+ * elsewhere; never NaN. A zero normal (0, 0, 0) counts as flat. */
+int btf_integrate(const btf_image *normals, const btf_image *mask,
+                  const btf_integrate_opts *opts, btf_image *height, btf_error *err);
+
+typedef struct btf_photostereo_opts {
+    double dark;          /* 0: 0.1; samples below dark x the pixel's reference
+                             level (its brightest after trim_high) are shadowed
+                             and excluded; < 0: no dark rule */
+    double trim_low;      /* 0: none; fraction of the darkest samples left out
+                             of the first fit */
+    double trim_high;     /* 0: 0.1; fraction of the brightest samples left out
+                             of the first fit (highlights); < 0: none */
+    double outlier;       /* 0: 3; samples whose residual exceeds this many
+                             robust standard deviations are excluded */
+    double saturation;    /* 0: 0.99; a sample with any raw channel at or above
+                             it is excluded (clipped); < 0: no such rule (HDR) */
+    double max_condition; /* 0: 1e4; largest condition number of sum l l^T
+                             accepted, for the whole light set (else an error)
+                             and per pixel (else the fallback) */
+    double specular_cone; /* 0: 20; degrees: a sample brighter than the fit
+                             whose half vector (of the light and the view
+                             (0, 0, 1)) lies within this angle of the normal
+                             is a highlight and excluded; < 0: no such rule */
+    int iterations;       /* 0: 5 reweighting passes at most */
+    int plain;            /* 1: plain least squares on every unsaturated sample
+                             (Woodham), no robust rule: for comparison */
+    btf_integrate_opts integrate;
+    btf_read_opts read;   /* how files are decoded (manifest, dataset):
+                             read.linear_8bit for linear 8-bit data; the
+                             channels field is ignored (files give RGB) */
+    int threads;          /* 0: all CPUs */
+    btf_progress_fn progress;
+    void *progress_user;
+} btf_photostereo_opts;
+
+typedef struct btf_ps_result {
+    btf_image normal;      /* W x H x 3: unit normals (x, y, z); 0 outside the mask */
+    btf_image albedo;      /* W x H x C (C of the inputs), light intensity divided out */
+    btf_image height;      /* W x H x 1: range map, pixel units, zero mean in the mask */
+    btf_image lights_used; /* W x H x 1: lights in the pixel's final fit (0: fallback) */
+    btf_image valid;       /* W x H x 1: 1 fitted from >= 3 lights, 0 fallback or outside */
+    int pixels;            /* inside the mask */
+    int fitted, fallback;  /* pixels with a fit / with the fallback normal (0, 0, 1) */
+    double condition;      /* condition number of sum l l^T over all lights */
+    int view;              /* dataset: the view used; -1 otherwise */
+    btf_dir view_dir;
+} btf_ps_result;
+
+/* Photometric stereo on `count` >= 3 images of one size and channel count
+ * (1 or 3), lit from lights[3 i .. 3 i + 2] (any length, normalised here;
+ * not all (nearly) coplanar). intensity: NULL, or count x 3 positive RGB
+ * light intensities that are divided out. mask: NULL or an image of the same
+ * size whose non-zero pixels are worked on. The height is integrated with
+ * opts->integrate. */
+int btf_photostereo(const btf_image *images, int count, const double *lights,
+                    const double *intensity, const btf_image *mask,
+                    const btf_photostereo_opts *opts, btf_ps_result *out, btf_error *err);
+/* The same on a BTF dataset: the images of the view closest to theta_v = 0
+ * under all its lights (btf_dir_to_vec), read one at a time. */
+int btf_photostereo_dataset(const btf_dataset *ds, const btf_image *mask,
+                            const btf_photostereo_opts *opts, btf_ps_result *out,
+                            btf_error *err);
+/* The same from a manifest: a TSV file with a header line naming its columns:
+ * path (relative to the manifest's folder, or absolute), the light either as
+ * theta_l, phi_l (degrees) or as lx, ly, lz (a vector in the frame above),
+ * and optionally r, g, b (the light's intensity). */
+int btf_photostereo_manifest(const char *path, const btf_image *mask,
+                             const btf_photostereo_opts *opts, btf_ps_result *out,
+                             btf_error *err);
+void btf_ps_result_free(btf_ps_result *r);
+
+/* Previews for people: normals as RGB (n + 1) / 2 (the usual normal-map
+ * colours once 8-bit encoded), and the range map as a shaded relief (lit
+ * from the top left, exaggerated to a fixed mean slope, tinted by height).
+ * Both are linear RGB for btf_image_write_png. */
+int btf_normals_preview(const btf_image *normals, btf_image *out, btf_error *err);
+int btf_height_relief(const btf_image *height, const btf_image *mask, btf_image *out,
+                      btf_error *err);
+/* Writes normals.exr, albedo.exr, height.exr (float) and normals.png,
+ * albedo.png, height.png into outdir (created if missing), atomically. */
+int btf_ps_write(const btf_ps_result *r, const btf_image *mask, const char *outdir,
+                 btf_error *err);
+
+/* ------------------------------ analyse, stage 3: the CAR model; the model */
+
+/* Paper section II.C. Each subspace image is decorrelated into 3 mono-spectral
+ * bands (PCA, Karhunen-Loeve), each band decomposed into a Gaussian-Laplacian
+ * pyramid, and each sub-band (band, level) modelled by a 2D causal
+ * auto-regressive field  Y_r = gamma X_r + e_r,  e_r ~ N(0, sigma^2),  where
+ * X_r holds the sub-band's values at the causal neighbourhood offsets. */
+
+#define BTF_CAR_MAX_NEIGHBOURS 24
+#define BTF_MAX_LEVELS 8
+
+/* A causal offset: row < 0, or row == 0 and col < 0. */
+typedef struct btf_offset {
+    int8_t row, col;
+} btf_offset;
+
+typedef struct btf_car_band {
+    int n;                                   /* neighbours, 0..BTF_CAR_MAX_NEIGHBOURS */
+    btf_offset offsets[BTF_CAR_MAX_NEIGHBOURS];
+    float gamma[BTF_CAR_MAX_NEIGHBOURS];     /* coefficients, one per offset */
+    float sigma;                             /* noise standard deviation, >= 0 */
+    float mean;                              /* mean of the sub-band */
+} btf_car_band;
+
+typedef struct btf_subspace_model {
+    int view, light;           /* the representative image's pair; -1 for a texture */
+    int width, height;         /* size of the analysed image */
+    float mean[3];             /* mean linear RGB */
+    float basis[9];            /* row-major 3x3: band_i = sum_j basis[3i+j] (rgb_j - mean_j);
+                                  orthonormal, so rgb = mean + basis^T band */
+    int levels;                /* pyramid levels, 1..BTF_MAX_LEVELS; level 0 is the finest */
+    btf_car_band bands[3][BTF_MAX_LEVELS]; /* [spectral band][level] */
+} btf_subspace_model;
+
+typedef struct btf_model {
+    btf_dirset views, lights;  /* count 0 for a single texture */
+    int n_subspaces;
+    uint8_t *index;            /* [view * lights.count + light] -> subspace; NULL for a texture */
+    btf_subspace_model *subspaces;
+    /* The range map (paper section II.B) as a small periodic tile: heights in
+     * texel units of the analysed images; NULL when absent. Normals follow
+     * from it. */
+    int range_width, range_height;
+    float *range;
+    float range_texel;         /* analysed-image texels per range-tile texel */
+} btf_model;
+
+void btf_model_free(btf_model *m);
+
+/* Warnings from a long computation (e.g. a model made stable by force). */
+typedef void (*btf_warning_fn)(void *user, const char *message);
+
+/* Neighbourhood SPEC: comma-separated causal "row:col" offsets, e.g.
+ * "0:-1,-1:0,-1:-1,-1:1". A non-causal or repeated offset is an error. */
+int btf_neighbourhood_parse(const char *spec, btf_offset *offsets, int *n, btf_error *err);
+void btf_neighbourhood_format(const btf_offset *offsets, int n, char *buf, size_t len);
+
+typedef struct btf_car_fit_opts {
+    int n_fixed;                          /* 0: choose by the Bayesian rule */
+    btf_offset fixed[BTF_CAR_MAX_NEIGHBOURS];
+    int max_neighbours;                   /* auto: largest candidate; 0: 14 */
+    btf_warning_fn warn;
+    void *warn_user;
+    const char *what;                     /* names the sub-band in warnings */
+} btf_car_fit_opts;
+
+#define BTF_CAR_MAX_CANDIDATES 16
+typedef struct btf_car_fit_info {
+    int candidates;                       /* evaluated */
+    int size[BTF_CAR_MAX_CANDIDATES];     /* their neighbour counts */
+    double log_evidence[BTF_CAR_MAX_CANDIDATES];
+    int chosen;                           /* index into the above; -1: none fitted */
+    double shrink;                        /* 1: as estimated; < 1: gamma scaled for stability */
+    long pixels;                          /* equations used (t) */
+} btf_car_fit_info;
+
+/* Fits the CAR model to one sub-band (w x h doubles): Bayesian estimates
+ * gamma = V_xx^-1 V_xy, sigma^2 from lambda, with the neighbourhood chosen by
+ * its posterior probability among a nested family of candidates (or fixed).
+ * Constant, tiny or ill-conditioned bands degrade to smaller models; an
+ * unstable estimate is shrunk until stable (a warning). Output always finite. */
+int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
+                btf_car_band *out, btf_car_fit_info *info, btf_error *err);
+/* 1 when the recursion 1/A(z1, z2) of the band's model is stable. */
+int btf_car_is_stable(const btf_car_band *b);
+/* sigma^2 times the mean of 1/|A|^2 over the frequency torus: the variance of
+ * the stationary field (without its mean). */
+double btf_car_stationary_variance(const btf_car_band *b);
+
+/* The model file MODEL.btfcar (docs/model-format.md): little-endian,
+ * versioned, CRC-32 checked. Writing is atomic; reading a corrupt, truncated
+ * or foreign file is an error naming it, never a crash. */
+int btf_model_write(const char *path, const btf_model *m, btf_error *err);
+int btf_model_read(const char *path, btf_model *m, btf_error *err);
+/* The same from and to memory (the writer's buffer is malloc'd). */
+int btf_model_encode(const btf_model *m, unsigned char **data, size_t *size, btf_error *err);
+int btf_model_decode(const unsigned char *data, size_t size, const char *name, btf_model *m,
+                     btf_error *err);
+
+typedef struct btf_fit_opts {
+    int levels;               /* pyramid levels 1..BTF_MAX_LEVELS; 0: auto (docs/model.md) */
+    btf_car_fit_opts car;     /* neighbourhood (fixed or auto), warnings */
+} btf_fit_opts;
+
+/* Models one subspace image (linear RGB): decorrelation, pyramid, one CAR
+ * model per band and level. view and light are left -1. */
+int btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts, btf_subspace_model *out,
+                     btf_error *err);
+/* A model of one ordinary colour texture: one subspace, no directions, no
+ * index table, no range map. */
+int btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_model *out,
+                    btf_error *err);
+/* The automatic number of pyramid levels for a band (docs/model.md). */
+int btf_auto_levels(const double *band, int w, int h);
+
+typedef struct btf_analyse_opts {
+    btf_segment_opts segment;         /* stage 1 */
+    btf_photostereo_opts photostereo; /* stage 2 */
+    btf_fit_opts fit;                 /* stage 3 */
+    int no_range;                     /* 1: no range map in the model */
+    int range_size;                   /* side of the range tile; 0: 64 (at most the image) */
+    btf_progress_fn progress;         /* stage progress (features, fits) */
+    void *progress_user;
+} btf_analyse_opts;
+
+/* All analysis stages on a dataset (paper section II): segmentation into
+ * subspace images, the range map by photometric stereo (view closest to
+ * theta_v = 0), and the CAR model of every subspace image. */
+int btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
+                btf_error *err);
+
+/* ------------------------------------------------------ synthesis (CPU) */
+
+/* Receives synthesised rows in order: rows [y, y + nrows) of width * channels
+ * floats each. Return non-zero (and fill err) to stop. */
+typedef int (*btf_rows_fn)(void *user, int y, int nrows, const float *rows, btf_error *err);
+
+/* Synthesises subspace image `subspace` of the model at width x height
+ * (any size >= 1), streaming: memory grows with the width, not the height.
+ * Per spectral band and pyramid level the CAR recursion runs with a burn-in
+ * margin (docs/synthesis.md) so the field is stationary from its first
+ * pixel; the pyramid is collapsed and the colour decorrelation undone. The
+ * noise is a counter-based generator (gpu/btf_noise.h) of (seed, subspace,
+ * band, level, row, column): the same seed gives the same bytes. */
+int btf_synthesise(const btf_model *m, int subspace, int width, int height, uint64_t seed,
+                   btf_rows_fn fn, void *user, btf_error *err);
+/* The same into an image (linear RGB). */
+int btf_synthesise_image(const btf_model *m, int subspace, int width, int height, uint64_t seed,
+                         btf_image *out, btf_error *err);
+/* One CAR field alone (its mean included), 1 channel, streamed the same way;
+ * stream names the noise stream. For tests and benchmarks. */
+int btf_car_synthesise_field(const btf_car_band *band, int width, int height, uint64_t seed,
+                             uint32_t stream, btf_rows_fn fn, void *user, btf_error *err);
 
 #ifdef __cplusplus
 }

@@ -17,25 +17,29 @@
  *    from btf_tmp_path() and the file appears only through btf_commit_file().
  *  - Files are untrusted: image sides are limited to 65536, the chunk offset
  *    table must fit in the file, every chunk must lie inside the file and
- *    inside the image before it is decoded, and one chunk may not unpack to
- *    more than BTF_EXR_MAX_CHUNK_BYTES. The library's own chunk-table
- *    "reconstruction" is switched off: a damaged table is an error, not a
- *    guess.
+ *    inside the image (all are checked before the image is allocated), and
+ *    one chunk may not unpack to more than BTF_EXR_MAX_CHUNK_BYTES. The
+ *    library's chunk-table "reconstruction" is switched off: a damaged table
+ *    is an error, not a guess.
  *
  * Reading: part 0 only (other parts are ignored). Channels R, G, B give a
  * colour image; else Y, else a lone channel of any name gives grey. Other
  * channels (A, Z, ...) are skipped. Deep parts, UINT or subsampled image
  * channels and luminance/chroma files (Y with RY/BY) are BTF_E_UNSUPPORTED.
- * Tiled parts are read at their full-resolution level. Decoding goes chunk by
- * chunk through one scratch buffer, so memory is the image plus one chunk.
- * Any NaN or Inf sample is BTF_E_DATA naming the pixel.
+ * Tiled parts are read at their full-resolution level. All compressions of
+ * OpenEXRCore 3.1 are read; it has no DWAA/DWAB codec, so those files are
+ * BTF_E_UNSUPPORTED too. Decoding goes chunk by chunk through one scratch
+ * buffer, so memory is the image plus one chunk. Any NaN or Inf sample is
+ * BTF_E_DATA naming the pixel.
  *
  * Writing: channel "Y", or "B", "G", "R" (EXR stores channels sorted by
  * name), HALF or FLOAT, scanlines in increasing y, ZIP compression: lossless
  * deflate over 16-scanline chunks, read by every EXR implementation, good on
  * smooth data and deterministic (the same pixels give the same bytes).
  * Non-finite input is refused (BTF_E_ARG) because such a file could not be
- * read back; half output is clamped to +-65504 so it never holds Inf.
+ * read back; half output is clamped to +-65504 so it never holds Inf. A
+ * chunk that does not shrink is stored raw (see compress_or_store: works
+ * around OpenEXRCore 3.1.5 writing unreadable chunks).
  */
 #include "internal.h"
 
@@ -459,7 +463,7 @@ static int for_each_chunk(exr_in *in, chunk_fn fn, void *user, btf_error *err)
                                             : each_scanline_chunk(in, fn, user, err);
 }
 
-/* The probe's chunk visitor: check_chunk already did the work. */
+/* The chunk-table walk's visitor: check_chunk already did the work. */
 static int chunk_ok(exr_in *in, const exr_chunk_info_t *ci, int cx, int cy, void *user,
                     btf_error *err)
 {
@@ -648,6 +652,10 @@ int btf_exr_read(const char *path, int channels, btf_image *out, btf_error *err)
     int rc = in_open(&in, path, err);
     if (!rc)
         rc = in_inspect(&in, err);
+    /* A cut-off or damaged chunk table fails here, before the image is
+     * allocated (a header may claim 65536 x 65536 in a few kilobytes). */
+    if (!rc)
+        rc = for_each_chunk(&in, chunk_ok, NULL, err);
     if (!rc)
         rc = read_pixels(&in, channels, out, err);
     in_close(&in);

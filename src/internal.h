@@ -34,13 +34,32 @@ int btf_write_file_atomic(const char *path, const void *data, size_t n, btf_erro
 int btf_read_file(const char *path, size_t max_bytes, unsigned char **data,
                   size_t *n, btf_error *err);
 
-/* mkdir -p; an existing folder is fine. */
-int btf_mkdirs(const char *path, btf_error *err);
 /* Joins a folder and a name into out (size n); BTF_E_ARG when too long. */
 int btf_path_join(char *out, size_t n, const char *dir, const char *name, btf_error *err);
 
 /* Number of online CPUs (at least 1). */
 int btf_cpu_count(void);
+
+/* Spectral decorrelation: src/decorrelate.c. Mean colour, orthonormal 3x3
+ * basis (rows by decreasing variance) and the band variances. */
+int btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
+             btf_error *err);
+/* bands[b][i] = basis row b . (rgb_i - mean), in double. */
+void btf_decorrelate(const btf_image *img, const float mean[3], const float basis[9],
+                     double *bands[3]);
+
+/* Gaussian-Laplacian pyramid: src/pyramid.c. */
+typedef struct btf_pyramid {
+    int levels;
+    int width[BTF_MAX_LEVELS], height[BTF_MAX_LEVELS];
+    double *level[BTF_MAX_LEVELS]; /* Laplacian levels; the last is the low-pass */
+} btf_pyramid;
+int btf_pyr_down(const double *src, int w, int h, double **dst, btf_error *err);
+int btf_pyr_up(const double *src, int w2, int h2, int w, int h, double **dst, btf_error *err);
+int btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid *p,
+                      btf_error *err);
+int btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err);
+void btf_pyramid_free(btf_pyramid *p);
 
 /* Tab-separated manifests: src/tsv.c */
 typedef struct btf_tsv {
@@ -61,21 +80,6 @@ int btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double 
 int btf_exr_probe(const char *path, btf_image_header *hdr, btf_error *err);
 int btf_exr_read(const char *path, int channels, btf_image *out, btf_error *err);
 int btf_exr_write(const char *path, const btf_image *img, int half, btf_error *err);
-/* Streaming scanline writer (synthesis of images larger than memory): rows
- * arrive top to bottom in batches of any size; only one chunk (16 rows, ZIP)
- * is buffered. Like btf_exr_write it is atomic: the file appears at path only
- * when close succeeds. Any error is final for the writer: close (which then
- * fails) or abort frees it and removes the temporary file. */
-typedef struct btf_exr_writer btf_exr_writer;
-int btf_exr_writer_open(const char *path, int width, int height, int channels, int half,
-                        btf_exr_writer **out, btf_error *err);
-/* rows: nrows*width*channels floats, interleaved channels; finite values. */
-int btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nrows, btf_error *err);
-/* Finishes and renames into place; an error if not all rows were given.
- * Always frees w. */
-int btf_exr_writer_close(btf_exr_writer *w, btf_error *err);
-/* Frees w and removes the temporary file; NULL is fine. */
-void btf_exr_writer_abort(btf_exr_writer *w);
 
 /* Procedural materials (src/material.c): precomputation for rendering many
  * (view, light) pairs. What a view sees depends only on the view, and what a

@@ -5,25 +5,29 @@
  * setting (as in file, grey, RGB). The reader must never crash, leak, print
  * or return a half-filled image; failures must be one line naming the file.
  *
- * Build from the repository root (the whole library is linked, as `make fuzz`
- * does; cv_bridge.cpp only because image.c refers to it):
+ * Build from the repository root. The reader needs only exr_io.c, util.c and
+ * image.c (which refers to the OpenCV bridge); `make fuzz` links the whole
+ * library instead, which works as well:
  *
  *   mkdir -p build-fuzz
  *   clang++ -std=c++17 -g -O1 -fsanitize=address,undefined -fno-sanitize=vptr -fPIC \
  *       -Iinclude -Isrc -I/usr/include/opencv4 -c src/cv_bridge.cpp \
  *       -o build-fuzz/cv_bridge.o
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -ffp-contract=off \
- *       -Iinclude -Isrc -Ibuild/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
+ *       -Iinclude -Isrc -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
  *       -DBTF_EXR_MAX_CHUNK_BYTES='(64u << 20)' \
- *       -o build-fuzz/fuzz_exr tests/fuzz_exr.c src/[a-z]*.c build-fuzz/cv_bridge.o \
- *       -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
- *       -lvulkan -lstdc++ -lm -lpthread
+ *       -o build-fuzz/fuzz_exr tests/fuzz_exr.c src/exr_io.c src/util.c src/image.c \
+ *       build-fuzz/cv_bridge.o -lopencv_imgcodecs -lopencv_imgproc -lopencv_core \
+ *       -lOpenEXRCore-3_1 -lstdc++ -lm -lpthread
  *
- * (add the gpu/ sources if the library has them; -DBTF_EXR_MAX_CHUNK_BYTES
- * keeps the library's per-chunk buffers under libFuzzer's memory limit.)
- * Run with a seed corpus of small EXR files, e.g. those test_exr writes:
+ * (-DBTF_EXR_MAX_CHUNK_BYTES keeps the library's per-chunk buffers well under
+ * libFuzzer's default 2 GB memory limit; -fno-sanitize=vptr because the C
+ * link lacks the C++ UBSan runtime.)
  *
- *   mkdir -p build-fuzz/corpus_exr   (and copy a few small .exr files there)
+ * Run with a seed corpus of small EXR files (a few KB each: btf_exr_write
+ * output, and files from other writers with other compressions and tiles):
+ *
+ *   mkdir -p build-fuzz/corpus_exr   (and copy the seed files there)
  *   ./build-fuzz/fuzz_exr -max_total_time=60 -max_len=65536 build-fuzz/corpus_exr
  *
  * OpenEXRCore itself is not instrumented unless rebuilt with the sanitizers,

@@ -701,6 +701,84 @@ static void dwa_is_unsupported(void **state)
     assert_null(b.data);
 }
 
+static uint32_t le32(const unsigned char *b)
+{
+    return b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+/* Relabels a single-part scanline file as deep scanline (the core API can
+ * write deep files only with sample tables): type "deepscanline", the
+ * non-image version flag, and the "version" and "chunkCount" attributes deep
+ * parts require; the offset table moves with the header. The pixel data is
+ * not deep data, but the reader must refuse the part before touching it. */
+static void relabel_as_deep(const char *path, int nchunks)
+{
+    size_t n;
+    unsigned char *d = slurp(path, &n);
+    size_t p = 8; /* magic and version, then attributes until an empty name */
+    while (p < n && d[p]) {
+        size_t name = strlen((const char *)d + p) + 1;
+        size_t type = strlen((const char *)d + p + name) + 1;
+        p += name + type + 4 + le32(d + p + name + type);
+        assert_true(p < n);
+    }
+    static const char old[] = "type\0string\0\15\0\0\0scanlineimage";
+    static const char repl[] = "type\0string\0\14\0\0\0deepscanline";
+    unsigned char extra[64];
+    size_t ne = 0;
+    memcpy(extra + ne, "version\0int\0\4\0\0\0\1\0\0\0", 20), ne += 20;
+    memcpy(extra + ne, "chunkCount\0int\0\4\0\0\0", 19), ne += 19;
+    for (int k = 0; k < 4; k++)
+        extra[ne++] = (unsigned char)((unsigned)nchunks >> (8 * k));
+    unsigned char *o = malloc(n + ne + 8);
+    assert_non_null(o);
+    unsigned char *at = memmem(d, p, old, sizeof old - 1);
+    assert_non_null(at);
+    size_t pre = (size_t)(at - d), m = 0;
+    memcpy(o, d, pre), m = pre;
+    memcpy(o + m, repl, sizeof repl - 1), m += sizeof repl - 1;
+    size_t rest = p - pre - (sizeof old - 1);
+    memcpy(o + m, at + sizeof old - 1, rest), m += rest;
+    memcpy(o + m, extra, ne), m += ne;
+    o[m++] = 0;
+    long long delta = (long long)m - (long long)(p + 1);
+    for (int k = 0; k < nchunks; k++) {
+        uint64_t off = 0;
+        for (int b = 0; b < 8; b++)
+            off |= (uint64_t)d[p + 1 + 8 * k + b] << (8 * b);
+        off += (uint64_t)delta;
+        for (int b = 0; b < 8; b++)
+            o[m++] = (unsigned char)(off >> (8 * b));
+    }
+    size_t body = p + 1 + 8 * (size_t)nchunks;
+    memcpy(o + m, d + body, n - body), m += n - body;
+    o[5] |= 0x08; /* the non-image (deep) flag */
+    tu_write_file(path, o, m);
+    free(o);
+    free(d);
+}
+
+static void deep_is_unsupported(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image b;
+    const char *p = tu_fmt("%s/deep.exr", dir);
+    raw_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 6, 5, 1, {"Y"},
+                  {EXR_PIXEL_FLOAT}};
+    raw_write(p, &s, pattern);
+    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    btf_image_free(&b);
+    relabel_as_deep(p, 5); /* NONE: one scanline per chunk */
+    int rc = btf_exr_read(p, 0, &b, &e);
+    if (rc != BTF_E_UNSUPPORTED)
+        print_error("deep read gave %d: %s\n", rc, e.msg);
+    assert_int_equal(rc, BTF_E_UNSUPPORTED);
+    assert_string_equal(e.msg, tu_fmt("%s: deep EXR images are not supported", p));
+    assert_null(b.data);
+    assert_int_equal(btf_exr_probe(p, &(btf_image_header){0}, &e), BTF_E_UNSUPPORTED);
+}
+
 static void unsupported_layouts(void **state)
 {
     (void)state;
@@ -849,6 +927,46 @@ static void garbage_and_missing(void **state)
     assert_int_equal(btf_exr_read(NULL, 0, &b, &e), BTF_E_ARG);
 }
 
+/* Rewrites the data window of an EXR file in place. */
+static void patch_data_window(const char *path, int x0, int y0, int x1, int y1)
+{
+    size_t n;
+    unsigned char *d = slurp(path, &n);
+    static const char key[] = "dataWindow\0box2i\0\20\0\0\0";
+    unsigned char *at = memmem(d, n, key, sizeof key - 1);
+    assert_non_null(at);
+    int32_t v[4] = {x0, y0, x1, y1};
+    for (int k = 0; k < 4; k++)
+        for (int b = 0; b < 4; b++)
+            at[sizeof key - 1 + 4 * k + b] = (unsigned char)((uint32_t)v[k] >> (8 * b));
+    tu_write_file(path, d, n);
+    free(d);
+}
+
+/* Headers that claim huge images are refused before anything is allocated
+ * for them (this runs under ASan, which would abort on a 48 GB calloc). */
+static void absurd_sizes(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image a;
+    const char *p = tu_fmt("%s/huge.exr", dir);
+    const int windows[][4] = {
+        {0, 0, 69999, 15},              /* wider than 65536 */
+        {0, 0, 15, 65536},              /* 65537 rows */
+        {0, 0, 65535, 65535},           /* allowed size, but 4096 chunks */
+        {-2147483647, 0, 2147483647, 15}, /* overflowing width */
+        {5, 5, 4, 20},                  /* empty */
+    };
+    for (int i = 0; i < 5; i++) {
+        half_exact_image(&a, 16, 16, 1, 3);
+        TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+        btf_image_free(&a);
+        patch_data_window(p, windows[i][0], windows[i][1], windows[i][2], windows[i][3]);
+        assert_rejected(p);
+    }
+}
+
 /* OpenEXR must report through btf_error, never on stderr. */
 static void library_is_silent(void **state)
 {
@@ -911,10 +1029,12 @@ int main(void)
         cmocka_unit_test(other_layouts),
         cmocka_unit_test(every_compression),
         cmocka_unit_test(dwa_is_unsupported),
+        cmocka_unit_test(deep_is_unsupported),
         cmocka_unit_test(unsupported_layouts),
         cmocka_unit_test(truncated_files),
         cmocka_unit_test(corrupt_bytes),
         cmocka_unit_test(garbage_and_missing),
+        cmocka_unit_test(absurd_sizes),
         cmocka_unit_test(library_is_silent),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

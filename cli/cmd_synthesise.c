@@ -1,0 +1,178 @@
+/* cmd_synthesise.c — btfcar synthesise: subspace images of any size. */
+#include "cli.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+
+static void help(void)
+{
+    printf("usage: btfcar synthesise MODEL --size WxH -o OUTDIR [--subspace LIST|all]\n"
+           "                        [--seed S] [--backend cpu] [--preview] [--quiet]\n\n"
+           "Generates subspace images of the model at any size, seamless and stationary,\n"
+           "streaming rows to OUTDIR/subspace_NN.exr (linear float RGB) as they are\n"
+           "produced: memory grows with the width, not the height (docs/synthesis.md).\n\n"
+           "  --size WxH        output size in pixels, each side 1..16777216\n"
+           "  --subspace LIST   comma-separated subspace numbers, or all (default)\n"
+           "  --seed S          noise seed (default 1); the same seed gives the same bytes\n"
+           "  --backend cpu     the CPU reference (the only backend in this version)\n"
+           "  --preview         also write subspace_NN.png (8-bit sRGB; up to 8192x8192)\n"
+           "  --half            write half-float EXR (default: float)\n"
+           "  --quiet           print nothing but errors\n");
+}
+
+typedef struct sink {
+    btf_exr_writer *exr;
+    btf_image *preview;
+    int height;
+    btf_progress_fn progress;
+} sink;
+
+static int put_rows(void *user, int y, int nrows, const float *rows, btf_error *err)
+{
+    sink *s = user;
+    if (s->preview)
+        memcpy(s->preview->data + (size_t)y * s->preview->width * 3, rows,
+               (size_t)nrows * s->preview->width * 3 * sizeof(float));
+    if (s->progress && ((y + nrows) % 256 == 0 || y + nrows == s->height))
+        s->progress(NULL, (double)(y + nrows) / s->height, "synthesising");
+    return btf_exr_writer_put_rows(s->exr, rows, nrows, err);
+}
+
+/* "0,3,5" or "all" into a 0/1 table of m->n_subspaces entries. */
+static int parse_list(const char *s, int n, unsigned char *pick)
+{
+    memset(pick, !strcmp(s, "all"), (size_t)n);
+    if (!strcmp(s, "all"))
+        return 0;
+    while (*s) {
+        char *end;
+        long v = strtol(s, &end, 10);
+        if (end == s || v < 0 || v >= n || (*end != ',' && *end))
+            return -1;
+        pick[v] = 1;
+        s = *end ? end + 1 : end;
+    }
+    return 0;
+}
+
+static int synth_one(const cli_ctx *c, const btf_model *m, int k, int w, int h, uint64_t seed,
+                     const char *outdir, int preview, int half, btf_error *err)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/subspace_%02d.exr", outdir, k);
+    sink s = {.height = h, .progress = cli_progress_fn(c)};
+    btf_image img = {0};
+    int rc = 0;
+    if (preview && (rc = btf_image_alloc(&img, w, h, 3, err)))
+        return rc;
+    s.preview = preview ? &img : NULL;
+    rc = btf_exr_writer_open(path, w, h, 3, half, &s.exr, err);
+    if (rc == 0) {
+        rc = btf_synthesise(m, k, w, h, seed, put_rows, &s, err);
+        if (rc)
+            btf_exr_writer_abort(s.exr);
+        else
+            rc = btf_exr_writer_close(s.exr, err);
+    }
+    if (rc == 0 && preview) {
+        snprintf(path, sizeof path, "%s/subspace_%02d.png", outdir, k);
+        rc = btf_image_write_png(path, &img, err);
+    }
+    btf_image_free(&img);
+    return rc;
+}
+
+int cmd_synthesise(int argc, char **argv)
+{
+    cli_ctx c = {"synthesise", 0};
+    const char *model = NULL, *outdir = NULL, *list = "all", *backend = "cpu";
+    int w = 0, h = 0, preview = 0, half = 0;
+    uint64_t seed = 1;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            help();
+            return 0;
+        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
+            c.quiet = 1;
+        } else if (!strcmp(a, "--preview")) {
+            preview = 1;
+        } else if (!strcmp(a, "--half")) {
+            half = 1;
+        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+            if (!v)
+                return cli_usage_error(&c, "-o needs a folder");
+            outdir = v, i++;
+        } else if (!strcmp(a, "--size")) {
+            if (!v || cli_parse_size(v, &w, &h) || w > 16777216 || h > 16777216)
+                return cli_usage_error(&c, "--size needs WxH, each 1..16777216");
+            i++;
+        } else if (!strcmp(a, "--subspace")) {
+            if (!v)
+                return cli_usage_error(&c, "--subspace needs a list or all");
+            list = v, i++;
+        } else if (!strcmp(a, "--seed")) {
+            if (!v || cli_parse_u64(v, &seed))
+                return cli_usage_error(&c, "--seed needs a non-negative whole number");
+            i++;
+        } else if (!strcmp(a, "--backend")) {
+            if (!v)
+                return cli_usage_error(&c, "--backend needs cpu");
+            backend = v, i++;
+        } else if (a[0] == '-' && a[1]) {
+            return cli_usage_error(&c, "unknown option '%s'", a);
+        } else if (!model) {
+            model = a;
+        } else {
+            return cli_usage_error(&c, "unexpected argument '%s'", a);
+        }
+    }
+    if (!model)
+        return cli_usage_error(&c, "MODEL is required");
+    if (!w)
+        return cli_usage_error(&c, "--size WxH is required");
+    if (!outdir)
+        return cli_usage_error(&c, "-o OUTDIR is required");
+    if (strcmp(backend, "cpu") != 0)
+        return cli_error(&c, "backend '%s' is not available in this version (available: cpu)",
+                         backend);
+    if (preview && (double)w * h > 8192.0 * 8192.0)
+        return cli_usage_error(&c, "--preview is limited to 8192x8192 pixels");
+    btf_error err = {0};
+    btf_model m;
+    if (btf_model_read(model, &m, &err) != 0)
+        return cli_lib_error(&c, &err);
+    unsigned char *pick = calloc((size_t)m.n_subspaces, 1);
+    int rc = pick ? 0 : 1;
+    if (rc == 0 && parse_list(list, m.n_subspaces, pick) != 0) {
+        free(pick);
+        int n = m.n_subspaces;
+        btf_model_free(&m);
+        return cli_usage_error(&c, "--subspace '%s': expected numbers 0..%d or all", list, n - 1);
+    }
+    if (rc == 0)
+        rc = btf_mkdirs(outdir, &err);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    int done = 0;
+    for (int k = 0; rc == 0 && k < m.n_subspaces; k++)
+        if (pick[k]) {
+            rc = synth_one(&c, &m, k, w, h, seed, outdir, preview, half, &err);
+            done++;
+        }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    free(pick);
+    btf_model_free(&m);
+    if (rc)
+        return cli_lib_error(&c, &err);
+    cli_progress_done();
+    double s = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    if (!c.quiet)
+        printf("synthesised %d subspace image%s of %dx%d in %.3f s (%.1f Mpixel/s) into %s\n", done,
+               done == 1 ? "" : "s", w, h, s, (double)w * h * done / (s > 0 ? s : 1e-9) / 1e6,
+               outdir);
+    return 0;
+}

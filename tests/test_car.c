@@ -1,0 +1,428 @@
+/* test_car.c — the CAR model: decorrelation, pyramid, estimation, Bayesian
+ * neighbourhood selection, stability, synthesis (issue 5 points 1-6, 9). */
+#include "testutil.h"
+
+#include "internal.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static btf_car_band model(const char *spec, const float *gamma, float sigma, float mean)
+{
+    btf_car_band b;
+    memset(&b, 0, sizeof b);
+    btf_error e = {0};
+    assert_int_equal(btf_neighbourhood_parse(spec, b.offsets, &b.n, &e), 0);
+    for (int i = 0; i < b.n; i++)
+        b.gamma[i] = gamma[i];
+    b.sigma = sigma;
+    b.mean = mean;
+    return b;
+}
+
+typedef struct collect {
+    double *data;
+    int width;
+    double sum, sum2;
+    long n;
+    int finite;
+} collect;
+
+static int collect_rows(void *user, int y, int nrows, const float *rows, btf_error *err)
+{
+    (void)err;
+    collect *c = user;
+    size_t n = (size_t)nrows * c->width;
+    for (size_t i = 0; i < n; i++) {
+        double v = rows[i];
+        if (!isfinite(v))
+            c->finite = 0;
+        if (c->data)
+            c->data[(size_t)y * c->width + i] = v;
+        c->sum += v;
+        c->sum2 += v * v;
+    }
+    c->n += (long)n;
+    return 0;
+}
+
+/* A field of the model, w x h, into a malloc'd double array. */
+static double *field(const btf_car_band *b, int w, int h, uint64_t seed)
+{
+    collect c = {.data = malloc((size_t)w * h * sizeof(double)), .width = w, .finite = 1};
+    btf_error e = {0};
+    TU_OK(btf_car_synthesise_field(b, w, h, seed, 7, collect_rows, &c, &e), &e);
+    assert_true(c.finite);
+    return c.data;
+}
+
+static void neighbourhood_spec(void **state)
+{
+    (void)state;
+    btf_offset o[BTF_CAR_MAX_NEIGHBOURS];
+    int n;
+    btf_error e = {0};
+    TU_OK(btf_neighbourhood_parse("0:-1,-1:0,-1:-1,-1:1", o, &n, &e), &e);
+    assert_int_equal(n, 4);
+    assert_true(o[3].row == -1 && o[3].col == 1);
+    char buf[128];
+    btf_neighbourhood_format(o, n, buf, sizeof buf);
+    assert_string_equal(buf, "0:-1,-1:0,-1:-1,-1:1");
+    const char *bad[] = {"0:1", "1:0", "0:0", "", "0:-1,", "a:b", "0:-1,0:-1", "-1", "-100:0"};
+    for (int i = 0; i < 9; i++)
+        assert_int_equal(btf_neighbourhood_parse(bad[i], o, &n, &e), BTF_E_ARG);
+    assert_int_equal(btf_neighbourhood_parse("1:0", o, &n, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "not causal"));
+}
+
+static void decorrelation_and_pyramid(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image img;
+    TU_OK(btf_image_alloc(&img, 37, 23, 3, &e), &e);
+    btf_rng r;
+    btf_rng_seed(&r, 4);
+    for (int i = 0; i < 37 * 23; i++) {
+        double a = btf_rng_uniform(&r), b = btf_rng_uniform(&r);
+        img.data[3 * i] = (float)(0.5 * a + 0.1 * b);
+        img.data[3 * i + 1] = (float)(0.4 * a + 0.05);
+        img.data[3 * i + 2] = (float)(0.2 * b);
+    }
+    float mean[3], basis[9];
+    double var[3];
+    TU_OK(btf_pca3(&img, mean, basis, var, &e), &e);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            double d = 0;
+            for (int k = 0; k < 3; k++)
+                d += (double)basis[3 * i + k] * basis[3 * j + k];
+            assert_true(fabs(d - (i == j)) < 1e-6); /* orthonormal */
+        }
+    assert_true(var[0] >= var[1] && var[1] >= var[2] && var[2] >= 0);
+    /* Decorrelated bands are uncorrelated, and the inverse restores RGB. */
+    double *bands[3];
+    for (int b = 0; b < 3; b++)
+        bands[b] = malloc(37 * 23 * sizeof(double));
+    btf_decorrelate(&img, mean, basis, bands);
+    double c01 = 0;
+    for (int i = 0; i < 37 * 23; i++) {
+        c01 += bands[0][i] * bands[1][i];
+        for (int k = 0; k < 3; k++) {
+            double v = mean[k] + basis[k] * bands[0][i] + basis[3 + k] * bands[1][i] +
+                       basis[6 + k] * bands[2][i];
+            assert_true(fabs(v - img.data[3 * i + k]) < 1e-5);
+        }
+    }
+    assert_true(fabs(c01 / (37 * 23)) < 1e-6);
+    /* The pyramid collapses back exactly, for odd sizes and every depth. */
+    for (int levels = 1; levels <= 5; levels++) {
+        btf_pyramid p;
+        TU_OK(btf_pyramid_build(bands[0], 37, 23, levels, &p, &e), &e);
+        assert_int_equal(p.width[levels - 1], levels == 1 ? 37 : (37 + (1 << (levels - 1)) - 1) >> (levels - 1));
+        double *back;
+        TU_OK(btf_pyramid_collapse(&p, &back, &e), &e);
+        for (int i = 0; i < 37 * 23; i++)
+            assert_true(fabs(back[i] - bands[0][i]) < 1e-12);
+        free(back);
+        btf_pyramid_free(&p);
+    }
+    /* A grey constant image: zero-variance bands, no division, finite basis. */
+    for (int i = 0; i < 37 * 23 * 3; i++)
+        img.data[i] = 0.25f;
+    TU_OK(btf_pca3(&img, mean, basis, var, &e), &e);
+    for (int i = 0; i < 9; i++)
+        assert_true(isfinite(basis[i]));
+    assert_true(var[0] == 0.0 && mean[1] == 0.25f);
+    for (int b = 0; b < 3; b++)
+        free(bands[b]);
+    btf_image_free(&img);
+}
+
+/* (a) Parameters of fields synthesised by the model itself are estimated
+ * back. With t ~ 2.6e5 equations the standard error of each coefficient is
+ * about 1/sqrt(t) ~ 0.002 (times a factor for correlated regressors), so a
+ * tolerance of 0.03 is ~10 standard errors; sigma to 2 %. */
+static void estimates_recover_known_parameters(void **state)
+{
+    (void)state;
+    struct {
+        const char *spec;
+        float gamma[6];
+    } cases[] = {
+        {"0:-1,-1:0", {0.45f, 0.4f}},
+        {"0:-1,-1:0,-1:-1", {0.6f, 0.55f, -0.3f}},
+        {"0:-1,-1:0,-1:-1,-1:1", {0.35f, 0.3f, -0.1f, 0.2f}},
+        {"0:-2,-2:0,-1:1", {0.3f, -0.3f, 0.25f}},
+    };
+    for (int c = 0; c < 4; c++) {
+        btf_car_band truth = model(cases[c].spec, cases[c].gamma, 0.7f, 2.0f);
+        assert_true(btf_car_is_stable(&truth));
+        double *f = field(&truth, 512, 512, 100 + c);
+        btf_car_fit_opts o = {.n_fixed = truth.n};
+        memcpy(o.fixed, truth.offsets, sizeof o.fixed);
+        btf_car_band fit;
+        btf_car_fit_info info;
+        btf_error e = {0};
+        TU_OK(btf_car_fit(f, 512, 512, &o, &fit, &info, &e), &e);
+        assert_int_equal(fit.n, truth.n);
+        for (int i = 0; i < truth.n; i++)
+            assert_true(fabsf(fit.gamma[i] - truth.gamma[i]) < 0.03f);
+        assert_true(fabsf(fit.sigma - truth.sigma) < 0.02f * truth.sigma);
+        assert_true(fabsf(fit.mean - truth.mean) < 0.2f);
+        assert_true(info.shrink == 1.0);
+        free(f);
+    }
+}
+
+/* (b) A long synthesis stays bounded and its sample variance matches the
+ * model's stationary variance within 5 %. 10^8 pixels (10^7 under the
+ * sanitizers, which are 10-20x slower). */
+static void long_synthesis_is_stationary(void **state)
+{
+    (void)state;
+    const float g[4] = {0.45f, 0.4f, -0.2f, 0.1f};
+    btf_car_band b = model("0:-1,-1:0,-1:-1,-1:1", g, 1.0f, 0.0f);
+    int side = getenv("BTF_ASAN") ? 3163 : 10000;
+    collect c = {.width = side, .finite = 1};
+    btf_error e = {0};
+    TU_OK(btf_car_synthesise_field(&b, side, side, 2026, 1, collect_rows, &c, &e), &e);
+    assert_true(c.finite);
+    double mean = c.sum / c.n, var = c.sum2 / c.n - mean * mean;
+    double stat = btf_car_stationary_variance(&b);
+    print_message("%ld pixels: sample variance %.5f, stationary %.5f (ratio %.4f)\n", c.n, var,
+                  stat, var / stat);
+    assert_true(fabs(var / stat - 1.0) < 0.05);
+    assert_true(fabs(mean) < 0.05 * sqrt(stat));
+}
+
+/* (c) The Bayesian choice finds the true neighbourhood (a member of the
+ * candidate family) far more often than any wrong one. */
+static void selection_finds_true_neighbourhood(void **state)
+{
+    (void)state;
+    struct {
+        const char *spec;
+        float gamma[6];
+    } truths[] = {
+        {"0:-1,-1:0", {0.5f, 0.3f}},
+        {"0:-1,-1:0,-1:-1,-1:1", {0.4f, 0.4f, -0.25f, 0.15f}},
+        {"0:-1,-1:0,-1:-1,-1:1,0:-2,-2:0", {0.4f, 0.3f, -0.1f, 0.1f, -0.2f, 0.15f}},
+    };
+    for (int t = 0; t < 3; t++) {
+        btf_car_band truth = model(truths[t].spec, truths[t].gamma, 1.0f, 0.0f);
+        int hits = 0, other[BTF_CAR_MAX_NEIGHBOURS + 1] = {0}, trials = 12;
+        for (int k = 0; k < trials; k++) {
+            double *f = field(&truth, 192, 192, 1000 * t + k);
+            btf_car_band fit;
+            btf_error e = {0};
+            TU_OK(btf_car_fit(f, 192, 192, NULL, &fit, NULL, &e), &e);
+            if (fit.n == truth.n)
+                hits++;
+            else
+                other[fit.n]++;
+            free(f);
+        }
+        int worst = 0;
+        for (int n = 0; n <= BTF_CAR_MAX_NEIGHBOURS; n++)
+            if (other[n] > worst)
+                worst = other[n];
+        print_message("true %d neighbours: chosen %d of %d times; most frequent wrong %d\n",
+                      truth.n, hits, trials, worst);
+        assert_true(hits >= 9);
+        assert_true(hits >= 3 * worst);
+    }
+    /* A white band gets the smallest model, not the largest. */
+    btf_car_band white = model("0:-1", (const float[]){0.0f}, 1.0f, 0.0f);
+    double *f = field(&white, 128, 128, 5);
+    btf_car_band fit;
+    btf_error e = {0};
+    TU_OK(btf_car_fit(f, 128, 128, NULL, &fit, NULL, &e), &e);
+    assert_true(fit.n <= 2);
+    free(f);
+}
+
+static int warnings;
+static void count_warning(void *user, const char *msg)
+{
+    (void)user;
+    (void)msg;
+    warnings++;
+}
+
+/* (d) Degenerate inputs: finite, stable parameters, always. */
+static void degenerate_bands(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_car_band fit;
+    btf_car_fit_info info;
+    double *band = malloc(64 * 64 * sizeof(double));
+    /* Constant: no model beyond the mean. */
+    for (int i = 0; i < 64 * 64; i++)
+        band[i] = 3.5;
+    TU_OK(btf_car_fit(band, 64, 64, NULL, &fit, &info, &e), &e);
+    assert_int_equal(fit.n, 0);
+    assert_true(fit.sigma == 0.0f && fit.mean == 3.5f);
+    /* 1x1, 1xN, Nx1: white noise of the band's spread. */
+    TU_OK(btf_car_fit(band, 1, 1, NULL, &fit, &info, &e), &e);
+    assert_int_equal(fit.n, 0);
+    for (int i = 0; i < 64; i++)
+        band[i] = (i * 37) % 11;
+    TU_OK(btf_car_fit(band, 64, 1, NULL, &fit, &info, &e), &e);
+    assert_true(isfinite(fit.sigma) && fit.sigma > 0);
+    assert_true(btf_car_is_stable(&fit));
+    TU_OK(btf_car_fit(band, 1, 64, NULL, &fit, &info, &e), &e);
+    assert_true(isfinite(fit.sigma) && fit.sigma > 0);
+    /* Scale: a field times 1e-30 and times 1e36 gives the same coefficients
+     * and proportionally scaled sigma, all finite. */
+    const float g[2] = {0.5f, 0.3f};
+    btf_car_band truth = model("0:-1,-1:0", g, 1.0f, 0.0f);
+    double *f = field(&truth, 64, 64, 3);
+    btf_car_band ref, tiny, huge;
+    TU_OK(btf_car_fit(f, 64, 64, NULL, &ref, NULL, &e), &e);
+    for (int i = 0; i < 64 * 64; i++)
+        band[i] = f[i] * 1e-30;
+    TU_OK(btf_car_fit(band, 64, 64, NULL, &tiny, NULL, &e), &e);
+    for (int i = 0; i < 64 * 64; i++)
+        band[i] = f[i] * 1e36;
+    TU_OK(btf_car_fit(band, 64, 64, NULL, &huge, NULL, &e), &e);
+    assert_int_equal(tiny.n, ref.n);
+    assert_int_equal(huge.n, ref.n);
+    for (int i = 0; i < ref.n; i++) {
+        assert_true(fabsf(tiny.gamma[i] - ref.gamma[i]) < 1e-5f);
+        assert_true(fabsf(huge.gamma[i] - ref.gamma[i]) < 1e-5f);
+    }
+    assert_true(isfinite(huge.sigma) && fabs(huge.sigma / 1e36 - ref.sigma) < 1e-4 * ref.sigma);
+    assert_true(tiny.sigma > 0 && fabs(tiny.sigma / 1e-30 - ref.sigma) < 1e-4 * ref.sigma);
+    /* Beyond the float range (|values| ~ 1e300): parameters clamp, finite. */
+    for (int i = 0; i < 64 * 64; i++)
+        band[i] = f[i] * 1e300;
+    TU_OK(btf_car_fit(band, 64, 64, NULL, &huge, NULL, &e), &e);
+    assert_true(isfinite(huge.sigma) && isfinite(huge.mean));
+    /* A non-stationary ramp makes least squares predict a unit root: the
+     * estimate is shrunk until stable, with a warning. */
+    for (int y = 0; y < 64; y++)
+        for (int x = 0; x < 64; x++)
+            band[y * 64 + x] = 3.0 * x + 2.0 * y + ((x * 7 + y * 13) % 5) * 0.01;
+    warnings = 0;
+    btf_car_fit_opts o = {.warn = count_warning};
+    TU_OK(btf_car_fit(band, 64, 64, &o, &fit, &info, &e), &e);
+    assert_true(btf_car_is_stable(&fit));
+    for (int i = 0; i < fit.n; i++)
+        assert_true(isfinite(fit.gamma[i]));
+    assert_true(info.shrink < 1.0);
+    assert_true(warnings >= 1);
+    /* NaN in the band is refused. */
+    band[5] = NAN;
+    assert_int_equal(btf_car_fit(band, 64, 64, NULL, &fit, NULL, &e), BTF_E_ARG);
+    free(f);
+    free(band);
+}
+
+static void stability_check(void **state)
+{
+    (void)state;
+    /* First-order quarter plane: stable iff 1-a-b-c, 1-a+b+c, 1+a-b+c,
+     * 1+a+b-c are all > 0 (NOTES). */
+    const float stable[3] = {0.5f, 0.5f, -0.25f}, unstable[3] = {0.6f, 0.6f, 0.0f};
+    btf_car_band s = model("-1:0,0:-1,-1:-1", stable, 1, 0);
+    btf_car_band u = model("-1:0,0:-1,-1:-1", unstable, 1, 0);
+    assert_true(btf_car_is_stable(&s));
+    assert_false(btf_car_is_stable(&u));
+    const float small[2] = {0.3f, 0.3f};
+    btf_car_band w = model("0:-1,-1:1", small, 1, 0);
+    assert_true(btf_car_is_stable(&w));
+    const float big[1] = {1.2f};
+    btf_car_band one = model("0:-1", big, 1, 0);
+    assert_false(btf_car_is_stable(&one));
+}
+
+/* Synthesis of subspace images: sizes from 1x1 up, seeds, streaming. */
+static void synthesis_sizes_and_seeds(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image tex;
+    TU_OK(btf_image_alloc(&tex, 64, 48, 3, &e), &e);
+    const float g[4] = {0.45f, 0.4f, -0.2f, 0.1f};
+    btf_car_band b = model("0:-1,-1:0,-1:-1,-1:1", g, 0.1f, 0.0f);
+    double *f = field(&b, 64, 48, 9);
+    for (int i = 0; i < 64 * 48; i++) {
+        tex.data[3 * i] = (float)(0.5 + f[i]);
+        tex.data[3 * i + 1] = (float)(0.3 + 0.5 * f[i]);
+        tex.data[3 * i + 2] = (float)(0.2 + 0.2 * f[(i * 7) % (64 * 48)]);
+    }
+    free(f);
+    btf_model m;
+    btf_fit_opts fo = {.levels = 2};
+    TU_OK(btf_texture_fit(&tex, &fo, &m, &e), &e);
+    assert_int_equal(m.subspaces[0].levels, 2);
+    int sizes[][2] = {{1, 1}, {1, 9}, {9, 1}, {7, 13}, {1000, 3}, {300, 200}};
+    for (int s = 0; s < 6; s++) {
+        btf_image a, b2, c;
+        int w = sizes[s][0], h = sizes[s][1];
+        TU_OK(btf_synthesise_image(&m, 0, w, h, 42, &a, &e), &e);
+        TU_OK(btf_synthesise_image(&m, 0, w, h, 42, &b2, &e), &e);
+        TU_OK(btf_synthesise_image(&m, 0, w, h, 43, &c, &e), &e);
+        size_t n = (size_t)w * h * 3;
+        assert_memory_equal(a.data, b2.data, n * sizeof(float)); /* same seed, same bytes */
+        int differ = 0;
+        for (size_t i = 0; i < n; i++) {
+            assert_true(isfinite(a.data[i]));
+            differ |= a.data[i] != c.data[i];
+        }
+        assert_true(differ);
+        btf_image_free(&a);
+        btf_image_free(&b2);
+        btf_image_free(&c);
+    }
+    /* The synthesis reproduces the texture's colour statistics. */
+    btf_image big;
+    TU_OK(btf_synthesise_image(&m, 0, 512, 512, 1, &big, &e), &e);
+    double mean[3] = {0}, tm[3] = {0};
+    for (int i = 0; i < 512 * 512; i++)
+        for (int k = 0; k < 3; k++)
+            mean[k] += big.data[3 * i + k] / (512.0 * 512.0);
+    for (int i = 0; i < 64 * 48; i++)
+        for (int k = 0; k < 3; k++)
+            tm[k] += tex.data[3 * i + k] / (64.0 * 48.0);
+    for (int k = 0; k < 3; k++)
+        assert_true(fabs(mean[k] - tm[k]) < 0.05);
+    btf_image_free(&big);
+    assert_int_equal(btf_synthesise_image(&m, 1, 4, 4, 1, &big, &e), BTF_E_ARG);
+    assert_int_equal(btf_synthesise_image(&m, 0, 0, 4, 1, &big, &e), BTF_E_ARG);
+    /* (e) The model survives its file bit for bit. */
+    unsigned char *bytes, *again;
+    size_t n1, n2;
+    TU_OK(btf_model_encode(&m, &bytes, &n1, &e), &e);
+    btf_model back;
+    TU_OK(btf_model_decode(bytes, n1, "memory", &back, &e), &e);
+    TU_OK(btf_model_encode(&back, &again, &n2, &e), &e);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(bytes, again, n1);
+    assert_memory_equal(&back.subspaces[0], &m.subspaces[0], sizeof(btf_subspace_model));
+    free(bytes);
+    free(again);
+    btf_model_free(&back);
+    btf_model_free(&m);
+    btf_image_free(&tex);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(neighbourhood_spec),
+        cmocka_unit_test(decorrelation_and_pyramid),
+        cmocka_unit_test(estimates_recover_known_parameters),
+        cmocka_unit_test(long_synthesis_is_stationary),
+        cmocka_unit_test(selection_finds_true_neighbourhood),
+        cmocka_unit_test(degenerate_bands),
+        cmocka_unit_test(stability_check),
+        cmocka_unit_test(synthesis_sizes_and_seeds),
+    };
+    return cmocka_run_group_tests_name("car", tests, NULL, NULL);
+}

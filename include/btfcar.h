@@ -396,14 +396,15 @@ int btf_integrate(const btf_image *normals, const btf_image *mask,
 
 typedef struct btf_photostereo_opts {
     double dark;          /* 0: 0.1; samples below dark x the pixel's reference
-                             level (its brightest after trim_high) are shadowed
-                             and excluded; < 0: no dark rule */
+                             level (its brightest after the top 5 %) are
+                             shadowed and excluded; < 0: no dark rule */
     double trim_low;      /* 0: none; fraction of the darkest samples left out
                              of the first fit */
     double trim_high;     /* 0: 0.1; fraction of the brightest samples left out
                              of the first fit (highlights); < 0: none */
-    double outlier;       /* 0: 3; samples whose residual exceeds this many
-                             robust standard deviations are excluded */
+    double outlier;       /* 0: 2; samples more than this many robust
+                             standard deviations below the fit (twice as
+                             many above it) are excluded */
     double saturation;    /* 0: 0.99; a sample with any raw channel at or above
                              it is excluded (clipped); < 0: no such rule (HDR) */
     double max_condition; /* 0: 1e4; largest condition number of sum l l^T

@@ -74,6 +74,16 @@ static int failf(btf_error *err, int code, const char *name, const char *fmt, ..
     return btf_fail(err, code, "%s: %s", name, msg);
 }
 
+/* Allocation whose failure message names the file, like every other. */
+static void *alloc_named(size_t count, size_t size, int zero, const char *name, btf_error *err)
+{
+    void *p = zero ? btf_calloc(count, size, NULL) : btf_alloc(count, size, NULL);
+    if (!p)
+        failf(err, BTF_E_NOMEM, name, "out of memory allocating %zu x %zu bytes", count,
+              size);
+    return p;
+}
+
 /* ------------------------------------------------- little-endian writer */
 
 typedef struct wbuf {
@@ -534,8 +544,8 @@ static int put_range(wbuf *b, const btf_model *m, const char *name, btf_error *e
         return failf(err, BTF_E_DATA, name,
                      "range map: heights %g..%g span too much for 16-bit quantisation "
                      "(expected magnitudes below about 1e33)", lo, hi);
-    uint16_t *q = btf_alloc(n, sizeof *q, err);
-    unsigned char *planes = btf_alloc(n, 2, err);
+    uint16_t *q = alloc_named(n, sizeof *q, 0, name, err);
+    unsigned char *planes = alloc_named(n, 2, 0, name, err);
     if (!q || !planes) {
         free(q);
         free(planes);
@@ -584,10 +594,11 @@ static int build_payload(const btf_model *m, wbuf *b, const char *name, btf_erro
 
 /* Wraps the payload: header, deflated (or stored, when deflate does not
  * help) body, CRC-32 of everything before it. */
-static int wrap_payload(const wbuf *pl, unsigned char **data, size_t *size, btf_error *err)
+static int wrap_payload(const wbuf *pl, const char *name, unsigned char **data, size_t *size,
+                        btf_error *err)
 {
     uLongf zlen = compressBound((uLong)pl->n);
-    unsigned char *out = btf_alloc(HEADER_BYTES + (size_t)zlen + CRC_BYTES, 1, err);
+    unsigned char *out = alloc_named(HEADER_BYTES + (size_t)zlen + CRC_BYTES, 1, 0, name, err);
     if (!out)
         return BTF_E_NOMEM;
     unsigned comp = COMP_ZLIB;
@@ -629,7 +640,7 @@ static int encode_named(const btf_model *m, const char *name, unsigned char **da
         rc = failf(err, BTF_E_DATA, name, "model of %zu bytes (expected at most %zu)", pl.n,
                    MAX_PAYLOAD_BYTES);
     if (rc == BTF_OK)
-        rc = wrap_payload(&pl, data, size, err);
+        rc = wrap_payload(&pl, name, data, size, err);
     free(pl.p);
     return rc;
 }
@@ -698,7 +709,7 @@ static int inflate_payload(const unsigned char *src, size_t n, size_t out_n, con
         return failf(err, BTF_E_FORMAT, name,
                      "payload of %zu bytes from %zu compressed (expected at most %u:1)", out_n, n,
                      ZLIB_MAX_RATIO);
-    unsigned char *p = btf_alloc(out_n ? out_n : 1, 1, err);
+    unsigned char *p = alloc_named(out_n ? out_n : 1, 1, 0, name, err);
     if (!p)
         return BTF_E_NOMEM;
     uLongf got = (uLongf)out_n;
@@ -826,7 +837,7 @@ static int read_dirset(const span *sp, int tag, btf_dirset *s, const char *name,
     if (r.n - r.pos < (size_t)count * 16)
         return short_section(tag, name, err);
     memcpy(s->name, nm, len);
-    s->dirs = btf_alloc(count, sizeof *s->dirs, err);
+    s->dirs = alloc_named(count, sizeof *s->dirs, 0, name, err);
     if (!s->dirs)
         return BTF_E_NOMEM;
     s->count = (int)count;
@@ -842,7 +853,7 @@ static int read_index(const span *sp, btf_model *m, const char *name, btf_error 
     size_t n = (size_t)m->views.count * m->lights.count;
     if (sp->n < n)
         return short_section(S_INDX, name, err);
-    m->index = btf_alloc(n, 1, err);
+    m->index = alloc_named(n, 1, 0, name, err);
     if (!m->index)
         return BTF_E_NOMEM;
     memcpy(m->index, sp->p, n);
@@ -915,7 +926,7 @@ static int read_subspaces(const span *sp, btf_model *m, const char *name, btf_er
     if (count < 1 || count > MAX_SUBSPACES)
         return failf(err, BTF_E_FORMAT, name, "%u subspaces (expected 1..%d)", count,
                      MAX_SUBSPACES);
-    m->subspaces = btf_calloc(count, sizeof *m->subspaces, err);
+    m->subspaces = alloc_named(count, sizeof *m->subspaces, 1, name, err);
     if (!m->subspaces)
         return BTF_E_NOMEM;
     m->n_subspaces = (int)count;
@@ -951,7 +962,7 @@ static int read_range(const span *sp, btf_model *m, const char *name, btf_error 
         return failf(err, BTF_E_FORMAT, name,
                      "range map: grid 2^%d, offset %ld (expected exponent %d..%d, |offset| <= 2^23)",
                      e, (long)k, GRID_E_MIN, GRID_E_MAX);
-    uint16_t *q = btf_alloc(n, sizeof *q, err);
+    uint16_t *q = alloc_named(n, sizeof *q, 0, name, err);
     if (!q)
         return BTF_E_NOMEM;
     unsigned qmax = 0;
@@ -968,7 +979,7 @@ static int read_range(const span *sp, btf_model *m, const char *name, btf_error 
                      "range map: offset %ld + height %u exceeds 2^23 (expected a 24-bit grid)",
                      (long)k, qmax);
     }
-    m->range = btf_alloc(n, sizeof *m->range, err);
+    m->range = alloc_named(n, sizeof *m->range, 0, name, err);
     if (!m->range) {
         free(q);
         return BTF_E_NOMEM;

@@ -14,19 +14,28 @@
  *
  * Real samples break the model: cast and attached shadows are too dark,
  * specular highlights too bright, clipped values wrong. The robust rule,
- * per pixel (docs/photostereo.md):
+ * per pixel (docs/photostereo.md, where the choices are measured):
  *  1. saturated samples (any raw channel >= saturation) and samples <= 0 are
  *     excluded;
- *  2. the pixel's reference level is its brightest value after leaving out
- *     the trim_high fraction of the brightest (highlights); samples darker
- *     than dark x reference are shadowed and excluded for good;
- *  3. a first fit uses the samples between the trim_low quantile and the
- *     reference (a trimmed least squares: the middle of the sorted values);
- *  4. reweighting (at most `iterations` times, until the set stops
- *     changing): with the robust scale s = 1.4826 median |residual| of the
- *     current set (at least 2 % of the albedo, so that perfect data does not
- *     make every sample an outlier), a sample is kept when it is predicted lit
- *     (g.l > 0) and its residual is within outlier x s; samples may come back.
+ *  2. shadows: the reference level is the pixel's brightest value after
+ *     the top 5 % (a few highlights); samples below dark x reference are
+ *     shadowed, and so are those below a jump of 3x between consecutive
+ *     sorted values (the shadow gap: shadows lit by ambient light form a
+ *     cluster that can outnumber the lit samples of a pixel in a crevice);
+ *     both exclusions are for good;
+ *  3. a first fit uses the remaining samples between their trim_low and
+ *     (1 - trim_high) quantiles (a trimmed least squares: highlights are
+ *     among the brightest);
+ *  4. reweighting, at most `iterations` times, until the set stops changing:
+ *     with the robust scale s = 1.4826 median |r| over the current set
+ *     (r: deleted residuals, which a single high-leverage outlier cannot
+ *     hide; s at least 2 % of the albedo, so that perfect data does not make
+ *     every sample an outlier), a sample is kept when the fit predicts it lit
+ *     (g.l > 0), it is at most outlier x s below the fit (shadows only
+ *     darken: partial shadows go), at most 2 outlier x s above it, and it is
+ *     not a highlight: brighter than the fit by more than s with its half
+ *     vector (of the light and the view (0, 0, 1)) within specular_cone of
+ *     the normal. Samples may come back.
  * Every fit needs at least 3 samples whose sum l l^T has a condition number
  * <= max_condition (the lights are not nearly coplanar); a reweighting step
  * that would break this is not taken.
@@ -59,13 +68,14 @@
 #define PS_PI 3.14159265358979323846
 #define DEF_DARK 0.1
 #define DEF_TRIM_HIGH 0.1
-#define DEF_OUTLIER 3.0
+#define DEF_OUTLIER 2.0
 #define DEF_SATURATION 0.99
 #define DEF_MAX_CONDITION 1e4
 #define DEF_ITERATIONS 5
 #define DEF_SPECULAR_CONE 20.0 /* degrees between the half vector and the normal */
 #define REF_QUANTILE 0.95     /* the reference level: the brightest after the top 5 % */
 #define SCALE_FLOOR 0.02      /* robust scale floor, fraction of the albedo */
+#define SHADOW_GAP 3.0        /* a jump between sorted values that splits off shadows */
 #define MAD_TO_SIGMA 1.4826   /* median |r| -> standard deviation for Gaussian r */
 #define MAX_THREADS 64
 #define ROWS_PER_TASK 8
@@ -184,8 +194,9 @@ static void sym3_weak_axis(const sym3 *m, double v[3])
     }
 }
 
-/* Solves A g = b after checking A's conditioning; 0 when rejected. */
-static int sym3_solve(const sym3 *m, const double b[3], double max_cond, double g[3])
+/* Solves A g = b after checking A's conditioning; 0 when rejected. inv
+ * (may be NULL) receives A^-1. */
+static int sym3_solve(const sym3 *m, const double b[3], double max_cond, double g[3], sym3 *inv)
 {
     if (!(sym3_condition(m) <= max_cond))
         return 0;
@@ -201,6 +212,10 @@ static int sym3_solve(const sym3 *m, const double b[3], double max_cond, double 
     g[0] = (c00 * b[0] + c01 * b[1] + c02 * b[2]) / det;
     g[1] = (c01 * b[0] + c11 * b[1] + c12 * b[2]) / det;
     g[2] = (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det;
+    if (inv) {
+        inv->a00 = c00 / det, inv->a11 = c11 / det, inv->a22 = c22 / det;
+        inv->a01 = c01 / det, inv->a02 = c02 / det, inv->a12 = c12 / det;
+    }
     return isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]);
 }
 
@@ -247,17 +262,58 @@ static double select_kth(double *a, int n, int k)
     return a[k];
 }
 
+/* Sorts a[0..n-1] ascending (Shell's gaps: n is small, no allocation). */
+static void sort_values(double *a, int n)
+{
+    static const int gaps[] = {57, 23, 10, 4, 1};
+    for (int g = 0; g < 5; g++) {
+        int h = gaps[g];
+        for (int i = h; i < n; i++) {
+            double t = a[i];
+            int j = i;
+            for (; j >= h && a[j - h] > t; j -= h)
+                a[j] = a[j - h];
+            a[j] = t;
+        }
+    }
+}
+
+/* The shadow gap. In a pixel that most lights reach only through cast
+ * shadow, the shadowed samples (lit by ambient or interreflected light) form
+ * a dark cluster that can outnumber the lit samples and sit above dark x ref.
+ * Such a cluster is separated from the lit values by a jump: in the sorted
+ * values a, the largest ratio a[i+1] / a[i] with a[i+1] between dark_cut and
+ * ref and at least 3 values from a[i+1] up. When it reaches SHADOW_GAP, the
+ * values up to a[i] are shadows: returns a[i+1], else 0. Lit samples of a
+ * Lambertian pixel vary smoothly with the light, so they show no such jump. */
+static double shadow_gap(const double *a, int n, double ref, double dark_cut)
+{
+    double best = 0.0, cut = 0.0;
+    for (int i = 0; i + 3 < n; i++) {
+        if (a[i + 1] > ref || a[i + 1] < dark_cut || !(a[i] > 0.0))
+            continue;
+        double r = a[i + 1] / a[i];
+        if (r > best) {
+            best = r;
+            cut = a[i + 1];
+        }
+    }
+    return best >= SHADOW_GAP ? cut : 0.0;
+}
+
 /* ------------------------------------------------------- the pixel fit */
 
 typedef struct ps_scratch {
     double *sel;              /* n */
+    double *res;              /* n residuals */
     unsigned char *ok, *use, *next; /* n flags each */
     double *row;              /* width * n grey values of one row */
 } ps_scratch;
 
-/* Least squares over the flagged samples; 0 if < 3 or ill-conditioned. */
+/* Least squares over the flagged samples; 0 if < 3 or ill-conditioned.
+ * inv receives (sum l l^T)^-1 for the leverages. */
 static int fit_set(const double *L, int n, const double *v, const unsigned char *use,
-                   double max_cond, double g[3])
+                   double max_cond, double g[3], sym3 *inv)
 {
     sym3 m = {0};
     double b[3] = {0, 0, 0};
@@ -272,37 +328,65 @@ static int fit_set(const double *L, int n, const double *v, const unsigned char 
         b[2] += v[i] * l[2];
         count++;
     }
-    return count >= 3 && sym3_solve(&m, b, max_cond, g);
+    return count >= 3 && sym3_solve(&m, b, max_cond, g, inv);
 }
 
-/* One reweighting step: the samples consistent with g (see the header).
- * H holds each light's half vector with the view (0, 0, 1). Returns the
- * number kept; *changed tells whether the set differs. */
-static int reweight(const ps_params *P, const double *L, const double *H, int n,
-                    const double *v, const double g[3], ps_scratch *s, int *changed)
+static double quad_form(const sym3 *m, const double *l)
 {
-    double rho = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    return m->a00 * l[0] * l[0] + m->a11 * l[1] * l[1] + m->a22 * l[2] * l[2] +
+           2.0 * (m->a01 * l[0] * l[1] + m->a02 * l[0] * l[2] + m->a12 * l[1] * l[2]);
+}
+
+/* Residuals of every sample against g into s->res; for the samples of the
+ * fit, the deleted residual r / (1 - h), h = l^T A^-1 l the sample's
+ * leverage: what the fit without that sample would predict. A single bad
+ * sample of high leverage (a partly shadowed one amid the lights) pulls an
+ * ordinary fit towards itself and hides its own residual; its deleted
+ * residual does not. Returns the robust scale 1.4826 median |r| of the fit's
+ * samples, at least SCALE_FLOOR x albedo. */
+static double residuals(const double *L, int n, const double *v, const double g[3],
+                        const sym3 *inv, ps_scratch *s)
+{
     int m = 0;
     for (int i = 0; i < n; i++) {
-        if (!s->use[i])
-            continue;
         const double *l = L + 3 * i;
-        s->sel[m++] = fabs(v[i] - (g[0] * l[0] + g[1] * l[1] + g[2] * l[2]));
+        double res = v[i] - (g[0] * l[0] + g[1] * l[1] + g[2] * l[2]);
+        if (s->use[i]) {
+            double h = quad_form(inv, l);
+            if (h < 1.0 - 1e-6)
+                res /= 1.0 - h;
+            s->sel[m++] = fabs(res);
+        }
+        s->res[i] = res;
     }
+    double rho = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
     double sigma = m > 0 ? MAD_TO_SIGMA * select_kth(s->sel, m, m / 2) : 0.0;
-    if (sigma < SCALE_FLOOR * rho)
-        sigma = SCALE_FLOOR * rho;
-    double cut = P->outlier * sigma, cone = P->cone_cos * rho;
+    return sigma > SCALE_FLOOR * rho ? sigma : SCALE_FLOOR * rho;
+}
+
+/* One reweighting step: the samples consistent with g, into s->next (see
+ * the header). Shadows only darken and highlights only brighten, so the
+ * window is asymmetric: a sample more than outlier x s below the fit is
+ * (partly) shadowed; one above it is a highlight when its half vector with
+ * the view lies within the specular cone of the normal (and it exceeds the
+ * fit by more than s), and an outlier anyway beyond 2 x outlier x s. A
+ * sample the fit predicts unlit (g.l <= 0) carries no information. Returns
+ * the number kept; *changed tells whether the set differs. */
+static int reweight(const ps_params *P, const double *L, const double *H, int n,
+                    const double *v, const double g[3], const sym3 *inv, ps_scratch *s,
+                    int *changed)
+{
+    double sigma = residuals(L, n, v, g, inv, s);
+    double rho = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    double below = P->outlier * sigma, above = 2.0 * P->outlier * sigma;
+    double cone = P->cone_cos * rho;
     int kept = 0;
     *changed = 0;
     for (int i = 0; i < n; i++) {
         const double *l = L + 3 * i, *hv = H + 3 * i;
-        double pred = g[0] * l[0] + g[1] * l[1] + g[2] * l[2];
-        double res = v[i] - pred;
-        /* A highlight: brighter than the fit, with the light near the
-         * mirror direction of the view (half vector near the normal). */
-        int spec = res > sigma && g[0] * hv[0] + g[1] * hv[1] + g[2] * hv[2] > cone;
-        unsigned char k = s->ok[i] && pred > 0.0 && fabs(res) <= cut && !spec;
+        double pred = g[0] * l[0] + g[1] * l[1] + g[2] * l[2], res = s->res[i];
+        int highlight = res > sigma && g[0] * hv[0] + g[1] * hv[1] + g[2] * hv[2] > cone;
+        unsigned char k = s->ok[i] && pred > 0.0 && res >= -below && res <= above && !highlight;
         s->next[i] = k;
         kept += k;
         *changed |= k != s->use[i];
@@ -310,11 +394,39 @@ static int reweight(const ps_params *P, const double *L, const double *H, int n,
     return kept;
 }
 
+/* The first set: the candidates (unsaturated, > 0) that are not shadowed
+ * (dark rule and shadow gap), less the trim fractions of the darkest and
+ * brightest. s->sel holds the nc candidate values. Returns the number of
+ * samples not shadowed (s->ok). */
+static int first_set(const ps_params *P, int n, const double *v, int nc, ps_scratch *s)
+{
+    sort_values(s->sel, nc);
+    double ref = s->sel[(int)floor(REF_QUANTILE * (nc - 1))];
+    double dark_cut = P->dark * ref, gap = shadow_gap(s->sel, nc, ref, dark_cut);
+    if (gap > dark_cut)
+        dark_cut = gap;
+    int first = 0;
+    while (first < nc && s->sel[first] < dark_cut)
+        first++;
+    int nok = nc - first;
+    if (nok < 3)
+        return nok;
+    /* The samples not shadowed are sel[first..nc-1], sorted. */
+    double hi = s->sel[first + (int)floor((1.0 - P->trim_high) * (nok - 1))];
+    double lo = s->sel[first + (int)ceil(P->trim_low * (nok - 1))];
+    for (int i = 0; i < n; i++) {
+        s->ok[i] = (unsigned char)(s->use[i] && v[i] >= dark_cut);
+        s->use[i] = (unsigned char)(s->ok[i] && v[i] >= lo && v[i] <= hi);
+    }
+    return nok;
+}
+
 /* The robust fit of one pixel's samples v (negative: saturated). On return
  * s->use flags the samples of the final fit. 1: fitted; 0: fallback. */
 static int fit_pixel(const ps_params *P, const double *L, const double *H, int n,
                      const double *v, ps_scratch *s, double g[3])
 {
+    sym3 inv;
     int nc = 0;
     for (int i = 0; i < n; i++) {
         int cand = P->plain ? v[i] >= 0.0 : v[i] > 0.0;
@@ -323,38 +435,25 @@ static int fit_pixel(const ps_params *P, const double *L, const double *H, int n
             s->sel[nc++] = v[i];
     }
     if (P->plain)
-        return fit_set(L, n, v, s->use, P->max_cond, g);
-    if (nc < 3)
+        return fit_set(L, n, v, s->use, P->max_cond, g, &inv);
+    if (nc < 3 || first_set(P, n, v, nc, s) < 3)
         return 0;
-    double ref = select_kth(s->sel, nc, (int)floor(REF_QUANTILE * (nc - 1)));
-    double dark_cut = P->dark * ref;
-    int nok = 0;
-    for (int i = 0; i < n; i++) {
-        s->ok[i] = (unsigned char)(s->use[i] && v[i] >= dark_cut);
-        if (s->ok[i])
-            s->sel[nok++] = v[i];
-    }
-    if (nok < 3)
-        return 0;
-    double hi = select_kth(s->sel, nok, (int)floor((1.0 - P->trim_high) * (nok - 1)));
-    double lo = P->trim_low > 0.0 ? select_kth(s->sel, nok, (int)ceil(P->trim_low * (nok - 1)))
-                                  : 0.0;
-    for (int i = 0; i < n; i++)
-        s->use[i] = (unsigned char)(s->ok[i] && v[i] >= lo && v[i] <= hi);
-    if (!fit_set(L, n, v, s->use, P->max_cond, g)) {
+    if (!fit_set(L, n, v, s->use, P->max_cond, g, &inv)) {
         /* Too few in the trimmed middle: every non-shadowed sample. */
         memcpy(s->use, s->ok, (size_t)n);
-        if (!fit_set(L, n, v, s->use, P->max_cond, g))
+        if (!fit_set(L, n, v, s->use, P->max_cond, g, &inv))
             return 0;
     }
     for (int it = 0; it < P->iterations; it++) {
         int changed;
-        int kept = reweight(P, L, H, n, v, g, s, &changed);
+        int kept = reweight(P, L, H, n, v, g, &inv, s, &changed);
         double g2[3];
-        if (!changed || kept < 3 || !fit_set(L, n, v, s->next, P->max_cond, g2))
+        sym3 inv2;
+        if (!changed || kept < 3 || !fit_set(L, n, v, s->next, P->max_cond, g2, &inv2))
             break;
         memcpy(s->use, s->next, (size_t)n);
         memcpy(g, g2, sizeof g2);
+        inv = inv2;
     }
     return g[0] * g[0] + g[1] * g[1] + g[2] * g[2] > 0.0;
 }
@@ -466,6 +565,7 @@ static void *worker_main(void *p)
 static void scratch_free(ps_scratch *s)
 {
     free(s->sel);
+    free(s->res);
     free(s->ok);
     free(s->row);
     memset(s, 0, sizeof *s);
@@ -475,9 +575,10 @@ static int scratch_alloc(ps_scratch *s, int n, int w, btf_error *err)
 {
     memset(s, 0, sizeof *s);
     s->sel = btf_alloc((size_t)n, sizeof(double), err);
+    s->res = btf_alloc((size_t)n, sizeof(double), err);
     s->ok = btf_alloc((size_t)n, 3, err);
     s->row = btf_alloc((size_t)n * (size_t)w, sizeof(double), err);
-    if (!s->sel || !s->ok || !s->row) {
+    if (!s->sel || !s->res || !s->ok || !s->row) {
         scratch_free(s);
         return BTF_E_NOMEM;
     }

@@ -36,6 +36,8 @@ typedef struct level_gen {
     int next;             /* next field row to generate */
     float *ring;          /* depth rows of (fw + 2 pad) floats */
     float *grow;          /* the G row of this level, window width */
+    float *noise;         /* fw + 6 floats: one row of Gaussians */
+    float *acc;           /* fw floats: the earlier-row part of each sum */
     /* Up-sampled (horizontally, to the finer level's window) G rows of this
      * level, 3 slots keyed by row index: for the finer level's vertical pass. */
     float *hup[3];
@@ -60,31 +62,61 @@ static float *ring_row(level_gen *g, int r)
     return g->ring + (size_t)slot * (g->fw + 2 * g->pad) + g->pad;
 }
 
+/* The Gaussians of one field row, in a loop of its own: the generator is
+ * half the cost of synthesis, and a plain loop over blocks lets the compiler
+ * vectorise it. Column c uses component c & 3 of block c >> 2. */
+static void noise_row(const level_gen *g, uint32_t seed_lo, uint32_t seed_hi, uint32_t urow,
+                      float *e)
+{
+    uint32_t c0 = (uint32_t)(g->fx0 + BTF_NOISE_ORIGIN), c1 = c0 + (uint32_t)g->fw;
+    uint32_t b0 = c0 >> 2, b1 = (c1 + 3u) >> 2;
+    float *out = e - (c0 & 3u); /* out[4 * (b - b0) + lane] is column b * 4 + lane */
+    for (uint32_t b = b0; b < b1; b++) {
+        btf_vec4 v = btf_noise4(seed_lo, seed_hi, g->stream, urow, b);
+        float *o = out + 4 * (b - b0);
+        o[0] = v.x;
+        o[1] = v.y;
+        o[2] = v.z;
+        o[3] = v.w;
+    }
+}
+
 /* The next row of the level's CAR field (zero-mean), by the recursion
- * Y_r = sum_s gamma_s Y_{r+s} + sigma e_r, in offset order. */
+ * Y_r = sum_s gamma_s Y_{r+s} + sigma e_r. The sum runs over the offsets of
+ * earlier rows first, then those of the same row, each group in stored order
+ * (btf_car_order in btf_shared.h; the GPU sums in the same order). The first
+ * group reads only finished rows, so it runs as independent per-pixel chains
+ * the compiler vectorises; only the same-row terms are sequential. */
 static void field_step(level_gen *g, uint32_t seed_lo, uint32_t seed_hi)
 {
     int r = g->next++;
     float *out = ring_row(g, r);
     const btf_car_band *b = g->car;
-    const float *src[BTF_CAR_MAX_NEIGHBOURS];
-    for (int s = 0; s < b->n; s++)
-        src[s] = ring_row(g, r + b->offsets[s].row) + b->offsets[s].col;
     /* Rows above the field's first row are zero: their ring slots were
      * cleared at start and are only overwritten by rows of the field. */
-    uint32_t urow = (uint32_t)(r + BTF_NOISE_ORIGIN);
-    float e4[4];
-    uint32_t block = 0xFFFFFFFFu;
-    for (int i = 0; i < g->fw; i++) {
-        uint32_t ucol = (uint32_t)(g->fx0 + i + BTF_NOISE_ORIGIN);
-        if ((ucol >> 2) != block) {
-            block = ucol >> 2;
-            btf_noise_block(seed_lo, seed_hi, g->stream, urow, block, e4);
+    float *e = g->noise + 3; /* 3 floats of slack before, for the block alignment */
+    noise_row(g, seed_lo, seed_hi, (uint32_t)(r + BTF_NOISE_ORIGIN), e);
+    float *acc = g->acc;
+    int fw = g->fw;
+    for (int i = 0; i < fw; i++)
+        acc[i] = 0.0f;
+    int same[BTF_CAR_MAX_NEIGHBOURS], nsame = 0;
+    for (int s = 0; s < b->n; s++) {
+        if (b->offsets[s].row == 0) {
+            same[nsame++] = s;
+            continue;
         }
-        float acc = 0.0f;
-        for (int s = 0; s < b->n; s++)
-            acc = btf_car_accumulate(acc, b->gamma[s], src[s][i]);
-        out[i] = btf_car_output(acc, b->sigma, e4[ucol & 3u]);
+        const float *src = ring_row(g, r + b->offsets[s].row) + b->offsets[s].col;
+        float gs = b->gamma[s];
+        for (int i = 0; i < fw; i++)
+            acc[i] = btf_car_accumulate(acc[i], gs, src[i]);
+    }
+    float sigma = b->sigma;
+    for (int i = 0; i < fw; i++) {
+        float a = acc[i];
+        for (int k = 0; k < nsame; k++)
+            a = btf_car_accumulate(a, b->gamma[same[k]], out[i + b->offsets[same[k]].col]);
+        out[i] = btf_car_output(a, sigma, e[i]);
     }
 }
 
@@ -150,6 +182,8 @@ static void band_free(band_gen *bg)
         level_gen *g = &bg->lv[l];
         free(g->ring);
         free(g->grow);
+        free(g->noise);
+        free(g->acc);
         for (int k = 0; k < 3; k++)
             free(g->hup[k]);
     }
@@ -178,9 +212,11 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
     g->next = y0 - BTF_SYNTH_BURNIN;
     g->ring = btf_calloc((size_t)g->depth * (g->fw + 2 * g->pad), sizeof(float), err);
     g->grow = btf_alloc((size_t)(x1 - x0), sizeof(float), err);
+    g->noise = btf_alloc((size_t)g->fw + 6, sizeof(float), err);
+    g->acc = btf_alloc((size_t)g->fw, sizeof(float), err);
     for (int k = 0; k < 3; k++)
         g->hup_row[k] = INT32_MIN;
-    return g->ring && g->grow ? BTF_OK : BTF_E_NOMEM;
+    return g->ring && g->grow && g->noise && g->acc ? BTF_OK : BTF_E_NOMEM;
 }
 
 /* Sets up the levels of one band for an output window [0, w) x [0, h). */
@@ -328,5 +364,7 @@ int btf_car_synthesise_field(const btf_car_band *band, int width, int height, ui
     free(row);
     free(g.ring);
     free(g.grow);
+    free(g.noise);
+    free(g.acc);
     return rc;
 }

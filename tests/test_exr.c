@@ -114,124 +114,6 @@ static int file_exists(const char *path)
     return access(path, F_OK) == 0;
 }
 
-/* Writes an EXR file directly with the core API, for layouts btf_exr_write
- * never produces. Channel c of pixel (x, y) (data-window relative) is
- * value(c, x, y); UINT channels store it truncated. */
-typedef struct raw_spec {
-    exr_storage_t storage;         /* SCANLINE or TILED */
-    exr_compression_t compression;
-    int tile;                      /* tile side when TILED */
-    int x0, y0;                    /* data window origin */
-    int width, height;
-    int nch;
-    const char *names[4];          /* sorted by name, as EXR requires */
-    exr_pixel_type_t types[4];
-} raw_spec;
-
-typedef float (*value_fn)(int c, int x, int y);
-
-static void raw_quiet(exr_const_context_t ctxt, exr_result_t code, const char *msg)
-{
-    (void)ctxt, (void)code;
-    print_error("openexr (test writer): %s\n", msg);
-}
-
-/* Encodes the block (bx, by, bw, bh) of the planar source buffers. */
-static void raw_encode(exr_context_t ctx, exr_encode_pipeline_t *enc, int *started,
-                       const exr_chunk_info_t *ci, const raw_spec *s, void **planes, int bx,
-                       int by)
-{
-    if (*started)
-        assert_int_equal(exr_encoding_update(ctx, 0, ci, enc), EXR_ERR_SUCCESS);
-    else
-        assert_int_equal(exr_encoding_initialize(ctx, 0, ci, enc), EXR_ERR_SUCCESS);
-    *started = 1;
-    for (int c = 0; c < enc->channel_count; c++) {
-        exr_coding_channel_info_t *ch = &enc->channels[c];
-        int k = -1;
-        for (int j = 0; j < s->nch; j++)
-            if (!strcmp(ch->channel_name, s->names[j]))
-                k = j;
-        assert_true(k >= 0);
-        ch->encode_from_ptr = (const uint8_t *)planes[k] + ((size_t)by * s->width + bx) * 4;
-        ch->user_pixel_stride = 4;
-        ch->user_line_stride = s->width * 4;
-        ch->user_bytes_per_element = 4;
-        ch->user_data_type = s->types[k] == EXR_PIXEL_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
-    }
-    assert_int_equal(exr_encoding_choose_default_routines(ctx, 0, enc), EXR_ERR_SUCCESS);
-    assert_int_equal(exr_encoding_run(ctx, 0, enc), EXR_ERR_SUCCESS);
-}
-
-static void raw_write(const char *path, const raw_spec *s, value_fn value)
-{
-    void *planes[4];
-    for (int k = 0; k < s->nch; k++) {
-        planes[k] = malloc((size_t)s->width * s->height * 4);
-        assert_non_null(planes[k]);
-        for (int y = 0; y < s->height; y++)
-            for (int x = 0; x < s->width; x++) {
-                size_t i = (size_t)y * s->width + x;
-                float v = value(k, x, y);
-                if (s->types[k] == EXR_PIXEL_UINT)
-                    ((uint32_t *)planes[k])[i] = (uint32_t)v;
-                else
-                    ((float *)planes[k])[i] = v;
-            }
-    }
-    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    init.error_handler_fn = raw_quiet;
-    exr_context_t ctx = NULL;
-    assert_int_equal(exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init), EXR_ERR_SUCCESS);
-    int part = -1;
-    assert_int_equal(exr_add_part(ctx, NULL, s->storage, &part), EXR_ERR_SUCCESS);
-    exr_attr_box2i_t box;
-    box.min.x = s->x0;
-    box.min.y = s->y0;
-    box.max.x = s->x0 + s->width - 1;
-    box.max.y = s->y0 + s->height - 1;
-    exr_attr_v2f_t center;
-    center.x = center.y = 0.0f;
-    assert_int_equal(exr_initialize_required_attr(ctx, part, &box, &box, 1.0f, &center, 1.0f,
-                                                  EXR_LINEORDER_INCREASING_Y, s->compression),
-                     EXR_ERR_SUCCESS);
-    if (s->storage == EXR_STORAGE_TILED)
-        assert_int_equal(exr_set_tile_descriptor(ctx, part, (uint32_t)s->tile, (uint32_t)s->tile,
-                                                 EXR_TILE_ONE_LEVEL, EXR_TILE_ROUND_DOWN),
-                         EXR_ERR_SUCCESS);
-    for (int k = 0; k < s->nch; k++)
-        assert_int_equal(exr_add_channel(ctx, part, s->names[k], s->types[k],
-                                         EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1),
-                         EXR_ERR_SUCCESS);
-    assert_int_equal(exr_write_header(ctx), EXR_ERR_SUCCESS);
-    exr_encode_pipeline_t enc;
-    memset(&enc, 0, sizeof enc);
-    int started = 0;
-    exr_chunk_info_t ci;
-    if (s->storage == EXR_STORAGE_TILED) {
-        int ntx = (s->width + s->tile - 1) / s->tile, nty = (s->height + s->tile - 1) / s->tile;
-        for (int ty = 0; ty < nty; ty++)
-            for (int tx = 0; tx < ntx; tx++) {
-                assert_int_equal(exr_write_tile_chunk_info(ctx, part, tx, ty, 0, 0, &ci),
-                                 EXR_ERR_SUCCESS);
-                raw_encode(ctx, &enc, &started, &ci, s, planes, tx * s->tile, ty * s->tile);
-            }
-    } else {
-        int32_t lines = 0;
-        assert_int_equal(exr_get_scanlines_per_chunk(ctx, part, &lines), EXR_ERR_SUCCESS);
-        for (int y = 0; y < s->height; y += lines) {
-            assert_int_equal(exr_write_scanline_chunk_info(ctx, part, s->y0 + y, &ci),
-                             EXR_ERR_SUCCESS);
-            raw_encode(ctx, &enc, &started, &ci, s, planes, 0, y);
-        }
-    }
-    if (started)
-        exr_encoding_destroy(ctx, &enc);
-    assert_int_equal(exr_finish(&ctx), EXR_ERR_SUCCESS);
-    for (int k = 0; k < s->nch; k++)
-        free(planes[k]);
-}
-
 /* A smooth test pattern, exact in half: channel c of (x, y). */
 static float pattern(int c, int x, int y)
 {
@@ -248,9 +130,9 @@ static float nan_at_0_4(int c, int x, int y)
     return (x == 0 && y == 4 && c == 0) ? NAN : pattern(c, x, y);
 }
 
-/* The image read from a raw_write(s, pattern) file: output channel k is the
+/* The image read from a tu_exr_write_raw(s, pattern) file: output channel k is the
  * file channel named want[k]. */
-static void assert_pattern(const btf_image *img, const raw_spec *s, const char *const *want)
+static void assert_pattern(const btf_image *img, const tu_exr_spec *s, const char *const *want)
 {
     for (int k = 0; k < img->channels; k++) {
         int src = -1;
@@ -571,9 +453,9 @@ static void inf_and_nan_in_file(void **state)
     btf_error e = {0};
     btf_image b;
     const char *p = tu_fmt("%s/inf.exr", dir);
-    raw_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 8, 6, 1, {"Y"},
+    tu_exr_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 8, 6, 1, {"Y"},
                   {EXR_PIXEL_FLOAT}};
-    raw_write(p, &s, inf_at_3_2);
+    tu_exr_write_raw(p, &s, inf_at_3_2);
     TU_OK(btf_exr_probe(p, &(btf_image_header){0}, &e), &e); /* the header is fine */
     assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_DATA);
     assert_string_equal(e.msg, tu_fmt("%s: NaN or Inf at pixel (3, 2)", p));
@@ -582,9 +464,9 @@ static void inf_and_nan_in_file(void **state)
     assert_int_equal(btf_image_read(p, NULL, &b, &e), BTF_E_DATA);
 
     /* NaN in a half RGB file, with compression. */
-    raw_spec s2 = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 5, 20, 3, {"B", "G", "R"},
+    tu_exr_spec s2 = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 5, 20, 3, {"B", "G", "R"},
                    {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
-    raw_write(p, &s2, nan_at_0_4);
+    tu_exr_write_raw(p, &s2, nan_at_0_4);
     assert_int_equal(btf_exr_read(p, 1, &b, &e), BTF_E_DATA);
     assert_string_equal(e.msg, tu_fmt("%s: NaN or Inf at pixel (0, 4)", p));
     assert_null(b.data);
@@ -599,9 +481,9 @@ static void other_layouts(void **state)
     const char *p = tu_fmt("%s/layout.exr", dir);
 
     /* Tiled, with partial tiles at the right and bottom edges. */
-    raw_spec t = {EXR_STORAGE_TILED, EXR_COMPRESSION_ZIP, 4, 0, 0, 10, 7, 3, {"B", "G", "R"},
+    tu_exr_spec t = {EXR_STORAGE_TILED, EXR_COMPRESSION_ZIP, 4, 0, 0, 10, 7, 3, {"B", "G", "R"},
                   {EXR_PIXEL_FLOAT, EXR_PIXEL_HALF, EXR_PIXEL_FLOAT}};
-    raw_write(p, &t, pattern);
+    tu_exr_write_raw(p, &t, pattern);
     TU_OK(btf_exr_probe(p, &hd, &e), &e);
     assert_int_equal(hd.width, 10);
     assert_int_equal(hd.height, 7);
@@ -613,9 +495,9 @@ static void other_layouts(void **state)
 
     /* A data window that does not start at (0, 0); an alpha channel that is
      * ignored; a single-channel tiled file of any name. */
-    raw_spec o = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_PIZ, 0, -3, 5, 9, 40, 2, {"A", "Y"},
+    tu_exr_spec o = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_PIZ, 0, -3, 5, 9, 40, 2, {"A", "Y"},
                   {EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
-    raw_write(p, &o, pattern);
+    tu_exr_write_raw(p, &o, pattern);
     TU_OK(btf_exr_probe(p, &hd, &e), &e);
     assert_int_equal(hd.channels, 1);
     assert_int_equal(hd.bits, 16);
@@ -625,9 +507,9 @@ static void other_layouts(void **state)
     assert_pattern(&b, &o, (const char *const[]){"Y"});
     btf_image_free(&b);
 
-    raw_spec z = {EXR_STORAGE_TILED, EXR_COMPRESSION_NONE, 3, 2, 2, 8, 8, 1, {"Z"},
+    tu_exr_spec z = {EXR_STORAGE_TILED, EXR_COMPRESSION_NONE, 3, 2, 2, 8, 8, 1, {"Z"},
                   {EXR_PIXEL_FLOAT}};
-    raw_write(p, &z, pattern);
+    tu_exr_write_raw(p, &z, pattern);
     TU_OK(btf_exr_read(p, 3, &b, &e), &e);
     assert_int_equal(b.channels, 3);
     assert_pattern(&b, &z, (const char *const[]){"Z", "Z", "Z"});
@@ -646,9 +528,9 @@ static void every_compression(void **state)
     /* DWAA/DWAB: OpenEXRCore 3.1 can neither write nor read them (see
      * dwa_is_unsupported). */
     for (int i = 0; i < 8; i++) {
-        raw_spec s = {EXR_STORAGE_SCANLINE, comp[i], 0, 0, 0, 45, 70, 4, {"A", "B", "G", "R"},
+        tu_exr_spec s = {EXR_STORAGE_SCANLINE, comp[i], 0, 0, 0, 45, 70, 4, {"A", "B", "G", "R"},
                       {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
-        raw_write(p, &s, pattern);
+        tu_exr_write_raw(p, &s, pattern);
         btf_image b;
         TU_OK(btf_exr_read(p, 0, &b, &e), &e);
         assert_int_equal(b.channels, 3);
@@ -681,9 +563,9 @@ static void dwa_is_unsupported(void **state)
     btf_error e = {0};
     btf_image b;
     const char *p = tu_fmt("%s/dwa.exr", dir);
-    raw_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 16, 8, 1, {"Y"},
+    tu_exr_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 16, 8, 1, {"Y"},
                   {EXR_PIXEL_HALF}};
-    raw_write(p, &s, pattern);
+    tu_exr_write_raw(p, &s, pattern);
     size_t n;
     unsigned char *d = slurp(p, &n);
     static const char key[] = "compression\0compression\0\1\0\0\0";
@@ -764,9 +646,9 @@ static void deep_is_unsupported(void **state)
     btf_error e = {0};
     btf_image b;
     const char *p = tu_fmt("%s/deep.exr", dir);
-    raw_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 6, 5, 1, {"Y"},
+    tu_exr_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 6, 5, 1, {"Y"},
                   {EXR_PIXEL_FLOAT}};
-    raw_write(p, &s, pattern);
+    tu_exr_write_raw(p, &s, pattern);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     btf_image_free(&b);
     relabel_as_deep(p, 5); /* NONE: one scanline per chunk */
@@ -787,31 +669,31 @@ static void unsupported_layouts(void **state)
     btf_image_header hd;
     const char *p = tu_fmt("%s/u.exr", dir);
 
-    raw_spec u = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 1, {"Y"},
+    tu_exr_spec u = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 1, {"Y"},
                   {EXR_PIXEL_UINT}};
-    raw_write(p, &u, pattern);
+    tu_exr_write_raw(p, &u, pattern);
     assert_int_equal(btf_exr_probe(p, &hd, &e), BTF_E_UNSUPPORTED);
     assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
     assert_non_null(strstr(e.msg, p));
     assert_non_null(strstr(e.msg, "UINT"));
 
-    raw_spec uv = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 2, {"U", "V"},
+    tu_exr_spec uv = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 2, {"U", "V"},
                    {EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
-    raw_write(p, &uv, pattern);
+    tu_exr_write_raw(p, &uv, pattern);
     assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
     assert_non_null(strstr(e.msg, "U, V"));
 
     /* Luminance/chroma: reading only Y would lose the colour. */
-    raw_spec yc = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 3,
+    tu_exr_spec yc = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 3,
                    {"BY", "RY", "Y"}, {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
-    raw_write(p, &yc, pattern);
+    tu_exr_write_raw(p, &yc, pattern);
     assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
 
     /* A UINT channel beside R, G, B is merely skipped. */
-    raw_spec id = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 6, 5, 4,
+    tu_exr_spec id = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 6, 5, 4,
                    {"B", "G", "R", "id"},
                    {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_UINT}};
-    raw_write(p, &id, pattern);
+    tu_exr_write_raw(p, &id, pattern);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     for (int i = 0; i < 30; i++)
         assert_true(b.data[3 * i] == pattern(2, i % 6, i / 6));

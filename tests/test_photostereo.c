@@ -180,21 +180,24 @@ typedef struct material_limits {
     double albedo;        /* mean relative albedo error, unshadowed pixels */
 } material_limits;
 
-/* Measured at 128^2, seed 1, 81 lights (robust defaults): leather 0.30 /
- * 0.78 deg, heights 5.0 % (FC) and 13 % (Poisson); fabric 0.39 / 0.87 deg,
- * 5.9 % and 34 %; wood 0.05 / 0.05 deg, 5 % and 40 %. Plain least squares
- * gave 1.48 deg (leather) and 7.0 deg (fabric) on all pixels.
+/* Measured at 128^2, seed 1, 81 lights (robust defaults): leather 0.30 deg
+ * on unshadowed pixels / 0.79 deg on all, heights 5.1 % (FC) and 13 %
+ * (Poisson), albedo 19 %; fabric 0.39 / 0.77 deg, 5.8 % and 34 %, 16 %; wood
+ * 0.05 / 0.05 deg, 5.0 % and 39 %, 0.9 %. Plain least squares: 1.48 deg
+ * (leather) and 7.0 deg (fabric) on all pixels.
  * Why Poisson's height error is larger: the normals of the materials are
  * central differences of their heights, which FC inverts exactly in the
  * Fourier domain while the 5-point Poisson solver sees the mean of two
  * neighbouring slopes (it damps relief of period p by cos^2(pi/p)); the
- * fabric's cliffs between threads and the wood's pores are fine relief. The
- * albedo absorbs the ambient term of the renderer (light in the shadows),
- * a few per cent. */
+ * fabric's cliffs between threads and the wood's pores are fine relief.
+ * Why the albedo is off by 15-20 % on leather and fabric: the renderer adds
+ * ambient light (5-6 % of the albedo, also in the shadows) and a broad
+ * white lobe, which a Lambertian fit partly absorbs, most in the darkest
+ * channel (leather's blue is 0.04 in its creases). */
 static const material_limits limits[] = {
-    {"leather", 0.6, 1.5, 0.10, 0.22, 0.15},
-    {"fabric", 0.8, 1.7, 0.12, 0.45, 0.15},
-    {"wood", 0.15, 0.15, 0.10, 0.55, 0.10},
+    {"leather", 0.6, 1.5, 0.10, 0.22, 0.30},
+    {"fabric", 0.8, 1.5, 0.10, 0.50, 0.25},
+    {"wood", 0.15, 0.15, 0.10, 0.60, 0.03},
 };
 
 static double albedo_error(const btf_ps_result *r, const scene *s)
@@ -274,8 +277,9 @@ static void materials_wood(void **state)
     check_material(&limits[2]);
 }
 
-/* Every third ubo81 light (27): fewer samples per pixel, still robust.
- * Measured: leather 0.95 deg on all pixels, fabric 1.31 deg. */
+/* Every third ubo81 light (27): fewer samples per pixel, still robust (the
+ * shadow gap keeps pixels that few lights reach from fitting their shadows).
+ * Measured at 96^2: leather 0.95 deg on all pixels, fabric 0.92 deg. */
 static void materials_light_subset(void **state)
 {
     (void)state;
@@ -808,9 +812,14 @@ static void integrate_nonperiodic(void **state)
         assert_true(all_finite(&out));
         double efc = height_error(out.data, z, NULL, wh);
         print_message("tilted bump %dx%d: Poisson %.4f, FC %.4f relative RMS\n", w, h, ep, efc);
-        assert_true(ep < 0.02);
-        if (w > 1 && h > 1)
+        if (w > 1 && h > 1) {
+            assert_true(ep < 0.02);
             assert_true(efc > 5.0 * ep);
+        } else {
+            /* 9 samples of a narrow bump: discretisation, not a defect
+             * (measured 14 %); this checks the degenerate sizes run. */
+            assert_true(ep < 0.3);
+        }
         btf_image_free(&out);
         btf_image_free(&nm);
         free(z);
@@ -960,9 +969,11 @@ static void chunk(FILE *f, const char *type, const unsigned char *data, size_t n
     put32(hdr, (unsigned long)n);
     memcpy(hdr + 4, type, 4);
     fwrite(hdr, 1, 8, f);
-    fwrite(data, 1, n, f);
     unsigned long c = crc32_of(0, hdr + 4, 4);
-    c = crc32_of(c, data, n);
+    if (n) {
+        fwrite(data, 1, n, f);
+        c = crc32_of(c, data, n);
+    }
     put32(crc, c);
     fwrite(crc, 1, 4, f);
 }

@@ -115,3 +115,107 @@ int tu_count_files(const char *path)
     closedir(d);
     return n;
 }
+
+
+static void raw_quiet(exr_const_context_t ctxt, exr_result_t code, const char *msg)
+{
+    (void)ctxt, (void)code;
+    print_error("openexr (test writer): %s\n", msg);
+}
+
+/* Encodes the block (bx, by, bw, bh) of the planar source buffers. */
+static void raw_encode(exr_context_t ctx, exr_encode_pipeline_t *enc, int *started,
+                       const exr_chunk_info_t *ci, const tu_exr_spec *s, void **planes, int bx,
+                       int by)
+{
+    if (*started)
+        assert_int_equal(exr_encoding_update(ctx, 0, ci, enc), EXR_ERR_SUCCESS);
+    else
+        assert_int_equal(exr_encoding_initialize(ctx, 0, ci, enc), EXR_ERR_SUCCESS);
+    *started = 1;
+    for (int c = 0; c < enc->channel_count; c++) {
+        exr_coding_channel_info_t *ch = &enc->channels[c];
+        int k = -1;
+        for (int j = 0; j < s->nch; j++)
+            if (!strcmp(ch->channel_name, s->names[j]))
+                k = j;
+        assert_true(k >= 0);
+        ch->encode_from_ptr = (const uint8_t *)planes[k] + ((size_t)by * s->width + bx) * 4;
+        ch->user_pixel_stride = 4;
+        ch->user_line_stride = s->width * 4;
+        ch->user_bytes_per_element = 4;
+        ch->user_data_type = s->types[k] == EXR_PIXEL_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+    }
+    assert_int_equal(exr_encoding_choose_default_routines(ctx, 0, enc), EXR_ERR_SUCCESS);
+    assert_int_equal(exr_encoding_run(ctx, 0, enc), EXR_ERR_SUCCESS);
+}
+
+void tu_exr_write_raw(const char *path, const tu_exr_spec *s, tu_exr_value_fn value)
+{
+    void *planes[4];
+    for (int k = 0; k < s->nch; k++) {
+        planes[k] = malloc((size_t)s->width * s->height * 4);
+        assert_non_null(planes[k]);
+        for (int y = 0; y < s->height; y++)
+            for (int x = 0; x < s->width; x++) {
+                size_t i = (size_t)y * s->width + x;
+                float v = value(k, x, y);
+                if (s->types[k] == EXR_PIXEL_UINT)
+                    ((uint32_t *)planes[k])[i] = (uint32_t)v;
+                else
+                    ((float *)planes[k])[i] = v;
+            }
+    }
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = raw_quiet;
+    exr_context_t ctx = NULL;
+    assert_int_equal(exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init), EXR_ERR_SUCCESS);
+    int part = -1;
+    assert_int_equal(exr_add_part(ctx, NULL, s->storage, &part), EXR_ERR_SUCCESS);
+    exr_attr_box2i_t box;
+    box.min.x = s->x0;
+    box.min.y = s->y0;
+    box.max.x = s->x0 + s->width - 1;
+    box.max.y = s->y0 + s->height - 1;
+    exr_attr_v2f_t center;
+    center.x = center.y = 0.0f;
+    assert_int_equal(exr_initialize_required_attr(ctx, part, &box, &box, 1.0f, &center, 1.0f,
+                                                  EXR_LINEORDER_INCREASING_Y, s->compression),
+                     EXR_ERR_SUCCESS);
+    if (s->storage == EXR_STORAGE_TILED)
+        assert_int_equal(exr_set_tile_descriptor(ctx, part, (uint32_t)s->tile, (uint32_t)s->tile,
+                                                 EXR_TILE_ONE_LEVEL, EXR_TILE_ROUND_DOWN),
+                         EXR_ERR_SUCCESS);
+    for (int k = 0; k < s->nch; k++)
+        assert_int_equal(exr_add_channel(ctx, part, s->names[k], s->types[k],
+                                         EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1),
+                         EXR_ERR_SUCCESS);
+    assert_int_equal(exr_write_header(ctx), EXR_ERR_SUCCESS);
+    exr_encode_pipeline_t enc;
+    memset(&enc, 0, sizeof enc);
+    int started = 0;
+    exr_chunk_info_t ci;
+    if (s->storage == EXR_STORAGE_TILED) {
+        int ntx = (s->width + s->tile - 1) / s->tile, nty = (s->height + s->tile - 1) / s->tile;
+        for (int ty = 0; ty < nty; ty++)
+            for (int tx = 0; tx < ntx; tx++) {
+                assert_int_equal(exr_write_tile_chunk_info(ctx, part, tx, ty, 0, 0, &ci),
+                                 EXR_ERR_SUCCESS);
+                raw_encode(ctx, &enc, &started, &ci, s, planes, tx * s->tile, ty * s->tile);
+            }
+    } else {
+        int32_t lines = 0;
+        assert_int_equal(exr_get_scanlines_per_chunk(ctx, part, &lines), EXR_ERR_SUCCESS);
+        for (int y = 0; y < s->height; y += lines) {
+            assert_int_equal(exr_write_scanline_chunk_info(ctx, part, s->y0 + y, &ci),
+                             EXR_ERR_SUCCESS);
+            raw_encode(ctx, &enc, &started, &ci, s, planes, 0, y);
+        }
+    }
+    if (started)
+        exr_encoding_destroy(ctx, &enc);
+    assert_int_equal(exr_finish(&ctx), EXR_ERR_SUCCESS);
+    for (int k = 0; k < s->nch; k++)
+        free(planes[k]);
+}
+

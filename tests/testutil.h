@@ -14,6 +14,8 @@
 
 #include "btfcar.h"
 
+#include <openexr.h>
+
 /* A fresh temporary folder (under $TMPDIR or /tmp), removed by tu_rmtree. */
 char *tu_tmpdir(void);
 void tu_rmtree(const char *path);
@@ -29,6 +31,23 @@ const char *tu_cli(void);
 void tu_write_file(const char *path, const void *data, size_t n);
 /* Number of regular files under a folder, recursively. */
 int tu_count_files(const char *path);
+/* Writes an EXR file directly with the core API (tu_exr_write_raw), for
+ * layouts and values btf_exr_write never produces (NaN, Inf, UINT, tiles). Channel c of pixel (x, y) (data-window relative) is
+ * value(c, x, y); UINT channels store it truncated. */
+typedef struct tu_exr_spec {
+    exr_storage_t storage;         /* SCANLINE or TILED */
+    exr_compression_t compression;
+    int tile;                      /* tile side when TILED */
+    int x0, y0;                    /* data window origin */
+    int width, height;
+    int nch;
+    const char *names[4];          /* sorted by name, as EXR requires */
+    exr_pixel_type_t types[4];
+} tu_exr_spec;
+
+typedef float (*tu_exr_value_fn)(int c, int x, int y);
+void tu_exr_write_raw(const char *path, const tu_exr_spec *s, tu_exr_value_fn value);
+
 /* Asserts a btfcar call succeeded, printing the error message if not. */
 #define TU_OK(call, errp)                                                      \
     do {                                                                       \

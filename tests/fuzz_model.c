@@ -1,0 +1,308 @@
+/*
+ * fuzz_model.c — libFuzzer target for the model decoder (src/model_io.c,
+ * docs/model-format.md). The decoder must never crash, leak or read out of
+ * bounds; a failure must be BTF_E_FORMAT (or BTF_E_NOMEM) with one line
+ * naming the input, and leave the model empty. Whatever it accepts must
+ * re-encode, and decode(encode(m)) must be m, field for field, with
+ * encode(decode(encode(m))) the same bytes.
+ *
+ * Two kinds of input, told apart by the first byte:
+ *  - 0x89 (how every model file starts): the input is a whole file, so the
+ *    signature, version, sizes, CRC and zlib checks are exercised;
+ *  - anything else: the rest of the input is a payload (the sections), put
+ *    in a container with a correct CRC (stored when the byte is even,
+ *    deflated when odd), so that mutations reach the section parser and the
+ *    validator instead of all dying at the CRC.
+ *
+ * Build from the repository root (`make fuzz` does this for every
+ * tests/fuzz_*.c, library sources instrumented too):
+ *
+ *   mkdir -p build-fuzz
+ *   clang++ -std=c++17 -g -O1 -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize=vptr \
+ *       -Iinclude -Isrc -I/usr/include/opencv4 -c src/cv_bridge.cpp -o build-fuzz/cv_bridge.o
+ *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -ffp-contract=off \
+ *       -Iinclude -Isrc -Igpu -Ibuild/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
+ *       -c tests/fuzz_model.c -o build-fuzz/fuzz_model.o
+ *   clang -std=c11 -g -O1 -fsanitize=fuzzer-no-link,address,undefined -ffp-contract=off \
+ *       -Iinclude -Isrc -Igpu -Ibuild/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
+ *       -c src/model_io.c ...   (each library source, one object each)
+ *   clang++ -fsanitize=fuzzer,address,undefined -o build-fuzz/fuzz_model \
+ *       build-fuzz/fuzz_model.o build-fuzz/<library objects> build-fuzz/cv_bridge.o \
+ *       -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
+ *       -lvulkan -lz -lm -lpthread
+ *
+ * Run with the seed corpus (tests/fuzz.sh copies it into a work folder):
+ *
+ *   ./build-fuzz/fuzz_model -max_total_time=60 build-fuzz/corpus/fuzz_model \
+ *       tests/fuzz-corpus/fuzz_model
+ *
+ * Seeds: built with -DFUZZ_MODEL_SEEDS (and without -fsanitize=fuzzer) this
+ * file is a program that writes small valid inputs of both kinds:
+ *
+ *   cc -std=c11 -DFUZZ_MODEL_SEEDS -D_DEFAULT_SOURCE -Iinclude -Isrc -o /tmp/seeds \
+ *       tests/fuzz_model.c build/libbtfcar.a <the Makefile's LDLIBS>
+ *   /tmp/seeds tests/fuzz-corpus/fuzz_model
+ */
+#include "btfcar.h"
+
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <zlib.h>
+
+static const unsigned char SIG[11] = {0x89, 'B', 'T', 'F', 'C', 'A', 'R', '\r', '\n', 0x1a, '\n'};
+
+static void put_u32(unsigned char *c, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        c[i] = (unsigned char)(v >> (8 * i));
+}
+
+/* A version 1.0 container around a payload, with a correct CRC-32. */
+static unsigned char *wrap(const unsigned char *payload, size_t n, int deflate, size_t *size)
+{
+    uLongf zn = compressBound((uLong)n);
+    unsigned char *f = malloc(26 + zn + 4);
+    if (!f)
+        abort();
+    if (!deflate || compress2(f + 26, &zn, payload, (uLong)n, 1) != Z_OK) {
+        deflate = 0;
+        if (n)
+            memcpy(f + 26, payload, n);
+        zn = (uLongf)n;
+    }
+    memcpy(f, SIG, 11);
+    f[11] = 1, f[12] = 0;  /* major */
+    f[13] = 0, f[14] = 0;  /* minor */
+    f[15] = 26, f[16] = 0; /* header bytes */
+    f[17] = (unsigned char)deflate;
+    put_u32(f + 18, (uint32_t)n);
+    put_u32(f + 22, (uint32_t)zn);
+    put_u32(f + 26 + zn, (uint32_t)crc32(0L, f, (uInt)(26 + zn)));
+    *size = 26 + zn + 4;
+    return f;
+}
+
+static int dirsets_equal(const btf_dirset *a, const btf_dirset *b)
+{
+    return a->count == b->count && !memcmp(a->name, b->name, sizeof a->name) &&
+           (a->count == 0 || !memcmp(a->dirs, b->dirs, sizeof *a->dirs * (size_t)a->count));
+}
+
+/* Field for field, bit for bit (the decoder zero-fills unused slots, so
+ * whole structs compare). */
+static int models_equal(const btf_model *a, const btf_model *b)
+{
+    if (!dirsets_equal(&a->views, &b->views) || !dirsets_equal(&a->lights, &b->lights))
+        return 0;
+    if (a->n_subspaces != b->n_subspaces || !a->index != !b->index)
+        return 0;
+    size_t ni = (size_t)a->views.count * a->lights.count;
+    if (a->index && memcmp(a->index, b->index, ni))
+        return 0;
+    if (memcmp(a->subspaces, b->subspaces, sizeof *a->subspaces * (size_t)a->n_subspaces))
+        return 0;
+    if (a->range_width != b->range_width || a->range_height != b->range_height ||
+        memcmp(&a->range_texel, &b->range_texel, sizeof a->range_texel) || !a->range != !b->range)
+        return 0;
+    size_t nr = (size_t)a->range_width * a->range_height;
+    return !a->range || !memcmp(a->range, b->range, sizeof *a->range * nr);
+}
+
+static int model_empty(const btf_model *m)
+{
+    return !m->views.dirs && !m->lights.dirs && !m->index && !m->subspaces && !m->range &&
+           m->n_subspaces == 0 && m->views.count == 0 && m->lights.count == 0;
+}
+
+/* Failures are BTF_E_FORMAT (or out of memory), one line naming the input. */
+static void check_failure(int rc, const btf_error *e, const btf_model *m)
+{
+    if ((rc != BTF_E_FORMAT && rc != BTF_E_NOMEM) || e->code != rc)
+        abort();
+    if (strncmp(e->msg, "fuzz: ", 6) != 0 || strchr(e->msg, '\n') || !model_empty(m))
+        abort();
+    if (rc == BTF_E_FORMAT && !strstr(e->msg, "(expected"))
+        abort();
+}
+
+/* What the decoder accepted must survive encode -> decode unchanged, and
+ * re-encode to the same bytes. */
+static void check_round_trip(const btf_model *m)
+{
+    btf_error e = {0};
+    unsigned char *d1 = NULL, *d2 = NULL;
+    size_t n1, n2;
+    if (btf_model_encode(m, &d1, &n1, &e) != 0)
+        abort();
+    btf_model r;
+    if (btf_model_decode(d1, n1, "fuzz", &r, &e) != 0)
+        abort();
+    if (!models_equal(m, &r))
+        abort();
+    if (btf_model_encode(&r, &d2, &n2, &e) != 0 || n1 != n2 || memcmp(d1, d2, n1))
+        abort();
+    btf_model_free(&r);
+    free(d1);
+    free(d2);
+}
+
+static void run_one(const unsigned char *data, size_t size)
+{
+    btf_model m;
+    btf_error e = {0};
+    int rc = btf_model_decode(data, size, "fuzz", &m, &e);
+    if (rc != 0) {
+        check_failure(rc, &e, &m);
+        return;
+    }
+    check_round_trip(&m);
+    btf_model_free(&m);
+}
+
+#ifndef FUZZ_MODEL_SEEDS
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    if (size > 0 && data[0] != 0x89) {
+        size_t n;
+        unsigned char *f = wrap(data + 1, size - 1, data[0] & 1, &n);
+        run_one(f, n);
+        free(f);
+        return 0;
+    }
+    /* A copy of exactly size bytes, so that ASan sees any over-read. */
+    unsigned char *copy = malloc(size ? size : 1);
+    if (!copy)
+        abort();
+    if (size)
+        memcpy(copy, data, size);
+    run_one(copy, size);
+    free(copy);
+    return 0;
+}
+
+#else /* the seed writer */
+
+static btf_offset causal[] = {{0, -1}, {-1, 0}, {-1, -1}, {-1, 1}, {0, -2}, {-2, 0}};
+
+static void small_model(btf_model *m, int directions, int range)
+{
+    btf_error e = {0};
+    memset(m, 0, sizeof *m);
+    if (directions) {
+        btf_dir v[3] = {{0, 0}, {30, 0}, {30, 180}}, l[2] = {{0, 0}, {45, 90}};
+        if (btf_dirset_from_list(&m->views, v, 3, &e) || btf_dirset_from_list(&m->lights, l, 2, &e))
+            exit(1);
+    }
+    m->n_subspaces = 2;
+    if (directions) {
+        m->index = malloc(6);
+        for (int i = 0; i < 6; i++)
+            m->index[i] = (uint8_t)(i & 1);
+    }
+    m->subspaces = calloc(2, sizeof *m->subspaces);
+    for (int s = 0; s < 2; s++) {
+        btf_subspace_model *sm = &m->subspaces[s];
+        sm->view = directions ? s : -1;
+        sm->light = directions ? 1 - s : -1;
+        sm->width = 64;
+        sm->height = 48;
+        sm->mean[0] = 0.25f, sm->mean[1] = 0.5f, sm->mean[2] = 0.125f;
+        /* An orthonormal basis: a rotation about z by 90 degrees. */
+        sm->basis[1] = 1.0f, sm->basis[3] = -1.0f, sm->basis[8] = 1.0f;
+        sm->levels = 2;
+        for (int b = 0; b < 3; b++)
+            for (int l = 0; l < 2; l++) {
+                btf_car_band *cb = &sm->bands[b][l];
+                cb->n = 1 + (b + l + s) % 6;
+                for (int i = 0; i < cb->n; i++) {
+                    cb->offsets[i] = causal[i];
+                    cb->gamma[i] = 0.1f * (float)(i + 1) - 0.2f;
+                }
+                cb->sigma = 0.01f * (float)(b + 1);
+                cb->mean = b == 0 ? 0.002f : 0.0f;
+            }
+    }
+    if (range) {
+        m->range_width = 5;
+        m->range_height = 4;
+        m->range_texel = 2.0f;
+        m->range = malloc(20 * sizeof(float));
+        for (int i = 0; i < 20; i++)
+            m->range[i] = 0.3f * (float)(i % 5) - 0.1f * (float)(i / 5);
+    }
+}
+
+static void write_file(const char *dir, const char *name, const unsigned char *p, size_t n)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "wb");
+    if (!f || fwrite(p, 1, n, f) != n || fclose(f) != 0) {
+        fprintf(stderr, "%s: cannot write\n", path);
+        exit(1);
+    }
+}
+
+/* The file itself, and (prefixed by the mode byte 0) its payload. */
+static void write_seeds(const char *dir, const char *name, const btf_model *m)
+{
+    btf_error e = {0};
+    unsigned char *d;
+    size_t n;
+    if (btf_model_encode(m, &d, &n, &e)) {
+        fprintf(stderr, "%s\n", e.msg);
+        exit(1);
+    }
+    char fname[256];
+    snprintf(fname, sizeof fname, "%s.btfcar", name);
+    write_file(dir, fname, d, n);
+    uLongf raw = d[18] | d[19] << 8 | d[20] << 16 | (uLongf)d[21] << 24;
+    unsigned char *p = malloc(raw + 1);
+    p[0] = 0;
+    if (d[17] == 1) {
+        if (uncompress(p + 1, &raw, d + 26, (uLong)(n - 30)) != Z_OK)
+            exit(1);
+    } else {
+        memcpy(p + 1, d + 26, raw);
+    }
+    snprintf(fname, sizeof fname, "%s.payload", name);
+    write_file(dir, fname, p, raw + 1);
+    /* Both seeds must pass the target's own checks. */
+    size_t wn;
+    unsigned char *w = wrap(p + 1, raw, 0, &wn);
+    btf_model r;
+    if (btf_model_decode(w, wn, "seed", &r, &e)) {
+        fprintf(stderr, "%s\n", e.msg);
+        exit(1);
+    }
+    btf_model_free(&r);
+    run_one(w, wn);
+    run_one(d, n);
+    free(w);
+    free(p);
+    free(d);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc != 2) {
+        fprintf(stderr, "usage: %s DIR\n", argv[0]);
+        return 2;
+    }
+    btf_model m;
+    small_model(&m, 1, 1);
+    write_seeds(argv[1], "full", &m);
+    btf_model_free(&m);
+    small_model(&m, 0, 0);
+    write_seeds(argv[1], "texture", &m);
+    btf_model_free(&m);
+    small_model(&m, 0, 1);
+    write_seeds(argv[1], "texture-range", &m);
+    btf_model_free(&m);
+    return 0;
+}
+
+#endif

@@ -16,7 +16,11 @@ static void help(void)
            "  --size WxH        output size in pixels, each side 1..16777216\n"
            "  --subspace LIST   comma-separated subspace numbers, or all (default)\n"
            "  --seed S          noise seed (default 1); the same seed gives the same bytes\n"
-           "  --backend cpu     the CPU reference (the only backend in this version)\n"
+           "  --backend B       cpu: the CPU reference; gpu: Vulkan compute (any device,\n"
+           "                    the CPU driver lavapipe included); auto (default): a real\n"
+           "                    GPU if present, else the CPU (lavapipe is slower than the\n"
+           "                    CPU path: measured, README). Same bytes on every backend.\n"
+           "  --device N        Vulkan device index (btfcar info --devices)\n"
            "  --preview         also write subspace_NN.png (8-bit sRGB; up to 8192x8192)\n"
            "  --half            write half-float EXR (default: float)\n"
            "  --quiet           print nothing but errors\n");
@@ -57,6 +61,64 @@ static int parse_list(const char *s, int n, unsigned char *pick)
     return 0;
 }
 
+/* Writes one image already in memory as EXR (+ preview). */
+static int write_image(const btf_image *img, int k, const char *outdir, int preview, int half,
+                       btf_error *err)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/subspace_%02d.exr", outdir, k);
+    int rc = btf_image_write_exr(path, img, half, err);
+    if (rc == 0 && preview) {
+        snprintf(path, sizeof path, "%s/subspace_%02d.png", outdir, k);
+        rc = btf_image_write_png(path, img, err);
+    }
+    return rc;
+}
+
+/* The GPU path: all chosen subspaces in as few jobs as the device allows. */
+static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick, int w, int h,
+                     uint64_t seed, const char *outdir, int preview, int half, btf_error *err)
+{
+    size_t count = m->n_subspaces > 0 ? (size_t)m->n_subspaces : 1;
+    int n = 0, *subs = calloc(count, sizeof(int));
+    btf_image *imgs = calloc(count, sizeof(btf_image));
+    if (!subs || !imgs) {
+        free(subs);
+        free(imgs);
+        snprintf(err->msg, sizeof err->msg, "out of memory");
+        return BTF_E_NOMEM;
+    }
+    for (int k = 0; k < m->n_subspaces; k++)
+        if (pick[k])
+            subs[n++] = k;
+    int rc = btf_gpu_synthesise(g, m, subs, n, w, h, seed, imgs, err);
+    for (int j = 0; rc == 0 && j < n; j++)
+        rc = write_image(&imgs[j], subs[j], outdir, preview, half, err);
+    for (int j = 0; j < n; j++)
+        btf_image_free(&imgs[j]);
+    free(subs);
+    free(imgs);
+    return rc;
+}
+
+/* Opens the Vulkan device the backend asks for; NULL with a note (auto) or
+ * an error (gpu) when there is none. */
+static btf_gpu *open_gpu(const cli_ctx *c, const char *backend, int device, btf_error *err)
+{
+    if (!strcmp(backend, "cpu"))
+        return NULL;
+    int explicit_gpu = !strcmp(backend, "gpu");
+    btf_gpu_opts o = {.use_device = device >= 0, .device = device < 0 ? 0 : device,
+                      .allow_cpu = explicit_gpu};
+    btf_gpu *g = NULL;
+    if (btf_gpu_open(&o, &g, err) != 0) {
+        if (!explicit_gpu && !c->quiet)
+            fprintf(stderr, "btfcar synthesise: note: no GPU (%s); using the CPU\n", err->msg);
+        return NULL;
+    }
+    return g;
+}
+
 static int synth_one(const cli_ctx *c, const btf_model *m, int k, int w, int h, uint64_t seed,
                      const char *outdir, int preview, int half, btf_error *err)
 {
@@ -87,8 +149,8 @@ static int synth_one(const cli_ctx *c, const btf_model *m, int k, int w, int h, 
 int cmd_synthesise(int argc, char **argv)
 {
     cli_ctx c = {"synthesise", 0};
-    const char *model = NULL, *outdir = NULL, *list = "all", *backend = "cpu";
-    int w = 0, h = 0, preview = 0, half = 0;
+    const char *model = NULL, *outdir = NULL, *list = "all", *backend = "auto";
+    int w = 0, h = 0, preview = 0, half = 0, device = -1;
     uint64_t seed = 1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -119,9 +181,14 @@ int cmd_synthesise(int argc, char **argv)
                 return cli_usage_error(&c, "--seed needs a non-negative whole number");
             i++;
         } else if (!strcmp(a, "--backend")) {
-            if (!v)
-                return cli_usage_error(&c, "--backend needs cpu");
+            if (!v || (strcmp(v, "cpu") && strcmp(v, "gpu") && strcmp(v, "auto")))
+                return cli_usage_error(&c, "--backend needs cpu, gpu or auto");
             backend = v, i++;
+        } else if (!strcmp(a, "--device")) {
+            long n;
+            if (!v || cli_parse_int(v, 0, 255, &n))
+                return cli_usage_error(&c, "--device needs an index 0..255");
+            device = (int)n, i++;
         } else if (a[0] == '-' && a[1]) {
             return cli_usage_error(&c, "unknown option '%s'", a);
         } else if (!model) {
@@ -136,9 +203,6 @@ int cmd_synthesise(int argc, char **argv)
         return cli_usage_error(&c, "--size WxH is required");
     if (!outdir)
         return cli_usage_error(&c, "-o OUTDIR is required");
-    if (strcmp(backend, "cpu") != 0)
-        return cli_error(&c, "backend '%s' is not available in this version (available: cpu)",
-                         backend);
     if (preview && (double)w * h > 8192.0 * 8192.0)
         return cli_usage_error(&c, "--preview is limited to 8192x8192 pixels");
     btf_error err = {0};
@@ -155,15 +219,28 @@ int cmd_synthesise(int argc, char **argv)
     }
     if (rc == 0)
         rc = btf_mkdirs(outdir, &err);
+    btf_gpu *gpu = NULL;
+    if (rc == 0) {
+        gpu = open_gpu(&c, backend, device, &err);
+        if (!gpu && !strcmp(backend, "gpu"))
+            rc = 1;
+    }
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     int done = 0;
-    for (int k = 0; rc == 0 && k < m.n_subspaces; k++)
-        if (pick[k]) {
-            rc = synth_one(&c, &m, k, w, h, seed, outdir, preview, half, &err);
-            done++;
-        }
+    for (int k = 0; k < m.n_subspaces; k++)
+        done += pick[k];
+    if (rc == 0 && gpu) {
+        rc = synth_gpu(gpu, &m, pick, w, h, seed, outdir, preview, half, &err);
+    } else {
+        for (int k = 0; rc == 0 && k < m.n_subspaces; k++)
+            if (pick[k])
+                rc = synth_one(&c, &m, k, w, h, seed, outdir, preview, half, &err);
+    }
     clock_gettime(CLOCK_MONOTONIC, &t1);
+    char devname[300];
+    snprintf(devname, sizeof devname, "%s", gpu ? btf_gpu_device_name(gpu) : "cpu");
+    btf_gpu_close(gpu);
     free(pick);
     btf_model_free(&m);
     if (rc)
@@ -171,8 +248,8 @@ int cmd_synthesise(int argc, char **argv)
     cli_progress_done();
     double s = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     if (!c.quiet)
-        printf("synthesised %d subspace image%s of %dx%d in %.3f s (%.1f Mpixel/s) into %s\n", done,
-               done == 1 ? "" : "s", w, h, s, (double)w * h * done / (s > 0 ? s : 1e-9) / 1e6,
-               outdir);
+        printf("synthesised %d subspace image%s of %dx%d on %s in %.3f s (%.1f Mpixel/s) into %s\n",
+               done, done == 1 ? "" : "s", w, h, devname, s,
+               (double)w * h * done / (s > 0 ? s : 1e-9) / 1e6, outdir);
     return 0;
 }

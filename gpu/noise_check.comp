@@ -3,12 +3,14 @@
 // Invocation i covers (row0 + i / nblocks, block0 + i % nblocks): it writes
 // btf_noise4 for that (row, block) to z[i], the raw Philox-4x32-10 words of
 // the same counter to raw[i], and btf_noise1 of the block's 4 columns to z1[i].
+// The workgroup size is specialisation constant 0 (default 64), so the host
+// test (tests/test_vk.c) can check that results do not depend on it.
 #version 450
 #extension GL_GOOGLE_include_directive : require
 
 #include "btf_noise.h"
 
-layout(local_size_x = 64) in;
+layout(local_size_x = 64, local_size_x_id = 0) in;
 
 layout(std430, set = 0, binding = 0) writeonly buffer Noise4 { vec4 z[]; };
 layout(std430, set = 0, binding = 1) writeonly buffer Raw { uvec4 raw[]; };

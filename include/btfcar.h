@@ -628,6 +628,34 @@ int btf_synthesise_image(const btf_model *m, int subspace, int width, int height
 int btf_car_synthesise_field(const btf_car_band *band, int width, int height, uint64_t seed,
                              uint32_t stream, btf_rows_fn fn, void *user, btf_error *err);
 
+/* ------------------------------------------------------ synthesis (GPU) */
+
+/* The Vulkan compute path (gpu/synth_gpu.c, docs/gpu.md): the same fields,
+ * collapse and colour as btf_synthesise, bit for bit, computed by compute
+ * shaders (a wavefront over each causal field). */
+typedef struct btf_gpu btf_gpu;
+
+typedef struct btf_gpu_opts {
+    int use_device;   /* 1: take `device` (an index of `btfcar info --devices`);
+                         0: BTF_VK_DEVICE if set, else the best device */
+    int device;
+    int allow_cpu;    /* 1: a CPU device (lavapipe) may be chosen automatically */
+    int validation;   /* 1: the Khronos validation layer, its messages counted */
+} btf_gpu_opts;
+
+int btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err);
+void btf_gpu_close(btf_gpu *g);
+const char *btf_gpu_device_name(const btf_gpu *g);
+int btf_gpu_is_cpu(const btf_gpu *g);             /* 1 for lavapipe */
+unsigned btf_gpu_validation_errors(const btf_gpu *g);
+const char *btf_gpu_first_validation_message(const btf_gpu *g);
+
+/* Synthesises n subspace images of width x height into outs[0 .. n-1]
+ * (allocated here, linear RGB), in as few GPU jobs as the device's buffer
+ * limits allow. */
+int btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n, int width,
+                       int height, uint64_t seed, btf_image *outs, btf_error *err);
+
 #ifdef __cplusplus
 }
 #endif

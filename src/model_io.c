@@ -666,8 +666,8 @@ int btf_model_write(const char *path, const btf_model *m, btf_error *err)
 
 /* -------------------------------------------------------------- decoding */
 
-/* Checks the container and hands back the payload: either a pointer into
- * data (stored) or an inflated copy in *owned. */
+/* The signature comes first: a foreign file, a truncated one and one mangled
+ * by a text-mode transfer each get their own message. */
 static int check_signature(const unsigned char *data, size_t size, const char *name,
                            btf_error *err)
 {
@@ -705,7 +705,7 @@ static int check_version(const unsigned char *data, size_t size, const char *nam
 static int inflate_payload(const unsigned char *src, size_t n, size_t out_n, const char *name,
                            unsigned char **out, btf_error *err)
 {
-    if (out_n > (size_t)n * ZLIB_MAX_RATIO + 64)
+    if ((uint64_t)out_n > (uint64_t)n * ZLIB_MAX_RATIO + 64)
         return failf(err, BTF_E_FORMAT, name,
                      "payload of %zu bytes from %zu compressed (expected at most %u:1)", out_n, n,
                      ZLIB_MAX_RATIO);
@@ -727,6 +727,9 @@ static int inflate_payload(const unsigned char *src, size_t n, size_t out_n, con
     return BTF_OK;
 }
 
+/* Checks the container (signature, version, sizes, CRC, compression) and
+ * hands back the payload: a pointer into data when stored, an inflated copy
+ * in *owned when deflated. */
 static int open_container(const unsigned char *data, size_t size, const char *name,
                           const unsigned char **payload, size_t *payload_n, unsigned char **owned,
                           btf_error *err)
@@ -746,13 +749,15 @@ static int open_container(const unsigned char *data, size_t size, const char *na
     if (hdr < HEADER_BYTES)
         return failf(err, BTF_E_FORMAT, name, "header of %zu bytes (expected at least %d)", hdr,
                      HEADER_BYTES);
-    /* size_t is 64-bit here and every term is below 2^32: no overflow. */
-    size_t total = hdr + stored_n + CRC_BYTES;
-    if (size < total)
-        return failf(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected %zu)", size, total);
-    if (size > total)
-        return failf(err, BTF_E_FORMAT, name, "%zu bytes after the end (expected %zu bytes in all)",
-                     size - total, total);
+    /* 64-bit sums of 32-bit terms: no overflow even where size_t is 32-bit. */
+    uint64_t total = (uint64_t)hdr + stored_n + CRC_BYTES;
+    if ((uint64_t)size < total)
+        return failf(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected %llu)", size,
+                     (unsigned long long)total);
+    if ((uint64_t)size > total)
+        return failf(err, BTF_E_FORMAT, name,
+                     "%llu bytes after the end (expected %llu bytes in all)",
+                     (unsigned long long)(size - total), (unsigned long long)total);
     uint32_t want = get_u32(data + size - CRC_BYTES);
     uint32_t got = (uint32_t)crc32(0L, data, (uInt)(size - CRC_BYTES));
     if (want != got)
@@ -960,7 +965,8 @@ static int read_range(const span *sp, btf_model *m, const char *name, btf_error 
         return short_section(S_RANG, name, err);
     if (e < GRID_E_MIN || e > GRID_E_MAX || k < -GRID_K_LIMIT || k >= GRID_K_LIMIT)
         return failf(err, BTF_E_FORMAT, name,
-                     "range map: grid 2^%d, offset %ld (expected exponent %d..%d, |offset| <= 2^23)",
+                     "range map: grid 2^%d, offset %ld (expected exponent %d..%d, offset "
+                     "-2^23..2^23-1)",
                      e, (long)k, GRID_E_MIN, GRID_E_MAX);
     uint16_t *q = alloc_named(n, sizeof *q, 0, name, err);
     if (!q)

@@ -198,8 +198,6 @@ static void sym3_weak_axis(const sym3 *m, double v[3])
  * (may be NULL) receives A^-1. */
 static int sym3_solve(const sym3 *m, const double b[3], double max_cond, double g[3], sym3 *inv)
 {
-    if (!(sym3_condition(m) <= max_cond))
-        return 0;
     double c00 = m->a11 * m->a22 - m->a12 * m->a12;
     double c01 = m->a02 * m->a12 - m->a01 * m->a22;
     double c02 = m->a01 * m->a12 - m->a02 * m->a11;
@@ -208,6 +206,12 @@ static int sym3_solve(const sym3 *m, const double b[3], double max_cond, double 
     double c22 = m->a00 * m->a11 - m->a01 * m->a01;
     double det = m->a00 * c00 + m->a01 * c01 + m->a02 * c02;
     if (!(det > 0.0) || !isfinite(det))
+        return 0;
+    /* For a positive definite A, lambda_min >= det / lambda_max^2, so the
+     * condition number is at most trace^3 / det: when that bound passes,
+     * the eigenvalues need not be computed (most pixels). */
+    double tr = m->a00 + m->a11 + m->a22;
+    if (!(tr * tr * tr <= max_cond * det) && !(sym3_condition(m) <= max_cond))
         return 0;
     g[0] = (c00 * b[0] + c01 * b[1] + c02 * b[2]) / det;
     g[1] = (c01 * b[0] + c11 * b[1] + c12 * b[2]) / det;
@@ -888,8 +892,21 @@ static int mask_inside(const char *name, const btf_image *mask, int w, int h,
     return BTF_OK;
 }
 
-/* The whole stage on a source whose size and channels are known. */
-static int ps_run(const ps_source *src, const double *lights, const double *E,
+/* The size of a file source from its first image's header. */
+static int probe_size(ps_source *src, btf_error *err)
+{
+    btf_image_header hdr;
+    int rc = btf_image_probe(src->paths[0], &hdr, err);
+    if (rc)
+        return rc;
+    src->width = hdr.width;
+    src->height = hdr.height;
+    src->channels = 3;
+    return BTF_OK;
+}
+
+/* The whole stage; a file source's size comes from its first image. */
+static int ps_run(ps_source *src, const double *lights, const double *E,
                   const btf_image *mask, const btf_photostereo_opts *o, btf_ps_result *out,
                   btf_error *err)
 {
@@ -897,22 +914,29 @@ static int ps_run(const ps_source *src, const double *lights, const double *E,
     int rc = resolve_opts(o, &P, err);
     if (rc)
         return rc;
-    int n = src->count, w = src->width, h = src->height;
-    size_t wh = (size_t)w * h;
+    int n = src->count;
     if (n < 3)
         return btf_fail(err, BTF_E_ARG, "%s: %d images; at least 3 lights are needed", src->name,
                         n);
     double *L = btf_alloc((size_t)n * 6, sizeof(double), err); /* lights, half vectors */
-    unsigned char *inside = btf_alloc(wh, 1, err);
-    if (!L || !inside) {
+    if (!L)
+        return BTF_E_NOMEM;
+    /* The lights first: a coplanar set fails before any file is touched. */
+    if ((rc = check_lights(src->name, lights, E, n, &P, L, &out->condition, err)) ||
+        (src->width == 0 && (rc = probe_size(src, err)))) {
         free(L);
-        free(inside);
+        return rc;
+    }
+    int w = src->width, h = src->height;
+    size_t wh = (size_t)w * h;
+    unsigned char *inside = btf_alloc(wh, 1, err);
+    if (!inside) {
+        free(L);
         return BTF_E_NOMEM;
     }
     float *grey = NULL;
     ps_job *j = NULL;
-    if ((rc = check_lights(src->name, lights, E, n, &P, L, &out->condition, err)) ||
-        (rc = mask_inside(src->name, mask, w, h, inside, &out->pixels, err)) ||
+    if ((rc = mask_inside(src->name, mask, w, h, inside, &out->pixels, err)) ||
         (rc = alloc_result(out, w, h, src->channels, err)))
         goto done;
     half_vectors(L, n, L + 3 * (size_t)n);
@@ -992,19 +1016,6 @@ int btf_photostereo(const btf_image *images, int count, const double *lights,
     if (rc)
         btf_ps_result_free(out);
     return rc;
-}
-
-/* The size of a file source from its first image's header. */
-static int probe_size(ps_source *src, btf_error *err)
-{
-    btf_image_header hdr;
-    int rc = btf_image_probe(src->paths[0], &hdr, err);
-    if (rc)
-        return rc;
-    src->width = hdr.width;
-    src->height = hdr.height;
-    src->channels = 3;
-    return BTF_OK;
 }
 
 int btf_photostereo_dataset(const btf_dataset *ds, const btf_image *mask,
@@ -1171,8 +1182,6 @@ int btf_photostereo_manifest(const char *path, const btf_image *mask,
             rc = BTF_E_NOMEM;
     }
     ps_source src = {path, n, NULL, (const char *const *)paths, o.read, 0, 0, 3};
-    if (rc == BTF_OK)
-        rc = probe_size(&src, err);
     if (rc == BTF_OK)
         rc = ps_run(&src, L, E, mask, &o, out, err);
     for (int i = 0; paths && i < n; i++)

@@ -1,0 +1,28 @@
+// synth_task.glsl -- the task records the synthesis shaders read (std430).
+// Their C mirror is in gpu/synth_gpu.c (gpu_task, gpu_unmix): 4-byte
+// members only, so both sides agree on the layout without padding rules.
+
+// One CAR field: (subspace, band, level). Offsets are pre-ordered by the
+// host: earlier rows first, then the same row (btf_shared.h's sum order).
+struct Task {
+    int fx0, fy0, fw, fh;     // field origin (absolute level coordinates) and size
+    int x0, y0, w, h;         // the level's window (absolute) and size
+    uint field_off, g_off;    // offsets (floats) into Fields[] and Gauss[]
+    uint stream;              // noise stream (subspace, band, level)
+    int n;                    // neighbours
+    int a;                    // wavefront slope: pixel (r, c) is ready at a r + c
+    int coarse;               // the task of level + 1 of the same band, or -1
+    float sigma, mean;
+    int off_r[24];
+    int off_c[24];
+    float gamma[24];
+};
+
+// One subspace image: the inverse decorrelation of its three level-0 bands.
+struct Unmix {
+    float mean[3];
+    float basis[9];
+    uint g_off[3];            // level-0 G windows of bands 0, 1, 2
+    uint out_off;             // offset (floats) of the RGB image in Out[]
+    int w, h;
+};

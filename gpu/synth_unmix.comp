@@ -1,0 +1,34 @@
+// synth_unmix.comp -- the inverse spectral decorrelation on the GPU:
+// rgb_k = mean_k + sum_b basis[b][k] band_b, with btf_unmix as on the CPU.
+// One workgroup per subspace image, a grid-stride loop over its pixels.
+#version 450
+#extension GL_GOOGLE_include_directive : require
+
+#define BTF_GLSL 1
+#include "btf_shared.h"
+#include "synth_task.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(std430, set = 0, binding = 0) readonly buffer Unmixes { Unmix jobs[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Gauss { float gauss[]; };
+layout(std430, set = 0, binding = 2) writeonly buffer Out { float rgb[]; };
+
+layout(push_constant) uniform Params {
+    uint job_base;
+} pc;
+
+void main()
+{
+    uint j = pc.job_base + gl_WorkGroupID.x;
+    uint count = uint(jobs[j].w) * uint(jobs[j].h);
+    for (uint p = gl_LocalInvocationID.x; p < count; p += 64u) {
+        float b0 = gauss[jobs[j].g_off[0] + p];
+        float b1 = gauss[jobs[j].g_off[1] + p];
+        float b2 = gauss[jobs[j].g_off[2] + p];
+        for (int k = 0; k < 3; k++)
+            rgb[jobs[j].out_off + 3u * p + uint(k)] =
+                btf_unmix(jobs[j].mean[k], jobs[j].basis[k], jobs[j].basis[3 + k],
+                          jobs[j].basis[6 + k], b0, b1, b2);
+    }
+}

@@ -36,6 +36,9 @@ STATIC    := $(BUILD)/libbtfcar.a
 SHARED    := $(BUILD)/libbtfcar.so
 CLI       := $(BUILD)/btfcar
 
+# Keep generated SPIR-V headers and objects between builds.
+.SECONDARY:
+
 .PHONY: all deps test test-run asan bench demo install uninstall fuzz fuzz-build clean help check-shaders
 
 all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN)

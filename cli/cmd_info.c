@@ -4,6 +4,7 @@
  * schemas are documented in docs/model-format.md ("btfcar info --json").
  */
 #include "cli.h"
+#include "vk.h" /* gpu/vk.h: btf_vk_list_devices for --devices */
 
 #include <math.h>
 #include <stdlib.h>
@@ -12,7 +13,8 @@
 
 static void help(void)
 {
-    printf("usage: btfcar info [--json] [--verify] [--quiet] DATASET|MODEL\n\n"
+    printf("usage: btfcar info [--json] [--verify] [--quiet] DATASET|MODEL\n"
+           "       btfcar info --devices\n\n"
            "Describes a BTF dataset or a model file (MODEL.btfcar, recognised by its\n"
            "signature).\n\n"
            "A dataset: its layout (UBO2003, UTIA or a manifest .tsv), the number of\n"
@@ -27,7 +29,9 @@ static void help(void)
            "  --json     print one JSON document instead (schema: docs/model-format.md)\n"
            "  --verify   dataset: also decode every image (catches corrupt data, NaN/Inf\n"
            "             in EXR); a model is always verified in full\n"
-           "  --quiet    no progress bar\n");
+           "  --quiet    no progress bar\n"
+           "  --devices  list the Vulkan devices GPU synthesis can use: index (for\n"
+           "             BTF_VK_DEVICE), type, Vulkan version, largest storage buffer, name\n");
 }
 
 /* --------------------------------------------------------------- shared */
@@ -389,11 +393,42 @@ static int info_model(cli_ctx *c, const model_file *mf, int json)
     return rc;
 }
 
+/* ------------------------------------------------------------ devices */
+
+/* --devices: one line per Vulkan device; exit 1 when there is none. */
+static int info_devices(cli_ctx *c)
+{
+    btf_error err = {0};
+    btf_vk_device_info *list;
+    int n;
+    if (btf_vk_list_devices(&list, &n, &err) != 0)
+        return cli_lib_error(c, &err);
+    if (n == 0) {
+        free(list);
+        return cli_error(c, "no Vulkan device found (install mesa-vulkan-drivers for the CPU "
+                            "driver lavapipe)");
+    }
+    printf("%-5s  %-14s  %-7s  %-26s  %s\n", "index", "type", "Vulkan",
+           "max storage buffer (bytes)", "name");
+    for (int i = 0; i < n; i++) {
+        char v[32];
+        btf_vk_version_text(list[i].api_version, v, sizeof v);
+        printf("%-5d  %-14s  %-7s  %-26llu  %s%s\n", list[i].index,
+               btf_vk_type_name(list[i].type), v,
+               (unsigned long long)list[i].max_storage_buffer_range, list[i].name,
+               list[i].usable ? "" : " (unusable: needs Vulkan 1.1 and a compute queue)");
+    }
+    free(list);
+    if (fflush(stdout) != 0)
+        return cli_error(c, "cannot write the output");
+    return 0;
+}
+
 int cmd_info(int argc, char **argv)
 {
     cli_ctx c = {"info", 0};
     const char *path = NULL;
-    int verify = 0, json = 0;
+    int verify = 0, json = 0, devices = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -405,6 +440,8 @@ int cmd_info(int argc, char **argv)
             verify = 1;
         } else if (!strcmp(a, "--json")) {
             json = 1;
+        } else if (!strcmp(a, "--devices")) {
+            devices = 1;
         } else if (a[0] == '-' && a[1]) {
             return cli_usage_error(&c, "unknown option '%s'", a);
         } else if (!path) {
@@ -413,6 +450,9 @@ int cmd_info(int argc, char **argv)
             return cli_usage_error(&c, "unexpected argument '%s'", a);
         }
     }
+    if (devices)
+        return path ? cli_usage_error(&c, "--devices takes no DATASET or MODEL")
+                    : info_devices(&c);
     if (!path)
         return cli_usage_error(&c, "DATASET or MODEL is required");
     model_file mf;

@@ -113,7 +113,9 @@ static btf_gpu *open_gpu(const cli_ctx *c, const char *backend, int device, btf_
     btf_gpu *g = NULL;
     if (btf_gpu_open(&o, &g, err) != 0) {
         if (!explicit_gpu && !c->quiet)
-            fprintf(stderr, "btfcar synthesise: note: no GPU (%s); using the CPU\n", err->msg);
+            fprintf(stderr, "btfcar synthesise: note: no GPU found; using the CPU (--backend gpu "
+                            "runs the Vulkan path on any device, the CPU driver lavapipe "
+                            "included)\n");
         return NULL;
     }
     return g;

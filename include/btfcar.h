@@ -373,8 +373,10 @@ typedef enum btf_integrate_method {
     BTF_INTEGRATE_POISSON,     /* least squares, Neumann boundary: DCT solve
                                   (Simchony et al. 1990); conjugate gradients
                                   preconditioned by it when a mask has holes */
-    BTF_INTEGRATE_FC           /* Frankot & Chellappa 1988: FFT, treats the
-                                  surface as periodic (BTF tiles are) */
+    BTF_INTEGRATE_FC           /* Frankot & Chellappa 1988: FFT with the
+                                  central-difference derivative; treats the
+                                  surface as periodic (procedural tiles are,
+                                  measured patches are not) */
 } btf_integrate_method;
 
 typedef struct btf_integrate_opts {

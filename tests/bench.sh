@@ -1,36 +1,66 @@
 #!/bin/sh
-# Runs the benchmark programs given as arguments, then the command-level
-# benchmarks. Benchmarks print figures and never fail on time.
+# make bench: the benchmark programs given as arguments, then command-level
+# benchmarks. Figures only: medians of several runs, throughput, peak memory,
+# ratios. Nothing here fails on time. BENCH_FULL=1 adds the 32768^2 synthesis.
 set -u
-for b in "$@"; do
-    "$b" || echo "bench: $(basename "$b") exited with $?"
-done
 BTFCAR=${BTF_CLI:-build/btfcar}
+export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}
+echo "== machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GiB", $2/1048576}' /proc/meminfo), $(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)"
+for b in "$@"; do
+    case "$b" in
+    *bench_gpu)
+        for n in 1 2; do
+            LP_NUM_THREADS=$n "$b" || echo "bench: $(basename "$b") exited with $?"
+        done ;;
+    *)
+        "$b" || echo "bench: $(basename "$b") exited with $?" ;;
+    esac
+done
+
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
-echo "== generate: 81 x 81 images, wall time (median of 3) and peak RSS"
-for size in 128 256; do
+median3() { echo "$@" | tr ' ' '\n' | sed '/^$/d' | sort -n | sed -n 2p; }
+# timed LABEL CMD...: runs CMD 3 times, prints the median wall time and the
+# peak RSS of the last run; leaves the last run's output in place.
+timed() {
+    label=$1
+    shift
     times=""
     for run in 1 2 3; do
-        rm -rf "$TMP/g"
-        /usr/bin/time -f "%e %M" -o "$TMP/time" "$BTFCAR" generate -q --material leather \
-            --size "$size" "$TMP/g" || echo "bench: generate failed"
+        /usr/bin/time -f "%e %M" -o "$TMP/time" "$@" >"$TMP/out" 2>"$TMP/err" ||
+            { echo "bench: $label failed: $(tail -1 "$TMP/err")"; return 1; }
         times="$times $(cut -d' ' -f1 "$TMP/time")"
-        rss=$(cut -d' ' -f2 "$TMP/time")
     done
-    med=$(echo $times | tr ' ' '\n' | sort -n | sed -n 2p)
-    bytes=$(du -sb "$TMP/g" | cut -f1)
-    echo "generate leather ${size}x${size}: median ${med} s (runs:${times}), $(echo "6561 $med" | awk '{printf "%.0f", $1/$2}') images/s, peak RSS $((rss / 1024)) MB, $bytes bytes on disk"
+    med=$(median3 $times)
+    rss=$(($(cut -d' ' -f2 "$TMP/time") / 1024))
+    echo "$label: median $med s (runs:$times), peak RSS $rss MB"
+}
+
+echo "== generate: 81 x 81 images"
+for size in 128 256; do
+    rm -rf "$TMP/g$size"
+    timed "generate leather ${size}x${size}" sh -c "rm -rf $TMP/g$size && $BTFCAR generate -q --material leather --size $size $TMP/g$size"
+    echo "   $(echo "6561 $med" | awk '{printf "%.0f", $1/$2}') images/s, $(du -sb "$TMP/g$size" | cut -f1) bytes on disk"
 done
-times=""
-for run in 1 2 3; do
-    /usr/bin/time -f "%e" -o "$TMP/time" "$BTFCAR" info -q "$TMP/g" >/dev/null
-    times="$times $(cat "$TMP/time")"
+G=$TMP/g256
+timed "info (probe 6561 files of 256^2)" "$BTFCAR" info -q "$G"
+timed "info --verify (decode 6561 JPEGs of 256^2)" "$BTFCAR" info -q --verify "$G"
+
+echo "== segmentation (issue 3): 81 x 81 images of 256^2, target <= 30 s, <= 1 GB"
+timed "analyse --stage segment" sh -c "rm -rf $TMP/seg && $BTFCAR analyse $G -o $TMP/seg --stage segment"
+echo "   $(echo "$med" | awk '{printf "%.2f", 1000*$1/6561}') ms per image; $(sed -n 1p "$TMP/out")"
+
+echo "== model file (issue 5): the whole analysis of the 81 x 81 x 256^2 material"
+timed "analyse (all stages)" "$BTFCAR" analyse -q "$G" -o "$TMP/m.btfcar"
+bytes=$(stat -c %s "$TMP/m.btfcar")
+echo "   model $bytes bytes (target <= 16384); ratio to the raw 8-bit images (81*81*256*256*3 = 1289945088 bytes) 1 : $((1289945088 / bytes)); paper ~1 : 10^5"
+
+echo "== streaming synthesis to EXR (issue 5): memory grows with the width, not the height"
+for h in 512 2048; do
+    timed "synthesise 32768x$h, 1 subspace, cpu" sh -c "rm -rf $TMP/s && $BTFCAR synthesise -q $TMP/m.btfcar --subspace 0 --backend cpu --half --size 32768x$h -o $TMP/s"
 done
-echo "info (probe 6561 files): median $(echo $times | tr ' ' '\n' | sort -n | sed -n 2p) s"
-times=""
-for run in 1 2 3; do
-    /usr/bin/time -f "%e" -o "$TMP/time" "$BTFCAR" info -q --verify "$TMP/g" >/dev/null
-    times="$times $(cat "$TMP/time")"
-done
-echo "info --verify (decode 6561 JPEGs of 256^2): median $(echo $times | tr ' ' '\n' | sort -n | sed -n 2p) s"
+if [ "${BENCH_FULL:-0}" = 1 ]; then
+    /usr/bin/time -f "%e %M" -o "$TMP/time" "$BTFCAR" synthesise -q "$TMP/m.btfcar" --subspace 0 \
+        --backend cpu --half --size 32768x32768 -o "$TMP/s"
+    echo "synthesise 32768x32768 to half EXR: $(cut -d' ' -f1 "$TMP/time") s, peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB (target <= 256 MB)"
+fi

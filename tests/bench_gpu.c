@@ -1,0 +1,99 @@
+/*
+ * bench_gpu.c — the paper's synthesis workload (15 subspace images of 512^2,
+ * 3 bands, 3 levels) on the Vulkan path and on the CPU path in one run, as a
+ * ratio. The Vulkan device is whatever BTF_VK_DEVICE / the loader offers;
+ * without a GPU that is lavapipe (set LP_NUM_THREADS to choose its threads).
+ * The first job (pipeline creation and shader compilation included) is
+ * reported apart from the medians. Never fails on time.
+ */
+#include "btfcar.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static int cmp(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static int drop(void *user, int y, int nrows, const float *rows, btf_error *err)
+{
+    (void)user, (void)y, (void)nrows, (void)rows, (void)err;
+    return 0;
+}
+
+int main(void)
+{
+    const char *icd = "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json";
+    if (!getenv("VK_DRIVER_FILES"))
+        setenv("VK_DRIVER_FILES", icd, 1);
+    btf_error e = {0};
+    btf_material mat;
+    btf_image img;
+    btf_model tex;
+    btf_fit_opts fo = {.levels = 3};
+    btf_neighbourhood_parse("0:-1,-1:0,-1:-1,-1:1", fo.car.fixed, &fo.car.n_fixed, &e);
+    if (btf_material_make("leather", 256, 3, &mat, &e) ||
+        btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){30, 45}, &img, &e) ||
+        btf_texture_fit(&img, &fo, &tex, &e)) {
+        fprintf(stderr, "bench_gpu: %s\n", e.msg);
+        return 1;
+    }
+    btf_model m = {0};
+    m.n_subspaces = 15;
+    m.subspaces = calloc(15, sizeof(btf_subspace_model));
+    int subs[15];
+    for (int k = 0; k < 15; k++) {
+        m.subspaces[k] = tex.subspaces[0];
+        subs[k] = k;
+    }
+    const char *lp = getenv("LP_NUM_THREADS");
+    double t0 = now();
+    btf_gpu *g;
+    btf_gpu_opts go = {.allow_cpu = 1};
+    if (btf_gpu_open(&go, &g, &e)) {
+        printf("gpu: no Vulkan device: %s\n", e.msg);
+        return 0;
+    }
+    double t_open = now() - t0;
+    btf_image out[15];
+    double tg[4], tc[3];
+    for (int r = 0; r < 4; r++) {
+        t0 = now();
+        if (btf_gpu_synthesise(g, &m, subs, 15, 512, 512, 1, out, &e)) {
+            fprintf(stderr, "bench_gpu: %s\n", e.msg);
+            return 1;
+        }
+        tg[r] = now() - t0;
+        for (int k = 0; k < 15; k++)
+            btf_image_free(&out[k]);
+    }
+    for (int r = 0; r < 3; r++) {
+        t0 = now();
+        for (int k = 0; k < 15; k++)
+            btf_synthesise(&m, k, 512, 512, 1, drop, NULL, &e);
+        tc[r] = now() - t0;
+    }
+    qsort(tg + 1, 3, sizeof(double), cmp);
+    qsort(tc, 3, sizeof(double), cmp);
+    printf("gpu (%s, LP_NUM_THREADS=%s): open + pipelines %.0f ms, first job %.0f ms\n",
+           btf_gpu_device_name(g), lp ? lp : "default", 1e3 * t_open, 1e3 * tg[0]);
+    printf("gpu vs cpu, 15 x 512^2, 4 neighbours, 3 levels: vulkan median %.0f ms, cpu (1 core) "
+           "median %.0f ms: vulkan/cpu time ratio %.2f\n", 1e3 * tg[2], 1e3 * tc[1], tg[2] / tc[1]);
+    btf_gpu_close(g);
+    free(m.subspaces);
+    btf_model_free(&tex);
+    btf_image_free(&img);
+    btf_material_free(&mat);
+    return 0;
+}

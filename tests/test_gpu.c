@@ -1,0 +1,192 @@
+/* test_gpu.c — GPU synthesis (Vulkan compute on lavapipe) against the CPU
+ * reference: bit-identical output for several models, sizes and seeds, with
+ * the Khronos validation layer on and no message allowed. */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static btf_gpu *gpu;
+
+static int setup(void **state)
+{
+    (void)state;
+    const char *icd = "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json";
+    if (!getenv("VK_DRIVER_FILES"))
+        setenv("VK_DRIVER_FILES", icd, 1);
+    if (!getenv("VK_ICD_FILENAMES"))
+        setenv("VK_ICD_FILENAMES", icd, 1);
+    btf_gpu_opts o = {.allow_cpu = 1, .validation = 1};
+    btf_error e = {0};
+    if (btf_gpu_open(&o, &gpu, &e) != 0) {
+        fprintf(stderr, "test_gpu: %s\n", e.msg);
+        return -1;
+    }
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    btf_gpu_close(gpu);
+    return 0;
+}
+
+static void no_validation_messages(void)
+{
+    unsigned n = btf_gpu_validation_errors(gpu);
+    if (n)
+        print_error("validation: %u message(s), first: %s\n", n,
+                    btf_gpu_first_validation_message(gpu));
+    assert_int_equal(n, 0);
+}
+
+/* A texture with structure at several scales, fitted with the given options. */
+static void fit(btf_model *m, int levels, const char *spec)
+{
+    btf_error e = {0};
+    btf_material mat;
+    TU_OK(btf_material_make("fabric", 64, 5, &mat, &e), &e);
+    btf_image img;
+    TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){45, 30}, &img, &e), &e);
+    btf_material_free(&mat);
+    btf_fit_opts fo = {.levels = levels};
+    if (spec)
+        TU_OK(btf_neighbourhood_parse(spec, fo.car.fixed, &fo.car.n_fixed, &e), &e);
+    TU_OK(btf_texture_fit(&img, &fo, m, &e), &e);
+    btf_image_free(&img);
+}
+
+/* Compares GPU and CPU synthesis of every subspace of m at w x h. */
+static void compare(const btf_model *m, int w, int h, uint64_t seed)
+{
+    btf_error e = {0};
+    int n = m->n_subspaces, subs[8] = {0};
+    assert_true(n <= 8);
+    btf_image gpu_out[8];
+    for (int k = 0; k < n; k++)
+        subs[k] = k;
+    TU_OK(btf_gpu_synthesise(gpu, m, subs, n, w, h, seed, gpu_out, &e), &e);
+    for (int k = 0; k < n; k++) {
+        btf_image cpu_out;
+        TU_OK(btf_synthesise_image(m, k, w, h, seed, &cpu_out, &e), &e);
+        size_t count = (size_t)w * h * 3, diff = 0;
+        for (size_t i = 0; i < count; i++)
+            diff += memcmp(&gpu_out[k].data[i], &cpu_out.data[i], sizeof(float)) != 0;
+        if (diff)
+            print_error("%dx%d seed %llu subspace %d: %zu of %zu values differ\n", w, h,
+                        (unsigned long long)seed, k, diff, count);
+        assert_int_equal(diff, 0);
+        btf_image_free(&cpu_out);
+        btf_image_free(&gpu_out[k]);
+    }
+    no_validation_messages();
+}
+
+static void parity_auto_model(void **state)
+{
+    (void)state;
+    btf_model m;
+    fit(&m, 2, NULL);
+    int sizes[][2] = {{1, 1}, {7, 13}, {1000, 3}, {3, 200}, {512, 512}};
+    for (int s = 0; s < 5; s++)
+        compare(&m, sizes[s][0], sizes[s][1], 1);
+    compare(&m, 33, 17, (1ull << 40) + 5);
+    btf_model_free(&m);
+}
+
+static void parity_fixed_neighbourhoods(void **state)
+{
+    (void)state;
+    /* The paper's 4 neighbours over 3 levels; and offsets reaching two
+     * columns right (wavefront slope 3) and three rows up. */
+    const char *specs[] = {"0:-1,-1:0,-1:-1,-1:1", "0:-1,-1:2,-2:2,-3:0,0:-3"};
+    for (int i = 0; i < 2; i++) {
+        btf_model m;
+        fit(&m, i == 0 ? 3 : 1, specs[i]);
+        compare(&m, 61, 45, 7);
+        compare(&m, 128, 1, 8);
+        btf_model_free(&m);
+    }
+}
+
+static void parity_several_subspaces(void **state)
+{
+    (void)state;
+    /* Three subspaces with 1, 2 and 3 levels in one job: different noise
+     * streams, different pyramid depths grouped by level. */
+    btf_model a, b, c;
+    fit(&a, 1, NULL);
+    fit(&b, 2, "0:-1,-1:0");
+    fit(&c, 3, "0:-1,-1:0,-1:-1,-1:1");
+    btf_model m = {0};
+    m.n_subspaces = 3;
+    btf_subspace_model subs[3] = {a.subspaces[0], b.subspaces[0], c.subspaces[0]};
+    m.subspaces = subs;
+    compare(&m, 40, 31, 99);
+    btf_model_free(&a);
+    btf_model_free(&b);
+    btf_model_free(&c);
+}
+
+static void bad_requests(void **state)
+{
+    (void)state;
+    btf_model m;
+    fit(&m, 1, NULL);
+    btf_error e = {0};
+    btf_image out[1];
+    int bad = 3, ok = 0;
+    assert_int_equal(btf_gpu_synthesise(gpu, &m, &bad, 1, 8, 8, 1, out, &e), BTF_E_ARG);
+    assert_int_equal(btf_gpu_synthesise(gpu, &m, &ok, 1, 0, 8, 1, out, &e), BTF_E_ARG);
+    /* Far beyond lavapipe's 128 MiB storage buffers: a clear refusal. */
+    assert_int_equal(btf_gpu_synthesise(gpu, &m, &ok, 1, 20000, 20000, 1, out, &e),
+                     BTF_E_UNSUPPORTED);
+    assert_non_null(strstr(e.msg, "CPU"));
+    no_validation_messages();
+    btf_model_free(&m);
+}
+
+static void cli_backends_agree(void **state)
+{
+    (void)state;
+    char *dir = tu_tmpdir();
+    btf_model m;
+    fit(&m, 2, NULL);
+    btf_error e = {0};
+    TU_OK(btf_model_write(tu_fmt("%s/m.btfcar", dir), &m, &e), &e);
+    btf_model_free(&m);
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("BTF_VK_VALIDATION=1 %s synthesise -q %s/m.btfcar --size 50x20 "
+                                   "--backend gpu -o %s/g", tu_cli(), dir, dir), &err), 0);
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s/m.btfcar --size 50x20 --backend cpu -o %s/c",
+                                   tu_cli(), dir, dir), NULL), 0);
+    btf_image g, c;
+    TU_OK(btf_image_read(tu_fmt("%s/g/subspace_00.exr", dir), NULL, &g, &e), &e);
+    TU_OK(btf_image_read(tu_fmt("%s/c/subspace_00.exr", dir), NULL, &c, &e), &e);
+    assert_memory_equal(g.data, c.data, 50 * 20 * 3 * sizeof(float));
+    btf_image_free(&g);
+    btf_image_free(&c);
+    /* auto on a machine whose only device is lavapipe: the CPU, with a note. */
+    assert_int_equal(tu_run(tu_fmt("%s synthesise %s/m.btfcar --size 5x5 -o %s/a > /dev/null",
+                                   tu_cli(), dir, dir), &err), 0);
+    assert_non_null(strstr(err, "using the CPU"));
+    free(err);
+    tu_rmtree(dir);
+    free(dir);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(parity_auto_model),
+        cmocka_unit_test(parity_fixed_neighbourhoods),
+        cmocka_unit_test(parity_several_subspaces),
+        cmocka_unit_test(bad_requests),
+        cmocka_unit_test(cli_backends_agree),
+    };
+    return cmocka_run_group_tests_name("gpu", tests, setup, teardown);
+}

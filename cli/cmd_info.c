@@ -258,11 +258,10 @@ static void text_subspace(const btf_model *m, int s)
 
 static int model_text(const btf_model *m, const model_file *mf)
 {
-    char bytes[64], views[128], lights[128];
-    cli_format_bytes(mf->bytes < 0 ? 0 : (uint64_t)mf->bytes, bytes, sizeof bytes);
+    char views[128], lights[128];
     printf("model       %s\n", mf->path);
-    printf("format      btfcar model %u.%u, %s (%lld bytes)\n", mf->major, mf->minor, bytes,
-           mf->bytes);
+    /* Exact bytes: models are a few kilobytes, the figure users compare. */
+    printf("format      btfcar model %u.%u, %lld bytes\n", mf->major, mf->minor, mf->bytes);
     if (m->views.count) {
         describe_set(&m->views, views, sizeof views);
         describe_set(&m->lights, lights, sizeof lights);

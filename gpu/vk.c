@@ -716,10 +716,12 @@ static void settle(btf_vk *vk)
     }
 }
 
-void btf_vk_destroy(btf_vk *vk)
+unsigned btf_vk_destroy_checked(btf_vk *vk, char *first_message, size_t n)
 {
+    if (first_message && n)
+        first_message[0] = '\0';
     if (!vk)
-        return;
+        return 0;
     if (vk->device) {
         vkDeviceWaitIdle(vk->device);
         settle(vk);
@@ -735,9 +737,18 @@ void btf_vk_destroy(btf_vk *vk)
         if (destroy)
             destroy(vk->instance, vk->messenger, NULL);
     }
-    if (vk->instance)
+    if (vk->instance) /* the messenger given at creation still reports here */
         vkDestroyInstance(vk->instance, NULL);
+    unsigned count = vk->n_messages;
+    if (first_message && n)
+        snprintf(first_message, n, "%s", vk->first_message);
     free(vk);
+    return count;
+}
+
+void btf_vk_destroy(btf_vk *vk)
+{
+    btf_vk_destroy_checked(vk, NULL, 0);
 }
 
 const btf_vk_device_info *btf_vk_info(const btf_vk *vk)

@@ -98,6 +98,10 @@ int btf_vk_create(const btf_vk_opts *o, btf_vk **out, btf_error *err);
 /* Waits for the device to be idle, then frees everything; NULL is fine.
  * Buffers and pipelines must be destroyed first. */
 void btf_vk_destroy(btf_vk *vk);
+/* The same, and returns btf_vk_validation_errors counted over the whole life
+ * including the teardown (where the layer reports objects never destroyed);
+ * the first message goes to first_message (n bytes; may be NULL). */
+unsigned btf_vk_destroy_checked(btf_vk *vk, char *first_message, size_t n);
 
 const btf_vk_device_info *btf_vk_info(const btf_vk *vk);
 /* 1 if the validation layer is on. */

@@ -864,7 +864,7 @@ static void integrate_masked(void **state)
     for (size_t k = 1; k < wh; k++)
         worst = fmax(worst, fabs((double)b.data[k] - a.data[k] - md));
     print_message("masked CG vs direct: worst difference %.2e\n", worst);
-    assert_true(worst < 0.05);
+    assert_true(worst < 0.005); /* measured 8e-4 */
     btf_image_free(&b);
     /* A ring-shaped mask (a hole in the middle and the corners out): the
      * surface is recovered on the ring (measured 0.55 %). */

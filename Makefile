@@ -97,6 +97,7 @@ asan: deps
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
 	  SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
 	  BTF_ASAN=1 $(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
 	  SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" test-run
 
@@ -156,7 +157,7 @@ install: $(STATIC) $(SHARED) $(CLI)
 	ln -sf libbtfcar.so.0 $(DESTDIR)$(PREFIX)/lib/libbtfcar.so
 	install -m 644 include/btfcar.h $(DESTDIR)$(PREFIX)/include/
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/
-	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(shell sed -n 's/.*BTF_VERSION_STRING "\(.*\)"/\1/p' include/btfcar.h)|' \
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBS@|$(LDLIBS)|' -e 's|@VERSION@|$(shell sed -n 's/.*BTF_VERSION_STRING "\(.*\)"/\1/p' include/btfcar.h)|' \
 	  btfcar.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/btfcar.pc
 
 uninstall:

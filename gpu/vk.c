@@ -7,7 +7,7 @@
  * Why this shape: every shader of the library needs the same few things, and
  * the correctness rules (limits checked before Vulkan sees them, a barrier
  * after every command, every VkResult turned into one line naming the call,
- * validation messages counted) are easiest to keep in one small file.
+ * validation messages counted) are easiest to keep in one file.
  */
 #include "vk.h"
 
@@ -663,8 +663,10 @@ static int choose_memory(btf_vk *vk, int force_staging, btf_error *err)
                         "Vulkan device %s offers no memory type for %s buffers", vk->info.name,
                         t < 0 ? "storage" : "host-visible staging");
     vk->storage_type = (uint32_t)t;
-    vk->upload_type = (uint32_t)up;
-    vk->download_type = (uint32_t)(down >= 0 ? down : up);
+    if (!vk->info.mapped_buffers) {
+        vk->upload_type = (uint32_t)up;
+        vk->download_type = (uint32_t)(down >= 0 ? down : up);
+    }
     return BTF_OK;
 }
 

@@ -268,7 +268,7 @@ static int check_band(const btf_car_band *b, btf_error *err)
         return btf_fail(err, BTF_E_ARG, "CAR model with %d neighbours", b->n);
     for (int s = 0; s < b->n; s++) {
         btf_offset o = b->offsets[s];
-        if (!(o.row < 0 || (o.row == 0 && o.col < 0)) || o.row < -64 || o.col < -64 || o.col > 64)
+        if (!(o.row < 0 || (o.row == 0 && o.col < 0)))
             return btf_fail(err, BTF_E_ARG, "CAR offset %d:%d is not causal", o.row, o.col);
     }
     return BTF_OK;

@@ -14,11 +14,11 @@
  *    deflated when odd), so that mutations reach the section parser and the
  *    validator instead of all dying at the CRC.
  *
- * Build from the repository root (`make fuzz` does this for every
+ * Build from the repository root (`make fuzz-build` does this for every
  * tests/fuzz_*.c, library sources instrumented too):
  *
  *   mkdir -p build-fuzz
- *   clang++ -std=c++17 -g -O1 -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize=vptr \
+ *   clang++ -std=c++17 -g -O1 -fsanitize=fuzzer-no-link,address,undefined \
  *       -Iinclude -Isrc -I/usr/include/opencv4 -c src/cv_bridge.cpp -o build-fuzz/cv_bridge.o
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -ffp-contract=off \
  *       -Iinclude -Isrc -Igpu -Ibuild/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
@@ -31,7 +31,8 @@
  *       -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
  *       -lvulkan -lz -lm -lpthread
  *
- * Run with the seed corpus (tests/fuzz.sh copies it into a work folder):
+ * Run with the seed corpus as a second, read-only corpus folder (as
+ * tests/fuzz.sh does; new inputs go to the first):
  *
  *   ./build-fuzz/fuzz_model -max_total_time=60 build-fuzz/corpus/fuzz_model \
  *       tests/fuzz-corpus/fuzz_model

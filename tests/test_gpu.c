@@ -18,6 +18,7 @@ static int setup(void **state)
         setenv("VK_DRIVER_FILES", icd, 1);
     if (!getenv("VK_ICD_FILENAMES"))
         setenv("VK_ICD_FILENAMES", icd, 1);
+    tu_vk_keep_layer_loaded();
     btf_gpu_opts o = {.allow_cpu = 1, .validation = 1};
     btf_error e = {0};
     if (btf_gpu_open(&o, &gpu, &e) != 0) {
@@ -159,8 +160,14 @@ static void cli_backends_agree(void **state)
     TU_OK(btf_model_write(tu_fmt("%s/m.btfcar", dir), &m, &e), &e);
     btf_model_free(&m);
     char *err = NULL;
-    assert_int_equal(tu_run(tu_fmt("BTF_VK_VALIDATION=1 %s synthesise -q %s/m.btfcar --size 50x20 "
-                                   "--backend gpu -o %s/g", tu_cli(), dir, dir), &err), 0);
+    /* The command with validation on (not under ASan: the layer's own known
+     * leak, tests/lsan.supp, cannot be matched once the loader unloads it). */
+    const char *validate = getenv("BTF_ASAN") ? "" : "BTF_VK_VALIDATION=1";
+    int rc = tu_run(tu_fmt("%s %s synthesise -q %s/m.btfcar --size 50x20 --backend gpu -o %s/g",
+                           validate, tu_cli(), dir, dir), &err);
+    if (rc)
+        print_error("%s\n", err);
+    assert_int_equal(rc, 0);
     free(err);
     assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s/m.btfcar --size 50x20 --backend cpu -o %s/c",
                                    tu_cli(), dir, dir), NULL), 0);

@@ -1397,6 +1397,29 @@ static void info_model(void **state)
     free_model(&m);
 }
 
+/* `info --json` on a dataset: a summary document. */
+static void info_dataset_json(void **state)
+{
+    (void)state;
+    char *ds = strdup(tu_fmt("%s/tinyds", dir));
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s generate --quiet --material fabric --size 8 %s", tu_cli(),
+                                   ds), &err), 0);
+    free(err);
+    int status;
+    char *out = capture(tu_fmt("%s info --json --quiet %s", tu_cli(), ds), &status);
+    assert_int_equal(status, 0);
+    if (!json_valid(out))
+        fail_msg("invalid JSON:\n%s", out);
+    assert_non_null(strstr(out, "\"format\": \"btfcar-dataset\""));
+    assert_non_null(strstr(out, "\"images\": 6561"));
+    assert_non_null(strstr(out, "\"layout\": \"UBO2003\""));
+    assert_int_equal(count_of(out, "\"count\": 81"), 2);
+    free(out);
+    tu_rmtree(ds);
+    free(ds);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1420,6 +1443,7 @@ int main(void)
         cmocka_unit_test(realistic_size),
         cmocka_unit_test(json_checker_works),
         cmocka_unit_test(info_model),
+        cmocka_unit_test(info_dataset_json),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

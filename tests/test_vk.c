@@ -22,33 +22,6 @@
 
 #define LAVAPIPE_ICD "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json"
 
-#if defined(__SANITIZE_ADDRESS__)
-#define TU_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define TU_ASAN 1
-#endif
-#endif
-
-#ifdef TU_ASAN
-#include <dlfcn.h>
-/* The validation layer's own leaks (tests/lsan.supp explains them). */
-const char *__lsan_default_suppressions(void);
-const char *__lsan_default_suppressions(void)
-{
-    return "leak:libVkLayer_khronos_validation.so\n";
-}
-#endif
-
-/* Under ASan, keeps the validation layer loaded after the loader lets it go,
- * so that LeakSanitizer can name its frames (and the rule above matches). */
-static void keep_layer_loaded(void)
-{
-#ifdef TU_ASAN
-    dlopen("libVkLayer_khronos_validation.so", RTLD_LAZY | RTLD_NODELETE);
-#endif
-}
-
 /* 1 when this program chose lavapipe itself (no driver variable was set). */
 static int forced_lavapipe;
 
@@ -676,7 +649,15 @@ static void job_timeout(void **state)
     TU_OK(btf_vk_job_begin(vk, &job, &err), &err);
     for (int rep = 0; rep < 4; rep++)
         TU_OK(btf_vk_job_dispatch(job, pipe, buf, 3, &p, sizeof p, CAP / 64, 1, 1, &err), &err);
-    assert_int_equal(btf_vk_job_submit_wait(job, &err), BTF_E_UNSUPPORTED);
+    int rc = btf_vk_job_submit_wait(job, &err);
+    if (rc == BTF_OK && !btf_vk_info(vk)->is_cpu) { /* a GPU may be that fast */
+        for (int i = 0; i < 3; i++)
+            btf_vk_buffer_destroy(buf[i]);
+        btf_vk_pipeline_destroy(pipe);
+        close_vk(vk);
+        skip();
+    }
+    assert_int_equal(rc, BTF_E_UNSUPPORTED);
     assert_true(contains(err.msg, "did not finish within 1 ms"));
     assert_true(contains(err.msg, "VK_TIMEOUT"));
     assert_int_equal(btf_vk_job_begin(vk, &job, &err), BTF_E_UNSUPPORTED);
@@ -786,7 +767,7 @@ int main(void)
         setenv("VK_ICD_FILENAMES", LAVAPIPE_ICD, 1);
     unsetenv("BTF_VK_DEVICE");
     unsetenv("BTF_VK_VALIDATION");
-    keep_layer_loaded();
+    tu_vk_keep_layer_loaded();
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(list_devices),
         cmocka_unit_test(create_destroy_repeatedly),

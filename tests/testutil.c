@@ -2,6 +2,33 @@
 #define _GNU_SOURCE
 #include "testutil.h"
 
+#if defined(__SANITIZE_ADDRESS__)
+#define TU_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define TU_ASAN 1
+#endif
+#endif
+
+#ifdef TU_ASAN
+#include <dlfcn.h>
+/* Leaks of libraries, not of btfcar: tests/lsan.supp explains both rules.
+ * The btfcar processes the tests start get the same file through
+ * LSAN_OPTIONS (make asan). */
+const char *__lsan_default_suppressions(void);
+const char *__lsan_default_suppressions(void)
+{
+    return "leak:libVkLayer_khronos_validation.so\nleak:libopencv_core.so\n";
+}
+#endif
+
+void tu_vk_keep_layer_loaded(void)
+{
+#ifdef TU_ASAN
+    dlopen("libVkLayer_khronos_validation.so", RTLD_LAZY | RTLD_NODELETE);
+#endif
+}
+
 #include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>

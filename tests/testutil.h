@@ -48,6 +48,11 @@ typedef struct tu_exr_spec {
 typedef float (*tu_exr_value_fn)(int c, int x, int y);
 void tu_exr_write_raw(const char *path, const tu_exr_spec *s, tu_exr_value_fn value);
 
+/* Under ASan, keeps the Vulkan validation layer loaded after the loader lets
+ * it go, so that LeakSanitizer can name its frames and the suppression of its
+ * known leak (tests/lsan.supp) matches. A no-op otherwise. */
+void tu_vk_keep_layer_loaded(void);
+
 /* Asserts a btfcar call succeeded, printing the error message if not. */
 #define TU_OK(call, errp)                                                      \
     do {                                                                       \

@@ -170,28 +170,6 @@ static int make_view_folders(const btf_dirset *dirs, const char *dir, btf_error 
     return BTF_OK;
 }
 
-/* rm -r of the temporary folder after a failure (it holds only our files). */
-static void remove_tree(const char *path)
-{
-    DIR *d = opendir(path);
-    if (d) {
-        struct dirent *e;
-        while ((e = readdir(d))) {
-            if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
-                continue;
-            char sub[4096];
-            snprintf(sub, sizeof sub, "%s/%s", path, e->d_name);
-            struct stat st;
-            if (lstat(sub, &st) == 0 && S_ISDIR(st.st_mode))
-                remove_tree(sub);
-            else
-                remove(sub);
-        }
-        closedir(d);
-    }
-    rmdir(path);
-}
-
 /* OUTDIR may not exist yet, or be an empty folder; anything else is refused
  * so that a generator run never overwrites somebody's data. */
 static int check_outdir(const char *outdir, btf_error *err)
@@ -284,7 +262,7 @@ int btf_generate(const char *material, const char *outdir, const btf_generate_op
                           strerror(errno));
     }
     if (rc)
-        remove_tree(tmp);
+        btf_remove_tree(tmp);
     btf_dirset_free(&dirs);
     btf_material_free(&m);
     return rc;

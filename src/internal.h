@@ -34,6 +34,9 @@ int btf_write_file_atomic(const char *path, const void *data, size_t n, btf_erro
 int btf_read_file(const char *path, size_t max_bytes, unsigned char **data,
                   size_t *n, btf_error *err);
 
+/* rm -r: removes a folder and everything below it (links are not
+ * followed); errors are ignored. For temporary output after a failure. */
+void btf_remove_tree(const char *path);
 /* Joins a folder and a name into out (size n); BTF_E_ARG when too long. */
 int btf_path_join(char *out, size_t n, const char *dir, const char *name, btf_error *err);
 

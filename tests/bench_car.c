@@ -6,31 +6,13 @@
  * fails on time.
  */
 #include "btfcar.h"
+#include "testutil.h"
 #include "btf_shared.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static int cmp(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp);
-    return v[n / 2];
-}
 
 /* A rough 256^2 texture: a procedural material rendered frontally. */
 static int texture(btf_image *img, btf_error *e)
@@ -65,17 +47,17 @@ int main(void)
     btf_model m;
     for (int r = 0; r < 5; r++) {
         btf_fit_opts fo = {.levels = 3};
-        double t0 = now();
+        double t0 = tu_now();
         if (btf_texture_fit(&img, &fo, &m, &e)) {
             fprintf(stderr, "bench_car: %s\n", e.msg);
             return 1;
         }
-        t[r] = now() - t0;
+        t[r] = tu_now() - t0;
         if (r < 4)
             btf_model_free(&m);
     }
     printf("car fit: 256x256 RGB image, 3 levels, auto neighbourhood: median %.1f ms (5 runs)\n",
-           1e3 * median(t, 5));
+           1e3 * tu_median(t, 5));
     int nb = 0;
     for (int b = 0; b < 3; b++)
         for (int l = 0; l < 3; l++)
@@ -102,15 +84,15 @@ int main(void)
         for (int k = 0; k < 15; k++)
             many.subspaces[k] = which[w]->subspaces[0];
         for (int r = 0; r < 5; r++) {
-            double t0 = now();
+            double t0 = tu_now();
             for (int k = 0; k < 15; k++)
                 if (btf_synthesise(&many, k, 512, 512, 1, sink, &acc, &e)) {
                     fprintf(stderr, "bench_car: %s\n", e.msg);
                     return 1;
                 }
-            t[r] = now() - t0;
+            t[r] = tu_now() - t0;
         }
-        double s = median(t, 5), px = 15.0 * 512 * 512;
+        double s = tu_median(t, 5), px = 15.0 * 512 * 512;
         printf("synthesis (cpu, 1 core, %s): 15 subspace images of 512x512, 3 bands, 3 levels: "
                "median %.1f ms (5 runs), %.2f Mpixel/s; paper: 3000 ms (Athlon 1.9 GHz), "
                "target 50 ms\n", label[w], 1e3 * s, px / s / 1e6);
@@ -122,26 +104,26 @@ int main(void)
      * sub-band, counted as calls of btf_noise4 (4 Gaussians each). */
     long n = 4L * 1024 * 1024;
     for (int r = 0; r < 5; r++) {
-        double t0 = now();
+        double t0 = tu_now();
         float x = 0;
         for (long i = 0; i < n; i++) {
             btf_vec4 v = btf_noise4(1u, 0u, 3u, (btf_uint)(i >> 10), (btf_uint)(i & 1023));
             x += v.x + v.w;
         }
-        t[r] = now() - t0;
+        t[r] = tu_now() - t0;
         acc += x;
     }
     printf("noise: %.2f ns per Gaussian (btf_noise4, median of 5 runs of %ld blocks)\n",
-           1e9 * median(t, 5) / (4.0 * n), n);
+           1e9 * tu_median(t, 5) / (4.0 * n), n);
     /* One CAR field alone: the recursion's own cost per pixel. */
     const btf_car_band *b0 = &m.subspaces[0].bands[0][0];
     for (int r = 0; r < 5; r++) {
-        double t0 = now();
+        double t0 = tu_now();
         btf_car_synthesise_field(b0, 1024, 1024, 7, 1, sink, &acc, &e);
-        t[r] = now() - t0;
+        t[r] = tu_now() - t0;
     }
     printf("car field: %d neighbours, 1024x1024: %.2f ns per pixel (median of 5)\n", b0->n,
-           1e9 * median(t, 5) / (1024.0 * 1024.0));
+           1e9 * tu_median(t, 5) / (1024.0 * 1024.0));
     unsigned char *bytes;
     size_t size;
     if (btf_model_encode(&m, &bytes, &size, &e) == 0) {

@@ -7,24 +7,12 @@
  * reported apart from the medians. Never fails on time.
  */
 #include "btfcar.h"
+#include "testutil.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static int cmp(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 static int drop(void *user, int y, int nrows, const float *rows, btf_error *err)
 {
@@ -58,38 +46,37 @@ int main(void)
         subs[k] = k;
     }
     const char *lp = getenv("LP_NUM_THREADS");
-    double t0 = now();
+    double t0 = tu_now();
     btf_gpu *g;
     btf_gpu_opts go = {.allow_cpu = 1};
     if (btf_gpu_open(&go, &g, &e)) {
         printf("gpu: no Vulkan device: %s\n", e.msg);
         return 0;
     }
-    double t_open = now() - t0;
+    double t_open = tu_now() - t0;
     btf_image out[15];
     double tg[4], tc[3];
     for (int r = 0; r < 4; r++) {
-        t0 = now();
+        t0 = tu_now();
         if (btf_gpu_synthesise(g, &m, subs, 15, 512, 512, 1, out, &e)) {
             fprintf(stderr, "bench_gpu: %s\n", e.msg);
             return 1;
         }
-        tg[r] = now() - t0;
+        tg[r] = tu_now() - t0;
         for (int k = 0; k < 15; k++)
             btf_image_free(&out[k]);
     }
     for (int r = 0; r < 3; r++) {
-        t0 = now();
+        t0 = tu_now();
         for (int k = 0; k < 15; k++)
             btf_synthesise(&m, k, 512, 512, 1, drop, NULL, &e);
-        tc[r] = now() - t0;
+        tc[r] = tu_now() - t0;
     }
-    qsort(tg + 1, 3, sizeof(double), cmp);
-    qsort(tc, 3, sizeof(double), cmp);
-    printf("gpu (%s, LP_NUM_THREADS=%s): open + pipelines %.0f ms, first job %.0f ms\n",
+        printf("gpu (%s, LP_NUM_THREADS=%s): open + pipelines %.0f ms, first job %.0f ms\n",
            btf_gpu_device_name(g), lp ? lp : "default", 1e3 * t_open, 1e3 * tg[0]);
     printf("gpu vs cpu, 15 x 512^2, 4 neighbours, 3 levels: vulkan median %.0f ms, cpu (1 core) "
-           "median %.0f ms: vulkan/cpu time ratio %.2f\n", 1e3 * tg[2], 1e3 * tc[1], tg[2] / tc[1]);
+           "median %.0f ms: vulkan/cpu time ratio %.2f\n", 1e3 * tu_median(tg + 1, 3), 1e3 * tu_median(tc, 3),
+           tu_median(tg + 1, 3) / tu_median(tc, 3));
     btf_gpu_close(g);
     free(m.subspaces);
     btf_model_free(&tex);

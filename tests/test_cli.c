@@ -8,22 +8,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-static char *dir;
-
-static int setup(void **state)
-{
-    (void)state;
-    dir = tu_tmpdir();
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    tu_rmtree(dir);
-    free(dir);
-    return 0;
-}
 
 /* Runs a command line and returns its stdout (malloc'd). */
 static char *capture(const char *cmd, int *status)
@@ -67,7 +51,7 @@ static void generate_then_info(void **state)
 {
     (void)state;
     char out[4096];
-    snprintf(out, sizeof out, "%s/leather", dir);
+    snprintf(out, sizeof out, "%s/leather", tu_dir);
     char *err = NULL;
     assert_int_equal(tu_run(tu_fmt("%s generate --quiet --material leather --size 16 --seed 7 %s",
                                    tu_cli(), out), &err), 0);
@@ -117,9 +101,9 @@ static void generate_is_deterministic(void **state)
 {
     (void)state;
     char a[4096], b[4096], c[4096];
-    snprintf(a, sizeof a, "%s/a", dir);
-    snprintf(b, sizeof b, "%s/b", dir);
-    snprintf(c, sizeof c, "%s/c", dir);
+    snprintf(a, sizeof a, "%s/a", tu_dir);
+    snprintf(b, sizeof b, "%s/b", tu_dir);
+    snprintf(c, sizeof c, "%s/c", tu_dir);
     assert_int_equal(tu_run(tu_fmt("%s generate -q --material fabric --size 8 --seed 3 --threads 1 %s",
                                    tu_cli(), a), NULL), 0);
     assert_int_equal(tu_run(tu_fmt("%s generate -q --material fabric --size 8 --seed 3 --threads 2 %s",
@@ -140,12 +124,12 @@ static void generate_errors(void **state)
 {
     (void)state;
     char *err = NULL;
-    assert_int_not_equal(tu_run(tu_fmt("%s generate --material velvet %s/v", tu_cli(), dir), &err), 0);
+    assert_int_not_equal(tu_run(tu_fmt("%s generate --material velvet %s/v", tu_cli(), tu_dir), &err), 0);
     assert_non_null(strstr(err, "velvet"));
     free(err);
     /* A non-empty OUTDIR is refused and left as it was. */
     char full[4096];
-    snprintf(full, sizeof full, "%s/full", dir);
+    snprintf(full, sizeof full, "%s/full", tu_dir);
     mkdir(full, 0777);
     tu_write_file(tu_fmt("%s/keep.txt", full), "mine", 4);
     assert_int_not_equal(tu_run(tu_fmt("%s generate --material wood --size 4 %s", tu_cli(), full),
@@ -153,9 +137,9 @@ static void generate_errors(void **state)
     assert_non_null(strstr(err, "not empty"));
     free(err);
     assert_int_equal(tu_count_files(full), 1);
-    assert_int_equal(tu_run(tu_fmt("%s generate --material wood --size 0 %s/z", tu_cli(), dir), &err), 2);
+    assert_int_equal(tu_run(tu_fmt("%s generate --material wood --size 0 %s/z", tu_cli(), tu_dir), &err), 2);
     free(err);
-    assert_int_equal(tu_run(tu_fmt("%s generate --size 4 %s/z", tu_cli(), dir), &err), 2);
+    assert_int_equal(tu_run(tu_fmt("%s generate --size 4 %s/z", tu_cli(), tu_dir), &err), 2);
     assert_non_null(strstr(err, "--material"));
     free(err);
 }
@@ -164,7 +148,7 @@ static void info_names_truncated_jpeg(void **state)
 {
     (void)state;
     char out[4096], victim[4096];
-    snprintf(out, sizeof out, "%s/trunc", dir);
+    snprintf(out, sizeof out, "%s/trunc", tu_dir);
     assert_int_equal(tu_run(tu_fmt("%s generate -q --material wood --size 8 %s", tu_cli(), out),
                             NULL), 0);
     snprintf(victim, sizeof victim, "%s/tv060_pv018/02387 tl045 pl200 tv060 pv018.jpg", out);
@@ -184,7 +168,7 @@ static void info_names_truncated_jpeg(void **state)
     assert_non_null(strstr(err, "02387 tl045 pl200 tv060 pv018.jpg"));
     assert_non_null(strstr(err, "missing"));
     free(err);
-    assert_int_equal(tu_run(tu_fmt("%s info %s/does-not-exist", tu_cli(), dir), &err), 1);
+    assert_int_equal(tu_run(tu_fmt("%s info %s/does-not-exist", tu_cli(), tu_dir), &err), 1);
     assert_non_null(strstr(err, "does-not-exist"));
     free(err);
 }
@@ -198,5 +182,5 @@ int main(void)
         cmocka_unit_test(generate_errors),
         cmocka_unit_test(info_names_truncated_jpeg),
     };
-    return cmocka_run_group_tests_name("cli", tests, setup, teardown);
+    return cmocka_run_group_tests_name("cli", tests, tu_setup_dir, tu_teardown_dir);
 }

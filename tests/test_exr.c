@@ -21,22 +21,6 @@
 #include <string.h>
 #include <unistd.h>
 
-static char *dir;
-
-static int setup(void **state)
-{
-    (void)state;
-    dir = tu_tmpdir();
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    tu_rmtree(dir);
-    free(dir);
-    return 0;
-}
 
 /* ------------------------------------------------------------ helpers */
 
@@ -85,11 +69,11 @@ static unsigned char *slurp(const char *path, size_t *n)
     return d;
 }
 
-/* A new empty folder dir/name (into out) for one test, so that file counts
+/* A new empty folder tu_dir/name (into out) for one test, so that file counts
  * are its own. */
 static void fresh_dir(char *out, size_t n, const char *name)
 {
-    snprintf(out, n, "%s/%s", dir, name);
+    snprintf(out, n, "%s/%s", tu_dir, name);
     btf_error e = {0};
     TU_OK(btf_mkdirs(out, &e), &e);
 }
@@ -192,7 +176,7 @@ static void half_rounds_to_nearest(void **state)
     btf_error e = {0};
     btf_image a, b;
     random_image(&a, 31, 9, 3, 5, 0.0f, 8.0f);
-    const char *p = tu_fmt("%s/h.exr", dir);
+    const char *p = tu_fmt("%s/h.exr", tu_dir);
     TU_OK(btf_exr_write(p, &a, 1, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     for (size_t i = 0; i < (size_t)31 * 9 * 3; i++)
@@ -211,7 +195,7 @@ static void extreme_values(void **state)
     btf_image a, b;
     TU_OK(btf_image_alloc(&a, n, 1, 1, &e), &e);
     memcpy(a.data, in, sizeof in);
-    const char *p = tu_fmt("%s/x.exr", dir);
+    const char *p = tu_fmt("%s/x.exr", tu_dir);
 
     /* Float keeps every value bit for bit, subnormals and -0 included. */
     TU_OK(btf_exr_write(p, &a, 0, &e), &e);
@@ -246,7 +230,7 @@ static void channel_conversion(void **state)
     btf_error e = {0};
     btf_image rgb, grey, b;
     random_image(&rgb, 9, 4, 3, 11, 0.0f, 10.0f);
-    const char *p = tu_fmt("%s/c.exr", dir);
+    const char *p = tu_fmt("%s/c.exr", tu_dir);
     TU_OK(btf_exr_write(p, &rgb, 0, &e), &e);
     TU_OK(btf_exr_read(p, 1, &b, &e), &e);
     assert_int_equal(b.channels, 1);
@@ -452,7 +436,7 @@ static void inf_and_nan_in_file(void **state)
     (void)state;
     btf_error e = {0};
     btf_image b;
-    const char *p = tu_fmt("%s/inf.exr", dir);
+    const char *p = tu_fmt("%s/inf.exr", tu_dir);
     tu_exr_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 8, 6, 1, {"Y"},
                   {EXR_PIXEL_FLOAT}};
     tu_exr_write_raw(p, &s, inf_at_3_2);
@@ -478,7 +462,7 @@ static void other_layouts(void **state)
     btf_error e = {0};
     btf_image b;
     btf_image_header hd;
-    const char *p = tu_fmt("%s/layout.exr", dir);
+    const char *p = tu_fmt("%s/layout.exr", tu_dir);
 
     /* Tiled, with partial tiles at the right and bottom edges. */
     tu_exr_spec t = {EXR_STORAGE_TILED, EXR_COMPRESSION_ZIP, 4, 0, 0, 10, 7, 3, {"B", "G", "R"},
@@ -520,7 +504,7 @@ static void every_compression(void **state)
 {
     (void)state;
     btf_error e = {0};
-    const char *p = tu_fmt("%s/comp.exr", dir);
+    const char *p = tu_fmt("%s/comp.exr", tu_dir);
     const exr_compression_t comp[] = {
         EXR_COMPRESSION_NONE,  EXR_COMPRESSION_RLE, EXR_COMPRESSION_ZIPS,
         EXR_COMPRESSION_ZIP,   EXR_COMPRESSION_PIZ, EXR_COMPRESSION_PXR24,
@@ -562,7 +546,7 @@ static void dwa_is_unsupported(void **state)
     (void)state;
     btf_error e = {0};
     btf_image b;
-    const char *p = tu_fmt("%s/dwa.exr", dir);
+    const char *p = tu_fmt("%s/dwa.exr", tu_dir);
     tu_exr_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 16, 8, 1, {"Y"},
                   {EXR_PIXEL_HALF}};
     tu_exr_write_raw(p, &s, pattern);
@@ -645,7 +629,7 @@ static void deep_is_unsupported(void **state)
     (void)state;
     btf_error e = {0};
     btf_image b;
-    const char *p = tu_fmt("%s/deep.exr", dir);
+    const char *p = tu_fmt("%s/deep.exr", tu_dir);
     tu_exr_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 6, 5, 1, {"Y"},
                   {EXR_PIXEL_FLOAT}};
     tu_exr_write_raw(p, &s, pattern);
@@ -667,7 +651,7 @@ static void unsupported_layouts(void **state)
     btf_error e = {0};
     btf_image b;
     btf_image_header hd;
-    const char *p = tu_fmt("%s/u.exr", dir);
+    const char *p = tu_fmt("%s/u.exr", tu_dir);
 
     tu_exr_spec u = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 1, {"Y"},
                   {EXR_PIXEL_UINT}};
@@ -725,12 +709,12 @@ static void truncated_files(void **state)
     btf_error e = {0};
     btf_image a;
     random_image(&a, 64, 50, 3, 7, 0.0f, 1.0f);
-    const char *full = tu_fmt("%s/full.exr", dir);
+    const char *full = tu_fmt("%s/full.exr", tu_dir);
     TU_OK(btf_exr_write(full, &a, 0, &e), &e);
     btf_image_free(&a);
     size_t n;
     unsigned char *d = slurp(full, &n);
-    const char *cut = tu_fmt("%s/cut.exr", dir);
+    const char *cut = tu_fmt("%s/cut.exr", tu_dir);
     /* Every length through the header and offset table, then a spread. */
     for (size_t len = 0; len < n; len += len < 400 ? 1 : 97) {
         tu_write_file(cut, d, len);
@@ -747,7 +731,7 @@ static void corrupt_bytes(void **state)
     btf_error e = {0};
     btf_image a, b;
     random_image(&a, 40, 40, 3, 8, 0.0f, 1.0f);
-    const char *full = tu_fmt("%s/good.exr", dir), *bad = tu_fmt("%s/bad.exr", dir);
+    const char *full = tu_fmt("%s/good.exr", tu_dir), *bad = tu_fmt("%s/bad.exr", tu_dir);
     TU_OK(btf_exr_write(full, &a, 1, &e), &e);
     btf_image_free(&a);
     size_t n;
@@ -784,7 +768,7 @@ static void garbage_and_missing(void **state)
     btf_error e = {0};
     btf_image b;
     btf_image_header hd;
-    const char *p = tu_fmt("%s/garbage.exr", dir);
+    const char *p = tu_fmt("%s/garbage.exr", tu_dir);
     unsigned char buf[4096];
     uint32_t s = 777;
     for (int round = 0; round < 50; round++) {
@@ -799,13 +783,13 @@ static void garbage_and_missing(void **state)
     tu_write_file(p, "", 0);
     assert_rejected(p);
 
-    const char *missing = tu_fmt("%s/missing.exr", dir);
+    const char *missing = tu_fmt("%s/missing.exr", tu_dir);
     assert_int_equal(btf_exr_read(missing, 0, &b, &e), BTF_E_IO);
     assert_null(b.data);
     assert_non_null(strstr(e.msg, missing));
     assert_int_equal(btf_exr_probe(missing, &hd, &e), BTF_E_IO);
     /* A folder is not a file. */
-    assert_int_equal(btf_exr_read(dir, 0, &b, &e), BTF_E_IO);
+    assert_int_equal(btf_exr_read(tu_dir, 0, &b, &e), BTF_E_IO);
     assert_int_equal(btf_exr_read(NULL, 0, &b, &e), BTF_E_ARG);
 }
 
@@ -832,7 +816,7 @@ static void absurd_sizes(void **state)
     (void)state;
     btf_error e = {0};
     btf_image a;
-    const char *p = tu_fmt("%s/huge.exr", dir);
+    const char *p = tu_fmt("%s/huge.exr", tu_dir);
     const int windows[][4] = {
         {0, 0, 69999, 15},              /* wider than 65536 */
         {0, 0, 15, 65536},              /* 65537 rows */
@@ -853,8 +837,8 @@ static void absurd_sizes(void **state)
 static void library_is_silent(void **state)
 {
     (void)state;
-    const char *errpath = tu_fmt("%s/stderr.txt", dir);
-    const char *p = tu_fmt("%s/noisy.exr", dir);
+    const char *errpath = tu_fmt("%s/stderr.txt", tu_dir);
+    const char *p = tu_fmt("%s/noisy.exr", tu_dir);
     fflush(stderr);
     int saved = dup(2);
     assert_true(saved >= 0);
@@ -878,7 +862,7 @@ static void library_is_silent(void **state)
         tu_write_file(p, d, n);
         rc4 = btf_exr_read(p, 0, &b, &e);
     }
-    rc5 = btf_exr_write(tu_fmt("%s/no/such/folder.exr", dir), &a, 1, &e);
+    rc5 = btf_exr_write(tu_fmt("%s/no/such/folder.exr", tu_dir), &a, 1, &e);
     fflush(stderr);
     dup2(saved, 2);
     close(saved);
@@ -919,5 +903,5 @@ int main(void)
         cmocka_unit_test(absurd_sizes),
         cmocka_unit_test(library_is_silent),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, tu_setup_dir, tu_teardown_dir);
 }

@@ -8,22 +8,6 @@
 #include <string.h>
 #include <sys/stat.h>
 
-static char *dir;
-
-static int setup(void **state)
-{
-    (void)state;
-    dir = tu_tmpdir();
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    tu_rmtree(dir);
-    free(dir);
-    return 0;
-}
 
 static void gradient(btf_image *img, int w, int h, int c)
 {
@@ -74,7 +58,7 @@ static void png_round_trip(void **state)
         for (int c = 1; c <= 3; c += 2) {
             btf_image a, b;
             gradient(&a, sizes[s][0], sizes[s][1], c);
-            const char *p = tu_fmt("%s/rt.png", dir);
+            const char *p = tu_fmt("%s/rt.png", tu_dir);
             TU_OK(btf_image_write_png(p, &a, &e), &e);
             btf_image_header h;
             TU_OK(btf_image_probe(p, &h, &e), &e);
@@ -102,7 +86,7 @@ static void jpeg_round_trip_and_channels(void **state)
     for (int i = 0; i < 33 * 17; i++)
         for (int k = 0; k < 3; k++)
             a.data[3 * i + k] = 0.1f + 0.6f * (float)(i % 33) / 32.0f + 0.1f * (float)k;
-    const char *p = tu_fmt("%s/rt.jpg", dir);
+    const char *p = tu_fmt("%s/rt.jpg", tu_dir);
     TU_OK(btf_image_write_jpeg(p, &a, 100, &e), &e);
     assert_int_equal(btf_file_format_of(p), BTF_FILE_JPEG);
     TU_OK(btf_image_read(p, NULL, &b, &e), &e);
@@ -152,8 +136,8 @@ static void truncated_files_are_errors(void **state)
     btf_image a, b;
     gradient(&a, 40, 30, 3);
     char png[4096], jpg[4096];
-    snprintf(png, sizeof png, "%s/full.png", dir);
-    snprintf(jpg, sizeof jpg, "%s/full.jpg", dir);
+    snprintf(png, sizeof png, "%s/full.png", tu_dir);
+    snprintf(jpg, sizeof jpg, "%s/full.jpg", tu_dir);
     TU_OK(btf_image_write_png(png, &a, &e), &e);
     TU_OK(btf_image_write_jpeg(jpg, &a, 90, &e), &e);
     const char *srcs[2] = {png, jpg};
@@ -161,7 +145,7 @@ static void truncated_files_are_errors(void **state)
         long n = size_of(srcs[s]);
         long cuts[] = {1, 3, 10, 40, n / 2, n - 20, n - 1};
         for (int k = 0; k < 7; k++) {
-            const char *cut = tu_fmt("%s/cut%d", dir, k);
+            const char *cut = tu_fmt("%s/cut%d", tu_dir, k);
             cut_file(srcs[s], cut, cuts[k]);
             int rc = btf_image_read(cut, NULL, &b, &e);
             assert_true(rc == BTF_E_FORMAT);
@@ -177,19 +161,19 @@ static void garbage_and_missing(void **state)
     (void)state;
     btf_error e = {0};
     btf_image b;
-    const char *g = tu_fmt("%s/garbage.jpg", dir);
+    const char *g = tu_fmt("%s/garbage.jpg", tu_dir);
     tu_write_file(g, "this is not an image at all", 27);
     assert_int_equal(btf_image_read(g, NULL, &b, &e), BTF_E_FORMAT);
     assert_non_null(strstr(e.msg, "garbage.jpg"));
-    const char *z = tu_fmt("%s/empty.png", dir);
+    const char *z = tu_fmt("%s/empty.png", tu_dir);
     tu_write_file(z, "", 0);
     btf_image_header h;
     assert_int_equal(btf_image_probe(z, &h, &e), BTF_E_FORMAT);
-    assert_int_equal(btf_image_read(tu_fmt("%s/nope.png", dir), NULL, &b, &e), BTF_E_IO);
+    assert_int_equal(btf_image_read(tu_fmt("%s/nope.png", tu_dir), NULL, &b, &e), BTF_E_IO);
     assert_non_null(strstr(e.msg, "nope.png"));
     /* A JPEG signature followed by junk: a corrupt marker, not a crash. */
     unsigned char junk[64] = {0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x02, 0x12, 0x34};
-    const char *j = tu_fmt("%s/junk.jpg", dir);
+    const char *j = tu_fmt("%s/junk.jpg", tu_dir);
     tu_write_file(j, junk, sizeof junk);
     assert_int_equal(btf_image_read(j, NULL, &b, &e), BTF_E_FORMAT);
 }
@@ -201,7 +185,7 @@ static void writes_are_atomic(void **state)
     btf_image a;
     gradient(&a, 8, 8, 3);
     /* Writing into a folder that does not exist fails and leaves nothing. */
-    const char *p = tu_fmt("%s/no/such/folder/x.png", dir);
+    const char *p = tu_fmt("%s/no/such/folder/x.png", tu_dir);
     assert_int_equal(btf_image_write_png(p, &a, &e), BTF_E_IO);
     assert_non_null(strstr(e.msg, "x.png"));
     /* A successful write leaves exactly the file, no temporary. */
@@ -225,5 +209,5 @@ int main(void)
         cmocka_unit_test(garbage_and_missing),
         cmocka_unit_test(writes_are_atomic),
     };
-    return cmocka_run_group_tests_name("image", tests, setup, teardown);
+    return cmocka_run_group_tests_name("image", tests, tu_setup_dir, tu_teardown_dir);
 }

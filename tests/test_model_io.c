@@ -16,22 +16,6 @@
 #include <sys/wait.h>
 #include <zlib.h>
 
-static char *dir;
-
-static int setup(void **state)
-{
-    (void)state;
-    dir = tu_tmpdir();
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    tu_rmtree(dir);
-    free(dir);
-    return 0;
-}
 
 /* ------------------------------------------------------- building models */
 
@@ -1091,7 +1075,7 @@ static void encoder_rules(void **state)
     assert_int_equal(btf_model_encode(&m, &d, &n, &e), BTF_E_DATA);
     assert_non_null(strstr(e.msg, "without directions"));
     m.index = NULL;
-    const char *path = tu_fmt("%s/refused.btfcar", dir);
+    const char *path = tu_fmt("%s/refused.btfcar", tu_dir);
     m.subspaces[0].bands[0][0].gamma[0] = NAN;
     assert_int_equal(btf_model_write(path, &m, &e), BTF_E_DATA);
     assert_int_equal(strncmp(e.msg, path, strlen(path)), 0);
@@ -1106,7 +1090,7 @@ static void encoder_rules(void **state)
 static void write_is_atomic(void **state)
 {
     (void)state;
-    char *sub = strdup(tu_fmt("%s/atomic", dir));
+    char *sub = strdup(tu_fmt("%s/atomic", tu_dir));
     assert_int_equal(mkdir(sub, 0777), 0);
     btf_model m, r;
     make_model(&m, &RICH);
@@ -1325,7 +1309,7 @@ static void info_model(void **state)
     make_model(&m, &spec);
     m.subspaces[1].bands[0][0].n = 2; /* FAMILY[0..1]: "0:-1,-1:0" */
     btf_error e = {0};
-    char *path = strdup(tu_fmt("%s/info.btfcar", dir));
+    char *path = strdup(tu_fmt("%s/info.btfcar", tu_dir));
     TU_OK(btf_model_write(path, &m, &e), &e);
     struct stat st;
     assert_int_equal(stat(path, &st), 0);
@@ -1401,7 +1385,7 @@ static void info_model(void **state)
 static void info_dataset_json(void **state)
 {
     (void)state;
-    char *ds = strdup(tu_fmt("%s/tinyds", dir));
+    char *ds = strdup(tu_fmt("%s/tinyds", tu_dir));
     char *err = NULL;
     assert_int_equal(tu_run(tu_fmt("%s generate --quiet --material fabric --size 8 %s", tu_cli(),
                                    ds), &err), 0);
@@ -1445,5 +1429,5 @@ int main(void)
         cmocka_unit_test(info_model),
         cmocka_unit_test(info_dataset_json),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, tu_setup_dir, tu_teardown_dir);
 }

@@ -2,6 +2,8 @@
 #define _GNU_SOURCE
 #include "testutil.h"
 
+#include "internal.h"
+
 #if defined(__SANITIZE_ADDRESS__)
 #define TU_ASAN 1
 #elif defined(__has_feature)
@@ -35,7 +37,45 @@ void tu_vk_keep_layer_loaded(void)
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
+
+char *tu_dir;
+
+int tu_setup_dir(void **state)
+{
+    (void)state;
+    tu_dir = tu_tmpdir();
+    return 0;
+}
+
+int tu_teardown_dir(void **state)
+{
+    (void)state;
+    tu_rmtree(tu_dir);
+    free(tu_dir);
+    tu_dir = NULL;
+    return 0;
+}
+
+double tu_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+double tu_median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return v[n / 2];
+}
 
 char *tu_tmpdir(void)
 {
@@ -49,25 +89,7 @@ char *tu_tmpdir(void)
 
 void tu_rmtree(const char *path)
 {
-    DIR *d = opendir(path);
-    if (!d) {
-        remove(path);
-        return;
-    }
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
-            continue;
-        char sub[4096];
-        snprintf(sub, sizeof sub, "%s/%s", path, e->d_name);
-        struct stat st;
-        if (lstat(sub, &st) == 0 && S_ISDIR(st.st_mode))
-            tu_rmtree(sub);
-        else
-            remove(sub);
-    }
-    closedir(d);
-    rmdir(path);
+    btf_remove_tree(path);
 }
 
 const char *tu_fmt(const char *fmt, ...)

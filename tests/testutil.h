@@ -16,6 +16,12 @@
 
 #include <openexr.h>
 
+/* A scratch folder for a whole group of tests: tu_setup_dir and
+ * tu_teardown_dir are cmocka group fixtures that make and remove tu_dir. */
+extern char *tu_dir;
+int tu_setup_dir(void **state);
+int tu_teardown_dir(void **state);
+
 /* A fresh temporary folder (under $TMPDIR or /tmp), removed by tu_rmtree. */
 char *tu_tmpdir(void);
 void tu_rmtree(const char *path);
@@ -52,6 +58,11 @@ void tu_exr_write_raw(const char *path, const tu_exr_spec *s, tu_exr_value_fn va
  * it go, so that LeakSanitizer can name its frames and the suppression of its
  * known leak (tests/lsan.supp) matches. A no-op otherwise. */
 void tu_vk_keep_layer_loaded(void);
+
+/* Wall-clock seconds (CLOCK_MONOTONIC), and the median of n values (sorts
+ * them): for the benchmark programs. */
+double tu_now(void);
+double tu_median(double *v, int n);
 
 /* Asserts a btfcar call succeeded, printing the error message if not. */
 #define TU_OK(call, errp)                                                      \

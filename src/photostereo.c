@@ -1129,21 +1129,20 @@ static int manifest_row(const btf_tsv *t, const char *path, int row, const manif
 }
 
 /* A manifest's relative path, from the manifest's folder. */
-static char *resolve_path(const char *manifest, const char *rel, btf_error *err)
+static int resolve_path(const char *manifest, const char *rel, char **out, btf_error *err)
 {
-    if (!*rel) {
-        btf_fail(err, BTF_E_FORMAT, "%s: empty path", manifest);
-        return NULL;
-    }
+    if (!*rel)
+        return btf_fail(err, BTF_E_FORMAT, "%s: empty path", manifest);
     const char *slash = strrchr(manifest, '/');
     size_t dl = rel[0] == '/' || !slash ? 0 : (size_t)(slash - manifest) + 1;
     size_t rl = strlen(rel);
     char *p = btf_alloc(dl + rl + 1, 1, err);
     if (!p)
-        return NULL;
+        return BTF_E_NOMEM;
     memcpy(p, manifest, dl);
     memcpy(p + dl, rel, rl + 1);
-    return p;
+    *out = p;
+    return BTF_OK;
 }
 
 int btf_photostereo_manifest(const char *path, const btf_image *mask,
@@ -1178,8 +1177,8 @@ int btf_photostereo_manifest(const char *path, const btf_image *mask,
         rc = BTF_E_NOMEM;
     for (int i = 0; i < n && rc == BTF_OK; i++) {
         rc = manifest_row(&t, path, i, &c, L + 3 * i, E ? E + 3 * i : NULL, err);
-        if (rc == BTF_OK && !(paths[i] = resolve_path(path, btf_tsv_cell(&t, i, c.path), err)))
-            rc = BTF_E_NOMEM;
+        if (rc == BTF_OK)
+            rc = resolve_path(path, btf_tsv_cell(&t, i, c.path), &paths[i], err);
     }
     ps_source src = {path, n, NULL, (const char *const *)paths, o.read, 0, 0, 3};
     if (rc == BTF_OK)

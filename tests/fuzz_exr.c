@@ -34,6 +34,7 @@
  * so memory errors inside it show only where they reach our code.
  */
 #include "internal.h"
+#include "fuzzutil.h"
 
 #include <fcntl.h>
 #include <math.h>
@@ -46,40 +47,6 @@
 /* Images above this many pixels are only probed, not decoded: their output
  * buffer alone could exceed libFuzzer's memory limit. */
 #define FUZZ_MAX_PIXELS (1u << 20)
-
-static char fuzz_path[512];
-
-static void remove_fuzz_file(void)
-{
-    if (fuzz_path[0])
-        unlink(fuzz_path);
-}
-
-static const char *input_path(void)
-{
-    if (!fuzz_path[0]) {
-        const char *tmp = getenv("TMPDIR");
-        snprintf(fuzz_path, sizeof fuzz_path, "%s/fuzz_exr.%ld.exr",
-                 tmp && *tmp ? tmp : "/tmp", (long)getpid());
-        atexit(remove_fuzz_file);
-    }
-    return fuzz_path;
-}
-
-static void write_input(const char *path, const uint8_t *data, size_t size)
-{
-    int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0600);
-    if (fd < 0)
-        abort();
-    size_t done = 0;
-    while (done < size) {
-        ssize_t w = write(fd, data + done, size - done);
-        if (w <= 0)
-            abort();
-        done += (size_t)w;
-    }
-    close(fd);
-}
 
 /* Failures are one line that starts with the file name. */
 static void check_error(const char *path, int rc, const btf_error *e)
@@ -113,8 +80,8 @@ static void check_read(const char *path, int channels, const btf_image_header *h
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    const char *path = input_path();
-    write_input(path, data, size);
+    const char *path = fuzz_input_path("exr");
+    fuzz_write_input(path, data, size);
     btf_image_header h;
     btf_error e = {0};
     int rc = btf_exr_probe(path, &h, &e);

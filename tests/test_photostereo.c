@@ -1231,6 +1231,9 @@ static void manifest_errors(void **state)
         {"path\ttheta_l\tphi_l\tr\tg\tb\na\t10\t0\t1\t1\t0\nb\t20\t90\t1\t1\t1\nc\t30\t180\t1\t1\t1\n",
          ":2: intensity b = 0"},
         {"path\ttheta_l\tphi_l\nmissing.png\t10\t0\nb\t20\t90\nc\t30\t180\n", "missing.png"},
+        /* Found by fuzz_manifest: an empty path is a format error (it was
+         * reported with the wrong status). */
+        {"path\ttheta_l\tphi_l\na\t10\t0\n\t20\t90\nc\t30\t180\n", "empty path"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const char *path = tu_fmt("%s/m%zu.tsv", dir, i);
@@ -1242,6 +1245,7 @@ static void manifest_errors(void **state)
             print_error("case %zu: rc %d, message '%s', expected '%s'\n", i, rc, err.msg,
                         cases[i].expect);
         assert_true(rc != 0);
+        assert_int_equal(err.code, rc);
         assert_non_null(strstr(err.msg, cases[i].expect));
         assert_null(r.normal.data);
     }

@@ -24,13 +24,27 @@ static void set_error(char *errbuf, size_t errlen, const char *what)
     }
 }
 
+/* Runs body (returning 0 or -1 with errbuf set) so that no exception
+ * crosses into C: every OpenCV exception becomes the error text. */
+template <class Body> static int guarded(char *errbuf, size_t errlen, Body body)
+{
+    try {
+        return body();
+    } catch (const std::exception &e) {
+        set_error(errbuf, errlen, e.what());
+    } catch (...) {
+        set_error(errbuf, errlen, "unknown OpenCV failure");
+    }
+    return -1;
+}
+
 /* Decodes a PNG/JPEG file as stored: 8- or 16-bit, 1 or 3 channels, RGB
  * order (OpenCV's BGR is swapped here so no caller sees it). Alpha dropped. */
 extern "C" int btfcv_read(const char *path, int *w, int *h, int *c, int *depth16,
                           void **pixels, char *errbuf, size_t errlen)
 {
     *pixels = nullptr;
-    try {
+    return guarded(errbuf, errlen, [&]() -> int {
         cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH |
                                          cv::IMREAD_ANYCOLOR);
         if (m.empty()) {
@@ -65,12 +79,7 @@ extern "C" int btfcv_read(const char *path, int *w, int *h, int *c, int *depth16
         *depth16 = rgb.depth() == CV_16U;
         *pixels = buf;
         return 0;
-    } catch (const std::exception &e) {
-        set_error(errbuf, errlen, e.what());
-    } catch (...) {
-        set_error(errbuf, errlen, "unknown OpenCV failure");
-    }
-    return -1;
+    });
 }
 
 /* Encodes 8-bit RGB or grey pixels to a memory buffer (".png" or ".jpg"). */
@@ -81,7 +90,7 @@ extern "C" int btfcv_encode(const char *ext, int w, int h, int c,
 {
     *out = nullptr;
     *outlen = 0;
-    try {
+    return guarded(errbuf, errlen, [&]() -> int {
         cv::Mat m(h, w, c == 3 ? CV_8UC3 : CV_8UC1, const_cast<unsigned char *>(pixels));
         cv::Mat bgr;
         if (c == 3)
@@ -109,12 +118,7 @@ extern "C" int btfcv_encode(const char *ext, int w, int h, int c,
         *out = copy;
         *outlen = buf.size();
         return 0;
-    } catch (const std::exception &e) {
-        set_error(errbuf, errlen, e.what());
-    } catch (...) {
-        set_error(errbuf, errlen, "unknown OpenCV failure");
-    }
-    return -1;
+    });
 }
 
 /* Linear RGB (floats, interleaved, n pixels) to CIE L*a*b* (D65), using
@@ -123,7 +127,7 @@ extern "C" int btfcv_encode(const char *ext, int w, int h, int c,
 extern "C" int btfcv_rgb_to_lab(const float *rgb, size_t n, float *lab, char *errbuf,
                                 size_t errlen)
 {
-    try {
+    return guarded(errbuf, errlen, [&]() -> int {
         if (n == 0)
             return 0;
         if (n > (size_t)INT32_MAX) {
@@ -138,12 +142,7 @@ extern "C" int btfcv_rgb_to_lab(const float *rgb, size_t n, float *lab, char *er
         cv::min(cv::max(src, 0.0), 1.0, clipped);
         cv::cvtColor(clipped, dst, cv::COLOR_LRGB2Lab);
         return 0;
-    } catch (const std::exception &e) {
-        set_error(errbuf, errlen, e.what());
-    } catch (...) {
-        set_error(errbuf, errlen, "unknown OpenCV failure");
-    }
-    return -1;
+    });
 }
 
 /* 2D discrete Fourier transform of a complex w x h array in double precision
@@ -152,7 +151,7 @@ extern "C" int btfcv_rgb_to_lab(const float *rgb, size_t n, float *lab, char *er
 extern "C" int btfcv_dft2(double *re, double *im, int w, int h, int inverse, char *errbuf,
                           size_t errlen)
 {
-    try {
+    return guarded(errbuf, errlen, [&]() -> int {
         cv::Mat planes[2] = {cv::Mat(h, w, CV_64F, re), cv::Mat(h, w, CV_64F, im)};
         cv::Mat z;
         cv::merge(planes, 2, z);
@@ -162,12 +161,7 @@ extern "C" int btfcv_dft2(double *re, double *im, int w, int h, int inverse, cha
         out[0].copyTo(planes[0]);
         out[1].copyTo(planes[1]);
         return 0;
-    } catch (const std::exception &e) {
-        set_error(errbuf, errlen, e.what());
-    } catch (...) {
-        set_error(errbuf, errlen, "unknown OpenCV failure");
-    }
-    return -1;
+    });
 }
 
 /* 2D DCT-II (inverse != 0: DCT-III, its inverse) of a real w x h array in
@@ -175,7 +169,7 @@ extern "C" int btfcv_dft2(double *re, double *im, int w, int h, int inverse, cha
  * sizes (or 1); others are an error here. */
 extern "C" int btfcv_dct2(double *a, int w, int h, int inverse, char *errbuf, size_t errlen)
 {
-    try {
+    return guarded(errbuf, errlen, [&]() -> int {
         if ((w > 1 && (w & 1)) || (h > 1 && (h & 1))) {
             set_error(errbuf, errlen, "DCT needs even sizes");
             return -1;
@@ -183,10 +177,5 @@ extern "C" int btfcv_dct2(double *a, int w, int h, int inverse, char *errbuf, si
         cv::Mat m(h, w, CV_64F, a);
         cv::dct(m, m, inverse ? cv::DCT_INVERSE : 0);
         return 0;
-    } catch (const std::exception &e) {
-        set_error(errbuf, errlen, e.what());
-    } catch (...) {
-        set_error(errbuf, errlen, "unknown OpenCV failure");
-    }
-    return -1;
+    });
 }

@@ -34,15 +34,16 @@ float field_at(uint base, int fw, int r, int c)
 void main()
 {
     uint t = pc.task_base + gl_WorkGroupID.x;
-    int fw = tasks[t].fw, fh = tasks[t].fh, a = tasks[t].a, n = tasks[t].n;
+    int fw = tasks[t].fw, rb = tasks[t].rb, a = tasks[t].a, n = tasks[t].n;
+    int rows = tasks[t].fh - rb; // rows to compute, from buffer row rb
     uint base = tasks[t].field_off;
-    int steps = a * (fh - 1) + fw;
+    int steps = rows > 0 ? a * (rows - 1) + fw : 0;
     for (int s = 0; s < steps; s++) {
-        // Rows r with c = s - a r inside [0, fw).
-        int rlo = (s - fw + 1 > 0) ? (s - fw + a) / a : 0;
-        int rhi = min(fh - 1, s / a);
-        for (int r = rlo + int(gl_LocalInvocationID.x); r <= rhi; r += 64) {
-            int c = s - a * r;
+        // Rows rb + q with c = s - a q inside [0, fw).
+        int qlo = (s - fw + 1 > 0) ? (s - fw + a) / a : 0;
+        int qhi = min(rows - 1, s / a);
+        for (int q = qlo + int(gl_LocalInvocationID.x); q <= qhi; q += 64) {
+            int c = s - a * q, r = rb + q;
             precise float acc = 0.0;
             for (int k = 0; k < n; k++)
                 acc = btf_car_accumulate(acc, tasks[t].gamma[k],

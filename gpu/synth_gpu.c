@@ -25,6 +25,7 @@
 /* C mirrors of gpu/synth_task.glsl (4-byte members only: std430 agrees). */
 typedef struct gpu_task {
     int32_t fx0, fy0, fw, fh;
+    int32_t rb;
     int32_t x0, y0, w, h;
     uint32_t field_off, g_off;
     uint32_t stream;
@@ -43,12 +44,14 @@ typedef struct gpu_unmix {
     int32_t w, h;
 } gpu_unmix;
 
-_Static_assert(sizeof(gpu_task) == 352, "gpu_task must match synth_task.glsl");
+_Static_assert(sizeof(gpu_task) == 356, "gpu_task must match synth_task.glsl");
 _Static_assert(sizeof(gpu_unmix) == 72, "gpu_unmix must match synth_task.glsl");
 _Static_assert(BTF_CAR_MAX_NEIGHBOURS == 24, "synth_task.glsl holds 24 offsets");
 
 struct btf_gpu {
     btf_vk *vk;
+    uint64_t max_buffer_bytes; /* 0: the device's limit */
+    int jobs, batches;         /* of the last btf_gpu_synthesise */
     btf_vk_pipeline *field, *collapse, *unmix;
 };
 
@@ -61,6 +64,7 @@ int btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err)
     btf_gpu *g = btf_calloc(1, sizeof *g, err);
     if (!g)
         return BTF_E_NOMEM;
+    g->max_buffer_bytes = o.max_buffer_bytes;
     btf_vk_opts vo = {.use_device = o.use_device, .device = o.device, .allow_cpu = o.allow_cpu,
                       .validation = o.validation};
     int rc = btf_vk_create(&vo, &g->vk, err);
@@ -107,6 +111,12 @@ unsigned btf_gpu_validation_errors(const btf_gpu *g)
     return btf_vk_validation_errors(g->vk);
 }
 
+void btf_gpu_last_tiling(const btf_gpu *g, int *batches, int *jobs)
+{
+    *batches = g->batches;
+    *jobs = g->jobs;
+}
+
 const char *btf_gpu_first_validation_message(const btf_gpu *g)
 {
     return btf_vk_first_validation_message(g->vk);
@@ -134,14 +144,13 @@ static int wavefront_slope(const btf_car_band *b)
 }
 
 /* A task record for one field; offsets ordered as btf_shared.h sums them:
- * earlier rows first, then the same row, each in stored order. */
-static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x0, int x1, int y0,
-                      int y1)
+ * earlier rows first, then the same row, each in stored order. The rows
+ * (fy0, rb, fh, y0, h) are set per strip. */
+static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x0, int x1)
 {
     memset(t, 0, sizeof *t);
-    t->x0 = x0, t->y0 = y0, t->w = x1 - x0, t->h = y1 - y0;
+    t->x0 = x0, t->w = x1 - x0;
     t->fx0 = x0 - BTF_SYNTH_MARGIN, t->fw = t->w + 2 * BTF_SYNTH_MARGIN;
-    t->fy0 = y0 - BTF_SYNTH_BURNIN, t->fh = t->h + BTF_SYNTH_BURNIN;
     t->stream = stream;
     t->sigma = b->sigma, t->mean = b->mean;
     t->a = wavefront_slope(b);
@@ -158,83 +167,160 @@ static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x
     t->n = k;
 }
 
-/* One batch of subspace images: tasks grouped by level (coarsest first is
- * not needed: collapse dispatches name their level's range). */
+/* The rows [*a, *b) of level l that output rows [y0, y1) read (level 0 is
+ * the output itself; each coarser level covers what up-sampling reads). */
+static void level_rows(int y0, int y1, int l, int *a, int *b)
+{
+    for (int k = 0; k < l; k++) {
+        int na = floordiv2(y0) - 1, nb = floordiv2(y1 - 1) + 2;
+        y0 = na, y1 = nb;
+    }
+    *a = y0, *b = y1;
+}
+
+/* Where one field stands while the strips go down the image. */
+typedef struct field_state {
+    int level, up;        /* pyramid level; rows of history the recursion reads */
+    int next;             /* next absolute field row to compute */
+    int base;             /* absolute row held in buffer row 0 */
+    int rows, grows;      /* buffer rows reserved: field, G window */
+    int carry;            /* rows reserved in the carry buffer */
+} field_state;
+
+/* A batch: n subspace images synthesised together, strip by strip. Tasks
+ * are grouped by level (the collapse dispatches one level at a time). */
 typedef struct batch {
+    int n, w, h, strip;
     gpu_task *tasks;
+    field_state *fs;
     int ntasks;
     int level_start[BTF_MAX_LEVELS + 1]; /* tasks of level l: [start[l], start[l+1]) */
     gpu_unmix *unmix;
-    int n;
-    uint64_t field_floats, gauss_floats, out_floats;
+    uint64_t field_floats, gauss_floats, out_floats, carry_floats;
 } batch;
 
-/* Task index of (image j, band b, level l) inside a level group. */
-static int build_batch(const btf_model *m, const int *subs, int n, int w, int h, batch *bt,
-                       btf_error *err)
+static void batch_free(batch *bt)
+{
+    free(bt->tasks);
+    free(bt->fs);
+    free(bt->unmix);
+    memset(bt, 0, sizeof *bt);
+}
+
+static int field_up(const gpu_task *t)
+{
+    int up = 0;
+    for (int k = 0; k < t->n; k++)
+        if (-t->off_r[k] > up)
+            up = -t->off_r[k];
+    return up;
+}
+
+/* The rows of each field for the strip [y0, y1), advancing its state. With
+ * plan_only the task records are left alone (sizing pass). Returns through
+ * keep[] the rows carried from the previous strip (0 on the first). */
+static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *keep_from)
+{
+    for (int i = 0; i < bt->ntasks; i++) {
+        gpu_task *t = &bt->tasks[i];
+        field_state *f = &bt->fs[i];
+        int ga, gb;
+        level_rows(y0, y1, f->level, &ga, &gb);
+        if (first) {
+            /* The field starts BTF_SYNTH_BURNIN rows above its window; the
+             * `up` rows above that are zero (the buffer is cleared). */
+            f->next = ga - BTF_SYNTH_BURNIN;
+            f->base = f->next - f->up;
+            keep[i] = 0;
+            keep_from[i] = 0;
+        } else {
+            int base = ga < f->next - f->up ? ga : f->next - f->up;
+            keep[i] = f->next - base;
+            keep_from[i] = base - f->base;
+            f->base = base;
+        }
+        t->fy0 = f->base;
+        t->rb = f->next - f->base;
+        t->fh = (gb > f->next ? gb : f->next) - f->base;
+        t->y0 = ga;
+        t->h = gb - ga;
+        if (gb > f->next)
+            f->next = gb;
+        if (t->fh > f->rows)
+            f->rows = t->fh;
+        if (t->h > f->grows)
+            f->grows = t->h;
+        if (keep[i] > f->carry)
+            f->carry = keep[i];
+    }
+}
+
+/* Builds the batch and sizes its buffers for strips of `strip` rows. */
+static int build_batch(const btf_model *m, const int *subs, int n, int w, int h, int strip,
+                       batch *bt, btf_error *err)
 {
     memset(bt, 0, sizeof *bt);
-    int max_levels = 0;
-    for (int j = 0; j < n; j++)
-        if (m->subspaces[subs[j]].levels > max_levels)
-            max_levels = m->subspaces[subs[j]].levels;
-    bt->tasks = btf_calloc((size_t)n * 3 * max_levels, sizeof(gpu_task), err);
-    bt->unmix = btf_calloc((size_t)n, sizeof(gpu_unmix), err);
-    if (!bt->tasks || !bt->unmix)
-        return BTF_E_NOMEM;
-    bt->n = n;
-    /* Count tasks per level to lay the groups out. */
-    int count[BTF_MAX_LEVELS] = {0};
-    for (int j = 0; j < n; j++)
-        for (int l = 0; l < m->subspaces[subs[j]].levels; l++)
+    bt->n = n, bt->w = w, bt->h = h, bt->strip = strip;
+    int max_levels = 0, count[BTF_MAX_LEVELS] = {0};
+    for (int j = 0; j < n; j++) {
+        const btf_subspace_model *sm = &m->subspaces[subs[j]];
+        if (sm->levels > max_levels)
+            max_levels = sm->levels;
+        for (int l = 0; l < sm->levels; l++)
             count[l] += 3;
+    }
     for (int l = 0; l < max_levels; l++)
         bt->level_start[l + 1] = bt->level_start[l] + count[l];
     bt->ntasks = bt->level_start[max_levels];
+    bt->tasks = btf_calloc((size_t)bt->ntasks, sizeof(gpu_task), err);
+    bt->fs = btf_calloc((size_t)bt->ntasks, sizeof(field_state), err);
+    bt->unmix = btf_calloc((size_t)n, sizeof(gpu_unmix), err);
+    int *keep = btf_calloc((size_t)bt->ntasks * 2, sizeof(int), err);
+    if (!bt->tasks || !bt->fs || !bt->unmix || !keep) {
+        free(keep);
+        return BTF_E_NOMEM;
+    }
     int fill[BTF_MAX_LEVELS];
     memcpy(fill, bt->level_start, sizeof fill);
     for (int j = 0; j < n; j++) {
         const btf_subspace_model *sm = &m->subspaces[subs[j]];
         for (int b = 0; b < 3; b++) {
-            int x0 = 0, x1 = w, y0 = 0, y1 = h, prev = -1;
+            int x0 = 0, x1 = w, prev = -1;
             for (int l = 0; l < sm->levels; l++) {
                 int ti = fill[l]++;
-                gpu_task *t = &bt->tasks[ti];
-                fill_task(t, &sm->bands[b][l],
-                          btf_noise_stream((uint32_t)subs[j], (uint32_t)b, (uint32_t)l), x0, x1,
-                          y0, y1);
-                t->field_off = (uint32_t)bt->field_floats;
-                t->g_off = (uint32_t)bt->gauss_floats;
-                bt->field_floats += (uint64_t)t->fw * t->fh;
-                bt->gauss_floats += (uint64_t)t->w * t->h;
+                fill_task(&bt->tasks[ti], &sm->bands[b][l],
+                          btf_noise_stream((uint32_t)subs[j], (uint32_t)b, (uint32_t)l), x0, x1);
+                bt->fs[ti].level = l;
+                bt->fs[ti].up = field_up(&bt->tasks[ti]);
                 if (prev >= 0)
                     bt->tasks[prev].coarse = ti;
-                else
-                    bt->unmix[j].g_off[b] = t->g_off;
                 prev = ti;
                 int nx0 = floordiv2(x0) - 1, nx1 = floordiv2(x1 - 1) + 2;
-                int ny0 = floordiv2(y0) - 1, ny1 = floordiv2(y1 - 1) + 2;
-                x0 = nx0, x1 = nx1, y0 = ny0, y1 = ny1;
+                x0 = nx0, x1 = nx1;
             }
         }
-        gpu_unmix *u = &bt->unmix[j];
-        memcpy(u->mean, sm->mean, sizeof u->mean);
-        memcpy(u->basis, sm->basis, sizeof u->basis);
-        u->out_off = (uint32_t)bt->out_floats;
-        u->w = w, u->h = h;
-        bt->out_floats += (uint64_t)w * h * 3;
+        memcpy(bt->unmix[j].mean, sm->mean, sizeof bt->unmix[j].mean);
+        memcpy(bt->unmix[j].basis, sm->basis, sizeof bt->unmix[j].basis);
+        bt->unmix[j].w = w;
     }
+    /* Walk the strips once to size every field's buffer rows. */
+    for (int y = 0; y < h; y += strip)
+        strip_rows(bt, y, y + strip < h ? y + strip : h, y == 0, keep, keep + bt->ntasks);
+    free(keep);
+    for (int i = 0; i < bt->ntasks; i++) {
+        gpu_task *t = &bt->tasks[i];
+        t->field_off = (uint32_t)bt->field_floats;
+        t->g_off = (uint32_t)bt->gauss_floats;
+        bt->field_floats += (uint64_t)t->fw * bt->fs[i].rows;
+        bt->gauss_floats += (uint64_t)t->w * bt->fs[i].grows;
+        bt->carry_floats += (uint64_t)t->fw * bt->fs[i].carry;
+    }
+    for (int j = 0; j < n; j++)
+        bt->out_floats += (uint64_t)w * strip * 3;
     return BTF_OK;
 }
 
-static void batch_free(batch *bt)
-{
-    free(bt->tasks);
-    free(bt->unmix);
-    memset(bt, 0, sizeof *bt);
-}
-
-/* The largest buffer a batch needs, in bytes (fields, G windows, output). */
+/* The largest buffer a batch needs, in bytes. */
 static uint64_t batch_need(const batch *bt)
 {
     uint64_t need = bt->field_floats;
@@ -242,6 +328,8 @@ static uint64_t batch_need(const batch *bt)
         need = bt->gauss_floats;
     if (bt->out_floats > need)
         need = bt->out_floats;
+    if (bt->carry_floats > need)
+        need = bt->carry_floats;
     return 4 * need;
 }
 
@@ -263,32 +351,91 @@ static int dispatch_range(btf_gpu *g, btf_vk_job *job, const btf_vk_pipeline *pi
     return BTF_OK;
 }
 
-static int run_batch(btf_gpu *g, const batch *bt, uint64_t seed, btf_image *outs, btf_error *err)
+typedef struct batch_buffers {
+    btf_vk_buffer *tasks, *unmix, *fields, *gauss, *out, *carry;
+} batch_buffers;
+
+static void buffers_free(batch_buffers *b)
 {
-    btf_vk_buffer *tasks = NULL, *unmix = NULL, *fields = NULL, *gauss = NULL, *out = NULL;
+    btf_vk_buffer_destroy(b->tasks);
+    btf_vk_buffer_destroy(b->unmix);
+    btf_vk_buffer_destroy(b->fields);
+    btf_vk_buffer_destroy(b->gauss);
+    btf_vk_buffer_destroy(b->out);
+    btf_vk_buffer_destroy(b->carry);
+}
+
+static int buffers_make(btf_gpu *g, const batch *bt, batch_buffers *b, btf_error *err)
+{
+    memset(b, 0, sizeof *b);
+    int rc = btf_vk_buffer_create(g->vk, sizeof(gpu_task) * (uint64_t)bt->ntasks, &b->tasks, err);
+    if (rc == 0)
+        rc = btf_vk_buffer_create(g->vk, sizeof(gpu_unmix) * (uint64_t)bt->n, &b->unmix, err);
+    if (rc == 0)
+        rc = btf_vk_buffer_create(g->vk, 4 * bt->field_floats, &b->fields, err);
+    if (rc == 0)
+        rc = btf_vk_buffer_create(g->vk, 4 * bt->gauss_floats, &b->gauss, err);
+    if (rc == 0)
+        rc = btf_vk_buffer_create(g->vk, 4 * bt->out_floats, &b->out, err);
+    if (rc == 0)
+        rc = btf_vk_buffer_create(g->vk, 4 * (bt->carry_floats ? bt->carry_floats : 1), &b->carry,
+                                  err);
+    return rc;
+}
+
+/* Carries each field's last rows to the top of its buffer (through the
+ * carry buffer: source and destination may overlap). */
+static int record_carry(btf_vk_job *job, const batch *bt, const batch_buffers *b, const int *keep,
+                        const int *keep_from, btf_error *err)
+{
+    uint64_t toff = 0;
+    int rc = BTF_OK;
+    for (int i = 0; rc == 0 && i < bt->ntasks; i++) {
+        const gpu_task *t = &bt->tasks[i];
+        uint64_t bytes = 4ull * t->fw * keep[i], from = 4ull * t->field_off;
+        if (bytes == 0 || keep_from[i] == 0)
+            continue; /* nothing to keep, or already in place */
+        rc = btf_vk_job_copy(job, b->fields, from + 4ull * t->fw * keep_from[i], b->carry, toff,
+                             bytes, err);
+        if (rc == 0)
+            rc = btf_vk_job_copy(job, b->carry, toff, b->fields, from, bytes, err);
+        toff += bytes;
+    }
+    return rc;
+}
+
+/* One strip of every image of the batch: one job. */
+static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, uint64_t seed,
+                     btf_image *outs, int *keep, btf_error *err)
+{
+    int first = y0 == 0;
+    strip_rows(bt, y0, y1, first, keep, keep + bt->ntasks);
+    uint64_t out_off = 0;
+    for (int j = 0; j < bt->n; j++) {
+        bt->unmix[j].out_off = (uint32_t)out_off;
+        bt->unmix[j].h = y1 - y0;
+        out_off += (uint64_t)bt->w * (y1 - y0) * 3;
+    }
+    for (int j = 0; j < bt->n; j++) /* level-0 tasks of image j, bands 0..2 */
+        for (int band = 0; band < 3; band++)
+            bt->unmix[j].g_off[band] = bt->tasks[3 * j + band].g_off;
     btf_vk_job *job = NULL;
-    int rc = btf_vk_buffer_create(g->vk, sizeof(gpu_task) * (uint64_t)bt->ntasks, &tasks, err);
+    int rc = btf_vk_buffer_upload(g->vk, b->tasks, 0, bt->tasks,
+                                  sizeof(gpu_task) * (uint64_t)bt->ntasks, err);
     if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, sizeof(gpu_unmix) * (uint64_t)bt->n, &unmix, err);
-    if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, 4 * bt->field_floats, &fields, err);
-    if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, 4 * bt->gauss_floats, &gauss, err);
-    if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, 4 * bt->out_floats, &out, err);
-    if (rc == 0)
-        rc = btf_vk_buffer_upload(g->vk, tasks, 0, bt->tasks, sizeof(gpu_task) * (uint64_t)bt->ntasks,
-                                  err);
-    if (rc == 0)
-        rc = btf_vk_buffer_upload(g->vk, unmix, 0, bt->unmix, sizeof(gpu_unmix) * (uint64_t)bt->n,
-                                  err);
+        rc = btf_vk_buffer_upload(g->vk, b->unmix, 0, bt->unmix,
+                                  sizeof(gpu_unmix) * (uint64_t)bt->n, err);
     if (rc == 0)
         rc = btf_vk_job_begin(g->vk, &job, err);
+    if (rc == 0 && first)
+        rc = btf_vk_job_fill(job, b->fields, 0, 4 * bt->field_floats, 0, err);
+    if (rc == 0 && !first)
+        rc = record_carry(job, bt, b, keep, keep + bt->ntasks, err);
     uint32_t fpush[3] = {(uint32_t)seed, (uint32_t)(seed >> 32), 0};
-    btf_vk_buffer *fb[2] = {tasks, fields};
+    btf_vk_buffer *fb[2] = {b->tasks, b->fields};
     if (rc == 0)
         rc = dispatch_range(g, job, g->field, fb, 2, fpush, 3, 0, (uint32_t)bt->ntasks, err);
-    btf_vk_buffer *cb[3] = {tasks, fields, gauss};
+    btf_vk_buffer *cb[3] = {b->tasks, b->fields, b->gauss};
     int levels = 0;
     while (levels < BTF_MAX_LEVELS && bt->level_start[levels + 1] > bt->level_start[levels])
         levels++;
@@ -297,7 +444,7 @@ static int run_batch(btf_gpu *g, const batch *bt, uint64_t seed, btf_image *outs
         rc = dispatch_range(g, job, g->collapse, cb, 3, cpush, 1, (uint32_t)bt->level_start[l],
                             (uint32_t)(bt->level_start[l + 1] - bt->level_start[l]), err);
     }
-    btf_vk_buffer *ub[3] = {unmix, gauss, out};
+    btf_vk_buffer *ub[3] = {b->unmix, b->gauss, b->out};
     uint32_t upush[1];
     if (rc == 0)
         rc = dispatch_range(g, job, g->unmix, ub, 3, upush, 1, 0, (uint32_t)bt->n, err);
@@ -306,14 +453,27 @@ static int run_batch(btf_gpu *g, const batch *bt, uint64_t seed, btf_image *outs
         job = NULL;
     }
     for (int j = 0; rc == 0 && j < bt->n; j++)
-        rc = btf_vk_buffer_download(g->vk, out, 4ull * bt->unmix[j].out_off, outs[j].data,
-                                    (uint64_t)outs[j].width * outs[j].height * 12, err);
+        rc = btf_vk_buffer_download(g->vk, b->out, 4ull * bt->unmix[j].out_off,
+                                    outs[j].data + (size_t)y0 * bt->w * 3,
+                                    4ull * bt->w * (y1 - y0) * 3, err);
     btf_vk_job_abort(job);
-    btf_vk_buffer_destroy(tasks);
-    btf_vk_buffer_destroy(unmix);
-    btf_vk_buffer_destroy(fields);
-    btf_vk_buffer_destroy(gauss);
-    btf_vk_buffer_destroy(out);
+    return rc;
+}
+
+static int run_batch(btf_gpu *g, batch *bt, uint64_t seed, btf_image *outs, btf_error *err)
+{
+    batch_buffers b;
+    int *keep = btf_calloc((size_t)bt->ntasks * 2, sizeof(int), err);
+    int rc = keep ? buffers_make(g, bt, &b, err) : BTF_E_NOMEM;
+    for (int y = 0; rc == 0 && y < bt->h; y += bt->strip) {
+        rc = run_strip(g, bt, &b, y, y + bt->strip < bt->h ? y + bt->strip : bt->h, seed, outs,
+                       keep, err);
+        g->jobs++;
+    }
+    g->batches++;
+    if (keep)
+        buffers_free(&b);
+    free(keep);
     return rc;
 }
 
@@ -345,47 +505,53 @@ static int check_request(const btf_model *m, const int *subs, int n, int w, int 
     return BTF_OK;
 }
 
+/* The largest batch of images from `subs` (at most n), with the tallest
+ * strips, whose buffers fit `limit` bytes; BTF_E_UNSUPPORTED if even one image
+ * in strips of one row does not fit (the width alone is too large). */
+static int plan_batch(const btf_model *m, const int *subs, int n, int w, int h, uint64_t limit,
+                      batch *bt, btf_error *err)
+{
+    for (int k = n; k >= 1; k = k / 2) {
+        for (int strip = h;; strip = (strip + 1) / 2) {
+            int rc = build_batch(m, subs, k, w, h, strip, bt, err);
+            if (rc)
+                return rc;
+            if (batch_need(bt) <= limit && bt->field_floats <= 0x7FFFFFFFull)
+                return BTF_OK;
+            uint64_t need = batch_need(bt);
+            batch_free(bt);
+            if (strip == 1) {
+                if (k == 1)
+                    return btf_fail(err, BTF_E_UNSUPPORTED,
+                                    "synthesis of width %d needs a %.1f MiB GPU buffer even in "
+                                    "strips of one row, more than the device's limit of %.1f MiB; "
+                                    "use the CPU backend", w, need / 1048576.0, limit / 1048576.0);
+                break;
+            }
+        }
+    }
+    return btf_fail(err, BTF_E_UNSUPPORTED, "no GPU batch fits"); /* not reached */
+}
+
 int btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n, int width,
                        int height, uint64_t seed, btf_image *outs, btf_error *err)
 {
     for (int j = 0; j < n; j++)
         memset(&outs[j], 0, sizeof outs[j]);
     int rc = check_request(m, subspaces, n, width, height, err);
-    if (rc)
-        return rc;
     for (int j = 0; rc == 0 && j < n; j++)
         rc = btf_image_alloc(&outs[j], width, height, 3, err);
+    g->jobs = g->batches = 0;
     uint64_t limit = btf_vk_info(g->vk)->max_storage_buffer_range;
-    /* Grow each batch while its buffers fit; one image that does not fit
-     * alone is refused (strip tiling of one field is not implemented). */
-    int start = 0;
-    while (rc == 0 && start < n) {
-        int k = 1;
+    if (g->max_buffer_bytes && g->max_buffer_bytes < limit)
+        limit = g->max_buffer_bytes;
+    for (int start = 0; rc == 0 && start < n;) {
         batch bt;
-        rc = build_batch(m, subspaces + start, 1, width, height, &bt, err);
-        if (rc == 0 && (batch_need(&bt) > limit || bt.field_floats > 0x7FFFFFFFull)) {
-            rc = btf_fail(err, BTF_E_UNSUPPORTED,
-                          "synthesis of %dx%d needs a %.0f MiB GPU buffer, more than the "
-                          "device's limit of %.0f MiB; use the CPU backend", width, height,
-                          batch_need(&bt) / 1048576.0, limit / 1048576.0);
-        }
-        while (rc == 0 && start + k < n) {
-            batch bigger;
-            rc = build_batch(m, subspaces + start, k + 1, width, height, &bigger, err);
-            if (rc)
-                break;
-            if (batch_need(&bigger) > limit || bigger.field_floats > 0x7FFFFFFFull) {
-                batch_free(&bigger);
-                break;
-            }
-            batch_free(&bt);
-            bt = bigger;
-            k++;
-        }
+        rc = plan_batch(m, subspaces + start, n - start, width, height, limit, &bt, err);
         if (rc == 0)
             rc = run_batch(g, &bt, seed, outs + start, err);
+        start += bt.n;
         batch_free(&bt);
-        start += k;
     }
     if (rc)
         for (int j = 0; j < n; j++)

@@ -5,7 +5,11 @@
 // One CAR field: (subspace, band, level). Offsets are pre-ordered by the
 // host: earlier rows first, then the same row (btf_shared.h's sum order).
 struct Task {
-    int fx0, fy0, fw, fh;     // field origin (absolute level coordinates) and size
+    int fx0, fy0, fw, fh;     // absolute column of the buffer's column 0 and row of its
+                              // row 0; buffer width and rows (a strip of the field)
+    int rb;                   // rows [0, rb) of the buffer are given (carried over
+                              // from the previous strip, or zero before the field's
+                              // first row); rows [rb, fh) are computed
     int x0, y0, w, h;         // the level's window (absolute) and size
     uint field_off, g_off;    // offsets (floats) into Fields[] and Gauss[]
     uint stream;              // noise stream (subspace, band, level)

@@ -643,6 +643,8 @@ typedef struct btf_gpu_opts {
     int device;
     int allow_cpu;    /* 1: a CPU device (lavapipe) may be chosen automatically */
     int validation;   /* 1: the Khronos validation layer, its messages counted */
+    uint64_t max_buffer_bytes; /* 0: the device's maxStorageBufferRange; smaller
+                                  values force the tiling (tests) */
 } btf_gpu_opts;
 
 int btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err);
@@ -651,10 +653,15 @@ const char *btf_gpu_device_name(const btf_gpu *g);
 int btf_gpu_is_cpu(const btf_gpu *g);             /* 1 for lavapipe */
 unsigned btf_gpu_validation_errors(const btf_gpu *g);
 const char *btf_gpu_first_validation_message(const btf_gpu *g);
+/* How the last btf_gpu_synthesise was cut: batches of images, and jobs
+ * (one per strip of rows of a batch). */
+void btf_gpu_last_tiling(const btf_gpu *g, int *batches, int *jobs);
 
 /* Synthesises n subspace images of width x height into outs[0 .. n-1]
- * (allocated here, linear RGB), in as few GPU jobs as the device's buffer
- * limits allow. */
+ * (allocated here, linear RGB). Images are grouped in batches and cut into
+ * strips of rows so that every GPU buffer fits the device's limit; the
+ * causal fields carry their last rows from strip to strip, so the result is
+ * the same whatever the tiling. */
 int btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n, int width,
                        int height, uint64_t seed, btf_image *outs, btf_error *err);
 

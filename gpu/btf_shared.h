@@ -22,6 +22,13 @@
 /* The largest output side: coordinates plus margins stay far from 2^28. */
 #define BTF_SYNTH_MAX_SIDE 16777216 /* 2^24 */
 
+/* The sum of one field pixel, Y = sum_s gamma_s Y_s + sigma e, runs in this
+ * order on both sides: from 0, the offsets of earlier rows in stored order
+ * (btf_car_accumulate), then the noise (btf_car_output), then the same-row
+ * offsets from the farthest column to the nearest (btf_car_accumulate). The
+ * nearest neighbour comes last so that on the CPU one pixel waits on the
+ * previous one for a single multiply and add. */
+
 /* One step of the neighbourhood sum: acc + gamma * y. */
 BTF_FN float btf_car_accumulate(float acc, float gamma, float y)
 {

@@ -45,14 +45,20 @@ void main()
         for (int q = qlo + int(gl_LocalInvocationID.x); q <= qhi; q += 64) {
             int c = s - a * q, r = rb + q;
             precise float acc = 0.0;
-            for (int k = 0; k < n; k++)
+            int np = tasks[t].n_prev;
+            for (int k = 0; k < np; k++)
                 acc = btf_car_accumulate(acc, tasks[t].gamma[k],
                                          field_at(base, fw, r + tasks[t].off_r[k],
                                                   c + tasks[t].off_c[k]));
             uint urow = uint(tasks[t].fy0 + r + BTF_NOISE_ORIGIN);
             uint ucol = uint(tasks[t].fx0 + c + BTF_NOISE_ORIGIN);
             float e = btf_noise1(pc.seed_lo, pc.seed_hi, tasks[t].stream, urow, ucol);
-            fields[base + uint(r * fw + c)] = btf_car_output(acc, tasks[t].sigma, e);
+            acc = btf_car_output(acc, tasks[t].sigma, e);
+            for (int k = np; k < n; k++)
+                acc = btf_car_accumulate(acc, tasks[t].gamma[k],
+                                         field_at(base, fw, r + tasks[t].off_r[k],
+                                                  c + tasks[t].off_c[k]));
+            fields[base + uint(r * fw + c)] = acc;
         }
         memoryBarrierBuffer();
         barrier();

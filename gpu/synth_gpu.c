@@ -29,7 +29,7 @@ typedef struct gpu_task {
     int32_t x0, y0, w, h;
     uint32_t field_off, g_off;
     uint32_t stream;
-    int32_t n, a, coarse;
+    int32_t n, n_prev, a, coarse;
     float sigma, mean;
     int32_t off_r[24];
     int32_t off_c[24];
@@ -44,7 +44,7 @@ typedef struct gpu_unmix {
     int32_t w, h;
 } gpu_unmix;
 
-_Static_assert(sizeof(gpu_task) == 356, "gpu_task must match synth_task.glsl");
+_Static_assert(sizeof(gpu_task) == 360, "gpu_task must match synth_task.glsl");
 _Static_assert(sizeof(gpu_unmix) == 72, "gpu_unmix must match synth_task.glsl");
 _Static_assert(BTF_CAR_MAX_NEIGHBOURS == 24, "synth_task.glsl holds 24 offsets");
 
@@ -144,8 +144,8 @@ static int wavefront_slope(const btf_car_band *b)
 }
 
 /* A task record for one field; offsets ordered as btf_shared.h sums them:
- * earlier rows first, then the same row, each in stored order. The rows
- * (fy0, rb, fh, y0, h) are set per strip. */
+ * earlier rows first in stored order, then the same row from the farthest
+ * column to the nearest. The rows (fy0, rb, fh, y0, h) are set per strip. */
 static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x0, int x1)
 {
     memset(t, 0, sizeof *t);
@@ -155,15 +155,21 @@ static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x
     t->sigma = b->sigma, t->mean = b->mean;
     t->a = wavefront_slope(b);
     t->coarse = -1;
-    int k = 0;
-    for (int pass = 0; pass < 2; pass++)
-        for (int s = 0; s < b->n; s++)
-            if ((b->offsets[s].row != 0) == (pass == 0)) {
-                t->off_r[k] = b->offsets[s].row;
-                t->off_c[k] = b->offsets[s].col;
-                t->gamma[k] = b->gamma[s];
-                k++;
-            }
+    int k = 0, same[BTF_CAR_MAX_NEIGHBOURS];
+    for (int s = 0; s < b->n; s++)
+        if (b->offsets[s].row != 0) {
+            t->off_r[k] = b->offsets[s].row;
+            t->off_c[k] = b->offsets[s].col;
+            t->gamma[k] = b->gamma[s];
+            k++;
+        }
+    t->n_prev = k;
+    int nsame = btf_car_same_row_order(b, same);
+    for (int i = 0; i < nsame; i++, k++) {
+        t->off_r[k] = 0;
+        t->off_c[k] = b->offsets[same[i]].col;
+        t->gamma[k] = b->gamma[same[i]];
+    }
     t->n = k;
 }
 

@@ -3,7 +3,9 @@
 // members only, so both sides agree on the layout without padding rules.
 
 // One CAR field: (subspace, band, level). Offsets are pre-ordered by the
-// host: earlier rows first, then the same row (btf_shared.h's sum order).
+// host in btf_shared.h's sum order: earlier rows first (stored order), then
+// the same row from the farthest column to the nearest; the noise term is
+// added between the two groups.
 struct Task {
     int fx0, fy0, fw, fh;     // absolute column of the buffer's column 0 and row of its
                               // row 0; buffer width and rows (a strip of the field)
@@ -14,6 +16,7 @@ struct Task {
     uint field_off, g_off;    // offsets (floats) into Fields[] and Gauss[]
     uint stream;              // noise stream (subspace, band, level)
     int n;                    // neighbours
+    int n_prev;               // of which the first n_prev are on earlier rows
     int a;                    // wavefront slope: pixel (r, c) is ready at a r + c
     int coarse;               // the task of level + 1 of the same band, or -1
     float sigma, mean;

@@ -64,6 +64,11 @@ int btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid 
 int btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err);
 void btf_pyramid_free(btf_pyramid *p);
 
+/* Synthesis (src/synth.c): the indices of a band's same-row offsets in the
+ * order btf_shared.h adds them (farthest column first); returns their count.
+ * Shared with the GPU host code, which orders the shader's offsets so. */
+int btf_car_same_row_order(const btf_car_band *b, int *idx);
+
 /* Tab-separated manifests: src/tsv.c */
 typedef struct btf_tsv {
     char *text;          /* the file, split in place */

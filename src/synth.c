@@ -65,6 +65,12 @@ static float *ring_row(level_gen *g, int r)
 /* The Gaussians of one field row, in a loop of its own: the generator is
  * half the cost of synthesis, and a plain loop over blocks lets the compiler
  * vectorise it. Column c uses component c & 3 of block c >> 2. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+/* Compiled twice, for plain x86-64 and for AVX2 (8 lanes instead of 4), the
+ * choice made once at load time. AVX2 brings no FMA here (and the build
+ * forbids contraction), so both give the same bits. */
+__attribute__((target_clones("avx2", "default")))
+#endif
 static void noise_row(const level_gen *g, uint32_t seed_lo, uint32_t seed_hi, uint32_t urow,
                       float *e)
 {
@@ -81,12 +87,31 @@ static void noise_row(const level_gen *g, uint32_t seed_lo, uint32_t seed_hi, ui
     }
 }
 
+/* The same-row offsets of a band, farthest first (column -3 before -2
+ * before -1): the order btf_shared.h adds them in. */
+int btf_car_same_row_order(const btf_car_band *b, int *idx)
+{
+    int n = 0;
+    for (int s = 0; s < b->n; s++)
+        if (b->offsets[s].row == 0)
+            idx[n++] = s;
+    for (int i = 1; i < n; i++) /* insertion sort by column, ascending; stable */
+        for (int j = i; j > 0 && b->offsets[idx[j]].col < b->offsets[idx[j - 1]].col; j--) {
+            int t = idx[j];
+            idx[j] = idx[j - 1];
+            idx[j - 1] = t;
+        }
+    return n;
+}
+
 /* The next row of the level's CAR field (zero-mean), by the recursion
- * Y_r = sum_s gamma_s Y_{r+s} + sigma e_r. The sum runs over the offsets of
- * earlier rows first, then those of the same row, each group in stored order
- * (btf_car_order in btf_shared.h; the GPU sums in the same order). The first
- * group reads only finished rows, so it runs as independent per-pixel chains
- * the compiler vectorises; only the same-row terms are sequential. */
+ * Y_r = sum_s gamma_s Y_{r+s} + sigma e_r, summed in the order of
+ * btf_shared.h (the GPU sums the same way): the offsets of earlier rows in
+ * stored order, then the noise, then the same-row offsets farthest first.
+ * Everything up to the noise reads finished rows only, so it runs as
+ * independent per-pixel chains the compiler vectorises; only the same-row
+ * terms are sequential, and with the nearest neighbour last the dependency
+ * from one pixel to the next is a single multiply and add. */
 static void field_step(level_gen *g, uint32_t seed_lo, uint32_t seed_hi)
 {
     int r = g->next++;
@@ -100,23 +125,60 @@ static void field_step(level_gen *g, uint32_t seed_lo, uint32_t seed_hi)
     int fw = g->fw;
     for (int i = 0; i < fw; i++)
         acc[i] = 0.0f;
-    int same[BTF_CAR_MAX_NEIGHBOURS], nsame = 0;
     for (int s = 0; s < b->n; s++) {
-        if (b->offsets[s].row == 0) {
-            same[nsame++] = s;
+        if (b->offsets[s].row == 0)
             continue;
-        }
         const float *src = ring_row(g, r + b->offsets[s].row) + b->offsets[s].col;
         float gs = b->gamma[s];
         for (int i = 0; i < fw; i++)
             acc[i] = btf_car_accumulate(acc[i], gs, src[i]);
     }
     float sigma = b->sigma;
-    for (int i = 0; i < fw; i++) {
-        float a = acc[i];
-        for (int k = 0; k < nsame; k++)
-            a = btf_car_accumulate(a, b->gamma[same[k]], out[i + b->offsets[same[k]].col]);
-        out[i] = btf_car_output(a, sigma, e[i]);
+    for (int i = 0; i < fw; i++)
+        acc[i] = btf_car_output(acc[i], sigma, e[i]);
+    int same[BTF_CAR_MAX_NEIGHBOURS];
+    int nsame = btf_car_same_row_order(b, same);
+    if (nsame == 0) {
+        memcpy(out, acc, (size_t)fw * sizeof(float));
+        return;
+    }
+    float gam[BTF_CAR_MAX_NEIGHBOURS];
+    int col[BTF_CAR_MAX_NEIGHBOURS];
+    for (int k = 0; k < nsame; k++) {
+        gam[k] = b->gamma[same[k]];
+        col[k] = b->offsets[same[k]].col;
+    }
+    /* The sequential part. For the family's same-row neighbours (columns
+     * -1; -2, -1; -3, -2, -1) the last values stay in registers, so one
+     * pixel waits on the previous one for a single multiply and add; any
+     * other set takes the general loop. Same operations either way. */
+    if (nsame == 1 && col[0] == -1) {
+        float y1 = out[-1];
+        for (int i = 0; i < fw; i++)
+            out[i] = y1 = btf_car_accumulate(acc[i], gam[0], y1);
+    } else if (nsame == 2 && col[0] == -2 && col[1] == -1) {
+        float y2 = out[-2], y1 = out[-1];
+        for (int i = 0; i < fw; i++) {
+            float v = btf_car_accumulate(btf_car_accumulate(acc[i], gam[0], y2), gam[1], y1);
+            y2 = y1;
+            out[i] = y1 = v;
+        }
+    } else if (nsame == 3 && col[0] == -3 && col[1] == -2 && col[2] == -1) {
+        float y3 = out[-3], y2 = out[-2], y1 = out[-1];
+        for (int i = 0; i < fw; i++) {
+            float v = btf_car_accumulate(
+                btf_car_accumulate(btf_car_accumulate(acc[i], gam[0], y3), gam[1], y2), gam[2], y1);
+            y3 = y2;
+            y2 = y1;
+            out[i] = y1 = v;
+        }
+    } else {
+        for (int i = 0; i < fw; i++) {
+            float a = acc[i];
+            for (int k = 0; k < nsame; k++)
+                a = btf_car_accumulate(a, gam[k], out[i + col[k]]);
+            out[i] = a;
+        }
     }
 }
 

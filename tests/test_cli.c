@@ -173,6 +173,25 @@ static void info_names_truncated_jpeg(void **state)
     free(err);
 }
 
+static void bad_model_files(void **state)
+{
+    (void)state;
+    char bad[4096];
+    snprintf(bad, sizeof bad, "%s/bad.btfcar", tu_dir);
+    tu_write_file(bad, "path\tjunk\nnot a model\n", 22);
+    const char *cmds[] = {"info %s", "synthesise %s --size 4x4 -o %s.out"};
+    for (int i = 0; i < 2; i++) {
+        char *err = NULL;
+        assert_int_equal(tu_run(tu_fmt(tu_fmt("%%s %s", cmds[i]), tu_cli(), bad, bad), &err), 1);
+        assert_non_null(strstr(err, bad));
+        assert_non_null(strstr(err, "not a btfcar model"));
+        assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+        free(err);
+    }
+    struct stat st;
+    assert_int_not_equal(stat(tu_fmt("%s.out/subspace_00.exr", bad), &st), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -181,6 +200,7 @@ int main(void)
         cmocka_unit_test(generate_is_deterministic),
         cmocka_unit_test(generate_errors),
         cmocka_unit_test(info_names_truncated_jpeg),
+        cmocka_unit_test(bad_model_files),
     };
     return cmocka_run_group_tests_name("cli", tests, tu_setup_dir, tu_teardown_dir);
 }

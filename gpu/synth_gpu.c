@@ -556,6 +556,10 @@ int btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int
         rc = plan_batch(m, subspaces + start, n - start, width, height, limit, &bt, err);
         if (rc == 0)
             rc = run_batch(g, &bt, seed, outs + start, err);
+        for (int j = 0; rc == 0 && j < bt.n; j++)
+            for (int y = 0; rc == 0 && y < height; y++)
+                rc = btf_check_finite_row(outs[start + j].data + (size_t)y * width * 3,
+                                          (size_t)width * 3, subspaces[start + j], y, err);
         start += bt.n;
         batch_free(&bt);
     }

@@ -68,6 +68,10 @@ void btf_pyramid_free(btf_pyramid *p);
  * order btf_shared.h adds them (farthest column first); returns their count.
  * Shared with the GPU host code, which orders the shader's offsets so. */
 int btf_car_same_row_order(const btf_car_band *b, int *idx);
+/* BTF_E_NUMERIC naming the subspace and row if any of n values is not
+ * finite: no synthesis hands out Inf or NaN (a model fitted to values near
+ * the float limit can overflow); both backends check their output with it. */
+int btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err);
 
 /* Tab-separated manifests: src/tsv.c */
 typedef struct btf_tsv {

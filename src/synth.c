@@ -23,6 +23,7 @@
 
 #include "btf_shared.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -316,6 +317,16 @@ static int band_init(band_gen *bg, const btf_car_band *bands, int levels, int su
     return BTF_OK;
 }
 
+int btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i]))
+            return btf_fail(err, BTF_E_NUMERIC,
+                            "synthesis of subspace %d overflowed the float range at row %d "
+                            "(the model's values are too large for float images)", subspace, y);
+    return BTF_OK;
+}
+
 static int check_size(int width, int height, btf_error *err)
 {
     if (width < 1 || height < 1 || width > BTF_SYNTH_MAX_SIDE || height > BTF_SYNTH_MAX_SIDE)
@@ -368,7 +379,9 @@ int btf_synthesise(const btf_model *m, int subspace, int width, int height, uint
             for (int k = 0; k < 3; k++)
                 row[3 * x + k] = btf_unmix(sm->mean[k], sm->basis[k], sm->basis[3 + k],
                                            sm->basis[6 + k], b0[x], b1[x], b2[x]);
-        rc = fn(user, y, 1, row, err);
+        rc = btf_check_finite_row(row, (size_t)width * 3, subspace, y, err);
+        if (rc == 0)
+            rc = fn(user, y, 1, row, err);
         if (rc && err && !err->msg[0])
             btf_fail(err, rc, "synthesis stopped by its consumer");
     }

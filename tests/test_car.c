@@ -412,6 +412,51 @@ static void synthesis_sizes_and_seeds(void **state)
     btf_image_free(&tex);
 }
 
+/* Images near 0 and near the float limit: finite parameters always; a
+ * synthesis either gives finite pixels or refuses with BTF_E_NUMERIC (values
+ * at 3e38 overflow float when the noise adds its tails), never Inf or NaN. */
+static void extreme_image_values(void **state)
+{
+    (void)state;
+    const float scales[] = {1e-38f, 1e-30f, 1e30f, 1e37f, 3e38f};
+    for (int s = 0; s < 5; s++) {
+        btf_error e = {0};
+        btf_image img;
+        TU_OK(btf_image_alloc(&img, 64, 64, 3, &e), &e);
+        for (int i = 0; i < 64 * 64 * 3; i++)
+            img.data[i] = scales[s] * ((float)((i * 7919) % 101) / 100.0f);
+        btf_model m;
+        btf_fit_opts fo = {.levels = 2};
+        TU_OK(btf_texture_fit(&img, &fo, &m, &e), &e);
+        const btf_subspace_model *sm = &m.subspaces[0];
+        for (int b = 0; b < 3; b++)
+            for (int l = 0; l < sm->levels; l++) {
+                const btf_car_band *cb = &sm->bands[b][l];
+                assert_true(isfinite(cb->sigma) && isfinite(cb->mean));
+                for (int k = 0; k < cb->n; k++)
+                    assert_true(isfinite(cb->gamma[k]));
+            }
+        unsigned char *bytes;
+        size_t n;
+        TU_OK(btf_model_encode(&m, &bytes, &n, &e), &e); /* the file accepts it */
+        free(bytes);
+        btf_image out;
+        int rc = btf_synthesise_image(&m, 0, 96, 80, 1, &out, &e);
+        if (scales[s] < 1e38f) {
+            TU_OK(rc, &e);
+            for (int i = 0; i < 96 * 80 * 3; i++)
+                assert_true(isfinite(out.data[i]));
+            btf_image_free(&out);
+        } else {
+            assert_int_equal(rc, BTF_E_NUMERIC);
+            assert_non_null(strstr(e.msg, "overflowed"));
+            assert_null(out.data);
+        }
+        btf_model_free(&m);
+        btf_image_free(&img);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -423,6 +468,7 @@ int main(void)
         cmocka_unit_test(degenerate_bands),
         cmocka_unit_test(stability_check),
         cmocka_unit_test(synthesis_sizes_and_seeds),
+        cmocka_unit_test(extreme_image_values),
     };
     return cmocka_run_group_tests_name("car", tests, NULL, NULL);
 }

@@ -190,6 +190,18 @@ static void bad_requests(void **state)
     int bad = 3, ok = 0;
     assert_int_equal(btf_gpu_synthesise(gpu, &m, &bad, 1, 8, 8, 1, out, &e), BTF_E_ARG);
     assert_int_equal(btf_gpu_synthesise(gpu, &m, &ok, 1, 0, 8, 1, out, &e), BTF_E_ARG);
+    /* A model of values near the float limit overflows: refused, as on the
+     * CPU, never handed out as Inf or NaN. */
+    btf_image big;
+    TU_OK(btf_image_alloc(&big, 32, 32, 3, &e), &e);
+    for (int i = 0; i < 32 * 32 * 3; i++)
+        big.data[i] = 3e38f * ((float)((i * 7919) % 101) / 100.0f);
+    btf_model huge;
+    TU_OK(btf_texture_fit(&big, NULL, &huge, &e), &e);
+    assert_int_equal(btf_gpu_synthesise(gpu, &huge, &ok, 1, 40, 40, 1, out, &e), BTF_E_NUMERIC);
+    assert_null(out[0].data);
+    btf_model_free(&huge);
+    btf_image_free(&big);
     no_validation_messages();
     btf_model_free(&m);
 }

@@ -12,11 +12,11 @@ static const struct {
     const char *summary;
 } commands[] = {
     {"generate", cmd_generate, "write a procedural BTF (81 x 81 images) in the UBO2003 layout"},
-    {"info", cmd_info, "describe a BTF dataset (layout, images, directions, size)"},
+    {"info", cmd_info, "describe a dataset, a model file, or the Vulkan devices"},
+    {"analyse", cmd_analyse, "analyse a dataset into a model file (or one stage: --stage segment)"},
     {"photostereo", cmd_photostereo, "normals, albedo and range map by robust photometric stereo"},
     {"texture-fit", cmd_texture_fit, "model one colour texture with the multi-scale 2D CAR model"},
-    {"synthesise", cmd_synthesise, "generate subspace images of a model at any size"},
-    {"analyse", cmd_analyse, "analyse a dataset (stage segment: subspace images, index table)"},
+    {"synthesise", cmd_synthesise, "generate subspace images of a model at any size (CPU or GPU)"},
 };
 
 static void usage(FILE *f)
@@ -24,7 +24,7 @@ static void usage(FILE *f)
     fprintf(f, "usage: btfcar COMMAND [OPTIONS] ...\n\n"
                "Probabilistic modelling of Bidirectional Texture Functions.\n\ncommands:\n");
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(f, "  %-10s %s\n", commands[i].name, commands[i].summary);
+        fprintf(f, "  %-12s %s\n", commands[i].name, commands[i].summary);
     fprintf(f, "\n'btfcar COMMAND --help' describes a command; 'btfcar --version' prints the version.\n");
 }
 

@@ -25,6 +25,8 @@ static void help(void)
            "  --stage segment    stop after the segmentation\n"
            "  --levels L|auto    pyramid levels (auto: from size and correlation length, <= 3)\n"
            "  --neighbourhood SPEC|auto  causal offsets row:col,...; auto: Bayesian choice\n"
+           "  --max-neighbours N   auto: the largest candidate considered, 1..14 (default 14;\n"
+           "                       the paper's models have fewer than 4)\n"
            "  --no-range         leave the range map out of the model\n"
            "  --range-size N     side of the range tile kept in the model (default 64)\n"
            "  --subspaces K|auto number of subspace images, 1..255; auto (default) takes\n"

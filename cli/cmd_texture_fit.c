@@ -18,6 +18,8 @@ static void help(void)
            "  --neighbourhood SPEC causal offsets row:col, comma-separated, e.g.\n"
            "                       0:-1,-1:0,-1:-1,-1:1; auto (default) chooses per sub-band\n"
            "                       by the posterior probability of each candidate model\n"
+           "  --max-neighbours N   auto: the largest candidate considered, 1..14 (default 14;\n"
+           "                       the paper's models have fewer than 4)\n"
            "  --quiet              print nothing but errors\n", BTF_MAX_LEVELS);
 }
 

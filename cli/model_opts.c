@@ -1,5 +1,5 @@
 /* model_opts.c — the model options shared by analyse and texture-fit:
- * --levels L|auto and --neighbourhood SPEC|auto. */
+ * --levels L|auto, --neighbourhood SPEC|auto and --max-neighbours N. */
 #include "cli.h"
 
 #include <string.h>
@@ -8,6 +8,7 @@ int cli_model_option(const cli_ctx *c, int argc, char **argv, int *i, btf_fit_op
 {
     const char *a = argv[*i];
     const char *v = *i + 1 < argc ? argv[*i + 1] : NULL;
+    *rc = 0;
     if (!strcmp(a, "--levels")) {
         long n;
         if (!v)
@@ -18,6 +19,14 @@ int cli_model_option(const cli_ctx *c, int argc, char **argv, int *i, btf_fit_op
             return *rc = cli_usage_error(c, "--levels needs 1..%d or auto", BTF_MAX_LEVELS), 1;
         else
             fo->levels = (int)n;
+        (*i)++;
+        return 1;
+    }
+    if (!strcmp(a, "--max-neighbours")) {
+        long n;
+        if (!v || cli_parse_int(v, 1, 14, &n))
+            return *rc = cli_usage_error(c, "--max-neighbours needs a whole number 1..14"), 1;
+        fo->car.max_neighbours = (int)n;
         (*i)++;
         return 1;
     }

@@ -192,6 +192,48 @@ static void bad_model_files(void **state)
     assert_int_not_equal(stat(tu_fmt("%s.out/subspace_00.exr", bad), &st), 0);
 }
 
+/* texture-fit's model options reach the model (--levels, --neighbourhood,
+ * --max-neighbours), and synthesise regenerates it. */
+static void texture_fit_options(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_material mat;
+    btf_image img;
+    TU_OK(btf_material_make("leather", 48, 2, &mat, &e), &e);
+    TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){30, 0}, &img, &e), &e);
+    btf_material_free(&mat);
+    char png[4096], model[4096];
+    snprintf(png, sizeof png, "%s/tex.png", tu_dir);
+    snprintf(model, sizeof model, "%s/tex.btfcar", tu_dir);
+    TU_OK(btf_image_write_png(png, &img, &e), &e);
+    btf_image_free(&img);
+    const char *opts[] = {"--levels 2 --max-neighbours 3", "--levels 1 --neighbourhood 0:-1,-1:0"};
+    const int want_levels[] = {2, 1};
+    for (int i = 0; i < 2; i++) {
+        char *err = NULL;
+        int rc = tu_run(tu_fmt("%s texture-fit -q %s -o %s %s", tu_cli(), png, model, opts[i]), &err);
+        if (rc)
+            print_error("%s\n", err);
+        assert_int_equal(rc, 0);
+        free(err);
+        btf_model m;
+        TU_OK(btf_model_read(model, &m, &e), &e);
+        assert_int_equal(m.subspaces[0].levels, want_levels[i]);
+        for (int b = 0; b < 3; b++)
+            for (int l = 0; l < m.subspaces[0].levels; l++)
+                assert_true(i == 0 ? m.subspaces[0].bands[b][l].n <= 3
+                                   : m.subspaces[0].bands[b][l].n == 2);
+        btf_model_free(&m);
+        assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s --size 20x10 --backend cpu -o %s.syn",
+                                       tu_cli(), model, model), NULL), 0);
+    }
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit %s -o %s --max-neighbours 0", tu_cli(), png,
+                                   model), &err), 2);
+    free(err);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -201,6 +243,7 @@ int main(void)
         cmocka_unit_test(generate_errors),
         cmocka_unit_test(info_names_truncated_jpeg),
         cmocka_unit_test(bad_model_files),
+        cmocka_unit_test(texture_fit_options),
     };
     return cmocka_run_group_tests_name("cli", tests, tu_setup_dir, tu_teardown_dir);
 }

@@ -29,6 +29,13 @@
  * nearest neighbour comes last so that on the CPU one pixel waits on the
  * previous one for a single multiply and add. */
 
+/* GPU work per invocation is bounded: lavapipe silently ends an invocation
+ * after some 13,000 iterations of an inner loop. Pixel loops cover at most
+ * BTF_GPU_CHUNK pixels per workgroup of 64 (2,048 iterations); the wavefront
+ * runs at most BTF_GPU_LOOP_BUDGET pixel iterations per dispatch. */
+#define BTF_GPU_CHUNK 131072
+#define BTF_GPU_LOOP_BUDGET 4096
+
 /* One step of the neighbourhood sum: acc + gamma * y. */
 BTF_FN float btf_car_accumulate(float acc, float gamma, float y)
 {

@@ -17,6 +17,8 @@ layout(std430, set = 0, binding = 0) readonly buffer Tasks { Task tasks[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Fields { float fields[]; };
 layout(std430, set = 0, binding = 2) buffer Gauss { float gauss[]; };
 
+// Each workgroup (x: the field, y: a chunk of BTF_GPU_CHUNK pixels) loops at
+// most BTF_GPU_CHUNK / 64 times: lavapipe silently stops longer loops.
 layout(push_constant) uniform Params {
     uint task_base;
 } pc;
@@ -41,7 +43,9 @@ void main()
     uint t = pc.task_base + gl_WorkGroupID.x;
     int w = tasks[t].w, h = tasks[t].h, ct = tasks[t].coarse;
     uint count = uint(w) * uint(h);
-    for (uint p = gl_LocalInvocationID.x; p < count; p += 64u) {
+    uint p_end = min(count, (gl_WorkGroupID.y + 1u) * uint(BTF_GPU_CHUNK));
+    for (uint p = gl_WorkGroupID.y * uint(BTF_GPU_CHUNK) + gl_LocalInvocationID.x; p < p_end;
+         p += 64u) {
         int x = tasks[t].x0 + int(p % uint(w)), y = tasks[t].y0 + int(p / uint(w));
         float f = fields[tasks[t].field_off +
                          uint((y - tasks[t].fy0) * tasks[t].fw + (x - tasks[t].fx0))];

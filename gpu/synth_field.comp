@@ -20,8 +20,13 @@ layout(local_size_x = 64) in;
 layout(std430, set = 0, binding = 0) readonly buffer Tasks { Task tasks[]; };
 layout(std430, set = 0, binding = 1) coherent buffer Fields { float fields[]; };
 
+// lavapipe ends a shader invocation after 65,535 loop iterations in all,
+// silently (the rows beyond came out unwritten), so the host runs the
+// wavefront in chunks of steps [s0, s1), one dispatch each; the field buffer
+// carries the state between them.
 layout(push_constant) uniform Params {
     uint seed_lo, seed_hi;
+    int s0, s1;               // wavefront steps of this dispatch
     uint task_base;           // dispatches of more than 65535 fields are split
 } pc;
 
@@ -38,7 +43,7 @@ void main()
     int rows = tasks[t].fh - rb; // rows to compute, from buffer row rb
     uint base = tasks[t].field_off;
     int steps = rows > 0 ? a * (rows - 1) + fw : 0;
-    for (int s = 0; s < steps; s++) {
+    for (int s = pc.s0; s < min(steps, pc.s1); s++) {
         // Rows rb + q with c = s - a q inside [0, fw).
         int qlo = (s - fw + 1 > 0) ? (s - fw + a) / a : 0;
         int qhi = min(rows - 1, s / a);

@@ -69,8 +69,8 @@ int btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err)
                       .validation = o.validation};
     int rc = btf_vk_create(&vo, &g->vk, err);
     if (rc == 0)
-        rc = btf_vk_pipeline_create(g->vk, synth_field_spv, sizeof synth_field_spv, 2, 12, NULL, 0,
-                                    &g->field, err);
+        rc = btf_vk_pipeline_create(g->vk, synth_field_spv, sizeof synth_field_spv, 2, 20, NULL, 0,
+                                    &g->field, err); /* push: seed, s0, s1, task_base */
     if (rc == 0)
         rc = btf_vk_pipeline_create(g->vk, synth_collapse_spv, sizeof synth_collapse_spv, 3, 4,
                                     NULL, 0, &g->collapse, err);
@@ -339,22 +339,71 @@ static uint64_t batch_need(const batch *bt)
     return 4 * need;
 }
 
-/* Dispatches `count` workgroups from `base`, split at the device's limit. */
+/* Dispatches `count` x gy workgroups from `base`, split at the device's
+ * limit along x. */
 static int dispatch_range(btf_gpu *g, btf_vk_job *job, const btf_vk_pipeline *pipe,
                           btf_vk_buffer *const *bufs, int nbufs, uint32_t *push, int push_words,
-                          uint32_t base, uint32_t count, btf_error *err)
+                          uint32_t base, uint32_t count, uint32_t gy, btf_error *err)
 {
-    uint32_t limit = btf_vk_info(g->vk)->max_workgroup_count[0];
+    const btf_vk_device_info *in = btf_vk_info(g->vk);
+    uint32_t limit = in->max_workgroup_count[0];
+    if (gy > in->max_workgroup_count[1])
+        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis needs %u workgroups along y, more "
+                        "than the device's %u; use the CPU backend", gy,
+                        in->max_workgroup_count[1]);
     while (count > 0) {
         uint32_t k = count < limit ? count : limit;
         push[push_words - 1] = base; /* the base is the last push word */
-        int rc = btf_vk_job_dispatch(job, pipe, bufs, nbufs, push, 4u * push_words, k, 1, 1, err);
+        int rc = btf_vk_job_dispatch(job, pipe, bufs, nbufs, push, 4u * push_words, k, gy, 1, err);
         if (rc)
             return rc;
         base += k;
         count -= k;
     }
     return BTF_OK;
+}
+
+/* Workgroups along y that cover `pixels` in chunks of BTF_GPU_CHUNK. */
+static uint32_t chunks(uint64_t pixels)
+{
+    uint64_t c = (pixels + BTF_GPU_CHUNK - 1) / BTF_GPU_CHUNK;
+    return c ? (uint32_t)(c > 0xFFFFFFFFu ? 0xFFFFFFFFu : c) : 1;
+}
+
+/* The wavefront of a strip in dispatches of a bounded number of steps:
+ * lavapipe ends a shader invocation after 65,535 loop iterations in all (its
+ * loop limiter is shared by every loop), silently. A step costs an
+ * invocation 1 + q (2 + n) iterations, q = ceil(active pixels / 64), n the
+ * neighbours; each dispatch stays within half the limit. */
+static int dispatch_wavefront(btf_gpu *g, btf_vk_job *job, const batch *bt, uint64_t seed,
+                              btf_vk_buffer *const *bufs, btf_error *err)
+{
+    int64_t steps = 0, per_step = 1;
+    for (int i = 0; i < bt->ntasks; i++) {
+        const gpu_task *t = &bt->tasks[i];
+        int rows = t->fh - t->rb;
+        if (rows <= 0)
+            continue;
+        int64_t st = (int64_t)t->a * (rows - 1) + t->fw;
+        int64_t active = (t->fw + t->a - 1) / t->a;
+        if (active > rows)
+            active = rows;
+        int64_t cost = 1 + ((active + 63) / 64) * (2 + t->n);
+        if (st > steps)
+            steps = st;
+        if (cost > per_step)
+            per_step = cost;
+    }
+    int64_t chunk = BTF_GPU_LOOP_BUDGET * 8 / per_step;
+    if (chunk < 1)
+        chunk = 1;
+    int rc = BTF_OK;
+    for (int64_t s0 = 0; rc == 0 && s0 < steps; s0 += chunk) {
+        int64_t s1 = s0 + chunk < steps ? s0 + chunk : steps;
+        uint32_t push[5] = {(uint32_t)seed, (uint32_t)(seed >> 32), (uint32_t)s0, (uint32_t)s1, 0};
+        rc = dispatch_range(g, job, g->field, bufs, 2, push, 5, 0, (uint32_t)bt->ntasks, 1, err);
+    }
+    return rc;
 }
 
 typedef struct batch_buffers {
@@ -437,23 +486,28 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
         rc = btf_vk_job_fill(job, b->fields, 0, 4 * bt->field_floats, 0, err);
     if (rc == 0 && !first)
         rc = record_carry(job, bt, b, keep, keep + bt->ntasks, err);
-    uint32_t fpush[3] = {(uint32_t)seed, (uint32_t)(seed >> 32), 0};
     btf_vk_buffer *fb[2] = {b->tasks, b->fields};
     if (rc == 0)
-        rc = dispatch_range(g, job, g->field, fb, 2, fpush, 3, 0, (uint32_t)bt->ntasks, err);
+        rc = dispatch_wavefront(g, job, bt, seed, fb, err);
     btf_vk_buffer *cb[3] = {b->tasks, b->fields, b->gauss};
     int levels = 0;
     while (levels < BTF_MAX_LEVELS && bt->level_start[levels + 1] > bt->level_start[levels])
         levels++;
     for (int l = levels - 1; rc == 0 && l >= 0; l--) {
         uint32_t cpush[1];
+        uint64_t most = 0;
+        for (int i = bt->level_start[l]; i < bt->level_start[l + 1]; i++)
+            if ((uint64_t)bt->tasks[i].w * bt->tasks[i].h > most)
+                most = (uint64_t)bt->tasks[i].w * bt->tasks[i].h;
         rc = dispatch_range(g, job, g->collapse, cb, 3, cpush, 1, (uint32_t)bt->level_start[l],
-                            (uint32_t)(bt->level_start[l + 1] - bt->level_start[l]), err);
+                            (uint32_t)(bt->level_start[l + 1] - bt->level_start[l]), chunks(most),
+                            err);
     }
     btf_vk_buffer *ub[3] = {b->unmix, b->gauss, b->out};
     uint32_t upush[1];
     if (rc == 0)
-        rc = dispatch_range(g, job, g->unmix, ub, 3, upush, 1, 0, (uint32_t)bt->n, err);
+        rc = dispatch_range(g, job, g->unmix, ub, 3, upush, 1, 0, (uint32_t)bt->n,
+                            chunks((uint64_t)bt->w * (y1 - y0)), err);
     if (rc == 0) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;

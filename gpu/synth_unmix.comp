@@ -14,6 +14,7 @@ layout(std430, set = 0, binding = 0) readonly buffer Unmixes { Unmix jobs[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Gauss { float gauss[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer Out { float rgb[]; };
 
+// x: the image, y: a chunk of BTF_GPU_CHUNK pixels (see synth_collapse.comp).
 layout(push_constant) uniform Params {
     uint job_base;
 } pc;
@@ -22,7 +23,9 @@ void main()
 {
     uint j = pc.job_base + gl_WorkGroupID.x;
     uint count = uint(jobs[j].w) * uint(jobs[j].h);
-    for (uint p = gl_LocalInvocationID.x; p < count; p += 64u) {
+    uint p_end = min(count, (gl_WorkGroupID.y + 1u) * uint(BTF_GPU_CHUNK));
+    for (uint p = gl_WorkGroupID.y * uint(BTF_GPU_CHUNK) + gl_LocalInvocationID.x; p < p_end;
+         p += 64u) {
         float b0 = gauss[jobs[j].g_off[0] + p];
         float b1 = gauss[jobs[j].g_off[1] + p];
         float b2 = gauss[jobs[j].g_off[2] + p];

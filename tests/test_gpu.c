@@ -136,6 +136,24 @@ static void parity_several_subspaces(void **state)
     btf_model_free(&c);
 }
 
+/* lavapipe ends a shader invocation after 65,535 loop iterations, silently:
+ * tall, wide and far-reaching cases must still match (the wavefront and the
+ * pixel loops are cut into bounded dispatches). Before that fix, 64 x 3000
+ * lost its last 375 rows and 4000 x 100 nearly everything. */
+static void parity_long_loops(void **state)
+{
+    (void)state;
+    btf_model m;
+    fit(&m, 2, "0:-1,-1:0,-1:-1,-1:1");
+    compare(&m, 64, 3000, 3);
+    compare(&m, 4000, 100, 4);
+    compare(&m, 1, 5000, 5);
+    btf_model_free(&m);
+    fit(&m, 1, "0:-1,-1:64"); /* wavefront slope 65 */
+    compare(&m, 150, 130, 6);
+    btf_model_free(&m);
+}
+
 /* Buffers beyond the device's limit: a lower limit forces batches of fewer
  * images and strips of rows carried from one to the next; the output must
  * not change by a bit. */
@@ -248,6 +266,7 @@ int main(void)
         cmocka_unit_test(parity_auto_model),
         cmocka_unit_test(parity_fixed_neighbourhoods),
         cmocka_unit_test(parity_several_subspaces),
+        cmocka_unit_test(parity_long_loops),
         cmocka_unit_test(parity_when_tiled),
         cmocka_unit_test(bad_requests),
         cmocka_unit_test(cli_backends_agree),

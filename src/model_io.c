@@ -345,6 +345,12 @@ static int check_band(const btf_car_band *b, const char *where, const char *name
             return failf(err, code, name,
                          "%s: neighbour offset %d:%d is not causal (expected row < 0, or row 0 "
                          "and column < 0)", where, o.row, o.col);
+        /* The neighbourhood parser's limit: reaches beyond 64 would make
+         * the GPU wavefront needlessly long (its slope grows with them). */
+        if (o.row < -64 || o.col < -64 || o.col > 64)
+            return failf(err, code, name,
+                         "%s: neighbour offset %d:%d reaches beyond 64 pixels (expected rows and "
+                         "columns within -64..64)", where, o.row, o.col);
         for (int j = 0; j < i; j++)
             if (b->offsets[j].row == o.row && b->offsets[j].col == o.col)
                 return failf(err, code, name,

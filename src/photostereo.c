@@ -438,8 +438,9 @@ static int fit_pixel(const ps_params *P, const double *L, const double *H, int n
         if (cand)
             s->sel[nc++] = v[i];
     }
-    if (P->plain)
-        return fit_set(L, n, v, s->use, P->max_cond, g, &inv);
+    if (P->plain) /* a black pixel gives g = 0: the fallback, not a 0/0 normal */
+        return fit_set(L, n, v, s->use, P->max_cond, g, &inv) &&
+               g[0] * g[0] + g[1] * g[1] + g[2] * g[2] > 0.0;
     if (nc < 3 || first_set(P, n, v, nc, s) < 3)
         return 0;
     if (!fit_set(L, n, v, s->use, P->max_cond, g, &inv)) {

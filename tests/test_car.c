@@ -457,6 +457,34 @@ static void extreme_image_values(void **state)
     }
 }
 
+/* The model file takes the parser's reach (|offset| <= 64), not all int8. */
+static void model_offsets_within_64(void **state)
+{
+    (void)state;
+    btf_model m = {0};
+    btf_subspace_model sm = {0};
+    sm.view = sm.light = -1;
+    sm.width = sm.height = 8;
+    sm.levels = 1;
+    sm.basis[0] = sm.basis[4] = sm.basis[8] = 1.0f;
+    m.n_subspaces = 1;
+    m.subspaces = &sm;
+    for (int b = 0; b < 3; b++) {
+        sm.bands[b][0].n = 1;
+        sm.bands[b][0].offsets[0] = (btf_offset){-1, 64};
+        sm.bands[b][0].gamma[0] = 0.1f;
+        sm.bands[b][0].sigma = 1.0f;
+    }
+    unsigned char *bytes;
+    size_t n;
+    btf_error e = {0};
+    TU_OK(btf_model_encode(&m, &bytes, &n, &e), &e);
+    free(bytes);
+    sm.bands[1][0].offsets[0] = (btf_offset){-1, 65};
+    assert_int_equal(btf_model_encode(&m, &bytes, &n, &e), BTF_E_DATA);
+    assert_non_null(strstr(e.msg, "beyond 64"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -469,6 +497,7 @@ int main(void)
         cmocka_unit_test(stability_check),
         cmocka_unit_test(synthesis_sizes_and_seeds),
         cmocka_unit_test(extreme_image_values),
+        cmocka_unit_test(model_offsets_within_64),
     };
     return cmocka_run_group_tests_name("car", tests, NULL, NULL);
 }

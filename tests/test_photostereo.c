@@ -655,6 +655,14 @@ static void dark_saturated_nan(void **state)
         assert_true(r.valid.data[k] == 1.0f);
     }
     assert_true(r.lights_used.data[2] <= n - 5);
+    btf_ps_result_free(&r);
+    /* Plain least squares too: the black pixel takes the fallback (found by
+     * review: it used to get a 0/0 normal). */
+    btf_photostereo_opts plain = {.plain = 1};
+    TU_OK(btf_photostereo(imgs, n, L, NULL, NULL, &plain, &r, &err), &err);
+    result_finite(&r);
+    assert_true(angle_deg(r.normal.data, up) == 0.0);
+    assert_true(r.valid.data[0] == 0.0f);
     free_images(imgs, n);
     btf_ps_result_free(&r);
 }

@@ -53,7 +53,7 @@ int cli_parse_u64(const char *s, uint64_t *out)
     errno = 0;
     if (*s == '-')
         return -1;
-    unsigned long long v = strtoull(s, &end, 0);
+    unsigned long long v = strtoull(s, &end, 10); /* "010" is ten, not eight */
     if (end == s || *end || errno)
         return -1;
     *out = (uint64_t)v;

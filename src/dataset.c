@@ -31,6 +31,8 @@ typedef struct entry_list {
     entry *items;
     int count, cap;
     btf_layout layout;
+    int flat;        /* UBO2003 files in one folder (no tvCCC_pvDDD/) */
+    char ext[8];     /* the first file's extension, for messages */
 } entry_list;
 
 struct btf_dataset {
@@ -135,6 +137,11 @@ static int add_file(entry_list *l, const char *dir, const char *name, const int 
     if (l->layout != BTF_LAYOUT_UNKNOWN && l->layout != kind)
         return btf_fail(err, BTF_E_DATA, "%s: %s file in a %s dataset (mixed layouts)", path,
                         btf_layout_name(kind), btf_layout_name(l->layout));
+    if (l->count == 0) {
+        l->flat = folder_view == NULL;
+        const char *dot = strrchr(name, '.');
+        snprintf(l->ext, sizeof l->ext, "%s", dot ? dot : "");
+    }
     l->layout = kind;
     if (n[0] > 90 || n[2] > 90 || n[1] >= 360 || n[3] >= 360)
         return btf_fail(err, BTF_E_DATA, "%s: direction out of range in the name", path);
@@ -240,12 +247,15 @@ static void expected_name(const btf_dataset *ds, int vi, int li, char *buf, size
     btf_dir v = ds->views.dirs[vi], L = ds->lights.dirs[li];
     int tl = (int)(L.theta + 0.5), pl = (int)(L.phi + 0.5), tv = (int)(v.theta + 0.5),
         pv = (int)(v.phi + 0.5);
+    char folder[32] = "";
+    if (!ds->files.flat)
+        snprintf(folder, sizeof folder, "tv%03d_pv%03d/", tv, pv);
     if (ds->info.layout == BTF_LAYOUT_UBO2003)
-        snprintf(buf, n, "%s/tv%03d_pv%03d/%05d tl%03d pl%03d tv%03d pv%03d.jpg", ds->root, tv, pv,
-                 li * ds->info.n_views + vi, tl, pl, tv, pv);
+        snprintf(buf, n, "%s/%s%05d tl%03d pl%03d tv%03d pv%03d%s", ds->root, folder,
+                 li * ds->info.n_views + vi, tl, pl, tv, pv, ds->files.ext);
     else if (ds->info.layout == BTF_LAYOUT_UTIA)
-        snprintf(buf, n, "%s/tv%03d_pv%03d/tl%03d_pl%03d_tv%03d_pv%03d.png", ds->root, tv, pv, tl,
-                 pl, tv, pv);
+        snprintf(buf, n, "%s/%stl%03d_pl%03d_tv%03d_pv%03d%s", ds->root, folder, tl, pl, tv, pv,
+                 ds->files.ext);
     else
         snprintf(buf, n, "%s", ds->root);
 }
@@ -258,8 +268,10 @@ static int build_table(btf_dataset *ds, const entry_list *l, btf_error *err)
         return BTF_E_NOMEM;
     for (int i = 0; i < l->count; i++) {
         const entry *e = &l->items[i];
-        int vi = btf_dirset_find(&ds->views, e->view, 0.6);
-        int li = btf_dirset_find(&ds->lights, e->light, 0.6);
+        int vi = btf_dirset_find(&ds->views, e->view, BTF_DIR_NAME_TOLERANCE);
+        int li = btf_dirset_find(&ds->lights, e->light, BTF_DIR_NAME_TOLERANCE);
+        if (vi < 0 || li < 0) /* the sets were made from these very entries */
+            return btf_fail(err, BTF_E_DATA, "%s: direction not in the dataset's set", e->path);
         char **slot = &ds->paths[(size_t)vi * nl + li];
         if (*slot) {
             char pair[160];

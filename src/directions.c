@@ -138,7 +138,9 @@ static int cmp_dir(const void *a, const void *b)
 }
 
 /* If the list is a known sampling (with names rounded to whole degrees, as
- * UBO2003 file names are), adopt that set's name and exact values. */
+ * UBO2003 file names are), adopt that set's name and exact values. Rounding
+ * theta and phi by half a degree each moves a direction by up to about
+ * 0.69 degree (ubo151's 23.5 and 7.5 offsets), hence the 0.75 tolerance. */
 static int adopt_known(btf_dirset *set, int (*make)(btf_dirset *, btf_error *), btf_error *err)
 {
     btf_dirset known;
@@ -146,7 +148,7 @@ static int adopt_known(btf_dirset *set, int (*make)(btf_dirset *, btf_error *), 
         return -1;
     int match = known.count == set->count;
     for (int i = 0; match && i < set->count; i++)
-        match = btf_dir_angle(set->dirs[i], known.dirs[i]) <= 0.6;
+        match = btf_dir_angle(set->dirs[i], known.dirs[i]) <= BTF_DIR_NAME_TOLERANCE;
     if (match) {
         free(set->dirs);
         *set = known;

@@ -43,6 +43,10 @@ int btf_path_join(char *out, size_t n, const char *dir, const char *name, btf_er
 /* Number of online CPUs (at least 1). */
 int btf_cpu_count(void);
 
+/* Directions named in whole degrees (file names) match a known set within
+ * this many degrees (src/directions.c, src/dataset.c). */
+#define BTF_DIR_NAME_TOLERANCE 0.75
+
 /* Spectral decorrelation: src/decorrelate.c. Mean colour, orthonormal 3x3
  * basis (rows by decreasing variance) and the band variances. */
 int btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],

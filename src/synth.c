@@ -434,7 +434,9 @@ int btf_car_synthesise_field(const btf_car_band *band, int width, int height, ui
         const float *f = field_row(&g, y, (uint32_t)seed, (uint32_t)(seed >> 32));
         for (int x = 0; x < width; x++)
             row[x] = btf_add_mean(band->mean, f[x]);
-        rc = fn(user, y, 1, row, err);
+        rc = btf_check_finite_row(row, (size_t)width, 0, y, err);
+        if (rc == 0)
+            rc = fn(user, y, 1, row, err);
     }
     free(row);
     free(g.ring);

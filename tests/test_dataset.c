@@ -199,6 +199,21 @@ static void missing_pair(void **state)
     assert_non_null(strstr(e.msg, "missing"));
     tu_rmtree(dir);
     free(dir);
+    /* The expected path follows the dataset: a flat folder has no view
+     * folder, a UTIA dataset of EXR files names an .exr (found by review). */
+    dir = make_ubo(0, 2, 0);
+    assert_int_equal(btf_dataset_open(dir, NULL, &ds, &e), BTF_E_DATA);
+    assert_non_null(strstr(e.msg, tu_fmt("%s/00002 tl000 pl000 tv015 pv060.jpg", dir)));
+    tu_rmtree(dir);
+    free(dir);
+    dir = make_utia("exr");
+    char victim[4096];
+    snprintf(victim, sizeof victim, "%s/tv015_pv060/tl030_pl090_tv015_pv060.exr", dir);
+    remove(victim);
+    assert_int_equal(btf_dataset_open(dir, NULL, &ds, &e), BTF_E_DATA);
+    assert_non_null(strstr(e.msg, victim));
+    tu_rmtree(dir);
+    free(dir);
 }
 
 static void duplicate_pair(void **state)

@@ -104,6 +104,17 @@ static void find_and_custom_lists(void **state)
     for (int i = 0; i < 81; i++)
         assert_true(btf_dir_angle(c.dirs[i], s.dirs[i]) < 1e-9);
     btf_dirset_free(&c);
+    /* UBO2014's dome as whole-degree file names give it (23.5 -> 24, 7.5 -> 8):
+     * still recognised (found by review: 0.6 degree was too tight). */
+    btf_dirset u151;
+    TU_OK(btf_dirset_ubo151(&u151, &e), &e);
+    btf_dir rounded[151];
+    for (int i = 0; i < 151; i++)
+        rounded[i] = (btf_dir){floor(u151.dirs[i].theta + 0.5), floor(u151.dirs[i].phi + 0.5)};
+    TU_OK(btf_dirset_from_list(&c, rounded, 151, &e), &e);
+    assert_string_equal(c.name, "ubo151");
+    btf_dirset_free(&c);
+    btf_dirset_free(&u151);
     /* Duplicates merge; phi is normalised; the order is ring by ring. */
     btf_dir list[] = {{30, 370}, {0, 45}, {30, 10}, {15, -90}, {0, 0}};
     TU_OK(btf_dirset_from_list(&c, list, 5, &e), &e);

@@ -19,6 +19,9 @@ int cli_error(const cli_ctx *c, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 /* Prints the library's error message and returns 1. */
 int cli_lib_error(const cli_ctx *c, const btf_error *err);
+/* Fills a library error record from the CLI (message and code); returns code. */
+int cli_set_error(btf_error *err, int code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
 /* "Usage: ..." hint for a wrong option; returns 2. */
 int cli_usage_error(const cli_ctx *c, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));

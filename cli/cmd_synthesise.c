@@ -13,7 +13,7 @@ static void help(void)
            "Generates subspace images of the model at any size, seamless and stationary,\n"
            "streaming rows to OUTDIR/subspace_NN.exr (linear float RGB) as they are\n"
            "produced: memory grows with the width, not the height (docs/synthesis.md).\n\n"
-           "  --size WxH        output size in pixels, each side 1..16777216\n"
+           "  --size WxH        output size in pixels, each side 1..65536 (EXR files)\n"
            "  --subspace LIST   comma-separated subspace numbers, or all (default)\n"
            "  --seed S          noise seed (default 1); the same seed gives the same bytes\n"
            "  --backend B       cpu: the CPU reference; gpu: Vulkan compute (any device,\n"
@@ -50,15 +50,18 @@ static int parse_list(const char *s, int n, unsigned char *pick)
     memset(pick, !strcmp(s, "all"), (size_t)n);
     if (!strcmp(s, "all"))
         return 0;
-    while (*s) {
+    if (!*s)
+        return -1;
+    for (;;) {
         char *end;
         long v = strtol(s, &end, 10);
         if (end == s || v < 0 || v >= n || (*end != ',' && *end))
             return -1;
         pick[v] = 1;
-        s = *end ? end + 1 : end;
+        if (!*end)
+            return 0;
+        s = end + 1; /* after a comma a number must follow */
     }
-    return 0;
 }
 
 /* Writes one image already in memory as EXR (+ preview). */
@@ -75,7 +78,12 @@ static int write_image(const btf_image *img, int k, const char *outdir, int prev
     return rc;
 }
 
-/* The GPU path: all chosen subspaces in as few jobs as the device allows. */
+/* The GPU path returns whole images; at most this many bytes of them are
+ * held at once (the CPU path streams rows instead). */
+#define GPU_IMAGE_BUDGET (1ull << 30)
+
+/* The GPU path: the chosen subspaces in groups that fit the memory budget,
+ * each group in as few jobs as the device allows. */
 static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick, int w, int h,
                      uint64_t seed, const char *outdir, int preview, int half, btf_error *err)
 {
@@ -85,17 +93,24 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick, 
     if (!subs || !imgs) {
         free(subs);
         free(imgs);
-        snprintf(err->msg, sizeof err->msg, "out of memory");
-        return BTF_E_NOMEM;
+        return cli_set_error(err, BTF_E_NOMEM, "out of memory");
     }
     for (int k = 0; k < m->n_subspaces; k++)
         if (pick[k])
             subs[n++] = k;
-    int rc = btf_gpu_synthesise(g, m, subs, n, w, h, seed, imgs, err);
-    for (int j = 0; rc == 0 && j < n; j++)
-        rc = write_image(&imgs[j], subs[j], outdir, preview, half, err);
-    for (int j = 0; j < n; j++)
-        btf_image_free(&imgs[j]);
+    uint64_t one = (uint64_t)w * h * 12;
+    int group = (int)(GPU_IMAGE_BUDGET / one);
+    if (group < 1)
+        group = 1;
+    int rc = 0;
+    for (int start = 0; rc == 0 && start < n; start += group) {
+        int k = n - start < group ? n - start : group;
+        rc = btf_gpu_synthesise(g, m, subs + start, k, w, h, seed, imgs, err);
+        for (int j = 0; rc == 0 && j < k; j++)
+            rc = write_image(&imgs[j], subs[start + j], outdir, preview, half, err);
+        for (int j = 0; j < k; j++)
+            btf_image_free(&imgs[j]);
+    }
     free(subs);
     free(imgs);
     return rc;
@@ -103,11 +118,21 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick, 
 
 /* Opens the Vulkan device the backend asks for; NULL with a note (auto) or
  * an error (gpu) when there is none. */
-static btf_gpu *open_gpu(const cli_ctx *c, const char *backend, int device, btf_error *err)
+static btf_gpu *open_gpu(const cli_ctx *c, const char *backend, int device, uint64_t image_bytes,
+                        btf_error *err)
 {
     if (!strcmp(backend, "cpu"))
         return NULL;
-    int explicit_gpu = !strcmp(backend, "gpu");
+    /* A named device is as explicit as --backend gpu: its errors are errors. */
+    int explicit_gpu = !strcmp(backend, "gpu") || device >= 0;
+    if (image_bytes > GPU_IMAGE_BUDGET) {
+        cli_set_error(err, BTF_E_UNSUPPORTED, "the GPU backend holds whole images in memory and one "
+                 "image needs %.1f GiB, more than its %.0f GiB budget; --backend cpu streams",
+                 image_bytes / 1073741824.0, GPU_IMAGE_BUDGET / 1073741824.0);
+        if (!explicit_gpu && !c->quiet)
+            fprintf(stderr, "btfcar synthesise: note: images this large are streamed on the CPU\n");
+        return NULL;
+    }
     btf_gpu_opts o = {.use_device = device >= 0, .device = device < 0 ? 0 : device,
                       .allow_cpu = explicit_gpu};
     btf_gpu *g = NULL;
@@ -171,8 +196,8 @@ int cmd_synthesise(int argc, char **argv)
                 return cli_usage_error(&c, "-o needs a folder");
             outdir = v, i++;
         } else if (!strcmp(a, "--size")) {
-            if (!v || cli_parse_size(v, &w, &h) || w > 16777216 || h > 16777216)
-                return cli_usage_error(&c, "--size needs WxH, each 1..16777216");
+            if (!v || cli_parse_size(v, &w, &h) || w > 65536 || h > 65536)
+                return cli_usage_error(&c, "--size needs WxH, each 1..65536");
             i++;
         } else if (!strcmp(a, "--subspace")) {
             if (!v)
@@ -205,6 +230,8 @@ int cmd_synthesise(int argc, char **argv)
         return cli_usage_error(&c, "--size WxH is required");
     if (!outdir)
         return cli_usage_error(&c, "-o OUTDIR is required");
+    if (device >= 0 && !strcmp(backend, "cpu"))
+        return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
     if (preview && (double)w * h > 8192.0 * 8192.0)
         return cli_usage_error(&c, "--preview is limited to 8192x8192 pixels");
     btf_error err = {0};
@@ -223,8 +250,8 @@ int cmd_synthesise(int argc, char **argv)
         rc = btf_mkdirs(outdir, &err);
     btf_gpu *gpu = NULL;
     if (rc == 0) {
-        gpu = open_gpu(&c, backend, device, &err);
-        if (!gpu && !strcmp(backend, "gpu"))
+        gpu = open_gpu(&c, backend, device, (uint64_t)w * h * 12, &err);
+        if (!gpu && (!strcmp(backend, "gpu") || device >= 0))
             rc = 1;
     }
     struct timespec t0, t1;

@@ -19,6 +19,16 @@ int cli_error(const cli_ctx *c, const char *fmt, ...)
     return 1;
 }
 
+int cli_set_error(btf_error *err, int code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+    va_end(ap);
+    err->code = code;
+    return code;
+}
+
 int cli_lib_error(const cli_ctx *c, const btf_error *err)
 {
     cli_progress_done();

@@ -170,4 +170,4 @@ clean:
 
 # The synthesis loops are written to be vectorised (src/synth.c); -O3 lets
 # GCC do it. The op order per pixel is fixed, so results do not change.
-$(BUILD)/src/synth.o: CFLAGS += -O3
+$(BUILD)/src/synth.o $(BUILD)/src/noise_row.o: CFLAGS += -O3

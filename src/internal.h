@@ -68,6 +68,14 @@ int btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid 
 int btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err);
 void btf_pyramid_free(btf_pyramid *p);
 
+/* Noise rows (src/noise_row.c): the Gaussians of blocks b0 .. b0 + n - 1 of
+ * a row (btf_noise4 of each, 4 n floats into out), bit for bit the same on
+ * every path; vector_path 0 forces the portable loop. btf_noise_path_avx2
+ * says whether the AVX2 path is in use (CPU support, BTF_NOISE_PORTABLE). */
+void btf_noise_blocks(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint32_t row,
+                      uint32_t b0, uint32_t n, int vector_path, float *out);
+int btf_noise_path_avx2(void);
+
 /* Synthesis (src/synth.c): the indices of a band's same-row offsets in the
  * order btf_shared.h adds them (farthest column first); returns their count.
  * Shared with the GPU host code, which orders the shader's offsets so. */

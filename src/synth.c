@@ -63,29 +63,15 @@ static float *ring_row(level_gen *g, int r)
     return g->ring + (size_t)slot * (g->fw + 2 * g->pad) + g->pad;
 }
 
-/* The Gaussians of one field row, in a loop of its own: the generator is
- * half the cost of synthesis, and a plain loop over blocks lets the compiler
- * vectorise it. Column c uses component c & 3 of block c >> 2. */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-/* Compiled twice, for plain x86-64 and for AVX2 (8 lanes instead of 4), the
- * choice made once at load time. AVX2 brings no FMA here (and the build
- * forbids contraction), so both give the same bits. */
-__attribute__((target_clones("avx2", "default")))
-#endif
+/* The Gaussians of one field row (src/noise_row.c): column c uses component
+ * c & 3 of block c >> 2. */
 static void noise_row(const level_gen *g, uint32_t seed_lo, uint32_t seed_hi, uint32_t urow,
                       float *e)
 {
     uint32_t c0 = (uint32_t)(g->fx0 + BTF_NOISE_ORIGIN), c1 = c0 + (uint32_t)g->fw;
     uint32_t b0 = c0 >> 2, b1 = (c1 + 3u) >> 2;
-    float *out = e - (c0 & 3u); /* out[4 * (b - b0) + lane] is column b * 4 + lane */
-    for (uint32_t b = b0; b < b1; b++) {
-        btf_vec4 v = btf_noise4(seed_lo, seed_hi, g->stream, urow, b);
-        float *o = out + 4 * (b - b0);
-        o[0] = v.x;
-        o[1] = v.y;
-        o[2] = v.z;
-        o[3] = v.w;
-    }
+    /* out[4 * (b - b0) + lane] is column b * 4 + lane */
+    btf_noise_blocks(seed_lo, seed_hi, g->stream, urow, b0, b1 - b0, 1, e - (c0 & 3u));
 }
 
 /* The same-row offsets of a band, farthest first (column -3 before -2

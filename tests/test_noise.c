@@ -9,6 +9,7 @@
  * so a correct generator would fail them for a tiny fraction of seeds only.
  */
 #include "testutil.h"
+#include "internal.h" /* btf_noise_blocks: the row generator of CPU synthesis */
 
 #include "../gpu/btf_noise.h"
 #include "noise_check_spv.h" /* built from gpu/noise_check.comp by the Makefile */
@@ -450,6 +451,40 @@ static void noise1_matches_noise4(void **state)
     }
 }
 
+/* The row generator of CPU synthesis (src/noise_row.c, an AVX2 path where
+ * the CPU has it) gives bit for bit btf_noise4 of each block, for every
+ * length (whole 16-block groups and tails) and for random keys, streams,
+ * rows and starting blocks, wrapped negative ones included. */
+static void noise_rows_match_noise4(void **state)
+{
+    (void)state;
+    enum { MAXB = 70 };
+    float fast[4 * MAXB + 1], slow[4 * MAXB + 1];
+    uint64_t s = 11;
+    long compared = 0;
+    for (int i = 0; i < 20000; i++) {
+        uint64_t a = mix64(&s), b = mix64(&s);
+        uint32_t n = (uint32_t)(a % (MAXB + 1));
+        uint32_t b0 = i < 100 ? (uint32_t)(i - 50) : (uint32_t)(b >> 32);
+        uint32_t row = (uint32_t)(a >> 32), stream = (uint32_t)b;
+        fast[4 * n] = slow[4 * n] = 12345.0f; /* nothing written past the end */
+        btf_noise_blocks((uint32_t)(a >> 8), (uint32_t)(b >> 40), stream, row, b0, n, 1, fast);
+        btf_noise_blocks((uint32_t)(a >> 8), (uint32_t)(b >> 40), stream, row, b0, n, 0, slow);
+        for (uint32_t k = 0; k < n; k++) {
+            btf_vec4 v = btf_noise4((uint32_t)(a >> 8), (uint32_t)(b >> 40), stream, row, b0 + k);
+            for (uint32_t c = 0; c < 4; c++) {
+                uint32_t want = btf_float_bits(btf_vec4_at(v, c));
+                assert_true(btf_float_bits(fast[4 * k + c]) == want);
+                assert_true(btf_float_bits(slow[4 * k + c]) == want);
+            }
+        }
+        assert_true(fast[4 * n] == 12345.0f && slow[4 * n] == 12345.0f);
+        compared += 4 * (long)n;
+    }
+    printf("noise rows: %ld Gaussians identical on both paths (vector path: %s)\n", compared,
+           btf_noise_path_avx2() ? "AVX2" : "portable only on this CPU");
+}
+
 /* Pairs of samples that must be independent: |corr| < 5 / sqrt(n) with
  * n = 10^6 pairs (also of squares, which catches a shared radius). */
 static void independence(void **state)
@@ -519,6 +554,7 @@ int main(void)
         cmocka_unit_test(gaussian_exact_tails),
         cmocka_unit_test(determinism_and_golden),
         cmocka_unit_test(noise1_matches_noise4),
+        cmocka_unit_test(noise_rows_match_noise4),
         cmocka_unit_test(independence),
         cmocka_unit_test(glsl_build),
     };

@@ -91,66 +91,125 @@ int btf_car_same_row_order(const btf_car_band *b, int *idx)
     return n;
 }
 
-/* The next row of the level's CAR field (zero-mean), by the recursion
- * Y_r = sum_s gamma_s Y_{r+s} + sigma e_r, summed in the order of
- * btf_shared.h (the GPU sums the same way): the offsets of earlier rows in
+typedef float v8f __attribute__((vector_size(32)));
+
+/* A vector from 8 floats at p, unaligned (a macro: a function returning a
+ * 32-byte vector would change the ABI of the portable build). */
+#define LOAD8(p) __extension__({ v8f v_; memcpy(&v_, (p), sizeof v_); v_; })
+
+/* acc[i] = (((0 + g0 src0[i]) + g1 src1[i]) + ...) + sigma e[i]: the
+ * earlier-row terms in stored order, then the noise (btf_car_accumulate,
+ * btf_car_output). One pass over the row with 32 pixels in registers, not
+ * one pass per term: the terms' adds form four independent chains and acc
+ * is written once. Same operations, same order as term by term. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+static void earlier_rows(const float *const *src, const float *gam, int n, float sigma,
+                         const float *e, float *acc, int fw)
+{
+    int i = 0;
+    for (; i + 32 <= fw; i += 32) {
+        v8f a0 = {0}, a1 = {0}, a2 = {0}, a3 = {0};
+        for (int s = 0; s < n; s++) {
+            const float *p = src[s] + i;
+            v8f gs = {0};
+            gs += gam[s]; /* broadcast: 0 + g is g exactly */
+            a0 = a0 + gs * LOAD8(p);
+            a1 = a1 + gs * LOAD8(p + 8);
+            a2 = a2 + gs * LOAD8(p + 16);
+            a3 = a3 + gs * LOAD8(p + 24);
+        }
+        v8f sg = {0};
+        sg += sigma;
+        a0 = a0 + sg * LOAD8(e + i);
+        a1 = a1 + sg * LOAD8(e + i + 8);
+        a2 = a2 + sg * LOAD8(e + i + 16);
+        a3 = a3 + sg * LOAD8(e + i + 24);
+        memcpy(acc + i, &a0, sizeof a0);
+        memcpy(acc + i + 8, &a1, sizeof a1);
+        memcpy(acc + i + 16, &a2, sizeof a2);
+        memcpy(acc + i + 24, &a3, sizeof a3);
+    }
+    for (; i < fw; i++) {
+        float a = 0.0f;
+        for (int s = 0; s < n; s++)
+            a = btf_car_accumulate(a, gam[s], src[s][i]);
+        acc[i] = btf_car_output(a, sigma, e[i]);
+    }
+}
+
+/* The first part of the next row of the level's CAR field (zero-mean), by
+ * the recursion Y_r = sum_s gamma_s Y_{r+s} + sigma e_r, summed in the order
+ * of btf_shared.h (the GPU sums the same way): the offsets of earlier rows in
  * stored order, then the noise, then the same-row offsets farthest first.
- * Everything up to the noise reads finished rows only, so it runs as
- * independent per-pixel chains the compiler vectorises; only the same-row
- * terms are sequential, and with the nearest neighbour last the dependency
- * from one pixel to the next is a single multiply and add. */
-static void field_step(level_gen *g, uint32_t seed_lo, uint32_t seed_hi)
+ * Everything up to the noise reads finished rows only, so it runs here as
+ * independent per-pixel chains the compiler vectorises, into g->acc; the
+ * same-row terms are sequential (same_row_*). Returns the new row. */
+static float *field_prepare(level_gen *g, uint32_t seed_lo, uint32_t seed_hi)
 {
     int r = g->next++;
-    float *out = ring_row(g, r);
     const btf_car_band *b = g->car;
     /* Rows above the field's first row are zero: their ring slots were
      * cleared at start and are only overwritten by rows of the field. */
     float *e = g->noise + 3; /* 3 floats of slack before, for the block alignment */
     noise_row(g, seed_lo, seed_hi, (uint32_t)(r + BTF_NOISE_ORIGIN), e);
-    float *acc = g->acc;
-    int fw = g->fw;
-    for (int i = 0; i < fw; i++)
-        acc[i] = 0.0f;
-    for (int s = 0; s < b->n; s++) {
-        if (b->offsets[s].row == 0)
-            continue;
-        const float *src = ring_row(g, r + b->offsets[s].row) + b->offsets[s].col;
-        float gs = b->gamma[s];
-        for (int i = 0; i < fw; i++)
-            acc[i] = btf_car_accumulate(acc[i], gs, src[i]);
-    }
-    float sigma = b->sigma;
-    for (int i = 0; i < fw; i++)
-        acc[i] = btf_car_output(acc[i], sigma, e[i]);
-    int same[BTF_CAR_MAX_NEIGHBOURS];
-    int nsame = btf_car_same_row_order(b, same);
-    if (nsame == 0) {
-        memcpy(out, acc, (size_t)fw * sizeof(float));
-        return;
-    }
+    const float *src[BTF_CAR_MAX_NEIGHBOURS];
     float gam[BTF_CAR_MAX_NEIGHBOURS];
-    int col[BTF_CAR_MAX_NEIGHBOURS];
-    for (int k = 0; k < nsame; k++) {
-        gam[k] = b->gamma[same[k]];
-        col[k] = b->offsets[same[k]].col;
+    int n = 0;
+    for (int s = 0; s < b->n; s++)
+        if (b->offsets[s].row != 0) {
+            src[n] = ring_row(g, r + b->offsets[s].row) + b->offsets[s].col;
+            gam[n++] = b->gamma[s];
+        }
+    earlier_rows(src, gam, n, b->sigma, e, g->acc, g->fw);
+    return ring_row(g, r);
+}
+
+/* k when the band's same-row offsets are exactly columns -k .. -1 (k <= 3,
+ * the candidate family's shapes), with their gammas in gam[3 - k .. 2]
+ * (gam[2] for column -1); -1 for any other set. */
+static int same_row_suffix(const btf_car_band *b, float gam[3])
+{
+    int idx[BTF_CAR_MAX_NEIGHBOURS];
+    int n = btf_car_same_row_order(b, idx);
+    if (n > 3)
+        return -1;
+    gam[0] = gam[1] = gam[2] = 0.0f;
+    for (int k = 0; k < n; k++) {
+        if (b->offsets[idx[k]].col != k - n)
+            return -1;
+        gam[3 - n + k] = b->gamma[idx[k]];
     }
-    /* The sequential part. For the family's same-row neighbours (columns
-     * -1; -2, -1; -3, -2, -1) the last values stay in registers, so one
-     * pixel waits on the previous one for a single multiply and add; any
-     * other set takes the general loop. Same operations either way. */
-    if (nsame == 1 && col[0] == -1) {
+    return n;
+}
+
+/* The sequential part of one field row: out[i] = acc[i] + the same-row
+ * terms, farthest column first. For the family's shapes (columns -1; -2, -1;
+ * -3, -2, -1) the last values stay in registers, so one pixel waits on the
+ * previous one for a single multiply and add; any other set takes the
+ * general loop. Same operations either way. */
+static void same_row_one(const level_gen *g, float *out)
+{
+    const btf_car_band *b = g->car;
+    const float *acc = g->acc;
+    int fw = g->fw;
+    float gam[3];
+    int k = same_row_suffix(b, gam);
+    if (k == 0) {
+        memcpy(out, acc, (size_t)fw * sizeof(float));
+    } else if (k == 1) {
         float y1 = out[-1];
         for (int i = 0; i < fw; i++)
-            out[i] = y1 = btf_car_accumulate(acc[i], gam[0], y1);
-    } else if (nsame == 2 && col[0] == -2 && col[1] == -1) {
+            out[i] = y1 = btf_car_accumulate(acc[i], gam[2], y1);
+    } else if (k == 2) {
         float y2 = out[-2], y1 = out[-1];
         for (int i = 0; i < fw; i++) {
-            float v = btf_car_accumulate(btf_car_accumulate(acc[i], gam[0], y2), gam[1], y1);
+            float v = btf_car_accumulate(btf_car_accumulate(acc[i], gam[1], y2), gam[2], y1);
             y2 = y1;
             out[i] = y1 = v;
         }
-    } else if (nsame == 3 && col[0] == -3 && col[1] == -2 && col[2] == -1) {
+    } else if (k == 3) {
         float y3 = out[-3], y2 = out[-2], y1 = out[-1];
         for (int i = 0; i < fw; i++) {
             float v = btf_car_accumulate(
@@ -160,69 +219,175 @@ static void field_step(level_gen *g, uint32_t seed_lo, uint32_t seed_hi)
             out[i] = y1 = v;
         }
     } else {
+        int same[BTF_CAR_MAX_NEIGHBOURS], col[BTF_CAR_MAX_NEIGHBOURS];
+        float gs[BTF_CAR_MAX_NEIGHBOURS];
+        int nsame = btf_car_same_row_order(b, same);
+        for (int j = 0; j < nsame; j++) {
+            gs[j] = b->gamma[same[j]];
+            col[j] = b->offsets[same[j]].col;
+        }
         for (int i = 0; i < fw; i++) {
             float a = acc[i];
-            for (int k = 0; k < nsame; k++)
-                a = btf_car_accumulate(a, gam[k], out[i + col[k]]);
+            for (int j = 0; j < nsame; j++)
+                a = btf_car_accumulate(a, gs[j], out[i + col[j]]);
             out[i] = a;
         }
     }
 }
 
-/* Zero-mean field row y of the level, over its window (a pointer into the ring). */
+/* One step of band b of same_row_three: the same operations as
+ * same_row_one's loop for k = 0 .. 3 (a missing term is skipped, never
+ * added as 0 * y, which could turn -0 into +0). */
+#define SAME_ROW_STEP(b)                                                                 \
+    do {                                                                                 \
+        float v = acc##b[i];                                                             \
+        if (k[b] >= 3)                                                                   \
+            v = btf_car_accumulate(v, g##b[0], y3_##b);                                  \
+        if (k[b] >= 2)                                                                   \
+            v = btf_car_accumulate(v, g##b[1], y2_##b);                                  \
+        if (k[b] >= 1)                                                                   \
+            v = btf_car_accumulate(v, g##b[2], y1_##b);                                  \
+        y3_##b = y2_##b;                                                                 \
+        y2_##b = y1_##b;                                                                 \
+        out##b[i] = y1_##b = v;                                                          \
+    } while (0)
+
+/* The sequential parts of the three bands' rows in one loop: three
+ * independent chains, so the core overlaps their latencies instead of
+ * waiting on each in turn (the chain is a third of synthesis time when run
+ * alone). Only for bands whose same-row sets have the family's shapes. */
+static void same_row_three(level_gen *const *g, float *const *out, const int *k,
+                           float gam[3][3])
+{
+    const float *acc0 = g[0]->acc, *acc1 = g[1]->acc, *acc2 = g[2]->acc;
+    float *out0 = out[0], *out1 = out[1], *out2 = out[2];
+    const float *g0 = gam[0], *g1 = gam[1], *g2 = gam[2];
+    /* Columns left of the row are zero padding (pad >= k columns). */
+    float y1_0 = k[0] >= 1 ? out0[-1] : 0.0f, y2_0 = k[0] >= 2 ? out0[-2] : 0.0f;
+    float y3_0 = k[0] >= 3 ? out0[-3] : 0.0f;
+    float y1_1 = k[1] >= 1 ? out1[-1] : 0.0f, y2_1 = k[1] >= 2 ? out1[-2] : 0.0f;
+    float y3_1 = k[1] >= 3 ? out1[-3] : 0.0f;
+    float y1_2 = k[2] >= 1 ? out2[-1] : 0.0f, y2_2 = k[2] >= 2 ? out2[-2] : 0.0f;
+    float y3_2 = k[2] >= 3 ? out2[-3] : 0.0f;
+    int fw = g[0]->fw;
+    for (int i = 0; i < fw; i++) {
+        SAME_ROW_STEP(0);
+        SAME_ROW_STEP(1);
+        SAME_ROW_STEP(2);
+    }
+}
+
+/* The next row of a level's field in each of the n bands that step
+ * together (same level of one subspace: same geometry, same rows). */
+static void field_step(level_gen *const *g, int n, uint32_t seed_lo, uint32_t seed_hi)
+{
+    float *out[3];
+    for (int b = 0; b < n; b++)
+        out[b] = field_prepare(g[b], seed_lo, seed_hi);
+    int k[3] = {-1, -1, -1};
+    float gam[3][3];
+    if (n == 3)
+        for (int b = 0; b < 3; b++)
+            k[b] = same_row_suffix(g[b]->car, gam[b]);
+    if (n == 3 && k[0] >= 0 && k[1] >= 0 && k[2] >= 0) {
+        same_row_three(g, out, k, gam);
+        return;
+    }
+    for (int b = 0; b < n; b++)
+        same_row_one(g[b], out[b]);
+}
+
+/* Zero-mean field row y of one level (a pointer into the ring). */
 static const float *field_row(level_gen *g, int y, uint32_t seed_lo, uint32_t seed_hi)
 {
     while (g->next <= y)
-        field_step(g, seed_lo, seed_hi);
+        field_step(&g, 1, seed_lo, seed_hi);
     return ring_row(g, y) + (g->x0 - g->fx0);
 }
 
-static const float *gauss_row(band_gen *bg, int l, int y);
+/* The rest works on the nb bands (1..3) of one subspace at once: they have
+ * the same geometry and ask for the same rows in the same order, so every
+ * step is taken for all of them together, and field_step can run their
+ * sequential recursions in one loop. Each band's results are what it would
+ * get alone. */
 
-/* The horizontally up-sampled G row i of level l (l >= 1), to the window of
- * level l - 1, from the 3-slot cache. Rows are requested in increasing order. */
-static const float *hup_row(band_gen *bg, int l, int i)
+/* Zero-mean field row y of level l of each band, over the level's window. */
+static void field_rows(band_gen *bg, int nb, int l, int y, const float **f)
 {
-    level_gen *g = &bg->lv[l];
-    int slot = ((i % 3) + 3) % 3;
-    if (g->hup_row[slot] != i) {
-        const float *c = gauss_row(bg, l, i);
-        float *o = g->hup[slot];
-        for (int k = 0; k < g->fine_w; k++) {
-            int x = g->fine_x0 + k, ci = floordiv2(x) - g->x0;
-            o[k] = (x & 1) ? btf_up_odd(c[ci], c[ci + 1])
-                           : btf_up_even(c[ci - 1], c[ci], c[ci + 1]);
-        }
-        g->hup_row[slot] = i;
-    }
-    return g->hup[slot];
+    level_gen *g[3];
+    for (int b = 0; b < nb; b++)
+        g[b] = &bg[b].lv[l];
+    while (g[0]->next <= y)
+        field_step(g, nb, bg[0].seed_lo, bg[0].seed_hi);
+    for (int b = 0; b < nb; b++)
+        f[b] = ring_row(g[b], y) + (g[b]->x0 - g[b]->fx0);
 }
 
-/* Row y of G_l = mean_l + field_l + up(G_{l+1}), over the level's window. */
-static const float *gauss_row(band_gen *bg, int l, int y)
+static void gauss_rows(band_gen *bg, int nb, int l, int y, const float **out);
+
+/* The horizontally up-sampled G row i of level l (l >= 1) of each band, to
+ * the window of level l - 1, from the 3-slot caches (all bands' caches hold
+ * the same rows). Rows are requested in increasing order. */
+static void hup_rows(band_gen *bg, int nb, int l, int i, const float **out)
 {
-    level_gen *g = &bg->lv[l];
-    const float *f = field_row(g, y, bg->seed_lo, bg->seed_hi);
-    int w = g->x1 - g->x0;
-    float mean = g->car->mean;
-    if (l == bg->levels - 1) {
-        for (int k = 0; k < w; k++)
-            g->grow[k] = btf_add_mean(mean, f[k]);
-        return g->grow;
+    int slot = ((i % 3) + 3) % 3;
+    if (bg[0].lv[l].hup_row[slot] != i) {
+        const float *rows[3];
+        gauss_rows(bg, nb, l, i, rows);
+        for (int b = 0; b < nb; b++) {
+            level_gen *g = &bg[b].lv[l];
+            const float *c = rows[b];
+            float *o = g->hup[slot];
+            for (int k = 0; k < g->fine_w; k++) {
+                int x = g->fine_x0 + k, ci = floordiv2(x) - g->x0;
+                o[k] = (x & 1) ? btf_up_odd(c[ci], c[ci + 1])
+                               : btf_up_even(c[ci - 1], c[ci], c[ci + 1]);
+            }
+            g->hup_row[slot] = i;
+        }
     }
+    for (int b = 0; b < nb; b++)
+        out[b] = bg[b].lv[l].hup[slot];
+}
+
+/* Row y of G_l = mean_l + field_l + up(G_{l+1}) of each band, over the
+ * level's window. */
+static void gauss_rows(band_gen *bg, int nb, int l, int y, const float **out)
+{
+    const float *f[3];
+    field_rows(bg, nb, l, y, f);
+    int last = l == bg[0].levels - 1;
+    const float *a[3], *b[3], *c[3];
     int i = floordiv2(y);
-    if (y & 1) {
-        const float *b = hup_row(bg, l + 1, i), *c = hup_row(bg, l + 1, i + 1);
-        for (int k = 0; k < w; k++)
-            g->grow[k] = btf_add_level(btf_add_mean(mean, f[k]), btf_up_odd(b[k], c[k]));
-    } else {
+    if (!last && (y & 1)) {
+        hup_rows(bg, nb, l + 1, i, b);
+        hup_rows(bg, nb, l + 1, i + 1, c);
+    } else if (!last) {
         /* Fetch in increasing order: i - 1, i, i + 1 share the 3-slot ring. */
-        const float *a = hup_row(bg, l + 1, i - 1), *b = hup_row(bg, l + 1, i);
-        const float *c = hup_row(bg, l + 1, i + 1);
-        for (int k = 0; k < w; k++)
-            g->grow[k] = btf_add_level(btf_add_mean(mean, f[k]), btf_up_even(a[k], b[k], c[k]));
+        hup_rows(bg, nb, l + 1, i - 1, a);
+        hup_rows(bg, nb, l + 1, i, b);
+        hup_rows(bg, nb, l + 1, i + 1, c);
     }
-    return g->grow;
+    for (int n = 0; n < nb; n++) {
+        level_gen *g = &bg[n].lv[l];
+        int w = g->x1 - g->x0;
+        float mean = g->car->mean;
+        const float *fn = f[n];
+        if (last) {
+            for (int k = 0; k < w; k++)
+                g->grow[k] = btf_add_mean(mean, fn[k]);
+        } else if (y & 1) {
+            const float *bn = b[n], *cn = c[n];
+            for (int k = 0; k < w; k++)
+                g->grow[k] = btf_add_level(btf_add_mean(mean, fn[k]), btf_up_odd(bn[k], cn[k]));
+        } else {
+            const float *an = a[n], *bn = b[n], *cn = c[n];
+            for (int k = 0; k < w; k++)
+                g->grow[k] = btf_add_level(btf_add_mean(mean, fn[k]),
+                                           btf_up_even(an[k], bn[k], cn[k]));
+        }
+        out[n] = g->grow;
+    }
 }
 
 static void band_free(band_gen *bg)
@@ -358,9 +523,9 @@ int btf_synthesise(const btf_model *m, int subspace, int width, int height, uint
     if (!rc && !row)
         rc = BTF_E_NOMEM;
     for (int y = 0; rc == 0 && y < height; y++) {
-        const float *b0 = gauss_row(&bg[0], 0, y);
-        const float *b1 = gauss_row(&bg[1], 0, y);
-        const float *b2 = gauss_row(&bg[2], 0, y);
+        const float *g0[3];
+        gauss_rows(bg, 3, 0, y, g0);
+        const float *b0 = g0[0], *b1 = g0[1], *b2 = g0[2];
         for (int x = 0; x < width; x++)
             for (int k = 0; k < 3; k++)
                 row[3 * x + k] = btf_unmix(sm->mean[k], sm->basis[k], sm->basis[3 + k],

@@ -21,21 +21,26 @@ static void help(void)
            "              one 2D CAR model per band and level (docs/model.md).\n"
            "With --stage segment it stops after stage 1 and writes to the folder OUT:\n"
            "index.png (x = view, y = light, one colour per subspace), index.tsv,\n"
-           "subspaces.tsv, and each subspace image as subspace_NN.exr + .png preview.\n\n"
+           "subspaces.tsv, and each subspace image as subspace_NN.exr + .png preview;\n"
+           "the options of the later stages (--levels, --neighbourhood, --max-neighbours,\n"
+           "--no-range, --range-size) are then a usage error.\n\n"
            "  --stage segment    stop after the segmentation\n"
            "  --levels L|auto    pyramid levels (auto: from size and correlation length, <= 3)\n"
            "  --neighbourhood SPEC|auto  causal offsets row:col,...; auto: Bayesian choice\n"
            "  --max-neighbours N   auto: the largest candidate considered, 1..14 (default 14;\n"
            "                       the paper's models have fewer than 4)\n"
            "  --no-range         leave the range map out of the model\n"
-           "  --range-size N     side of the range tile kept in the model (default 64)\n"
+           "  --range-size N     longer side of the range tile kept in the model (default\n"
+           "                     64, at most the image's); the shorter side follows the\n"
+           "                     image's aspect ratio at the same scale\n"
            "  --subspaces K|auto number of subspace images, 1..255; auto (default) takes\n"
            "                     the smallest K whose k-means distortion is at most 10%% of\n"
            "                     the K = 1 distortion, at most 20 (docs/segmentation.md)\n"
            "  --bins B           histogram bins per Lab channel (default 32)\n"
            "  --seed S           k-means seed (default 1); same seed, same result\n"
            "  --restarts R       k-means restarts, the best kept (default 5)\n"
-           "  --threads T        threads decoding images (default: all CPUs)\n"
+           "  --threads T        threads decoding images and solving photometric stereo\n"
+           "                     (default: all CPUs)\n"
            "  --quiet            no progress bar, no report\n");
 }
 
@@ -46,42 +51,65 @@ static double now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-static int write_tables(const btf_segmentation *s, const btf_dataset_info *in, const char *out,
-                        btf_error *err)
+/* Writes text that was built in memory (open_memstream) to path atomically:
+ * the whole file appears or none does. Frees the text. */
+static int write_text(const char *path, FILE *mem, char **text, size_t *len, btf_error *err)
 {
-    char path[4096], tmp[4096];
-    snprintf(path, sizeof path, "%s/index.tsv", out);
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "w");
+    int bad = ferror(mem);
+    bad |= fclose(mem) != 0;
+    int rc = bad ? cli_set_error(err, BTF_E_NOMEM, "%s: out of memory formatting it", path)
+                 : btf_write_file_atomic(path, *text, *len, err);
+    free(*text);
+    *text = NULL;
+    return rc;
+}
+
+static int write_index_tsv(const btf_segmentation *s, const btf_dataset_info *in,
+                           const char *path, btf_error *err)
+{
+    char *text = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&text, &len);
     if (!f)
-        return snprintf(err->msg, sizeof err->msg, "%s: cannot create", path), 1;
+        return cli_set_error(err, BTF_E_NOMEM, "%s: out of memory formatting it", path);
     fprintf(f, "view\tlight\ttheta_v\tphi_v\ttheta_l\tphi_l\tsubspace\n");
     for (int v = 0; v < s->n_views; v++)
         for (int l = 0; l < s->n_lights; l++)
             fprintf(f, "%d\t%d\t%g\t%g\t%g\t%g\t%d\n", v, l, in->views->dirs[v].theta,
                     in->views->dirs[v].phi, in->lights->dirs[l].theta, in->lights->dirs[l].phi,
                     s->index[v * s->n_lights + l]);
-    if (fclose(f) != 0 || rename(tmp, path) != 0) {
-        remove(tmp);
-        return snprintf(err->msg, sizeof err->msg, "%s: write failed", path), 1;
-    }
-    snprintf(path, sizeof path, "%s/subspaces.tsv", out);
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    f = fopen(tmp, "w");
+    return write_text(path, f, &text, &len, err);
+}
+
+static int write_subspaces_tsv(const btf_segmentation *s, const btf_dataset_info *in,
+                               const char *path, btf_error *err)
+{
+    char *text = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&text, &len);
     if (!f)
-        return snprintf(err->msg, sizeof err->msg, "%s: cannot create", path), 1;
+        return cli_set_error(err, BTF_E_NOMEM, "%s: out of memory formatting it", path);
     fprintf(f, "subspace\tmembers\tview\tlight\ttheta_v\tphi_v\ttheta_l\tphi_l\timage\n");
     for (int c = 0; c < s->k; c++) {
         int v = s->rep_view[c], l = s->rep_light[c];
-        fprintf(f, "%d\t%d\t%d\t%d\t%g\t%g\t%g\t%g\tsubspace_%02d.exr\n", c, s->members[c], v, l,
-                in->views->dirs[v].theta, in->views->dirs[v].phi, in->lights->dirs[l].theta,
+        fprintf(f, "%d\t%d\t%d\t%d\t%g\t%g\t%g\t%g\tsubspace_%02d.exr\n", c, s->members[c], v,
+                l, in->views->dirs[v].theta, in->views->dirs[v].phi, in->lights->dirs[l].theta,
                 in->lights->dirs[l].phi, c);
     }
-    if (fclose(f) != 0 || rename(tmp, path) != 0) {
-        remove(tmp);
-        return snprintf(err->msg, sizeof err->msg, "%s: write failed", path), 1;
-    }
-    return 0;
+    return write_text(path, f, &text, &len, err);
+}
+
+/* index.tsv and subspaces.tsv in the folder out. */
+static int write_tables(const btf_segmentation *s, const btf_dataset_info *in, const char *out,
+                        btf_error *err)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/index.tsv", out);
+    int rc = write_index_tsv(s, in, path, err);
+    if (rc)
+        return rc;
+    snprintf(path, sizeof path, "%s/subspaces.tsv", out);
+    return write_subspaces_tsv(s, in, path, err);
 }
 
 static int write_subspace_images(const btf_segmentation *s, const btf_dataset *ds,
@@ -120,6 +148,9 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, const b
     ao.fit.car.warn = c->quiet ? NULL : cli_warning;
     ao.fit.car.warn_user = c;
     ao.photostereo.progress = cli_progress_fn(c);
+    ao.photostereo.threads = so->features.threads;
+    btf_analyse_report report = {{0}};
+    ao.report = &report;
     btf_model m;
     int rc = btf_analyse(ds, &ao, &m, &err);
     const btf_dataset_info *in = btf_dataset_get_info(ds);
@@ -135,6 +166,7 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, const b
         rc = btf_model_encode(&m, &bytes, &size, &err);
     free(bytes);
     if (rc == 0 && !c->quiet) {
+        printf("segmentation: %s\n", report.segment_reason);
         printf("model         %s: %zu bytes, %d subspace%s, range tile %dx%d\n", out, size,
                m.n_subspaces, m.n_subspaces == 1 ? "" : "s", m.range_width, m.range_height);
         printf("compression   1 : %.0f against the raw 8-bit images (%.0f bytes)\n",
@@ -154,6 +186,7 @@ int cmd_analyse(int argc, char **argv)
     btf_segment_opts so = {.kmeans.seed = 1};
     btf_fit_opts fo = {0};
     int no_range = 0, range_size = 0;
+    const char *later = NULL; /* the first option only the later stages use */
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -196,13 +229,16 @@ int cmd_analyse(int argc, char **argv)
             so.kmeans.restarts = (int)n, i++;
         } else if (!strcmp(a, "--no-range")) {
             no_range = 1;
+            later = later ? later : a;
         } else if (!strcmp(a, "--range-size")) {
             if (!v || cli_parse_int(v, 1, 4096, &n))
                 return cli_usage_error(&c, "--range-size needs a whole number 1..4096");
             range_size = (int)n, i++;
+            later = later ? later : a;
         } else if (cli_model_option(&c, argc, argv, &i, &fo, &rc)) {
             if (rc)
                 return rc;
+            later = later ? later : a;
         } else if (!strcmp(a, "--threads")) {
             if (!v || cli_parse_int(v, 1, 64, &n))
                 return cli_usage_error(&c, "--threads needs a whole number 1..64");
@@ -223,6 +259,9 @@ int cmd_analyse(int argc, char **argv)
         return analyse_all(&c, dataset, out, &so, &fo, no_range, range_size);
     if (strcmp(stage, "segment") != 0)
         return cli_usage_error(&c, "unknown stage '%s' (available: segment)", stage);
+    /* Ignoring a model option silently would let a user believe it acted. */
+    if (later)
+        return cli_usage_error(&c, "%s is not used by --stage segment", later);
 
     btf_error err = {0};
     btf_dataset_opts dopts = {.progress = cli_progress_fn(&c)};

@@ -121,6 +121,11 @@ void btf_exr_writer_abort(btf_exr_writer *w);
 
 /* mkdir -p; an existing folder is fine. */
 int btf_mkdirs(const char *path, btf_error *err);
+/* Writes n bytes to path atomically: into a unique temporary file beside it,
+ * renamed over path only when every byte is written and the file is closed;
+ * on failure the temporary file is removed and path is left as it was
+ * (BTF_E_IO; BTF_E_ARG for a path too long; the message names path). */
+int btf_write_file_atomic(const char *path, const void *data, size_t n, btf_error *err);
 
 /* sRGB transfer function (IEC 61966-2-1), per value. */
 float btf_srgb_to_linear(float v);
@@ -520,7 +525,9 @@ typedef struct btf_model {
      * from it. */
     int range_width, range_height;
     float *range;
-    float range_texel;         /* analysed-image texels per range-tile texel */
+    float range_texel;         /* analysed-image texels per range-tile texel,
+                                  along both axes (the tile keeps the image's
+                                  aspect ratio) */
 } btf_model;
 
 void btf_model_free(btf_model *m);
@@ -591,19 +598,29 @@ int btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_model *o
 /* The automatic number of pyramid levels for a band (docs/model.md). */
 int btf_auto_levels(const double *band, int w, int h);
 
+/* What btf_analyse decided on the way, for reports to people; the model
+ * itself holds the results. Fields may be added. */
+typedef struct btf_analyse_report {
+    char segment_reason[256]; /* why this number of subspaces (one line, as
+                                 btf_segmentation.reason) */
+} btf_analyse_report;
+
 typedef struct btf_analyse_opts {
     btf_segment_opts segment;         /* stage 1 */
-    btf_photostereo_opts photostereo; /* stage 2 */
+    btf_photostereo_opts photostereo; /* stage 2 (its own threads field: 0, all CPUs) */
     btf_fit_opts fit;                 /* stage 3 */
     int no_range;                     /* 1: no range map in the model */
-    int range_size;                   /* side of the range tile; 0: 64 (at most the image) */
+    int range_size;                   /* longer side of the range tile; 0: 64 (at most
+                                         the image's); docs/photostereo.md */
     btf_progress_fn progress;         /* stage progress (features, fits) */
     void *progress_user;
+    btf_analyse_report *report;       /* NULL, or filled in when btf_analyse succeeds */
 } btf_analyse_opts;
 
 /* All analysis stages on a dataset (paper section II): segmentation into
  * subspace images, the range map by photometric stereo (view closest to
- * theta_v = 0), and the CAR model of every subspace image. */
+ * theta_v = 0), and the CAR model of every subspace image. The range tile
+ * keeps the image's aspect ratio: one scale, range_texel, for both axes. */
 int btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
                 btf_error *err);
 

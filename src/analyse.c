@@ -12,13 +12,52 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Area-averages the height map into a T x T tile: each tile texel is the
- * mean of the source pixels whose centres fall in its cell. */
-static int range_tile(const btf_image *h, int t, btf_model *m, btf_error *err)
+/* The range tile's grid: one tile texel is p/q image pixels along both
+ * axes (a rational, so that binning is exact integer arithmetic), and the
+ * tile has tw x th texels. */
+typedef struct tile_grid {
+    long long p, q;
+    int tw, th;
+} tile_grid;
+
+/* The longer side gets n texels (n <= that side), so a texel is L/n pixels;
+ * the shorter side gets as many whole texels of that same size as fit. One
+ * scale for both axes keeps the tile's texels square, like the image's. A
+ * texel wider than the shorter side would cover pixels the image does not
+ * have, so the scale is capped at that side (for aspect ratios beyond n : 1
+ * the longer side then exceeds n). */
+static tile_grid range_grid(int w, int h, int n)
 {
-    m->range = btf_calloc((size_t)t * t, sizeof(float), err);
-    double *acc = btf_calloc((size_t)t * t, sizeof(double), err);
-    int *cnt = btf_calloc((size_t)t * t, sizeof(int), err);
+    int lo = w < h ? w : h, hi = w < h ? h : w;
+    if (n > hi)
+        n = hi;
+    tile_grid g = {hi, n, 0, 0};
+    if ((long long)lo * n < hi)
+        g.p = lo, g.q = 1;
+    g.tw = (int)((long long)w * g.q / g.p);
+    g.th = (int)((long long)h * g.q / g.p);
+    return g;
+}
+
+/* Tile cell of pixel i's centre, i + 1/2, on a grid of p/q pixels: -1 for
+ * the strip beyond the last whole cell (left out, so that every cell is the
+ * same size). */
+static int grid_cell(int i, const tile_grid *g, int cells)
+{
+    int c = (int)((2LL * i + 1) * g->q / (2 * g->p));
+    return c < cells ? c : -1;
+}
+
+/* Area-averages the height map into the tile: each tile texel is the mean
+ * of the source pixels whose centres fall in its cell. Heights stay in
+ * image-pixel units. */
+static int range_tile(const btf_image *h, int n, btf_model *m, btf_error *err)
+{
+    tile_grid g = range_grid(h->width, h->height, n);
+    size_t cells = (size_t)g.tw * g.th;
+    m->range = btf_calloc(cells, sizeof(float), err);
+    double *acc = btf_calloc(cells, sizeof(double), err);
+    int *cnt = btf_calloc(cells, sizeof(int), err);
     if (!m->range || !acc || !cnt) {
         free(acc);
         free(cnt);
@@ -26,16 +65,21 @@ static int range_tile(const btf_image *h, int t, btf_model *m, btf_error *err)
         m->range = NULL;
         return BTF_E_NOMEM;
     }
-    for (int y = 0; y < h->height; y++)
-        for (int x = 0; x < h->width; x++) {
-            int ty = (int)((long)y * t / h->height), tx = (int)((long)x * t / h->width);
-            acc[(size_t)ty * t + tx] += h->data[(size_t)y * h->width + x];
-            cnt[(size_t)ty * t + tx]++;
+    for (int y = 0; y < h->height; y++) {
+        int ty = grid_cell(y, &g, g.th);
+        for (int x = 0; x < h->width && ty >= 0; x++) {
+            int tx = grid_cell(x, &g, g.tw);
+            if (tx < 0)
+                continue;
+            acc[(size_t)ty * g.tw + tx] += h->data[(size_t)y * h->width + x];
+            cnt[(size_t)ty * g.tw + tx]++;
         }
-    for (size_t i = 0; i < (size_t)t * t; i++)
+    }
+    for (size_t i = 0; i < cells; i++)
         m->range[i] = cnt[i] ? (float)(acc[i] / cnt[i]) : 0.0f;
-    m->range_width = m->range_height = t;
-    m->range_texel = (float)h->width / (float)t;
+    m->range_width = g.tw;
+    m->range_height = g.th;
+    m->range_texel = (float)((double)g.p / (double)g.q);
     free(acc);
     free(cnt);
     return BTF_OK;
@@ -48,11 +92,7 @@ static int stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_mod
     int rc = btf_photostereo_dataset(ds, NULL, &o->photostereo, &ps, err);
     if (rc)
         return rc;
-    int side = ps.height.width < ps.height.height ? ps.height.width : ps.height.height;
-    int t = o->range_size > 0 ? o->range_size : 64;
-    if (t > side)
-        t = side;
-    rc = range_tile(&ps.height, t, m, err);
+    rc = range_tile(&ps.height, o->range_size > 0 ? o->range_size : 64, m, err);
     btf_ps_result_free(&ps);
     return rc;
 }
@@ -116,6 +156,10 @@ int btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *
         rc = stage_range(ds, &o, out, err);
     if (rc == 0)
         rc = stage_fit(ds, &seg, &o, out, err);
+    if (rc == 0 && o.report) {
+        memset(o.report, 0, sizeof *o.report);
+        snprintf(o.report->segment_reason, sizeof o.report->segment_reason, "%s", seg.reason);
+    }
     btf_segmentation_free(&seg);
     if (rc)
         btf_model_free(out);

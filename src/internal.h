@@ -28,8 +28,7 @@ void *btf_calloc(size_t count, size_t size, btf_error *err);
 int btf_tmp_path(const char *path, char *tmp, size_t n, btf_error *err);
 int btf_commit_file(const char *tmp, const char *path, btf_error *err);
 void btf_abort_file(const char *tmp);
-/* Writes a whole buffer atomically. */
-int btf_write_file_atomic(const char *path, const void *data, size_t n, btf_error *err);
+/* btf_write_file_atomic (a whole buffer) is public: include/btfcar.h. */
 /* Reads a whole file (at most max_bytes) into a malloc'd buffer. */
 int btf_read_file(const char *path, size_t max_bytes, unsigned char **data,
                   size_t *n, btf_error *err);

@@ -99,7 +99,7 @@ int btf_write_file_atomic(const char *path, const void *data, size_t n, btf_erro
     FILE *f = fopen(tmp, "wb");
     if (!f)
         return btf_fail(err, BTF_E_IO, "%s: cannot create: %s", path, strerror(errno));
-    size_t w = fwrite(data, 1, n, f);
+    size_t w = n ? fwrite(data, 1, n, f) : 0; /* data may be NULL when n is 0 */
     int bad = (w != n) | (fflush(f) != 0);
     int e = errno;
     bad |= fclose(f) != 0;

@@ -297,6 +297,27 @@ static void field_step(level_gen *const *g, int n, uint32_t seed_lo, uint32_t se
         same_row_one(g[b], out[b]);
 }
 
+/* Horizontal pyrUp of a coarse row c (its window starts at column cx0) to
+ * the fine columns [fx0, fx0 + n): fine column x reads coarse floor(x / 2);
+ * an even x is btf_up_even of three coarse values, an odd x btf_up_odd of
+ * two. One loop per parity, each of which vectorises (a loop choosing per
+ * column does not). */
+static void up_row(const float *c, int cx0, int fx0, int n, float *o)
+{
+    for (int par = 0; par < 2; par++) {
+        int k0 = (fx0 & 1) == par ? 0 : 1; /* the first fine column of this parity */
+        int m = k0 < n ? (n - k0 + 1) / 2 : 0;
+        const float *cc = c + (floordiv2(fx0 + k0) - cx0);
+        float *out = o + k0;
+        if (par == 0)
+            for (int j = 0; j < m; j++)
+                out[2 * j] = btf_up_even(cc[j - 1], cc[j], cc[j + 1]);
+        else
+            for (int j = 0; j < m; j++)
+                out[2 * j] = btf_up_odd(cc[j], cc[j + 1]);
+    }
+}
+
 /* Zero-mean field row y of one level (a pointer into the ring). */
 static const float *field_row(level_gen *g, int y, uint32_t seed_lo, uint32_t seed_hi)
 {
@@ -337,12 +358,7 @@ static void hup_rows(band_gen *bg, int nb, int l, int i, const float **out)
         for (int b = 0; b < nb; b++) {
             level_gen *g = &bg[b].lv[l];
             const float *c = rows[b];
-            float *o = g->hup[slot];
-            for (int k = 0; k < g->fine_w; k++) {
-                int x = g->fine_x0 + k, ci = floordiv2(x) - g->x0;
-                o[k] = (x & 1) ? btf_up_odd(c[ci], c[ci + 1])
-                               : btf_up_even(c[ci - 1], c[ci], c[ci + 1]);
-            }
+            up_row(c, g->x0, g->fine_x0, g->fine_w, g->hup[slot]);
             g->hup_row[slot] = i;
         }
     }
@@ -468,13 +484,41 @@ static int band_init(band_gen *bg, const btf_car_band *bands, int levels, int su
     return BTF_OK;
 }
 
+/* Inverse decorrelation of one row (btf_unmix per channel): channel by
+ * channel into planes (loops the compiler vectorises), then interleaved. */
+static void unmix_row(const btf_subspace_model *sm, const float *b0, const float *b1,
+                      const float *b2, int width, float *plane, float *row)
+{
+    for (int k = 0; k < 3; k++) {
+        float *p = plane + (size_t)k * width;
+        float mean = sm->mean[k], c0 = sm->basis[k], c1 = sm->basis[3 + k];
+        float c2 = sm->basis[6 + k];
+        for (int x = 0; x < width; x++)
+            p[x] = btf_unmix(mean, c0, c1, c2, b0[x], b1[x], b2[x]);
+    }
+    const float *p0 = plane, *p1 = plane + width, *p2 = plane + 2 * (size_t)width;
+    for (int x = 0; x < width; x++) {
+        row[3 * x] = p0[x];
+        row[3 * x + 1] = p1[x];
+        row[3 * x + 2] = p2[x];
+    }
+}
+
 int btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err)
 {
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(v[i]))
-            return btf_fail(err, BTF_E_NUMERIC,
-                            "synthesis of subspace %d overflowed the float range at row %d "
-                            "(the model's values are too large for float images)", subspace, y);
+    /* Inf and NaN have all exponent bits set: OR the test over the row
+     * (a branch-free loop the compiler vectorises), look closer only when
+     * it fails. */
+    uint32_t bad = 0;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t u;
+        memcpy(&u, &v[i], sizeof u);
+        bad |= (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
+    }
+    if (bad)
+        return btf_fail(err, BTF_E_NUMERIC,
+                        "synthesis of subspace %d overflowed the float range at row %d "
+                        "(the model's values are too large for float images)", subspace, y);
     return BTF_OK;
 }
 
@@ -519,17 +563,15 @@ int btf_synthesise(const btf_model *m, int subspace, int width, int height, uint
     for (; made < 3 && rc == 0; made++)
         rc = band_init(&bg[made], sm->bands[made], sm->levels, subspace, made, width, height, seed,
                        err);
-    float *row = rc ? NULL : btf_alloc((size_t)width * 3, sizeof(float), err);
+    float *row = rc ? NULL : btf_alloc((size_t)width * 6, sizeof(float), err);
+    float *plane = row ? row + (size_t)width * 3 : NULL; /* 3 planar channels */
     if (!rc && !row)
         rc = BTF_E_NOMEM;
     for (int y = 0; rc == 0 && y < height; y++) {
         const float *g0[3];
         gauss_rows(bg, 3, 0, y, g0);
         const float *b0 = g0[0], *b1 = g0[1], *b2 = g0[2];
-        for (int x = 0; x < width; x++)
-            for (int k = 0; k < 3; k++)
-                row[3 * x + k] = btf_unmix(sm->mean[k], sm->basis[k], sm->basis[3 + k],
-                                           sm->basis[6 + k], b0[x], b1[x], b2[x]);
+        unmix_row(sm, b0, b1, b2, width, plane, row);
         rc = btf_check_finite_row(row, (size_t)width * 3, subspace, y, err);
         if (rc == 0)
             rc = fn(user, y, 1, row, err);

@@ -11,11 +11,9 @@
 
 #include "btf_noise.h"
 
-/* Rows a level's CAR field starts above its window, and columns it extends
- * on either side: the transient from the zero boundary dies out there, so
- * the output is stationary from its first pixel (docs/synthesis.md). */
-#define BTF_SYNTH_BURNIN 64
-#define BTF_SYNTH_MARGIN 64
+/* The rows a level's CAR field starts above its window, and the columns it
+ * extends on either side, are the band's margin (src/margin.c), computed on
+ * the host for both paths. */
 /* Field coordinates are signed (burn-in rows and margins are negative);
  * the noise counter takes them plus this origin, as unsigned. */
 #define BTF_NOISE_ORIGIN 268435456 /* 2^28 */

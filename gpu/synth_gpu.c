@@ -150,7 +150,8 @@ static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x
 {
     memset(t, 0, sizeof *t);
     t->x0 = x0, t->w = x1 - x0;
-    t->fx0 = x0 - BTF_SYNTH_MARGIN, t->fw = t->w + 2 * BTF_SYNTH_MARGIN;
+    int margin = btf_band_margin(b); /* the CPU's margins (src/margin.c) */
+    t->fx0 = x0 - margin, t->fw = t->w + 2 * margin;
     t->stream = stream;
     t->sigma = b->sigma, t->mean = b->mean;
     t->a = wavefront_slope(b);
@@ -187,6 +188,7 @@ static void level_rows(int y0, int y1, int l, int *a, int *b)
 /* Where one field stands while the strips go down the image. */
 typedef struct field_state {
     int level, up;        /* pyramid level; rows of history the recursion reads */
+    int margin;           /* burn-in rows above the window (btf_band_margin) */
     int next;             /* next absolute field row to compute */
     int base;             /* absolute row held in buffer row 0 */
     int rows, grows;      /* buffer rows reserved: field, G window */
@@ -233,9 +235,9 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
         int ga, gb;
         level_rows(y0, y1, f->level, &ga, &gb);
         if (first) {
-            /* The field starts BTF_SYNTH_BURNIN rows above its window; the
+            /* The field starts `margin` rows above its window; the
              * `up` rows above that are zero (the buffer is cleared). */
-            f->next = ga - BTF_SYNTH_BURNIN;
+            f->next = ga - f->margin;
             f->base = f->next - f->up;
             keep[i] = 0;
             keep_from[i] = 0;
@@ -298,6 +300,7 @@ static int build_batch(const btf_model *m, const int *subs, int n, int w, int h,
                           btf_noise_stream((uint32_t)subs[j], (uint32_t)b, (uint32_t)l), x0, x1);
                 bt->fs[ti].level = l;
                 bt->fs[ti].up = field_up(&bt->tasks[ti]);
+                bt->fs[ti].margin = btf_band_margin(&sm->bands[b][l]);
                 if (prev >= 0)
                     bt->tasks[prev].coarse = ti;
                 prev = ti;
@@ -554,6 +557,9 @@ static int check_request(const btf_model *m, const int *subs, int n, int w, int 
                 const btf_car_band *cb = &sm->bands[b][l];
                 if (cb->n < 0 || cb->n > BTF_CAR_MAX_NEIGHBOURS)
                     return btf_fail(err, BTF_E_ARG, "CAR model with %d neighbours", cb->n);
+                if (cb->margin < 0 || cb->margin > BTF_SYNTH_MARGIN_MAX)
+                    return btf_fail(err, BTF_E_ARG, "CAR synthesis margin %d: expected 0..%d",
+                                    cb->margin, BTF_SYNTH_MARGIN_MAX);
                 for (int s = 0; s < cb->n; s++) {
                     btf_offset o = cb->offsets[s];
                     if (!(o.row < 0 || (o.row == 0 && o.col < 0)))

@@ -503,6 +503,12 @@ typedef struct btf_car_band {
     float gamma[BTF_CAR_MAX_NEIGHBOURS];     /* coefficients, one per offset */
     float sigma;                             /* noise standard deviation, >= 0 */
     float mean;                              /* mean of the sub-band */
+    /* Synthesis margin in pixels: the field starts this many rows above its
+     * window and runs this many columns on either side, so the zero
+     * boundary's transient has died out (docs/synthesis.md). Not stored in
+     * model files: fitting and reading set it from the coefficients; 0
+     * lets synthesis compute it. At most 256. */
+    int margin;
 } btf_car_band;
 
 typedef struct btf_subspace_model {

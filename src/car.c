@@ -509,6 +509,7 @@ int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
         warn(&o, text);
     }
     out->sigma = to_float(sqrt(s2) * sd);
+    out->margin = btf_car_margin(out);
     free(z);
     if (info)
         *info = inf;

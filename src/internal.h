@@ -67,6 +67,19 @@ int btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid 
 int btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err);
 void btf_pyramid_free(btf_pyramid *p);
 
+/* Synthesis margins (src/margin.c): the rows above its window a band's
+ * CAR field starts, and the columns it runs on either side, so that the
+ * zero boundary's transient has died out (below BTF_SYNTH_MARGIN_EPS of the
+ * stationary variance) before the window. Depends on the band alone; CPU
+ * and GPU synthesis both use it. 0 for a band without neighbours. */
+#define BTF_SYNTH_MARGIN_MIN 8
+#define BTF_SYNTH_MARGIN_MAX 256
+#define BTF_SYNTH_MARGIN_EPS 1e-4
+int btf_car_margin(const btf_car_band *b);
+/* The margin synthesis uses: the band's cached one (set by fitting and
+ * reading models), else btf_car_margin. */
+int btf_band_margin(const btf_car_band *b);
+
 /* Noise rows (src/noise_row.c): the Gaussians of blocks b0 .. b0 + n - 1 of
  * a row (btf_noise4 of each, 4 n floats into out), bit for bit the same on
  * every path; vector_path 0 forces the portable loop. btf_noise_path_avx2

@@ -1060,6 +1060,11 @@ int btf_model_decode(const unsigned char *data, size_t size, const char *name, b
     if (rc == BTF_OK)
         rc = read_payload(payload, payload_n, m, name, err);
     free(owned);
+    /* Margins are not stored: they follow from the coefficients. */
+    for (int k = 0; rc == BTF_OK && k < m->n_subspaces; k++)
+        for (int b = 0; b < 3; b++)
+            for (int l = 0; l < m->subspaces[k].levels; l++)
+                m->subspaces[k].bands[b][l].margin = btf_car_margin(&m->subspaces[k].bands[b][l]);
     if (rc)
         btf_model_free(m);
     return rc;

@@ -10,9 +10,10 @@
  * Geometry. Level 0 covers the output window [0, W) x [0, H). Level l+1
  * covers what the up-sampling of level l reads: [floor(x0/2) - 1,
  * floor((x1-1)/2) + 2). Each level's CAR field additionally runs over
- * BTF_SYNTH_MARGIN columns on either side and starts BTF_SYNTH_BURNIN rows
- * above its window, with zeros outside: the transient dies out before the
- * window, so the output is stationary from its first pixel.
+ * `margin` columns on either side and starts `margin` rows above its window,
+ * with zeros outside, the margin chosen per band from its impulse response
+ * (src/margin.c): the transient dies out before the window, so the output
+ * is stationary from its first pixel.
  *
  * Streaming. Rows are produced top to bottom. A level keeps only the rows its
  * recursion reaches back to (a ring), and the up-sampled rows of the next
@@ -189,11 +190,12 @@ static int same_row_suffix(const btf_car_band *b, float gam[3])
  * -3, -2, -1) the last values stay in registers, so one pixel waits on the
  * previous one for a single multiply and add; any other set takes the
  * general loop. Same operations either way. */
-static void same_row_one(const level_gen *g, float *out)
+static void same_row_one(const level_gen *g, float *out, int from)
 {
     const btf_car_band *b = g->car;
-    const float *acc = g->acc;
-    int fw = g->fw;
+    const float *acc = g->acc + from;
+    int fw = g->fw - from;
+    out += from; /* the chain goes on from column `from` */
     float gam[3];
     int k = same_row_suffix(b, gam);
     if (k == 0) {
@@ -269,12 +271,39 @@ static void same_row_three(level_gen *const *g, float *const *out, const int *k,
     float y3_1 = k[1] >= 3 ? out1[-3] : 0.0f;
     float y1_2 = k[2] >= 1 ? out2[-1] : 0.0f, y2_2 = k[2] >= 2 ? out2[-2] : 0.0f;
     float y3_2 = k[2] >= 3 ? out2[-3] : 0.0f;
-    int fw = g[0]->fw;
-    for (int i = 0; i < fw; i++) {
-        SAME_ROW_STEP(0);
-        SAME_ROW_STEP(1);
-        SAME_ROW_STEP(2);
+    int fw = g[0]->fw < g[1]->fw ? g[0]->fw : g[1]->fw;
+    fw = g[2]->fw < fw ? g[2]->fw : fw; /* bands of other margins are wider */
+    if (k[0] == k[1] && k[1] == k[2]) {
+        /* The usual case, all three bands of one shape: the tests on k are
+         * constant in each copy of the loop, which leaves only arithmetic. */
+        int kk[3] = {k[0], k[0], k[0]};
+        switch (k[0]) {
+#define SAME_ROW_LOOP(K)                                                                         \
+    case K:                                                                                      \
+        kk[0] = kk[1] = kk[2] = K;                                                               \
+        for (int i = 0; i < fw; i++) {                                                           \
+            const int *k = kk; /* constant K: the compiler folds the tests */                    \
+            SAME_ROW_STEP(0);                                                                    \
+            SAME_ROW_STEP(1);                                                                    \
+            SAME_ROW_STEP(2);                                                                    \
+        }                                                                                        \
+        break;
+            SAME_ROW_LOOP(0)
+            SAME_ROW_LOOP(1)
+            SAME_ROW_LOOP(2)
+            SAME_ROW_LOOP(3)
+#undef SAME_ROW_LOOP
+        }
+    } else {
+        for (int i = 0; i < fw; i++) {
+            SAME_ROW_STEP(0);
+            SAME_ROW_STEP(1);
+            SAME_ROW_STEP(2);
+        }
     }
+    for (int b = 0; b < 3; b++)
+        if (g[b]->fw > fw)
+            same_row_one(g[b], out[b], fw);
 }
 
 /* The next row of a level's field in each of the n bands that step
@@ -294,7 +323,7 @@ static void field_step(level_gen *const *g, int n, uint32_t seed_lo, uint32_t se
         return;
     }
     for (int b = 0; b < n; b++)
-        same_row_one(g[b], out[b]);
+        same_row_one(g[b], out[b], 0);
 }
 
 /* Horizontal pyrUp of a coarse row c (its window starts at column cx0) to
@@ -335,11 +364,19 @@ static const float *field_row(level_gen *g, int y, uint32_t seed_lo, uint32_t se
 /* Zero-mean field row y of level l of each band, over the level's window. */
 static void field_rows(band_gen *bg, int nb, int l, int y, const float **f)
 {
-    level_gen *g[3];
-    for (int b = 0; b < nb; b++)
+    uint32_t lo = bg[0].seed_lo, hi = bg[0].seed_hi;
+    level_gen *g[3], *due[3];
+    int ndue = 0;
+    for (int b = 0; b < nb; b++) {
         g[b] = &bg[b].lv[l];
-    while (g[0]->next <= y)
-        field_step(g, nb, bg[0].seed_lo, bg[0].seed_hi);
+        /* Burn-in rows differ with the margin: each band alone up to y - 1. */
+        while (g[b]->next < y)
+            field_step(&g[b], 1, lo, hi);
+        if (g[b]->next == y)
+            due[ndue++] = g[b];
+    }
+    if (ndue > 0) /* row y of all bands at once */
+        field_step(due, ndue, lo, hi);
     for (int b = 0; b < nb; b++)
         f[b] = ring_row(g[b], y) + (g[b]->x0 - g[b]->fx0);
 }
@@ -424,11 +461,12 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
                       int y0, int y1, btf_error *err)
 {
     memset(g, 0, sizeof *g);
+    int margin = btf_band_margin(car);
     g->car = car;
     g->stream = stream;
     g->x0 = x0, g->x1 = x1, g->y0 = y0, g->y1 = y1;
-    g->fx0 = x0 - BTF_SYNTH_MARGIN;
-    g->fw = (x1 - x0) + 2 * BTF_SYNTH_MARGIN;
+    g->fx0 = x0 - margin;
+    g->fw = (x1 - x0) + 2 * margin;
     int up = 0;
     g->pad = 1;
     for (int s = 0; s < car->n; s++) {
@@ -439,7 +477,7 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
             g->pad = c;
     }
     g->depth = up + 1;
-    g->next = y0 - BTF_SYNTH_BURNIN;
+    g->next = y0 - margin;
     g->ring = btf_calloc((size_t)g->depth * (g->fw + 2 * g->pad), sizeof(float), err);
     g->grow = btf_alloc((size_t)(x1 - x0), sizeof(float), err);
     g->noise = btf_alloc((size_t)g->fw + 6, sizeof(float), err);
@@ -534,6 +572,9 @@ static int check_band(const btf_car_band *b, btf_error *err)
 {
     if (b->n < 0 || b->n > BTF_CAR_MAX_NEIGHBOURS)
         return btf_fail(err, BTF_E_ARG, "CAR model with %d neighbours", b->n);
+    if (b->margin < 0 || b->margin > BTF_SYNTH_MARGIN_MAX)
+        return btf_fail(err, BTF_E_ARG, "CAR synthesis margin %d: expected 0..%d", b->margin,
+                        BTF_SYNTH_MARGIN_MAX);
     for (int s = 0; s < b->n; s++) {
         btf_offset o = b->offsets[s];
         if (!(o.row < 0 || (o.row == 0 && o.col < 0)))

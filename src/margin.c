@@ -1,0 +1,97 @@
+/*
+ * margin.c — how far outside its window a CAR field must start so that the
+ * window is stationary from its first pixel (paper section II.C: the model
+ * is stationary; synthesis must not show the zero boundary).
+ *
+ * A synthesised field starts from zeros BTF margin rows above its window and
+ * runs that many extra columns on either side. The boundary's effect on a
+ * window pixel is what the field's impulse response carries over that
+ * distance: with h the response of the recursion Y_r = sum_s gamma_s Y_{r+s}
+ * + e_r to a unit impulse, the stationary variance is sigma^2 sum h^2 and a
+ * pixel m rows or columns from the boundary misses about the part of that
+ * sum beyond m. The margin is the smallest m (a power of two times
+ * BTF_SYNTH_MARGIN_MIN, at least the neighbourhood's reach) whose missing
+ * part is below BTF_SYNTH_MARGIN_EPS of the whole, capped at
+ * BTF_SYNTH_MARGIN_MAX. A weakly correlated band (most of them) needs 8 or
+ * 16 pixels, a strongly correlated one up to the cap: synthesis no longer
+ * pays a fixed 64 on every side of every level, and no longer cuts short a
+ * band whose correlation reaches farther.
+ *
+ * The response is computed in double on a grid of 2m + 1 rows and 4m + 1
+ * columns with the synthesis' own zero boundary, so the estimate includes
+ * what the boundary does. The result depends on the band alone, never on
+ * the output size, tiling or backend: CPU and GPU (gpu/synth_gpu.c) call
+ * this same function and stay bit-identical.
+ */
+#include "internal.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdlib.h>
+
+/* The larger of the neighbourhood's row and column reach. */
+static int band_reach(const btf_car_band *b)
+{
+    int r = 0;
+    for (int s = 0; s < b->n; s++) {
+        int dr = abs(b->offsets[s].row), dc = abs(b->offsets[s].col);
+        r = dr > r ? dr : r;
+        r = dc > r ? dc : r;
+    }
+    return r;
+}
+
+/* Whether margin m suffices: the impulse response on rows [0, 2m] and
+ * columns [-2m, 2m] (zeros beyond, as in synthesis), and the share of its
+ * energy outside rows [0, m], columns [-m, m]. The grid carries `reach`
+ * zero rows above and columns on either side, so the sum needs no bounds
+ * checks. */
+static int margin_suffices(const btf_car_band *b, int m, int reach)
+{
+    int rows = 2 * m + 1, cols = 4 * m + 1, c0 = 2 * m;
+    size_t stride = (size_t)cols + 2 * reach;
+    double *h = calloc((size_t)(rows + reach) * stride, sizeof *h);
+    if (!h)
+        return 0; /* cannot tell: take a larger margin */
+    ptrdiff_t off[BTF_CAR_MAX_NEIGHBOURS];
+    double gam[BTF_CAR_MAX_NEIGHBOURS];
+    for (int s = 0; s < b->n; s++) {
+        off[s] = (ptrdiff_t)b->offsets[s].row * (ptrdiff_t)stride + b->offsets[s].col;
+        gam[s] = b->gamma[s];
+    }
+    double total = 0.0, inside = 0.0;
+    for (int r = 0; r < rows; r++) {
+        double *row = h + (size_t)(r + reach) * stride + reach;
+        for (int c = 0; c < cols; c++) {
+            double v = (r == 0 && c == c0) ? 1.0 : 0.0;
+            for (int s = 0; s < b->n; s++)
+                v += gam[s] * row[c + off[s]];
+            row[c] = v;
+            double e = v * v;
+            total += e;
+            if (r <= m && abs(c - c0) <= m)
+                inside += e;
+        }
+    }
+    free(h);
+    if (!isfinite(total))
+        return 0; /* a growing response: no margin suffices */
+    return total - inside <= BTF_SYNTH_MARGIN_EPS * total;
+}
+
+int btf_car_margin(const btf_car_band *b)
+{
+    if (b->n == 0)
+        return 0; /* white noise: no memory, no transient */
+    int m = BTF_SYNTH_MARGIN_MIN, reach = band_reach(b);
+    while (m < 2 * reach && m < BTF_SYNTH_MARGIN_MAX)
+        m *= 2;
+    while (m < BTF_SYNTH_MARGIN_MAX && !margin_suffices(b, m, reach))
+        m *= 2;
+    return m;
+}
+
+int btf_band_margin(const btf_car_band *b)
+{
+    return b->margin > 0 ? b->margin : btf_car_margin(b);
+}

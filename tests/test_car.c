@@ -199,6 +199,89 @@ static void long_synthesis_is_stationary(void **state)
     assert_true(fabs(mean) < 0.05 * sqrt(stat));
 }
 
+/* Synthesis margins (src/margin.c) follow the band's correlation: none for
+ * white noise, the minimum for a weak band, more as the correlation grows,
+ * the cap for an unstable one; and with its margin a strongly correlated
+ * field is stationary from its first row, which a short margin is not. */
+static void margins_follow_correlation(void **state)
+{
+    (void)state;
+    btf_car_band white = model("0:-1", (const float[]){0.0f}, 1.0f, 0.0f);
+    white.n = 0;
+    assert_int_equal(btf_car_margin(&white), 0);
+    btf_car_band weak = model("0:-1", (const float[]){0.2f}, 1.0f, 0.0f);
+    assert_int_equal(btf_car_margin(&weak), BTF_SYNTH_MARGIN_MIN);
+    const float strengths[] = {0.2f, 0.35f, 0.45f, 0.49f, 0.499f};
+    int last = 0;
+    for (int i = 0; i < 5; i++) {
+        float g = strengths[i];
+        btf_car_band b = model("0:-1,-1:0", (const float[]){g, g}, 1.0f, 0.0f);
+        int m = btf_car_margin(&b);
+        print_message("gamma %.3f %.3f: margin %d\n", g, g, m);
+        assert_true(m >= last && m <= BTF_SYNTH_MARGIN_MAX);
+        last = m;
+    }
+    assert_true(last > 64); /* reaches farther than the old fixed 64 */
+    btf_car_band unstable = model("0:-1,-1:0", (const float[]){0.6f, 0.6f}, 1.0f, 0.0f);
+    assert_int_equal(btf_car_margin(&unstable), BTF_SYNTH_MARGIN_MAX);
+
+    /* The first row's variance over many seeds, against the stationary one. */
+    btf_car_band strong = model("0:-1,-1:0", (const float[]){0.45f, 0.45f}, 1.0f, 0.0f);
+    double stat = btf_car_stationary_variance(&strong);
+    int seeds = getenv("BTF_ASAN") ? 60 : 200, w = 2000;
+    for (int pass = 0; pass < 2; pass++) {
+        strong.margin = pass == 0 ? 0 : 2; /* computed, then far too short */
+        collect c = {.width = w, .finite = 1};
+        btf_error e = {0};
+        for (int s = 0; s < seeds; s++)
+            TU_OK(btf_car_synthesise_field(&strong, w, 1, 100 + s, 3, collect_rows, &c, &e), &e);
+        double ratio = (c.sum2 / c.n) / stat;
+        print_message("margin %d: first-row variance / stationary = %.4f\n",
+                      pass == 0 ? btf_car_margin(&strong) : 2, ratio);
+        if (pass == 0)
+            assert_true(fabs(ratio - 1.0) < 0.05);
+        else
+            assert_true(ratio < 0.9); /* 0.86: the transient shows */
+    }
+    /* A margin beyond the cap is refused, not run. */
+    strong.margin = BTF_SYNTH_MARGIN_MAX + 1;
+    btf_error e = {0};
+    collect c = {.width = 4, .finite = 1};
+    assert_int_equal(btf_car_synthesise_field(&strong, 4, 4, 1, 3, collect_rows, &c, &e),
+                     BTF_E_ARG);
+}
+
+/* Fitting sets each band's margin, and reading a model file sets the same
+ * (margins are not stored: they follow from the coefficients). */
+static void fitted_and_read_models_carry_margins(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_material mat;
+    TU_OK(btf_material_make("fabric", 64, 5, &mat, &e), &e);
+    btf_image img;
+    TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){45, 30}, &img, &e), &e);
+    btf_material_free(&mat);
+    btf_fit_opts fo = {.levels = 2};
+    btf_model m, back;
+    TU_OK(btf_texture_fit(&img, &fo, &m, &e), &e);
+    unsigned char *bytes;
+    size_t size;
+    TU_OK(btf_model_encode(&m, &bytes, &size, &e), &e);
+    TU_OK(btf_model_decode(bytes, size, "fitted", &back, &e), &e);
+    for (int b = 0; b < 3; b++)
+        for (int l = 0; l < 2; l++) {
+            const btf_car_band *fit = &m.subspaces[0].bands[b][l];
+            assert_true(fit->n == 0 || fit->margin >= BTF_SYNTH_MARGIN_MIN);
+            assert_int_equal(fit->margin, btf_car_margin(fit));
+            assert_int_equal(back.subspaces[0].bands[b][l].margin, fit->margin);
+        }
+    free(bytes);
+    btf_model_free(&m);
+    btf_model_free(&back);
+    btf_image_free(&img);
+}
+
 /* (c) The Bayesian choice finds the true neighbourhood (a member of the
  * candidate family) far more often than any wrong one. */
 static void selection_finds_true_neighbourhood(void **state)
@@ -492,6 +575,8 @@ int main(void)
         cmocka_unit_test(decorrelation_and_pyramid),
         cmocka_unit_test(estimates_recover_known_parameters),
         cmocka_unit_test(long_synthesis_is_stationary),
+        cmocka_unit_test(margins_follow_correlation),
+        cmocka_unit_test(fitted_and_read_models_carry_margins),
         cmocka_unit_test(selection_finds_true_neighbourhood),
         cmocka_unit_test(degenerate_bands),
         cmocka_unit_test(stability_check),

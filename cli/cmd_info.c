@@ -252,7 +252,7 @@ static void text_subspace(const btf_model *m, int s)
             printf("  band %d level %d: %s  gamma", b, l, cb->n ? nb : "(none)");
             for (int i = 0; i < cb->n; i++)
                 printf(" %.6g", cb->gamma[i]);
-            printf("  sigma %.6g  mean %.6g\n", cb->sigma, cb->mean);
+            printf("  sigma %.6g  mean %.6g  margin %d\n", cb->sigma, cb->mean, cb->margin);
         }
 }
 
@@ -302,6 +302,7 @@ static void json_band(FILE *f, const btf_car_band *b)
     json_f32(f, b->sigma);
     fputs(", \"mean\": ", f);
     json_f32(f, b->mean);
+    fprintf(f, ", \"margin\": %d", b->margin);
     fputc('}', f);
 }
 

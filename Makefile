@@ -77,7 +77,7 @@ $(STATIC): $(LIB_OBJ)
 	ar rcs $@ $^
 
 $(SHARED): $(LIB_OBJ)
-	$(CXX) -shared -Wl,-soname,libbtfcar.so.0 $(SAN) -o $@ $^ $(LDLIBS)
+	$(CXX) -shared -Wl,-soname,libbtfcar.so.1 $(SAN) -o $@ $^ $(LDLIBS)
 
 $(CLI): $(CLI_OBJ) $(STATIC)
 	$(CC) $(SAN) -pthread -o $@ $(CLI_OBJ) $(STATIC) $(LDLIBS)
@@ -153,8 +153,8 @@ install: $(STATIC) $(SHARED) $(CLI)
 	install -d $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include $(DESTDIR)$(PREFIX)/bin \
 	  $(DESTDIR)$(PREFIX)/lib/pkgconfig
 	install -m 644 $(STATIC) $(DESTDIR)$(PREFIX)/lib/
-	install -m 755 $(SHARED) $(DESTDIR)$(PREFIX)/lib/libbtfcar.so.0
-	ln -sf libbtfcar.so.0 $(DESTDIR)$(PREFIX)/lib/libbtfcar.so
+	install -m 755 $(SHARED) $(DESTDIR)$(PREFIX)/lib/libbtfcar.so.1
+	ln -sf libbtfcar.so.1 $(DESTDIR)$(PREFIX)/lib/libbtfcar.so
 	install -m 644 include/btfcar.h $(DESTDIR)$(PREFIX)/include/
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBS@|$(LDLIBS)|' -e 's|@VERSION@|$(shell sed -n 's/.*BTF_VERSION_STRING "\(.*\)"/\1/p' include/btfcar.h)|' \

@@ -44,7 +44,8 @@ static int put_rows(void *user, int y, int nrows, const float *rows, btf_error *
     return btf_exr_writer_put_rows(s->exr, rows, nrows, err);
 }
 
-/* "0,3,5" or "all" into a 0/1 table of m->n_subspaces entries. */
+/* "0,3,5" or "all" into a 0/1 table of m->n_subspaces entries: plain
+ * decimal numbers only (no sign, no spaces), each once. */
 static int parse_list(const char *s, int n, unsigned char *pick)
 {
     memset(pick, !strcmp(s, "all"), (size_t)n);
@@ -54,8 +55,10 @@ static int parse_list(const char *s, int n, unsigned char *pick)
         return -1;
     for (;;) {
         char *end;
+        if (*s < '0' || *s > '9')
+            return -1;
         long v = strtol(s, &end, 10);
-        if (end == s || v < 0 || v >= n || (*end != ',' && *end))
+        if (v >= n || (*end != ',' && *end) || pick[v])
             return -1;
         pick[v] = 1;
         if (!*end)
@@ -244,16 +247,20 @@ int cmd_synthesise(int argc, char **argv)
         free(pick);
         int n = m.n_subspaces;
         btf_model_free(&m);
-        return cli_usage_error(&c, "--subspace '%s': expected numbers 0..%d or all", list, n - 1);
+        return cli_usage_error(&c, "--subspace '%s': expected distinct numbers 0..%d, "
+                               "comma-separated, or all", list, n - 1);
     }
-    if (rc == 0)
-        rc = btf_mkdirs(outdir, &err);
+    /* The device first: a refusal leaves no output folder behind. */
     btf_gpu *gpu = NULL;
     if (rc == 0) {
         gpu = open_gpu(&c, backend, device, (uint64_t)w * h * 12, &err);
         if (!gpu && (!strcmp(backend, "gpu") || device >= 0))
             rc = 1;
+        else if (!gpu)
+            err = (btf_error){0}; /* the CPU takes over: the GPU's reason is spent */
     }
+    if (rc == 0)
+        rc = btf_mkdirs(outdir, &err);
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     int done = 0;

@@ -599,12 +599,48 @@ static int plan_batch(const btf_model *m, const int *subs, int n, int w, int h, 
     return btf_fail(err, BTF_E_UNSUPPORTED, "no GPU batch fits"); /* not reached */
 }
 
+/* Margins once per call: a model built through the API may leave them 0
+ * (to be computed), and planning builds batches many times. Returns m
+ * itself when every band has one, else a shallow copy with its own
+ * subspace array (*copy, freed by the caller) holding them. */
+static int resolve_margins(const btf_model *m, const int *subs, int n, btf_model *copy,
+                           const btf_model **use, btf_error *err)
+{
+    *use = m;
+    memset(copy, 0, sizeof *copy);
+    for (int j = 0; j < n; j++) {
+        btf_subspace_model *sm = &m->subspaces[subs[j]];
+        for (int b = 0; b < 3; b++)
+            for (int l = 0; l < sm->levels; l++) {
+                if (sm->bands[b][l].margin > 0 || sm->bands[b][l].n == 0)
+                    continue;
+                if (!copy->subspaces) {
+                    *copy = *m;
+                    copy->subspaces = btf_alloc((size_t)m->n_subspaces,
+                                                sizeof(btf_subspace_model), err);
+                    if (!copy->subspaces)
+                        return BTF_E_NOMEM;
+                    memcpy(copy->subspaces, m->subspaces,
+                           (size_t)m->n_subspaces * sizeof(btf_subspace_model));
+                    *use = copy;
+                }
+                btf_car_band *cb = &copy->subspaces[subs[j]].bands[b][l];
+                if ((cb->margin = btf_car_margin(cb)) < 0)
+                    return btf_fail(err, BTF_E_NOMEM, "out of memory");
+            }
+    }
+    return BTF_OK;
+}
+
 int btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n, int width,
                        int height, uint64_t seed, btf_image *outs, btf_error *err)
 {
     for (int j = 0; j < n; j++)
         memset(&outs[j], 0, sizeof outs[j]);
     int rc = check_request(m, subspaces, n, width, height, err);
+    btf_model copy = {0};
+    if (rc == 0)
+        rc = resolve_margins(m, subspaces, n, &copy, &m, err);
     for (int j = 0; rc == 0 && j < n; j++)
         rc = btf_image_alloc(&outs[j], width, height, 3, err);
     g->jobs = g->batches = 0;
@@ -626,5 +662,6 @@ int btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int
     if (rc)
         for (int j = 0; j < n; j++)
             btf_image_free(&outs[j]);
+    free(copy.subspaces); /* only the array: the rest is the caller's model */
     return rc;
 }

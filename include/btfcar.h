@@ -507,7 +507,8 @@ typedef struct btf_car_band {
      * window and runs this many columns on either side, so the zero
      * boundary's transient has died out (docs/synthesis.md). Not stored in
      * model files: fitting and reading set it from the coefficients; 0
-     * lets synthesis compute it. At most 256. */
+     * lets synthesis compute it, so set it to 0 after changing gamma.
+     * At most 256. (Added in soname 1.) */
     int margin;
 } btf_car_band;
 

@@ -509,8 +509,20 @@ int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
         warn(&o, text);
     }
     out->sigma = to_float(sqrt(s2) * sd);
-    out->margin = btf_car_margin(out);
     free(z);
+    if ((out->margin = btf_car_margin(out)) < 0)
+        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+    if (out->margin == BTF_SYNTH_MARGIN_MAX) {
+        /* Nearly unstable: its correlation outreaches the largest margin. */
+        double short_by = btf_car_margin_shortfall(out, BTF_SYNTH_MARGIN_MAX);
+        if (short_by > BTF_SYNTH_MARGIN_EPS) {
+            char text[200];
+            snprintf(text, sizeof text, "correlation reaches beyond the %d-pixel synthesis "
+                     "margin: the first rows and columns of a synthesis miss at least %.2g%% of "
+                     "the stationary variance", BTF_SYNTH_MARGIN_MAX, 100.0 * short_by);
+            warn(&o, text);
+        }
+    }
     if (info)
         *info = inf;
     return BTF_OK;

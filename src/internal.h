@@ -76,8 +76,18 @@ void btf_pyramid_free(btf_pyramid *p);
 #define BTF_SYNTH_MARGIN_MAX 256
 #define BTF_SYNTH_MARGIN_EPS 1e-4
 int btf_car_margin(const btf_car_band *b);
+/* The same with a work budget (grid cells times neighbours, decremented):
+ * when it runs out, the safe answer BTF_SYNTH_MARGIN_MAX. Reading a model
+ * file uses it so that a small crafted file cannot cost minutes. Both
+ * return -1 when out of memory. */
+int btf_car_margin_within(const btf_car_band *b, double *budget);
+/* The share of the impulse response's energy beyond m rows or columns: a
+ * lower bound of what a pixel that far from the zero boundary misses of the
+ * stationary variance (the side boundaries pin the field to 0, which costs
+ * nearly unstable bands more), or -1 when out of memory. */
+double btf_car_margin_shortfall(const btf_car_band *b, int m);
 /* The margin synthesis uses: the band's cached one (set by fitting and
- * reading models), else btf_car_margin. */
+ * reading models), else btf_car_margin; -1 when out of memory. */
 int btf_band_margin(const btf_car_band *b);
 
 /* Noise rows (src/noise_row.c): the Gaussians of blocks b0 .. b0 + n - 1 of

@@ -10,12 +10,14 @@
  * + e_r to a unit impulse, the stationary variance is sigma^2 sum h^2 and a
  * pixel m rows or columns from the boundary misses about the part of that
  * sum beyond m. The margin is the smallest m (a power of two times
- * BTF_SYNTH_MARGIN_MIN, at least the neighbourhood's reach) whose missing
- * part is below BTF_SYNTH_MARGIN_EPS of the whole, capped at
+ * BTF_SYNTH_MARGIN_MIN, at least twice the neighbourhood's reach) whose
+ * missing part is below BTF_SYNTH_MARGIN_EPS of the whole, capped at
  * BTF_SYNTH_MARGIN_MAX. A weakly correlated band (most of them) needs 8 or
- * 16 pixels, a strongly correlated one up to the cap: synthesis no longer
- * pays a fixed 64 on every side of every level, and no longer cuts short a
- * band whose correlation reaches farther.
+ * 16 pixels, a strongly correlated one more: synthesis no longer pays a
+ * fixed 64 on every side of every level, and gives bands whose correlation
+ * reaches farther up to 256. A band that needs more than the cap (a nearly
+ * unstable one) is synthesised with 256 and its first rows fall short of
+ * the stationary variance: fitting warns of it (btf_car_margin_shortfall).
  *
  * The response is computed in double on a grid of 2m + 1 rows and 4m + 1
  * columns with the synthesis' own zero boundary, so the estimate includes
@@ -41,18 +43,18 @@ static int band_reach(const btf_car_band *b)
     return r;
 }
 
-/* Whether margin m suffices: the impulse response on rows [0, 2m] and
- * columns [-2m, 2m] (zeros beyond, as in synthesis), and the share of its
- * energy outside rows [0, m], columns [-m, m]. The grid carries `reach`
- * zero rows above and columns on either side, so the sum needs no bounds
- * checks. */
-static int margin_suffices(const btf_car_band *b, int m, int reach)
+/* The share of the impulse response's energy lying outside rows [0, m],
+ * columns [-m, m], the response computed on rows [0, 2m] and columns
+ * [-2m, 2m] (zeros beyond, as in synthesis): 1 for a growing response, -1
+ * when the grid cannot be allocated. The grid carries `reach` zero rows
+ * above and columns on either side, so the sum needs no bounds checks. */
+static double outside_share(const btf_car_band *b, int m, int reach)
 {
     int rows = 2 * m + 1, cols = 4 * m + 1, c0 = 2 * m;
     size_t stride = (size_t)cols + 2 * reach;
     double *h = calloc((size_t)(rows + reach) * stride, sizeof *h);
     if (!h)
-        return 0; /* cannot tell: take a larger margin */
+        return -1.0;
     ptrdiff_t off[BTF_CAR_MAX_NEIGHBOURS];
     double gam[BTF_CAR_MAX_NEIGHBOURS];
     for (int s = 0; s < b->n; s++) {
@@ -60,7 +62,7 @@ static int margin_suffices(const btf_car_band *b, int m, int reach)
         gam[s] = b->gamma[s];
     }
     double total = 0.0, inside = 0.0;
-    for (int r = 0; r < rows; r++) {
+    for (int r = 0; r < rows && total < 1e300; r++) { /* a blow-up ends it early */
         double *row = h + (size_t)(r + reach) * stride + reach;
         for (int c = 0; c < cols; c++) {
             double v = (r == 0 && c == c0) ? 1.0 : 0.0;
@@ -74,21 +76,49 @@ static int margin_suffices(const btf_car_band *b, int m, int reach)
         }
     }
     free(h);
-    if (!isfinite(total))
-        return 0; /* a growing response: no margin suffices */
-    return total - inside <= BTF_SYNTH_MARGIN_EPS * total;
+    if (!(total < 1e300))
+        return 1.0; /* a growing response (or NaN coefficients): all of it is outside */
+    return (total - inside) / total;
 }
 
-int btf_car_margin(const btf_car_band *b)
+/* The work of testing margin m: grid cells times neighbours. */
+static double test_work(const btf_car_band *b, int m)
+{
+    return (2.0 * m + 1.0) * (4.0 * m + 1.0) * (b->n + 1);
+}
+
+int btf_car_margin_within(const btf_car_band *b, double *budget)
 {
     if (b->n == 0)
         return 0; /* white noise: no memory, no transient */
     int m = BTF_SYNTH_MARGIN_MIN, reach = band_reach(b);
     while (m < 2 * reach && m < BTF_SYNTH_MARGIN_MAX)
         m *= 2;
-    while (m < BTF_SYNTH_MARGIN_MAX && !margin_suffices(b, m, reach))
-        m *= 2;
+    for (; m < BTF_SYNTH_MARGIN_MAX; m *= 2) {
+        if (budget) {
+            if (*budget < test_work(b, m))
+                return BTF_SYNTH_MARGIN_MAX; /* out of budget: the safe answer */
+            *budget -= test_work(b, m);
+        }
+        double share = outside_share(b, m, reach);
+        if (share < 0.0)
+            return -1;
+        if (share <= BTF_SYNTH_MARGIN_EPS)
+            break;
+    }
     return m;
+}
+
+int btf_car_margin(const btf_car_band *b)
+{
+    return btf_car_margin_within(b, NULL);
+}
+
+double btf_car_margin_shortfall(const btf_car_band *b, int m)
+{
+    if (b->n == 0)
+        return 0.0;
+    return outside_share(b, m, band_reach(b));
 }
 
 int btf_band_margin(const btf_car_band *b)

@@ -462,6 +462,8 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
 {
     memset(g, 0, sizeof *g);
     int margin = btf_band_margin(car);
+    if (margin < 0)
+        return btf_fail(err, BTF_E_NOMEM, "out of memory");
     g->car = car;
     g->stream = stream;
     g->x0 = x0, g->x1 = x1, g->y0 = y0, g->y1 = y1;

@@ -282,6 +282,62 @@ static void fitted_and_read_models_carry_margins(void **state)
     btf_image_free(&img);
 }
 
+/* Reading a model computes its margins within a work budget: a small file
+ * of thousands of nearly unstable bands (24 neighbours, gammas summing to
+ * 0.998) reads in seconds, not minutes, its bands taking the safe largest
+ * margin; a band whose correlation outreaches the largest margin is
+ * reported by btf_car_margin_shortfall. */
+static void margins_bounded_on_read(void **state)
+{
+    (void)state;
+    btf_model m;
+    memset(&m, 0, sizeof m);
+    m.n_subspaces = 256;
+    m.subspaces = calloc(256, sizeof *m.subspaces);
+    assert_non_null(m.subspaces);
+    for (int s = 0; s < 256; s++) {
+        btf_subspace_model *sm = &m.subspaces[s];
+        sm->view = sm->light = -1;
+        sm->width = sm->height = 64;
+        sm->levels = 8;
+        sm->basis[0] = sm->basis[4] = sm->basis[8] = 1.0f;
+        for (int b = 0; b < 3; b++)
+            for (int l = 0; l < 8; l++) {
+                btf_car_band *cb = &sm->bands[b][l];
+                for (int r = -3; r <= 0; r++)
+                    for (int c = -3; c <= 3 && cb->n < 24; c++)
+                        if (r < 0 || c < 0) {
+                            cb->offsets[cb->n].row = (int8_t)r;
+                            cb->offsets[cb->n].col = (int8_t)c;
+                            cb->gamma[cb->n++] = 0.0416f;
+                        }
+                cb->sigma = 1.0f;
+            }
+    }
+    unsigned char *bytes;
+    size_t size;
+    btf_error e = {0};
+    TU_OK(btf_model_encode(&m, &bytes, &size, &e), &e);
+    btf_model back;
+    double t0 = tu_now();
+    TU_OK(btf_model_decode(bytes, size, "crafted", &back, &e), &e);
+    double took = tu_now() - t0;
+    print_message("%zu-byte file of %d bands read in %.2f s\n", size, 256 * 3 * 8, took);
+    assert_true(took < (getenv("BTF_ASAN") ? 60.0 : 10.0)); /* unbounded: about 20 s */
+    assert_int_equal(back.subspaces[255].bands[2][7].margin, BTF_SYNTH_MARGIN_MAX);
+    free(bytes);
+    btf_model_free(&back);
+    free(m.subspaces);
+
+    btf_car_band edge = model("0:-1,-1:0", (const float[]){0.499f, 0.499f}, 1.0f, 0.0f);
+    assert_int_equal(btf_car_margin(&edge), BTF_SYNTH_MARGIN_MAX);
+    double short_by = btf_car_margin_shortfall(&edge, BTF_SYNTH_MARGIN_MAX);
+    print_message("gamma 0.499, 0.499: %.3g of the variance beyond 256 pixels\n", short_by);
+    assert_true(short_by > BTF_SYNTH_MARGIN_EPS);
+    btf_car_band fine = model("0:-1,-1:0", (const float[]){0.45f, 0.45f}, 1.0f, 0.0f);
+    assert_true(btf_car_margin_shortfall(&fine, btf_car_margin(&fine)) <= BTF_SYNTH_MARGIN_EPS);
+}
+
 /* (c) The Bayesian choice finds the true neighbourhood (a member of the
  * candidate family) far more often than any wrong one. */
 static void selection_finds_true_neighbourhood(void **state)
@@ -577,6 +633,7 @@ int main(void)
         cmocka_unit_test(long_synthesis_is_stationary),
         cmocka_unit_test(margins_follow_correlation),
         cmocka_unit_test(fitted_and_read_models_carry_margins),
+        cmocka_unit_test(margins_bounded_on_read),
         cmocka_unit_test(selection_finds_true_neighbourhood),
         cmocka_unit_test(degenerate_bands),
         cmocka_unit_test(stability_check),

@@ -234,6 +234,55 @@ static void texture_fit_options(void **state)
     free(err);
 }
 
+/* synthesise's request checks: --subspace takes distinct plain numbers,
+ * --size at most 65536 per side, --device goes with a Vulkan backend, and
+ * the GPU backend refuses images beyond its memory budget (auto streams
+ * them on the CPU instead). Usage errors exit 2 before any output. */
+static void synthesise_request_checks(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_material mat;
+    btf_image img;
+    TU_OK(btf_material_make("wood", 32, 3, &mat, &e), &e);
+    TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){30, 0}, &img, &e), &e);
+    btf_material_free(&mat);
+    char png[4096], model[4096], out[4096];
+    snprintf(png, sizeof png, "%s/req.png", tu_dir);
+    snprintf(model, sizeof model, "%s/req.btfcar", tu_dir);
+    snprintf(out, sizeof out, "%s/req.out", tu_dir);
+    TU_OK(btf_image_write_png(png, &img, &e), &e);
+    btf_image_free(&img);
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s -o %s --levels 1", tu_cli(), png, model),
+                            NULL), 0);
+    const char *bad[] = {"--subspace ''", "--subspace ' 0'", "--subspace +0", "--subspace -0",
+                         "--subspace 0,0", "--subspace 0,", "--subspace 1",
+                         "--size 70000x1", "--size 1x65537", "--backend cpu --device 0"};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        char *err = NULL;
+        int rc = tu_run(tu_fmt("%s synthesise %s --size 8x8 %s -o %s", tu_cli(), model, bad[i],
+                               out), &err);
+        if (rc != 2)
+            print_error("%s: exit %d, %s\n", bad[i], rc, err ? err : "");
+        assert_int_equal(rc, 2);
+        assert_true(strchr(err, '\n') == err + strlen(err) - 1); /* one line */
+        free(err);
+    }
+    struct stat st;
+    assert_int_not_equal(stat(out, &st), 0); /* nothing written */
+    assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s --size 4x3 --subspace 0 --backend cpu "
+                                   "-o %s", tu_cli(), model, out), NULL), 0);
+    /* 20000 x 20000 floats are 4.5 GiB: more than the GPU backend holds. The
+     * refusal comes before any device or pixel work. */
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 20000x20000 --backend gpu -o %s.big",
+                                   tu_cli(), model, out), &err), 1);
+    assert_non_null(strstr(err, "GiB"));
+    assert_non_null(strstr(err, "--backend cpu"));
+    free(err);
+    assert_int_not_equal(stat(tu_fmt("%s.big", out), &st), 0); /* no folder left */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -244,6 +293,7 @@ int main(void)
         cmocka_unit_test(info_names_truncated_jpeg),
         cmocka_unit_test(bad_model_files),
         cmocka_unit_test(texture_fit_options),
+        cmocka_unit_test(synthesise_request_checks),
     };
     return cmocka_run_group_tests_name("cli", tests, tu_setup_dir, tu_teardown_dir);
 }

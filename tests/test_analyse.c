@@ -173,19 +173,6 @@ static void report_gives_segmentation_reason(void **state)
     btf_dataset_close(ds);
 }
 
-/* Runs a command line and returns its stdout (malloc'd). */
-static char *capture(const char *cmd, int *status)
-{
-    FILE *p = popen(cmd, "r");
-    assert_non_null(p);
-    char *out = calloc(1, 1 << 16);
-    size_t n = fread(out, 1, (1 << 16) - 1, p);
-    out[n] = 0;
-    int st = pclose(p);
-    *status = WEXITSTATUS(st);
-    return out;
-}
-
 /* The "segmentation: ..." line of a command's output (malloc'd), or NULL. */
 static char *reason_line(const char *text)
 {
@@ -221,10 +208,10 @@ static void cli_prints_segmentation_reason(void **state)
     (void)state;
     int st;
     const char *model = tu_fmt("%s/cli.btfcar", tu_dir);
-    char *full = capture(tu_fmt("%s analyse %s -o %s --levels 1 --max-neighbours 2 --threads 1 "
+    char *full = tu_capture(tu_fmt("%s analyse %s -o %s --levels 1 --max-neighbours 2 --threads 1 "
                                 "2>&1", tu_cli(), wide, model), &st);
     assert_int_equal(st, 0);
-    char *seg = capture(tu_fmt("%s analyse %s -o %s/seg --stage segment 2>&1", tu_cli(), wide,
+    char *seg = tu_capture(tu_fmt("%s analyse %s -o %s/seg --stage segment 2>&1", tu_cli(), wide,
                                tu_dir), &st);
     assert_int_equal(st, 0);
     char *a = reason_line(full), *b = reason_line(seg);
@@ -239,7 +226,7 @@ static void cli_prints_segmentation_reason(void **state)
     free(seg);
     /* --quiet: no report at all. */
     const char *model3 = tu_fmt("%s/cli3.btfcar", tu_dir);
-    full = capture(tu_fmt("%s analyse -q %s -o %s --levels 1 --max-neighbours 2 --threads 3",
+    full = tu_capture(tu_fmt("%s analyse -q %s -o %s --levels 1 --max-neighbours 2 --threads 3",
                           tu_cli(), wide, model3), &st);
     assert_int_equal(st, 0);
     assert_string_equal(full, "");

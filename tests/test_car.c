@@ -257,11 +257,8 @@ static void fitted_and_read_models_carry_margins(void **state)
 {
     (void)state;
     btf_error e = {0};
-    btf_material mat;
-    TU_OK(btf_material_make("fabric", 64, 5, &mat, &e), &e);
     btf_image img;
-    TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){45, 30}, &img, &e), &e);
-    btf_material_free(&mat);
+    tu_material_image("fabric", 64, 5, (btf_dir){0, 0}, (btf_dir){45, 30}, &img);
     btf_fit_opts fo = {.levels = 2};
     btf_model m, back;
     TU_OK(btf_texture_fit(&img, &fo, &m, &e), &e);

@@ -9,34 +9,21 @@
 #include <unistd.h>
 
 
-/* Runs a command line and returns its stdout (malloc'd). */
-static char *capture(const char *cmd, int *status)
-{
-    FILE *p = popen(cmd, "r");
-    assert_non_null(p);
-    char *out = calloc(1, 1 << 16);
-    size_t n = fread(out, 1, (1 << 16) - 1, p);
-    out[n] = 0;
-    int st = pclose(p);
-    *status = WEXITSTATUS(st);
-    return out;
-}
-
 static void help_and_version(void **state)
 {
     (void)state;
     int st;
-    char *out = capture(tu_fmt("%s --help", tu_cli()), &st);
+    char *out = tu_capture(tu_fmt("%s --help", tu_cli()), &st);
     assert_int_equal(st, 0);
     assert_non_null(strstr(out, "generate"));
     free(out);
-    out = capture(tu_fmt("%s --version", tu_cli()), &st);
+    out = tu_capture(tu_fmt("%s --version", tu_cli()), &st);
     assert_int_equal(st, 0);
     assert_non_null(strstr(out, BTF_VERSION_STRING));
     free(out);
     const char *cmds[] = {"generate", "info"};
     for (int i = 0; i < 2; i++) {
-        out = capture(tu_fmt("%s %s --help", tu_cli(), cmds[i]), &st);
+        out = tu_capture(tu_fmt("%s %s --help", tu_cli(), cmds[i]), &st);
         assert_int_equal(st, 0);
         assert_non_null(strstr(out, "usage: btfcar"));
         free(out);
@@ -65,7 +52,7 @@ static void generate_then_info(void **state)
     assert_int_equal(stat(tu_fmt("%s/tv075_pv345/06560 tl075 pl345 tv075 pv345.jpg", out), &st), 0);
     assert_int_equal(stat(tu_fmt("%s/tv015_pv000/00001 tl000 pl000 tv015 pv000.jpg", out), &st), 0);
     int status;
-    char *text = capture(tu_fmt("%s info %s", tu_cli(), out), &status);
+    char *text = tu_capture(tu_fmt("%s info %s", tu_cli(), out), &status);
     assert_int_equal(status, 0);
     assert_non_null(strstr(text, "UBO2003"));
     assert_non_null(strstr(text, "6561 (81 views x 81 lights)"));
@@ -73,7 +60,7 @@ static void generate_then_info(void **state)
     assert_non_null(strstr(text, "ubo81"));
     free(text);
     /* --verify decodes every image. */
-    text = capture(tu_fmt("%s info --verify %s", tu_cli(), out), &status);
+    text = tu_capture(tu_fmt("%s info --verify %s", tu_cli(), out), &status);
     assert_int_equal(status, 0);
     free(text);
 }
@@ -198,11 +185,8 @@ static void texture_fit_options(void **state)
 {
     (void)state;
     btf_error e = {0};
-    btf_material mat;
     btf_image img;
-    TU_OK(btf_material_make("leather", 48, 2, &mat, &e), &e);
-    TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){30, 0}, &img, &e), &e);
-    btf_material_free(&mat);
+    tu_material_image("leather", 48, 2, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
     char png[4096], model[4096];
     snprintf(png, sizeof png, "%s/tex.png", tu_dir);
     snprintf(model, sizeof model, "%s/tex.btfcar", tu_dir);
@@ -242,11 +226,8 @@ static void synthesise_request_checks(void **state)
 {
     (void)state;
     btf_error e = {0};
-    btf_material mat;
     btf_image img;
-    TU_OK(btf_material_make("wood", 32, 3, &mat, &e), &e);
-    TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){30, 0}, &img, &e), &e);
-    btf_material_free(&mat);
+    tu_material_image("wood", 32, 3, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
     char png[4096], model[4096], out[4096];
     snprintf(png, sizeof png, "%s/req.png", tu_dir);
     snprintf(model, sizeof model, "%s/req.btfcar", tu_dir);

@@ -48,11 +48,8 @@ static void no_validation_messages(void)
 static void fit(btf_model *m, int levels, const char *spec)
 {
     btf_error e = {0};
-    btf_material mat;
-    TU_OK(btf_material_make("fabric", 64, 5, &mat, &e), &e);
     btf_image img;
-    TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){45, 30}, &img, &e), &e);
-    btf_material_free(&mat);
+    tu_material_image("fabric", 64, 5, (btf_dir){0, 0}, (btf_dir){45, 30}, &img);
     btf_fit_opts fo = {.levels = levels};
     if (spec)
         TU_OK(btf_neighbourhood_parse(spec, fo.car.fixed, &fo.car.n_fixed, &e), &e);

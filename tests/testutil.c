@@ -268,3 +268,25 @@ void tu_exr_write_raw(const char *path, const tu_exr_spec *s, tu_exr_value_fn va
         free(planes[k]);
 }
 
+char *tu_capture(const char *cmd, int *status)
+{
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char *out = calloc(1, 1 << 16);
+    assert_non_null(out);
+    size_t n = fread(out, 1, (1 << 16) - 1, p);
+    out[n] = 0;
+    int st = pclose(p);
+    *status = WEXITSTATUS(st);
+    return out;
+}
+
+void tu_material_image(const char *name, int size, unsigned seed, btf_dir view, btf_dir light,
+                       btf_image *img)
+{
+    btf_error e = {0};
+    btf_material mat;
+    TU_OK(btf_material_make(name, size, seed, &mat, &e), &e);
+    TU_OK(btf_material_render(&mat, view, light, img, &e), &e);
+    btf_material_free(&mat);
+}

@@ -62,6 +62,13 @@ void tu_vk_keep_layer_loaded(void);
 /* Wall-clock seconds (CLOCK_MONOTONIC), and the median of n values (sorts
  * them): for the benchmark programs. */
 double tu_now(void);
+/* Runs a command line and returns its stdout (malloc'd, up to 64 KiB), its
+ * exit status in *status. */
+char *tu_capture(const char *cmd, int *status);
+/* One rendered image of a procedural material (btf_material_make/render):
+ * the test textures of several programs. */
+void tu_material_image(const char *name, int size, unsigned seed, btf_dir view, btf_dir light,
+                       btf_image *img);
 double tu_median(double *v, int n);
 
 /* Asserts a btfcar call succeeded, printing the error message if not. */

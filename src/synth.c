@@ -45,15 +45,6 @@ typedef struct level_gen {
     float *hup[3];
     int hup_row[3];
     int fine_x0, fine_w;  /* the finer level's window */
-    /* The band's offsets in summation order, sorted once (level_init):
-     * earlier rows in stored order, then the same row farthest first. */
-    int nprev, nsame;
-    btf_offset prev[BTF_CAR_MAX_NEIGHBOURS];
-    float prev_gamma[BTF_CAR_MAX_NEIGHBOURS];
-    int same_col[BTF_CAR_MAX_NEIGHBOURS];
-    float same_gamma[BTF_CAR_MAX_NEIGHBOURS];
-    int same_k;           /* same_row_suffix's shape, -1 for another set */
-    float suffix_gamma[3];
 } level_gen;
 
 typedef struct band_gen {
@@ -165,9 +156,14 @@ static float *field_prepare(level_gen *g, uint32_t seed_lo, uint32_t seed_hi)
     float *e = g->noise + 3; /* 3 floats of slack before, for the block alignment */
     noise_row(g, seed_lo, seed_hi, (uint32_t)(r + BTF_NOISE_ORIGIN), e);
     const float *src[BTF_CAR_MAX_NEIGHBOURS];
-    for (int s = 0; s < g->nprev; s++)
-        src[s] = ring_row(g, r + g->prev[s].row) + g->prev[s].col;
-    earlier_rows(src, g->prev_gamma, g->nprev, b->sigma, e, g->acc, g->fw);
+    float gam[BTF_CAR_MAX_NEIGHBOURS];
+    int n = 0;
+    for (int s = 0; s < b->n; s++)
+        if (b->offsets[s].row != 0) {
+            src[n] = ring_row(g, r + b->offsets[s].row) + b->offsets[s].col;
+            gam[n++] = b->gamma[s];
+        }
+    earlier_rows(src, gam, n, b->sigma, e, g->acc, g->fw);
     return ring_row(g, r);
 }
 
@@ -196,11 +192,12 @@ static int same_row_suffix(const btf_car_band *b, float gam[3])
  * general loop. Same operations either way. */
 static void same_row_one(const level_gen *g, float *out, int from)
 {
+    const btf_car_band *b = g->car;
     const float *acc = g->acc + from;
     int fw = g->fw - from;
     out += from; /* the chain goes on from column `from` */
-    const float *gam = g->suffix_gamma;
-    int k = g->same_k;
+    float gam[3];
+    int k = same_row_suffix(b, gam);
     if (k == 0) {
         memcpy(out, acc, (size_t)fw * sizeof(float));
     } else if (k == 1) {
@@ -224,9 +221,13 @@ static void same_row_one(const level_gen *g, float *out, int from)
             out[i] = y1 = v;
         }
     } else {
-        int nsame = g->nsame;
-        const int *col = g->same_col;
-        const float *gs = g->same_gamma;
+        int same[BTF_CAR_MAX_NEIGHBOURS], col[BTF_CAR_MAX_NEIGHBOURS];
+        float gs[BTF_CAR_MAX_NEIGHBOURS];
+        int nsame = btf_car_same_row_order(b, same);
+        for (int j = 0; j < nsame; j++) {
+            gs[j] = b->gamma[same[j]];
+            col[j] = b->offsets[same[j]].col;
+        }
         for (int i = 0; i < fw; i++) {
             float a = acc[i];
             for (int j = 0; j < nsame; j++)
@@ -257,11 +258,12 @@ static void same_row_one(const level_gen *g, float *out, int from)
  * independent chains, so the core overlaps their latencies instead of
  * waiting on each in turn (the chain is a third of synthesis time when run
  * alone). Only for bands whose same-row sets have the family's shapes. */
-static void same_row_three(level_gen *const *g, float *const *out, const int *k)
+static void same_row_three(level_gen *const *g, float *const *out, const int *k,
+                           float gam[3][3])
 {
     const float *acc0 = g[0]->acc, *acc1 = g[1]->acc, *acc2 = g[2]->acc;
     float *out0 = out[0], *out1 = out[1], *out2 = out[2];
-    const float *g0 = g[0]->suffix_gamma, *g1 = g[1]->suffix_gamma, *g2 = g[2]->suffix_gamma;
+    const float *g0 = gam[0], *g1 = gam[1], *g2 = gam[2];
     /* Columns left of the row are zero padding (pad >= k columns). */
     float y1_0 = k[0] >= 1 ? out0[-1] : 0.0f, y2_0 = k[0] >= 2 ? out0[-2] : 0.0f;
     float y3_0 = k[0] >= 3 ? out0[-3] : 0.0f;
@@ -311,9 +313,13 @@ static void field_step(level_gen *const *g, int n, uint32_t seed_lo, uint32_t se
     float *out[3];
     for (int b = 0; b < n; b++)
         out[b] = field_prepare(g[b], seed_lo, seed_hi);
-    if (n == 3 && g[0]->same_k >= 0 && g[1]->same_k >= 0 && g[2]->same_k >= 0) {
-        int k[3] = {g[0]->same_k, g[1]->same_k, g[2]->same_k};
-        same_row_three(g, out, k);
+    int k[3] = {-1, -1, -1};
+    float gam[3][3];
+    if (n == 3)
+        for (int b = 0; b < 3; b++)
+            k[b] = same_row_suffix(g[b]->car, gam[b]);
+    if (n == 3 && k[0] >= 0 && k[1] >= 0 && k[2] >= 0) {
+        same_row_three(g, out, k, gam);
         return;
     }
     for (int b = 0; b < n; b++)
@@ -473,18 +479,6 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
             g->pad = c;
     }
     g->depth = up + 1;
-    for (int s = 0; s < car->n; s++)
-        if (car->offsets[s].row != 0) {
-            g->prev[g->nprev] = car->offsets[s];
-            g->prev_gamma[g->nprev++] = car->gamma[s];
-        }
-    int same[BTF_CAR_MAX_NEIGHBOURS];
-    g->nsame = btf_car_same_row_order(car, same);
-    for (int j = 0; j < g->nsame; j++) {
-        g->same_col[j] = car->offsets[same[j]].col;
-        g->same_gamma[j] = car->gamma[same[j]];
-    }
-    g->same_k = same_row_suffix(car, g->suffix_gamma);
     g->next = y0 - margin;
     g->ring = btf_calloc((size_t)g->depth * (g->fw + 2 * g->pad), sizeof(float), err);
     g->grow = btf_alloc((size_t)(x1 - x0), sizeof(float), err);

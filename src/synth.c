@@ -98,14 +98,21 @@ typedef float v8f __attribute__((vector_size(32)));
  * 32-byte vector would change the ABI of the portable build). */
 #define LOAD8(p) __extension__({ v8f v_; memcpy(&v_, (p), sizeof v_); v_; })
 
+/* The row loops below are compiled twice, for plain x86-64 and for AVX2
+ * (twice the lanes), the choice made once at load time; AVX2 brings no FMA
+ * here and the build forbids contraction, so both give the same bits. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define SYNTH_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define SYNTH_AVX2_CLONES
+#endif
+
 /* acc[i] = (((0 + g0 src0[i]) + g1 src1[i]) + ...) + sigma e[i]: the
  * earlier-row terms in stored order, then the noise (btf_car_accumulate,
  * btf_car_output). One pass over the row with 32 pixels in registers, not
  * one pass per term: the terms' adds form four independent chains and acc
  * is written once. Same operations, same order as term by term. */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+SYNTH_AVX2_CLONES
 static void earlier_rows(const float *const *src, const float *gam, int n, float sigma,
                          const float *e, float *acc, int fw)
 {
@@ -331,6 +338,7 @@ static void field_step(level_gen *const *g, int n, uint32_t seed_lo, uint32_t se
  * an even x is btf_up_even of three coarse values, an odd x btf_up_odd of
  * two. One loop per parity, each of which vectorises (a loop choosing per
  * column does not). */
+SYNTH_AVX2_CLONES
 static void up_row(const float *c, int cx0, int fx0, int n, float *o)
 {
     for (int par = 0; par < 2; par++) {
@@ -403,6 +411,25 @@ static void hup_rows(band_gen *bg, int nb, int l, int i, const float **out)
         out[b] = bg[b].lv[l].hup[slot];
 }
 
+/* One row of G_l = mean + field + vertical up-sampling of the coarser
+ * level's rows: none (coarsest level), b and c (odd row), a, b and c (even
+ * row). */
+SYNTH_AVX2_CLONES
+static void level_sum_row(int w, float mean, const float *f, const float *a, const float *b,
+                          const float *c, float *out)
+{
+    if (!b) {
+        for (int k = 0; k < w; k++)
+            out[k] = btf_add_mean(mean, f[k]);
+    } else if (!a) {
+        for (int k = 0; k < w; k++)
+            out[k] = btf_add_level(btf_add_mean(mean, f[k]), btf_up_odd(b[k], c[k]));
+    } else {
+        for (int k = 0; k < w; k++)
+            out[k] = btf_add_level(btf_add_mean(mean, f[k]), btf_up_even(a[k], b[k], c[k]));
+    }
+}
+
 /* Row y of G_l = mean_l + field_l + up(G_{l+1}) of each band, over the
  * level's window. */
 static void gauss_rows(band_gen *bg, int nb, int l, int y, const float **out)
@@ -426,19 +453,12 @@ static void gauss_rows(band_gen *bg, int nb, int l, int y, const float **out)
         int w = g->x1 - g->x0;
         float mean = g->car->mean;
         const float *fn = f[n];
-        if (last) {
-            for (int k = 0; k < w; k++)
-                g->grow[k] = btf_add_mean(mean, fn[k]);
-        } else if (y & 1) {
-            const float *bn = b[n], *cn = c[n];
-            for (int k = 0; k < w; k++)
-                g->grow[k] = btf_add_level(btf_add_mean(mean, fn[k]), btf_up_odd(bn[k], cn[k]));
-        } else {
-            const float *an = a[n], *bn = b[n], *cn = c[n];
-            for (int k = 0; k < w; k++)
-                g->grow[k] = btf_add_level(btf_add_mean(mean, fn[k]),
-                                           btf_up_even(an[k], bn[k], cn[k]));
-        }
+        if (last)
+            level_sum_row(w, mean, fn, NULL, NULL, NULL, g->grow);
+        else if (y & 1)
+            level_sum_row(w, mean, fn, NULL, b[n], c[n], g->grow);
+        else
+            level_sum_row(w, mean, fn, a[n], b[n], c[n], g->grow);
         out[n] = g->grow;
     }
 }
@@ -562,6 +582,7 @@ static void interleave3(const float *p0, const float *p1, const float *p2, int w
  * channel into planes, with the finite test folded in (loops the compiler
  * vectorises), then interleaved. Returns nonzero when a value is Inf or NaN
  * (all exponent bits set). */
+SYNTH_AVX2_CLONES
 static int unmix_row(const btf_subspace_model *sm, const float *b0, const float *b1,
                      const float *b2, int width, float *plane, float *row)
 {

@@ -188,7 +188,6 @@ static void level_rows(int y0, int y1, int l, int *a, int *b)
 /* Where one field stands while the strips go down the image. */
 typedef struct field_state {
     int level, up;        /* pyramid level; rows of history the recursion reads */
-    int margin;           /* burn-in rows above the window (btf_band_margin) */
     int next;             /* next absolute field row to compute */
     int base;             /* absolute row held in buffer row 0 */
     int rows, grows;      /* buffer rows reserved: field, G window */
@@ -235,9 +234,10 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
         int ga, gb;
         level_rows(y0, y1, f->level, &ga, &gb);
         if (first) {
-            /* The field starts `margin` rows above its window; the
-             * `up` rows above that are zero (the buffer is cleared). */
-            f->next = ga - f->margin;
+            /* The field starts its margin (x0 - fx0, set by fill_task) rows
+             * above its window; the `up` rows above that are zero (the
+             * buffer is cleared). */
+            f->next = ga - (t->x0 - t->fx0);
             f->base = f->next - f->up;
             keep[i] = 0;
             keep_from[i] = 0;
@@ -300,7 +300,6 @@ static int build_batch(const btf_model *m, const int *subs, int n, int w, int h,
                           btf_noise_stream((uint32_t)subs[j], (uint32_t)b, (uint32_t)l), x0, x1);
                 bt->fs[ti].level = l;
                 bt->fs[ti].up = field_up(&bt->tasks[ti]);
-                bt->fs[ti].margin = btf_band_margin(&sm->bands[b][l]);
                 if (prev >= 0)
                     bt->tasks[prev].coarse = ti;
                 prev = ti;
@@ -554,18 +553,9 @@ static int check_request(const btf_model *m, const int *subs, int n, int w, int 
             return btf_fail(err, BTF_E_ARG, "subspace %d: %d pyramid levels", subs[j], sm->levels);
         for (int b = 0; b < 3; b++)
             for (int l = 0; l < sm->levels; l++) {
-                const btf_car_band *cb = &sm->bands[b][l];
-                if (cb->n < 0 || cb->n > BTF_CAR_MAX_NEIGHBOURS)
-                    return btf_fail(err, BTF_E_ARG, "CAR model with %d neighbours", cb->n);
-                if (cb->margin < 0 || cb->margin > BTF_SYNTH_MARGIN_MAX)
-                    return btf_fail(err, BTF_E_ARG, "CAR synthesis margin %d: expected 0..%d",
-                                    cb->margin, BTF_SYNTH_MARGIN_MAX);
-                for (int s = 0; s < cb->n; s++) {
-                    btf_offset o = cb->offsets[s];
-                    if (!(o.row < 0 || (o.row == 0 && o.col < 0)))
-                        return btf_fail(err, BTF_E_ARG, "CAR offset %d:%d is not causal", o.row,
-                                        o.col);
-                }
+                int rc = btf_synth_check_band(&sm->bands[b][l], err); /* as on the CPU */
+                if (rc)
+                    return rc;
             }
     }
     return BTF_OK;

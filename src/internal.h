@@ -102,6 +102,9 @@ int btf_noise_path_avx2(void);
  * order btf_shared.h adds them (farthest column first); returns their count.
  * Shared with the GPU host code, which orders the shader's offsets so. */
 int btf_car_same_row_order(const btf_car_band *b, int *idx);
+/* A band synthesis can run: 0..BTF_CAR_MAX_NEIGHBOURS causal offsets, a
+ * margin within 0..BTF_SYNTH_MARGIN_MAX (CPU and GPU paths alike). */
+int btf_synth_check_band(const btf_car_band *b, btf_error *err);
 /* BTF_E_NUMERIC naming the subspace and row if any of n values is not
  * finite: no synthesis hands out Inf or NaN (a model fitted to values near
  * the float limit can overflow); both backends check their output with it. */

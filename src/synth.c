@@ -314,7 +314,8 @@ static void same_row_three(level_gen *const *g, float *const *out, const int *k,
 }
 
 /* The next row of a level's field in each of the n bands that step
- * together (same level of one subspace: same geometry, same rows). */
+ * together (same level of one subspace: same window, same row; field
+ * widths differ with the margins). */
 static void field_step(level_gen *const *g, int n, uint32_t seed_lo, uint32_t seed_hi)
 {
     float *out[3];
@@ -364,10 +365,10 @@ static const float *field_row(level_gen *g, int y, uint32_t seed_lo, uint32_t se
 }
 
 /* The rest works on the nb bands (1..3) of one subspace at once: they have
- * the same geometry and ask for the same rows in the same order, so every
- * step is taken for all of them together, and field_step can run their
- * sequential recursions in one loop. Each band's results are what it would
- * get alone. */
+ * the same windows and ask for the same rows in the same order (only their
+ * fields' margins differ), so every step is taken for all of them together,
+ * and field_step can run their sequential recursions in one loop. Each
+ * band's results are what it would get alone. */
 
 /* Zero-mean field row y of level l of each band, over the level's window. */
 static void field_rows(band_gen *bg, int nb, int l, int y, const float **f)
@@ -544,6 +545,15 @@ static int band_init(band_gen *bg, const btf_car_band *bands, int levels, int su
     return BTF_OK;
 }
 
+/* Inf and NaN have all exponent bits set: a branch-free test that loops
+ * over rows can OR together and the compiler vectorises. */
+static inline uint32_t nonfinite_bits(float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, sizeof u);
+    return (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
+}
+
 #if defined(__GNUC__) && !defined(__clang__)
 typedef float v4f __attribute__((vector_size(16)));
 typedef int32_t v4i __attribute__((vector_size(16)));
@@ -593,9 +603,7 @@ static int unmix_row(const btf_subspace_model *sm, const float *b0, const float 
         float c2 = sm->basis[6 + k];
         for (int x = 0; x < width; x++) {
             float v = btf_unmix(mean, c0, c1, c2, b0[x], b1[x], b2[x]);
-            uint32_t u;
-            memcpy(&u, &v, sizeof u);
-            bad |= (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
+            bad |= nonfinite_bits(v);
             p[x] = v;
         }
     }
@@ -605,15 +613,9 @@ static int unmix_row(const btf_subspace_model *sm, const float *b0, const float 
 
 int btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err)
 {
-    /* Inf and NaN have all exponent bits set: OR the test over the row
-     * (a branch-free loop the compiler vectorises), look closer only when
-     * it fails. */
     uint32_t bad = 0;
-    for (size_t i = 0; i < n; i++) {
-        uint32_t u;
-        memcpy(&u, &v[i], sizeof u);
-        bad |= (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
-    }
+    for (size_t i = 0; i < n; i++)
+        bad |= nonfinite_bits(v[i]);
     if (bad)
         return btf_fail(err, BTF_E_NUMERIC,
                         "synthesis of subspace %d overflowed the float range at row %d "
@@ -629,7 +631,7 @@ static int check_size(int width, int height, btf_error *err)
     return BTF_OK;
 }
 
-static int check_band(const btf_car_band *b, btf_error *err)
+int btf_synth_check_band(const btf_car_band *b, btf_error *err)
 {
     if (b->n < 0 || b->n > BTF_CAR_MAX_NEIGHBOURS)
         return btf_fail(err, BTF_E_ARG, "CAR model with %d neighbours", b->n);
@@ -658,7 +660,7 @@ int btf_synthesise(const btf_model *m, int subspace, int width, int height, uint
         return btf_fail(err, BTF_E_ARG, "subspace %d: %d pyramid levels", subspace, sm->levels);
     for (int b = 0; b < 3; b++)
         for (int l = 0; l < sm->levels; l++)
-            if ((rc = check_band(&sm->bands[b][l], err)))
+            if ((rc = btf_synth_check_band(&sm->bands[b][l], err)))
                 return rc;
     band_gen bg[3];
     int made = 0;
@@ -717,7 +719,7 @@ int btf_car_synthesise_field(const btf_car_band *band, int width, int height, ui
 {
     int rc = check_size(width, height, err);
     if (rc == 0)
-        rc = check_band(band, err);
+        rc = btf_synth_check_band(band, err);
     if (rc)
         return rc;
     level_gen g;

@@ -303,18 +303,25 @@ static int count_lines(const char *path)
 /* --stage segment writes whole tables and no temporary files; a table that
  * cannot be written is an error naming it (exit 1) that leaves no temporary
  * file behind. */
+/* `analyse --stage segment --subspaces 3` of the wide dataset into dir,
+ * which must succeed. */
+static void segment_into(const char *dir)
+{
+    char *err = NULL;
+    int rc = tu_run(tu_fmt("%s analyse -q %s -o %s --stage segment --subspaces 3", tu_cli(), wide,
+                           dir), &err);
+    if (rc)
+        print_error("%s\n", err);
+    assert_int_equal(rc, 0);
+    free(err);
+}
+
 static void cli_segment_tables_atomic(void **state)
 {
     (void)state;
     char out[4096];
     snprintf(out, sizeof out, "%s/tables", tu_dir);
-    char *err = NULL;
-    int rc = tu_run(tu_fmt("%s analyse -q %s -o %s --stage segment --subspaces 3", tu_cli(), wide,
-                           out), &err);
-    if (rc)
-        print_error("%s\n", err);
-    assert_int_equal(rc, 0);
-    free(err);
+    segment_into(out);
     assert_int_equal(count_lines(tu_fmt("%s/index.tsv", out)), 1 + N_LIGHTS);
     assert_int_equal(count_lines(tu_fmt("%s/subspaces.tsv", out)), 1 + 3);
     /* index.png, two tables, an EXR and a PNG per subspace: nothing else. */
@@ -329,12 +336,7 @@ static void cli_segment_tables_atomic(void **state)
     mkdir(busy, 0777);
     mkdir(tu_fmt("%s/index.tsv.tmp", busy), 0777);
     tu_write_file(tu_fmt("%s/subspaces.tsv.tmp", busy), "mine", 4);
-    rc = tu_run(tu_fmt("%s analyse -q %s -o %s --stage segment --subspaces 3", tu_cli(), wide,
-                       busy), &err);
-    if (rc)
-        print_error("%s\n", err);
-    assert_int_equal(rc, 0);
-    free(err);
+    segment_into(busy);
     assert_int_equal(count_lines(tu_fmt("%s/index.tsv", busy)), 1 + N_LIGHTS);
     struct stat sb;
     assert_int_equal(stat(tu_fmt("%s/subspaces.tsv.tmp", busy), &sb), 0);
@@ -348,8 +350,9 @@ static void cli_segment_tables_atomic(void **state)
         mkdir(bad, 0777);
         /* A folder where the table goes: the rename into place fails. */
         mkdir(tu_fmt("%s/%s", bad, names[i]), 0777);
-        rc = tu_run(tu_fmt("%s analyse -q %s -o %s --stage segment --subspaces 3", tu_cli(), wide,
-                           bad), &err);
+        char *err = NULL;
+        int rc = tu_run(tu_fmt("%s analyse -q %s -o %s --stage segment --subspaces 3", tu_cli(),
+                               wide, bad), &err);
         assert_int_equal(rc, 1);
         /* One line naming the file (under ASan, LeakSanitizer may add its
          * summary of suppressions after it). */

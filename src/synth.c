@@ -24,6 +24,7 @@
 
 #include "btf_shared.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,12 +35,13 @@ typedef struct level_gen {
     int x0, x1, y0, y1;   /* window, absolute level coordinates */
     int fx0, fw;          /* field columns [fx0, fx0 + fw) */
     int pad;              /* zero columns on each side of a ring row */
-    int depth;            /* ring rows: reach up + 1 */
+    int depth;            /* ring rows: reach up + 2 (field_pair writes row r + 1
+                           * while row r still reads the row reach up above it) */
     int next;             /* next field row to generate */
     float *ring;          /* depth rows of (fw + 2 pad) floats */
     float *grow;          /* the G row of this level, window width */
-    float *noise;         /* fw + 6 floats: one row of Gaussians */
-    float *acc;           /* fw floats: the earlier-row part of each sum */
+    float *noise, *noise2; /* fw + 6 floats: one row of Gaussians (two rows) */
+    float *acc, *acc2;    /* fw floats: the earlier-row part of each sum */
     /* Up-sampled (horizontally, to the finer level's window) G rows of this
      * level, 3 slots keyed by row index: for the finer level's vertical pass. */
     float *hup[3];
@@ -147,32 +149,24 @@ static void earlier_rows(const float *const *src, const float *gam, int n, float
     }
 }
 
-/* The first part of the next row of the level's CAR field (zero-mean), by
- * the recursion Y_r = sum_s gamma_s Y_{r+s} + sigma e_r, summed in the order
- * of btf_shared.h (the GPU sums the same way): the offsets of earlier rows in
+/* One field row being generated: the earlier-row terms of its recursion
+ * Y_r = sum_s gamma_s Y_{r+s} + sigma e_r, summed in the order of
+ * btf_shared.h (the GPU sums the same way): the offsets of earlier rows in
  * stored order, then the noise, then the same-row offsets farthest first.
- * Everything up to the noise reads finished rows only, so it runs here as
- * independent per-pixel chains the compiler vectorises, into g->acc; the
- * same-row terms are sequential (same_row_*). Returns the new row. */
-static float *field_prepare(level_gen *g, uint32_t seed_lo, uint32_t seed_hi)
-{
-    int r = g->next++;
-    const btf_car_band *b = g->car;
-    /* Rows above the field's first row are zero: their ring slots were
-     * cleared at start and are only overwritten by rows of the field. */
-    float *e = g->noise + 3; /* 3 floats of slack before, for the block alignment */
-    noise_row(g, seed_lo, seed_hi, (uint32_t)(r + BTF_NOISE_ORIGIN), e);
-    const float *src[BTF_CAR_MAX_NEIGHBOURS];
+ * Everything up to the noise reads finished rows only, so it runs as
+ * independent per-pixel chains the compiler vectorises (row_job_acc, into
+ * acc); the same-row terms are sequential (jobs_same_row). */
+typedef struct row_job {
+    level_gen *g;
+    const float *src[BTF_CAR_MAX_NEIGHBOURS]; /* earlier rows, at field column 0 */
     float gam[BTF_CAR_MAX_NEIGHBOURS];
-    int n = 0;
-    for (int s = 0; s < b->n; s++)
-        if (b->offsets[s].row != 0) {
-            src[n] = ring_row(g, r + b->offsets[s].row) + b->offsets[s].col;
-            gam[n++] = b->gamma[s];
-        }
-    earlier_rows(src, gam, n, b->sigma, e, g->acc, g->fw);
-    return ring_row(g, r);
-}
+    int nterms;
+    const float *e;  /* the row's Gaussians */
+    float *acc;      /* the earlier-row part and the noise of each pixel */
+    float *out;      /* the row in the ring, field column 0 */
+    int k;           /* same_row_suffix, or -1 for another same-row set */
+    float g3[3];     /* its gammas of columns -3, -2, -1 */
+} row_job;
 
 /* k when the band's same-row offsets are exactly columns -k .. -1 (k <= 3,
  * the candidate family's shapes), with their gammas in gam[3 - k .. 2]
@@ -192,146 +186,248 @@ static int same_row_suffix(const btf_car_band *b, float gam[3])
     return n;
 }
 
-/* The sequential part of one field row: out[i] = acc[i] + the same-row
- * terms, farthest column first. For the family's shapes (columns -1; -2, -1;
- * -3, -2, -1) the last values stay in registers, so one pixel waits on the
- * previous one for a single multiply and add; any other set takes the
- * general loop. Same operations either way. */
-static void same_row_one(const level_gen *g, float *out, int from)
+/* Starts field row r of level g: its noise into noise + 3 (3 floats of
+ * slack before, for the block alignment), its terms, its ring row. Rows
+ * above the field's first row are zero: their ring slots were cleared at
+ * start and are only overwritten by rows of the field. */
+static void row_job_init(row_job *j, level_gen *g, int r, float *noise, float *acc,
+                         uint32_t seed_lo, uint32_t seed_hi)
 {
     const btf_car_band *b = g->car;
-    const float *acc = g->acc + from;
-    int fw = g->fw - from;
-    out += from; /* the chain goes on from column `from` */
-    float gam[3];
-    int k = same_row_suffix(b, gam);
-    if (k == 0) {
-        memcpy(out, acc, (size_t)fw * sizeof(float));
-    } else if (k == 1) {
-        float y1 = out[-1];
-        for (int i = 0; i < fw; i++)
-            out[i] = y1 = btf_car_accumulate(acc[i], gam[2], y1);
-    } else if (k == 2) {
-        float y2 = out[-2], y1 = out[-1];
-        for (int i = 0; i < fw; i++) {
-            float v = btf_car_accumulate(btf_car_accumulate(acc[i], gam[1], y2), gam[2], y1);
-            y2 = y1;
-            out[i] = y1 = v;
+    j->g = g;
+    j->e = noise + 3;
+    noise_row(g, seed_lo, seed_hi, (uint32_t)(r + BTF_NOISE_ORIGIN), noise + 3);
+    j->nterms = 0;
+    for (int s = 0; s < b->n; s++)
+        if (b->offsets[s].row != 0) {
+            j->src[j->nterms] = ring_row(g, r + b->offsets[s].row) + b->offsets[s].col;
+            j->gam[j->nterms++] = b->gamma[s];
         }
-    } else if (k == 3) {
-        float y3 = out[-3], y2 = out[-2], y1 = out[-1];
-        for (int i = 0; i < fw; i++) {
-            float v = btf_car_accumulate(
-                btf_car_accumulate(btf_car_accumulate(acc[i], gam[0], y3), gam[1], y2), gam[2], y1);
-            y3 = y2;
-            y2 = y1;
-            out[i] = y1 = v;
-        }
-    } else {
-        int same[BTF_CAR_MAX_NEIGHBOURS], col[BTF_CAR_MAX_NEIGHBOURS];
-        float gs[BTF_CAR_MAX_NEIGHBOURS];
-        int nsame = btf_car_same_row_order(b, same);
-        for (int j = 0; j < nsame; j++) {
-            gs[j] = b->gamma[same[j]];
-            col[j] = b->offsets[same[j]].col;
-        }
-        for (int i = 0; i < fw; i++) {
-            float a = acc[i];
-            for (int j = 0; j < nsame; j++)
-                a = btf_car_accumulate(a, gs[j], out[i + col[j]]);
-            out[i] = a;
-        }
-    }
+    j->acc = acc;
+    j->out = ring_row(g, r);
+    j->k = same_row_suffix(b, j->g3);
 }
 
-/* One step of band b of same_row_three: the same operations as
- * same_row_one's loop for k = 0 .. 3 (a missing term is skipped, never
- * added as 0 * y, which could turn -0 into +0). */
-#define SAME_ROW_STEP(b)                                                                 \
-    do {                                                                                 \
-        float v = acc##b[i];                                                             \
-        if (k[b] >= 3)                                                                   \
-            v = btf_car_accumulate(v, g##b[0], y3_##b);                                  \
-        if (k[b] >= 2)                                                                   \
-            v = btf_car_accumulate(v, g##b[1], y2_##b);                                  \
-        if (k[b] >= 1)                                                                   \
-            v = btf_car_accumulate(v, g##b[2], y1_##b);                                  \
-        y3_##b = y2_##b;                                                                 \
-        y2_##b = y1_##b;                                                                 \
-        out##b[i] = y1_##b = v;                                                          \
-    } while (0)
-
-/* The sequential parts of the three bands' rows in one loop: three
- * independent chains, so the core overlaps their latencies instead of
- * waiting on each in turn (the chain is a third of synthesis time when run
- * alone). Only for bands whose same-row sets have the family's shapes. */
-static void same_row_three(level_gen *const *g, float *const *out, const int *k,
-                           float gam[3][3])
+/* The earlier-row part of columns [from, from + len): reads the rows above
+ * up to column from + len - 1 + their reach to the right. */
+static void row_job_acc(const row_job *j, int from, int len)
 {
-    const float *acc0 = g[0]->acc, *acc1 = g[1]->acc, *acc2 = g[2]->acc;
-    float *out0 = out[0], *out1 = out[1], *out2 = out[2];
-    const float *g0 = gam[0], *g1 = gam[1], *g2 = gam[2];
-    /* Columns left of the row are zero padding (pad >= k columns). */
-    float y1_0 = k[0] >= 1 ? out0[-1] : 0.0f, y2_0 = k[0] >= 2 ? out0[-2] : 0.0f;
-    float y3_0 = k[0] >= 3 ? out0[-3] : 0.0f;
-    float y1_1 = k[1] >= 1 ? out1[-1] : 0.0f, y2_1 = k[1] >= 2 ? out1[-2] : 0.0f;
-    float y3_1 = k[1] >= 3 ? out1[-3] : 0.0f;
-    float y1_2 = k[2] >= 1 ? out2[-1] : 0.0f, y2_2 = k[2] >= 2 ? out2[-2] : 0.0f;
-    float y3_2 = k[2] >= 3 ? out2[-3] : 0.0f;
-    int fw = g[0]->fw < g[1]->fw ? g[0]->fw : g[1]->fw;
-    fw = g[2]->fw < fw ? g[2]->fw : fw; /* bands of other margins are wider */
-    if (k[0] == k[1] && k[1] == k[2]) {
-        /* The usual case, all three bands of one shape: the tests on k are
-         * constant in each copy of the loop, which leaves only arithmetic. */
-        int kk[3] = {k[0], k[0], k[0]};
-        switch (k[0]) {
-#define SAME_ROW_LOOP(K)                                                                         \
-    case K:                                                                                      \
-        kk[0] = kk[1] = kk[2] = K;                                                               \
-        for (int i = 0; i < fw; i++) {                                                           \
-            const int *k = kk; /* constant K: the compiler folds the tests */                    \
-            SAME_ROW_STEP(0);                                                                    \
-            SAME_ROW_STEP(1);                                                                    \
-            SAME_ROW_STEP(2);                                                                    \
-        }                                                                                        \
-        break;
-            SAME_ROW_LOOP(0)
-            SAME_ROW_LOOP(1)
-            SAME_ROW_LOOP(2)
-            SAME_ROW_LOOP(3)
-#undef SAME_ROW_LOOP
-        }
-    } else {
-        for (int i = 0; i < fw; i++) {
-            SAME_ROW_STEP(0);
-            SAME_ROW_STEP(1);
-            SAME_ROW_STEP(2);
-        }
-    }
-    for (int b = 0; b < 3; b++)
-        if (g[b]->fw > fw)
-            same_row_one(g[b], out[b], fw);
+    const float *src[BTF_CAR_MAX_NEIGHBOURS];
+    for (int s = 0; s < j->nterms; s++)
+        src[s] = j->src[s] + from;
+    earlier_rows(src, j->gam, j->nterms, j->g->car->sigma, j->e + from, j->acc + from, len);
 }
 
-/* The next row of a level's field in each of the n bands that step
+/* One sequential chain: out[i] = acc[i] + the same-row terms, columns -3,
+ * -2, -1 (gammas g[0..2]); out[-3 .. -1] hold the columns before. */
+typedef struct chain {
+    const float *acc;
+    float *out;
+    const float *g;
+} chain;
+
+/* S chains of shape K (columns -K .. -1) in one loop: independent chains,
+ * so the core overlaps their latencies (one pixel waits on the previous one
+ * for a multiply and an add, 6 cycles on Zen 3, the largest cost of
+ * synthesis after the noise when a chain runs alone). S and K are
+ * constants in each copy (chains below), so the tests on K fold away and
+ * the chains' last values live in registers. A missing term is skipped,
+ * never added as 0 * y, which could turn -0 into +0. */
+static inline __attribute__((always_inline)) void chains_run(const chain *c, const int S,
+                                                             const int K, int len)
+{
+    const float *acc[6];
+    float *out[6];
+    float g0[6], g1[6], g2[6], y1[6], y2[6], y3[6];
+    for (int s = 0; s < S; s++) {
+        acc[s] = c[s].acc;
+        out[s] = c[s].out;
+        g0[s] = c[s].g[0], g1[s] = c[s].g[1], g2[s] = c[s].g[2];
+        y1[s] = K >= 1 ? out[s][-1] : 0.0f;
+        y2[s] = K >= 2 ? out[s][-2] : 0.0f;
+        y3[s] = K >= 3 ? out[s][-3] : 0.0f;
+    }
+    for (int i = 0; i < len; i++) {
+        _Pragma("GCC unroll 6") for (int s = 0; s < S; s++) {
+            float v = acc[s][i];
+            if (K >= 3)
+                v = btf_car_accumulate(v, g0[s], y3[s]);
+            if (K >= 2)
+                v = btf_car_accumulate(v, g1[s], y2[s]);
+            if (K >= 1)
+                v = btf_car_accumulate(v, g2[s], y1[s]);
+            y3[s] = y2[s];
+            y2[s] = y1[s];
+            out[s][i] = y1[s] = v;
+        }
+    }
+}
+
+#define MAX_CHAINS 6
+static void chains(const chain *c, int S, int K, int len)
+{
+    switch (S * 4 + K) {
+#define CHAINS_CASE(S_, K_)                                                                      \
+    case (S_) * 4 + (K_):                                                                        \
+        chains_run(c, S_, K_, len);                                                              \
+        return;
+#define CHAINS_SHAPES(S_) CHAINS_CASE(S_, 0) CHAINS_CASE(S_, 1) CHAINS_CASE(S_, 2) CHAINS_CASE(S_, 3)
+        CHAINS_SHAPES(1)
+        CHAINS_SHAPES(2)
+        CHAINS_SHAPES(3)
+        CHAINS_SHAPES(4)
+        CHAINS_SHAPES(5)
+        CHAINS_SHAPES(6)
+#undef CHAINS_SHAPES
+#undef CHAINS_CASE
+    }
+}
+
+/* The same-row part of a row whose same-row set is not one of the family's
+ * shapes, columns [from, from + len): the general loop, same operations. */
+static void same_row_general(const row_job *j, int from, int len)
+{
+    const btf_car_band *b = j->g->car;
+    int same[BTF_CAR_MAX_NEIGHBOURS], col[BTF_CAR_MAX_NEIGHBOURS];
+    float gs[BTF_CAR_MAX_NEIGHBOURS];
+    int nsame = btf_car_same_row_order(b, same);
+    for (int t = 0; t < nsame; t++) {
+        gs[t] = b->gamma[same[t]];
+        col[t] = b->offsets[same[t]].col;
+    }
+    float *out = j->out;
+    for (int i = from; i < from + len; i++) {
+        float a = j->acc[i];
+        for (int t = 0; t < nsame; t++)
+            a = btf_car_accumulate(a, gs[t], out[i + col[t]]);
+        out[i] = a;
+    }
+}
+
+/* The same-row part of n rows, row t over columns [from[t], from[t] + len)
+ * (its columns before are done): rows of one shape step together, up to
+ * MAX_CHAINS in one loop. */
+static void jobs_same_row(row_job *const *jobs, const int *from, int n, int len)
+{
+    if (len <= 0)
+        return;
+    for (int K = 0; K <= 3; K++) {
+        chain grp[MAX_CHAINS];
+        int m = 0;
+        for (int t = 0; t < n; t++)
+            if (jobs[t]->k == K) {
+                grp[m++] = (chain){jobs[t]->acc + from[t], jobs[t]->out + from[t], jobs[t]->g3};
+                if (m == MAX_CHAINS) {
+                    chains(grp, m, K, len);
+                    m = 0;
+                }
+            }
+        if (m)
+            chains(grp, m, K, len);
+    }
+    for (int t = 0; t < n; t++)
+        if (jobs[t]->k < 0)
+            same_row_general(jobs[t], from[t], len);
+}
+
+/* The next row of a level's field in each of the n bands (1..3) that step
  * together (same level of one subspace: same window, same row; field
  * widths differ with the margins). */
 static void field_step(level_gen *const *g, int n, uint32_t seed_lo, uint32_t seed_hi)
 {
-    float *out[3];
-    for (int b = 0; b < n; b++)
-        out[b] = field_prepare(g[b], seed_lo, seed_hi);
-    int k[3] = {-1, -1, -1};
-    float gam[3][3];
-    if (n == 3)
-        for (int b = 0; b < 3; b++)
-            k[b] = same_row_suffix(g[b]->car, gam[b]);
-    if (n == 3 && k[0] >= 0 && k[1] >= 0 && k[2] >= 0) {
-        same_row_three(g, out, k, gam);
-        return;
+    row_job job[3], *jp[3] = {NULL, NULL, NULL};
+    int zero[3] = {0, 0, 0}, common = INT_MAX;
+    for (int b = 0; b < n; b++) {
+        row_job_init(&job[b], g[b], g[b]->next++, g[b]->noise, g[b]->acc, seed_lo, seed_hi);
+        row_job_acc(&job[b], 0, g[b]->fw);
+        jp[b] = &job[b];
+        common = g[b]->fw < common ? g[b]->fw : common;
     }
+    jobs_same_row(jp, zero, n, common);
+    for (int b = 0; b < n; b++) /* bands of larger margins are wider */
+        jobs_same_row(&jp[b], &common, 1, g[b]->fw - common);
+}
+
+/* The columns of a chunk in field_pair. */
+#define PAIR_CHUNK 64
+
+/* How far row r + 1 trails row r in field_pair: a chunk plus row r + 1's
+ * reach into row r to the right, so that a chunk of row r + 1 reads only
+ * finished columns of row r. */
+static int pair_lead(level_gen *const *g, int n)
+{
+    int reach = 0;
     for (int b = 0; b < n; b++)
-        same_row_one(g[b], out[b], 0);
+        for (int s = 0; s < g[b]->car->n; s++) {
+            btf_offset o = g[b]->car->offsets[s];
+            if (o.row == -1 && o.col > reach)
+                reach = o.col;
+        }
+    return PAIR_CHUNK + reach;
+}
+
+/* The next two rows, r and r + 1, of each of the n bands at once, for
+ * twice the independent chains of field_step: row r + 1 runs `lead`
+ * columns behind row r, chunk by chunk, its earlier-row part computed just
+ * before each chunk from the part of row r already finished. Every value is
+ * the same sum in the same order as field_step gives. Each band runs over
+ * its own width (the margins differ); the chains of the bands still going
+ * share a loop. Needs every width >= lead. */
+static void field_pair(level_gen *const *g, int n, int lead, uint32_t seed_lo, uint32_t seed_hi)
+{
+    row_job j0[3], j1[3];
+    row_job *first[3] = {NULL, NULL, NULL}, *second[3] = {NULL, NULL, NULL};
+    int widest = 0;
+    for (int b = 0; b < n; b++) {
+        int r = g[b]->next;
+        g[b]->next += 2;
+        row_job_init(&j0[b], g[b], r, g[b]->noise, g[b]->acc, seed_lo, seed_hi);
+        row_job_init(&j1[b], g[b], r + 1, g[b]->noise2, g[b]->acc2, seed_lo, seed_hi);
+        row_job_acc(&j0[b], 0, g[b]->fw);
+        first[b] = &j0[b];
+        second[b] = &j1[b];
+        widest = g[b]->fw > widest ? g[b]->fw : widest;
+    }
+    int at[6] = {0, 0, 0, 0, 0, 0};
+    jobs_same_row(first, at, n, lead);
+    for (int x = lead; x < widest; x += PAIR_CHUNK) {
+        row_job *full[6], *part[2];
+        int nfull = 0;
+        for (int b = 0; b < n; b++) {
+            int len = g[b]->fw - x < PAIR_CHUNK ? g[b]->fw - x : PAIR_CHUNK;
+            if (len <= 0)
+                continue;
+            row_job_acc(second[b], x - lead, len); /* row r is done up to x - 1 */
+            int from[2] = {x, x - lead};
+            if (len < PAIR_CHUNK) { /* the band's last chunk */
+                part[0] = first[b], part[1] = second[b];
+                jobs_same_row(part, from, 2, len);
+                continue;
+            }
+            at[nfull] = from[0], full[nfull++] = first[b];
+            at[nfull] = from[1], full[nfull++] = second[b];
+        }
+        jobs_same_row(full, at, nfull, PAIR_CHUNK);
+    }
+    for (int b = 0; b < n; b++) { /* the last lead columns of row r + 1 */
+        at[b] = g[b]->fw - lead;
+        row_job_acc(second[b], at[b], lead);
+    }
+    jobs_same_row(second, at, n, lead);
+}
+
+/* Advances the n bands, all at row r = next: by two rows when row r + 1 is
+ * wanted too (below `until`) and the rows are wide enough, else by one. */
+static void field_advance(level_gen *const *g, int n, int until, uint32_t seed_lo,
+                          uint32_t seed_hi)
+{
+    int lead = pair_lead(g, n), narrow = 0;
+    for (int b = 0; b < n; b++)
+        narrow |= g[b]->fw < 2 * lead;
+    if (g[0]->next + 1 < until && !narrow)
+        field_pair(g, n, lead, seed_lo, seed_hi);
+    else
+        field_step(g, n, seed_lo, seed_hi);
 }
 
 /* Horizontal pyrUp of a coarse row c (its window starts at column cx0) to
@@ -360,7 +456,7 @@ static void up_row(const float *c, int cx0, int fx0, int n, float *o)
 static const float *field_row(level_gen *g, int y, uint32_t seed_lo, uint32_t seed_hi)
 {
     while (g->next <= y)
-        field_step(&g, 1, seed_lo, seed_hi);
+        field_advance(&g, 1, g->y1, seed_lo, seed_hi);
     return ring_row(g, y) + (g->x0 - g->fx0);
 }
 
@@ -380,12 +476,12 @@ static void field_rows(band_gen *bg, int nb, int l, int y, const float **f)
         g[b] = &bg[b].lv[l];
         /* Burn-in rows differ with the margin: each band alone up to y - 1. */
         while (g[b]->next < y)
-            field_step(&g[b], 1, lo, hi);
+            field_advance(&g[b], 1, y, lo, hi);
         if (g[b]->next == y)
             due[ndue++] = g[b];
     }
-    if (ndue > 0) /* row y of all bands at once */
-        field_step(due, ndue, lo, hi);
+    if (ndue > 0) /* row y (and y + 1) of all bands at once */
+        field_advance(due, ndue, due[0]->y1, lo, hi);
     for (int b = 0; b < nb; b++)
         f[b] = ring_row(g[b], y) + (g[b]->x0 - g[b]->fx0);
 }
@@ -471,7 +567,9 @@ static void band_free(band_gen *bg)
         free(g->ring);
         free(g->grow);
         free(g->noise);
+        free(g->noise2);
         free(g->acc);
+        free(g->acc2);
         for (int k = 0; k < 3; k++)
             free(g->hup[k]);
     }
@@ -499,15 +597,18 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
         if (c > g->pad)
             g->pad = c;
     }
-    g->depth = up + 1;
+    g->depth = up + 2;
     g->next = y0 - margin;
     g->ring = btf_calloc((size_t)g->depth * (g->fw + 2 * g->pad), sizeof(float), err);
     g->grow = btf_alloc((size_t)(x1 - x0), sizeof(float), err);
     g->noise = btf_alloc((size_t)g->fw + 6, sizeof(float), err);
+    g->noise2 = btf_alloc((size_t)g->fw + 6, sizeof(float), err);
     g->acc = btf_alloc((size_t)g->fw, sizeof(float), err);
+    g->acc2 = btf_alloc((size_t)g->fw, sizeof(float), err);
     for (int k = 0; k < 3; k++)
         g->hup_row[k] = INT32_MIN;
-    return g->ring && g->grow && g->noise && g->acc ? BTF_OK : BTF_E_NOMEM;
+    return g->ring && g->grow && g->noise && g->noise2 && g->acc && g->acc2 ? BTF_OK
+                                                                           : BTF_E_NOMEM;
 }
 
 /* Sets up the levels of one band for an output window [0, w) x [0, h). */
@@ -739,6 +840,8 @@ int btf_car_synthesise_field(const btf_car_band *band, int width, int height, ui
     free(g.ring);
     free(g.grow);
     free(g.noise);
+    free(g.noise2);
     free(g.acc);
+    free(g.acc2);
     return rc;
 }

@@ -3,6 +3,7 @@
 #include "testutil.h"
 
 #include "internal.h"
+#include "btf_shared.h" /* the sum order and the noise, for the direct recursion */
 
 #include <float.h>
 #include <math.h>
@@ -181,6 +182,76 @@ static void estimates_recover_known_parameters(void **state)
 /* (b) A long synthesis stays bounded and its sample variance matches the
  * model's stationary variance within 5 %. 10^8 pixels (10^7 under the
  * sanitizers, which are 10-20x slower). */
+/* The recursion written out directly: field row by row, pixel by pixel,
+ * zero outside the field, in the order of btf_shared.h (earlier rows in
+ * stored order, the noise, same-row offsets farthest first). */
+static float *direct_field(const btf_car_band *b, int w, int h, uint64_t seed, uint32_t stream)
+{
+    int m = btf_band_margin(b), fw = w + 2 * m, fh = h + m;
+    float *f = calloc((size_t)fw * fh, sizeof(float)), *out = malloc((size_t)w * h * sizeof(float));
+    assert_true(f && out);
+    int same[BTF_CAR_MAX_NEIGHBOURS];
+    int nsame = btf_car_same_row_order(b, same);
+    for (int r = 0; r < fh; r++)
+        for (int c = 0; c < fw; c++) {
+            float a = 0.0f;
+            for (int s = 0; s < b->n; s++) {
+                btf_offset o = b->offsets[s];
+                int rr = r + o.row, cc = c + o.col;
+                if (o.row != 0)
+                    a = btf_car_accumulate(a, b->gamma[s], rr >= 0 && cc >= 0 && cc < fw
+                                                               ? f[(size_t)rr * fw + cc] : 0.0f);
+            }
+            uint32_t urow = (uint32_t)(r - m + BTF_NOISE_ORIGIN); /* field row r is row r - m */
+            uint32_t ucol = (uint32_t)(c - m + BTF_NOISE_ORIGIN);
+            a = btf_car_output(a, b->sigma, btf_noise1((uint32_t)seed, (uint32_t)(seed >> 32),
+                                                       stream, urow, ucol));
+            for (int t = 0; t < nsame; t++) {
+                int cc = c + b->offsets[same[t]].col;
+                a = btf_car_accumulate(a, b->gamma[same[t]], cc >= 0 ? f[(size_t)r * fw + cc] : 0.0f);
+            }
+            f[(size_t)r * fw + c] = a;
+        }
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++)
+            out[(size_t)y * w + x] = btf_add_mean(b->mean, f[(size_t)(y + m) * fw + x + m]);
+    free(f);
+    return out;
+}
+
+/* CPU synthesis steps two rows at once where it can (src/synth.c,
+ * field_pair), with row r + 1 trailing row r by a chunk plus its reach;
+ * every value must still be the direct recursion's, bit for bit: the
+ * family's shapes and others, reaches past a chunk, widths on both sides
+ * of the pairing threshold, odd and even heights. */
+static void row_pairs_match_direct_recursion(void **state)
+{
+    (void)state;
+    const char *specs[] = {"0:-1,-1:0,-1:-1,-1:1", "-1:0", "0:-2,-1:0,-1:1",
+                           "0:-1,0:-2,0:-3,-1:3,-2:-2", "0:-1,-1:40,-1:-7,-3:0",
+                           "0:-1,0:-2,-1:0,-1:2,-2:0,-2:1"};
+    const float g[6] = {0.3f, 0.2f, -0.1f, 0.15f, 0.05f, -0.05f};
+    int widths[] = {1, 5, 64, 129, 150, 300}, heights[] = {1, 2, 7};
+    for (int s = 0; s < 6; s++) {
+        btf_car_band b = model(specs[s], g, 0.7f, 0.25f);
+        b.margin = 8 + 4 * s; /* as fitting would set it */
+        for (int wi = 0; wi < 6; wi++)
+            for (int hi = 0; hi < 3; hi++) {
+                int w = widths[wi], h = heights[hi];
+                double *got = field(&b, w, h, 1234 + s);
+                float *want = direct_field(&b, w, h, 1234 + s, 7);
+                size_t diff = 0;
+                for (int i = 0; i < w * h; i++)
+                    diff += (float)got[i] != want[i];
+                if (diff)
+                    print_error("%s at %dx%d: %zu values differ\n", specs[s], w, h, diff);
+                assert_int_equal(diff, 0);
+                free(got);
+                free(want);
+            }
+    }
+}
+
 static void long_synthesis_is_stationary(void **state)
 {
     (void)state;
@@ -627,6 +698,7 @@ int main(void)
         cmocka_unit_test(neighbourhood_spec),
         cmocka_unit_test(decorrelation_and_pyramid),
         cmocka_unit_test(estimates_recover_known_parameters),
+        cmocka_unit_test(row_pairs_match_direct_recursion),
         cmocka_unit_test(long_synthesis_is_stationary),
         cmocka_unit_test(margins_follow_correlation),
         cmocka_unit_test(fitted_and_read_models_carry_margins),

@@ -1,7 +1,7 @@
 // noise_check.comp -- checks that gpu/btf_noise.h compiles as GLSL and gives
 // the GPU side of the CPU/GPU bit-exactness test of the synthesis noise.
 // Invocation i covers (row0 + i / nblocks, block0 + i % nblocks): it writes
-// btf_noise4 for that (row, block) to z[i], the raw Philox-4x32-10 words of
+// btf_noise4 for that (row, block) to z[i], the raw Philox-4x32-7 words of
 // the same counter to raw[i], and btf_noise1 of the block's 4 columns to z1[i].
 // The workgroup size is specialisation constant 0 (default 64), so the host
 // test (tests/test_vk.c) can check that results do not depend on it.

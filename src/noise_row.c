@@ -145,7 +145,7 @@ AVX_FN void store_blocks8(float *p, v8f z0, v8f z1, v8f z2, v8f z3)
     _mm256_storeu_ps(p + 24, _mm256_permute2f128_ps(r2, r3, 0x31));
 }
 
-/* Blocks b .. b + 15 (64 Gaussians) into out[0 .. 63]: Philox-4x32-10 on
+/* Blocks b .. b + 15 (64 Gaussians) into out[0 .. 63]: Philox-4x32-7 on
  * two 8-lane groups, then Box-Muller on their four word pairs. */
 AVX_FN void noise_blocks16(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint32_t row,
                            uint32_t b, float *out)

@@ -38,6 +38,8 @@ typedef struct level_gen {
     int depth;            /* ring rows: reach up + 2 (field_pair writes row r + 1
                            * while row r still reads the row reach up above it) */
     int next;             /* next field row to generate */
+    int same_k;           /* same_row_suffix of the band, and its gammas */
+    float same_g[3];
     float *ring;          /* depth rows of (fw + 2 pad) floats */
     float *grow;          /* the G row of this level, window width */
     float *noise, *noise2; /* fw + 6 floats: one row of Gaussians (two rows) */
@@ -205,7 +207,8 @@ static void row_job_init(row_job *j, level_gen *g, int r, float *noise, float *a
         }
     j->acc = acc;
     j->out = ring_row(g, r);
-    j->k = same_row_suffix(b, j->g3);
+    j->k = g->same_k;
+    memcpy(j->g3, g->same_g, sizeof j->g3);
 }
 
 /* The earlier-row part of columns [from, from + len): reads the rows above
@@ -598,6 +601,7 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
             g->pad = c;
     }
     g->depth = up + 2;
+    g->same_k = same_row_suffix(car, g->same_g);
     g->next = y0 - margin;
     g->ring = btf_calloc((size_t)g->depth * (g->fw + 2 * g->pad), sizeof(float), err);
     g->grow = btf_alloc((size_t)(x1 - x0), sizeof(float), err);
@@ -694,8 +698,8 @@ static void interleave3(const float *p0, const float *p1, const float *p2, int w
  * vectorises), then interleaved. Returns nonzero when a value is Inf or NaN
  * (all exponent bits set). */
 SYNTH_AVX2_CLONES
-static int unmix_row(const btf_subspace_model *sm, const float *b0, const float *b1,
-                     const float *b2, int width, float *plane, float *row)
+static int unmix_planar(const btf_subspace_model *sm, const float *b0, const float *b1,
+                        const float *b2, int width, float *plane, float *row)
 {
     uint32_t bad = 0;
     for (int k = 0; k < 3; k++) {
@@ -710,6 +714,72 @@ static int unmix_row(const btf_subspace_model *sm, const float *b0, const float 
     }
     interleave3(plane, plane + width, plane + 2 * (size_t)width, width, row);
     return bad != 0;
+}
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define SYNTH_HAVE_AVX2_UNMIX 1
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include <immintrin.h>
+
+/* unmix_planar in one pass with AVX2, 8 pixels at a time: btf_unmix's
+ * multiplies and adds in its order (no FMA: the build forbids contraction
+ * and no intrinsic here asks for it), the finite test, and the RGB
+ * interleave by three lane permutations and six blends straight into the
+ * row; the last width % 8 pixels go through unmix_planar. Same bits. */
+static int unmix_avx2(const btf_subspace_model *sm, const float *b0, const float *b1,
+                      const float *b2, int width, float *plane, float *row)
+{
+    __m256 mean[3], c0[3], c1[3], c2[3];
+    for (int k = 0; k < 3; k++) {
+        mean[k] = _mm256_set1_ps(sm->mean[k]);
+        c0[k] = _mm256_set1_ps(sm->basis[k]);
+        c1[k] = _mm256_set1_ps(sm->basis[3 + k]);
+        c2[k] = _mm256_set1_ps(sm->basis[6 + k]);
+    }
+    const __m256i expo = _mm256_set1_epi32(0x7F800000);
+    /* lane i of out k takes its channel from the permuted a, b or c */
+    const __m256i pa = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
+    const __m256i pb = _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2);
+    const __m256i pc = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
+    __m256i bad = _mm256_setzero_si256();
+    int x = 0;
+    for (; x + 8 <= width; x += 8) {
+        __m256 v0 = _mm256_loadu_ps(b0 + x), v1 = _mm256_loadu_ps(b1 + x);
+        __m256 v2 = _mm256_loadu_ps(b2 + x), ch[3];
+        for (int k = 0; k < 3; k++) {
+            __m256 s = _mm256_add_ps(mean[k], _mm256_mul_ps(c0[k], v0));
+            s = _mm256_add_ps(s, _mm256_mul_ps(c1[k], v1));
+            ch[k] = _mm256_add_ps(s, _mm256_mul_ps(c2[k], v2));
+            __m256i e = _mm256_and_si256(_mm256_castps_si256(ch[k]), expo);
+            bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(e, expo));
+        }
+        __m256 a = _mm256_permutevar8x32_ps(ch[0], pa);
+        __m256 b = _mm256_permutevar8x32_ps(ch[1], pb);
+        __m256 c = _mm256_permutevar8x32_ps(ch[2], pc);
+        /* r g b r g b r g | b r g b r g b r | g b r g b r g b */
+        _mm256_storeu_ps(row + 3 * x, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24));
+        _mm256_storeu_ps(row + 3 * x + 8, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49));
+        _mm256_storeu_ps(row + 3 * x + 16, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92));
+    }
+    int tail = x < width ? unmix_planar(sm, b0 + x, b1 + x, b2 + x, width - x, plane,
+                                        row + 3 * x) : 0;
+    return !_mm256_testz_si256(bad, bad) || tail;
+}
+#pragma GCC pop_options
+#endif
+
+/* One row of the subspace image from its three bands, interleaved RGB into
+ * row (plane: 3 width floats of scratch). Returns nonzero when a value is
+ * Inf or NaN. */
+static int unmix_row(const btf_subspace_model *sm, const float *b0, const float *b1,
+                     const float *b2, int width, float *plane, float *row)
+{
+#ifdef SYNTH_HAVE_AVX2_UNMIX
+    if (__builtin_cpu_supports("avx2")) /* a load and a test */
+        return unmix_avx2(sm, b0, b1, b2, width, plane, row);
+#endif
+    return unmix_planar(sm, b0, b1, b2, width, plane, row);
 }
 
 int btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err)

@@ -1,6 +1,6 @@
 /*
  * bench_noise.c -- speed of the CAR synthesis noise (gpu/btf_noise.h) on one
- * core: ns per Gaussian through btf_noise4 (one Philox-4x32-10 call and two
+ * core: ns per Gaussian through btf_noise4 (one Philox-4x32-7 call and two
  * Box-Muller pairs per 4 Gaussians), through btf_noise1, and Philox alone.
  * Median of 5 runs; prints figures, never fails on time.
  */
@@ -83,6 +83,6 @@ int main(void)
     printf("== noise (gpu/btf_noise.h), one core\n");
     report("btf_noise4 (Philox + 2 Box-Muller pairs)", "Gaussian", run_noise4);
     report("btf_noise1 (Philox + 1 Box-Muller pair)", "Gaussian", run_noise1);
-    report("btf_philox (Philox-4x32-10 alone)", "call", run_philox);
+    report("btf_philox (Philox-4x32-7 alone)", "call", run_philox);
     return 0;
 }

@@ -433,26 +433,61 @@ static void field_advance(level_gen *const *g, int n, int until, uint32_t seed_l
         field_step(g, n, seed_lo, seed_hi);
 }
 
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define SYNTH_HAVE_AVX2 1
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include <immintrin.h>
+
+/* up_row's column pairs with AVX2: fine columns 2j and 2j + 1 from coarse
+ * cc[j - 1 .. j + 1], 8 pairs at a time, btf_up_even and btf_up_odd in
+ * their order (no FMA), interleaved by unpacks and lane permutes into whole
+ * vector stores (a loop per parity stores one lane at a time). Returns the
+ * pairs done. */
+static int up_pairs_avx2(const float *cc, int m, float *out)
+{
+    const __m256 six = _mm256_set1_ps(6.0f), eighth = _mm256_set1_ps(0.125f);
+    const __m256 half = _mm256_set1_ps(0.5f);
+    int j = 0;
+    for (; j + 8 <= m; j += 8) {
+        __m256 a = _mm256_loadu_ps(cc + j - 1), b = _mm256_loadu_ps(cc + j);
+        __m256 c = _mm256_loadu_ps(cc + j + 1);
+        __m256 even = _mm256_mul_ps(_mm256_add_ps(_mm256_add_ps(a, c), _mm256_mul_ps(b, six)),
+                                    eighth);
+        __m256 odd = _mm256_mul_ps(_mm256_add_ps(b, c), half);
+        __m256 lo = _mm256_unpacklo_ps(even, odd), hi = _mm256_unpackhi_ps(even, odd);
+        _mm256_storeu_ps(out + 2 * j, _mm256_permute2f128_ps(lo, hi, 0x20));
+        _mm256_storeu_ps(out + 2 * j + 8, _mm256_permute2f128_ps(lo, hi, 0x31));
+    }
+    return j;
+}
+#pragma GCC pop_options
+#endif
+
 /* Horizontal pyrUp of a coarse row c (its window starts at column cx0) to
  * the fine columns [fx0, fx0 + n): fine column x reads coarse floor(x / 2);
  * an even x is btf_up_even of three coarse values, an odd x btf_up_odd of
- * two. One loop per parity, each of which vectorises (a loop choosing per
- * column does not). */
-SYNTH_AVX2_CLONES
+ * two. After an odd first column, the rest goes in (even, odd) pairs. */
 static void up_row(const float *c, int cx0, int fx0, int n, float *o)
 {
-    for (int par = 0; par < 2; par++) {
-        int k0 = (fx0 & 1) == par ? 0 : 1; /* the first fine column of this parity */
-        int m = k0 < n ? (n - k0 + 1) / 2 : 0;
-        const float *cc = c + (floordiv2(fx0 + k0) - cx0);
-        float *out = o + k0;
-        if (par == 0)
-            for (int j = 0; j < m; j++)
-                out[2 * j] = btf_up_even(cc[j - 1], cc[j], cc[j + 1]);
-        else
-            for (int j = 0; j < m; j++)
-                out[2 * j] = btf_up_odd(cc[j], cc[j + 1]);
+    int x = 0;
+    if ((fx0 & 1) && n > 0) {
+        const float *cc = c + (floordiv2(fx0) - cx0);
+        o[0] = btf_up_odd(cc[0], cc[1]);
+        x = 1;
     }
+    const float *cc = c + (floordiv2(fx0 + x) - cx0); /* coarse of fine column x */
+    int m = (n - x) / 2, j = 0;
+#ifdef SYNTH_HAVE_AVX2
+    if (__builtin_cpu_supports("avx2"))
+        j = up_pairs_avx2(cc, m, o + x);
+#endif
+    for (; j < m; j++) {
+        o[x + 2 * j] = btf_up_even(cc[j - 1], cc[j], cc[j + 1]);
+        o[x + 2 * j + 1] = btf_up_odd(cc[j], cc[j + 1]);
+    }
+    if ((n - x) & 1) /* a last even column */
+        o[n - 1] = btf_up_even(cc[m - 1], cc[m], cc[m + 1]);
 }
 
 /* Zero-mean field row y of one level (a pointer into the ring). */
@@ -716,11 +751,9 @@ static int unmix_planar(const btf_subspace_model *sm, const float *b0, const flo
     return bad != 0;
 }
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define SYNTH_HAVE_AVX2_UNMIX 1
+#ifdef SYNTH_HAVE_AVX2
 #pragma GCC push_options
 #pragma GCC target("avx2")
-#include <immintrin.h>
 
 /* unmix_planar in one pass with AVX2, 8 pixels at a time: btf_unmix's
  * multiplies and adds in its order (no FMA: the build forbids contraction
@@ -775,7 +808,7 @@ static int unmix_avx2(const btf_subspace_model *sm, const float *b0, const float
 static int unmix_row(const btf_subspace_model *sm, const float *b0, const float *b1,
                      const float *b2, int width, float *plane, float *row)
 {
-#ifdef SYNTH_HAVE_AVX2_UNMIX
+#ifdef SYNTH_HAVE_AVX2
     if (__builtin_cpu_supports("avx2")) /* a load and a test */
         return unmix_avx2(sm, b0, b1, b2, width, plane, row);
 #endif

@@ -49,9 +49,9 @@ typedef float v8f __attribute__((vector_size(32)));
 
 #define AVX_FN static inline __attribute__((always_inline))
 /* Box-Muller vectors evaluated in lock step: four 8-lane chains hide the
- * latency of one. */
+ * latency of one (two in the tail of a row). */
 #define NV 4
-#define EACH for (int j = 0; j < NV; j++)
+#define EACH for (int j = 0; j < nv; j++)
 
 /* hi:lo = m * c per lane (BTF_MULHILO), with two vpmuludq. */
 AVX_FN void mulhilo8(uint32_t m, v8u c, v8u *hi, v8u *lo)
@@ -74,8 +74,9 @@ AVX_FN v8f u2f8(v8u u) /* exact: u < 2^24 wherever it is used */
     return __builtin_convertvector((v8i)u, v8f);
 }
 
-/* btf_noise_gauss2 on NV x 8 word pairs: same operations, same order. */
-AVX_FN void gauss2_lockstep(const v8u *a, const v8u *b, v8f *z0, v8f *z1)
+/* btf_noise_gauss2 on nv x 8 word pairs (nv <= NV, a constant where it is
+ * inlined): same operations, same order. */
+AVX_FN void gauss2_lockstep(const int nv, const v8u *a, const v8u *b, v8f *z0, v8f *z1)
 {
     v8f e[NV], f[NV], q[NV], x[NV], h[NV], y[NV];
     EACH {
@@ -145,13 +146,14 @@ AVX_FN void store_blocks8(float *p, v8f z0, v8f z1, v8f z2, v8f z3)
     _mm256_storeu_ps(p + 24, _mm256_permute2f128_ps(r2, r3, 0x31));
 }
 
-/* Blocks b .. b + 15 (64 Gaussians) into out[0 .. 63]: Philox-4x32-7 on
- * two 8-lane groups, then Box-Muller on their four word pairs. */
-AVX_FN void noise_blocks16(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint32_t row,
-                           uint32_t b, float *out)
+/* Blocks b .. b + 8 G - 1 (32 G Gaussians) into out: Philox-4x32-7 on G
+ * 8-lane groups (G = 1 or 2, a constant where it is inlined), then
+ * Box-Muller on their 2 G word pairs. */
+AVX_FN void noise_groups(const int G, uint32_t seed_lo, uint32_t seed_hi, uint32_t stream,
+                         uint32_t row, uint32_t b, float *out)
 {
     v8u cx[2], cy[2], cz[2], cw[2];
-    for (int g = 0; g < 2; g++) {
+    for (int g = 0; g < G; g++) {
         uint32_t c = b + 8u * (uint32_t)g;
         v8u blocks = {c, c + 1, c + 2, c + 3, c + 4, c + 5, c + 6, c + 7};
         cx[g] = blocks;
@@ -161,7 +163,7 @@ AVX_FN void noise_blocks16(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, 
     }
     uint32_t k0 = seed_lo, k1 = seed_hi;
     for (int i = 0; i < BTF_PHILOX_ROUNDS; i++) {
-        for (int g = 0; g < 2; g++) { /* btf_philox_round */
+        for (int g = 0; g < G; g++) { /* btf_philox_round */
             v8u hi0, lo0, hi1, lo1;
             mulhilo8(BTF_PHILOX_M0, cx[g], &hi0, &lo0);
             mulhilo8(BTF_PHILOX_M1, cz[g], &hi1, &lo1);
@@ -174,11 +176,15 @@ AVX_FN void noise_blocks16(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, 
         k1 += BTF_PHILOX_W1;
     }
     /* btf_noise4: (x, y) give components 0 and 1, (z, w) components 2 and 3 */
-    v8u a[NV] = {cx[0], cx[1], cz[0], cz[1]}, w[NV] = {cy[0], cy[1], cw[0], cw[1]};
+    v8u a[NV], w[NV];
+    for (int g = 0; g < G; g++) {
+        a[g] = cx[g], a[G + g] = cz[g];
+        w[g] = cy[g], w[G + g] = cw[g];
+    }
     v8f z0[NV], z1[NV];
-    gauss2_lockstep(a, w, z0, z1);
-    store_blocks8(out, z0[0], z1[0], z0[2], z1[2]);
-    store_blocks8(out + 32, z0[1], z1[1], z0[3], z1[3]);
+    gauss2_lockstep(2 * G, a, w, z0, z1);
+    for (int g = 0; g < G; g++)
+        store_blocks8(out + 32 * g, z0[g], z1[g], z0[G + g], z1[G + g]);
 }
 
 static void noise_blocks_avx2(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint32_t row,
@@ -186,12 +192,17 @@ static void noise_blocks_avx2(uint32_t seed_lo, uint32_t seed_hi, uint32_t strea
 {
     uint32_t i = 0;
     for (; i + 16 <= n; i += 16)
-        noise_blocks16(seed_lo, seed_hi, stream, row, b0 + i, out + 4 * i);
+        noise_groups(2, seed_lo, seed_hi, stream, row, b0 + i, out + 4 * i);
+    if (i + 8 <= n) {
+        noise_groups(1, seed_lo, seed_hi, stream, row, b0 + i, out + 4 * i);
+        i += 8;
+    }
     if (i < n) {
-        /* The tail: one more group into a scratch buffer, cheaper than even
-         * a few blocks of the scalar generator (8x slower per Gaussian). */
-        float tail[64];
-        noise_blocks16(seed_lo, seed_hi, stream, row, b0 + i, tail);
+        /* The last 1..7 blocks: one more group into a scratch buffer,
+         * cheaper than even a few blocks of the scalar generator (8x slower
+         * per Gaussian). */
+        float tail[32];
+        noise_groups(1, seed_lo, seed_hi, stream, row, b0 + i, tail);
         memcpy(out + 4 * i, tail, (size_t)(n - i) * 4 * sizeof(float));
     }
 }

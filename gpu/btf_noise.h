@@ -10,12 +10,13 @@
  *  - 32-bit integer arithmetic (Philox-4x32-7, a counter-based generator:
  *    J. K. Salmon, M. A. Moraes, R. O. Dror, D. E. Shaw, "Parallel random
  *    numbers: as easy as 1, 2, 3", SC'11; Random123 known answers in
- *    tests/test_noise.c).  7 rounds is the count the paper finds passing
- *    all of TestU01's BigCrush; Random123 defaults to 10 as a safety
- *    margin.  Ours was 10 until the generator was found to cost half of CPU
- *    synthesis (issue 5); a cheaper hash, pcg4d (Jarzynski and Olano, JCGT
- *    2020), saved more but failed dieharder's DNA test (p < 1e-8) on the
- *    words in the order synthesis draws them, where Philox-7 passes;
+ *    tests/test_noise.c).  The paper reports Philox-4x32 with 7 rounds
+ *    passing all of TestU01's BigCrush; Random123 defaults to 10 for a
+ *    safety margin.  btfcar used 10 until the generator turned out to cost
+ *    half of CPU synthesis (issue 5, docs/synthesis.md); a cheaper hash,
+ *    pcg4d (Jarzynski and Olano, JCGT 2020), saved more but failed
+ *    dieharder's DNA test (p < 1e-8) on the words in the order synthesis
+ *    draws them, where Philox-4x32-7 passes;
  *  - float additions, subtractions and multiplications (correctly rounded
  *    on both sides), exact int->float conversions of values < 2^24, bit casts
  *    and selects.  No division, no exp/log/sin/cos/sqrt built-ins: their last

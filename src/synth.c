@@ -380,7 +380,7 @@ static void field_pair(level_gen *const *g, int n, int lead, uint32_t seed_lo, u
 {
     row_job j0[3], j1[3];
     row_job *first[3] = {NULL, NULL, NULL}, *second[3] = {NULL, NULL, NULL};
-    int widest = 0;
+    int widest = 0, narrowest = INT_MAX, shape = g[0]->same_k;
     for (int b = 0; b < n; b++) {
         int r = g[b]->next;
         g[b]->next += 2;
@@ -390,10 +390,23 @@ static void field_pair(level_gen *const *g, int n, int lead, uint32_t seed_lo, u
         first[b] = &j0[b];
         second[b] = &j1[b];
         widest = g[b]->fw > widest ? g[b]->fw : widest;
+        narrowest = g[b]->fw < narrowest ? g[b]->fw : narrowest;
+        shape = g[b]->same_k == shape ? shape : -1;
     }
     int at[6] = {0, 0, 0, 0, 0, 0};
     jobs_same_row(first, at, n, lead);
-    for (int x = lead; x < widest; x += PAIR_CHUNK) {
+    int x = lead;
+    if (shape >= 0) /* the usual case: all chains of one shape, straight to one loop */
+        for (; x + PAIR_CHUNK <= narrowest; x += PAIR_CHUNK) {
+            chain c[MAX_CHAINS];
+            for (int b = 0; b < n; b++) {
+                row_job_acc(second[b], x - lead, PAIR_CHUNK);
+                c[2 * b] = (chain){j0[b].acc + x, j0[b].out + x, j0[b].g3};
+                c[2 * b + 1] = (chain){j1[b].acc + x - lead, j1[b].out + x - lead, j1[b].g3};
+            }
+            chains(c, 2 * n, shape, PAIR_CHUNK);
+        }
+    for (; x < widest; x += PAIR_CHUNK) {
         row_job *full[6], *part[2];
         int nfull = 0;
         for (int b = 0; b < n; b++) {

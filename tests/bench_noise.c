@@ -1,10 +1,13 @@
 /*
  * bench_noise.c -- speed of the CAR synthesis noise (gpu/btf_noise.h) on one
  * core: ns per Gaussian through btf_noise4 (one Philox-4x32-7 call and two
- * Box-Muller pairs per 4 Gaussians), through btf_noise1, and Philox alone.
+ * Box-Muller pairs per 4 Gaussians), through btf_noise1, and Philox alone;
+ * and the row generator CPU synthesis uses (btf_noise_blocks, AVX2 where
+ * the CPU has it), rows of 136 blocks as in a level-0 field of 512 + margins.
  * Median of 5 runs; prints figures, never fails on time.
  */
 #include "../gpu/btf_noise.h"
+#include "internal.h" /* btf_noise_blocks */
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -67,6 +70,22 @@ static double run_philox(void)
     return t * 1e9 / CALLS;
 }
 
+static double run_rows(void)
+{
+    enum { BLOCKS = 136 };
+    static float row[4 * BLOCKS];
+    float acc = 0.0f;
+    uint32_t rows = CALLS / BLOCKS;
+    double t0 = now();
+    for (uint32_t r = 0; r < rows; r++) {
+        btf_noise_blocks(1u, 2u, 3u, r, 67108860u, BLOCKS, 1, row);
+        acc += row[r % (4 * BLOCKS)];
+    }
+    double t = now() - t0;
+    sink_f = acc;
+    return t * 1e9 / (4.0 * BLOCKS * rows);
+}
+
 static void report(const char *what, const char *unit, double (*fn)(void))
 {
     double r[RUNS];
@@ -84,5 +103,8 @@ int main(void)
     report("btf_noise4 (Philox + 2 Box-Muller pairs)", "Gaussian", run_noise4);
     report("btf_noise1 (Philox + 1 Box-Muller pair)", "Gaussian", run_noise1);
     report("btf_philox (Philox-4x32-7 alone)", "call", run_philox);
+    report(btf_noise_path_avx2() ? "btf_noise_blocks (rows, AVX2 path)"
+                                 : "btf_noise_blocks (rows, portable path)",
+           "Gaussian", run_rows);
     return 0;
 }

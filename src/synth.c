@@ -369,63 +369,92 @@ static int pair_lead(level_gen *const *g, int n)
     return PAIR_CHUNK + reach;
 }
 
+/* Two rows, r and r + 1, of n bands generated together (field_pair). */
+typedef struct row_pair {
+    int n, lead;
+    row_job first[3], second[3]; /* rows r and r + 1 of each band */
+    int widest, narrowest;       /* field widths */
+    int shape;                   /* the bands' common same-row shape, or -1 */
+} row_pair;
+
+/* Starts rows r and r + 1 of each band: both rows' noise and terms, row
+ * r's earlier-row part over the whole row (the rows above are finished). */
+static void row_pair_init(row_pair *p, level_gen *const *g, int n, int lead, uint32_t seed_lo,
+                          uint32_t seed_hi)
+{
+    p->n = n, p->lead = lead;
+    p->widest = 0, p->narrowest = INT_MAX, p->shape = g[0]->same_k;
+    for (int b = 0; b < n; b++) {
+        int r = g[b]->next;
+        g[b]->next += 2;
+        row_job_init(&p->first[b], g[b], r, g[b]->noise, g[b]->acc, seed_lo, seed_hi);
+        row_job_init(&p->second[b], g[b], r + 1, g[b]->noise2, g[b]->acc2, seed_lo, seed_hi);
+        row_job_acc(&p->first[b], 0, g[b]->fw);
+        p->widest = g[b]->fw > p->widest ? g[b]->fw : p->widest;
+        p->narrowest = g[b]->fw < p->narrowest ? g[b]->fw : p->narrowest;
+        p->shape = g[b]->same_k == p->shape ? p->shape : -1;
+    }
+}
+
+/* The chunk of row r at column x and of row r + 1 at x - lead, all bands
+ * a whole chunk wide and of one shape: straight to one loop of 2 n chains
+ * (the usual case). */
+static void row_pair_chunk_uniform(row_pair *p, int x)
+{
+    chain c[MAX_CHAINS];
+    for (int b = 0; b < p->n; b++) {
+        const row_job *f = &p->first[b], *s = &p->second[b];
+        row_job_acc(s, x - p->lead, PAIR_CHUNK); /* row r is done up to x - 1 */
+        c[2 * b] = (chain){f->acc + x, f->out + x, f->g3};
+        c[2 * b + 1] = (chain){s->acc + x - p->lead, s->out + x - p->lead, s->g3};
+    }
+    chains(c, 2 * p->n, p->shape, PAIR_CHUNK);
+}
+
+/* The same for any bands: those past their width sit out, those in their
+ * last (partial) chunk run on their own, the others share a loop. */
+static void row_pair_chunk(row_pair *p, int x)
+{
+    row_job *full[6], *part[2];
+    int at[6], nfull = 0;
+    for (int b = 0; b < p->n; b++) {
+        int fw = p->first[b].g->fw, len = fw - x < PAIR_CHUNK ? fw - x : PAIR_CHUNK;
+        if (len <= 0)
+            continue;
+        row_job_acc(&p->second[b], x - p->lead, len); /* row r is done up to x - 1 */
+        int from[2] = {x, x - p->lead};
+        if (len < PAIR_CHUNK) {
+            part[0] = &p->first[b], part[1] = &p->second[b];
+            jobs_same_row(part, from, 2, len);
+            continue;
+        }
+        at[nfull] = from[0], full[nfull++] = &p->first[b];
+        at[nfull] = from[1], full[nfull++] = &p->second[b];
+    }
+    jobs_same_row(full, at, nfull, PAIR_CHUNK);
+}
+
 /* The next two rows, r and r + 1, of each of the n bands at once, for
  * twice the independent chains of field_step: row r + 1 runs `lead`
  * columns behind row r, chunk by chunk, its earlier-row part computed just
  * before each chunk from the part of row r already finished. Every value is
  * the same sum in the same order as field_step gives. Each band runs over
- * its own width (the margins differ); the chains of the bands still going
- * share a loop. Needs every width >= lead. */
+ * its own width (the margins differ). Needs every width >= lead. */
 static void field_pair(level_gen *const *g, int n, int lead, uint32_t seed_lo, uint32_t seed_hi)
 {
-    row_job j0[3], j1[3];
-    row_job *first[3] = {NULL, NULL, NULL}, *second[3] = {NULL, NULL, NULL};
-    int widest = 0, narrowest = INT_MAX, shape = g[0]->same_k;
-    for (int b = 0; b < n; b++) {
-        int r = g[b]->next;
-        g[b]->next += 2;
-        row_job_init(&j0[b], g[b], r, g[b]->noise, g[b]->acc, seed_lo, seed_hi);
-        row_job_init(&j1[b], g[b], r + 1, g[b]->noise2, g[b]->acc2, seed_lo, seed_hi);
-        row_job_acc(&j0[b], 0, g[b]->fw);
-        first[b] = &j0[b];
-        second[b] = &j1[b];
-        widest = g[b]->fw > widest ? g[b]->fw : widest;
-        narrowest = g[b]->fw < narrowest ? g[b]->fw : narrowest;
-        shape = g[b]->same_k == shape ? shape : -1;
-    }
-    int at[6] = {0, 0, 0, 0, 0, 0};
-    jobs_same_row(first, at, n, lead);
+    row_pair p;
+    row_pair_init(&p, g, n, lead, seed_lo, seed_hi);
+    row_job *first[3] = {&p.first[0], &p.first[1], &p.first[2]};
+    row_job *second[3] = {&p.second[0], &p.second[1], &p.second[2]};
+    int at[3] = {0, 0, 0};
+    jobs_same_row(first, at, n, lead); /* row r alone */
     int x = lead;
-    if (shape >= 0) /* the usual case: all chains of one shape, straight to one loop */
-        for (; x + PAIR_CHUNK <= narrowest; x += PAIR_CHUNK) {
-            chain c[MAX_CHAINS];
-            for (int b = 0; b < n; b++) {
-                row_job_acc(second[b], x - lead, PAIR_CHUNK);
-                c[2 * b] = (chain){j0[b].acc + x, j0[b].out + x, j0[b].g3};
-                c[2 * b + 1] = (chain){j1[b].acc + x - lead, j1[b].out + x - lead, j1[b].g3};
-            }
-            chains(c, 2 * n, shape, PAIR_CHUNK);
-        }
-    for (; x < widest; x += PAIR_CHUNK) {
-        row_job *full[6], *part[2];
-        int nfull = 0;
-        for (int b = 0; b < n; b++) {
-            int len = g[b]->fw - x < PAIR_CHUNK ? g[b]->fw - x : PAIR_CHUNK;
-            if (len <= 0)
-                continue;
-            row_job_acc(second[b], x - lead, len); /* row r is done up to x - 1 */
-            int from[2] = {x, x - lead};
-            if (len < PAIR_CHUNK) { /* the band's last chunk */
-                part[0] = first[b], part[1] = second[b];
-                jobs_same_row(part, from, 2, len);
-                continue;
-            }
-            at[nfull] = from[0], full[nfull++] = first[b];
-            at[nfull] = from[1], full[nfull++] = second[b];
-        }
-        jobs_same_row(full, at, nfull, PAIR_CHUNK);
-    }
-    for (int b = 0; b < n; b++) { /* the last lead columns of row r + 1 */
+    if (p.shape >= 0)
+        for (; x + PAIR_CHUNK <= p.narrowest; x += PAIR_CHUNK)
+            row_pair_chunk_uniform(&p, x);
+    for (; x < p.widest; x += PAIR_CHUNK)
+        row_pair_chunk(&p, x);
+    for (int b = 0; b < n; b++) { /* row r + 1 alone: its last lead columns */
         at[b] = g[b]->fw - lead;
         row_job_acc(second[b], at[b], lead);
     }

@@ -171,3 +171,7 @@ clean:
 # The synthesis loops are written to be vectorised (src/synth.c); -O3 lets
 # GCC do it. The op order per pixel is fixed, so results do not change.
 $(BUILD)/src/synth.o $(BUILD)/src/noise_row.o: CFLAGS += -O3
+# The noise generator's four Box-Muller vectors in lock step run out of the
+# 16 vector registers; scheduling before register allocation, with an eye on
+# register pressure, makes it about 8 % faster (same instructions, same bits).
+$(BUILD)/src/noise_row.o: CFLAGS += -fschedule-insns -fsched-pressure

@@ -143,6 +143,18 @@ static void earlier_rows(const float *const *src, const float *gam, int n, float
         memcpy(acc + i + 16, &a2, sizeof a2);
         memcpy(acc + i + 24, &a3, sizeof a3);
     }
+    for (; i + 8 <= fw; i += 8) { /* what is left, 8 pixels at a time */
+        v8f a0 = {0};
+        for (int s = 0; s < n; s++) {
+            v8f gs = {0};
+            gs += gam[s];
+            a0 = a0 + gs * LOAD8(src[s] + i);
+        }
+        v8f sg = {0};
+        sg += sigma;
+        a0 = a0 + sg * LOAD8(e + i);
+        memcpy(acc + i, &a0, sizeof a0);
+    }
     for (; i < fw; i++) {
         float a = 0.0f;
         for (int s = 0; s < n; s++)

@@ -9,10 +9,13 @@
  * distance: with h the response of the recursion Y_r = sum_s gamma_s Y_{r+s}
  * + e_r to a unit impulse, the stationary variance is sigma^2 sum h^2 and a
  * pixel m rows or columns from the boundary misses about the part of that
- * sum beyond m. The margin is the smallest m (a power of two times
+ * sum beyond m. The margin is the smallest m (a multiple of
  * BTF_SYNTH_MARGIN_MIN, at least twice the neighbourhood's reach) whose
  * missing part is below BTF_SYNTH_MARGIN_EPS of the whole, capped at
- * BTF_SYNTH_MARGIN_MAX. A weakly correlated band (most of them) needs 8 or
+ * BTF_SYNTH_MARGIN_MAX: found by doubling, then by bisection between the
+ * last two powers of two (a band that needs 130 rows costs 136, not 256:
+ * margins are a large part of the pixels synthesised when the bands are
+ * strongly correlated). A weakly correlated band (most of them) needs 8 or
  * 16 pixels, a strongly correlated one more: synthesis no longer pays a
  * fixed 64 on every side of every level, and gives bands whose correlation
  * reaches farther up to 256. A band that needs more than the cap (a nearly
@@ -87,6 +90,21 @@ static double test_work(const btf_car_band *b, int m)
     return (2.0 * m + 1.0) * (4.0 * m + 1.0) * (b->n + 1);
 }
 
+/* Whether margin m leaves at most BTF_SYNTH_MARGIN_EPS outside: 1 yes, 0
+ * no, -1 out of memory, -2 out of budget (budget NULL: none). */
+static int margin_enough(const btf_car_band *b, int m, int reach, double *budget)
+{
+    if (budget) {
+        if (*budget < test_work(b, m))
+            return -2;
+        *budget -= test_work(b, m);
+    }
+    double share = outside_share(b, m, reach);
+    if (share < 0.0)
+        return -1;
+    return share <= BTF_SYNTH_MARGIN_EPS;
+}
+
 int btf_car_margin_within(const btf_car_band *b, double *budget)
 {
     if (b->n == 0)
@@ -94,19 +112,33 @@ int btf_car_margin_within(const btf_car_band *b, double *budget)
     int m = BTF_SYNTH_MARGIN_MIN, reach = band_reach(b);
     while (m < 2 * reach && m < BTF_SYNTH_MARGIN_MAX)
         m *= 2;
-    for (; m < BTF_SYNTH_MARGIN_MAX; m *= 2) {
-        if (budget) {
-            if (*budget < test_work(b, m))
-                return BTF_SYNTH_MARGIN_MAX; /* out of budget: the safe answer */
-            *budget -= test_work(b, m);
-        }
-        double share = outside_share(b, m, reach);
-        if (share < 0.0)
+    int first = m, ok = 0;
+    for (;; m *= 2) {
+        ok = margin_enough(b, m, reach, budget);
+        if (ok == -2)
+            return BTF_SYNTH_MARGIN_MAX; /* out of budget: the safe answer */
+        if (ok < 0)
             return -1;
-        if (share <= BTF_SYNTH_MARGIN_EPS)
+        if (ok || m >= BTF_SYNTH_MARGIN_MAX)
             break;
     }
-    return m;
+    if (!ok || m == first)
+        return m; /* the cap (not enough: fitting warns), or the least allowed */
+    /* m is enough and m / 2 is not: bisect in steps of the minimum. */
+    int lo = m / 2, hi = m;
+    while (hi - lo > BTF_SYNTH_MARGIN_MIN) {
+        int mid = (lo + hi) / 2 / BTF_SYNTH_MARGIN_MIN * BTF_SYNTH_MARGIN_MIN;
+        int r = margin_enough(b, mid, reach, budget);
+        if (r == -2)
+            return hi; /* enough, if not the least */
+        if (r < 0)
+            return -1;
+        if (r)
+            hi = mid;
+        else
+            lo = mid;
+    }
+    return hi;
 }
 
 int btf_car_margin(const btf_car_band *b)

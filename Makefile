@@ -39,9 +39,9 @@ CLI       := $(BUILD)/btfcar
 # Keep generated SPIR-V headers and objects between builds.
 .SECONDARY:
 
-.PHONY: all deps test test-run asan bench demo install uninstall fuzz fuzz-build clean help check-shaders
+.PHONY: all deps test test-run asan bench demo install uninstall fuzz fuzz-build clean help check-shaders noise-stream
 
-all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN)
+all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN) $(BUILD)/noise_stream
 
 help:
 	@echo "make deps     install missing Debian packages (apt-get; needs root)"
@@ -50,6 +50,7 @@ help:
 	@echo "make asan     the whole test suite under ASan + UBSan (build-asan/)"
 	@echo "make demo     deps + build + generate a material and analyse it end to end"
 	@echo "make bench    benchmarks (figures; never fails on time)"
+	@echo "make noise-stream  build/noise_stream: raw noise words for dieharder"
 	@echo "make fuzz     libFuzzer targets with clang (FUZZ_SECONDS=30 each)"
 	@echo "make install  PREFIX=/usr/local: library, header, btfcar, pkg-config file"
 
@@ -178,3 +179,11 @@ $(BUILD)/src/synth.o $(BUILD)/src/noise_row.o: CFLAGS += -O3
 SCHED_FLAGS := $(shell $(CC) -fschedule-insns -fsched-pressure -Werror -x c -c /dev/null \
                  -o /dev/null 2>/dev/null && echo -fschedule-insns -fsched-pressure)
 $(BUILD)/src/noise_row.o: CFLAGS += $(SCHED_FLAGS)
+
+# The raw words of one synthesis noise stream, for statistical test suites
+# (docs/synthesis.md, "Noise"): build/noise_stream | dieharder -a -g 200
+noise-stream: $(BUILD)/noise_stream
+
+$(BUILD)/noise_stream: tools/noise_stream.c gpu/btf_noise.h gpu/btf_shared.h
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $<

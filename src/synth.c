@@ -35,8 +35,10 @@ typedef struct level_gen {
     int x0, x1, y0, y1;   /* window, absolute level coordinates */
     int fx0, fw;          /* field columns [fx0, fx0 + fw) */
     int pad;              /* zero columns on each side of a ring row */
-    int depth;            /* ring rows: reach up + 2 (field_pair writes row r + 1
-                           * while row r still reads the row reach up above it) */
+    int depth;            /* ring rows: reach up + 2, one more than the recursion
+                           * reads: callers read row r after field_pair has also
+                           * written row r + 1 (with reach up 0, one row would
+                           * not hold both) */
     int next;             /* next field row to generate */
     int same_k;           /* same_row_suffix of the band, and its gammas */
     float same_g[3];

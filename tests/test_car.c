@@ -179,9 +179,6 @@ static void estimates_recover_known_parameters(void **state)
     }
 }
 
-/* (b) A long synthesis stays bounded and its sample variance matches the
- * model's stationary variance within 5 %. 10^8 pixels (10^7 under the
- * sanitizers, which are 10-20x slower). */
 /* The recursion written out directly: field row by row, pixel by pixel,
  * zero outside the field, in the order of btf_shared.h (earlier rows in
  * stored order, the noise, same-row offsets farthest first). */
@@ -222,20 +219,24 @@ static float *direct_field(const btf_car_band *b, int w, int h, uint64_t seed, u
 /* CPU synthesis steps two rows at once where it can (src/synth.c,
  * field_pair), with row r + 1 trailing row r by a chunk plus its reach;
  * every value must still be the direct recursion's, bit for bit: the
- * family's shapes and others, reaches past a chunk, widths on both sides
- * of the pairing threshold, odd and even heights. */
+ * family's shapes and others, same-row offsets only, no neighbours, reaches
+ * past a chunk, widths on both sides of the pairing threshold (for the
+ * first spec, field width 130 is exactly twice the lead and 193 leaves
+ * whole chunks), odd and even heights. */
 static void row_pairs_match_direct_recursion(void **state)
 {
     (void)state;
     const char *specs[] = {"0:-1,-1:0,-1:-1,-1:1", "-1:0", "0:-2,-1:0,-1:1",
                            "0:-1,0:-2,0:-3,-1:3,-2:-2", "0:-1,-1:40,-1:-7,-3:0",
-                           "0:-1,0:-2,-1:0,-1:2,-2:0,-2:1"};
+                           "0:-1,0:-2,-1:0,-1:2,-2:0,-2:1", "0:-1", "0:-2,0:-5", ""};
     const float g[6] = {0.3f, 0.2f, -0.1f, 0.15f, 0.05f, -0.05f};
-    int widths[] = {1, 5, 64, 129, 150, 300}, heights[] = {1, 2, 7};
-    for (int s = 0; s < 6; s++) {
-        btf_car_band b = model(specs[s], g, 0.7f, 0.25f);
-        b.margin = 8 + 4 * s; /* as fitting would set it */
-        for (int wi = 0; wi < 6; wi++)
+    int widths[] = {1, 5, 64, 114, 129, 150, 177, 300}, heights[] = {1, 2, 7};
+    for (int s = 0; s < 9; s++) {
+        btf_car_band b = s < 8 ? model(specs[s], g, 0.7f, 0.25f) : model("0:-1", g, 0.7f, 0.25f);
+        if (s == 8)
+            b.n = 0; /* white noise */
+        b.margin = s == 0 ? 8 : 8 + 4 * s; /* as fitting would set it */
+        for (int wi = 0; wi < 8; wi++)
             for (int hi = 0; hi < 3; hi++) {
                 int w = widths[wi], h = heights[hi];
                 double *got = field(&b, w, h, 1234 + s);
@@ -252,6 +253,57 @@ static void row_pairs_match_direct_recursion(void **state)
     }
 }
 
+/* The same through btf_synthesise with three bands stepping together:
+ * one level, identity basis and zero means, so each channel is its band's
+ * field. The bands differ in margin (band 0 the widest), same-row shape
+ * and reach into the row above (the pair's lead is the largest); one band
+ * has no earlier-row offset at all (its ring holds a row and the one being
+ * paired). */
+static void row_pairs_of_three_bands(void **state)
+{
+    (void)state;
+    const char *mixed[3] = {"0:-1,0:-2", "0:-1,0:-2,0:-3,-1:40,-2:-2", "0:-2,0:-5,-1:0,-1:1"};
+    const char *one_shape[3] = {"0:-1,0:-2,-1:0", "0:-2,0:-1,-1:40,-2:-2",
+                                "0:-1,0:-2,-1:1,-3:0"};
+    const float g[6] = {0.3f, 0.2f, -0.1f, 0.15f, 0.05f, -0.05f};
+    const int margins[3] = {200, 8, 33};
+    for (int cfg = 0; cfg < 2; cfg++) {
+        const char *const *specs = cfg ? one_shape : mixed;
+        btf_subspace_model sm;
+        memset(&sm, 0, sizeof sm);
+        sm.levels = 1;
+        sm.basis[0] = sm.basis[4] = sm.basis[8] = 1.0f;
+        for (int b = 0; b < 3; b++) {
+            sm.bands[b][0] = model(specs[b], g, 0.7f, 0.0f);
+            sm.bands[b][0].margin = margins[b];
+        }
+        btf_model m = {.n_subspaces = 1, .subspaces = &sm};
+        int widths[] = {1, 100, 200, 257, 300, 600}, heights[] = {1, 2, 7};
+        for (int wi = 0; wi < 6; wi++)
+            for (int hi = 0; hi < 3; hi++) {
+                int w = widths[wi], h = heights[hi];
+                btf_image img;
+                btf_error e = {0};
+                TU_OK(btf_synthesise_image(&m, 0, w, h, 42, &img, &e), &e);
+                size_t diff = 0;
+                for (int b = 0; b < 3; b++) {
+                    float *want = direct_field(&sm.bands[b][0], w, h, 42,
+                                               btf_noise_stream(0, (uint32_t)b, 0));
+                    for (int i = 0; i < w * h; i++)
+                        diff += img.data[3 * i + b] != want[i];
+                    free(want);
+                }
+                if (diff)
+                    print_error("config %d at %dx%d: %zu values differ\n", cfg, w, h, diff);
+                assert_int_equal(diff, 0);
+                btf_image_free(&img);
+            }
+    }
+}
+
+/* (b) A long synthesis stays bounded and its sample variance matches the
+ * model's stationary variance within 5 %. 10^8 pixels (10^7 under the
+ * sanitizers, which are 10-20x slower). */
 static void long_synthesis_is_stationary(void **state)
 {
     (void)state;
@@ -699,6 +751,7 @@ int main(void)
         cmocka_unit_test(decorrelation_and_pyramid),
         cmocka_unit_test(estimates_recover_known_parameters),
         cmocka_unit_test(row_pairs_match_direct_recursion),
+        cmocka_unit_test(row_pairs_of_three_bands),
         cmocka_unit_test(long_synthesis_is_stationary),
         cmocka_unit_test(margins_follow_correlation),
         cmocka_unit_test(fitted_and_read_models_carry_margins),

@@ -42,6 +42,9 @@ typedef struct level_gen {
     int next;             /* next field row to generate */
     int same_k;           /* same_row_suffix of the band, and its gammas */
     float same_g[3];
+    int nsame;            /* the same-row offsets in adding order (columns, gammas) */
+    int same_col[BTF_CAR_MAX_NEIGHBOURS];
+    float same_gam[BTF_CAR_MAX_NEIGHBOURS];
     float *ring;          /* depth rows of (fw + 2 pad) floats */
     float *grow;          /* the G row of this level, window width */
     float *noise, *noise2; /* fw + 6 floats: one row of Gaussians (two rows) */
@@ -304,19 +307,12 @@ static void chains(const chain *c, int S, int K, int len)
  * shapes, columns [from, from + len): the general loop, same operations. */
 static void same_row_general(const row_job *j, int from, int len)
 {
-    const btf_car_band *b = j->g->car;
-    int same[BTF_CAR_MAX_NEIGHBOURS], col[BTF_CAR_MAX_NEIGHBOURS];
-    float gs[BTF_CAR_MAX_NEIGHBOURS];
-    int nsame = btf_car_same_row_order(b, same);
-    for (int t = 0; t < nsame; t++) {
-        gs[t] = b->gamma[same[t]];
-        col[t] = b->offsets[same[t]].col;
-    }
+    const level_gen *g = j->g;
     float *out = j->out;
     for (int i = from; i < from + len; i++) {
         float a = j->acc[i];
-        for (int t = 0; t < nsame; t++)
-            a = btf_car_accumulate(a, gs[t], out[i + col[t]]);
+        for (int t = 0; t < g->nsame; t++)
+            a = btf_car_accumulate(a, g->same_gam[t], out[i + g->same_col[t]]);
         out[i] = a;
     }
 }
@@ -693,6 +689,12 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
     }
     g->depth = up + 2;
     g->same_k = same_row_suffix(car, g->same_g);
+    int same[BTF_CAR_MAX_NEIGHBOURS];
+    g->nsame = btf_car_same_row_order(car, same);
+    for (int t = 0; t < g->nsame; t++) {
+        g->same_col[t] = car->offsets[same[t]].col;
+        g->same_gam[t] = car->gamma[same[t]];
+    }
     g->next = y0 - margin;
     g->ring = btf_calloc((size_t)g->depth * (g->fw + 2 * g->pad), sizeof(float), err);
     g->grow = btf_alloc((size_t)(x1 - x0), sizeof(float), err);

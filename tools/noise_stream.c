@@ -12,15 +12,39 @@
  */
 #include "btf_shared.h"
 
+#include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+
+/* Argument i as an unsigned number at most max, else a one-line error. */
+static unsigned long long arg(int argc, char **argv, int i, unsigned long long def,
+                              unsigned long long max, const char *name)
+{
+    if (argc <= i)
+        return def;
+    char *end;
+    errno = 0;
+    unsigned long long v = strtoull(argv[i], &end, 0);
+    if (errno || end == argv[i] || *end || argv[i][0] == '-' || v > max) {
+        fprintf(stderr, "noise_stream: %s \"%s\": expected a number 0..%llu\n", name, argv[i],
+                max);
+        exit(2);
+    }
+    return v;
+}
 
 int main(int argc, char **argv)
 {
-    unsigned long long seed = argc > 1 ? strtoull(argv[1], NULL, 0) : 1;
-    uint32_t stream = argc > 2 ? (uint32_t)strtoul(argv[2], NULL, 0) : 0;
-    long blocks = argc > 3 ? strtol(argv[3], NULL, 0) : 136;
-    if (blocks < 1 || blocks > 1 << 20) {
+    if (argc > 4 || (argc > 1 && (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")))) {
+        fprintf(argc > 4 ? stderr : stdout, "usage: noise_stream [SEED [STREAM [BLOCKS]]]\n");
+        return argc > 4 ? 2 : 0;
+    }
+    unsigned long long seed = arg(argc, argv, 1, 1, ULLONG_MAX, "SEED");
+    uint32_t stream = (uint32_t)arg(argc, argv, 2, 0, UINT32_MAX, "STREAM");
+    long blocks = (long)arg(argc, argv, 3, 136, 1 << 20, "BLOCKS");
+    if (blocks < 1) {
         fprintf(stderr, "noise_stream: BLOCKS must be 1..1048576\n");
         return 2;
     }

@@ -98,6 +98,25 @@ void btf_noise_blocks(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint3
                       uint32_t b0, uint32_t n, int vector_path, float *out);
 int btf_noise_path_avx2(void);
 
+/* The wavefront generator of CAR fields (src/wave.c): eight rows at once,
+ * bit for bit the row-by-row recursion. btf_wave_supported says whether a
+ * band and field width qualify on this machine (AVX2, small offsets, family
+ * same-row shapes, wide enough; BTF_NOISE_PORTABLE=1 turns it off). A wave
+ * stores its rows into a ring of `depth` rows of fw + 2 pad floats (pad >=
+ * btf_wave_pad(), depth >= BTF_WAVE_DEPTH): btf_wave_run returns once row
+ * `row` (>= row0, rows asked in increasing order) is complete there. */
+typedef struct btf_wave btf_wave;
+#define BTF_WAVE_DEPTH 16
+int btf_wave_supported(const btf_car_band *b, int fw);
+int btf_wave_pad(void);
+btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_t stream,
+                       float *ring, int depth, int pad, btf_error *err);
+void btf_wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi);
+void btf_wave_free(btf_wave *w);
+/* Turns the wavefront on or off for syntheses started afterwards (tests and
+ * benchmarks compare the two; the default: on unless BTF_SYNTH_WAVE=0). */
+void btf_wave_enable(int on);
+
 /* Synthesis (src/synth.c): the indices of a band's same-row offsets in the
  * order btf_shared.h adds them (farthest column first); returns their count.
  * Shared with the GPU host code, which orders the shader's offsets so. */

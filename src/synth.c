@@ -54,6 +54,7 @@ typedef struct level_gen {
     float *hup[3];
     int hup_row[3];
     int fine_x0, fine_w;  /* the finer level's window */
+    btf_wave *wave;       /* the wavefront that fills the ring, or NULL (row by row) */
 } level_gen;
 
 typedef struct band_gen {
@@ -473,9 +474,19 @@ static void field_pair(level_gen *const *g, int n, int lead, uint32_t seed_lo, u
 
 /* Advances the n bands, all at row r = next: by two rows when row r + 1 is
  * wanted too (below `until`) and the rows are wide enough, else by one. */
-static void field_advance(level_gen *const *g, int n, int until, uint32_t seed_lo,
+static void field_advance(level_gen *const *all, int n_all, int until, uint32_t seed_lo,
                           uint32_t seed_hi)
 {
+    level_gen *g[3];
+    int n = 0;
+    for (int b = 0; b < n_all; b++) {
+        if (all[b]->wave) /* a wave runs eight rows at once on its own */
+            btf_wave_run(all[b]->wave, all[b]->next++, seed_lo, seed_hi);
+        else
+            g[n++] = all[b];
+    }
+    if (n == 0)
+        return;
     int lead = pair_lead(g, n), narrow = 0;
     for (int b = 0; b < n; b++)
         narrow |= g[b]->fw < 2 * lead;
@@ -660,6 +671,7 @@ static void band_free(band_gen *bg)
         free(g->noise2);
         free(g->acc);
         free(g->acc2);
+        btf_wave_free(g->wave);
         for (int k = 0; k < 3; k++)
             free(g->hup[k]);
     }
@@ -688,6 +700,11 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
             g->pad = c;
     }
     g->depth = up + 2;
+    int wave = btf_wave_supported(car, g->fw);
+    if (wave) {
+        g->depth = BTF_WAVE_DEPTH;
+        g->pad = btf_wave_pad();
+    }
     g->same_k = same_row_suffix(car, g->same_g);
     int same[BTF_CAR_MAX_NEIGHBOURS];
     g->nsame = btf_car_same_row_order(car, same);
@@ -704,8 +721,12 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
     g->acc2 = btf_alloc((size_t)g->fw, sizeof(float), err);
     for (int k = 0; k < 3; k++)
         g->hup_row[k] = INT32_MIN;
-    return g->ring && g->grow && g->noise && g->noise2 && g->acc && g->acc2 ? BTF_OK
-                                                                           : BTF_E_NOMEM;
+    if (!(g->ring && g->grow && g->noise && g->noise2 && g->acc && g->acc2))
+        return BTF_E_NOMEM;
+    if (wave && !(g->wave = btf_wave_new(car, g->fw, g->fx0, g->next, stream, g->ring, g->depth,
+                                         g->pad, err)))
+        return BTF_E_NOMEM;
+    return BTF_OK;
 }
 
 /* Sets up the levels of one band for an output window [0, w) x [0, h). */
@@ -1004,5 +1025,6 @@ int btf_car_synthesise_field(const btf_car_band *band, int width, int height, ui
     free(g.noise2);
     free(g.acc);
     free(g.acc2);
+    btf_wave_free(g.wave);
     return rc;
 }

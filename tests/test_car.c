@@ -301,6 +301,112 @@ static void row_pairs_of_three_bands(void **state)
     }
 }
 
+/* The wavefront (src/wave.c: eight rows per vector step, lane k trailing
+ * lane k - 1, each lane running its rows back to back) must give the direct
+ * recursion's values bit for bit: every shape it takes (rows up to 3 back,
+ * columns up to 4 either way, same-row shapes 0..3 long, no neighbours),
+ * field widths at its threshold (136) and far above, margins that move the
+ * noise blocks against the lanes' laps, heights that end inside, at and
+ * after the first eight rows and several laps. On a CPU with AVX2 the test
+ * also checks that the wave takes these bands (else it tests the rows). */
+static void wavefront_matches_direct_recursion(void **state)
+{
+    (void)state;
+    const char *specs[] = {"0:-1,-1:0,-1:-1,-1:1", "0:-1,-1:0,-1:1", "",
+                           "0:-1,0:-2,0:-3,-1:4,-1:-4,-2:0,-3:2",
+                           "0:-2,0:-1,-2:-1,-1:0,-3:-4,-2:3",
+                           "-1:0,-1:-1,-1:1,-1:-2,-1:2,-2:0,-2:-1,-2:1,-2:-2,-2:2,-3:0",
+                           "0:-1,0:-2"};
+    const float g[11] = {0.2f, 0.15f, -0.1f, 0.12f, 0.05f, -0.05f, 0.04f, 0.03f, -0.03f,
+                         0.02f, 0.01f};
+    const int widths[] = {100, 119, 120, 121, 200, 1000}, heights[] = {1, 7, 8, 9, 30};
+    const int margins[] = {8, 13, 22};
+    int waved = 0;
+    for (int s = 0; s < 7; s++) {
+        btf_car_band b = model(s == 2 ? "0:-1" : specs[s], g, 0.7f, 0.25f);
+        if (s == 2)
+            b.n = 0; /* white noise */
+        for (int mi = 0; mi < 3; mi++)
+            for (int wi = 0; wi < 6; wi++)
+                for (int hi = 0; hi < 5; hi++) {
+                    int w = widths[wi], h = heights[hi];
+                    b.margin = margins[(mi + wi + hi) % 3];
+                    if (b.n == 0)
+                        b.margin = 0;
+                    int fw = w + 2 * b.margin;
+                    if (btf_noise_path_avx2() && fw >= 136) {
+                        assert_true(btf_wave_supported(&b, fw));
+                        waved++;
+                    }
+                    double *got = field(&b, w, h, 99 + s);
+                    float *want = direct_field(&b, w, h, 99 + s, 7);
+                    size_t diff = 0;
+                    for (int i = 0; i < w * h; i++)
+                        diff += (float)got[i] != want[i];
+                    if (diff)
+                        print_error("%s at %dx%d, margin %d: %zu values differ\n", specs[s], w, h,
+                                    b.margin, diff);
+                    assert_int_equal(diff, 0);
+                    free(got);
+                    free(want);
+                }
+    }
+    print_message("%d of the fields above ran as a wavefront\n", waved);
+    /* Out of its scope it declines: a row 4 back, a column 5 over, a
+     * same-row gap, a field narrower than 136. */
+    const char *outside[] = {"-4:0", "-1:5", "0:-2", "0:-1,0:-2,0:-3,0:-4"};
+    for (int i = 0; i < 4; i++) {
+        btf_car_band b = model(outside[i], g, 0.7f, 0.0f);
+        assert_false(btf_wave_supported(&b, 1000));
+    }
+    btf_car_band b = model("0:-1,-1:0", g, 0.7f, 0.0f);
+    assert_false(btf_wave_supported(&b, 135));
+}
+
+/* Whole syntheses of fitted multi-level models are the same bytes with the
+ * wavefront on and off (btf_wave_enable): level windows start at odd and
+ * negative columns, bands of one level run different margins, sizes from
+ * 1 x 1 up. */
+static void wavefront_and_rows_give_the_same_images(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image tex;
+    TU_OK(btf_image_alloc(&tex, 96, 80, 3, &e), &e);
+    const float g[4] = {0.45f, 0.4f, -0.2f, 0.1f};
+    btf_car_band b = model("0:-1,-1:0,-1:-1,-1:1", g, 0.1f, 0.0f);
+    double *f = field(&b, 96, 80, 5);
+    for (int i = 0; i < 96 * 80; i++) {
+        tex.data[3 * i] = (float)(0.5 + f[i]);
+        tex.data[3 * i + 1] = (float)(0.3 + 0.5 * f[(i * 3) % (96 * 80)]);
+        tex.data[3 * i + 2] = (float)(0.2 + 0.2 * f[(i * 7) % (96 * 80)]);
+    }
+    free(f);
+    const char *specs[] = {NULL, "0:-1,-1:0,-1:-1,-1:1", "0:-1,-1:0,-1:1"};
+    for (int sp = 0; sp < 3; sp++) {
+        btf_fit_opts fo = {.levels = 3};
+        if (specs[sp])
+            TU_OK(btf_neighbourhood_parse(specs[sp], fo.car.fixed, &fo.car.n_fixed, &e), &e);
+        btf_model m;
+        TU_OK(btf_texture_fit(&tex, &fo, &m, &e), &e);
+        int sizes[][2] = {{1, 1}, {131, 3}, {257, 19}, {600, 41}};
+        for (int s = 0; s < 4; s++) {
+            int w = sizes[s][0], h = sizes[s][1];
+            btf_image on, off;
+            btf_wave_enable(1);
+            TU_OK(btf_synthesise_image(&m, 0, w, h, 7 + s, &on, &e), &e);
+            btf_wave_enable(0);
+            TU_OK(btf_synthesise_image(&m, 0, w, h, 7 + s, &off, &e), &e);
+            btf_wave_enable(1);
+            assert_memory_equal(on.data, off.data, (size_t)w * h * 3 * sizeof(float));
+            btf_image_free(&on);
+            btf_image_free(&off);
+        }
+        btf_model_free(&m);
+    }
+    btf_image_free(&tex);
+}
+
 /* (b) A long synthesis stays bounded and its sample variance matches the
  * model's stationary variance within 5 %. 10^8 pixels (10^7 under the
  * sanitizers, which are 10-20x slower). */
@@ -752,6 +858,8 @@ int main(void)
         cmocka_unit_test(estimates_recover_known_parameters),
         cmocka_unit_test(row_pairs_match_direct_recursion),
         cmocka_unit_test(row_pairs_of_three_bands),
+        cmocka_unit_test(wavefront_matches_direct_recursion),
+        cmocka_unit_test(wavefront_and_rows_give_the_same_images),
         cmocka_unit_test(long_synthesis_is_stationary),
         cmocka_unit_test(margins_follow_correlation),
         cmocka_unit_test(fitted_and_read_models_carry_margins),

@@ -925,6 +925,11 @@ int btf_synth_check_band(const btf_car_band *b, btf_error *err)
         btf_offset o = b->offsets[s];
         if (!(o.row < 0 || (o.row == 0 && o.col < 0)))
             return btf_fail(err, BTF_E_ARG, "CAR offset %d:%d is not causal", o.row, o.col);
+        /* the bound of model files and neighbourhood specs: one rule for
+         * every way a band comes in (the API takes any int8 offset) */
+        if (o.row < -64 || o.col < -64 || o.col > 64)
+            return btf_fail(err, BTF_E_ARG, "CAR offset %d:%d reaches beyond 64 pixels", o.row,
+                            o.col);
     }
     return BTF_OK;
 }

@@ -97,6 +97,7 @@ void btf_wave_enable(int on)
     atomic_store(&wave_on, on ? 1 : 0);
 }
 
+#ifdef WAVE_AVAILABLE
 static int wave_enabled(void)
 {
     atomic_int *on = &wave_on;
@@ -108,6 +109,7 @@ static int wave_enabled(void)
     }
     return v;
 }
+#endif
 
 int btf_wave_supported(const btf_car_band *b, int fw)
 {

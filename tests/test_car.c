@@ -848,6 +848,17 @@ static void model_offsets_within_64(void **state)
     sm.bands[1][0].offsets[0] = (btf_offset){-1, 65};
     assert_int_equal(btf_model_encode(&m, &bytes, &n, &e), BTF_E_DATA);
     assert_non_null(strstr(e.msg, "beyond 64"));
+    /* Synthesis refuses such a band too, with the same bound as model
+     * files and neighbourhood specs (btf_offset holds up to 127). */
+    sm.bands[1][0].offsets[0] = (btf_offset){-1, 100};
+    btf_image img;
+    assert_int_equal(btf_synthesise_image(&m, 0, 4, 4, 1, &img, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "beyond 64"));
+    assert_int_equal(btf_car_synthesise_field(&sm.bands[1][0], 4, 4, 1, 0, NULL, NULL, &e),
+                     BTF_E_ARG);
+    sm.bands[1][0].offsets[0] = (btf_offset){-1, 64};
+    TU_OK(btf_synthesise_image(&m, 0, 4, 4, 1, &img, &e), &e);
+    btf_image_free(&img);
 }
 
 int main(void)

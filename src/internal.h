@@ -101,21 +101,28 @@ int btf_noise_path_avx2(void);
 /* The wavefront generator of CAR fields (src/wave.c): eight rows at once,
  * bit for bit the row-by-row recursion. btf_wave_supported says whether a
  * band and field width qualify on this machine (AVX2, small offsets, family
- * same-row shapes, wide enough; BTF_NOISE_PORTABLE=1 turns it off). A wave
- * stores its rows into a ring of `depth` rows of fw + 2 pad floats (pad >=
- * btf_wave_pad(), depth >= BTF_WAVE_DEPTH): btf_wave_run returns once row
- * `row` (>= row0, rows asked in increasing order) is complete there. */
+ * same-row shapes, wide enough; BTF_SYNTH_WAVE=0 or BTF_NOISE_PORTABLE=1
+ * turn it off). A wave stores its rows into a ring of `depth` rows of fw + 2
+ * pad floats (row r in slot r mod depth, as src/synth.c's ring_row; depth
+ * >= BTF_WAVE_DEPTH, pad >= btf_wave_pad(), else BTF_E_ARG): btf_wave_run
+ * returns once row `row` (>= row0, rows asked in increasing order) is
+ * complete there. Rows row + 1 .. row + 7 are then partly written, so only
+ * row `row` may be read before the next run. */
 typedef struct btf_wave btf_wave;
-#define BTF_WAVE_DEPTH 16
+#define BTF_WAVE_DEPTH 8
 int btf_wave_supported(const btf_car_band *b, int fw);
 int btf_wave_pad(void);
 btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_t stream,
                        float *ring, int depth, int pad, btf_error *err);
 void btf_wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi);
 void btf_wave_free(btf_wave *w);
-/* Turns the wavefront on or off for syntheses started afterwards (tests and
- * benchmarks compare the two; the default: on unless BTF_SYNTH_WAVE=0). */
-void btf_wave_enable(int on);
+/* Turns the wavefront on or off for syntheses started afterwards and
+ * returns whether it was on (tests and benchmarks compare the two, then
+ * restore; the default: on unless BTF_SYNTH_WAVE=0). btf_wave_available:
+ * whether this build and CPU have it at all (GCC, x86-64, AVX2, the AVX2
+ * noise path). */
+int btf_wave_enable(int on);
+int btf_wave_available(void);
 
 /* Synthesis (src/synth.c): the indices of a band's same-row offsets in the
  * order btf_shared.h adds them (farthest column first); returns their count.

@@ -35,7 +35,7 @@ typedef struct level_gen {
     int x0, x1, y0, y1;   /* window, absolute level coordinates */
     int fx0, fw;          /* field columns [fx0, fx0 + fw) */
     int pad;              /* zero columns on each side of a ring row */
-    int depth;            /* ring rows: reach up + 2, one more than the recursion
+    int depth;            /* ring rows (a wave: BTF_WAVE_DEPTH): reach up + 2, one more than the recursion
                            * reads: callers read row r after field_pair has also
                            * written row r + 1 (with reach up 0, one row would
                            * not hold both) */
@@ -715,18 +715,18 @@ static int level_init(level_gen *g, const btf_car_band *car, uint32_t stream, in
     g->next = y0 - margin;
     g->ring = btf_calloc((size_t)g->depth * (g->fw + 2 * g->pad), sizeof(float), err);
     g->grow = btf_alloc((size_t)(x1 - x0), sizeof(float), err);
+    for (int k = 0; k < 3; k++)
+        g->hup_row[k] = INT32_MIN;
+    if (!(g->ring && g->grow))
+        return BTF_E_NOMEM;
+    if (wave) /* the wave draws its noise lane by lane: no noise or sum rows */
+        return (g->wave = btf_wave_new(car, g->fw, g->fx0, g->next, stream, g->ring, g->depth,
+                                       g->pad, err)) ? BTF_OK : BTF_E_NOMEM;
     g->noise = btf_alloc((size_t)g->fw + 6, sizeof(float), err);
     g->noise2 = btf_alloc((size_t)g->fw + 6, sizeof(float), err);
     g->acc = btf_alloc((size_t)g->fw, sizeof(float), err);
     g->acc2 = btf_alloc((size_t)g->fw, sizeof(float), err);
-    for (int k = 0; k < 3; k++)
-        g->hup_row[k] = INT32_MIN;
-    if (!(g->ring && g->grow && g->noise && g->noise2 && g->acc && g->acc2))
-        return BTF_E_NOMEM;
-    if (wave && !(g->wave = btf_wave_new(car, g->fw, g->fx0, g->next, stream, g->ring, g->depth,
-                                         g->pad, err)))
-        return BTF_E_NOMEM;
-    return BTF_OK;
+    return g->noise && g->noise2 && g->acc && g->acc2 ? BTF_OK : BTF_E_NOMEM;
 }
 
 /* Sets up the levels of one band for an output window [0, w) x [0, h). */

@@ -92,9 +92,28 @@ struct btf_wave {
  * benchmarks compare the two ways; a user can rule it out when in doubt). */
 static atomic_int wave_on = -1; /* decided once; a race only repeats the decision */
 
-void btf_wave_enable(int on)
+#ifdef WAVE_AVAILABLE
+static int wave_enabled(void);
+#endif
+
+int btf_wave_enable(int on)
 {
+#ifdef WAVE_AVAILABLE
+    int was = wave_enabled();
+#else
+    int was = 0;
+#endif
     atomic_store(&wave_on, on ? 1 : 0);
+    return was;
+}
+
+int btf_wave_available(void)
+{
+#ifdef WAVE_AVAILABLE
+    return btf_noise_path_avx2();
+#else
+    return 0;
+#endif
 }
 
 #ifdef WAVE_AVAILABLE
@@ -156,14 +175,21 @@ static float *wave_dst(const btf_wave *w, int k)
 {
     if (w->pos[k] < 0)
         return NULL;
-    /* the ring row of r: depth is BTF_WAVE_DEPTH, a power of two */
-    uint32_t slot = (w->urow[k] - (uint32_t)BTF_NOISE_ORIGIN) & (BTF_WAVE_DEPTH - 1u);
+    /* the ring row of r, as src/synth.c's ring_row finds it (only when a
+     * lane starts a row: the division is rare) */
+    int r = (int)(w->urow[k] - (uint32_t)BTF_NOISE_ORIGIN);
+    int slot = ((r % w->depth) + w->depth) % w->depth;
     return w->ring + (size_t)slot * w->stride + w->pad + (w->pos[k] - w->a);
 }
 
 btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_t stream,
                        float *ring, int depth, int pad, btf_error *err)
 {
+    if (depth < BTF_WAVE_DEPTH || pad < btf_wave_pad()) {
+        btf_fail(err, BTF_E_ARG, "wavefront ring of %d rows padded by %d: expected >= %d and %d",
+                 depth, pad, BTF_WAVE_DEPTH, btf_wave_pad());
+        return NULL;
+    }
     btf_wave *w = btf_calloc(1, sizeof *w, err);
     if (!w)
         return NULL;

@@ -19,6 +19,12 @@
  * recursion reaches back to (a ring), and the up-sampled rows of the next
  * coarser level that the current fine row reads (a ring of 3): memory grows
  * with the width, not the height.
+ *
+ * Field generators. A level whose band qualifies (btf_wave_supported: AVX2,
+ * the candidate family's shapes, fields at least 136 wide) is filled by the
+ * wavefront of src/wave.c, eight rows per vector step, into a ring of
+ * BTF_WAVE_DEPTH rows; the others run row by row here (field_pair,
+ * field_step). Both give the same bits.
  */
 #include "internal.h"
 

@@ -60,6 +60,25 @@ static double *field(const btf_car_band *b, int w, int h, uint64_t seed)
     return c.data;
 }
 
+/* A w x h colour texture from one 4-neighbour CAR field: red the field,
+ * green the field read with column step green_step (1: the same pixels),
+ * blue with step 7, each with its own offset and scale. */
+static void car_texture(int w, int h, uint64_t seed, int green_step, btf_image *tex)
+{
+    btf_error e = {0};
+    TU_OK(btf_image_alloc(tex, w, h, 3, &e), &e);
+    const float g[4] = {0.45f, 0.4f, -0.2f, 0.1f};
+    btf_car_band b = model("0:-1,-1:0,-1:-1,-1:1", g, 0.1f, 0.0f);
+    double *f = field(&b, w, h, seed);
+    int n = w * h;
+    for (int i = 0; i < n; i++) {
+        tex->data[3 * i] = (float)(0.5 + f[i]);
+        tex->data[3 * i + 1] = (float)(0.3 + 0.5 * f[(i * green_step) % n]);
+        tex->data[3 * i + 2] = (float)(0.2 + 0.2 * f[(i * 7) % n]);
+    }
+    free(f);
+}
+
 static void neighbourhood_spec(void **state)
 {
     (void)state;
@@ -456,16 +475,7 @@ static void wavefront_and_rows_give_the_same_images(void **state)
     (void)state;
     btf_error e = {0};
     btf_image tex;
-    TU_OK(btf_image_alloc(&tex, 96, 80, 3, &e), &e);
-    const float g[4] = {0.45f, 0.4f, -0.2f, 0.1f};
-    btf_car_band b = model("0:-1,-1:0,-1:-1,-1:1", g, 0.1f, 0.0f);
-    double *f = field(&b, 96, 80, 5);
-    for (int i = 0; i < 96 * 80; i++) {
-        tex.data[3 * i] = (float)(0.5 + f[i]);
-        tex.data[3 * i + 1] = (float)(0.3 + 0.5 * f[(i * 3) % (96 * 80)]);
-        tex.data[3 * i + 2] = (float)(0.2 + 0.2 * f[(i * 7) % (96 * 80)]);
-    }
-    free(f);
+    car_texture(96, 80, 5, 3, &tex);
     const char *specs[] = {NULL, "0:-1,-1:0,-1:-1,-1:1", "0:-1,-1:0,-1:1"};
     for (int sp = 0; sp < 3; sp++) {
         btf_fit_opts fo = {.levels = 3};
@@ -798,16 +808,7 @@ static void synthesis_sizes_and_seeds(void **state)
     (void)state;
     btf_error e = {0};
     btf_image tex;
-    TU_OK(btf_image_alloc(&tex, 64, 48, 3, &e), &e);
-    const float g[4] = {0.45f, 0.4f, -0.2f, 0.1f};
-    btf_car_band b = model("0:-1,-1:0,-1:-1,-1:1", g, 0.1f, 0.0f);
-    double *f = field(&b, 64, 48, 9);
-    for (int i = 0; i < 64 * 48; i++) {
-        tex.data[3 * i] = (float)(0.5 + f[i]);
-        tex.data[3 * i + 1] = (float)(0.3 + 0.5 * f[i]);
-        tex.data[3 * i + 2] = (float)(0.2 + 0.2 * f[(i * 7) % (64 * 48)]);
-    }
-    free(f);
+    car_texture(64, 48, 9, 1, &tex);
     btf_model m;
     btf_fit_opts fo = {.levels = 2};
     TU_OK(btf_texture_fit(&tex, &fo, &m, &e), &e);

@@ -41,10 +41,10 @@ typedef struct level_gen {
     int x0, x1, y0, y1;   /* window, absolute level coordinates */
     int fx0, fw;          /* field columns [fx0, fx0 + fw) */
     int pad;              /* zero columns on each side of a ring row */
-    int depth;            /* ring rows (a wave: BTF_WAVE_DEPTH): reach up + 2, one more than the recursion
+    int depth;            /* ring rows: reach up + 2, one more than the recursion
                            * reads: callers read row r after field_pair has also
                            * written row r + 1 (with reach up 0, one row would
-                           * not hold both) */
+                           * not hold both); a wave's: BTF_WAVE_DEPTH */
     int next;             /* next field row to generate */
     int same_k;           /* same_row_suffix of the band, and its gammas */
     float same_g[3];
@@ -478,7 +478,8 @@ static void field_pair(level_gen *const *g, int n, int lead, uint32_t seed_lo, u
     jobs_same_row(second, at, n, lead);
 }
 
-/* Advances the n bands, all at row r = next: by two rows when row r + 1 is
+/* Advances the n bands, all at row r = next: a band with a wavefront by
+ * one row through it; the others together, by two rows when row r + 1 is
  * wanted too (below `until`) and the rows are wide enough, else by one. */
 static void field_advance(level_gen *const *all, int n_all, int until, uint32_t seed_lo,
                           uint32_t seed_hi)

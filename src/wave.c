@@ -19,7 +19,8 @@
  * are masked to +0 exactly as the rows' zero columns are). Step t holds lane
  * k at sequence index s = t - k WAVE_LAG, lap s / wp, position s % wp (lanes
  * with s < 0 are above the field: zero). h keeps the last wp step vectors
- * (slot t % wp). A neighbour d rows up and dc columns over is lane k - d
+ * (slot t % wp; its first WAVE_MIRROR slots repeated past wp, so a run of
+ * slots never wraps). A neighbour d rows up and dc columns over is lane k - d
  * at step t - d WAVE_LAG + dc, or, for lanes k < d, lane k - d + 8 on its
  * previous lap, at step t - wp + (8 - d) WAVE_LAG + dc: a blend of two
  * slots, rotated by d lanes (wave_rotated). Every 8 steps the eight vectors
@@ -34,9 +35,10 @@
  * every value against the recursion written out pixel by pixel.
  *
  * Scope: GCC on x86-64 with AVX2 (else, or with BTF_NOISE_PORTABLE=1, the
- * row-by-row code runs), bands whose earlier-row offsets lie within 7 rows
- * and 7 columns and whose same-row offsets are columns -k .. -1 (k <= 3:
- * the candidate family's shapes), fields at least WAVE_MIN_LAP wide.
+ * row-by-row code runs), bands whose earlier-row offsets lie within
+ * WAVE_REACH_ROW rows up and WAVE_REACH_COL columns either way and whose
+ * same-row offsets are columns -k .. -1 (k <= 3): every member of the
+ * candidate family; fields at least WAVE_MIN_LAP wide.
  */
 #include "internal.h"
 

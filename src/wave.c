@@ -95,7 +95,16 @@ struct btf_wave {
 static atomic_int wave_on = -1; /* decided once; a race only repeats the decision */
 
 #ifdef WAVE_AVAILABLE
-static int wave_enabled(void);
+static int wave_enabled(void)
+{
+    int v = atomic_load(&wave_on);
+    if (v < 0) {
+        const char *env = getenv("BTF_SYNTH_WAVE");
+        v = !(env && !strcmp(env, "0"));
+        atomic_store(&wave_on, v);
+    }
+    return v;
+}
 #endif
 
 int btf_wave_enable(int on)
@@ -118,19 +127,6 @@ int btf_wave_available(void)
 #endif
 }
 
-#ifdef WAVE_AVAILABLE
-static int wave_enabled(void)
-{
-    atomic_int *on = &wave_on;
-    int v = atomic_load(on);
-    if (v < 0) {
-        const char *env = getenv("BTF_SYNTH_WAVE");
-        v = !(env && !strcmp(env, "0"));
-        atomic_store(on, v);
-    }
-    return v;
-}
-#endif
 
 int btf_wave_supported(const btf_car_band *b, int fw)
 {

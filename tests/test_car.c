@@ -235,6 +235,20 @@ static float *direct_field(const btf_car_band *b, int w, int h, uint64_t seed, u
     return out;
 }
 
+/* How many values of the synthesised field (stream 7) differ from the
+ * direct recursion's. */
+static size_t values_off_direct(const btf_car_band *b, int w, int h, uint64_t seed)
+{
+    double *got = field(b, w, h, seed);
+    float *want = direct_field(b, w, h, seed, 7);
+    size_t diff = 0;
+    for (int i = 0; i < w * h; i++)
+        diff += (float)got[i] != want[i];
+    free(got);
+    free(want);
+    return diff;
+}
+
 /* CPU synthesis steps two rows at once where it can (src/synth.c,
  * field_pair), with row r + 1 trailing row r by a chunk plus its reach;
  * every value must still be the direct recursion's, bit for bit: the
@@ -258,16 +272,10 @@ static void row_pairs_match_direct_recursion(void **state)
         for (int wi = 0; wi < 8; wi++)
             for (int hi = 0; hi < 3; hi++) {
                 int w = widths[wi], h = heights[hi];
-                double *got = field(&b, w, h, 1234 + s);
-                float *want = direct_field(&b, w, h, 1234 + s, 7);
-                size_t diff = 0;
-                for (int i = 0; i < w * h; i++)
-                    diff += (float)got[i] != want[i];
+                size_t diff = values_off_direct(&b, w, h, 1234 + s);
                 if (diff)
                     print_error("%s at %dx%d: %zu values differ\n", specs[s], w, h, diff);
                 assert_int_equal(diff, 0);
-                free(got);
-                free(want);
             }
     }
 }
@@ -357,17 +365,11 @@ static void wavefront_matches_direct_recursion(void **state)
                         assert_true(btf_wave_supported(&b, fw));
                         waved++;
                     }
-                    double *got = field(&b, w, h, 99 + s);
-                    float *want = direct_field(&b, w, h, 99 + s, 7);
-                    size_t diff = 0;
-                    for (int i = 0; i < w * h; i++)
-                        diff += (float)got[i] != want[i];
+                    size_t diff = values_off_direct(&b, w, h, 99 + s);
                     if (diff)
                         print_error("%s at %dx%d, margin %d: %zu values differ\n", specs[s], w, h,
                                     b.margin, diff);
                     assert_int_equal(diff, 0);
-                    free(got);
-                    free(want);
                 }
     }
     print_message("%d of the fields above ran as a wavefront\n", waved);

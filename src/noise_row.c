@@ -68,16 +68,12 @@ AVX_FN void store_blocks8(float *p, v8f z0, v8f z1, v8f z2, v8f z3)
 AVX_FN void noise_groups(const int G, uint32_t seed_lo, uint32_t seed_hi, uint32_t stream,
                          uint32_t row, uint32_t b, float *out)
 {
-    v8u cx[2], cy[2], cz[2], cw[2];
+    v8u blocks[2], cx[2], cy[2], cz[2], cw[2];
     for (int g = 0; g < G; g++) {
         uint32_t c = b + 8u * (uint32_t)g;
-        v8u blocks = {c, c + 1, c + 2, c + 3, c + 4, c + 5, c + 6, c + 7};
-        cx[g] = blocks;
-        cy[g] = blocks * 0u + row;
-        cz[g] = blocks * 0u + stream;
-        cw[g] = blocks * 0u + BTF_NOISE_TAG;
+        blocks[g] = (v8u){c, c + 1, c + 2, c + 3, c + 4, c + 5, c + 6, c + 7};
     }
-    philox8_rounds(G, cx, cy, cz, cw, seed_lo, seed_hi);
+    philox8_noise(G, blocks, blocks[0] * 0u + row, stream, seed_lo, seed_hi, cx, cy, cz, cw);
     /* btf_noise4: (x, y) give components 0 and 1, (z, w) components 2 and 3 */
     v8u a[NV], w[NV];
     for (int g = 0; g < G; g++) {

@@ -292,11 +292,8 @@ WAVE_FN void wave_noise(const btf_wave *w, __m256i pos, __m256i urow, uint32_t s
 {
     v8u blk = (v8u)_mm256_add_epi32(_mm256_set1_epi32((int)w->block0),
                                     _mm256_srai_epi32(pos, 2));
-    v8u cx[2] = {blk, blk + 1u}, cy[2] = {(v8u)urow, (v8u)urow};
-    v8u cz[2], cw[2];
-    cz[0] = cz[1] = blk * 0u + w->stream;
-    cw[0] = cw[1] = blk * 0u + BTF_NOISE_TAG;
-    philox8_rounds(2, cx, cy, cz, cw, seed_lo, seed_hi);
+    v8u block[2] = {blk, blk + 1u}, cx[2], cy[2], cz[2], cw[2];
+    philox8_noise(2, block, (v8u)urow, w->stream, seed_lo, seed_hi, cx, cy, cz, cw);
     /* btf_noise4: (x, y) give components 0 and 1, (z, w) components 2 and 3 */
     v8u a[4] = {cx[0], cx[1], cz[0], cz[1]}, b[4] = {cy[0], cy[1], cw[0], cw[1]};
     v8f z0[4], z1[4];

@@ -487,6 +487,59 @@ static void noise_rows_match_noise4(void **state)
            btf_noise_path_avx2() ? "AVX2" : "portable only on this CPU");
 }
 
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include "noise_avx2.h"
+
+/* 8 pairs through the AVX2 Box-Muller against btf_noise_gauss2; the number
+ * of pairs whose bits differ. (Arrays, not vectors, cross the call: the
+ * caller is not compiled for AVX2.) */
+static long gauss2_lockstep_mismatches(const uint32_t *wa, const uint32_t *wb)
+{
+    v8u a, b;
+    memcpy(&a, wa, sizeof a);
+    memcpy(&b, wb, sizeof b);
+    v8f z0[1], z1[1];
+    gauss2_lockstep(1, &a, &b, z0, z1);
+    long bad = 0;
+    for (int k = 0; k < 8; k++) {
+        btf_vec2 g = btf_noise_gauss2(wa[k], wb[k]);
+        bad += btf_float_bits(g.x) != ((v8u)z0[0])[k] || btf_float_bits(g.y) != ((v8u)z1[0])[k];
+    }
+    return bad;
+}
+#pragma GCC pop_options
+
+
+/* The AVX2 Box-Muller (src/noise_avx2.h) rewrites btf_noise_gauss2's
+ * halving test and quadrant selects as bit tricks: every radius word (all
+ * 2^24 values of a >> 8) and every angle word (all 2^24 of b >> 8) gives
+ * the same bits as the shared header. */
+static void lockstep_every_radius_and_angle(void **state)
+{
+    (void)state;
+    if (!__builtin_cpu_supports("avx2"))
+        skip(); /* the vector code cannot run on this CPU */
+    long bad = 0;
+    for (uint32_t i = 0; i < (1u << 24); i += 8) {
+        uint32_t a[8], b[8];
+        for (uint32_t k = 0; k < 8; k++) { /* radius word i + k, some angle */
+            a[k] = ((i + k) << 8) | 0x5Au;
+            b[k] = (i + k) * 2654435761u;
+        }
+        bad += gauss2_lockstep_mismatches(a, b);
+        for (uint32_t k = 0; k < 8; k++) { /* angle word i + k, some radius */
+            b[k] = ((i + k) << 8) | 0xA5u;
+            a[k] = (i + k) * 2246822519u;
+        }
+        bad += gauss2_lockstep_mismatches(a, b);
+    }
+    printf("AVX2 Box-Muller: 2 x 2^24 word pairs, %ld differ from btf_noise_gauss2\n", bad);
+    assert_int_equal(bad, 0);
+}
+#endif
+
 /* Pairs of samples that must be independent: |corr| < 5 / sqrt(n) with
  * n = 10^6 pairs (also of squares, which catches a shared radius). */
 static void independence(void **state)
@@ -557,6 +610,9 @@ int main(void)
         cmocka_unit_test(determinism_and_golden),
         cmocka_unit_test(noise1_matches_noise4),
         cmocka_unit_test(noise_rows_match_noise4),
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+        cmocka_unit_test(lockstep_every_radius_and_angle),
+#endif
         cmocka_unit_test(independence),
         cmocka_unit_test(glsl_build),
     };

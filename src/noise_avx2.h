@@ -97,58 +97,76 @@ AVX_FN void gauss2_lockstep(const int nv, const v8u *a, const v8u *b, v8f *z0, v
     }
 }
 
-/* Philox-4x32-7 (btf_philox) rounds first .. BTF_PHILOX_ROUNDS - 1 on G
- * groups of 8 counters (x, y, z, w), in place; (k0, k1) is round first's
- * key. */
-AVX_FN void philox8_rounds(const int first, const int G, v8u *cx, v8u *cy, v8u *cz, v8u *cw,
-                           uint32_t k0, uint32_t k1)
+/* The words of btf_noise4's counters (block, row, stream, BTF_NOISE_TAG)
+ * that do not change along a row, with the seed's round keys, as 8-lane
+ * vectors in memory: the rounds read them as operands instead of
+ * broadcasting scalars again on every call (GCC rebuilds such constants
+ * through general registers, two instructions each, once the vector
+ * registers run out). Made once per (seed, stream). */
+typedef struct philox8_plan {
+    uint32_t key[BTF_PHILOX_ROUNDS][2][8]; /* round i's (k0, k1) */
+    uint32_t x0[8]; /* round 0: hi(M1 stream) ^ k0, the part of x shared by all lanes */
+    uint32_t z0[8]; /* round 0: BTF_NOISE_TAG ^ k1 */
+    uint32_t x1[8]; /* round 1: lo(M1 stream) ^ k0, y after round 0 being lo(M1 stream) */
+} philox8_plan;
+
+static inline void philox8_plan_make(philox8_plan *p, uint32_t stream, uint32_t k0, uint32_t k1)
 {
-    for (int i = first; i < BTF_PHILOX_ROUNDS; i++) {
-        for (int g = 0; g < G; g++) { /* btf_philox_round */
-            v8u hi0, lo0, hi1, lo1;
-            mulhilo8(BTF_PHILOX_M0, cx[g], &hi0, &lo0);
-            mulhilo8(BTF_PHILOX_M1, cz[g], &hi1, &lo1);
-            cx[g] = hi1 ^ cy[g] ^ k0;
-            cy[g] = lo1;
-            cz[g] = hi0 ^ cw[g] ^ k1;
-            cw[g] = lo0;
+    uint32_t s_hi, s_lo; /* stream * M1: round 0's second product, the same everywhere */
+    BTF_MULHILO(BTF_PHILOX_M1, stream, s_hi, s_lo);
+    for (int i = 0; i < BTF_PHILOX_ROUNDS; i++) {
+        for (int l = 0; l < 8; l++) {
+            p->key[i][0][l] = k0;
+            p->key[i][1][l] = k1;
         }
+        if (i == 0)
+            for (int l = 0; l < 8; l++)
+                p->x0[l] = s_hi ^ k0, p->z0[l] = BTF_NOISE_TAG ^ k1;
+        if (i == 1)
+            for (int l = 0; l < 8; l++)
+                p->x1[l] = s_lo ^ k0;
         k0 += BTF_PHILOX_W0;
         k1 += BTF_PHILOX_W1;
     }
 }
 
-/* The Philox words of btf_noise4 for the counters (block[g], row, stream,
- * BTF_NOISE_TAG) of G groups (G <= 2) into (cx, cy, cz, cw): the same
- * values as btf_philox, with less work. The groups share row, stream and
- * the tag, so round 0 multiplies the constant z word once, in scalar, and
- * leaves x equal in all groups; round 1 multiplies that shared x once.
- * (Exclusive or is associative: regrouping its operands changes no bit.) */
-AVX_FN void philox8_noise(const int G, const v8u *block, v8u row, uint32_t stream,
-                          uint32_t k0, uint32_t k1, v8u *cx, v8u *cy, v8u *cz, v8u *cw)
+#define PLAN8(v) ((v8u)_mm256_loadu_si256((const __m256i *)(v)))
+
+/* The Philox-4x32-7 words (btf_philox) of the counters (block[g], row,
+ * stream, BTF_NOISE_TAG) of G groups (G <= 2) into (cx, cy, cz, cw), with
+ * the plan of (seed, stream). The same values with less work: the groups
+ * share row, stream and the tag, so round 0 leaves x equal in all groups
+ * and round 1 multiplies that x once. (Exclusive or is associative:
+ * regrouping its operands changes no bit.) */
+AVX_FN void philox8_noise(const int G, const v8u *block, v8u row, const philox8_plan *p,
+                          v8u *cx, v8u *cy, v8u *cz, v8u *cw)
 {
-    uint32_t s_hi, s_lo; /* stream * M1, round 0's second product */
-    BTF_MULHILO(BTF_PHILOX_M1, stream, s_hi, s_lo);
-    v8u x1 = row ^ (s_hi ^ k0), z1[2], w1[2], hi, lo;
-    for (int g = 0; g < G; g++) {
+    v8u x1 = row ^ PLAN8(p->x0), z1[2], w1[2], hi, lo;
+    for (int g = 0; g < G; g++) { /* round 0 */
         mulhilo8(BTF_PHILOX_M0, block[g], &hi, &lo);
-        z1[g] = hi ^ (BTF_NOISE_TAG ^ k1);
-        w1[g] = lo; /* y after round 0 is s_lo in every lane */
+        z1[g] = hi ^ PLAN8(p->z0);
+        w1[g] = lo;
     }
-    k0 += BTF_PHILOX_W0;
-    k1 += BTF_PHILOX_W1;
-    v8u x_hi, x_lo;
+    v8u x_hi, x_lo; /* round 1 */
     mulhilo8(BTF_PHILOX_M0, x1, &x_hi, &x_lo);
     for (int g = 0; g < G; g++) {
         mulhilo8(BTF_PHILOX_M1, z1[g], &hi, &lo);
-        cx[g] = hi ^ (s_lo ^ k0);
+        cx[g] = hi ^ PLAN8(p->x1);
         cy[g] = lo;
-        cz[g] = x_hi ^ w1[g] ^ k1;
+        cz[g] = x_hi ^ w1[g] ^ PLAN8(p->key[1][1]);
         cw[g] = x_lo;
     }
-    k0 += BTF_PHILOX_W0;
-    k1 += BTF_PHILOX_W1;
-    philox8_rounds(2, G, cx, cy, cz, cw, k0, k1);
+    for (int i = 2; i < BTF_PHILOX_ROUNDS; i++) {
+        for (int g = 0; g < G; g++) { /* btf_philox_round */
+            v8u hi0, lo0, hi1, lo1;
+            mulhilo8(BTF_PHILOX_M0, cx[g], &hi0, &lo0);
+            mulhilo8(BTF_PHILOX_M1, cz[g], &hi1, &lo1);
+            cx[g] = hi1 ^ cy[g] ^ PLAN8(p->key[i][0]);
+            cy[g] = lo1;
+            cz[g] = hi0 ^ cw[g] ^ PLAN8(p->key[i][1]);
+            cw[g] = lo0;
+        }
+    }
 }
 
 #endif

@@ -65,15 +65,15 @@ AVX_FN void store_blocks8(float *p, v8f z0, v8f z1, v8f z2, v8f z3)
 /* Blocks b .. b + 8 G - 1 (32 G Gaussians) into out: Philox-4x32-7 on G
  * 8-lane groups (G = 1 or 2, a constant where it is inlined), then
  * Box-Muller on their 2 G word pairs. */
-AVX_FN void noise_groups(const int G, uint32_t seed_lo, uint32_t seed_hi, uint32_t stream,
-                         uint32_t row, uint32_t b, float *out)
+AVX_FN void noise_groups(const int G, const philox8_plan *plan, uint32_t row, uint32_t b,
+                         float *out)
 {
     v8u blocks[2], cx[2], cy[2], cz[2], cw[2];
     for (int g = 0; g < G; g++) {
         uint32_t c = b + 8u * (uint32_t)g;
         blocks[g] = (v8u){c, c + 1, c + 2, c + 3, c + 4, c + 5, c + 6, c + 7};
     }
-    philox8_noise(G, blocks, blocks[0] * 0u + row, stream, seed_lo, seed_hi, cx, cy, cz, cw);
+    philox8_noise(G, blocks, blocks[0] * 0u + row, plan, cx, cy, cz, cw);
     /* btf_noise4: (x, y) give components 0 and 1, (z, w) components 2 and 3 */
     v8u a[NV], w[NV];
     for (int g = 0; g < G; g++) {
@@ -89,11 +89,13 @@ AVX_FN void noise_groups(const int G, uint32_t seed_lo, uint32_t seed_hi, uint32
 static void noise_blocks_avx2(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint32_t row,
                               uint32_t b0, uint32_t n, float *out)
 {
+    philox8_plan plan;
+    philox8_plan_make(&plan, stream, seed_lo, seed_hi);
     uint32_t i = 0;
     for (; i + 16 <= n; i += 16)
-        noise_groups(2, seed_lo, seed_hi, stream, row, b0 + i, out + 4 * i);
+        noise_groups(2, &plan, row, b0 + i, out + 4 * i);
     if (i + 8 <= n) {
-        noise_groups(1, seed_lo, seed_hi, stream, row, b0 + i, out + 4 * i);
+        noise_groups(1, &plan, row, b0 + i, out + 4 * i);
         i += 8;
     }
     if (i < n) {
@@ -101,7 +103,7 @@ static void noise_blocks_avx2(uint32_t seed_lo, uint32_t seed_hi, uint32_t strea
          * cheaper than even a few blocks of the scalar generator (8x slower
          * per Gaussian). */
         float tail[32];
-        noise_groups(1, seed_lo, seed_hi, stream, row, b0 + i, tail);
+        noise_groups(1, &plan, row, b0 + i, tail);
         memcpy(out + 4 * i, tail, (size_t)(n - i) * 4 * sizeof(float));
     }
 }

@@ -51,6 +51,10 @@
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 #define WAVE_AVAILABLE 1
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include "noise_avx2.h" /* up here: struct btf_wave holds a philox8_plan */
+#pragma GCC pop_options
 #endif
 
 #define WAVE_LAG 16     /* columns lane k trails lane k - 1: > WAVE_REACH_COL + 7, so
@@ -88,6 +92,11 @@ struct btf_wave {
     float *ring;                /* the level's ring of rows */
     int depth, pad;
     size_t stride;
+#ifdef WAVE_AVAILABLE
+    int planned;                /* plan holds the rounds of plan_seed */
+    uint32_t plan_seed[2];
+    philox8_plan plan;
+#endif
 };
 
 /* BTF_SYNTH_WAVE=0 in the environment turns the wavefront off (tests and
@@ -260,7 +269,6 @@ btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_
 #ifdef WAVE_AVAILABLE
 #pragma GCC push_options
 #pragma GCC target("avx2")
-#include "noise_avx2.h"
 
 #define WAVE_FN static inline __attribute__((always_inline))
 
@@ -287,13 +295,12 @@ WAVE_FN void transpose8(const __m256 *v, __m256 *r)
 
 /* The 32 Gaussians of the next 8 steps, e[j] for step j: each lane's two
  * blocks (its positions p .. p + 7) of its own row, btf_noise4's bits. */
-WAVE_FN void wave_noise(const btf_wave *w, __m256i pos, __m256i urow, uint32_t seed_lo,
-                        uint32_t seed_hi, __m256 *e)
+WAVE_FN void wave_noise(const btf_wave *w, __m256i pos, __m256i urow, __m256 *e)
 {
     v8u blk = (v8u)_mm256_add_epi32(_mm256_set1_epi32((int)w->block0),
                                     _mm256_srai_epi32(pos, 2));
     v8u block[2] = {blk, blk + 1u}, cx[2], cy[2], cz[2], cw[2];
-    philox8_noise(2, block, (v8u)urow, w->stream, seed_lo, seed_hi, cx, cy, cz, cw);
+    philox8_noise(2, block, (v8u)urow, &w->plan, cx, cy, cz, cw);
     /* btf_noise4: (x, y) give components 0 and 1, (z, w) components 2 and 3 */
     v8u a[4] = {cx[0], cx[1], cz[0], cz[1]}, b[4] = {cy[0], cy[1], cw[0], cw[1]};
     v8f z0[4], z1[4];
@@ -375,12 +382,12 @@ WAVE_FN void wave_terms(const btf_wave *w, const __m256 *e, __m256 *acc)
 /* Steps t .. t + 7: noise, earlier-row part, then the same-row chain (K
  * terms, a constant where inlined) lane by lane in vector steps, +0 outside
  * the field; the step vectors into h, the rows into the ring. */
-WAVE_FN void wave_group_shape(btf_wave *w, uint32_t seed_lo, uint32_t seed_hi, const int K)
+WAVE_FN void wave_group_shape(btf_wave *w, const int K)
 {
     __m256i pos = _mm256_loadu_si256((const __m256i *)w->pos);
     __m256i urow = _mm256_loadu_si256((const __m256i *)w->urow);
     __m256 e[8], acc[8], out[8];
-    wave_noise(w, pos, urow, seed_lo, seed_hi, e);
+    wave_noise(w, pos, urow, e);
     wave_terms(w, e, acc);
     __m256 y1 = _mm256_loadu_ps(w->y[0]), y2 = _mm256_loadu_ps(w->y[1]);
     __m256 y3 = _mm256_loadu_ps(w->y[2]);
@@ -435,13 +442,13 @@ WAVE_FN void wave_group_shape(btf_wave *w, uint32_t seed_lo, uint32_t seed_hi, c
         w->hslot = 0;
 }
 
-static void wave_group_any(btf_wave *w, uint32_t seed_lo, uint32_t seed_hi)
+static void wave_group_any(btf_wave *w)
 {
     switch (w->k) {
-    case 0: wave_group_shape(w, seed_lo, seed_hi, 0); break;
-    case 1: wave_group_shape(w, seed_lo, seed_hi, 1); break;
-    case 2: wave_group_shape(w, seed_lo, seed_hi, 2); break;
-    default: wave_group_shape(w, seed_lo, seed_hi, 3); break;
+    case 0: wave_group_shape(w, 0); break;
+    case 1: wave_group_shape(w, 1); break;
+    case 2: wave_group_shape(w, 2); break;
+    default: wave_group_shape(w, 3); break;
     }
 }
 
@@ -450,8 +457,13 @@ void btf_wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi)
     int64_t i = (int64_t)row - w->row0;
     int64_t lap = i / 8, lane = i % 8;
     int64_t done = (lap + 1) * w->wp + lane * WAVE_LAG; /* its last position stored */
+    if (!w->planned || w->plan_seed[0] != seed_lo || w->plan_seed[1] != seed_hi) {
+        philox8_plan_make(&w->plan, w->stream, seed_lo, seed_hi);
+        w->plan_seed[0] = seed_lo, w->plan_seed[1] = seed_hi;
+        w->planned = 1;
+    }
     while (w->t < done)
-        wave_group_any(w, seed_lo, seed_hi);
+        wave_group_any(w);
 }
 #pragma GCC pop_options
 #else

@@ -33,9 +33,10 @@
  * BTF_E_DATA naming the pixel.
  *
  * Writing: channel "Y", or "B", "G", "R" (EXR stores channels sorted by
- * name), HALF or FLOAT, scanlines in increasing y, ZIP compression: lossless
- * deflate over 16-scanline chunks, read by every EXR implementation, good on
- * smooth data and deterministic (the same pixels give the same bytes).
+ * name), HALF or FLOAT, scanlines in increasing y, ZIP compression:
+ * lossless deflate (zlib level 4, see writer_header) over 16-scanline
+ * chunks, read by every EXR implementation, good on smooth data and
+ * deterministic (the same pixels give the same bytes).
  * Non-finite input is refused (BTF_E_ARG) because such a file could not be
  * read back; half output is clamped to +-65504 so it never holds Inf. A
  * chunk that does not shrink is stored raw (see compress_or_store: works
@@ -711,6 +712,12 @@ static exr_result_t writer_header(btf_exr_writer *w)
     exr_pixel_type_t type = w->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
     for (int c = 0; c < w->channels && !rv; c++)
         rv = exr_add_channel(w->ctx, part, names[c], type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    /* zlib level 4, not the library's default 6: on synthesised texture
+     * (noise-like, it barely compresses) a 32768 x 512 half-float image
+     * took 9.0 s at 6, 3.6 s at 4 and 3.0 s at 1, for 67.8, 68.8 and 70.2
+     * MB: level 6 spent 90 % of synthesis in deflate for 1.5 % of size. */
+    if (!rv)
+        rv = exr_set_zip_compression_level(w->ctx, part, 4);
     if (!rv)
         rv = exr_write_header(w->ctx);
     int32_t lines = 0;

@@ -48,8 +48,9 @@ AVX_FN void gauss2_lockstep(const int nv, const v8u *a, const v8u *b, v8f *z0, v
         v8f u = u2f8((a[j] >> 8) | 1u) * BTF_2POW_M24;
         v8u ix = (v8u)u;
         v8u mant = ix & 0x007FFFFFu;
-        /* hm: all ones where btf_noise_log's hm is 1 (the exponent gains
-         * 1 - hm wraps to + 1, the mantissa's exponent field loses one) */
+        /* hm: all ones (-1) where btf_noise_log's hm is 1, so the
+         * exponent adds 1 as "- hm", and "+ (hm << 23)" takes 1 from the
+         * mantissa's exponent field (mod 2^32), as "- (1 << 23)" there */
         v8u hm = (v8u)((v8i)mant > (int32_t)(BTF_SQRT2_MANT - 1u));
         v8f m = (v8f)(mant | (0x3F800000u + (hm << 23)));
         e[j] = u2f8((ix >> 23) - hm) - 127.0f;
@@ -104,7 +105,8 @@ AVX_FN void gauss2_lockstep(const int nv, const v8u *a, const v8u *b, v8f *z0, v
  * through general registers, two instructions each, once the vector
  * registers run out). Made once per (seed, stream). */
 typedef struct philox8_plan {
-    uint32_t key[BTF_PHILOX_ROUNDS][2][8]; /* round i's (k0, k1) */
+    uint32_t key[BTF_PHILOX_ROUNDS][2][8]; /* round i's (k0, k1); rounds 0 and 1
+                                            * read theirs folded into x0, z0, x1 */
     uint32_t x0[8]; /* round 0: hi(M1 stream) ^ k0, the part of x shared by all lanes */
     uint32_t z0[8]; /* round 0: BTF_NOISE_TAG ^ k1 */
     uint32_t x1[8]; /* round 1: lo(M1 stream) ^ k0, y after round 0 being lo(M1 stream) */

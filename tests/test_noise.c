@@ -511,7 +511,6 @@ static long gauss2_lockstep_mismatches(const uint32_t *wa, const uint32_t *wb)
 }
 #pragma GCC pop_options
 
-
 /* The AVX2 Box-Muller (src/noise_avx2.h) rewrites btf_noise_gauss2's
  * halving test and quadrant selects as bit tricks: every radius word (all
  * 2^24 values of a >> 8) and every angle word (all 2^24 of b >> 8) gives

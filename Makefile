@@ -17,14 +17,15 @@ PKGS      := OpenEXR vulkan cmocka
 NO_TRUNC  := $(shell $(CC) -Wno-format-truncation -Werror -x c -c /dev/null -o /dev/null \
                2>/dev/null && echo -Wno-format-truncation)
 COMMON    := -Wall -Wextra -Werror $(NO_TRUNC) -ffp-contract=off -fPIC -pthread $(OPT) $(SAN)
-CPPFLAGS  := -Iinclude -Isrc -Igpu -I$(BUILD)/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE
+CPPFLAGS  := -Iinclude -Isrc -Isrc/synth -Igpu -I$(BUILD)/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE
 CFLAGS    := -std=c11 $(COMMON)
 CXXFLAGS  := -std=c++17 $(COMMON) -I/usr/include/opencv4
 LDLIBS    := -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
              -lvulkan -lz -lstdc++ -lm -lpthread
 
-LIB_C     := $(sort $(wildcard src/*.c) $(wildcard gpu/*.c))
-LIB_CXX   := $(sort $(wildcard src/*.cpp))
+LIB_C     := $(sort $(wildcard src/*/*.c) $(wildcard gpu/*.c))
+LIB_CXX   := $(sort $(wildcard src/*/*.cpp))
+LIB_H     := $(wildcard include/*.h src/*/*.h gpu/*.h)
 LIB_OBJ   := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
 CLI_OBJ   := $(patsubst %.c,$(BUILD)/%.o,$(sort $(wildcard cli/*.c)))
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
@@ -60,19 +61,19 @@ help:
 deps:
 	@sh tools/install-deps.sh
 
-$(BUILD)/%.o: %.c $(wildcard include/*.h src/*.h gpu/*.h tests/*.h) $(SPIRV_H)
+$(BUILD)/%.o: %.c $(LIB_H) $(wildcard tests/*.h) $(SPIRV_H)
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
 
-$(BUILD)/%.o: %.cpp $(wildcard include/*.h src/*.h)
+$(BUILD)/%.o: %.cpp $(LIB_H)
 	@mkdir -p $(dir $@)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c $< -o $@
 
 # Shaders: GLSL -> SPIR-V as a C array, validated by spirv-val.
-$(BUILD)/gen/%_spv.h: gpu/%.comp $(wildcard gpu/*.glsl gpu/*.h)
+$(BUILD)/gen/%_spv.h: gpu/%.comp $(wildcard gpu/*.glsl src/synth/btf_*.h)
 	@mkdir -p $(dir $@)
-	glslangValidator -V --target-env vulkan1.1 -Igpu --vn $*_spv -o $@.spv.h $<
-	glslangValidator -V --target-env vulkan1.1 -Igpu -o $@.spv $<
+	glslangValidator -V --target-env vulkan1.1 -Igpu -Isrc/synth --vn $*_spv -o $@.spv.h $<
+	glslangValidator -V --target-env vulkan1.1 -Igpu -Isrc/synth -o $@.spv $<
 	spirv-val --target-env vulkan1.1 $@.spv
 	mv $@.spv.h $@
 
@@ -130,11 +131,11 @@ FUZZ_SAN     := -fsanitize=address,undefined -fno-sanitize-recover=undefined
 FUZZ_FLAGS   := -g -O1 -fno-omit-frame-pointer -ffp-contract=off -pthread -Wall -Wextra \
                 -DBTF_EXR_MAX_CHUNK_BYTES='(64u << 20)'
 
-$(FUZZ_BUILD)/%.o: %.c $(wildcard include/*.h src/*.h gpu/*.h) $(SPIRV_H)
+$(FUZZ_BUILD)/%.o: %.c $(LIB_H) $(SPIRV_H)
 	@mkdir -p $(dir $@)
 	clang $(CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link $(FUZZ_SAN) -c $< -o $@
 
-$(FUZZ_BUILD)/%.o: %.cpp $(wildcard include/*.h src/*.h)
+$(FUZZ_BUILD)/%.o: %.cpp $(LIB_H)
 	@mkdir -p $(dir $@)
 	clang++ $(CPPFLAGS) -std=c++17 -I/usr/include/opencv4 $(FUZZ_FLAGS) \
 	  -fsanitize=fuzzer-no-link $(FUZZ_SAN) -c $< -o $@
@@ -172,21 +173,22 @@ uninstall:
 clean:
 	rm -rf build build-asan build-fuzz
 
-# The synthesis loops are written to be vectorised (src/synth.c); -O3 lets
+# The synthesis loops are written to be vectorised (src/synth/); -O3 lets
 # GCC do it. The op order per pixel is fixed, so results do not change.
-$(BUILD)/src/synth.o $(BUILD)/src/noise_row.o $(BUILD)/src/wave.o: CFLAGS += -O3
+SYNTH_O3  := $(patsubst %.c,$(BUILD)/%.o,$(wildcard src/synth/*.c))
+$(SYNTH_O3): CFLAGS += -O3
 # The noise generator's four Box-Muller vectors in lock step run out of the
 # 16 vector registers; scheduling before register allocation, with an eye on
 # register pressure, makes it about 8 % faster (same instructions, same bits).
 # GCC options: added only where the compiler takes them (clang does not).
 SCHED_FLAGS := $(shell $(CC) -fschedule-insns -fsched-pressure -Werror -x c -c /dev/null \
                  -o /dev/null 2>/dev/null && echo -fschedule-insns -fsched-pressure)
-$(BUILD)/src/noise_row.o $(BUILD)/src/wave.o: CFLAGS += $(SCHED_FLAGS)
+$(BUILD)/src/synth/noise_row.o $(BUILD)/src/synth/wave.o: CFLAGS += $(SCHED_FLAGS)
 
 # The raw words of one synthesis noise stream, for statistical test suites
 # (docs/synthesis.md, "Noise"): build/noise_stream | dieharder -a -g 200
 noise-stream: $(BUILD)/noise_stream
 
-$(BUILD)/noise_stream: tools/noise_stream.c gpu/btf_noise.h gpu/btf_shared.h
+$(BUILD)/noise_stream: tools/noise_stream.c src/synth/btf_noise.h src/synth/btf_shared.h
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $<

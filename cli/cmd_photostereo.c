@@ -1,7 +1,7 @@
 /* cmd_photostereo.c — btfcar photostereo: normals, albedo and range map of a
  * BTF dataset (the view closest to theta_v = 0) or of ordinary photometric
- * stereo images listed in a manifest (library: src/photostereo.c,
- * src/integrate.c; docs/photostereo.md). */
+ * stereo images listed in a manifest (library: src/range/photostereo.c,
+ * src/range/integrate.c; docs/photostereo.md). */
 #include "cli.h"
 
 #include <errno.h>

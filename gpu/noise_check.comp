@@ -1,4 +1,4 @@
-// noise_check.comp -- checks that gpu/btf_noise.h compiles as GLSL and gives
+// noise_check.comp -- checks that src/synth/btf_noise.h compiles as GLSL and gives
 // the GPU side of the CPU/GPU bit-exactness test of the synthesis noise.
 // Invocation i covers (row0 + i / nblocks, block0 + i % nblocks): it writes
 // btf_noise4 for that (row, block) to z[i], the raw Philox-4x32-7 words of

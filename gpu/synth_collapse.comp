@@ -1,6 +1,6 @@
 // synth_collapse.comp -- one pyramid level of the collapse on the GPU:
 //     G_l = mean_l + Y_l + up(G_{l+1})
-// over the level's window, the up-sampling done as on the CPU (src/synth.c):
+// over the level's window, the up-sampling done as on the CPU (src/synth/synth.c):
 // horizontally within each of the coarse rows the fine row reads, then
 // vertically, with btf_up_even / btf_up_odd. Dispatched level by level, from
 // the coarsest; one workgroup per field, a grid-stride loop over its pixels.

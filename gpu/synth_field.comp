@@ -6,7 +6,7 @@
 // every offset of an earlier row (a = 2 for the usual up-right neighbour), so
 // every pixel of one step is computed at once, a barrier between steps. No
 // spin-waiting between workgroups (no forward-progress guarantee). The sums,
-// noise and zero boundary are those of the CPU reference (src/synth.c):
+// noise and zero boundary are those of the CPU reference (src/synth/synth.c):
 // the results are bit-identical.
 #version 450
 #extension GL_GOOGLE_include_directive : require

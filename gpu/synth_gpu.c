@@ -1,16 +1,18 @@
 /*
  * synth_gpu.c — subspace synthesis on the GPU (Vulkan compute), the same
- * computation as the CPU reference src/synth.c, bit for bit:
+ * computation as the CPU reference src/synth/synth.c, bit for bit:
  *   1. synth_field.comp: every CAR field (subspace, band, level) in one
  *      workgroup, its causal recursion as a wavefront (docs/gpu.md);
  *   2. synth_collapse.comp: the pyramid collapse, level by level from the
  *      coarsest;
  *   3. synth_unmix.comp: the inverse colour decorrelation.
  * The geometry (windows, margins, burn-in) and the float formulas are the
- * CPU's (gpu/btf_shared.h). One job (command buffer) per batch of subspace
+ * CPU's (src/synth/btf_shared.h). One job (command buffer) per batch of subspace
  * images; batches are cut so that every buffer fits the device's limits.
  */
-#include "internal.h"
+#include "synth/synth.h"
+#include "car/car.h"
+#include "core/core.h"
 
 #include "btf_shared.h"
 #include "vk.h"
@@ -150,7 +152,7 @@ static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x
 {
     memset(t, 0, sizeof *t);
     t->x0 = x0, t->w = x1 - x0;
-    int margin = btf_band_margin(b); /* the CPU's margins (src/margin.c) */
+    int margin = btf_band_margin(b); /* the CPU's margins (src/car/margin.c) */
     t->fx0 = x0 - margin, t->fw = t->w + 2 * margin;
     t->stream = stream;
     t->sigma = b->sigma, t->mean = b->mean;

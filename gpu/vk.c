@@ -12,9 +12,10 @@
 #if defined(__SANITIZE_ADDRESS__) && !defined(_GNU_SOURCE)
 #define _GNU_SOURCE /* dl_iterate_phdr, RTLD_NODELETE: sanitizer builds only, see below */
 #endif
+#include <stdio.h>
 #include "vk.h"
 
-#include "internal.h"
+#include "core/core.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -644,7 +644,7 @@ typedef int (*btf_rows_fn)(void *user, int y, int nrows, const float *rows, btf_
  * Per spectral band and pyramid level the CAR recursion runs with a burn-in
  * margin (docs/synthesis.md) so the field is stationary from its first
  * pixel; the pyramid is collapsed and the colour decorrelation undone. The
- * noise is a counter-based generator (gpu/btf_noise.h) of (seed, subspace,
+ * noise is a counter-based generator (src/synth/btf_noise.h) of (seed, subspace,
  * band, level, row, column): the same seed gives the same bytes. */
 int btf_synthesise(const btf_model *m, int subspace, int width, int height, uint64_t seed,
                    btf_rows_fn fn, void *user, btf_error *err);

@@ -5,10 +5,11 @@
  * 256^2 image with neighbourhood selection. Medians of several runs; never
  * fails on time.
  */
+#include "synth/synth.h"
 #include "btfcar.h"
 #include "testutil.h"
 #include "btf_shared.h"
-#include "internal.h" /* btf_wave_enable: the two field generators side by side */
+#include "core/core.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -93,7 +94,7 @@ int main(void)
             many.subspaces[k] = which[w]->subspaces[0];
         /* 9 runs of each field generator, interleaved: this VM's timings
          * wander by 20 %; the median and the best run say how much, and
-         * the ratio compares like with like. The wavefront (src/wave.c) is
+         * the ratio compares like with like. The wavefront (src/synth/wave.c) is
          * what synthesis uses; the row-by-row generator is its fallback. */
         double tw[2][9];
         int was = btf_wave_enable(1), have = btf_wave_available();

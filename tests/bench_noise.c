@@ -1,13 +1,14 @@
 /*
- * bench_noise.c -- speed of the CAR synthesis noise (gpu/btf_noise.h) on one
+ * bench_noise.c -- speed of the CAR synthesis noise (src/synth/btf_noise.h) on one
  * core: ns per Gaussian through btf_noise4 (one Philox-4x32-7 call and two
  * Box-Muller pairs per 4 Gaussians), through btf_noise1, and Philox alone;
  * and the row generator CPU synthesis uses (btf_noise_blocks, AVX2 where
  * the CPU has it), rows of 136 blocks as in a level-0 field of 512 + margins.
  * Median of 5 runs; prints figures, never fails on time.
  */
-#include "../gpu/btf_noise.h"
-#include "internal.h" /* btf_noise_blocks */
+#include "synth/synth.h"
+#include "btf_noise.h"
+#include "core/core.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -99,7 +100,7 @@ static void report(const char *what, const char *unit, double (*fn)(void))
 
 int main(void)
 {
-    printf("== noise (gpu/btf_noise.h), one core\n");
+    printf("== noise (src/synth/btf_noise.h), one core\n");
     report("btf_noise4 (Philox + 2 Box-Muller pairs)", "Gaussian", run_noise4);
     report("btf_noise1 (Philox + 1 Box-Muller pair)", "Gaussian", run_noise1);
     report("btf_philox (Philox-4x32-7 alone)", "call", run_philox);

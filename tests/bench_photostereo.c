@@ -5,7 +5,8 @@
  * integrators alone. Median of 5 runs. Prints figures; never fails on time
  * (the target is <= 1 s for normals + integration on the 2-core machine).
  */
-#include "internal.h"
+#include "generate/material.h"
+#include "core/core.h"
 
 #include <stdio.h>
 #include <stdlib.h>

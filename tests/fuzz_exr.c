@@ -1,5 +1,5 @@
 /*
- * fuzz_exr.c — libFuzzer target for the EXR reader (src/exr_io.c). Each input
+ * fuzz_exr.c — libFuzzer target for the EXR reader (src/io/exr.c). Each input
  * is written to a temporary file (the reader works on paths), probed, and,
  * when the probe accepts it and the image is modest, read with each channel
  * setting (as in file, grey, RGB). The reader must never crash, leak, print
@@ -11,12 +11,12 @@
  *
  *   mkdir -p build-fuzz
  *   clang++ -std=c++17 -g -O1 -fsanitize=address,undefined -fno-sanitize=vptr -fPIC \
- *       -Iinclude -Isrc -I/usr/include/opencv4 -c src/cv_bridge.cpp \
+ *       -Iinclude -Isrc -I/usr/include/opencv4 -c src/io/cv_bridge.cpp \
  *       -o build-fuzz/cv_bridge.o
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -ffp-contract=off \
  *       -Iinclude -Isrc -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
  *       -DBTF_EXR_MAX_CHUNK_BYTES='(64u << 20)' \
- *       -o build-fuzz/fuzz_exr tests/fuzz_exr.c src/exr_io.c src/util.c src/image.c \
+ *       -o build-fuzz/fuzz_exr tests/fuzz_exr.c src/io/exr.c src/core/files.c src/io/image_file.c \
  *       build-fuzz/cv_bridge.o -lopencv_imgcodecs -lopencv_imgproc -lopencv_core \
  *       -lOpenEXRCore-3_1 -lstdc++ -lm -lpthread
  *
@@ -33,7 +33,8 @@
  * OpenEXRCore itself is not instrumented unless rebuilt with the sanitizers,
  * so memory errors inside it show only where they reach our code.
  */
-#include "internal.h"
+#include "core/core.h"
+#include "io/io.h"
 #include "fuzzutil.h"
 
 #include <fcntl.h>

@@ -1,13 +1,14 @@
 /*
  * fuzz_image.c — libFuzzer target for the PNG and JPEG paths of the image
- * reader (src/image.c): the structural probe (PNG IHDR and IEND, JPEG marker
+ * reader (src/io/image_file.c): the structural probe (PNG IHDR and IEND, JPEG marker
  * walk to the frame header and the end-of-image marker) and, for inputs the
  * probe accepts with a modest size, the decode through OpenCV and the
  * conversion to linear float. OpenCV's decoders are not instrumented; the
  * target checks that btfcar's own code never crashes, leaks or returns a
  * half-filled image. `make fuzz` builds and runs it.
  */
-#include "internal.h"
+#include "core/core.h"
+#include "io/io.h"
 #include "fuzzutil.h"
 
 #include <string.h>

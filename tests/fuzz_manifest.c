@@ -1,13 +1,14 @@
 /*
  * fuzz_manifest.c — libFuzzer target for the tab-separated manifests btfcar
- * reads (src/tsv.c), through the dataset reader (src/dataset.c: columns,
+ * reads (src/io/tsv.c), through the dataset reader (src/io/dataset.c: columns,
  * numbers, directions) and the photometric-stereo manifest reader
- * (src/photostereo.c: theta/phi or lx/ly/lz, r g b). Paths in a fuzzed
+ * (src/range/photostereo.c: theta/phi or lx/ly/lz, r g b). Paths in a fuzzed
  * manifest name files that do not exist, so both must fail cleanly: one line,
  * no crash, no leak. `make fuzz` builds and runs it (seeds in
  * tests/fuzz-corpus/fuzz_manifest/).
  */
-#include "internal.h"
+#include "core/core.h"
+#include "io/io.h"
 #include "fuzzutil.h"
 
 #include <string.h>

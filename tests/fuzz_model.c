@@ -1,5 +1,5 @@
 /*
- * fuzz_model.c — libFuzzer target for the model decoder (src/model_io.c,
+ * fuzz_model.c — libFuzzer target for the model decoder (src/model/model_file.c,
  * docs/model-format.md). The decoder must never crash, leak or read out of
  * bounds; a failure must be BTF_E_FORMAT (or BTF_E_NOMEM) with one line
  * naming the input, and leave the model empty. Whatever it accepts must
@@ -19,13 +19,13 @@
  *
  *   mkdir -p build-fuzz
  *   clang++ -std=c++17 -g -O1 -fsanitize=fuzzer-no-link,address,undefined \
- *       -Iinclude -Isrc -I/usr/include/opencv4 -c src/cv_bridge.cpp -o build-fuzz/cv_bridge.o
+ *       -Iinclude -Isrc -I/usr/include/opencv4 -c src/io/cv_bridge.cpp -o build-fuzz/cv_bridge.o
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -ffp-contract=off \
  *       -Iinclude -Isrc -Igpu -Ibuild/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
  *       -c tests/fuzz_model.c -o build-fuzz/fuzz_model.o
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer-no-link,address,undefined -ffp-contract=off \
  *       -Iinclude -Isrc -Igpu -Ibuild/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
- *       -c src/model_io.c ...   (each library source, one object each)
+ *       -c src/model/model_file.c ...   (each library source, one object each)
  *   clang++ -fsanitize=fuzzer,address,undefined -o build-fuzz/fuzz_model \
  *       build-fuzz/fuzz_model.o build-fuzz/<library objects> build-fuzz/cv_bridge.o \
  *       -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \

@@ -1,5 +1,5 @@
 /*
- * test_analyse.c — the whole analysis (src/analyse.c, btf_analyse) and
+ * test_analyse.c — the whole analysis (src/analyse/analyse.c, btf_analyse) and
  * `btfcar analyse`: the range tile of non-square images, the report of the
  * segmentation, the options --stage segment refuses, and the tables it
  * writes (atomically, errors naming the file).

@@ -1,8 +1,10 @@
 /* test_car.c — the CAR model: decorrelation, pyramid, estimation, Bayesian
  * neighbourhood selection, stability, synthesis (issue 5 points 1-6, 9). */
+#include "synth/synth.h"
+#include "car/car.h"
 #include "testutil.h"
 
-#include "internal.h"
+#include "core/core.h"
 #include "btf_shared.h" /* the sum order and the noise, for the direct recursion */
 
 #include <float.h>
@@ -249,7 +251,7 @@ static size_t values_off_direct(const btf_car_band *b, int w, int h, uint64_t se
     return diff;
 }
 
-/* CPU synthesis steps two rows at once where it can (src/synth.c,
+/* CPU synthesis steps two rows at once where it can (src/synth/synth.c,
  * field_pair), with row r + 1 trailing row r by a chunk plus its reach;
  * every value must still be the direct recursion's, bit for bit: the
  * family's shapes and others, same-row offsets only, no neighbours, reaches
@@ -328,7 +330,7 @@ static void row_pairs_of_three_bands(void **state)
     }
 }
 
-/* The wavefront (src/wave.c: eight rows per vector step, lane k trailing
+/* The wavefront (src/synth/wave.c: eight rows per vector step, lane k trailing
  * lane k - 1, each lane running its rows back to back) must give the direct
  * recursion's values bit for bit: every shape it takes (rows up to 3 back,
  * columns up to 4 either way, same-row shapes 0..3 long, no neighbours),
@@ -526,7 +528,7 @@ static void long_synthesis_is_stationary(void **state)
     assert_true(fabs(mean) < 0.05 * sqrt(stat));
 }
 
-/* Synthesis margins (src/margin.c) follow the band's correlation: none for
+/* Synthesis margins (src/car/margin.c) follow the band's correlation: none for
  * white noise, the minimum for a weak band, more as the correlation grows,
  * the cap for an unstable one; and with its margin a strongly correlated
  * field is stationary from its first row, which a short margin is not. */

@@ -1,14 +1,15 @@
 /*
- * test_exr.c — src/exr_io.c: EXR round trips (half/float, 1/3 channels, odd
+ * test_exr.c — src/io/exr.c: EXR round trips (half/float, 1/3 channels, odd
  * sizes, extreme values), the streaming writer, atomic writes, and reading
  * hostile input (NaN/Inf, truncation, garbage, unsupported layouts). Files
  * the writer cannot produce (Inf, tiles, UINT, other compressions, offset
  * data windows) are made here directly with the OpenEXR core API.
  */
 #define _GNU_SOURCE /* memmem */
+#include "io/io.h"
 #include "testutil.h"
 
-#include "internal.h"
+#include "core/core.h"
 
 #include <openexr.h>
 

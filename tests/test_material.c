@@ -1,5 +1,5 @@
 /*
- * test_material.c — the procedural materials (src/material.c): every material
+ * test_material.c — the procedural materials (src/generate/material.c): every material
  * makes and renders at any size, deterministically, with periodic heights,
  * unit normals and finite images for every (view, light) pair; the images
  * behave like the physics they model (Lambertian falloff, cast shadows on the
@@ -7,8 +7,9 @@
  * axis convention (y up in the image) holds for normals, lighting and
  * parallax. Prints the render time at 128^2 (never fails on time).
  */
+#include "generate/material.h"
 #include "testutil.h"
-#include "internal.h"
+#include "core/core.h"
 
 #include <math.h>
 #include <stdio.h>

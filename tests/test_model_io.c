@@ -1,5 +1,5 @@
 /*
- * test_model_io.c — the model file MODEL.btfcar (src/model_io.c,
+ * test_model_io.c — the model file MODEL.btfcar (src/model/model_file.c,
  * docs/model-format.md): bit-exact round trips, rejection of truncated,
  * corrupt, foreign and future files, every validation rule (each bad file
  * built with a correct CRC by an independent writer of the documented

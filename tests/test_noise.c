@@ -1,5 +1,5 @@
 /*
- * test_noise.c -- the CAR synthesis noise of gpu/btf_noise.h: Philox-4x32-7
+ * test_noise.c -- the CAR synthesis noise of src/synth/btf_noise.h: Philox-4x32-7
  * (and -10) known answers, the accuracy of the polynomial log / sqrt / cos / sin, the
  * Gaussian's moments, Kolmogorov-Smirnov distance and exact tails, range,
  * determinism, independence, and that the header also builds as GLSL.
@@ -8,10 +8,11 @@
  * the bounds sit at about 5 standard errors (or the Kolmogorov 1e-5 level),
  * so a correct generator would fail them for a tiny fraction of seeds only.
  */
+#include "synth/synth.h"
 #include "testutil.h"
-#include "internal.h" /* btf_noise_blocks: the row generator of CPU synthesis */
+#include "core/core.h"
 
-#include "../gpu/btf_noise.h"
+#include "btf_noise.h"
 #include "noise_check_spv.h" /* built from gpu/noise_check.comp by the Makefile */
 
 #include <math.h>
@@ -453,7 +454,7 @@ static void noise1_matches_noise4(void **state)
     }
 }
 
-/* The row generator of CPU synthesis (src/noise_row.c, an AVX2 path where
+/* The row generator of CPU synthesis (src/synth/noise_row.c, an AVX2 path where
  * the CPU has it) gives bit for bit btf_noise4 of each block, for every
  * length (whole 16-block groups and tails) and for random keys, streams,
  * rows and starting blocks, wrapped negative ones included. */
@@ -511,7 +512,7 @@ static long gauss2_lockstep_mismatches(const uint32_t *wa, const uint32_t *wb)
 }
 #pragma GCC pop_options
 
-/* The AVX2 Box-Muller (src/noise_avx2.h) rewrites btf_noise_gauss2's
+/* The AVX2 Box-Muller (src/synth/noise_avx2.h) rewrites btf_noise_gauss2's
  * halving test and quadrant selects as bit tricks: every radius word (all
  * 2^24 values of a >> 8) and every angle word (all 2^24 of b >> 8) gives
  * the same bits as the shared header. */

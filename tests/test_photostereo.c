@@ -1,5 +1,5 @@
 /*
- * test_photostereo.c — analyse stage 2 (src/photostereo.c, src/integrate.c,
+ * test_photostereo.c — analyse stage 2 (src/range/photostereo.c, src/range/integrate.c,
  * cli/cmd_photostereo.c): robust photometric stereo and the integration of
  * normals into a range map.
  *
@@ -19,8 +19,9 @@
  * when they were set: they leave a margin of about 1.5-2x for platform
  * differences, not for regressions.
  */
+#include "generate/material.h"
 #include "testutil.h"
-#include "internal.h"
+#include "core/core.h"
 
 #include <math.h>
 #include <stdio.h>

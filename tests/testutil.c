@@ -2,7 +2,7 @@
 #define _GNU_SOURCE
 #include "testutil.h"
 
-#include "internal.h"
+#include "core/core.h"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define TU_ASAN 1

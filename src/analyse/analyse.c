@@ -1,0 +1,168 @@
+/*
+ * analyse.c — the whole analysis of a BTF dataset into one model (paper
+ * section II): stage 1 segments the (view, light) space into K subspace
+ * images (src/segment/segment.c); stage 2 recovers the range map by photometric
+ * stereo on the view closest to the normal (src/range/photostereo.c) and keeps it
+ * as a small tile; stage 3 models each subspace image with the multi-scale
+ * colour CAR model (src/car/subspace_fit.c).
+ */
+#include <stdio.h>
+#include "core/core.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The range tile's grid: one tile texel is p/q image pixels along both
+ * axes (a rational, so that binning is exact integer arithmetic), and the
+ * tile has tw x th texels. */
+typedef struct tile_grid {
+    long long p, q;
+    int tw, th;
+} tile_grid;
+
+/* The longer side gets n texels (n <= that side), so a texel is L/n pixels;
+ * the shorter side gets as many whole texels of that same size as fit. One
+ * scale for both axes keeps the tile's texels square, like the image's. A
+ * texel wider than the shorter side would cover pixels the image does not
+ * have, so the scale is capped at that side (for aspect ratios beyond n : 1
+ * the longer side then exceeds n). */
+static tile_grid range_grid(int w, int h, int n)
+{
+    int lo = w < h ? w : h, hi = w < h ? h : w;
+    if (n > hi)
+        n = hi;
+    tile_grid g = {hi, n, 0, 0};
+    if ((long long)lo * n < hi)
+        g.p = lo, g.q = 1;
+    g.tw = (int)((long long)w * g.q / g.p);
+    g.th = (int)((long long)h * g.q / g.p);
+    return g;
+}
+
+/* Tile cell of pixel i's centre, i + 1/2, on a grid of p/q pixels: -1 for
+ * the strip beyond the last whole cell (left out, so that every cell is the
+ * same size). */
+static int grid_cell(int i, const tile_grid *g, int cells)
+{
+    int c = (int)((2LL * i + 1) * g->q / (2 * g->p));
+    return c < cells ? c : -1;
+}
+
+/* Area-averages the height map into the tile: each tile texel is the mean
+ * of the source pixels whose centres fall in its cell. Heights stay in
+ * image-pixel units. */
+static int range_tile(const btf_image *h, int n, btf_model *m, btf_error *err)
+{
+    tile_grid g = range_grid(h->width, h->height, n);
+    size_t cells = (size_t)g.tw * g.th;
+    m->range = btf_calloc(cells, sizeof(float), err);
+    double *acc = btf_calloc(cells, sizeof(double), err);
+    int *cnt = btf_calloc(cells, sizeof(int), err);
+    if (!m->range || !acc || !cnt) {
+        free(acc);
+        free(cnt);
+        free(m->range);
+        m->range = NULL;
+        return BTF_E_NOMEM;
+    }
+    for (int y = 0; y < h->height; y++) {
+        int ty = grid_cell(y, &g, g.th);
+        for (int x = 0; x < h->width && ty >= 0; x++) {
+            int tx = grid_cell(x, &g, g.tw);
+            if (tx < 0)
+                continue;
+            acc[(size_t)ty * g.tw + tx] += h->data[(size_t)y * h->width + x];
+            cnt[(size_t)ty * g.tw + tx]++;
+        }
+    }
+    for (size_t i = 0; i < cells; i++)
+        m->range[i] = cnt[i] ? (float)(acc[i] / cnt[i]) : 0.0f;
+    m->range_width = g.tw;
+    m->range_height = g.th;
+    m->range_texel = (float)((double)g.p / (double)g.q);
+    free(acc);
+    free(cnt);
+    return BTF_OK;
+}
+
+static int stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_model *m,
+                       btf_error *err)
+{
+    btf_ps_result ps;
+    int rc = btf_photostereo_dataset(ds, NULL, &o->photostereo, &ps, err);
+    if (rc)
+        return rc;
+    rc = range_tile(&ps.height, o->range_size > 0 ? o->range_size : 64, m, err);
+    btf_ps_result_free(&ps);
+    return rc;
+}
+
+static int stage_fit(const btf_dataset *ds, const btf_segmentation *seg, const btf_analyse_opts *o,
+                     btf_model *m, btf_error *err)
+{
+    m->subspaces = btf_calloc((size_t)seg->k, sizeof(btf_subspace_model), err);
+    if (!m->subspaces)
+        return BTF_E_NOMEM;
+    m->n_subspaces = seg->k;
+    for (int k = 0; k < seg->k; k++) {
+        btf_image img;
+        int rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &img, err);
+        if (rc)
+            return rc;
+        char what[64];
+        snprintf(what, sizeof what, "subspace %d", k);
+        btf_fit_opts fo = o->fit;
+        fo.car.what = what;
+        rc = btf_fit_subspace(&img, &fo, &m->subspaces[k], err);
+        btf_image_free(&img);
+        if (rc)
+            return rc;
+        m->subspaces[k].view = seg->rep_view[k];
+        m->subspaces[k].light = seg->rep_light[k];
+        if (o->progress)
+            o->progress(o->progress_user, (double)(k + 1) / seg->k, "fitting CAR models");
+    }
+    return BTF_OK;
+}
+
+int btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
+                btf_error *err)
+{
+    btf_analyse_opts o = {0};
+    if (opts)
+        o = *opts;
+    memset(out, 0, sizeof *out);
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    if (o.segment.features.progress == NULL) {
+        o.segment.features.progress = o.progress;
+        o.segment.features.progress_user = o.progress_user;
+    }
+    btf_segmentation seg;
+    int rc = btf_segment(ds, &o.segment, &seg, err);
+    if (rc)
+        return rc;
+    rc = btf_dirset_copy(&out->views, in->views, err);
+    if (rc == 0)
+        rc = btf_dirset_copy(&out->lights, in->lights, err);
+    if (rc == 0) {
+        size_t n = (size_t)in->n_views * in->n_lights;
+        out->index = btf_alloc(n, 1, err);
+        if (out->index)
+            memcpy(out->index, seg.index, n);
+        else
+            rc = BTF_E_NOMEM;
+    }
+    if (rc == 0 && !o.no_range)
+        rc = stage_range(ds, &o, out, err);
+    if (rc == 0)
+        rc = stage_fit(ds, &seg, &o, out, err);
+    if (rc == 0 && o.report) {
+        memset(o.report, 0, sizeof *o.report);
+        snprintf(o.report->segment_reason, sizeof o.report->segment_reason, "%s", seg.reason);
+    }
+    btf_segmentation_free(&seg);
+    if (rc)
+        btf_model_free(out);
+    return rc;
+}

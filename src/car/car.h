@@ -1,0 +1,55 @@
+/*
+ * car.h — the modelling stage's internals (src/car/, paper section II.C):
+ * spectral decorrelation, the Gaussian-Laplacian pyramid and synthesis
+ * margins of CAR bands. Private to the library.
+ */
+#ifndef BTF_CAR_H
+#define BTF_CAR_H
+
+#include "btfcar.h"
+
+/* Spectral decorrelation: car/decorrelate.c. Mean colour, orthonormal 3x3
+ * basis (rows by decreasing variance) and the band variances. */
+int btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
+             btf_error *err);
+/* bands[b][i] = basis row b . (rgb_i - mean), in double. */
+void btf_decorrelate(const btf_image *img, const float mean[3], const float basis[9],
+                     double *bands[3]);
+
+/* Gaussian-Laplacian pyramid: car/pyramid.c. */
+typedef struct btf_pyramid {
+    int levels;
+    int width[BTF_MAX_LEVELS], height[BTF_MAX_LEVELS];
+    double *level[BTF_MAX_LEVELS]; /* Laplacian levels; the last is the low-pass */
+} btf_pyramid;
+int btf_pyr_down(const double *src, int w, int h, double **dst, btf_error *err);
+int btf_pyr_up(const double *src, int w2, int h2, int w, int h, double **dst, btf_error *err);
+int btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid *p,
+                      btf_error *err);
+int btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err);
+void btf_pyramid_free(btf_pyramid *p);
+
+/* Synthesis margins (car/margin.c): the rows above its window a band's
+ * CAR field starts, and the columns it runs on either side, so that the
+ * zero boundary's transient has died out (below BTF_SYNTH_MARGIN_EPS of the
+ * stationary variance) before the window. Depends on the band alone; CPU
+ * and GPU synthesis both use it. 0 for a band without neighbours. */
+#define BTF_SYNTH_MARGIN_MIN 8
+#define BTF_SYNTH_MARGIN_MAX 256
+#define BTF_SYNTH_MARGIN_EPS 1e-4
+int btf_car_margin(const btf_car_band *b);
+/* The same with a work budget (grid cells times neighbours, decremented):
+ * when it runs out, the safe answer BTF_SYNTH_MARGIN_MAX. Reading a model
+ * file uses it so that a small crafted file cannot cost minutes. Both
+ * return -1 when out of memory. */
+int btf_car_margin_within(const btf_car_band *b, double *budget);
+/* The share of the impulse response's energy beyond m rows or columns: a
+ * lower bound of what a pixel that far from the zero boundary misses of the
+ * stationary variance (the side boundaries pin the field to 0, which costs
+ * nearly unstable bands more), or -1 when out of memory. */
+double btf_car_margin_shortfall(const btf_car_band *b, int m);
+/* The margin synthesis uses: the band's cached one (set by fitting and
+ * reading models), else btf_car_margin; -1 when out of memory. */
+int btf_band_margin(const btf_car_band *b);
+
+#endif

@@ -1,0 +1,531 @@
+/*
+ * car.c — estimation of the 2D causal auto-regressive (CAR) model of one
+ * sub-band (paper section II.C, eq. (1)-(2)):
+ *
+ *     Y_r = gamma X_r + e_r,   e_r ~ N(0, sigma^2) white,
+ *
+ * X_r the values at the causal neighbourhood offsets I_r of pixel r.
+ *
+ * Estimates. With the conjugate normal-gamma prior gamma | sigma^2 ~
+ * N(0, sigma^2 V0^-1), sigma^-2 ~ Gamma(a0, b0), V0 = v0 I, and the data
+ * gathered in V = sum_t [Y_t; X_t][Y_t; X_t]^T, the posterior gives
+ *     gamma^T = (V_xx + V0)^-1 V_xy,   lambda = V_yy - V_xy^T (V_xx + V0)^-1 V_xy,
+ *     sigma^2 = (2 b0 + lambda) / (2 a0 + t - 2),
+ * the paper's estimates with its prior matrix V0 (eq. 2). All sums are double;
+ * the solve is a Cholesky factorisation of V_xx + V0, which the prior makes
+ * positive definite: no explicit inverse, no failure on a constant band.
+ *
+ * Neighbourhood choice ("model only what the data requires"). Candidates are
+ * a nested family (the first 1, 2, 3, 4, 6, 8, 10, 12, 14 offsets of
+ * FAMILY below). Each is scored by its log marginal likelihood in closed form
+ *     ln p(Y | I) = (eta/2) ln v0 - (1/2) ln |V_xx + V0| + a0 ln b0 - a_t ln b_t
+ *                   + ln Gamma(a_t) - ln Gamma(a0) - (t/2) ln 2 pi,
+ *     a_t = a0 + t/2,  b_t = b0 + lambda/2,
+ * over the same t equations for every candidate (those where the largest
+ * neighbourhood fits), so the posterior probabilities compare fairly; the
+ * most probable candidate wins. With equal prior odds this is the Bayesian
+ * decision rule of Haindl's CAR model selection; the determinant term is the
+ * Occam factor that keeps smooth bands small. Data are standardised first
+ * (mean 0, variance 1), so v0 = 1, a0 = 1, b0 = 0.01 are weak and scale-free.
+ *
+ * Stability. Least-squares and Bayesian estimates are not guaranteed stable.
+ * btf_car_is_stable checks sum |gamma| < 1 (sufficient), else that A(w1, w2) =
+ * 1 - sum gamma_s e^{-i(w1 r_s + w2 c_s)} stays away from 0 on a frequency
+ * grid (necessary) and that a test recursion does not grow. An unstable
+ * estimate is shrunk (gamma <- 0.95 gamma, repeatedly) until stable, sigma is
+ * re-estimated for the shrunk gamma, and a warning says so.
+ */
+#include <stdio.h>
+#include "core/core.h"
+#include "car/car.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PRIOR_V0 1.0
+#define PRIOR_A0 1.0
+#define PRIOR_B0 0.01
+
+static const btf_offset FAMILY[14] = {{0, -1}, {-1, 0}, {-1, -1}, {-1, 1}, {0, -2},
+                                      {-2, 0}, {-1, -2}, {-1, 2}, {-2, -1}, {-2, 1},
+                                      {-2, -2}, {-2, 2}, {0, -3}, {-3, 0}};
+static const int FAMILY_SIZES[] = {1, 2, 3, 4, 6, 8, 10, 12, 14};
+#define N_FAMILY_SIZES 9
+
+/* ------------------------------------------------------------ neighbourhood */
+
+static int is_causal(btf_offset o)
+{
+    return o.row < 0 || (o.row == 0 && o.col < 0);
+}
+
+int btf_neighbourhood_parse(const char *spec, btf_offset *offsets, int *n, btf_error *err)
+{
+    *n = 0;
+    const char *p = spec;
+    while (*p) {
+        char *end;
+        long r = strtol(p, &end, 10);
+        if (end == p || *end != ':')
+            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': expected row:col at '%s'", spec, p);
+        p = end + 1;
+        long c = strtol(p, &end, 10);
+        if (end == p || (*end != ',' && *end != '\0'))
+            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': expected row:col at '%s'", spec, p);
+        if (r < -64 || r > 64 || c < -64 || c > 64)
+            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld beyond 64", spec, r, c);
+        btf_offset o = {(int8_t)r, (int8_t)c};
+        if (!is_causal(o))
+            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld is not causal "
+                            "(need row < 0, or row 0 and col < 0)", spec, r, c);
+        for (int i = 0; i < *n; i++)
+            if (offsets[i].row == o.row && offsets[i].col == o.col)
+                return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld repeated", spec, r, c);
+        if (*n == BTF_CAR_MAX_NEIGHBOURS)
+            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': more than %d offsets", spec,
+                            BTF_CAR_MAX_NEIGHBOURS);
+        offsets[(*n)++] = o;
+        p = *end == ',' ? end + 1 : end;
+        if (*end == ',' && *p == '\0')
+            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': trailing comma", spec);
+    }
+    if (*n == 0)
+        return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': empty", spec);
+    return BTF_OK;
+}
+
+void btf_neighbourhood_format(const btf_offset *offsets, int n, char *buf, size_t len)
+{
+    size_t k = 0;
+    if (len)
+        buf[0] = '\0';
+    for (int i = 0; i < n && k < len; i++) {
+        int w = snprintf(buf + k, len - k, "%s%d:%d", i ? "," : "", offsets[i].row, offsets[i].col);
+        if (w < 0)
+            break;
+        k += (size_t)w;
+    }
+}
+
+/* ---------------------------------------------------------------- algebra */
+
+/* Cholesky factor of the leading m x m block of a (stride lda) into l; 0 on
+ * success, -1 if not positive definite. */
+static int cholesky(const double *a, int lda, int m, double *l)
+{
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j <= i; j++) {
+            double s = a[i * lda + j];
+            for (int k = 0; k < j; k++)
+                s -= l[i * m + k] * l[j * m + k];
+            if (i == j) {
+                if (!(s > 0.0))
+                    return -1;
+                l[i * m + i] = sqrt(s);
+            } else {
+                l[i * m + j] = s / l[j * m + j];
+            }
+        }
+    return 0;
+}
+
+/* Solves (L L^T) x = b. */
+static void chol_solve(const double *l, int m, const double *b, double *x)
+{
+    double y[BTF_CAR_MAX_NEIGHBOURS];
+    for (int i = 0; i < m; i++) {
+        double s = b[i];
+        for (int k = 0; k < i; k++)
+            s -= l[i * m + k] * y[k];
+        y[i] = s / l[i * m + i];
+    }
+    for (int i = m - 1; i >= 0; i--) {
+        double s = y[i];
+        for (int k = i + 1; k < m; k++)
+            s -= l[k * m + i] * x[k];
+        x[i] = s / l[i * m + i];
+    }
+}
+
+/* ----------------------------------------------------------- accumulation */
+
+typedef struct reach {
+    int up, left, right;
+} reach;
+
+static reach reach_of(const btf_offset *o, int n)
+{
+    reach r = {0, 0, 0};
+    for (int i = 0; i < n; i++) {
+        if (-o[i].row > r.up)
+            r.up = -o[i].row;
+        if (-o[i].col > r.left)
+            r.left = -o[i].col;
+        if (o[i].col > r.right)
+            r.right = o[i].col;
+    }
+    return r;
+}
+
+/* V = sum over the pixels where all n offsets fit of [y; x][y; x]^T,
+ * (n+1) x (n+1), row-major; returns t, the number of pixels. */
+static long accumulate(const double *z, int w, int h, const btf_offset *o, int n, double *v)
+{
+    reach r = reach_of(o, n);
+    int m = n + 1;
+    memset(v, 0, (size_t)m * m * sizeof(double));
+    long t = 0;
+    double u[BTF_CAR_MAX_NEIGHBOURS + 1];
+    for (int y = r.up; y < h; y++)
+        for (int x = r.left; x < w - r.right; x++) {
+            u[0] = z[(size_t)y * w + x];
+            for (int i = 0; i < n; i++)
+                u[i + 1] = z[(size_t)(y + o[i].row) * w + x + o[i].col];
+            for (int i = 0; i < m; i++)
+                for (int j = 0; j <= i; j++)
+                    v[i * m + j] += u[i] * u[j];
+            t++;
+        }
+    for (int i = 0; i < m; i++)
+        for (int j = i + 1; j < m; j++)
+            v[i * m + j] = v[j * m + i];
+    return t;
+}
+
+/* Estimates and log evidence of the sub-model using the first eta offsets
+ * (the leading block of V). Returns 0, or -1 when the fit is impossible. */
+static int fit_prefix(const double *v, int m, int eta, long t, double *gamma, double *lambda,
+                      double *log_ev)
+{
+    double a[(BTF_CAR_MAX_NEIGHBOURS) * (BTF_CAR_MAX_NEIGHBOURS)];
+    double l[(BTF_CAR_MAX_NEIGHBOURS) * (BTF_CAR_MAX_NEIGHBOURS)];
+    double vxy[BTF_CAR_MAX_NEIGHBOURS];
+    for (int i = 0; i < eta; i++) {
+        for (int j = 0; j < eta; j++)
+            a[i * eta + j] = v[(i + 1) * m + (j + 1)] + (i == j ? PRIOR_V0 : 0.0);
+        vxy[i] = v[(i + 1) * m];
+    }
+    if (cholesky(a, eta, eta, l) != 0)
+        return -1;
+    chol_solve(l, eta, vxy, gamma);
+    double fit = 0.0, logdet = 0.0;
+    for (int i = 0; i < eta; i++) {
+        fit += vxy[i] * gamma[i];
+        logdet += 2.0 * log(l[i * eta + i]);
+    }
+    double lam = v[0] - fit;
+    if (lam < 0.0)
+        lam = 0.0; /* rounding on a perfectly predictable band */
+    double at = PRIOR_A0 + 0.5 * (double)t, bt = PRIOR_B0 + 0.5 * lam;
+    *lambda = lam;
+    *log_ev = 0.5 * eta * log(PRIOR_V0) - 0.5 * logdet + PRIOR_A0 * log(PRIOR_B0) - at * log(bt) +
+              lgamma(at) - lgamma(PRIOR_A0) - 0.5 * (double)t * log(2.0 * 3.14159265358979323846);
+    for (int i = 0; i < eta; i++)
+        if (!isfinite(gamma[i]))
+            return -1;
+    return isfinite(*log_ev) ? 0 : -1;
+}
+
+/* Residual sum of squares of a given gamma from V: V_yy - 2 g.V_xy + g V_xx g. */
+static double residual(const double *v, int m, const double *g, int eta)
+{
+    double s = v[0];
+    for (int i = 0; i < eta; i++) {
+        s -= 2.0 * g[i] * v[(i + 1) * m];
+        for (int j = 0; j < eta; j++)
+            s += g[i] * g[j] * v[(i + 1) * m + (j + 1)];
+    }
+    return s > 0.0 ? s : 0.0;
+}
+
+/* -------------------------------------------------------------- stability */
+
+/* |A(w1, w2)|^2 on an n x n grid of the frequency torus: min and the mean of
+ * its inverse (the stationary variance for unit noise). */
+static void spectrum(const btf_car_band *b, int n, double *min_a2, double *mean_inv)
+{
+    double mn = INFINITY, acc = 0.0;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double w1 = 2.0 * 3.14159265358979323846 * i / n;
+            double w2 = 2.0 * 3.14159265358979323846 * j / n;
+            double re = 1.0, im = 0.0;
+            for (int s = 0; s < b->n; s++) {
+                double ph = w1 * b->offsets[s].row + w2 * b->offsets[s].col;
+                re -= b->gamma[s] * cos(ph);
+                im += b->gamma[s] * sin(ph);
+            }
+            double a2 = re * re + im * im;
+            if (a2 < mn)
+                mn = a2;
+            acc += a2 > 1e-300 ? 1.0 / a2 : 1e300;
+        }
+    *min_a2 = mn;
+    *mean_inv = acc / ((double)n * n);
+}
+
+/* Runs the recursion on a rows x cols field of unit noise (zero boundary).
+ * A stable model does not grow: neither down the rows (the last quarter of
+ * rows against the quarter before) nor along them (the last quarter of
+ * columns against the quarter before; the zero boundary only ever lowers
+ * the variance near an edge). */
+static int recursion_grows(const btf_car_band *b)
+{
+    enum { R = 160, C = 192 };
+    double *f = calloc((size_t)R * C, sizeof(double));
+    if (!f)
+        return 1; /* cannot check: treat as unstable, which only shrinks */
+    btf_rng rng;
+    btf_rng_seed(&rng, 12345);
+    for (int y = 0; y < R; y++)
+        for (int x = 0; x < C; x++) {
+            double s = 0.0;
+            for (int k = 0; k < b->n; k++) {
+                int yy = y + b->offsets[k].row, xx = x + b->offsets[k].col;
+                if (yy >= 0 && xx >= 0 && xx < C)
+                    s += b->gamma[k] * f[yy * C + xx];
+            }
+            /* Uniform noise of unit variance is enough to excite growth. */
+            f[y * C + x] = s + (btf_rng_uniform(&rng) - 0.5) * 3.4641016151377544;
+        }
+    double rows1 = 0.0, rows2 = 0.0, cols1 = 0.0, cols2 = 0.0;
+    for (int y = R / 2; y < R; y++)
+        for (int x = C / 4; x < C; x++) {
+            double q = f[y * C + x] * f[y * C + x];
+            if (x < 3 * C / 4) {
+                if (y < 3 * R / 4)
+                    rows1 += q;
+                else
+                    rows2 += q;
+            }
+            if (y >= 3 * R / 4) {
+                if (x < C / 2)
+                    continue;
+                if (x < 3 * C / 4)
+                    cols1 += q;
+                else
+                    cols2 += q;
+            }
+        }
+    free(f);
+    if (!isfinite(rows1) || !isfinite(rows2) || !isfinite(cols1) || !isfinite(cols2))
+        return 1;
+    return rows2 > 1.5 * rows1 + 1e-12 || cols2 > 1.5 * cols1 + 1e-12;
+}
+
+int btf_car_is_stable(const btf_car_band *b)
+{
+    double sum = 0.0;
+    for (int i = 0; i < b->n; i++) {
+        if (!isfinite(b->gamma[i]))
+            return 0;
+        sum += fabs(b->gamma[i]);
+    }
+    if (sum < 1.0)
+        return 1;
+    double mn, inv;
+    spectrum(b, 64, &mn, &inv);
+    if (!(mn > 1e-6))
+        return 0;
+    return !recursion_grows(b);
+}
+
+double btf_car_stationary_variance(const btf_car_band *b)
+{
+    double mn, inv;
+    spectrum(b, 256, &mn, &inv);
+    return (double)b->sigma * b->sigma * inv;
+}
+
+/* ------------------------------------------------------------------ fitting */
+
+static void warn(const btf_car_fit_opts *o, const char *text)
+{
+    if (!o->warn)
+        return;
+    char msg[320];
+    snprintf(msg, sizeof msg, "%s%s%s", o->what ? o->what : "", o->what ? ": " : "", text);
+    o->warn(o->warn_user, msg);
+}
+
+/* float of a double, clamped to the finite float range. */
+static float to_float(double v)
+{
+    if (v > FLT_MAX)
+        return FLT_MAX;
+    if (v < -FLT_MAX)
+        return -FLT_MAX;
+    return (float)v;
+}
+
+/* Mean and standard deviation in double, in two passes over the band
+ * scaled by its largest magnitude, so that values near the double limits
+ * (1e300) do not overflow when squared. */
+static void moments(const double *band, size_t n, double *mean, double *sd)
+{
+    double big = 0.0;
+    for (size_t i = 0; i < n; i++)
+        if (fabs(band[i]) > big)
+            big = fabs(band[i]);
+    if (!(big > 0.0)) {
+        *mean = 0.0;
+        *sd = 0.0;
+        return;
+    }
+    double m = 0.0;
+    for (size_t i = 0; i < n; i++)
+        m += band[i] / big;
+    m /= (double)n;
+    double v = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double d = band[i] / big - m;
+        v += d * d;
+    }
+    *mean = m * big;
+    *sd = sqrt(v / (double)n) * big;
+}
+
+/* Shrinks gamma until the model is stable; returns the factor applied. */
+static double stabilise(btf_car_band *b)
+{
+    double f = 1.0;
+    float g0[BTF_CAR_MAX_NEIGHBOURS];
+    memcpy(g0, b->gamma, sizeof g0);
+    for (int k = 0; k < 200 && !btf_car_is_stable(b); k++) {
+        f *= 0.95;
+        for (int i = 0; i < b->n; i++)
+            b->gamma[i] = (float)(g0[i] * f);
+    }
+    if (!btf_car_is_stable(b)) { /* cannot happen for f -> 0; be safe */
+        b->n = 0;
+        f = 0.0;
+    }
+    return f;
+}
+
+int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
+                btf_car_band *out, btf_car_fit_info *info, btf_error *err)
+{
+    btf_car_fit_opts o = {0};
+    if (opts)
+        o = *opts;
+    btf_car_fit_info inf = {.chosen = -1, .shrink = 1.0};
+    memset(out, 0, sizeof *out);
+    if (!band || w < 1 || h < 1)
+        return btf_fail(err, BTF_E_ARG, "CAR fit of a %d x %d band", w, h);
+    if (o.n_fixed < 0 || o.n_fixed > BTF_CAR_MAX_NEIGHBOURS)
+        return btf_fail(err, BTF_E_ARG, "neighbourhood of %d offsets", o.n_fixed);
+    for (int i = 0; i < o.n_fixed; i++)
+        if (!is_causal(o.fixed[i]))
+            return btf_fail(err, BTF_E_ARG, "offset %d:%d is not causal", o.fixed[i].row,
+                            o.fixed[i].col);
+    size_t n = (size_t)w * h;
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(band[i]))
+            return btf_fail(err, BTF_E_ARG, "CAR fit: sample %zu of the band is not finite", i);
+    double mean, sd;
+    moments(band, n, &mean, &sd);
+    if (!isfinite(mean) || !isfinite(sd))
+        return btf_fail(err, BTF_E_NUMERIC, "CAR fit: band mean or variance overflows");
+    out->mean = to_float(mean);
+    if (!(sd > 1e-12 * (fabs(mean) + 1e-300)) || !(sd > 1e-30)) {
+        /* A constant band: nothing to model beyond its mean. */
+        if (info)
+            *info = inf;
+        return BTF_OK;
+    }
+    double *z = btf_alloc(n, sizeof(double), err);
+    if (!z)
+        return BTF_E_NOMEM;
+    for (size_t i = 0; i < n; i++)
+        z[i] = (band[i] - mean) / sd;
+
+    const btf_offset *offs = o.n_fixed ? o.fixed : FAMILY;
+    int maxn = o.max_neighbours > 0 ? o.max_neighbours : 14;
+    int sizes[N_FAMILY_SIZES], nsizes = 0;
+    if (o.n_fixed) {
+        sizes[nsizes++] = o.n_fixed;
+    } else {
+        for (int i = 0; i < N_FAMILY_SIZES; i++)
+            if (FAMILY_SIZES[i] <= maxn)
+                sizes[nsizes++] = FAMILY_SIZES[i];
+        if (nsizes == 0)
+            sizes[nsizes++] = 1;
+    }
+    /* Shrink the family until its largest member has equations to spare:
+     * tiny images get small models instead of none. */
+    double v[(BTF_CAR_MAX_NEIGHBOURS + 1) * (BTF_CAR_MAX_NEIGHBOURS + 1)];
+    long t = 0;
+    while (nsizes > 0) {
+        t = accumulate(z, w, h, offs, sizes[nsizes - 1], v);
+        if (t >= 2L * sizes[nsizes - 1] + 4)
+            break;
+        nsizes--;
+    }
+    inf.pixels = t;
+    int m = nsizes ? sizes[nsizes - 1] + 1 : 0;
+    double best = -INFINITY, best_lambda = 0.0, g[BTF_CAR_MAX_NEIGHBOURS];
+    int best_eta = 0;
+    for (int c = 0; c < nsizes; c++) {
+        double gc[BTF_CAR_MAX_NEIGHBOURS], lam, ev;
+        if (fit_prefix(v, m, sizes[c], t, gc, &lam, &ev) != 0)
+            continue;
+        inf.size[inf.candidates] = sizes[c];
+        inf.log_evidence[inf.candidates] = ev;
+        if (ev > best) {
+            best = ev;
+            best_eta = sizes[c];
+            best_lambda = lam;
+            inf.chosen = inf.candidates;
+            memcpy(g, gc, (size_t)sizes[c] * sizeof(double));
+        }
+        inf.candidates++;
+    }
+    if (inf.chosen < 0) {
+        /* No neighbourhood fits (1 x 1, 1 x N images): white noise. */
+        out->sigma = to_float(sd);
+        char text[160];
+        snprintf(text, sizeof text, "too small for a CAR model (%ld equations); white noise", t);
+        warn(&o, text);
+        free(z);
+        if (info)
+            *info = inf;
+        return BTF_OK;
+    }
+    out->n = best_eta;
+    memcpy(out->offsets, offs, (size_t)best_eta * sizeof(btf_offset));
+    for (int i = 0; i < best_eta; i++)
+        out->gamma[i] = (float)g[i];
+    double s2 = (2.0 * PRIOR_B0 + best_lambda) / (2.0 * PRIOR_A0 + (double)t - 2.0);
+    inf.shrink = stabilise(out);
+    if (inf.shrink < 1.0) {
+        double gs[BTF_CAR_MAX_NEIGHBOURS];
+        for (int i = 0; i < out->n; i++)
+            gs[i] = out->gamma[i];
+        s2 = (2.0 * PRIOR_B0 + residual(v, m, gs, out->n)) / (2.0 * PRIOR_A0 + (double)t - 2.0);
+        char text[160];
+        snprintf(text, sizeof text, "unstable estimate: coefficients scaled by %.3f to make the "
+                 "recursion stable", inf.shrink);
+        warn(&o, text);
+    }
+    out->sigma = to_float(sqrt(s2) * sd);
+    free(z);
+    if ((out->margin = btf_car_margin(out)) < 0)
+        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+    if (out->margin == BTF_SYNTH_MARGIN_MAX) {
+        /* Nearly unstable: its correlation outreaches the largest margin. */
+        double short_by = btf_car_margin_shortfall(out, BTF_SYNTH_MARGIN_MAX);
+        if (short_by > BTF_SYNTH_MARGIN_EPS) {
+            char text[200];
+            snprintf(text, sizeof text, "correlation reaches beyond the %d-pixel synthesis "
+                     "margin: the first rows and columns of a synthesis miss at least %.2g%% of "
+                     "the stationary variance", BTF_SYNTH_MARGIN_MAX, 100.0 * short_by);
+            warn(&o, text);
+        }
+    }
+    if (info)
+        *info = inf;
+    return BTF_OK;
+}

@@ -1,0 +1,127 @@
+/*
+ * decorrelate.c — spectral decorrelation of a colour image (paper section
+ * II.C): the mean colour is subtracted and the pixels are projected on the
+ * eigenvectors of their 3 x 3 colour covariance (Karhunen-Loeve transform),
+ * giving three mono-spectral bands that are modelled independently. The
+ * basis is orthonormal, so the inverse is its transpose and restores the
+ * colour correlations exactly. Nothing is divided by an eigenvalue, so a band
+ * of zero variance (a grey or constant image) is harmless: it is constant.
+ */
+#include "core/core.h"
+#include "car/car.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Eigen-decomposition of a symmetric 3 x 3 matrix by cyclic Jacobi
+ * rotations: plain, robust and deterministic. a is destroyed; vectors come
+ * out as the columns of v. */
+static void jacobi3(double a[3][3], double v[3][3], double ev[3])
+{
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            v[i][j] = i == j;
+    for (int sweep = 0; sweep < 64; sweep++) {
+        double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
+        double scale = fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
+        if (off <= 1e-300 || off <= 1e-17 * scale)
+            break;
+        for (int p = 0; p < 2; p++)
+            for (int q = p + 1; q < 3; q++) {
+                if (a[p][q] == 0.0)
+                    continue;
+                double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+                if (!isfinite(t))
+                    t = 0.0; /* theta overflowed: the rotation is negligible */
+                double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
+                for (int k = 0; k < 3; k++) { /* A <- J^T A J */
+                    double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < 3; k++) {
+                    double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for (int k = 0; k < 3; k++) {
+                    double vkp = v[k][p], vkq = v[k][q];
+                    v[k][p] = c * vkp - s * vkq;
+                    v[k][q] = s * vkp + c * vkq;
+                }
+            }
+    }
+    for (int i = 0; i < 3; i++)
+        ev[i] = a[i][i];
+}
+
+int btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
+             btf_error *err)
+{
+    if (!img || !img->data || img->channels != 3)
+        return btf_fail(err, BTF_E_ARG, "spectral decorrelation needs an RGB image");
+    size_t n = (size_t)img->width * img->height;
+    double m[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            m[k] += img->data[3 * i + k];
+    for (int k = 0; k < 3; k++)
+        m[k] /= (double)n;
+    double c[3][3] = {{0}};
+    for (size_t i = 0; i < n; i++) {
+        double d[3];
+        for (int k = 0; k < 3; k++)
+            d[k] = img->data[3 * i + k] - m[k];
+        for (int a = 0; a < 3; a++)
+            for (int b = a; b < 3; b++)
+                c[a][b] += d[a] * d[b];
+    }
+    for (int a = 0; a < 3; a++)
+        for (int b = a; b < 3; b++)
+            c[b][a] = c[a][b] = c[a][b] / (double)n;
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++)
+            if (!isfinite(c[a][b]))
+                return btf_fail(err, BTF_E_NUMERIC, "colour covariance is not finite "
+                                "(pixel values too large)");
+    double v[3][3], ev[3];
+    jacobi3(c, v, ev);
+    /* Order bands by decreasing variance; fix each vector's sign so that its
+     * largest component is positive (one basis per image, run to run). */
+    int order[3] = {0, 1, 2};
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++)
+            if (ev[order[j]] > ev[order[i]]) {
+                int t = order[i];
+                order[i] = order[j];
+                order[j] = t;
+            }
+    for (int r = 0; r < 3; r++) {
+        int col = order[r], big = 0;
+        for (int k = 1; k < 3; k++)
+            if (fabs(v[k][col]) > fabs(v[big][col]))
+                big = k;
+        double sign = v[big][col] < 0 ? -1.0 : 1.0;
+        for (int k = 0; k < 3; k++)
+            basis[3 * r + k] = (float)(sign * v[k][col]);
+        if (variance)
+            variance[r] = ev[col] > 0.0 ? ev[col] : 0.0;
+    }
+    for (int k = 0; k < 3; k++)
+        mean[k] = (float)m[k];
+    return BTF_OK;
+}
+
+void btf_decorrelate(const btf_image *img, const float mean[3], const float basis[9],
+                     double *bands[3])
+{
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; i++) {
+        double d[3];
+        for (int k = 0; k < 3; k++)
+            d[k] = (double)img->data[3 * i + k] - mean[k];
+        for (int b = 0; b < 3; b++)
+            bands[b][i] = basis[3 * b] * d[0] + basis[3 * b + 1] * d[1] + basis[3 * b + 2] * d[2];
+    }
+}

@@ -1,0 +1,58 @@
+/*
+ * image.c — the float image (allocation with a size bound) and the sRGB
+ * transfer function (IEC 61966-2-1).
+ */
+#include "core/core.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+int btf_image_alloc(btf_image *img, int width, int height, int channels, btf_error *err)
+{
+    img->data = NULL;
+    img->width = img->height = img->channels = 0;
+    if (width < 1 || height < 1 || width > BTF_MAX_SIDE || height > BTF_MAX_SIDE)
+        return btf_fail(err, BTF_E_ARG, "image size %dx%d out of range 1..%d", width,
+                        height, BTF_MAX_SIDE);
+    if (channels != 1 && channels != 3)
+        return btf_fail(err, BTF_E_ARG, "image channels %d: expected 1 or 3", channels);
+    float *d = btf_calloc((size_t)width * (size_t)height * (size_t)channels, sizeof(float), err);
+    if (!d)
+        return BTF_E_NOMEM;
+    img->data = d;
+    img->width = width;
+    img->height = height;
+    img->channels = channels;
+    return BTF_OK;
+}
+
+void btf_image_free(btf_image *img)
+{
+    if (!img)
+        return;
+    free(img->data);
+    img->data = NULL;
+    img->width = img->height = img->channels = 0;
+}
+
+float btf_srgb_to_linear(float v)
+{
+    if (!(v > 0.0f))
+        return 0.0f;
+    if (v <= 0.04045f)
+        return v / 12.92f;
+    if (v >= 1.0f)
+        return 1.0f;
+    return powf((v + 0.055f) / 1.055f, 2.4f);
+}
+
+float btf_linear_to_srgb(float v)
+{
+    if (!(v > 0.0f))
+        return 0.0f;
+    if (v <= 0.0031308f)
+        return v * 12.92f;
+    if (v >= 1.0f)
+        return 1.0f;
+    return 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
+}

@@ -1,0 +1,271 @@
+/*
+ * generate.c — writes a procedural BTF to disk in the Bonn UBO2003 layout:
+ * for each of the 81 views a folder "tvCCC_pvDDD/" with the 81 images
+ * "NNNNN tlAAA plBBB tvCCC pvDDD.jpg" (NNNNN = light_index * 81 + view_index),
+ * plus the ground truth in truth/{height,normals,albedo}.exr.
+ *
+ * Visibility from a view depends only on the view, and shadowing only on the
+ * light, so the 81 view maps and 81 light maps are computed once and each of
+ * the 6,561 images only combines one of each (src/generate/material.c). Images are
+ * rendered and encoded by a pool of threads; each image is independent, so
+ * the output does not depend on the thread count.
+ *
+ * The whole dataset is built in a temporary folder beside OUTDIR and renamed
+ * into place at the end: a failure leaves nothing behind.
+ */
+#include <stdio.h>
+#include "core/core.h"
+#include "generate/material.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+typedef struct gen_job {
+    const btf_material *m;
+    const btf_dirset *dirs;
+    btf_view_map **views;
+    btf_light_map **lights;
+    const char *dir;       /* the temporary output folder */
+    int quality;
+    atomic_int next;       /* next task index */
+    atomic_int done;
+    atomic_int failed;
+    int total;
+    btf_error err;         /* the first failure */
+    pthread_mutex_t lock;
+    btf_progress_fn progress;
+    void *user;
+} gen_job;
+
+static void job_fail(gen_job *j, const btf_error *e)
+{
+    pthread_mutex_lock(&j->lock);
+    if (!atomic_load(&j->failed)) {
+        j->err = *e;
+        atomic_store(&j->failed, 1);
+    }
+    pthread_mutex_unlock(&j->lock);
+}
+
+static void view_folder(char *buf, size_t n, btf_dir v)
+{
+    snprintf(buf, n, "tv%03d_pv%03d", (int)(v.theta + 0.5), (int)(v.phi + 0.5));
+}
+
+static int render_one(gen_job *j, int vi, int li, btf_error *err)
+{
+    btf_dir v = j->dirs->dirs[vi], l = j->dirs->dirs[li];
+    btf_image img = {0};
+    int rc = btf_material_render_maps(j->m, j->views[vi], j->lights[li], v, l, &img, err);
+    if (rc)
+        return rc;
+    char folder[32], name[64], path[4096];
+    view_folder(folder, sizeof folder, v);
+    snprintf(name, sizeof name, "%s/%05d tl%03d pl%03d tv%03d pv%03d.jpg", folder,
+             li * j->dirs->count + vi, (int)(l.theta + 0.5), (int)(l.phi + 0.5),
+             (int)(v.theta + 0.5), (int)(v.phi + 0.5));
+    rc = btf_path_join(path, sizeof path, j->dir, name, err);
+    if (rc == 0)
+        rc = btf_image_write_jpeg(path, &img, j->quality, err);
+    btf_image_free(&img);
+    return rc;
+}
+
+/* Phase 1 tasks: 0..n-1 view maps, n..2n-1 light maps. */
+static int make_map(gen_job *j, int t, btf_error *err)
+{
+    int n = j->dirs->count;
+    if (t < n)
+        return btf_view_map_make(j->m, j->dirs->dirs[t], &j->views[t], err);
+    return btf_light_map_make(j->m, j->dirs->dirs[t - n], &j->lights[t - n], err);
+}
+
+typedef struct worker_arg {
+    gen_job *job;
+    int phase;
+} worker_arg;
+
+static void *worker(void *p)
+{
+    worker_arg *a = p;
+    gen_job *j = a->job;
+    int n = j->dirs->count;
+    int tasks = a->phase == 1 ? 2 * n : n * n;
+    btf_error e = {0};
+    for (;;) {
+        if (atomic_load(&j->failed))
+            break;
+        int t = atomic_fetch_add(&j->next, 1);
+        if (t >= tasks)
+            break;
+        /* Phase 2 walks view-major so that one view's folder fills at a time. */
+        int rc = a->phase == 1 ? make_map(j, t, &e) : render_one(j, t / n, t % n, &e);
+        if (rc) {
+            job_fail(j, &e);
+            break;
+        }
+        int d = atomic_fetch_add(&j->done, 1) + 1;
+        if (a->phase == 2 && j->progress && (d % 81 == 0 || d == tasks)) {
+            pthread_mutex_lock(&j->lock);
+            j->progress(j->user, (double)d / tasks, "rendering images");
+            pthread_mutex_unlock(&j->lock);
+        }
+    }
+    return NULL;
+}
+
+static int run_phase(gen_job *j, int phase, int threads, btf_error *err)
+{
+    atomic_store(&j->next, 0);
+    atomic_store(&j->done, 0);
+    worker_arg arg = {j, phase};
+    pthread_t tid[64];
+    int started = 0;
+    for (int i = 1; i < threads && i < 64; i++)
+        if (pthread_create(&tid[started], NULL, worker, &arg) == 0)
+            started++;
+    worker(&arg); /* the calling thread works too */
+    for (int i = 0; i < started; i++)
+        pthread_join(tid[i], NULL);
+    if (atomic_load(&j->failed)) {
+        if (err)
+            *err = j->err;
+        return j->err.code ? j->err.code : BTF_E_IO;
+    }
+    return BTF_OK;
+}
+
+static int write_truth(const btf_material *m, const char *dir, btf_error *err)
+{
+    char tdir[4096], path[4096];
+    int rc = btf_path_join(tdir, sizeof tdir, dir, "truth", err);
+    if (rc == 0)
+        rc = btf_mkdirs(tdir, err);
+    struct { const char *name; float *data; int channels; } maps[3] = {
+        {"height.exr", m->height, 1}, {"normals.exr", m->normal, 3}, {"albedo.exr", m->albedo, 3}};
+    for (int i = 0; rc == 0 && i < 3; i++) {
+        btf_image img = {m->size, m->size, maps[i].channels, maps[i].data};
+        rc = btf_path_join(path, sizeof path, tdir, maps[i].name, err);
+        if (rc == 0)
+            rc = btf_image_write_exr(path, &img, 0, err);
+    }
+    return rc;
+}
+
+static int make_view_folders(const btf_dirset *dirs, const char *dir, btf_error *err)
+{
+    for (int i = 0; i < dirs->count; i++) {
+        char folder[32], path[4096];
+        view_folder(folder, sizeof folder, dirs->dirs[i]);
+        int rc = btf_path_join(path, sizeof path, dir, folder, err);
+        if (rc == 0)
+            rc = btf_mkdirs(path, err);
+        if (rc)
+            return rc;
+    }
+    return BTF_OK;
+}
+
+/* OUTDIR may not exist yet, or be an empty folder; anything else is refused
+ * so that a generator run never overwrites somebody's data. */
+static int check_outdir(const char *outdir, btf_error *err)
+{
+    struct stat st;
+    if (stat(outdir, &st) != 0)
+        return errno == ENOENT ? BTF_OK
+                               : btf_fail(err, BTF_E_IO, "%s: %s", outdir, strerror(errno));
+    if (!S_ISDIR(st.st_mode))
+        return btf_fail(err, BTF_E_ARG, "%s: exists and is not a folder", outdir);
+    DIR *d = opendir(outdir);
+    if (!d)
+        return btf_fail(err, BTF_E_IO, "%s: %s", outdir, strerror(errno));
+    int empty = 1;
+    struct dirent *e;
+    while (empty && (e = readdir(d)))
+        empty = !strcmp(e->d_name, ".") || !strcmp(e->d_name, "..");
+    closedir(d);
+    if (!empty)
+        return btf_fail(err, BTF_E_ARG, "%s: folder exists and is not empty; give a new or empty "
+                        "folder", outdir);
+    return BTF_OK;
+}
+
+static int generate_into(const btf_material *m, const btf_dirset *dirs, const char *tmp,
+                         const btf_generate_opts *o, btf_error *err)
+{
+    int n = dirs->count;
+    gen_job j = {.m = m, .dirs = dirs, .dir = tmp, .quality = o->jpeg_quality ? o->jpeg_quality : 95,
+                 .total = n * n, .progress = o->progress, .user = o->progress_user};
+    pthread_mutex_init(&j.lock, NULL);
+    j.views = btf_calloc((size_t)n, sizeof *j.views, err);
+    j.lights = btf_calloc((size_t)n, sizeof *j.lights, err);
+    int rc = (j.views && j.lights) ? BTF_OK : BTF_E_NOMEM;
+    int threads = o->threads > 0 ? o->threads : btf_cpu_count();
+    if (rc == 0)
+        rc = make_view_folders(dirs, tmp, err);
+    if (rc == 0)
+        rc = run_phase(&j, 1, threads, err);
+    if (rc == 0)
+        rc = run_phase(&j, 2, threads, err);
+    if (rc == 0)
+        rc = write_truth(m, tmp, err);
+    for (int i = 0; i < n; i++) {
+        if (j.views)
+            btf_view_map_free(j.views[i]);
+        if (j.lights)
+            btf_light_map_free(j.lights[i]);
+    }
+    free(j.views);
+    free(j.lights);
+    pthread_mutex_destroy(&j.lock);
+    return rc;
+}
+
+int btf_generate(const char *material, const char *outdir, const btf_generate_opts *opts,
+                 btf_error *err)
+{
+    btf_generate_opts o = {0};
+    if (opts)
+        o = *opts;
+    int size = o.size ? o.size : 128;
+    if (o.jpeg_quality < 0 || o.jpeg_quality > 100)
+        return btf_fail(err, BTF_E_ARG, "JPEG quality %d: expected 1..100", o.jpeg_quality);
+    int rc = check_outdir(outdir, err);
+    if (rc)
+        return rc;
+    btf_material m;
+    rc = btf_material_make(material, size, o.seed, &m, err);
+    if (rc)
+        return rc;
+    btf_dirset dirs;
+    rc = btf_dirset_ubo81(&dirs, err);
+    if (rc) {
+        btf_material_free(&m);
+        return rc;
+    }
+    char tmp[4096];
+    size_t len = strlen(outdir);
+    while (len > 1 && outdir[len - 1] == '/')
+        len--;
+    snprintf(tmp, sizeof tmp, "%.*s.partial-%ld", (int)len, outdir, (long)getpid());
+    rc = btf_mkdirs(tmp, err);
+    if (rc == 0)
+        rc = generate_into(&m, &dirs, tmp, &o, err);
+    if (rc == 0) {
+        rmdir(outdir); /* an empty OUTDIR (checked above) is replaced */
+        if (rename(tmp, outdir) != 0)
+            rc = btf_fail(err, BTF_E_IO, "%s: cannot move the dataset into place: %s", outdir,
+                          strerror(errno));
+    }
+    if (rc)
+        btf_remove_tree(tmp);
+    btf_dirset_free(&dirs);
+    btf_material_free(&m);
+    return rc;
+}

@@ -1,0 +1,182 @@
+/*
+ * cv_bridge.cpp — the one C++ file: a thin C interface over the parts of
+ * OpenCV 4 that have no C API (image decoding and encoding). Nothing here
+ * throws across the boundary: every OpenCV exception becomes an error text.
+ */
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <vector>
+
+extern "C" {
+#include "core/core.h"
+#include "io/io.h"
+}
+
+static void set_error(char *errbuf, size_t errlen, const char *what)
+{
+    if (errbuf && errlen) {
+        std::strncpy(errbuf, what, errlen - 1);
+        errbuf[errlen - 1] = '\0';
+    }
+}
+
+/* Runs body (returning 0 or -1 with errbuf set) so that no exception
+ * crosses into C: every OpenCV exception becomes the error text. */
+template <class Body> static int guarded(char *errbuf, size_t errlen, Body body)
+{
+    try {
+        return body();
+    } catch (const std::exception &e) {
+        set_error(errbuf, errlen, e.what());
+    } catch (...) {
+        set_error(errbuf, errlen, "unknown OpenCV failure");
+    }
+    return -1;
+}
+
+/* Decodes a PNG/JPEG file as stored: 8- or 16-bit, 1 or 3 channels, RGB
+ * order (OpenCV's BGR is swapped here so no caller sees it). Alpha dropped. */
+extern "C" int btfcv_read(const char *path, int *w, int *h, int *c, int *depth16,
+                          void **pixels, char *errbuf, size_t errlen)
+{
+    *pixels = nullptr;
+    return guarded(errbuf, errlen, [&]() -> int {
+        cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH |
+                                         cv::IMREAD_ANYCOLOR);
+        if (m.empty()) {
+            set_error(errbuf, errlen, "cannot decode image");
+            return -1;
+        }
+        if (m.depth() != CV_8U && m.depth() != CV_16U) {
+            set_error(errbuf, errlen, "unsupported sample type (not 8- or 16-bit)");
+            return -1;
+        }
+        cv::Mat rgb;
+        switch (m.channels()) {
+        case 1: rgb = m; break;
+        case 3: cv::cvtColor(m, rgb, cv::COLOR_BGR2RGB); break;
+        case 4: cv::cvtColor(m, rgb, cv::COLOR_BGRA2RGB); break;
+        default:
+            set_error(errbuf, errlen, "unsupported channel count");
+            return -1;
+        }
+        if (!rgb.isContinuous())
+            rgb = rgb.clone();
+        size_t bytes = rgb.total() * rgb.elemSize();
+        void *buf = std::malloc(bytes ? bytes : 1);
+        if (!buf) {
+            set_error(errbuf, errlen, "out of memory");
+            return -1;
+        }
+        std::memcpy(buf, rgb.data, bytes);
+        *w = rgb.cols;
+        *h = rgb.rows;
+        *c = rgb.channels();
+        *depth16 = rgb.depth() == CV_16U;
+        *pixels = buf;
+        return 0;
+    });
+}
+
+/* Encodes 8-bit RGB or grey pixels to a memory buffer (".png" or ".jpg"). */
+extern "C" int btfcv_encode(const char *ext, int w, int h, int c,
+                            const unsigned char *pixels, int jpeg_quality,
+                            unsigned char **out, size_t *outlen, char *errbuf,
+                            size_t errlen)
+{
+    *out = nullptr;
+    *outlen = 0;
+    return guarded(errbuf, errlen, [&]() -> int {
+        cv::Mat m(h, w, c == 3 ? CV_8UC3 : CV_8UC1, const_cast<unsigned char *>(pixels));
+        cv::Mat bgr;
+        if (c == 3)
+            cv::cvtColor(m, bgr, cv::COLOR_RGB2BGR);
+        else
+            bgr = m;
+        std::vector<int> params;
+        if (std::strcmp(ext, ".jpg") == 0) {
+            params = {cv::IMWRITE_JPEG_QUALITY, jpeg_quality};
+        } else {
+            /* Level 3: files within a few % of level 9 at a fraction of the time. */
+            params = {cv::IMWRITE_PNG_COMPRESSION, 3};
+        }
+        std::vector<unsigned char> buf;
+        if (!cv::imencode(ext, bgr, buf, params)) {
+            set_error(errbuf, errlen, "encoder failed");
+            return -1;
+        }
+        unsigned char *copy = static_cast<unsigned char *>(std::malloc(buf.size() ? buf.size() : 1));
+        if (!copy) {
+            set_error(errbuf, errlen, "out of memory");
+            return -1;
+        }
+        std::memcpy(copy, buf.data(), buf.size());
+        *out = copy;
+        *outlen = buf.size();
+        return 0;
+    });
+}
+
+/* Linear RGB (floats, interleaved, n pixels) to CIE L*a*b* (D65), using
+ * OpenCV's linear-RGB conversion: our pixels are already linearised, so the
+ * sRGB variant (COLOR_RGB2Lab) would apply the transfer function twice. */
+extern "C" int btfcv_rgb_to_lab(const float *rgb, size_t n, float *lab, char *errbuf,
+                                size_t errlen)
+{
+    return guarded(errbuf, errlen, [&]() -> int {
+        if (n == 0)
+            return 0;
+        if (n > (size_t)INT32_MAX) {
+            set_error(errbuf, errlen, "too many pixels");
+            return -1;
+        }
+        cv::Mat src(1, (int)n, CV_32FC3, const_cast<float *>(rgb));
+        cv::Mat dst(1, (int)n, CV_32FC3, lab);
+        cv::Mat clipped;
+        /* OpenCV expects [0, 1]; values above 1 (highlights) are clamped so
+         * that L stays in [0, 100]. */
+        cv::min(cv::max(src, 0.0), 1.0, clipped);
+        cv::cvtColor(clipped, dst, cv::COLOR_LRGB2Lab);
+        return 0;
+    });
+}
+
+/* 2D discrete Fourier transform of a complex w x h array in double precision
+ * (re and im separate, row-major), in place. inverse != 0: the inverse,
+ * scaled by 1/(w*h). Any size (OpenCV uses mixed radix). */
+extern "C" int btfcv_dft2(double *re, double *im, int w, int h, int inverse, char *errbuf,
+                          size_t errlen)
+{
+    return guarded(errbuf, errlen, [&]() -> int {
+        cv::Mat planes[2] = {cv::Mat(h, w, CV_64F, re), cv::Mat(h, w, CV_64F, im)};
+        cv::Mat z;
+        cv::merge(planes, 2, z);
+        cv::dft(z, z, inverse ? (cv::DFT_INVERSE | cv::DFT_SCALE) : 0);
+        cv::Mat out[2];
+        cv::split(z, out);
+        out[0].copyTo(planes[0]);
+        out[1].copyTo(planes[1]);
+        return 0;
+    });
+}
+
+/* 2D DCT-II (inverse != 0: DCT-III, its inverse) of a real w x h array in
+ * place, orthonormal scaling as OpenCV defines it. OpenCV requires even
+ * sizes (or 1); others are an error here. */
+extern "C" int btfcv_dct2(double *a, int w, int h, int inverse, char *errbuf, size_t errlen)
+{
+    return guarded(errbuf, errlen, [&]() -> int {
+        if ((w > 1 && (w & 1)) || (h > 1 && (h & 1))) {
+            set_error(errbuf, errlen, "DCT needs even sizes");
+            return -1;
+        }
+        cv::Mat m(h, w, CV_64F, a);
+        cv::dct(m, m, inverse ? cv::DCT_INVERSE : 0);
+        return 0;
+    });
+}

@@ -1,0 +1,165 @@
+/*
+ * tsv.c — a small reader for the tab-separated manifests btfcar accepts
+ * (datasets, photometric stereo): a header line naming the columns, then one
+ * record per line. Blank lines and lines starting with '#' are skipped. Fields
+ * are separated by tabs only, so paths may contain spaces.
+ */
+#include "core/core.h"
+#include "io/io.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TSV_MAX_BYTES (64u << 20)
+
+void btf_tsv_free(btf_tsv *t)
+{
+    if (!t)
+        return;
+    free(t->text);
+    free(t->cells);
+    free(t->line_no);
+    memset(t, 0, sizeof *t);
+}
+
+/* Splits one line in place at tabs into at most max fields. */
+static int split_line(char *line, char **fields, int max)
+{
+    int n = 0;
+    char *p = line;
+    for (;;) {
+        char *tab = strchr(p, '\t');
+        if (n < max)
+            fields[n] = p;
+        n++;
+        if (!tab)
+            break;
+        *tab = '\0';
+        p = tab + 1;
+    }
+    return n;
+}
+
+static int count_fields(const char *line)
+{
+    int n = 1;
+    for (; *line; line++)
+        n += *line == '\t';
+    return n;
+}
+
+static char *trim(char *s)
+{
+    while (*s == ' ')
+        s++;
+    size_t n = strlen(s);
+    while (n > 0 && (s[n - 1] == ' ' || s[n - 1] == '\r'))
+        s[--n] = '\0';
+    return s;
+}
+
+static int is_skipped(const char *line)
+{
+    while (*line == ' ' || *line == '\t' || *line == '\r')
+        line++;
+    return *line == '\0' || *line == '#';
+}
+
+int btf_tsv_read(const char *path, btf_tsv *t, btf_error *err)
+{
+    memset(t, 0, sizeof *t);
+    unsigned char *data;
+    size_t n;
+    int rc = btf_read_file(path, TSV_MAX_BYTES, &data, &n, err);
+    if (rc)
+        return rc;
+    if (memchr(data, 0, n)) {
+        free(data);
+        return btf_fail(err, BTF_E_FORMAT, "%s: not a text file (contains NUL bytes)", path);
+    }
+    char *text = realloc(data, n + 1);
+    if (!text) {
+        free(data);
+        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+    }
+    text[n] = '\0';
+    t->text = text;
+    size_t lines = 1;
+    for (size_t i = 0; i < n; i++)
+        lines += text[i] == '\n';
+    int have_header = 0, line = 0;
+    char *save = text;
+    for (char *l = text; l; l = save) {
+        char *nl = strchr(l, '\n');
+        save = nl ? nl + 1 : NULL;
+        if (nl)
+            *nl = '\0';
+        line++;
+        if (is_skipped(l))
+            continue;
+        if (!have_header) {
+            t->ncols = count_fields(l);
+            if (t->ncols > 64) {
+                btf_tsv_free(t);
+                return btf_fail(err, BTF_E_FORMAT, "%s:%d: more than 64 columns", path, line);
+            }
+            char **header = btf_alloc((size_t)t->ncols, sizeof(char *), err);
+            t->cells = btf_alloc(lines * (size_t)t->ncols, sizeof(char *), err);
+            t->line_no = btf_alloc(lines, sizeof(int), err);
+            if (!header || !t->cells || !t->line_no) {
+                free(header);
+                btf_tsv_free(t);
+                return BTF_E_NOMEM;
+            }
+            split_line(l, header, t->ncols);
+            for (int c = 0; c < t->ncols; c++)
+                t->names[c] = trim(header[c]);
+            free(header);
+            have_header = 1;
+            continue;
+        }
+        char **row = t->cells + (size_t)t->nrows * t->ncols;
+        int k = split_line(l, row, t->ncols);
+        if (k != t->ncols) {
+            int ncols = t->ncols;
+            btf_tsv_free(t);
+            return btf_fail(err, BTF_E_FORMAT, "%s:%d: %d fields, the header names %d", path, line,
+                            k, ncols);
+        }
+        for (int c = 0; c < t->ncols; c++)
+            row[c] = trim(row[c]);
+        t->line_no[t->nrows++] = line;
+    }
+    if (!have_header) {
+        btf_tsv_free(t);
+        return btf_fail(err, BTF_E_FORMAT, "%s: empty manifest (no header line)", path);
+    }
+    return BTF_OK;
+}
+
+int btf_tsv_column(const btf_tsv *t, const char *name)
+{
+    for (int c = 0; c < t->ncols; c++)
+        if (strcmp(t->names[c], name) == 0)
+            return c;
+    return -1;
+}
+
+const char *btf_tsv_cell(const btf_tsv *t, int row, int col)
+{
+    return t->cells[(size_t)row * t->ncols + col];
+}
+
+int btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
+                   btf_error *err)
+{
+    const char *s = btf_tsv_cell(t, row, col);
+    char *end;
+    double v = strtod(s, &end);
+    if (end == s || *end != '\0' || !isfinite(v))
+        return btf_fail(err, BTF_E_FORMAT, "%s:%d: %s '%s' is not a finite number", path,
+                        t->line_no[row], t->names[col], s);
+    *out = v;
+    return BTF_OK;
+}

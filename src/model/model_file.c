@@ -1,0 +1,1109 @@
+/*
+ * model_io.c — the model file MODEL.btfcar: everything synthesis and rendering
+ * need (direction sets, index table, per-subspace spectral basis and CAR
+ * parameters, the range-map tile) in a few kilobytes. The layout, the limits
+ * and the range-map quantisation are specified in docs/model-format.md; this
+ * file is its reference implementation.
+ *
+ * One validator (validate_model) serves both directions: the encoder refuses
+ * any model the decoder would reject, so whatever btfcar writes it can read,
+ * and the decoder trusts nothing it has not checked. Decoding is designed for
+ * hostile input (it runs under libFuzzer, tests/fuzz_model.c): every count is
+ * bounded before it sizes an allocation, every read is bounds-checked, and a
+ * failure frees whatever was built.
+ */
+#include "car/car.h"
+#include <stdio.h>
+#include "core/core.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <zlib.h>
+
+/* ------------------------------------------------------------ constants */
+
+/* PNG-style signature: the high byte catches 7-bit channels, CR LF and the
+ * lone LF catch line-ending conversion, ^Z stops DOS `type`. */
+#define SIG_LEN 11
+#define SIG_STEM 7 /* "\x89BTFCAR": what survives a text-mode transfer */
+static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
+                                                 'R',  '\r', '\n', 0x1a, '\n'};
+
+#define FMT_MAJOR 1
+#define FMT_MINOR 0
+#define HEADER_BYTES 26 /* signature .. stored size, version 1.0 */
+#define CRC_BYTES 4
+#define COMP_STORED 0
+#define COMP_ZLIB 1
+/* deflate cannot expand by more than ~1032:1; a larger claimed payload is a
+ * lie that would only cost us an allocation. */
+#define ZLIB_MAX_RATIO 1032u
+
+#define MAX_FILE_BYTES ((size_t)64 << 20)
+#define MAX_PAYLOAD_BYTES ((size_t)64 << 20)
+#define MAX_DIRS 4096
+#define MAX_SUBSPACES 256 /* the index table stores uint8 ids */
+#define MAX_IMAGE_SIDE (1 << 20)
+#define MAX_RANGE_SIDE 65535
+#define MAX_RANGE_SAMPLES (1L << 24)
+#define MAX_NAME 31
+#define BASIS_TOL 1e-3
+
+/* The range map's grid: h = (k + q + 1/2) 2^e, q in [0, 65535], with
+ * k + q + 1/2 held exactly by a float (24-bit significand) and no value
+ * below the smallest denormal or above FLT_MAX. */
+#define GRID_E_MIN (-148)
+#define GRID_E_MAX 105
+#define GRID_Q_MAX 65535.0
+#define GRID_K_LIMIT 8388608.0 /* 2^23 */
+
+enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_COUNT };
+static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG"};
+
+/* ------------------------------------------------------------- messages */
+
+/* "NAME: message" with the given code. */
+static int failf(btf_error *err, int code, const char *name, const char *fmt, ...)
+    BTF_PRINTF(4, 5);
+static int failf(btf_error *err, int code, const char *name, const char *fmt, ...)
+{
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return btf_fail(err, code, "%s: %s", name, msg);
+}
+
+/* Allocation whose failure message names the file, like every other. */
+static void *alloc_named(size_t count, size_t size, int zero, const char *name, btf_error *err)
+{
+    void *p = zero ? btf_calloc(count, size, NULL) : btf_alloc(count, size, NULL);
+    if (!p)
+        failf(err, BTF_E_NOMEM, name, "out of memory allocating %zu x %zu bytes", count,
+              size);
+    return p;
+}
+
+/* ------------------------------------------------- little-endian writer */
+
+typedef struct wbuf {
+    unsigned char *p;
+    size_t n, cap;
+    int failed; /* sticky: an allocation failed */
+} wbuf;
+
+static void w_bytes(wbuf *b, const void *src, size_t n)
+{
+    if (b->failed)
+        return;
+    if (b->cap - b->n < n) {
+        size_t cap = b->cap ? b->cap : 4096;
+        while (cap - b->n < n)
+            cap *= 2;
+        unsigned char *p = realloc(b->p, cap);
+        if (!p) {
+            b->failed = 1;
+            return;
+        }
+        b->p = p;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->n, src, n);
+    b->n += n;
+}
+
+static void w_u8(wbuf *b, unsigned v)
+{
+    unsigned char c = (unsigned char)v;
+    w_bytes(b, &c, 1);
+}
+
+static void w_u16(wbuf *b, unsigned v)
+{
+    unsigned char c[2] = {(unsigned char)v, (unsigned char)(v >> 8)};
+    w_bytes(b, c, 2);
+}
+
+static void put_u32(unsigned char *c, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        c[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void w_u32(wbuf *b, uint32_t v)
+{
+    unsigned char c[4];
+    put_u32(c, v);
+    w_bytes(b, c, 4);
+}
+
+static void w_f32(wbuf *b, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    w_u32(b, v);
+}
+
+static void w_f64(wbuf *b, double f)
+{
+    uint64_t v;
+    memcpy(&v, &f, 8);
+    w_u32(b, (uint32_t)v);
+    w_u32(b, (uint32_t)(v >> 32));
+}
+
+/* A section is its tag, a u32 length and the body; the length is patched in
+ * when the body is complete. */
+static size_t w_section_begin(wbuf *b, int tag)
+{
+    w_bytes(b, TAGS[tag], 4);
+    w_u32(b, 0);
+    return b->n;
+}
+
+static void w_section_end(wbuf *b, size_t body)
+{
+    if (!b->failed)
+        put_u32(b->p + body - 4, (uint32_t)(b->n - body));
+}
+
+/* ------------------------------------------------- little-endian reader */
+
+typedef struct rbuf {
+    const unsigned char *p;
+    size_t n, pos;
+    int short_read; /* sticky: a read ran past the end (values read as 0) */
+} rbuf;
+
+static const unsigned char *r_take(rbuf *r, size_t k)
+{
+    if (r->short_read || r->n - r->pos < k) {
+        r->short_read = 1;
+        return NULL;
+    }
+    const unsigned char *p = r->p + r->pos;
+    r->pos += k;
+    return p;
+}
+
+static unsigned get_u16(const unsigned char *c)
+{
+    return (unsigned)c[0] | (unsigned)c[1] << 8;
+}
+
+static uint32_t get_u32(const unsigned char *c)
+{
+    return (uint32_t)c[0] | (uint32_t)c[1] << 8 | (uint32_t)c[2] << 16 | (uint32_t)c[3] << 24;
+}
+
+static unsigned r_u8(rbuf *r)
+{
+    const unsigned char *c = r_take(r, 1);
+    return c ? c[0] : 0;
+}
+
+static unsigned r_u16(rbuf *r)
+{
+    const unsigned char *c = r_take(r, 2);
+    return c ? get_u16(c) : 0;
+}
+
+static int r_i16(rbuf *r)
+{
+    unsigned v = r_u16(r);
+    return v >= 0x8000u ? (int)v - 0x10000 : (int)v;
+}
+
+static uint32_t r_u32(rbuf *r)
+{
+    const unsigned char *c = r_take(r, 4);
+    return c ? get_u32(c) : 0;
+}
+
+static int32_t r_i32(rbuf *r)
+{
+    uint32_t v = r_u32(r);
+    return v >= 0x80000000u ? (int32_t)(v - 0x80000000u) - INT32_MAX - 1 : (int32_t)v;
+}
+
+static float r_f32(rbuf *r)
+{
+    uint32_t v = r_u32(r);
+    float f;
+    memcpy(&f, &v, 4);
+    return f;
+}
+
+static double r_f64(rbuf *r)
+{
+    uint64_t lo = r_u32(r), hi = r_u32(r);
+    uint64_t v = lo | hi << 32;
+    double f;
+    memcpy(&f, &v, 8);
+    return f;
+}
+
+/* ------------------------------------------------------- the range grid */
+
+/* The canonical grid of heights in [lo, hi]: the smallest e at which every
+ * height floors to k + q with q <= 65535 and k + q + 1 within 24 bits. The
+ * condition only coarsens as e grows, and heights decoded from a grid pick
+ * the same grid again (docs/model-format.md), so decode(encode(m)) is a
+ * fixed point. -1 when no e fits (a span near FLT_MAX). */
+static int grid_choose(double lo, double hi, int *e, int32_t *k)
+{
+    for (int x = GRID_E_MIN; x <= GRID_E_MAX; x++) {
+        double a = floor(ldexp(lo, -x)), b = floor(ldexp(hi, -x));
+        if (a >= -GRID_K_LIMIT && b - a <= GRID_Q_MAX && b + 1.0 <= GRID_K_LIMIT) {
+            *e = x;
+            *k = (int32_t)a;
+            return 0;
+        }
+    }
+    return -1;
+}
+
+static float grid_value(int e, int32_t k, unsigned q)
+{
+    return (float)ldexp((double)k + (double)q + 0.5, e);
+}
+
+/* The predictor of sample (x, y) from its quantised left, upper and
+ * upper-left neighbours (a plane through them, clamped): smooth surfaces
+ * leave small residuals, which deflate well. */
+static unsigned predict(const uint16_t *q, int w, int x, int y)
+{
+    if (y == 0)
+        return x == 0 ? 0 : q[x - 1];
+    const uint16_t *row = q + (size_t)y * w, *up = row - w;
+    if (x == 0)
+        return up[0];
+    long p = (long)row[x - 1] + up[x] - up[x - 1];
+    return p < 0 ? 0 : p > 65535 ? 65535 : (unsigned)p;
+}
+
+/* Residual modulo 2^16 as a signed value, zigzag-mapped so that small
+ * magnitudes of either sign give small codes: 0, -1, 1, -2 -> 0, 1, 2, 3. */
+static unsigned zigzag(unsigned q, unsigned pred)
+{
+    unsigned d = (q - pred) & 0xFFFFu;
+    return d < 0x8000u ? 2 * d : 2 * (0x10000u - d) - 1;
+}
+
+static unsigned unzigzag(unsigned z, unsigned pred)
+{
+    unsigned mag = z >> 1;
+    unsigned d = (z & 1) ? 0x10000u - mag - 1 : mag;
+    return (pred + d) & 0xFFFFu;
+}
+
+/* ----------------------------------------------------------- validation */
+
+static int causal(btf_offset o)
+{
+    return o.row < 0 || (o.row == 0 && o.col < 0);
+}
+
+static int check_dirset(const btf_dirset *s, const char *what, const char *name, int code,
+                        btf_error *err)
+{
+    if (s->count < 0 || s->count > MAX_DIRS)
+        return failf(err, code, name, "%s: %d directions (expected 0..%d)", what, s->count,
+                     MAX_DIRS);
+    if (s->count == 0)
+        return BTF_OK;
+    if (!s->dirs)
+        return failf(err, code, name, "%s: no direction array (expected %d directions)", what,
+                     s->count);
+    size_t len = strnlen(s->name, sizeof s->name);
+    if (len > MAX_NAME)
+        return failf(err, code, name, "%s: set name is not terminated (expected at most %d characters)",
+                     what, MAX_NAME);
+    for (size_t i = 0; i < len; i++)
+        if (s->name[i] < 0x20 || s->name[i] > 0x7e)
+            return failf(err, code, name, "%s: set name has byte 0x%02x (expected printable ASCII)",
+                         what, (unsigned char)s->name[i]);
+    for (int i = 0; i < s->count; i++) {
+        btf_dir d = s->dirs[i];
+        if (!(d.theta >= 0.0 && d.theta <= 90.0) || !(d.phi >= 0.0 && d.phi < 360.0))
+            return failf(err, code, name,
+                         "%s: direction %d is (theta %g, phi %g) (expected theta in [0, 90], "
+                         "phi in [0, 360))", what, i, d.theta, d.phi);
+    }
+    return BTF_OK;
+}
+
+static int check_band(const btf_car_band *b, const char *where, const char *name, int code,
+                      btf_error *err)
+{
+    if (b->n < 0 || b->n > BTF_CAR_MAX_NEIGHBOURS)
+        return failf(err, code, name, "%s: %d neighbours (expected 0..%d)", where, b->n,
+                     BTF_CAR_MAX_NEIGHBOURS);
+    for (int i = 0; i < b->n; i++) {
+        btf_offset o = b->offsets[i];
+        if (!causal(o))
+            return failf(err, code, name,
+                         "%s: neighbour offset %d:%d is not causal (expected row < 0, or row 0 "
+                         "and column < 0)", where, o.row, o.col);
+        /* The neighbourhood parser's limit: reaches beyond 64 would make
+         * the GPU wavefront needlessly long (its slope grows with them). */
+        if (o.row < -64 || o.col < -64 || o.col > 64)
+            return failf(err, code, name,
+                         "%s: neighbour offset %d:%d reaches beyond 64 pixels (expected rows and "
+                         "columns within -64..64)", where, o.row, o.col);
+        for (int j = 0; j < i; j++)
+            if (b->offsets[j].row == o.row && b->offsets[j].col == o.col)
+                return failf(err, code, name,
+                             "%s: neighbour offset %d:%d appears twice (expected distinct offsets)",
+                             where, o.row, o.col);
+        if (!isfinite(b->gamma[i]))
+            return failf(err, code, name, "%s: gamma[%d] is %g (expected a finite number)", where,
+                         i, b->gamma[i]);
+    }
+    if (!(isfinite(b->sigma) && b->sigma >= 0.0f))
+        return failf(err, code, name, "%s: sigma is %g (expected a finite number >= 0)", where,
+                     b->sigma);
+    if (!isfinite(b->mean))
+        return failf(err, code, name, "%s: mean is %g (expected a finite number)", where, b->mean);
+    return BTF_OK;
+}
+
+/* The basis must be orthonormal: synthesis inverts it by transposition. */
+static int check_basis(const float *basis, int s, const char *name, int code, btf_error *err)
+{
+    for (int i = 0; i < 9; i++)
+        if (!isfinite(basis[i]))
+            return failf(err, code, name, "subspace %d: basis[%d] is %g (expected a finite number)",
+                         s, i, basis[i]);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j <= i; j++) {
+            double dot = 0.0;
+            for (int k = 0; k < 3; k++)
+                dot += (double)basis[3 * i + k] * basis[3 * j + k];
+            if (fabs(dot - (i == j)) > BASIS_TOL)
+                return failf(err, code, name,
+                             "subspace %d: basis rows %d and %d have dot product %g (expected an "
+                             "orthonormal basis, within %g)", s, i, j, dot, BASIS_TOL);
+        }
+    return BTF_OK;
+}
+
+static int check_subspace(const btf_model *m, int s, const char *name, int code, btf_error *err)
+{
+    const btf_subspace_model *sm = &m->subspaces[s];
+    int none = sm->view == -1 && sm->light == -1;
+    int valid = sm->view >= 0 && sm->view < m->views.count && sm->light >= 0 &&
+                sm->light < m->lights.count;
+    if (!none && !valid)
+        return failf(err, code, name,
+                     "subspace %d: representative (view %d, light %d) (expected both -1, or "
+                     "indices below %d views and %d lights)", s, sm->view, sm->light,
+                     m->views.count, m->lights.count);
+    if (sm->width < 1 || sm->width > MAX_IMAGE_SIDE || sm->height < 1 ||
+        sm->height > MAX_IMAGE_SIDE)
+        return failf(err, code, name, "subspace %d: size %d x %d (expected 1..%d on each side)", s,
+                     sm->width, sm->height, MAX_IMAGE_SIDE);
+    for (int c = 0; c < 3; c++)
+        if (!isfinite(sm->mean[c]))
+            return failf(err, code, name, "subspace %d: mean[%d] is %g (expected a finite number)",
+                         s, c, sm->mean[c]);
+    int rc = check_basis(sm->basis, s, name, code, err);
+    if (rc)
+        return rc;
+    if (sm->levels < 1 || sm->levels > BTF_MAX_LEVELS)
+        return failf(err, code, name, "subspace %d: %d pyramid levels (expected 1..%d)", s,
+                     sm->levels, BTF_MAX_LEVELS);
+    for (int b = 0; b < 3; b++)
+        for (int l = 0; l < sm->levels; l++) {
+            char where[64];
+            snprintf(where, sizeof where, "subspace %d, band %d, level %d", s, b, l);
+            if ((rc = check_band(&sm->bands[b][l], where, name, code, err)))
+                return rc;
+        }
+    return BTF_OK;
+}
+
+static int check_range(const btf_model *m, const char *name, int code, btf_error *err)
+{
+    if (m->range_width == 0 && m->range_height == 0 && !m->range)
+        return BTF_OK;
+    if (m->range_width < 1 || m->range_width > MAX_RANGE_SIDE || m->range_height < 1 ||
+        m->range_height > MAX_RANGE_SIDE ||
+        (long)m->range_width * m->range_height > MAX_RANGE_SAMPLES)
+        return failf(err, code, name,
+                     "range map: size %d x %d (expected 1..%d on each side, at most %ld samples)",
+                     m->range_width, m->range_height, MAX_RANGE_SIDE, MAX_RANGE_SAMPLES);
+    if (!m->range)
+        return failf(err, code, name, "range map: %d x %d but no heights (expected an array)",
+                     m->range_width, m->range_height);
+    if (!(isfinite(m->range_texel) && m->range_texel > 0.0f))
+        return failf(err, code, name, "range map: texel %g (expected a finite number > 0)",
+                     m->range_texel);
+    size_t n = (size_t)m->range_width * m->range_height;
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(m->range[i]))
+            return failf(err, code, name, "range map: height %zu is %g (expected a finite number)",
+                         i, m->range[i]);
+    return BTF_OK;
+}
+
+/* Every rule of docs/model-format.md that a model in memory must meet. code
+ * is BTF_E_DATA when writing (the caller's model is wrong) and BTF_E_FORMAT
+ * when reading (the file is). */
+static int validate_model(const btf_model *m, const char *name, int code, btf_error *err)
+{
+    int rc;
+    if ((rc = check_dirset(&m->views, "views", name, code, err)) ||
+        (rc = check_dirset(&m->lights, "lights", name, code, err)))
+        return rc;
+    if ((m->views.count == 0) != (m->lights.count == 0))
+        return failf(err, code, name, "%d views and %d lights (expected both or neither)",
+                     m->views.count, m->lights.count);
+    if (m->n_subspaces < 1 || m->n_subspaces > MAX_SUBSPACES || !m->subspaces)
+        return failf(err, code, name, "%d subspaces (expected 1..%d)", m->n_subspaces,
+                     MAX_SUBSPACES);
+    if (m->views.count > 0) {
+        if (!m->index)
+            return failf(err, code, name, "no index table (expected %d x %d entries)",
+                         m->views.count, m->lights.count);
+        size_t n = (size_t)m->views.count * m->lights.count;
+        for (size_t i = 0; i < n; i++)
+            if (m->index[i] >= m->n_subspaces)
+                return failf(err, code, name,
+                             "index table: (view %zu, light %zu) -> subspace %u (expected < %d)",
+                             i / (size_t)m->lights.count, i % (size_t)m->lights.count,
+                             m->index[i], m->n_subspaces);
+    } else if (m->index) {
+        return failf(err, code, name, "an index table without directions (expected none)");
+    }
+    for (int s = 0; s < m->n_subspaces; s++)
+        if ((rc = check_subspace(m, s, name, code, err)))
+            return rc;
+    return check_range(m, name, code, err);
+}
+
+/* -------------------------------------------------------------- encoding */
+
+static void put_dirset(wbuf *b, int tag, const btf_dirset *s)
+{
+    size_t body = w_section_begin(b, tag);
+    size_t len = strlen(s->name);
+    w_u8(b, (unsigned)len);
+    w_bytes(b, s->name, len);
+    w_u16(b, (unsigned)s->count);
+    for (int i = 0; i < s->count; i++) {
+        w_f64(b, s->dirs[i].theta);
+        w_f64(b, s->dirs[i].phi);
+    }
+    w_section_end(b, body);
+}
+
+static void put_band(wbuf *b, const btf_car_band *c)
+{
+    w_u8(b, (unsigned)c->n);
+    for (int i = 0; i < c->n; i++) {
+        w_u8(b, (unsigned)(uint8_t)c->offsets[i].row);
+        w_u8(b, (unsigned)(uint8_t)c->offsets[i].col);
+    }
+    for (int i = 0; i < c->n; i++)
+        w_f32(b, c->gamma[i]);
+    w_f32(b, c->sigma);
+    w_f32(b, c->mean);
+}
+
+static void put_subspaces(wbuf *b, const btf_model *m)
+{
+    size_t body = w_section_begin(b, S_SUBS);
+    w_u16(b, (unsigned)m->n_subspaces);
+    for (int s = 0; s < m->n_subspaces; s++) {
+        const btf_subspace_model *sm = &m->subspaces[s];
+        w_u16(b, (unsigned)sm->view & 0xFFFFu);
+        w_u16(b, (unsigned)sm->light & 0xFFFFu);
+        w_u32(b, (uint32_t)sm->width);
+        w_u32(b, (uint32_t)sm->height);
+        for (int c = 0; c < 3; c++)
+            w_f32(b, sm->mean[c]);
+        for (int i = 0; i < 9; i++)
+            w_f32(b, sm->basis[i]);
+        w_u8(b, (unsigned)sm->levels);
+        for (int band = 0; band < 3; band++)
+            for (int l = 0; l < sm->levels; l++)
+                put_band(b, &sm->bands[band][l]);
+    }
+    w_section_end(b, body);
+}
+
+/* Quantises the heights on their canonical grid and writes the predictor
+ * residuals as two byte planes (low bytes, then high bytes): the high plane
+ * of a smooth surface is nearly all zeros. */
+static int put_range(wbuf *b, const btf_model *m, const char *name, btf_error *err)
+{
+    size_t n = (size_t)m->range_width * m->range_height;
+    float lo = m->range[0], hi = m->range[0];
+    for (size_t i = 1; i < n; i++) {
+        lo = m->range[i] < lo ? m->range[i] : lo;
+        hi = m->range[i] > hi ? m->range[i] : hi;
+    }
+    int e;
+    int32_t k;
+    if (grid_choose(lo, hi, &e, &k) != 0)
+        return failf(err, BTF_E_DATA, name,
+                     "range map: heights %g..%g span too much for 16-bit quantisation "
+                     "(expected magnitudes below about 1e33)", lo, hi);
+    uint16_t *q = alloc_named(n, sizeof *q, 0, name, err);
+    unsigned char *planes = alloc_named(n, 2, 0, name, err);
+    if (!q || !planes) {
+        free(q);
+        free(planes);
+        return BTF_E_NOMEM;
+    }
+    for (size_t i = 0; i < n; i++)
+        q[i] = (uint16_t)(floor(ldexp(m->range[i], -e)) - k);
+    int w = m->range_width;
+    for (size_t i = 0; i < n; i++) {
+        unsigned z = zigzag(q[i], predict(q, w, (int)(i % (size_t)w), (int)(i / (size_t)w)));
+        planes[i] = (unsigned char)z;
+        planes[n + i] = (unsigned char)(z >> 8);
+    }
+    size_t body = w_section_begin(b, S_RANG);
+    w_u16(b, (unsigned)m->range_width);
+    w_u16(b, (unsigned)m->range_height);
+    w_f32(b, m->range_texel);
+    w_u16(b, (unsigned)e & 0xFFFFu);
+    w_u32(b, (uint32_t)k);
+    w_bytes(b, planes, 2 * n);
+    w_section_end(b, body);
+    free(q);
+    free(planes);
+    return BTF_OK;
+}
+
+static int build_payload(const btf_model *m, wbuf *b, const char *name, btf_error *err)
+{
+    if (m->views.count > 0) {
+        put_dirset(b, S_VIEW, &m->views);
+        put_dirset(b, S_LGHT, &m->lights);
+        size_t body = w_section_begin(b, S_INDX);
+        w_bytes(b, m->index, (size_t)m->views.count * m->lights.count);
+        w_section_end(b, body);
+    }
+    put_subspaces(b, m);
+    if (m->range) {
+        int rc = put_range(b, m, name, err);
+        if (rc)
+            return rc;
+    }
+    if (b->failed)
+        return failf(err, BTF_E_NOMEM, name, "out of memory encoding the model");
+    return BTF_OK;
+}
+
+/* Wraps the payload: header, deflated (or stored, when deflate does not
+ * help) body, CRC-32 of everything before it. */
+static int wrap_payload(const wbuf *pl, const char *name, unsigned char **data, size_t *size,
+                        btf_error *err)
+{
+    uLongf zlen = compressBound((uLong)pl->n);
+    unsigned char *out = alloc_named(HEADER_BYTES + (size_t)zlen + CRC_BYTES, 1, 0, name, err);
+    if (!out)
+        return BTF_E_NOMEM;
+    unsigned comp = COMP_ZLIB;
+    if (compress2(out + HEADER_BYTES, &zlen, pl->p, (uLong)pl->n, 9) != Z_OK ||
+        zlen >= pl->n) {
+        comp = COMP_STORED;
+        zlen = (uLongf)pl->n;
+        memcpy(out + HEADER_BYTES, pl->p, pl->n);
+    }
+    memcpy(out, SIGNATURE, SIG_LEN);
+    out[11] = FMT_MAJOR, out[12] = 0;
+    out[13] = FMT_MINOR, out[14] = 0;
+    out[15] = HEADER_BYTES, out[16] = 0;
+    out[17] = (unsigned char)comp;
+    put_u32(out + 18, (uint32_t)pl->n);
+    put_u32(out + 22, (uint32_t)zlen);
+    size_t body = HEADER_BYTES + (size_t)zlen;
+    put_u32(out + body, (uint32_t)crc32(0L, out, (uInt)body));
+    *data = out;
+    *size = body + CRC_BYTES;
+    return BTF_OK;
+}
+
+static int encode_named(const btf_model *m, const char *name, unsigned char **data, size_t *size,
+                        btf_error *err)
+{
+    if (!data || !size)
+        return failf(err, BTF_E_ARG, name, "no output buffer");
+    *data = NULL;
+    *size = 0;
+    if (!m)
+        return failf(err, BTF_E_ARG, name, "no model");
+    int rc = validate_model(m, name, BTF_E_DATA, err);
+    if (rc)
+        return rc;
+    wbuf pl = {0};
+    rc = build_payload(m, &pl, name, err);
+    if (rc == BTF_OK && pl.n > MAX_PAYLOAD_BYTES)
+        rc = failf(err, BTF_E_DATA, name, "model of %zu bytes (expected at most %zu)", pl.n,
+                   MAX_PAYLOAD_BYTES);
+    if (rc == BTF_OK)
+        rc = wrap_payload(&pl, name, data, size, err);
+    free(pl.p);
+    return rc;
+}
+
+int btf_model_encode(const btf_model *m, unsigned char **data, size_t *size, btf_error *err)
+{
+    return encode_named(m, "model", data, size, err);
+}
+
+int btf_model_write(const char *path, const btf_model *m, btf_error *err)
+{
+    if (!path)
+        return btf_fail(err, BTF_E_ARG, "model: no path to write to");
+    unsigned char *data;
+    size_t size;
+    int rc = encode_named(m, path, &data, &size, err);
+    if (rc)
+        return rc;
+    rc = btf_write_file_atomic(path, data, size, err);
+    free(data);
+    return rc;
+}
+
+/* -------------------------------------------------------------- decoding */
+
+/* The signature comes first: a foreign file, a truncated one and one mangled
+ * by a text-mode transfer each get their own message. */
+static int check_signature(const unsigned char *data, size_t size, const char *name,
+                           btf_error *err)
+{
+    size_t k = size < SIG_LEN ? size : SIG_LEN;
+    if (memcmp(data, SIGNATURE, k) == 0) /* a prefix of the signature, or all of it */
+        return size < SIG_LEN ? failf(err, BTF_E_FORMAT, name,
+                                      "truncated: %zu bytes (expected at least %d)", size,
+                                      HEADER_BYTES + CRC_BYTES)
+                              : BTF_OK;
+    if (size >= SIG_STEM && memcmp(data, SIGNATURE, SIG_STEM) == 0)
+        return failf(err, BTF_E_FORMAT, name,
+                     "damaged signature, line endings converted by a text-mode transfer? "
+                     "(expected bytes 89 42 54 46 43 41 52 0D 0A 1A 0A)");
+    return failf(err, BTF_E_FORMAT, name,
+                 "not a btfcar model (expected the signature \\x89BTFCAR\\r\\n\\x1a\\n)");
+}
+
+static int check_version(const unsigned char *data, size_t size, const char *name,
+                         btf_error *err)
+{
+    if (size < SIG_LEN + 4)
+        return failf(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected at least %d)", size,
+                     HEADER_BYTES + CRC_BYTES);
+    unsigned major = get_u16(data + 11), minor = get_u16(data + 13);
+    if (major > FMT_MAJOR)
+        return failf(err, BTF_E_FORMAT, name,
+                     "format version %u.%u is newer than this reader (expected major version %d; "
+                     "a newer btfcar reads it)", major, minor, FMT_MAJOR);
+    if (major != FMT_MAJOR)
+        return failf(err, BTF_E_FORMAT, name, "format version %u.%u (expected major version %d)",
+                     major, minor, FMT_MAJOR);
+    return BTF_OK;
+}
+
+static int inflate_payload(const unsigned char *src, size_t n, size_t out_n, const char *name,
+                           unsigned char **out, btf_error *err)
+{
+    if ((uint64_t)out_n > (uint64_t)n * ZLIB_MAX_RATIO + 64)
+        return failf(err, BTF_E_FORMAT, name,
+                     "payload of %zu bytes from %zu compressed (expected at most %u:1)", out_n, n,
+                     ZLIB_MAX_RATIO);
+    unsigned char *p = alloc_named(out_n ? out_n : 1, 1, 0, name, err);
+    if (!p)
+        return BTF_E_NOMEM;
+    uLongf got = (uLongf)out_n;
+    uLong used = (uLong)n;
+    int zr = uncompress2(p, &got, src, &used);
+    if (zr != Z_OK || got != out_n || used != n) {
+        free(p);
+        if (zr == Z_MEM_ERROR)
+            return failf(err, BTF_E_NOMEM, name, "out of memory inflating the payload");
+        return failf(err, BTF_E_FORMAT, name,
+                     "corrupt compressed payload (expected a zlib stream of %zu bytes giving %zu)",
+                     n, out_n);
+    }
+    *out = p;
+    return BTF_OK;
+}
+
+/* Checks the container (signature, version, sizes, CRC, compression) and
+ * hands back the payload: a pointer into data when stored, an inflated copy
+ * in *owned when deflated. */
+static int open_container(const unsigned char *data, size_t size, const char *name,
+                          const unsigned char **payload, size_t *payload_n, unsigned char **owned,
+                          btf_error *err)
+{
+    int rc;
+    if ((rc = check_signature(data, size, name, err)) || (rc = check_version(data, size, name, err)))
+        return rc;
+    if (size > MAX_FILE_BYTES)
+        return failf(err, BTF_E_FORMAT, name, "%zu bytes (expected at most %zu)", size,
+                     MAX_FILE_BYTES);
+    if (size < HEADER_BYTES + CRC_BYTES)
+        return failf(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected at least %d)", size,
+                     HEADER_BYTES + CRC_BYTES);
+    size_t hdr = get_u16(data + 15);
+    unsigned comp = data[17];
+    size_t raw_n = get_u32(data + 18), stored_n = get_u32(data + 22);
+    if (hdr < HEADER_BYTES)
+        return failf(err, BTF_E_FORMAT, name, "header of %zu bytes (expected at least %d)", hdr,
+                     HEADER_BYTES);
+    /* 64-bit sums of 32-bit terms: no overflow even where size_t is 32-bit. */
+    uint64_t total = (uint64_t)hdr + stored_n + CRC_BYTES;
+    if ((uint64_t)size < total)
+        return failf(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected %llu)", size,
+                     (unsigned long long)total);
+    if ((uint64_t)size > total)
+        return failf(err, BTF_E_FORMAT, name,
+                     "%llu bytes after the end (expected %llu bytes in all)",
+                     (unsigned long long)(size - total), (unsigned long long)total);
+    uint32_t want = get_u32(data + size - CRC_BYTES);
+    uint32_t got = (uint32_t)crc32(0L, data, (uInt)(size - CRC_BYTES));
+    if (want != got)
+        return failf(err, BTF_E_FORMAT, name,
+                     "CRC-32 mismatch, the file is corrupt (expected %08x, computed %08x)",
+                     (unsigned)want, (unsigned)got);
+    if (raw_n > MAX_PAYLOAD_BYTES)
+        return failf(err, BTF_E_FORMAT, name, "payload of %zu bytes (expected at most %zu)", raw_n,
+                     MAX_PAYLOAD_BYTES);
+    if (comp == COMP_STORED) {
+        if (raw_n != stored_n)
+            return failf(err, BTF_E_FORMAT, name,
+                         "stored payload of %zu bytes declared as %zu (expected equal sizes)",
+                         stored_n, raw_n);
+        *payload = data + hdr;
+        *payload_n = raw_n;
+        return BTF_OK;
+    }
+    if (comp != COMP_ZLIB)
+        return failf(err, BTF_E_FORMAT, name,
+                     "compression method %u (expected 0 stored or 1 zlib)", comp);
+    if ((rc = inflate_payload(data + hdr, stored_n, raw_n, name, owned, err)))
+        return rc;
+    *payload = *owned;
+    *payload_n = raw_n;
+    return BTF_OK;
+}
+
+typedef struct span {
+    const unsigned char *p;
+    size_t n;
+    int present;
+} span;
+
+/* Splits the payload into its sections. Unknown tags are skipped: a newer
+ * minor version may add sections. */
+static int split_sections(const unsigned char *p, size_t n, span sec[S_COUNT], const char *name,
+                          btf_error *err)
+{
+    size_t pos = 0;
+    while (pos < n) {
+        if (n - pos < 8)
+            return failf(err, BTF_E_FORMAT, name,
+                         "truncated section header at payload offset %zu (expected 8 bytes)", pos);
+        size_t len = get_u32(p + pos + 4);
+        if (len > n - pos - 8)
+            return failf(err, BTF_E_FORMAT, name,
+                         "section at payload offset %zu: %zu bytes (expected at most %zu)", pos,
+                         len, n - pos - 8);
+        for (int t = 0; t < S_COUNT; t++)
+            if (memcmp(p + pos, TAGS[t], 4) == 0) {
+                if (sec[t].present)
+                    return failf(err, BTF_E_FORMAT, name,
+                                 "section %s appears twice (expected once)", TAGS[t]);
+                sec[t] = (span){p + pos + 8, len, 1};
+            }
+        pos += 8 + len;
+    }
+    return BTF_OK;
+}
+
+static int short_section(int tag, const char *name, btf_error *err)
+{
+    return failf(err, BTF_E_FORMAT, name, "section %s is truncated (expected more bytes)",
+                 TAGS[tag]);
+}
+
+static int read_dirset(const span *sp, int tag, btf_dirset *s, const char *name, btf_error *err)
+{
+    rbuf r = {sp->p, sp->n, 0, 0};
+    unsigned len = r_u8(&r);
+    if (len > MAX_NAME)
+        return failf(err, BTF_E_FORMAT, name, "section %s: set name of %u bytes (expected at most %d)",
+                     TAGS[tag], len, MAX_NAME);
+    const unsigned char *nm = r_take(&r, len);
+    unsigned count = r_u16(&r);
+    if (r.short_read)
+        return short_section(tag, name, err);
+    if (count < 1 || count > MAX_DIRS)
+        return failf(err, BTF_E_FORMAT, name, "section %s: %u directions (expected 1..%d)",
+                     TAGS[tag], count, MAX_DIRS);
+    if (r.n - r.pos < (size_t)count * 16)
+        return short_section(tag, name, err);
+    memcpy(s->name, nm, len);
+    s->dirs = alloc_named(count, sizeof *s->dirs, 0, name, err);
+    if (!s->dirs)
+        return BTF_E_NOMEM;
+    s->count = (int)count;
+    for (unsigned i = 0; i < count; i++) {
+        s->dirs[i].theta = r_f64(&r);
+        s->dirs[i].phi = r_f64(&r);
+    }
+    return BTF_OK;
+}
+
+static int read_index(const span *sp, btf_model *m, const char *name, btf_error *err)
+{
+    size_t n = (size_t)m->views.count * m->lights.count;
+    if (sp->n < n)
+        return short_section(S_INDX, name, err);
+    m->index = alloc_named(n, 1, 0, name, err);
+    if (!m->index)
+        return BTF_E_NOMEM;
+    memcpy(m->index, sp->p, n);
+    return BTF_OK;
+}
+
+static int8_t s8(unsigned char c)
+{
+    return (int8_t)(c >= 0x80 ? (int)c - 0x100 : (int)c);
+}
+
+static void read_band(rbuf *r, btf_car_band *b)
+{
+    for (int i = 0; i < b->n; i++) {
+        const unsigned char *c = r_take(r, 2);
+        b->offsets[i].row = c ? s8(c[0]) : 0;
+        b->offsets[i].col = c ? s8(c[1]) : 0;
+    }
+    for (int i = 0; i < b->n; i++)
+        b->gamma[i] = r_f32(r);
+    b->sigma = r_f32(r);
+    b->mean = r_f32(r);
+}
+
+/* Reads one subspace; counts that size loops (levels, n) are checked at
+ * once, everything else by validate_model. */
+static int read_subspace(rbuf *r, btf_subspace_model *sm, int s, const char *name,
+                         btf_error *err)
+{
+    sm->view = r_i16(r);
+    sm->light = r_i16(r);
+    uint32_t w = r_u32(r), h = r_u32(r);
+    if (!r->short_read && (w < 1 || w > MAX_IMAGE_SIDE || h < 1 || h > MAX_IMAGE_SIDE))
+        return failf(err, BTF_E_FORMAT, name,
+                     "subspace %d: size %lu x %lu (expected 1..%d on each side)", s,
+                     (unsigned long)w, (unsigned long)h, MAX_IMAGE_SIDE);
+    sm->width = (int)w;
+    sm->height = (int)h;
+    for (int c = 0; c < 3; c++)
+        sm->mean[c] = r_f32(r);
+    for (int i = 0; i < 9; i++)
+        sm->basis[i] = r_f32(r);
+    sm->levels = (int)r_u8(r);
+    if (r->short_read)
+        return short_section(S_SUBS, name, err);
+    if (sm->levels < 1 || sm->levels > BTF_MAX_LEVELS)
+        return failf(err, BTF_E_FORMAT, name, "subspace %d: %d pyramid levels (expected 1..%d)", s,
+                     sm->levels, BTF_MAX_LEVELS);
+    for (int b = 0; b < 3; b++)
+        for (int l = 0; l < sm->levels; l++) {
+            btf_car_band *cb = &sm->bands[b][l];
+            cb->n = (int)r_u8(r);
+            if (cb->n > BTF_CAR_MAX_NEIGHBOURS)
+                return failf(err, BTF_E_FORMAT, name,
+                             "subspace %d, band %d, level %d: %d neighbours (expected 0..%d)", s, b,
+                             l, cb->n, BTF_CAR_MAX_NEIGHBOURS);
+            read_band(r, cb);
+            if (r->short_read)
+                return short_section(S_SUBS, name, err);
+        }
+    return BTF_OK;
+}
+
+static int read_subspaces(const span *sp, btf_model *m, const char *name, btf_error *err)
+{
+    rbuf r = {sp->p, sp->n, 0, 0};
+    unsigned count = r_u16(&r);
+    if (r.short_read)
+        return short_section(S_SUBS, name, err);
+    if (count < 1 || count > MAX_SUBSPACES)
+        return failf(err, BTF_E_FORMAT, name, "%u subspaces (expected 1..%d)", count,
+                     MAX_SUBSPACES);
+    m->subspaces = alloc_named(count, sizeof *m->subspaces, 1, name, err);
+    if (!m->subspaces)
+        return BTF_E_NOMEM;
+    m->n_subspaces = (int)count;
+    for (int s = 0; s < (int)count; s++) {
+        int rc = read_subspace(&r, &m->subspaces[s], s, name, err);
+        if (rc)
+            return rc;
+    }
+    return BTF_OK;
+}
+
+/* Rebuilds the heights from the predictor residuals and checks that the
+ * grid is in range and canonical (what the encoder picks for them), so that
+ * a decoded model re-encodes to the same bytes. */
+static int read_range(const span *sp, btf_model *m, const char *name, btf_error *err)
+{
+    rbuf r = {sp->p, sp->n, 0, 0};
+    int w = (int)r_u16(&r), h = (int)r_u16(&r);
+    float texel = r_f32(&r);
+    int e = r_i16(&r);
+    int32_t k = r_i32(&r);
+    if (r.short_read)
+        return short_section(S_RANG, name, err);
+    if (w < 1 || h < 1 || (long)w * h > MAX_RANGE_SAMPLES)
+        return failf(err, BTF_E_FORMAT, name,
+                     "range map: size %d x %d (expected 1..%d on each side, at most %ld samples)",
+                     w, h, MAX_RANGE_SIDE, MAX_RANGE_SAMPLES);
+    size_t n = (size_t)w * h;
+    const unsigned char *planes = r_take(&r, 2 * n);
+    if (!planes)
+        return short_section(S_RANG, name, err);
+    if (e < GRID_E_MIN || e > GRID_E_MAX || k < -GRID_K_LIMIT || k >= GRID_K_LIMIT)
+        return failf(err, BTF_E_FORMAT, name,
+                     "range map: grid 2^%d, offset %ld (expected exponent %d..%d, offset "
+                     "-2^23..2^23-1)",
+                     e, (long)k, GRID_E_MIN, GRID_E_MAX);
+    uint16_t *q = alloc_named(n, sizeof *q, 0, name, err);
+    if (!q)
+        return BTF_E_NOMEM;
+    unsigned qmax = 0;
+    for (size_t i = 0; i < n; i++) {
+        unsigned z = planes[i] | (unsigned)planes[n + i] << 8;
+        q[i] = (uint16_t)unzigzag(z, predict(q, w, (int)(i % (size_t)w), (int)(i / (size_t)w)));
+        qmax = q[i] > qmax ? q[i] : qmax;
+    }
+    int ce;
+    int32_t ck;
+    if ((double)k + qmax + 1.0 > GRID_K_LIMIT) {
+        free(q);
+        return failf(err, BTF_E_FORMAT, name,
+                     "range map: offset %ld + height %u exceeds 2^23 (expected a 24-bit grid)",
+                     (long)k, qmax);
+    }
+    m->range = alloc_named(n, sizeof *m->range, 0, name, err);
+    if (!m->range) {
+        free(q);
+        return BTF_E_NOMEM;
+    }
+    float lo = 0, hi = 0;
+    for (size_t i = 0; i < n; i++) {
+        m->range[i] = grid_value(e, k, q[i]);
+        lo = (i == 0 || m->range[i] < lo) ? m->range[i] : lo;
+        hi = (i == 0 || m->range[i] > hi) ? m->range[i] : hi;
+    }
+    free(q);
+    m->range_width = w;
+    m->range_height = h;
+    m->range_texel = texel;
+    if (grid_choose(lo, hi, &ce, &ck) != 0 || ce != e || ck != k)
+        return failf(err, BTF_E_FORMAT, name,
+                     "range map: grid 2^%d, offset %ld is not canonical for heights %g..%g "
+                     "(expected 2^%d, offset %ld)", e, (long)k, lo, hi, ce, (long)ck);
+    return BTF_OK;
+}
+
+static int read_payload(const unsigned char *p, size_t n, btf_model *m, const char *name,
+                        btf_error *err)
+{
+    span sec[S_COUNT] = {{0}};
+    int rc = split_sections(p, n, sec, name, err);
+    if (rc)
+        return rc;
+    if (sec[S_VIEW].present != sec[S_LGHT].present ||
+        sec[S_VIEW].present != sec[S_INDX].present)
+        return failf(err, BTF_E_FORMAT, name,
+                     "sections VIEW %s, LGHT %s, INDX %s (expected all three or none)",
+                     sec[S_VIEW].present ? "present" : "absent",
+                     sec[S_LGHT].present ? "present" : "absent",
+                     sec[S_INDX].present ? "present" : "absent");
+    if (!sec[S_SUBS].present)
+        return failf(err, BTF_E_FORMAT, name, "no SUBS section (expected one)");
+    if (sec[S_VIEW].present &&
+        ((rc = read_dirset(&sec[S_VIEW], S_VIEW, &m->views, name, err)) ||
+         (rc = read_dirset(&sec[S_LGHT], S_LGHT, &m->lights, name, err)) ||
+         (rc = read_index(&sec[S_INDX], m, name, err))))
+        return rc;
+    if ((rc = read_subspaces(&sec[S_SUBS], m, name, err)))
+        return rc;
+    if (sec[S_RANG].present && (rc = read_range(&sec[S_RANG], m, name, err)))
+        return rc;
+    return validate_model(m, name, BTF_E_FORMAT, err);
+}
+
+int btf_model_decode(const unsigned char *data, size_t size, const char *name, btf_model *m,
+                     btf_error *err)
+{
+    if (!name)
+        name = "model";
+    if (!m)
+        return failf(err, BTF_E_ARG, name, "no model to decode into");
+    memset(m, 0, sizeof *m);
+    if (!data && size)
+        return failf(err, BTF_E_ARG, name, "no data");
+    if (!data)
+        data = (const unsigned char *)"";
+    const unsigned char *payload = NULL;
+    size_t payload_n = 0;
+    unsigned char *owned = NULL;
+    int rc = open_container(data, size, name, &payload, &payload_n, &owned, err);
+    if (rc == BTF_OK)
+        rc = read_payload(payload, payload_n, m, name, err);
+    free(owned);
+    /* Margins are not stored: they follow from the coefficients. A budget
+     * (about a second of work) keeps a small crafted file of thousands of
+     * nearly unstable bands from costing minutes; past it a band takes the
+     * largest margin, which is always safe. */
+    double budget = 1e9;
+    for (int k = 0; rc == BTF_OK && k < m->n_subspaces; k++)
+        for (int b = 0; rc == BTF_OK && b < 3; b++)
+            for (int l = 0; rc == BTF_OK && l < m->subspaces[k].levels; l++) {
+                btf_car_band *cb = &m->subspaces[k].bands[b][l];
+                if ((cb->margin = btf_car_margin_within(cb, &budget)) < 0)
+                    rc = failf(err, BTF_E_NOMEM, name, "out of memory");
+            }
+    if (rc)
+        btf_model_free(m);
+    return rc;
+}
+
+int btf_model_read(const char *path, btf_model *m, btf_error *err)
+{
+    if (!m)
+        return btf_fail(err, BTF_E_ARG, "model: nothing to read into");
+    memset(m, 0, sizeof *m);
+    if (!path)
+        return btf_fail(err, BTF_E_ARG, "model: no path to read");
+    unsigned char *data;
+    size_t n;
+    int rc = btf_read_file(path, MAX_FILE_BYTES, &data, &n, err);
+    if (rc)
+        return rc;
+    rc = btf_model_decode(data, n, path, m, err);
+    free(data);
+    return rc;
+}
+
+void btf_model_free(btf_model *m)
+{
+    if (!m)
+        return;
+    btf_dirset_free(&m->views);
+    btf_dirset_free(&m->lights);
+    free(m->index);
+    free(m->subspaces);
+    free(m->range);
+    memset(m, 0, sizeof *m);
+}

@@ -1,0 +1,221 @@
+/*
+ * segment.c — BTF space segmentation (paper section II.A): the n_views x
+ * n_lights images are clustered by k-means on their Lab cumulative histograms
+ * (src/segment/features.c, src/segment/kmeans.c) into K subspaces; each subspace is
+ * represented by the member image closest to its cluster centre — a real
+ * measured image, which the CAR stage models. The index table says, for each
+ * (view, light) pair, which subspace image stands for it.
+ *
+ * Choosing K (--subspaces auto). The distortion D(K) (sum of squared feature
+ * distances to the centres) falls as K grows; D(1) is the total scatter of the
+ * features. btfcar takes the smallest K with D(K) <= tau * D(1), tau = 0.10
+ * by default: the subspaces explain at least 90 % of the feature scatter.
+ * K is capped at 20 (the paper's bound) and at the number of distinct
+ * features. If every feature is the same, K = 1.
+ */
+#include <stdio.h>
+#include "core/core.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SEGMENT_MAX_K 255 /* the index table stores one byte per pair */
+
+void btf_segmentation_free(btf_segmentation *s)
+{
+    if (!s)
+        return;
+    free(s->index);
+    free(s->rep_view);
+    free(s->rep_light);
+    free(s->members);
+    free(s->distortion_by_k);
+    memset(s, 0, sizeof *s);
+}
+
+/* The member closest to each centre (ties: lowest index). */
+static int pick_representatives(const float *f, int n, int dim, const btf_kmeans_result *km,
+                                int n_lights, btf_segmentation *s, btf_error *err)
+{
+    double *best = btf_alloc((size_t)km->k, sizeof(double), err);
+    if (!best)
+        return BTF_E_NOMEM;
+    for (int c = 0; c < km->k; c++) {
+        best[c] = -1.0;
+        s->members[c] = 0;
+    }
+    for (int i = 0; i < n; i++) {
+        int c = km->labels[i];
+        s->members[c]++;
+        double d = 0.0;
+        for (int j = 0; j < dim; j++) {
+            double t = (double)f[(size_t)i * dim + j] - km->centres[(size_t)c * dim + j];
+            d += t * t;
+        }
+        if (best[c] < 0.0 || d < best[c]) {
+            best[c] = d;
+            s->rep_view[c] = i / n_lights;
+            s->rep_light[c] = i % n_lights;
+        }
+    }
+    free(best);
+    return BTF_OK;
+}
+
+static int fill_result(const float *f, int n, int dim, int n_lights, const btf_kmeans_result *km,
+                       btf_segmentation *s, btf_error *err)
+{
+    s->k = km->k;
+    s->distortion = km->distortion;
+    s->index = btf_alloc((size_t)n, 1, err);
+    s->rep_view = btf_alloc((size_t)km->k, sizeof(int), err);
+    s->rep_light = btf_alloc((size_t)km->k, sizeof(int), err);
+    s->members = btf_alloc((size_t)km->k, sizeof(int), err);
+    if (!s->index || !s->rep_view || !s->rep_light || !s->members)
+        return BTF_E_NOMEM;
+    for (int i = 0; i < n; i++)
+        s->index[i] = (uint8_t)km->labels[i];
+    return pick_representatives(f, n, dim, km, n_lights, s, err);
+}
+
+/* Runs k-means for K = 1, 2, ... until the rule of the file comment holds. */
+static int choose_k(const float *f, int n, int dim, const btf_segment_opts *o, int max_k,
+                    double tau, btf_segmentation *s, btf_kmeans_result *chosen, btf_error *err)
+{
+    double d1 = 0.0;
+    for (int k = 1; k <= max_k; k++) {
+        btf_kmeans_result km;
+        int rc = btf_kmeans(f, n, dim, k, &o->kmeans, &km, err);
+        if (rc)
+            return rc;
+        s->distortion_by_k[k] = km.distortion;
+        if (k == 1)
+            d1 = km.distortion;
+        int fewer = km.k < k; /* ran out of distinct features */
+        int pass = !(d1 > 0.0) || km.distortion <= tau * d1;
+        if (pass || fewer || k == max_k) {
+            if (!(d1 > 0.0))
+                snprintf(s->reason, sizeof s->reason,
+                         "K = 1: every image has the same feature (no scatter to explain)");
+            else if (fewer)
+                snprintf(s->reason, sizeof s->reason,
+                         "K = %d: only %d distinct features; D(%d)/D(1) = %.4f", km.k, km.k, km.k,
+                         km.distortion / d1);
+            else if (pass && k == 1)
+                snprintf(s->reason, sizeof s->reason, "K = 1: D(1) is already within %.3f", tau);
+            else if (pass)
+                snprintf(s->reason, sizeof s->reason,
+                         "K = %d: smallest K with D(K)/D(1) <= %.3f (D(%d)/D(1) = %.4f, "
+                         "D(%d)/D(1) = %.4f)", k, tau, k, km.distortion / d1, k - 1,
+                         s->distortion_by_k[k - 1] / d1);
+            else
+                snprintf(s->reason, sizeof s->reason,
+                         "K = %d: the cap; D(%d)/D(1) = %.4f is still above %.3f", k, k,
+                         km.distortion / d1, tau);
+            *chosen = km;
+            return BTF_OK;
+        }
+        btf_kmeans_free(&km);
+    }
+    return btf_fail(err, BTF_E_ARG, "segmentation: no K tried (max %d)", max_k);
+}
+
+int btf_segment_features(const float *features, int n_views, int n_lights, int dim,
+                         const btf_segment_opts *opts, btf_segmentation *out, btf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    btf_segment_opts o = {0};
+    if (opts)
+        o = *opts;
+    int n = n_views * n_lights;
+    if (n_views < 1 || n_lights < 1 || dim < 1)
+        return btf_fail(err, BTF_E_ARG, "segmentation of %d x %d images", n_views, n_lights);
+    if (o.subspaces < 0 || o.subspaces > SEGMENT_MAX_K)
+        return btf_fail(err, BTF_E_ARG, "subspaces %d: expected 1..%d or auto", o.subspaces,
+                        SEGMENT_MAX_K);
+    double tau = o.auto_threshold > 0.0 ? o.auto_threshold : 0.10;
+    if (!(tau < 1.0))
+        return btf_fail(err, BTF_E_ARG, "auto threshold %g: expected in (0, 1)", tau);
+    int max_k = o.max_subspaces > 0 ? o.max_subspaces : 20;
+    if (max_k > SEGMENT_MAX_K)
+        max_k = SEGMENT_MAX_K;
+    if (o.subspaces > max_k)
+        max_k = o.subspaces;
+    out->n_views = n_views;
+    out->n_lights = n_lights;
+    out->max_k = max_k;
+    out->distortion_by_k = btf_calloc((size_t)max_k + 1, sizeof(double), err);
+    if (!out->distortion_by_k)
+        return BTF_E_NOMEM;
+    btf_kmeans_result km;
+    int rc;
+    if (o.subspaces > 0) {
+        rc = btf_kmeans(features, n, dim, o.subspaces, &o.kmeans, &km, err);
+        if (rc == 0) {
+            out->distortion_by_k[km.k] = km.distortion;
+            if (km.k < o.subspaces)
+                snprintf(out->reason, sizeof out->reason,
+                         "K = %d: %d asked, but only %d distinct features", km.k, o.subspaces, km.k);
+            else
+                snprintf(out->reason, sizeof out->reason, "K = %d: fixed by --subspaces", km.k);
+        }
+    } else {
+        rc = choose_k(features, n, dim, &o, max_k, tau, out, &km, err);
+    }
+    if (rc == 0) {
+        rc = fill_result(features, n, dim, n_lights, &km, out, err);
+        btf_kmeans_free(&km);
+    }
+    if (rc)
+        btf_segmentation_free(out);
+    return rc;
+}
+
+int btf_segment(const btf_dataset *ds, const btf_segment_opts *opts, btf_segmentation *out,
+                btf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    btf_segment_opts o = {0};
+    if (opts)
+        o = *opts;
+    float *f;
+    int dim;
+    int rc = btf_dataset_features(ds, &o.features, &f, &dim, err);
+    if (rc)
+        return rc;
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    rc = btf_segment_features(f, in->n_views, in->n_lights, dim, &o, out, err);
+    free(f);
+    return rc;
+}
+
+/* A palette of well-separated colours (sRGB 8-bit), repeated beyond 20. */
+static const unsigned char PALETTE[20][3] = {
+    {230, 25, 75},  {60, 180, 75},   {255, 225, 25}, {0, 130, 200},   {245, 130, 48},
+    {145, 30, 180}, {70, 240, 240},  {240, 50, 230}, {210, 245, 60},  {250, 190, 212},
+    {0, 128, 128},  {220, 190, 255}, {170, 110, 40}, {255, 250, 200}, {128, 0, 0},
+    {170, 255, 195}, {128, 128, 0},  {255, 215, 180}, {0, 0, 128},    {128, 128, 128}};
+
+int btf_segmentation_write_png(const btf_segmentation *s, int cell, const char *path,
+                               btf_error *err)
+{
+    if (cell <= 0)
+        cell = 6;
+    if (cell > 64)
+        return btf_fail(err, BTF_E_ARG, "%s: cell size %d: expected 1..64", path, cell);
+    btf_image img;
+    int rc = btf_image_alloc(&img, s->n_views * cell, s->n_lights * cell, 3, err);
+    if (rc)
+        return rc;
+    for (int y = 0; y < img.height; y++)
+        for (int x = 0; x < img.width; x++) {
+            int v = x / cell, l = y / cell;
+            const unsigned char *c = PALETTE[s->index[v * s->n_lights + l] % 20];
+            for (int k = 0; k < 3; k++)
+                img.data[(y * img.width + x) * 3 + k] = btf_srgb_to_linear(c[k] / 255.0f);
+        }
+    rc = btf_image_write_png(path, &img, err);
+    btf_image_free(&img);
+    return rc;
+}

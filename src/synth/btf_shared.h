@@ -1,0 +1,108 @@
+/*
+ * btf_shared.h — constants and float formulas of CAR synthesis shared, as the
+ * very same text, by the CPU reference (src/synth/synth.c, compiled as C11 with
+ * -ffp-contract=off) and the Vulkan compute shader (gpu/synth.comp, GLSL
+ * 4.50). Every function performs its operations in one written order, each
+ * result `precise` in GLSL, so the two paths can agree bit for bit.
+ * Keep it in the common subset of C and GLSL (see src/synth/btf_noise.h).
+ */
+#ifndef BTF_SHARED_H
+#define BTF_SHARED_H
+
+#include "btf_noise.h"
+
+/* The rows a level's CAR field starts above its window, and the columns it
+ * extends on either side, are the band's margin (src/car/margin.c), computed on
+ * the host for both paths. */
+/* Field coordinates are signed (burn-in rows and margins are negative);
+ * the noise counter takes them plus this origin, as unsigned. */
+#define BTF_NOISE_ORIGIN 268435456 /* 2^28 */
+/* The largest output side: coordinates plus margins stay far from 2^28. */
+#define BTF_SYNTH_MAX_SIDE 16777216 /* 2^24 */
+
+/* The sum of one field pixel, Y = sum_s gamma_s Y_s + sigma e, runs in this
+ * order on both sides: from 0, the offsets of earlier rows in stored order
+ * (btf_car_accumulate), then the noise (btf_car_output), then the same-row
+ * offsets from the farthest column to the nearest (btf_car_accumulate). The
+ * nearest neighbour comes last so that on the CPU one pixel waits on the
+ * previous one for a single multiply and add. */
+
+/* GPU work per invocation is bounded: lavapipe silently ends an invocation
+ * after some 13,000 iterations of an inner loop. Pixel loops cover at most
+ * BTF_GPU_CHUNK pixels per workgroup of 64 (2,048 iterations); the wavefront
+ * runs at most BTF_GPU_LOOP_BUDGET pixel iterations per dispatch. */
+#define BTF_GPU_CHUNK 131072
+#define BTF_GPU_LOOP_BUDGET 4096
+
+/* One step of the neighbourhood sum: acc + gamma * y. */
+BTF_FN float btf_car_accumulate(float acc, float gamma, float y)
+{
+    BTF_PRECISE float p = gamma * y;
+    BTF_PRECISE float s = acc + p;
+    return s;
+}
+
+/* The new field value: the prediction plus the scaled noise. */
+BTF_FN float btf_car_output(float acc, float sigma, float e)
+{
+    BTF_PRECISE float p = sigma * e;
+    BTF_PRECISE float s = acc + p;
+    return s;
+}
+
+BTF_FN float btf_add_mean(float mean, float field)
+{
+    BTF_PRECISE float s = mean + field;
+    return s;
+}
+
+BTF_FN float btf_add_level(float a, float b)
+{
+    BTF_PRECISE float s = a + b;
+    return s;
+}
+
+/* pyrUp in one dimension: an even fine sample from coarse a, b, c with
+ * weights 1, 6, 1 over 8; an odd one halfway between b and c. */
+BTF_FN float btf_up_even(float a, float b, float c)
+{
+    BTF_PRECISE float ac = a + c;
+    BTF_PRECISE float b6 = b * 6.0f;
+    BTF_PRECISE float s = ac + b6;
+    BTF_PRECISE float r = s * 0.125f;
+    return r;
+}
+
+BTF_FN float btf_up_odd(float b, float c)
+{
+    BTF_PRECISE float s = b + c;
+    BTF_PRECISE float r = s * 0.5f;
+    return r;
+}
+
+/* Inverse decorrelation of one colour channel k: mean_k + sum_b basis[b][k] v_b. */
+BTF_FN float btf_unmix(float mean, float b0, float b1, float b2, float v0, float v1, float v2)
+{
+    BTF_PRECISE float p0 = b0 * v0;
+    BTF_PRECISE float s0 = mean + p0;
+    BTF_PRECISE float p1 = b1 * v1;
+    BTF_PRECISE float s1 = s0 + p1;
+    BTF_PRECISE float p2 = b2 * v2;
+    BTF_PRECISE float s2 = s1 + p2;
+    return s2;
+}
+
+#if !defined(BTF_GLSL) && !defined(VULKAN) && !defined(GL_core_profile) && !defined(GL_ES)
+/* C only: the four Gaussians of one noise block into an array. */
+static inline void btf_noise_block(btf_uint seed_lo, btf_uint seed_hi, btf_uint stream,
+                                   btf_uint row, btf_uint block, float e[4])
+{
+    btf_vec4 v = btf_noise4(seed_lo, seed_hi, stream, row, block);
+    e[0] = v.x;
+    e[1] = v.y;
+    e[2] = v.z;
+    e[3] = v.w;
+}
+#endif
+
+#endif /* BTF_SHARED_H */

@@ -1,0 +1,475 @@
+/*
+ * wave.c — a CAR field generated as a wavefront: eight rows at once, one
+ * per AVX2 lane (issue 5's speed target; docs/synthesis.md).
+ *
+ * Why. Each pixel of the causal recursion Y_r = sum_s gamma_s Y_{r+s} +
+ * sigma e_r waits on its left neighbour (a multiply and an add), so a row
+ * is a sequential chain, and row by row the vector units sit idle while
+ * the chain runs. Row r + 1 only needs row r up to a few columns to the
+ * right, though: when lane k works on row r + k, WAVE_LAG columns behind
+ * lane k - 1, every neighbour a lane needs is already computed, and one
+ * vector step advances eight rows by one column. The noise is counter
+ * based, so each lane draws its own (row, block) directly (no row of noise
+ * is stored and reread), and the earlier-row terms are one lane rotation
+ * of vectors computed a few steps before.
+ *
+ * Lanes never stop: lane k runs rows row0 + k, row0 + k + 8, ... back to
+ * back, each a lap of wp positions: `a` zero columns, the field's fw
+ * columns, `b` zero columns (the zero boundary of synthesis; pad positions
+ * are masked to +0 exactly as the rows' zero columns are). Step t holds lane
+ * k at sequence index s = t - k WAVE_LAG, lap s / wp, position s % wp (lanes
+ * with s < 0 are above the field: zero). h keeps the last wp step vectors
+ * (slot t % wp; its first WAVE_MIRROR slots repeated past wp, so a run of
+ * slots never wraps). A neighbour d rows up and dc columns over is lane k - d
+ * at step t - d WAVE_LAG + dc, or, for lanes k < d, lane k - d + 8 on its
+ * previous lap, at step t - wp + (8 - d) WAVE_LAG + dc: a blend of two
+ * slots, rotated by d lanes (wave_rotated). Every 8 steps the eight vectors
+ * are transposed into 8 consecutive columns of each lane's row and stored
+ * in the level's ring of rows, which the pyramid reads as before.
+ *
+ * Bits. Every pixel is the same sum in the same order as the row-by-row
+ * code in src/synth/synth.c and the GPU shader (btf_shared.h): earlier-row terms
+ * in stored order starting from 0, then sigma e, then the same-row terms
+ * farthest first. Noise is btf_noise4 of the same (row, block) through the
+ * same AVX2 code as noise rows (src/synth/noise_avx2.h). tests/test_car.c checks
+ * every value against the recursion written out pixel by pixel.
+ *
+ * Scope: GCC on x86-64 with AVX2 (else, or with BTF_NOISE_PORTABLE=1, the
+ * row-by-row code runs), bands whose earlier-row offsets lie within
+ * WAVE_REACH_ROW rows up and WAVE_REACH_COL columns either way and whose
+ * same-row offsets are columns -k .. -1 (k <= 3): every member of the
+ * candidate family; fields at least WAVE_MIN_LAP wide.
+ */
+#include "core/core.h"
+#include "synth/synth.h"
+
+#include "btf_noise.h"
+#include "btf_shared.h"
+
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define WAVE_AVAILABLE 1
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include "noise_avx2.h" /* up here: struct btf_wave holds a philox8_plan */
+#pragma GCC pop_options
+#endif
+
+#define WAVE_LAG 16     /* columns lane k trails lane k - 1: > WAVE_REACH_COL + 7, so
+                         * a group's 8 steps read only earlier groups' values */
+#define WAVE_REACH_ROW 3 /* largest row offset handled (the family's) */
+#define WAVE_REACH_COL 4 /* largest |column offset| handled */
+#define WAVE_SPAN (2 * WAVE_REACH_COL) /* column spread of one row offset's terms */
+#define WAVE_MIRROR 16  /* slots past wp that repeat the first ones (>= WAVE_SPAN + 8) */
+#define WAVE_MIN_LAP 136 /* > 8 WAVE_LAG + WAVE_REACH_COL: the two slots a lane
+                          * blend reads stay apart */
+
+struct btf_wave {
+    int fw, a, wp;              /* field width, left zero columns, lap length */
+    int row0;                   /* first field row */
+    uint32_t block0;            /* noise block of lap position 0 */
+    uint32_t stream;
+    float sigma;
+    int ne;                     /* earlier-row terms, stored order */
+    int term_rot[BTF_CAR_MAX_NEIGHBOURS]; /* index into rot_d */
+    int term_at[BTF_CAR_MAX_NEIGHBOURS];  /* rot_back - its own steps back */
+    float term_g[BTF_CAR_MAX_NEIGHBOURS];
+    int nrot;                   /* distinct row offsets d */
+    int rot_d[WAVE_REACH_ROW];
+    int rot_back[WAVE_REACH_ROW]; /* d WAVE_LAG - (smallest dc): farthest back */
+    int rot_n[WAVE_REACH_ROW];    /* 8 + the spread of its columns */
+    int k;                      /* same-row shape: columns -k .. -1 */
+    float g3[3];                /* their gammas (columns -3, -2, -1) */
+    int64_t t;                  /* steps done, a multiple of 8 */
+    int hslot;                  /* t % wp */
+    int32_t pos[8];             /* each lane's position (s while s < 0) */
+    uint32_t urow[8];           /* each lane's row + BTF_NOISE_ORIGIN */
+    float y[3][8];              /* the last three step vectors */
+    float *dst[8];              /* where each lane's next 8 positions go, or NULL */
+    float *h;                   /* wp + WAVE_MIRROR step vectors */
+    float *ring;                /* the level's ring of rows */
+    int depth, pad;
+    size_t stride;
+#ifdef WAVE_AVAILABLE
+    int planned;                /* plan holds the rounds of plan_seed */
+    uint32_t plan_seed[2];
+    philox8_plan plan;
+#endif
+};
+
+/* BTF_SYNTH_WAVE=0 in the environment turns the wavefront off (tests and
+ * benchmarks compare the two ways; a user can rule it out when in doubt). */
+static atomic_int wave_on = -1; /* decided once; a race only repeats the decision */
+
+#ifdef WAVE_AVAILABLE
+static int wave_enabled(void)
+{
+    int v = atomic_load(&wave_on);
+    if (v < 0) {
+        const char *env = getenv("BTF_SYNTH_WAVE");
+        v = !(env && !strcmp(env, "0"));
+        atomic_store(&wave_on, v);
+    }
+    return v;
+}
+#endif
+
+int btf_wave_enable(int on)
+{
+#ifdef WAVE_AVAILABLE
+    int was = wave_enabled();
+#else
+    int was = 0;
+#endif
+    atomic_store(&wave_on, on ? 1 : 0);
+    return was;
+}
+
+int btf_wave_available(void)
+{
+#ifdef WAVE_AVAILABLE
+    return btf_noise_path_avx2();
+#else
+    return 0;
+#endif
+}
+
+
+int btf_wave_supported(const btf_car_band *b, int fw)
+{
+#ifdef WAVE_AVAILABLE
+    if (!btf_noise_path_avx2() || !wave_enabled())
+        return 0;
+    int same[BTF_CAR_MAX_NEIGHBOURS];
+    int nsame = btf_car_same_row_order(b, same);
+    if (nsame > 3)
+        return 0;
+    for (int i = 0; i < nsame; i++)
+        if (b->offsets[same[i]].col != i - nsame)
+            return 0;
+    for (int s = 0; s < b->n; s++) {
+        int d = -b->offsets[s].row, dc = b->offsets[s].col;
+        if (d > WAVE_REACH_ROW || dc > WAVE_REACH_COL || dc < -WAVE_REACH_COL)
+            return 0;
+    }
+    return fw >= WAVE_MIN_LAP;
+#else
+    (void)b, (void)fw;
+    return 0;
+#endif
+}
+
+/* The ring padding a wave needs on each side of a row: the zero columns of
+ * its laps are stored too. */
+int btf_wave_pad(void)
+{
+    return 2 * WAVE_REACH_COL + 8;
+}
+
+void btf_wave_free(btf_wave *w)
+{
+    if (!w)
+        return;
+    free(w->h);
+    free(w);
+}
+
+/* Where lane k's row and position start in the ring (its row above the
+ * field: NULL). */
+static float *wave_dst(const btf_wave *w, int k)
+{
+    if (w->pos[k] < 0)
+        return NULL;
+    /* the ring row of r, as src/synth/synth.c's ring_row finds it (only when a
+     * lane starts a row: the division is rare) */
+    int r = (int)(w->urow[k] - (uint32_t)BTF_NOISE_ORIGIN);
+    int slot = ((r % w->depth) + w->depth) % w->depth;
+    return w->ring + (size_t)slot * w->stride + w->pad + (w->pos[k] - w->a);
+}
+
+btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_t stream,
+                       float *ring, int depth, int pad, btf_error *err)
+{
+    if (depth < BTF_WAVE_DEPTH || pad < btf_wave_pad()) {
+        btf_fail(err, BTF_E_ARG, "wavefront ring of %d rows padded by %d: expected >= %d and %d",
+                 depth, pad, BTF_WAVE_DEPTH, btf_wave_pad());
+        return NULL;
+    }
+    btf_wave *w = btf_calloc(1, sizeof *w, err);
+    if (!w)
+        return NULL;
+    int left = 0, right = 0;
+    for (int s = 0; s < b->n; s++) {
+        int dc = b->offsets[s].col;
+        left = -dc > left ? -dc : left;
+        right = dc > right ? dc : right;
+    }
+    /* Lap position 0 starts a noise block: a >= left, fx0 - a on a block
+     * boundary (BTF_NOISE_ORIGIN is a multiple of 4). */
+    uint32_t c0 = (uint32_t)(fx0 + BTF_NOISE_ORIGIN);
+    w->a = left + (int)((c0 - (uint32_t)left) & 3u);
+    w->block0 = (c0 - (uint32_t)w->a) >> 2;
+    w->wp = (w->a + fw + right + 7) / 8 * 8; /* b = wp - a - fw >= right */
+    w->fw = fw;
+    w->row0 = row0;
+    w->stream = stream;
+    w->sigma = b->sigma;
+    int same[BTF_CAR_MAX_NEIGHBOURS];
+    w->k = btf_car_same_row_order(b, same);
+    for (int i = 0; i < w->k; i++)
+        w->g3[3 - w->k + i] = b->gamma[same[i]];
+    for (int s = 0; s < b->n; s++) {
+        int d = -b->offsets[s].row, dc = b->offsets[s].col;
+        if (d == 0)
+            continue;
+        int r = 0;
+        while (r < w->nrot && w->rot_d[r] != d)
+            r++;
+        if (r == w->nrot) {
+            w->rot_d[r] = d;
+            w->nrot++;
+        }
+        w->term_rot[w->ne] = r;
+        w->term_at[w->ne] = d * WAVE_LAG - dc; /* steps back, made relative below */
+        w->term_g[w->ne++] = b->gamma[s];
+    }
+    for (int r = 0; r < w->nrot; r++) {
+        int lo = INT32_MAX, hi = 0;
+        for (int s = 0; s < w->ne; s++)
+            if (w->term_rot[s] == r) {
+                lo = w->term_at[s] < lo ? w->term_at[s] : lo;
+                hi = w->term_at[s] > hi ? w->term_at[s] : hi;
+            }
+        w->rot_back[r] = hi;
+        w->rot_n[r] = 8 + hi - lo;
+    }
+    for (int s = 0; s < w->ne; s++)
+        w->term_at[s] = w->rot_back[w->term_rot[s]] - w->term_at[s];
+    for (int k = 0; k < 8; k++) {
+        w->pos[k] = -k * WAVE_LAG;
+        w->urow[k] = (uint32_t)(row0 + k + BTF_NOISE_ORIGIN);
+    }
+    size_t hsize = ((size_t)w->wp + WAVE_MIRROR) * 8 * sizeof(float);
+    w->h = aligned_alloc(32, hsize);
+    if (!w->h) {
+        btf_wave_free(w);
+        btf_fail(err, BTF_E_NOMEM, "out of memory");
+        return NULL;
+    }
+    memset(w->h, 0, hsize);
+    w->ring = ring, w->depth = depth, w->pad = pad;
+    w->stride = (size_t)fw + 2 * (size_t)pad;
+    for (int k = 0; k < 8; k++)
+        w->dst[k] = wave_dst(w, k);
+    return w;
+}
+
+#ifdef WAVE_AVAILABLE
+#pragma GCC push_options
+#pragma GCC target("avx2")
+
+#define WAVE_FN static inline __attribute__((always_inline))
+
+/* 8 x 8 transpose: r[k] lane j = v[j] lane k. */
+WAVE_FN void transpose8(const __m256 *v, __m256 *r)
+{
+    __m256 t0 = _mm256_unpacklo_ps(v[0], v[1]), t1 = _mm256_unpackhi_ps(v[0], v[1]);
+    __m256 t2 = _mm256_unpacklo_ps(v[2], v[3]), t3 = _mm256_unpackhi_ps(v[2], v[3]);
+    __m256 t4 = _mm256_unpacklo_ps(v[4], v[5]), t5 = _mm256_unpackhi_ps(v[4], v[5]);
+    __m256 t6 = _mm256_unpacklo_ps(v[6], v[7]), t7 = _mm256_unpackhi_ps(v[6], v[7]);
+    __m256 u0 = _mm256_shuffle_ps(t0, t2, 0x44), u1 = _mm256_shuffle_ps(t0, t2, 0xEE);
+    __m256 u2 = _mm256_shuffle_ps(t1, t3, 0x44), u3 = _mm256_shuffle_ps(t1, t3, 0xEE);
+    __m256 u4 = _mm256_shuffle_ps(t4, t6, 0x44), u5 = _mm256_shuffle_ps(t4, t6, 0xEE);
+    __m256 u6 = _mm256_shuffle_ps(t5, t7, 0x44), u7 = _mm256_shuffle_ps(t5, t7, 0xEE);
+    r[0] = _mm256_permute2f128_ps(u0, u4, 0x20);
+    r[1] = _mm256_permute2f128_ps(u1, u5, 0x20);
+    r[2] = _mm256_permute2f128_ps(u2, u6, 0x20);
+    r[3] = _mm256_permute2f128_ps(u3, u7, 0x20);
+    r[4] = _mm256_permute2f128_ps(u0, u4, 0x31);
+    r[5] = _mm256_permute2f128_ps(u1, u5, 0x31);
+    r[6] = _mm256_permute2f128_ps(u2, u6, 0x31);
+    r[7] = _mm256_permute2f128_ps(u3, u7, 0x31);
+}
+
+/* The 32 Gaussians of the next 8 steps, e[j] for step j: each lane's two
+ * blocks (its positions p .. p + 7) of its own row, btf_noise4's bits. */
+WAVE_FN void wave_noise(const btf_wave *w, __m256i pos, __m256i urow, __m256 *e)
+{
+    v8u blk = (v8u)_mm256_add_epi32(_mm256_set1_epi32((int)w->block0),
+                                    _mm256_srai_epi32(pos, 2));
+    v8u block[2] = {blk, blk + 1u}, cx[2], cy[2], cz[2], cw[2];
+    philox8_noise(2, block, (v8u)urow, &w->plan, cx, cy, cz, cw);
+    /* btf_noise4: (x, y) give components 0 and 1, (z, w) components 2 and 3 */
+    v8u a[4] = {cx[0], cx[1], cz[0], cz[1]}, b[4] = {cy[0], cy[1], cw[0], cw[1]};
+    v8f z0[4], z1[4];
+    gauss2_lockstep(4, a, b, z0, z1);
+    e[0] = (__m256)z0[0], e[1] = (__m256)z1[0], e[2] = (__m256)z0[2], e[3] = (__m256)z1[2];
+    e[4] = (__m256)z0[1], e[5] = (__m256)z1[1], e[6] = (__m256)z0[3], e[7] = (__m256)z1[3];
+}
+
+/* The values d rows up of each lane for n consecutive steps from slot x
+ * (the slots of h, mirror included): lane k takes lane k - d of the step,
+ * lanes below d lane k - d + 8 of the step 8 WAVE_LAG later, which holds the
+ * row d up on its previous lap. */
+WAVE_FN void wave_rotated(const btf_wave *w, int x, int d, int n, __m256 *out)
+{
+    int x2 = x + 8 * WAVE_LAG;
+    x2 = x2 >= w->wp ? x2 - w->wp : x2;
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    __m256 high = _mm256_castsi256_ps(_mm256_cmpgt_epi32(lane, _mm256_set1_epi32(7 - d)));
+    __m256i idx = _mm256_and_si256(_mm256_sub_epi32(lane, _mm256_set1_epi32(d)),
+                                   _mm256_set1_epi32(7));
+    const float *cur = w->h + (size_t)x * 8, *prev = w->h + (size_t)x2 * 8;
+    for (int i = 0; i < n; i++) {
+        __m256 mixed = _mm256_blendv_ps(_mm256_load_ps(cur + 8 * i),
+                                        _mm256_load_ps(prev + 8 * i), high);
+        out[i] = _mm256_permutevar8x32_ps(mixed, idx);
+    }
+}
+
+/* Stores lane k's 8 positions from row[k] into its ring row, then moves
+ * each lane on by 8 positions (`past`: the lanes that start a row). */
+WAVE_FN void wave_store(btf_wave *w, const __m256 *row, int past)
+{
+    for (int k = 0; k < 8; k++)
+        if (w->dst[k]) {
+            _mm256_storeu_ps(w->dst[k], row[k]);
+            w->dst[k] += 8;
+        }
+    if (past)
+        for (int k = 0; k < 8; k++)
+            if (past & (1 << k) || !w->dst[k])
+                w->dst[k] = wave_dst(w, k);
+}
+
+/* The earlier-row part and the noise of the next 8 steps: acc[j] =
+ * (((0 + g_1 Y_1) + g_2 Y_2) + ...) + sigma e[j] per lane, terms in stored
+ * order (btf_car_accumulate, btf_car_output). Reads only steps before t. */
+WAVE_FN void wave_terms(const btf_wave *w, const __m256 *e, __m256 *acc)
+{
+    __m256 rot[WAVE_REACH_ROW][8 + WAVE_SPAN];
+    for (int r = 0; r < w->nrot; r++) {
+        int x = w->hslot - w->rot_back[r];
+        wave_rotated(w, x < 0 ? x + w->wp : x, w->rot_d[r], w->rot_n[r], rot[r]);
+    }
+    __m256 a0 = _mm256_setzero_ps(), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0, a6 = a0;
+    __m256 a7 = a0; /* in registers: an array here became memory cleared by rep stos */
+    for (int s = 0; s < w->ne; s++) {
+        const __m256 g = _mm256_set1_ps(w->term_g[s]);
+        const __m256 *src = rot[w->term_rot[s]] + w->term_at[s];
+        a0 = _mm256_add_ps(a0, _mm256_mul_ps(g, src[0]));
+        a1 = _mm256_add_ps(a1, _mm256_mul_ps(g, src[1]));
+        a2 = _mm256_add_ps(a2, _mm256_mul_ps(g, src[2]));
+        a3 = _mm256_add_ps(a3, _mm256_mul_ps(g, src[3]));
+        a4 = _mm256_add_ps(a4, _mm256_mul_ps(g, src[4]));
+        a5 = _mm256_add_ps(a5, _mm256_mul_ps(g, src[5]));
+        a6 = _mm256_add_ps(a6, _mm256_mul_ps(g, src[6]));
+        a7 = _mm256_add_ps(a7, _mm256_mul_ps(g, src[7]));
+    }
+    const __m256 sigma = _mm256_set1_ps(w->sigma);
+    acc[0] = _mm256_add_ps(a0, _mm256_mul_ps(sigma, e[0]));
+    acc[1] = _mm256_add_ps(a1, _mm256_mul_ps(sigma, e[1]));
+    acc[2] = _mm256_add_ps(a2, _mm256_mul_ps(sigma, e[2]));
+    acc[3] = _mm256_add_ps(a3, _mm256_mul_ps(sigma, e[3]));
+    acc[4] = _mm256_add_ps(a4, _mm256_mul_ps(sigma, e[4]));
+    acc[5] = _mm256_add_ps(a5, _mm256_mul_ps(sigma, e[5]));
+    acc[6] = _mm256_add_ps(a6, _mm256_mul_ps(sigma, e[6]));
+    acc[7] = _mm256_add_ps(a7, _mm256_mul_ps(sigma, e[7]));
+}
+
+/* Steps t .. t + 7: noise, earlier-row part, then the same-row chain (K
+ * terms, a constant where inlined) lane by lane in vector steps, +0 outside
+ * the field; the step vectors into h, the rows into the ring. */
+WAVE_FN void wave_group_shape(btf_wave *w, const int K)
+{
+    __m256i pos = _mm256_loadu_si256((const __m256i *)w->pos);
+    __m256i urow = _mm256_loadu_si256((const __m256i *)w->urow);
+    __m256 e[8], acc[8], out[8];
+    wave_noise(w, pos, urow, e);
+    wave_terms(w, e, acc);
+    __m256 y1 = _mm256_loadu_ps(w->y[0]), y2 = _mm256_loadu_ps(w->y[1]);
+    __m256 y3 = _mm256_loadu_ps(w->y[2]);
+    const __m256 g0 = _mm256_set1_ps(w->g3[0]), g1 = _mm256_set1_ps(w->g3[1]);
+    const __m256 g2 = _mm256_set1_ps(w->g3[2]);
+    /* lane k is a field column when 0 <= pos + j - a < fw: one signed
+     * compare after moving both sides by 2^31 */
+    const __m256i flip = _mm256_set1_epi32(INT32_MIN);
+    const __m256i q0 = _mm256_add_epi32(_mm256_sub_epi32(pos, _mm256_set1_epi32(w->a)), flip);
+    const __m256i end = _mm256_add_epi32(_mm256_set1_epi32(w->fw), flip);
+    float *h = w->h + (size_t)w->hslot * 8;
+    /* every lane inside the field for all 8 steps (the usual case): no mask */
+    __m256i last = _mm256_add_epi32(q0, _mm256_set1_epi32(7));
+    __m256i inside = _mm256_and_si256(_mm256_cmpgt_epi32(end, q0), _mm256_cmpgt_epi32(end, last));
+    int masked = _mm256_movemask_ps(_mm256_castsi256_ps(inside)) != 0xFF;
+    for (int j = 0; j < 8; j++) {
+        __m256 v = acc[j];
+        if (K >= 3)
+            v = _mm256_add_ps(v, _mm256_mul_ps(g0, y3));
+        if (K >= 2)
+            v = _mm256_add_ps(v, _mm256_mul_ps(g1, y2));
+        if (K >= 1)
+            v = _mm256_add_ps(v, _mm256_mul_ps(g2, y1));
+        if (masked) {
+            __m256i in = _mm256_cmpgt_epi32(end, _mm256_add_epi32(q0, _mm256_set1_epi32(j)));
+            v = _mm256_and_ps(v, _mm256_castsi256_ps(in)); /* +0 outside the field */
+        }
+        y3 = y2, y2 = y1, y1 = v;
+        _mm256_store_ps(h + 8 * j, v);
+        out[j] = v;
+    }
+    if (w->hslot < WAVE_MIRROR) /* the mirror past wp */
+        memcpy(w->h + ((size_t)w->wp + w->hslot) * 8, h, 8 * 8 * sizeof(float));
+    _mm256_storeu_ps(w->y[0], y1);
+    _mm256_storeu_ps(w->y[1], y2);
+    _mm256_storeu_ps(w->y[2], y3);
+    /* next positions; a lane past its lap starts its next row */
+    pos = _mm256_add_epi32(pos, _mm256_set1_epi32(8));
+    __m256i past = _mm256_cmpgt_epi32(pos, _mm256_set1_epi32(w->wp - 1));
+    pos = _mm256_sub_epi32(pos, _mm256_and_si256(past, _mm256_set1_epi32(w->wp)));
+    urow = _mm256_add_epi32(urow, _mm256_and_si256(past, _mm256_set1_epi32(8)));
+    _mm256_storeu_si256((__m256i *)w->pos, pos);
+    _mm256_storeu_si256((__m256i *)w->urow, urow);
+    __m256 rows[8];
+    transpose8(out, rows);
+    /* lanes still above the field (pos < 0 before: dst NULL) are checked too */
+    wave_store(w, rows, _mm256_movemask_ps(_mm256_castsi256_ps(past)) |
+                            (w->t < 8 * WAVE_LAG ? 0x100 : 0));
+    w->t += 8;
+    w->hslot += 8;
+    if (w->hslot == w->wp)
+        w->hslot = 0;
+}
+
+static void wave_group_any(btf_wave *w)
+{
+    switch (w->k) {
+    case 0: wave_group_shape(w, 0); break;
+    case 1: wave_group_shape(w, 1); break;
+    case 2: wave_group_shape(w, 2); break;
+    default: wave_group_shape(w, 3); break;
+    }
+}
+
+void btf_wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi)
+{
+    int64_t i = (int64_t)row - w->row0;
+    int64_t lap = i / 8, lane = i % 8;
+    int64_t done = (lap + 1) * w->wp + lane * WAVE_LAG; /* its last position stored */
+    if (!w->planned || w->plan_seed[0] != seed_lo || w->plan_seed[1] != seed_hi) {
+        philox8_plan_make(&w->plan, w->stream, seed_lo, seed_hi);
+        w->plan_seed[0] = seed_lo, w->plan_seed[1] = seed_hi;
+        w->planned = 1;
+    }
+    while (w->t < done)
+        wave_group_any(w);
+}
+#pragma GCC pop_options
+#else
+void btf_wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi)
+{
+    (void)w, (void)row, (void)seed_lo, (void)seed_hi; /* never created */
+}
+#endif

@@ -1,0 +1,140 @@
+/*
+ * test_golden.c — same bytes out: the demo material's model file and the
+ * synthesised subspace images for fixed seeds (CPU and GPU backends) hash to
+ * stored values. A refactoring that changes any of them changes what users
+ * get from the same model and seed; a deliberate change (a new noise, a new
+ * model format version) updates the hashes here and says so in its commit.
+ *
+ * The model file is hashed byte for byte. The images are hashed by their
+ * decoded float pixels, not their file bytes: EXR headers carry provenance
+ * (btfcar version, model file name) that may change without the pixels
+ * changing.
+ */
+#include "testutil.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* FNV-1a, 64-bit: enough to tell two outputs apart; not a security hash. */
+static uint64_t fnv1a(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+#define FNV_START 0xcbf29ce484222325ull
+
+static uint64_t hash_file(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    uint64_t h = FNV_START;
+    unsigned char buf[65536];
+    size_t r;
+    while ((r = fread(buf, 1, sizeof buf, f)) > 0)
+        h = fnv1a(h, buf, r);
+    fclose(f);
+    return h;
+}
+
+static uint64_t hash_pixels(const char *path, int *w, int *h)
+{
+    btf_image img;
+    btf_error err = {0};
+    TU_OK(btf_image_read(path, NULL, &img, &err), &err);
+    *w = img.width;
+    *h = img.height;
+    uint64_t hv = fnv1a(FNV_START, img.data,
+                        (size_t)img.width * img.height * img.channels * sizeof(float));
+    btf_image_free(&img);
+    return hv;
+}
+
+/* Made once for the group: the demo dataset (leather, 128, seed 1) and its
+ * model, as `make demo` makes them. */
+static char *model_path;
+
+static int setup(void **state)
+{
+    tu_setup_dir(state);
+    const char *cli = tu_cli();
+    model_path = strdup(tu_fmt("%s/m.btfcar", tu_dir));
+    if (tu_run(tu_fmt("%s generate --material leather --size 128 --seed 1 --quiet %s/ds", cli,
+                      tu_dir), NULL) != 0)
+        return -1;
+    if (tu_run(tu_fmt("%s analyse %s/ds -o %s --quiet >/dev/null", cli, tu_dir, model_path),
+               NULL) != 0)
+        return -1;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    free(model_path);
+    return tu_teardown_dir(state);
+}
+
+static void demo_model_file_is_unchanged(void **state)
+{
+    (void)state;
+    uint64_t h = hash_file(model_path);
+    print_message("model file: 0x%016llx\n", (unsigned long long)h);
+    assert_true(h == 0x5941461f4c59f500ull);
+}
+
+/* Expected pixel hashes of subspace_00 .. subspace_05. */
+static void check_images(const char *dir, const uint64_t *expect, int n, int w, int h)
+{
+    for (int k = 0; k < n; k++) {
+        int iw = 0, ih = 0;
+        uint64_t hv = hash_pixels(tu_fmt("%s/subspace_%02d.exr", dir, k), &iw, &ih);
+        print_message("%s subspace %d: 0x%016llx\n", dir, k, (unsigned long long)hv);
+        assert_int_equal(iw, w);
+        assert_int_equal(ih, h);
+        assert_true(hv == expect[k]);
+    }
+}
+
+static void cpu_synthesis_is_unchanged(void **state)
+{
+    (void)state;
+    const char *out = tu_fmt("%s/cpu", tu_dir);
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", out);
+    assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 256x256 --seed 7 --quiet -o %s",
+                                   tu_cli(), model_path, dir), NULL), 0);
+    static const uint64_t expect[6] = {
+        0x440b9765b8bc540bull, 0x8ad156b2726e5a96ull, 0xac9df49db7aafa57ull,
+        0x6e4a2d1a47347959ull, 0x5da770423ba57f19ull, 0xc699a12870c98a18ull,
+    };
+    check_images(dir, expect, 6, 256, 256);
+}
+
+static void gpu_synthesis_is_unchanged(void **state)
+{
+    (void)state;
+    const char *out = tu_fmt("%s/gpu", tu_dir);
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", out);
+    assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 200x130 --seed 3 --backend gpu "
+                                   "--quiet -o %s", tu_cli(), model_path, dir), NULL), 0);
+    static const uint64_t expect[6] = {
+        0xe8c750f159a44f7dull, 0x990fe2776bf04b41ull, 0x970da093f40fa984ull,
+        0x8ca97bfcf096b156ull, 0x3d7c473681be2727ull, 0x7a028b9e064c45faull,
+    };
+    check_images(dir, expect, 6, 200, 130);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(demo_model_file_is_unchanged),
+        cmocka_unit_test(cpu_synthesis_is_unchanged),
+        cmocka_unit_test(gpu_synthesis_is_unchanged),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}

@@ -43,7 +43,7 @@ CLI       := $(BUILD)/btfcar
 # Keep generated SPIR-V headers and objects between builds.
 .SECONDARY:
 
-.PHONY: all deps test test-run asan bench demo install uninstall fuzz fuzz-build clean help check-shaders noise-stream
+.PHONY: all deps test test-run asan bench demo install uninstall fuzz fuzz-build clean help check-shaders noise-stream check-layering
 
 all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN) $(BUILD)/noise_stream
 
@@ -90,8 +90,12 @@ $(CLI): $(CLI_OBJ) $(STATIC)
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_HELP) $(STATIC)
 	$(CC) $(SAN) -pthread -o $@ $< $(TEST_HELP) $(STATIC) $(LDLIBS) -lcmocka
 
+# No two object files of the library may call each other (docs/design.md).
+check-layering: $(LIB_OBJ)
+	@sh tools/check-layering.sh $(LIB_OBJ)
+
 # Run every test program; tests/run.sh prints the final "N passed, N failed".
-test-run: $(TEST_BIN) $(CLI)
+test-run: $(TEST_BIN) $(CLI) check-layering
 	@BTF_CLI=$(abspath $(CLI)) sh tests/run.sh $(TEST_BIN)
 
 test: deps

@@ -1,7 +1,7 @@
 /* cmd_photostereo.c — btfcar photostereo: normals, albedo and range map of a
  * BTF dataset (the view closest to theta_v = 0) or of ordinary photometric
- * stereo images listed in a manifest (library: src/range/photostereo.c,
- * src/range/integrate.c; docs/photostereo.md). */
+ * stereo images listed in a manifest (library: src/range/, entry points in
+ * src/range/photostereo.c and src/range/ps_manifest.c; docs/photostereo.md). */
 #include "cli.h"
 
 #include <errno.h>
@@ -166,17 +166,16 @@ static int parse_args(cli_ctx *c, int argc, char **argv, ps_args *p)
     return 0;
 }
 
-static int run(const cli_ctx *c, const ps_args *p, const btf_image *mask, btf_ps_result *r,
-               btf_error *err)
+static int run(const cli_ctx *c, const ps_args *p, btf_ps_result *r, btf_error *err)
 {
     if (p->manifest)
-        return btf_photostereo_manifest(p->manifest, mask, &p->o, r, err);
+        return btf_photostereo_manifest(p->manifest, &p->o, r, err);
     btf_dataset_opts dopts = {.skip_verify = 1, .progress = cli_progress_fn(c)};
     btf_dataset *ds;
     int rc = btf_dataset_open(p->dataset, &dopts, &ds, err);
     if (rc)
         return rc;
-    rc = btf_photostereo_dataset(ds, mask, &p->o, r, err);
+    rc = btf_photostereo_dataset(ds, &p->o, r, err);
     btf_dataset_close(ds);
     return rc;
 }
@@ -195,8 +194,9 @@ int cmd_photostereo(int argc, char **argv)
         return cli_lib_error(&c, &err);
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
+    p.o.mask = p.mask ? &mask : NULL;
     btf_ps_result r;
-    rc = run(&c, &p, p.mask ? &mask : NULL, &r, &err);
+    rc = run(&c, &p, &r, &err);
     if (rc == 0) {
         rc = btf_ps_write(&r, p.mask ? &mask : NULL, p.outdir, &err);
         if (rc)

@@ -376,7 +376,7 @@ int btf_segmentation_write_png(const btf_segmentation *s, int cell, const char *
  * Method, robust rule and fallback: docs/photostereo.md. */
 
 typedef enum btf_integrate_method {
-    BTF_INTEGRATE_DEFAULT = 0, /* = BTF_INTEGRATE_POISSON */
+    BTF_INTEGRATE_DEFAULT = 0, /* the default: BTF_INTEGRATE_POISSON */
     BTF_INTEGRATE_POISSON,     /* least squares, Neumann boundary: DCT solve
                                   (Simchony et al. 1990); conjugate gradients
                                   preconditioned by it when a mask has holes */
@@ -387,46 +387,56 @@ typedef enum btf_integrate_method {
 } btf_integrate_method;
 
 typedef struct btf_integrate_opts {
-    btf_integrate_method method;
-    double max_slope;   /* 0: 10; |dz/dx| and |dz/dy| are clamped to it, so
-                           normals near the horizon (n_z -> 0) stay finite */
-    double tolerance;   /* 0: 1e-7; relative residual at which the masked
+    btf_integrate_method method; /* default: BTF_INTEGRATE_POISSON */
+    double max_slope;   /* default 10; |dz/dx| and |dz/dy| are clamped to it,
+                           so normals near the horizon (n_z -> 0) stay finite */
+    double tolerance;   /* default 1e-7; relative residual at which the masked
                            Poisson solver stops */
-    int max_iter;       /* 0: 2000 conjugate-gradient iterations at most */
+    int max_iter;       /* default 2000 conjugate-gradient iterations at most */
 } btf_integrate_opts;
+
+/* The defaults above; a zero field of btf_integrate_opts means the same. */
+btf_integrate_opts btf_integrate_defaults(void);
 
 /* Integrates a normal map (3 channels x, y, z in the frame above) into a
  * height field in pixel units: dz/dcolumn = -n_x/n_z, dz/drow = +n_y/n_z.
  * mask: NULL (every pixel) or an image of the same size whose non-zero
- * pixels are valid. Output: 1 channel, zero mean over the valid pixels, 0
- * elsewhere; never NaN. A zero normal (0, 0, 0) counts as flat. */
-int btf_integrate(const btf_image *normals, const btf_image *mask,
-                  const btf_integrate_opts *opts, btf_image *height, btf_error *err);
+ * pixels are valid. opts: NULL for the defaults. Output: 1 channel, zero
+ * mean over the valid pixels, 0 elsewhere; never NaN. A zero normal
+ * (0, 0, 0) counts as flat. */
+btf_status btf_integrate(const btf_image *normals, const btf_image *mask,
+                         const btf_integrate_opts *opts, btf_image *height, btf_error *err);
 
+/* Options of photometric stereo. Each field's default is given; a zero
+ * field means that default, a negative one switches a rule off where said. */
 typedef struct btf_photostereo_opts {
-    double dark;          /* 0: 0.1; samples below dark x the pixel's reference
-                             level (its brightest after the top 5 %) are
-                             shadowed and excluded; < 0: no dark rule */
-    double trim_low;      /* 0: none; fraction of the darkest samples left out
-                             of the first fit */
-    double trim_high;     /* 0: 0.1; fraction of the brightest samples left out
-                             of the first fit (highlights); < 0: none */
-    double outlier;       /* 0: 2; samples more than this many robust
+    double dark;          /* default 0.1; samples below dark x the pixel's
+                             reference level (its brightest after the top 5 %)
+                             are shadowed and excluded; < 0: no dark rule */
+    double trim_low;      /* default 0 (none); fraction of the darkest samples
+                             left out of the first fit */
+    double trim_high;     /* default 0.1; fraction of the brightest samples left
+                             out of the first fit (highlights); < 0: none */
+    double outlier;       /* default 2; samples more than this many robust
                              standard deviations below the fit (twice as
                              many above it) are excluded */
-    double saturation;    /* 0: 0.99; a sample with any raw channel at or above
-                             it is excluded (clipped); < 0: no such rule (HDR) */
-    double max_condition; /* 0: 1e4; largest condition number of sum l l^T
+    double saturation;    /* default 0.99; a sample with any raw channel at or
+                             above it is excluded (clipped); < 0: no such rule
+                             (HDR) */
+    double max_condition; /* default 1e4; largest condition number of sum l l^T
                              accepted, for the whole light set (else an error)
                              and per pixel (else the fallback) */
-    double specular_cone; /* 0: 20; degrees: a sample brighter than the fit
+    double specular_cone; /* default 20; degrees: a sample brighter than the fit
                              whose half vector (of the light and the view
                              (0, 0, 1)) lies within this angle of the normal
                              is a highlight and excluded; < 0: no such rule */
-    int iterations;       /* 0: 5 reweighting passes at most */
+    int iterations;       /* default 5 reweighting passes at most; < 0: none */
     int plain;            /* 1: plain least squares on every unsaturated sample
                              (Woodham), no robust rule: for comparison */
-    btf_integrate_opts integrate;
+    const btf_image *mask; /* NULL: every pixel; else an image of the images'
+                             size (1 or 3 channels) whose non-zero pixels are
+                             worked on: every output is 0 elsewhere */
+    btf_integrate_opts integrate; /* how the height is integrated */
     btf_read_opts read;   /* how files are decoded (manifest, dataset):
                              read.linear_8bit for linear 8-bit data; the
                              channels field is ignored (files give RGB) */
@@ -434,6 +444,21 @@ typedef struct btf_photostereo_opts {
     btf_progress_fn progress;
     void *progress_user;
 } btf_photostereo_opts;
+
+/* The defaults above (no mask, all CPUs, no progress); a zeroed
+ * btf_photostereo_opts gives the same results. */
+btf_photostereo_opts btf_photostereo_defaults(void);
+
+/* Images in memory for btf_photostereo: `count` >= 3 images of one size and
+ * channel count (1 or 3), image i lit from lights[3 i .. 3 i + 2] (any
+ * length, normalised here; not all (nearly) coplanar). */
+typedef struct btf_ps_input {
+    const btf_image *images;
+    int count;
+    const double *lights;    /* count x 3 */
+    const double *intensity; /* NULL, or count x 3 positive RGB light
+                                intensities that are divided out */
+} btf_ps_input;
 
 typedef struct btf_ps_result {
     btf_image normal;      /* W x H x 3: unit normals (x, y, z); 0 outside the mask */
@@ -448,40 +473,36 @@ typedef struct btf_ps_result {
     btf_dir view_dir;
 } btf_ps_result;
 
-/* Photometric stereo on `count` >= 3 images of one size and channel count
- * (1 or 3), lit from lights[3 i .. 3 i + 2] (any length, normalised here;
- * not all (nearly) coplanar). intensity: NULL, or count x 3 positive RGB
- * light intensities that are divided out. mask: NULL or an image of the same
- * size whose non-zero pixels are worked on. The height is integrated with
- * opts->integrate. */
-int btf_photostereo(const btf_image *images, int count, const double *lights,
-                    const double *intensity, const btf_image *mask,
-                    const btf_photostereo_opts *opts, btf_ps_result *out, btf_error *err);
+/* Photometric stereo on images in memory. opts: NULL for the defaults;
+ * opts->mask restricts the work, opts->integrate the height. On failure out
+ * holds nothing to free. */
+btf_status btf_photostereo(const btf_ps_input *in, const btf_photostereo_opts *opts,
+                           btf_ps_result *out, btf_error *err);
 /* The same on a BTF dataset: the images of the view closest to theta_v = 0
  * under all its lights (btf_dir_to_vec), read one at a time. */
-int btf_photostereo_dataset(const btf_dataset *ds, const btf_image *mask,
-                            const btf_photostereo_opts *opts, btf_ps_result *out,
-                            btf_error *err);
+btf_status btf_photostereo_dataset(const btf_dataset *ds, const btf_photostereo_opts *opts,
+                                   btf_ps_result *out, btf_error *err);
 /* The same from a manifest: a TSV file with a header line naming its columns:
  * path (relative to the manifest's folder, or absolute), the light either as
  * theta_l, phi_l (degrees) or as lx, ly, lz (a vector in the frame above),
  * and optionally r, g, b (the light's intensity). */
-int btf_photostereo_manifest(const char *path, const btf_image *mask,
-                             const btf_photostereo_opts *opts, btf_ps_result *out,
-                             btf_error *err);
+btf_status btf_photostereo_manifest(const char *path, const btf_photostereo_opts *opts,
+                                    btf_ps_result *out, btf_error *err);
 void btf_ps_result_free(btf_ps_result *r);
 
 /* Previews for people: normals as RGB (n + 1) / 2 (the usual normal-map
  * colours once 8-bit encoded), and the range map as a shaded relief (lit
- * from the top left, exaggerated to a fixed mean slope, tinted by height).
- * Both are linear RGB for btf_image_write_png. */
-int btf_normals_preview(const btf_image *normals, btf_image *out, btf_error *err);
-int btf_height_relief(const btf_image *height, const btf_image *mask, btf_image *out,
-                      btf_error *err);
+ * from the top left, exaggerated to a fixed mean slope, tinted by height;
+ * mask: NULL or the mask of the run, outside which it is black). Both are
+ * linear RGB for btf_image_write_png. */
+btf_status btf_normals_preview(const btf_image *normals, btf_image *out, btf_error *err);
+btf_status btf_height_relief(const btf_image *height, const btf_image *mask, btf_image *out,
+                             btf_error *err);
 /* Writes normals.exr, albedo.exr, height.exr (float) and normals.png,
- * albedo.png, height.png into outdir (created if missing), atomically. */
-int btf_ps_write(const btf_ps_result *r, const btf_image *mask, const char *outdir,
-                 btf_error *err);
+ * albedo.png, height.png into outdir (created if missing), each file
+ * atomically; mask as for btf_height_relief. */
+btf_status btf_ps_write(const btf_ps_result *r, const btf_image *mask, const char *outdir,
+                        btf_error *err);
 
 /* ------------------------------ analyse, stage 3: the CAR model; the model */
 

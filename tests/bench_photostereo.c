@@ -89,9 +89,10 @@ int main(void)
         for (int r = 0; r < RUNS; r++) {
             btf_photostereo_opts o = {.plain = cases[c].plain};
             o.integrate.method = cases[c].method;
+            btf_ps_input in = {imgs, n, L, NULL};
             btf_ps_result res;
             double t0 = now();
-            if (btf_photostereo(imgs, n, L, NULL, NULL, &o, &res, &err) != 0) {
+            if (btf_photostereo(&in, &o, &res, &err) != 0) {
                 fprintf(stderr, "bench_photostereo: %s\n", err.msg);
                 return 1;
             }

@@ -2,7 +2,7 @@
  * fuzz_manifest.c — libFuzzer target for the tab-separated manifests btfcar
  * reads (src/io/tsv.c), through the dataset reader (src/io/dataset.c: columns,
  * numbers, directions) and the photometric-stereo manifest reader
- * (src/range/photostereo.c: theta/phi or lx/ly/lz, r g b). Paths in a fuzzed
+ * (src/range/ps_manifest.c: theta/phi or lx/ly/lz, r g b). Paths in a fuzzed
  * manifest name files that do not exist, so both must fail cleanly: one line,
  * no crash, no leak. `make fuzz` builds and runs it (seeds in
  * tests/fuzz-corpus/fuzz_manifest/).
@@ -46,7 +46,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     btf_dataset_close(ds);
     btf_ps_result ps;
     btf_photostereo_opts po = {.threads = 1};
-    rc = btf_photostereo_manifest(path, NULL, &po, &ps, &e);
+    rc = btf_photostereo_manifest(path, &po, &ps, &e);
     check(rc, &e);
     if (rc == 0)
         btf_ps_result_free(&ps);

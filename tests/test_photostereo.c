@@ -1,7 +1,6 @@
 /*
- * test_photostereo.c — analyse stage 2 (src/range/photostereo.c, src/range/integrate.c,
- * cli/cmd_photostereo.c): robust photometric stereo and the integration of
- * normals into a range map.
+ * test_photostereo.c — analyse stage 2 (src/range/, cli/cmd_photostereo.c):
+ * robust photometric stereo and the integration of normals into a range map.
  *
  *  - the built-in materials, rendered at view theta 0 under the 81 ubo81
  *    lights (cast shadows, a broad specular lobe on leather, a sharp one on
@@ -168,7 +167,7 @@ static void scene_free(scene *s)
 static void run_ps(const scene *s, const btf_photostereo_opts *o, btf_ps_result *r)
 {
     btf_error err = {0};
-    TU_OK(btf_photostereo(s->img, s->n, s->L, NULL, NULL, o, r, &err), &err);
+    TU_OK(btf_photostereo(&(btf_ps_input){s->img, s->n, s->L, NULL}, o, r, &err), &err);
     result_finite(r);
 }
 
@@ -321,6 +320,58 @@ static void threads_deterministic(void **state)
     scene_free(&s);
 }
 
+/* The defaults struct holds the documented defaults, and a zeroed struct
+ * means the same: identical results, for photometric stereo and for the
+ * integration alone. */
+static void defaults_equal_zero(void **state)
+{
+    (void)state;
+    btf_photostereo_opts d = btf_photostereo_defaults();
+    assert_true(d.dark == 0.1 && d.trim_low == 0.0 && d.trim_high == 0.1);
+    assert_true(d.outlier == 2.0 && d.saturation == 0.99 && d.max_condition == 1e4);
+    assert_true(d.specular_cone == 20.0 && d.iterations == 5 && d.plain == 0);
+    assert_true(d.mask == NULL && d.threads == 0 && d.progress == NULL);
+    btf_integrate_opts di = btf_integrate_defaults();
+    assert_int_equal(di.method, BTF_INTEGRATE_POISSON);
+    assert_true(di.max_slope == 10.0 && di.tolerance == 1e-7 && di.max_iter == 2000);
+    assert_memory_equal(&d.integrate, &di, sizeof di);
+
+    scene s;
+    scene_make(&s, "leather", 40, 3);
+    size_t wh = 40 * 40;
+    btf_photostereo_opts zero = {0};
+    btf_ps_result a, b, c;
+    run_ps(&s, &zero, &a);
+    run_ps(&s, &d, &b);
+    run_ps(&s, NULL, &c);
+    assert_memory_equal(a.normal.data, b.normal.data, wh * 3 * sizeof(float));
+    assert_memory_equal(a.albedo.data, b.albedo.data, wh * 3 * sizeof(float));
+    assert_memory_equal(a.height.data, b.height.data, wh * sizeof(float));
+    assert_memory_equal(a.lights_used.data, b.lights_used.data, wh * sizeof(float));
+    assert_memory_equal(a.normal.data, c.normal.data, wh * 3 * sizeof(float));
+    assert_memory_equal(a.height.data, c.height.data, wh * sizeof(float));
+    assert_int_equal(a.fitted, b.fitted);
+
+    /* The integration alone, with a hole in the mask (the iterative path,
+     * where tolerance and max_iter matter). */
+    btf_image mask, ha, hb;
+    btf_error err = {0};
+    TU_OK(btf_image_alloc(&mask, 40, 40, 1, &err), &err);
+    for (size_t k = 0; k < wh; k++)
+        mask.data[k] = (k % 40 > 10 && k % 40 < 20 && k / 40 > 5 && k / 40 < 30) ? 0.0f : 1.0f;
+    btf_integrate_opts iz = {0};
+    TU_OK(btf_integrate(&a.normal, &mask, &iz, &ha, &err), &err);
+    TU_OK(btf_integrate(&a.normal, &mask, &di, &hb, &err), &err);
+    assert_memory_equal(ha.data, hb.data, wh * sizeof(float));
+    btf_image_free(&ha);
+    btf_image_free(&hb);
+    btf_image_free(&mask);
+    btf_ps_result_free(&a);
+    btf_ps_result_free(&b);
+    btf_ps_result_free(&c);
+    scene_free(&s);
+}
+
 static void progress_count(void *user, double f, const char *what)
 {
     assert_true(f >= 0.0 && f <= 1.0);
@@ -458,10 +509,10 @@ static void sphere_lambertian(void **state)
     size_t wh = (size_t)sp.w * sp.h;
     float *truth = malloc(wh * 3 * sizeof(float)), *height = malloc(wh * sizeof(float));
     sphere_render(&sp, L, n, imgs, truth, height, &mask);
-    btf_photostereo_opts o = {0};
+    btf_photostereo_opts o = {.mask = &mask};
     btf_ps_result r;
     btf_error err = {0};
-    TU_OK(btf_photostereo(imgs, n, L, NULL, &mask, &o, &r, &err), &err);
+    TU_OK(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, &o, &r, &err), &err);
     result_finite(&r);
     unsigned char *sel = sphere_select(&sp, L, n, 1.0);
     double e = mean_angle(r.normal.data, truth, sel, wh), worst = 0.0;
@@ -542,7 +593,7 @@ static void coplanar_lights(void **state)
     plane_images(nrm, L, n, 8, 6, imgs);
     btf_ps_result r;
     btf_error err = {0};
-    int rc = btf_photostereo(imgs, n, L, NULL, NULL, NULL, &r, &err);
+    int rc = btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, NULL, &r, &err);
     assert_int_equal(rc, BTF_E_DATA);
     assert_non_null(strstr(err.msg, "coplanar"));
     assert_non_null(strstr(err.msg, "not determined along ("));
@@ -551,12 +602,12 @@ static void coplanar_lights(void **state)
     /* Nearly coplanar: tilt the plane of the lights by 0.3 degrees. */
     for (int i = 0; i < n; i++)
         L[3 * i + 1] = 0.005 * (i % 2 ? 1 : -1);
-    rc = btf_photostereo(imgs, n, L, NULL, NULL, NULL, &r, &err);
+    rc = btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, NULL, &r, &err);
     assert_int_equal(rc, BTF_E_DATA);
     assert_non_null(strstr(err.msg, "coplanar"));
     /* A looser max_condition accepts it, and the answer is finite. */
     btf_photostereo_opts o = {.max_condition = 1e8};
-    TU_OK(btf_photostereo(imgs, n, L, NULL, NULL, &o, &r, &err), &err);
+    TU_OK(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, &o, &r, &err), &err);
     result_finite(&r);
     btf_ps_result_free(&r);
     /* Every light on the horizon (theta 90): coplanar too. */
@@ -564,13 +615,13 @@ static void coplanar_lights(void **state)
         btf_dir d = {90.0, 45.0 * i};
         btf_dir_to_vec(d, L + 3 * i);
     }
-    rc = btf_photostereo(imgs, n, L, NULL, NULL, NULL, &r, &err);
+    rc = btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, NULL, &r, &err);
     assert_int_equal(rc, BTF_E_DATA);
     /* Fewer than 3 images, a zero light, a bad intensity. */
-    rc = btf_photostereo(imgs, 2, L, NULL, NULL, NULL, &r, &err);
+    rc = btf_photostereo(&(btf_ps_input){imgs, 2, L, NULL}, NULL, &r, &err);
     assert_int_equal(rc, BTF_E_ARG);
     double Z[9] = {0, 0, 0, 0, 0, 1, 1, 0, 1};
-    rc = btf_photostereo(imgs, 3, Z, NULL, NULL, NULL, &r, &err);
+    rc = btf_photostereo(&(btf_ps_input){imgs, 3, Z, NULL}, NULL, &r, &err);
     assert_int_equal(rc, BTF_E_ARG);
     assert_non_null(strstr(err.msg, "light 0"));
     double E[8 * 3];
@@ -581,7 +632,7 @@ static void coplanar_lights(void **state)
         btf_dir d = {20.0 + 5.0 * i, 45.0 * i};
         btf_dir_to_vec(d, L + 3 * i);
     }
-    rc = btf_photostereo(imgs, n, L, E, NULL, NULL, &r, &err);
+    rc = btf_photostereo(&(btf_ps_input){imgs, n, L, E}, NULL, &r, &err);
     assert_int_equal(rc, BTF_E_ARG);
     assert_non_null(strstr(err.msg, "intensity"));
     free_images(imgs, n);
@@ -602,7 +653,7 @@ static void grazing_lights(void **state)
     plane_images(nrm, L, n, 5, 3, imgs);
     btf_ps_result r;
     btf_error err = {0};
-    TU_OK(btf_photostereo(imgs, n, L, NULL, NULL, NULL, &r, &err), &err);
+    TU_OK(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, NULL, &r, &err), &err);
     result_finite(&r);
     float t[3] = {(float)nrm[0], (float)nrm[1], (float)nrm[2]};
     for (int k = 0; k < 15; k++)
@@ -637,7 +688,7 @@ static void dark_saturated_nan(void **state)
     }
     btf_ps_result r;
     btf_error err = {0};
-    TU_OK(btf_photostereo(imgs, n, L, NULL, NULL, NULL, &r, &err), &err);
+    TU_OK(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, NULL, &r, &err), &err);
     result_finite(&r);
     float t[3] = {(float)nrm[0], (float)nrm[1], (float)nrm[2]}, up[3] = {0, 0, 1};
     /* The fallback: normal (0, 0, 1), invalid; all-dark albedo 0; the
@@ -657,10 +708,10 @@ static void dark_saturated_nan(void **state)
     }
     assert_true(r.lights_used.data[2] <= n - 5);
     btf_ps_result_free(&r);
-    /* Plain least squares too: the black pixel takes the fallback (found by
-     * review: it used to get a 0/0 normal). */
+    /* Plain least squares too: the black pixel gives g = 0, which must take
+     * the fallback rather than a 0/0 normal. */
     btf_photostereo_opts plain = {.plain = 1};
-    TU_OK(btf_photostereo(imgs, n, L, NULL, NULL, &plain, &r, &err), &err);
+    TU_OK(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, &plain, &r, &err), &err);
     result_finite(&r);
     assert_true(angle_deg(r.normal.data, up) == 0.0);
     assert_true(r.valid.data[0] == 0.0f);
@@ -682,9 +733,9 @@ static void empty_mask(void **state)
     btf_error err = {0};
     TU_OK(btf_image_alloc(&mask, 7, 5, 1, &err), &err);
     btf_ps_result r;
-    btf_photostereo_opts o = {.integrate.method = BTF_INTEGRATE_FC};
+    btf_photostereo_opts o = {.mask = &mask, .integrate.method = BTF_INTEGRATE_FC};
     for (int pass = 0; pass < 2; pass++) {
-        TU_OK(btf_photostereo(imgs, n, L, NULL, &mask, &o, &r, &err), &err);
+        TU_OK(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, &o, &r, &err), &err);
         result_finite(&r);
         assert_int_equal(r.pixels, 0);
         assert_int_equal(r.fitted + r.fallback, 0);
@@ -696,7 +747,9 @@ static void empty_mask(void **state)
     /* A mask of the wrong size is an error. */
     btf_image small;
     TU_OK(btf_image_alloc(&small, 3, 3, 1, &err), &err);
-    assert_int_equal(btf_photostereo(imgs, n, L, NULL, &small, NULL, &r, &err), BTF_E_ARG);
+    btf_photostereo_opts wrong = {.mask = &small};
+    assert_int_equal(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, &wrong, &r, &err),
+                     BTF_E_ARG);
     assert_non_null(strstr(err.msg, "mask"));
     btf_image_free(&small);
     btf_image_free(&mask);
@@ -720,16 +773,16 @@ static void bad_arguments(void **state)
     btf_image other;
     TU_OK(btf_image_alloc(&other, 5, 4, 1, &err), &err);
     imgs[2] = other;
-    assert_int_equal(btf_photostereo(imgs, n, L, NULL, NULL, NULL, &r, &err), BTF_E_ARG);
+    assert_int_equal(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, NULL, &r, &err), BTF_E_ARG);
     assert_non_null(strstr(err.msg, "image 2"));
     imgs[2] = keep;
     btf_image_free(&other);
     btf_photostereo_opts o = {.trim_low = 0.6, .trim_high = 0.5};
-    assert_int_equal(btf_photostereo(imgs, n, L, NULL, NULL, &o, &r, &err), BTF_E_ARG);
+    assert_int_equal(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, &o, &r, &err), BTF_E_ARG);
     btf_photostereo_opts o2 = {.dark = NAN};
-    assert_int_equal(btf_photostereo(imgs, n, L, NULL, NULL, &o2, &r, &err), BTF_E_ARG);
+    assert_int_equal(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, &o2, &r, &err), BTF_E_ARG);
     btf_photostereo_opts o3 = {.specular_cone = 95};
-    assert_int_equal(btf_photostereo(imgs, n, L, NULL, NULL, &o3, &r, &err), BTF_E_ARG);
+    assert_int_equal(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, &o3, &r, &err), BTF_E_ARG);
     free_images(imgs, n);
 }
 
@@ -1142,7 +1195,8 @@ static void manifest_formats(void **state)
     btf_image fmask;
     TU_OK(btf_image_read(tu_fmt("%s/mask.png", dir), NULL, &fmask, &err), &err);
     btf_ps_result r;
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/lights.tsv", dir), &fmask, NULL, &r, &err), &err);
+    btf_photostereo_opts mo = {.mask = &fmask};
+    TU_OK(btf_photostereo_manifest(tu_fmt("%s/lights.tsv", dir), &mo, &r, &err), &err);
     result_finite(&r);
     assert_int_equal(r.normal.width, 72);
     assert_int_equal(r.normal.height, 56);
@@ -1186,8 +1240,8 @@ static void manifest_formats(void **state)
     write_text(tu_fmt("%s/vec.tsv", dir), text);
     write_text(tu_fmt("%s/plain.tsv", dir), plain);
     btf_ps_result a, b;
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/vec.tsv", dir), NULL, NULL, &a, &err), &err);
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/plain.tsv", dir), NULL, NULL, &b, &err), &err);
+    TU_OK(btf_photostereo_manifest(tu_fmt("%s/vec.tsv", dir), NULL, &a, &err), &err);
+    TU_OK(btf_photostereo_manifest(tu_fmt("%s/plain.tsv", dir), NULL, &b, &err), &err);
     size_t wh = 72 * 56;
     assert_memory_equal(a.normal.data, b.normal.data, wh * 3 * sizeof(float));
     assert_memory_equal(a.albedo.data, b.albedo.data, wh * 3 * sizeof(float));
@@ -1206,7 +1260,7 @@ static void manifest_formats(void **state)
     write_text(tu_fmt("%s/unscaled.tsv", dir), text);
     btf_ps_result c;
     btf_photostereo_opts po = {.plain = 1};
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/unscaled.tsv", dir), NULL, &po, &c, &err), &err);
+    TU_OK(btf_photostereo_manifest(tu_fmt("%s/unscaled.tsv", dir), &po, &c, &err), &err);
     assert_true(sphere_error(&c.normal, L, n) > 0.1);
     btf_ps_result_free(&a);
     btf_ps_result_free(&b);
@@ -1240,8 +1294,8 @@ static void manifest_errors(void **state)
         {"path\ttheta_l\tphi_l\tr\tg\tb\na\t10\t0\t1\t1\t0\nb\t20\t90\t1\t1\t1\nc\t30\t180\t1\t1\t1\n",
          ":2: intensity b = 0"},
         {"path\ttheta_l\tphi_l\nmissing.png\t10\t0\nb\t20\t90\nc\t30\t180\n", "missing.png"},
-        /* Found by fuzz_manifest: an empty path is a format error (it was
-         * reported with the wrong status). */
+        /* An empty path cell is the manifest's error, named as such, not a
+         * file "" that cannot be read. */
         {"path\ttheta_l\tphi_l\na\t10\t0\n\t20\t90\nc\t30\t180\n", "empty path"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -1249,7 +1303,7 @@ static void manifest_errors(void **state)
         write_text(path, cases[i].text);
         btf_ps_result r;
         btf_error err = {0};
-        int rc = btf_photostereo_manifest(path, NULL, NULL, &r, &err);
+        int rc = btf_photostereo_manifest(path, NULL, &r, &err);
         if (rc == 0 || !strstr(err.msg, cases[i].expect))
             print_error("case %zu: rc %d, message '%s', expected '%s'\n", i, rc, err.msg,
                         cases[i].expect);
@@ -1289,10 +1343,10 @@ static void linear_8bit(void **state)
     write_text(tu_fmt("%s/m.tsv", dir), text);
     btf_ps_result r;
     btf_photostereo_opts o = {.read.linear_8bit = 1};
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/m.tsv", dir), NULL, &o, &r, &err), &err);
+    TU_OK(btf_photostereo_manifest(tu_fmt("%s/m.tsv", dir), &o, &r, &err), &err);
     double el = sphere_error(&r.normal, L, n);
     btf_ps_result_free(&r);
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/m.tsv", dir), NULL, NULL, &r, &err), &err);
+    TU_OK(btf_photostereo_manifest(tu_fmt("%s/m.tsv", dir), NULL, &r, &err), &err);
     double es = sphere_error(&r.normal, L, n);
     btf_ps_result_free(&r);
     /* Measured: 0.05 deg as linear, 10.7 deg misread as sRGB. */
@@ -1313,7 +1367,8 @@ static void write_outputs(void **state)
     sphere_render(&file_sphere, L, n, imgs, NULL, NULL, &mask);
     btf_ps_result r;
     btf_error err = {0};
-    TU_OK(btf_photostereo(imgs, n, L, NULL, &mask, NULL, &r, &err), &err);
+    btf_photostereo_opts o = {.mask = &mask};
+    TU_OK(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, &o, &r, &err), &err);
     char out[4096];
     snprintf(out, sizeof out, "%s/out/deeper", tmp);
     TU_OK(btf_ps_write(&r, &mask, out, &err), &err);
@@ -1363,7 +1418,7 @@ static void dataset_entry(void **state)
     TU_OK(btf_dataset_open(ds_dir, &dopts, &ds, &err), &err);
     btf_ps_result r;
     btf_photostereo_opts o = {.integrate.method = BTF_INTEGRATE_FC};
-    TU_OK(btf_photostereo_dataset(ds, NULL, &o, &r, &err), &err);
+    TU_OK(btf_photostereo_dataset(ds, &o, &r, &err), &err);
     btf_dataset_close(ds);
     result_finite(&r);
     assert_true(r.view >= 0 && r.view_dir.theta == 0.0);
@@ -1503,6 +1558,7 @@ int main(void)
         cmocka_unit_test(materials_wood),
         cmocka_unit_test(materials_light_subset),
         cmocka_unit_test(threads_deterministic),
+        cmocka_unit_test(defaults_equal_zero),
         cmocka_unit_test(progress_reported),
         cmocka_unit_test(sphere_lambertian),
         cmocka_unit_test(coplanar_lights),

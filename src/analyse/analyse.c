@@ -90,7 +90,7 @@ static int stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_mod
                        btf_error *err)
 {
     btf_ps_result ps;
-    int rc = btf_photostereo_dataset(ds, NULL, &o->photostereo, &ps, err);
+    int rc = btf_photostereo_dataset(ds, &o->photostereo, &ps, err);
     if (rc)
         return rc;
     rc = range_tile(&ps.height, o->range_size > 0 ? o->range_size : 64, m, err);

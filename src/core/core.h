@@ -1,7 +1,7 @@
 /*
  * core.h — the plumbing every stage shares (src/core/): one-line errors,
- * allocation, atomic files and paths, the CPU count, direction-name
- * tolerance. Private to the library; not installed.
+ * allocation, atomic files and paths, the CPU count, the thread pool,
+ * direction-name tolerance. Private to the library; not installed.
  */
 #ifndef BTF_CORE_H
 #define BTF_CORE_H
@@ -46,6 +46,29 @@ int btf_path_join(char *out, size_t n, const char *dir, const char *name, btf_er
 
 /* Number of online CPUs (at least 1). */
 int btf_cpu_count(void);
+
+/* The thread pool (core/pool.c): btf_pool_run runs jobs 0..jobs-1, each
+ * exactly once, over btf_pool_workers(threads, jobs) threads (threads 0:
+ * every CPU), the calling thread among them, and returns when all are done.
+ * job(user, j, worker, err) does job j; worker (0 = the calling thread,
+ * < btf_pool_workers) lets the caller keep scratch per thread; a job's
+ * output must depend on j alone, so that results do not depend on the
+ * thread count. The first job to fail stops the batch (no new job starts)
+ * and its status and message are returned. progress (NULL: none) is called
+ * from the calling thread only, after every `every` jobs and once at the
+ * end, with from + (to - from) x the fraction of jobs done. */
+#define BTF_POOL_MAX_THREADS 64
+typedef btf_status (*btf_pool_job_fn)(void *user, int job, int worker, btf_error *err);
+typedef struct btf_pool_progress {
+    btf_progress_fn fn;   /* NULL: no reports */
+    void *user;
+    const char *what;     /* the step's name, passed to fn */
+    double from, to;      /* the fractions reported at the start and the end */
+    int every;            /* report after this many jobs (< 1: after each) */
+} btf_pool_progress;
+int btf_pool_workers(int threads, int jobs);
+btf_status btf_pool_run(int jobs, int threads, btf_pool_job_fn job, void *user,
+                        const btf_pool_progress *progress, btf_error *err);
 
 /* Directions named in whole degrees (file names) match a known set within
  * this many degrees (core/directions.c, io/dataset.c). */

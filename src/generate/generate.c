@@ -6,9 +6,9 @@
  *
  * Visibility from a view depends only on the view, and shadowing only on the
  * light, so the 81 view maps and 81 light maps are computed once and each of
- * the 6,561 images only combines one of each (src/generate/material.c). Images are
- * rendered and encoded by a pool of threads; each image is independent, so
- * the output does not depend on the thread count.
+ * the 6,561 images only combines one of each (src/generate/material.c). Maps,
+ * then images, are made by the thread pool (core/pool.c); each is
+ * independent, so the output does not depend on the thread count.
  *
  * The whole dataset is built in a temporary folder beside OUTDIR and renamed
  * into place at the end: a failure leaves nothing behind.
@@ -19,13 +19,13 @@
 
 #include <dirent.h>
 #include <errno.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+/* The batch both phases share: the material, its directions and the maps
+ * phase 1 makes for phase 2. */
 typedef struct gen_job {
     const btf_material *m;
     const btf_dirset *dirs;
@@ -33,32 +33,14 @@ typedef struct gen_job {
     btf_light_map **lights;
     const char *dir;       /* the temporary output folder */
     int quality;
-    atomic_int next;       /* next task index */
-    atomic_int done;
-    atomic_int failed;
-    int total;
-    btf_error err;         /* the first failure */
-    pthread_mutex_t lock;
-    btf_progress_fn progress;
-    void *user;
 } gen_job;
-
-static void job_fail(gen_job *j, const btf_error *e)
-{
-    pthread_mutex_lock(&j->lock);
-    if (!atomic_load(&j->failed)) {
-        j->err = *e;
-        atomic_store(&j->failed, 1);
-    }
-    pthread_mutex_unlock(&j->lock);
-}
 
 static void view_folder(char *buf, size_t n, btf_dir v)
 {
     snprintf(buf, n, "tv%03d_pv%03d", (int)(v.theta + 0.5), (int)(v.phi + 0.5));
 }
 
-static int render_one(gen_job *j, int vi, int li, btf_error *err)
+static int render_one(const gen_job *j, int vi, int li, btf_error *err)
 {
     btf_dir v = j->dirs->dirs[vi], l = j->dirs->dirs[li];
     btf_image img = {0};
@@ -77,68 +59,24 @@ static int render_one(gen_job *j, int vi, int li, btf_error *err)
     return rc;
 }
 
-/* Phase 1 tasks: 0..n-1 view maps, n..2n-1 light maps. */
-static int make_map(gen_job *j, int t, btf_error *err)
+/* Phase 1 jobs: 0..n-1 the view maps, n..2n-1 the light maps. */
+static btf_status map_job(void *user, int t, int worker, btf_error *err)
 {
+    (void)worker;
+    gen_job *j = user;
     int n = j->dirs->count;
     if (t < n)
         return btf_view_map_make(j->m, j->dirs->dirs[t], &j->views[t], err);
     return btf_light_map_make(j->m, j->dirs->dirs[t - n], &j->lights[t - n], err);
 }
 
-typedef struct worker_arg {
-    gen_job *job;
-    int phase;
-} worker_arg;
-
-static void *worker(void *p)
+/* Phase 2 jobs walk view-major so that one view's folder fills at a time. */
+static btf_status image_job(void *user, int t, int worker, btf_error *err)
 {
-    worker_arg *a = p;
-    gen_job *j = a->job;
+    (void)worker;
+    gen_job *j = user;
     int n = j->dirs->count;
-    int tasks = a->phase == 1 ? 2 * n : n * n;
-    btf_error e = {0};
-    for (;;) {
-        if (atomic_load(&j->failed))
-            break;
-        int t = atomic_fetch_add(&j->next, 1);
-        if (t >= tasks)
-            break;
-        /* Phase 2 walks view-major so that one view's folder fills at a time. */
-        int rc = a->phase == 1 ? make_map(j, t, &e) : render_one(j, t / n, t % n, &e);
-        if (rc) {
-            job_fail(j, &e);
-            break;
-        }
-        int d = atomic_fetch_add(&j->done, 1) + 1;
-        if (a->phase == 2 && j->progress && (d % 81 == 0 || d == tasks)) {
-            pthread_mutex_lock(&j->lock);
-            j->progress(j->user, (double)d / tasks, "rendering images");
-            pthread_mutex_unlock(&j->lock);
-        }
-    }
-    return NULL;
-}
-
-static int run_phase(gen_job *j, int phase, int threads, btf_error *err)
-{
-    atomic_store(&j->next, 0);
-    atomic_store(&j->done, 0);
-    worker_arg arg = {j, phase};
-    pthread_t tid[64];
-    int started = 0;
-    for (int i = 1; i < threads && i < 64; i++)
-        if (pthread_create(&tid[started], NULL, worker, &arg) == 0)
-            started++;
-    worker(&arg); /* the calling thread works too */
-    for (int i = 0; i < started; i++)
-        pthread_join(tid[i], NULL);
-    if (atomic_load(&j->failed)) {
-        if (err)
-            *err = j->err;
-        return j->err.code ? j->err.code : BTF_E_IO;
-    }
-    return BTF_OK;
+    return render_one(j, t / n, t % n, err);
 }
 
 static int write_truth(const btf_material *m, const char *dir, btf_error *err)
@@ -200,19 +138,19 @@ static int generate_into(const btf_material *m, const btf_dirset *dirs, const ch
                          const btf_generate_opts *o, btf_error *err)
 {
     int n = dirs->count;
-    gen_job j = {.m = m, .dirs = dirs, .dir = tmp, .quality = o->jpeg_quality ? o->jpeg_quality : 95,
-                 .total = n * n, .progress = o->progress, .user = o->progress_user};
-    pthread_mutex_init(&j.lock, NULL);
+    gen_job j = {.m = m, .dirs = dirs, .dir = tmp,
+                 .quality = o->jpeg_quality ? o->jpeg_quality : 95};
     j.views = btf_calloc((size_t)n, sizeof *j.views, err);
     j.lights = btf_calloc((size_t)n, sizeof *j.lights, err);
     int rc = (j.views && j.lights) ? BTF_OK : BTF_E_NOMEM;
-    int threads = o->threads > 0 ? o->threads : btf_cpu_count();
+    btf_pool_progress progress = {o->progress, o->progress_user, "rendering images", 0.0, 1.0,
+                                  n};
     if (rc == 0)
         rc = make_view_folders(dirs, tmp, err);
     if (rc == 0)
-        rc = run_phase(&j, 1, threads, err);
+        rc = btf_pool_run(2 * n, o->threads, map_job, &j, NULL, err);
     if (rc == 0)
-        rc = run_phase(&j, 2, threads, err);
+        rc = btf_pool_run(n * n, o->threads, image_job, &j, &progress, err);
     if (rc == 0)
         rc = write_truth(m, tmp, err);
     for (int i = 0; i < n; i++) {
@@ -223,7 +161,6 @@ static int generate_into(const btf_material *m, const btf_dirset *dirs, const ch
     }
     free(j.views);
     free(j.lights);
-    pthread_mutex_destroy(&j.lock);
     return rc;
 }
 

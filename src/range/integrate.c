@@ -56,9 +56,6 @@
 #include <string.h>
 
 #define INT_PI 3.14159265358979323846
-#define DEFAULT_MAX_SLOPE 10.0
-#define DEFAULT_TOLERANCE 1e-7
-#define DEFAULT_MAX_ITER 2000
 
 /* ------------------------------------------------------------------ slopes */
 
@@ -111,8 +108,8 @@ static double cd_symbol(int k, int n)
     return sin(2.0 * INT_PI * (double)k / (double)n);
 }
 
-static int integrate_fc(int w, int h, const double *p, const double *q, double *z,
-                        btf_error *err)
+static btf_status integrate_fc(int w, int h, const double *p, const double *q, double *z,
+                               btf_error *err)
 {
     size_t count = (size_t)w * h;
     double *re = btf_alloc(count * 2, sizeof(double), err);
@@ -204,7 +201,7 @@ static double neumann_eig(int k, int n)
  * solution of zero mean (the pseudo-inverse: L's null space is the
  * constants). Even sizes: OpenCV's DCT-II; odd: mirrored DFT. scratch holds
  * 8 w h doubles. */
-static int poisson_full(int w, int h, double *a, double *scratch, btf_error *err)
+static btf_status poisson_full(int w, int h, double *a, double *scratch, btf_error *err)
 {
     char msg[256];
     int even = (w == 1 || w % 2 == 0) && (h == 1 || h % 2 == 0);
@@ -295,12 +292,12 @@ static double dot(const double *a, const double *b, size_t n)
 /* The preconditioner: the full-grid pseudo-inverse applied to r (zero
  * outside the mask), restricted to the mask. r sums to zero over every
  * part of the mask, so the full-grid constant it discards is no loss. */
-static int precondition(int w, int h, const unsigned char *valid, const double *r, double *z,
-                        double *scratch, btf_error *err)
+static btf_status precondition(int w, int h, const unsigned char *valid, const double *r,
+                               double *z, double *scratch, btf_error *err)
 {
     size_t count = (size_t)w * h;
     memcpy(z, r, count * sizeof(double));
-    int rc = poisson_full(w, h, z, scratch, err);
+    btf_status rc = poisson_full(w, h, z, scratch, err);
     if (rc)
         return rc;
     for (size_t k = 0; k < count; k++)
@@ -311,8 +308,8 @@ static int precondition(int w, int h, const unsigned char *valid, const double *
 
 /* Preconditioned conjugate gradients on L_valid z = b (consistent and
  * positive semi-definite: CG stays in the range of L). */
-static int poisson_masked(int w, int h, const unsigned char *valid, const double *b, double *x,
-                          double tol, int max_iter, btf_error *err)
+static btf_status poisson_masked(int w, int h, const unsigned char *valid, const double *b,
+                                 double *x, double tol, int max_iter, btf_error *err)
 {
     size_t count = (size_t)w * h;
     double *buf = btf_alloc(count * 12, sizeof(double), err);
@@ -323,7 +320,7 @@ static int poisson_masked(int w, int h, const unsigned char *valid, const double
     memset(x, 0, count * sizeof(double));
     memcpy(r, b, count * sizeof(double));
     double bnorm = sqrt(dot(b, b, count));
-    int rc = BTF_OK;
+    btf_status rc = BTF_OK;
     if (!(bnorm > 0.0) || !isfinite(bnorm))
         goto done;
     if ((rc = precondition(w, h, valid, r, z, scratch, err)))
@@ -355,16 +352,16 @@ done:
     return rc;
 }
 
-static int integrate_poisson(int w, int h, const double *p, const double *q,
-                             const unsigned char *valid, int all_valid, double tol,
-                             int max_iter, double *z, btf_error *err)
+static btf_status integrate_poisson(int w, int h, const double *p, const double *q,
+                                    const unsigned char *valid, int all_valid, double tol,
+                                    int max_iter, double *z, btf_error *err)
 {
     size_t count = (size_t)w * h;
     double *b = btf_alloc(count * 9, sizeof(double), err);
     if (!b)
         return BTF_E_NOMEM;
     poisson_rhs(w, h, p, q, valid, b);
-    int rc;
+    btf_status rc;
     if (all_valid) {
         rc = poisson_full(w, h, b, b + count, err);
         if (rc == 0)
@@ -378,14 +375,26 @@ static int integrate_poisson(int w, int h, const double *p, const double *q,
 
 /* ----------------------------------------------------------------- public */
 
-static int check_inputs(const btf_image *normals, const btf_image *mask,
-                        const btf_integrate_opts *o, btf_error *err)
+btf_integrate_opts btf_integrate_defaults(void)
+{
+    btf_integrate_opts o = {
+        .method = BTF_INTEGRATE_POISSON,
+        .max_slope = 10.0,
+        .tolerance = 1e-7,
+        .max_iter = 2000,
+    };
+    return o;
+}
+
+static btf_status check_inputs(const btf_image *normals, const btf_image *mask,
+                               const btf_integrate_opts *o, btf_error *err)
 {
     if (!normals || !normals->data || normals->channels != 3 || normals->width < 1 ||
         normals->height < 1)
         return btf_fail(err, BTF_E_ARG, "integrate: the normal map must be a 3-channel image");
     if (mask && (!mask->data || mask->width != normals->width || mask->height != normals->height))
-        return btf_fail(err, BTF_E_ARG, "integrate: mask size %dx%d differs from the normal map's %dx%d",
+        return btf_fail(err, BTF_E_ARG,
+                        "integrate: mask size %dx%d differs from the normal map's %dx%d",
                         mask->width, mask->height, normals->width, normals->height);
     if (o->method != BTF_INTEGRATE_DEFAULT && o->method != BTF_INTEGRATE_POISSON &&
         o->method != BTF_INTEGRATE_FC)
@@ -393,13 +402,14 @@ static int check_inputs(const btf_image *normals, const btf_image *mask,
     if (!(o->max_slope >= 0.0) || !isfinite(o->max_slope) || !(o->tolerance >= 0.0) ||
         !isfinite(o->tolerance) || o->max_iter < 0)
         return btf_fail(err, BTF_E_ARG,
-                        "integrate: max_slope %g, tolerance %g, max_iter %d: expected finite values >= 0",
+                        "integrate: max_slope %g, tolerance %g, max_iter %d: expected finite "
+                        "values >= 0",
                         o->max_slope, o->tolerance, o->max_iter);
     return BTF_OK;
 }
 
-int btf_integrate(const btf_image *normals, const btf_image *mask, const btf_integrate_opts *opts,
-                  btf_image *height, btf_error *err)
+btf_status btf_integrate(const btf_image *normals, const btf_image *mask,
+                         const btf_integrate_opts *opts, btf_image *height, btf_error *err)
 {
     btf_integrate_opts o = {0};
     if (opts)
@@ -407,12 +417,14 @@ int btf_integrate(const btf_image *normals, const btf_image *mask, const btf_int
     if (!height)
         return btf_fail(err, BTF_E_ARG, "integrate: no output image given");
     memset(height, 0, sizeof *height);
-    int rc = check_inputs(normals, mask, &o, err);
+    btf_status rc = check_inputs(normals, mask, &o, err);
     if (rc)
         return rc;
-    double max_slope = o.max_slope > 0.0 ? o.max_slope : DEFAULT_MAX_SLOPE;
-    double tol = o.tolerance > 0.0 ? o.tolerance : DEFAULT_TOLERANCE;
-    int max_iter = o.max_iter > 0 ? o.max_iter : DEFAULT_MAX_ITER;
+    /* 0 takes the default (check_inputs refused negative values). */
+    const btf_integrate_opts def = btf_integrate_defaults();
+    double max_slope = o.max_slope > 0.0 ? o.max_slope : def.max_slope;
+    double tol = o.tolerance > 0.0 ? o.tolerance : def.tolerance;
+    int max_iter = o.max_iter > 0 ? o.max_iter : def.max_iter;
     int w = normals->width, h = normals->height;
     size_t count = (size_t)w * h;
     if ((rc = btf_image_alloc(height, w, h, 1, err)))

@@ -6,14 +6,13 @@
  * 1-D cumulative histograms is their earth mover's distance, so nearby
  * illumination changes move features smoothly.
  *
- * A dataset's features are computed streaming: each worker thread decodes one
- * image at a time; only the features stay in memory.
+ * A dataset's features are computed streaming by the thread pool
+ * (core/pool.c): each job decodes one image; only the features stay in
+ * memory.
  */
 #include "io/io.h"
 #include "core/core.h"
 
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -65,42 +64,23 @@ int btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *e
     return BTF_OK;
 }
 
-typedef struct feat_job {
+/* One job per image: decode it, compute its feature into its own row. */
+typedef struct feature_batch {
     const btf_dataset *ds;
-    float *features;
-    int bins, dim, total;
-    atomic_int next, done, failed;
-    pthread_mutex_t lock;
-    btf_error err;
-    btf_progress_fn progress;
-    void *user;
-} feat_job;
+    int n_lights, bins, dim;
+    float *features;      /* (views x lights) x dim */
+} feature_batch;
 
-static void *feat_worker(void *p)
+static btf_status feature_job(void *user, int image, int worker, btf_error *err)
 {
-    feat_job *j = p;
-    int nl = btf_dataset_get_info(j->ds)->n_lights;
-    btf_error e = {0};
-    for (;;) {
-        int t = atomic_fetch_add(&j->next, 1);
-        if (t >= j->total || atomic_load(&j->failed))
-            break;
-        btf_image img = {0};
-        int rc = btf_dataset_read(j->ds, t / nl, t % nl, &img, &e);
-        if (rc == 0)
-            rc = btf_lab_cumhist(&img, j->bins, j->features + (size_t)t * j->dim, &e);
-        btf_image_free(&img);
-        pthread_mutex_lock(&j->lock);
-        if (rc && !atomic_load(&j->failed)) {
-            j->err = e;
-            atomic_store(&j->failed, 1);
-        }
-        int d = atomic_fetch_add(&j->done, 1) + 1;
-        if (j->progress && (d % 64 == 0 || d == j->total))
-            j->progress(j->user, (double)d / j->total, "image features");
-        pthread_mutex_unlock(&j->lock);
-    }
-    return NULL;
+    (void)worker;
+    const feature_batch *b = user;
+    btf_image img = {0};
+    btf_status rc = btf_dataset_read(b->ds, image / b->n_lights, image % b->n_lights, &img, err);
+    if (rc == BTF_OK)
+        rc = btf_lab_cumhist(&img, b->bins, b->features + (size_t)image * b->dim, err);
+    btf_image_free(&img);
+    return rc;
 }
 
 int btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts, float **features,
@@ -113,29 +93,18 @@ int btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts, fl
     if (bins < 2 || bins > 4096)
         return btf_fail(err, BTF_E_ARG, "histogram bins %d: expected 2..4096", bins);
     const btf_dataset_info *in = btf_dataset_get_info(ds);
-    feat_job j = {.ds = ds, .bins = bins, .dim = 3 * bins, .total = in->n_views * in->n_lights,
-                  .progress = o.progress, .user = o.progress_user};
-    j.features = btf_alloc((size_t)j.total * j.dim, sizeof(float), err);
-    if (!j.features)
+    feature_batch b = {.ds = ds, .n_lights = in->n_lights, .bins = bins, .dim = 3 * bins};
+    int total = in->n_views * in->n_lights;
+    b.features = btf_alloc((size_t)total * b.dim, sizeof(float), err);
+    if (!b.features)
         return BTF_E_NOMEM;
-    pthread_mutex_init(&j.lock, NULL);
-    int threads = o.threads > 0 ? o.threads : btf_cpu_count();
-    pthread_t tid[64];
-    int started = 0;
-    for (int i = 1; i < threads && i < 64; i++)
-        if (pthread_create(&tid[started], NULL, feat_worker, &j) == 0)
-            started++;
-    feat_worker(&j);
-    for (int i = 0; i < started; i++)
-        pthread_join(tid[i], NULL);
-    pthread_mutex_destroy(&j.lock);
-    if (atomic_load(&j.failed)) {
-        free(j.features);
-        if (err)
-            *err = j.err;
-        return j.err.code ? j.err.code : BTF_E_IO;
+    btf_pool_progress progress = {o.progress, o.progress_user, "image features", 0.0, 1.0, 64};
+    btf_status rc = btf_pool_run(total, o.threads, feature_job, &b, &progress, err);
+    if (rc) {
+        free(b.features);
+        return rc;
     }
-    *features = j.features;
-    *dim = j.dim;
+    *features = b.features;
+    *dim = b.dim;
     return BTF_OK;
 }

@@ -1,0 +1,127 @@
+/*
+ * pool.c — the library's one thread pool: runs jobs 0..N-1 of a batch over
+ * T threads, the calling thread among them. Every stage whose work splits
+ * into independent pieces uses it: the image features of segmentation
+ * (paper section II.A), the rows of photometric stereo (section II.B) and
+ * the images of the procedural generator.
+ *
+ * Jobs are handed out one at a time from a shared counter, so a slow job
+ * does not hold back a fixed share of the others. Each job runs exactly once
+ * (until a failure stops the batch), and a job's output may depend only on
+ * its index: then the result is the same for any thread count. The worker
+ * index exists only so that callers can give each thread its own scratch.
+ *
+ * The first failure wins: its status and message are returned, and workers
+ * take no new job once it is recorded (jobs already running finish).
+ * Progress is reported from the calling thread only, so that a caller's
+ * callback need not be thread-safe nor care which thread it runs on; after
+ * the last job the final fraction is always reported once.
+ */
+#include "core/core.h"
+
+#include <pthread.h>
+#include <stdatomic.h>
+
+typedef struct pool_run {
+    int jobs;
+    btf_pool_job_fn job;
+    void *user;
+    const btf_pool_progress *progress;
+    int reported;           /* jobs done at the last progress report */
+    atomic_int next, done, failed;
+    pthread_mutex_t lock;   /* guards status and error */
+    btf_status status;
+    btf_error error;
+} pool_run;
+
+typedef struct pool_worker {
+    pool_run *run;
+    int index;
+} pool_worker;
+
+static void report(pool_run *r, int done)
+{
+    const btf_pool_progress *p = r->progress;
+    r->reported = done;
+    p->fn(p->user, p->from + (p->to - p->from) * (double)done / (double)r->jobs, p->what);
+}
+
+static void *work(void *arg)
+{
+    pool_worker *w = arg;
+    pool_run *r = w->run;
+    const btf_pool_progress *p = w->index == 0 && r->progress && r->progress->fn ? r->progress
+                                                                                 : NULL;
+    int every = p && p->every > 1 ? p->every : 1;
+    btf_error e = {0};
+    while (!atomic_load(&r->failed)) {
+        int t = atomic_fetch_add(&r->next, 1);
+        if (t >= r->jobs)
+            break;
+        btf_status rc = r->job(r->user, t, w->index, &e);
+        if (rc != BTF_OK) {
+            pthread_mutex_lock(&r->lock);
+            if (!atomic_load(&r->failed)) {
+                r->status = rc;
+                r->error = e;
+                atomic_store(&r->failed, 1);
+            }
+            pthread_mutex_unlock(&r->lock);
+            break;
+        }
+        int d = atomic_fetch_add(&r->done, 1) + 1;
+        if (p && d - r->reported >= every && d < r->jobs)
+            report(r, d);
+    }
+    return NULL;
+}
+
+int btf_pool_workers(int threads, int jobs)
+{
+    int n = threads > 0 ? threads : btf_cpu_count();
+    if (n > BTF_POOL_MAX_THREADS)
+        n = BTF_POOL_MAX_THREADS;
+    if (n > jobs)
+        n = jobs;
+    return n < 1 ? 1 : n;
+}
+
+btf_status btf_pool_run(int jobs, int threads, btf_pool_job_fn job, void *user,
+                        const btf_pool_progress *progress, btf_error *err)
+{
+    if (jobs <= 0)
+        return BTF_OK;
+    if (!job)
+        return btf_fail(err, BTF_E_ARG, "thread pool: no job function given");
+    pool_run r = {.jobs = jobs, .job = job, .user = user, .progress = progress,
+                  .status = BTF_OK};
+    atomic_init(&r.next, 0);
+    atomic_init(&r.done, 0);
+    atomic_init(&r.failed, 0);
+    pthread_mutex_init(&r.lock, NULL);
+    int workers = btf_pool_workers(threads, jobs);
+    pthread_t tid[BTF_POOL_MAX_THREADS];
+    pool_worker arg[BTF_POOL_MAX_THREADS];
+    int started = 0;
+    for (int i = 1; i < workers; i++) {
+        arg[i] = (pool_worker){&r, i};
+        /* A thread that cannot be started only means fewer workers: the
+         * jobs still all get done, by the others. */
+        if (pthread_create(&tid[i], NULL, work, &arg[i]) != 0)
+            break;
+        started = i;
+    }
+    arg[0] = (pool_worker){&r, 0};
+    work(&arg[0]);
+    for (int i = 1; i <= started; i++)
+        pthread_join(tid[i], NULL);
+    pthread_mutex_destroy(&r.lock);
+    if (atomic_load(&r.failed)) {
+        if (err)
+            *err = r.error;
+        return r.status;
+    }
+    if (progress && progress->fn)
+        report(&r, jobs);
+    return BTF_OK;
+}

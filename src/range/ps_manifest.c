@@ -1,0 +1,182 @@
+/*
+ * ps_manifest.c — photometric stereo (Haindl & Filip 2007, section II.B)
+ * on ordinary captures listed in a manifest: a TSV file (read by io/tsv.c)
+ * with a header line naming its columns: path (relative to the manifest's
+ * folder, or absolute), the light as theta_l, phi_l (degrees) or as lx,
+ * ly, lz (a vector), and optionally r, g, b (the light's intensity). The
+ * table is turned into lights, intensities and paths here; the run itself
+ * is photostereo.c's. Every message names the manifest, and a bad value its
+ * line and column, since a person wrote the file.
+ */
+#include "range/range.h"
+#include "io/io.h"
+#include "core/core.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The manifest's columns; -1 when absent. */
+typedef struct manifest_columns {
+    int path, theta, phi, lx, ly, lz, r, g, b;
+} manifest_columns;
+
+/* What a manifest describes: count images, their lights and intensities. */
+typedef struct manifest {
+    int count;
+    double *lights;       /* count x 3 */
+    double *intensity;    /* count x 3, or NULL without r g b columns */
+    char **paths;         /* count, resolved against the manifest's folder */
+} manifest;
+
+static btf_status find_columns(const btf_tsv *t, const char *path, manifest_columns *c,
+                               btf_error *err)
+{
+    c->path = btf_tsv_column(t, "path");
+    c->theta = btf_tsv_column(t, "theta_l");
+    c->phi = btf_tsv_column(t, "phi_l");
+    c->lx = btf_tsv_column(t, "lx");
+    c->ly = btf_tsv_column(t, "ly");
+    c->lz = btf_tsv_column(t, "lz");
+    c->r = btf_tsv_column(t, "r");
+    c->g = btf_tsv_column(t, "g");
+    c->b = btf_tsv_column(t, "b");
+    if (c->path < 0)
+        return btf_fail(err, BTF_E_FORMAT, "%s: no 'path' column in the header line", path);
+    int angles = (c->theta >= 0) + (c->phi >= 0), vec = (c->lx >= 0) + (c->ly >= 0) + (c->lz >= 0);
+    int rgb = (c->r >= 0) + (c->g >= 0) + (c->b >= 0);
+    if (angles == 1 || (vec != 0 && vec != 3) || (rgb != 0 && rgb != 3))
+        return btf_fail(err, BTF_E_FORMAT, "%s: incomplete columns: give theta_l and phi_l, or "
+                        "lx, ly and lz, and r, g, b together or not at all", path);
+    if (angles == 2 && vec == 3)
+        return btf_fail(err, BTF_E_FORMAT, "%s: both theta_l/phi_l and lx/ly/lz columns: give "
+                        "the light one way only", path);
+    if (angles == 0 && vec == 0)
+        return btf_fail(err, BTF_E_FORMAT, "%s: no light columns (theta_l, phi_l or lx, ly, lz)",
+                        path);
+    return BTF_OK;
+}
+
+/* Row `row`'s light into light[3] and, with r g b columns, its intensity
+ * into intensity[3] (NULL otherwise). */
+static btf_status read_row(const btf_tsv *t, const char *path, int row, const manifest_columns *c,
+                           double *light, double *intensity, btf_error *err)
+{
+    btf_status rc;
+    if (c->theta >= 0) {
+        btf_dir d;
+        if ((rc = btf_tsv_number(t, path, row, c->theta, &d.theta, err)) ||
+            (rc = btf_tsv_number(t, path, row, c->phi, &d.phi, err)))
+            return rc;
+        if (d.theta < 0.0 || d.theta > 90.0)
+            return btf_fail(err, BTF_E_FORMAT, "%s:%d: theta_l %g out of range 0..90 degrees",
+                            path, t->line_no[row], d.theta);
+        btf_dir_to_vec(d, light);
+    } else {
+        int cols[3] = {c->lx, c->ly, c->lz};
+        for (int k = 0; k < 3; k++)
+            if ((rc = btf_tsv_number(t, path, row, cols[k], &light[k], err)))
+                return rc;
+        double len = sqrt(light[0] * light[0] + light[1] * light[1] + light[2] * light[2]);
+        if (!(len > 1e-12) || !isfinite(len))
+            return btf_fail(err, BTF_E_FORMAT, "%s:%d: light (%g, %g, %g) is not a non-zero "
+                            "finite vector", path, t->line_no[row], light[0], light[1], light[2]);
+    }
+    if (intensity) {
+        int cols[3] = {c->r, c->g, c->b};
+        for (int k = 0; k < 3; k++) {
+            if ((rc = btf_tsv_number(t, path, row, cols[k], &intensity[k], err)))
+                return rc;
+            if (!(intensity[k] > 0.0))
+                return btf_fail(err, BTF_E_FORMAT, "%s:%d: intensity %s = %g must be positive",
+                                path, t->line_no[row], t->names[cols[k]], intensity[k]);
+        }
+    }
+    return BTF_OK;
+}
+
+/* A manifest's relative path, from the manifest's folder. */
+static btf_status resolve_path(const char *manifest_path, const char *rel, char **out,
+                               btf_error *err)
+{
+    if (!*rel)
+        return btf_fail(err, BTF_E_FORMAT, "%s: empty path", manifest_path);
+    const char *slash = strrchr(manifest_path, '/');
+    size_t dl = rel[0] == '/' || !slash ? 0 : (size_t)(slash - manifest_path) + 1;
+    size_t rl = strlen(rel);
+    char *p = btf_alloc(dl + rl + 1, 1, err);
+    if (!p)
+        return BTF_E_NOMEM;
+    memcpy(p, manifest_path, dl);
+    memcpy(p + dl, rel, rl + 1);
+    *out = p;
+    return BTF_OK;
+}
+
+static void manifest_free(manifest *m)
+{
+    for (int i = 0; m->paths && i < m->count; i++)
+        free(m->paths[i]);
+    free(m->paths);
+    free(m->lights);
+    free(m->intensity);
+    memset(m, 0, sizeof *m);
+}
+
+/* The table t read from the manifest at path into m (freed on failure). */
+static btf_status manifest_parse(const btf_tsv *t, const char *path, manifest *m, btf_error *err)
+{
+    memset(m, 0, sizeof *m);
+    manifest_columns c;
+    btf_status rc = find_columns(t, path, &c, err);
+    if (rc)
+        return rc;
+    int n = t->nrows;
+    if (n < 3)
+        return btf_fail(err, BTF_E_FORMAT, "%s: %d images; photometric stereo needs at least 3",
+                        path, n);
+    m->count = n;
+    m->lights = btf_alloc((size_t)n * 3, sizeof(double), err);
+    m->intensity = c.r >= 0 ? btf_alloc((size_t)n * 3, sizeof(double), err) : NULL;
+    m->paths = btf_calloc((size_t)n, sizeof(char *), err);
+    if (!m->lights || !m->paths || (c.r >= 0 && !m->intensity))
+        rc = BTF_E_NOMEM;
+    for (int i = 0; i < n && rc == BTF_OK; i++) {
+        rc = read_row(t, path, i, &c, m->lights + 3 * i,
+                      m->intensity ? m->intensity + 3 * i : NULL, err);
+        if (rc == BTF_OK)
+            rc = resolve_path(path, btf_tsv_cell(t, i, c.path), &m->paths[i], err);
+    }
+    if (rc)
+        manifest_free(m);
+    return rc;
+}
+
+btf_status btf_photostereo_manifest(const char *path, const btf_photostereo_opts *opts,
+                                    btf_ps_result *out, btf_error *err)
+{
+    btf_status rc = btf_ps_result_start(out, err);
+    if (rc)
+        return rc;
+    if (!path)
+        return btf_fail(err, BTF_E_ARG, "photostereo: no manifest given");
+    btf_photostereo_opts o = {0};
+    if (opts)
+        o = *opts;
+    btf_tsv t;
+    if ((rc = btf_tsv_read(path, &t, err)))
+        return rc;
+    manifest m;
+    rc = manifest_parse(&t, path, &m, err);
+    btf_tsv_free(&t);
+    if (rc)
+        return rc;
+    /* The size comes from the first image (btf_ps_run probes it). */
+    btf_ps_source src = {.name = path, .count = m.count, .paths = (const char *const *)m.paths,
+                         .read = o.read, .channels = 3};
+    rc = btf_ps_run(&src, m.lights, m.intensity, &o, out, err);
+    manifest_free(&m);
+    if (rc)
+        btf_ps_result_free(out);
+    return rc;
+}

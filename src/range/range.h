@@ -1,0 +1,178 @@
+/*
+ * range.h — the range-map stage's internals (src/range/; Haindl & Filip
+ * 2007, section II.B): robust Lambertian photometric stereo and its parts.
+ * Private to the library.
+ *
+ * The files and who calls whom (no file calls back into one that calls it):
+ *
+ *   photostereo.c  the public entry points, options, the light set, the run
+ *     -> ps_sources.c  images in memory or decoded from files; the mask
+ *     -> ps_passes.c   the two passes over the images: grey samples, albedo
+ *          -> ps_sources.c
+ *     -> ps_solve.c    every pixel's fit, rows spread over the thread pool
+ *          -> ps_fit.c     the robust fit of one pixel
+ *               -> linalg3.c, order.c   3x3 algebra, order statistics
+ *     -> linalg3.c     the conditioning of the whole light set
+ *     -> integrate.c   normals to heights (public: btf_integrate)
+ *   ps_manifest.c  manifest files -> photostereo.c
+ *   ps_write.c     the result on disk -> ps_preview.c (previews) -> ps_sources.c
+ */
+#ifndef BTF_RANGE_H
+#define BTF_RANGE_H
+
+#include "btfcar.h"
+
+#include <stdint.h>
+
+/* ------------------------------------------------ 3x3 algebra: linalg3.c */
+
+/* A symmetric 3x3 matrix, such as the Gram matrix sum l l^T of a pixel's
+ * light directions, by its six distinct entries. */
+typedef struct btf_sym3 {
+    double xx, yy, zz, xy, xz, yz;
+} btf_sym3;
+
+/* m += v v^T. Inline: it runs once per sample of every fit. */
+static inline void btf_sym3_add_outer(btf_sym3 *m, const double v[3])
+{
+    m->xx += v[0] * v[0];
+    m->yy += v[1] * v[1];
+    m->zz += v[2] * v[2];
+    m->xy += v[0] * v[1];
+    m->xz += v[0] * v[2];
+    m->yz += v[1] * v[2];
+}
+
+/* v^T m v: with m the inverse Gram matrix, a sample's leverage. */
+static inline double btf_sym3_quadratic(const btf_sym3 *m, const double v[3])
+{
+    return m->xx * v[0] * v[0] + m->yy * v[1] * v[1] + m->zz * v[2] * v[2] +
+           2.0 * (m->xy * v[0] * v[1] + m->xz * v[0] * v[2] + m->yz * v[1] * v[2]);
+}
+
+/* Condition number lambda_max / lambda_min; infinity when singular. */
+double btf_sym3_condition(const btf_sym3 *m);
+/* The unit eigenvector of the smallest eigenvalue: the direction a set of
+ * lights resolves worst. */
+void btf_sym3_weakest_axis(const btf_sym3 *m, double axis[3]);
+/* Solves m x = rhs when m is positive definite with a condition number of
+ * at most max_condition; 0 when rejected. inverse (may be NULL) receives
+ * m^-1. */
+int btf_sym3_solve(const btf_sym3 *m, const double rhs[3], double max_condition, double x[3],
+                   btf_sym3 *inverse);
+
+/* -------------------------------------------- order statistics: order.c */
+
+/* The k-th smallest of a[0..n-1] (0-based); reorders a. */
+double btf_select_kth(double *a, int n, int k);
+/* Sorts a[0..n-1] ascending, in place, without allocating. */
+void btf_sort_small(double *a, int n);
+
+/* ------------------------------------------ the pixel fit: ps_fit.c */
+
+/* The options of btf_photostereo_opts with defaults and special values
+ * resolved (photostereo.c), as the fit uses them. */
+typedef struct btf_ps_params {
+    double dark;          /* shadow threshold, fraction of the reference level; 0: none */
+    double trim_low, trim_high;
+    double outlier;
+    double saturation;    /* INFINITY: no saturation rule */
+    double max_condition;
+    double specular_cos;  /* cos of the specular cone; > 1: no highlight rule */
+    int iterations;
+    int plain;
+} btf_ps_params;
+
+/* One thread's working memory for the fits of `count` samples per pixel. */
+typedef struct btf_ps_scratch {
+    double *values;          /* count: sample values to sort or select in */
+    double *residuals;       /* count */
+    unsigned char *unshadowed; /* count flags: candidates the shadow rules keep */
+    unsigned char *in_fit;   /* count flags: the samples of the current fit */
+    unsigned char *next_fit; /* count flags: the set a reweighting step proposes */
+    double *row_samples;     /* width x count: one image row, pixel-major */
+} btf_ps_scratch;
+btf_status btf_ps_scratch_alloc(btf_ps_scratch *s, int count, int width, btf_error *err);
+void btf_ps_scratch_free(btf_ps_scratch *s);
+
+/* The robust fit of one pixel: samples[i] its grey value under the unit
+ * light lights[3 i..] (negative: saturated), halfway[3 i..] the unit half
+ * vector of that light and the view. 1: *scaled_normal = albedo x normal
+ * and s->in_fit flags the samples of the final fit; 0: no fit (fallback). */
+int btf_ps_fit_pixel(const btf_ps_params *params, const double *lights, const double *halfway,
+                     int count, const double *samples, btf_ps_scratch *s,
+                     double scaled_normal[3]);
+/* The samples from which the fallback normal (0, 0, 1) takes its albedo. */
+void btf_ps_fallback_set(const double *lights, int count, const double *samples,
+                         unsigned char *in_fit);
+
+/* -------------------------------------- every pixel's fit: ps_solve.c */
+
+/* The fit of a whole image: inputs, outputs and counts. */
+typedef struct btf_ps_solve {
+    int width, height, count;
+    int set_words;             /* 64-bit words per pixel in fit_sets */
+    const double *lights;      /* count x 3, unit */
+    const double *halfway;     /* count x 3, unit half vectors with the view (0, 0, 1) */
+    const float *grey;         /* count x (width x height), image-major; < 0: saturated */
+    const unsigned char *inside; /* width x height flags: the mask */
+    btf_ps_params params;
+    float *normal;             /* width x height x 3 */
+    float *lights_used, *valid; /* width x height each */
+    uint64_t *fit_sets;        /* (width x height) x set_words: samples of each fit */
+    int fitted, fallback;      /* pixel counts, set by btf_ps_solve_all */
+} btf_ps_solve;
+/* Fits every pixel inside the mask over `threads` threads (0: all CPUs);
+ * progress (may be NULL) runs from `from` to `to`. */
+btf_status btf_ps_solve_all(btf_ps_solve *job, int threads, btf_progress_fn progress,
+                            void *progress_user, double from, double to, btf_error *err);
+
+/* ------------------------------------------ image sources: ps_sources.c */
+
+/* Where the images come from: memory, or files decoded on demand (once per
+ * pass, so that a dataset never has all its images in memory). */
+typedef struct btf_ps_source {
+    const char *name;          /* for messages: "photostereo", a manifest, a dataset */
+    int count;
+    const btf_image *images;   /* in memory, or NULL */
+    const char *const *paths;  /* files otherwise */
+    btf_read_opts read;
+    int width, height, channels; /* 0 x 0 for files until btf_ps_source_probe */
+} btf_ps_source;
+/* The size of a file source from its first image's header. */
+btf_status btf_ps_source_probe(btf_ps_source *src, btf_error *err);
+/* Image i: a pointer into memory, or decoded into *tmp (free it after). */
+btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
+                             const btf_image **img, btf_error *err);
+/* inside[k] = 1 where the mask (NULL: everywhere) is non-zero and finite in
+ * any channel; *pixels counts them. An error names `name` when the mask does
+ * not fit a width x height image. */
+btf_status btf_ps_mask_inside(const char *name, const btf_image *mask, int width, int height,
+                              unsigned char *inside, int *pixels, btf_error *err);
+
+/* -------------------------------------- passes over images: ps_passes.c */
+
+/* Pass 1: every image's grey samples into grey (count x width x height),
+ * progress 0 .. 0.4 for files. */
+btf_status btf_ps_pass_grey(const btf_ps_source *src, const double *intensity, double saturation,
+                            const unsigned char *inside, float *grey,
+                            const btf_photostereo_opts *o, btf_error *err);
+/* Pass 2: the colour albedo of every pixel with its normal fixed, over the
+ * samples of its fit; progress 0.5 .. 0.9 for files. */
+btf_status btf_ps_pass_albedo(const btf_ps_source *src, const double *intensity,
+                              const btf_ps_solve *job, btf_image *albedo,
+                              const btf_photostereo_opts *o, btf_error *err);
+/* o->progress, if any. */
+void btf_ps_report(const btf_photostereo_opts *o, double fraction, const char *what);
+
+/* -------------------------------------------- the run: photostereo.c */
+
+/* The whole stage on a source lit by lights (count x 3, any length) with
+ * intensity (NULL or count x 3); a file source's size comes from its first
+ * image. Fills out, which the caller has cleared. */
+btf_status btf_ps_run(btf_ps_source *src, const double *lights, const double *intensity,
+                      const btf_photostereo_opts *o, btf_ps_result *out, btf_error *err);
+/* Clears out for a call (view -1); BTF_E_ARG when out is NULL. */
+btf_status btf_ps_result_start(btf_ps_result *out, btf_error *err);
+
+#endif

@@ -1,0 +1,152 @@
+/*
+ * test_pool.c — the library's thread pool (src/core/pool.c), which the
+ * segmentation features, photometric stereo and the generator share: every
+ * job runs exactly once whatever the thread count, worker indices stay
+ * below btf_pool_workers, the first failure is returned with its message
+ * and stops the batch, and progress comes from the calling thread only,
+ * in order, ending at its `to` fraction.
+ */
+#include "testutil.h"
+#include "core/core.h"
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define JOBS 1000
+
+typedef struct batch {
+    atomic_int runs[JOBS];
+    unsigned results[JOBS];
+    int workers;
+    atomic_int bad_worker;
+    int fail_at;              /* the job that fails; -1: none */
+    atomic_int started;
+} batch;
+
+static btf_status job(void *user, int j, int worker, btf_error *err)
+{
+    batch *b = user;
+    atomic_fetch_add(&b->started, 1);
+    if (worker < 0 || worker >= b->workers)
+        atomic_store(&b->bad_worker, 1);
+    atomic_fetch_add(&b->runs[j], 1);
+    /* Output that depends on the job index alone. */
+    unsigned h = 2166136261u ^ (unsigned)j;
+    for (int i = 0; i < 100; i++)
+        h = (h ^ (unsigned)i) * 16777619u;
+    b->results[j] = h;
+    if (j == b->fail_at)
+        return btf_fail(err, BTF_E_DATA, "job %d failed on purpose", j);
+    return BTF_OK;
+}
+
+static void batch_init(batch *b, int threads, int fail_at)
+{
+    memset(b, 0, sizeof *b);
+    b->workers = btf_pool_workers(threads, JOBS);
+    b->fail_at = fail_at;
+}
+
+static void every_job_once(void **state)
+{
+    (void)state;
+    static batch ref, b;
+    batch_init(&ref, 1, -1);
+    btf_error err = {0};
+    TU_OK(btf_pool_run(JOBS, 1, job, &ref, NULL, &err), &err);
+    const int threads[] = {0, 2, 3, 7, 64, 1000};
+    for (size_t t = 0; t < sizeof threads / sizeof threads[0]; t++) {
+        batch_init(&b, threads[t], -1);
+        TU_OK(btf_pool_run(JOBS, threads[t], job, &b, NULL, &err), &err);
+        for (int j = 0; j < JOBS; j++)
+            assert_int_equal(atomic_load(&b.runs[j]), 1);
+        assert_memory_equal(b.results, ref.results, sizeof b.results);
+        assert_int_equal(atomic_load(&b.bad_worker), 0);
+    }
+    /* No job: nothing runs, no error. */
+    assert_int_equal(btf_pool_run(0, 4, job, &b, NULL, &err), BTF_OK);
+}
+
+static void workers_clamped(void **state)
+{
+    (void)state;
+    assert_int_equal(btf_pool_workers(5, 3), 3);
+    assert_int_equal(btf_pool_workers(1000, 1000), BTF_POOL_MAX_THREADS);
+    assert_int_equal(btf_pool_workers(4, 0), 1);
+    assert_int_equal(btf_pool_workers(0, 1000),
+                     btf_cpu_count() < BTF_POOL_MAX_THREADS ? btf_cpu_count()
+                                                            : BTF_POOL_MAX_THREADS);
+}
+
+static void first_failure_wins(void **state)
+{
+    (void)state;
+    static batch b;
+    for (int threads = 1; threads <= 4; threads++) {
+        batch_init(&b, threads, 10);
+        btf_error err = {0};
+        assert_int_equal(btf_pool_run(JOBS, threads, job, &b, NULL, &err), BTF_E_DATA);
+        assert_int_equal(err.code, BTF_E_DATA);
+        assert_string_equal(err.msg, "job 10 failed on purpose");
+        /* The batch stops: with one thread exactly at the failure, with
+         * more after the jobs already running. */
+        int started = atomic_load(&b.started);
+        if (threads == 1)
+            assert_int_equal(started, 11);
+        assert_true(started < JOBS);
+        /* err may be NULL. */
+        batch_init(&b, threads, 10);
+        assert_int_equal(btf_pool_run(JOBS, threads, job, &b, NULL, NULL), BTF_E_DATA);
+    }
+}
+
+typedef struct progress_log {
+    pthread_t caller;
+    int calls, wrong_thread;
+    double last;
+    int backwards;
+} progress_log;
+
+static void on_progress(void *user, double f, const char *what)
+{
+    progress_log *p = user;
+    assert_string_equal(what, "testing");
+    if (!pthread_equal(pthread_self(), p->caller))
+        p->wrong_thread = 1;
+    if (f < p->last)
+        p->backwards = 1;
+    p->last = f;
+    p->calls++;
+}
+
+static void progress_from_caller(void **state)
+{
+    (void)state;
+    static batch b;
+    for (int threads = 1; threads <= 4; threads++) {
+        progress_log log = {.caller = pthread_self(), .last = 0.25};
+        btf_pool_progress pp = {on_progress, &log, "testing", 0.25, 0.75, 100};
+        batch_init(&b, threads, -1);
+        btf_error err = {0};
+        TU_OK(btf_pool_run(JOBS, threads, job, &b, &pp, &err), &err);
+        assert_int_equal(log.wrong_thread, 0);
+        assert_int_equal(log.backwards, 0);
+        assert_true(log.last == 0.75);
+        assert_true(log.calls >= 1 && log.calls <= JOBS / 100 + 1);
+        if (threads == 1)
+            assert_int_equal(log.calls, JOBS / 100);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(every_job_once),
+        cmocka_unit_test(workers_clamped),
+        cmocka_unit_test(first_failure_wins),
+        cmocka_unit_test(progress_from_caller),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -88,7 +88,13 @@ $(CLI): $(CLI_OBJ) $(STATIC)
 	$(CC) $(SAN) -pthread -o $@ $(CLI_OBJ) $(STATIC) $(LDLIBS)
 
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_HELP) $(STATIC)
-	$(CC) $(SAN) -pthread -o $@ $< $(TEST_HELP) $(STATIC) $(LDLIBS) -lcmocka
+	$(CC) $(SAN) -pthread $(TEST_LDFLAGS) -o $@ $< $(TEST_HELP) $(STATIC) $(LDLIBS) -lcmocka
+
+# The fault simulator (tests/test_alloc_fail.c): the library's calls of
+# malloc & co. go to the test's __wrap_* functions, which fail the n-th one.
+ALLOC_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free \
+              -Wl,--wrap=aligned_alloc,--wrap=posix_memalign,--wrap=strdup,--wrap=strndup
+$(BUILD)/tests/test_alloc_fail: TEST_LDFLAGS = $(ALLOC_WRAP)
 
 # Run every test program; tests/run.sh prints the final "N passed, N failed".
 test-run: $(TEST_BIN) $(CLI)
@@ -146,7 +152,8 @@ $(FUZZ_BUILD)/fuzz_%: tests/fuzz_%.c $(FUZZ_OBJ)
 	clang++ -fsanitize=fuzzer $(FUZZ_SAN) -pthread -o $@ $@.o $(FUZZ_OBJ) $(LDLIBS)
 
 # Keep the objects (pattern-rule intermediates) so rebuilds are incremental.
-.SECONDARY: $(FUZZ_OBJ) $(SPIRV_H)
+# (A .SECONDARY with a list makes only those secondary: the test objects too.)
+.SECONDARY: $(FUZZ_OBJ) $(SPIRV_H) $(TEST_BIN:%=%.o) $(BENCH_BIN:%=%.o) $(TEST_HELP)
 
 fuzz-build: $(FUZZ_BIN)
 

@@ -50,11 +50,12 @@ CLI       := $(BUILD)/btfcar
 SOVERSION := 1
 SONAME    := libbtfcar.so.$(SOVERSION)
 # It exports exactly the functions include/btfcar.h declares: the objects
-# are compiled with hidden visibility (src/core/visibility.h gives the
-# public declarations default visibility), and the version script, made from
+# are compiled with hidden visibility (the header's declarations are under
+# #pragma GCC visibility push(default)), and the version script, made from
 # the header, makes everything else local. `make check-exports` checks it.
 EXPORT_MAP := $(BUILD)/gen/btfcar.map
-$(LIB_OBJ): CPPFLAGS += -fvisibility=hidden -include src/core/visibility.h
+$(LIB_OBJ): CFLAGS += -fvisibility=hidden
+$(LIB_OBJ): CXXFLAGS += -fvisibility=hidden
 
 # Keep generated SPIR-V headers and objects between builds.
 .SECONDARY:

@@ -22,6 +22,11 @@ CFLAGS    := -std=c11 $(COMMON)
 CXXFLAGS  := -std=c++17 $(COMMON) -I/usr/include/opencv4
 LDLIBS    := -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
              -lvulkan -lz -lstdc++ -lm -lpthread
+# The same for btfcar.pc: the dependencies that have a pkg-config file
+# (Requires.private) and the libraries that have none (Libs.private; Debian's
+# OpenCV -dev packages ship no opencv4.pc).
+PC_REQUIRES_PRIVATE := OpenEXR vulkan zlib
+PC_LIBS_PRIVATE     := -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lstdc++ -lm -pthread
 
 LIB_C     := $(sort $(wildcard src/*/*.c) $(wildcard gpu/*.c))
 LIB_CXX   := $(sort $(wildcard src/*/*.cpp))
@@ -40,10 +45,22 @@ STATIC    := $(BUILD)/libbtfcar.a
 SHARED    := $(BUILD)/libbtfcar.so
 CLI       := $(BUILD)/btfcar
 
+# The shared library's major version (docs/install.md, "Shared library and
+# soname"): raised on every ABI break.
+SOVERSION := 1
+SONAME    := libbtfcar.so.$(SOVERSION)
+# It exports exactly the functions include/btfcar.h declares: the objects
+# are compiled with hidden visibility (the header's declarations are under
+# #pragma GCC visibility push(default)), and the version script, made from
+# the header, makes everything else local. `make check-exports` checks it.
+EXPORT_MAP := $(BUILD)/gen/btfcar.map
+$(LIB_OBJ): CFLAGS += -fvisibility=hidden
+$(LIB_OBJ): CXXFLAGS += -fvisibility=hidden
+
 # Keep generated SPIR-V headers and objects between builds.
 .SECONDARY:
 
-.PHONY: all deps test test-run asan bench demo install uninstall fuzz fuzz-build clean help check-shaders noise-stream check-layering
+.PHONY: all deps test test-run asan bench demo install uninstall fuzz fuzz-build clean help check-shaders noise-stream check-exports check-install check-layering
 
 all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN) $(BUILD)/noise_stream
 
@@ -57,6 +74,9 @@ help:
 	@echo "make noise-stream  build/noise_stream: raw noise words for dieharder"
 	@echo "make fuzz     libFuzzer targets with clang (FUZZ_SECONDS=30 each)"
 	@echo "make install  PREFIX=/usr/local: library, header, btfcar, pkg-config file"
+	@echo "make check-exports  libbtfcar.so exports exactly the functions of include/btfcar.h"
+	@echo "make check-install  install into build/check-install; link a program by pkg-config"
+	@echo "make check-layering  no two object files of the library call each other"
 
 deps:
 	@sh tools/install-deps.sh
@@ -81,21 +101,38 @@ $(STATIC): $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
-$(SHARED): $(LIB_OBJ)
-	$(CXX) -shared -Wl,-soname,libbtfcar.so.1 $(SAN) -o $@ $^ $(LDLIBS)
+$(EXPORT_MAP): include/btfcar.h tools/public-symbols.sh
+	@mkdir -p $(dir $@)
+	CC="$(CC)" sh tools/public-symbols.sh include/btfcar.h --map > $@.tmp
+	mv $@.tmp $@
+
+$(SHARED): $(LIB_OBJ) $(EXPORT_MAP)
+	$(CXX) -shared -Wl,-soname,$(SONAME) -Wl,--version-script=$(EXPORT_MAP) $(SAN) -o $@ \
+	  $(LIB_OBJ) $(LDLIBS)
+
+# The dynamic symbols of libbtfcar.so against the header's declarations,
+# both ways: no internal symbol exported, no public function missing.
+check-exports: $(SHARED)
+	@CC="$(CC)" sh tools/check-exports.sh $(SHARED) include/btfcar.h
 
 $(CLI): $(CLI_OBJ) $(STATIC)
 	$(CC) $(SAN) -pthread -o $@ $(CLI_OBJ) $(STATIC) $(LDLIBS)
 
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_HELP) $(STATIC)
-	$(CC) $(SAN) -pthread -o $@ $< $(TEST_HELP) $(STATIC) $(LDLIBS) -lcmocka
+	$(CC) $(SAN) -pthread $(TEST_LDFLAGS) -o $@ $< $(TEST_HELP) $(STATIC) $(LDLIBS) -lcmocka
+
+# The fault simulator (tests/test_alloc_fail.c): the library's calls of
+# malloc & co. go to the test's __wrap_* functions, which fail the n-th one.
+ALLOC_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free \
+              -Wl,--wrap=aligned_alloc,--wrap=posix_memalign,--wrap=strdup,--wrap=strndup
+$(BUILD)/tests/test_alloc_fail: TEST_LDFLAGS = $(ALLOC_WRAP)
 
 # No two object files of the library may call each other (docs/design.md).
 check-layering: $(LIB_OBJ)
 	@sh tools/check-layering.sh $(LIB_OBJ)
 
 # Run every test program; tests/run.sh prints the final "N passed, N failed".
-test-run: $(TEST_BIN) $(CLI) check-layering
+test-run: $(TEST_BIN) $(CLI) check-exports check-layering
 	@BTF_CLI=$(abspath $(CLI)) sh tests/run.sh $(TEST_BIN)
 
 test: deps
@@ -150,7 +187,8 @@ $(FUZZ_BUILD)/fuzz_%: tests/fuzz_%.c $(FUZZ_OBJ)
 	clang++ -fsanitize=fuzzer $(FUZZ_SAN) -pthread -o $@ $@.o $(FUZZ_OBJ) $(LDLIBS)
 
 # Keep the objects (pattern-rule intermediates) so rebuilds are incremental.
-.SECONDARY: $(FUZZ_OBJ) $(SPIRV_H)
+# (A .SECONDARY with a list makes only those secondary: the test objects too.)
+.SECONDARY: $(FUZZ_OBJ) $(SPIRV_H) $(TEST_BIN:%=%.o) $(BENCH_BIN:%=%.o) $(TEST_HELP)
 
 fuzz-build: $(FUZZ_BIN)
 
@@ -162,12 +200,20 @@ install: $(STATIC) $(SHARED) $(CLI)
 	install -d $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include $(DESTDIR)$(PREFIX)/bin \
 	  $(DESTDIR)$(PREFIX)/lib/pkgconfig
 	install -m 644 $(STATIC) $(DESTDIR)$(PREFIX)/lib/
-	install -m 755 $(SHARED) $(DESTDIR)$(PREFIX)/lib/libbtfcar.so.1
-	ln -sf libbtfcar.so.1 $(DESTDIR)$(PREFIX)/lib/libbtfcar.so
+	install -m 755 $(SHARED) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
+	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libbtfcar.so
 	install -m 644 include/btfcar.h $(DESTDIR)$(PREFIX)/include/
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/
-	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBS@|$(LDLIBS)|' -e 's|@VERSION@|$(shell sed -n 's/.*BTF_VERSION_STRING "\(.*\)"/\1/p' include/btfcar.h)|' \
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@REQUIRES_PRIVATE@|$(PC_REQUIRES_PRIVATE)|' \
+	  -e 's|@LIBS_PRIVATE@|$(PC_LIBS_PRIVATE)|' -e 's|@VERSION@|$(shell sed -n 's/.*BTF_VERSION_STRING "\(.*\)"/\1/p' include/btfcar.h)|' \
 	  btfcar.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/btfcar.pc
+
+# Installs into $(BUILD)/check-install and builds a small program with
+# `pkg-config btfcar`, shared and --static (tools/check-install.sh).
+check-install: $(STATIC) $(SHARED) $(CLI)
+	@rm -rf $(BUILD)/check-install
+	@$(MAKE) --no-print-directory install DESTDIR= PREFIX=$(abspath $(BUILD))/check-install >/dev/null
+	@CC="$(CC)" sh tools/check-install.sh $(abspath $(BUILD))/check-install
 
 uninstall:
 	rm -f $(DESTDIR)$(PREFIX)/lib/libbtfcar.a $(DESTDIR)$(PREFIX)/lib/libbtfcar.so* \

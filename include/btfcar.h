@@ -17,6 +17,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* What this header declares is the ABI of libbtfcar.so: the library is
+ * compiled with -fvisibility=hidden, and these declarations alone are
+ * exported (docs/install.md, "Shared library and soname"). */
+#pragma GCC visibility push(default)
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -715,4 +720,6 @@ int btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int
 #ifdef __cplusplus
 }
 #endif
+
+#pragma GCC visibility pop
 #endif /* BTFCAR_H */

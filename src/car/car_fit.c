@@ -270,13 +270,13 @@ static void spectrum(const btf_car_band *b, int n, double *min_a2, double *mean_
  * A stable model does not grow: neither down the rows (the last quarter of
  * rows against the quarter before) nor along them (the last quarter of
  * columns against the quarter before; the zero boundary only ever lowers
- * the variance near an edge). */
+ * the variance near an edge). 1: grows, 0: does not, -1: out of memory. */
 static int recursion_grows(const btf_car_band *b)
 {
     enum { R = 160, C = 192 };
     double *f = calloc((size_t)R * C, sizeof(double));
     if (!f)
-        return 1; /* cannot check: treat as unstable, which only shrinks */
+        return -1;
     btf_rng rng;
     btf_rng_seed(&rng, 12345);
     for (int y = 0; y < R; y++)
@@ -315,7 +315,8 @@ static int recursion_grows(const btf_car_band *b)
     return rows2 > 1.5 * rows1 + 1e-12 || cols2 > 1.5 * cols1 + 1e-12;
 }
 
-int btf_car_is_stable(const btf_car_band *b)
+/* 1: stable, 0: not, -1: out of memory (cannot tell). */
+static int stability(const btf_car_band *b)
 {
     double sum = 0.0;
     for (int i = 0; i < b->n; i++) {
@@ -329,7 +330,13 @@ int btf_car_is_stable(const btf_car_band *b)
     spectrum(b, 64, &mn, &inv);
     if (!(mn > 1e-6))
         return 0;
-    return !recursion_grows(b);
+    int grows = recursion_grows(b);
+    return grows < 0 ? -1 : !grows;
+}
+
+int btf_car_is_stable(const btf_car_band *b)
+{
+    return stability(b) == 1;
 }
 
 double btf_car_stationary_variance(const btf_car_band *b)
@@ -387,22 +394,30 @@ static void moments(const double *band, size_t n, double *mean, double *sd)
     *sd = sqrt(v / (double)n) * big;
 }
 
-/* Shrinks gamma until the model is stable; returns the factor applied. */
-static double stabilise(btf_car_band *b)
+/* Shrinks gamma until the model is stable; *factor gets the factor
+ * applied. -1 when out of memory (the model's stability is unknown, and
+ * shrinking it anyway would make the result depend on free memory). */
+static int stabilise(btf_car_band *b, double *factor)
 {
     double f = 1.0;
     float g0[BTF_CAR_MAX_NEIGHBOURS];
     memcpy(g0, b->gamma, sizeof g0);
-    for (int k = 0; k < 200 && !btf_car_is_stable(b); k++) {
+    int st = 0;
+    for (int k = 0; k < 200 && (st = stability(b)) == 0; k++) {
         f *= 0.95;
         for (int i = 0; i < b->n; i++)
             b->gamma[i] = (float)(g0[i] * f);
     }
-    if (!btf_car_is_stable(b)) { /* cannot happen for f -> 0; be safe */
+    if (st == 0)
+        st = stability(b);
+    if (st < 0)
+        return -1;
+    if (st == 0) { /* cannot happen for f -> 0; be safe */
         b->n = 0;
         f = 0.0;
     }
-    return f;
+    *factor = f;
+    return 0;
 }
 
 int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
@@ -499,7 +514,10 @@ int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
     for (int i = 0; i < best_eta; i++)
         out->gamma[i] = (float)g[i];
     double s2 = (2.0 * PRIOR_B0 + best_lambda) / (2.0 * PRIOR_A0 + (double)t - 2.0);
-    inf.shrink = stabilise(out);
+    if (stabilise(out, &inf.shrink) < 0) {
+        free(z);
+        return btf_fail(err, BTF_E_NOMEM, "out of memory checking the model's stability");
+    }
     if (inf.shrink < 1.0) {
         double gs[BTF_CAR_MAX_NEIGHBOURS];
         for (int i = 0; i < out->n; i++)

@@ -151,7 +151,7 @@ static void round_trip_sizes(void **state)
                     half_exact_image(&a, w, h, c, (uint32_t)(s * 7 + c));
                 else
                     random_image(&a, w, h, c, (uint32_t)(s * 7 + c), -1000.0f, 1000.0f);
-                TU_OK(btf_exr_write(p, &a, half, &e), &e);
+                TU_OK(btf_image_write_exr(p, &a, half, &e), &e);
                 btf_image_header hd;
                 TU_OK(btf_exr_probe(p, &hd, &e), &e);
                 assert_int_equal(hd.format, BTF_FILE_EXR);
@@ -178,7 +178,7 @@ static void half_rounds_to_nearest(void **state)
     btf_image a, b;
     random_image(&a, 31, 9, 3, 5, 0.0f, 8.0f);
     const char *p = tu_fmt("%s/h.exr", tu_dir);
-    TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     for (size_t i = 0; i < (size_t)31 * 9 * 3; i++)
         assert_true(fabsf(a.data[i] - b.data[i]) <= a.data[i] * (1.0f / 2048.0f) + 1e-7f);
@@ -199,14 +199,14 @@ static void extreme_values(void **state)
     const char *p = tu_fmt("%s/x.exr", tu_dir);
 
     /* Float keeps every value bit for bit, subnormals and -0 included. */
-    TU_OK(btf_exr_write(p, &a, 0, &e), &e);
+    TU_OK(btf_image_write_exr(p, &a, 0, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     assert_memory_equal(a.data, b.data, sizeof in);
     btf_image_free(&b);
 
     /* Half clamps to +-65504 (never Inf); tiny values go to 0 or a half
      * subnormal, keeping their sign. */
-    TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     for (int i = 0; i < n; i++) {
         float v = b.data[i];
@@ -232,7 +232,7 @@ static void channel_conversion(void **state)
     btf_image rgb, grey, b;
     random_image(&rgb, 9, 4, 3, 11, 0.0f, 10.0f);
     const char *p = tu_fmt("%s/c.exr", tu_dir);
-    TU_OK(btf_exr_write(p, &rgb, 0, &e), &e);
+    TU_OK(btf_image_write_exr(p, &rgb, 0, &e), &e);
     TU_OK(btf_exr_read(p, 1, &b, &e), &e);
     assert_int_equal(b.channels, 1);
     for (int i = 0; i < 36; i++) {
@@ -246,7 +246,7 @@ static void channel_conversion(void **state)
     btf_image_free(&b);
 
     random_image(&grey, 5, 6, 1, 12, -5.0f, 5.0f);
-    TU_OK(btf_exr_write(p, &grey, 1, &e), &e);
+    TU_OK(btf_image_write_exr(p, &grey, 1, &e), &e);
     TU_OK(btf_exr_read(p, 3, &b, &e), &e);
     assert_int_equal(b.channels, 3);
     for (int i = 0; i < 30; i++) {
@@ -257,7 +257,7 @@ static void channel_conversion(void **state)
     /* An RGB image of FLT_MAX has a luminance of FLT_MAX, not Inf. */
     for (int i = 0; i < 36 * 3; i++)
         rgb.data[i] = FLT_MAX;
-    TU_OK(btf_exr_write(p, &rgb, 0, &e), &e);
+    TU_OK(btf_image_write_exr(p, &rgb, 0, &e), &e);
     TU_OK(btf_exr_read(p, 1, &b, &e), &e);
     for (int i = 0; i < 36; i++)
         assert_true(isfinite(b.data[i]) && b.data[i] > 3e38f);
@@ -281,7 +281,7 @@ static void streaming_equals_one_shot(void **state)
         int w = 37, h = 101, c = 3;
         random_image(&a, w, h, c, 99 + half, -3.0f, 3.0f);
         const char *p1 = tu_fmt("%s/one.exr", d), *p2 = tu_fmt("%s/stream.exr", d);
-        TU_OK(btf_exr_write(p1, &a, half, &e), &e);
+        TU_OK(btf_image_write_exr(p1, &a, half, &e), &e);
 
         btf_exr_writer *wr = NULL;
         TU_OK(btf_exr_writer_open(p2, w, h, c, half, &wr, &e), &e);
@@ -373,8 +373,8 @@ static void writer_misuse(void **state)
 
     /* No image. */
     btf_image none = {0};
-    assert_int_equal(btf_exr_write(p, &none, 0, &e), BTF_E_ARG);
-    assert_int_equal(btf_exr_write(p, NULL, 0, &e), BTF_E_ARG);
+    assert_int_equal(btf_image_write_exr(p, &none, 0, &e), BTF_E_ARG);
+    assert_int_equal(btf_image_write_exr(p, NULL, 0, &e), BTF_E_ARG);
 }
 
 static void non_finite_input_refused(void **state)
@@ -390,7 +390,7 @@ static void non_finite_input_refused(void **state)
             random_image(&a, 6, 40, 3, 3, 0.0f, 1.0f);
             /* Pixel (4, 35), past the first chunks, so some were written. */
             a.data[(35 * 6 + 4) * 3 + 1] = kind == 0 ? NAN : kind == 1 ? INFINITY : -INFINITY;
-            assert_int_equal(btf_exr_write(p, &a, half, &e), BTF_E_ARG);
+            assert_int_equal(btf_image_write_exr(p, &a, half, &e), BTF_E_ARG);
             assert_non_null(strstr(e.msg, "(4, 35)"));
             assert_non_null(strstr(e.msg, kind == 0 ? "NaN" : "Inf"));
             assert_false(file_exists(p));
@@ -408,19 +408,19 @@ static void writes_are_atomic(void **state)
     const char *p = tu_fmt("%s/atomic.exr", d);
     btf_image a, b, bad;
     half_exact_image(&a, 12, 12, 3, 1);
-    TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
     /* A failed rewrite leaves the old file as it was. */
     random_image(&bad, 12, 12, 3, 2, 0.0f, 1.0f);
     bad.data[100] = NAN;
-    assert_int_equal(btf_exr_write(p, &bad, 0, &e), BTF_E_ARG);
+    assert_int_equal(btf_image_write_exr(p, &bad, 0, &e), BTF_E_ARG);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     assert_same_image(&a, &b);
     btf_image_free(&b);
     /* A successful rewrite replaces it. */
     bad.data[100] = 0.5f;
-    TU_OK(btf_exr_write(p, &bad, 0, &e), &e);
+    TU_OK(btf_image_write_exr(p, &bad, 0, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     assert_same_image(&bad, &b);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
@@ -711,7 +711,7 @@ static void truncated_files(void **state)
     btf_image a;
     random_image(&a, 64, 50, 3, 7, 0.0f, 1.0f);
     const char *full = tu_fmt("%s/full.exr", tu_dir);
-    TU_OK(btf_exr_write(full, &a, 0, &e), &e);
+    TU_OK(btf_image_write_exr(full, &a, 0, &e), &e);
     btf_image_free(&a);
     size_t n;
     unsigned char *d = slurp(full, &n);
@@ -733,7 +733,7 @@ static void corrupt_bytes(void **state)
     btf_image a, b;
     random_image(&a, 40, 40, 3, 8, 0.0f, 1.0f);
     const char *full = tu_fmt("%s/good.exr", tu_dir), *bad = tu_fmt("%s/bad.exr", tu_dir);
-    TU_OK(btf_exr_write(full, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr(full, &a, 1, &e), &e);
     btf_image_free(&a);
     size_t n;
     unsigned char *d = slurp(full, &n);
@@ -827,7 +827,7 @@ static void absurd_sizes(void **state)
     };
     for (int i = 0; i < 5; i++) {
         half_exact_image(&a, 16, 16, 1, 3);
-        TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+        TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
         btf_image_free(&a);
         patch_data_window(p, windows[i][0], windows[i][1], windows[i][2], windows[i][3]);
         assert_rejected(p);
@@ -851,7 +851,7 @@ static void library_is_silent(void **state)
     btf_error e = {0};
     btf_image a, b;
     random_image(&a, 30, 30, 3, 4, 0.0f, 1.0f);
-    int rc1 = btf_exr_write(p, &a, 0, &e);
+    int rc1 = btf_image_write_exr(p, &a, 0, &e);
     size_t n = 0;
     unsigned char *d = rc1 ? NULL : slurp(p, &n);
     int rc2 = BTF_OK, rc3 = BTF_OK, rc4 = BTF_OK, rc5 = BTF_OK;
@@ -863,7 +863,7 @@ static void library_is_silent(void **state)
         tu_write_file(p, d, n);
         rc4 = btf_exr_read(p, 0, &b, &e);
     }
-    rc5 = btf_exr_write(tu_fmt("%s/no/such/folder.exr", tu_dir), &a, 1, &e);
+    rc5 = btf_image_write_exr(tu_fmt("%s/no/such/folder.exr", tu_dir), &a, 1, &e);
     fflush(stderr);
     dup2(saved, 2);
     close(saved);

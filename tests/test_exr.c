@@ -1,7 +1,8 @@
 /*
- * test_exr.c — src/io/exr.c: EXR round trips (half/float, 1/3 channels, odd
+ * test_exr.c — src/io/exr_read.c and exr_write.c: EXR round trips (half/float, 1/3 channels, odd
  * sizes, extreme values), the streaming writer, atomic writes, and reading
- * hostile input (NaN/Inf, truncation, garbage, unsupported layouts). Files
+ * hostile input (NaN/Inf, truncation, garbage, unsupported layouts),
+ * decoding from memory, and the provenance attributes. Files
  * the writer cannot produce (Inf, tiles, UINT, other compressions, offset
  * data windows) are made here directly with the OpenEXR core API.
  */
@@ -880,6 +881,162 @@ static void library_is_silent(void **state)
     free(text);
 }
 
+/* ------------------------------------------------------------ provenance */
+
+/* The string attribute `name` of part 0, or NULL when absent. */
+static const char *exr_string(exr_const_context_t ctx, const char *name)
+{
+    int32_t len = 0;
+    const char *s = NULL;
+    if (exr_attr_get_string(ctx, 0, name, &len, &s) != EXR_ERR_SUCCESS)
+        return NULL;
+    assert_int_equal((int)strlen(s), len);
+    return s;
+}
+
+static exr_context_t open_exr(const char *path)
+{
+    exr_context_t ctx = NULL;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    assert_int_equal(exr_start_read(&ctx, path, &init), EXR_ERR_SUCCESS);
+    return ctx;
+}
+
+static void assert_same_pixels(const char *p1, const char *p2)
+{
+    btf_error e = {0};
+    btf_image a, b;
+    TU_OK(btf_exr_read(p1, 0, &a, &e), &e);
+    TU_OK(btf_exr_read(p2, 0, &b, &e), &e);
+    assert_int_equal(a.width, b.width);
+    assert_int_equal(a.height, b.height);
+    assert_int_equal(a.channels, b.channels);
+    assert_memory_equal(a.data, b.data, (size_t)a.width * a.height * a.channels * sizeof(float));
+    btf_image_free(&a);
+    btf_image_free(&b);
+}
+
+static void provenance_attributes(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char d[1024];
+    fresh_dir(d, sizeof d, "meta");
+    btf_exr_meta meta = {.model = "models/leather.btfcar", .seed = UINT64_MAX, .subspace = 7,
+                         .has_dirs = 1, .view = {30, 45}, .light = {75, 352.5}};
+    for (int half = 0; half <= 1; half++)
+        for (int c = 1; c <= 3; c += 2) {
+            btf_image a;
+            random_image(&a, 21, 35, c, 5 + half + c, -2.0f, 2.0f);
+            const char *plain = tu_fmt("%s/plain.exr", d), *with = tu_fmt("%s/meta.exr", d);
+            const char *stream = tu_fmt("%s/stream.exr", d);
+            TU_OK(btf_image_write_exr(plain, &a, half, &e), &e);
+            TU_OK(btf_image_write_exr_meta(with, &a, half, &meta, &e), &e);
+            btf_exr_writer *w = NULL;
+            TU_OK(btf_exr_writer_open_meta(stream, a.width, a.height, c, half, &meta, &w, &e),
+                  &e);
+            TU_OK(btf_exr_writer_put_rows(w, a.data, a.height, &e), &e);
+            TU_OK(btf_exr_writer_close(w, &e), &e);
+
+            exr_context_t ctx = open_exr(with);
+            assert_string_equal(exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
+            assert_string_equal(exr_string(ctx, "btfcarModel"), "models/leather.btfcar");
+            assert_string_equal(exr_string(ctx, "btfcarSeed"), "18446744073709551615");
+            assert_string_equal(exr_string(ctx, "btfcarSubspace"), "7");
+            assert_string_equal(exr_string(ctx, "btfcarView"), "30 45");
+            assert_string_equal(exr_string(ctx, "btfcarLight"), "75 352.5");
+            exr_attr_chromaticities_t ch;
+            assert_int_equal(exr_attr_get_chromaticities(ctx, 0, "chromaticities", &ch),
+                             EXR_ERR_SUCCESS);
+            assert_true(ch.red_x == 0.64f && ch.red_y == 0.33f);
+            assert_true(ch.green_x == 0.30f && ch.green_y == 0.60f);
+            assert_true(ch.blue_x == 0.15f && ch.blue_y == 0.06f);
+            assert_true(ch.white_x == 0.3127f && ch.white_y == 0.3290f);
+            exr_finish(&ctx);
+
+            /* Without metadata: none of it. */
+            ctx = open_exr(plain);
+            assert_null(exr_string(ctx, "btfcarVersion"));
+            assert_null(exr_string(ctx, "btfcarModel"));
+            assert_int_not_equal(exr_attr_get_chromaticities(ctx, 0, "chromaticities", &ch),
+                                 EXR_ERR_SUCCESS);
+            exr_finish(&ctx);
+
+            /* The header changes, the pixels do not; streaming gives the
+             * same file as the one-shot writer. */
+            assert_same_pixels(plain, with);
+            size_t n1, n2;
+            unsigned char *d1 = slurp(with, &n1), *d2 = slurp(stream, &n2);
+            assert_int_equal(n1, n2);
+            assert_memory_equal(d1, d2, n1);
+            free(d1);
+            free(d2);
+            btf_image_free(&a);
+        }
+
+    /* A model without directions, and provenance without a model. */
+    btf_image a;
+    random_image(&a, 4, 4, 3, 11, 0.0f, 1.0f);
+    const char *p = tu_fmt("%s/partial.exr", d);
+    btf_exr_meta some = {.model = "m.btfcar", .seed = 0, .subspace = 0};
+    TU_OK(btf_image_write_exr_meta(p, &a, 1, &some, &e), &e);
+    exr_context_t ctx = open_exr(p);
+    assert_string_equal(exr_string(ctx, "btfcarSeed"), "0");
+    assert_string_equal(exr_string(ctx, "btfcarSubspace"), "0");
+    assert_null(exr_string(ctx, "btfcarView"));
+    assert_null(exr_string(ctx, "btfcarLight"));
+    exr_finish(&ctx);
+    btf_exr_meta none = {0};
+    TU_OK(btf_image_write_exr_meta(p, &a, 1, &none, &e), &e);
+    ctx = open_exr(p);
+    assert_string_equal(exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
+    assert_null(exr_string(ctx, "btfcarModel"));
+    assert_null(exr_string(ctx, "btfcarSeed"));
+    exr_finish(&ctx);
+    btf_image_free(&a);
+    remove(p);
+}
+
+/* ------------------------------------------------------ reading from memory */
+
+static void decode_from_memory(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char d[1024];
+    fresh_dir(d, sizeof d, "memory");
+    btf_image a, b, c;
+    random_image(&a, 19, 40, 3, 21, -1.0f, 4.0f);
+    const char *p = tu_fmt("%s/m.exr", d);
+    TU_OK(btf_image_write_exr(p, &a, 0, &e), &e);
+    size_t n;
+    unsigned char *bytes = slurp(p, &n);
+    for (int ch = 0; ch <= 3; ch += ch ? 2 : 1) {
+        btf_read_opts ro = {.channels = ch};
+        TU_OK(btf_image_read(p, &ro, &b, &e), &e);
+        TU_OK(btf_image_decode(bytes, n, "buffer", &ro, &c, &e), &e);
+        assert_same_image(&b, &c);
+        btf_image_free(&b);
+        btf_image_free(&c);
+    }
+    btf_image_header h1, h2;
+    TU_OK(btf_image_probe(p, &h1, &e), &e);
+    TU_OK(btf_image_probe_memory(bytes, n, "buffer", &h2, &e), &e);
+    assert_memory_equal(&h1, &h2, sizeof h1);
+    /* Damage is reported under the caller's name, like a file's. */
+    for (size_t cut = 0; cut < n; cut += n / 7 + 1) {
+        int rc = btf_image_decode(bytes, cut, "cut-buffer", NULL, &c, &e);
+        assert_true(rc == BTF_E_FORMAT);
+        assert_true(strncmp(e.msg, "cut-buffer: ", 12) == 0);
+        assert_null(c.data);
+    }
+    assert_int_equal(btf_image_decode(NULL, 0, NULL, NULL, &c, &e), BTF_E_FORMAT);
+    assert_true(strncmp(e.msg, "image: ", 7) == 0);
+    free(bytes);
+    btf_image_free(&a);
+    remove(p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -903,6 +1060,8 @@ int main(void)
         cmocka_unit_test(garbage_and_missing),
         cmocka_unit_test(absurd_sizes),
         cmocka_unit_test(library_is_silent),
+        cmocka_unit_test(provenance_attributes),
+        cmocka_unit_test(decode_from_memory),
     };
     return cmocka_run_group_tests(tests, tu_setup_dir, tu_teardown_dir);
 }

@@ -7,8 +7,8 @@
  * up(G_{l+1})) restores the band exactly.
  *
  * The up-sampling arithmetic is written out (btf_up_even / btf_up_odd in
- * internal.h) because synthesis on the CPU and on the GPU must perform the
- * very same float operations. Analysis works in double and mirrors at the
+ * src/synth/btf_shared.h) because synthesis on the CPU and on the GPU must
+ * perform the very same float operations. Analysis works in double and mirrors at the
  * borders (reflect-101, as OpenCV does); synthesis never reaches a border.
  */
 #include "core/core.h"

@@ -1,5 +1,7 @@
 /*
- * dataset.c — BTF datasets on disk behind one streaming interface.
+ * dataset.c — BTF datasets on disk (the measured (view, light) images that
+ * the analysis of paper section II starts from) behind one streaming
+ * interface.
  *
  * Three layouts are recognised automatically:
  *  - Bonn UBO2003: "NNNNN tlAAA plBBB tvCCC pvDDD.jpg" (3-digit whole degrees,

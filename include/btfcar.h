@@ -2,11 +2,18 @@
  * btfcar.h — the public C API of btfcar, a toolkit for probabilistic modelling
  * of Bidirectional Texture Functions (Haindl & Filip, TPAMI 2007).
  *
- * Conventions (see docs/api.md):
- *  - every fallible call returns a btf_status (0 = success, negative = error) and,
- *    when given a non-NULL btf_error, fills it with one line naming the file, the
- *    value and what was expected. The library never prints and never exits.
- *  - option structs are valid when zero-initialised; zero means "default".
+ * Conventions (docs/api.md):
+ *  - a fallible call returns a btf_status (BTF_OK = 0, errors negative) and,
+ *    when given a non-NULL btf_error, fills it with one line naming the file,
+ *    the value and what was expected. The library never prints and never exits.
+ *  - options structs are valid when zero-initialised: a zero field means its
+ *    default, and btf_X_defaults() returns the struct btf_X_opts with every
+ *    default written out (the same results as the zeroed struct). A NULL
+ *    options pointer means the defaults.
+ *  - what a call allocates into a caller's struct is released by the matching
+ *    *_free (or *_close) function, which accepts a zeroed struct and NULL.
+ *  - parsers work on memory (btf_image_decode, btf_model_decode); the file
+ *    readers (btf_image_read, btf_model_read) are thin wrappers over them.
  *  - images are linear float, channels interleaved, row 0 at the top.
  *  - directions are in degrees: theta from the surface normal (z), phi the
  *    azimuth measured from +x towards +y.
@@ -26,8 +33,6 @@
 extern "C" {
 #endif
 
-/* 0.2: the synthesis noise changed (Philox-4x32-7 instead of -10) and so
- * did the margins: the same model and seed give other images than 0.1. */
 #define BTF_VERSION_MAJOR 0
 #define BTF_VERSION_MINOR 2
 #define BTF_VERSION_PATCH 0
@@ -64,7 +69,8 @@ typedef struct btf_image {
     float *data;                 /* width*height*channels floats, row-major */
 } btf_image;
 
-int btf_image_alloc(btf_image *img, int width, int height, int channels, btf_error *err);
+btf_status btf_image_alloc(btf_image *img, int width, int height, int channels,
+                           btf_error *err);
 void btf_image_free(btf_image *img);
 
 typedef enum btf_file_format {
@@ -85,9 +91,13 @@ typedef struct btf_image_header {
     uint64_t file_bytes;
 } btf_image_header;
 
-/* Reads the header only and checks the file's structure (a JPEG must end with
- * its end-of-image marker, a PNG with its IEND chunk): cheap, no decoding. */
-int btf_image_probe(const char *path, btf_image_header *hdr, btf_error *err);
+/* Reads the header only and checks the structure (a JPEG must end with its
+ * end-of-image marker, a PNG with its IEND chunk, an EXR's chunk table must
+ * fit): cheap, no decoding. The memory form checks n bytes at data; name
+ * starts its error messages, as the path does for the file form. */
+btf_status btf_image_probe_memory(const void *data, size_t n, const char *name,
+                                  btf_image_header *hdr, btf_error *err);
+btf_status btf_image_probe(const char *path, btf_image_header *hdr, btf_error *err);
 
 typedef struct btf_read_opts {
     int channels;       /* 0: 3 for colour files, 1 for grey; 1 or 3 forces it */
@@ -95,44 +105,55 @@ typedef struct btf_read_opts {
                            1: 8-bit values are taken as linear (v/255) */
     int srgb_16bit;     /* 0 (default): 16-bit PNG is linear (v/65535); 1: sRGB */
 } btf_read_opts;
+/* The defaults: every field 0 (as above). */
+btf_read_opts btf_read_defaults(void);
 
-/* Reads PNG (8/16-bit), JPEG or EXR (half/float) into linear float. EXR values
- * that are NaN or Inf are an error (BTF_E_DATA) naming the file. */
-int btf_image_read(const char *path, const btf_read_opts *opts, btf_image *out,
-                   btf_error *err);
+/* Decodes PNG (8/16-bit), JPEG or EXR (half/float) held in memory (n bytes
+ * at data; the format from its signature) into linear float. name starts
+ * the error messages (NULL: "image"). EXR values that are NaN or Inf are an
+ * error (BTF_E_DATA). opts NULL: btf_read_defaults(). */
+btf_status btf_image_decode(const void *data, size_t n, const char *name,
+                            const btf_read_opts *opts, btf_image *out, btf_error *err);
+/* The same from a file, its messages naming it. EXR files are read in place,
+ * chunk by chunk; PNG and JPEG files are loaded and decoded. */
+btf_status btf_image_read(const char *path, const btf_read_opts *opts, btf_image *out,
+                          btf_error *err);
 
 /* Writers are atomic: a temporary file beside `path` is renamed over it. PNG
  * and JPEG encode linear values to 8-bit sRGB (clamped to [0, 1]); EXR stores
- * linear values as half (half != 0) or float. */
-int btf_image_write_png(const char *path, const btf_image *img, btf_error *err);
-int btf_image_write_jpeg(const char *path, const btf_image *img, int quality,
-                         btf_error *err);
-int btf_image_write_exr(const char *path, const btf_image *img, int half,
-                        btf_error *err);
+ * linear values as half (half != 0) or float, with no optional attributes
+ * (btf_image_write_exr_meta below adds provenance). */
+btf_status btf_image_write_png(const char *path, const btf_image *img, btf_error *err);
+btf_status btf_image_write_jpeg(const char *path, const btf_image *img, int quality,
+                                btf_error *err);
+btf_status btf_image_write_exr(const char *path, const btf_image *img, int half,
+                               btf_error *err);
 
 /* Streaming EXR scanline writer (synthesis of images larger than memory): rows
  * arrive top to bottom in batches of any size; only one chunk (16 rows, ZIP)
- * is buffered. Like btf_exr_write it is atomic: the file appears at path only
- * when close succeeds. Any error is final for the writer: close (which then
- * fails) or abort frees it and removes the temporary file. */
+ * is buffered. Like btf_image_write_exr it is atomic: the file appears at
+ * path only when close succeeds. Any error is final for the writer: close
+ * (which then fails) or abort frees it and removes the temporary file. */
 typedef struct btf_exr_writer btf_exr_writer;
-int btf_exr_writer_open(const char *path, int width, int height, int channels, int half,
-                        btf_exr_writer **out, btf_error *err);
+btf_status btf_exr_writer_open(const char *path, int width, int height, int channels,
+                               int half, btf_exr_writer **out, btf_error *err);
 /* rows: nrows*width*channels floats, interleaved channels; finite values. */
-int btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nrows, btf_error *err);
+btf_status btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nrows,
+                                   btf_error *err);
 /* Finishes and renames into place; an error if not all rows were given.
  * Always frees w. */
-int btf_exr_writer_close(btf_exr_writer *w, btf_error *err);
+btf_status btf_exr_writer_close(btf_exr_writer *w, btf_error *err);
 /* Frees w and removes the temporary file; NULL is fine. */
 void btf_exr_writer_abort(btf_exr_writer *w);
 
 /* mkdir -p; an existing folder is fine. */
-int btf_mkdirs(const char *path, btf_error *err);
+btf_status btf_mkdirs(const char *path, btf_error *err);
 /* Writes n bytes to path atomically: into a unique temporary file beside it,
  * renamed over path only when every byte is written and the file is closed;
  * on failure the temporary file is removed and path is left as it was
  * (BTF_E_IO; BTF_E_ARG for a path too long; the message names path). */
-int btf_write_file_atomic(const char *path, const void *data, size_t n, btf_error *err);
+btf_status btf_write_file_atomic(const char *path, const void *data, size_t n,
+                                 btf_error *err);
 
 /* sRGB transfer function (IEC 61966-2-1), per value. */
 float btf_srgb_to_linear(float v);
@@ -153,14 +174,14 @@ typedef struct btf_dirset {
 
 /* The Bonn/UTIA 81-direction sampling: theta 0,15,...,75 with 1,6,12,18,20,24
  * azimuths evenly spaced from phi = 0. */
-int btf_dirset_ubo81(btf_dirset *set, btf_error *err);
+btf_status btf_dirset_ubo81(btf_dirset *set, btf_error *err);
 /* The UBO2014 151-direction dome (per-ring azimuth offsets). */
-int btf_dirset_ubo151(btf_dirset *set, btf_error *err);
+btf_status btf_dirset_ubo151(btf_dirset *set, btf_error *err);
 /* A custom set from a list; sorted ring by ring, phi ascending, duplicates
  * (within 1e-6 degree) merged. If the list equals a known set it is named so. */
-int btf_dirset_from_list(btf_dirset *set, const btf_dir *dirs, int count,
-                         btf_error *err);
-int btf_dirset_copy(btf_dirset *dst, const btf_dirset *src, btf_error *err);
+btf_status btf_dirset_from_list(btf_dirset *set, const btf_dir *dirs, int count,
+                                btf_error *err);
+btf_status btf_dirset_copy(btf_dirset *dst, const btf_dirset *src, btf_error *err);
 void btf_dirset_free(btf_dirset *set);
 /* Index of the direction within tol degrees (angle between unit vectors) or -1. */
 int btf_dirset_find(const btf_dirset *set, btf_dir d, double tol_deg);
@@ -171,6 +192,30 @@ void btf_dir_to_vec(btf_dir d, double v[3]);
 btf_dir btf_vec_to_dir(const double v[3]);
 /* Angle in degrees between two directions. */
 double btf_dir_angle(btf_dir a, btf_dir b);
+
+/* ---------------------------------------------------------- EXR provenance */
+
+/* What an output EXR says about where it came from, as header attributes
+ * (docs/api.md, "EXR provenance"): btfcarVersion and the standard
+ * chromaticities attribute (linear sRGB: Rec. 709 primaries, D65 white)
+ * always; btfcarModel, btfcarSeed and btfcarSubspace when model is set;
+ * btfcarView and btfcarLight ("THETA PHI", degrees) when has_dirs is 1.
+ * The pixels are the same with or without them. */
+typedef struct btf_exr_meta {
+    const char *model;     /* the model file synthesised from; NULL: none */
+    uint64_t seed;         /* with model: the synthesis seed */
+    int subspace;          /* with model: the subspace synthesised */
+    int has_dirs;          /* 1: view and light are set */
+    btf_dir view, light;   /* the subspace's representative (view, light) */
+} btf_exr_meta;
+
+/* btf_image_write_exr and btf_exr_writer_open with provenance; meta NULL
+ * writes none (they are those calls then). */
+btf_status btf_image_write_exr_meta(const char *path, const btf_image *img, int half,
+                                    const btf_exr_meta *meta, btf_error *err);
+btf_status btf_exr_writer_open_meta(const char *path, int width, int height, int channels,
+                                    int half, const btf_exr_meta *meta, btf_exr_writer **out,
+                                    btf_error *err);
 
 /* ----------------------------------------------------------------- datasets */
 
@@ -202,19 +247,21 @@ typedef struct btf_dataset_opts {
     btf_progress_fn progress;
     void *progress_user;
 } btf_dataset_opts;
+/* The defaults: every field 0 (probe every image, no progress). */
+btf_dataset_opts btf_dataset_defaults(void);
 
 /* Detects the layout of `path` (a folder, or a manifest .tsv file), collects
  * the (light, view) pairs and checks that the set is complete (every light
  * with every view, each pair once) and that every image has one size. */
-int btf_dataset_open(const char *path, const btf_dataset_opts *opts,
-                     btf_dataset **out, btf_error *err);
+btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts,
+                            btf_dataset **out, btf_error *err);
 void btf_dataset_close(btf_dataset *ds);
 const btf_dataset_info *btf_dataset_get_info(const btf_dataset *ds);
 /* The file holding (view, light); NULL when out of range. */
 const char *btf_dataset_path(const btf_dataset *ds, int view, int light);
 /* Decodes one image to linear float RGB (3 channels). */
-int btf_dataset_read(const btf_dataset *ds, int view, int light, btf_image *out,
-                     btf_error *err);
+btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_image *out,
+                            btf_error *err);
 
 /* Streaming: hands out one (light, view) image at a time, view-major. */
 typedef struct btf_sample {
@@ -231,14 +278,15 @@ typedef struct btf_dataset_iter {
 } btf_dataset_iter;
 
 void btf_dataset_iter_begin(btf_dataset_iter *it, const btf_dataset *ds);
-/* 1: a sample was produced; 0: the end; < 0: an error (the iterator stays
- * usable, the failing image is skipped on the next call). */
+/* 1: a sample was produced; 0: the end; < 0: an error, a btf_status (the
+ * iterator stays usable, the failing image is skipped on the next call).
+ * Returns int because it counts as well as fails. */
 int btf_dataset_iter_next(btf_dataset_iter *it, btf_error *err);
 void btf_dataset_iter_end(btf_dataset_iter *it);
 
 /* Reads and decodes every image once (catches corrupt data, NaN/Inf in EXR). */
-int btf_dataset_verify_pixels(const btf_dataset *ds, btf_progress_fn progress,
-                              void *user, btf_error *err);
+btf_status btf_dataset_verify_pixels(const btf_dataset *ds, btf_progress_fn progress,
+                                     void *user, btf_error *err);
 
 /* ------------------------------------------------------ procedural materials */
 
@@ -258,16 +306,16 @@ typedef struct btf_material {
 
 /* Names of the built-in materials, NULL-terminated: leather, fabric, wood. */
 const char *const *btf_material_names(void);
-int btf_material_make(const char *name, int size, uint64_t seed, btf_material *m,
-                      btf_error *err);
+btf_status btf_material_make(const char *name, int size, uint64_t seed, btf_material *m,
+                             btf_error *err);
 void btf_material_free(btf_material *m);
 
 /* Renders the rectified image the BTF measures for one (view, light) pair:
  * for every texel of the reference plane, the view ray finds the visible
  * surface point (masking, parallax), which is lit by the light unless the
  * height field casts a shadow on it. Output: linear RGB, size x size. */
-int btf_material_render(const btf_material *m, btf_dir view, btf_dir light,
-                        btf_image *out, btf_error *err);
+btf_status btf_material_render(const btf_material *m, btf_dir view, btf_dir light,
+                               btf_image *out, btf_error *err);
 
 typedef struct btf_generate_opts {
     int size;               /* 0: 128 */
@@ -277,11 +325,13 @@ typedef struct btf_generate_opts {
     btf_progress_fn progress;
     void *progress_user;
 } btf_generate_opts;
+/* The defaults: size 128, seed 0, JPEG quality 95, threads 0 (all CPUs). */
+btf_generate_opts btf_generate_defaults(void);
 
 /* Writes the 81 x 81 images of a material in the UBO2003 layout under outdir
  * (per-view folders), and outdir/truth/{height,normals,albedo}.exr. */
-int btf_generate(const char *material, const char *outdir,
-                 const btf_generate_opts *opts, btf_error *err);
+btf_status btf_generate(const char *material, const char *outdir,
+                        const btf_generate_opts *opts, btf_error *err);
 
 /* ------------------------------------------ analyse, stage 1: segmentation */
 /* Paper section II.A: the (view, light) images are clustered by k-means on
@@ -302,6 +352,8 @@ typedef struct btf_feature_opts {
     btf_progress_fn progress;
     void *progress_user;
 } btf_feature_opts;
+/* The defaults: 32 bins, threads 0 (all CPUs), no progress. */
+btf_feature_opts btf_feature_defaults(void);
 
 /* Fixed ranges of the histograms: L* [0, 100], a* and b* [-64, 64] (values
  * outside are counted in the end bins). */
@@ -309,18 +361,20 @@ typedef struct btf_feature_opts {
 
 /* The feature of one linear-RGB image: the cumulative histograms of L*, a*,
  * b* (each normalised to end at 1), concatenated: 3 * bins floats. */
-int btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *err);
+btf_status btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *err);
 
 /* Features of every image of a dataset, streamed (one image decoded at a time
  * per thread): features[(view * n_lights + light) * dim + i], dim = 3 * bins. */
-int btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
-                         float **features, int *dim, btf_error *err);
+btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
+                                float **features, int *dim, btf_error *err);
 
 typedef struct btf_kmeans_opts {
     int restarts;             /* 0: 5; the best run by distortion is kept */
     int max_iter;             /* 0: 100 Lloyd iterations per run */
     uint64_t seed;            /* 0 is a valid seed */
 } btf_kmeans_opts;
+/* The defaults: 5 restarts, 100 iterations, seed 0. */
+btf_kmeans_opts btf_kmeans_defaults(void);
 
 typedef struct btf_kmeans_result {
     int k;                    /* clusters produced: min(k asked, distinct points) */
@@ -332,8 +386,8 @@ typedef struct btf_kmeans_result {
 /* k-means with k-means++ seeding and restarts. k larger than the number of
  * distinct points is reduced to it; clusters that go empty are re-seeded at
  * the point farthest from its centre. Same inputs and seed, same result. */
-int btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
-               btf_kmeans_result *out, btf_error *err);
+btf_status btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
+                      btf_kmeans_result *out, btf_error *err);
 void btf_kmeans_free(btf_kmeans_result *r);
 
 typedef struct btf_segment_opts {
@@ -344,6 +398,9 @@ typedef struct btf_segment_opts {
     btf_feature_opts features;
     btf_kmeans_opts kmeans;
 } btf_segment_opts;
+/* The defaults: K auto, at most 20, threshold 0.10, and the defaults of
+ * features and k-means. */
+btf_segment_opts btf_segment_defaults(void);
 
 typedef struct btf_segmentation {
     int n_views, n_lights;
@@ -357,19 +414,19 @@ typedef struct btf_segmentation {
     char reason[256];         /* why this K (one line) */
 } btf_segmentation;
 
-int btf_segment(const btf_dataset *ds, const btf_segment_opts *opts, btf_segmentation *out,
-                btf_error *err);
+btf_status btf_segment(const btf_dataset *ds, const btf_segment_opts *opts,
+                       btf_segmentation *out, btf_error *err);
 /* The same from features already computed (n = n_views * n_lights). */
-int btf_segment_features(const float *features, int n_views, int n_lights, int dim,
-                         const btf_segment_opts *opts, btf_segmentation *out, btf_error *err);
+btf_status btf_segment_features(const float *features, int n_views, int n_lights, int dim,
+                                const btf_segment_opts *opts, btf_segmentation *out,
+                                btf_error *err);
 void btf_segmentation_free(btf_segmentation *s);
 
 /* The index table as a picture like the paper's Fig. 5: x = view index,
  * y = light index, one colour per subspace, each cell cell x cell pixels
  * (0: 6). Written atomically. */
-int btf_segmentation_write_png(const btf_segmentation *s, int cell, const char *path,
-                               btf_error *err);
-
+btf_status btf_segmentation_write_png(const btf_segmentation *s, int cell, const char *path,
+                                      btf_error *err);
 
 /* ------------------------------- analyse, stage 2: photometric stereo */
 /* Paper section II.B: the range map of the material is recovered by
@@ -536,7 +593,7 @@ typedef struct btf_car_band {
      * boundary's transient has died out (docs/synthesis.md). Not stored in
      * model files: fitting and reading set it from the coefficients; 0
      * lets synthesis compute it, so set it to 0 after changing gamma.
-     * At most 256. (Added in soname 1.) */
+     * At most 256. */
     int margin;
 } btf_car_band;
 
@@ -565,14 +622,21 @@ typedef struct btf_model {
                                   aspect ratio) */
 } btf_model;
 
+/* Frees what the model owns and zeroes it; NULL and a zeroed model are fine. */
 void btf_model_free(btf_model *m);
+/* The provenance of a synthesis of subspace `subspace` of m, read from
+ * model_path with seed: the subspace's representative (view, light) when it
+ * has one (has_dirs 0 for a texture model or an out-of-range subspace). */
+btf_exr_meta btf_model_exr_meta(const btf_model *m, const char *model_path, int subspace,
+                                uint64_t seed);
 
 /* Warnings from a long computation (e.g. a model made stable by force). */
 typedef void (*btf_warning_fn)(void *user, const char *message);
 
 /* Neighbourhood SPEC: comma-separated causal "row:col" offsets, e.g.
  * "0:-1,-1:0,-1:-1,-1:1". A non-causal or repeated offset is an error. */
-int btf_neighbourhood_parse(const char *spec, btf_offset *offsets, int *n, btf_error *err);
+btf_status btf_neighbourhood_parse(const char *spec, btf_offset *offsets, int *n,
+                                   btf_error *err);
 void btf_neighbourhood_format(const btf_offset *offsets, int n, char *buf, size_t len);
 
 typedef struct btf_car_fit_opts {
@@ -583,6 +647,9 @@ typedef struct btf_car_fit_opts {
     void *warn_user;
     const char *what;                     /* names the sub-band in warnings */
 } btf_car_fit_opts;
+/* The defaults: the Bayesian choice among candidates of at most 14
+ * neighbours, no warnings callback. */
+btf_car_fit_opts btf_car_fit_defaults(void);
 
 #define BTF_CAR_MAX_CANDIDATES 16
 typedef struct btf_car_fit_info {
@@ -599,8 +666,8 @@ typedef struct btf_car_fit_info {
  * its posterior probability among a nested family of candidates (or fixed).
  * Constant, tiny or ill-conditioned bands degrade to smaller models; an
  * unstable estimate is shrunk until stable (a warning). Output always finite. */
-int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
-                btf_car_band *out, btf_car_fit_info *info, btf_error *err);
+btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
+                       btf_car_band *out, btf_car_fit_info *info, btf_error *err);
 /* 1 when the recursion 1/A(z1, z2) of the band's model is stable. */
 int btf_car_is_stable(const btf_car_band *b);
 /* sigma^2 times the mean of 1/|A|^2 over the frequency torus: the variance of
@@ -610,26 +677,31 @@ double btf_car_stationary_variance(const btf_car_band *b);
 /* The model file MODEL.btfcar (docs/model-format.md): little-endian,
  * versioned, CRC-32 checked. Writing is atomic; reading a corrupt, truncated
  * or foreign file is an error naming it, never a crash. */
-int btf_model_write(const char *path, const btf_model *m, btf_error *err);
-int btf_model_read(const char *path, btf_model *m, btf_error *err);
-/* The same from and to memory (the writer's buffer is malloc'd). */
-int btf_model_encode(const btf_model *m, unsigned char **data, size_t *size, btf_error *err);
-int btf_model_decode(const unsigned char *data, size_t size, const char *name, btf_model *m,
-                     btf_error *err);
+btf_status btf_model_write(const char *path, const btf_model *m, btf_error *err);
+btf_status btf_model_read(const char *path, btf_model *m, btf_error *err);
+/* The same to and from memory: encode's buffer is malloc'd (the caller
+ * frees it); decode's name starts its messages (NULL: "model"). The file
+ * forms are these plus the atomic write or the whole-file read. */
+btf_status btf_model_encode(const btf_model *m, unsigned char **data, size_t *size,
+                            btf_error *err);
+btf_status btf_model_decode(const unsigned char *data, size_t size, const char *name,
+                            btf_model *m, btf_error *err);
 
 typedef struct btf_fit_opts {
     int levels;               /* pyramid levels 1..BTF_MAX_LEVELS; 0: auto (docs/model.md) */
     btf_car_fit_opts car;     /* neighbourhood (fixed or auto), warnings */
 } btf_fit_opts;
+/* The defaults: levels 0 (auto), car = btf_car_fit_defaults(). */
+btf_fit_opts btf_fit_defaults(void);
 
 /* Models one subspace image (linear RGB): decorrelation, pyramid, one CAR
  * model per band and level. view and light are left -1. */
-int btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts, btf_subspace_model *out,
-                     btf_error *err);
+btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
+                            btf_subspace_model *out, btf_error *err);
 /* A model of one ordinary colour texture: one subspace, no directions, no
  * index table, no range map. */
-int btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_model *out,
-                    btf_error *err);
+btf_status btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_model *out,
+                           btf_error *err);
 /* The automatic number of pyramid levels for a band (docs/model.md). */
 int btf_auto_levels(const double *band, int w, int h);
 
@@ -651,13 +723,16 @@ typedef struct btf_analyse_opts {
     void *progress_user;
     btf_analyse_report *report;       /* NULL, or filled in when btf_analyse succeeds */
 } btf_analyse_opts;
+/* The defaults: those of each stage's options, a range map with a 64-texel
+ * tile, no progress, no report. */
+btf_analyse_opts btf_analyse_defaults(void);
 
 /* All analysis stages on a dataset (paper section II): segmentation into
  * subspace images, the range map by photometric stereo (view closest to
  * theta_v = 0), and the CAR model of every subspace image. The range tile
  * keeps the image's aspect ratio: one scale, range_texel, for both axes. */
-int btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
-                btf_error *err);
+btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
+                       btf_error *err);
 
 /* ------------------------------------------------------ synthesis (CPU) */
 

@@ -1,6 +1,7 @@
 /*
- * fuzzutil.h — what the libFuzzer targets share: the readers work on paths,
- * so each input is written to a per-process temporary file first.
+ * fuzzutil.h — what the libFuzzer targets share: for the readers that work
+ * on paths (a dataset manifest names files beside it), the input is written
+ * to a per-process temporary file first; the parsers take it from memory.
  * Header-only, because `make fuzz` builds every tests/fuzz_*.c on its own.
  */
 #ifndef BTF_FUZZUTIL_H

@@ -173,6 +173,32 @@ static void report_gives_segmentation_reason(void **state)
     btf_dataset_close(ds);
 }
 
+/* NULL, the zeroed options and btf_analyse_defaults() give one model. */
+static void defaults_equal_zero(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_dataset *ds;
+    TU_OK(btf_dataset_open(wide, NULL, &ds, &e), &e);
+    btf_analyse_opts zero = {0}, d = btf_analyse_defaults();
+    const btf_analyse_opts *opts[3] = {NULL, &zero, &d};
+    unsigned char *bytes[3];
+    size_t n[3];
+    for (int i = 0; i < 3; i++) {
+        btf_model m;
+        TU_OK(btf_analyse(ds, opts[i], &m, &e), &e);
+        TU_OK(btf_model_encode(&m, &bytes[i], &n[i], &e), &e);
+        btf_model_free(&m);
+    }
+    for (int i = 1; i < 3; i++) {
+        assert_int_equal(n[i], n[0]);
+        assert_memory_equal(bytes[i], bytes[0], n[0]);
+    }
+    for (int i = 0; i < 3; i++)
+        free(bytes[i]);
+    btf_dataset_close(ds);
+}
+
 /* The "segmentation: ..." line of a command's output (malloc'd), or NULL. */
 static char *reason_line(const char *text)
 {
@@ -403,6 +429,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(range_tile_non_square),
         cmocka_unit_test(report_gives_segmentation_reason),
+        cmocka_unit_test(defaults_equal_zero),
         cmocka_unit_test(cli_prints_segmentation_reason),
         cmocka_unit_test(cli_segment_rejects_model_options),
         cmocka_unit_test(cli_segment_tables_atomic),

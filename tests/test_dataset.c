@@ -1,5 +1,8 @@
-/* test_dataset.c — layouts, detection, completeness and every bad input. */
+/* test_dataset.c — layouts, detection, completeness and every bad input;
+ * the manifest parser on buffers and files. */
 #include "testutil.h"
+
+#include "io/io.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -364,6 +367,57 @@ static void unknown_and_mixed_layouts(void **state)
     free(dir);
 }
 
+/* The TSV parser on a buffer gives what the file reader gives, and its
+ * messages carry the buffer's name. */
+static void tsv_from_memory(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const char text[] = "# a comment\npath\ttheta_l\tphi_l\r\n\n a b.png \t 10\t20\r\n"
+                        "c.exr\t-1e3\tx\n";
+    char *dir = tu_tmpdir();
+    const char *p = tu_fmt("%s/mem.tsv", dir);
+    tu_write_file(p, text, sizeof text - 1);
+    btf_tsv a, b;
+    TU_OK(btf_tsv_read(p, &a, &e), &e);
+    TU_OK(btf_tsv_parse(text, sizeof text - 1, "buf", &b, &e), &e);
+    assert_int_equal(a.ncols, 3);
+    assert_int_equal(a.nrows, 2);
+    assert_int_equal(b.ncols, a.ncols);
+    assert_int_equal(b.nrows, a.nrows);
+    for (int c = 0; c < a.ncols; c++)
+        assert_string_equal(a.names[c], b.names[c]);
+    for (int r = 0; r < a.nrows; r++) {
+        assert_int_equal(a.line_no[r], b.line_no[r]);
+        for (int c = 0; c < a.ncols; c++)
+            assert_string_equal(btf_tsv_cell(&a, r, c), btf_tsv_cell(&b, r, c));
+    }
+    assert_string_equal(btf_tsv_cell(&b, 0, 0), "a b.png");
+    assert_int_equal(b.line_no[1], 5);
+    double v;
+    assert_int_equal(btf_tsv_number(&b, "buf", 1, 2, &v, &e), BTF_E_FORMAT);
+    assert_non_null(strstr(e.msg, "buf:5: phi_l 'x'"));
+    btf_tsv_free(&a);
+    btf_tsv_free(&b);
+    tu_rmtree(dir);
+    free(dir);
+    /* The input is copied: the caller's buffer is left as it was. */
+    char copy[sizeof text];
+    memcpy(copy, text, sizeof text);
+    TU_OK(btf_tsv_parse(copy, sizeof copy - 1, NULL, &b, &e), &e);
+    assert_memory_equal(copy, text, sizeof text);
+    btf_tsv_free(&b);
+
+    assert_int_equal(btf_tsv_parse("a\tb\n1\n", 6, "short", &b, &e), BTF_E_FORMAT);
+    assert_string_equal(e.msg, "short:2: 1 fields, the header names 2");
+    assert_int_equal(btf_tsv_parse("a\0b", 3, "nul", &b, &e), BTF_E_FORMAT);
+    assert_string_equal(e.msg, "nul: not a text file (contains NUL bytes)");
+    assert_int_equal(btf_tsv_parse("", 0, NULL, &b, &e), BTF_E_FORMAT);
+    assert_string_equal(e.msg, "manifest: empty manifest (no header line)");
+    assert_int_equal(btf_tsv_parse(NULL, 0, "none", &b, &e), BTF_E_FORMAT);
+    assert_null(b.text);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -376,6 +430,7 @@ int main(void)
         cmocka_unit_test(truncated_and_unreadable),
         cmocka_unit_test(nan_in_exr),
         cmocka_unit_test(unknown_and_mixed_layouts),
+        cmocka_unit_test(tsv_from_memory),
     };
     return cmocka_run_group_tests_name("dataset", tests, NULL, NULL);
 }

@@ -1,7 +1,8 @@
 /*
- * test_exr.c — src/io/exr.c: EXR round trips (half/float, 1/3 channels, odd
+ * test_exr.c — src/io/exr_read.c and exr_write.c: EXR round trips (half/float, 1/3 channels, odd
  * sizes, extreme values), the streaming writer, atomic writes, and reading
- * hostile input (NaN/Inf, truncation, garbage, unsupported layouts). Files
+ * hostile input (NaN/Inf, truncation, garbage, unsupported layouts),
+ * decoding from memory, and the provenance attributes. Files
  * the writer cannot produce (Inf, tiles, UINT, other compressions, offset
  * data windows) are made here directly with the OpenEXR core API.
  */
@@ -151,7 +152,7 @@ static void round_trip_sizes(void **state)
                     half_exact_image(&a, w, h, c, (uint32_t)(s * 7 + c));
                 else
                     random_image(&a, w, h, c, (uint32_t)(s * 7 + c), -1000.0f, 1000.0f);
-                TU_OK(btf_exr_write(p, &a, half, &e), &e);
+                TU_OK(btf_image_write_exr(p, &a, half, &e), &e);
                 btf_image_header hd;
                 TU_OK(btf_exr_probe(p, &hd, &e), &e);
                 assert_int_equal(hd.format, BTF_FILE_EXR);
@@ -178,7 +179,7 @@ static void half_rounds_to_nearest(void **state)
     btf_image a, b;
     random_image(&a, 31, 9, 3, 5, 0.0f, 8.0f);
     const char *p = tu_fmt("%s/h.exr", tu_dir);
-    TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     for (size_t i = 0; i < (size_t)31 * 9 * 3; i++)
         assert_true(fabsf(a.data[i] - b.data[i]) <= a.data[i] * (1.0f / 2048.0f) + 1e-7f);
@@ -199,14 +200,14 @@ static void extreme_values(void **state)
     const char *p = tu_fmt("%s/x.exr", tu_dir);
 
     /* Float keeps every value bit for bit, subnormals and -0 included. */
-    TU_OK(btf_exr_write(p, &a, 0, &e), &e);
+    TU_OK(btf_image_write_exr(p, &a, 0, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     assert_memory_equal(a.data, b.data, sizeof in);
     btf_image_free(&b);
 
     /* Half clamps to +-65504 (never Inf); tiny values go to 0 or a half
      * subnormal, keeping their sign. */
-    TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     for (int i = 0; i < n; i++) {
         float v = b.data[i];
@@ -232,7 +233,7 @@ static void channel_conversion(void **state)
     btf_image rgb, grey, b;
     random_image(&rgb, 9, 4, 3, 11, 0.0f, 10.0f);
     const char *p = tu_fmt("%s/c.exr", tu_dir);
-    TU_OK(btf_exr_write(p, &rgb, 0, &e), &e);
+    TU_OK(btf_image_write_exr(p, &rgb, 0, &e), &e);
     TU_OK(btf_exr_read(p, 1, &b, &e), &e);
     assert_int_equal(b.channels, 1);
     for (int i = 0; i < 36; i++) {
@@ -246,7 +247,7 @@ static void channel_conversion(void **state)
     btf_image_free(&b);
 
     random_image(&grey, 5, 6, 1, 12, -5.0f, 5.0f);
-    TU_OK(btf_exr_write(p, &grey, 1, &e), &e);
+    TU_OK(btf_image_write_exr(p, &grey, 1, &e), &e);
     TU_OK(btf_exr_read(p, 3, &b, &e), &e);
     assert_int_equal(b.channels, 3);
     for (int i = 0; i < 30; i++) {
@@ -257,7 +258,7 @@ static void channel_conversion(void **state)
     /* An RGB image of FLT_MAX has a luminance of FLT_MAX, not Inf. */
     for (int i = 0; i < 36 * 3; i++)
         rgb.data[i] = FLT_MAX;
-    TU_OK(btf_exr_write(p, &rgb, 0, &e), &e);
+    TU_OK(btf_image_write_exr(p, &rgb, 0, &e), &e);
     TU_OK(btf_exr_read(p, 1, &b, &e), &e);
     for (int i = 0; i < 36; i++)
         assert_true(isfinite(b.data[i]) && b.data[i] > 3e38f);
@@ -281,7 +282,7 @@ static void streaming_equals_one_shot(void **state)
         int w = 37, h = 101, c = 3;
         random_image(&a, w, h, c, 99 + half, -3.0f, 3.0f);
         const char *p1 = tu_fmt("%s/one.exr", d), *p2 = tu_fmt("%s/stream.exr", d);
-        TU_OK(btf_exr_write(p1, &a, half, &e), &e);
+        TU_OK(btf_image_write_exr(p1, &a, half, &e), &e);
 
         btf_exr_writer *wr = NULL;
         TU_OK(btf_exr_writer_open(p2, w, h, c, half, &wr, &e), &e);
@@ -373,8 +374,8 @@ static void writer_misuse(void **state)
 
     /* No image. */
     btf_image none = {0};
-    assert_int_equal(btf_exr_write(p, &none, 0, &e), BTF_E_ARG);
-    assert_int_equal(btf_exr_write(p, NULL, 0, &e), BTF_E_ARG);
+    assert_int_equal(btf_image_write_exr(p, &none, 0, &e), BTF_E_ARG);
+    assert_int_equal(btf_image_write_exr(p, NULL, 0, &e), BTF_E_ARG);
 }
 
 static void non_finite_input_refused(void **state)
@@ -390,7 +391,7 @@ static void non_finite_input_refused(void **state)
             random_image(&a, 6, 40, 3, 3, 0.0f, 1.0f);
             /* Pixel (4, 35), past the first chunks, so some were written. */
             a.data[(35 * 6 + 4) * 3 + 1] = kind == 0 ? NAN : kind == 1 ? INFINITY : -INFINITY;
-            assert_int_equal(btf_exr_write(p, &a, half, &e), BTF_E_ARG);
+            assert_int_equal(btf_image_write_exr(p, &a, half, &e), BTF_E_ARG);
             assert_non_null(strstr(e.msg, "(4, 35)"));
             assert_non_null(strstr(e.msg, kind == 0 ? "NaN" : "Inf"));
             assert_false(file_exists(p));
@@ -408,19 +409,19 @@ static void writes_are_atomic(void **state)
     const char *p = tu_fmt("%s/atomic.exr", d);
     btf_image a, b, bad;
     half_exact_image(&a, 12, 12, 3, 1);
-    TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
     /* A failed rewrite leaves the old file as it was. */
     random_image(&bad, 12, 12, 3, 2, 0.0f, 1.0f);
     bad.data[100] = NAN;
-    assert_int_equal(btf_exr_write(p, &bad, 0, &e), BTF_E_ARG);
+    assert_int_equal(btf_image_write_exr(p, &bad, 0, &e), BTF_E_ARG);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     assert_same_image(&a, &b);
     btf_image_free(&b);
     /* A successful rewrite replaces it. */
     bad.data[100] = 0.5f;
-    TU_OK(btf_exr_write(p, &bad, 0, &e), &e);
+    TU_OK(btf_image_write_exr(p, &bad, 0, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     assert_same_image(&bad, &b);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
@@ -711,7 +712,7 @@ static void truncated_files(void **state)
     btf_image a;
     random_image(&a, 64, 50, 3, 7, 0.0f, 1.0f);
     const char *full = tu_fmt("%s/full.exr", tu_dir);
-    TU_OK(btf_exr_write(full, &a, 0, &e), &e);
+    TU_OK(btf_image_write_exr(full, &a, 0, &e), &e);
     btf_image_free(&a);
     size_t n;
     unsigned char *d = slurp(full, &n);
@@ -733,7 +734,7 @@ static void corrupt_bytes(void **state)
     btf_image a, b;
     random_image(&a, 40, 40, 3, 8, 0.0f, 1.0f);
     const char *full = tu_fmt("%s/good.exr", tu_dir), *bad = tu_fmt("%s/bad.exr", tu_dir);
-    TU_OK(btf_exr_write(full, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr(full, &a, 1, &e), &e);
     btf_image_free(&a);
     size_t n;
     unsigned char *d = slurp(full, &n);
@@ -827,7 +828,7 @@ static void absurd_sizes(void **state)
     };
     for (int i = 0; i < 5; i++) {
         half_exact_image(&a, 16, 16, 1, 3);
-        TU_OK(btf_exr_write(p, &a, 1, &e), &e);
+        TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
         btf_image_free(&a);
         patch_data_window(p, windows[i][0], windows[i][1], windows[i][2], windows[i][3]);
         assert_rejected(p);
@@ -851,7 +852,7 @@ static void library_is_silent(void **state)
     btf_error e = {0};
     btf_image a, b;
     random_image(&a, 30, 30, 3, 4, 0.0f, 1.0f);
-    int rc1 = btf_exr_write(p, &a, 0, &e);
+    int rc1 = btf_image_write_exr(p, &a, 0, &e);
     size_t n = 0;
     unsigned char *d = rc1 ? NULL : slurp(p, &n);
     int rc2 = BTF_OK, rc3 = BTF_OK, rc4 = BTF_OK, rc5 = BTF_OK;
@@ -863,7 +864,7 @@ static void library_is_silent(void **state)
         tu_write_file(p, d, n);
         rc4 = btf_exr_read(p, 0, &b, &e);
     }
-    rc5 = btf_exr_write(tu_fmt("%s/no/such/folder.exr", tu_dir), &a, 1, &e);
+    rc5 = btf_image_write_exr(tu_fmt("%s/no/such/folder.exr", tu_dir), &a, 1, &e);
     fflush(stderr);
     dup2(saved, 2);
     close(saved);
@@ -878,6 +879,162 @@ static void library_is_silent(void **state)
         print_error("unexpected stderr: %.*s\n", (int)m, (const char *)text);
     assert_int_equal(m, 0);
     free(text);
+}
+
+/* ------------------------------------------------------------ provenance */
+
+/* The string attribute `name` of part 0, or NULL when absent. */
+static const char *exr_string(exr_const_context_t ctx, const char *name)
+{
+    int32_t len = 0;
+    const char *s = NULL;
+    if (exr_attr_get_string(ctx, 0, name, &len, &s) != EXR_ERR_SUCCESS)
+        return NULL;
+    assert_int_equal((int)strlen(s), len);
+    return s;
+}
+
+static exr_context_t open_exr(const char *path)
+{
+    exr_context_t ctx = NULL;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    assert_int_equal(exr_start_read(&ctx, path, &init), EXR_ERR_SUCCESS);
+    return ctx;
+}
+
+static void assert_same_pixels(const char *p1, const char *p2)
+{
+    btf_error e = {0};
+    btf_image a, b;
+    TU_OK(btf_exr_read(p1, 0, &a, &e), &e);
+    TU_OK(btf_exr_read(p2, 0, &b, &e), &e);
+    assert_int_equal(a.width, b.width);
+    assert_int_equal(a.height, b.height);
+    assert_int_equal(a.channels, b.channels);
+    assert_memory_equal(a.data, b.data, (size_t)a.width * a.height * a.channels * sizeof(float));
+    btf_image_free(&a);
+    btf_image_free(&b);
+}
+
+static void provenance_attributes(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char d[1024];
+    fresh_dir(d, sizeof d, "meta");
+    btf_exr_meta meta = {.model = "models/leather.btfcar", .seed = UINT64_MAX, .subspace = 7,
+                         .has_dirs = 1, .view = {30, 45}, .light = {75, 352.5}};
+    for (int half = 0; half <= 1; half++)
+        for (int c = 1; c <= 3; c += 2) {
+            btf_image a;
+            random_image(&a, 21, 35, c, 5 + half + c, -2.0f, 2.0f);
+            const char *plain = tu_fmt("%s/plain.exr", d), *with = tu_fmt("%s/meta.exr", d);
+            const char *stream = tu_fmt("%s/stream.exr", d);
+            TU_OK(btf_image_write_exr(plain, &a, half, &e), &e);
+            TU_OK(btf_image_write_exr_meta(with, &a, half, &meta, &e), &e);
+            btf_exr_writer *w = NULL;
+            TU_OK(btf_exr_writer_open_meta(stream, a.width, a.height, c, half, &meta, &w, &e),
+                  &e);
+            TU_OK(btf_exr_writer_put_rows(w, a.data, a.height, &e), &e);
+            TU_OK(btf_exr_writer_close(w, &e), &e);
+
+            exr_context_t ctx = open_exr(with);
+            assert_string_equal(exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
+            assert_string_equal(exr_string(ctx, "btfcarModel"), "models/leather.btfcar");
+            assert_string_equal(exr_string(ctx, "btfcarSeed"), "18446744073709551615");
+            assert_string_equal(exr_string(ctx, "btfcarSubspace"), "7");
+            assert_string_equal(exr_string(ctx, "btfcarView"), "30 45");
+            assert_string_equal(exr_string(ctx, "btfcarLight"), "75 352.5");
+            exr_attr_chromaticities_t ch;
+            assert_int_equal(exr_attr_get_chromaticities(ctx, 0, "chromaticities", &ch),
+                             EXR_ERR_SUCCESS);
+            assert_true(ch.red_x == 0.64f && ch.red_y == 0.33f);
+            assert_true(ch.green_x == 0.30f && ch.green_y == 0.60f);
+            assert_true(ch.blue_x == 0.15f && ch.blue_y == 0.06f);
+            assert_true(ch.white_x == 0.3127f && ch.white_y == 0.3290f);
+            exr_finish(&ctx);
+
+            /* Without metadata: none of it. */
+            ctx = open_exr(plain);
+            assert_null(exr_string(ctx, "btfcarVersion"));
+            assert_null(exr_string(ctx, "btfcarModel"));
+            assert_int_not_equal(exr_attr_get_chromaticities(ctx, 0, "chromaticities", &ch),
+                                 EXR_ERR_SUCCESS);
+            exr_finish(&ctx);
+
+            /* The header changes, the pixels do not; streaming gives the
+             * same file as the one-shot writer. */
+            assert_same_pixels(plain, with);
+            size_t n1, n2;
+            unsigned char *d1 = slurp(with, &n1), *d2 = slurp(stream, &n2);
+            assert_int_equal(n1, n2);
+            assert_memory_equal(d1, d2, n1);
+            free(d1);
+            free(d2);
+            btf_image_free(&a);
+        }
+
+    /* A model without directions, and provenance without a model. */
+    btf_image a;
+    random_image(&a, 4, 4, 3, 11, 0.0f, 1.0f);
+    const char *p = tu_fmt("%s/partial.exr", d);
+    btf_exr_meta some = {.model = "m.btfcar", .seed = 0, .subspace = 0};
+    TU_OK(btf_image_write_exr_meta(p, &a, 1, &some, &e), &e);
+    exr_context_t ctx = open_exr(p);
+    assert_string_equal(exr_string(ctx, "btfcarSeed"), "0");
+    assert_string_equal(exr_string(ctx, "btfcarSubspace"), "0");
+    assert_null(exr_string(ctx, "btfcarView"));
+    assert_null(exr_string(ctx, "btfcarLight"));
+    exr_finish(&ctx);
+    btf_exr_meta none = {0};
+    TU_OK(btf_image_write_exr_meta(p, &a, 1, &none, &e), &e);
+    ctx = open_exr(p);
+    assert_string_equal(exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
+    assert_null(exr_string(ctx, "btfcarModel"));
+    assert_null(exr_string(ctx, "btfcarSeed"));
+    exr_finish(&ctx);
+    btf_image_free(&a);
+    remove(p);
+}
+
+/* ------------------------------------------------------ reading from memory */
+
+static void decode_from_memory(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char d[1024];
+    fresh_dir(d, sizeof d, "memory");
+    btf_image a, b, c;
+    random_image(&a, 19, 40, 3, 21, -1.0f, 4.0f);
+    const char *p = tu_fmt("%s/m.exr", d);
+    TU_OK(btf_image_write_exr(p, &a, 0, &e), &e);
+    size_t n;
+    unsigned char *bytes = slurp(p, &n);
+    for (int ch = 0; ch <= 3; ch += ch ? 2 : 1) {
+        btf_read_opts ro = {.channels = ch};
+        TU_OK(btf_image_read(p, &ro, &b, &e), &e);
+        TU_OK(btf_image_decode(bytes, n, "buffer", &ro, &c, &e), &e);
+        assert_same_image(&b, &c);
+        btf_image_free(&b);
+        btf_image_free(&c);
+    }
+    btf_image_header h1, h2;
+    TU_OK(btf_image_probe(p, &h1, &e), &e);
+    TU_OK(btf_image_probe_memory(bytes, n, "buffer", &h2, &e), &e);
+    assert_memory_equal(&h1, &h2, sizeof h1);
+    /* Damage is reported under the caller's name, like a file's. */
+    for (size_t cut = 0; cut < n; cut += n / 7 + 1) {
+        int rc = btf_image_decode(bytes, cut, "cut-buffer", NULL, &c, &e);
+        assert_true(rc == BTF_E_FORMAT);
+        assert_true(strncmp(e.msg, "cut-buffer: ", 12) == 0);
+        assert_null(c.data);
+    }
+    assert_int_equal(btf_image_decode(NULL, 0, NULL, NULL, &c, &e), BTF_E_FORMAT);
+    assert_true(strncmp(e.msg, "image: ", 7) == 0);
+    free(bytes);
+    btf_image_free(&a);
+    remove(p);
 }
 
 int main(void)
@@ -903,6 +1060,8 @@ int main(void)
         cmocka_unit_test(garbage_and_missing),
         cmocka_unit_test(absurd_sizes),
         cmocka_unit_test(library_is_silent),
+        cmocka_unit_test(provenance_attributes),
+        cmocka_unit_test(decode_from_memory),
     };
     return cmocka_run_group_tests(tests, tu_setup_dir, tu_teardown_dir);
 }

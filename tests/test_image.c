@@ -1,4 +1,5 @@
-/* test_image.c — float images, sRGB, PNG/JPEG files, the structural probe. */
+/* test_image.c — float images, sRGB, PNG/JPEG files and buffers, the
+ * structural probe, the read options' defaults. */
 #include "testutil.h"
 
 #include <float.h>
@@ -198,6 +199,75 @@ static void writes_are_atomic(void **state)
     btf_image_free(&a);
 }
 
+static unsigned char *slurp(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long len = ftell(f);
+    rewind(f);
+    unsigned char *b = malloc(len > 0 ? (size_t)len : 1);
+    assert_non_null(b);
+    assert_int_equal(fread(b, 1, (size_t)len, f), (size_t)len);
+    fclose(f);
+    *n = (size_t)len;
+    return b;
+}
+
+/* Decoding a buffer gives what reading its file gives, for every option,
+ * and damage is reported under the buffer's name. */
+static void decode_from_memory(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image a, b, c;
+    gradient(&a, 23, 11, 3);
+    const char *png = tu_fmt("%s/mem.png", tu_dir);
+    char jpg[4096];
+    snprintf(jpg, sizeof jpg, "%s/mem.jpg", tu_dir);
+    TU_OK(btf_image_write_png(png, &a, &e), &e);
+    TU_OK(btf_image_write_jpeg(jpg, &a, 90, &e), &e);
+    const char *files[2] = {png, jpg};
+    btf_read_opts opts[4] = {{0}, {.channels = 1}, {.channels = 3, .linear_8bit = 1},
+                             btf_read_defaults()};
+    for (int f = 0; f < 2; f++) {
+        size_t n;
+        unsigned char *bytes = slurp(files[f], &n);
+        for (int k = 0; k < 4; k++) {
+            TU_OK(btf_image_read(files[f], &opts[k], &b, &e), &e);
+            TU_OK(btf_image_decode(bytes, n, "buf", &opts[k], &c, &e), &e);
+            assert_int_equal(b.width, c.width);
+            assert_int_equal(b.height, c.height);
+            assert_int_equal(b.channels, c.channels);
+            assert_memory_equal(b.data, c.data,
+                                (size_t)b.width * b.height * b.channels * sizeof(float));
+            btf_image_free(&b);
+            btf_image_free(&c);
+        }
+        btf_image_header h1, h2;
+        TU_OK(btf_image_probe(files[f], &h1, &e), &e);
+        TU_OK(btf_image_probe_memory(bytes, n, "buf", &h2, &e), &e);
+        assert_memory_equal(&h1, &h2, sizeof h1);
+        size_t cuts[] = {0, 1, 3, 10, 40, n / 2, n - 1};
+        for (int k = 0; k < 7; k++) {
+            assert_int_equal(btf_image_decode(bytes, cuts[k], "cut", NULL, &c, &e), BTF_E_FORMAT);
+            assert_true(strncmp(e.msg, "cut: ", 5) == 0);
+            assert_null(c.data);
+        }
+        btf_read_opts bad = {.channels = 2};
+        assert_int_equal(btf_image_decode(bytes, n, "buf", &bad, &c, &e), BTF_E_ARG);
+        free(bytes);
+    }
+    btf_image_free(&a);
+}
+
+static void read_defaults(void **state)
+{
+    (void)state;
+    btf_read_opts d = btf_read_defaults(), zero = {0};
+    assert_memory_equal(&d, &zero, sizeof d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -208,6 +278,8 @@ int main(void)
         cmocka_unit_test(truncated_files_are_errors),
         cmocka_unit_test(garbage_and_missing),
         cmocka_unit_test(writes_are_atomic),
+        cmocka_unit_test(decode_from_memory),
+        cmocka_unit_test(read_defaults),
     };
     return cmocka_run_group_tests_name("image", tests, tu_setup_dir, tu_teardown_dir);
 }

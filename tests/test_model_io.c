@@ -1,10 +1,10 @@
 /*
  * test_model_io.c — the model file MODEL.btfcar (src/model/model_file.c,
- * docs/model-format.md): bit-exact round trips, rejection of truncated,
+ * model_check.c, docs/model-format.md): bit-exact round trips, rejection of truncated,
  * corrupt, foreign and future files, every validation rule (each bad file
  * built with a correct CRC by an independent writer of the documented
- * layout), atomic writing, the encoded size of a realistic model, and
- * `btfcar info MODEL [--json]`.
+ * layout), atomic writing, the encoded size of a realistic model, the EXR
+ * provenance of a model's subspace, and `btfcar info MODEL [--json]`.
  */
 #include "testutil.h"
 
@@ -1404,6 +1404,35 @@ static void info_dataset_json(void **state)
     free(ds);
 }
 
+/* btf_model_exr_meta: a subspace's representative directions, none for a
+ * texture or a subspace out of range. */
+static void exr_meta_of_subspace(void **state)
+{
+    (void)state;
+    btf_model m;
+    make_model(&m, &RICH);
+    for (int k = 0; k < m.n_subspaces; k++) {
+        btf_exr_meta meta = btf_model_exr_meta(&m, "rich.btfcar", k, 99);
+        assert_string_equal(meta.model, "rich.btfcar");
+        assert_true(meta.seed == 99);
+        assert_int_equal(meta.subspace, k);
+        assert_int_equal(meta.has_dirs, 1);
+        const btf_subspace_model *sm = &m.subspaces[k];
+        assert_true(meta.view.theta == m.views.dirs[sm->view].theta);
+        assert_true(meta.view.phi == m.views.dirs[sm->view].phi);
+        assert_true(meta.light.theta == m.lights.dirs[sm->light].theta);
+        assert_true(meta.light.phi == m.lights.dirs[sm->light].phi);
+    }
+    assert_int_equal(btf_model_exr_meta(&m, "x", m.n_subspaces, 1).has_dirs, 0);
+    assert_int_equal(btf_model_exr_meta(&m, "x", -1, 1).has_dirs, 0);
+    free_model(&m);
+    make_model(&m, &SMALL);
+    btf_exr_meta t = btf_model_exr_meta(&m, "tex.btfcar", 0, 5);
+    assert_int_equal(t.has_dirs, 0);
+    assert_string_equal(t.model, "tex.btfcar");
+    free_model(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1428,6 +1457,7 @@ int main(void)
         cmocka_unit_test(json_checker_works),
         cmocka_unit_test(info_model),
         cmocka_unit_test(info_dataset_json),
+        cmocka_unit_test(exr_meta_of_subspace),
     };
     return cmocka_run_group_tests(tests, tu_setup_dir, tu_teardown_dir);
 }

@@ -1,10 +1,11 @@
 /*
  * analyse.c — the whole analysis of a BTF dataset into one model (paper
  * section II): stage 1 segments the (view, light) space into K subspace
- * images (src/segment/segment.c); stage 2 recovers the range map by photometric
- * stereo on the view closest to the normal (src/range/photostereo.c) and keeps it
- * as a small tile; stage 3 models each subspace image with the multi-scale
- * colour CAR model (src/car/subspace_fit.c).
+ * images (II.A, segment/segment.c); stage 2 recovers the range map by
+ * photometric stereo on the view closest to the normal (II.B,
+ * range/photostereo.c) and keeps it as a small tile, averaged here; stage 3
+ * models each subspace image with the multi-scale colour CAR model (II.C,
+ * car/subspace_fit.c).
  */
 #include <stdio.h>
 #include "core/core.h"
@@ -52,7 +53,7 @@ static int grid_cell(int i, const tile_grid *g, int cells)
 /* Area-averages the height map into the tile: each tile texel is the mean
  * of the source pixels whose centres fall in its cell. Heights stay in
  * image-pixel units. */
-static int range_tile(const btf_image *h, int n, btf_model *m, btf_error *err)
+static btf_status range_tile(const btf_image *h, int n, btf_model *m, btf_error *err)
 {
     tile_grid g = range_grid(h->width, h->height, n);
     size_t cells = (size_t)g.tw * g.th;
@@ -86,20 +87,20 @@ static int range_tile(const btf_image *h, int n, btf_model *m, btf_error *err)
     return BTF_OK;
 }
 
-static int stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_model *m,
-                       btf_error *err)
+static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_model *m,
+                              btf_error *err)
 {
     btf_ps_result ps;
-    int rc = btf_photostereo_dataset(ds, &o->photostereo, &ps, err);
+    btf_status rc = btf_photostereo_dataset(ds, &o->photostereo, &ps, err);
     if (rc)
         return rc;
-    rc = range_tile(&ps.height, o->range_size > 0 ? o->range_size : 64, m, err);
+    rc = range_tile(&ps.height, o->range_size, m, err);
     btf_ps_result_free(&ps);
     return rc;
 }
 
-static int stage_fit(const btf_dataset *ds, const btf_segmentation *seg, const btf_analyse_opts *o,
-                     btf_model *m, btf_error *err)
+static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
+                            const btf_analyse_opts *o, btf_model *m, btf_error *err)
 {
     m->subspaces = btf_calloc((size_t)seg->k, sizeof(btf_subspace_model), err);
     if (!m->subspaces)
@@ -107,7 +108,7 @@ static int stage_fit(const btf_dataset *ds, const btf_segmentation *seg, const b
     m->n_subspaces = seg->k;
     for (int k = 0; k < seg->k; k++) {
         btf_image img;
-        int rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &img, err);
+        btf_status rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &img, err);
         if (rc)
             return rc;
         char what[64];
@@ -126,12 +127,31 @@ static int stage_fit(const btf_dataset *ds, const btf_segmentation *seg, const b
     return BTF_OK;
 }
 
-int btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
-                btf_error *err)
+btf_analyse_opts btf_analyse_defaults(void)
 {
-    btf_analyse_opts o = {0};
-    if (opts)
-        o = *opts;
+    return (btf_analyse_opts){
+        .segment = btf_segment_defaults(),
+        .photostereo = btf_photostereo_defaults(),
+        .fit = btf_fit_defaults(),
+        .no_range = 0,
+        .range_size = 64,
+    };
+}
+
+/* range_size zero (or negative) becomes its default; the stages' nested
+ * options are resolved by the stages' own calls. */
+static btf_analyse_opts resolve_opts(const btf_analyse_opts *opts)
+{
+    btf_analyse_opts d = btf_analyse_defaults(), o = opts ? *opts : d;
+    if (o.range_size <= 0)
+        o.range_size = d.range_size;
+    return o;
+}
+
+btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
+                       btf_error *err)
+{
+    btf_analyse_opts o = resolve_opts(opts);
     memset(out, 0, sizeof *out);
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     if (o.segment.features.progress == NULL) {
@@ -139,7 +159,7 @@ int btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *
         o.segment.features.progress_user = o.progress_user;
     }
     btf_segmentation seg;
-    int rc = btf_segment(ds, &o.segment, &seg, err);
+    btf_status rc = btf_segment(ds, &o.segment, &seg, err);
     if (rc)
         return rc;
     rc = btf_dirset_copy(&out->views, in->views, err);

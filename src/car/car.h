@@ -1,17 +1,21 @@
 /*
  * car.h — the modelling stage's internals (src/car/, paper section II.C):
- * spectral decorrelation, the Gaussian-Laplacian pyramid and synthesis
- * margins of CAR bands. Private to the library.
+ * causal offsets, spectral decorrelation, the Gaussian-Laplacian pyramid
+ * and synthesis margins of CAR bands. Private to the library.
  */
 #ifndef BTF_CAR_H
 #define BTF_CAR_H
 
 #include "btfcar.h"
 
+/* 1 when the offset is causal: row < 0, or row 0 and col < 0
+ * (car/neighbourhood.c). */
+int btf_offset_is_causal(btf_offset o);
+
 /* Spectral decorrelation: car/decorrelate.c. Mean colour, orthonormal 3x3
  * basis (rows by decreasing variance) and the band variances. */
-int btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
-             btf_error *err);
+btf_status btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
+                    btf_error *err);
 /* bands[b][i] = basis row b . (rgb_i - mean), in double. */
 void btf_decorrelate(const btf_image *img, const float mean[3], const float basis[9],
                      double *bands[3]);
@@ -22,11 +26,12 @@ typedef struct btf_pyramid {
     int width[BTF_MAX_LEVELS], height[BTF_MAX_LEVELS];
     double *level[BTF_MAX_LEVELS]; /* Laplacian levels; the last is the low-pass */
 } btf_pyramid;
-int btf_pyr_down(const double *src, int w, int h, double **dst, btf_error *err);
-int btf_pyr_up(const double *src, int w2, int h2, int w, int h, double **dst, btf_error *err);
-int btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid *p,
+btf_status btf_pyr_down(const double *src, int w, int h, double **dst, btf_error *err);
+btf_status btf_pyr_up(const double *src, int w2, int h2, int w, int h, double **dst,
                       btf_error *err);
-int btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err);
+btf_status btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid *p,
+                             btf_error *err);
+btf_status btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err);
 void btf_pyramid_free(btf_pyramid *p);
 
 /* Synthesis margins (car/margin.c): the rows above its window a band's
@@ -51,5 +56,11 @@ double btf_car_margin_shortfall(const btf_car_band *b, int m);
 /* The margin synthesis uses: the band's cached one (set by fitting and
  * reading models), else btf_car_margin; -1 when out of memory. */
 int btf_band_margin(const btf_car_band *b);
+
+/* Stability of a band's recursion (car/stability.c): btf_car_is_stable's
+ * answer, and UNKNOWN when the check ran out of memory, so that a fit under
+ * memory pressure fails instead of shrinking a model for no reason. */
+typedef enum btf_stability { BTF_UNSTABLE = 0, BTF_STABLE = 1, BTF_STABILITY_UNKNOWN = -1 } btf_stability;
+btf_stability btf_car_stability(const btf_car_band *b);
 
 #endif

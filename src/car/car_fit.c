@@ -1,5 +1,5 @@
 /*
- * car.c — estimation of the 2D causal auto-regressive (CAR) model of one
+ * car_fit.c — estimation of the 2D causal auto-regressive (CAR) model of one
  * sub-band (paper section II.C, eq. (1)-(2)):
  *
  *     Y_r = gamma X_r + e_r,   e_r ~ N(0, sigma^2) white,
@@ -28,12 +28,10 @@
  * Occam factor that keeps smooth bands small. Data are standardised first
  * (mean 0, variance 1), so v0 = 1, a0 = 1, b0 = 0.01 are weak and scale-free.
  *
- * Stability. Least-squares and Bayesian estimates are not guaranteed stable.
- * btf_car_is_stable checks sum |gamma| < 1 (sufficient), else that A(w1, w2) =
- * 1 - sum gamma_s e^{-i(w1 r_s + w2 c_s)} stays away from 0 on a frequency
- * grid (necessary) and that a test recursion does not grow. An unstable
- * estimate is shrunk (gamma <- 0.95 gamma, repeatedly) until stable, sigma is
- * re-estimated for the shrunk gamma, and a warning says so.
+ * Stability. Least-squares and Bayesian estimates are not guaranteed stable
+ * (car/stability.c tests them). An unstable estimate is shrunk (gamma <- 0.95
+ * gamma, repeatedly) until stable, sigma is re-estimated for the shrunk
+ * gamma, and a warning says so.
  */
 #include <stdio.h>
 #include "core/core.h"
@@ -53,61 +51,6 @@ static const btf_offset FAMILY[14] = {{0, -1}, {-1, 0}, {-1, -1}, {-1, 1}, {0, -
                                       {-2, -2}, {-2, 2}, {0, -3}, {-3, 0}};
 static const int FAMILY_SIZES[] = {1, 2, 3, 4, 6, 8, 10, 12, 14};
 #define N_FAMILY_SIZES 9
-
-/* ------------------------------------------------------------ neighbourhood */
-
-static int is_causal(btf_offset o)
-{
-    return o.row < 0 || (o.row == 0 && o.col < 0);
-}
-
-int btf_neighbourhood_parse(const char *spec, btf_offset *offsets, int *n, btf_error *err)
-{
-    *n = 0;
-    const char *p = spec;
-    while (*p) {
-        char *end;
-        long r = strtol(p, &end, 10);
-        if (end == p || *end != ':')
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': expected row:col at '%s'", spec, p);
-        p = end + 1;
-        long c = strtol(p, &end, 10);
-        if (end == p || (*end != ',' && *end != '\0'))
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': expected row:col at '%s'", spec, p);
-        if (r < -64 || r > 64 || c < -64 || c > 64)
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld beyond 64", spec, r, c);
-        btf_offset o = {(int8_t)r, (int8_t)c};
-        if (!is_causal(o))
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld is not causal "
-                            "(need row < 0, or row 0 and col < 0)", spec, r, c);
-        for (int i = 0; i < *n; i++)
-            if (offsets[i].row == o.row && offsets[i].col == o.col)
-                return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld repeated", spec, r, c);
-        if (*n == BTF_CAR_MAX_NEIGHBOURS)
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': more than %d offsets", spec,
-                            BTF_CAR_MAX_NEIGHBOURS);
-        offsets[(*n)++] = o;
-        p = *end == ',' ? end + 1 : end;
-        if (*end == ',' && *p == '\0')
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': trailing comma", spec);
-    }
-    if (*n == 0)
-        return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': empty", spec);
-    return BTF_OK;
-}
-
-void btf_neighbourhood_format(const btf_offset *offsets, int n, char *buf, size_t len)
-{
-    size_t k = 0;
-    if (len)
-        buf[0] = '\0';
-    for (int i = 0; i < n && k < len; i++) {
-        int w = snprintf(buf + k, len - k, "%s%d:%d", i ? "," : "", offsets[i].row, offsets[i].col);
-        if (w < 0)
-            break;
-        k += (size_t)w;
-    }
-}
 
 /* ---------------------------------------------------------------- algebra */
 
@@ -240,112 +183,6 @@ static double residual(const double *v, int m, const double *g, int eta)
     return s > 0.0 ? s : 0.0;
 }
 
-/* -------------------------------------------------------------- stability */
-
-/* |A(w1, w2)|^2 on an n x n grid of the frequency torus: min and the mean of
- * its inverse (the stationary variance for unit noise). */
-static void spectrum(const btf_car_band *b, int n, double *min_a2, double *mean_inv)
-{
-    double mn = INFINITY, acc = 0.0;
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++) {
-            double w1 = 2.0 * 3.14159265358979323846 * i / n;
-            double w2 = 2.0 * 3.14159265358979323846 * j / n;
-            double re = 1.0, im = 0.0;
-            for (int s = 0; s < b->n; s++) {
-                double ph = w1 * b->offsets[s].row + w2 * b->offsets[s].col;
-                re -= b->gamma[s] * cos(ph);
-                im += b->gamma[s] * sin(ph);
-            }
-            double a2 = re * re + im * im;
-            if (a2 < mn)
-                mn = a2;
-            acc += a2 > 1e-300 ? 1.0 / a2 : 1e300;
-        }
-    *min_a2 = mn;
-    *mean_inv = acc / ((double)n * n);
-}
-
-/* Runs the recursion on a rows x cols field of unit noise (zero boundary).
- * A stable model does not grow: neither down the rows (the last quarter of
- * rows against the quarter before) nor along them (the last quarter of
- * columns against the quarter before; the zero boundary only ever lowers
- * the variance near an edge). 1: grows, 0: does not, -1: out of memory. */
-static int recursion_grows(const btf_car_band *b)
-{
-    enum { R = 160, C = 192 };
-    double *f = calloc((size_t)R * C, sizeof(double));
-    if (!f)
-        return -1;
-    btf_rng rng;
-    btf_rng_seed(&rng, 12345);
-    for (int y = 0; y < R; y++)
-        for (int x = 0; x < C; x++) {
-            double s = 0.0;
-            for (int k = 0; k < b->n; k++) {
-                int yy = y + b->offsets[k].row, xx = x + b->offsets[k].col;
-                if (yy >= 0 && xx >= 0 && xx < C)
-                    s += b->gamma[k] * f[yy * C + xx];
-            }
-            /* Uniform noise of unit variance is enough to excite growth. */
-            f[y * C + x] = s + (btf_rng_uniform(&rng) - 0.5) * 3.4641016151377544;
-        }
-    double rows1 = 0.0, rows2 = 0.0, cols1 = 0.0, cols2 = 0.0;
-    for (int y = R / 2; y < R; y++)
-        for (int x = C / 4; x < C; x++) {
-            double q = f[y * C + x] * f[y * C + x];
-            if (x < 3 * C / 4) {
-                if (y < 3 * R / 4)
-                    rows1 += q;
-                else
-                    rows2 += q;
-            }
-            if (y >= 3 * R / 4) {
-                if (x < C / 2)
-                    continue;
-                if (x < 3 * C / 4)
-                    cols1 += q;
-                else
-                    cols2 += q;
-            }
-        }
-    free(f);
-    if (!isfinite(rows1) || !isfinite(rows2) || !isfinite(cols1) || !isfinite(cols2))
-        return 1;
-    return rows2 > 1.5 * rows1 + 1e-12 || cols2 > 1.5 * cols1 + 1e-12;
-}
-
-/* 1: stable, 0: not, -1: out of memory (cannot tell). */
-static int stability(const btf_car_band *b)
-{
-    double sum = 0.0;
-    for (int i = 0; i < b->n; i++) {
-        if (!isfinite(b->gamma[i]))
-            return 0;
-        sum += fabs(b->gamma[i]);
-    }
-    if (sum < 1.0)
-        return 1;
-    double mn, inv;
-    spectrum(b, 64, &mn, &inv);
-    if (!(mn > 1e-6))
-        return 0;
-    int grows = recursion_grows(b);
-    return grows < 0 ? -1 : !grows;
-}
-
-int btf_car_is_stable(const btf_car_band *b)
-{
-    return stability(b) == 1;
-}
-
-double btf_car_stationary_variance(const btf_car_band *b)
-{
-    double mn, inv;
-    spectrum(b, 256, &mn, &inv);
-    return (double)b->sigma * b->sigma * inv;
-}
-
 /* ------------------------------------------------------------------ fitting */
 
 static void warn(const btf_car_fit_opts *o, const char *text)
@@ -402,17 +239,17 @@ static int stabilise(btf_car_band *b, double *factor)
     double f = 1.0;
     float g0[BTF_CAR_MAX_NEIGHBOURS];
     memcpy(g0, b->gamma, sizeof g0);
-    int st = 0;
-    for (int k = 0; k < 200 && (st = stability(b)) == 0; k++) {
+    btf_stability st = BTF_UNSTABLE;
+    for (int k = 0; k < 200 && (st = btf_car_stability(b)) == BTF_UNSTABLE; k++) {
         f *= 0.95;
         for (int i = 0; i < b->n; i++)
             b->gamma[i] = (float)(g0[i] * f);
     }
-    if (st == 0)
-        st = stability(b);
-    if (st < 0)
+    if (st == BTF_UNSTABLE)
+        st = btf_car_stability(b);
+    if (st == BTF_STABILITY_UNKNOWN)
         return -1;
-    if (st == 0) { /* cannot happen for f -> 0; be safe */
+    if (st == BTF_UNSTABLE) { /* cannot happen for f -> 0; be safe */
         b->n = 0;
         f = 0.0;
     }
@@ -420,12 +257,24 @@ static int stabilise(btf_car_band *b, double *factor)
     return 0;
 }
 
-int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
-                btf_car_band *out, btf_car_fit_info *info, btf_error *err)
+btf_car_fit_opts btf_car_fit_defaults(void)
 {
-    btf_car_fit_opts o = {0};
-    if (opts)
-        o = *opts;
+    return (btf_car_fit_opts){.n_fixed = 0, .max_neighbours = 14};
+}
+
+/* The options with every zero (or negative) count replaced by its default. */
+static btf_car_fit_opts resolve_opts(const btf_car_fit_opts *opts)
+{
+    btf_car_fit_opts d = btf_car_fit_defaults(), o = opts ? *opts : d;
+    if (o.max_neighbours <= 0)
+        o.max_neighbours = d.max_neighbours;
+    return o;
+}
+
+btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
+                       btf_car_band *out, btf_car_fit_info *info, btf_error *err)
+{
+    btf_car_fit_opts o = resolve_opts(opts);
     btf_car_fit_info inf = {.chosen = -1, .shrink = 1.0};
     memset(out, 0, sizeof *out);
     if (!band || w < 1 || h < 1)
@@ -433,7 +282,7 @@ int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
     if (o.n_fixed < 0 || o.n_fixed > BTF_CAR_MAX_NEIGHBOURS)
         return btf_fail(err, BTF_E_ARG, "neighbourhood of %d offsets", o.n_fixed);
     for (int i = 0; i < o.n_fixed; i++)
-        if (!is_causal(o.fixed[i]))
+        if (!btf_offset_is_causal(o.fixed[i]))
             return btf_fail(err, BTF_E_ARG, "offset %d:%d is not causal", o.fixed[i].row,
                             o.fixed[i].col);
     size_t n = (size_t)w * h;
@@ -458,7 +307,7 @@ int btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
         z[i] = (band[i] - mean) / sd;
 
     const btf_offset *offs = o.n_fixed ? o.fixed : FAMILY;
-    int maxn = o.max_neighbours > 0 ? o.max_neighbours : 14;
+    int maxn = o.max_neighbours;
     int sizes[N_FAMILY_SIZES], nsizes = 0;
     if (o.n_fixed) {
         sizes[nsizes++] = o.n_fixed;

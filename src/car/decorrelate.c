@@ -56,8 +56,8 @@ static void jacobi3(double a[3][3], double v[3][3], double ev[3])
         ev[i] = a[i][i];
 }
 
-int btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
-             btf_error *err)
+btf_status btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
+                    btf_error *err)
 {
     if (!img || !img->data || img->channels != 3)
         return btf_fail(err, BTF_E_ARG, "spectral decorrelation needs an RGB image");

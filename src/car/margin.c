@@ -16,11 +16,12 @@
  * last two powers of two (a band that needs 130 rows costs 136, not 256:
  * margins are a large part of the pixels synthesised when the bands are
  * strongly correlated). A weakly correlated band (most of them) needs 8 or
- * 16 pixels, a strongly correlated one more: synthesis no longer pays a
- * fixed 64 on every side of every level, and gives bands whose correlation
- * reaches farther up to 256. A band that needs more than the cap (a nearly
- * unstable one) is synthesised with 256 and its first rows fall short of
- * the stationary variance: fitting warns of it (btf_car_margin_shortfall).
+ * 16 pixels, a strongly correlated one more, up to 256: a margin per band
+ * costs each band only what its own correlation needs, where one fixed
+ * margin would be too much for most and too little for some. A band that
+ * needs more than the cap (a nearly unstable one) is synthesised with 256
+ * and its first rows fall short of the stationary variance: fitting warns
+ * of it (btf_car_margin_shortfall).
  *
  * The response is computed in double on a grid of 2m + 1 rows and 4m + 1
  * columns with the synthesis' own zero boundary, so the estimate includes

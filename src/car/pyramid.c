@@ -7,8 +7,8 @@
  * up(G_{l+1})) restores the band exactly.
  *
  * The up-sampling arithmetic is written out (btf_up_even / btf_up_odd in
- * internal.h) because synthesis on the CPU and on the GPU must perform the
- * very same float operations. Analysis works in double and mirrors at the
+ * src/synth/btf_shared.h) because synthesis on the CPU and on the GPU must
+ * perform the very same float operations. Analysis works in double and mirrors at the
  * borders (reflect-101, as OpenCV does); synthesis never reaches a border.
  */
 #include "core/core.h"
@@ -31,7 +31,7 @@ static int mirror(int i, int n)
     return i;
 }
 
-int btf_pyr_down(const double *src, int w, int h, double **dst, btf_error *err)
+btf_status btf_pyr_down(const double *src, int w, int h, double **dst, btf_error *err)
 {
     static const double k[5] = {1.0 / 16, 4.0 / 16, 6.0 / 16, 4.0 / 16, 1.0 / 16};
     int w2 = (w + 1) / 2, h2 = (h + 1) / 2;
@@ -72,7 +72,7 @@ static double up_sample(const double *c, int stride, int n, int x)
     return (c[(size_t)mirror(i, n) * stride] + c[(size_t)mirror(i + 1, n) * stride]) * 0.5;
 }
 
-int btf_pyr_up(const double *src, int w2, int h2, int w, int h, double **dst, btf_error *err)
+btf_status btf_pyr_up(const double *src, int w2, int h2, int w, int h, double **dst, btf_error *err)
 {
     double *tmp = btf_alloc((size_t)w * h2, sizeof(double), err);
     double *out = btf_alloc((size_t)w * h, sizeof(double), err);
@@ -99,7 +99,8 @@ void btf_pyramid_free(btf_pyramid *p)
     memset(p, 0, sizeof *p);
 }
 
-int btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid *p, btf_error *err)
+btf_status btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid *p,
+                             btf_error *err)
 {
     memset(p, 0, sizeof *p);
     if (levels < 1 || levels > BTF_MAX_LEVELS)
@@ -117,7 +118,7 @@ int btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid 
             break;
         }
         double *down, *up;
-        int rc = btf_pyr_down(g, w, h, &down, err);
+        btf_status rc = btf_pyr_down(g, w, h, &down, err);
         if (rc == 0) {
             rc = btf_pyr_up(down, (w + 1) / 2, (h + 1) / 2, w, h, &up, err);
             if (rc)
@@ -139,7 +140,7 @@ int btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid 
     return BTF_OK;
 }
 
-int btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err)
+btf_status btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err)
 {
     int l = p->levels - 1;
     double *g = btf_alloc((size_t)p->width[l] * p->height[l], sizeof(double), err);
@@ -148,7 +149,7 @@ int btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err)
     memcpy(g, p->level[l], (size_t)p->width[l] * p->height[l] * sizeof(double));
     for (l = p->levels - 2; l >= 0; l--) {
         double *up;
-        int rc = btf_pyr_up(g, p->width[l + 1], p->height[l + 1], p->width[l], p->height[l], &up, err);
+        btf_status rc = btf_pyr_up(g, p->width[l + 1], p->height[l + 1], p->width[l], p->height[l], &up, err);
         free(g);
         if (rc)
             return rc;

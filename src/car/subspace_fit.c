@@ -1,7 +1,8 @@
 /*
- * fit.c — the model of one subspace image (paper section II.C): spectral
- * decorrelation into 3 bands (src/car/decorrelate.c), a Gaussian-Laplacian
- * pyramid per band (src/car/pyramid.c) and a CAR model per sub-band (src/car/car_fit.c).
+ * subspace_fit.c — the model of one subspace image (paper section II.C):
+ * spectral decorrelation into 3 bands (car/decorrelate.c), a
+ * Gaussian-Laplacian pyramid per band (car/pyramid.c) and a CAR model per
+ * sub-band (car/car_fit.c); and the one-subspace model of a plain texture.
  *
  * Pyramid depth (--levels auto). The correlation length ell of the dominant
  * band is the smallest lag (1..64) at which its normalised autocorrelation,
@@ -69,11 +70,12 @@ int btf_auto_levels(const double *band, int w, int h)
     return levels;
 }
 
-static int fit_band(const double *band, int w, int h, int levels, const btf_car_fit_opts *car,
-                    const char *what, btf_car_band *out, btf_error *err)
+static btf_status fit_band(const double *band, int w, int h, int levels,
+                           const btf_car_fit_opts *car, const char *what, btf_car_band *out,
+                           btf_error *err)
 {
     btf_pyramid p;
-    int rc = btf_pyramid_build(band, w, h, levels, &p, err);
+    btf_status rc = btf_pyramid_build(band, w, h, levels, &p, err);
     if (rc)
         return rc;
     for (int l = 0; rc == 0 && l < levels; l++) {
@@ -87,12 +89,17 @@ static int fit_band(const double *band, int w, int h, int levels, const btf_car_
     return rc;
 }
 
-int btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts, btf_subspace_model *out,
-                     btf_error *err)
+btf_fit_opts btf_fit_defaults(void)
 {
-    btf_fit_opts o = {0};
-    if (opts)
-        o = *opts;
+    return (btf_fit_opts){.levels = 0, .car = btf_car_fit_defaults()};
+}
+
+btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
+                            btf_subspace_model *out, btf_error *err)
+{
+    /* levels 0 is auto, decided below from the image; btf_car_fit resolves
+     * the CAR options' own defaults. */
+    btf_fit_opts o = opts ? *opts : btf_fit_defaults();
     memset(out, 0, sizeof *out);
     if (o.levels < 0 || o.levels > BTF_MAX_LEVELS)
         return btf_fail(err, BTF_E_ARG, "levels %d: expected 1..%d or auto", o.levels, BTF_MAX_LEVELS);
@@ -103,7 +110,7 @@ int btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts, btf_subspac
     out->view = out->light = -1;
     out->width = img->width;
     out->height = img->height;
-    int rc = btf_pca3(img, out->mean, out->basis, NULL, err);
+    btf_status rc = btf_pca3(img, out->mean, out->basis, NULL, err);
     if (rc)
         return rc;
     double *bands[3] = {NULL, NULL, NULL};
@@ -130,8 +137,8 @@ int btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts, btf_subspac
     return rc;
 }
 
-int btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_model *out,
-                    btf_error *err)
+btf_status btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_model *out,
+                           btf_error *err)
 {
     memset(out, 0, sizeof *out);
     if (!img || !img->data || img->channels != 3)
@@ -142,7 +149,7 @@ int btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_model *o
     out->n_subspaces = 1;
     snprintf(out->views.name, sizeof out->views.name, "none");
     snprintf(out->lights.name, sizeof out->lights.name, "none");
-    int rc = btf_fit_subspace(img, opts, &out->subspaces[0], err);
+    btf_status rc = btf_fit_subspace(img, opts, &out->subspaces[0], err);
     if (rc)
         btf_model_free(out);
     return rc;

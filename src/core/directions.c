@@ -76,7 +76,7 @@ static int make_rings(btf_dirset *set, const char *name, const double *theta, co
     return BTF_OK;
 }
 
-int btf_dirset_ubo81(btf_dirset *set, btf_error *err)
+btf_status btf_dirset_ubo81(btf_dirset *set, btf_error *err)
 {
     static const double theta[] = {0, 15, 30, 45, 60, 75};
     static const int count[] = {1, 6, 12, 18, 20, 24};
@@ -84,7 +84,7 @@ int btf_dirset_ubo81(btf_dirset *set, btf_error *err)
     return make_rings(set, "ubo81", theta, count, offset, 6, err);
 }
 
-int btf_dirset_ubo151(btf_dirset *set, btf_error *err)
+btf_status btf_dirset_ubo151(btf_dirset *set, btf_error *err)
 {
     static const double theta[] = {0, 11, 23.5, 30, 37.5, 45, 52.5, 60, 67.5, 75};
     static const int count[] = {1, 6, 12, 12, 12, 18, 18, 24, 24, 24};
@@ -101,7 +101,7 @@ void btf_dirset_free(btf_dirset *set)
     set->count = 0;
 }
 
-int btf_dirset_copy(btf_dirset *dst, const btf_dirset *src, btf_error *err)
+btf_status btf_dirset_copy(btf_dirset *dst, const btf_dirset *src, btf_error *err)
 {
     dst->dirs = btf_alloc((size_t)(src->count ? src->count : 1), sizeof(btf_dir), err);
     if (!dst->dirs)
@@ -159,7 +159,7 @@ static int adopt_known(btf_dirset *set, int (*make)(btf_dirset *, btf_error *), 
     return 0;
 }
 
-int btf_dirset_from_list(btf_dirset *set, const btf_dir *dirs, int count, btf_error *err)
+btf_status btf_dirset_from_list(btf_dirset *set, const btf_dir *dirs, int count, btf_error *err)
 {
     memset(set, 0, sizeof *set);
     if (count < 1)

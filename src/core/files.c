@@ -39,7 +39,7 @@ void btf_abort_file(const char *tmp)
     remove(tmp);
 }
 
-int btf_write_file_atomic(const char *path, const void *data, size_t n, btf_error *err)
+btf_status btf_write_file_atomic(const char *path, const void *data, size_t n, btf_error *err)
 {
     char tmp[4096];
     int rc = btf_tmp_path(path, tmp, sizeof tmp, err);
@@ -106,7 +106,7 @@ int btf_read_file(const char *path, size_t max_bytes, unsigned char **data,
     return BTF_OK;
 }
 
-int btf_mkdirs(const char *path, btf_error *err)
+btf_status btf_mkdirs(const char *path, btf_error *err)
 {
     char buf[4096];
     size_t len = strlen(path);

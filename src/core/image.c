@@ -7,7 +7,8 @@
 #include <math.h>
 #include <stdlib.h>
 
-int btf_image_alloc(btf_image *img, int width, int height, int channels, btf_error *err)
+btf_status btf_image_alloc(btf_image *img, int width, int height, int channels,
+                           btf_error *err)
 {
     img->data = NULL;
     img->width = img->height = img->channels = 0;

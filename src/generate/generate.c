@@ -1,12 +1,13 @@
 /*
- * generate.c — writes a procedural BTF to disk in the Bonn UBO2003 layout:
+ * generate.c — writes a procedural BTF (a stand-in for the measured BTFs of
+ * the paper's section II) to disk in the Bonn UBO2003 layout:
  * for each of the 81 views a folder "tvCCC_pvDDD/" with the 81 images
  * "NNNNN tlAAA plBBB tvCCC pvDDD.jpg" (NNNNN = light_index * 81 + view_index),
  * plus the ground truth in truth/{height,normals,albedo}.exr.
  *
  * Visibility from a view depends only on the view, and shadowing only on the
  * light, so the 81 view maps and 81 light maps are computed once and each of
- * the 6,561 images only combines one of each (src/generate/material.c). Maps,
+ * the 6,561 images only combines one of each (generate/render.c). Maps,
  * then images, are made by the thread pool (core/pool.c); each is
  * independent, so the output does not depend on the thread count.
  *
@@ -79,10 +80,10 @@ static btf_status image_job(void *user, int t, int worker, btf_error *err)
     return render_one(j, t / n, t % n, err);
 }
 
-static int write_truth(const btf_material *m, const char *dir, btf_error *err)
+static btf_status write_truth(const btf_material *m, const char *dir, btf_error *err)
 {
     char tdir[4096], path[4096];
-    int rc = btf_path_join(tdir, sizeof tdir, dir, "truth", err);
+    btf_status rc = btf_path_join(tdir, sizeof tdir, dir, "truth", err);
     if (rc == 0)
         rc = btf_mkdirs(tdir, err);
     struct { const char *name; float *data; int channels; } maps[3] = {
@@ -96,12 +97,12 @@ static int write_truth(const btf_material *m, const char *dir, btf_error *err)
     return rc;
 }
 
-static int make_view_folders(const btf_dirset *dirs, const char *dir, btf_error *err)
+static btf_status make_view_folders(const btf_dirset *dirs, const char *dir, btf_error *err)
 {
     for (int i = 0; i < dirs->count; i++) {
         char folder[32], path[4096];
         view_folder(folder, sizeof folder, dirs->dirs[i]);
-        int rc = btf_path_join(path, sizeof path, dir, folder, err);
+        btf_status rc = btf_path_join(path, sizeof path, dir, folder, err);
         if (rc == 0)
             rc = btf_mkdirs(path, err);
         if (rc)
@@ -112,7 +113,7 @@ static int make_view_folders(const btf_dirset *dirs, const char *dir, btf_error 
 
 /* OUTDIR may not exist yet, or be an empty folder; anything else is refused
  * so that a generator run never overwrites somebody's data. */
-static int check_outdir(const char *outdir, btf_error *err)
+static btf_status check_outdir(const char *outdir, btf_error *err)
 {
     struct stat st;
     if (stat(outdir, &st) != 0)
@@ -138,8 +139,7 @@ static int generate_into(const btf_material *m, const btf_dirset *dirs, const ch
                          const btf_generate_opts *o, btf_error *err)
 {
     int n = dirs->count;
-    gen_job j = {.m = m, .dirs = dirs, .dir = tmp,
-                 .quality = o->jpeg_quality ? o->jpeg_quality : 95};
+    gen_job j = {.m = m, .dirs = dirs, .dir = tmp, .quality = o->jpeg_quality};
     j.views = btf_calloc((size_t)n, sizeof *j.views, err);
     j.lights = btf_calloc((size_t)n, sizeof *j.lights, err);
     int rc = (j.views && j.lights) ? BTF_OK : BTF_E_NOMEM;
@@ -164,16 +164,25 @@ static int generate_into(const btf_material *m, const btf_dirset *dirs, const ch
     return rc;
 }
 
-int btf_generate(const char *material, const char *outdir, const btf_generate_opts *opts,
-                 btf_error *err)
+btf_generate_opts btf_generate_defaults(void)
 {
-    btf_generate_opts o = {0};
-    if (opts)
-        o = *opts;
-    int size = o.size ? o.size : 128;
+    return (btf_generate_opts){.size = 128, .seed = 0, .jpeg_quality = 95, .threads = 0};
+}
+
+btf_status btf_generate(const char *material, const char *outdir, const btf_generate_opts *opts,
+                        btf_error *err)
+{
+    btf_generate_opts d = btf_generate_defaults(), o = opts ? *opts : d;
     if (o.jpeg_quality < 0 || o.jpeg_quality > 100)
         return btf_fail(err, BTF_E_ARG, "JPEG quality %d: expected 1..100", o.jpeg_quality);
-    int rc = check_outdir(outdir, err);
+    /* Zero means the default; seed 0 and threads 0 (all CPUs) are taken as
+     * they are. A negative size is refused by btf_material_make. */
+    if (o.size == 0)
+        o.size = d.size;
+    if (o.jpeg_quality == 0)
+        o.jpeg_quality = d.jpeg_quality;
+    int size = o.size;
+    btf_status rc = check_outdir(outdir, err);
     if (rc)
         return rc;
     btf_material m;

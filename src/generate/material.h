@@ -1,13 +1,26 @@
 /*
- * material.h — procedural materials' per-view and per-light maps
- * (src/generate/), shared by the generator and the tests. Private.
+ * material.h — procedural materials' internals (src/generate/): the size
+ * limit, and the per-view and per-light maps of rendering, shared by the
+ * generator and the tests. Private to the library.
  */
 #ifndef BTF_MATERIAL_H
 #define BTF_MATERIAL_H
 
 #include "btfcar.h"
 
-/* Procedural materials (generate/material.c): precomputation for rendering many
+#include <stdint.h>
+
+/* Largest material side: keeps size*size*3 well inside int. */
+#define BTF_MATERIAL_MAX_SIZE 16384
+
+/* i mod n in [0, n), for any sign of i: textures are periodic. */
+static inline int btf_wrap_int(int64_t i, int n)
+{
+    int64_t r = i % n;
+    return (int)(r < 0 ? r + n : r);
+}
+
+/* Rendering (generate/render.c): precomputation for rendering many
  * (view, light) pairs. What a view sees depends only on the view, and what a
  * light shadows only on the light, so a generator builds one view map per
  * view and one light map per light and combines them per pair with
@@ -25,8 +38,8 @@ typedef struct btf_view_map {
     float *normal; /* size*size*3: unit normal at the hit */
     float *albedo; /* size*size*3: albedo at the hit */
 } btf_view_map;
-int btf_view_map_make(const btf_material *m, btf_dir view, btf_view_map **out,
-                      btf_error *err);
+btf_status btf_view_map_make(const btf_material *m, btf_dir view, btf_view_map **out,
+                             btf_error *err);
 void btf_view_map_free(btf_view_map *vm);
 
 typedef struct btf_light_map {
@@ -34,17 +47,17 @@ typedef struct btf_light_map {
     float *vis;    /* size*size: visibility of the light from the surface point
                       above texel (x, y): 0 in cast shadow .. 1 lit (soft edge) */
 } btf_light_map;
-int btf_light_map_make(const btf_material *m, btf_dir light, btf_light_map **out,
-                       btf_error *err);
+btf_status btf_light_map_make(const btf_material *m, btf_dir light, btf_light_map **out,
+                              btf_error *err);
 void btf_light_map_free(btf_light_map *lm);
 
 /* Shades one (view, light) pair from its maps into out (allocated here, size x
  * size x 3; the caller frees it). view and light must be the directions the
  * maps were made for. */
-int btf_material_render_maps(const btf_material *m, const btf_view_map *vm,
-                             const btf_light_map *lm, btf_dir view, btf_dir light,
-                             btf_image *out, btf_error *err);
+btf_status btf_material_render_maps(const btf_material *m, const btf_view_map *vm,
+                                    const btf_light_map *lm, btf_dir view, btf_dir light,
+                                    btf_image *out, btf_error *err);
 /* Recomputes m->normal from m->height (central differences, wrapping). */
-void btf_material_normals_from_height(btf_material *m);
+void btf_material_normals_from_height(btf_material *m); /* generate/material.c */
 
 #endif

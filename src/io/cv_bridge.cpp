@@ -1,12 +1,15 @@
 /*
  * cv_bridge.cpp — the one C++ file: a thin C interface over the parts of
- * OpenCV 4 that have no C API (image decoding and encoding). Nothing here
- * throws across the boundary: every OpenCV exception becomes an error text.
+ * OpenCV 4 that have no C API: PNG/JPEG decoding and encoding in memory,
+ * the linear-RGB to CIE Lab conversion (segmentation features), and the 2D
+ * DFT and DCT (range-map integration). Nothing here throws across the
+ * boundary: every OpenCV exception becomes an error text.
  */
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
@@ -39,15 +42,22 @@ template <class Body> static int guarded(char *errbuf, size_t errlen, Body body)
     return -1;
 }
 
-/* Decodes a PNG/JPEG file as stored: 8- or 16-bit, 1 or 3 channels, RGB
- * order (OpenCV's BGR is swapped here so no caller sees it). Alpha dropped. */
-extern "C" int btfcv_read(const char *path, int *w, int *h, int *c, int *depth16,
-                          void **pixels, char *errbuf, size_t errlen)
+/* Decodes a PNG/JPEG held in memory as stored: 8- or 16-bit, 1 or 3
+ * channels, RGB order (OpenCV's BGR is swapped here so no caller sees it).
+ * Alpha dropped. */
+extern "C" int btfcv_decode(const void *data, size_t n, int *w, int *h, int *c, int *depth16,
+                            void **pixels, char *errbuf, size_t errlen)
 {
     *pixels = nullptr;
     return guarded(errbuf, errlen, [&]() -> int {
-        cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH |
-                                         cv::IMREAD_ANYCOLOR);
+        /* OpenCV sizes a buffer Mat with an int. */
+        if (n == 0 || n > (size_t)INT32_MAX) {
+            set_error(errbuf, errlen, n ? "too large to decode" : "cannot decode image");
+            return -1;
+        }
+        const cv::Mat encoded(1, (int)n, CV_8U, const_cast<void *>(data));
+        cv::Mat m = cv::imdecode(encoded, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH |
+                                          cv::IMREAD_ANYCOLOR);
         if (m.empty()) {
             set_error(errbuf, errlen, "cannot decode image");
             return -1;

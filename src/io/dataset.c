@@ -1,5 +1,7 @@
 /*
- * dataset.c — BTF datasets on disk behind one streaming interface.
+ * dataset.c — BTF datasets on disk (the measured (view, light) images that
+ * the analysis of paper section II starts from) behind one streaming
+ * interface.
  *
  * Three layouts are recognised automatically:
  *  - Bonn UBO2003: "NNNNN tlAAA plBBB tvCCC pvDDD.jpg" (3-digit whole degrees,
@@ -64,7 +66,8 @@ static void entries_free(entry_list *l)
     memset(l, 0, sizeof *l);
 }
 
-static int entries_add(entry_list *l, const char *path, btf_dir light, btf_dir view, btf_error *err)
+static btf_status entries_add(entry_list *l, const char *path, btf_dir light, btf_dir view,
+                              btf_error *err)
 {
     if (l->count == l->cap) {
         int ncap = l->cap ? l->cap * 2 : 256;
@@ -119,8 +122,8 @@ static btf_dir dir_of(int theta, int phi)
 
 /* Classifies one file name; adds it if it follows a layout. folder_view is
  * the view named by the enclosing "tvCCC_pvDDD" folder, or NULL. */
-static int add_file(entry_list *l, const char *dir, const char *name, const int *folder_view,
-                    btf_error *err)
+static btf_status add_file(entry_list *l, const char *dir, const char *name,
+                           const int *folder_view, btf_error *err)
 {
     int n[8];
     btf_layout kind;
@@ -133,7 +136,7 @@ static int add_file(entry_list *l, const char *dir, const char *name, const int 
         return BTF_OK; /* not an image of the dataset (a README, truth/, ...) */
     }
     char path[PATH_MAX_LEN];
-    int rc = btf_path_join(path, sizeof path, dir, name, err);
+    btf_status rc = btf_path_join(path, sizeof path, dir, name, err);
     if (rc)
         return rc;
     if (l->layout != BTF_LAYOUT_UNKNOWN && l->layout != kind)
@@ -153,12 +156,13 @@ static int add_file(entry_list *l, const char *dir, const char *name, const int 
     return entries_add(l, path, dir_of(n[0], n[1]), dir_of(n[2], n[3]), err);
 }
 
-static int scan_folder(entry_list *l, const char *dir, const int *folder_view, btf_error *err)
+static btf_status scan_folder(entry_list *l, const char *dir, const int *folder_view,
+                              btf_error *err)
 {
     DIR *d = opendir(dir);
     if (!d)
         return btf_fail(err, BTF_E_IO, "%s: cannot open folder: %s", dir, strerror(errno));
-    int rc = BTF_OK;
+    btf_status rc = BTF_OK;
     struct dirent *e;
     while (rc == BTF_OK && (e = readdir(d))) {
         if (e->d_name[0] == '.')
@@ -178,10 +182,10 @@ static int scan_folder(entry_list *l, const char *dir, const int *folder_view, b
     return rc;
 }
 
-static int read_manifest(entry_list *l, const char *path, btf_error *err)
+static btf_status read_manifest(entry_list *l, const char *path, btf_error *err)
 {
     btf_tsv t;
-    int rc = btf_tsv_read(path, &t, err);
+    btf_status rc = btf_tsv_read(path, &t, err);
     if (rc)
         return rc;
     static const char *cols[5] = {"path", "theta_l", "phi_l", "theta_v", "phi_v"};
@@ -225,14 +229,14 @@ static int read_manifest(entry_list *l, const char *path, btf_error *err)
 }
 
 /* The distinct light (or view) directions of the entries as a set. */
-static int collect_dirs(const entry_list *l, int lights, btf_dirset *set, btf_error *err)
+static btf_status collect_dirs(const entry_list *l, int lights, btf_dirset *set, btf_error *err)
 {
     btf_dir *d = btf_alloc((size_t)l->count, sizeof *d, err);
     if (!d)
         return BTF_E_NOMEM;
     for (int i = 0; i < l->count; i++)
         d[i] = lights ? l->items[i].light : l->items[i].view;
-    int rc = btf_dirset_from_list(set, d, l->count, err);
+    btf_status rc = btf_dirset_from_list(set, d, l->count, err);
     free(d);
     return rc;
 }
@@ -262,7 +266,7 @@ static void expected_name(const btf_dataset *ds, int vi, int li, char *buf, size
         snprintf(buf, n, "%s", ds->root);
 }
 
-static int build_table(btf_dataset *ds, const entry_list *l, btf_error *err)
+static btf_status build_table(btf_dataset *ds, const entry_list *l, btf_error *err)
 {
     int nv = ds->views.count, nl = ds->lights.count;
     ds->paths = btf_calloc((size_t)nv * nl, sizeof(char *), err);
@@ -296,7 +300,7 @@ static int build_table(btf_dataset *ds, const entry_list *l, btf_error *err)
 }
 
 /* Probes every file (or only the first): same size everywhere, sound structure. */
-static int probe_files(btf_dataset *ds, const btf_dataset_opts *o, btf_error *err)
+static btf_status probe_files(btf_dataset *ds, const btf_dataset_opts *o, btf_error *err)
 {
     int n = ds->info.n_views * ds->info.n_lights;
     btf_image_header first = {0};
@@ -304,7 +308,7 @@ static int probe_files(btf_dataset *ds, const btf_dataset_opts *o, btf_error *er
         btf_image_header h;
         const char *p = ds->paths[i];
         if (i == 0 || !o->skip_verify) {
-            int rc = btf_image_probe(p, &h, err);
+            btf_status rc = btf_image_probe(p, &h, err);
             if (rc)
                 return rc;
             if (i == 0) {
@@ -330,14 +334,14 @@ static int probe_files(btf_dataset *ds, const btf_dataset_opts *o, btf_error *er
     return BTF_OK;
 }
 
-static int list_entries(const char *path, entry_list *l, btf_error *err)
+static btf_status list_entries(const char *path, entry_list *l, btf_error *err)
 {
     struct stat st;
     if (stat(path, &st) != 0)
         return btf_fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
     if (!S_ISDIR(st.st_mode))
         return read_manifest(l, path, err);
-    int rc = scan_folder(l, path, NULL, err);
+    btf_status rc = scan_folder(l, path, NULL, err);
     if (rc == BTF_OK && l->count == 0)
         rc = btf_fail(err, BTF_E_FORMAT,
                       "%s: unknown layout: no UBO2003 ('NNNNN tlAAA plBBB tvCCC pvDDD.jpg') or "
@@ -357,13 +361,16 @@ void btf_dataset_close(btf_dataset *ds)
     free(ds);
 }
 
-int btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_dataset **out,
-                     btf_error *err)
+btf_dataset_opts btf_dataset_defaults(void)
+{
+    return (btf_dataset_opts){.skip_verify = 0, .progress = NULL, .progress_user = NULL};
+}
+
+btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_dataset **out,
+                            btf_error *err)
 {
     *out = NULL;
-    btf_dataset_opts o = {0};
-    if (opts)
-        o = *opts;
+    btf_dataset_opts o = opts ? *opts : btf_dataset_defaults();
     btf_dataset *ds = btf_calloc(1, sizeof *ds, err);
     if (!ds)
         return BTF_E_NOMEM;
@@ -371,7 +378,7 @@ int btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_dataset
     size_t rl = strlen(ds->root);
     while (rl > 1 && ds->root[rl - 1] == '/')
         ds->root[--rl] = '\0';
-    int rc = list_entries(ds->root, &ds->files, err);
+    btf_status rc = list_entries(ds->root, &ds->files, err);
     if (rc == BTF_OK)
         rc = collect_dirs(&ds->files, 0, &ds->views, err);
     if (rc == BTF_OK)
@@ -407,14 +414,15 @@ const char *btf_dataset_path(const btf_dataset *ds, int view, int light)
     return ds->paths[(size_t)view * ds->info.n_lights + light];
 }
 
-int btf_dataset_read(const btf_dataset *ds, int view, int light, btf_image *out, btf_error *err)
+btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_image *out,
+                            btf_error *err)
 {
     const char *p = btf_dataset_path(ds, view, light);
     if (!p)
         return btf_fail(err, BTF_E_ARG, "%s: no (view %d, light %d) in a %d x %d dataset", ds->root,
                         view, light, ds->info.n_views, ds->info.n_lights);
     btf_read_opts ro = {.channels = 3};
-    int rc = btf_image_read(p, &ro, out, err);
+    btf_status rc = btf_image_read(p, &ro, out, err);
     if (rc == BTF_OK && (out->width != ds->info.width || out->height != ds->info.height)) {
         rc = btf_fail(err, BTF_E_DATA, "%s: size %dx%d differs from the dataset's %dx%d", p,
                       out->width, out->height, ds->info.width, ds->info.height);
@@ -452,8 +460,8 @@ void btf_dataset_iter_end(btf_dataset_iter *it)
     btf_image_free(&it->sample.image);
 }
 
-int btf_dataset_verify_pixels(const btf_dataset *ds, btf_progress_fn progress, void *user,
-                              btf_error *err)
+btf_status btf_dataset_verify_pixels(const btf_dataset *ds, btf_progress_fn progress,
+                                     void *user, btf_error *err)
 {
     btf_dataset_iter it;
     btf_dataset_iter_begin(&it, ds);
@@ -463,5 +471,5 @@ int btf_dataset_verify_pixels(const btf_dataset *ds, btf_progress_fn progress, v
             progress(user, (double)it.next / n, "decoding images");
     }
     btf_dataset_iter_end(&it);
-    return rc;
+    return rc < 0 ? (btf_status)rc : BTF_OK;
 }

@@ -1,17 +1,43 @@
 /*
  * image_file.c — image files: format detection by signature, a cheap
- * structural probe of PNG/JPEG files (catches truncation without decoding),
- * and read/write dispatch to OpenCV (PNG, JPEG; io/cv_bridge.cpp) and
- * OpenEXR (io/exr.c).
+ * structural probe of PNG and JPEG (catches truncation without decoding),
+ * decoding into linear float through OpenCV (PNG, JPEG; io/cv_bridge.cpp)
+ * or OpenEXR (io/exr_read.c), and the PNG and JPEG writers.
+ *
+ * Every reader works on a byte source (io/source.c), so decoding from
+ * memory and from a file is one code path: btf_image_decode wraps a buffer,
+ * btf_image_read opens the file, and both call decode_source.
  */
 #include <stdio.h>
 #include "core/core.h"
 #include "io/io.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+btf_read_opts btf_read_defaults(void)
+{
+    return (btf_read_opts){.channels = 0, .linear_8bit = 0, .srgb_16bit = 0};
+}
+
+static btf_file_format format_of_signature(const unsigned char *sig, size_t n)
+{
+    if (n >= 4 && sig[0] == 0x89 && sig[1] == 'P' && sig[2] == 'N' && sig[3] == 'G')
+        return BTF_FILE_PNG;
+    if (n >= 3 && sig[0] == 0xFF && sig[1] == 0xD8 && sig[2] == 0xFF)
+        return BTF_FILE_JPEG;
+    if (n >= 4 && sig[0] == 0x76 && sig[1] == 0x2F && sig[2] == 0x31 && sig[3] == 0x01)
+        return BTF_FILE_EXR;
+    return BTF_FILE_UNKNOWN;
+}
+
+static btf_file_format format_of_source(btf_source *src)
+{
+    unsigned char sig[4] = {0};
+    int64_t n = btf_source_read(src, sig, 4, 0);
+    return format_of_signature(sig, n > 0 ? (size_t)n : 0);
+}
 
 btf_file_format btf_file_format_of(const char *path)
 {
@@ -21,13 +47,7 @@ btf_file_format btf_file_format_of(const char *path)
         return BTF_FILE_UNKNOWN;
     size_t n = fread(sig, 1, 4, f);
     fclose(f);
-    if (n == 4 && sig[0] == 0x89 && sig[1] == 'P' && sig[2] == 'N' && sig[3] == 'G')
-        return BTF_FILE_PNG;
-    if (n >= 3 && sig[0] == 0xFF && sig[1] == 0xD8 && sig[2] == 0xFF)
-        return BTF_FILE_JPEG;
-    if (n == 4 && sig[0] == 0x76 && sig[1] == 0x2F && sig[2] == 0x31 && sig[3] == 0x01)
-        return BTF_FILE_EXR;
-    return BTF_FILE_UNKNOWN;
+    return format_of_signature(sig, n);
 }
 
 static uint32_t be32(const unsigned char *p)
@@ -35,31 +55,31 @@ static uint32_t be32(const unsigned char *p)
     return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
 }
 
-static long file_size(FILE *f)
+/* Exactly n bytes at offset, or 0 (a short read or a failed one: either
+ * way the structure the probe wants is not there). */
+static int read_exact(btf_source *src, void *buf, uint64_t n, uint64_t offset)
 {
-    if (fseek(f, 0, SEEK_END) != 0)
-        return -1;
-    long n = ftell(f);
-    rewind(f);
-    return n;
+    return btf_source_read(src, buf, n, offset) == (int64_t)n;
 }
 
 /* PNG: signature, IHDR first, IEND chunk as the last 12 bytes. */
-static int probe_png(const char *path, FILE *f, long size, btf_image_header *hdr, btf_error *err)
+static btf_status probe_png(btf_source *src, btf_image_header *hdr, btf_error *err)
 {
     static const unsigned char iend[12] = {0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xAE, 0x42, 0x60, 0x82};
+    const char *name = src->name;
+    uint64_t size = src->size;
     unsigned char b[33], tail[12];
-    if (size < 8 + 25 + 12 || fread(b, 1, 33, f) != 33)
-        return btf_fail(err, BTF_E_FORMAT, "%s: truncated PNG (%ld bytes)", path, size);
+    if (size < 8 + 25 + 12 || !read_exact(src, b, 33, 0))
+        return btf_fail(err, BTF_E_FORMAT, "%s: truncated PNG (%llu bytes)", name,
+                        (unsigned long long)size);
     if (be32(b + 8) != 13 || memcmp(b + 12, "IHDR", 4) != 0)
-        return btf_fail(err, BTF_E_FORMAT, "%s: PNG without IHDR header", path);
+        return btf_fail(err, BTF_E_FORMAT, "%s: PNG without IHDR header", name);
     uint32_t w = be32(b + 16), h = be32(b + 20);
     int depth = b[24], ctype = b[25];
     if (w < 1 || h < 1 || w > BTF_MAX_SIDE || h > BTF_MAX_SIDE)
-        return btf_fail(err, BTF_E_FORMAT, "%s: PNG size %ux%u out of range", path, w, h);
-    if (fseek(f, size - 12, SEEK_SET) != 0 || fread(tail, 1, 12, f) != 12 ||
-        memcmp(tail, iend, 12) != 0)
-        return btf_fail(err, BTF_E_FORMAT, "%s: truncated PNG (no IEND chunk at the end)", path);
+        return btf_fail(err, BTF_E_FORMAT, "%s: PNG size %ux%u out of range", name, w, h);
+    if (!read_exact(src, tail, 12, size - 12) || memcmp(tail, iend, 12) != 0)
+        return btf_fail(err, BTF_E_FORMAT, "%s: truncated PNG (no IEND chunk at the end)", name);
     hdr->width = (int)w;
     hdr->height = (int)h;
     hdr->bits = depth == 16 ? 16 : 8;
@@ -75,30 +95,31 @@ static int is_jpeg_sof(int m)
 /* JPEG: walk the marker segments to the frame header (SOF), then require the
  * end-of-image marker near the end (a truncated download lacks it, and
  * libjpeg would silently fill the missing part with grey). */
-static int probe_jpeg(const char *path, FILE *f, long size, btf_image_header *hdr, btf_error *err)
+static btf_status probe_jpeg(btf_source *src, btf_image_header *hdr, btf_error *err)
 {
-    unsigned char b[9];
-    long pos = 2;
+    const char *name = src->name;
+    uint64_t size = src->size;
+    unsigned char b[10];
+    uint64_t pos = 2;
     int found = 0;
     while (pos + 4 <= size && !found) {
-        if (fseek(f, pos, SEEK_SET) != 0 || fread(b, 1, 4, f) != 4)
+        if (!read_exact(src, b, 4, pos))
             break;
         if (b[0] != 0xFF)
-            return btf_fail(err, BTF_E_FORMAT, "%s: corrupt JPEG (bad marker at byte %ld)", path, pos);
+            return btf_fail(err, BTF_E_FORMAT, "%s: corrupt JPEG (bad marker at byte %llu)", name,
+                            (unsigned long long)pos);
         if (b[1] == 0xFF) { /* fill byte */
             pos++;
             continue;
         }
-        int len = b[2] << 8 | b[3];
+        unsigned len = (unsigned)b[2] << 8 | b[3];
         if (is_jpeg_sof(b[1])) {
-            if (fread(b + 4, 1, 5, f) != 5)
+            /* precision, height, width, component count */
+            if (!read_exact(src, b + 4, 6, pos + 4))
                 break;
             hdr->height = b[5] << 8 | b[6];
             hdr->width = b[7] << 8 | b[8];
-            int comps;
-            if (fseek(f, pos + 9, SEEK_SET) != 0 || (comps = fgetc(f)) == EOF)
-                break;
-            hdr->channels = comps == 1 ? 1 : 3;
+            hdr->channels = b[9] == 1 ? 1 : 3;
             hdr->bits = 8;
             found = 1;
         } else if (b[1] == 0xD9 || b[1] == 0xDA) {
@@ -107,50 +128,64 @@ static int probe_jpeg(const char *path, FILE *f, long size, btf_image_header *hd
         pos += 2 + len;
     }
     if (!found)
-        return btf_fail(err, BTF_E_FORMAT, "%s: truncated or corrupt JPEG (no frame header)", path);
+        return btf_fail(err, BTF_E_FORMAT, "%s: truncated or corrupt JPEG (no frame header)", name);
     if (hdr->width < 1 || hdr->height < 1)
-        return btf_fail(err, BTF_E_FORMAT, "%s: JPEG size %dx%d unsupported", path, hdr->width,
+        return btf_fail(err, BTF_E_FORMAT, "%s: JPEG size %dx%d unsupported", name, hdr->width,
                         hdr->height);
     /* Encoders may pad after EOI; look for it in the last 64 bytes. */
     unsigned char tail[64];
-    long start = size > 64 ? size - 64 : 0;
-    size_t n;
-    if (fseek(f, start, SEEK_SET) != 0 || (n = fread(tail, 1, sizeof tail, f)) < 2)
-        return btf_fail(err, BTF_E_FORMAT, "%s: truncated JPEG", path);
+    uint64_t start = size > 64 ? size - 64 : 0;
+    int64_t got = btf_source_read(src, tail, sizeof tail, start);
+    if (got < 2)
+        return btf_fail(err, BTF_E_FORMAT, "%s: truncated JPEG", name);
+    size_t n = (size_t)got;
     while (n > 2 && (tail[n - 1] == 0 || tail[n - 1] == '\n' || tail[n - 1] == '\r'))
         n--;
     if (tail[n - 2] == 0xFF && tail[n - 1] == 0xD9)
         return BTF_OK;
-    return btf_fail(err, BTF_E_FORMAT, "%s: truncated JPEG (no end-of-image marker)", path);
+    return btf_fail(err, BTF_E_FORMAT, "%s: truncated JPEG (no end-of-image marker)", name);
 }
 
-int btf_image_probe(const char *path, btf_image_header *hdr, btf_error *err)
+static btf_status probe_source(btf_source *src, btf_image_header *hdr, btf_error *err)
 {
     memset(hdr, 0, sizeof *hdr);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return btf_fail(err, BTF_E_IO, "%s: cannot open: %s", path, strerror(errno));
-    long size = file_size(f);
-    unsigned char sig[4] = {0};
-    size_t n = size > 0 ? fread(sig, 1, 4, f) : 0;
-    int rc;
-    if (size <= 0) {
-        rc = btf_fail(err, BTF_E_FORMAT, "%s: empty file", path);
-    } else if (n == 4 && !memcmp(sig, "\x89PNG", 4)) {
+    if (src->size == 0)
+        return btf_fail(err, BTF_E_FORMAT, "%s: empty file", src->name);
+    btf_status rc;
+    switch (format_of_source(src)) {
+    case BTF_FILE_PNG:
         hdr->format = BTF_FILE_PNG;
-        rewind(f);
-        rc = probe_png(path, f, size, hdr, err);
-    } else if (n >= 3 && sig[0] == 0xFF && sig[1] == 0xD8 && sig[2] == 0xFF) {
+        rc = probe_png(src, hdr, err);
+        break;
+    case BTF_FILE_JPEG:
         hdr->format = BTF_FILE_JPEG;
-        rc = probe_jpeg(path, f, size, hdr, err);
-    } else if (n == 4 && !memcmp(sig, "\x76\x2f\x31\x01", 4)) {
-        fclose(f);
-        return btf_exr_probe(path, hdr, err);
-    } else {
-        rc = btf_fail(err, BTF_E_FORMAT, "%s: not a PNG, JPEG or EXR file", path);
+        rc = probe_jpeg(src, hdr, err);
+        break;
+    case BTF_FILE_EXR:
+        return btf_exr_probe_source(src, hdr, err);
+    default:
+        rc = btf_fail(err, BTF_E_FORMAT, "%s: not a PNG, JPEG or EXR file", src->name);
     }
-    fclose(f);
-    hdr->file_bytes = size > 0 ? (uint64_t)size : 0;
+    hdr->file_bytes = src->size;
+    return rc;
+}
+
+btf_status btf_image_probe_memory(const void *data, size_t n, const char *name,
+                                  btf_image_header *hdr, btf_error *err)
+{
+    btf_source src;
+    btf_source_memory(&src, data, n, name);
+    return probe_source(&src, hdr, err);
+}
+
+btf_status btf_image_probe(const char *path, btf_image_header *hdr, btf_error *err)
+{
+    memset(hdr, 0, sizeof *hdr);
+    btf_source src;
+    btf_status rc = btf_source_open(&src, path, err);
+    if (!rc)
+        rc = probe_source(&src, hdr, err);
+    btf_source_close(&src);
     return rc;
 }
 
@@ -175,12 +210,12 @@ static void convert_16bit(const uint16_t *src, size_t count, int srgb, float *ds
 
 /* Changes the channel count of a decoded image in place (grey <-> RGB);
  * grey from RGB is the Rec. 709 luminance of the linear values. */
-static int convert_channels(btf_image *img, int want, btf_error *err)
+static btf_status convert_channels(btf_image *img, int want, btf_error *err)
 {
     if (want == 0 || want == img->channels)
         return BTF_OK;
     btf_image out;
-    int rc = btf_image_alloc(&out, img->width, img->height, want, err);
+    btf_status rc = btf_image_alloc(&out, img->width, img->height, want, err);
     if (rc)
         return rc;
     size_t n = (size_t)img->width * img->height;
@@ -197,21 +232,29 @@ static int convert_channels(btf_image *img, int want, btf_error *err)
     return BTF_OK;
 }
 
-static int read_cv(const char *path, const btf_read_opts *o, btf_image *out, btf_error *err)
+/* PNG or JPEG: the probe's checks, then OpenCV's decoder on the bytes. */
+static btf_status decode_cv(btf_source *src, const btf_read_opts *o, btf_image *out,
+                            btf_error *err)
 {
     btf_image_header hdr;
-    int rc = btf_image_probe(path, &hdr, err);
+    btf_status rc = probe_source(src, &hdr, err);
     if (rc)
+        return rc;
+    const unsigned char *bytes;
+    unsigned char *owned;
+    if ((rc = btf_source_bytes(src, &bytes, &owned, err)))
         return rc;
     int w, h, c, d16;
     void *px;
     char msg[256];
-    if (btfcv_read(path, &w, &h, &c, &d16, &px, msg, sizeof msg) != 0)
-        return btf_fail(err, BTF_E_FORMAT, "%s: %s", path, msg);
+    int bad = btfcv_decode(bytes, (size_t)src->size, &w, &h, &c, &d16, &px, msg, sizeof msg);
+    free(owned);
+    if (bad)
+        return btf_fail(err, BTF_E_FORMAT, "%s: %s", src->name, msg);
     if (w != hdr.width || h != hdr.height) {
         free(px);
         return btf_fail(err, BTF_E_FORMAT, "%s: decoded size %dx%d differs from header %dx%d",
-                        path, w, h, hdr.width, hdr.height);
+                        src->name, w, h, hdr.width, hdr.height);
     }
     rc = btf_image_alloc(out, w, h, c, err);
     if (rc == 0) {
@@ -225,35 +268,61 @@ static int read_cv(const char *path, const btf_read_opts *o, btf_image *out, btf
     return rc;
 }
 
-int btf_image_read(const char *path, const btf_read_opts *opts, btf_image *out, btf_error *err)
+/* The one decoder behind btf_image_decode and btf_image_read. */
+static btf_status decode_source(btf_source *src, const btf_read_opts *o, btf_image *out,
+                                btf_error *err)
 {
-    btf_read_opts o = {0};
-    if (opts)
-        o = *opts;
-    memset(out, 0, sizeof *out);
-    if (o.channels != 0 && o.channels != 1 && o.channels != 3)
-        return btf_fail(err, BTF_E_ARG, "%s: channels %d requested: expected 0, 1 or 3", path,
-                        o.channels);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return btf_fail(err, BTF_E_IO, "%s: cannot open: %s", path, strerror(errno));
-    fclose(f);
-    btf_file_format fmt = btf_file_format_of(path);
-    int rc;
-    switch (fmt) {
+    btf_status rc;
+    switch (format_of_source(src)) {
     case BTF_FILE_EXR:
-        return btf_exr_read(path, o.channels, out, err);
+        /* The EXR reader converts the channel count while it copies. */
+        return btf_exr_read_source(src, o->channels, out, err);
     case BTF_FILE_PNG:
     case BTF_FILE_JPEG:
-        rc = read_cv(path, &o, out, err);
+        rc = decode_cv(src, o, out, err);
         break;
     default:
-        return btf_fail(err, BTF_E_FORMAT, "%s: not a PNG, JPEG or EXR file", path);
+        return btf_fail(err, BTF_E_FORMAT, "%s: not a PNG, JPEG or EXR file", src->name);
     }
     if (rc == 0)
-        rc = convert_channels(out, o.channels, err);
+        rc = convert_channels(out, o->channels, err);
     if (rc)
         btf_image_free(out);
+    return rc;
+}
+
+static btf_status check_read_opts(const btf_read_opts *o, const char *name, btf_error *err)
+{
+    if (o->channels != 0 && o->channels != 1 && o->channels != 3)
+        return btf_fail(err, BTF_E_ARG, "%s: channels %d requested: expected 0, 1 or 3", name,
+                        o->channels);
+    return BTF_OK;
+}
+
+btf_status btf_image_decode(const void *data, size_t n, const char *name,
+                            const btf_read_opts *opts, btf_image *out, btf_error *err)
+{
+    btf_read_opts o = opts ? *opts : btf_read_defaults();
+    memset(out, 0, sizeof *out);
+    btf_source src;
+    btf_source_memory(&src, data, n, name);
+    btf_status rc = check_read_opts(&o, src.name, err);
+    return rc ? rc : decode_source(&src, &o, out, err);
+}
+
+btf_status btf_image_read(const char *path, const btf_read_opts *opts, btf_image *out,
+                          btf_error *err)
+{
+    btf_read_opts o = opts ? *opts : btf_read_defaults();
+    memset(out, 0, sizeof *out);
+    btf_status rc = check_read_opts(&o, path, err);
+    if (rc)
+        return rc;
+    btf_source src;
+    rc = btf_source_open(&src, path, err);
+    if (!rc)
+        rc = decode_source(&src, &o, out, err);
+    btf_source_close(&src);
     return rc;
 }
 
@@ -271,8 +340,8 @@ static unsigned char *to_srgb8(const btf_image *img, btf_error *err)
     return b;
 }
 
-static int write_cv(const char *path, const char *ext, const btf_image *img, int quality,
-                    btf_error *err)
+static btf_status write_cv(const char *path, const char *ext, const btf_image *img, int quality,
+                           btf_error *err)
 {
     if (!img || !img->data || (img->channels != 1 && img->channels != 3))
         return btf_fail(err, BTF_E_ARG, "%s: no image to write", path);
@@ -282,31 +351,25 @@ static int write_cv(const char *path, const char *ext, const btf_image *img, int
     unsigned char *enc;
     size_t len;
     char msg[256];
-    int rc = btfcv_encode(ext, img->width, img->height, img->channels, px, quality, &enc,
-                          &len, msg, sizeof msg);
+    int bad = btfcv_encode(ext, img->width, img->height, img->channels, px, quality, &enc,
+                           &len, msg, sizeof msg);
     free(px);
-    if (rc != 0)
+    if (bad)
         return btf_fail(err, BTF_E_IO, "%s: cannot encode: %s", path, msg);
-    rc = btf_write_file_atomic(path, enc, len, err);
+    btf_status rc = btf_write_file_atomic(path, enc, len, err);
     free(enc);
     return rc;
 }
 
-int btf_image_write_png(const char *path, const btf_image *img, btf_error *err)
+btf_status btf_image_write_png(const char *path, const btf_image *img, btf_error *err)
 {
     return write_cv(path, ".png", img, 0, err);
 }
 
-int btf_image_write_jpeg(const char *path, const btf_image *img, int quality, btf_error *err)
+btf_status btf_image_write_jpeg(const char *path, const btf_image *img, int quality,
+                                btf_error *err)
 {
     if (quality < 1 || quality > 100)
         return btf_fail(err, BTF_E_ARG, "%s: JPEG quality %d: expected 1..100", path, quality);
     return write_cv(path, ".jpg", img, quality, err);
-}
-
-int btf_image_write_exr(const char *path, const btf_image *img, int half, btf_error *err)
-{
-    if (!img || !img->data)
-        return btf_fail(err, BTF_E_ARG, "%s: no image to write", path);
-    return btf_exr_write(path, img, half, err);
 }

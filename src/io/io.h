@@ -1,7 +1,8 @@
 /*
- * io.h — file formats below the public readers (src/io/): tab-separated
- * manifests, OpenEXR through its core C API, and the C interface of the
- * OpenCV bridge. Private to the library.
+ * io.h — file formats below the public readers (src/io/): the byte source
+ * every parser reads from, tab-separated manifests, OpenEXR through its
+ * core C API, and the C interface of the OpenCV bridge. Private to the
+ * library.
  */
 #ifndef BTF_IO_H
 #define BTF_IO_H
@@ -9,31 +10,63 @@
 #include "btfcar.h"
 
 #include <stddef.h>
+#include <stdint.h>
 
-/* Tab-separated manifests: io/tsv.c */
+/* A byte source (io/source.c): a memory buffer, or a regular file read in
+ * place with pread. name is the file name or the caller's name for the
+ * buffer, and starts every error message. */
+typedef struct btf_source {
+    const char *name;
+    int fd;                    /* -1 for a memory buffer */
+    const unsigned char *data; /* the buffer (memory sources) */
+    uint64_t size;
+    int sys_errno;             /* errno of the last failed pread, else 0 */
+} btf_source;
+void btf_source_memory(btf_source *s, const void *data, size_t n, const char *name);
+/* Opens a regular file (BTF_E_IO naming it otherwise); close even on failure. */
+btf_status btf_source_open(btf_source *s, const char *path, btf_error *err);
+void btf_source_close(btf_source *s);
+/* Up to n bytes at offset (fewer at the end, 0 past it); -1 when the system
+ * call fails (sys_errno says why). */
+int64_t btf_source_read(btf_source *s, void *buf, uint64_t n, uint64_t offset);
+/* The whole content: *data points into a memory source, or into *owned (the
+ * caller frees it) for a file. */
+btf_status btf_source_bytes(btf_source *s, const unsigned char **data, unsigned char **owned,
+                            btf_error *err);
+
+/* Tab-separated manifests (io/tsv.c): a header line naming the columns, then
+ * one record per line; blank lines and '#' lines are skipped. */
 typedef struct btf_tsv {
-    char *text;          /* the file, split in place */
+    char *text;          /* a copy of the input, split in place */
     int ncols, nrows;
     const char *names[64];
     char **cells;        /* nrows * ncols */
-    int *line_no;        /* file line of each row, for messages */
+    int *line_no;        /* input line of each row, for messages */
 } btf_tsv;
-int btf_tsv_read(const char *path, btf_tsv *t, btf_error *err);
+/* Parses n bytes of text; name starts the error messages ("NAME:LINE: ..."). */
+btf_status btf_tsv_parse(const char *text, size_t n, const char *name, btf_tsv *t,
+                         btf_error *err);
+/* The same from a file (at most 64 MiB), named by its path. */
+btf_status btf_tsv_read(const char *path, btf_tsv *t, btf_error *err);
 void btf_tsv_free(btf_tsv *t);
 int btf_tsv_column(const btf_tsv *t, const char *name); /* -1 if absent */
 const char *btf_tsv_cell(const btf_tsv *t, int row, int col);
-int btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
-                   btf_error *err);
+btf_status btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
+                          btf_error *err);
 
-/* EXR (OpenEXR core C API): io/exr.c */
-int btf_exr_probe(const char *path, btf_image_header *hdr, btf_error *err);
-int btf_exr_read(const char *path, int channels, btf_image *out, btf_error *err);
-int btf_exr_write(const char *path, const btf_image *img, int half, btf_error *err);
+/* EXR reading (io/exr_read.c) from any source: the header probe and the
+ * decoder (channels 0: as in the file; 1 or 3 converts). The path forms open
+ * the file and call these. The writers are public (btf_image_write_exr,
+ * btf_exr_writer_open; io/exr_write.c). */
+btf_status btf_exr_probe_source(btf_source *src, btf_image_header *hdr, btf_error *err);
+btf_status btf_exr_read_source(btf_source *src, int channels, btf_image *out, btf_error *err);
+btf_status btf_exr_probe(const char *path, btf_image_header *hdr, btf_error *err);
+btf_status btf_exr_read(const char *path, int channels, btf_image *out, btf_error *err);
 
-/* The OpenCV bridge (io/cv_bridge.cpp), a C interface. Error text goes to
- * errbuf; return 0 on success. */
-int btfcv_read(const char *path, int *w, int *h, int *c, int *depth16,
-               void **pixels, char *errbuf, size_t errlen);
+/* The OpenCV bridge (io/cv_bridge.cpp), a C interface with its own small
+ * convention: 0 on success, -1 with the error text in errbuf. */
+int btfcv_decode(const void *data, size_t n, int *w, int *h, int *c, int *depth16,
+                 void **pixels, char *errbuf, size_t errlen);
 int btfcv_encode(const char *ext, int w, int h, int c, const unsigned char *pixels,
                  int jpeg_quality, unsigned char **out, size_t *outlen,
                  char *errbuf, size_t errlen);

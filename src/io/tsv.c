@@ -1,8 +1,9 @@
 /*
- * tsv.c — a small reader for the tab-separated manifests btfcar accepts
+ * tsv.c — a small parser for the tab-separated manifests btfcar accepts
  * (datasets, photometric stereo): a header line naming the columns, then one
  * record per line. Blank lines and lines starting with '#' are skipped. Fields
- * are separated by tabs only, so paths may contain spaces.
+ * are separated by tabs only, so paths may contain spaces. The parser works
+ * on a buffer (btf_tsv_parse); btf_tsv_read loads a file and parses it.
  */
 #include "core/core.h"
 #include "io/io.h"
@@ -66,25 +67,16 @@ static int is_skipped(const char *line)
     return *line == '\0' || *line == '#';
 }
 
-int btf_tsv_read(const char *path, btf_tsv *t, btf_error *err)
+/* Parses text (n bytes plus a NUL, owned by t from here on) in place. */
+static btf_status parse_owned(char *text, size_t n, const char *name, btf_tsv *t,
+                              btf_error *err)
 {
-    memset(t, 0, sizeof *t);
-    unsigned char *data;
-    size_t n;
-    int rc = btf_read_file(path, TSV_MAX_BYTES, &data, &n, err);
-    if (rc)
-        return rc;
-    if (memchr(data, 0, n)) {
-        free(data);
-        return btf_fail(err, BTF_E_FORMAT, "%s: not a text file (contains NUL bytes)", path);
-    }
-    char *text = realloc(data, n + 1);
-    if (!text) {
-        free(data);
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+    t->text = text;
+    if (memchr(text, 0, n)) {
+        btf_tsv_free(t);
+        return btf_fail(err, BTF_E_FORMAT, "%s: not a text file (contains NUL bytes)", name);
     }
     text[n] = '\0';
-    t->text = text;
     size_t lines = 1;
     for (size_t i = 0; i < n; i++)
         lines += text[i] == '\n';
@@ -102,7 +94,7 @@ int btf_tsv_read(const char *path, btf_tsv *t, btf_error *err)
             t->ncols = count_fields(l);
             if (t->ncols > 64) {
                 btf_tsv_free(t);
-                return btf_fail(err, BTF_E_FORMAT, "%s:%d: more than 64 columns", path, line);
+                return btf_fail(err, BTF_E_FORMAT, "%s:%d: more than 64 columns", name, line);
             }
             char **header = btf_alloc((size_t)t->ncols, sizeof(char *), err);
             t->cells = btf_alloc(lines * (size_t)t->ncols, sizeof(char *), err);
@@ -124,7 +116,7 @@ int btf_tsv_read(const char *path, btf_tsv *t, btf_error *err)
         if (k != t->ncols) {
             int ncols = t->ncols;
             btf_tsv_free(t);
-            return btf_fail(err, BTF_E_FORMAT, "%s:%d: %d fields, the header names %d", path, line,
+            return btf_fail(err, BTF_E_FORMAT, "%s:%d: %d fields, the header names %d", name, line,
                             k, ncols);
         }
         for (int c = 0; c < t->ncols; c++)
@@ -133,9 +125,44 @@ int btf_tsv_read(const char *path, btf_tsv *t, btf_error *err)
     }
     if (!have_header) {
         btf_tsv_free(t);
-        return btf_fail(err, BTF_E_FORMAT, "%s: empty manifest (no header line)", path);
+        return btf_fail(err, BTF_E_FORMAT, "%s: empty manifest (no header line)", name);
     }
     return BTF_OK;
+}
+
+btf_status btf_tsv_parse(const char *text, size_t n, const char *name, btf_tsv *t,
+                         btf_error *err)
+{
+    memset(t, 0, sizeof *t);
+    if (!name)
+        name = "manifest";
+    if (!text && n)
+        return btf_fail(err, BTF_E_ARG, "%s: no text", name);
+    if (n > TSV_MAX_BYTES)
+        return btf_fail(err, BTF_E_FORMAT, "%s: larger than %u bytes", name, TSV_MAX_BYTES);
+    char *copy = malloc(n + 1);
+    if (!copy)
+        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", name);
+    if (n)
+        memcpy(copy, text, n);
+    return parse_owned(copy, n, name, t, err);
+}
+
+btf_status btf_tsv_read(const char *path, btf_tsv *t, btf_error *err)
+{
+    memset(t, 0, sizeof *t);
+    unsigned char *data;
+    size_t n;
+    btf_status rc = btf_read_file(path, TSV_MAX_BYTES, &data, &n, err);
+    if (rc)
+        return rc;
+    /* Room for the terminating NUL; the bytes are parsed where they are. */
+    char *text = realloc(data, n + 1);
+    if (!text) {
+        free(data);
+        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+    }
+    return parse_owned(text, n, path, t, err);
 }
 
 int btf_tsv_column(const btf_tsv *t, const char *name)
@@ -151,8 +178,8 @@ const char *btf_tsv_cell(const btf_tsv *t, int row, int col)
     return t->cells[(size_t)row * t->ncols + col];
 }
 
-int btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
-                   btf_error *err)
+btf_status btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
+                          btf_error *err)
 {
     const char *s = btf_tsv_cell(t, row, col);
     char *end;

@@ -1,20 +1,21 @@
 /*
- * model_io.c — the model file MODEL.btfcar: everything synthesis and rendering
- * need (direction sets, index table, per-subspace spectral basis and CAR
- * parameters, the range-map tile) in a few kilobytes. The layout, the limits
- * and the range-map quantisation are specified in docs/model-format.md; this
- * file is its reference implementation.
+ * model_file.c — the model file MODEL.btfcar: everything synthesis and
+ * rendering need (direction sets, index table, per-subspace spectral basis
+ * and CAR parameters of paper section II.C, the range-map tile of section
+ * II.B) in a few kilobytes. The layout, the limits and the range-map
+ * quantisation are specified in docs/model-format.md; this file is its
+ * reference implementation: encoding and decoding in memory, and the file
+ * forms as thin wrappers (an atomic write, a whole-file read).
  *
- * One validator (validate_model) serves both directions: the encoder refuses
- * any model the decoder would reject, so whatever btfcar writes it can read,
- * and the decoder trusts nothing it has not checked. Decoding is designed for
- * hostile input (it runs under libFuzzer, tests/fuzz_model.c): every count is
- * bounded before it sizes an allocation, every read is bounds-checked, and a
- * failure frees whatever was built.
+ * The validator (model/model_check.c) serves both directions: the encoder
+ * refuses any model the decoder would reject, so whatever btfcar writes it
+ * can read, and the decoder trusts nothing it has not checked. Decoding is
+ * designed for hostile input (it runs under libFuzzer, tests/fuzz_model.c):
+ * every count is bounded before it sizes an allocation, every read is
+ * bounds-checked, and a failure frees whatever was built.
  */
 #include "car/car.h"
-#include <stdio.h>
-#include "core/core.h"
+#include "model/model.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -42,13 +43,12 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 
 #define MAX_FILE_BYTES ((size_t)64 << 20)
 #define MAX_PAYLOAD_BYTES ((size_t)64 << 20)
-#define MAX_DIRS 4096
-#define MAX_SUBSPACES 256 /* the index table stores uint8 ids */
-#define MAX_IMAGE_SIDE (1 << 20)
-#define MAX_RANGE_SIDE 65535
-#define MAX_RANGE_SAMPLES (1L << 24)
-#define MAX_NAME 31
-#define BASIS_TOL 1e-3
+#define MAX_DIRS BTF_MODEL_MAX_DIRS
+#define MAX_SUBSPACES BTF_MODEL_MAX_SUBSPACES
+#define MAX_IMAGE_SIDE BTF_MODEL_MAX_IMAGE_SIDE
+#define MAX_RANGE_SIDE BTF_MODEL_MAX_RANGE_SIDE
+#define MAX_RANGE_SAMPLES BTF_MODEL_MAX_RANGE_SAMPLES
+#define MAX_NAME BTF_MODEL_MAX_NAME
 
 /* The range map's grid: h = (k + q + 1/2) 2^e, q in [0, 65535], with
  * k + q + 1/2 held exactly by a float (24-bit significand) and no value
@@ -63,18 +63,8 @@ static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG"};
 
 /* ------------------------------------------------------------- messages */
 
-/* "NAME: message" with the given code. */
-static int failf(btf_error *err, int code, const char *name, const char *fmt, ...)
-    BTF_PRINTF(4, 5);
-static int failf(btf_error *err, int code, const char *name, const char *fmt, ...)
-{
-    char msg[768];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    return btf_fail(err, code, "%s: %s", name, msg);
-}
+/* Every message names the file or buffer (model/model_check.c). */
+#define failf btf_model_fail
 
 /* Allocation whose failure message names the file, like every other. */
 static void *alloc_named(size_t count, size_t size, int zero, const char *name, btf_error *err)
@@ -299,191 +289,6 @@ static unsigned unzigzag(unsigned z, unsigned pred)
     return (pred + d) & 0xFFFFu;
 }
 
-/* ----------------------------------------------------------- validation */
-
-static int causal(btf_offset o)
-{
-    return o.row < 0 || (o.row == 0 && o.col < 0);
-}
-
-static int check_dirset(const btf_dirset *s, const char *what, const char *name, int code,
-                        btf_error *err)
-{
-    if (s->count < 0 || s->count > MAX_DIRS)
-        return failf(err, code, name, "%s: %d directions (expected 0..%d)", what, s->count,
-                     MAX_DIRS);
-    if (s->count == 0)
-        return BTF_OK;
-    if (!s->dirs)
-        return failf(err, code, name, "%s: no direction array (expected %d directions)", what,
-                     s->count);
-    size_t len = strnlen(s->name, sizeof s->name);
-    if (len > MAX_NAME)
-        return failf(err, code, name, "%s: set name is not terminated (expected at most %d characters)",
-                     what, MAX_NAME);
-    for (size_t i = 0; i < len; i++)
-        if (s->name[i] < 0x20 || s->name[i] > 0x7e)
-            return failf(err, code, name, "%s: set name has byte 0x%02x (expected printable ASCII)",
-                         what, (unsigned char)s->name[i]);
-    for (int i = 0; i < s->count; i++) {
-        btf_dir d = s->dirs[i];
-        if (!(d.theta >= 0.0 && d.theta <= 90.0) || !(d.phi >= 0.0 && d.phi < 360.0))
-            return failf(err, code, name,
-                         "%s: direction %d is (theta %g, phi %g) (expected theta in [0, 90], "
-                         "phi in [0, 360))", what, i, d.theta, d.phi);
-    }
-    return BTF_OK;
-}
-
-static int check_band(const btf_car_band *b, const char *where, const char *name, int code,
-                      btf_error *err)
-{
-    if (b->n < 0 || b->n > BTF_CAR_MAX_NEIGHBOURS)
-        return failf(err, code, name, "%s: %d neighbours (expected 0..%d)", where, b->n,
-                     BTF_CAR_MAX_NEIGHBOURS);
-    for (int i = 0; i < b->n; i++) {
-        btf_offset o = b->offsets[i];
-        if (!causal(o))
-            return failf(err, code, name,
-                         "%s: neighbour offset %d:%d is not causal (expected row < 0, or row 0 "
-                         "and column < 0)", where, o.row, o.col);
-        /* The neighbourhood parser's limit: reaches beyond 64 would make
-         * the GPU wavefront needlessly long (its slope grows with them). */
-        if (o.row < -64 || o.col < -64 || o.col > 64)
-            return failf(err, code, name,
-                         "%s: neighbour offset %d:%d reaches beyond 64 pixels (expected rows and "
-                         "columns within -64..64)", where, o.row, o.col);
-        for (int j = 0; j < i; j++)
-            if (b->offsets[j].row == o.row && b->offsets[j].col == o.col)
-                return failf(err, code, name,
-                             "%s: neighbour offset %d:%d appears twice (expected distinct offsets)",
-                             where, o.row, o.col);
-        if (!isfinite(b->gamma[i]))
-            return failf(err, code, name, "%s: gamma[%d] is %g (expected a finite number)", where,
-                         i, b->gamma[i]);
-    }
-    if (!(isfinite(b->sigma) && b->sigma >= 0.0f))
-        return failf(err, code, name, "%s: sigma is %g (expected a finite number >= 0)", where,
-                     b->sigma);
-    if (!isfinite(b->mean))
-        return failf(err, code, name, "%s: mean is %g (expected a finite number)", where, b->mean);
-    return BTF_OK;
-}
-
-/* The basis must be orthonormal: synthesis inverts it by transposition. */
-static int check_basis(const float *basis, int s, const char *name, int code, btf_error *err)
-{
-    for (int i = 0; i < 9; i++)
-        if (!isfinite(basis[i]))
-            return failf(err, code, name, "subspace %d: basis[%d] is %g (expected a finite number)",
-                         s, i, basis[i]);
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j <= i; j++) {
-            double dot = 0.0;
-            for (int k = 0; k < 3; k++)
-                dot += (double)basis[3 * i + k] * basis[3 * j + k];
-            if (fabs(dot - (i == j)) > BASIS_TOL)
-                return failf(err, code, name,
-                             "subspace %d: basis rows %d and %d have dot product %g (expected an "
-                             "orthonormal basis, within %g)", s, i, j, dot, BASIS_TOL);
-        }
-    return BTF_OK;
-}
-
-static int check_subspace(const btf_model *m, int s, const char *name, int code, btf_error *err)
-{
-    const btf_subspace_model *sm = &m->subspaces[s];
-    int none = sm->view == -1 && sm->light == -1;
-    int valid = sm->view >= 0 && sm->view < m->views.count && sm->light >= 0 &&
-                sm->light < m->lights.count;
-    if (!none && !valid)
-        return failf(err, code, name,
-                     "subspace %d: representative (view %d, light %d) (expected both -1, or "
-                     "indices below %d views and %d lights)", s, sm->view, sm->light,
-                     m->views.count, m->lights.count);
-    if (sm->width < 1 || sm->width > MAX_IMAGE_SIDE || sm->height < 1 ||
-        sm->height > MAX_IMAGE_SIDE)
-        return failf(err, code, name, "subspace %d: size %d x %d (expected 1..%d on each side)", s,
-                     sm->width, sm->height, MAX_IMAGE_SIDE);
-    for (int c = 0; c < 3; c++)
-        if (!isfinite(sm->mean[c]))
-            return failf(err, code, name, "subspace %d: mean[%d] is %g (expected a finite number)",
-                         s, c, sm->mean[c]);
-    int rc = check_basis(sm->basis, s, name, code, err);
-    if (rc)
-        return rc;
-    if (sm->levels < 1 || sm->levels > BTF_MAX_LEVELS)
-        return failf(err, code, name, "subspace %d: %d pyramid levels (expected 1..%d)", s,
-                     sm->levels, BTF_MAX_LEVELS);
-    for (int b = 0; b < 3; b++)
-        for (int l = 0; l < sm->levels; l++) {
-            char where[64];
-            snprintf(where, sizeof where, "subspace %d, band %d, level %d", s, b, l);
-            if ((rc = check_band(&sm->bands[b][l], where, name, code, err)))
-                return rc;
-        }
-    return BTF_OK;
-}
-
-static int check_range(const btf_model *m, const char *name, int code, btf_error *err)
-{
-    if (m->range_width == 0 && m->range_height == 0 && !m->range)
-        return BTF_OK;
-    if (m->range_width < 1 || m->range_width > MAX_RANGE_SIDE || m->range_height < 1 ||
-        m->range_height > MAX_RANGE_SIDE ||
-        (long)m->range_width * m->range_height > MAX_RANGE_SAMPLES)
-        return failf(err, code, name,
-                     "range map: size %d x %d (expected 1..%d on each side, at most %ld samples)",
-                     m->range_width, m->range_height, MAX_RANGE_SIDE, MAX_RANGE_SAMPLES);
-    if (!m->range)
-        return failf(err, code, name, "range map: %d x %d but no heights (expected an array)",
-                     m->range_width, m->range_height);
-    if (!(isfinite(m->range_texel) && m->range_texel > 0.0f))
-        return failf(err, code, name, "range map: texel %g (expected a finite number > 0)",
-                     m->range_texel);
-    size_t n = (size_t)m->range_width * m->range_height;
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(m->range[i]))
-            return failf(err, code, name, "range map: height %zu is %g (expected a finite number)",
-                         i, m->range[i]);
-    return BTF_OK;
-}
-
-/* Every rule of docs/model-format.md that a model in memory must meet. code
- * is BTF_E_DATA when writing (the caller's model is wrong) and BTF_E_FORMAT
- * when reading (the file is). */
-static int validate_model(const btf_model *m, const char *name, int code, btf_error *err)
-{
-    int rc;
-    if ((rc = check_dirset(&m->views, "views", name, code, err)) ||
-        (rc = check_dirset(&m->lights, "lights", name, code, err)))
-        return rc;
-    if ((m->views.count == 0) != (m->lights.count == 0))
-        return failf(err, code, name, "%d views and %d lights (expected both or neither)",
-                     m->views.count, m->lights.count);
-    if (m->n_subspaces < 1 || m->n_subspaces > MAX_SUBSPACES || !m->subspaces)
-        return failf(err, code, name, "%d subspaces (expected 1..%d)", m->n_subspaces,
-                     MAX_SUBSPACES);
-    if (m->views.count > 0) {
-        if (!m->index)
-            return failf(err, code, name, "no index table (expected %d x %d entries)",
-                         m->views.count, m->lights.count);
-        size_t n = (size_t)m->views.count * m->lights.count;
-        for (size_t i = 0; i < n; i++)
-            if (m->index[i] >= m->n_subspaces)
-                return failf(err, code, name,
-                             "index table: (view %zu, light %zu) -> subspace %u (expected < %d)",
-                             i / (size_t)m->lights.count, i % (size_t)m->lights.count,
-                             m->index[i], m->n_subspaces);
-    } else if (m->index) {
-        return failf(err, code, name, "an index table without directions (expected none)");
-    }
-    for (int s = 0; s < m->n_subspaces; s++)
-        if ((rc = check_subspace(m, s, name, code, err)))
-            return rc;
-    return check_range(m, name, code, err);
-}
-
 /* -------------------------------------------------------------- encoding */
 
 static void put_dirset(wbuf *b, int tag, const btf_dirset *s)
@@ -538,7 +343,7 @@ static void put_subspaces(wbuf *b, const btf_model *m)
 /* Quantises the heights on their canonical grid and writes the predictor
  * residuals as two byte planes (low bytes, then high bytes): the high plane
  * of a smooth surface is nearly all zeros. */
-static int put_range(wbuf *b, const btf_model *m, const char *name, btf_error *err)
+static btf_status put_range(wbuf *b, const btf_model *m, const char *name, btf_error *err)
 {
     size_t n = (size_t)m->range_width * m->range_height;
     float lo = m->range[0], hi = m->range[0];
@@ -580,7 +385,7 @@ static int put_range(wbuf *b, const btf_model *m, const char *name, btf_error *e
     return BTF_OK;
 }
 
-static int build_payload(const btf_model *m, wbuf *b, const char *name, btf_error *err)
+static btf_status build_payload(const btf_model *m, wbuf *b, const char *name, btf_error *err)
 {
     if (m->views.count > 0) {
         put_dirset(b, S_VIEW, &m->views);
@@ -591,7 +396,7 @@ static int build_payload(const btf_model *m, wbuf *b, const char *name, btf_erro
     }
     put_subspaces(b, m);
     if (m->range) {
-        int rc = put_range(b, m, name, err);
+        btf_status rc = put_range(b, m, name, err);
         if (rc)
             return rc;
     }
@@ -602,8 +407,8 @@ static int build_payload(const btf_model *m, wbuf *b, const char *name, btf_erro
 
 /* Wraps the payload: header, deflated (or stored, when deflate does not
  * help) body, CRC-32 of everything before it. */
-static int wrap_payload(const wbuf *pl, const char *name, unsigned char **data, size_t *size,
-                        btf_error *err)
+static btf_status wrap_payload(const wbuf *pl, const char *name, unsigned char **data,
+                               size_t *size, btf_error *err)
 {
     uLongf zlen = compressBound((uLong)pl->n);
     unsigned char *out = alloc_named(HEADER_BYTES + (size_t)zlen + CRC_BYTES, 1, 0, name, err);
@@ -630,8 +435,8 @@ static int wrap_payload(const wbuf *pl, const char *name, unsigned char **data, 
     return BTF_OK;
 }
 
-static int encode_named(const btf_model *m, const char *name, unsigned char **data, size_t *size,
-                        btf_error *err)
+static btf_status encode_named(const btf_model *m, const char *name, unsigned char **data,
+                               size_t *size, btf_error *err)
 {
     if (!data || !size)
         return failf(err, BTF_E_ARG, name, "no output buffer");
@@ -639,7 +444,7 @@ static int encode_named(const btf_model *m, const char *name, unsigned char **da
     *size = 0;
     if (!m)
         return failf(err, BTF_E_ARG, name, "no model");
-    int rc = validate_model(m, name, BTF_E_DATA, err);
+    btf_status rc = btf_model_validate(m, name, BTF_E_DATA, err);
     if (rc)
         return rc;
     wbuf pl = {0};
@@ -653,18 +458,18 @@ static int encode_named(const btf_model *m, const char *name, unsigned char **da
     return rc;
 }
 
-int btf_model_encode(const btf_model *m, unsigned char **data, size_t *size, btf_error *err)
+btf_status btf_model_encode(const btf_model *m, unsigned char **data, size_t *size, btf_error *err)
 {
     return encode_named(m, "model", data, size, err);
 }
 
-int btf_model_write(const char *path, const btf_model *m, btf_error *err)
+btf_status btf_model_write(const char *path, const btf_model *m, btf_error *err)
 {
     if (!path)
         return btf_fail(err, BTF_E_ARG, "model: no path to write to");
     unsigned char *data;
     size_t size;
-    int rc = encode_named(m, path, &data, &size, err);
+    btf_status rc = encode_named(m, path, &data, &size, err);
     if (rc)
         return rc;
     rc = btf_write_file_atomic(path, data, size, err);
@@ -676,8 +481,8 @@ int btf_model_write(const char *path, const btf_model *m, btf_error *err)
 
 /* The signature comes first: a foreign file, a truncated one and one mangled
  * by a text-mode transfer each get their own message. */
-static int check_signature(const unsigned char *data, size_t size, const char *name,
-                           btf_error *err)
+static btf_status check_signature(const unsigned char *data, size_t size, const char *name,
+                                  btf_error *err)
 {
     size_t k = size < SIG_LEN ? size : SIG_LEN;
     if (memcmp(data, SIGNATURE, k) == 0) /* a prefix of the signature, or all of it */
@@ -693,8 +498,8 @@ static int check_signature(const unsigned char *data, size_t size, const char *n
                  "not a btfcar model (expected the signature \\x89BTFCAR\\r\\n\\x1a\\n)");
 }
 
-static int check_version(const unsigned char *data, size_t size, const char *name,
-                         btf_error *err)
+static btf_status check_version(const unsigned char *data, size_t size, const char *name,
+                                btf_error *err)
 {
     if (size < SIG_LEN + 4)
         return failf(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected at least %d)", size,
@@ -710,8 +515,8 @@ static int check_version(const unsigned char *data, size_t size, const char *nam
     return BTF_OK;
 }
 
-static int inflate_payload(const unsigned char *src, size_t n, size_t out_n, const char *name,
-                           unsigned char **out, btf_error *err)
+static btf_status inflate_payload(const unsigned char *src, size_t n, size_t out_n,
+                                  const char *name, unsigned char **out, btf_error *err)
 {
     if ((uint64_t)out_n > (uint64_t)n * ZLIB_MAX_RATIO + 64)
         return failf(err, BTF_E_FORMAT, name,
@@ -738,11 +543,11 @@ static int inflate_payload(const unsigned char *src, size_t n, size_t out_n, con
 /* Checks the container (signature, version, sizes, CRC, compression) and
  * hands back the payload: a pointer into data when stored, an inflated copy
  * in *owned when deflated. */
-static int open_container(const unsigned char *data, size_t size, const char *name,
-                          const unsigned char **payload, size_t *payload_n, unsigned char **owned,
-                          btf_error *err)
+static btf_status open_container(const unsigned char *data, size_t size, const char *name,
+                                 const unsigned char **payload, size_t *payload_n,
+                                 unsigned char **owned, btf_error *err)
 {
-    int rc;
+    btf_status rc;
     if ((rc = check_signature(data, size, name, err)) || (rc = check_version(data, size, name, err)))
         return rc;
     if (size > MAX_FILE_BYTES)
@@ -802,8 +607,8 @@ typedef struct span {
 
 /* Splits the payload into its sections. Unknown tags are skipped: a newer
  * minor version may add sections. */
-static int split_sections(const unsigned char *p, size_t n, span sec[S_COUNT], const char *name,
-                          btf_error *err)
+static btf_status split_sections(const unsigned char *p, size_t n, span sec[S_COUNT],
+                                 const char *name, btf_error *err)
 {
     size_t pos = 0;
     while (pos < n) {
@@ -827,13 +632,14 @@ static int split_sections(const unsigned char *p, size_t n, span sec[S_COUNT], c
     return BTF_OK;
 }
 
-static int short_section(int tag, const char *name, btf_error *err)
+static btf_status short_section(int tag, const char *name, btf_error *err)
 {
     return failf(err, BTF_E_FORMAT, name, "section %s is truncated (expected more bytes)",
                  TAGS[tag]);
 }
 
-static int read_dirset(const span *sp, int tag, btf_dirset *s, const char *name, btf_error *err)
+static btf_status read_dirset(const span *sp, int tag, btf_dirset *s, const char *name,
+                              btf_error *err)
 {
     rbuf r = {sp->p, sp->n, 0, 0};
     unsigned len = r_u8(&r);
@@ -861,7 +667,7 @@ static int read_dirset(const span *sp, int tag, btf_dirset *s, const char *name,
     return BTF_OK;
 }
 
-static int read_index(const span *sp, btf_model *m, const char *name, btf_error *err)
+static btf_status read_index(const span *sp, btf_model *m, const char *name, btf_error *err)
 {
     size_t n = (size_t)m->views.count * m->lights.count;
     if (sp->n < n)
@@ -893,8 +699,8 @@ static void read_band(rbuf *r, btf_car_band *b)
 
 /* Reads one subspace; counts that size loops (levels, n) are checked at
  * once, everything else by validate_model. */
-static int read_subspace(rbuf *r, btf_subspace_model *sm, int s, const char *name,
-                         btf_error *err)
+static btf_status read_subspace(rbuf *r, btf_subspace_model *sm, int s, const char *name,
+                                btf_error *err)
 {
     sm->view = r_i16(r);
     sm->light = r_i16(r);
@@ -930,7 +736,7 @@ static int read_subspace(rbuf *r, btf_subspace_model *sm, int s, const char *nam
     return BTF_OK;
 }
 
-static int read_subspaces(const span *sp, btf_model *m, const char *name, btf_error *err)
+static btf_status read_subspaces(const span *sp, btf_model *m, const char *name, btf_error *err)
 {
     rbuf r = {sp->p, sp->n, 0, 0};
     unsigned count = r_u16(&r);
@@ -944,7 +750,7 @@ static int read_subspaces(const span *sp, btf_model *m, const char *name, btf_er
         return BTF_E_NOMEM;
     m->n_subspaces = (int)count;
     for (int s = 0; s < (int)count; s++) {
-        int rc = read_subspace(&r, &m->subspaces[s], s, name, err);
+        btf_status rc = read_subspace(&r, &m->subspaces[s], s, name, err);
         if (rc)
             return rc;
     }
@@ -954,7 +760,7 @@ static int read_subspaces(const span *sp, btf_model *m, const char *name, btf_er
 /* Rebuilds the heights from the predictor residuals and checks that the
  * grid is in range and canonical (what the encoder picks for them), so that
  * a decoded model re-encodes to the same bytes. */
-static int read_range(const span *sp, btf_model *m, const char *name, btf_error *err)
+static btf_status read_range(const span *sp, btf_model *m, const char *name, btf_error *err)
 {
     rbuf r = {sp->p, sp->n, 0, 0};
     int w = (int)r_u16(&r), h = (int)r_u16(&r);
@@ -1015,11 +821,11 @@ static int read_range(const span *sp, btf_model *m, const char *name, btf_error 
     return BTF_OK;
 }
 
-static int read_payload(const unsigned char *p, size_t n, btf_model *m, const char *name,
-                        btf_error *err)
+static btf_status read_payload(const unsigned char *p, size_t n, btf_model *m, const char *name,
+                               btf_error *err)
 {
     span sec[S_COUNT] = {{0}};
-    int rc = split_sections(p, n, sec, name, err);
+    btf_status rc = split_sections(p, n, sec, name, err);
     if (rc)
         return rc;
     if (sec[S_VIEW].present != sec[S_LGHT].present ||
@@ -1040,11 +846,11 @@ static int read_payload(const unsigned char *p, size_t n, btf_model *m, const ch
         return rc;
     if (sec[S_RANG].present && (rc = read_range(&sec[S_RANG], m, name, err)))
         return rc;
-    return validate_model(m, name, BTF_E_FORMAT, err);
+    return btf_model_validate(m, name, BTF_E_FORMAT, err);
 }
 
-int btf_model_decode(const unsigned char *data, size_t size, const char *name, btf_model *m,
-                     btf_error *err)
+btf_status btf_model_decode(const unsigned char *data, size_t size, const char *name,
+                            btf_model *m, btf_error *err)
 {
     if (!name)
         name = "model";
@@ -1058,7 +864,7 @@ int btf_model_decode(const unsigned char *data, size_t size, const char *name, b
     const unsigned char *payload = NULL;
     size_t payload_n = 0;
     unsigned char *owned = NULL;
-    int rc = open_container(data, size, name, &payload, &payload_n, &owned, err);
+    btf_status rc = open_container(data, size, name, &payload, &payload_n, &owned, err);
     if (rc == BTF_OK)
         rc = read_payload(payload, payload_n, m, name, err);
     free(owned);
@@ -1079,7 +885,7 @@ int btf_model_decode(const unsigned char *data, size_t size, const char *name, b
     return rc;
 }
 
-int btf_model_read(const char *path, btf_model *m, btf_error *err)
+btf_status btf_model_read(const char *path, btf_model *m, btf_error *err)
 {
     if (!m)
         return btf_fail(err, BTF_E_ARG, "model: nothing to read into");
@@ -1088,22 +894,10 @@ int btf_model_read(const char *path, btf_model *m, btf_error *err)
         return btf_fail(err, BTF_E_ARG, "model: no path to read");
     unsigned char *data;
     size_t n;
-    int rc = btf_read_file(path, MAX_FILE_BYTES, &data, &n, err);
+    btf_status rc = btf_read_file(path, MAX_FILE_BYTES, &data, &n, err);
     if (rc)
         return rc;
     rc = btf_model_decode(data, n, path, m, err);
     free(data);
     return rc;
-}
-
-void btf_model_free(btf_model *m)
-{
-    if (!m)
-        return;
-    btf_dirset_free(&m->views);
-    btf_dirset_free(&m->lights);
-    free(m->index);
-    free(m->subspaces);
-    free(m->range);
-    memset(m, 0, sizeof *m);
 }

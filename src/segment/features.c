@@ -26,7 +26,7 @@ static int bin_of(float v, float lo, float hi, int bins)
     return (int)t;
 }
 
-int btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *err)
+btf_status btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *err)
 {
     if (bins < 2 || bins > 4096)
         return btf_fail(err, BTF_E_ARG, "histogram bins %d: expected 2..4096", bins);
@@ -83,13 +83,16 @@ static btf_status feature_job(void *user, int image, int worker, btf_error *err)
     return rc;
 }
 
-int btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts, float **features,
-                         int *dim, btf_error *err)
+btf_feature_opts btf_feature_defaults(void)
 {
-    btf_feature_opts o = {0};
-    if (opts)
-        o = *opts;
-    int bins = o.bins ? o.bins : 32;
+    return (btf_feature_opts){.bins = 32, .threads = 0};
+}
+
+btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
+                                float **features, int *dim, btf_error *err)
+{
+    btf_feature_opts o = opts ? *opts : btf_feature_defaults();
+    int bins = o.bins ? o.bins : btf_feature_defaults().bins;
     if (bins < 2 || bins > 4096)
         return btf_fail(err, BTF_E_ARG, "histogram bins %d: expected 2..4096", bins);
     const btf_dataset_info *in = btf_dataset_get_info(ds);

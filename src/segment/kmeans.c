@@ -159,7 +159,7 @@ static double one_run(const float *x, int n, int dim, int k, int max_iter, btf_r
 /* Renumbers clusters by first appearance in point order, so that equal
  * partitions print equally whatever run produced them, and drops clusters
  * without members. */
-static int canonical_order(btf_kmeans_result *r, int n, int dim, btf_error *err)
+static btf_status canonical_order(btf_kmeans_result *r, int n, int dim, btf_error *err)
 {
     int *map = btf_alloc((size_t)r->k, sizeof(int), err);
     float *c = btf_alloc((size_t)r->k * dim, sizeof(float), err);
@@ -202,13 +202,28 @@ void btf_kmeans_free(btf_kmeans_result *r)
     memset(r, 0, sizeof *r);
 }
 
-int btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
-               btf_kmeans_result *out, btf_error *err)
+btf_kmeans_opts btf_kmeans_defaults(void)
+{
+    return (btf_kmeans_opts){.restarts = 5, .max_iter = 100, .seed = 0};
+}
+
+/* The options with every zero (or negative) count replaced by its default;
+ * the seed is taken as it is (0 is a seed like any other). */
+static btf_kmeans_opts resolve_opts(const btf_kmeans_opts *opts)
+{
+    btf_kmeans_opts d = btf_kmeans_defaults(), o = opts ? *opts : d;
+    if (o.restarts <= 0)
+        o.restarts = d.restarts;
+    if (o.max_iter <= 0)
+        o.max_iter = d.max_iter;
+    return o;
+}
+
+btf_status btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
+                      btf_kmeans_result *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
-    btf_kmeans_opts o = {0};
-    if (opts)
-        o = *opts;
+    btf_kmeans_opts o = resolve_opts(opts);
     if (n < 1 || dim < 1 || k < 1)
         return btf_fail(err, BTF_E_ARG, "k-means on %d points of dimension %d with k = %d", n, dim, k);
     for (size_t i = 0; i < (size_t)n * dim; i++)
@@ -217,8 +232,7 @@ int btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts
                             i % (size_t)dim, i / (size_t)dim);
     if (k > n)
         k = n;
-    int restarts = o.restarts > 0 ? o.restarts : 5;
-    int max_iter = o.max_iter > 0 ? o.max_iter : 100;
+    int restarts = o.restarts, max_iter = o.max_iter;
     km_work w = {0}, best = {0};
     w.labels = btf_alloc((size_t)n, sizeof(int), err);
     w.count = btf_alloc((size_t)k, sizeof(int), err);
@@ -227,7 +241,7 @@ int btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts
     w.acc = btf_alloc((size_t)k * dim, sizeof(double), err);
     best.labels = btf_alloc((size_t)n, sizeof(int), err);
     best.centres = btf_alloc((size_t)k * dim, sizeof(float), err);
-    int rc = (w.labels && w.count && w.centres && w.d2 && w.acc && best.labels && best.centres)
+    btf_status rc = (w.labels && w.count && w.centres && w.d2 && w.acc && best.labels && best.centres)
                  ? BTF_OK : BTF_E_NOMEM;
     double best_dist = -1.0;
     int best_k = 0;

@@ -1,7 +1,7 @@
 /*
  * segment.c — BTF space segmentation (paper section II.A): the n_views x
  * n_lights images are clustered by k-means on their Lab cumulative histograms
- * (src/segment/features.c, src/segment/kmeans.c) into K subspaces; each subspace is
+ * (segment/features.c, segment/kmeans.c) into K subspaces; each subspace is
  * represented by the member image closest to its cluster centre — a real
  * measured image, which the CAR stage models. The index table says, for each
  * (view, light) pair, which subspace image stands for it.
@@ -35,8 +35,8 @@ void btf_segmentation_free(btf_segmentation *s)
 }
 
 /* The member closest to each centre (ties: lowest index). */
-static int pick_representatives(const float *f, int n, int dim, const btf_kmeans_result *km,
-                                int n_lights, btf_segmentation *s, btf_error *err)
+static btf_status pick_representatives(const float *f, int n, int dim, const btf_kmeans_result *km,
+                                       int n_lights, btf_segmentation *s, btf_error *err)
 {
     double *best = btf_alloc((size_t)km->k, sizeof(double), err);
     if (!best)
@@ -63,8 +63,8 @@ static int pick_representatives(const float *f, int n, int dim, const btf_kmeans
     return BTF_OK;
 }
 
-static int fill_result(const float *f, int n, int dim, int n_lights, const btf_kmeans_result *km,
-                       btf_segmentation *s, btf_error *err)
+static btf_status fill_result(const float *f, int n, int dim, int n_lights,
+                              const btf_kmeans_result *km, btf_segmentation *s, btf_error *err)
 {
     s->k = km->k;
     s->distortion = km->distortion;
@@ -80,13 +80,14 @@ static int fill_result(const float *f, int n, int dim, int n_lights, const btf_k
 }
 
 /* Runs k-means for K = 1, 2, ... until the rule of the file comment holds. */
-static int choose_k(const float *f, int n, int dim, const btf_segment_opts *o, int max_k,
-                    double tau, btf_segmentation *s, btf_kmeans_result *chosen, btf_error *err)
+static btf_status choose_k(const float *f, int n, int dim, const btf_segment_opts *o, int max_k,
+                           double tau, btf_segmentation *s, btf_kmeans_result *chosen,
+                           btf_error *err)
 {
     double d1 = 0.0;
     for (int k = 1; k <= max_k; k++) {
         btf_kmeans_result km;
-        int rc = btf_kmeans(f, n, dim, k, &o->kmeans, &km, err);
+        btf_status rc = btf_kmeans(f, n, dim, k, &o->kmeans, &km, err);
         if (rc)
             return rc;
         s->distortion_by_k[k] = km.distortion;
@@ -121,23 +122,44 @@ static int choose_k(const float *f, int n, int dim, const btf_segment_opts *o, i
     return btf_fail(err, BTF_E_ARG, "segmentation: no K tried (max %d)", max_k);
 }
 
-int btf_segment_features(const float *features, int n_views, int n_lights, int dim,
-                         const btf_segment_opts *opts, btf_segmentation *out, btf_error *err)
+btf_segment_opts btf_segment_defaults(void)
+{
+    return (btf_segment_opts){.subspaces = 0,
+                              .max_subspaces = 20,
+                              .auto_threshold = 0.10,
+                              .features = btf_feature_defaults(),
+                              .kmeans = btf_kmeans_defaults()};
+}
+
+/* The options with zero (or negative) cap and threshold replaced by their
+ * defaults; subspaces 0 stays (it means auto), and the nested features and
+ * k-means options are resolved by their own calls. */
+static btf_segment_opts resolve_opts(const btf_segment_opts *opts)
+{
+    btf_segment_opts d = btf_segment_defaults(), o = opts ? *opts : d;
+    if (o.max_subspaces <= 0)
+        o.max_subspaces = d.max_subspaces;
+    if (!(o.auto_threshold > 0.0))
+        o.auto_threshold = d.auto_threshold;
+    return o;
+}
+
+btf_status btf_segment_features(const float *features, int n_views, int n_lights, int dim,
+                                const btf_segment_opts *opts, btf_segmentation *out,
+                                btf_error *err)
 {
     memset(out, 0, sizeof *out);
-    btf_segment_opts o = {0};
-    if (opts)
-        o = *opts;
+    btf_segment_opts o = resolve_opts(opts);
     int n = n_views * n_lights;
     if (n_views < 1 || n_lights < 1 || dim < 1)
         return btf_fail(err, BTF_E_ARG, "segmentation of %d x %d images", n_views, n_lights);
     if (o.subspaces < 0 || o.subspaces > SEGMENT_MAX_K)
         return btf_fail(err, BTF_E_ARG, "subspaces %d: expected 1..%d or auto", o.subspaces,
                         SEGMENT_MAX_K);
-    double tau = o.auto_threshold > 0.0 ? o.auto_threshold : 0.10;
+    double tau = o.auto_threshold;
     if (!(tau < 1.0))
         return btf_fail(err, BTF_E_ARG, "auto threshold %g: expected in (0, 1)", tau);
-    int max_k = o.max_subspaces > 0 ? o.max_subspaces : 20;
+    int max_k = o.max_subspaces;
     if (max_k > SEGMENT_MAX_K)
         max_k = SEGMENT_MAX_K;
     if (o.subspaces > max_k)
@@ -149,7 +171,7 @@ int btf_segment_features(const float *features, int n_views, int n_lights, int d
     if (!out->distortion_by_k)
         return BTF_E_NOMEM;
     btf_kmeans_result km;
-    int rc;
+    btf_status rc;
     if (o.subspaces > 0) {
         rc = btf_kmeans(features, n, dim, o.subspaces, &o.kmeans, &km, err);
         if (rc == 0) {
@@ -172,16 +194,14 @@ int btf_segment_features(const float *features, int n_views, int n_lights, int d
     return rc;
 }
 
-int btf_segment(const btf_dataset *ds, const btf_segment_opts *opts, btf_segmentation *out,
-                btf_error *err)
+btf_status btf_segment(const btf_dataset *ds, const btf_segment_opts *opts,
+                       btf_segmentation *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
-    btf_segment_opts o = {0};
-    if (opts)
-        o = *opts;
+    btf_segment_opts o = opts ? *opts : btf_segment_defaults();
     float *f;
     int dim;
-    int rc = btf_dataset_features(ds, &o.features, &f, &dim, err);
+    btf_status rc = btf_dataset_features(ds, &o.features, &f, &dim, err);
     if (rc)
         return rc;
     const btf_dataset_info *in = btf_dataset_get_info(ds);
@@ -197,15 +217,15 @@ static const unsigned char PALETTE[20][3] = {
     {0, 128, 128},  {220, 190, 255}, {170, 110, 40}, {255, 250, 200}, {128, 0, 0},
     {170, 255, 195}, {128, 128, 0},  {255, 215, 180}, {0, 0, 128},    {128, 128, 128}};
 
-int btf_segmentation_write_png(const btf_segmentation *s, int cell, const char *path,
-                               btf_error *err)
+btf_status btf_segmentation_write_png(const btf_segmentation *s, int cell, const char *path,
+                                      btf_error *err)
 {
     if (cell <= 0)
         cell = 6;
     if (cell > 64)
         return btf_fail(err, BTF_E_ARG, "%s: cell size %d: expected 1..64", path, cell);
     btf_image img;
-    int rc = btf_image_alloc(&img, s->n_views * cell, s->n_lights * cell, 3, err);
+    btf_status rc = btf_image_alloc(&img, s->n_views * cell, s->n_lights * cell, 3, err);
     if (rc)
         return rc;
     for (int y = 0; y < img.height; y++)

@@ -1,0 +1,118 @@
+/*
+ * stability.c — stability and stationary variance of a CAR band (paper
+ * section II.C: the model must be a stable recursion for synthesis to give
+ * a stationary field).
+ *
+ * btf_car_is_stable checks sum |gamma| < 1 (sufficient), else that A(w1, w2)
+ * = 1 - sum gamma_s e^{-i(w1 r_s + w2 c_s)} stays away from 0 on a frequency
+ * grid (necessary) and that a test recursion does not grow. The stationary
+ * variance is sigma^2 times the mean of 1/|A|^2 over the frequency torus.
+ */
+#include "core/core.h"
+#include "car/car.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* |A(w1, w2)|^2 on an n x n grid of the frequency torus: min and the mean of
+ * its inverse (the stationary variance for unit noise). */
+static void spectrum(const btf_car_band *b, int n, double *min_a2, double *mean_inv)
+{
+    double mn = INFINITY, acc = 0.0;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double w1 = 2.0 * 3.14159265358979323846 * i / n;
+            double w2 = 2.0 * 3.14159265358979323846 * j / n;
+            double re = 1.0, im = 0.0;
+            for (int s = 0; s < b->n; s++) {
+                double ph = w1 * b->offsets[s].row + w2 * b->offsets[s].col;
+                re -= b->gamma[s] * cos(ph);
+                im += b->gamma[s] * sin(ph);
+            }
+            double a2 = re * re + im * im;
+            if (a2 < mn)
+                mn = a2;
+            acc += a2 > 1e-300 ? 1.0 / a2 : 1e300;
+        }
+    *min_a2 = mn;
+    *mean_inv = acc / ((double)n * n);
+}
+
+/* Runs the recursion on a rows x cols field of unit noise (zero boundary).
+ * A stable model does not grow: neither down the rows (the last quarter of
+ * rows against the quarter before) nor along them (the last quarter of
+ * columns against the quarter before; the zero boundary only ever lowers
+ * the variance near an edge). 1: grows, 0: does not, -1: out of memory. */
+static int recursion_grows(const btf_car_band *b)
+{
+    enum { R = 160, C = 192 };
+    double *f = calloc((size_t)R * C, sizeof(double));
+    if (!f)
+        return -1;
+    btf_rng rng;
+    btf_rng_seed(&rng, 12345);
+    for (int y = 0; y < R; y++)
+        for (int x = 0; x < C; x++) {
+            double s = 0.0;
+            for (int k = 0; k < b->n; k++) {
+                int yy = y + b->offsets[k].row, xx = x + b->offsets[k].col;
+                if (yy >= 0 && xx >= 0 && xx < C)
+                    s += b->gamma[k] * f[yy * C + xx];
+            }
+            /* Uniform noise of unit variance is enough to excite growth. */
+            f[y * C + x] = s + (btf_rng_uniform(&rng) - 0.5) * 3.4641016151377544;
+        }
+    double rows1 = 0.0, rows2 = 0.0, cols1 = 0.0, cols2 = 0.0;
+    for (int y = R / 2; y < R; y++)
+        for (int x = C / 4; x < C; x++) {
+            double q = f[y * C + x] * f[y * C + x];
+            if (x < 3 * C / 4) {
+                if (y < 3 * R / 4)
+                    rows1 += q;
+                else
+                    rows2 += q;
+            }
+            if (y >= 3 * R / 4) {
+                if (x < C / 2)
+                    continue;
+                if (x < 3 * C / 4)
+                    cols1 += q;
+                else
+                    cols2 += q;
+            }
+        }
+    free(f);
+    if (!isfinite(rows1) || !isfinite(rows2) || !isfinite(cols1) || !isfinite(cols2))
+        return 1;
+    return rows2 > 1.5 * rows1 + 1e-12 || cols2 > 1.5 * cols1 + 1e-12;
+}
+
+btf_stability btf_car_stability(const btf_car_band *b)
+{
+    double sum = 0.0;
+    for (int i = 0; i < b->n; i++) {
+        if (!isfinite(b->gamma[i]))
+            return BTF_UNSTABLE;
+        sum += fabs(b->gamma[i]);
+    }
+    if (sum < 1.0)
+        return BTF_STABLE;
+    double mn, inv;
+    spectrum(b, 64, &mn, &inv);
+    if (!(mn > 1e-6))
+        return BTF_UNSTABLE;
+    int grows = recursion_grows(b);
+    return grows < 0 ? BTF_STABILITY_UNKNOWN : grows ? BTF_UNSTABLE : BTF_STABLE;
+}
+
+int btf_car_is_stable(const btf_car_band *b)
+{
+    return btf_car_stability(b) == BTF_STABLE;
+}
+
+double btf_car_stationary_variance(const btf_car_band *b)
+{
+    double mn, inv;
+    spectrum(b, 256, &mn, &inv);
+    return (double)b->sigma * b->sigma * inv;
+}

@@ -1,0 +1,220 @@
+/*
+ * model_check.c — the validator of models (docs/model-format.md, "Rules"):
+ * direction sets, the index table, every subspace's spectral basis and CAR
+ * bands (paper section II.C: causal neighbourhoods, finite coefficients,
+ * sigma >= 0), and the range-map tile (section II.B). The encoder runs it
+ * before writing and the decoder after reading, so the two agree on what a
+ * model is, and the decoder trusts nothing it has not checked.
+ */
+#include <stdio.h>
+#include "car/car.h"
+#include "model/model.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <string.h>
+
+/* Rows of the basis must be orthonormal within this: synthesis inverts the
+ * basis by transposition. */
+#define BASIS_TOL 1e-3
+
+#define MAX_DIRS BTF_MODEL_MAX_DIRS
+#define MAX_SUBSPACES BTF_MODEL_MAX_SUBSPACES
+#define MAX_IMAGE_SIDE BTF_MODEL_MAX_IMAGE_SIDE
+#define MAX_RANGE_SIDE BTF_MODEL_MAX_RANGE_SIDE
+#define MAX_RANGE_SAMPLES BTF_MODEL_MAX_RANGE_SAMPLES
+#define MAX_NAME BTF_MODEL_MAX_NAME
+
+btf_status btf_model_fail(btf_error *err, btf_status code, const char *name, const char *fmt,
+                          ...)
+{
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return btf_fail(err, code, "%s: %s", name, msg);
+}
+
+#define failf btf_model_fail
+
+static btf_status check_dirset(const btf_dirset *s, const char *what, const char *name,
+                               btf_status code, btf_error *err)
+{
+    if (s->count < 0 || s->count > MAX_DIRS)
+        return failf(err, code, name, "%s: %d directions (expected 0..%d)", what, s->count,
+                     MAX_DIRS);
+    if (s->count == 0)
+        return BTF_OK;
+    if (!s->dirs)
+        return failf(err, code, name, "%s: no direction array (expected %d directions)", what,
+                     s->count);
+    size_t len = strnlen(s->name, sizeof s->name);
+    if (len > MAX_NAME)
+        return failf(err, code, name, "%s: set name is not terminated (expected at most %d characters)",
+                     what, MAX_NAME);
+    for (size_t i = 0; i < len; i++)
+        if (s->name[i] < 0x20 || s->name[i] > 0x7e)
+            return failf(err, code, name, "%s: set name has byte 0x%02x (expected printable ASCII)",
+                         what, (unsigned char)s->name[i]);
+    for (int i = 0; i < s->count; i++) {
+        btf_dir d = s->dirs[i];
+        if (!(d.theta >= 0.0 && d.theta <= 90.0) || !(d.phi >= 0.0 && d.phi < 360.0))
+            return failf(err, code, name,
+                         "%s: direction %d is (theta %g, phi %g) (expected theta in [0, 90], "
+                         "phi in [0, 360))", what, i, d.theta, d.phi);
+    }
+    return BTF_OK;
+}
+
+static btf_status check_band(const btf_car_band *b, const char *where, const char *name,
+                             btf_status code, btf_error *err)
+{
+    if (b->n < 0 || b->n > BTF_CAR_MAX_NEIGHBOURS)
+        return failf(err, code, name, "%s: %d neighbours (expected 0..%d)", where, b->n,
+                     BTF_CAR_MAX_NEIGHBOURS);
+    for (int i = 0; i < b->n; i++) {
+        btf_offset o = b->offsets[i];
+        if (!btf_offset_is_causal(o))
+            return failf(err, code, name,
+                         "%s: neighbour offset %d:%d is not causal (expected row < 0, or row 0 "
+                         "and column < 0)", where, o.row, o.col);
+        /* The neighbourhood parser's limit: reaches beyond 64 would make
+         * the GPU wavefront needlessly long (its slope grows with them). */
+        if (o.row < -64 || o.col < -64 || o.col > 64)
+            return failf(err, code, name,
+                         "%s: neighbour offset %d:%d reaches beyond 64 pixels (expected rows and "
+                         "columns within -64..64)", where, o.row, o.col);
+        for (int j = 0; j < i; j++)
+            if (b->offsets[j].row == o.row && b->offsets[j].col == o.col)
+                return failf(err, code, name,
+                             "%s: neighbour offset %d:%d appears twice (expected distinct offsets)",
+                             where, o.row, o.col);
+        if (!isfinite(b->gamma[i]))
+            return failf(err, code, name, "%s: gamma[%d] is %g (expected a finite number)", where,
+                         i, b->gamma[i]);
+    }
+    if (!(isfinite(b->sigma) && b->sigma >= 0.0f))
+        return failf(err, code, name, "%s: sigma is %g (expected a finite number >= 0)", where,
+                     b->sigma);
+    if (!isfinite(b->mean))
+        return failf(err, code, name, "%s: mean is %g (expected a finite number)", where, b->mean);
+    return BTF_OK;
+}
+
+/* The basis must be orthonormal: synthesis inverts it by transposition. */
+static btf_status check_basis(const float *basis, int s, const char *name, btf_status code,
+                              btf_error *err)
+{
+    for (int i = 0; i < 9; i++)
+        if (!isfinite(basis[i]))
+            return failf(err, code, name, "subspace %d: basis[%d] is %g (expected a finite number)",
+                         s, i, basis[i]);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j <= i; j++) {
+            double dot = 0.0;
+            for (int k = 0; k < 3; k++)
+                dot += (double)basis[3 * i + k] * basis[3 * j + k];
+            if (fabs(dot - (i == j)) > BASIS_TOL)
+                return failf(err, code, name,
+                             "subspace %d: basis rows %d and %d have dot product %g (expected an "
+                             "orthonormal basis, within %g)", s, i, j, dot, BASIS_TOL);
+        }
+    return BTF_OK;
+}
+
+static btf_status check_subspace(const btf_model *m, int s, const char *name, btf_status code,
+                                 btf_error *err)
+{
+    const btf_subspace_model *sm = &m->subspaces[s];
+    int none = sm->view == -1 && sm->light == -1;
+    int valid = sm->view >= 0 && sm->view < m->views.count && sm->light >= 0 &&
+                sm->light < m->lights.count;
+    if (!none && !valid)
+        return failf(err, code, name,
+                     "subspace %d: representative (view %d, light %d) (expected both -1, or "
+                     "indices below %d views and %d lights)", s, sm->view, sm->light,
+                     m->views.count, m->lights.count);
+    if (sm->width < 1 || sm->width > MAX_IMAGE_SIDE || sm->height < 1 ||
+        sm->height > MAX_IMAGE_SIDE)
+        return failf(err, code, name, "subspace %d: size %d x %d (expected 1..%d on each side)", s,
+                     sm->width, sm->height, MAX_IMAGE_SIDE);
+    for (int c = 0; c < 3; c++)
+        if (!isfinite(sm->mean[c]))
+            return failf(err, code, name, "subspace %d: mean[%d] is %g (expected a finite number)",
+                         s, c, sm->mean[c]);
+    btf_status rc = check_basis(sm->basis, s, name, code, err);
+    if (rc)
+        return rc;
+    if (sm->levels < 1 || sm->levels > BTF_MAX_LEVELS)
+        return failf(err, code, name, "subspace %d: %d pyramid levels (expected 1..%d)", s,
+                     sm->levels, BTF_MAX_LEVELS);
+    for (int b = 0; b < 3; b++)
+        for (int l = 0; l < sm->levels; l++) {
+            char where[64];
+            snprintf(where, sizeof where, "subspace %d, band %d, level %d", s, b, l);
+            if ((rc = check_band(&sm->bands[b][l], where, name, code, err)))
+                return rc;
+        }
+    return BTF_OK;
+}
+
+static btf_status check_range(const btf_model *m, const char *name, btf_status code, btf_error *err)
+{
+    if (m->range_width == 0 && m->range_height == 0 && !m->range)
+        return BTF_OK;
+    if (m->range_width < 1 || m->range_width > MAX_RANGE_SIDE || m->range_height < 1 ||
+        m->range_height > MAX_RANGE_SIDE ||
+        (long)m->range_width * m->range_height > MAX_RANGE_SAMPLES)
+        return failf(err, code, name,
+                     "range map: size %d x %d (expected 1..%d on each side, at most %ld samples)",
+                     m->range_width, m->range_height, MAX_RANGE_SIDE, MAX_RANGE_SAMPLES);
+    if (!m->range)
+        return failf(err, code, name, "range map: %d x %d but no heights (expected an array)",
+                     m->range_width, m->range_height);
+    if (!(isfinite(m->range_texel) && m->range_texel > 0.0f))
+        return failf(err, code, name, "range map: texel %g (expected a finite number > 0)",
+                     m->range_texel);
+    size_t n = (size_t)m->range_width * m->range_height;
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(m->range[i]))
+            return failf(err, code, name, "range map: height %zu is %g (expected a finite number)",
+                         i, m->range[i]);
+    return BTF_OK;
+}
+
+/* Every rule of docs/model-format.md that a model in memory must meet. code
+ * is BTF_E_DATA when writing (the caller's model is wrong) and BTF_E_FORMAT
+ * when reading (the file is). */
+btf_status btf_model_validate(const btf_model *m, const char *name, btf_status code,
+                              btf_error *err)
+{
+    btf_status rc;
+    if ((rc = check_dirset(&m->views, "views", name, code, err)) ||
+        (rc = check_dirset(&m->lights, "lights", name, code, err)))
+        return rc;
+    if ((m->views.count == 0) != (m->lights.count == 0))
+        return failf(err, code, name, "%d views and %d lights (expected both or neither)",
+                     m->views.count, m->lights.count);
+    if (m->n_subspaces < 1 || m->n_subspaces > MAX_SUBSPACES || !m->subspaces)
+        return failf(err, code, name, "%d subspaces (expected 1..%d)", m->n_subspaces,
+                     MAX_SUBSPACES);
+    if (m->views.count > 0) {
+        if (!m->index)
+            return failf(err, code, name, "no index table (expected %d x %d entries)",
+                         m->views.count, m->lights.count);
+        size_t n = (size_t)m->views.count * m->lights.count;
+        for (size_t i = 0; i < n; i++)
+            if (m->index[i] >= m->n_subspaces)
+                return failf(err, code, name,
+                             "index table: (view %zu, light %zu) -> subspace %u (expected < %d)",
+                             i / (size_t)m->lights.count, i % (size_t)m->lights.count,
+                             m->index[i], m->n_subspaces);
+    } else if (m->index) {
+        return failf(err, code, name, "an index table without directions (expected none)");
+    }
+    for (int s = 0; s < m->n_subspaces; s++)
+        if ((rc = check_subspace(m, s, name, code, err)))
+            return rc;
+    return check_range(m, name, code, err);
+}

@@ -334,7 +334,9 @@ static void defaults_equal_zero(void **state)
     btf_integrate_opts di = btf_integrate_defaults();
     assert_int_equal(di.method, BTF_INTEGRATE_POISSON);
     assert_true(di.max_slope == 10.0 && di.tolerance == 1e-7 && di.max_iter == 2000);
-    assert_memory_equal(&d.integrate, &di, sizeof di);
+    /* Field by field: the structs' padding bytes are unspecified. */
+    assert_true(d.integrate.method == di.method && d.integrate.max_slope == di.max_slope &&
+                d.integrate.tolerance == di.tolerance && d.integrate.max_iter == di.max_iter);
 
     scene s;
     scene_make(&s, "leather", 40, 3);

@@ -6,6 +6,7 @@
 #define BTF_CLI_H
 
 #include "btfcar.h"
+#include "options.h"
 
 #include <stdio.h>
 
@@ -49,10 +50,27 @@ int cmd_analyse(int argc, char **argv);
 int cmd_texture_fit(int argc, char **argv);
 int cmd_synthesise(int argc, char **argv);
 
-/* Model options (--levels, --neighbourhood) shared by analyse and
- * texture-fit: returns 1 if argv[*i] was one (advancing *i), with *rc the
- * exit status of a usage error (0 when fine). */
-int cli_model_option(const cli_ctx *c, int argc, char **argv, int *i, btf_fit_opts *fo, int *rc);
+/* The model options shared by analyse and texture-fit, as option-table
+ * rows over a btf_fit_opts (fo) with a tag. */
+int cli_parse_neighbourhood(const char *value, void *dest, char *why, size_t n);
+void cli_show_neighbourhood(const void *dest, char *buf, size_t n);
+#define CLI_MODEL_OPTIONS(fo, tag_)                                                        \
+    {.name = "--levels", .kind = CLI_INT, .dest = &(fo)->levels, .meta = "L|auto",         \
+     .help = "pyramid levels; auto: from the image size and its correlation length,\n"    \
+             "at most 3 (docs/model.md)",                                                  \
+     .lo = 1, .hi = BTF_MAX_LEVELS, .word = "auto", .word_value = 0, .tag = (tag_)},       \
+    {.name = "--neighbourhood", .kind = CLI_CUSTOM, .dest = &(fo)->car, .meta = "SPEC|auto", \
+     .help = "causal offsets row:col, comma-separated, e.g. 0:-1,-1:0,-1:-1,-1:1;\n"      \
+             "auto chooses per sub-band by each candidate's posterior probability",        \
+     .parse = cli_parse_neighbourhood, .show = cli_show_neighbourhood, .tag = (tag_)},     \
+    {.name = "--neighborhood", .kind = CLI_CUSTOM, .dest = &(fo)->car, .meta = "SPEC|auto", \
+     .help = "the same as --neighbourhood", .parse = cli_parse_neighbourhood,              \
+     .tag = (tag_)},                                                                       \
+    {.name = "--max-neighbours", .kind = CLI_INT, .dest = &(fo)->car.max_neighbours,       \
+     .meta = "N", .help = "auto: the largest candidate considered (the paper's models\n"  \
+                          "have fewer than 4)",                                            \
+     .lo = 1, .hi = 14, .tag = (tag_)}
+
 /* A btf_warning_fn printing "btfcar CMD: warning: ..." (user: the cli_ctx). */
 void cli_warning(void *user, const char *message);
 /* The CAR parameters of one subspace, as text. */

@@ -6,43 +6,22 @@
 #include <time.h>
 
 
-static void help(void)
-{
-    printf("usage: btfcar analyse DATASET -o MODEL.btfcar [--subspaces K|auto] [--levels L|auto]\n"
-           "                      [--neighbourhood SPEC|auto] [--seed S] [--no-range]\n"
-           "                      [--range-size N] [--bins B] [--restarts R] [--threads T]\n"
-           "       btfcar analyse DATASET -o OUTDIR --stage segment [options]\n\n"
-           "Analyses a BTF dataset (paper section II) into one model file:\n"
-           "  1. segment  k-means on CIE Lab cumulative histograms of the (view, light)\n"
-           "              images gives K subspace images and the index table;\n"
-           "  2. range    robust photometric stereo on the view closest to the normal\n"
-           "              gives the range map, kept as a small tile (--range-size, 64);\n"
-           "  3. model    each subspace image: spectral PCA, Gaussian-Laplacian pyramid,\n"
-           "              one 2D CAR model per band and level (docs/model.md).\n"
-           "With --stage segment it stops after stage 1 and writes to the folder OUT:\n"
-           "index.png (x = view, y = light, one colour per subspace), index.tsv,\n"
-           "subspaces.tsv, and each subspace image as subspace_NN.exr + .png preview;\n"
-           "the options of the later stages (--levels, --neighbourhood, --max-neighbours,\n"
-           "--no-range, --range-size) are then a usage error.\n\n"
-           "  --stage segment    stop after the segmentation\n"
-           "  --levels L|auto    pyramid levels (auto: from size and correlation length, <= 3)\n"
-           "  --neighbourhood SPEC|auto  causal offsets row:col,...; auto: Bayesian choice\n"
-           "  --max-neighbours N   auto: the largest candidate considered, 1..14 (default 14;\n"
-           "                       the paper's models have fewer than 4)\n"
-           "  --no-range         leave the range map out of the model\n"
-           "  --range-size N     longer side of the range tile kept in the model (default\n"
-           "                     64, at most the image's); the shorter side follows the\n"
-           "                     image's aspect ratio at the same scale\n"
-           "  --subspaces K|auto number of subspace images, 1..255; auto (default) takes\n"
-           "                     the smallest K whose k-means distortion is at most 10%% of\n"
-           "                     the K = 1 distortion, at most 20 (docs/segmentation.md)\n"
-           "  --bins B           histogram bins per Lab channel (default 32)\n"
-           "  --seed S           k-means seed (default 1); same seed, same result\n"
-           "  --restarts R       k-means restarts, the best kept (default 5)\n"
-           "  --threads T        threads decoding images and solving photometric stereo\n"
-           "                     (default: all CPUs)\n"
-           "  --quiet            no progress bar, no report\n");
-}
+static const char ABOUT[] =
+    "Analyses a BTF dataset (paper section II) into one model file:\n"
+    "  1. segment  k-means on CIE Lab cumulative histograms of the (view, light)\n"
+    "              images gives K subspace images and the index table;\n"
+    "  2. range    robust photometric stereo on the view closest to the normal\n"
+    "              gives the range map, kept as a small tile (--range-size);\n"
+    "  3. model    each subspace image: spectral PCA, Gaussian-Laplacian pyramid,\n"
+    "              one 2D CAR model per band and level (docs/model.md).\n"
+    "With --stage segment it stops after stage 1 and writes to the folder OUT:\n"
+    "index.png (x = view, y = light, one colour per subspace), index.tsv,\n"
+    "subspaces.tsv, and each subspace image as subspace_NN.exr + .png preview;\n"
+    "the options of the later stages (--levels, --neighbourhood, --max-neighbours,\n"
+    "--no-range, --range-size) are then a usage error.\n";
+
+/* Options only the stages after the segmentation use. */
+enum { TAG_LATER = 1 };
 
 static double now(void)
 {
@@ -134,8 +113,7 @@ static int write_subspace_images(const btf_segmentation *s, const btf_dataset *d
 }
 
 /* The whole analysis into a model file, with a report. */
-static int analyse_all(cli_ctx *c, const char *dataset, const char *out, const btf_segment_opts *so,
-                       const btf_fit_opts *fo, int no_range, int range_size)
+static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_analyse_opts ao)
 {
     btf_error err = {0};
     btf_dataset_opts dopts = {.progress = cli_progress_fn(c)};
@@ -143,12 +121,11 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, const b
     double t0 = now();
     if (btf_dataset_open(dataset, &dopts, &ds, &err) != 0)
         return cli_lib_error(c, &err);
-    btf_analyse_opts ao = {.segment = *so, .fit = *fo, .no_range = no_range,
-                           .range_size = range_size, .progress = cli_progress_fn(c)};
+    ao.progress = cli_progress_fn(c);
     ao.fit.car.warn = c->quiet ? NULL : cli_warning;
     ao.fit.car.warn_user = c;
     ao.photostereo.progress = cli_progress_fn(c);
-    ao.photostereo.threads = so->features.threads;
+    ao.photostereo.threads = ao.segment.features.threads;
     btf_analyse_report report = {{0}};
     ao.report = &report;
     btf_model m;
@@ -182,84 +159,52 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, const b
 int cmd_analyse(int argc, char **argv)
 {
     cli_ctx c = {"analyse", 0};
-    const char *dataset = NULL, *out = NULL, *stage = NULL;
-    btf_segment_opts so = {.kmeans.seed = 1};
-    btf_fit_opts fo = {0};
-    int no_range = 0, range_size = 0;
-    const char *later = NULL; /* the first option only the later stages use */
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        long n;
-        int rc;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            help();
-            return 0;
-        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
-            c.quiet = 1;
-        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-            if (!v)
-                return cli_usage_error(&c, "%s needs a path", a);
-            out = v, i++;
-        } else if (!strcmp(a, "--stage")) {
-            if (!v)
-                return cli_usage_error(&c, "--stage needs a name");
-            stage = v, i++;
-        } else if (!strcmp(a, "--subspaces")) {
-            if (!v)
-                return cli_usage_error(&c, "--subspaces needs K or auto");
-            if (!strcmp(v, "auto"))
-                so.subspaces = 0;
-            else if (cli_parse_int(v, 1, 255, &n))
-                return cli_usage_error(&c, "--subspaces needs a whole number 1..255 or auto");
-            else
-                so.subspaces = (int)n;
-            i++;
-        } else if (!strcmp(a, "--bins")) {
-            if (!v || cli_parse_int(v, 2, 4096, &n))
-                return cli_usage_error(&c, "--bins needs a whole number 2..4096");
-            so.features.bins = (int)n, i++;
-        } else if (!strcmp(a, "--seed")) {
-            if (!v || cli_parse_u64(v, &so.kmeans.seed))
-                return cli_usage_error(&c, "--seed needs a non-negative whole number");
-            i++;
-        } else if (!strcmp(a, "--restarts")) {
-            if (!v || cli_parse_int(v, 1, 1000, &n))
-                return cli_usage_error(&c, "--restarts needs a whole number 1..1000");
-            so.kmeans.restarts = (int)n, i++;
-        } else if (!strcmp(a, "--no-range")) {
-            no_range = 1;
-            later = later ? later : a;
-        } else if (!strcmp(a, "--range-size")) {
-            if (!v || cli_parse_int(v, 1, 4096, &n))
-                return cli_usage_error(&c, "--range-size needs a whole number 1..4096");
-            range_size = (int)n, i++;
-            later = later ? later : a;
-        } else if (cli_model_option(&c, argc, argv, &i, &fo, &rc)) {
-            if (rc)
-                return rc;
-            later = later ? later : a;
-        } else if (!strcmp(a, "--threads")) {
-            if (!v || cli_parse_int(v, 1, 64, &n))
-                return cli_usage_error(&c, "--threads needs a whole number 1..64");
-            so.features.threads = (int)n, i++;
-        } else if (a[0] == '-' && a[1]) {
-            return cli_usage_error(&c, "unknown option '%s'", a);
-        } else if (!dataset) {
-            dataset = a;
-        } else {
-            return cli_usage_error(&c, "unexpected argument '%s'", a);
-        }
-    }
-    if (!dataset)
-        return cli_usage_error(&c, "DATASET is required");
-    if (!out)
-        return cli_usage_error(&c, "-o OUT is required");
-    if (!stage)
-        return analyse_all(&c, dataset, out, &so, &fo, no_range, range_size);
-    if (strcmp(stage, "segment") != 0)
-        return cli_usage_error(&c, "unknown stage '%s' (available: segment)", stage);
+    static const char *const stages[] = {"segment", NULL};
+    const char *out = NULL;
+    int stage = -1;
+    btf_analyse_opts ao = btf_analyse_defaults();
+    ao.segment.kmeans.seed = 1; /* the command's seed; the library's default is 0 */
+    btf_segment_opts *so = &ao.segment;
+    cli_opt opts[] = {
+        {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
+         .meta = "OUT", .help = "the model file to write (a folder with --stage segment)",
+         .required = 1},
+        {.name = "--stage", .kind = CLI_CHOICE, .dest = &stage, .meta = "STAGE",
+         .help = "stop after this stage", .choices = stages},
+        {.name = "--subspaces", .kind = CLI_INT, .dest = &so->subspaces, .meta = "K|auto",
+         .help = "number of subspace images; auto takes the smallest K whose k-means\n"
+                 "distortion is at most 10% of the K = 1 distortion, at most 20\n"
+                 "(docs/segmentation.md)",
+         .lo = 1, .hi = 255, .word = "auto", .word_value = 0},
+        {.name = "--bins", .kind = CLI_INT, .dest = &so->features.bins, .meta = "B",
+         .help = "histogram bins per Lab channel", .lo = 2, .hi = 4096},
+        {.name = "--seed", .kind = CLI_U64, .dest = &so->kmeans.seed, .meta = "S",
+         .help = "k-means seed; same seed, same result"},
+        {.name = "--restarts", .kind = CLI_INT, .dest = &so->kmeans.restarts, .meta = "R",
+         .help = "k-means restarts, the best kept", .lo = 1, .hi = 1000},
+        {.name = "--threads", .kind = CLI_INT, .dest = &so->features.threads, .meta = "T",
+         .help = "threads decoding images and solving photometric stereo", .lo = 1,
+         .hi = 64, .zero_means = "all CPUs"},
+        CLI_MODEL_OPTIONS(&ao.fit, TAG_LATER),
+        {.name = "--no-range", .kind = CLI_FLAG, .dest = &ao.no_range,
+         .help = "leave the range map out of the model", .tag = TAG_LATER},
+        {.name = "--range-size", .kind = CLI_INT, .dest = &ao.range_size, .meta = "N",
+         .help = "longer side of the range tile kept in the model (at most the\n"
+                 "image's); the shorter side follows the image's aspect ratio",
+         .lo = 1, .hi = 4096, .tag = TAG_LATER},
+        {0}};
+    cli_spec spec = {.cmd = "analyse", .args = "DATASET",
+                     .alt_usage = "       btfcar analyse DATASET -o OUTDIR --stage segment "
+                                  "[options]",
+                     .about = ABOUT, .min_args = 1, .max_args = 1, .opts = opts};
+    const char *dataset;
+    int nargs, prc = cli_parse(&c, &spec, argc, argv, &dataset, &nargs);
+    if (prc >= 0)
+        return prc;
+    if (stage < 0)
+        return analyse_all(&c, dataset, out, ao);
     /* Ignoring a model option silently would let a user believe it acted. */
+    const char *later = cli_first_seen(&spec, TAG_LATER);
     if (later)
         return cli_usage_error(&c, "%s is not used by --stage segment", later);
 
@@ -269,10 +214,10 @@ int cmd_analyse(int argc, char **argv)
     double t0 = now();
     if (btf_dataset_open(dataset, &dopts, &ds, &err) != 0)
         return cli_lib_error(&c, &err);
-    so.features.progress = cli_progress_fn(&c);
+    so->features.progress = cli_progress_fn(&c);
     btf_segmentation seg;
     double t1 = now();
-    if (btf_segment(ds, &so, &seg, &err) != 0) {
+    if (btf_segment(ds, so, &seg, &err) != 0) {
         btf_dataset_close(ds);
         return cli_lib_error(&c, &err);
     }

@@ -11,28 +11,18 @@
 #include <string.h>
 #include <sys/stat.h>
 
-static void help(void)
-{
-    printf("usage: btfcar info [--json] [--verify] [--quiet] DATASET|MODEL\n"
-           "       btfcar info --devices\n\n"
-           "Describes a BTF dataset or a model file (MODEL.btfcar, recognised by its\n"
-           "signature).\n\n"
-           "A dataset: its layout (UBO2003, UTIA or a manifest .tsv), the number of\n"
-           "images, views and lights, the image size, the direction sets and the bytes on\n"
-           "disk. Every image's header and structure is checked (a missing or duplicated\n"
-           "(light, view) pair, mixed sizes or a truncated file is an error).\n\n"
-           "A model: its direction sets, the index table, every subspace (representative\n"
-           "(view, light) pair, analysed size, mean colour, spectral basis, pyramid levels,\n"
-           "and per band and level the CAR neighbourhood as row:col offsets, gamma, sigma\n"
-           "and mean), the range map and the file size. The whole file is checked (CRC-32\n"
-           "and every field) before anything is printed.\n\n"
-           "  --json     print one JSON document instead (schema: docs/model-format.md)\n"
-           "  --verify   dataset: also decode every image (catches corrupt data, NaN/Inf\n"
-           "             in EXR); a model is always verified in full\n"
-           "  --quiet    no progress bar\n"
-           "  --devices  list the Vulkan devices GPU synthesis can use: index (for\n"
-           "             BTF_VK_DEVICE), type, Vulkan version, largest storage buffer, name\n");
-}
+static const char ABOUT[] =
+    "Describes a BTF dataset or a model file (MODEL.btfcar, recognised by its\n"
+    "signature), or with --devices the Vulkan devices.\n\n"
+    "A dataset: its layout (UBO2003, UTIA or a manifest .tsv), the number of\n"
+    "images, views and lights, the image size, the direction sets and the bytes on\n"
+    "disk. Every image's header and structure is checked (a missing or duplicated\n"
+    "(light, view) pair, mixed sizes or a truncated file is an error).\n\n"
+    "A model: its direction sets, the index table, every subspace (representative\n"
+    "(view, light) pair, analysed size, mean colour, spectral basis, pyramid levels,\n"
+    "and per band and level the CAR neighbourhood as row:col offsets, gamma, sigma\n"
+    "and mean), the range map and the file size. The whole file is checked (CRC-32\n"
+    "and every field) before anything is printed.\n";
 
 /* --------------------------------------------------------------- shared */
 
@@ -395,19 +385,27 @@ static int info_model(cli_ctx *c, const model_file *mf, int json)
 
 /* ------------------------------------------------------------ devices */
 
-/* --devices: one line per Vulkan device; exit 1 when there is none. */
-static int info_devices(cli_ctx *c)
+static void devices_json(const btf_vk_device_info *list, int n)
 {
-    btf_error err = {0};
-    btf_vk_device_info *list;
-    int n;
-    if (btf_vk_list_devices(&list, &n, &err) != 0)
-        return cli_lib_error(c, &err);
-    if (n == 0) {
-        free(list);
-        return cli_error(c, "no Vulkan device found (install mesa-vulkan-drivers for the CPU "
-                            "driver lavapipe)");
+    printf("{\"devices\": [");
+    for (int i = 0; i < n; i++) {
+        char v[32];
+        btf_vk_version_text(list[i].api_version, v, sizeof v);
+        printf("%s\n  {\"index\": %d, \"type\": ", i ? "," : "", list[i].index);
+        json_string(stdout, btf_vk_type_name(list[i].type));
+        printf(", \"vulkan\": ");
+        json_string(stdout, v);
+        printf(", \"max_storage_buffer_bytes\": %llu, \"usable\": %s, \"name\": ",
+               (unsigned long long)list[i].max_storage_buffer_range,
+               list[i].usable ? "true" : "false");
+        json_string(stdout, list[i].name);
+        printf("}");
     }
+    printf("%s]}\n", n ? "\n" : "");
+}
+
+static void devices_text(const btf_vk_device_info *list, int n)
+{
     printf("%-5s  %-14s  %-7s  %-26s  %s\n", "index", "type", "Vulkan",
            "max storage buffer (bytes)", "name");
     for (int i = 0; i < n; i++) {
@@ -418,6 +416,26 @@ static int info_devices(cli_ctx *c)
                (unsigned long long)list[i].max_storage_buffer_range, list[i].name,
                list[i].usable ? "" : " (unusable: needs Vulkan 1.1 and a compute queue)");
     }
+}
+
+/* --devices: one line per Vulkan device, or one JSON document. Without any
+ * device the text form is an error (exit 1); the JSON form lists none. */
+static int info_devices(cli_ctx *c, int json)
+{
+    btf_error err = {0};
+    btf_vk_device_info *list;
+    int n;
+    if (btf_vk_list_devices(&list, &n, &err) != 0)
+        return cli_lib_error(c, &err);
+    if (n == 0 && !json) {
+        free(list);
+        return cli_error(c, "no Vulkan device found (install mesa-vulkan-drivers for the CPU "
+                            "driver lavapipe)");
+    }
+    if (json)
+        devices_json(list, n);
+    else
+        devices_text(list, n);
     free(list);
     if (fflush(stdout) != 0)
         return cli_error(c, "cannot write the output");
@@ -429,30 +447,26 @@ int cmd_info(int argc, char **argv)
     cli_ctx c = {"info", 0};
     const char *path = NULL;
     int verify = 0, json = 0, devices = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            help();
-            return 0;
-        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
-            c.quiet = 1;
-        } else if (!strcmp(a, "--verify")) {
-            verify = 1;
-        } else if (!strcmp(a, "--json")) {
-            json = 1;
-        } else if (!strcmp(a, "--devices")) {
-            devices = 1;
-        } else if (a[0] == '-' && a[1]) {
-            return cli_usage_error(&c, "unknown option '%s'", a);
-        } else if (!path) {
-            path = a;
-        } else {
-            return cli_usage_error(&c, "unexpected argument '%s'", a);
-        }
-    }
+    cli_opt opts[] = {
+        {.name = "--json", .kind = CLI_FLAG, .dest = &json,
+         .help = "print one JSON document instead (schema: docs/model-format.md)"},
+        {.name = "--verify", .kind = CLI_FLAG, .dest = &verify,
+         .help = "dataset: also decode every image (catches corrupt data, NaN/Inf\n"
+                 "in EXR); a model is always verified in full"},
+        {.name = "--devices", .kind = CLI_FLAG, .dest = &devices,
+         .help = "list the Vulkan devices GPU synthesis can use: index (for\n"
+                 "--device and BTF_VK_DEVICE), type, Vulkan version, largest storage\n"
+                 "buffer, name"},
+        {0}};
+    cli_spec spec = {.cmd = "info", .args = "DATASET|MODEL",
+                     .alt_usage = "       btfcar info --devices [--json]", .about = ABOUT,
+                     .min_args = 0, .max_args = 1, .opts = opts};
+    int nargs, prc = cli_parse(&c, &spec, argc, argv, &path, &nargs);
+    if (prc >= 0)
+        return prc;
     if (devices)
         return path ? cli_usage_error(&c, "--devices takes no DATASET or MODEL")
-                    : info_devices(&c);
+                    : info_devices(&c, json);
     if (!path)
         return cli_usage_error(&c, "DATASET or MODEL is required");
     model_file mf;

@@ -10,67 +10,49 @@
 #include <string.h>
 #include <time.h>
 
-static void help(void)
-{
-    printf("usage: btfcar photostereo DATASET -o OUTDIR [options]\n"
-           "       btfcar photostereo --manifest FILE -o OUTDIR [options]\n\n"
-           "Robust Lambertian photometric stereo (Haindl & Filip 2007, section II.B): the\n"
-           "normal and albedo of every pixel from images of one view under known lights,\n"
-           "and the range map integrated from the normals. A BTF dataset uses the images\n"
-           "of its view closest to theta_v = 0 under all its lights. A manifest is a TSV\n"
-           "file whose header line names the columns: path (relative to the manifest's\n"
-           "folder, or absolute), the light as theta_l phi_l (degrees) or as a vector\n"
-           "lx ly lz (x right, y up in the image, z towards the camera), and optionally\n"
-           "r g b, the light's intensity (divided out). Normals are written in the frame\n"
-           "of the light directions. PNG (8/16-bit), JPEG and EXR of any size.\n\n"
-           "Writes into OUTDIR (created if missing): normals.exr (x, y, z in R, G, B),\n"
-           "albedo.exr, height.exr (pixel units, zero mean) and the previews normals.png,\n"
-           "albedo.png, height.png (shaded relief).\n\n"
-           "  -o, --output OUTDIR    the folder for the results (required)\n"
-           "  --manifest FILE        read the images and lights from a manifest\n"
-           "  --mask IMAGE           work on the mask's non-zero pixels only (zero elsewhere)\n"
-           "  --integrate poisson|fc least squares with a free boundary (default), or\n"
-           "                         Frankot-Chellappa (periodic surfaces, e.g. generated tiles)\n"
-           "  --linear               8-bit PNG/JPEG values are linear (default: sRGB)\n"
-           "  --trim LOW,HIGH        fractions of the darkest / brightest samples left out\n"
-           "                         of the first fit (default 0,0.1)\n"
-           "  --dark F               samples below F x the pixel's reference level are\n"
-           "                         shadows (default 0.1; 0: no such rule)\n"
-           "  --outlier K            samples K robust standard deviations below the fit\n"
-           "                         (2K above) are outliers (default 2)\n"
-           "  --specular-cone DEG    highlight cone around the mirror direction (default 20;\n"
-           "                         0: no such rule)\n"
-           "  --saturation S         raw values >= S are clipped (default 0.99; 0: none, HDR)\n"
-           "  --plain                plain least squares, no robust rule (for comparison)\n"
-           "  --threads T            worker threads (default: all CPUs)\n"
-           "  --quiet                no progress bar, no summary\n");
-}
+static const char ABOUT[] =
+    "Robust Lambertian photometric stereo (Haindl & Filip 2007, section II.B): the\n"
+    "normal and albedo of every pixel from images of one view under known lights,\n"
+    "and the range map integrated from the normals. A BTF dataset uses the images\n"
+    "of its view closest to theta_v = 0 under all its lights. A manifest is a TSV\n"
+    "file whose header line names the columns: path (relative to the manifest's\n"
+    "folder, or absolute), the light as theta_l phi_l (degrees) or as a vector\n"
+    "lx ly lz (x right, y up in the image, z towards the camera), and optionally\n"
+    "r g b, the light's intensity (divided out). Normals are written in the frame\n"
+    "of the light directions. PNG (8/16-bit), JPEG and EXR of any size.\n\n"
+    "Writes into OUTDIR (created if missing): normals.exr (x, y, z in R, G, B),\n"
+    "albedo.exr, height.exr (pixel units, zero mean) and the previews normals.png,\n"
+    "albedo.png, height.png (shaded relief).\n";
 
-/* The whole string must be a finite number in [lo, hi]. */
-static int parse_double(const char *s, double lo, double hi, double *out)
+/* "LOW,HIGH" into the options' trim fractions. */
+static int parse_trim(const char *s, void *dest, char *why, size_t n)
 {
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    if (end == s || *end || errno || !isfinite(v) || v < lo || v > hi)
-        return -1;
-    *out = v;
-    return 0;
-}
-
-/* "LOW,HIGH" */
-static int parse_trim(const char *s, double *lo, double *hi)
-{
-    char buf[64];
+    btf_photostereo_opts *o = dest;
+    char buf[64], *end;
     const char *comma = strchr(s, ',');
+    double lo, hi;
+    snprintf(why, n, "LOW,HIGH fractions in [0, 1) with LOW + HIGH < 1");
     if (!comma || (size_t)(comma - s) >= sizeof buf)
         return -1;
     memcpy(buf, s, (size_t)(comma - s));
     buf[comma - s] = '\0';
-    if (parse_double(buf, 0.0, 0.99, lo) || parse_double(comma + 1, 0.0, 0.99, hi) ||
-        *lo + *hi >= 1.0)
+    errno = 0;
+    lo = strtod(buf, &end);
+    if (end == buf || *end || errno)
         return -1;
+    hi = strtod(comma + 1, &end);
+    if (end == comma + 1 || *end || errno || !(lo >= 0.0 && lo <= 0.99) ||
+        !(hi >= 0.0 && hi <= 0.99) || lo + hi >= 1.0)
+        return -1;
+    o->trim_low = lo;
+    o->trim_high = hi;
     return 0;
+}
+
+static void show_trim(const void *dest, char *buf, size_t n)
+{
+    const btf_photostereo_opts *o = dest;
+    snprintf(buf, n, "%g,%g", o->trim_low, o->trim_high > 0.0 ? o->trim_high : 0.0);
 }
 
 typedef struct ps_args {
@@ -78,91 +60,70 @@ typedef struct ps_args {
     btf_photostereo_opts o;
 } ps_args;
 
-/* Options that take a value; returns 0 when handled, 2 on a usage error,
- * -1 when `a` is not one of them. */
-static int value_option(const cli_ctx *c, ps_args *p, const char *a, const char *v, int *i)
+/* On the command line 0 turns a rule off; the library says so with < 0
+ * (its 0 means the default). */
+static void zero_means_off(double *v)
 {
-    double x, y;
-    long n;
-    btf_photostereo_opts *o = &p->o;
-    if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-        if (!v)
-            return cli_usage_error(c, "%s needs a folder", a);
-        p->outdir = v;
-    } else if (!strcmp(a, "--manifest")) {
-        if (!v)
-            return cli_usage_error(c, "--manifest needs a file");
-        p->manifest = v;
-    } else if (!strcmp(a, "--mask")) {
-        if (!v)
-            return cli_usage_error(c, "--mask needs an image");
-        p->mask = v;
-    } else if (!strcmp(a, "--integrate")) {
-        if (!v || (strcmp(v, "poisson") && strcmp(v, "fc")))
-            return cli_usage_error(c, "--integrate needs poisson or fc");
-        o->integrate.method = !strcmp(v, "fc") ? BTF_INTEGRATE_FC : BTF_INTEGRATE_POISSON;
-    } else if (!strcmp(a, "--trim")) {
-        if (!v || parse_trim(v, &x, &y))
-            return cli_usage_error(c, "--trim needs LOW,HIGH fractions in [0, 1) with LOW + HIGH < 1");
-        o->trim_low = x;
-        o->trim_high = y > 0.0 ? y : -1.0; /* the library's 0 means its default */
-    } else if (!strcmp(a, "--dark")) {
-        if (!v || parse_double(v, 0.0, 0.99, &x))
-            return cli_usage_error(c, "--dark needs a fraction in [0, 1)");
-        o->dark = x > 0.0 ? x : -1.0;
-    } else if (!strcmp(a, "--outlier")) {
-        if (!v || parse_double(v, 0.1, 1e6, &x))
-            return cli_usage_error(c, "--outlier needs a number >= 0.1");
-        o->outlier = x;
-    } else if (!strcmp(a, "--specular-cone")) {
-        if (!v || parse_double(v, 0.0, 89.0, &x))
-            return cli_usage_error(c, "--specular-cone needs degrees in [0, 89]");
-        o->specular_cone = x > 0.0 ? x : -1.0;
-    } else if (!strcmp(a, "--saturation")) {
-        if (!v || parse_double(v, 0.0, 1e30, &x))
-            return cli_usage_error(c, "--saturation needs a number >= 0");
-        o->saturation = x > 0.0 ? x : -1.0;
-    } else if (!strcmp(a, "--threads")) {
-        if (!v || cli_parse_int(v, 1, 64, &n))
-            return cli_usage_error(c, "--threads needs a whole number 1..64");
-        o->threads = (int)n;
-    } else {
-        return -1;
-    }
-    (*i)++;
-    return 0;
+    if (*v == 0.0)
+        *v = -1.0;
 }
 
 static int parse_args(cli_ctx *c, int argc, char **argv, ps_args *p)
 {
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            help();
-            return -1;
-        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
-            c->quiet = 1;
-        } else if (!strcmp(a, "--linear")) {
-            p->o.read.linear_8bit = 1;
-        } else if (!strcmp(a, "--plain")) {
-            p->o.plain = 1;
-        } else {
-            int rc = value_option(c, p, a, v, &i);
-            if (rc > 0)
-                return rc;
-            if (rc == 0)
-                continue;
-            if (a[0] == '-' && a[1])
-                return cli_usage_error(c, "unknown option '%s'", a);
-            if (p->dataset)
-                return cli_usage_error(c, "unexpected argument '%s'", a);
-            p->dataset = a;
-        }
-    }
-    if (!p->outdir)
-        return cli_usage_error(c, "-o OUTDIR is required");
+    static const char *const methods[] = {"poisson", "fc", NULL};
+    static const int method_values[] = {BTF_INTEGRATE_POISSON, BTF_INTEGRATE_FC};
+    btf_photostereo_opts *o = &p->o;
+    *o = btf_photostereo_defaults();
+    cli_opt opts[] = {
+        {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &p->outdir,
+         .meta = "OUTDIR", .help = "the folder for the results", .required = 1},
+        {.name = "--manifest", .kind = CLI_STRING, .dest = &p->manifest, .meta = "FILE",
+         .help = "read the images and lights from a manifest"},
+        {.name = "--mask", .kind = CLI_STRING, .dest = &p->mask, .meta = "IMAGE",
+         .help = "work on the mask's non-zero pixels only (zero elsewhere)"},
+        {.name = "--integrate", .kind = CLI_CHOICE, .dest = &o->integrate.method,
+         .meta = "poisson|fc",
+         .help = "least squares with a free boundary, or Frankot-Chellappa\n"
+                 "(periodic surfaces, e.g. generated tiles)",
+         .choices = methods, .values = method_values},
+        {.name = "--linear", .kind = CLI_FLAG, .dest = &o->read.linear_8bit,
+         .help = "8-bit PNG/JPEG values are linear (default: sRGB)"},
+        {.name = "--trim", .kind = CLI_CUSTOM, .dest = o, .meta = "LOW,HIGH",
+         .help = "fractions of the darkest / brightest samples left out of the\n"
+                 "first fit",
+         .parse = parse_trim, .show = show_trim},
+        {.name = "--dark", .kind = CLI_DOUBLE, .dest = &o->dark, .meta = "F",
+         .help = "samples below F x the pixel's reference level are shadows\n"
+                 "(0: no such rule)",
+         .lo = 0.0, .hi = 0.99},
+        {.name = "--outlier", .kind = CLI_DOUBLE, .dest = &o->outlier, .meta = "K",
+         .help = "samples K robust standard deviations below the fit (2K above)\n"
+                 "are outliers",
+         .lo = 0.1, .hi = 1e6},
+        {.name = "--specular-cone", .kind = CLI_DOUBLE, .dest = &o->specular_cone,
+         .meta = "DEG", .help = "highlight cone around the mirror direction (0: no such rule)",
+         .lo = 0.0, .hi = 89.0},
+        {.name = "--saturation", .kind = CLI_DOUBLE, .dest = &o->saturation, .meta = "S",
+         .help = "raw values >= S are clipped (0: no such rule, HDR)", .lo = 0.0, .hi = 1e30},
+        {.name = "--plain", .kind = CLI_FLAG, .dest = &o->plain,
+         .help = "plain least squares, no robust rule (for comparison)"},
+        {.name = "--threads", .kind = CLI_INT, .dest = &o->threads, .meta = "T",
+         .help = "worker threads", .lo = 1, .hi = 64, .zero_means = "all CPUs"},
+        {0}};
+    cli_spec spec = {.cmd = "photostereo", .args = "DATASET",
+                     .alt_usage = "       btfcar photostereo --manifest FILE -o OUTDIR [options]",
+                     .about = ABOUT, .min_args = 0, .max_args = 1, .opts = opts};
+    int nargs, rc = cli_parse(c, &spec, argc, argv, &p->dataset, &nargs);
+    if (rc >= 0)
+        return rc == 0 ? -1 : rc;
+    if (nargs == 0)
+        p->dataset = NULL;
     if (!p->dataset == !p->manifest)
         return cli_usage_error(c, "give either DATASET or --manifest FILE");
+    zero_means_off(&o->dark);
+    zero_means_off(&o->specular_cone);
+    zero_means_off(&o->saturation);
+    zero_means_off(&o->trim_high);
     return 0;
 }
 

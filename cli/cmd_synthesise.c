@@ -6,25 +6,14 @@
 #include <time.h>
 
 
-static void help(void)
-{
-    printf("usage: btfcar synthesise MODEL --size WxH -o OUTDIR [--subspace LIST|all]\n"
-           "                        [--seed S] [--backend cpu] [--preview] [--quiet]\n\n"
-           "Generates subspace images of the model at any size, seamless and stationary,\n"
-           "streaming rows to OUTDIR/subspace_NN.exr (linear float RGB) as they are\n"
-           "produced: memory grows with the width, not the height (docs/synthesis.md).\n\n"
-           "  --size WxH        output size in pixels, each side 1..65536 (EXR files)\n"
-           "  --subspace LIST   comma-separated subspace numbers, or all (default)\n"
-           "  --seed S          noise seed (default 1); the same seed gives the same bytes\n"
-           "  --backend B       cpu: the CPU reference; gpu: Vulkan compute (any device,\n"
-           "                    the CPU driver lavapipe included); auto (default): a real\n"
-           "                    GPU if present, else the CPU (lavapipe is slower than the\n"
-           "                    CPU path: measured, README). Same bytes on every backend.\n"
-           "  --device N        Vulkan device index (btfcar info --devices)\n"
-           "  --preview         also write subspace_NN.png (8-bit sRGB; up to 8192x8192)\n"
-           "  --half            write half-float EXR (default: float)\n"
-           "  --quiet           print nothing but errors\n");
-}
+static const char ABOUT[] =
+    "Generates subspace images of the model at any size, seamless and stationary\n"
+    "(paper section II.C), streaming rows to OUTDIR/subspace_NN.exr (linear RGB)\n"
+    "as they are produced: memory grows with the width, not the height\n"
+    "(docs/synthesis.md). The same model and seed give the same pixels on every\n"
+    "backend. Environment: BTF_VK_DEVICE=N names the Vulkan device when --device\n"
+    "is not given; BTF_SYNTH_WAVE=0 and BTF_NOISE_PORTABLE=1 select the CPU's\n"
+    "row-by-row field generator and portable noise loop (same pixels, slower).\n";
 
 typedef struct sink {
     btf_exr_writer *exr;
@@ -119,10 +108,9 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick, 
     return rc;
 }
 
-/* Opens the Vulkan device the backend asks for; NULL with a note (auto) or
+/* Opens the Vulkan device the backend asks for; NULL (auto falls back to the CPU) or
  * an error (gpu) when there is none. */
-static btf_gpu *open_gpu(const cli_ctx *c, const char *backend, int device, uint64_t image_bytes,
-                        btf_error *err)
+static btf_gpu *open_gpu(const char *backend, int device, uint64_t image_bytes, btf_error *err)
 {
     if (!strcmp(backend, "cpu"))
         return NULL;
@@ -132,20 +120,14 @@ static btf_gpu *open_gpu(const cli_ctx *c, const char *backend, int device, uint
         cli_set_error(err, BTF_E_UNSUPPORTED, "the GPU backend holds whole images in memory and one "
                  "image needs %.1f GiB, more than its %.0f GiB budget; --backend cpu streams",
                  image_bytes / 1073741824.0, GPU_IMAGE_BUDGET / 1073741824.0);
-        if (!explicit_gpu && !c->quiet)
-            fprintf(stderr, "btfcar synthesise: note: images this large are streamed on the CPU\n");
         return NULL;
     }
     btf_gpu_opts o = {.use_device = device >= 0, .device = device < 0 ? 0 : device,
                       .allow_cpu = explicit_gpu};
     btf_gpu *g = NULL;
-    if (btf_gpu_open(&o, &g, err) != 0) {
-        if (!explicit_gpu && !c->quiet)
-            fprintf(stderr, "btfcar synthesise: note: no GPU found; using the CPU (--backend gpu "
-                            "runs the Vulkan path on any device, the CPU driver lavapipe "
-                            "included)\n");
+    /* auto without a GPU is no failure: the CPU runs and the summary says so. */
+    if (btf_gpu_open(&o, &g, err) != 0)
         return NULL;
-    }
     return g;
 }
 
@@ -179,60 +161,37 @@ static int synth_one(const cli_ctx *c, const btf_model *m, int k, int w, int h, 
 int cmd_synthesise(int argc, char **argv)
 {
     cli_ctx c = {"synthesise", 0};
-    const char *model = NULL, *outdir = NULL, *list = "all", *backend = "auto";
-    int w = 0, h = 0, preview = 0, half = 0, device = -1;
+    static const char *const backends[] = {"cpu", "gpu", "auto", NULL};
+    const char *model = NULL, *outdir = NULL, *list = "all";
+    int size[2] = {0, 0}, preview = 0, half = 0, device = -1, backend_index = 2;
     uint64_t seed = 1;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            help();
-            return 0;
-        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
-            c.quiet = 1;
-        } else if (!strcmp(a, "--preview")) {
-            preview = 1;
-        } else if (!strcmp(a, "--half")) {
-            half = 1;
-        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-            if (!v)
-                return cli_usage_error(&c, "-o needs a folder");
-            outdir = v, i++;
-        } else if (!strcmp(a, "--size")) {
-            if (!v || cli_parse_size(v, &w, &h) || w > 65536 || h > 65536)
-                return cli_usage_error(&c, "--size needs WxH, each 1..65536");
-            i++;
-        } else if (!strcmp(a, "--subspace")) {
-            if (!v)
-                return cli_usage_error(&c, "--subspace needs a list or all");
-            list = v, i++;
-        } else if (!strcmp(a, "--seed")) {
-            if (!v || cli_parse_u64(v, &seed))
-                return cli_usage_error(&c, "--seed needs a non-negative whole number");
-            i++;
-        } else if (!strcmp(a, "--backend")) {
-            if (!v || (strcmp(v, "cpu") && strcmp(v, "gpu") && strcmp(v, "auto")))
-                return cli_usage_error(&c, "--backend needs cpu, gpu or auto");
-            backend = v, i++;
-        } else if (!strcmp(a, "--device")) {
-            long n;
-            if (!v || cli_parse_int(v, 0, 255, &n))
-                return cli_usage_error(&c, "--device needs an index 0..255");
-            device = (int)n, i++;
-        } else if (a[0] == '-' && a[1]) {
-            return cli_usage_error(&c, "unknown option '%s'", a);
-        } else if (!model) {
-            model = a;
-        } else {
-            return cli_usage_error(&c, "unexpected argument '%s'", a);
-        }
-    }
-    if (!model)
-        return cli_usage_error(&c, "MODEL is required");
-    if (!w)
-        return cli_usage_error(&c, "--size WxH is required");
-    if (!outdir)
-        return cli_usage_error(&c, "-o OUTDIR is required");
+    cli_opt opts[] = {
+        {.name = "--size", .kind = CLI_SIZE, .dest = size, .meta = "WxH",
+         .help = "output size in pixels", .lo = 1, .hi = 65536, .required = 1},
+        {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &outdir,
+         .meta = "OUTDIR", .help = "the folder for subspace_NN.exr", .required = 1},
+        {.name = "--subspace", .kind = CLI_STRING, .dest = &list, .meta = "LIST",
+         .help = "comma-separated subspace numbers, or all"},
+        {.name = "--seed", .kind = CLI_U64, .dest = &seed, .meta = "S",
+         .help = "noise seed; the same seed gives the same pixels"},
+        {.name = "--backend", .kind = CLI_CHOICE, .dest = &backend_index, .meta = "cpu|gpu|auto",
+         .help = "cpu: the CPU reference; gpu: Vulkan compute on any device, the CPU\n"
+                 "driver lavapipe included; auto: a real GPU if present, else the CPU",
+         .choices = backends},
+        {.name = "--device", .kind = CLI_INT, .dest = &device, .meta = "N",
+         .help = "Vulkan device index (btfcar info --devices)", .lo = 0, .hi = 255},
+        {.name = "--preview", .kind = CLI_FLAG, .dest = &preview,
+         .help = "also write subspace_NN.png (8-bit sRGB; up to 8192x8192)"},
+        {.name = "--half", .kind = CLI_FLAG, .dest = &half,
+         .help = "write half-float EXR (default: float)"},
+        {0}};
+    cli_spec spec = {.cmd = "synthesise", .args = "MODEL", .about = ABOUT, .min_args = 1,
+                     .max_args = 1, .opts = opts};
+    int nargs, prc = cli_parse(&c, &spec, argc, argv, &model, &nargs);
+    if (prc >= 0)
+        return prc;
+    const char *backend = backends[backend_index];
+    int w = size[0], h = size[1];
     if (device >= 0 && !strcmp(backend, "cpu"))
         return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
     if (preview && (double)w * h > 8192.0 * 8192.0)
@@ -253,7 +212,7 @@ int cmd_synthesise(int argc, char **argv)
     /* The device first: a refusal leaves no output folder behind. */
     btf_gpu *gpu = NULL;
     if (rc == 0) {
-        gpu = open_gpu(&c, backend, device, (uint64_t)w * h * 12, &err);
+        gpu = open_gpu(backend, device, (uint64_t)w * h * 12, &err);
         if (!gpu && (!strcmp(backend, "gpu") || device >= 0))
             rc = 1;
         else if (!gpu)

@@ -25,7 +25,7 @@ static void usage(FILE *f)
                "Probabilistic modelling of Bidirectional Texture Functions.\n\ncommands:\n");
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         fprintf(f, "  %-12s %s\n", commands[i].name, commands[i].summary);
-    fprintf(f, "\n'btfcar COMMAND --help' describes a command; 'btfcar --version' prints the version.\n");
+    fprintf(f, "\n'btfcar COMMAND --help' describes a command; 'btfcar --version' (-V) prints the version.\n");
 }
 
 int main(int argc, char **argv)
@@ -38,7 +38,7 @@ int main(int argc, char **argv)
         usage(stdout);
         return 0;
     }
-    if (!strcmp(argv[1], "--version")) {
+    if (!strcmp(argv[1], "--version") || !strcmp(argv[1], "-V")) {
         printf("btfcar %s\n", BTF_VERSION_STRING);
         return 0;
     }

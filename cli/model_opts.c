@@ -1,49 +1,33 @@
-/* model_opts.c — the model options shared by analyse and texture-fit:
- * --levels L|auto, --neighbourhood SPEC|auto and --max-neighbours N. */
+/* model_opts.c — what analyse and texture-fit share: the --neighbourhood
+ * value (CLI_MODEL_OPTIONS in cli.h holds the rows), warnings, and the CAR
+ * parameters of a subspace as text. */
 #include "cli.h"
 
+#include <stdio.h>
 #include <string.h>
 
-int cli_model_option(const cli_ctx *c, int argc, char **argv, int *i, btf_fit_opts *fo, int *rc)
+int cli_parse_neighbourhood(const char *value, void *dest, char *why, size_t n)
 {
-    const char *a = argv[*i];
-    const char *v = *i + 1 < argc ? argv[*i + 1] : NULL;
-    *rc = 0;
-    if (!strcmp(a, "--levels")) {
-        long n;
-        if (!v)
-            return *rc = cli_usage_error(c, "--levels needs L or auto"), 1;
-        if (!strcmp(v, "auto"))
-            fo->levels = 0;
-        else if (cli_parse_int(v, 1, BTF_MAX_LEVELS, &n))
-            return *rc = cli_usage_error(c, "--levels needs 1..%d or auto", BTF_MAX_LEVELS), 1;
-        else
-            fo->levels = (int)n;
-        (*i)++;
-        return 1;
+    btf_car_fit_opts *car = dest;
+    if (!strcmp(value, "auto")) {
+        car->n_fixed = 0;
+        return 0;
     }
-    if (!strcmp(a, "--max-neighbours")) {
-        long n;
-        if (!v || cli_parse_int(v, 1, 14, &n))
-            return *rc = cli_usage_error(c, "--max-neighbours needs a whole number 1..14"), 1;
-        fo->car.max_neighbours = (int)n;
-        (*i)++;
-        return 1;
-    }
-    if (!strcmp(a, "--neighbourhood") || !strcmp(a, "--neighborhood")) {
-        if (!v)
-            return *rc = cli_usage_error(c, "--neighbourhood needs SPEC or auto"), 1;
-        if (!strcmp(v, "auto")) {
-            fo->car.n_fixed = 0;
-        } else {
-            btf_error err = {0};
-            if (btf_neighbourhood_parse(v, fo->car.fixed, &fo->car.n_fixed, &err) != 0)
-                return *rc = cli_usage_error(c, "%s", err.msg), 1;
-        }
-        (*i)++;
-        return 1;
+    btf_error err = {0};
+    if (btf_neighbourhood_parse(value, car->fixed, &car->n_fixed, &err) != 0) {
+        snprintf(why, n, "causal row:col offsets or auto (%s)", err.msg);
+        return -1;
     }
     return 0;
+}
+
+void cli_show_neighbourhood(const void *dest, char *buf, size_t n)
+{
+    const btf_car_fit_opts *car = dest;
+    if (car->n_fixed == 0)
+        snprintf(buf, n, "auto");
+    else
+        btf_neighbourhood_format(car->fixed, car->n_fixed, buf, n);
 }
 
 void cli_warning(void *user, const char *message)

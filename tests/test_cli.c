@@ -264,10 +264,83 @@ static void synthesise_request_checks(void **state)
     assert_int_not_equal(stat(tu_fmt("%s.big", out), &st), 0); /* no folder left */
 }
 
+/* What every command takes from the one option table: --name=value, "--",
+ * -V, unknown choices as usage errors, usage lines that name every option
+ * the parser knows, and --help defaults that are the library's. */
+static void option_conventions(void **state)
+{
+    (void)state;
+    int st;
+    char *out = tu_capture(tu_fmt("%s -V", tu_cli()), &st);
+    assert_int_equal(st, 0);
+    assert_non_null(strstr(out, BTF_VERSION_STRING));
+    free(out);
+    char *err = NULL;
+    /* An unknown value of an enumerated option: exit 2, the choices named. */
+    assert_int_equal(tu_run(tu_fmt("%s generate --material stone %s/x", tu_cli(), tu_dir), &err), 2);
+    assert_non_null(strstr(err, "leather"));
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s synthesise m --size 4x4 -o x --backend=tpu", tu_cli()),
+                            &err), 2);
+    assert_non_null(strstr(err, "cpu, gpu or auto"));
+    free(err);
+    /* --name=value is --name value; a flag with a value is an error. */
+    const char *ds = tu_fmt("%s/conv", tu_dir);
+    char dsdir[4096];
+    snprintf(dsdir, sizeof dsdir, "%s", ds);
+    assert_int_equal(tu_run(tu_fmt("%s generate --material=fabric --size=8 --seed=3 -q %s",
+                                   tu_cli(), dsdir), NULL), 0);
+    assert_int_equal(tu_count_files(dsdir), 6561 + 3);
+    assert_int_equal(tu_run(tu_fmt("%s info --json=yes %s", tu_cli(), dsdir), &err), 2);
+    assert_non_null(strstr(err, "takes no value"));
+    free(err);
+    /* "--" ends the options: a folder named like an option is an argument. */
+    char *cwd = getcwd(NULL, 0);
+    assert_int_equal(chdir(tu_dir), 0);
+    assert_int_equal(tu_run(tu_fmt("%s generate --material wood --size 4 -q -- --odd", tu_cli()),
+                            NULL), 0);
+    struct stat sb;
+    assert_int_equal(stat("--odd/truth/height.exr", &sb), 0);
+    assert_int_equal(chdir(cwd), 0);
+    free(cwd);
+    /* The usage line names what the parser accepts. */
+    out = tu_capture(tu_fmt("%s synthesise --help", tu_cli()), &st);
+    assert_int_equal(st, 0);
+    assert_non_null(strstr(out, "[--backend cpu|gpu|auto]"));
+    assert_non_null(strstr(out, "[--half]"));
+    assert_non_null(strstr(out, "[--device N]"));
+    free(out);
+    /* --help prints the library's defaults (btf_*_defaults). */
+    btf_generate_opts g = btf_generate_defaults();
+    out = tu_capture(tu_fmt("%s generate --help", tu_cli()), &st);
+    assert_non_null(strstr(out, tu_fmt("(default: %d)", g.size)));
+    assert_non_null(strstr(out, tu_fmt("(default: %d)", g.jpeg_quality)));
+    free(out);
+    btf_segment_opts so = btf_segment_defaults();
+    out = tu_capture(tu_fmt("%s analyse --help", tu_cli()), &st);
+    assert_non_null(strstr(out, tu_fmt("(default: %d)", so.features.bins)));
+    assert_non_null(strstr(out, tu_fmt("(default: %d)", so.kmeans.restarts)));
+    free(out);
+}
+
+/* info --devices --json is one JSON document whatever the devices. */
+static void devices_json(void **state)
+{
+    (void)state;
+    int st;
+    char *out = tu_capture(tu_fmt("%s info --devices --json", tu_cli()), &st);
+    assert_int_equal(st, 0);
+    assert_true(strncmp(out, "{\"devices\": [", 13) == 0);
+    assert_non_null(strstr(out, "]}"));
+    free(out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(help_and_version),
+        cmocka_unit_test(option_conventions),
+        cmocka_unit_test(devices_json),
         cmocka_unit_test(generate_then_info),
         cmocka_unit_test(generate_is_deterministic),
         cmocka_unit_test(generate_errors),

@@ -1,4 +1,5 @@
-// synth_field.comp -- the causal recursion of CAR random fields on the GPU.
+// synth_field.comp -- the causal recursion of CAR random fields on the GPU
+// (Haindl & Filip 2007, section II.C: each sub-band level is a CAR field).
 // One workgroup per field; the recursion
 //     Y(r, c) = sum_s gamma_s Y(r + dr_s, c + dc_s) + sigma e(r, c)
 // is parallelised as a wavefront: pixel (r, c) depends only on pixels of
@@ -6,7 +7,7 @@
 // every offset of an earlier row (a = 2 for the usual up-right neighbour), so
 // every pixel of one step is computed at once, a barrier between steps. No
 // spin-waiting between workgroups (no forward-progress guarantee). The sums,
-// noise and zero boundary are those of the CPU reference (src/synth/synth.c):
+// noise and zero boundary are those of the CPU reference (src/synth/rows.c):
 // the results are bit-identical.
 #version 450
 #extension GL_GOOGLE_include_directive : require

@@ -1,4 +1,5 @@
-// synth_task.glsl -- the task records the synthesis shaders read (std430).
+// synth_task.glsl -- the task records the synthesis shaders read (std430;
+// CAR synthesis, Haindl & Filip 2007, section II.C).
 // Their C mirror is in gpu/synth_gpu.c (gpu_task, gpu_unmix): 4-byte
 // members only, so both sides agree on the layout without padding rules.
 

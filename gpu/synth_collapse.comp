@@ -26,7 +26,7 @@ layout(push_constant) uniform Params {
 } pc;
 
 // Coarse row q of task ct, up-sampled horizontally to fine column x.
-float hup(int ct, int q, int x)
+float coarse_up(int ct, int q, int x)
 {
     uint row = tasks[ct].g_off + uint((q - tasks[ct].y0) * tasks[ct].w);
     int ci = btf_floordiv2(x) - tasks[ct].x0;
@@ -51,9 +51,10 @@ void main()
             int i = btf_floordiv2(y);
             float up;
             if ((y & 1) != 0)
-                up = btf_up_odd(hup(ct, i, x), hup(ct, i + 1, x));
+                up = btf_up_odd(coarse_up(ct, i, x), coarse_up(ct, i + 1, x));
             else
-                up = btf_up_even(hup(ct, i - 1, x), hup(ct, i, x), hup(ct, i + 1, x));
+                up = btf_up_even(coarse_up(ct, i - 1, x), coarse_up(ct, i, x),
+                                 coarse_up(ct, i + 1, x));
             v = btf_add_level(v, up);
         }
         gauss[tasks[t].g_off + p] = v;

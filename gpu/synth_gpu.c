@@ -1,8 +1,9 @@
 /*
- * synth_gpu.c — subspace synthesis on the GPU (Vulkan compute; Haindl &
- * Filip 2007, section II.C: CAR fields by their causal recursion, the
- * pyramid collapse, the inverse decorrelation), the same computation as the
- * CPU reference in src/synth/, bit for bit:
+ * synth_gpu.c — subspace synthesis on the GPU (Haindl & Filip 2007, section
+ * II.C: CAR fields by their causal recursion, the pyramid collapse, the
+ * inverse decorrelation; section III does it in fragment programs, here it
+ * is Vulkan compute), the same computation as the CPU reference in
+ * src/synth/, bit for bit:
  *   1. synth_field.comp: every CAR field (subspace, band, level) in one
  *      workgroup, its causal recursion as a wavefront (docs/gpu.md);
  *   2. synth_collapse.comp: the pyramid collapse, level by level from the
@@ -614,7 +615,7 @@ static void image_size(const btf_model *m, int sub, const btf_synth_opts *o, int
 btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
                               const btf_synth_opts *opts, btf_image *outs, btf_error *err)
 {
-    btf_synth_opts o = opts ? *opts : btf_synth_defaults();
+    btf_synth_opts o = btf_synth_resolve(opts);
     for (int j = 0; j < n; j++)
         memset(&outs[j], 0, sizeof outs[j]);
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;

@@ -16,8 +16,9 @@
  *
  * Conventions are the library's: btf_status returns, one-line btf_error
  * messages naming the Vulkan call and its VkResult, zero-initialised option
- * structs, no globals, no environment reads, no printing. Every Vulkan call of this file is checked;
- * with no Vulkan driver installed everything fails with BTF_E_UNSUPPORTED.
+ * structs, no globals, no environment reads, no printing. Every Vulkan call
+ * of this file is checked; with no Vulkan driver installed everything fails
+ * with BTF_E_UNSUPPORTED.
  *
  * Threads: a btf_vk and everything made from it must be used by one thread at
  * a time (one queue, one command pool). Separate btf_vk handles are

@@ -6,11 +6,12 @@
  *
  * Why a file of its own: the generator is the largest cost of CPU
  * synthesis (the paper's workload, 15 images of 512 x 512 with 3 bands and
- * 3 levels, draws some 17.5 million Gaussians). The portable loop is left to the compiler's vectoriser,
- * which on x86-64 does two things badly: it turns Philox's 32 x 32 ->
- * 64-bit products by constants into chains of 64-bit shifts and adds, and
- * it evaluates the long Box-Muller dependency chains (log polynomial,
- * Newton square root) one vector at a time, so the core waits on latency.
+ * 3 levels, draws some 17.5 million Gaussians). The portable loop is left
+ * to the compiler's vectoriser, which on x86-64 does two things badly: it
+ * turns Philox's 32 x 32 -> 64-bit products by constants into chains of
+ * 64-bit shifts and adds, and it evaluates the long Box-Muller dependency
+ * chains (log polynomial, Newton square root) one vector at a time, so the
+ * core waits on latency.
  * The AVX2 path below multiplies with vpmuludq and runs four independent
  * vectors in lock step (source-level interleaving); it is 2.3x faster on a
  * Zen 3 core. It performs the very same IEEE operations in the same order

@@ -36,6 +36,12 @@
 #define SYNTH_AVX2_CLONES
 #endif
 
+/* ------------------------------------------------------------ synthesise.c */
+
+/* opts (NULL: none) with every zero field replaced by its default
+ * (btf_synth_defaults); shared with the GPU host code. */
+btf_synth_opts btf_synth_resolve(const btf_synth_opts *opts);
+
 /* The CPU switches of btf_synth_opts, resolved: which generators run. */
 typedef struct synth_paths {
     int vector_noise; /* the AVX2 noise loop (when the CPU has AVX2) */

@@ -33,8 +33,7 @@ btf_synth_opts btf_synth_defaults(void)
     return o;
 }
 
-/* opts with every zero field replaced by its default. */
-static btf_synth_opts resolve_opts(const btf_synth_opts *opts)
+btf_synth_opts btf_synth_resolve(const btf_synth_opts *opts)
 {
     btf_synth_opts d = btf_synth_defaults();
     if (!opts)
@@ -87,7 +86,7 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
                                   const btf_synth_opts *opts, btf_rows_fn fn, void *user,
                                   btf_error *err)
 {
-    btf_synth_opts o = resolve_opts(opts);
+    btf_synth_opts o = btf_synth_resolve(opts);
     int width, height;
     btf_status rc = check_subspace(m, subspace, err);
     if (rc == BTF_OK)
@@ -151,7 +150,7 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
                                 btf_image *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
-    btf_synth_opts o = resolve_opts(opts);
+    btf_synth_opts o = btf_synth_resolve(opts);
     int w, h;
     btf_status rc = check_subspace(m, subspace, err);
     if (rc == BTF_OK)
@@ -185,7 +184,7 @@ btf_status btf_car_synthesise_field(const btf_car_band *band, int margin, uint32
                                     const btf_synth_opts *opts, btf_rows_fn fn, void *user,
                                     btf_error *err)
 {
-    btf_synth_opts o = resolve_opts(opts);
+    btf_synth_opts o = btf_synth_resolve(opts);
     int width = o.width, height = o.height;
     btf_status rc = btf_synth_check_size(width, height, err);
     if (rc == 0)

@@ -40,7 +40,7 @@ float field_at(uint base, int fw, int r, int c)
 void main()
 {
     uint t = pc.task_base + gl_WorkGroupID.x;
-    int fw = tasks[t].fw, rb = tasks[t].rb, a = tasks[t].a, n = tasks[t].n;
+    int fw = tasks[t].fw, rb = tasks[t].rows_given, a = tasks[t].slope, n = tasks[t].n;
     int rows = tasks[t].fh - rb; // rows to compute, from buffer row rb
     uint base = tasks[t].field_off;
     int steps = rows > 0 ? a * (rows - 1) + fw : 0;
@@ -51,7 +51,7 @@ void main()
         for (int q = qlo + int(gl_LocalInvocationID.x); q <= qhi; q += 64) {
             int c = s - a * q, r = rb + q;
             precise float acc = 0.0;
-            int np = tasks[t].n_prev;
+            int np = tasks[t].n_earlier;
             for (int k = 0; k < np; k++)
                 acc = btf_car_accumulate(acc, tasks[t].gamma[k],
                                          field_at(base, fw, r + tasks[t].off_r[k],

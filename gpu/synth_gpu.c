@@ -34,11 +34,11 @@
 /* C mirrors of gpu/synth_task.glsl (4-byte members only: std430 agrees). */
 typedef struct gpu_task {
     int32_t fx0, fy0, fw, fh;
-    int32_t rb;
+    int32_t rows_given;
     int32_t x0, y0, w, h;
     uint32_t field_off, g_off;
     uint32_t stream;
-    int32_t n, n_prev, a, coarse;
+    int32_t n, n_earlier, slope, coarse;
     float sigma, mean;
     int32_t off_r[24];
     int32_t off_c[24];
@@ -166,7 +166,7 @@ static int wavefront_slope(const btf_car_band *b)
 
 /* A task record for one field; offsets ordered as btf_shared.h sums them:
  * earlier rows first in stored order, then the same row from the farthest
- * column to the nearest. The rows (fy0, rb, fh, y0, h) are set per strip. */
+ * column to the nearest. The rows (fy0, rows_given, fh, y0, h) are set per strip. */
 static void fill_task(gpu_task *t, const btf_car_band *b, int margin, uint32_t stream, int x0,
                       int x1)
 {
@@ -175,7 +175,7 @@ static void fill_task(gpu_task *t, const btf_car_band *b, int margin, uint32_t s
     t->fx0 = x0 - margin, t->fw = t->w + 2 * margin;
     t->stream = stream;
     t->sigma = b->sigma, t->mean = b->mean;
-    t->a = wavefront_slope(b);
+    t->slope = wavefront_slope(b);
     t->coarse = -1;
     int k = 0, same[BTF_CAR_MAX_NEIGHBOURS];
     for (int s = 0; s < b->n; s++)
@@ -185,7 +185,7 @@ static void fill_task(gpu_task *t, const btf_car_band *b, int margin, uint32_t s
             t->gamma[k] = b->gamma[s];
             k++;
         }
-    t->n_prev = k;
+    t->n_earlier = k;
     int nsame = btf_car_same_row_order(b, same);
     for (int i = 0; i < nsame; i++, k++) {
         t->off_r[k] = 0;
@@ -258,7 +258,7 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
             f->base = base;
         }
         t->fy0 = f->base;
-        t->rb = f->next - f->base;
+        t->rows_given = f->next - f->base;
         t->fh = (gb > f->next ? gb : f->next) - f->base;
         t->y0 = ga;
         t->h = gb - ga;
@@ -395,11 +395,11 @@ static int dispatch_wavefront(btf_gpu *g, btf_vk_job *job, const batch *bt, uint
     int64_t steps = 0, per_step = 1;
     for (int i = 0; i < bt->ntasks; i++) {
         const gpu_task *t = &bt->tasks[i];
-        int rows = t->fh - t->rb;
+        int rows = t->fh - t->rows_given;
         if (rows <= 0)
             continue;
-        int64_t st = (int64_t)t->a * (rows - 1) + t->fw;
-        int64_t active = (t->fw + t->a - 1) / t->a;
+        int64_t st = (int64_t)t->slope * (rows - 1) + t->fw;
+        int64_t active = (t->fw + t->slope - 1) / t->slope;
         if (active > rows)
             active = rows;
         int64_t cost = 1 + ((active + 63) / 64) * (2 + t->n);

@@ -4,7 +4,6 @@
  * schemas are documented in docs/model-format.md ("btfcar info --json").
  */
 #include "cli.h"
-#include "vk.h" /* gpu/vk.h: btf_vk_list_devices for --devices */
 
 #include <math.h>
 #include <stdlib.h>
@@ -25,6 +24,15 @@ static const char ABOUT[] =
     "and every field) before anything is printed.\n";
 
 /* --------------------------------------------------------------- shared */
+
+/* The synthesis margin of a band (-1 should the library run out of memory). */
+static int band_margin(const btf_model *m, int s, int b, int l)
+{
+    int margin = -1;
+    btf_error err = {0};
+    btf_synth_margin(m, s, b, l, &margin, &err);
+    return margin;
+}
 
 /* "ubo81: 81 directions, theta 0..75 in 6 rings" */
 static void describe_set(const btf_dirset *s, char *buf, size_t n)
@@ -242,7 +250,8 @@ static void text_subspace(const btf_model *m, int s)
             printf("  band %d level %d: %s  gamma", b, l, cb->n ? nb : "(none)");
             for (int i = 0; i < cb->n; i++)
                 printf(" %.6g", cb->gamma[i]);
-            printf("  sigma %.6g  mean %.6g  margin %d\n", cb->sigma, cb->mean, cb->margin);
+            printf("  sigma %.6g  mean %.6g  margin %d\n", cb->sigma, cb->mean,
+                   band_margin(m, s, b, l));
         }
 }
 
@@ -277,7 +286,7 @@ static int model_text(const btf_model *m, const model_file *mf)
     return 0;
 }
 
-static void json_band(FILE *f, const btf_car_band *b)
+static void json_band(FILE *f, const btf_car_band *b, int margin)
 {
     char nb[BTF_CAR_MAX_NEIGHBOURS * 10 + 1];
     format_neighbourhood(b, nb, sizeof nb);
@@ -292,12 +301,13 @@ static void json_band(FILE *f, const btf_car_band *b)
     json_f32(f, b->sigma);
     fputs(", \"mean\": ", f);
     json_f32(f, b->mean);
-    fprintf(f, ", \"margin\": %d", b->margin);
+    fprintf(f, ", \"margin\": %d", margin);
     fputc('}', f);
 }
 
-static void json_subspace(FILE *f, const btf_subspace_model *sm)
+static void json_subspace(FILE *f, const btf_model *m, int s)
 {
+    const btf_subspace_model *sm = &m->subspaces[s];
     fprintf(f, "{\"view\": %d, \"light\": %d, \"width\": %d, \"height\": %d, \"mean\": ",
             sm->view, sm->light, sm->width, sm->height);
     json_f32s(f, sm->mean, 3);
@@ -311,7 +321,7 @@ static void json_subspace(FILE *f, const btf_subspace_model *sm)
         fputs(b ? ",\n    [" : "\n    [", f);
         for (int l = 0; l < sm->levels; l++) {
             fputs(l ? ",\n     " : "", f);
-            json_band(f, &sm->bands[b][l]);
+            json_band(f, &sm->bands[b][l], band_margin(m, s, b, l));
         }
         fputc(']', f);
     }
@@ -349,7 +359,7 @@ static int model_json(const btf_model *m, const model_file *mf)
     fprintf(f, ",\n \"subspaces\": [");
     for (int s = 0; s < m->n_subspaces; s++) {
         fputs(s ? ",\n  " : "\n  ", f);
-        json_subspace(f, &m->subspaces[s]);
+        json_subspace(f, m, s);
     }
     fputs("],\n \"range\": ", f);
     if (m->range) {
@@ -385,37 +395,30 @@ static int info_model(cli_ctx *c, const model_file *mf, int json)
 
 /* ------------------------------------------------------------ devices */
 
-static void devices_json(const btf_vk_device_info *list, int n)
+static void devices_json(const btf_gpu_device *list, int n)
 {
     printf("{\"devices\": [");
     for (int i = 0; i < n; i++) {
-        char v[32];
-        btf_vk_version_text(list[i].api_version, v, sizeof v);
         printf("%s\n  {\"index\": %d, \"type\": ", i ? "," : "", list[i].index);
-        json_string(stdout, btf_vk_type_name(list[i].type));
+        json_string(stdout, list[i].type_name);
         printf(", \"vulkan\": ");
-        json_string(stdout, v);
+        json_string(stdout, list[i].vulkan_version);
         printf(", \"max_storage_buffer_bytes\": %llu, \"usable\": %s, \"name\": ",
-               (unsigned long long)list[i].max_storage_buffer_range,
-               list[i].usable ? "true" : "false");
+               (unsigned long long)list[i].max_buffer_bytes, list[i].usable ? "true" : "false");
         json_string(stdout, list[i].name);
         printf("}");
     }
     printf("%s]}\n", n ? "\n" : "");
 }
 
-static void devices_text(const btf_vk_device_info *list, int n)
+static void devices_text(const btf_gpu_device *list, int n)
 {
     printf("%-5s  %-14s  %-7s  %-26s  %s\n", "index", "type", "Vulkan",
            "max storage buffer (bytes)", "name");
-    for (int i = 0; i < n; i++) {
-        char v[32];
-        btf_vk_version_text(list[i].api_version, v, sizeof v);
-        printf("%-5d  %-14s  %-7s  %-26llu  %s%s\n", list[i].index,
-               btf_vk_type_name(list[i].type), v,
-               (unsigned long long)list[i].max_storage_buffer_range, list[i].name,
+    for (int i = 0; i < n; i++)
+        printf("%-5d  %-14s  %-7s  %-26llu  %s%s\n", list[i].index, list[i].type_name,
+               list[i].vulkan_version, (unsigned long long)list[i].max_buffer_bytes, list[i].name,
                list[i].usable ? "" : " (unusable: needs Vulkan 1.1 and a compute queue)");
-    }
 }
 
 /* --devices: one line per Vulkan device, or one JSON document. Without any
@@ -423,9 +426,9 @@ static void devices_text(const btf_vk_device_info *list, int n)
 static int info_devices(cli_ctx *c, int json)
 {
     btf_error err = {0};
-    btf_vk_device_info *list;
+    btf_gpu_device *list;
     int n;
-    if (btf_vk_list_devices(&list, &n, &err) != 0)
+    if (btf_gpu_list_devices(&list, &n, &err) != 0)
         return cli_lib_error(c, &err);
     if (n == 0 && !json) {
         free(list);

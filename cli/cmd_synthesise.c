@@ -56,18 +56,59 @@ static int parse_list(const char *s, int n, unsigned char *pick)
     }
 }
 
+/* Where and how the images go. */
+typedef struct output {
+    const char *dir;
+    const char *model_path; /* provenance in each EXR header */
+    int preview, half;
+} output;
+
 /* Writes one image already in memory as EXR (+ preview). */
-static int write_image(const btf_image *img, int k, const char *outdir, int preview, int half,
-                       btf_error *err)
+static int write_image(const btf_image *img, const btf_model *m, int k, uint64_t seed,
+                       const output *out, btf_error *err)
 {
     char path[4096];
-    snprintf(path, sizeof path, "%s/subspace_%02d.exr", outdir, k);
-    int rc = btf_image_write_exr(path, img, half, err);
-    if (rc == 0 && preview) {
-        snprintf(path, sizeof path, "%s/subspace_%02d.png", outdir, k);
+    snprintf(path, sizeof path, "%s/subspace_%02d.exr", out->dir, k);
+    btf_exr_meta meta = btf_model_exr_meta(m, out->model_path, k, seed);
+    int rc = btf_image_write_exr_meta(path, img, out->half, &meta, err);
+    if (rc == 0 && out->preview) {
+        snprintf(path, sizeof path, "%s/subspace_%02d.png", out->dir, k);
         rc = btf_image_write_png(path, img, err);
     }
     return rc;
+}
+
+/* The environment's settings (docs/cli.md); the library reads none. */
+
+/* BTF_NOISE_PORTABLE=1 (set, not empty, not "0"): the portable noise loop;
+ * BTF_SYNTH_WAVE=0: CPU fields row by row. Both give the same bytes. */
+static void env_cpu_switches(btf_synth_opts *o)
+{
+    const char *p = getenv("BTF_NOISE_PORTABLE"), *w = getenv("BTF_SYNTH_WAVE");
+    o->portable_noise = p && *p && strcmp(p, "0") != 0;
+    o->row_by_row = w && !strcmp(w, "0");
+}
+
+/* BTF_VK_DEVICE=N (a device index; unset or empty: none, *index -1) and
+ * BTF_VK_VALIDATION=0|1 into the GPU options. */
+static int env_gpu(btf_gpu_opts *o, int *index, btf_error *err)
+{
+    const char *d = getenv("BTF_VK_DEVICE"), *v = getenv("BTF_VK_VALIDATION");
+    *index = -1;
+    if (d && *d) {
+        long n = 0;
+        for (const char *c = d; *c; c++) {
+            if (*c < '0' || *c > '9' || n > 100000)
+                return cli_set_error(err, BTF_E_ARG, "BTF_VK_DEVICE='%s': expected a device "
+                                     "index (see btfcar info --devices)", d);
+            n = n * 10 + (*c - '0');
+        }
+        *index = (int)n;
+    }
+    if (v && *v && strcmp(v, "0") && strcmp(v, "1"))
+        return cli_set_error(err, BTF_E_ARG, "BTF_VK_VALIDATION='%s': expected 0 or 1", v);
+    o->validation = v && !strcmp(v, "1");
+    return 0;
 }
 
 /* The GPU path returns whole images; at most this many bytes of them are
@@ -76,8 +117,8 @@ static int write_image(const btf_image *img, int k, const char *outdir, int prev
 
 /* The GPU path: the chosen subspaces in groups that fit the memory budget,
  * each group in as few jobs as the device allows. */
-static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick, int w, int h,
-                     uint64_t seed, const char *outdir, int preview, int half, btf_error *err)
+static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick,
+                     const btf_synth_opts *so, const output *out, btf_error *err)
 {
     size_t count = m->n_subspaces > 0 ? (size_t)m->n_subspaces : 1;
     int n = 0, *subs = calloc(count, sizeof(int));
@@ -90,16 +131,16 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick, 
     for (int k = 0; k < m->n_subspaces; k++)
         if (pick[k])
             subs[n++] = k;
-    uint64_t one = (uint64_t)w * h * 12;
+    uint64_t one = (uint64_t)so->width * so->height * 12;
     int group = (int)(GPU_IMAGE_BUDGET / one);
     if (group < 1)
         group = 1;
     int rc = 0;
     for (int start = 0; rc == 0 && start < n; start += group) {
         int k = n - start < group ? n - start : group;
-        rc = btf_gpu_synthesise(g, m, subs + start, k, w, h, seed, imgs, err);
+        rc = btf_gpu_synthesise(g, m, subs + start, k, so, imgs, err);
         for (int j = 0; rc == 0 && j < k; j++)
-            rc = write_image(&imgs[j], subs[start + j], outdir, preview, half, err);
+            rc = write_image(&imgs[j], m, subs[start + j], so->seed, out, err);
         for (int j = 0; j < k; j++)
             btf_image_free(&imgs[j]);
     }
@@ -122,36 +163,47 @@ static btf_gpu *open_gpu(const char *backend, int device, uint64_t image_bytes, 
                  image_bytes / 1073741824.0, GPU_IMAGE_BUDGET / 1073741824.0);
         return NULL;
     }
-    btf_gpu_opts o = {.use_device = device >= 0, .device = device < 0 ? 0 : device,
-                      .allow_cpu = explicit_gpu};
+    btf_gpu_opts o = btf_gpu_defaults();
+    int env_device;
     btf_gpu *g = NULL;
+    int rc = env_gpu(&o, &env_device, err), from_env = device < 0 && env_device >= 0;
+    if (from_env)
+        device = env_device;
+    o.use_device = device >= 0;
+    o.device = device < 0 ? 0 : device;
+    o.allow_cpu = explicit_gpu;
+    if (rc == 0 && btf_gpu_open(&o, &g, err) != 0 && from_env) {
+        char msg[sizeof err->msg];
+        snprintf(msg, sizeof msg, "BTF_VK_DEVICE=%d: %s", device, err->msg);
+        snprintf(err->msg, sizeof err->msg, "%s", msg);
+    }
     /* auto without a GPU is no failure: the CPU runs and the summary says so. */
-    if (btf_gpu_open(&o, &g, err) != 0)
-        return NULL;
     return g;
 }
 
-static int synth_one(const cli_ctx *c, const btf_model *m, int k, int w, int h, uint64_t seed,
-                     const char *outdir, int preview, int half, btf_error *err)
+static int synth_one(const cli_ctx *c, const btf_model *m, int k, const btf_synth_opts *so,
+                     const output *out, btf_error *err)
 {
+    int w = so->width, h = so->height, preview = out->preview;
     char path[4096];
-    snprintf(path, sizeof path, "%s/subspace_%02d.exr", outdir, k);
+    snprintf(path, sizeof path, "%s/subspace_%02d.exr", out->dir, k);
     sink s = {.height = h, .progress = cli_progress_fn(c)};
     btf_image img = {0};
     int rc = 0;
     if (preview && (rc = btf_image_alloc(&img, w, h, 3, err)))
         return rc;
     s.preview = preview ? &img : NULL;
-    rc = btf_exr_writer_open(path, w, h, 3, half, &s.exr, err);
+    btf_exr_meta meta = btf_model_exr_meta(m, out->model_path, k, so->seed);
+    rc = btf_exr_writer_open_meta(path, w, h, 3, out->half, &meta, &s.exr, err);
     if (rc == 0) {
-        rc = btf_synthesise(m, k, w, h, seed, put_rows, &s, err);
+        rc = btf_synthesise(m, k, so, put_rows, &s, err);
         if (rc)
             btf_exr_writer_abort(s.exr);
         else
             rc = btf_exr_writer_close(s.exr, err);
     }
     if (rc == 0 && preview) {
-        snprintf(path, sizeof path, "%s/subspace_%02d.png", outdir, k);
+        snprintf(path, sizeof path, "%s/subspace_%02d.png", out->dir, k);
         rc = btf_image_write_png(path, &img, err);
     }
     btf_image_free(&img);
@@ -225,12 +277,16 @@ int cmd_synthesise(int argc, char **argv)
     int done = 0;
     for (int k = 0; k < m.n_subspaces; k++)
         done += pick[k];
+    btf_synth_opts so = btf_synth_defaults();
+    so.width = w, so.height = h, so.seed = seed;
+    env_cpu_switches(&so);
+    output out = {.dir = outdir, .model_path = model, .preview = preview, .half = half};
     if (rc == 0 && gpu) {
-        rc = synth_gpu(gpu, &m, pick, w, h, seed, outdir, preview, half, &err);
+        rc = synth_gpu(gpu, &m, pick, &so, &out, &err);
     } else {
         for (int k = 0; rc == 0 && k < m.n_subspaces; k++)
             if (pick[k])
-                rc = synth_one(&c, &m, k, w, h, seed, outdir, preview, half, &err);
+                rc = synth_one(&c, &m, k, &so, &out, &err);
     }
     clock_gettime(CLOCK_MONOTONIC, &t1);
     char devname[300];

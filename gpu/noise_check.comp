@@ -1,5 +1,6 @@
-// noise_check.comp -- checks that src/synth/btf_noise.h compiles as GLSL and gives
-// the GPU side of the CPU/GPU bit-exactness test of the synthesis noise.
+// noise_check.comp -- checks that src/synth/btf_noise.h compiles as GLSL and
+// gives the GPU side of the CPU/GPU bit-exactness test of the synthesis
+// noise (the white noise of the CAR fields, Haindl & Filip 2007, II.C).
 // Invocation i covers (row0 + i / nblocks, block0 + i % nblocks): it writes
 // btf_noise4 for that (row, block) to z[i], the raw Philox-4x32-7 words of
 // the same counter to raw[i], and btf_noise1 of the block's 4 columns to z1[i].

@@ -1,9 +1,11 @@
-// synth_collapse.comp -- one pyramid level of the collapse on the GPU:
+// synth_collapse.comp -- one pyramid level of the collapse on the GPU
+// (Haindl & Filip 2007, section II.C: the synthesised levels recombined):
 //     G_l = mean_l + Y_l + up(G_{l+1})
-// over the level's window, the up-sampling done as on the CPU (src/synth/synth.c):
-// horizontally within each of the coarse rows the fine row reads, then
-// vertically, with btf_up_even / btf_up_odd. Dispatched level by level, from
-// the coarsest; one workgroup per field, a grid-stride loop over its pixels.
+// over the level's window, the up-sampling done as on the CPU
+// (src/synth/upsample.c): horizontally within each of the coarse rows the
+// fine row reads, then vertically, with btf_up_even / btf_up_odd. Dispatched
+// level by level, from the coarsest; one workgroup per field, a grid-stride
+// loop over its pixels.
 #version 450
 #extension GL_GOOGLE_include_directive : require
 
@@ -23,16 +25,11 @@ layout(push_constant) uniform Params {
     uint task_base;
 } pc;
 
-int floordiv2(int v)
-{
-    return v >= 0 ? v / 2 : -((-v + 1) / 2);
-}
-
 // Coarse row q of task ct, up-sampled horizontally to fine column x.
-float hup(int ct, int q, int x)
+float coarse_up(int ct, int q, int x)
 {
     uint row = tasks[ct].g_off + uint((q - tasks[ct].y0) * tasks[ct].w);
-    int ci = floordiv2(x) - tasks[ct].x0;
+    int ci = btf_floordiv2(x) - tasks[ct].x0;
     if ((x & 1) != 0)
         return btf_up_odd(gauss[row + uint(ci)], gauss[row + uint(ci + 1)]);
     return btf_up_even(gauss[row + uint(ci - 1)], gauss[row + uint(ci)], gauss[row + uint(ci + 1)]);
@@ -51,12 +48,13 @@ void main()
                          uint((y - tasks[t].fy0) * tasks[t].fw + (x - tasks[t].fx0))];
         float v = btf_add_mean(tasks[t].mean, f);
         if (ct >= 0) {
-            int i = floordiv2(y);
+            int i = btf_floordiv2(y);
             float up;
             if ((y & 1) != 0)
-                up = btf_up_odd(hup(ct, i, x), hup(ct, i + 1, x));
+                up = btf_up_odd(coarse_up(ct, i, x), coarse_up(ct, i + 1, x));
             else
-                up = btf_up_even(hup(ct, i - 1, x), hup(ct, i, x), hup(ct, i + 1, x));
+                up = btf_up_even(coarse_up(ct, i - 1, x), coarse_up(ct, i, x),
+                                 coarse_up(ct, i + 1, x));
             v = btf_add_level(v, up);
         }
         gauss[tasks[t].g_off + p] = v;

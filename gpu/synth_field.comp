@@ -1,4 +1,5 @@
-// synth_field.comp -- the causal recursion of CAR random fields on the GPU.
+// synth_field.comp -- the causal recursion of CAR random fields on the GPU
+// (Haindl & Filip 2007, section II.C: each sub-band level is a CAR field).
 // One workgroup per field; the recursion
 //     Y(r, c) = sum_s gamma_s Y(r + dr_s, c + dc_s) + sigma e(r, c)
 // is parallelised as a wavefront: pixel (r, c) depends only on pixels of
@@ -6,7 +7,7 @@
 // every offset of an earlier row (a = 2 for the usual up-right neighbour), so
 // every pixel of one step is computed at once, a barrier between steps. No
 // spin-waiting between workgroups (no forward-progress guarantee). The sums,
-// noise and zero boundary are those of the CPU reference (src/synth/synth.c):
+// noise and zero boundary are those of the CPU reference (src/synth/rows.c):
 // the results are bit-identical.
 #version 450
 #extension GL_GOOGLE_include_directive : require
@@ -39,7 +40,7 @@ float field_at(uint base, int fw, int r, int c)
 void main()
 {
     uint t = pc.task_base + gl_WorkGroupID.x;
-    int fw = tasks[t].fw, rb = tasks[t].rb, a = tasks[t].a, n = tasks[t].n;
+    int fw = tasks[t].fw, rb = tasks[t].rows_given, a = tasks[t].slope, n = tasks[t].n;
     int rows = tasks[t].fh - rb; // rows to compute, from buffer row rb
     uint base = tasks[t].field_off;
     int steps = rows > 0 ? a * (rows - 1) + fw : 0;
@@ -50,7 +51,7 @@ void main()
         for (int q = qlo + int(gl_LocalInvocationID.x); q <= qhi; q += 64) {
             int c = s - a * q, r = rb + q;
             precise float acc = 0.0;
-            int np = tasks[t].n_prev;
+            int np = tasks[t].n_earlier;
             for (int k = 0; k < np; k++)
                 acc = btf_car_accumulate(acc, tasks[t].gamma[k],
                                          field_at(base, fw, r + tasks[t].off_r[k],

@@ -1,20 +1,27 @@
 /*
- * synth_gpu.c — subspace synthesis on the GPU (Vulkan compute), the same
- * computation as the CPU reference src/synth/synth.c, bit for bit:
+ * synth_gpu.c — subspace synthesis on the GPU (Haindl & Filip 2007, section
+ * II.C: CAR fields by their causal recursion, the pyramid collapse, the
+ * inverse decorrelation; section III does it in fragment programs, here it
+ * is Vulkan compute), the same computation as the CPU reference in
+ * src/synth/, bit for bit:
  *   1. synth_field.comp: every CAR field (subspace, band, level) in one
  *      workgroup, its causal recursion as a wavefront (docs/gpu.md);
  *   2. synth_collapse.comp: the pyramid collapse, level by level from the
  *      coarsest;
  *   3. synth_unmix.comp: the inverse colour decorrelation.
- * The geometry (windows, margins, burn-in) and the float formulas are the
- * CPU's (src/synth/btf_shared.h). One job (command buffer) per batch of subspace
- * images; batches are cut so that every buffer fits the device's limits.
+ * The geometry (src/synth/geometry.h: windows; src/car/margin.c: margins)
+ * and the float formulas (src/synth/btf_shared.h) are the CPU's. One job
+ * (command buffer) per strip of rows of a batch of subspace images;
+ * batches and strips are cut so that every buffer fits the device's
+ * limits.
  */
 #include "synth/synth.h"
 #include "car/car.h"
 #include "core/core.h"
 
 #include "btf_shared.h"
+#include "geometry.h"
+#include "synth/synth_testing.h"
 #include "vk.h"
 
 #include "synth_collapse_spv.h"
@@ -27,11 +34,11 @@
 /* C mirrors of gpu/synth_task.glsl (4-byte members only: std430 agrees). */
 typedef struct gpu_task {
     int32_t fx0, fy0, fw, fh;
-    int32_t rb;
+    int32_t rows_given;
     int32_t x0, y0, w, h;
     uint32_t field_off, g_off;
     uint32_t stream;
-    int32_t n, n_prev, a, coarse;
+    int32_t n, n_earlier, slope, coarse;
     float sigma, mean;
     int32_t off_r[24];
     int32_t off_c[24];
@@ -57,19 +64,31 @@ struct btf_gpu {
     btf_vk_pipeline *field, *collapse, *unmix;
 };
 
-int btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err)
+btf_gpu_opts btf_gpu_defaults(void)
+{
+    btf_gpu_opts o = {
+        .use_device = 0, /* the best device */
+        .device = 0,
+        .allow_cpu = 0,
+        .validation = 0,
+    };
+    return o;
+}
+
+btf_status btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err)
 {
     *out = NULL;
-    btf_gpu_opts o = {0};
-    if (opts)
-        o = *opts;
+    btf_gpu_opts d = btf_gpu_defaults(), o = opts ? *opts : d;
+    o.use_device = o.use_device ? o.use_device : d.use_device;
+    o.device = o.device ? o.device : d.device;
+    o.allow_cpu = o.allow_cpu ? o.allow_cpu : d.allow_cpu;
+    o.validation = o.validation ? o.validation : d.validation;
     btf_gpu *g = btf_calloc(1, sizeof *g, err);
     if (!g)
         return BTF_E_NOMEM;
-    g->max_buffer_bytes = o.max_buffer_bytes;
     btf_vk_opts vo = {.use_device = o.use_device, .device = o.device, .allow_cpu = o.allow_cpu,
                       .validation = o.validation};
-    int rc = btf_vk_create(&vo, &g->vk, err);
+    btf_status rc = btf_vk_create(&vo, &g->vk, err);
     if (rc == 0)
         rc = btf_vk_pipeline_create(g->vk, synth_field_spv, sizeof synth_field_spv, 2, 20, NULL, 0,
                                     &g->field, err); /* push: seed, s0, s1, task_base */
@@ -119,14 +138,14 @@ void btf_gpu_last_tiling(const btf_gpu *g, int *batches, int *jobs)
     *jobs = g->jobs;
 }
 
+void btf_gpu_set_max_buffer_bytes(btf_gpu *g, uint64_t bytes)
+{
+    g->max_buffer_bytes = bytes;
+}
+
 const char *btf_gpu_first_validation_message(const btf_gpu *g)
 {
     return btf_vk_first_validation_message(g->vk);
-}
-
-static int floordiv2(int a)
-{
-    return a >= 0 ? a / 2 : -((-a + 1) / 2);
 }
 
 /* The wavefront slope: pixel (r, c) must come after (r + dr, c + dc) for
@@ -147,16 +166,16 @@ static int wavefront_slope(const btf_car_band *b)
 
 /* A task record for one field; offsets ordered as btf_shared.h sums them:
  * earlier rows first in stored order, then the same row from the farthest
- * column to the nearest. The rows (fy0, rb, fh, y0, h) are set per strip. */
-static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x0, int x1)
+ * column to the nearest. The rows (fy0, rows_given, fh, y0, h) are set per strip. */
+static void fill_task(gpu_task *t, const btf_car_band *b, int margin, uint32_t stream, int x0,
+                      int x1)
 {
     memset(t, 0, sizeof *t);
     t->x0 = x0, t->w = x1 - x0;
-    int margin = btf_band_margin(b); /* the CPU's margins (src/car/margin.c) */
     t->fx0 = x0 - margin, t->fw = t->w + 2 * margin;
     t->stream = stream;
     t->sigma = b->sigma, t->mean = b->mean;
-    t->a = wavefront_slope(b);
+    t->slope = wavefront_slope(b);
     t->coarse = -1;
     int k = 0, same[BTF_CAR_MAX_NEIGHBOURS];
     for (int s = 0; s < b->n; s++)
@@ -166,7 +185,7 @@ static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x
             t->gamma[k] = b->gamma[s];
             k++;
         }
-    t->n_prev = k;
+    t->n_earlier = k;
     int nsame = btf_car_same_row_order(b, same);
     for (int i = 0; i < nsame; i++, k++) {
         t->off_r[k] = 0;
@@ -174,17 +193,6 @@ static void fill_task(gpu_task *t, const btf_car_band *b, uint32_t stream, int x
         t->gamma[k] = b->gamma[same[i]];
     }
     t->n = k;
-}
-
-/* The rows [*a, *b) of level l that output rows [y0, y1) read (level 0 is
- * the output itself; each coarser level covers what up-sampling reads). */
-static void level_rows(int y0, int y1, int l, int *a, int *b)
-{
-    for (int k = 0; k < l; k++) {
-        int na = floordiv2(y0) - 1, nb = floordiv2(y1 - 1) + 2;
-        y0 = na, y1 = nb;
-    }
-    *a = y0, *b = y1;
 }
 
 /* Where one field stands while the strips go down the image. */
@@ -233,8 +241,8 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
     for (int i = 0; i < bt->ntasks; i++) {
         gpu_task *t = &bt->tasks[i];
         field_state *f = &bt->fs[i];
-        int ga, gb;
-        level_rows(y0, y1, f->level, &ga, &gb);
+        btf_span rows = btf_level_span((btf_span){y0, y1}, f->level);
+        int ga = rows.lo, gb = rows.hi;
         if (first) {
             /* The field starts its margin (x0 - fx0, set by fill_task) rows
              * above its window; the `up` rows above that are zero (the
@@ -250,7 +258,7 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
             f->base = base;
         }
         t->fy0 = f->base;
-        t->rb = f->next - f->base;
+        t->rows_given = f->next - f->base;
         t->fh = (gb > f->next ? gb : f->next) - f->base;
         t->y0 = ga;
         t->h = gb - ga;
@@ -265,9 +273,10 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
     }
 }
 
-/* Builds the batch and sizes its buffers for strips of `strip` rows. */
-static int build_batch(const btf_model *m, const int *subs, int n, int w, int h, int strip,
-                       batch *bt, btf_error *err)
+/* Builds the batch and sizes its buffers for strips of `strip` rows;
+ * margins[j][b][l] of image j. */
+static int build_batch(const btf_model *m, const int *subs, const int (*margins)[3][BTF_MAX_LEVELS],
+                       int n, int w, int h, int strip, batch *bt, btf_error *err)
 {
     memset(bt, 0, sizeof *bt);
     bt->n = n, bt->w = w, bt->h = h, bt->strip = strip;
@@ -295,18 +304,19 @@ static int build_batch(const btf_model *m, const int *subs, int n, int w, int h,
     for (int j = 0; j < n; j++) {
         const btf_subspace_model *sm = &m->subspaces[subs[j]];
         for (int b = 0; b < 3; b++) {
-            int x0 = 0, x1 = w, prev = -1;
+            btf_span xs = {0, w};
+            int prev = -1;
             for (int l = 0; l < sm->levels; l++) {
                 int ti = fill[l]++;
-                fill_task(&bt->tasks[ti], &sm->bands[b][l],
-                          btf_noise_stream((uint32_t)subs[j], (uint32_t)b, (uint32_t)l), x0, x1);
+                fill_task(&bt->tasks[ti], &sm->bands[b][l], margins[j][b][l],
+                          btf_noise_stream((uint32_t)subs[j], (uint32_t)b, (uint32_t)l), xs.lo,
+                          xs.hi);
                 bt->fs[ti].level = l;
                 bt->fs[ti].up = field_up(&bt->tasks[ti]);
                 if (prev >= 0)
                     bt->tasks[prev].coarse = ti;
                 prev = ti;
-                int nx0 = floordiv2(x0) - 1, nx1 = floordiv2(x1 - 1) + 2;
-                x0 = nx0, x1 = nx1;
+                xs = btf_coarser_span(xs);
             }
         }
         memcpy(bt->unmix[j].mean, sm->mean, sizeof bt->unmix[j].mean);
@@ -385,11 +395,11 @@ static int dispatch_wavefront(btf_gpu *g, btf_vk_job *job, const batch *bt, uint
     int64_t steps = 0, per_step = 1;
     for (int i = 0; i < bt->ntasks; i++) {
         const gpu_task *t = &bt->tasks[i];
-        int rows = t->fh - t->rb;
+        int rows = t->fh - t->rows_given;
         if (rows <= 0)
             continue;
-        int64_t st = (int64_t)t->a * (rows - 1) + t->fw;
-        int64_t active = (t->fw + t->a - 1) / t->a;
+        int64_t st = (int64_t)t->slope * (rows - 1) + t->fw;
+        int64_t active = (t->fw + t->slope - 1) / t->slope;
         if (active > rows)
             active = rows;
         int64_t cost = 1 + ((active + 63) / 64) * (2 + t->n);
@@ -541,11 +551,11 @@ static int run_batch(btf_gpu *g, batch *bt, uint64_t seed, btf_image *outs, btf_
     return rc;
 }
 
-static int check_request(const btf_model *m, const int *subs, int n, int w, int h, btf_error *err)
+/* The subspaces checked as on the CPU, and their margins (once per call:
+ * planning builds batches many times). */
+static btf_status check_request(const btf_model *m, const int *subs, int n,
+                                int (*margins)[3][BTF_MAX_LEVELS], btf_error *err)
 {
-    if (w < 1 || h < 1 || w > BTF_SYNTH_MAX_SIDE || h > BTF_SYNTH_MAX_SIDE)
-        return btf_fail(err, BTF_E_ARG, "synthesis size %dx%d: expected 1..%d on each side", w, h,
-                        BTF_SYNTH_MAX_SIDE);
     for (int j = 0; j < n; j++) {
         if (subs[j] < 0 || subs[j] >= m->n_subspaces)
             return btf_fail(err, BTF_E_ARG, "subspace %d: the model has %d", subs[j],
@@ -555,8 +565,12 @@ static int check_request(const btf_model *m, const int *subs, int n, int w, int 
             return btf_fail(err, BTF_E_ARG, "subspace %d: %d pyramid levels", subs[j], sm->levels);
         for (int b = 0; b < 3; b++)
             for (int l = 0; l < sm->levels; l++) {
-                int rc = btf_synth_check_band(&sm->bands[b][l], err); /* as on the CPU */
+                btf_status rc = btf_synth_check_band(&sm->bands[b][l], 0, err);
                 if (rc)
+                    return rc;
+                if ((margins[j][b][l] = btf_model_margin(m, subs[j], b, l)) < 0)
+                    return btf_fail(err, BTF_E_NOMEM, "out of memory");
+                if ((rc = btf_synth_check_band(&sm->bands[b][l], margins[j][b][l], err)))
                     return rc;
             }
     }
@@ -566,12 +580,12 @@ static int check_request(const btf_model *m, const int *subs, int n, int w, int 
 /* The largest batch of images from `subs` (at most n), with the tallest
  * strips, whose buffers fit `limit` bytes; BTF_E_UNSUPPORTED if even one image
  * in strips of one row does not fit (the width alone is too large). */
-static int plan_batch(const btf_model *m, const int *subs, int n, int w, int h, uint64_t limit,
-                      batch *bt, btf_error *err)
+static int plan_batch(const btf_model *m, const int *subs, const int (*margins)[3][BTF_MAX_LEVELS],
+                      int n, int w, int h, uint64_t limit, batch *bt, btf_error *err)
 {
     for (int k = n; k >= 1; k = k / 2) {
         for (int strip = h;; strip = (strip + 1) / 2) {
-            int rc = build_batch(m, subs, k, w, h, strip, bt, err);
+            int rc = build_batch(m, subs, margins, k, w, h, strip, bt, err);
             if (rc)
                 return rc;
             if (batch_need(bt) <= limit && bt->field_floats <= 0x7FFFFFFFull)
@@ -591,59 +605,49 @@ static int plan_batch(const btf_model *m, const int *subs, int n, int w, int h, 
     return btf_fail(err, BTF_E_UNSUPPORTED, "no GPU batch fits"); /* not reached */
 }
 
-/* Margins once per call: a model built through the API may leave them 0
- * (to be computed), and planning builds batches many times. Returns m
- * itself when every band has one, else a shallow copy with its own
- * subspace array (*copy, freed by the caller) holding them. */
-static int resolve_margins(const btf_model *m, const int *subs, int n, btf_model *copy,
-                           const btf_model **use, btf_error *err)
+/* The output size of image j: opts' or, where 0, the analysed size. */
+static void image_size(const btf_model *m, int sub, const btf_synth_opts *o, int *w, int *h)
 {
-    *use = m;
-    memset(copy, 0, sizeof *copy);
-    for (int j = 0; j < n; j++) {
-        btf_subspace_model *sm = &m->subspaces[subs[j]];
-        for (int b = 0; b < 3; b++)
-            for (int l = 0; l < sm->levels; l++) {
-                if (sm->bands[b][l].margin > 0 || sm->bands[b][l].n == 0)
-                    continue;
-                if (!copy->subspaces) {
-                    *copy = *m;
-                    copy->subspaces = btf_alloc((size_t)m->n_subspaces,
-                                                sizeof(btf_subspace_model), err);
-                    if (!copy->subspaces)
-                        return BTF_E_NOMEM;
-                    memcpy(copy->subspaces, m->subspaces,
-                           (size_t)m->n_subspaces * sizeof(btf_subspace_model));
-                    *use = copy;
-                }
-                btf_car_band *cb = &copy->subspaces[subs[j]].bands[b][l];
-                if ((cb->margin = btf_car_margin(cb)) < 0)
-                    return btf_fail(err, BTF_E_NOMEM, "out of memory");
-            }
-    }
-    return BTF_OK;
+    *w = o->width ? o->width : m->subspaces[sub].width;
+    *h = o->height ? o->height : m->subspaces[sub].height;
 }
 
-int btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n, int width,
-                       int height, uint64_t seed, btf_image *outs, btf_error *err)
+btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
+                              const btf_synth_opts *opts, btf_image *outs, btf_error *err)
 {
+    btf_synth_opts o = btf_synth_resolve(opts);
     for (int j = 0; j < n; j++)
         memset(&outs[j], 0, sizeof outs[j]);
-    int rc = check_request(m, subspaces, n, width, height, err);
-    btf_model copy = {0};
-    if (rc == 0)
-        rc = resolve_margins(m, subspaces, n, &copy, &m, err);
-    for (int j = 0; rc == 0 && j < n; j++)
-        rc = btf_image_alloc(&outs[j], width, height, 3, err);
+    int (*margins)[3][BTF_MAX_LEVELS] = NULL;
+    btf_status rc = BTF_OK;
+    if (!m || n < 0)
+        rc = btf_fail(err, BTF_E_ARG, "GPU synthesis: no model, or %d images", n);
+    if (rc == BTF_OK && n > 0 &&
+        !(margins = btf_calloc((size_t)n, sizeof *margins, err)))
+        rc = BTF_E_NOMEM;
+    if (rc == BTF_OK)
+        rc = check_request(m, subspaces, n, margins, err);
+    for (int j = 0; rc == 0 && j < n; j++) {
+        int w, h;
+        image_size(m, subspaces[j], &o, &w, &h);
+        if ((rc = btf_synth_check_size(w, h, err)) == BTF_OK)
+            rc = btf_image_alloc(&outs[j], w, h, 3, err);
+    }
     g->jobs = g->batches = 0;
     uint64_t limit = btf_vk_info(g->vk)->max_storage_buffer_range;
     if (g->max_buffer_bytes && g->max_buffer_bytes < limit)
         limit = g->max_buffer_bytes;
     for (int start = 0; rc == 0 && start < n;) {
+        /* a batch holds images of one size */
+        int width = outs[start].width, height = outs[start].height, same = 1;
+        while (start + same < n && outs[start + same].width == width &&
+               outs[start + same].height == height)
+            same++;
         batch bt;
-        rc = plan_batch(m, subspaces + start, n - start, width, height, limit, &bt, err);
+        rc = plan_batch(m, subspaces + start, margins + start, same, width, height, limit, &bt,
+                        err);
         if (rc == 0)
-            rc = run_batch(g, &bt, seed, outs + start, err);
+            rc = run_batch(g, &bt, o.seed, outs + start, err);
         for (int j = 0; rc == 0 && j < bt.n; j++)
             for (int y = 0; rc == 0 && y < height; y++)
                 rc = btf_check_finite_row(outs[start + j].data + (size_t)y * width * 3,
@@ -654,6 +658,6 @@ int btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int
     if (rc)
         for (int j = 0; j < n; j++)
             btf_image_free(&outs[j]);
-    free(copy.subspaces); /* only the array: the rest is the caller's model */
+    free(margins);
     return rc;
 }

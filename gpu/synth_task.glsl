@@ -1,4 +1,5 @@
-// synth_task.glsl -- the task records the synthesis shaders read (std430).
+// synth_task.glsl -- the task records the synthesis shaders read (std430;
+// CAR synthesis, Haindl & Filip 2007, section II.C).
 // Their C mirror is in gpu/synth_gpu.c (gpu_task, gpu_unmix): 4-byte
 // members only, so both sides agree on the layout without padding rules.
 
@@ -9,15 +10,15 @@
 struct Task {
     int fx0, fy0, fw, fh;     // absolute column of the buffer's column 0 and row of its
                               // row 0; buffer width and rows (a strip of the field)
-    int rb;                   // rows [0, rb) of the buffer are given (carried over
-                              // from the previous strip, or zero before the field's
-                              // first row); rows [rb, fh) are computed
+    int rows_given;           // rows [0, rows_given) of the buffer are given (carried
+                              // over from the previous strip, or zero before the
+                              // field's first row); rows [rows_given, fh) are computed
     int x0, y0, w, h;         // the level's window (absolute) and size
     uint field_off, g_off;    // offsets (floats) into Fields[] and Gauss[]
     uint stream;              // noise stream (subspace, band, level)
     int n;                    // neighbours
-    int n_prev;               // of which the first n_prev are on earlier rows
-    int a;                    // wavefront slope: pixel (r, c) is ready at a r + c
+    int n_earlier;            // of which the first n_earlier are on earlier rows
+    int slope;                // wavefront slope a: pixel (r, c) is ready at step a r + c
     int coarse;               // the task of level + 1 of the same band, or -1
     float sigma, mean;
     int off_r[24];

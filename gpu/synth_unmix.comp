@@ -1,5 +1,7 @@
-// synth_unmix.comp -- the inverse spectral decorrelation on the GPU:
-// rgb_k = mean_k + sum_b basis[b][k] band_b, with btf_unmix as on the CPU.
+// synth_unmix.comp -- the inverse spectral decorrelation on the GPU (Haindl
+// & Filip 2007, section II.C, the last step of synthesis):
+// rgb_k = mean_k + sum_b basis[b][k] band_b, with btf_unmix as on the CPU
+// (src/synth/colour.c).
 // One workgroup per subspace image, a grid-stride loop over its pixels.
 #version 450
 #extension GL_GOOGLE_include_directive : require

@@ -1,5 +1,7 @@
 /*
- * vk.c — the internal Vulkan compute layer (see vk.h and docs/gpu.md):
+ * vk.c — the internal Vulkan compute layer under GPU synthesis (Haindl &
+ * Filip 2007, section II.C, computed by compute shaders; see vk.h and
+ * docs/gpu.md):
  * instance and device choice, memory types, storage buffers with upload and
  * download, compute pipelines from SPIR-V, and jobs of dispatches with a
  * barrier after each command.
@@ -195,39 +197,6 @@ void btf_vk_version_text(uint32_t v, char *buf, size_t n)
              VK_API_VERSION_PATCH(v));
 }
 
-/* Strict "0" / "1" (or unset, empty: 0) from the environment. */
-static int env_flag(const char *name, int *out, btf_error *err)
-{
-    const char *s = getenv(name);
-    *out = 0;
-    if (!s || !*s || !strcmp(s, "0"))
-        return BTF_OK;
-    if (!strcmp(s, "1")) {
-        *out = 1;
-        return BTF_OK;
-    }
-    return btf_fail(err, BTF_E_ARG, "%s='%s': expected 0 or 1", name, s);
-}
-
-/* A non-negative decimal index from the environment; -1 when unset. */
-static int env_index(const char *name, int *out, btf_error *err)
-{
-    const char *s = getenv(name);
-    *out = -1;
-    if (!s || !*s)
-        return BTF_OK;
-    long v = 0;
-    for (const char *p = s; *p; p++) {
-        if (*p < '0' || *p > '9' || v > 100000)
-            return btf_fail(err, BTF_E_ARG,
-                            "%s='%s': expected a device index (see btfcar info --devices)", name,
-                            s);
-        v = v * 10 + (*p - '0');
-    }
-    *out = (int)v;
-    return BTF_OK;
-}
-
 /* ---------------------------------------------------------- instance */
 
 static int has_layer(const char *name, int *found, btf_error *err)
@@ -292,7 +261,7 @@ static int check_validation_support(int *sync_validation, btf_error *err)
         return rc;
     if (!found)
         return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "Vulkan validation was requested (opts or BTF_VK_VALIDATION=1) but the "
+                        "Vulkan validation was requested (btf_vk_opts.validation) but the "
                         "layer %s is not installed (Debian: vulkan-validationlayers)",
                         VALIDATION_LAYER);
     if (!has_instance_extension(NULL, VK_EXT_DEBUG_UTILS_EXTENSION_NAME) &&
@@ -455,7 +424,7 @@ static void fill_info(VkPhysicalDevice p, int index, btf_vk_device_info *di)
             di->device_local_bytes = mp.memoryHeaps[h].size;
 }
 
-int btf_vk_list_devices(btf_vk_device_info **list, int *count, btf_error *err)
+btf_status btf_vk_list_devices(btf_vk_device_info **list, int *count, btf_error *err)
 {
     *list = NULL;
     *count = 0;
@@ -500,23 +469,21 @@ static int type_rank(int type)
     }
 }
 
-/* A named device (index from opts or BTF_VK_DEVICE): it must exist and run
- * our shaders. */
-static int named_device(const btf_vk_device_info *in, int n, int index, const char *how,
-                        btf_error *err)
+/* A named device (btf_vk_opts.device): it must exist and run our shaders. */
+static int named_device(const btf_vk_device_info *in, int n, int index, btf_error *err)
 {
     if (index < 0 || index >= n)
         return btf_fail(err, BTF_E_ARG,
-                        "%s: Vulkan device %d does not exist (%d device%s: indices 0..%d; see "
+                        "Vulkan device %d does not exist (%d device%s: indices 0..%d; see "
                         "btfcar info --devices)",
-                        how, index, n, n == 1 ? "" : "s", n - 1);
+                        index, n, n == 1 ? "" : "s", n - 1);
     if (!in[index].usable) {
         char v[32];
         btf_vk_version_text(in[index].api_version, v, sizeof v);
         return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "%s: Vulkan device %d (%s, Vulkan %s) cannot run btfcar's shaders "
+                        "Vulkan device %d (%s, Vulkan %s) cannot run btfcar's shaders "
                         "(Vulkan 1.1 and a compute queue needed)",
-                        how, index, in[index].name, v);
+                        index, in[index].name, v);
     }
     return BTF_OK;
 }
@@ -543,7 +510,7 @@ static int best_device(const btf_vk_device_info *in, int n, int allow_cpu, int *
     if (cpu >= 0)
         return btf_fail(err, BTF_E_UNSUPPORTED,
                         "only a CPU Vulkan device was found (%d: %s); allow it "
-                        "(btf_vk_opts.allow_cpu) or name it with BTF_VK_DEVICE=%d",
+                        "(btf_gpu_opts.allow_cpu) or name it (btf_gpu_opts.device = %d)",
                         cpu, in[cpu].name, cpu);
     return btf_fail(err, BTF_E_UNSUPPORTED,
                     "no usable Vulkan device (Vulkan 1.1 with a compute queue needed; %d "
@@ -554,7 +521,7 @@ static int best_device(const btf_vk_device_info *in, int n, int allow_cpu, int *
 static int choose_device(btf_vk *vk, const btf_vk_opts *o, btf_error *err)
 {
     VkPhysicalDevice *devs;
-    int n, env = -1, chosen = -1;
+    int n, chosen = -1;
     int rc = enumerate(vk->instance, &devs, &n, err);
     if (rc)
         return rc;
@@ -563,9 +530,7 @@ static int choose_device(btf_vk *vk, const btf_vk_opts *o, btf_error *err)
     for (int i = 0; !rc && i < n; i++)
         fill_info(devs[i], i, &in[i]);
     if (!rc && o->use_device)
-        rc = named_device(in, n, chosen = o->device, "btf_vk_opts.device", err);
-    else if (!rc && !(rc = env_index("BTF_VK_DEVICE", &env, err)) && env >= 0)
-        rc = named_device(in, n, chosen = env, "BTF_VK_DEVICE", err);
+        rc = named_device(in, n, chosen = o->device, err);
     else if (!rc)
         rc = best_device(in, n, o->allow_cpu, &chosen, err);
     if (!rc) {
@@ -708,20 +673,17 @@ static int choose_memory(btf_vk *vk, int force_staging, btf_error *err)
 
 /* ------------------------------------------------------------ context */
 
-int btf_vk_create(const btf_vk_opts *o, btf_vk **out, btf_error *err)
+btf_status btf_vk_create(const btf_vk_opts *o, btf_vk **out, btf_error *err)
 {
     static const btf_vk_opts defaults;
     *out = NULL;
     if (!o)
         o = &defaults;
-    int env_validation;
-    int rc = env_flag("BTF_VK_VALIDATION", &env_validation, err);
-    if (rc)
-        return rc;
     btf_vk *vk = btf_calloc(1, sizeof *vk, err);
     if (!vk)
         return BTF_E_NOMEM;
-    vk->validation = o->validation || env_validation;
+    int rc;
+    vk->validation = o->validation;
     vk->timeout_ms = o->timeout_ms ? o->timeout_ms : DEFAULT_TIMEOUT_MS;
     vk->timeout_ns = (uint64_t)vk->timeout_ms * 1000000u;
     rc = make_instance(vk, vk->validation, &vk->instance, err);
@@ -917,7 +879,7 @@ static int buffer_make(btf_vk *vk, VkDeviceSize bytes, VkBufferUsageFlags usage,
     return BTF_OK;
 }
 
-int btf_vk_buffer_create(btf_vk *vk, uint64_t bytes, btf_vk_buffer **out, btf_error *err)
+btf_status btf_vk_buffer_create(btf_vk *vk, uint64_t bytes, btf_vk_buffer **out, btf_error *err)
 {
     *out = NULL;
     int rc = check_usable(vk, err);
@@ -1003,7 +965,7 @@ static int staged(btf_vk *vk, VkBuffer buf, uint64_t offset, unsigned char *host
     return rc;
 }
 
-int btf_vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset, const void *data,
+btf_status btf_vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset, const void *data,
                          uint64_t bytes, btf_error *err)
 {
     int rc = check_usable(vk, err);
@@ -1018,7 +980,7 @@ int btf_vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset, const 
     return staged(vk, buf->buffer, offset, (unsigned char *)(uintptr_t)data, bytes, 1, err);
 }
 
-int btf_vk_buffer_download(btf_vk *vk, const btf_vk_buffer *buf, uint64_t offset, void *data,
+btf_status btf_vk_buffer_download(btf_vk *vk, const btf_vk_buffer *buf, uint64_t offset, void *data,
                            uint64_t bytes, btf_error *err)
 {
     int rc = check_usable(vk, err);
@@ -1135,7 +1097,7 @@ static int make_pipeline(btf_vk_pipeline *p, const uint32_t *spirv, size_t spirv
     return BTF_OK;
 }
 
-int btf_vk_pipeline_create(btf_vk *vk, const uint32_t *spirv, size_t spirv_bytes,
+btf_status btf_vk_pipeline_create(btf_vk *vk, const uint32_t *spirv, size_t spirv_bytes,
                            int n_buffers, uint32_t push_constant_bytes,
                            const uint32_t *spec_values, int n_spec, btf_vk_pipeline **out,
                            btf_error *err)
@@ -1194,7 +1156,7 @@ static void job_free(btf_vk_job *job)
     free(job);
 }
 
-int btf_vk_job_begin(btf_vk *vk, btf_vk_job **out, btf_error *err)
+btf_status btf_vk_job_begin(btf_vk *vk, btf_vk_job **out, btf_error *err)
 {
     *out = NULL;
     int rc = check_usable(vk, err);
@@ -1339,7 +1301,7 @@ static int check_dispatch(const btf_vk_job *job, const btf_vk_pipeline *pipe,
     return BTF_OK;
 }
 
-int btf_vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
+btf_status btf_vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
                         btf_vk_buffer *const *bufs, int nbufs, const void *push,
                         uint32_t push_bytes, uint32_t gx, uint32_t gy, uint32_t gz,
                         btf_error *err)
@@ -1365,7 +1327,7 @@ int btf_vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
     return BTF_OK;
 }
 
-int btf_vk_job_fill(btf_vk_job *job, btf_vk_buffer *buf, uint64_t offset, uint64_t bytes,
+btf_status btf_vk_job_fill(btf_vk_job *job, btf_vk_buffer *buf, uint64_t offset, uint64_t bytes,
                     uint32_t value, btf_error *err)
 {
     int rc = check_usable(job->vk, err);
@@ -1392,7 +1354,7 @@ static void record_copy(btf_vk_job *job, VkBuffer src, uint64_t src_off, VkBuffe
     barrier_after(job->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
 }
 
-int btf_vk_job_copy(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_offset,
+btf_status btf_vk_job_copy(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_offset,
                     btf_vk_buffer *dst, uint64_t dst_offset, uint64_t bytes, btf_error *err)
 {
     int rc = check_usable(job->vk, err);
@@ -1428,7 +1390,7 @@ static int job_stuck(btf_vk_job *job, VkResult r, btf_error *err)
     return btf_fail(err, BTF_E_UNSUPPORTED, "%s", vk->broken);
 }
 
-int btf_vk_job_submit_wait(btf_vk_job *job, btf_error *err)
+btf_status btf_vk_job_submit_wait(btf_vk_job *job, btf_error *err)
 {
     btf_vk *vk = job->vk;
     int rc = check_usable(vk, err);

@@ -1,10 +1,12 @@
 /*
- * vk.h — the library's small internal Vulkan compute layer (gpu/vk.c): one
+ * vk.h — the library's small internal Vulkan compute layer (gpu/vk.c), on
+ * which GPU synthesis (Haindl & Filip 2007, section II.C, as compute
+ * shaders) is built: one
  * device, one compute queue, storage buffers, compute pipelines built from
  * SPIR-V, and jobs (one command buffer of dispatches, fills and copies,
- * submitted and waited for). GPU synthesis builds on it; `btfcar info
- * --devices` lists devices with it. Not installed: no Vulkan type appears
- * here, so includers need no Vulkan headers.
+ * submitted and waited for). btf_gpu_list_devices lists devices with it.
+ * Not installed: no Vulkan type appears here, so includers need no Vulkan
+ * headers.
  *
  * Why a layer of our own: the Vulkan boilerplate (instance, device choice,
  * memory types, descriptor sets, barriers, fences) is the same for every
@@ -14,8 +16,9 @@
  *
  * Conventions are the library's: btf_status returns, one-line btf_error
  * messages naming the Vulkan call and its VkResult, zero-initialised option
- * structs, no globals, no printing. Every Vulkan call of this file is checked;
- * with no Vulkan driver installed everything fails with BTF_E_UNSUPPORTED.
+ * structs, no globals, no environment reads, no printing. Every Vulkan call
+ * of this file is checked; with no Vulkan driver installed everything fails
+ * with BTF_E_UNSUPPORTED.
  *
  * Threads: a btf_vk and everything made from it must be used by one thread at
  * a time (one queue, one command pool). Separate btf_vk handles are
@@ -41,7 +44,7 @@ enum {
 };
 
 typedef struct btf_vk_device_info {
-    int index;                      /* in btf_vk_list_devices (BTF_VK_DEVICE=index) */
+    int index;                      /* in btf_vk_list_devices (btf_vk_opts.device) */
     char name[256];
     int type;                       /* BTF_VK_TYPE_... (VkPhysicalDeviceType) */
     int is_cpu;                     /* type == BTF_VK_TYPE_CPU (lavapipe) */
@@ -63,9 +66,9 @@ typedef struct btf_vk_device_info {
 } btf_vk_device_info;
 
 /* Every Vulkan device, in the driver's enumeration order (the index of
- * BTF_VK_DEVICE and btf_vk_opts.device). *list is malloc'd (free() it);
+ * btf_vk_opts.device). *list is malloc'd (free() it);
  * *count may be 0. No driver: BTF_E_UNSUPPORTED. */
-int btf_vk_list_devices(btf_vk_device_info **list, int *count, btf_error *err);
+btf_status btf_vk_list_devices(btf_vk_device_info **list, int *count, btf_error *err);
 
 /* "discrete GPU", "integrated GPU", "virtual GPU", "CPU", "other". */
 const char *btf_vk_type_name(int type);
@@ -78,23 +81,22 @@ typedef struct btf_vk btf_vk;
 
 typedef struct btf_vk_opts {
     int use_device;  /* 1: take `device` (an index of btf_vk_list_devices);
-                        0: BTF_VK_DEVICE=N if set, else the best device:
-                        discrete > integrated > virtual GPU > CPU */
+                        0: the best device: discrete > integrated > virtual
+                        GPU > CPU */
     int device;
     int allow_cpu;   /* automatic choice only: 1 lets a CPU device (lavapipe) be
                         chosen; 0 refuses it with BTF_E_UNSUPPORTED. A device
-                        named by use_device or BTF_VK_DEVICE is always taken. */
+                        named by use_device is always taken. */
     int validation;  /* 1: VK_LAYER_KHRONOS_validation (with synchronisation
                         validation) and a messenger counting its errors and
-                        warnings; BTF_E_UNSUPPORTED if the layer is missing.
-                        BTF_VK_VALIDATION=1 in the environment forces it on. */
+                        warnings; BTF_E_UNSUPPORTED if the layer is missing. */
     int force_staging; /* 1: never map storage buffers, use staging copies
                           (tests the path discrete GPUs take) */
     uint32_t timeout_ms; /* wait limit of one job (0: 10 minutes) */
 } btf_vk_opts;
 
 /* Instance, device, compute queue, command pool. o may be NULL (defaults). */
-int btf_vk_create(const btf_vk_opts *o, btf_vk **out, btf_error *err);
+btf_status btf_vk_create(const btf_vk_opts *o, btf_vk **out, btf_error *err);
 /* Waits for the device to be idle, then frees everything; NULL is fine.
  * Buffers and pipelines must be destroyed first. */
 void btf_vk_destroy(btf_vk *vk);
@@ -119,7 +121,7 @@ typedef struct btf_vk_buffer btf_vk_buffer;
  * undefined). Larger data must be split by the caller. Errors: BTF_E_ARG for
  * a size beyond the device's limits, BTF_E_NOMEM when the memory heap cannot
  * hold it. */
-int btf_vk_buffer_create(btf_vk *vk, uint64_t bytes, btf_vk_buffer **out, btf_error *err);
+btf_status btf_vk_buffer_create(btf_vk *vk, uint64_t bytes, btf_vk_buffer **out, btf_error *err);
 void btf_vk_buffer_destroy(btf_vk_buffer *buf); /* NULL is fine */
 uint64_t btf_vk_buffer_size(const btf_vk_buffer *buf);
 /* The mapped memory when info.mapped_buffers (read and write it directly
@@ -129,9 +131,9 @@ void *btf_vk_buffer_mapped(btf_vk_buffer *buf);
 /* Copies bytes between host memory and [offset, offset + bytes) of the
  * buffer. Synchronous; never while a submitted job uses the buffer (jobs
  * are synchronous too, so only threads could break this). */
-int btf_vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset, const void *data,
+btf_status btf_vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset, const void *data,
                          uint64_t bytes, btf_error *err);
-int btf_vk_buffer_download(btf_vk *vk, const btf_vk_buffer *buf, uint64_t offset, void *data,
+btf_status btf_vk_buffer_download(btf_vk *vk, const btf_vk_buffer *buf, uint64_t offset, void *data,
                            uint64_t bytes, btf_error *err);
 
 /* -------------------------------------------------------------- pipelines */
@@ -146,7 +148,7 @@ typedef struct btf_vk_pipeline btf_vk_pipeline;
  * constants at offset 0; specialisation constants constant_id 0 .. n_spec - 1,
  * 4 bytes each (uint, int or float bits). The shader must declare exactly
  * this interface (the validation layer checks). */
-int btf_vk_pipeline_create(btf_vk *vk, const uint32_t *spirv, size_t spirv_bytes,
+btf_status btf_vk_pipeline_create(btf_vk *vk, const uint32_t *spirv, size_t spirv_bytes,
                            int n_buffers, uint32_t push_constant_bytes,
                            const uint32_t *spec_values, int n_spec,
                            btf_vk_pipeline **out, btf_error *err);
@@ -160,30 +162,30 @@ typedef struct btf_vk_job btf_vk_job;
  * btf_vk_job_submit_wait. Every command is followed by a memory barrier, so
  * each one sees the results of all before it (and the host sees everything
  * once the job is done). A failed record call leaves the job as it was. */
-int btf_vk_job_begin(btf_vk *vk, btf_vk_job **out, btf_error *err);
+btf_status btf_vk_job_begin(btf_vk *vk, btf_vk_job **out, btf_error *err);
 
 /* Dispatches gx * gy * gz workgroups of pipe with bufs[0 .. nbufs-1] bound at
  * bindings 0 .. nbufs-1 (nbufs must equal the pipeline's n_buffers) and
  * push_bytes (equal to its push_constant_bytes) of push constants. Counts
  * beyond maxComputeWorkGroupCount are refused (BTF_E_ARG); a zero count
  * records nothing. */
-int btf_vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
+btf_status btf_vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
                         btf_vk_buffer *const *bufs, int nbufs, const void *push,
                         uint32_t push_bytes, uint32_t gx, uint32_t gy, uint32_t gz,
                         btf_error *err);
 /* Fills [offset, offset + bytes) with the 32-bit value; offset and bytes are
  * multiples of 4. */
-int btf_vk_job_fill(btf_vk_job *job, btf_vk_buffer *buf, uint64_t offset, uint64_t bytes,
+btf_status btf_vk_job_fill(btf_vk_job *job, btf_vk_buffer *buf, uint64_t offset, uint64_t bytes,
                     uint32_t value, btf_error *err);
 /* Copies bytes from src at src_offset to dst at dst_offset (regions of one
  * buffer must not overlap). */
-int btf_vk_job_copy(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_offset,
+btf_status btf_vk_job_copy(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_offset,
                     btf_vk_buffer *dst, uint64_t dst_offset, uint64_t bytes, btf_error *err);
 
 /* Submits, waits (at most opts.timeout_ms) and frees the job, whatever the
  * outcome. A timeout or a lost device is BTF_E_UNSUPPORTED and leaves the
  * btf_vk unusable (only btf_vk_destroy then, which waits for the device). */
-int btf_vk_job_submit_wait(btf_vk_job *job, btf_error *err);
+btf_status btf_vk_job_submit_wait(btf_vk_job *job, btf_error *err);
 /* Frees a job without running it; NULL is fine. */
 void btf_vk_job_abort(btf_vk_job *job);
 

@@ -1,11 +1,14 @@
 /*
- * bench_car.c — figures for the CAR model (issue 5): the paper's synthesis
+ * bench_car.c — figures for the CAR model (Haindl & Filip 2007, section
+ * II.C): the paper's synthesis
  * workload (15 subspace images of 512^2, 3 bands, 3 pyramid levels) on one
  * core, pixels per second, the noise generator alone, and the analysis of a
  * 256^2 image with neighbourhood selection. Medians of several runs; never
  * fails on time.
  */
 #include "synth/synth.h"
+#include "synth/synth_testing.h"
+#include "car/car.h"
 #include "btfcar.h"
 #include "testutil.h"
 #include "btf_shared.h"
@@ -92,24 +95,26 @@ int main(void)
         many.subspaces = calloc(15, sizeof(btf_subspace_model));
         for (int k = 0; k < 15; k++)
             many.subspaces[k] = which[w]->subspaces[0];
+        /* margins kept, as in a fitted or read model: the figure is synthesis */
+        if (btf_model_keep_margins(&many, -1.0) != BTF_OK)
+            return 1;
         /* 9 runs of each field generator, interleaved: this VM's timings
          * wander by 20 %; the median and the best run say how much, and
          * the ratio compares like with like. The wavefront (src/synth/wave.c) is
          * what synthesis uses; the row-by-row generator is its fallback. */
         double tw[2][9];
-        int was = btf_wave_enable(1), have = btf_wave_available();
+        int have = btf_wave_available();
         for (int r = 0; r < 9; r++)
             for (int on = 1; on >= 0; on--) {
-                btf_wave_enable(on && have);
+                btf_synth_opts so = {.width = 512, .height = 512, .seed = 1, .row_by_row = !on};
                 double t0 = tu_now();
                 for (int k = 0; k < 15; k++)
-                    if (btf_synthesise(&many, k, 512, 512, 1, sink, &acc, &e)) {
+                    if (btf_synthesise(&many, k, &so, sink, &acc, &e)) {
                         fprintf(stderr, "bench_car: %s\n", e.msg);
                         return 1;
                     }
                 tw[on][r] = tu_now() - t0;
             }
-        btf_wave_enable(was);
         double best[2], med[2], px = 15.0 * 512 * 512;
         for (int on = 0; on < 2; on++) {
             best[on] = tw[on][0];
@@ -120,7 +125,8 @@ int main(void)
         int widest = 0;
         for (int b = 0; b < 3; b++)
             for (int l = 0; l < 3; l++) {
-                int mg = which[w]->subspaces[0].bands[b][l].margin;
+                int mg = 0;
+                btf_synth_margin(which[w], 0, b, l, &mg, &e);
                 widest = mg > widest ? mg : widest;
             }
         printf("synthesis (cpu, 1 core, %s, largest margin %d): 15 subspace images of 512x512, "
@@ -132,8 +138,8 @@ int main(void)
                    "ms; wavefront / rows %.2f (medians)\n", 1e3 * med[0], 1e3 * best[0],
                    med[1] / med[0]);
         else
-            printf("   (row by row: this build or CPU has no wavefront, or BTF_NOISE_PORTABLE "
-                   "is set)\n");
+            printf("   (row by row: this build or CPU has no wavefront)\n");
+        btf_model_internal_free(many.internal);
         free(many.subspaces);
     }
     for (int i = 0; i < 2; i++)
@@ -142,9 +148,10 @@ int main(void)
     /* A field without neighbours: the noise as synthesis draws it, plus the
      * field's own per-row work. */
     btf_car_band white = {.n = 0, .sigma = 1.0f, .mean = 0.0f};
+    btf_synth_opts fo = {.width = 1024, .height = 1024, .seed = 7};
     for (int r = 0; r < 5; r++) {
         double t0 = tu_now();
-        btf_car_synthesise_field(&white, 1024, 1024, 7, 1, sink, &acc, &e);
+        btf_car_synthesise_field(&white, -1, 1, &fo, sink, &acc, &e);
         t[r] = tu_now() - t0;
     }
     printf("white field: %.2f ns per pixel through the field pipeline (noise, row bookkeeping, "
@@ -154,7 +161,7 @@ int main(void)
     const btf_car_band *b0 = &m.subspaces[0].bands[0][0];
     for (int r = 0; r < 5; r++) {
         double t0 = tu_now();
-        btf_car_synthesise_field(b0, 1024, 1024, 7, 1, sink, &acc, &e);
+        btf_car_synthesise_field(b0, -1, 1, &fo, sink, &acc, &e);
         t[r] = tu_now() - t0;
     }
     printf("car field: %d neighbours, 1024x1024: %.2f ns per pixel (median of 5)\n", b0->n,

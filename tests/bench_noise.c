@@ -104,7 +104,7 @@ int main(void)
     report("btf_noise4 (Philox + 2 Box-Muller pairs)", "Gaussian", run_noise4);
     report("btf_noise1 (Philox + 1 Box-Muller pair)", "Gaussian", run_noise1);
     report("btf_philox (Philox-4x32-7 alone)", "call", run_philox);
-    report(btf_noise_path_avx2() ? "btf_noise_blocks (rows, AVX2 path)"
+    report(btf_noise_avx2_available() ? "btf_noise_blocks (rows, AVX2 path)"
                                  : "btf_noise_blocks (rows, portable path)",
            "Gaussian", run_rows);
     return 0;

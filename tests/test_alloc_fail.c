@@ -784,12 +784,12 @@ static void analyse(void **state)
 #define SYN_H 24
 #define SYN_SEED 11
 
-/* The one call of the synthesis API (kept in one place: its signature is
- * about to take an options struct). */
+/* The one call of the synthesis API. */
 static int synthesise_cpu(const btf_model *m, int subspace, int width, int height,
                           uint64_t seed, btf_rows_fn fn, void *user, btf_error *err)
 {
-    return btf_synthesise(m, subspace, width, height, seed, fn, user, err);
+    btf_synth_opts o = {.width = width, .height = height, .seed = seed};
+    return btf_synthesise(m, subspace, &o, fn, user, err);
 }
 
 typedef struct synth_ctx {

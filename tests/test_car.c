@@ -1,6 +1,8 @@
-/* test_car.c — the CAR model: decorrelation, pyramid, estimation, Bayesian
- * neighbourhood selection, stability, synthesis (issue 5 points 1-6, 9). */
+/* test_car.c — the CAR model (Haindl & Filip 2007, section II.C):
+ * decorrelation, pyramid, estimation, Bayesian neighbourhood selection,
+ * stability, synthesis and its margins. */
 #include "synth/synth.h"
+#include "synth/synth_testing.h"
 #include "car/car.h"
 #include "testutil.h"
 
@@ -52,14 +54,31 @@ static int collect_rows(void *user, int y, int nrows, const float *rows, btf_err
     return 0;
 }
 
-/* A field of the model, w x h, into a malloc'd double array. */
-static double *field(const btf_car_band *b, int w, int h, uint64_t seed)
+/* A field of the model, w x h, with the given margin (< 0: the band's
+ * own), row by row or as the generators choose, into a malloc'd double
+ * array. */
+static double *field_with(const btf_car_band *b, int margin, int w, int h, uint64_t seed,
+                          int row_by_row)
 {
     collect c = {.data = malloc((size_t)w * h * sizeof(double)), .width = w, .finite = 1};
     btf_error e = {0};
-    TU_OK(btf_car_synthesise_field(b, w, h, seed, 7, collect_rows, &c, &e), &e);
+    btf_synth_opts o = {.width = w, .height = h, .seed = seed, .row_by_row = row_by_row};
+    TU_OK(btf_car_synthesise_field(b, margin, 7, &o, collect_rows, &c, &e), &e);
     assert_true(c.finite);
     return c.data;
+}
+
+static double *field(const btf_car_band *b, int w, int h, uint64_t seed)
+{
+    return field_with(b, -1, w, h, seed, 0);
+}
+
+/* Subspace 0 of m, w x h (0: the analysed size), into an image. */
+static void synth_image(const btf_model *m, int w, int h, uint64_t seed, btf_image *out)
+{
+    btf_error e = {0};
+    btf_synth_opts o = {.width = w, .height = h, .seed = seed};
+    TU_OK(btf_synthesise_image(m, 0, &o, out, &e), &e);
 }
 
 /* A w x h colour texture from one 4-neighbour CAR field: red the field,
@@ -203,9 +222,10 @@ static void estimates_recover_known_parameters(void **state)
 /* The recursion written out directly: field row by row, pixel by pixel,
  * zero outside the field, in the order of btf_shared.h (earlier rows in
  * stored order, the noise, same-row offsets farthest first). */
-static float *direct_field(const btf_car_band *b, int w, int h, uint64_t seed, uint32_t stream)
+static float *direct_field(const btf_car_band *b, int margin, int w, int h, uint64_t seed,
+                           uint32_t stream)
 {
-    int m = btf_band_margin(b), fw = w + 2 * m, fh = h + m;
+    int m = margin < 0 ? btf_car_margin(b) : margin, fw = w + 2 * m, fh = h + m;
     float *f = calloc((size_t)fw * fh, sizeof(float)), *out = malloc((size_t)w * h * sizeof(float));
     assert_true(f && out);
     int same[BTF_CAR_MAX_NEIGHBOURS];
@@ -239,10 +259,10 @@ static float *direct_field(const btf_car_band *b, int w, int h, uint64_t seed, u
 
 /* How many values of the synthesised field (stream 7) differ from the
  * direct recursion's. */
-static size_t values_off_direct(const btf_car_band *b, int w, int h, uint64_t seed)
+static size_t values_off_direct(const btf_car_band *b, int margin, int w, int h, uint64_t seed)
 {
-    double *got = field(b, w, h, seed);
-    float *want = direct_field(b, w, h, seed, 7);
+    double *got = field_with(b, margin, w, h, seed, 0);
+    float *want = direct_field(b, margin, w, h, seed, 7);
     size_t diff = 0;
     for (int i = 0; i < w * h; i++)
         diff += (float)got[i] != want[i];
@@ -251,8 +271,8 @@ static size_t values_off_direct(const btf_car_band *b, int w, int h, uint64_t se
     return diff;
 }
 
-/* CPU synthesis steps two rows at once where it can (src/synth/synth.c,
- * field_pair), with row r + 1 trailing row r by a chunk plus its reach;
+/* CPU synthesis steps two rows at once where it can (src/synth/rows.c,
+ * btf_rows_pair), with row r + 1 trailing row r by a chunk plus its reach;
  * every value must still be the direct recursion's, bit for bit: the
  * family's shapes and others, same-row offsets only, no neighbours, reaches
  * past a chunk, widths on both sides of the pairing threshold (for the
@@ -270,16 +290,26 @@ static void row_pairs_match_direct_recursion(void **state)
         btf_car_band b = s < 8 ? model(specs[s], g, 0.7f, 0.25f) : model("0:-1", g, 0.7f, 0.25f);
         if (s == 8)
             b.n = 0; /* white noise */
-        b.margin = s == 0 ? 8 : 8 + 4 * s; /* as fitting would set it */
+        int margin = s == 0 ? 8 : 8 + 4 * s; /* of the size fitting gives */
         for (int wi = 0; wi < 8; wi++)
             for (int hi = 0; hi < 3; hi++) {
                 int w = widths[wi], h = heights[hi];
-                size_t diff = values_off_direct(&b, w, h, 1234 + s);
+                size_t diff = values_off_direct(&b, margin, w, h, 1234 + s);
                 if (diff)
                     print_error("%s at %dx%d: %zu values differ\n", specs[s], w, h, diff);
                 assert_int_equal(diff, 0);
             }
     }
+}
+
+/* Rows of RGB into an image of their width (the user). */
+static int rows_into_image(void *user, int y, int nrows, const float *rows, btf_error *err)
+{
+    (void)err;
+    btf_image *img = user;
+    memcpy(img->data + (size_t)y * img->width * 3, rows,
+           (size_t)nrows * img->width * 3 * sizeof(float));
+    return 0;
 }
 
 /* The same through btf_synthesise with three bands stepping together:
@@ -295,17 +325,15 @@ static void row_pairs_of_three_bands(void **state)
     const char *one_shape[3] = {"0:-1,0:-2,-1:0", "0:-2,0:-1,-1:40,-2:-2",
                                 "0:-1,0:-2,-1:1,-3:0"};
     const float g[6] = {0.3f, 0.2f, -0.1f, 0.15f, 0.05f, -0.05f};
-    const int margins[3] = {200, 8, 33};
+    int margins[3][BTF_MAX_LEVELS] = {{200}, {8}, {33}};
     for (int cfg = 0; cfg < 2; cfg++) {
         const char *const *specs = cfg ? one_shape : mixed;
         btf_subspace_model sm;
         memset(&sm, 0, sizeof sm);
         sm.levels = 1;
         sm.basis[0] = sm.basis[4] = sm.basis[8] = 1.0f;
-        for (int b = 0; b < 3; b++) {
+        for (int b = 0; b < 3; b++)
             sm.bands[b][0] = model(specs[b], g, 0.7f, 0.0f);
-            sm.bands[b][0].margin = margins[b];
-        }
         btf_model m = {.n_subspaces = 1, .subspaces = &sm};
         int widths[] = {1, 100, 200, 257, 300, 600}, heights[] = {1, 2, 7};
         for (int wi = 0; wi < 6; wi++)
@@ -313,10 +341,12 @@ static void row_pairs_of_three_bands(void **state)
                 int w = widths[wi], h = heights[hi];
                 btf_image img;
                 btf_error e = {0};
-                TU_OK(btf_synthesise_image(&m, 0, w, h, 42, &img, &e), &e);
+                TU_OK(btf_image_alloc(&img, w, h, 3, &e), &e);
+                btf_synth_opts o = {.width = w, .height = h, .seed = 42};
+                TU_OK(btf_synthesise_margins(&m, 0, margins, &o, rows_into_image, &img, &e), &e);
                 size_t diff = 0;
                 for (int b = 0; b < 3; b++) {
-                    float *want = direct_field(&sm.bands[b][0], w, h, 42,
+                    float *want = direct_field(&sm.bands[b][0], margins[b][0], w, h, 42,
                                                btf_noise_stream(0, (uint32_t)b, 0));
                     for (int i = 0; i < w * h; i++)
                         diff += img.data[3 * i + b] != want[i];
@@ -350,7 +380,7 @@ static void wavefront_matches_direct_recursion(void **state)
                          0.02f, 0.01f};
     const int widths[] = {100, 119, 120, 121, 200, 1000}, heights[] = {1, 7, 8, 9, 30};
     const int margins[] = {8, 13, 22};
-    int waved = 0, was = btf_wave_enable(1); /* whatever BTF_SYNTH_WAVE says */
+    int waved = 0;
     for (int s = 0; s < 7; s++) {
         btf_car_band b = model(s == 2 ? "0:-1" : specs[s], g, 0.7f, 0.25f);
         if (s == 2)
@@ -359,18 +389,16 @@ static void wavefront_matches_direct_recursion(void **state)
             for (int wi = 0; wi < 6; wi++)
                 for (int hi = 0; hi < 5; hi++) {
                     int w = widths[wi], h = heights[hi];
-                    b.margin = margins[(mi + wi + hi) % 3];
-                    if (b.n == 0)
-                        b.margin = 0;
-                    int fw = w + 2 * b.margin;
+                    int margin = b.n == 0 ? 0 : margins[(mi + wi + hi) % 3];
+                    int fw = w + 2 * margin;
                     if (btf_wave_available() && fw >= 136) {
                         assert_true(btf_wave_supported(&b, fw));
                         waved++;
                     }
-                    size_t diff = values_off_direct(&b, w, h, 99 + s);
+                    size_t diff = values_off_direct(&b, margin, w, h, 99 + s);
                     if (diff)
                         print_error("%s at %dx%d, margin %d: %zu values differ\n", specs[s], w, h,
-                                    b.margin, diff);
+                                    margin, diff);
                     assert_int_equal(diff, 0);
                 }
     }
@@ -384,9 +412,6 @@ static void wavefront_matches_direct_recursion(void **state)
     }
     btf_car_band b = model("0:-1,-1:0", g, 0.7f, 0.0f);
     assert_false(btf_wave_supported(&b, 135));
-    btf_wave_enable(0);
-    assert_false(btf_wave_supported(&b, 1000)); /* switched off */
-    btf_wave_enable(was);
 }
 
 /* Random bands within the wavefront's scope (same-row shapes 0..3, rows
@@ -407,7 +432,7 @@ static int rand_in(uint64_t *st, int lo, int hi)
     return lo + (int)(xorshift(st) % (uint64_t)(hi - lo + 1));
 }
 
-static btf_car_band random_wave_band(uint64_t *st)
+static btf_car_band random_wave_band(uint64_t *st, int *margin)
 {
     btf_car_band b;
     memset(&b, 0, sizeof b);
@@ -433,7 +458,7 @@ static btf_car_band random_wave_band(uint64_t *st)
     b.n = n;
     int pick = rand_in(st, 0, 19);
     b.sigma = pick == 0 ? 0.0f : pick == 1 ? -0.0f : (float)rand_in(st, 1, 1000) / 500.0f;
-    b.margin = rand_in(st, 0, 1) ? rand_in(st, 1, 40) : 0;
+    *margin = rand_in(st, 0, 1) ? rand_in(st, 1, 40) : -1; /* -1: the band's own */
     return b;
 }
 
@@ -441,20 +466,19 @@ static void wavefront_random_bands(void **state)
 {
     (void)state;
     uint64_t st = 88172645463325252ull;
-    int was = btf_wave_enable(1), waved = 0;
+    int waved = 0;
     for (int it = 0; it < 300; it++) {
-        btf_car_band b = random_wave_band(&st);
-        int m = btf_band_margin(&b);
+        int margin;
+        btf_car_band b = random_wave_band(&st, &margin);
+        int m = margin < 0 ? btf_car_margin(&b) : margin;
         int w = rand_in(&st, 1, 500), h = rand_in(&st, 0, 3) ? rand_in(&st, 1, 45)
                                                             : rand_in(&st, 100, 400);
         if (rand_in(&st, 0, 2) == 0) /* fields at the threshold */
             w = rand_in(&st, 100, 160) - 2 * m > 0 ? rand_in(&st, 100, 160) - 2 * m : 1;
         uint64_t seed = xorshift(&st);
-        btf_wave_enable(1);
         waved += btf_wave_supported(&b, w + 2 * m);
-        double *on = field(&b, w, h, seed);
-        btf_wave_enable(0);
-        double *off = field(&b, w, h, seed);
+        double *on = field_with(&b, margin, w, h, seed, 0);
+        double *off = field_with(&b, margin, w, h, seed, 1);
         size_t diff = 0;
         for (size_t i = 0; i < (size_t)w * h; i++)
             diff += memcmp(&on[i], &off[i], sizeof on[i]) != 0;
@@ -464,14 +488,14 @@ static void wavefront_random_bands(void **state)
         free(on);
         free(off);
     }
-    btf_wave_enable(was);
     print_message("%d of 300 random fields ran as a wavefront\n", waved);
     if (btf_wave_available())
         assert_true(waved > 100);
 }
 
 /* Whole syntheses of fitted multi-level models are the same bytes with the
- * wavefront on and off (btf_wave_enable): level windows start at odd and
+ * wavefront on and off (btf_synth_opts.row_by_row), and with the portable
+ * noise loop: level windows start at odd and
  * negative columns, bands of one level run different margins, sizes from
  * 1 x 1 up. */
 static void wavefront_and_rows_give_the_same_images(void **state)
@@ -488,20 +512,21 @@ static void wavefront_and_rows_give_the_same_images(void **state)
         btf_model m;
         TU_OK(btf_texture_fit(&tex, &fo, &m, &e), &e);
         int sizes[][2] = {{1, 1}, {131, 3}, {257, 19}, {600, 41}};
-        int was = btf_wave_enable(1);
         for (int s = 0; s < 4; s++) {
             int w = sizes[s][0], h = sizes[s][1];
-            btf_image on, off;
-            btf_wave_enable(1);
-            TU_OK(btf_synthesise_image(&m, 0, w, h, 7 + s, &on, &e), &e);
-            btf_wave_enable(0);
-            TU_OK(btf_synthesise_image(&m, 0, w, h, 7 + s, &off, &e), &e);
-            btf_wave_enable(1);
+            btf_image on, off, portable;
+            btf_synth_opts o = {.width = w, .height = h, .seed = 7 + s};
+            TU_OK(btf_synthesise_image(&m, 0, &o, &on, &e), &e);
+            o.row_by_row = 1;
+            TU_OK(btf_synthesise_image(&m, 0, &o, &off, &e), &e);
+            o.row_by_row = 0, o.portable_noise = 1;
+            TU_OK(btf_synthesise_image(&m, 0, &o, &portable, &e), &e);
             assert_memory_equal(on.data, off.data, (size_t)w * h * 3 * sizeof(float));
+            assert_memory_equal(on.data, portable.data, (size_t)w * h * 3 * sizeof(float));
             btf_image_free(&on);
             btf_image_free(&off);
+            btf_image_free(&portable);
         }
-        btf_wave_enable(was);
         btf_model_free(&m);
     }
     btf_image_free(&tex);
@@ -518,7 +543,8 @@ static void long_synthesis_is_stationary(void **state)
     int side = getenv("BTF_ASAN") ? 3163 : 10000;
     collect c = {.width = side, .finite = 1};
     btf_error e = {0};
-    TU_OK(btf_car_synthesise_field(&b, side, side, 2026, 1, collect_rows, &c, &e), &e);
+    btf_synth_opts o = {.width = side, .height = side, .seed = 2026};
+    TU_OK(btf_car_synthesise_field(&b, -1, 1, &o, collect_rows, &c, &e), &e);
     assert_true(c.finite);
     double mean = c.sum / c.n, var = c.sum2 / c.n - mean * mean;
     double stat = btf_car_stationary_variance(&b);
@@ -559,11 +585,13 @@ static void margins_follow_correlation(void **state)
     double stat = btf_car_stationary_variance(&strong);
     int seeds = getenv("BTF_ASAN") ? 60 : 200, w = 2000;
     for (int pass = 0; pass < 2; pass++) {
-        strong.margin = pass == 0 ? 0 : 2; /* computed, then far too short */
+        int margin = pass == 0 ? -1 : 2; /* its own, then far too short */
         collect c = {.width = w, .finite = 1};
         btf_error e = {0};
-        for (int s = 0; s < seeds; s++)
-            TU_OK(btf_car_synthesise_field(&strong, w, 1, 100 + s, 3, collect_rows, &c, &e), &e);
+        for (int s = 0; s < seeds; s++) {
+            btf_synth_opts o = {.width = w, .height = 1, .seed = 100 + s};
+            TU_OK(btf_car_synthesise_field(&strong, margin, 3, &o, collect_rows, &c, &e), &e);
+        }
         double ratio = (c.sum2 / c.n) / stat;
         print_message("margin %d: first-row variance / stationary = %.4f\n",
                       pass == 0 ? btf_car_margin(&strong) : 2, ratio);
@@ -573,15 +601,16 @@ static void margins_follow_correlation(void **state)
             assert_true(ratio < 0.9); /* 0.86: the transient shows */
     }
     /* A margin beyond the cap is refused, not run. */
-    strong.margin = BTF_SYNTH_MARGIN_MAX + 1;
     btf_error e = {0};
     collect c = {.width = 4, .finite = 1};
-    assert_int_equal(btf_car_synthesise_field(&strong, 4, 4, 1, 3, collect_rows, &c, &e),
-                     BTF_E_ARG);
+    btf_synth_opts o = {.width = 4, .height = 4, .seed = 1};
+    assert_int_equal(btf_car_synthesise_field(&strong, BTF_SYNTH_MARGIN_MAX + 1, 3, &o,
+                                              collect_rows, &c, &e), BTF_E_ARG);
 }
 
-/* Fitting sets each band's margin, and reading a model file sets the same
- * (margins are not stored: they follow from the coefficients). */
+/* A fitted model's margins follow from its coefficients, and reading its
+ * file gives the same (margins are not stored in the file), also for a band
+ * changed after reading (its kept margin no longer applies). */
 static void fitted_and_read_models_carry_margins(void **state)
 {
     (void)state;
@@ -598,10 +627,21 @@ static void fitted_and_read_models_carry_margins(void **state)
     for (int b = 0; b < 3; b++)
         for (int l = 0; l < 2; l++) {
             const btf_car_band *fit = &m.subspaces[0].bands[b][l];
-            assert_true(fit->n == 0 || fit->margin >= BTF_SYNTH_MARGIN_MIN);
-            assert_int_equal(fit->margin, btf_car_margin(fit));
-            assert_int_equal(back.subspaces[0].bands[b][l].margin, fit->margin);
+            int mf, mb;
+            TU_OK(btf_synth_margin(&m, 0, b, l, &mf, &e), &e);
+            TU_OK(btf_synth_margin(&back, 0, b, l, &mb, &e), &e);
+            assert_true(fit->n == 0 || mf >= BTF_SYNTH_MARGIN_MIN);
+            assert_int_equal(mf, btf_car_margin(fit));
+            assert_int_equal(mb, mf);
         }
+    assert_non_null(back.internal); /* kept by the reader */
+    btf_car_band *cb = &back.subspaces[0].bands[0][0];
+    cb->n = 1, cb->offsets[0] = (btf_offset){0, -1}, cb->gamma[0] = 0.499f;
+    int changed;
+    TU_OK(btf_synth_margin(&back, 0, 0, 0, &changed, &e), &e);
+    assert_int_equal(changed, btf_car_margin(cb));
+    assert_int_equal(btf_synth_margin(&back, 0, 3, 0, &changed, &e), BTF_E_ARG);
+    assert_int_equal(btf_synth_margin(&back, 0, 0, 2, &changed, &e), BTF_E_ARG);
     free(bytes);
     btf_model_free(&m);
     btf_model_free(&back);
@@ -650,7 +690,9 @@ static void margins_bounded_on_read(void **state)
     double took = tu_now() - t0;
     print_message("%zu-byte file of %d bands read in %.2f s\n", size, 256 * 3 * 8, took);
     assert_true(took < (getenv("BTF_ASAN") ? 60.0 : 10.0)); /* unbounded: about 20 s */
-    assert_int_equal(back.subspaces[255].bands[2][7].margin, BTF_SYNTH_MARGIN_MAX);
+    int last;
+    TU_OK(btf_synth_margin(&back, 255, 2, 7, &last, &e), &e);
+    assert_int_equal(last, BTF_SYNTH_MARGIN_MAX);
     free(bytes);
     btf_model_free(&back);
     free(m.subspaces);
@@ -821,9 +863,9 @@ static void synthesis_sizes_and_seeds(void **state)
     for (int s = 0; s < 6; s++) {
         btf_image a, b2, c;
         int w = sizes[s][0], h = sizes[s][1];
-        TU_OK(btf_synthesise_image(&m, 0, w, h, 42, &a, &e), &e);
-        TU_OK(btf_synthesise_image(&m, 0, w, h, 42, &b2, &e), &e);
-        TU_OK(btf_synthesise_image(&m, 0, w, h, 43, &c, &e), &e);
+        synth_image(&m, w, h, 42, &a);
+        synth_image(&m, w, h, 42, &b2);
+        synth_image(&m, w, h, 43, &c);
         size_t n = (size_t)w * h * 3;
         assert_memory_equal(a.data, b2.data, n * sizeof(float)); /* same seed, same bytes */
         int differ = 0;
@@ -838,7 +880,7 @@ static void synthesis_sizes_and_seeds(void **state)
     }
     /* The synthesis reproduces the texture's colour statistics. */
     btf_image big;
-    TU_OK(btf_synthesise_image(&m, 0, 512, 512, 1, &big, &e), &e);
+    synth_image(&m, 512, 512, 1, &big);
     double mean[3] = {0}, tm[3] = {0};
     for (int i = 0; i < 512 * 512; i++)
         for (int k = 0; k < 3; k++)
@@ -849,8 +891,21 @@ static void synthesis_sizes_and_seeds(void **state)
     for (int k = 0; k < 3; k++)
         assert_true(fabs(mean[k] - tm[k]) < 0.05);
     btf_image_free(&big);
-    assert_int_equal(btf_synthesise_image(&m, 1, 4, 4, 1, &big, &e), BTF_E_ARG);
-    assert_int_equal(btf_synthesise_image(&m, 0, 0, 4, 1, &big, &e), BTF_E_ARG);
+    btf_synth_opts o = {.width = 4, .height = 4, .seed = 1};
+    assert_int_equal(btf_synthesise_image(&m, 1, &o, &big, &e), BTF_E_ARG);
+    o.width = -1;
+    assert_int_equal(btf_synthesise_image(&m, 0, &o, &big, &e), BTF_E_ARG);
+    o.width = 1 << 25;
+    assert_int_equal(btf_synthesise_image(&m, 0, &o, &big, &e), BTF_E_ARG);
+    /* No options: the analysed size and seed 0, which zero options mean. */
+    btf_image dflt, zero;
+    TU_OK(btf_synthesise_image(&m, 0, NULL, &dflt, &e), &e);
+    assert_true(dflt.width == 64 && dflt.height == 48);
+    btf_synth_opts d = btf_synth_defaults();
+    TU_OK(btf_synthesise_image(&m, 0, &d, &zero, &e), &e);
+    assert_memory_equal(dflt.data, zero.data, (size_t)64 * 48 * 3 * sizeof(float));
+    btf_image_free(&dflt);
+    btf_image_free(&zero);
     /* (e) The model survives its file bit for bit. */
     unsigned char *bytes, *again;
     size_t n1, n2;
@@ -897,7 +952,8 @@ static void extreme_image_values(void **state)
         TU_OK(btf_model_encode(&m, &bytes, &n, &e), &e); /* the file accepts it */
         free(bytes);
         btf_image out;
-        int rc = btf_synthesise_image(&m, 0, 96, 80, 1, &out, &e);
+        btf_synth_opts o = {.width = 96, .height = 80, .seed = 1};
+        int rc = btf_synthesise_image(&m, 0, &o, &out, &e);
         if (scales[s] < 1e38f) {
             TU_OK(rc, &e);
             for (int i = 0; i < 96 * 80 * 3; i++)
@@ -943,12 +999,13 @@ static void model_offsets_within_64(void **state)
      * files and neighbourhood specs (btf_offset holds up to 127). */
     sm.bands[1][0].offsets[0] = (btf_offset){-1, 100};
     btf_image img;
-    assert_int_equal(btf_synthesise_image(&m, 0, 4, 4, 1, &img, &e), BTF_E_ARG);
+    btf_synth_opts o = {.width = 4, .height = 4, .seed = 1};
+    assert_int_equal(btf_synthesise_image(&m, 0, &o, &img, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "beyond 64"));
-    assert_int_equal(btf_car_synthesise_field(&sm.bands[1][0], 4, 4, 1, 0, NULL, NULL, &e),
+    assert_int_equal(btf_car_synthesise_field(&sm.bands[1][0], -1, 0, &o, NULL, NULL, &e),
                      BTF_E_ARG);
     sm.bands[1][0].offsets[0] = (btf_offset){-1, 64};
-    TU_OK(btf_synthesise_image(&m, 0, 4, 4, 1, &img, &e), &e);
+    TU_OK(btf_synthesise_image(&m, 0, &o, &img, &e), &e);
     btf_image_free(&img);
 }
 

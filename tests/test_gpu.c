@@ -1,6 +1,7 @@
 /* test_gpu.c — GPU synthesis (Vulkan compute on lavapipe) against the CPU
  * reference: bit-identical output for several models, sizes and seeds, with
  * the Khronos validation layer on and no message allowed. */
+#include "synth/synth_testing.h"
 #include "testutil.h"
 
 #include <math.h>
@@ -66,10 +67,11 @@ static void compare(const btf_model *m, int w, int h, uint64_t seed)
     btf_image gpu_out[8];
     for (int k = 0; k < n; k++)
         subs[k] = k;
-    TU_OK(btf_gpu_synthesise(gpu, m, subs, n, w, h, seed, gpu_out, &e), &e);
+    btf_synth_opts o = {.width = w, .height = h, .seed = seed};
+    TU_OK(btf_gpu_synthesise(gpu, m, subs, n, &o, gpu_out, &e), &e);
     for (int k = 0; k < n; k++) {
         btf_image cpu_out;
-        TU_OK(btf_synthesise_image(m, k, w, h, seed, &cpu_out, &e), &e);
+        TU_OK(btf_synthesise_image(m, k, &o, &cpu_out, &e), &e);
         size_t count = (size_t)w * h * 3, diff = 0;
         for (size_t i = 0; i < count; i++)
             diff += memcmp(&gpu_out[k].data[i], &cpu_out.data[i], sizeof(float)) != 0;
@@ -168,8 +170,9 @@ static void parity_when_tiled(void **state)
     uint64_t limits[] = {6000000, 4000000};
     for (int i = 0; i < 2; i++) {
         btf_gpu *small;
-        btf_gpu_opts o = {.allow_cpu = 1, .validation = 1, .max_buffer_bytes = limits[i]};
+        btf_gpu_opts o = {.allow_cpu = 1, .validation = 1};
         TU_OK(btf_gpu_open(&o, &small, &e), &e);
+        btf_gpu_set_max_buffer_bytes(small, limits[i]);
         btf_gpu *keep = gpu;
         gpu = small;
         compare(&m, 300, 257, 11); /* needs ~14 MB untiled (wide margins) */
@@ -183,12 +186,13 @@ static void parity_when_tiled(void **state)
     }
     /* A limit below one row of the widest field (plus its burn-in) is refused. */
     btf_gpu *tiny;
-    btf_gpu_opts o = {.allow_cpu = 1, .max_buffer_bytes = 4096};
+    btf_gpu_opts o = {.allow_cpu = 1};
     TU_OK(btf_gpu_open(&o, &tiny, &e), &e);
+    btf_gpu_set_max_buffer_bytes(tiny, 4096);
     btf_image out[1];
     int zero = 0;
-    assert_int_equal(btf_gpu_synthesise(tiny, &m, &zero, 1, 300, 10, 1, out, &e),
-                     BTF_E_UNSUPPORTED);
+    btf_synth_opts so = {.width = 300, .height = 10, .seed = 1};
+    assert_int_equal(btf_gpu_synthesise(tiny, &m, &zero, 1, &so, out, &e), BTF_E_UNSUPPORTED);
     assert_non_null(strstr(e.msg, "strips of one row"));
     btf_gpu_close(tiny);
     btf_model_free(&a);
@@ -203,8 +207,18 @@ static void bad_requests(void **state)
     btf_error e = {0};
     btf_image out[1];
     int bad = 3, ok = 0;
-    assert_int_equal(btf_gpu_synthesise(gpu, &m, &bad, 1, 8, 8, 1, out, &e), BTF_E_ARG);
-    assert_int_equal(btf_gpu_synthesise(gpu, &m, &ok, 1, 0, 8, 1, out, &e), BTF_E_ARG);
+    btf_synth_opts o = {.width = 8, .height = 8, .seed = 1};
+    assert_int_equal(btf_gpu_synthesise(gpu, &m, &bad, 1, &o, out, &e), BTF_E_ARG);
+    o.width = -1;
+    assert_int_equal(btf_gpu_synthesise(gpu, &m, &ok, 1, &o, out, &e), BTF_E_ARG);
+    /* No options: the analysed size (64 x 64), as on the CPU. */
+    TU_OK(btf_gpu_synthesise(gpu, &m, &ok, 1, NULL, out, &e), &e);
+    btf_image cpu;
+    TU_OK(btf_synthesise_image(&m, 0, NULL, &cpu, &e), &e);
+    assert_true(out[0].width == 64 && out[0].height == 64);
+    assert_memory_equal(out[0].data, cpu.data, (size_t)64 * 64 * 3 * sizeof(float));
+    btf_image_free(&cpu);
+    btf_image_free(&out[0]);
     /* A model of values near the float limit overflows: refused, as on the
      * CPU, never handed out as Inf or NaN. */
     btf_image big;
@@ -213,12 +227,63 @@ static void bad_requests(void **state)
         big.data[i] = 3e38f * ((float)((i * 7919) % 101) / 100.0f);
     btf_model huge;
     TU_OK(btf_texture_fit(&big, NULL, &huge, &e), &e);
-    assert_int_equal(btf_gpu_synthesise(gpu, &huge, &ok, 1, 40, 40, 1, out, &e), BTF_E_NUMERIC);
+    o.width = 40, o.height = 40;
+    assert_int_equal(btf_gpu_synthesise(gpu, &huge, &ok, 1, &o, out, &e), BTF_E_NUMERIC);
     assert_null(out[0].data);
     btf_model_free(&huge);
     btf_image_free(&big);
     no_validation_messages();
     btf_model_free(&m);
+}
+
+/* The public device list, the defaults, and images of different analysed
+ * sizes in one call (no size given: each its own, in batches of one size). */
+static void devices_defaults_and_sizes(void **state)
+{
+    (void)state;
+    btf_gpu_device *list;
+    int n;
+    btf_error e = {0};
+    TU_OK(btf_gpu_list_devices(&list, &n, &e), &e);
+    assert_true(n >= 1);
+    int cpu = 0;
+    for (int i = 0; i < n; i++) {
+        assert_int_equal(list[i].index, i);
+        assert_true(list[i].name[0] && list[i].type_name && list[i].vulkan_version[0] == '1');
+        cpu |= list[i].type == BTF_GPU_CPU && !strcmp(list[i].type_name, "CPU") &&
+               list[i].usable && list[i].max_buffer_bytes > 0;
+    }
+    assert_true(cpu || getenv("VK_DRIVER_FILES") == NULL); /* lavapipe is set up */
+    free(list);
+    btf_gpu_opts d = btf_gpu_defaults();
+    assert_true(!d.use_device && !d.allow_cpu && !d.validation);
+
+    btf_model a, b;
+    fit(&a, 1, NULL);
+    fit(&b, 2, "0:-1,-1:0");
+    btf_subspace_model subs[3] = {a.subspaces[0], a.subspaces[0], b.subspaces[0]};
+    subs[0].width = 20, subs[0].height = 9;
+    subs[1].width = 20, subs[1].height = 9;
+    subs[2].width = 7, subs[2].height = 30;
+    btf_model m = {.n_subspaces = 3, .subspaces = subs};
+    int which[3] = {0, 1, 2};
+    btf_image out[3];
+    TU_OK(btf_gpu_synthesise(gpu, &m, which, 3, NULL, out, &e), &e);
+    int batches, jobs;
+    btf_gpu_last_tiling(gpu, &batches, &jobs);
+    assert_int_equal(batches, 2);
+    for (int k = 0; k < 3; k++) {
+        btf_image cpu_out;
+        TU_OK(btf_synthesise_image(&m, k, NULL, &cpu_out, &e), &e);
+        assert_true(out[k].width == subs[k].width && out[k].height == subs[k].height);
+        assert_memory_equal(out[k].data, cpu_out.data,
+                            (size_t)subs[k].width * subs[k].height * 3 * sizeof(float));
+        btf_image_free(&cpu_out);
+        btf_image_free(&out[k]);
+    }
+    no_validation_messages();
+    btf_model_free(&a);
+    btf_model_free(&b);
 }
 
 static void cli_backends_agree(void **state)
@@ -273,6 +338,7 @@ int main(void)
         cmocka_unit_test(parity_long_loops),
         cmocka_unit_test(parity_when_tiled),
         cmocka_unit_test(bad_requests),
+        cmocka_unit_test(devices_defaults_and_sizes),
         cmocka_unit_test(cli_backends_agree),
     };
     return cmocka_run_group_tests_name("gpu", tests, setup, teardown);

@@ -485,7 +485,7 @@ static void noise_rows_match_noise4(void **state)
         compared += 4 * (long)n;
     }
     printf("noise rows: %ld Gaussians identical on both paths (vector path: %s)\n", compared,
-           btf_noise_path_avx2() ? "AVX2" : "portable only on this CPU");
+           btf_noise_avx2_available() ? "AVX2" : "portable only on this CPU");
 }
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)

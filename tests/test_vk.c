@@ -3,7 +3,9 @@
  * Mesa CPU driver: device listing and choice, create/destroy cycles, buffer
  * round trips (mapped and staged), fills and copies, the bit-exact parity of
  * the shader noise (gpu/noise_check.comp) with the C btf_noise4, limits
- * refused with clear errors, job timeouts, and `btfcar info --devices`.
+ * refused with clear errors, job timeouts, `btfcar info --devices`, and the
+ * command's environment variables (BTF_VK_DEVICE, BTF_VK_VALIDATION), which
+ * the command reads and the library does not.
  *
  * Every context runs with the validation layer, and every test ends by
  * asserting that the layer reported no error or warning — except the one
@@ -169,14 +171,11 @@ static void device_choice_errors(void **state)
     assert_null(vk);
     assert_true(contains(err.msg, "Vulkan device 99 does not exist"));
 
+    /* The environment is the command's business: the library ignores it. */
     saved_env s = env_set("BTF_VK_DEVICE", "99");
     btf_vk_opts auto_opts = {.validation = 1, .allow_cpu = 1};
-    assert_int_equal(btf_vk_create(&auto_opts, &vk, &err), BTF_E_ARG);
-    assert_true(contains(err.msg, "BTF_VK_DEVICE"));
-    assert_true(contains(err.msg, "does not exist"));
-    setenv("BTF_VK_DEVICE", "one", 1);
-    assert_int_equal(btf_vk_create(&auto_opts, &vk, &err), BTF_E_ARG);
-    assert_true(contains(err.msg, "BTF_VK_DEVICE='one'"));
+    TU_OK(btf_vk_create(&auto_opts, &vk, &err), &err);
+    close_vk(vk);
     env_restore(s);
 
     if (forced_lavapipe) {
@@ -184,11 +183,6 @@ static void device_choice_errors(void **state)
         btf_vk_opts strict = {.validation = 1};
         assert_int_equal(btf_vk_create(&strict, &vk, &err), BTF_E_UNSUPPORTED);
         assert_true(contains(err.msg, "only a CPU Vulkan device"));
-        s = env_set("BTF_VK_DEVICE", "0");
-        TU_OK(btf_vk_create(&strict, &vk, &err), &err);
-        assert_true(btf_vk_info(vk)->is_cpu);
-        close_vk(vk);
-        env_restore(s);
         btf_vk_opts named = {.use_device = 1, .device = 0, .validation = 1};
         TU_OK(btf_vk_create(&named, &vk, &err), &err);
         assert_int_equal(btf_vk_info(vk)->index, 0);
@@ -202,17 +196,11 @@ static void validation_switches(void **state)
     btf_error err = {0};
     btf_vk *vk = NULL;
     btf_vk_opts o = {.allow_cpu = 1};
-    saved_env s = env_set("BTF_VK_VALIDATION", "1");
-    TU_OK(btf_vk_create(&o, &vk, &err), &err);
-    assert_true(btf_vk_validating(vk)); /* forced on by the environment */
-    close_vk(vk);
-    setenv("BTF_VK_VALIDATION", "yes", 1);
-    assert_int_equal(btf_vk_create(&o, &vk, &err), BTF_E_ARG);
-    assert_true(contains(err.msg, "BTF_VK_VALIDATION='yes'"));
-    env_restore(s);
+    saved_env s = env_set("BTF_VK_VALIDATION", "1"); /* the command's, not the library's */
     TU_OK(btf_vk_create(&o, &vk, &err), &err);
     assert_false(btf_vk_validating(vk));
     btf_vk_destroy(vk);
+    env_restore(s);
 
     /* No validation layer where the loader looks: a clear refusal. */
     s = env_set("VK_LAYER_PATH", "/nonexistent-btfcar-layers");
@@ -756,6 +744,45 @@ static void cli_info_devices(void **state)
     free(dir);
 }
 
+/* The command reads BTF_VK_DEVICE and BTF_VK_VALIDATION and says which
+ * variable is wrong; --device names a device as BTF_VK_DEVICE does. */
+static void cli_environment(void **state)
+{
+    (void)state;
+    char *dir = tu_tmpdir();
+    btf_image img;
+    tu_material_image("leather", 16, 1, (btf_dir){0, 0}, (btf_dir){45, 30}, &img);
+    btf_model m;
+    btf_fit_opts fo = {.levels = 1};
+    btf_error e = {0};
+    TU_OK(btf_texture_fit(&img, &fo, &m, &e), &e);
+    TU_OK(btf_model_write(tu_fmt("%s/m.btfcar", dir), &m, &e), &e);
+    btf_model_free(&m);
+    btf_image_free(&img);
+    char *run = strdup(tu_fmt("%s synthesise -q %s/m.btfcar --size 8x8 --backend gpu -o %s/o",
+                              tu_cli(), dir, dir));
+    char *errtext = NULL;
+    assert_int_equal(tu_run(tu_fmt("BTF_VK_DEVICE=99 %s", run), &errtext), 1);
+    assert_true(contains(errtext, "BTF_VK_DEVICE=99"));
+    assert_true(contains(errtext, "does not exist"));
+    free(errtext);
+    assert_int_equal(tu_run(tu_fmt("BTF_VK_DEVICE=one %s", run), &errtext), 1);
+    assert_true(contains(errtext, "BTF_VK_DEVICE='one'"));
+    free(errtext);
+    assert_int_equal(tu_run(tu_fmt("BTF_VK_VALIDATION=yes %s", run), &errtext), 1);
+    assert_true(contains(errtext, "BTF_VK_VALIDATION='yes'"));
+    free(errtext);
+    if (forced_lavapipe) {
+        /* A named device is taken even when it is the CPU driver. */
+        assert_int_equal(tu_run(tu_fmt("BTF_VK_DEVICE=0 %s synthesise -q %s/m.btfcar --size 8x8 "
+                                       "-o %s/n", tu_cli(), dir, dir), NULL), 0);
+        assert_int_equal(tu_run(tu_fmt("%s --device 0", run), NULL), 0);
+    }
+    free(run);
+    tu_rmtree(dir);
+    free(dir);
+}
+
 int main(void)
 {
     /* lavapipe, unless the caller chose a driver; no device or validation
@@ -786,6 +813,7 @@ int main(void)
         cmocka_unit_test(job_timeout),
         cmocka_unit_test(timings),
         cmocka_unit_test(cli_info_devices),
+        cmocka_unit_test(cli_environment),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

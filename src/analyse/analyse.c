@@ -8,6 +8,7 @@
  * car/subspace_fit.c).
  */
 #include <stdio.h>
+#include "car/car.h"
 #include "core/core.h"
 
 #include <math.h>
@@ -177,6 +178,8 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
         rc = stage_range(ds, &o, out, err);
     if (rc == 0)
         rc = stage_fit(ds, &seg, &o, out, err);
+    if (rc == 0 && btf_model_keep_margins(out, -1.0) != BTF_OK) /* for synthesis */
+        rc = btf_fail(err, BTF_E_NOMEM, "out of memory");
     if (rc == 0 && o.report) {
         memset(o.report, 0, sizeof *o.report);
         snprintf(o.report->segment_reason, sizeof o.report->segment_reason, "%s", seg.reason);

@@ -379,9 +379,10 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
     }
     out->sigma = to_float(sqrt(s2) * sd);
     free(z);
-    if ((out->margin = btf_car_margin(out)) < 0)
+    int margin = btf_car_margin(out);
+    if (margin < 0)
         return btf_fail(err, BTF_E_NOMEM, "out of memory");
-    if (out->margin == BTF_SYNTH_MARGIN_MAX) {
+    if (margin == BTF_SYNTH_MARGIN_MAX) {
         /* Nearly unstable: its correlation outreaches the largest margin. */
         double short_by = btf_car_margin_shortfall(out, BTF_SYNTH_MARGIN_MAX);
         if (short_by > BTF_SYNTH_MARGIN_EPS) {

@@ -150,6 +150,8 @@ btf_status btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_m
     snprintf(out->views.name, sizeof out->views.name, "none");
     snprintf(out->lights.name, sizeof out->lights.name, "none");
     btf_status rc = btf_fit_subspace(img, opts, &out->subspaces[0], err);
+    if (rc == 0 && btf_model_keep_margins(out, -1.0) != BTF_OK) /* for synthesis */
+        rc = btf_fail(err, BTF_E_NOMEM, "out of memory");
     if (rc)
         btf_model_free(out);
     return rc;

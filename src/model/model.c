@@ -4,6 +4,7 @@
  * synthesis of one of its subspaces carries into an EXR.
  */
 #include "core/core.h"
+#include "car/car.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -17,6 +18,7 @@ void btf_model_free(btf_model *m)
     free(m->index);
     free(m->subspaces);
     free(m->range);
+    btf_model_internal_free(m->internal);
     memset(m, 0, sizeof *m);
 }
 

@@ -871,15 +871,10 @@ btf_status btf_model_decode(const unsigned char *data, size_t size, const char *
     /* Margins are not stored: they follow from the coefficients. A budget
      * (about a second of work) keeps a small crafted file of thousands of
      * nearly unstable bands from costing minutes; past it a band takes the
-     * largest margin, which is always safe. */
-    double budget = 1e9;
-    for (int k = 0; rc == BTF_OK && k < m->n_subspaces; k++)
-        for (int b = 0; rc == BTF_OK && b < 3; b++)
-            for (int l = 0; rc == BTF_OK && l < m->subspaces[k].levels; l++) {
-                btf_car_band *cb = &m->subspaces[k].bands[b][l];
-                if ((cb->margin = btf_car_margin_within(cb, &budget)) < 0)
-                    rc = failf(err, BTF_E_NOMEM, name, "out of memory");
-            }
+     * largest margin, which is always safe. Synthesis finds them in
+     * m->internal. */
+    if (rc == BTF_OK && btf_model_keep_margins(m, 1e9) != BTF_OK)
+        rc = failf(err, BTF_E_NOMEM, name, "out of memory");
     if (rc)
         btf_model_free(m);
     return rc;

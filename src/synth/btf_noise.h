@@ -1,5 +1,6 @@
 /*
- * btf_noise.h -- the Gaussian noise that drives CAR synthesis, ONE text shared
+ * btf_noise.h -- the Gaussian white noise e_r that drives CAR synthesis
+ * (Haindl & Filip 2007, section II.C: Y_r = gamma X_r + e_r), ONE text shared
  * by the C library (included by the C11 sources in src/) and the Vulkan
  * compute shaders (included by the .comp files in gpu/, GLSL 4.50 with
  * GL_GOOGLE_include_directive).
@@ -12,11 +13,12 @@
  *    numbers: as easy as 1, 2, 3", SC'11; Random123 known answers in
  *    tests/test_noise.c).  The paper reports Philox-4x32 with 7 rounds
  *    passing all of TestU01's BigCrush; Random123 defaults to 10 for a
- *    safety margin.  btfcar used 10 until the generator turned out to cost
- *    half of CPU synthesis (issue 5, docs/synthesis.md); a cheaper hash,
- *    pcg4d (Jarzynski and Olano, JCGT 2020), saved more but failed
- *    dieharder's DNA test (p < 1e-8) on the words in the order synthesis
- *    draws them, where Philox-4x32-7 passes;
+ *    safety margin, which texture synthesis, whose noise the CAR model
+ *    filters, does not need, while the generator is the largest cost of CPU
+ *    synthesis (docs/synthesis.md, "Noise").  A cheaper hash, pcg4d
+ *    (Jarzynski and Olano, JCGT 2020), fails dieharder's DNA test
+ *    (p < 1e-8) on the words in the order synthesis draws them, where
+ *    Philox-4x32-7 passes;
  *  - float additions, subtractions and multiplications (correctly rounded
  *    on both sides), exact int->float conversions of values < 2^24, bit casts
  *    and selects.  No division, no exp/log/sin/cos/sqrt built-ins: their last

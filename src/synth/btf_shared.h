@@ -1,10 +1,12 @@
 /*
- * btf_shared.h — constants and float formulas of CAR synthesis shared, as the
- * very same text, by the CPU reference (src/synth/synth.c, compiled as C11 with
- * -ffp-contract=off) and the Vulkan compute shader (gpu/synth.comp, GLSL
- * 4.50). Every function performs its operations in one written order, each
- * result `precise` in GLSL, so the two paths can agree bit for bit.
- * Keep it in the common subset of C and GLSL (see src/synth/btf_noise.h).
+ * btf_shared.h — constants and formulas of CAR synthesis (Haindl & Filip
+ * 2007, section II.C: the causal recursion, the pyramid collapse, the
+ * inverse decorrelation) shared, as the very same text, by the CPU code
+ * (src/synth/, C11 with -ffp-contract=off) and the Vulkan compute shaders
+ * (gpu/synth_*.comp, GLSL 4.50). Every float function performs its
+ * operations in one written order, each result `precise` in GLSL, so the
+ * two paths agree bit for bit. Keep it in the common subset of C and GLSL
+ * (see src/synth/btf_noise.h).
  */
 #ifndef BTF_SHARED_H
 #define BTF_SHARED_H
@@ -12,10 +14,10 @@
 #include "btf_noise.h"
 
 /* The rows a level's CAR field starts above its window, and the columns it
- * extends on either side, are the band's margin (src/car/margin.c), computed on
- * the host for both paths. */
-/* Field coordinates are signed (burn-in rows and margins are negative);
- * the noise counter takes them plus this origin, as unsigned. */
+ * extends on either side, are the band's margin (src/car/margin.c), computed
+ * on the host for both paths. Field coordinates are signed (burn-in rows
+ * and margins are negative); the noise counter takes them plus this origin,
+ * as unsigned. */
 #define BTF_NOISE_ORIGIN 268435456 /* 2^28 */
 /* The largest output side: coordinates plus margins stay far from 2^28. */
 #define BTF_SYNTH_MAX_SIDE 16777216 /* 2^24 */
@@ -33,6 +35,13 @@
  * runs at most BTF_GPU_LOOP_BUDGET pixel iterations per dispatch. */
 #define BTF_GPU_CHUNK 131072
 #define BTF_GPU_LOOP_BUDGET 4096
+
+/* floor(a / 2) for any sign: the coarse column or row of a fine one (level
+ * windows, src/synth/geometry.h; the up-sampling of the collapse). */
+BTF_FN int btf_floordiv2(int a)
+{
+    return a >= 0 ? a / 2 : -((-a + 1) / 2);
+}
 
 /* One step of the neighbourhood sum: acc + gamma * y. */
 BTF_FN float btf_car_accumulate(float acc, float gamma, float y)

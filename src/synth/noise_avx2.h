@@ -1,10 +1,12 @@
 /*
- * noise_avx2.h — the AVX2 building blocks of the synthesis noise: Philox
+ * noise_avx2.h — the AVX2 building blocks of the synthesis noise (the white
+ * noise of the CAR fields, Haindl & Filip 2007, section II.C): Philox
  * products with vpmuludq and Box-Muller on several 8-lane vectors in lock
- * step (src/synth/noise_row.c explains why). Shared by src/synth/noise_row.c (rows of
- * noise) and src/synth/wave.c (noise drawn lane by lane for the wavefront), so
- * both give btf_noise4's bits. Include only inside a region compiled for
- * AVX2 (#pragma GCC target("avx2")), after src/synth/btf_noise.h, GCC on x86-64.
+ * step (src/synth/noise_row.c explains why). Shared by src/synth/noise_row.c
+ * (rows of noise) and src/synth/wave.c (noise drawn lane by lane for the
+ * wavefront), so both give btf_noise4's bits. Include only inside a region
+ * compiled for AVX2 (#pragma GCC target("avx2")), after
+ * src/synth/btf_noise.h, GCC on x86-64.
  */
 #ifndef BTF_NOISE_AVX2_H
 #define BTF_NOISE_AVX2_H

@@ -1,28 +1,30 @@
 /*
- * noise_row.c — a row of synthesis noise: the Gaussians of consecutive
- * blocks of src/synth/btf_noise.h, bit for bit what btf_noise4 gives block by block.
+ * noise_row.c — a row of synthesis noise (Haindl & Filip 2007, section
+ * II.C: the white Gaussian noise e_r that drives each CAR field): the
+ * Gaussians of consecutive blocks of src/synth/btf_noise.h, bit for bit
+ * what btf_noise4 gives block by block.
  *
- * Why a file of its own: the generator is the largest cost of CPU synthesis
- * (issue 5's workload draws 25 million Gaussians). The portable loop is left
+ * Why a file of its own: the generator is the largest cost of CPU
+ * synthesis (the paper's workload, 15 images of 512 x 512 with 3 bands and
+ * 3 levels, draws some 17.5 million Gaussians). The portable loop is left
  * to the compiler's vectoriser, which on x86-64 does two things badly: it
  * turns Philox's 32 x 32 -> 64-bit products by constants into chains of
  * 64-bit shifts and adds, and it evaluates the long Box-Muller dependency
  * chains (log polynomial, Newton square root) one vector at a time, so the
- * core waits on latency. The AVX2 path below multiplies with vpmuludq and
- * runs four independent vectors in lock step (source-level interleaving);
- * it is 2.3x faster on a Zen 3 core. It performs the very same IEEE
- * operations in the same order (additions, multiplications, exact int ->
- * float conversions, bit operations; no FMA: the build forbids contraction
- * and nothing here asks for it), so the bits do not change: tests/test_noise.c
- * compares the two paths over many rows, and the GPU parity tests hold.
+ * core waits on latency.
+ * The AVX2 path below multiplies with vpmuludq and runs four independent
+ * vectors in lock step (source-level interleaving); it is 2.3x faster on a
+ * Zen 3 core. It performs the very same IEEE operations in the same order
+ * (additions, multiplications, exact int -> float conversions, bit
+ * operations; no FMA: the build forbids contraction and nothing here asks
+ * for it), so the bits do not change: tests/test_noise.c compares the two
+ * paths over many rows, and the GPU parity tests hold.
  */
 #include "core/core.h"
 #include "synth/synth.h"
 
 #include "btf_noise.h"
 
-#include <stdatomic.h>
-#include <stdlib.h>
 #include <string.h>
 
 /* The portable path: btf_noise4 block by block. */
@@ -111,19 +113,10 @@ static void noise_blocks_avx2(uint32_t seed_lo, uint32_t seed_hi, uint32_t strea
 #pragma GCC pop_options
 #endif
 
-/* BTF_NOISE_PORTABLE=1 in the environment forces the portable path (tests
- * compare the two; a user can rule out the vector path when in doubt). */
-int btf_noise_path_avx2(void)
+int btf_noise_avx2_available(void)
 {
 #ifdef BTF_HAVE_AVX2_PATH
-    static atomic_int path = -1; /* decided once; a race only repeats the decision */
-    int p = atomic_load(&path);
-    if (p < 0) {
-        const char *env = getenv("BTF_NOISE_PORTABLE");
-        p = (env && *env && strcmp(env, "0")) ? 0 : __builtin_cpu_supports("avx2") != 0;
-        atomic_store(&path, p);
-    }
-    return p;
+    return __builtin_cpu_supports("avx2") != 0;
 #else
     return 0;
 #endif
@@ -133,7 +126,7 @@ void btf_noise_blocks(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint3
                       uint32_t b0, uint32_t n, int vector_path, float *out)
 {
 #ifdef BTF_HAVE_AVX2_PATH
-    if (vector_path && btf_noise_path_avx2()) {
+    if (vector_path && __builtin_cpu_supports("avx2")) { /* a load and a test */
         noise_blocks_avx2(seed_lo, seed_hi, stream, row, b0, n, out);
         return;
     }

@@ -1,7 +1,22 @@
 /*
- * synth.h — CPU synthesis internals (src/synth/): noise rows, the
- * wavefront generator, band checks shared with the GPU host code. Private
- * to the library.
+ * synth.h — the CPU synthesis internals (src/synth/, Haindl & Filip 2007,
+ * section II.C: CAR fields by their causal recursion, the pyramid collapse,
+ * the inverse decorrelation), one section per file, callers above callees:
+ *
+ *   synthesise.c   the public calls: options, checks, the row loop
+ *   collapse.c     the pyramid of one band, streamed row by row
+ *   upsample.c     pyrUp of rows (horizontal pairs, vertical sums)
+ *   field.c        one CAR field of a level: its ring of rows, and which
+ *                  generator fills it
+ *   wave.c         generator: the wavefront, eight rows per AVX2 step
+ *   rows.c         generator: row by row (two rows at a time where it can)
+ *   chains.c       the sequential same-row part of field rows
+ *   neighbourhood.c  the order of a band's terms; the checks of a band
+ *   noise_row.c    rows of Gaussian noise (AVX2 or portable)
+ *   colour.c       inverse decorrelation of rows; the finite test
+ *
+ * No file calls into one above it. The GPU host code (gpu/synth_gpu.c)
+ * uses neighbourhood.c and colour.c. Private to the library.
  */
 #ifndef BTF_SYNTH_H
 #define BTF_SYNTH_H
@@ -9,25 +24,106 @@
 #include "btfcar.h"
 
 #include <stddef.h>
+#include <stdint.h>
 
-/* Noise rows (synth/noise_row.c): the Gaussians of blocks b0 .. b0 + n - 1 of
- * a row (btf_noise4 of each, 4 n floats into out), bit for bit the same on
- * every path; vector_path 0 forces the portable loop. btf_noise_path_avx2
- * says whether the AVX2 path is in use (CPU support, BTF_NOISE_PORTABLE). */
+/* Row loops compiled twice, for plain x86-64 and for AVX2 (twice the
+ * lanes), the choice made once at load time; AVX2 brings no FMA here and
+ * the build forbids contraction, so both give the same bits. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define SYNTH_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#define SYNTH_HAVE_AVX2 1 /* hand-written AVX2 loops (under #pragma GCC target) */
+#else
+#define SYNTH_AVX2_CLONES
+#endif
+
+/* ------------------------------------------------------------ synthesise.c */
+
+/* opts (NULL: none) with every zero field replaced by its default
+ * (btf_synth_defaults); shared with the GPU host code. */
+btf_synth_opts btf_synth_resolve(const btf_synth_opts *opts);
+
+/* The CPU switches of btf_synth_opts, resolved: which generators run. */
+typedef struct synth_paths {
+    int vector_noise; /* the AVX2 noise loop (when the CPU has AVX2) */
+    int wave;         /* the wavefront (where the band and the CPU qualify) */
+} synth_paths;
+
+/* ------------------------------------------------------------ noise_row.c */
+
+/* The Gaussians of blocks b0 .. b0 + n - 1 of a row (btf_noise4 of each,
+ * 4 n floats into out), bit for bit the same on every path; vector_path 0
+ * forces the portable loop, 1 takes AVX2 where the CPU has it. */
 void btf_noise_blocks(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint32_t row,
                       uint32_t b0, uint32_t n, int vector_path, float *out);
-int btf_noise_path_avx2(void);
+/* Whether this build and CPU have the AVX2 noise loop. */
+int btf_noise_avx2_available(void);
 
-/* The wavefront generator of CAR fields (synth/wave.c): eight rows at once,
- * bit for bit the row-by-row recursion. btf_wave_supported says whether a
- * band and field width qualify on this machine (AVX2, small offsets, family
- * same-row shapes, wide enough; BTF_SYNTH_WAVE=0 or BTF_NOISE_PORTABLE=1
- * turn it off). A wave stores its rows into a ring of `depth` rows of fw + 2
- * pad floats (row r in slot r mod depth, as synth/synth.c's ring_row; depth
- * >= BTF_WAVE_DEPTH, pad >= btf_wave_pad(), else BTF_E_ARG): btf_wave_run
- * returns once row `row` (>= row0, rows asked in increasing order) is
- * complete there. Rows row + 1 .. row + 7 are then partly written, so only
- * row `row` may be read before the next run. */
+/* -------------------------------------------------------- neighbourhood.c */
+
+/* The indices of a band's same-row offsets in the order btf_shared.h adds
+ * them (farthest column first); returns their count. The GPU host code
+ * orders the shader's offsets so. */
+int btf_car_same_row_order(const btf_car_band *b, int *idx);
+/* k when the band's same-row offsets are exactly columns -k .. -1 (k <= 3,
+ * the candidate family's shapes), with their gammas in gamma3[3 - k .. 2]
+ * (gamma3[2] for column -1, the rest 0); -1 for any other set. */
+int btf_car_same_row_shape(const btf_car_band *b, float gamma3[3]);
+/* A band synthesis can run with this margin: 0..BTF_CAR_MAX_NEIGHBOURS
+ * causal offsets within 64 pixels, a margin within 0..BTF_SYNTH_MARGIN_MAX
+ * (CPU and GPU paths alike). */
+btf_status btf_synth_check_band(const btf_car_band *b, int margin, btf_error *err);
+/* A synthesis size: 1..BTF_SYNTH_MAX_SIDE on each side. */
+btf_status btf_synth_check_size(int width, int height, btf_error *err);
+
+/* ---------------------------------------------------------------- colour.c */
+
+/* One row of a subspace image from its three bands: inverse decorrelation
+ * (btf_unmix per channel), interleaved RGB into row (plane: 3 width floats
+ * of scratch). Returns nonzero when a value is Inf or NaN. */
+int btf_unmix_row(const btf_subspace_model *sm, const float *b0, const float *b1,
+                  const float *b2, int width, float *plane, float *row);
+/* BTF_E_NUMERIC naming the subspace and row if any of n values is not
+ * finite: no synthesis hands out Inf or NaN (a model fitted to values near
+ * the float limit can overflow); both backends check their output with it. */
+btf_status btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err);
+
+/* -------------------------------------------------------------- upsample.c */
+
+/* Horizontal pyrUp of a coarse row c (its window starts at column cx0) to
+ * the fine columns [fx0, fx0 + n). */
+void btf_up_row(const float *c, int cx0, int fx0, int n, float *out);
+/* One row of G_l = mean + field + vertical pyrUp of the coarser level's
+ * horizontally up-sampled rows: none (b NULL: the coarsest level), b and c
+ * (an odd row: a NULL), or a, b and c (an even row). */
+void btf_level_sum_row(int w, float mean, const float *field, const float *a, const float *b,
+                       const float *c, float *out);
+
+/* ---------------------------------------------------------------- chains.c */
+
+/* One sequential same-row chain: out[i] = acc[i] + the same-row terms of
+ * columns -3, -2, -1 (gammas gamma3[0..2]); out[-3 .. -1] hold the columns
+ * before. */
+typedef struct synth_chain {
+    const float *acc;
+    float *out;
+    const float *gamma3;
+} synth_chain;
+#define SYNTH_MAX_CHAINS 6
+/* n (1..SYNTH_MAX_CHAINS) chains of shape k (0..3: columns -k .. -1), len
+ * pixels each, in one loop. */
+void btf_chains(const synth_chain *c, int n, int k, int len);
+
+/* ------------------------------------------------------------------ wave.c */
+
+/* The wavefront generator of CAR fields: eight rows at once, bit for bit
+ * the row-by-row recursion. btf_wave_supported says whether a band and
+ * field width qualify on this machine (AVX2, small offsets, the family's
+ * same-row shapes, wide enough). A wave stores its rows into a ring of
+ * `depth` rows of fw + 2 pad floats (row r in slot r mod depth, as
+ * synth_field_ring_row; depth >= BTF_WAVE_DEPTH, pad >= btf_wave_pad(),
+ * else BTF_E_ARG): btf_wave_run returns once row `row` (>= row0, rows asked
+ * in increasing order) is complete there. Rows row + 1 .. row + 7 are then
+ * partly written, so only row `row` may be read before the next run. */
 typedef struct btf_wave btf_wave;
 #define BTF_WAVE_DEPTH 8
 int btf_wave_supported(const btf_car_band *b, int fw);
@@ -36,24 +132,99 @@ btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_
                        float *ring, int depth, int pad, btf_error *err);
 void btf_wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi);
 void btf_wave_free(btf_wave *w);
-/* Turns the wavefront on or off for syntheses started afterwards and
- * returns whether it was on (tests and benchmarks compare the two, then
- * restore; the default: on unless BTF_SYNTH_WAVE=0). btf_wave_available:
- * whether this build and CPU have it at all (GCC, x86-64, AVX2, the AVX2
- * noise path). */
-int btf_wave_enable(int on);
+/* Whether this build and CPU have the wavefront at all (GCC, x86-64, AVX2). */
 int btf_wave_available(void);
 
-/* Synthesis (synth/synth.c): the indices of a band's same-row offsets in the
- * order btf_shared.h adds them (farthest column first); returns their count.
- * Shared with the GPU host code, which orders the shader's offsets so. */
-int btf_car_same_row_order(const btf_car_band *b, int *idx);
-/* A band synthesis can run: 0..BTF_CAR_MAX_NEIGHBOURS causal offsets, a
- * margin within 0..BTF_SYNTH_MARGIN_MAX (CPU and GPU paths alike). */
-int btf_synth_check_band(const btf_car_band *b, btf_error *err);
-/* BTF_E_NUMERIC naming the subspace and row if any of n values is not
- * finite: no synthesis hands out Inf or NaN (a model fitted to values near
- * the float limit can overflow); both backends check their output with it. */
-int btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err);
+/* ----------------------------------------------------------------- field.c */
+
+/* One CAR field: a level's window plus its margin on either side, rows
+ * generated top to bottom into a ring that keeps the rows its recursion
+ * reaches back to. */
+typedef struct synth_field {
+    const btf_car_band *band;
+    uint32_t stream;       /* noise stream (subspace, band, level) */
+    int fx0, fw;           /* field columns [fx0, fx0 + fw): the window and margins */
+    int window_x0;         /* the window's first column */
+    int end;               /* one past the last row anyone asks for */
+    int pad;               /* zero columns on each side of a ring row */
+    int depth;             /* ring rows: reach up + 2, one more than the recursion
+                            * reads, as a row is read after the row pair
+                            * generator has also written the next (with reach
+                            * up 0, one row would not hold both); a wave's:
+                            * BTF_WAVE_DEPTH */
+    int next;              /* next field row to generate */
+    int vector_noise;      /* synth_paths.vector_noise */
+    int same_row_shape;    /* btf_car_same_row_shape, and its gammas */
+    float same_row_gamma3[3];
+    int n_same_row;        /* the same-row offsets in adding order */
+    int same_row_col[BTF_CAR_MAX_NEIGHBOURS];
+    float same_row_gamma[BTF_CAR_MAX_NEIGHBOURS];
+    float *ring;           /* depth rows of (fw + 2 pad) floats */
+    float *noise, *noise_next; /* fw + 6 floats: the Gaussians of a row (of the next) */
+    float *acc, *acc_next; /* fw floats: the earlier-row part of each sum (next row) */
+    btf_wave *wave;        /* the wavefront that fills the ring, or NULL (row by row) */
+} synth_field;
+
+/* Field row r (any integer): a pointer to its field column 0 in the ring. */
+static inline float *synth_field_ring_row(const synth_field *f, int r)
+{
+    int slot = ((r % f->depth) + f->depth) % f->depth;
+    return f->ring + (size_t)slot * (f->fw + 2 * f->pad) + f->pad;
+}
+
+/* A field over window columns [x0, x1) and rows [y0, y1) with `margin`
+ * (rows above, columns either side), zeros outside. */
+btf_status synth_field_init(synth_field *f, const btf_car_band *band, int margin,
+                            uint32_t stream, int x0, int x1, int y0, int y1,
+                            const synth_paths *paths, btf_error *err);
+void synth_field_free(synth_field *f);
+/* Zero-mean row y (increasing from call to call) of one field, over its
+ * window. */
+const float *synth_field_row(synth_field *f, int y, uint32_t seed_lo, uint32_t seed_hi);
+/* The same for n (1..3) fields of one level of a subspace (same window,
+ * same rows; their margins differ), stepping together: each field's values
+ * are what it would get alone. */
+void synth_field_rows(synth_field *const *f, int n, int y, uint32_t seed_lo, uint32_t seed_hi,
+                      const float **rows);
+
+/* ------------------------------------------------------------------ rows.c */
+
+/* The row-by-row generator, on n (1..3) fields all at row next: one row
+ * each, or two (rows next and next + 1; every field width >= 2 lead, lead
+ * from btf_rows_pair_lead) with twice the independent chains. */
+void btf_rows_step(synth_field *const *f, int n, uint32_t seed_lo, uint32_t seed_hi);
+int btf_rows_pair_lead(synth_field *const *f, int n);
+void btf_rows_pair(synth_field *const *f, int n, int lead, uint32_t seed_lo, uint32_t seed_hi);
+
+/* -------------------------------------------------------------- collapse.c */
+
+/* One level of a band's pyramid during synthesis. */
+typedef struct synth_level {
+    synth_field field;
+    int x0, x1, y0, y1;    /* the level's window, absolute level coordinates */
+    float *gauss_row;      /* G_l of the last row asked for, window width */
+    /* Rows of G_l up-sampled horizontally to the finer level's window, for
+     * its vertical pass: 3 slots, slot i mod 3 holding row up_row_of[slot]. */
+    float *up_rows[3];
+    int up_row_of[3];
+    int fine_x0, fine_w;   /* the finer level's window */
+} synth_level;
+
+/* The pyramid of one spectral band. */
+typedef struct synth_band {
+    int levels;
+    synth_level level[BTF_MAX_LEVELS];
+    uint32_t seed_lo, seed_hi;
+} synth_band;
+
+/* Sets up the levels of spectral band `band` of a subspace for the output
+ * window [0, w) x [0, h); margins[l] per level. */
+btf_status synth_band_init(synth_band *sb, const btf_car_band *bands, const int *margins,
+                           int levels, int subspace, int band, int w, int h, uint64_t seed,
+                           const synth_paths *paths, btf_error *err);
+void synth_band_free(synth_band *sb);
+/* Row y of G_l of each of the nb (1..3) bands of one subspace, which step
+ * together, over the level's window; rows asked in increasing order. */
+void synth_gauss_rows(synth_band *sb, int nb, int l, int y, const float **out);
 
 #endif

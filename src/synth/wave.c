@@ -1,6 +1,8 @@
 /*
- * wave.c — a CAR field generated as a wavefront: eight rows at once, one
- * per AVX2 lane (issue 5's speed target; docs/synthesis.md).
+ * wave.c — a CAR field (Haindl & Filip 2007, section II.C: each sub-band
+ * level is synthesised by its causal recursion) generated as a wavefront:
+ * eight rows at once, one per AVX2 lane (docs/synthesis.md, "Speed on the
+ * CPU").
  *
  * Why. Each pixel of the causal recursion Y_r = sum_s gamma_s Y_{r+s} +
  * sigma e_r waits on its left neighbour (a multiply and an add), so a row
@@ -28,14 +30,14 @@
  * in the level's ring of rows, which the pyramid reads as before.
  *
  * Bits. Every pixel is the same sum in the same order as the row-by-row
- * code in src/synth/synth.c and the GPU shader (btf_shared.h): earlier-row terms
+ * code (src/synth/rows.c) and the GPU shader (btf_shared.h): earlier-row terms
  * in stored order starting from 0, then sigma e, then the same-row terms
  * farthest first. Noise is btf_noise4 of the same (row, block) through the
  * same AVX2 code as noise rows (src/synth/noise_avx2.h). tests/test_car.c checks
  * every value against the recursion written out pixel by pixel.
  *
- * Scope: GCC on x86-64 with AVX2 (else, or with BTF_NOISE_PORTABLE=1, the
- * row-by-row code runs), bands whose earlier-row offsets lie within
+ * Scope: GCC on x86-64 with AVX2 (else, or when the caller asks for the
+ * portable noise or for rows, the row-by-row code runs), bands whose earlier-row offsets lie within
  * WAVE_REACH_ROW rows up and WAVE_REACH_COL columns either way and whose
  * same-row offsets are columns -k .. -1 (k <= 3): every member of the
  * candidate family; fields at least WAVE_MIN_LAP wide.
@@ -46,7 +48,6 @@
 #include "btf_noise.h"
 #include "btf_shared.h"
 
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -73,16 +74,16 @@ struct btf_wave {
     uint32_t block0;            /* noise block of lap position 0 */
     uint32_t stream;
     float sigma;
-    int ne;                     /* earlier-row terms, stored order */
+    int n_earlier;              /* earlier-row terms, stored order */
     int term_rot[BTF_CAR_MAX_NEIGHBOURS]; /* index into rot_d */
     int term_at[BTF_CAR_MAX_NEIGHBOURS];  /* rot_back - its own steps back */
-    float term_g[BTF_CAR_MAX_NEIGHBOURS];
+    float term_gamma[BTF_CAR_MAX_NEIGHBOURS];
     int nrot;                   /* distinct row offsets d */
     int rot_d[WAVE_REACH_ROW];
     int rot_back[WAVE_REACH_ROW]; /* d WAVE_LAG - (smallest dc): farthest back */
     int rot_n[WAVE_REACH_ROW];    /* 8 + the spread of its columns */
-    int k;                      /* same-row shape: columns -k .. -1 */
-    float g3[3];                /* their gammas (columns -3, -2, -1) */
+    int same_row_shape;         /* same-row offsets: columns -k .. -1, k this */
+    float same_row_gamma3[3];   /* their gammas (columns -3, -2, -1) */
     int64_t t;                  /* steps done, a multiple of 8 */
     int hslot;                  /* t % wp */
     int32_t pos[8];             /* each lane's position (s while s < 0) */
@@ -100,56 +101,21 @@ struct btf_wave {
 #endif
 };
 
-/* BTF_SYNTH_WAVE=0 in the environment turns the wavefront off (tests and
- * benchmarks compare the two ways; a user can rule it out when in doubt). */
-static atomic_int wave_on = -1; /* decided once; a race only repeats the decision */
-
-#ifdef WAVE_AVAILABLE
-static int wave_enabled(void)
-{
-    int v = atomic_load(&wave_on);
-    if (v < 0) {
-        const char *env = getenv("BTF_SYNTH_WAVE");
-        v = !(env && !strcmp(env, "0"));
-        atomic_store(&wave_on, v);
-    }
-    return v;
-}
-#endif
-
-int btf_wave_enable(int on)
-{
-#ifdef WAVE_AVAILABLE
-    int was = wave_enabled();
-#else
-    int was = 0;
-#endif
-    atomic_store(&wave_on, on ? 1 : 0);
-    return was;
-}
-
 int btf_wave_available(void)
 {
 #ifdef WAVE_AVAILABLE
-    return btf_noise_path_avx2();
+    return btf_noise_avx2_available();
 #else
     return 0;
 #endif
 }
 
-
 int btf_wave_supported(const btf_car_band *b, int fw)
 {
 #ifdef WAVE_AVAILABLE
-    if (!btf_noise_path_avx2() || !wave_enabled())
+    float gamma3[3];
+    if (!btf_noise_avx2_available() || btf_car_same_row_shape(b, gamma3) < 0)
         return 0;
-    int same[BTF_CAR_MAX_NEIGHBOURS];
-    int nsame = btf_car_same_row_order(b, same);
-    if (nsame > 3)
-        return 0;
-    for (int i = 0; i < nsame; i++)
-        if (b->offsets[same[i]].col != i - nsame)
-            return 0;
     for (int s = 0; s < b->n; s++) {
         int d = -b->offsets[s].row, dc = b->offsets[s].col;
         if (d > WAVE_REACH_ROW || dc > WAVE_REACH_COL || dc < -WAVE_REACH_COL)
@@ -183,8 +149,8 @@ static float *wave_dst(const btf_wave *w, int k)
 {
     if (w->pos[k] < 0)
         return NULL;
-    /* the ring row of r, as src/synth/synth.c's ring_row finds it (only when a
-     * lane starts a row: the division is rare) */
+    /* the ring row of r, as synth_field_ring_row finds it (only when a lane
+     * starts a row: the division is rare) */
     int r = (int)(w->urow[k] - (uint32_t)BTF_NOISE_ORIGIN);
     int slot = ((r % w->depth) + w->depth) % w->depth;
     return w->ring + (size_t)slot * w->stride + w->pad + (w->pos[k] - w->a);
@@ -217,10 +183,7 @@ btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_
     w->row0 = row0;
     w->stream = stream;
     w->sigma = b->sigma;
-    int same[BTF_CAR_MAX_NEIGHBOURS];
-    w->k = btf_car_same_row_order(b, same);
-    for (int i = 0; i < w->k; i++)
-        w->g3[3 - w->k + i] = b->gamma[same[i]];
+    w->same_row_shape = btf_car_same_row_shape(b, w->same_row_gamma3);
     for (int s = 0; s < b->n; s++) {
         int d = -b->offsets[s].row, dc = b->offsets[s].col;
         if (d == 0)
@@ -232,13 +195,13 @@ btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_
             w->rot_d[r] = d;
             w->nrot++;
         }
-        w->term_rot[w->ne] = r;
-        w->term_at[w->ne] = d * WAVE_LAG - dc; /* steps back, made relative below */
-        w->term_g[w->ne++] = b->gamma[s];
+        w->term_rot[w->n_earlier] = r;
+        w->term_at[w->n_earlier] = d * WAVE_LAG - dc; /* steps back, made relative below */
+        w->term_gamma[w->n_earlier++] = b->gamma[s];
     }
     for (int r = 0; r < w->nrot; r++) {
         int lo = INT32_MAX, hi = 0;
-        for (int s = 0; s < w->ne; s++)
+        for (int s = 0; s < w->n_earlier; s++)
             if (w->term_rot[s] == r) {
                 lo = w->term_at[s] < lo ? w->term_at[s] : lo;
                 hi = w->term_at[s] > hi ? w->term_at[s] : hi;
@@ -246,7 +209,7 @@ btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_
         w->rot_back[r] = hi;
         w->rot_n[r] = 8 + hi - lo;
     }
-    for (int s = 0; s < w->ne; s++)
+    for (int s = 0; s < w->n_earlier; s++)
         w->term_at[s] = w->rot_back[w->term_rot[s]] - w->term_at[s];
     for (int k = 0; k < 8; k++) {
         w->pos[k] = -k * WAVE_LAG;
@@ -357,8 +320,8 @@ WAVE_FN void wave_terms(const btf_wave *w, const __m256 *e, __m256 *acc)
     }
     __m256 a0 = _mm256_setzero_ps(), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0, a6 = a0;
     __m256 a7 = a0; /* in registers: an array here became memory cleared by rep stos */
-    for (int s = 0; s < w->ne; s++) {
-        const __m256 g = _mm256_set1_ps(w->term_g[s]);
+    for (int s = 0; s < w->n_earlier; s++) {
+        const __m256 g = _mm256_set1_ps(w->term_gamma[s]);
         const __m256 *src = rot[w->term_rot[s]] + w->term_at[s];
         a0 = _mm256_add_ps(a0, _mm256_mul_ps(g, src[0]));
         a1 = _mm256_add_ps(a1, _mm256_mul_ps(g, src[1]));
@@ -392,8 +355,8 @@ WAVE_FN void wave_group_shape(btf_wave *w, const int K)
     wave_terms(w, e, acc);
     __m256 y1 = _mm256_loadu_ps(w->y[0]), y2 = _mm256_loadu_ps(w->y[1]);
     __m256 y3 = _mm256_loadu_ps(w->y[2]);
-    const __m256 g0 = _mm256_set1_ps(w->g3[0]), g1 = _mm256_set1_ps(w->g3[1]);
-    const __m256 g2 = _mm256_set1_ps(w->g3[2]);
+    const __m256 g0 = _mm256_set1_ps(w->same_row_gamma3[0]), g1 = _mm256_set1_ps(w->same_row_gamma3[1]);
+    const __m256 g2 = _mm256_set1_ps(w->same_row_gamma3[2]);
     /* lane k is a field column when 0 <= pos + j - a < fw: one signed
      * compare after moving both sides by 2^31 */
     const __m256i flip = _mm256_set1_epi32(INT32_MIN);
@@ -445,7 +408,7 @@ WAVE_FN void wave_group_shape(btf_wave *w, const int K)
 
 static void wave_group_any(btf_wave *w)
 {
-    switch (w->k) {
+    switch (w->same_row_shape) {
     case 0: wave_group_shape(w, 0); break;
     case 1: wave_group_shape(w, 1); break;
     case 2: wave_group_shape(w, 2); break;

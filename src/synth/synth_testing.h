@@ -1,0 +1,34 @@
+/*
+ * synth_testing.h — hooks into synthesis for tests and benchmarks only
+ * (CAR synthesis, Haindl & Filip 2007, section II.C): a single CAR field,
+ * forced margins, the GPU's buffer limit and tiling. Not part of the public
+ * API; the definitions live beside the code they reach into
+ * (src/synth/synthesise.c, gpu/synth_gpu.c).
+ */
+#ifndef BTF_SYNTH_TESTING_H
+#define BTF_SYNTH_TESTING_H
+
+#include "btfcar.h"
+
+/* One CAR field alone (its mean included), 1 channel, opts->width x
+ * opts->height (both required), streamed like btf_synthesise; stream names
+ * the noise stream; margin < 0: the band's own (btf_car_margin). */
+btf_status btf_car_synthesise_field(const btf_car_band *band, int margin, uint32_t stream,
+                                    const btf_synth_opts *opts, btf_rows_fn fn, void *user,
+                                    btf_error *err);
+
+/* btf_synthesise with margins[band][level] instead of the bands' own
+ * (NULL: their own). */
+btf_status btf_synthesise_margins(const btf_model *m, int subspace,
+                                  const int (*margins)[BTF_MAX_LEVELS],
+                                  const btf_synth_opts *opts, btf_rows_fn fn, void *user,
+                                  btf_error *err);
+
+/* GPU buffers of at most `bytes` (0: the device's maxStorageBufferRange),
+ * so that tests can force the tiling of btf_gpu_synthesise. */
+void btf_gpu_set_max_buffer_bytes(btf_gpu *g, uint64_t bytes);
+/* How the last btf_gpu_synthesise was cut: batches of images, and jobs
+ * (one per strip of rows of a batch). */
+void btf_gpu_last_tiling(const btf_gpu *g, int *batches, int *jobs);
+
+#endif

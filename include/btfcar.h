@@ -34,9 +34,9 @@ extern "C" {
 #endif
 
 #define BTF_VERSION_MAJOR 0
-#define BTF_VERSION_MINOR 2
+#define BTF_VERSION_MINOR 3
 #define BTF_VERSION_PATCH 0
-#define BTF_VERSION_STRING "0.2.0"
+#define BTF_VERSION_STRING "0.3.0"
 
 /* ------------------------------------------------------------------ errors */
 
@@ -57,7 +57,7 @@ typedef struct btf_error {
 } btf_error;
 
 /* A short name of a status code ("I/O error", ...). */
-const char *btf_status_name(int status);
+const char *btf_status_name(btf_status status);
 
 /* Progress report for long work: fraction in [0, 1]; what names the step. */
 typedef void (*btf_progress_fn)(void *user, double fraction, const char *what);
@@ -703,7 +703,7 @@ btf_status btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_m
 int btf_auto_levels(const double *band, int w, int h);
 
 /* What btf_analyse decided on the way, for reports to people; the model
- * itself holds the results. Fields may be added. */
+ * itself holds the results. (A new field is an ABI change: docs/install.md.) */
 typedef struct btf_analyse_report {
     char segment_reason[256]; /* why this number of subspaces (one line, as
                                  btf_segmentation.reason) */

@@ -7,7 +7,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 
-const char *btf_status_name(int status)
+const char *btf_status_name(btf_status status)
 {
     switch (status) {
     case BTF_OK: return "ok";

@@ -335,12 +335,28 @@ static void devices_json(void **state)
     free(out);
 }
 
+/* docs/cli.md is the commands' own --help (tools/cli-doc.sh): it must not
+ * drift from the option tables. Run from the source tree (make test). */
+static void cli_doc_is_current(void **state)
+{
+    (void)state;
+    if (access("tools/cli-doc.sh", R_OK) != 0 || access("docs/cli.md", R_OK) != 0) {
+        print_message("not in the source tree: docs/cli.md not compared\n");
+        return;
+    }
+    int st = tu_run(tu_fmt("sh tools/cli-doc.sh %s | cmp -s - docs/cli.md", tu_cli()), NULL);
+    if (st != 0)
+        print_error("docs/cli.md is stale: sh tools/cli-doc.sh build/btfcar > docs/cli.md\n");
+    assert_int_equal(st, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(help_and_version),
         cmocka_unit_test(option_conventions),
         cmocka_unit_test(devices_json),
+        cmocka_unit_test(cli_doc_is_current),
         cmocka_unit_test(generate_then_info),
         cmocka_unit_test(generate_is_deterministic),
         cmocka_unit_test(generate_errors),

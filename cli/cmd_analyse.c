@@ -43,14 +43,23 @@ static int write_text(const char *path, FILE *mem, char **text, size_t *len, btf
     return rc;
 }
 
+/* A text file built in memory, then written by write_text. */
+static FILE *text_begin(char **text, size_t *len, const char *path, btf_error *err)
+{
+    FILE *f = open_memstream(text, len);
+    if (!f)
+        cli_set_error(err, BTF_E_NOMEM, "%s: out of memory formatting it", path);
+    return f;
+}
+
 static int write_index_tsv(const btf_segmentation *s, const btf_dataset_info *in,
                            const char *path, btf_error *err)
 {
     char *text = NULL;
     size_t len = 0;
-    FILE *f = open_memstream(&text, &len);
+    FILE *f = text_begin(&text, &len, path, err);
     if (!f)
-        return cli_set_error(err, BTF_E_NOMEM, "%s: out of memory formatting it", path);
+        return BTF_E_NOMEM;
     fprintf(f, "view\tlight\ttheta_v\tphi_v\ttheta_l\tphi_l\tsubspace\n");
     for (int v = 0; v < s->n_views; v++)
         for (int l = 0; l < s->n_lights; l++)
@@ -65,9 +74,9 @@ static int write_subspaces_tsv(const btf_segmentation *s, const btf_dataset_info
 {
     char *text = NULL;
     size_t len = 0;
-    FILE *f = open_memstream(&text, &len);
+    FILE *f = text_begin(&text, &len, path, err);
     if (!f)
-        return cli_set_error(err, BTF_E_NOMEM, "%s: out of memory formatting it", path);
+        return BTF_E_NOMEM;
     fprintf(f, "subspace\tmembers\tview\tlight\ttheta_v\tphi_v\ttheta_l\tphi_l\timage\n");
     for (int c = 0; c < s->k; c++) {
         int v = s->rep_view[c], l = s->rep_light[c];

@@ -18,12 +18,6 @@
  * basis by transposition. */
 #define BASIS_TOL 1e-3
 
-#define MAX_DIRS BTF_MODEL_MAX_DIRS
-#define MAX_SUBSPACES BTF_MODEL_MAX_SUBSPACES
-#define MAX_IMAGE_SIDE BTF_MODEL_MAX_IMAGE_SIDE
-#define MAX_RANGE_SIDE BTF_MODEL_MAX_RANGE_SIDE
-#define MAX_RANGE_SAMPLES BTF_MODEL_MAX_RANGE_SAMPLES
-#define MAX_NAME BTF_MODEL_MAX_NAME
 
 btf_status btf_model_fail(btf_error *err, btf_status code, const char *name, const char *fmt,
                           ...)
@@ -41,18 +35,18 @@ btf_status btf_model_fail(btf_error *err, btf_status code, const char *name, con
 static btf_status check_dirset(const btf_dirset *s, const char *what, const char *name,
                                btf_status code, btf_error *err)
 {
-    if (s->count < 0 || s->count > MAX_DIRS)
+    if (s->count < 0 || s->count > BTF_MODEL_MAX_DIRS)
         return failf(err, code, name, "%s: %d directions (expected 0..%d)", what, s->count,
-                     MAX_DIRS);
+                     BTF_MODEL_MAX_DIRS);
     if (s->count == 0)
         return BTF_OK;
     if (!s->dirs)
         return failf(err, code, name, "%s: no direction array (expected %d directions)", what,
                      s->count);
     size_t len = strnlen(s->name, sizeof s->name);
-    if (len > MAX_NAME)
+    if (len > BTF_MODEL_MAX_NAME)
         return failf(err, code, name, "%s: set name is not terminated (expected at most %d characters)",
-                     what, MAX_NAME);
+                     what, BTF_MODEL_MAX_NAME);
     for (size_t i = 0; i < len; i++)
         if (s->name[i] < 0x20 || s->name[i] > 0x7e)
             return failf(err, code, name, "%s: set name has byte 0x%02x (expected printable ASCII)",
@@ -135,10 +129,10 @@ static btf_status check_subspace(const btf_model *m, int s, const char *name, bt
                      "subspace %d: representative (view %d, light %d) (expected both -1, or "
                      "indices below %d views and %d lights)", s, sm->view, sm->light,
                      m->views.count, m->lights.count);
-    if (sm->width < 1 || sm->width > MAX_IMAGE_SIDE || sm->height < 1 ||
-        sm->height > MAX_IMAGE_SIDE)
+    if (sm->width < 1 || sm->width > BTF_MODEL_MAX_IMAGE_SIDE || sm->height < 1 ||
+        sm->height > BTF_MODEL_MAX_IMAGE_SIDE)
         return failf(err, code, name, "subspace %d: size %d x %d (expected 1..%d on each side)", s,
-                     sm->width, sm->height, MAX_IMAGE_SIDE);
+                     sm->width, sm->height, BTF_MODEL_MAX_IMAGE_SIDE);
     for (int c = 0; c < 3; c++)
         if (!isfinite(sm->mean[c]))
             return failf(err, code, name, "subspace %d: mean[%d] is %g (expected a finite number)",
@@ -163,12 +157,12 @@ static btf_status check_range(const btf_model *m, const char *name, btf_status c
 {
     if (m->range_width == 0 && m->range_height == 0 && !m->range)
         return BTF_OK;
-    if (m->range_width < 1 || m->range_width > MAX_RANGE_SIDE || m->range_height < 1 ||
-        m->range_height > MAX_RANGE_SIDE ||
-        (long)m->range_width * m->range_height > MAX_RANGE_SAMPLES)
+    if (m->range_width < 1 || m->range_width > BTF_MODEL_MAX_RANGE_SIDE || m->range_height < 1 ||
+        m->range_height > BTF_MODEL_MAX_RANGE_SIDE ||
+        (long)m->range_width * m->range_height > BTF_MODEL_MAX_RANGE_SAMPLES)
         return failf(err, code, name,
                      "range map: size %d x %d (expected 1..%d on each side, at most %ld samples)",
-                     m->range_width, m->range_height, MAX_RANGE_SIDE, MAX_RANGE_SAMPLES);
+                     m->range_width, m->range_height, BTF_MODEL_MAX_RANGE_SIDE, BTF_MODEL_MAX_RANGE_SAMPLES);
     if (!m->range)
         return failf(err, code, name, "range map: %d x %d but no heights (expected an array)",
                      m->range_width, m->range_height);
@@ -196,9 +190,9 @@ btf_status btf_model_validate(const btf_model *m, const char *name, btf_status c
     if ((m->views.count == 0) != (m->lights.count == 0))
         return failf(err, code, name, "%d views and %d lights (expected both or neither)",
                      m->views.count, m->lights.count);
-    if (m->n_subspaces < 1 || m->n_subspaces > MAX_SUBSPACES || !m->subspaces)
+    if (m->n_subspaces < 1 || m->n_subspaces > BTF_MODEL_MAX_SUBSPACES || !m->subspaces)
         return failf(err, code, name, "%d subspaces (expected 1..%d)", m->n_subspaces,
-                     MAX_SUBSPACES);
+                     BTF_MODEL_MAX_SUBSPACES);
     if (m->views.count > 0) {
         if (!m->index)
             return failf(err, code, name, "no index table (expected %d x %d entries)",

@@ -43,12 +43,6 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 
 #define MAX_FILE_BYTES ((size_t)64 << 20)
 #define MAX_PAYLOAD_BYTES ((size_t)64 << 20)
-#define MAX_DIRS BTF_MODEL_MAX_DIRS
-#define MAX_SUBSPACES BTF_MODEL_MAX_SUBSPACES
-#define MAX_IMAGE_SIDE BTF_MODEL_MAX_IMAGE_SIDE
-#define MAX_RANGE_SIDE BTF_MODEL_MAX_RANGE_SIDE
-#define MAX_RANGE_SAMPLES BTF_MODEL_MAX_RANGE_SAMPLES
-#define MAX_NAME BTF_MODEL_MAX_NAME
 
 /* The range map's grid: h = (k + q + 1/2) 2^e, q in [0, 65535], with
  * k + q + 1/2 held exactly by a float (24-bit significand) and no value
@@ -643,16 +637,16 @@ static btf_status read_dirset(const span *sp, int tag, btf_dirset *s, const char
 {
     rbuf r = {sp->p, sp->n, 0, 0};
     unsigned len = r_u8(&r);
-    if (len > MAX_NAME)
+    if (len > BTF_MODEL_MAX_NAME)
         return failf(err, BTF_E_FORMAT, name, "section %s: set name of %u bytes (expected at most %d)",
-                     TAGS[tag], len, MAX_NAME);
+                     TAGS[tag], len, BTF_MODEL_MAX_NAME);
     const unsigned char *nm = r_take(&r, len);
     unsigned count = r_u16(&r);
     if (r.short_read)
         return short_section(tag, name, err);
-    if (count < 1 || count > MAX_DIRS)
+    if (count < 1 || count > BTF_MODEL_MAX_DIRS)
         return failf(err, BTF_E_FORMAT, name, "section %s: %u directions (expected 1..%d)",
-                     TAGS[tag], count, MAX_DIRS);
+                     TAGS[tag], count, BTF_MODEL_MAX_DIRS);
     if (r.n - r.pos < (size_t)count * 16)
         return short_section(tag, name, err);
     memcpy(s->name, nm, len);
@@ -705,10 +699,10 @@ static btf_status read_subspace(rbuf *r, btf_subspace_model *sm, int s, const ch
     sm->view = r_i16(r);
     sm->light = r_i16(r);
     uint32_t w = r_u32(r), h = r_u32(r);
-    if (!r->short_read && (w < 1 || w > MAX_IMAGE_SIDE || h < 1 || h > MAX_IMAGE_SIDE))
+    if (!r->short_read && (w < 1 || w > BTF_MODEL_MAX_IMAGE_SIDE || h < 1 || h > BTF_MODEL_MAX_IMAGE_SIDE))
         return failf(err, BTF_E_FORMAT, name,
                      "subspace %d: size %lu x %lu (expected 1..%d on each side)", s,
-                     (unsigned long)w, (unsigned long)h, MAX_IMAGE_SIDE);
+                     (unsigned long)w, (unsigned long)h, BTF_MODEL_MAX_IMAGE_SIDE);
     sm->width = (int)w;
     sm->height = (int)h;
     for (int c = 0; c < 3; c++)
@@ -742,9 +736,9 @@ static btf_status read_subspaces(const span *sp, btf_model *m, const char *name,
     unsigned count = r_u16(&r);
     if (r.short_read)
         return short_section(S_SUBS, name, err);
-    if (count < 1 || count > MAX_SUBSPACES)
+    if (count < 1 || count > BTF_MODEL_MAX_SUBSPACES)
         return failf(err, BTF_E_FORMAT, name, "%u subspaces (expected 1..%d)", count,
-                     MAX_SUBSPACES);
+                     BTF_MODEL_MAX_SUBSPACES);
     m->subspaces = alloc_named(count, sizeof *m->subspaces, 1, name, err);
     if (!m->subspaces)
         return BTF_E_NOMEM;
@@ -769,10 +763,10 @@ static btf_status read_range(const span *sp, btf_model *m, const char *name, btf
     int32_t k = r_i32(&r);
     if (r.short_read)
         return short_section(S_RANG, name, err);
-    if (w < 1 || h < 1 || (long)w * h > MAX_RANGE_SAMPLES)
+    if (w < 1 || h < 1 || (long)w * h > BTF_MODEL_MAX_RANGE_SAMPLES)
         return failf(err, BTF_E_FORMAT, name,
                      "range map: size %d x %d (expected 1..%d on each side, at most %ld samples)",
-                     w, h, MAX_RANGE_SIDE, MAX_RANGE_SAMPLES);
+                     w, h, BTF_MODEL_MAX_RANGE_SIDE, BTF_MODEL_MAX_RANGE_SAMPLES);
     size_t n = (size_t)w * h;
     const unsigned char *planes = r_take(&r, 2 * n);
     if (!planes)

@@ -12,7 +12,7 @@ SAN       ?=
 PKGS      := OpenEXR vulkan cmocka
 
 # -ffp-contract=off: no FMA contraction, so the CPU reference can match the
-# GPU shaders bit for bit (docs/design.md, "Determinism").
+# GPU shaders bit for bit (docs/design.md, "Conventions", CPU/GPU parity).
 # -Wno-format-truncation where the compiler knows it (GCC; clang rejects it).
 NO_TRUNC  := $(shell $(CC) -Wno-format-truncation -Werror -x c -c /dev/null -o /dev/null \
                2>/dev/null && echo -Wno-format-truncation)
@@ -161,8 +161,8 @@ demo: deps
 # instrumentation. tests/fuzz.sh then runs each for FUZZ_SECONDS from its
 # seed corpus (tests/fuzz-corpus/NAME/) and fails if any input crashes.
 # Warnings are shown but not fatal here: gcc's -Werror build is the gate.
-# The small EXR chunk limit keeps exr_io.c's buffers under libFuzzer's
-# memory limit.
+# The small EXR chunk limit (BTF_EXR_MAX_CHUNK_BYTES) keeps the chunk
+# buffers of src/io/exr_read.c under libFuzzer's memory limit.
 FUZZ_SECONDS ?= 30
 FUZZ_BUILD   ?= build-fuzz
 FUZZ_SRC     := $(sort $(wildcard tests/fuzz_*.c))

@@ -1,4 +1,7 @@
-/* cmd_analyse.c — btfcar analyse: the analysis stages on a dataset. */
+/* cmd_analyse.c — btfcar analyse: the analysis stages on a dataset (Haindl &
+ * Filip 2007, section II: II.A segmentation, II.B range map, II.C CAR
+ * models; library: src/analyse/analyse.c), or stage 1 alone with its
+ * pictures and tables (--stage segment). */
 #include "cli.h"
 
 #include <stdlib.h>

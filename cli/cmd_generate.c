@@ -1,4 +1,6 @@
-/* cmd_generate.c — btfcar generate: a procedural BTF on disk. */
+/* cmd_generate.c — btfcar generate: a procedural BTF on disk, a stand-in with
+ * known ground truth for the measured data that the analysis of Haindl &
+ * Filip 2007, section II starts from (library: src/generate/). */
 #include "cli.h"
 
 #include <stdlib.h>

@@ -1,4 +1,8 @@
-/* cmd_synthesise.c — btfcar synthesise: subspace images of any size. */
+/* cmd_synthesise.c — btfcar synthesise: subspace images of any size from a
+ * model (Haindl & Filip 2007, section II.C, model synthesis), on the CPU
+ * (src/synth/) or the GPU (gpu/), written to EXR as rows arrive. Reads the
+ * environment switches the library does not (BTF_VK_*, BTF_SYNTH_WAVE,
+ * BTF_NOISE_PORTABLE) and passes them as options. */
 #include "cli.h"
 
 #include <stdlib.h>

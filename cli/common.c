@@ -1,4 +1,5 @@
-/* common.c — see cli.h. */
+/* common.c — what every command shares (declared in cli.h): error and usage
+ * messages, number and size parsing, the progress bar, byte counts as text. */
 #include "cli.h"
 
 #include <errno.h>

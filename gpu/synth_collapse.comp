@@ -1,5 +1,6 @@
 // synth_collapse.comp -- one pyramid level of the collapse on the GPU
-// (Haindl & Filip 2007, section II.C: the synthesised levels recombined):
+// (Haindl & Filip 2007, section II.C: the synthesised levels recombined;
+// section III, "Synthesis of the BTF Subspace Images", on the GPU):
 //     G_l = mean_l + Y_l + up(G_{l+1})
 // over the level's window, the up-sampling done as on the CPU
 // (src/synth/upsample.c): horizontally within each of the coarse rows the

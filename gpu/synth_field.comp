@@ -1,5 +1,6 @@
 // synth_field.comp -- the causal recursion of CAR random fields on the GPU
-// (Haindl & Filip 2007, section II.C: each sub-band level is a CAR field).
+// (Haindl & Filip 2007, section II.C: each sub-band level is a CAR field;
+// section III, "Synthesis of the BTF Subspace Images", on the GPU).
 // One workgroup per field; the recursion
 //     Y(r, c) = sum_s gamma_s Y(r + dr_s, c + dc_s) + sigma e(r, c)
 // is parallelised as a wavefront: pixel (r, c) depends only on pixels of

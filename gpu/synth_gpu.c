@@ -233,9 +233,13 @@ static int field_up(const gpu_task *t)
     return up;
 }
 
-/* The rows of each field for the strip [y0, y1), advancing its state. With
- * plan_only the task records are left alone (sizing pass). Returns through
- * keep[] the rows carried from the previous strip (0 on the first). */
+/* The rows of each field for the strip [y0, y1), advancing its state and
+ * writing them into its task record, and the most rows each buffer needs so
+ * far (field_state.rows, grows, carry). build_batch walks every strip
+ * through it once to size the buffers; run_strip calls it again before each
+ * job, from the first strip on, so the records match the strip it runs.
+ * Returns through keep[] the rows carried from the previous strip (0 on
+ * the first). */
 static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *keep_from)
 {
     for (int i = 0; i < bt->ntasks; i++) {

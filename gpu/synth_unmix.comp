@@ -1,5 +1,6 @@
 // synth_unmix.comp -- the inverse spectral decorrelation on the GPU (Haindl
-// & Filip 2007, section II.C, the last step of synthesis):
+// & Filip 2007, section II.C, the last step of synthesis; section III, the
+// 3 x 3 inverse decorrelation matrix applied to each colour pixel):
 // rgb_k = mean_k + sum_b basis[b][k] band_b, with btf_unmix as on the CPU
 // (src/synth/colour.c).
 // One workgroup per subspace image, a grid-stride loop over its pixels.

@@ -203,7 +203,7 @@ static void missing_pair(void **state)
     tu_rmtree(dir);
     free(dir);
     /* The expected path follows the dataset: a flat folder has no view
-     * folder, a UTIA dataset of EXR files names an .exr (found by review). */
+     * folder, a UTIA dataset of EXR files names an .exr. */
     dir = make_ubo(0, 2, 0);
     assert_int_equal(btf_dataset_open(dir, NULL, &ds, &e), BTF_E_DATA);
     assert_non_null(strstr(e.msg, tu_fmt("%s/00002 tl000 pl000 tv015 pv060.jpg", dir)));

@@ -1,7 +1,8 @@
 /*
  * rng.c — a small deterministic random stream (splitmix64, Steele et al.
- * 2014) for seeded choices on the CPU: k-means++ seeding, restarts. The CAR
- * synthesis noise is a separate, counter-based generator shared with the GPU.
+ * 2014) for seeded choices on the CPU: k-means++ seeding and restarts of
+ * segmentation (Haindl & Filip 2007, section II.A). The CAR synthesis noise
+ * is a separate, counter-based generator shared with the GPU.
  */
 #include "core/core.h"
 

@@ -2,9 +2,11 @@
  * render.c — the images a BTF measurement of a procedural material records
  * (generate/material.c makes the materials): the rectified image of one
  * (view, light) pair, and the per-view and per-light maps that make 6,561
- * of them cheap. Axes as in generate/material.c: texture u = column, w =
- * row (row 0 at the top); directions and normals x right, y UP, z towards
- * the camera.
+ * of them cheap. This simulates the measured input of the analysis (Haindl
+ * & Filip 2007, section II); it is not the rendering of the model on
+ * geometry (section III). Axes as in generate/material.c: texture u =
+ * column, w = row (row 0 at the top); directions and normals x right, y UP,
+ * z towards the camera.
  *
  * Rendering (the rectified image of one (view, light) pair). For every texel
  * (x, y) of the reference plane z = 0 the view ray through (x, y, 0) is

@@ -1,9 +1,10 @@
 /*
  * cv_bridge.cpp — the one C++ file: a thin C interface over the parts of
  * OpenCV 4 that have no C API: PNG/JPEG decoding and encoding in memory,
- * the linear-RGB to CIE Lab conversion (segmentation features), and the 2D
- * DFT and DCT (range-map integration). Nothing here throws across the
- * boundary: every OpenCV exception becomes an error text.
+ * the linear-RGB to CIE Lab conversion (segmentation features, Haindl &
+ * Filip 2007, section II.A), and the 2D DFT and DCT (range-map integration,
+ * section II.B). Nothing here throws across the boundary: every OpenCV
+ * exception becomes an error text.
  */
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>

@@ -9,7 +9,7 @@
 
 #include "core/core.h"
 
-/* Limits (docs/model-format.md, "Limits"). */
+/* Limits (docs/model-format.md, "Validation"). */
 #define BTF_MODEL_MAX_DIRS 4096
 #define BTF_MODEL_MAX_SUBSPACES 256 /* the index table stores uint8 ids */
 #define BTF_MODEL_MAX_IMAGE_SIDE (1 << 20)

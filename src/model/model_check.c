@@ -1,5 +1,5 @@
 /*
- * model_check.c — the validator of models (docs/model-format.md, "Rules"):
+ * model_check.c — the validator of models (docs/model-format.md, "Validation"):
  * direction sets, the index table, every subspace's spectral basis and CAR
  * bands (paper section II.C: causal neighbourhoods, finite coefficients,
  * sigma >= 0), and the range-map tile (section II.B). The encoder runs it

@@ -692,7 +692,7 @@ static void read_band(rbuf *r, btf_car_band *b)
 }
 
 /* Reads one subspace; counts that size loops (levels, n) are checked at
- * once, everything else by validate_model. */
+ * once, everything else by btf_model_validate (model/model_check.c). */
 static btf_status read_subspace(rbuf *r, btf_subspace_model *sm, int s, const char *name,
                                 btf_error *err)
 {

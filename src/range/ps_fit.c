@@ -101,12 +101,13 @@ static int fit_set(const double *lights, int count, const double *samples,
 }
 
 /* Residuals of every sample against the fit into s->residuals; for the
- * samples of the fit, the deleted residual r / (1 - h), h = l^T A^-1 l the
- * sample's leverage: what the fit without that sample would predict. A
- * single bad sample of high leverage (a partly shadowed one amid the lights)
- * pulls an ordinary fit towards itself and hides its own residual; its
- * deleted residual does not. Returns the robust scale 1.4826 median |r| of
- * the fit's samples, at least SCALE_FLOOR x albedo. */
+ * samples of the fit, the deleted residual r / (1 - h), with h = l^T
+ * (sum l l^T)^-1 l (gram_inverse) the sample's leverage: what the fit
+ * without that sample would predict. A single bad sample of high leverage
+ * (a partly shadowed one amid the lights) pulls an ordinary fit towards
+ * itself and hides its own residual; its deleted residual does not.
+ * Returns the robust scale 1.4826 median |r| of the fit's samples, at
+ * least SCALE_FLOOR x albedo. */
 static double residuals(const double *lights, int count, const double *samples,
                         const double scaled_normal[3], const btf_sym3 *gram_inverse,
                         btf_ps_scratch *s)

@@ -1,7 +1,7 @@
 /*
- * vk.h — the library's small internal Vulkan compute layer (gpu/vk.c), on
- * which GPU synthesis (Haindl & Filip 2007, section II.C, as compute
- * shaders) is built: one
+ * vk.h — the library's small internal Vulkan compute layer, on which GPU
+ * synthesis (Haindl & Filip 2007, section II.C, computed as in section III,
+ * "Synthesis of the BTF Subspace Images", by compute shaders) is built: one
  * device, one compute queue, storage buffers, compute pipelines built from
  * SPIR-V, and jobs (one command buffer of dispatches, fills and copies,
  * submitted and waited for). btf_gpu_list_devices lists devices with it.
@@ -12,12 +12,20 @@
  * memory types, descriptor sets, barriers, fences) is the same for every
  * shader, and the rules that make it correct — barriers after every command,
  * limits checked before Vulkan sees a call, validation errors counted —
- * belong in one place. docs/gpu.md describes the choices.
+ * are kept once, here, rather than by each shader's host code. docs/gpu.md
+ * describes the choices.
+ *
+ * The layer is four files behind this one interface, sharing the private
+ * gpu/vk_internal.h: gpu/vk.c (the context: create, destroy, accessors),
+ * gpu/vk_instance.c (loader, instance, validation messenger, device list
+ * and choice), gpu/vk_memory.c (memory types, buffers, upload and download
+ * with staging) and gpu/vk_job.c (pipelines, descriptor pools, jobs,
+ * barriers, fences). Each calls only the ones after it in that list.
  *
  * Conventions are the library's: btf_status returns, one-line btf_error
  * messages naming the Vulkan call and its VkResult, zero-initialised option
  * structs, no globals, no environment reads, no printing. Every Vulkan call
- * of this file is checked; with no Vulkan driver installed everything fails
+ * of the layer is checked; with no Vulkan driver installed everything fails
  * with BTF_E_UNSUPPORTED.
  *
  * Threads: a btf_vk and everything made from it must be used by one thread at

@@ -1,5 +1,5 @@
 /*
- * test_vk.c — the internal Vulkan compute layer (gpu/vk.c) on lavapipe, the
+ * test_vk.c — the internal Vulkan compute layer (gpu/vk.h) on lavapipe, the
  * Mesa CPU driver: device listing and choice, create/destroy cycles, buffer
  * round trips (mapped and staged), fills and copies, the bit-exact parity of
  * the shader noise (gpu/noise_check.comp) with the C btf_noise4, limits

@@ -3,233 +3,32 @@
  * the analysis of paper section II starts from) behind one streaming
  * interface.
  *
- * Three layouts are recognised automatically:
- *  - Bonn UBO2003: "NNNNN tlAAA plBBB tvCCC pvDDD.jpg" (3-digit whole degrees,
- *    5-digit running index), in per-view folders "tvCCC_pvDDD/" or one folder;
- *  - UTIA: "tvCCC_pvDDD/tlAAA_plBBB_tvCCC_pvDDD.png" (8-bit sRGB) or ".exr";
- *  - a manifest: a TSV file with the columns path, theta_l, phi_l, theta_v,
- *    phi_v (degrees; paths relative to the manifest's folder).
- * Opening collects every (light, view) pair from the names only, checks that
- * the set is complete and unique, and (unless asked not to) probes every file's
- * header and structure. Pixels are decoded one image at a time, on demand.
+ * Opening lists the files of a UBO2003, UTIA or manifest layout
+ * (io/dataset_scan.c), makes every (view, light) pair's table from the
+ * entries, checks that the set is complete and unique, and (unless asked
+ * not to) probes every file's header and structure. Pixels are decoded one
+ * image at a time, on demand: read by pair, iterate, or verify them all.
  */
 #include <stdio.h>
 #include "core/core.h"
 #include "io/io.h"
 
-#include <ctype.h>
-#include <dirent.h>
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
-#define PATH_MAX_LEN 4096
-
-typedef struct entry {
-    char *path;
-    btf_dir light, view;
-} entry;
-
-typedef struct entry_list {
-    entry *items;
-    int count, cap;
-    btf_layout layout;
-    int flat;        /* UBO2003 files in one folder (no tvCCC_pvDDD/) */
-    char ext[8];     /* the first file's extension, for messages */
-} entry_list;
-
 struct btf_dataset {
     btf_dataset_info info;
     btf_dirset views, lights;
-    char root[PATH_MAX_LEN];
-    entry_list files; /* owns the path strings */
+    char root[BTF_DATASET_PATH_MAX];
+    btf_dataset_entries files; /* owns the path strings */
     char **paths;     /* [view * n_lights + light], pointers into files */
 };
 
-
-const char *btf_layout_name(btf_layout layout)
-{
-    switch (layout) {
-    case BTF_LAYOUT_UBO2003: return "UBO2003";
-    case BTF_LAYOUT_UTIA: return "UTIA";
-    case BTF_LAYOUT_MANIFEST: return "manifest";
-    default: return "unknown";
-    }
-}
-
-static void entries_free(entry_list *l)
-{
-    for (int i = 0; i < l->count; i++)
-        free(l->items[i].path);
-    free(l->items);
-    memset(l, 0, sizeof *l);
-}
-
-static btf_status entries_add(entry_list *l, const char *path, btf_dir light, btf_dir view,
-                              btf_error *err)
-{
-    if (l->count == l->cap) {
-        int ncap = l->cap ? l->cap * 2 : 256;
-        entry *n = realloc(l->items, (size_t)ncap * sizeof *n);
-        if (!n)
-            return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
-        l->items = n;
-        l->cap = ncap;
-    }
-    char *p = strdup(path);
-    if (!p)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
-    l->items[l->count++] = (entry){p, light, view};
-    return BTF_OK;
-}
-
-/* Matches name against a pattern where '#' is one decimal digit and any other
- * character must be equal (letters case-insensitively). The digit groups are
- * stored in nums (up to 8). Returns the number of groups, or -1. */
-static int match_name(const char *name, const char *pat, int *nums)
-{
-    int groups = 0, in_group = 0;
-    for (; *pat; pat++, name++) {
-        if (*pat == '#') {
-            if (!isdigit((unsigned char)*name))
-                return -1;
-            if (!in_group) {
-                if (groups == 8)
-                    return -1;
-                nums[groups++] = 0;
-            }
-            nums[groups - 1] = nums[groups - 1] * 10 + (*name - '0');
-            in_group = 1;
-        } else {
-            if (tolower((unsigned char)*name) != tolower((unsigned char)*pat))
-                return -1;
-            in_group = 0;
-        }
-    }
-    return *name == '\0' ? groups : -1;
-}
-
-static const char UBO_JPG[] = "##### tl### pl### tv### pv###.jpg";
-static const char UTIA_PNG[] = "tl###_pl###_tv###_pv###.png";
-static const char UTIA_EXR[] = "tl###_pl###_tv###_pv###.exr";
-static const char VIEW_DIR[] = "tv###_pv###";
-
-static btf_dir dir_of(int theta, int phi)
-{
-    return (btf_dir){(double)theta, (double)phi};
-}
-
-/* Classifies one file name; adds it if it follows a layout. folder_view is
- * the view named by the enclosing "tvCCC_pvDDD" folder, or NULL. */
-static btf_status add_file(entry_list *l, const char *dir, const char *name,
-                           const int *folder_view, btf_error *err)
-{
-    int n[8];
-    btf_layout kind;
-    if (match_name(name, UBO_JPG, n) == 5) {
-        kind = BTF_LAYOUT_UBO2003;
-        n[0] = n[1], n[1] = n[2], n[2] = n[3], n[3] = n[4]; /* drop the running index */
-    } else if (folder_view && (match_name(name, UTIA_PNG, n) == 4 || match_name(name, UTIA_EXR, n) == 4)) {
-        kind = BTF_LAYOUT_UTIA;
-    } else {
-        return BTF_OK; /* not an image of the dataset (a README, truth/, ...) */
-    }
-    char path[PATH_MAX_LEN];
-    btf_status rc = btf_path_join(path, sizeof path, dir, name, err);
-    if (rc)
-        return rc;
-    if (l->layout != BTF_LAYOUT_UNKNOWN && l->layout != kind)
-        return btf_fail(err, BTF_E_DATA, "%s: %s file in a %s dataset (mixed layouts)", path,
-                        btf_layout_name(kind), btf_layout_name(l->layout));
-    if (l->count == 0) {
-        l->flat = folder_view == NULL;
-        const char *dot = strrchr(name, '.');
-        snprintf(l->ext, sizeof l->ext, "%s", dot ? dot : "");
-    }
-    l->layout = kind;
-    if (n[0] > 90 || n[2] > 90 || n[1] >= 360 || n[3] >= 360)
-        return btf_fail(err, BTF_E_DATA, "%s: direction out of range in the name", path);
-    if (folder_view && (folder_view[0] != n[2] || folder_view[1] != n[3]))
-        return btf_fail(err, BTF_E_DATA, "%s: view tv%03d pv%03d differs from its folder's", path,
-                        n[2], n[3]);
-    return entries_add(l, path, dir_of(n[0], n[1]), dir_of(n[2], n[3]), err);
-}
-
-static btf_status scan_folder(entry_list *l, const char *dir, const int *folder_view,
-                              btf_error *err)
-{
-    DIR *d = opendir(dir);
-    if (!d)
-        return btf_fail(err, BTF_E_IO, "%s: cannot open folder: %s", dir, strerror(errno));
-    btf_status rc = BTF_OK;
-    struct dirent *e;
-    while (rc == BTF_OK && (e = readdir(d))) {
-        if (e->d_name[0] == '.')
-            continue;
-        int view[8];
-        char sub[PATH_MAX_LEN];
-        if (!folder_view && match_name(e->d_name, VIEW_DIR, view) == 2) {
-            rc = btf_path_join(sub, sizeof sub, dir, e->d_name, err);
-            struct stat st;
-            if (rc == BTF_OK && stat(sub, &st) == 0 && S_ISDIR(st.st_mode))
-                rc = scan_folder(l, sub, view, err);
-        } else {
-            rc = add_file(l, dir, e->d_name, folder_view, err);
-        }
-    }
-    closedir(d);
-    return rc;
-}
-
-static btf_status read_manifest(entry_list *l, const char *path, btf_error *err)
-{
-    btf_tsv t;
-    btf_status rc = btf_tsv_read(path, &t, err);
-    if (rc)
-        return rc;
-    static const char *cols[5] = {"path", "theta_l", "phi_l", "theta_v", "phi_v"};
-    int c[5];
-    for (int i = 0; i < 5; i++)
-        if ((c[i] = btf_tsv_column(&t, cols[i])) < 0) {
-            btf_tsv_free(&t);
-            return btf_fail(err, BTF_E_FORMAT,
-                            "%s: manifest header lacks the column '%s' (expected: path theta_l "
-                            "phi_l theta_v phi_v, tab-separated)", path, cols[i]);
-        }
-    char base[PATH_MAX_LEN];
-    snprintf(base, sizeof base, "%s", path);
-    char *slash = strrchr(base, '/');
-    if (slash)
-        slash[1] = '\0';
-    else
-        snprintf(base, sizeof base, ".");
-    l->layout = BTF_LAYOUT_MANIFEST;
-    for (int r = 0; rc == BTF_OK && r < t.nrows; r++) {
-        double v[4];
-        for (int i = 0; rc == BTF_OK && i < 4; i++)
-            rc = btf_tsv_number(&t, path, r, c[i + 1], &v[i], err);
-        if (rc)
-            break;
-        const char *p = btf_tsv_cell(&t, r, c[0]);
-        char full[PATH_MAX_LEN];
-        if (p[0] == '/')
-            snprintf(full, sizeof full, "%s", p);
-        else
-            rc = btf_path_join(full, sizeof full, base, p, err);
-        if (rc == BTF_OK && (v[0] < 0 || v[0] > 90 || v[2] < 0 || v[2] > 90))
-            rc = btf_fail(err, BTF_E_DATA, "%s:%d: theta outside [0, 90]", path, t.line_no[r]);
-        if (rc == BTF_OK)
-            rc = entries_add(l, full, (btf_dir){v[0], v[1]}, (btf_dir){v[2], v[3]}, err);
-    }
-    if (rc == BTF_OK && t.nrows == 0)
-        rc = btf_fail(err, BTF_E_DATA, "%s: manifest lists no images", path);
-    btf_tsv_free(&t);
-    return rc;
-}
-
 /* The distinct light (or view) directions of the entries as a set. */
-static btf_status collect_dirs(const entry_list *l, int lights, btf_dirset *set, btf_error *err)
+static btf_status collect_dirs(const btf_dataset_entries *l, int lights, btf_dirset *set,
+                               btf_error *err)
 {
     btf_dir *d = btf_alloc((size_t)l->count, sizeof *d, err);
     if (!d)
@@ -266,14 +65,14 @@ static void expected_name(const btf_dataset *ds, int vi, int li, char *buf, size
         snprintf(buf, n, "%s", ds->root);
 }
 
-static btf_status build_table(btf_dataset *ds, const entry_list *l, btf_error *err)
+static btf_status build_table(btf_dataset *ds, const btf_dataset_entries *l, btf_error *err)
 {
     int nv = ds->views.count, nl = ds->lights.count;
     ds->paths = btf_calloc((size_t)nv * nl, sizeof(char *), err);
     if (!ds->paths)
         return BTF_E_NOMEM;
     for (int i = 0; i < l->count; i++) {
-        const entry *e = &l->items[i];
+        const btf_dataset_entry *e = &l->items[i];
         int vi = btf_dirset_find(&ds->views, e->view, BTF_DIR_NAME_TOLERANCE);
         int li = btf_dirset_find(&ds->lights, e->light, BTF_DIR_NAME_TOLERANCE);
         if (vi < 0 || li < 0) /* the sets were made from these very entries */
@@ -290,7 +89,7 @@ static btf_status build_table(btf_dataset *ds, const entry_list *l, btf_error *e
     for (int vi = 0; vi < nv; vi++)
         for (int li = 0; li < nl; li++)
             if (!ds->paths[(size_t)vi * nl + li]) {
-                char name[PATH_MAX_LEN], pair[160];
+                char name[BTF_DATASET_PATH_MAX], pair[160];
                 expected_name(ds, vi, li, name, sizeof name);
                 describe_pair(pair, sizeof pair, ds->lights.dirs[li], ds->views.dirs[vi]);
                 return btf_fail(err, BTF_E_DATA, "%s: missing image for %s (%d of %d pairs present)",
@@ -334,27 +133,11 @@ static btf_status probe_files(btf_dataset *ds, const btf_dataset_opts *o, btf_er
     return BTF_OK;
 }
 
-static btf_status list_entries(const char *path, entry_list *l, btf_error *err)
-{
-    struct stat st;
-    if (stat(path, &st) != 0)
-        return btf_fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
-    if (!S_ISDIR(st.st_mode))
-        return read_manifest(l, path, err);
-    btf_status rc = scan_folder(l, path, NULL, err);
-    if (rc == BTF_OK && l->count == 0)
-        rc = btf_fail(err, BTF_E_FORMAT,
-                      "%s: unknown layout: no UBO2003 ('NNNNN tlAAA plBBB tvCCC pvDDD.jpg') or "
-                      "UTIA ('tvCCC_pvDDD/tlAAA_plBBB_tvCCC_pvDDD.png|exr') images; for other "
-                      "layouts pass a manifest .tsv", path);
-    return rc;
-}
-
 void btf_dataset_close(btf_dataset *ds)
 {
     if (!ds)
         return;
-    entries_free(&ds->files);
+    btf_dataset_entries_free(&ds->files);
     btf_dirset_free(&ds->views);
     btf_dirset_free(&ds->lights);
     free(ds->paths);
@@ -378,7 +161,7 @@ btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_
     size_t rl = strlen(ds->root);
     while (rl > 1 && ds->root[rl - 1] == '/')
         ds->root[--rl] = '\0';
-    btf_status rc = list_entries(ds->root, &ds->files, err);
+    btf_status rc = btf_dataset_list_entries(ds->root, &ds->files, err);
     if (rc == BTF_OK)
         rc = collect_dirs(&ds->files, 0, &ds->views, err);
     if (rc == BTF_OK)

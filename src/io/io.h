@@ -1,8 +1,8 @@
 /*
  * io.h — file formats below the public readers (src/io/): the byte source
  * every parser reads from, tab-separated manifests, OpenEXR through its
- * core C API, and the C interface of the OpenCV bridge. Private to the
- * library.
+ * core C API, the dataset layouts' file lists, and the C interface of the
+ * OpenCV bridge. Private to the library.
  */
 #ifndef BTF_IO_H
 #define BTF_IO_H
@@ -62,6 +62,27 @@ btf_status btf_exr_probe_source(btf_source *src, btf_image_header *hdr, btf_erro
 btf_status btf_exr_read_source(btf_source *src, int channels, btf_image *out, btf_error *err);
 btf_status btf_exr_probe(const char *path, btf_image_header *hdr, btf_error *err);
 btf_status btf_exr_read(const char *path, int channels, btf_image *out, btf_error *err);
+
+/* Dataset layouts (io/dataset_scan.c): the image files of a dataset folder
+ * (UBO2003 or UTIA names) or manifest as entries, from the names alone;
+ * io/dataset.c makes the (view, light) table of them. */
+#define BTF_DATASET_PATH_MAX 4096
+typedef struct btf_dataset_entry {
+    char *path;
+    btf_dir light, view;
+} btf_dataset_entry;
+typedef struct btf_dataset_entries {
+    btf_dataset_entry *items;
+    int count, cap;
+    btf_layout layout;
+    int flat;        /* UBO2003 files in one folder (no tvCCC_pvDDD/) */
+    char ext[8];     /* the first file's extension, for messages */
+} btf_dataset_entries;
+/* Every entry of the dataset at path: a folder is scanned, a file is read as
+ * a manifest. A folder without any image of a known layout is BTF_E_FORMAT.
+ * Free l (also on failure) with btf_dataset_entries_free. */
+btf_status btf_dataset_list_entries(const char *path, btf_dataset_entries *l, btf_error *err);
+void btf_dataset_entries_free(btf_dataset_entries *l);
 
 /* The OpenCV bridge (io/cv_bridge.cpp), a C interface with its own small
  * convention: 0 on success, -1 with the error text in errbuf. */

@@ -1,0 +1,221 @@
+/*
+ * dataset_scan.c — the image files of a BTF dataset on disk (the measured
+ * (view, light) images that the analysis of paper section II starts from)
+ * as a list of (path, light, view) entries, from the names alone (io/io.h;
+ * io/dataset.c makes the dataset of them).
+ *
+ * Three layouts are recognised automatically:
+ *  - Bonn UBO2003: "NNNNN tlAAA plBBB tvCCC pvDDD.jpg" (3-digit whole degrees,
+ *    5-digit running index), in per-view folders "tvCCC_pvDDD/" or one folder;
+ *  - UTIA: "tvCCC_pvDDD/tlAAA_plBBB_tvCCC_pvDDD.png" (8-bit sRGB) or ".exr";
+ *  - a manifest: a TSV file with the columns path, theta_l, phi_l, theta_v,
+ *    phi_v (degrees; paths relative to the manifest's folder).
+ * A folder is scanned by name patterns (one level of view folders); a file
+ * is read as a manifest. Names in one dataset must follow one layout.
+ */
+#include <stdio.h>
+#include "core/core.h"
+#include "io/io.h"
+
+#include <ctype.h>
+#include <dirent.h>
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+const char *btf_layout_name(btf_layout layout)
+{
+    switch (layout) {
+    case BTF_LAYOUT_UBO2003: return "UBO2003";
+    case BTF_LAYOUT_UTIA: return "UTIA";
+    case BTF_LAYOUT_MANIFEST: return "manifest";
+    default: return "unknown";
+    }
+}
+
+void btf_dataset_entries_free(btf_dataset_entries *l)
+{
+    for (int i = 0; i < l->count; i++)
+        free(l->items[i].path);
+    free(l->items);
+    memset(l, 0, sizeof *l);
+}
+
+static btf_status entries_add(btf_dataset_entries *l, const char *path, btf_dir light,
+                              btf_dir view, btf_error *err)
+{
+    if (l->count == l->cap) {
+        int ncap = l->cap ? l->cap * 2 : 256;
+        btf_dataset_entry *n = realloc(l->items, (size_t)ncap * sizeof *n);
+        if (!n)
+            return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
+        l->items = n;
+        l->cap = ncap;
+    }
+    char *p = strdup(path);
+    if (!p)
+        return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
+    l->items[l->count++] = (btf_dataset_entry){p, light, view};
+    return BTF_OK;
+}
+
+/* Matches name against a pattern where '#' is one decimal digit and any other
+ * character must be equal (letters case-insensitively). The digit groups are
+ * stored in nums (up to 8). Returns the number of groups, or -1. */
+static int match_name(const char *name, const char *pat, int *nums)
+{
+    int groups = 0, in_group = 0;
+    for (; *pat; pat++, name++) {
+        if (*pat == '#') {
+            if (!isdigit((unsigned char)*name))
+                return -1;
+            if (!in_group) {
+                if (groups == 8)
+                    return -1;
+                nums[groups++] = 0;
+            }
+            nums[groups - 1] = nums[groups - 1] * 10 + (*name - '0');
+            in_group = 1;
+        } else {
+            if (tolower((unsigned char)*name) != tolower((unsigned char)*pat))
+                return -1;
+            in_group = 0;
+        }
+    }
+    return *name == '\0' ? groups : -1;
+}
+
+static const char UBO_JPG[] = "##### tl### pl### tv### pv###.jpg";
+static const char UTIA_PNG[] = "tl###_pl###_tv###_pv###.png";
+static const char UTIA_EXR[] = "tl###_pl###_tv###_pv###.exr";
+static const char VIEW_DIR[] = "tv###_pv###";
+
+static btf_dir dir_of(int theta, int phi)
+{
+    return (btf_dir){(double)theta, (double)phi};
+}
+
+/* Classifies one file name; adds it if it follows a layout. folder_view is
+ * the view named by the enclosing "tvCCC_pvDDD" folder, or NULL. */
+static btf_status add_file(btf_dataset_entries *l, const char *dir, const char *name,
+                           const int *folder_view, btf_error *err)
+{
+    int n[8];
+    btf_layout kind;
+    if (match_name(name, UBO_JPG, n) == 5) {
+        kind = BTF_LAYOUT_UBO2003;
+        n[0] = n[1], n[1] = n[2], n[2] = n[3], n[3] = n[4]; /* drop the running index */
+    } else if (folder_view && (match_name(name, UTIA_PNG, n) == 4 || match_name(name, UTIA_EXR, n) == 4)) {
+        kind = BTF_LAYOUT_UTIA;
+    } else {
+        return BTF_OK; /* not an image of the dataset (a README, truth/, ...) */
+    }
+    char path[BTF_DATASET_PATH_MAX];
+    btf_status rc = btf_path_join(path, sizeof path, dir, name, err);
+    if (rc)
+        return rc;
+    if (l->layout != BTF_LAYOUT_UNKNOWN && l->layout != kind)
+        return btf_fail(err, BTF_E_DATA, "%s: %s file in a %s dataset (mixed layouts)", path,
+                        btf_layout_name(kind), btf_layout_name(l->layout));
+    if (l->count == 0) {
+        l->flat = folder_view == NULL;
+        const char *dot = strrchr(name, '.');
+        snprintf(l->ext, sizeof l->ext, "%s", dot ? dot : "");
+    }
+    l->layout = kind;
+    if (n[0] > 90 || n[2] > 90 || n[1] >= 360 || n[3] >= 360)
+        return btf_fail(err, BTF_E_DATA, "%s: direction out of range in the name", path);
+    if (folder_view && (folder_view[0] != n[2] || folder_view[1] != n[3]))
+        return btf_fail(err, BTF_E_DATA, "%s: view tv%03d pv%03d differs from its folder's", path,
+                        n[2], n[3]);
+    return entries_add(l, path, dir_of(n[0], n[1]), dir_of(n[2], n[3]), err);
+}
+
+static btf_status scan_folder(btf_dataset_entries *l, const char *dir, const int *folder_view,
+                              btf_error *err)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        return btf_fail(err, BTF_E_IO, "%s: cannot open folder: %s", dir, strerror(errno));
+    btf_status rc = BTF_OK;
+    struct dirent *e;
+    while (rc == BTF_OK && (e = readdir(d))) {
+        if (e->d_name[0] == '.')
+            continue;
+        int view[8];
+        char sub[BTF_DATASET_PATH_MAX];
+        if (!folder_view && match_name(e->d_name, VIEW_DIR, view) == 2) {
+            rc = btf_path_join(sub, sizeof sub, dir, e->d_name, err);
+            struct stat st;
+            if (rc == BTF_OK && stat(sub, &st) == 0 && S_ISDIR(st.st_mode))
+                rc = scan_folder(l, sub, view, err);
+        } else {
+            rc = add_file(l, dir, e->d_name, folder_view, err);
+        }
+    }
+    closedir(d);
+    return rc;
+}
+
+static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_error *err)
+{
+    btf_tsv t;
+    btf_status rc = btf_tsv_read(path, &t, err);
+    if (rc)
+        return rc;
+    static const char *cols[5] = {"path", "theta_l", "phi_l", "theta_v", "phi_v"};
+    int c[5];
+    for (int i = 0; i < 5; i++)
+        if ((c[i] = btf_tsv_column(&t, cols[i])) < 0) {
+            btf_tsv_free(&t);
+            return btf_fail(err, BTF_E_FORMAT,
+                            "%s: manifest header lacks the column '%s' (expected: path theta_l "
+                            "phi_l theta_v phi_v, tab-separated)", path, cols[i]);
+        }
+    char base[BTF_DATASET_PATH_MAX];
+    snprintf(base, sizeof base, "%s", path);
+    char *slash = strrchr(base, '/');
+    if (slash)
+        slash[1] = '\0';
+    else
+        snprintf(base, sizeof base, ".");
+    l->layout = BTF_LAYOUT_MANIFEST;
+    for (int r = 0; rc == BTF_OK && r < t.nrows; r++) {
+        double v[4];
+        for (int i = 0; rc == BTF_OK && i < 4; i++)
+            rc = btf_tsv_number(&t, path, r, c[i + 1], &v[i], err);
+        if (rc)
+            break;
+        const char *p = btf_tsv_cell(&t, r, c[0]);
+        char full[BTF_DATASET_PATH_MAX];
+        if (p[0] == '/')
+            snprintf(full, sizeof full, "%s", p);
+        else
+            rc = btf_path_join(full, sizeof full, base, p, err);
+        if (rc == BTF_OK && (v[0] < 0 || v[0] > 90 || v[2] < 0 || v[2] > 90))
+            rc = btf_fail(err, BTF_E_DATA, "%s:%d: theta outside [0, 90]", path, t.line_no[r]);
+        if (rc == BTF_OK)
+            rc = entries_add(l, full, (btf_dir){v[0], v[1]}, (btf_dir){v[2], v[3]}, err);
+    }
+    if (rc == BTF_OK && t.nrows == 0)
+        rc = btf_fail(err, BTF_E_DATA, "%s: manifest lists no images", path);
+    btf_tsv_free(&t);
+    return rc;
+}
+
+btf_status btf_dataset_list_entries(const char *path, btf_dataset_entries *l, btf_error *err)
+{
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return btf_fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
+    if (!S_ISDIR(st.st_mode))
+        return read_manifest(l, path, err);
+    btf_status rc = scan_folder(l, path, NULL, err);
+    if (rc == BTF_OK && l->count == 0)
+        rc = btf_fail(err, BTF_E_FORMAT,
+                      "%s: unknown layout: no UBO2003 ('NNNNN tlAAA plBBB tvCCC pvDDD.jpg') or "
+                      "UTIA ('tvCCC_pvDDD/tlAAA_plBBB_tvCCC_pvDDD.png|exr') images; for other "
+                      "layouts pass a manifest .tsv", path);
+    return rc;
+}

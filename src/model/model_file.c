@@ -5,7 +5,8 @@
  * II.B) in a few kilobytes. The layout, the limits and the range-map
  * quantisation are specified in docs/model-format.md; this file is its
  * reference implementation: encoding and decoding in memory, and the file
- * forms as thin wrappers (an atomic write, a whole-file read).
+ * forms as thin wrappers (an atomic write, a whole-file read). The range
+ * map's grid and prediction coding are model/model_range.c's.
  *
  * The validator (model/model_check.c) serves both directions: the encoder
  * refuses any model the decoder would reject, so whatever btfcar writes it
@@ -16,6 +17,7 @@
  */
 #include "car/car.h"
 #include "model/model.h"
+#include "model/range_code.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -43,14 +45,6 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 
 #define MAX_FILE_BYTES ((size_t)64 << 20)
 #define MAX_PAYLOAD_BYTES ((size_t)64 << 20)
-
-/* The range map's grid: h = (k + q + 1/2) 2^e, q in [0, 65535], with
- * k + q + 1/2 held exactly by a float (24-bit significand) and no value
- * below the smallest denormal or above FLT_MAX. */
-#define GRID_E_MIN (-148)
-#define GRID_E_MAX 105
-#define GRID_Q_MAX 65535.0
-#define GRID_K_LIMIT 8388608.0 /* 2^23 */
 
 enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_COUNT };
 static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG"};
@@ -229,60 +223,6 @@ static double r_f64(rbuf *r)
     return f;
 }
 
-/* ------------------------------------------------------- the range grid */
-
-/* The canonical grid of heights in [lo, hi]: the smallest e at which every
- * height floors to k + q with q <= 65535 and k + q + 1 within 24 bits. The
- * condition only coarsens as e grows, and heights decoded from a grid pick
- * the same grid again (docs/model-format.md), so decode(encode(m)) is a
- * fixed point. -1 when no e fits (a span near FLT_MAX). */
-static int grid_choose(double lo, double hi, int *e, int32_t *k)
-{
-    for (int x = GRID_E_MIN; x <= GRID_E_MAX; x++) {
-        double a = floor(ldexp(lo, -x)), b = floor(ldexp(hi, -x));
-        if (a >= -GRID_K_LIMIT && b - a <= GRID_Q_MAX && b + 1.0 <= GRID_K_LIMIT) {
-            *e = x;
-            *k = (int32_t)a;
-            return 0;
-        }
-    }
-    return -1;
-}
-
-static float grid_value(int e, int32_t k, unsigned q)
-{
-    return (float)ldexp((double)k + (double)q + 0.5, e);
-}
-
-/* The predictor of sample (x, y) from its quantised left, upper and
- * upper-left neighbours (a plane through them, clamped): smooth surfaces
- * leave small residuals, which deflate well. */
-static unsigned predict(const uint16_t *q, int w, int x, int y)
-{
-    if (y == 0)
-        return x == 0 ? 0 : q[x - 1];
-    const uint16_t *row = q + (size_t)y * w, *up = row - w;
-    if (x == 0)
-        return up[0];
-    long p = (long)row[x - 1] + up[x] - up[x - 1];
-    return p < 0 ? 0 : p > 65535 ? 65535 : (unsigned)p;
-}
-
-/* Residual modulo 2^16 as a signed value, zigzag-mapped so that small
- * magnitudes of either sign give small codes: 0, -1, 1, -2 -> 0, 1, 2, 3. */
-static unsigned zigzag(unsigned q, unsigned pred)
-{
-    unsigned d = (q - pred) & 0xFFFFu;
-    return d < 0x8000u ? 2 * d : 2 * (0x10000u - d) - 1;
-}
-
-static unsigned unzigzag(unsigned z, unsigned pred)
-{
-    unsigned mag = z >> 1;
-    unsigned d = (z & 1) ? 0x10000u - mag - 1 : mag;
-    return (pred + d) & 0xFFFFu;
-}
-
 /* -------------------------------------------------------------- encoding */
 
 static void put_dirset(wbuf *b, int tag, const btf_dirset *s)
@@ -347,7 +287,7 @@ static btf_status put_range(wbuf *b, const btf_model *m, const char *name, btf_e
     }
     int e;
     int32_t k;
-    if (grid_choose(lo, hi, &e, &k) != 0)
+    if (btf_range_grid_choose(lo, hi, &e, &k) != 0)
         return failf(err, BTF_E_DATA, name,
                      "range map: heights %g..%g span too much for 16-bit quantisation "
                      "(expected magnitudes below about 1e33)", lo, hi);
@@ -362,7 +302,8 @@ static btf_status put_range(wbuf *b, const btf_model *m, const char *name, btf_e
         q[i] = (uint16_t)(floor(ldexp(m->range[i], -e)) - k);
     int w = m->range_width;
     for (size_t i = 0; i < n; i++) {
-        unsigned z = zigzag(q[i], predict(q, w, (int)(i % (size_t)w), (int)(i / (size_t)w)));
+        unsigned z = btf_range_zigzag(q[i], btf_range_predict(q, w, (int)(i % (size_t)w),
+                                                              (int)(i / (size_t)w)));
         planes[i] = (unsigned char)z;
         planes[n + i] = (unsigned char)(z >> 8);
     }
@@ -771,23 +712,25 @@ static btf_status read_range(const span *sp, btf_model *m, const char *name, btf
     const unsigned char *planes = r_take(&r, 2 * n);
     if (!planes)
         return short_section(S_RANG, name, err);
-    if (e < GRID_E_MIN || e > GRID_E_MAX || k < -GRID_K_LIMIT || k >= GRID_K_LIMIT)
+    if (e < BTF_RANGE_GRID_E_MIN || e > BTF_RANGE_GRID_E_MAX || k < -BTF_RANGE_GRID_K_LIMIT ||
+        k >= BTF_RANGE_GRID_K_LIMIT)
         return failf(err, BTF_E_FORMAT, name,
                      "range map: grid 2^%d, offset %ld (expected exponent %d..%d, offset "
                      "-2^23..2^23-1)",
-                     e, (long)k, GRID_E_MIN, GRID_E_MAX);
+                     e, (long)k, BTF_RANGE_GRID_E_MIN, BTF_RANGE_GRID_E_MAX);
     uint16_t *q = alloc_named(n, sizeof *q, 0, name, err);
     if (!q)
         return BTF_E_NOMEM;
     unsigned qmax = 0;
     for (size_t i = 0; i < n; i++) {
         unsigned z = planes[i] | (unsigned)planes[n + i] << 8;
-        q[i] = (uint16_t)unzigzag(z, predict(q, w, (int)(i % (size_t)w), (int)(i / (size_t)w)));
+        q[i] = (uint16_t)btf_range_unzigzag(
+            z, btf_range_predict(q, w, (int)(i % (size_t)w), (int)(i / (size_t)w)));
         qmax = q[i] > qmax ? q[i] : qmax;
     }
     int ce;
     int32_t ck;
-    if ((double)k + qmax + 1.0 > GRID_K_LIMIT) {
+    if ((double)k + qmax + 1.0 > BTF_RANGE_GRID_K_LIMIT) {
         free(q);
         return failf(err, BTF_E_FORMAT, name,
                      "range map: offset %ld + height %u exceeds 2^23 (expected a 24-bit grid)",
@@ -800,7 +743,7 @@ static btf_status read_range(const span *sp, btf_model *m, const char *name, btf
     }
     float lo = 0, hi = 0;
     for (size_t i = 0; i < n; i++) {
-        m->range[i] = grid_value(e, k, q[i]);
+        m->range[i] = btf_range_grid_value(e, k, q[i]);
         lo = (i == 0 || m->range[i] < lo) ? m->range[i] : lo;
         hi = (i == 0 || m->range[i] > hi) ? m->range[i] : hi;
     }
@@ -808,7 +751,7 @@ static btf_status read_range(const span *sp, btf_model *m, const char *name, btf
     m->range_width = w;
     m->range_height = h;
     m->range_texel = texel;
-    if (grid_choose(lo, hi, &ce, &ck) != 0 || ce != e || ck != k)
+    if (btf_range_grid_choose(lo, hi, &ce, &ck) != 0 || ce != e || ck != k)
         return failf(err, BTF_E_FORMAT, name,
                      "range map: grid 2^%d, offset %ld is not canonical for heights %g..%g "
                      "(expected 2^%d, offset %ld)", e, (long)k, lo, hi, ce, (long)ck);

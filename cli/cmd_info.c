@@ -2,10 +2,11 @@
  * cmd_info.c — btfcar info: what a dataset or a model file holds, as text
  * for people or (--json) as a stable JSON document for programs. The JSON
  * schemas are documented in docs/model-format.md ("btfcar info --json").
+ * Here: the options, telling a model file from a dataset, the dataset
+ * report and the Vulkan device list; the model report is info_model.c's.
  */
-#include "cli.h"
+#include "info.h"
 
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -23,33 +24,7 @@ static const char ABOUT[] =
     "and mean), the range map and the file size. The whole file is checked (CRC-32\n"
     "and every field) before anything is printed.\n";
 
-/* --------------------------------------------------------------- shared */
-
-/* The synthesis margin of a band (-1 should the library run out of memory). */
-static int band_margin(const btf_model *m, int s, int b, int l)
-{
-    int margin = -1;
-    btf_error err = {0};
-    btf_synth_margin(m, s, b, l, &margin, &err);
-    return margin;
-}
-
-/* "ubo81: 81 directions, theta 0..75 in 6 rings" */
-static void describe_set(const btf_dirset *s, char *buf, size_t n)
-{
-    int rings = 0;
-    double lo = 1e9, hi = -1;
-    for (int i = 0; i < s->count; i++) {
-        if (i == 0 || s->dirs[i].theta != s->dirs[i - 1].theta)
-            rings++;
-        if (s->dirs[i].theta < lo)
-            lo = s->dirs[i].theta;
-        if (s->dirs[i].theta > hi)
-            hi = s->dirs[i].theta;
-    }
-    snprintf(buf, n, "%s: %d directions, theta %g..%g deg in %d rings", s->name, s->count, lo, hi,
-             rings);
-}
+/* ------------------------------------------------------------ datasets */
 
 static const char *format_name(btf_file_format f)
 {
@@ -61,61 +36,11 @@ static const char *format_name(btf_file_format f)
     }
 }
 
-/* A JSON string literal: quotes, backslashes and control bytes escaped. */
-static void json_string(FILE *f, const char *s)
-{
-    fputc('"', f);
-    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-        if (*p == '"' || *p == '\\')
-            fprintf(f, "\\%c", *p);
-        else if (*p < 0x20 || *p == 0x7f)
-            fprintf(f, "\\u%04x", *p);
-        else
-            fputc(*p, f);
-    }
-    fputc('"', f);
-}
-
-/* float32 values with 9 significant digits (enough to round-trip) and
- * doubles with 17; the model reader has rejected NaN and Inf already. */
-static void json_f32(FILE *f, float v)
-{
-    fprintf(f, "%.9g", (double)v);
-}
-
-static void json_f32s(FILE *f, const float *v, int n)
-{
-    fputc('[', f);
-    for (int i = 0; i < n; i++) {
-        if (i)
-            fputs(", ", f);
-        json_f32(f, v[i]);
-    }
-    fputc(']', f);
-}
-
-/* {"name": "ubo81", "count": 81, "directions": [[theta, phi], ...]} or null */
-static void json_dirset(FILE *f, const btf_dirset *s)
-{
-    if (!s || s->count == 0) {
-        fputs("null", f);
-        return;
-    }
-    fputs("{\"name\": ", f);
-    json_string(f, s->name);
-    fprintf(f, ", \"count\": %d, \"directions\": [", s->count);
-    for (int i = 0; i < s->count; i++)
-        fprintf(f, "%s[%.17g, %.17g]", i ? ", " : "", s->dirs[i].theta, s->dirs[i].phi);
-    fputs("]}", f);
-}
-
-/* ------------------------------------------------------------ datasets */
-
 static int dataset_text(const btf_dataset_info *in, int verify)
 {
     char views[128], lights[128], bytes[64];
-    describe_set(in->views, views, sizeof views);
-    describe_set(in->lights, lights, sizeof lights);
+    cli_describe_set(in->views, views, sizeof views);
+    cli_describe_set(in->lights, lights, sizeof lights);
     cli_format_bytes(in->bytes_on_disk, bytes, sizeof bytes);
     printf("dataset     %s\n", in->root);
     printf("layout      %s\n", btf_layout_name(in->layout));
@@ -135,17 +60,17 @@ static int dataset_json(const btf_dataset_info *in, int verify)
 {
     FILE *f = stdout;
     fputs("{\"format\": \"btfcar-dataset\", \"path\": ", f);
-    json_string(f, in->root);
+    cli_json_string(f, in->root);
     fputs(", \"layout\": ", f);
-    json_string(f, btf_layout_name(in->layout));
+    cli_json_string(f, btf_layout_name(in->layout));
     fprintf(f, ",\n \"images\": %d, \"width\": %d, \"height\": %d, \"channels\": %d, "
                "\"file_format\": \"%s\", \"bytes_on_disk\": %llu, \"verified\": %s,\n \"views\": ",
             in->n_views * in->n_lights, in->width, in->height, in->channels,
             format_name(in->format), (unsigned long long)in->bytes_on_disk,
             verify ? "true" : "false");
-    json_dirset(f, in->views);
+    cli_json_dirset(f, in->views);
     fputs(",\n \"lights\": ", f);
-    json_dirset(f, in->lights);
+    cli_json_dirset(f, in->lights);
     fputs("}\n", f);
     return 0;
 }
@@ -175,12 +100,6 @@ static int info_dataset(cli_ctx *c, const char *path, int verify, int json)
  * still goes to the model reader, which says so. */
 static const unsigned char MODEL_STEM[7] = {0x89, 'B', 'T', 'F', 'C', 'A', 'R'};
 
-typedef struct model_file {
-    const char *path;
-    unsigned major, minor;
-    long long bytes;
-} model_file;
-
 /* 1 when path is a file that starts like a model; its version and size. */
 static int sniff_model(const char *path, model_file *mf)
 {
@@ -200,199 +119,6 @@ static int sniff_model(const char *path, model_file *mf)
     return 1;
 }
 
-/* "0:-1,-1:0", the neighbourhood SPEC syntax of the command line. */
-static void format_neighbourhood(const btf_car_band *b, char *buf, size_t n)
-{
-    size_t k = 0;
-    buf[0] = '\0';
-    for (int i = 0; i < b->n && k < n; i++)
-        k += (size_t)snprintf(buf + k, n - k, "%s%d:%d", i ? "," : "", b->offsets[i].row,
-                              b->offsets[i].col);
-}
-
-static void range_bounds(const btf_model *m, float *lo, float *hi)
-{
-    size_t n = (size_t)m->range_width * m->range_height;
-    *lo = *hi = m->range[0];
-    for (size_t i = 1; i < n; i++) {
-        *lo = fminf(*lo, m->range[i]);
-        *hi = fmaxf(*hi, m->range[i]);
-    }
-}
-
-/* Index table cells per subspace (how many (view, light) pairs it serves). */
-static int members(const btf_model *m, int s)
-{
-    int n = 0;
-    for (int i = 0; i < m->views.count * m->lights.count; i++)
-        n += m->index[i] == s;
-    return n;
-}
-
-static void text_subspace(const btf_model *m, int s)
-{
-    const btf_subspace_model *sm = &m->subspaces[s];
-    printf("subspace %d  ", s);
-    if (sm->view >= 0)
-        printf("view %d (theta %g, phi %g), light %d (theta %g, phi %g), %d images; ", sm->view,
-               m->views.dirs[sm->view].theta, m->views.dirs[sm->view].phi, sm->light,
-               m->lights.dirs[sm->light].theta, m->lights.dirs[sm->light].phi, members(m, s));
-    printf("%d x %d, %d level%s\n", sm->width, sm->height, sm->levels, sm->levels == 1 ? "" : "s");
-    printf("  mean      %.6g %.6g %.6g\n", sm->mean[0], sm->mean[1], sm->mean[2]);
-    printf("  basis     [%.6g %.6g %.6g] [%.6g %.6g %.6g] [%.6g %.6g %.6g]\n", sm->basis[0],
-           sm->basis[1], sm->basis[2], sm->basis[3], sm->basis[4], sm->basis[5], sm->basis[6],
-           sm->basis[7], sm->basis[8]);
-    for (int b = 0; b < 3; b++)
-        for (int l = 0; l < sm->levels; l++) {
-            const btf_car_band *cb = &sm->bands[b][l];
-            char nb[BTF_CAR_MAX_NEIGHBOURS * 10 + 1];
-            format_neighbourhood(cb, nb, sizeof nb);
-            printf("  band %d level %d: %s  gamma", b, l, cb->n ? nb : "(none)");
-            for (int i = 0; i < cb->n; i++)
-                printf(" %.6g", cb->gamma[i]);
-            printf("  sigma %.6g  mean %.6g  margin %d\n", cb->sigma, cb->mean,
-                   band_margin(m, s, b, l));
-        }
-}
-
-static int model_text(const btf_model *m, const model_file *mf)
-{
-    char views[128], lights[128];
-    printf("model       %s\n", mf->path);
-    /* Exact bytes: models are a few kilobytes, the figure users compare. */
-    printf("format      btfcar model %u.%u, %lld bytes\n", mf->major, mf->minor, mf->bytes);
-    if (m->views.count) {
-        describe_set(&m->views, views, sizeof views);
-        describe_set(&m->lights, lights, sizeof lights);
-        printf("views       %s\n", views);
-        printf("lights      %s\n", lights);
-        printf("index       %d views x %d lights -> %d subspaces\n", m->views.count,
-               m->lights.count, m->n_subspaces);
-    } else {
-        printf("views       none (a single texture)\n");
-        printf("lights      none (a single texture)\n");
-    }
-    printf("subspaces   %d\n", m->n_subspaces);
-    if (m->range) {
-        float lo, hi;
-        range_bounds(m, &lo, &hi);
-        printf("range map   %d x %d, texel %g, heights %.6g..%.6g\n", m->range_width,
-               m->range_height, m->range_texel, lo, hi);
-    } else {
-        printf("range map   none\n");
-    }
-    for (int s = 0; s < m->n_subspaces; s++)
-        text_subspace(m, s);
-    return 0;
-}
-
-static void json_band(FILE *f, const btf_car_band *b, int margin)
-{
-    char nb[BTF_CAR_MAX_NEIGHBOURS * 10 + 1];
-    format_neighbourhood(b, nb, sizeof nb);
-    fputs("{\"neighbourhood\": ", f);
-    json_string(f, nb);
-    fputs(", \"offsets\": [", f);
-    for (int i = 0; i < b->n; i++)
-        fprintf(f, "%s[%d, %d]", i ? ", " : "", b->offsets[i].row, b->offsets[i].col);
-    fputs("], \"gamma\": ", f);
-    json_f32s(f, b->gamma, b->n);
-    fputs(", \"sigma\": ", f);
-    json_f32(f, b->sigma);
-    fputs(", \"mean\": ", f);
-    json_f32(f, b->mean);
-    fprintf(f, ", \"margin\": %d", margin);
-    fputc('}', f);
-}
-
-static void json_subspace(FILE *f, const btf_model *m, int s)
-{
-    const btf_subspace_model *sm = &m->subspaces[s];
-    fprintf(f, "{\"view\": %d, \"light\": %d, \"width\": %d, \"height\": %d, \"mean\": ",
-            sm->view, sm->light, sm->width, sm->height);
-    json_f32s(f, sm->mean, 3);
-    fputs(", \"basis\": [", f);
-    for (int r = 0; r < 3; r++) {
-        fputs(r ? ", " : "", f);
-        json_f32s(f, sm->basis + 3 * r, 3);
-    }
-    fprintf(f, "], \"levels\": %d,\n   \"bands\": [", sm->levels);
-    for (int b = 0; b < 3; b++) {
-        fputs(b ? ",\n    [" : "\n    [", f);
-        for (int l = 0; l < sm->levels; l++) {
-            fputs(l ? ",\n     " : "", f);
-            json_band(f, &sm->bands[b][l], band_margin(m, s, b, l));
-        }
-        fputc(']', f);
-    }
-    fputs("]}", f);
-}
-
-static void json_index(FILE *f, const btf_model *m)
-{
-    if (!m->index) {
-        fputs("null", f);
-        return;
-    }
-    fputc('[', f);
-    for (int v = 0; v < m->views.count; v++) {
-        fputs(v ? ",\n   [" : "\n   [", f);
-        for (int l = 0; l < m->lights.count; l++)
-            fprintf(f, "%s%u", l ? ", " : "", m->index[v * m->lights.count + l]);
-        fputc(']', f);
-    }
-    fputc(']', f);
-}
-
-static int model_json(const btf_model *m, const model_file *mf)
-{
-    FILE *f = stdout;
-    fprintf(f, "{\"format\": \"btfcar-model\", \"version\": [%u, %u], \"file\": ", mf->major,
-            mf->minor);
-    json_string(f, mf->path);
-    fprintf(f, ", \"file_bytes\": %lld,\n \"views\": ", mf->bytes);
-    json_dirset(f, &m->views);
-    fputs(",\n \"lights\": ", f);
-    json_dirset(f, &m->lights);
-    fputs(",\n \"index\": ", f);
-    json_index(f, m);
-    fprintf(f, ",\n \"subspaces\": [");
-    for (int s = 0; s < m->n_subspaces; s++) {
-        fputs(s ? ",\n  " : "\n  ", f);
-        json_subspace(f, m, s);
-    }
-    fputs("],\n \"range\": ", f);
-    if (m->range) {
-        float lo, hi;
-        range_bounds(m, &lo, &hi);
-        fprintf(f, "{\"width\": %d, \"height\": %d, \"texel\": ", m->range_width,
-                m->range_height);
-        json_f32(f, m->range_texel);
-        fputs(", \"min\": ", f);
-        json_f32(f, lo);
-        fputs(", \"max\": ", f);
-        json_f32(f, hi);
-        fputc('}', f);
-    } else {
-        fputs("null", f);
-    }
-    fputs("}\n", f);
-    return 0;
-}
-
-static int info_model(cli_ctx *c, const model_file *mf, int json)
-{
-    btf_error err = {0};
-    btf_model m;
-    if (btf_model_read(mf->path, &m, &err) != 0)
-        return cli_lib_error(c, &err);
-    int rc = json ? model_json(&m, mf) : model_text(&m, mf);
-    btf_model_free(&m);
-    if (fflush(stdout) != 0)
-        return cli_error(c, "cannot write the output");
-    return rc;
-}
-
 /* ------------------------------------------------------------ devices */
 
 static void devices_json(const btf_gpu_device *list, int n)
@@ -400,12 +126,12 @@ static void devices_json(const btf_gpu_device *list, int n)
     printf("{\"devices\": [");
     for (int i = 0; i < n; i++) {
         printf("%s\n  {\"index\": %d, \"type\": ", i ? "," : "", list[i].index);
-        json_string(stdout, list[i].type_name);
+        cli_json_string(stdout, list[i].type_name);
         printf(", \"vulkan\": ");
-        json_string(stdout, list[i].vulkan_version);
+        cli_json_string(stdout, list[i].vulkan_version);
         printf(", \"max_storage_buffer_bytes\": %llu, \"usable\": %s, \"name\": ",
                (unsigned long long)list[i].max_buffer_bytes, list[i].usable ? "true" : "false");
-        json_string(stdout, list[i].name);
+        cli_json_string(stdout, list[i].name);
         printf("}");
     }
     printf("%s]}\n", n ? "\n" : "");
@@ -474,7 +200,7 @@ int cmd_info(int argc, char **argv)
         return cli_usage_error(&c, "DATASET or MODEL is required");
     model_file mf;
     if (sniff_model(path, &mf))
-        return info_model(&c, &mf, json);
+        return cli_info_model(&c, &mf, json);
     /* A file named like a model that does not start like one: say what the
      * model reader finds, rather than trying it as a manifest. */
     size_t len = strlen(path);

@@ -1,0 +1,213 @@
+/*
+ * info_model.c — btfcar info on a model file (MODEL.btfcar): its direction
+ * sets, index table, range map (Haindl & Filip 2007, section II.B) and every
+ * subspace's spectral basis and CAR parameters per band and level (section
+ * II.C) with each band's synthesis margin, as text or (--json) as the JSON
+ * document of docs/model-format.md ("btfcar info --json"). cmd_info.c
+ * recognises the file and calls cli_info_model (info.h).
+ */
+#include "info.h"
+
+#include <math.h>
+
+/* The synthesis margin of a band (-1 should the library run out of memory). */
+static int band_margin(const btf_model *m, int s, int b, int l)
+{
+    int margin = -1;
+    btf_error err = {0};
+    btf_synth_margin(m, s, b, l, &margin, &err);
+    return margin;
+}
+
+/* "0:-1,-1:0", the neighbourhood SPEC syntax of the command line. */
+static void format_neighbourhood(const btf_car_band *b, char *buf, size_t n)
+{
+    size_t k = 0;
+    buf[0] = '\0';
+    for (int i = 0; i < b->n && k < n; i++)
+        k += (size_t)snprintf(buf + k, n - k, "%s%d:%d", i ? "," : "", b->offsets[i].row,
+                              b->offsets[i].col);
+}
+
+static void range_bounds(const btf_model *m, float *lo, float *hi)
+{
+    size_t n = (size_t)m->range_width * m->range_height;
+    *lo = *hi = m->range[0];
+    for (size_t i = 1; i < n; i++) {
+        *lo = fminf(*lo, m->range[i]);
+        *hi = fmaxf(*hi, m->range[i]);
+    }
+}
+
+/* Index table cells per subspace (how many (view, light) pairs it serves). */
+static int members(const btf_model *m, int s)
+{
+    int n = 0;
+    for (int i = 0; i < m->views.count * m->lights.count; i++)
+        n += m->index[i] == s;
+    return n;
+}
+
+static void text_subspace(const btf_model *m, int s)
+{
+    const btf_subspace_model *sm = &m->subspaces[s];
+    printf("subspace %d  ", s);
+    if (sm->view >= 0)
+        printf("view %d (theta %g, phi %g), light %d (theta %g, phi %g), %d images; ", sm->view,
+               m->views.dirs[sm->view].theta, m->views.dirs[sm->view].phi, sm->light,
+               m->lights.dirs[sm->light].theta, m->lights.dirs[sm->light].phi, members(m, s));
+    printf("%d x %d, %d level%s\n", sm->width, sm->height, sm->levels, sm->levels == 1 ? "" : "s");
+    printf("  mean      %.6g %.6g %.6g\n", sm->mean[0], sm->mean[1], sm->mean[2]);
+    printf("  basis     [%.6g %.6g %.6g] [%.6g %.6g %.6g] [%.6g %.6g %.6g]\n", sm->basis[0],
+           sm->basis[1], sm->basis[2], sm->basis[3], sm->basis[4], sm->basis[5], sm->basis[6],
+           sm->basis[7], sm->basis[8]);
+    for (int b = 0; b < 3; b++)
+        for (int l = 0; l < sm->levels; l++) {
+            const btf_car_band *cb = &sm->bands[b][l];
+            char nb[BTF_CAR_MAX_NEIGHBOURS * 10 + 1];
+            format_neighbourhood(cb, nb, sizeof nb);
+            printf("  band %d level %d: %s  gamma", b, l, cb->n ? nb : "(none)");
+            for (int i = 0; i < cb->n; i++)
+                printf(" %.6g", cb->gamma[i]);
+            printf("  sigma %.6g  mean %.6g  margin %d\n", cb->sigma, cb->mean,
+                   band_margin(m, s, b, l));
+        }
+}
+
+static int model_text(const btf_model *m, const model_file *mf)
+{
+    char views[128], lights[128];
+    printf("model       %s\n", mf->path);
+    /* Exact bytes: models are a few kilobytes, the figure users compare. */
+    printf("format      btfcar model %u.%u, %lld bytes\n", mf->major, mf->minor, mf->bytes);
+    if (m->views.count) {
+        cli_describe_set(&m->views, views, sizeof views);
+        cli_describe_set(&m->lights, lights, sizeof lights);
+        printf("views       %s\n", views);
+        printf("lights      %s\n", lights);
+        printf("index       %d views x %d lights -> %d subspaces\n", m->views.count,
+               m->lights.count, m->n_subspaces);
+    } else {
+        printf("views       none (a single texture)\n");
+        printf("lights      none (a single texture)\n");
+    }
+    printf("subspaces   %d\n", m->n_subspaces);
+    if (m->range) {
+        float lo, hi;
+        range_bounds(m, &lo, &hi);
+        printf("range map   %d x %d, texel %g, heights %.6g..%.6g\n", m->range_width,
+               m->range_height, m->range_texel, lo, hi);
+    } else {
+        printf("range map   none\n");
+    }
+    for (int s = 0; s < m->n_subspaces; s++)
+        text_subspace(m, s);
+    return 0;
+}
+
+static void json_band(FILE *f, const btf_car_band *b, int margin)
+{
+    char nb[BTF_CAR_MAX_NEIGHBOURS * 10 + 1];
+    format_neighbourhood(b, nb, sizeof nb);
+    fputs("{\"neighbourhood\": ", f);
+    cli_json_string(f, nb);
+    fputs(", \"offsets\": [", f);
+    for (int i = 0; i < b->n; i++)
+        fprintf(f, "%s[%d, %d]", i ? ", " : "", b->offsets[i].row, b->offsets[i].col);
+    fputs("], \"gamma\": ", f);
+    cli_json_f32s(f, b->gamma, b->n);
+    fputs(", \"sigma\": ", f);
+    cli_json_f32(f, b->sigma);
+    fputs(", \"mean\": ", f);
+    cli_json_f32(f, b->mean);
+    fprintf(f, ", \"margin\": %d", margin);
+    fputc('}', f);
+}
+
+static void json_subspace(FILE *f, const btf_model *m, int s)
+{
+    const btf_subspace_model *sm = &m->subspaces[s];
+    fprintf(f, "{\"view\": %d, \"light\": %d, \"width\": %d, \"height\": %d, \"mean\": ",
+            sm->view, sm->light, sm->width, sm->height);
+    cli_json_f32s(f, sm->mean, 3);
+    fputs(", \"basis\": [", f);
+    for (int r = 0; r < 3; r++) {
+        fputs(r ? ", " : "", f);
+        cli_json_f32s(f, sm->basis + 3 * r, 3);
+    }
+    fprintf(f, "], \"levels\": %d,\n   \"bands\": [", sm->levels);
+    for (int b = 0; b < 3; b++) {
+        fputs(b ? ",\n    [" : "\n    [", f);
+        for (int l = 0; l < sm->levels; l++) {
+            fputs(l ? ",\n     " : "", f);
+            json_band(f, &sm->bands[b][l], band_margin(m, s, b, l));
+        }
+        fputc(']', f);
+    }
+    fputs("]}", f);
+}
+
+static void json_index(FILE *f, const btf_model *m)
+{
+    if (!m->index) {
+        fputs("null", f);
+        return;
+    }
+    fputc('[', f);
+    for (int v = 0; v < m->views.count; v++) {
+        fputs(v ? ",\n   [" : "\n   [", f);
+        for (int l = 0; l < m->lights.count; l++)
+            fprintf(f, "%s%u", l ? ", " : "", m->index[v * m->lights.count + l]);
+        fputc(']', f);
+    }
+    fputc(']', f);
+}
+
+static int model_json(const btf_model *m, const model_file *mf)
+{
+    FILE *f = stdout;
+    fprintf(f, "{\"format\": \"btfcar-model\", \"version\": [%u, %u], \"file\": ", mf->major,
+            mf->minor);
+    cli_json_string(f, mf->path);
+    fprintf(f, ", \"file_bytes\": %lld,\n \"views\": ", mf->bytes);
+    cli_json_dirset(f, &m->views);
+    fputs(",\n \"lights\": ", f);
+    cli_json_dirset(f, &m->lights);
+    fputs(",\n \"index\": ", f);
+    json_index(f, m);
+    fprintf(f, ",\n \"subspaces\": [");
+    for (int s = 0; s < m->n_subspaces; s++) {
+        fputs(s ? ",\n  " : "\n  ", f);
+        json_subspace(f, m, s);
+    }
+    fputs("],\n \"range\": ", f);
+    if (m->range) {
+        float lo, hi;
+        range_bounds(m, &lo, &hi);
+        fprintf(f, "{\"width\": %d, \"height\": %d, \"texel\": ", m->range_width,
+                m->range_height);
+        cli_json_f32(f, m->range_texel);
+        fputs(", \"min\": ", f);
+        cli_json_f32(f, lo);
+        fputs(", \"max\": ", f);
+        cli_json_f32(f, hi);
+        fputc('}', f);
+    } else {
+        fputs("null", f);
+    }
+    fputs("}\n", f);
+    return 0;
+}
+
+int cli_info_model(cli_ctx *c, const model_file *mf, int json)
+{
+    btf_error err = {0};
+    btf_model m;
+    if (btf_model_read(mf->path, &m, &err) != 0)
+        return cli_lib_error(c, &err);
+    int rc = json ? model_json(&m, mf) : model_text(&m, mf);
+    btf_model_free(&m);
+    if (fflush(stdout) != 0)
+        return cli_error(c, "cannot write the output");
+    return rc;
+}

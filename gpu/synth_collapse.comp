@@ -29,7 +29,7 @@ layout(push_constant) uniform Params {
 // Coarse row q of task ct, up-sampled horizontally to fine column x.
 float coarse_up(int ct, int q, int x)
 {
-    uint row = tasks[ct].g_off + uint((q - tasks[ct].y0) * tasks[ct].w);
+    uint row = tasks[ct].gauss_off + uint((q - tasks[ct].y0) * tasks[ct].window_w);
     int ci = btf_floordiv2(x) - tasks[ct].x0;
     if ((x & 1) != 0)
         return btf_up_odd(gauss[row + uint(ci)], gauss[row + uint(ci + 1)]);
@@ -39,7 +39,7 @@ float coarse_up(int ct, int q, int x)
 void main()
 {
     uint t = pc.task_base + gl_WorkGroupID.x;
-    int w = tasks[t].w, h = tasks[t].h, ct = tasks[t].coarse;
+    int w = tasks[t].window_w, h = tasks[t].window_h, ct = tasks[t].coarse;
     uint count = uint(w) * uint(h);
     uint p_end = min(count, (gl_WorkGroupID.y + 1u) * uint(BTF_GPU_CHUNK));
     for (uint p = gl_WorkGroupID.y * uint(BTF_GPU_CHUNK) + gl_LocalInvocationID.x; p < p_end;
@@ -58,6 +58,6 @@ void main()
                                  coarse_up(ct, i + 1, x));
             v = btf_add_level(v, up);
         }
-        gauss[tasks[t].g_off + p] = v;
+        gauss[tasks[t].gauss_off + p] = v;
     }
 }

@@ -41,7 +41,7 @@ float field_at(uint base, int fw, int r, int c)
 void main()
 {
     uint t = pc.task_base + gl_WorkGroupID.x;
-    int fw = tasks[t].fw, rb = tasks[t].rows_given, a = tasks[t].slope, n = tasks[t].n;
+    int fw = tasks[t].fw, rb = tasks[t].rows_given, a = tasks[t].slope, n = tasks[t].n_offsets;
     int rows = tasks[t].fh - rb; // rows to compute, from buffer row rb
     uint base = tasks[t].field_off;
     int steps = rows > 0 ? a * (rows - 1) + fw : 0;

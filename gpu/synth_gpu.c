@@ -9,15 +9,15 @@
  *   2. synth_collapse.comp: the pyramid collapse, level by level from the
  *      coarsest;
  *   3. synth_unmix.comp: the inverse colour decorrelation.
- * The geometry (src/synth/geometry.h: windows; src/car/margin.c: margins)
- * and the float formulas (src/synth/btf_shared.h) are the CPU's. One job
- * (command buffer) per strip of rows of a batch of subspace images;
- * batches and strips are cut so that every buffer fits the device's
- * limits.
+ * The geometry (src/synth/geometry.h: windows; src/car/margin.c: margins,
+ * kept per model by src/model/model_margins.c) and the float formulas
+ * (src/synth/btf_shared.h) are the CPU's. One job (command buffer) per
+ * strip of rows of a batch of subspace images; batches and strips are cut
+ * so that every buffer fits the device's limits.
  */
 #include "synth/synth.h"
-#include "car/car.h"
 #include "core/core.h"
+#include "model/model.h"
 
 #include "btf_shared.h"
 #include "geometry.h"
@@ -35,10 +35,10 @@
 typedef struct gpu_task {
     int32_t fx0, fy0, fw, fh;
     int32_t rows_given;
-    int32_t x0, y0, w, h;
-    uint32_t field_off, g_off;
+    int32_t x0, y0, window_w, window_h;
+    uint32_t field_off, gauss_off;
     uint32_t stream;
-    int32_t n, n_earlier, slope, coarse;
+    int32_t n_offsets, n_earlier, slope, coarse;
     float sigma, mean;
     int32_t off_r[24];
     int32_t off_c[24];
@@ -48,9 +48,9 @@ typedef struct gpu_task {
 typedef struct gpu_unmix {
     float mean[3];
     float basis[9];
-    uint32_t g_off[3];
+    uint32_t gauss_off[3];
     uint32_t out_off;
-    int32_t w, h;
+    int32_t width, height;
 } gpu_unmix;
 
 _Static_assert(sizeof(gpu_task) == 360, "gpu_task must match synth_task.glsl");
@@ -166,13 +166,14 @@ static int wavefront_slope(const btf_car_band *b)
 
 /* A task record for one field; offsets ordered as btf_shared.h sums them:
  * earlier rows first in stored order, then the same row from the farthest
- * column to the nearest. The rows (fy0, rows_given, fh, y0, h) are set per strip. */
+ * column to the nearest. The rows (fy0, rows_given, fh, y0, window_h) are set per
+ * strip. */
 static void fill_task(gpu_task *t, const btf_car_band *b, int margin, uint32_t stream, int x0,
                       int x1)
 {
     memset(t, 0, sizeof *t);
-    t->x0 = x0, t->w = x1 - x0;
-    t->fx0 = x0 - margin, t->fw = t->w + 2 * margin;
+    t->x0 = x0, t->window_w = x1 - x0;
+    t->fx0 = x0 - margin, t->fw = t->window_w + 2 * margin;
     t->stream = stream;
     t->sigma = b->sigma, t->mean = b->mean;
     t->slope = wavefront_slope(b);
@@ -192,22 +193,25 @@ static void fill_task(gpu_task *t, const btf_car_band *b, int margin, uint32_t s
         t->off_c[k] = b->offsets[same[i]].col;
         t->gamma[k] = b->gamma[same[i]];
     }
-    t->n = k;
+    t->n_offsets = k;
 }
 
 /* Where one field stands while the strips go down the image. */
 typedef struct field_state {
-    int level, up;        /* pyramid level; rows of history the recursion reads */
+    int level;            /* pyramid level */
+    int reach_up;         /* rows of history the recursion reads */
     int next;             /* next absolute field row to compute */
     int base;             /* absolute row held in buffer row 0 */
-    int rows, grows;      /* buffer rows reserved: field, G window */
+    int rows;             /* field buffer rows reserved */
+    int gauss_rows;       /* G window rows reserved */
     int carry;            /* rows reserved in the carry buffer */
 } field_state;
 
-/* A batch: n subspace images synthesised together, strip by strip. Tasks
- * are grouped by level (the collapse dispatches one level at a time). */
+/* A batch: n_images subspace images of one size synthesised together,
+ * strip by strip. Tasks are grouped by level (the collapse dispatches one
+ * level at a time). */
 typedef struct batch {
-    int n, w, h, strip;
+    int n_images, width, height, strip;
     gpu_task *tasks;
     field_state *fs;
     int ntasks;
@@ -224,10 +228,10 @@ static void batch_free(batch *bt)
     memset(bt, 0, sizeof *bt);
 }
 
-static int field_up(const gpu_task *t)
+static int field_reach_up(const gpu_task *t)
 {
     int up = 0;
-    for (int k = 0; k < t->n; k++)
+    for (int k = 0; k < t->n_offsets; k++)
         if (-t->off_r[k] > up)
             up = -t->off_r[k];
     return up;
@@ -235,7 +239,7 @@ static int field_up(const gpu_task *t)
 
 /* The rows of each field for the strip [y0, y1), advancing its state and
  * writing them into its task record, and the most rows each buffer needs so
- * far (field_state.rows, grows, carry). build_batch walks every strip
+ * far (field_state.rows, gauss_rows, carry). build_batch walks every strip
  * through it once to size the buffers; run_strip calls it again before each
  * job, from the first strip on, so the records match the strip it runs.
  * Returns through keep[] the rows carried from the previous strip (0 on
@@ -249,14 +253,14 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
         int ga = rows.lo, gb = rows.hi;
         if (first) {
             /* The field starts its margin (x0 - fx0, set by fill_task) rows
-             * above its window; the `up` rows above that are zero (the
+             * above its window; the `reach_up` rows above that are zero (the
              * buffer is cleared). */
             f->next = ga - (t->x0 - t->fx0);
-            f->base = f->next - f->up;
+            f->base = f->next - f->reach_up;
             keep[i] = 0;
             keep_from[i] = 0;
         } else {
-            int base = ga < f->next - f->up ? ga : f->next - f->up;
+            int base = ga < f->next - f->reach_up ? ga : f->next - f->reach_up;
             keep[i] = f->next - base;
             keep_from[i] = base - f->base;
             f->base = base;
@@ -265,13 +269,13 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
         t->rows_given = f->next - f->base;
         t->fh = (gb > f->next ? gb : f->next) - f->base;
         t->y0 = ga;
-        t->h = gb - ga;
+        t->window_h = gb - ga;
         if (gb > f->next)
             f->next = gb;
         if (t->fh > f->rows)
             f->rows = t->fh;
-        if (t->h > f->grows)
-            f->grows = t->h;
+        if (t->window_h > f->gauss_rows)
+            f->gauss_rows = t->window_h;
         if (keep[i] > f->carry)
             f->carry = keep[i];
     }
@@ -283,7 +287,7 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
                        int n, int w, int h, int strip, batch *bt, btf_error *err)
 {
     memset(bt, 0, sizeof *bt);
-    bt->n = n, bt->w = w, bt->h = h, bt->strip = strip;
+    bt->n_images = n, bt->width = w, bt->height = h, bt->strip = strip;
     int max_levels = 0, count[BTF_MAX_LEVELS] = {0};
     for (int j = 0; j < n; j++) {
         const btf_subspace_model *sm = &m->subspaces[subs[j]];
@@ -316,7 +320,7 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
                           btf_noise_stream((uint32_t)subs[j], (uint32_t)b, (uint32_t)l), xs.lo,
                           xs.hi);
                 bt->fs[ti].level = l;
-                bt->fs[ti].up = field_up(&bt->tasks[ti]);
+                bt->fs[ti].reach_up = field_reach_up(&bt->tasks[ti]);
                 if (prev >= 0)
                     bt->tasks[prev].coarse = ti;
                 prev = ti;
@@ -325,7 +329,7 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
         }
         memcpy(bt->unmix[j].mean, sm->mean, sizeof bt->unmix[j].mean);
         memcpy(bt->unmix[j].basis, sm->basis, sizeof bt->unmix[j].basis);
-        bt->unmix[j].w = w;
+        bt->unmix[j].width = w;
     }
     /* Walk the strips once to size every field's buffer rows. */
     for (int y = 0; y < h; y += strip)
@@ -334,9 +338,9 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
     for (int i = 0; i < bt->ntasks; i++) {
         gpu_task *t = &bt->tasks[i];
         t->field_off = (uint32_t)bt->field_floats;
-        t->g_off = (uint32_t)bt->gauss_floats;
+        t->gauss_off = (uint32_t)bt->gauss_floats;
         bt->field_floats += (uint64_t)t->fw * bt->fs[i].rows;
-        bt->gauss_floats += (uint64_t)t->w * bt->fs[i].grows;
+        bt->gauss_floats += (uint64_t)t->window_w * bt->fs[i].gauss_rows;
         bt->carry_floats += (uint64_t)t->fw * bt->fs[i].carry;
     }
     for (int j = 0; j < n; j++)
@@ -406,7 +410,7 @@ static int dispatch_wavefront(btf_gpu *g, btf_vk_job *job, const batch *bt, uint
         int64_t active = (t->fw + t->slope - 1) / t->slope;
         if (active > rows)
             active = rows;
-        int64_t cost = 1 + ((active + 63) / 64) * (2 + t->n);
+        int64_t cost = 1 + ((active + 63) / 64) * (2 + t->n_offsets);
         if (st > steps)
             steps = st;
         if (cost > per_step)
@@ -443,7 +447,8 @@ static int buffers_make(btf_gpu *g, const batch *bt, batch_buffers *b, btf_error
     memset(b, 0, sizeof *b);
     int rc = btf_vk_buffer_create(g->vk, sizeof(gpu_task) * (uint64_t)bt->ntasks, &b->tasks, err);
     if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, sizeof(gpu_unmix) * (uint64_t)bt->n, &b->unmix, err);
+        rc = btf_vk_buffer_create(g->vk, sizeof(gpu_unmix) * (uint64_t)bt->n_images, &b->unmix,
+                                  err);
     if (rc == 0)
         rc = btf_vk_buffer_create(g->vk, 4 * bt->field_floats, &b->fields, err);
     if (rc == 0)
@@ -484,20 +489,20 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
     int first = y0 == 0;
     strip_rows(bt, y0, y1, first, keep, keep + bt->ntasks);
     uint64_t out_off = 0;
-    for (int j = 0; j < bt->n; j++) {
+    for (int j = 0; j < bt->n_images; j++) {
         bt->unmix[j].out_off = (uint32_t)out_off;
-        bt->unmix[j].h = y1 - y0;
-        out_off += (uint64_t)bt->w * (y1 - y0) * 3;
+        bt->unmix[j].height = y1 - y0;
+        out_off += (uint64_t)bt->width * (y1 - y0) * 3;
     }
-    for (int j = 0; j < bt->n; j++) /* level-0 tasks of image j, bands 0..2 */
+    for (int j = 0; j < bt->n_images; j++) /* level-0 tasks of image j, bands 0..2 */
         for (int band = 0; band < 3; band++)
-            bt->unmix[j].g_off[band] = bt->tasks[3 * j + band].g_off;
+            bt->unmix[j].gauss_off[band] = bt->tasks[3 * j + band].gauss_off;
     btf_vk_job *job = NULL;
     int rc = btf_vk_buffer_upload(g->vk, b->tasks, 0, bt->tasks,
                                   sizeof(gpu_task) * (uint64_t)bt->ntasks, err);
     if (rc == 0)
         rc = btf_vk_buffer_upload(g->vk, b->unmix, 0, bt->unmix,
-                                  sizeof(gpu_unmix) * (uint64_t)bt->n, err);
+                                  sizeof(gpu_unmix) * (uint64_t)bt->n_images, err);
     if (rc == 0)
         rc = btf_vk_job_begin(g->vk, &job, err);
     if (rc == 0 && first)
@@ -515,8 +520,8 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
         uint32_t cpush[1];
         uint64_t most = 0;
         for (int i = bt->level_start[l]; i < bt->level_start[l + 1]; i++)
-            if ((uint64_t)bt->tasks[i].w * bt->tasks[i].h > most)
-                most = (uint64_t)bt->tasks[i].w * bt->tasks[i].h;
+            if ((uint64_t)bt->tasks[i].window_w * bt->tasks[i].window_h > most)
+                most = (uint64_t)bt->tasks[i].window_w * bt->tasks[i].window_h;
         rc = dispatch_range(g, job, g->collapse, cb, 3, cpush, 1, (uint32_t)bt->level_start[l],
                             (uint32_t)(bt->level_start[l + 1] - bt->level_start[l]), chunks(most),
                             err);
@@ -524,16 +529,16 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
     btf_vk_buffer *ub[3] = {b->unmix, b->gauss, b->out};
     uint32_t upush[1];
     if (rc == 0)
-        rc = dispatch_range(g, job, g->unmix, ub, 3, upush, 1, 0, (uint32_t)bt->n,
-                            chunks((uint64_t)bt->w * (y1 - y0)), err);
+        rc = dispatch_range(g, job, g->unmix, ub, 3, upush, 1, 0, (uint32_t)bt->n_images,
+                            chunks((uint64_t)bt->width * (y1 - y0)), err);
     if (rc == 0) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
     }
-    for (int j = 0; rc == 0 && j < bt->n; j++)
+    for (int j = 0; rc == 0 && j < bt->n_images; j++)
         rc = btf_vk_buffer_download(g->vk, b->out, 4ull * bt->unmix[j].out_off,
-                                    outs[j].data + (size_t)y0 * bt->w * 3,
-                                    4ull * bt->w * (y1 - y0) * 3, err);
+                                    outs[j].data + (size_t)y0 * bt->width * 3,
+                                    4ull * bt->width * (y1 - y0) * 3, err);
     btf_vk_job_abort(job);
     return rc;
 }
@@ -543,9 +548,9 @@ static int run_batch(btf_gpu *g, batch *bt, uint64_t seed, btf_image *outs, btf_
     batch_buffers b;
     int *keep = btf_calloc((size_t)bt->ntasks * 2, sizeof(int), err);
     int rc = keep ? buffers_make(g, bt, &b, err) : BTF_E_NOMEM;
-    for (int y = 0; rc == 0 && y < bt->h; y += bt->strip) {
-        rc = run_strip(g, bt, &b, y, y + bt->strip < bt->h ? y + bt->strip : bt->h, seed, outs,
-                       keep, err);
+    for (int y = 0; rc == 0 && y < bt->height; y += bt->strip) {
+        int y1 = y + bt->strip < bt->height ? y + bt->strip : bt->height;
+        rc = run_strip(g, bt, &b, y, y1, seed, outs, keep, err);
         g->jobs++;
     }
     g->batches++;
@@ -652,11 +657,11 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
                         err);
         if (rc == 0)
             rc = run_batch(g, &bt, o.seed, outs + start, err);
-        for (int j = 0; rc == 0 && j < bt.n; j++)
+        for (int j = 0; rc == 0 && j < bt.n_images; j++)
             for (int y = 0; rc == 0 && y < height; y++)
                 rc = btf_check_finite_row(outs[start + j].data + (size_t)y * width * 3,
                                           (size_t)width * 3, subspaces[start + j], y, err);
-        start += bt.n;
+        start += bt.n_images;
         batch_free(&bt);
     }
     if (rc)

@@ -13,10 +13,11 @@ struct Task {
     int rows_given;           // rows [0, rows_given) of the buffer are given (carried
                               // over from the previous strip, or zero before the
                               // field's first row); rows [rows_given, fh) are computed
-    int x0, y0, w, h;         // the level's window (absolute) and size
-    uint field_off, g_off;    // offsets (floats) into Fields[] and Gauss[]
+    int x0, y0;               // the level's window in this strip (absolute): first
+    int window_w, window_h;   // column and row, width and rows
+    uint field_off, gauss_off; // offsets (floats) into Fields[] and Gauss[]
     uint stream;              // noise stream (subspace, band, level)
-    int n;                    // neighbours
+    int n_offsets;            // neighbours (off_r, off_c, gamma)
     int n_earlier;            // of which the first n_earlier are on earlier rows
     int slope;                // wavefront slope a: pixel (r, c) is ready at step a r + c
     int coarse;               // the task of level + 1 of the same band, or -1
@@ -30,7 +31,7 @@ struct Task {
 struct Unmix {
     float mean[3];
     float basis[9];
-    uint g_off[3];            // level-0 G windows of bands 0, 1, 2
+    uint gauss_off[3];        // level-0 G windows of bands 0, 1, 2
     uint out_off;             // offset (floats) of the RGB image in Out[]
-    int w, h;
+    int width, height;        // the image's width, the strip's rows
 };

@@ -25,13 +25,13 @@ layout(push_constant) uniform Params {
 void main()
 {
     uint j = pc.job_base + gl_WorkGroupID.x;
-    uint count = uint(jobs[j].w) * uint(jobs[j].h);
+    uint count = uint(jobs[j].width) * uint(jobs[j].height);
     uint p_end = min(count, (gl_WorkGroupID.y + 1u) * uint(BTF_GPU_CHUNK));
     for (uint p = gl_WorkGroupID.y * uint(BTF_GPU_CHUNK) + gl_LocalInvocationID.x; p < p_end;
          p += 64u) {
-        float b0 = gauss[jobs[j].g_off[0] + p];
-        float b1 = gauss[jobs[j].g_off[1] + p];
-        float b2 = gauss[jobs[j].g_off[2] + p];
+        float b0 = gauss[jobs[j].gauss_off[0] + p];
+        float b1 = gauss[jobs[j].gauss_off[1] + p];
+        float b2 = gauss[jobs[j].gauss_off[2] + p];
         for (int k = 0; k < 3; k++)
             rgb[jobs[j].out_off + 3u * p + uint(k)] =
                 btf_unmix(jobs[j].mean[k], jobs[j].basis[k], jobs[j].basis[3 + k],

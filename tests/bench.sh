@@ -46,16 +46,16 @@ G=$TMP/g256
 timed "info (probe 6561 files of 256^2)" "$BTFCAR" info -q "$G"
 timed "info --verify (decode 6561 JPEGs of 256^2)" "$BTFCAR" info -q --verify "$G"
 
-echo "== segmentation (issue 3): 81 x 81 images of 256^2, target <= 30 s, <= 1 GB"
+echo "== segmentation: 81 x 81 images of 256^2, target <= 30 s, <= 1 GB"
 timed "analyse --stage segment" sh -c "rm -rf $TMP/seg && $BTFCAR analyse $G -o $TMP/seg --stage segment"
 echo "   $(echo "$med" | awk '{printf "%.2f", 1000*$1/6561}') ms per image; $(sed -n 1p "$TMP/out")"
 
-echo "== model file (issue 5): the whole analysis of the 81 x 81 x 256^2 material"
+echo "== model file: the whole analysis of the 81 x 81 x 256^2 material"
 timed "analyse (all stages)" "$BTFCAR" analyse -q "$G" -o "$TMP/m.btfcar"
 bytes=$(stat -c %s "$TMP/m.btfcar")
 echo "   model $bytes bytes (target <= 16384); ratio to the raw 8-bit images (81*81*256*256*3 = 1289945088 bytes) 1 : $((1289945088 / bytes)); paper ~1 : 10^5"
 
-echo "== streaming synthesis to EXR (issue 5): memory grows with the width, not the height"
+echo "== streaming synthesis to EXR: memory grows with the width, not the height"
 for h in 512 2048; do
     timed "synthesise 32768x$h, 1 subspace, cpu" sh -c "rm -rf $TMP/s && $BTFCAR synthesise -q $TMP/m.btfcar --subspace 0 --backend cpu --half --size 32768x$h -o $TMP/s"
 done

@@ -1,14 +1,14 @@
 /*
  * bench_car.c — figures for the CAR model (Haindl & Filip 2007, section
- * II.C): the paper's synthesis
- * workload (15 subspace images of 512^2, 3 bands, 3 pyramid levels) on one
- * core, pixels per second, the noise generator alone, and the analysis of a
- * 256^2 image with neighbourhood selection. Medians of several runs; never
- * fails on time.
+ * II.C): the paper's synthesis workload (15 subspace images of 512^2, 3
+ * bands, 3 pyramid levels) on one core, pixels per second, the noise
+ * generator alone, and the analysis of a 256^2 image with neighbourhood
+ * selection. Medians of several runs; never fails on time.
  */
 #include "synth/synth.h"
 #include "synth/synth_testing.h"
 #include "car/car.h"
+#include "model/model.h"
 #include "btfcar.h"
 #include "testutil.h"
 #include "btf_shared.h"

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include "car/car.h"
 #include "core/core.h"
+#include "model/model.h"
 
 #include <math.h>
 #include <stdlib.h>

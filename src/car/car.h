@@ -53,16 +53,7 @@ int btf_car_margin_within(const btf_car_band *b, double *budget);
  * stationary variance (the side boundaries pin the field to 0, which costs
  * nearly unstable bands more), or -1 when out of memory. */
 double btf_car_margin_shortfall(const btf_car_band *b, int m);
-/* The margins of a model's bands, kept in m->internal so that synthesis
- * need not compute them at every call: reading a model file computes them
- * all within a work budget (in the order subspace, band, level), fitting
- * one without (budget < 0). BTF_E_NOMEM when out of memory. */
-btf_status btf_model_keep_margins(btf_model *m, double budget);
-void btf_model_internal_free(struct btf_model_internal *in);
-/* The margin synthesis uses for band b, level l of subspace k: the kept
- * one while the band's neighbourhood and coefficients are those it was
- * computed for, else btf_car_margin; -1 when out of memory. */
-int btf_model_margin(const btf_model *m, int k, int b, int l);
+/* A model keeps its bands' margins: model/model.h, btf_model_margin. */
 
 /* Stability of a band's recursion (car/stability.c): btf_car_is_stable's
  * answer, and UNKNOWN when the check ran out of memory, so that a fit under

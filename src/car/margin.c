@@ -27,7 +27,9 @@
  * columns with the synthesis' own zero boundary, so the estimate includes
  * what the boundary does. The result depends on the band alone, never on
  * the output size, tiling or backend: CPU and GPU (gpu/synth_gpu.c) call
- * this same function and stay bit-identical.
+ * this same function and stay bit-identical. A model keeps the margins of
+ * its bands (src/model/model_margins.c) so that synthesis computes them
+ * once.
  */
 #include "core/core.h"
 #include "car/car.h"
@@ -154,83 +156,4 @@ double btf_car_margin_shortfall(const btf_car_band *b, int m)
     if (b->n == 0)
         return 0.0;
     return outside_share(b, m, band_reach(b));
-}
-
-/* A kept margin and what it was computed from. */
-typedef struct kept_margin {
-    int n;
-    btf_offset offsets[BTF_CAR_MAX_NEIGHBOURS];
-    float gamma[BTF_CAR_MAX_NEIGHBOURS];
-    int margin;
-} kept_margin;
-
-struct btf_model_internal {
-    int n_subspaces;
-    kept_margin *margins; /* [(k * 3 + band) * BTF_MAX_LEVELS + level] */
-};
-
-static size_t kept_index(int k, int b, int l)
-{
-    return ((size_t)k * 3 + (size_t)b) * BTF_MAX_LEVELS + (size_t)l;
-}
-
-void btf_model_internal_free(struct btf_model_internal *in)
-{
-    if (!in)
-        return;
-    free(in->margins);
-    free(in);
-}
-
-btf_status btf_model_keep_margins(btf_model *m, double budget)
-{
-    btf_model_internal_free(m->internal);
-    m->internal = NULL;
-    if (m->n_subspaces <= 0)
-        return BTF_OK;
-    struct btf_model_internal *in = calloc(1, sizeof *in);
-    kept_margin *kept = calloc((size_t)m->n_subspaces * 3 * BTF_MAX_LEVELS, sizeof *kept);
-    if (!in || !kept) {
-        free(in);
-        free(kept);
-        return BTF_E_NOMEM;
-    }
-    in->n_subspaces = m->n_subspaces;
-    in->margins = kept;
-    for (int k = 0; k < m->n_subspaces; k++)
-        for (int b = 0; b < 3; b++)
-            for (int l = 0; l < m->subspaces[k].levels && l < BTF_MAX_LEVELS; l++) {
-                const btf_car_band *cb = &m->subspaces[k].bands[b][l];
-                kept_margin *e = &kept[kept_index(k, b, l)];
-                e->n = cb->n;
-                memcpy(e->offsets, cb->offsets, sizeof e->offsets);
-                memcpy(e->gamma, cb->gamma, sizeof e->gamma);
-                if ((e->margin = btf_car_margin_within(cb, budget < 0 ? NULL : &budget)) < 0) {
-                    btf_model_internal_free(in);
-                    return BTF_E_NOMEM;
-                }
-            }
-    m->internal = in;
-    return BTF_OK;
-}
-
-/* Whether a kept margin was computed for this band: the same neighbours
- * and the same coefficient bits (the margin depends on nothing else). */
-static int kept_for(const kept_margin *e, const btf_car_band *b)
-{
-    return e->n == b->n && b->n >= 0 && b->n <= BTF_CAR_MAX_NEIGHBOURS &&
-           !memcmp(e->offsets, b->offsets, (size_t)b->n * sizeof b->offsets[0]) &&
-           !memcmp(e->gamma, b->gamma, (size_t)b->n * sizeof b->gamma[0]);
-}
-
-int btf_model_margin(const btf_model *m, int k, int b, int l)
-{
-    const btf_car_band *cb = &m->subspaces[k].bands[b][l];
-    const struct btf_model_internal *in = m->internal;
-    if (in && k < in->n_subspaces && l < BTF_MAX_LEVELS) {
-        const kept_margin *e = &in->margins[kept_index(k, b, l)];
-        if (kept_for(e, cb))
-            return e->margin;
-    }
-    return btf_car_margin(cb);
 }

@@ -2,7 +2,7 @@
  * subspace_fit.c — the model of one subspace image (paper section II.C):
  * spectral decorrelation into 3 bands (car/decorrelate.c), a
  * Gaussian-Laplacian pyramid per band (car/pyramid.c) and a CAR model per
- * sub-band (car/car_fit.c); and the one-subspace model of a plain texture.
+ * sub-band (car/car_fit.c).
  *
  * Pyramid depth (--levels auto). The correlation length ell of the dominant
  * band is the smallest lag (1..64) at which its normalised autocorrelation,
@@ -134,25 +134,5 @@ btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
     }
     for (int b = 0; b < 3; b++)
         free(bands[b]);
-    return rc;
-}
-
-btf_status btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_model *out,
-                           btf_error *err)
-{
-    memset(out, 0, sizeof *out);
-    if (!img || !img->data || img->channels != 3)
-        return btf_fail(err, BTF_E_ARG, "texture fit needs an RGB image");
-    out->subspaces = btf_calloc(1, sizeof(btf_subspace_model), err);
-    if (!out->subspaces)
-        return BTF_E_NOMEM;
-    out->n_subspaces = 1;
-    snprintf(out->views.name, sizeof out->views.name, "none");
-    snprintf(out->lights.name, sizeof out->lights.name, "none");
-    btf_status rc = btf_fit_subspace(img, opts, &out->subspaces[0], err);
-    if (rc == 0 && btf_model_keep_margins(out, -1.0) != BTF_OK) /* for synthesis */
-        rc = btf_fail(err, BTF_E_NOMEM, "out of memory");
-    if (rc)
-        btf_model_free(out);
     return rc;
 }

@@ -4,7 +4,7 @@
  * synthesis of one of its subspaces carries into an EXR.
  */
 #include "core/core.h"
-#include "car/car.h"
+#include "model/model.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,8 +1,9 @@
 /*
  * model.h — the model's rules shared by its files (src/model/): the limits
  * of docs/model-format.md, which a model in memory must meet to be written
- * and a file must meet to be read, and the validator that checks them all.
- * Private to the library.
+ * and a file must meet to be read, the validator that checks them all, and
+ * the synthesis margins a model keeps for its CAR bands (paper section
+ * II.C). Private to the library.
  */
 #ifndef BTF_MODEL_H
 #define BTF_MODEL_H
@@ -28,5 +29,18 @@ btf_status btf_model_fail(btf_error *err, btf_status code, const char *name, con
  * whatever btfcar writes it can read. */
 btf_status btf_model_validate(const btf_model *m, const char *name, btf_status code,
                               btf_error *err);
+
+/* The synthesis margins of a model's bands (model/model_margins.c; each
+ * computed by btf_car_margin_within, car/car.h), kept in m->internal so that
+ * synthesis need not compute them at every call: reading a model file
+ * computes them all within a work budget (in the order subspace, band,
+ * level), fitting one without (budget < 0). BTF_E_NOMEM when out of
+ * memory. */
+btf_status btf_model_keep_margins(btf_model *m, double budget);
+void btf_model_internal_free(struct btf_model_internal *in);
+/* The margin synthesis uses for band b, level l of subspace k: the kept
+ * one while the band's neighbourhood and coefficients are those it was
+ * computed for, else btf_car_margin; -1 when out of memory. */
+int btf_model_margin(const btf_model *m, int k, int b, int l);
 
 #endif

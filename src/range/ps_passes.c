@@ -45,19 +45,19 @@ static void grey_of(const btf_image *img, int i, const double *intensity, double
                     const unsigned char *inside, float *out)
 {
     size_t count = (size_t)img->width * img->height;
-    int C = img->channels;
+    int channels = img->channels;
     double scale[3];
-    for (int c = 0; c < C; c++)
-        scale[c] = 1.0 / channel_intensity(intensity, i, c, C) / C;
+    for (int c = 0; c < channels; c++)
+        scale[c] = 1.0 / channel_intensity(intensity, i, c, channels) / channels;
     for (size_t k = 0; k < count; k++) {
         if (!inside[k]) {
             out[k] = 0.0f;
             continue;
         }
-        const float *p = img->data + k * (size_t)C;
+        const float *p = img->data + k * (size_t)channels;
         double grey = 0.0;
         int saturated = 0;
-        for (int c = 0; c < C; c++) {
+        for (int c = 0; c < channels; c++) {
             saturated |= p[c] >= saturation; /* NaN compares false */
             grey += clean(p[c]) * scale[c];
         }
@@ -71,27 +71,27 @@ static void grey_of(const btf_image *img, int i, const double *intensity, double
 }
 
 /* Image i's share of the albedo sums: for each pixel whose fit used sample
- * i, num_c += I_c n.l and den += (n.l)^2. */
+ * i, num_c += I_c n.l and den += (n.l)^2 (l: light i's direction). */
 static void albedo_add(const btf_image *img, int i, const double *intensity,
-                       const btf_ps_solve *j, double *num, double *den)
+                       const btf_ps_solve *job, double *num, double *den)
 {
     size_t count = (size_t)img->width * img->height;
-    int C = img->channels;
+    int channels = img->channels;
     double scale[3];
-    for (int c = 0; c < C; c++)
-        scale[c] = 1.0 / channel_intensity(intensity, i, c, C);
-    const double *l = j->lights + 3 * i;
+    for (int c = 0; c < channels; c++)
+        scale[c] = 1.0 / channel_intensity(intensity, i, c, channels);
+    const double *light = job->lights + 3 * i;
     uint64_t bit = (uint64_t)1 << (i & 63);
     for (size_t k = 0; k < count; k++) {
-        if (!(j->fit_sets[k * (size_t)j->set_words + (size_t)(i >> 6)] & bit))
+        if (!(job->fit_sets[k * (size_t)job->set_words + (size_t)(i >> 6)] & bit))
             continue;
-        const float *normal = j->normal + 3 * k;
-        double nl = normal[0] * l[0] + normal[1] * l[1] + normal[2] * l[2];
+        const float *normal = job->normal + 3 * k;
+        double nl = normal[0] * light[0] + normal[1] * light[1] + normal[2] * light[2];
         if (!(nl > 0.0))
             continue;
-        const float *p = img->data + k * (size_t)C;
-        for (int c = 0; c < C; c++)
-            num[k * (size_t)C + c] += clean(p[c]) * scale[c] * nl;
+        const float *p = img->data + k * (size_t)channels;
+        for (int c = 0; c < channels; c++)
+            num[k * (size_t)channels + c] += clean(p[c]) * scale[c] * nl;
         den[k] += nl * nl;
     }
 }
@@ -122,11 +122,11 @@ btf_status btf_ps_pass_albedo(const btf_ps_source *src, const double *intensity,
                               const btf_photostereo_opts *o, btf_error *err)
 {
     size_t wh = (size_t)src->width * src->height;
-    int C = src->channels;
-    double *num = btf_calloc(wh * (size_t)(C + 1), sizeof(double), err);
+    int channels = src->channels;
+    double *num = btf_calloc(wh * (size_t)(channels + 1), sizeof(double), err);
     if (!num)
         return BTF_E_NOMEM;
-    double *den = num + wh * (size_t)C;
+    double *den = num + wh * (size_t)channels;
     btf_status rc = BTF_OK;
     for (int i = 0; i < src->count && rc == BTF_OK; i++) {
         btf_image tmp = {0};
@@ -139,10 +139,10 @@ btf_status btf_ps_pass_albedo(const btf_ps_source *src, const double *intensity,
             btf_ps_report(o, 0.5 + 0.4 * (i + 1) / src->count, "reading images (albedo)");
     }
     for (size_t k = 0; rc == BTF_OK && k < wh; k++) {
-        for (int c = 0; c < C; c++) {
-            double a = job->inside[k] && den[k] > 0.0 ? num[k * C + c] / den[k] : 0.0;
+        for (int c = 0; c < channels; c++) {
+            double a = job->inside[k] && den[k] > 0.0 ? num[k * channels + c] / den[k] : 0.0;
             float f = (float)a;
-            albedo->data[k * C + c] = isfinite(f) ? f : FLT_MAX;
+            albedo->data[k * channels + c] = isfinite(f) ? f : FLT_MAX;
         }
     }
     free(num);

@@ -37,21 +37,24 @@ btf_status btf_normals_preview(const btf_image *normals, btf_image *out, btf_err
     return BTF_OK;
 }
 
-/* Slope of h along columns / rows at (x, y) by central differences inside
- * the valid set, one-sided at its edge, 0 where isolated. */
-static double slope_at(const btf_image *h, const unsigned char *in, int x, int y, int dx, int dy)
+/* Slope of the height map along columns / rows at (x, y) by central
+ * differences inside the valid set, one-sided at its edge, 0 where
+ * isolated. */
+static double slope_at(const btf_image *height_map, const unsigned char *inside, int x, int y,
+                       int dx, int dy)
 {
-    int w = h->width, H = h->height;
+    int width = height_map->width, rows = height_map->height;
+    const float *z = height_map->data;
     int x0 = x - dx, y0 = y - dy, x1 = x + dx, y1 = y + dy;
-    int has0 = x0 >= 0 && y0 >= 0 && in[(size_t)y0 * w + x0];
-    int has1 = x1 < w && y1 < H && in[(size_t)y1 * w + x1];
-    double c = h->data[(size_t)y * w + x];
+    int has0 = x0 >= 0 && y0 >= 0 && inside[(size_t)y0 * width + x0];
+    int has1 = x1 < width && y1 < rows && inside[(size_t)y1 * width + x1];
+    double c = z[(size_t)y * width + x];
     if (has0 && has1)
-        return 0.5 * (h->data[(size_t)y1 * w + x1] - h->data[(size_t)y0 * w + x0]);
+        return 0.5 * (z[(size_t)y1 * width + x1] - z[(size_t)y0 * width + x0]);
     if (has1)
-        return h->data[(size_t)y1 * w + x1] - c;
+        return z[(size_t)y1 * width + x1] - c;
     if (has0)
-        return c - h->data[(size_t)y0 * w + x0];
+        return c - z[(size_t)y0 * width + x0];
     return 0.0;
 }
 
@@ -63,16 +66,16 @@ btf_status btf_height_relief(const btf_image *height, const btf_image *mask, btf
     memset(out, 0, sizeof *out);
     if (!height || !height->data || height->channels != 1)
         return btf_fail(err, BTF_E_ARG, "relief: a 1-channel height map is needed");
-    int w = height->width, h = height->height, pixels;
-    size_t count = (size_t)w * h;
-    unsigned char *in = btf_alloc(count, 1, err);
-    if (!in)
+    int width = height->width, rows = height->height, pixels;
+    size_t count = (size_t)width * rows;
+    unsigned char *inside = btf_alloc(count, 1, err);
+    if (!inside)
         return BTF_E_NOMEM;
-    btf_status rc = btf_ps_mask_inside("relief", mask, w, h, in, &pixels, err);
+    btf_status rc = btf_ps_mask_inside("relief", mask, width, rows, inside, &pixels, err);
     if (rc == BTF_OK)
-        rc = btf_image_alloc(out, w, h, 3, err);
+        rc = btf_image_alloc(out, width, rows, 3, err);
     if (rc) {
-        free(in);
+        free(inside);
         return rc;
     }
     /* Exaggeration: the mean slope becomes 0.5 whatever the relief's depth,
@@ -80,31 +83,32 @@ btf_status btf_height_relief(const btf_image *height, const btf_image *mask, btf
      * blue-grey (low) to warm white (high) between its extremes. */
     double sum = 0.0, lo = INFINITY, hi = -INFINITY;
     int n = 0;
-    for (int y = 0; y < h; y++)
-        for (int x = 0; x < w; x++) {
-            size_t k = (size_t)y * w + x;
-            if (!in[k] || !isfinite(height->data[k]))
+    for (int y = 0; y < rows; y++)
+        for (int x = 0; x < width; x++) {
+            size_t k = (size_t)y * width + x;
+            if (!inside[k] || !isfinite(height->data[k]))
                 continue;
-            double gx = slope_at(height, in, x, y, 1, 0), gy = slope_at(height, in, x, y, 0, 1);
+            double gx = slope_at(height, inside, x, y, 1, 0);
+            double gy = slope_at(height, inside, x, y, 0, 1);
             sum += sqrt(gx * gx + gy * gy);
             lo = fmin(lo, height->data[k]);
             hi = fmax(hi, height->data[k]);
             n++;
         }
     double mean = n > 0 ? sum / n : 0.0;
-    double ex = mean > 1e-12 ? 0.5 / mean : 1.0;
+    double exaggeration = mean > 1e-12 ? 0.5 / mean : 1.0;
     double span = hi > lo ? hi - lo : 1.0;
     /* Light from the top left, 45 degrees up: (-1, 1, sqrt 2) / 2. */
-    const double l[3] = {-0.5, 0.5, 0.70710678118654752};
-    for (int y = 0; y < h; y++)
-        for (int x = 0; x < w; x++) {
-            size_t k = (size_t)y * w + x;
-            if (!in[k] || !isfinite(height->data[k]))
+    const double light[3] = {-0.5, 0.5, 0.70710678118654752};
+    for (int y = 0; y < rows; y++)
+        for (int x = 0; x < width; x++) {
+            size_t k = (size_t)y * width + x;
+            if (!inside[k] || !isfinite(height->data[k]))
                 continue;
-            double gx = ex * slope_at(height, in, x, y, 1, 0);
-            double gy = -ex * slope_at(height, in, x, y, 0, 1); /* y up */
+            double gx = exaggeration * slope_at(height, inside, x, y, 1, 0);
+            double gy = -exaggeration * slope_at(height, inside, x, y, 0, 1); /* y up */
             double len = sqrt(gx * gx + gy * gy + 1.0);
-            double shade = (-gx * l[0] - gy * l[1] + l[2]) / len;
+            double shade = (-gx * light[0] - gy * light[1] + light[2]) / len;
             shade = 0.15 + 0.85 * (shade > 0.0 ? shade : 0.0);
             double t = (height->data[k] - lo) / span;
             const double low[3] = {0.55, 0.62, 0.75}, high[3] = {1.0, 0.97, 0.88};
@@ -113,7 +117,7 @@ btf_status btf_height_relief(const btf_image *height, const btf_image *mask, btf
                 out->data[3 * k + c] = btf_srgb_to_linear((float)(v > 1.0 ? 1.0 : v));
             }
         }
-    free(in);
+    free(inside);
     return BTF_OK;
 }
 

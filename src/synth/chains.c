@@ -11,36 +11,38 @@
 
 #include "btf_shared.h"
 
-/* S chains of shape K (columns -K .. -1) in one loop: independent chains,
- * so the core overlaps their latencies (one pixel waits on the previous one
- * for a multiply and an add, 6 cycles on Zen 3, the largest cost of
- * synthesis after the noise when a chain runs alone). S and K are
- * constants in each copy (btf_chains below), so the tests on K fold away and
- * the chains' last values live in registers. A missing term is skipped,
- * never added as 0 * y, which could turn -0 into +0. */
-static inline __attribute__((always_inline)) void chains_run(const synth_chain *c, const int S,
-                                                             const int K, int len)
+/* n_chains chains of one shape (same-row columns -shape .. -1) in one loop:
+ * independent chains, so the core overlaps their latencies (one pixel waits
+ * on the previous one for a multiply and an add, 6 cycles on Zen 3, the
+ * largest cost of synthesis after the noise when a chain runs alone).
+ * n_chains and shape are constants in each copy (btf_chains below), so the
+ * tests on shape fold away and the chains' last values live in registers.
+ * A missing term is skipped, never added as 0 * y, which could turn -0 into
+ * +0. */
+static inline __attribute__((always_inline)) void chains_run(const synth_chain *c,
+                                                             const int n_chains,
+                                                             const int shape, int len)
 {
     const float *acc[SYNTH_MAX_CHAINS];
     float *out[SYNTH_MAX_CHAINS];
     float g0[SYNTH_MAX_CHAINS], g1[SYNTH_MAX_CHAINS], g2[SYNTH_MAX_CHAINS];
     float y1[SYNTH_MAX_CHAINS], y2[SYNTH_MAX_CHAINS], y3[SYNTH_MAX_CHAINS];
-    for (int s = 0; s < S; s++) {
+    for (int s = 0; s < n_chains; s++) {
         acc[s] = c[s].acc;
         out[s] = c[s].out;
         g0[s] = c[s].gamma3[0], g1[s] = c[s].gamma3[1], g2[s] = c[s].gamma3[2];
-        y1[s] = K >= 1 ? out[s][-1] : 0.0f;
-        y2[s] = K >= 2 ? out[s][-2] : 0.0f;
-        y3[s] = K >= 3 ? out[s][-3] : 0.0f;
+        y1[s] = shape >= 1 ? out[s][-1] : 0.0f;
+        y2[s] = shape >= 2 ? out[s][-2] : 0.0f;
+        y3[s] = shape >= 3 ? out[s][-3] : 0.0f;
     }
     for (int i = 0; i < len; i++) {
-        _Pragma("GCC unroll 6") for (int s = 0; s < S; s++) {
+        _Pragma("GCC unroll 6") for (int s = 0; s < n_chains; s++) {
             float v = acc[s][i];
-            if (K >= 3)
+            if (shape >= 3)
                 v = btf_car_accumulate(v, g0[s], y3[s]);
-            if (K >= 2)
+            if (shape >= 2)
                 v = btf_car_accumulate(v, g1[s], y2[s]);
-            if (K >= 1)
+            if (shape >= 1)
                 v = btf_car_accumulate(v, g2[s], y1[s]);
             y3[s] = y2[s];
             y2[s] = y1[s];
@@ -49,14 +51,14 @@ static inline __attribute__((always_inline)) void chains_run(const synth_chain *
     }
 }
 
-void btf_chains(const synth_chain *c, int S, int K, int len)
+void btf_chains(const synth_chain *c, int n_chains, int shape, int len)
 {
-    switch (S * 4 + K) {
-#define CHAINS_CASE(S_, K_)                                                                      \
-    case (S_) * 4 + (K_):                                                                        \
-        chains_run(c, S_, K_, len);                                                              \
+    switch (n_chains * 4 + shape) {
+#define CHAINS_CASE(n_, shape_)                                                                  \
+    case (n_) * 4 + (shape_):                                                                    \
+        chains_run(c, n_, shape_, len);                                                          \
         return;
-#define CHAINS_SHAPES(S_) CHAINS_CASE(S_, 0) CHAINS_CASE(S_, 1) CHAINS_CASE(S_, 2) CHAINS_CASE(S_, 3)
+#define CHAINS_SHAPES(n_) CHAINS_CASE(n_, 0) CHAINS_CASE(n_, 1) CHAINS_CASE(n_, 2) CHAINS_CASE(n_, 3)
         CHAINS_SHAPES(1)
         CHAINS_SHAPES(2)
         CHAINS_SHAPES(3)

@@ -109,9 +109,9 @@ typedef struct synth_chain {
     const float *gamma3;
 } synth_chain;
 #define SYNTH_MAX_CHAINS 6
-/* n (1..SYNTH_MAX_CHAINS) chains of shape k (0..3: columns -k .. -1), len
- * pixels each, in one loop. */
-void btf_chains(const synth_chain *c, int n, int k, int len);
+/* n_chains (1..SYNTH_MAX_CHAINS) chains of one shape (0..3: the same-row
+ * terms are columns -shape .. -1), len pixels each, in one loop. */
+void btf_chains(const synth_chain *c, int n_chains, int shape, int len);
 
 /* ------------------------------------------------------------------ wave.c */
 

@@ -13,6 +13,7 @@
  */
 #include "car/car.h"
 #include "core/core.h"
+#include "model/model.h"
 #include "synth/synth.h"
 #include "synth/synth_testing.h"
 

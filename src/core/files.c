@@ -24,6 +24,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
+#include <time.h>
 #include <unistd.h>
 
 /* Every temporary name ends in TMP_TAG PID-N. */
@@ -31,7 +32,10 @@
 #define TMP_SLOTS 64
 #define TMP_TRIES 1000
 
-enum { SLOT_FREE, SLOT_BUSY, SLOT_FILE, SLOT_DIR };
+/* SLOT_COMMIT: a folder being moved into place; the signal cleanup waits
+ * for it (the committing thread blocks the signals, another thread may take
+ * them). */
+enum { SLOT_FREE, SLOT_BUSY, SLOT_FILE, SLOT_DIR, SLOT_COMMIT };
 static struct {
     _Atomic int state;
     char path[4096];
@@ -54,15 +58,20 @@ static int live_add(const char *path, int kind)
     return -1;
 }
 
-static void live_drop(const char *path)
+static void live_set(const char *path, int kind)
 {
     for (int i = 0; i < TMP_SLOTS; i++) {
         int s = atomic_load(&tmp_live[i].state);
-        if ((s == SLOT_FILE || s == SLOT_DIR) && !strcmp(tmp_live[i].path, path)) {
-            atomic_store(&tmp_live[i].state, SLOT_FREE);
+        if (s >= SLOT_FILE && !strcmp(tmp_live[i].path, path)) {
+            atomic_store(&tmp_live[i].state, kind);
             return;
         }
     }
+}
+
+static void live_drop(const char *path)
+{
+    live_set(path, SLOT_FREE);
 }
 
 /* Removes a tree with system calls only (async-signal-safe): openat,
@@ -112,6 +121,9 @@ void btf_remove_temporaries(void)
             unlink(tmp_live[i].path);
         else if (s == SLOT_DIR)
             sig_rmtree_at(AT_FDCWD, tmp_live[i].path, 0);
+        /* A set being moved into place: wait (at most 10 s) for the move. */
+        for (int t = 0; t < 10000 && atomic_load(&tmp_live[i].state) == SLOT_COMMIT; t++)
+            nanosleep(&(struct timespec){0, 1000000}, NULL);
     }
 }
 
@@ -436,6 +448,7 @@ btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err)
     sigaddset(&block, SIGTERM);
     sigaddset(&block, SIGHUP);
     pthread_sigmask(SIG_BLOCK, &block, &old);
+    live_set(d->tmp, SLOT_COMMIT);
     btf_status rc = BTF_OK;
     /* A missing or empty folder is replaced in one rename. */
     if (rename(d->tmp, d->dir) != 0) {

@@ -40,6 +40,15 @@ btf_progress_fn cli_progress_fn(const cli_ctx *c);
 /* Ends a progress line (newline) if one was drawn. */
 void cli_progress_done(void);
 
+/* Before any work: checks that an output path can be written (a file or a
+ * folder of files, btf_output_check) and removes stale temporaries of dead
+ * btfcar runs beside it (and in it, for a folder). 0, or prints one line
+ * naming the path and returns 1. */
+int cli_check_output(const cli_ctx *c, const char *path, btf_output_kind kind);
+/* SIGINT, SIGTERM and SIGHUP remove the run's temporaries
+ * (btf_remove_temporaries) and exit with 128 + the signal. */
+void cli_install_signal_cleanup(void);
+
 /* "12.3 MB" */
 void cli_format_bytes(uint64_t bytes, char *buf, size_t n);
 

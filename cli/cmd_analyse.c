@@ -213,6 +213,8 @@ int cmd_analyse(int argc, char **argv)
     int nargs, prc = cli_parse(&c, &spec, argc, argv, &dataset, &nargs);
     if (prc >= 0)
         return prc;
+    if (cli_check_output(&c, out, stage < 0 ? BTF_OUTPUT_FILE : BTF_OUTPUT_FOLDER))
+        return 1;
     if (stage < 0)
         return analyse_all(&c, dataset, out, ao);
     /* Ignoring a model option silently would let a user believe it acted. */
@@ -237,14 +239,21 @@ int cmd_analyse(int argc, char **argv)
     cli_progress_done();
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     char path[4096];
-    snprintf(path, sizeof path, "%s/index.png", out);
-    int rc = btf_mkdirs(out, &err);
+    btf_output_dir *od = NULL; /* the set goes into place as a whole */
+    int rc = btf_output_dir_begin(out, &od, &err);
+    const char *dir = btf_output_dir_path(od);
+    if (rc == 0)
+        snprintf(path, sizeof path, "%s/index.png", dir);
     if (rc == 0)
         rc = btf_segmentation_write_png(&seg, 0, path, &err);
     if (rc == 0)
-        rc = write_tables(&seg, in, out, &err);
+        rc = write_tables(&seg, in, dir, &err);
     if (rc == 0)
-        rc = write_subspace_images(&seg, ds, out, &err);
+        rc = write_subspace_images(&seg, ds, dir, &err);
+    if (rc)
+        btf_output_dir_abort(od);
+    else
+        rc = btf_output_dir_commit(od, &err);
     if (rc) {
         btf_segmentation_free(&seg);
         btf_dataset_close(ds);

@@ -37,6 +37,8 @@ int cmd_generate(int argc, char **argv)
     int nargs, rc = cli_parse(&c, &spec, argc, argv, &outdir, &nargs);
     if (rc >= 0)
         return rc;
+    if (cli_check_output(&c, outdir, BTF_OUTPUT_FOLDER))
+        return 1;
     const char *name = btf_material_names()[material];
     o.progress = cli_progress_fn(&c);
     btf_error err = {0};

@@ -148,6 +148,8 @@ int cmd_photostereo(int argc, char **argv)
     int rc = parse_args(&c, argc, argv, &p);
     if (rc)
         return rc < 0 ? 0 : rc;
+    if (cli_check_output(&c, p.outdir, BTF_OUTPUT_FOLDER))
+        return 1;
     p.o.progress = cli_progress_fn(&c);
     btf_error err = {0};
     btf_image mask = {0};

@@ -252,6 +252,8 @@ int cmd_synthesise(int argc, char **argv)
         return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
     if (preview && (double)w * h > 8192.0 * 8192.0)
         return cli_usage_error(&c, "--preview is limited to 8192x8192 pixels");
+    if (cli_check_output(&c, outdir, BTF_OUTPUT_FOLDER))
+        return 1;
     btf_error err = {0};
     btf_model m;
     if (btf_model_read(model, &m, &err) != 0)
@@ -274,8 +276,9 @@ int cmd_synthesise(int argc, char **argv)
         else if (!gpu)
             err = (btf_error){0}; /* the CPU takes over: the GPU's reason is spent */
     }
+    btf_output_dir *od = NULL; /* all images go into place at the end, or none */
     if (rc == 0)
-        rc = btf_mkdirs(outdir, &err);
+        rc = btf_output_dir_begin(outdir, &od, &err);
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     int done = 0;
@@ -284,7 +287,7 @@ int cmd_synthesise(int argc, char **argv)
     btf_synth_opts so = btf_synth_defaults();
     so.width = w, so.height = h, so.seed = seed;
     env_cpu_switches(&so);
-    output out = {.dir = outdir, .model_path = model, .preview = preview, .half = half};
+    output out = {.dir = btf_output_dir_path(od), .model_path = model, .preview = preview, .half = half};
     if (rc == 0 && gpu) {
         rc = synth_gpu(gpu, &m, pick, &so, &out, &err);
     } else {
@@ -292,6 +295,10 @@ int cmd_synthesise(int argc, char **argv)
             if (pick[k])
                 rc = synth_one(&c, &m, k, &so, &out, &err);
     }
+    if (rc == 0)
+        rc = btf_output_dir_commit(od, &err);
+    else
+        btf_output_dir_abort(od);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     char devname[300];
     snprintf(devname, sizeof devname, "%s", gpu ? btf_gpu_device_name(gpu) : "cpu");

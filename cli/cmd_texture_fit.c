@@ -28,6 +28,8 @@ int cmd_texture_fit(int argc, char **argv)
     int nargs, prc = cli_parse(&c, &spec, argc, argv, &image, &nargs);
     if (prc >= 0)
         return prc;
+    if (cli_check_output(&c, out, BTF_OUTPUT_FILE))
+        return 1;
     btf_error err = {0};
     btf_image img;
     btf_read_opts ro = {.channels = 3};

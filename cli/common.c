@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <inttypes.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,6 +19,44 @@ int cli_error(const cli_ctx *c, const char *fmt, ...)
     fputc('\n', stderr);
     va_end(ap);
     return 1;
+}
+
+int cli_check_output(const cli_ctx *c, const char *path, btf_output_kind kind)
+{
+    btf_error err = {0};
+    if (btf_output_check(path, kind, &err) != 0)
+        return cli_lib_error(c, &err);
+    char parent[4096];
+    snprintf(parent, sizeof parent, "%s", path);
+    size_t len = strlen(parent);
+    while (len > 1 && parent[len - 1] == '/')
+        parent[--len] = '\0';
+    char *slash = strrchr(parent, '/');
+    if (!slash)
+        snprintf(parent, sizeof parent, ".");
+    else
+        slash[slash == parent] = '\0'; /* "/x" keeps "/" */
+    btf_remove_stale_temporaries(parent);
+    if (kind == BTF_OUTPUT_FOLDER)
+        btf_remove_stale_temporaries(path);
+    return 0;
+}
+
+static void on_signal(int sig)
+{
+    btf_remove_temporaries();
+    _exit(128 + sig);
+}
+
+void cli_install_signal_cleanup(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigfillset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGHUP, &sa, NULL);
 }
 
 int cli_set_error(btf_error *err, int code, const char *fmt, ...)

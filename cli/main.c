@@ -42,6 +42,7 @@ int main(int argc, char **argv)
         printf("btfcar %s\n", BTF_VERSION_STRING);
         return 0;
     }
+    cli_install_signal_cleanup();
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name))
             return commands[i].run(argc - 1, argv + 1);

@@ -148,12 +148,49 @@ void btf_exr_writer_abort(btf_exr_writer *w);
 
 /* mkdir -p; an existing folder is fine. */
 btf_status btf_mkdirs(const char *path, btf_error *err);
-/* Writes n bytes to path atomically: into a unique temporary file beside it,
- * renamed over path only when every byte is written and the file is closed;
- * on failure the temporary file is removed and path is left as it was
- * (BTF_E_IO; BTF_E_ARG for a path too long; the message names path). */
+/* Writes n bytes to path atomically: into a new temporary file beside it
+ * (PATH.btfcar-tmp-PID-N, created with O_EXCL | O_NOFOLLOW: never through a
+ * planted symlink), fsync'd and renamed over path only when every byte is
+ * written; on failure the temporary file is removed and path is left as it
+ * was (BTF_E_IO; BTF_E_ARG for a path too long; the message names path). */
 btf_status btf_write_file_atomic(const char *path, const void *data, size_t n,
                                  btf_error *err);
+
+/* Output folders written as a whole (docs/design.md, "Writes are atomic"):
+ * begin creates a temporary sibling folder DIR.btfcar-tmp-PID-N (and any
+ * missing folders above DIR); the caller writes every file into
+ * btf_output_dir_path(d); commit moves the set into place: a missing or
+ * empty DIR is replaced by one rename, an existing DIR gets the new files by
+ * one rename each (files of other names stay), with SIGINT/SIGTERM/SIGHUP
+ * blocked meanwhile. abort removes the temporary folder and the folders
+ * begin created. Both free d. */
+typedef struct btf_output_dir btf_output_dir;
+btf_status btf_output_dir_begin(const char *dir, btf_output_dir **out, btf_error *err);
+const char *btf_output_dir_path(const btf_output_dir *d);
+btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err);
+void btf_output_dir_abort(btf_output_dir *d);
+
+/* Checks, before any work, that path can be written: a file (BTF_OUTPUT_FILE:
+ * its folder exists, takes files, and path is not a folder or other
+ * non-regular file) or a folder of files (BTF_OUTPUT_FOLDER: path is a folder
+ * or missing, and the nearest existing folder above it takes files). It
+ * proves "takes files" by creating and removing a temporary file. BTF_E_ARG
+ * or BTF_E_IO, the message naming path. */
+typedef enum btf_output_kind { BTF_OUTPUT_FILE = 0, BTF_OUTPUT_FOLDER = 1 } btf_output_kind;
+btf_status btf_output_check(const char *path, btf_output_kind kind, btf_error *err);
+
+/* Removes every temporary file and folder that btfcar's writers of this
+ * process have created and not yet committed or removed. Async-signal-safe
+ * (system calls only): for a SIGINT/SIGTERM handler, which then exits. The
+ * list it walks is the library's one piece of global mutable state: a
+ * fixed table of 64 paths, each slot claimed and released atomically by
+ * the thread that created the temporary (a temporary beyond 64 live ones is
+ * left out of the list, not refused). */
+void btf_remove_temporaries(void);
+/* Removes the stale temporaries in folder: entries named *.btfcar-tmp-PID-N
+ * owned by this user whose process PID no longer exists (never this
+ * process's, never another user's). Returns how many it removed. */
+int btf_remove_stale_temporaries(const char *folder);
 
 /* sRGB transfer function (IEC 61966-2-1), per value. */
 float btf_srgb_to_linear(float v);

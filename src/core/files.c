@@ -1,58 +1,207 @@
 /*
- * files.c — atomic file writing (a temporary name beside the target, renamed
- * into place), whole-file reads with a size bound, folders and paths.
+ * files.c — safe output: temporary files and folders beside the target,
+ * created exclusively (O_EXCL | O_NOFOLLOW, never through a planted
+ * symlink), fsync'd and renamed into place; output folders written as a
+ * whole (a temporary sibling folder renamed at the end); the list of live
+ * temporaries that a signal handler removes; stale temporaries of dead
+ * processes; output paths checked before work; whole-file reads with a size
+ * bound, folders and paths (docs/design.md, "Writes are atomic").
+ *
+ * The one piece of mutable state of the library is here: the table of live
+ * temporaries (tmp_live below), so that btf_remove_temporaries, called from
+ * a SIGINT/SIGTERM handler, can remove them. Each slot is claimed and
+ * released atomically by the thread that created the temporary.
  */
 #include "core/core.h"
 
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
+#include <time.h>
 #include <unistd.h>
 
-int btf_tmp_path(const char *path, char *tmp, size_t n, btf_error *err)
+/* Every temporary name ends in TMP_TAG PID-N. */
+#define TMP_TAG ".btfcar-tmp-"
+#define TMP_SLOTS 64
+#define TMP_TRIES 1000
+
+/* SLOT_COMMIT: a folder being moved into place; the signal cleanup waits
+ * for it (the committing thread blocks the signals, another thread may take
+ * them). */
+enum { SLOT_FREE, SLOT_BUSY, SLOT_FILE, SLOT_DIR, SLOT_COMMIT };
+static struct {
+    _Atomic int state;
+    char path[4096];
+} tmp_live[TMP_SLOTS];
+
+/* Records a temporary just created; -1 when the table is full (then only
+ * the signal cleanup misses it). */
+static int live_add(const char *path, int kind)
 {
-    /* The pid and a counter make names unique across processes and threads
-     * of one process (the counter is atomic). */
+    if (strlen(path) >= sizeof tmp_live[0].path)
+        return -1;
+    for (int i = 0; i < TMP_SLOTS; i++) {
+        int expect = SLOT_FREE;
+        if (atomic_compare_exchange_strong(&tmp_live[i].state, &expect, SLOT_BUSY)) {
+            strcpy(tmp_live[i].path, path);
+            atomic_store(&tmp_live[i].state, kind);
+            return i;
+        }
+    }
+    return -1;
+}
+
+static void live_set(const char *path, int kind)
+{
+    for (int i = 0; i < TMP_SLOTS; i++) {
+        int s = atomic_load(&tmp_live[i].state);
+        if (s >= SLOT_FILE && !strcmp(tmp_live[i].path, path)) {
+            atomic_store(&tmp_live[i].state, kind);
+            return;
+        }
+    }
+}
+
+static void live_drop(const char *path)
+{
+    live_set(path, SLOT_FREE);
+}
+
+/* Removes a tree with system calls only (async-signal-safe): openat,
+ * getdents64, unlinkat. */
+struct linux_dirent64 {
+    unsigned long long d_ino;
+    long long d_off;
+    unsigned short d_reclen;
+    unsigned char d_type;
+    char d_name[];
+};
+
+static void sig_rmtree_at(int parent, const char *name, int depth)
+{
+    if (unlinkat(parent, name, 0) == 0 || depth > 16)
+        return;
+    int fd = openat(parent, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0)
+        return;
+    char buf[2048] __attribute__((aligned(8)));
+    for (int pass = 0; pass < 64; pass++) {
+        int removed = 0;
+        long n;
+        lseek(fd, 0, SEEK_SET);
+        while ((n = syscall(SYS_getdents64, fd, buf, sizeof buf)) > 0) {
+            for (long off = 0; off < n;) {
+                struct linux_dirent64 *e = (struct linux_dirent64 *)(buf + off);
+                off += e->d_reclen;
+                if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+                    continue;
+                sig_rmtree_at(fd, e->d_name, depth + 1);
+                removed = 1;
+            }
+        }
+        if (!removed)
+            break;
+    }
+    close(fd);
+    unlinkat(parent, name, AT_REMOVEDIR);
+}
+
+void btf_remove_temporaries(void)
+{
+    for (int i = 0; i < TMP_SLOTS; i++) {
+        int s = atomic_load(&tmp_live[i].state);
+        if (s == SLOT_FILE)
+            unlink(tmp_live[i].path);
+        else if (s == SLOT_DIR)
+            sig_rmtree_at(AT_FDCWD, tmp_live[i].path, 0);
+        /* A set being moved into place: wait (at most 10 s) for the move. */
+        for (int t = 0; t < 10000 && atomic_load(&tmp_live[i].state) == SLOT_COMMIT; t++)
+            nanosleep(&(struct timespec){0, 1000000}, NULL);
+    }
+}
+
+/* PATH.btfcar-tmp-PID-N, N from a counter shared by all threads. */
+static int tmp_name(const char *path, char *tmp, size_t n, btf_error *err)
+{
     static _Atomic unsigned long counter;
     unsigned long c = ++counter;
-    int k = snprintf(tmp, n, "%s.tmp%ld.%lu", path, (long)getpid(), c);
+    int k = snprintf(tmp, n, "%s" TMP_TAG "%ld-%lu", path, (long)getpid(), c);
     if (k < 0 || (size_t)k >= n)
         return btf_fail(err, BTF_E_ARG, "%s: path too long", path);
     return BTF_OK;
+}
+
+int btf_tmp_create(const char *path, char *tmp, size_t n, int *fd, btf_error *err)
+{
+    *fd = -1;
+    for (int t = 0; t < TMP_TRIES; t++) {
+        int rc = tmp_name(path, tmp, n, err);
+        if (rc)
+            return rc;
+        /* O_EXCL: an existing name, a symlink too, is never opened. */
+        int f = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+        if (f >= 0) {
+            live_add(tmp, SLOT_FILE);
+            *fd = f;
+            return BTF_OK;
+        }
+        if (errno != EEXIST)
+            return btf_fail(err, BTF_E_IO, "%s: cannot create: %s", path, strerror(errno));
+    }
+    return btf_fail(err, BTF_E_IO, "%s: cannot create a temporary file: %d names taken", path,
+                    TMP_TRIES);
 }
 
 int btf_commit_file(const char *tmp, const char *path, btf_error *err)
 {
     if (rename(tmp, path) != 0) {
         int e = errno;
-        remove(tmp);
+        btf_abort_file(tmp);
         return btf_fail(err, BTF_E_IO, "%s: cannot rename into place: %s", path, strerror(e));
     }
+    live_drop(tmp);
     return BTF_OK;
 }
 
 void btf_abort_file(const char *tmp)
 {
     remove(tmp);
+    live_drop(tmp);
 }
 
 btf_status btf_write_file_atomic(const char *path, const void *data, size_t n, btf_error *err)
 {
     char tmp[4096];
-    int rc = btf_tmp_path(path, tmp, sizeof tmp, err);
+    int fd;
+    int rc = btf_tmp_create(path, tmp, sizeof tmp, &fd, err);
     if (rc)
         return rc;
-    FILE *f = fopen(tmp, "wb");
-    if (!f)
-        return btf_fail(err, BTF_E_IO, "%s: cannot create: %s", path, strerror(errno));
-    size_t w = n ? fwrite(data, 1, n, f) : 0; /* data may be NULL when n is 0 */
-    int bad = (w != n) | (fflush(f) != 0);
-    int e = errno;
-    bad |= fclose(f) != 0;
-    if (bad) {
+    const unsigned char *p = data;
+    size_t left = n;
+    int e = 0;
+    while (left > 0) {
+        ssize_t w = write(fd, p, left);
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0) {
+            e = w < 0 ? errno : ENOSPC;
+            break;
+        }
+        p += w;
+        left -= (size_t)w;
+    }
+    if (!e && fsync(fd) != 0)
+        e = errno;
+    if (close(fd) != 0 && !e)
+        e = errno;
+    if (e) {
         btf_abort_file(tmp);
         return btf_fail(err, BTF_E_IO, "%s: write failed: %s", path, strerror(e));
     }
@@ -157,4 +306,279 @@ void btf_remove_tree(const char *path)
         closedir(d);
     }
     rmdir(path);
+}
+
+/* ---- Output folders written as a whole ---- */
+
+struct btf_output_dir {
+    char dir[4096];     /* the final folder, no trailing slash */
+    char tmp[4096];     /* DIR.btfcar-tmp-PID-N beside it */
+    char created[4096]; /* the topmost missing ancestor begin created, or "" */
+};
+
+/* path without trailing slashes into out. */
+static int strip_slashes(const char *path, char *out, size_t n, btf_error *err)
+{
+    size_t len = strlen(path);
+    while (len > 1 && path[len - 1] == '/')
+        len--;
+    if (len == 0 || len >= n)
+        return btf_fail(err, BTF_E_ARG, "'%s': bad path", path);
+    memcpy(out, path, len);
+    out[len] = '\0';
+    return BTF_OK;
+}
+
+/* The folder that holds path ("." for a bare name). */
+static void parent_of(const char *path, char *out, size_t n)
+{
+    const char *s = strrchr(path, '/');
+    if (!s)
+        snprintf(out, n, ".");
+    else if (s == path)
+        snprintf(out, n, "/");
+    else
+        snprintf(out, n, "%.*s", (int)(s - path), path);
+}
+
+/* Removes the folders begin created above the temporary folder, innermost
+ * first, as long as they are empty. */
+static void undo_ancestors(const btf_output_dir *d)
+{
+    if (!d->created[0])
+        return;
+    char p[4096];
+    parent_of(d->dir, p, sizeof p);
+    size_t top = strlen(d->created);
+    while (strlen(p) >= top && rmdir(p) == 0) {
+        char *s = strrchr(p, '/');
+        if (!s || s == p)
+            break;
+        *s = '\0';
+    }
+}
+
+btf_status btf_output_dir_begin(const char *dir, btf_output_dir **out, btf_error *err)
+{
+    if (!out)
+        return btf_fail(err, BTF_E_ARG, "btf_output_dir_begin: NULL output pointer");
+    *out = NULL;
+    if (!dir)
+        return btf_fail(err, BTF_E_ARG, "btf_output_dir_begin: no folder");
+    btf_output_dir *d = calloc(1, sizeof *d);
+    if (!d)
+        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", dir);
+    btf_status rc = strip_slashes(dir, d->dir, sizeof d->dir, err);
+    char parent[4096];
+    parent_of(d->dir, parent, sizeof parent);
+    struct stat st;
+    if (!rc && stat(parent, &st) != 0) {
+        /* The first missing ancestor, to be removed again on failure. */
+        for (size_t i = 1; i <= strlen(parent); i++)
+            if (parent[i] == '/' || parent[i] == '\0') {
+                snprintf(d->created, sizeof d->created, "%.*s", (int)i, parent);
+                if (stat(d->created, &st) != 0)
+                    break;
+            }
+        rc = btf_mkdirs(parent, err);
+        if (rc)
+            undo_ancestors(d);
+    }
+    for (int t = 0; !rc; t++) {
+        if ((rc = tmp_name(d->dir, d->tmp, sizeof d->tmp, err)))
+            break;
+        if (mkdir(d->tmp, 0777) == 0) {
+            live_add(d->tmp, SLOT_DIR);
+            *out = d;
+            return BTF_OK;
+        }
+        if (errno != EEXIST || t == TMP_TRIES)
+            rc = btf_fail(err, BTF_E_IO, "%s: cannot create a folder beside it: %s", d->dir,
+                          strerror(errno));
+    }
+    undo_ancestors(d);
+    free(d);
+    return rc;
+}
+
+const char *btf_output_dir_path(const btf_output_dir *d)
+{
+    return d ? d->tmp : NULL;
+}
+
+/* Moves every entry of the temporary folder into the existing folder: a
+ * first pass checks that no new file would land on a folder, so that a
+ * refusal moves nothing. */
+static btf_status move_entries(const btf_output_dir *d, btf_error *err)
+{
+    btf_status rc = BTF_OK;
+    for (int pass = 0; pass < 2 && !rc; pass++) {
+        DIR *dh = opendir(d->tmp);
+        if (!dh)
+            return btf_fail(err, BTF_E_IO, "%s: %s", d->dir, strerror(errno));
+        struct dirent *e;
+        while (!rc && (e = readdir(dh))) {
+            if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+                continue;
+            char from[8192], to[8192];
+            snprintf(from, sizeof from, "%s/%s", d->tmp, e->d_name);
+            snprintf(to, sizeof to, "%s/%s", d->dir, e->d_name);
+            struct stat a, b;
+            if (pass == 0 && lstat(from, &a) == 0 && lstat(to, &b) == 0 &&
+                (S_ISDIR(a.st_mode) || S_ISDIR(b.st_mode)))
+                rc = btf_fail(err, BTF_E_IO, "%s: exists and is %s; nothing moved into %s", to,
+                              S_ISDIR(b.st_mode) ? "a folder" : "a file", d->dir);
+            else if (pass == 1 && rename(from, to) != 0)
+                rc = btf_fail(err, BTF_E_IO, "%s: cannot move into place: %s", to,
+                              strerror(errno));
+        }
+        closedir(dh);
+    }
+    return rc;
+}
+
+btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err)
+{
+    if (!d)
+        return btf_fail(err, BTF_E_ARG, "btf_output_dir_commit: NULL");
+    /* No interrupt between the renames: the set moves as a whole. */
+    sigset_t block, old;
+    sigemptyset(&block);
+    sigaddset(&block, SIGINT);
+    sigaddset(&block, SIGTERM);
+    sigaddset(&block, SIGHUP);
+    pthread_sigmask(SIG_BLOCK, &block, &old);
+    live_set(d->tmp, SLOT_COMMIT);
+    btf_status rc = BTF_OK;
+    /* A missing or empty folder is replaced in one rename. */
+    if (rename(d->tmp, d->dir) != 0) {
+        struct stat st;
+        if ((errno == ENOTEMPTY || errno == EEXIST) && stat(d->dir, &st) == 0 &&
+            S_ISDIR(st.st_mode))
+            rc = move_entries(d, err);
+        else
+            rc = btf_fail(err, BTF_E_IO, "%s: cannot move the output into place: %s", d->dir,
+                          strerror(errno));
+        btf_remove_tree(d->tmp);
+    }
+    live_drop(d->tmp);
+    if (rc)
+        undo_ancestors(d);
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
+    free(d);
+    return rc;
+}
+
+void btf_output_dir_abort(btf_output_dir *d)
+{
+    if (!d)
+        return;
+    btf_remove_tree(d->tmp);
+    live_drop(d->tmp);
+    undo_ancestors(d);
+    free(d);
+}
+
+/* ---- Checks before work, stale temporaries ---- */
+
+/* Creates and removes a temporary file in folder: proof that it takes files. */
+static btf_status probe_folder(const char *path, const char *folder, btf_error *err)
+{
+    char name[4096], tmp[4096];
+    int fd;
+    btf_error e = {0};
+    snprintf(name, sizeof name, "%s/.btfcar-probe", folder);
+    if (btf_tmp_create(name, tmp, sizeof tmp, &fd, &e) != 0) {
+        const char *why = strstr(e.msg, ": cannot create: ");
+        return btf_fail(err, BTF_E_IO, "%s: cannot write in folder %s%s", path, folder,
+                        why ? why + 15 : "");
+    }
+    close(fd);
+    btf_abort_file(tmp);
+    return BTF_OK;
+}
+
+btf_status btf_output_check(const char *path, btf_output_kind kind, btf_error *err)
+{
+    if (!path || !*path)
+        return btf_fail(err, BTF_E_ARG, "no output path given");
+    if (kind != BTF_OUTPUT_FILE && kind != BTF_OUTPUT_FOLDER)
+        return btf_fail(err, BTF_E_ARG, "%s: unknown output kind %d", path, (int)kind);
+    char p[4096], parent[4096];
+    btf_status rc = strip_slashes(path, p, sizeof p, err);
+    if (rc)
+        return rc;
+    size_t len = strlen(path);
+    if (kind == BTF_OUTPUT_FILE && path[len - 1] == '/')
+        return btf_fail(err, BTF_E_ARG, "%s: names a folder; expected a file name", path);
+    struct stat st;
+    int exists = stat(p, &st) == 0;
+    if (!exists && errno != ENOENT)
+        return btf_fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
+    if (exists && kind == BTF_OUTPUT_FILE && S_ISDIR(st.st_mode))
+        return btf_fail(err, BTF_E_ARG, "%s: is a folder; expected a file name", path);
+    if (exists && kind == BTF_OUTPUT_FILE && !S_ISREG(st.st_mode))
+        return btf_fail(err, BTF_E_ARG, "%s: exists and is not a regular file", path);
+    if (exists && kind == BTF_OUTPUT_FOLDER && !S_ISDIR(st.st_mode))
+        return btf_fail(err, BTF_E_ARG, "%s: exists and is not a folder", path);
+    parent_of(p, parent, sizeof parent);
+    /* A folder output may create missing folders above it (removed again
+     * on failure); a file goes into an existing folder. */
+    while (stat(parent, &st) != 0) {
+        if (errno == ENOENT && kind == BTF_OUTPUT_FILE)
+            return btf_fail(err, BTF_E_IO, "%s: folder %s does not exist", path, parent);
+        if (errno != ENOENT)
+            return btf_fail(err, BTF_E_IO, "%s: folder %s: %s", path, parent, strerror(errno));
+        char up[4096];
+        parent_of(parent, up, sizeof up);
+        if (!strcmp(up, parent))
+            return btf_fail(err, BTF_E_IO, "%s: folder %s: %s", path, parent, strerror(errno));
+        snprintf(parent, sizeof parent, "%s", up);
+    }
+    if (!S_ISDIR(st.st_mode))
+        return btf_fail(err, BTF_E_ARG, "%s: %s is not a folder", path, parent);
+    rc = probe_folder(path, parent, err);
+    if (!rc && exists && kind == BTF_OUTPUT_FOLDER)
+        rc = probe_folder(path, p, err);
+    return rc;
+}
+
+int btf_remove_stale_temporaries(const char *folder)
+{
+    DIR *dh = opendir(folder && *folder ? folder : ".");
+    if (!dh)
+        return 0;
+    int removed = 0;
+    struct dirent *e;
+    while ((e = readdir(dh))) {
+        const char *t = strstr(e->d_name, TMP_TAG), *next;
+        while (t && (next = strstr(t + 1, TMP_TAG)))
+            t = next;
+        if (!t)
+            continue;
+        char *end;
+        const char *num = t + strlen(TMP_TAG);
+        if (*num < '0' || *num > '9')
+            continue;
+        long pid = strtol(num, &end, 10);
+        if (*end != '-' || end[1] < '0' || end[1] > '9')
+            continue;
+        strtoul(end + 1, &end, 10);
+        if (*end || pid <= 0 || pid == (long)getpid())
+            continue;
+        char sub[8192];
+        struct stat st;
+        snprintf(sub, sizeof sub, "%s/%s", folder && *folder ? folder : ".", e->d_name);
+        if (lstat(sub, &st) != 0 || st.st_uid != getuid())
+            continue;
+        if (kill((pid_t)pid, 0) == 0 || errno != ESRCH)
+            continue; /* alive, or not ours to judge */
+        if (S_ISDIR(st.st_mode))
+            btf_remove_tree(sub);
+        else
+            unlink(sub);
+        removed++;
+    }
+    closedir(dh);
+    return removed;
 }

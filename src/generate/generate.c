@@ -195,22 +195,15 @@ btf_status btf_generate(const char *material, const char *outdir, const btf_gene
         btf_material_free(&m);
         return rc;
     }
-    char tmp[4096];
-    size_t len = strlen(outdir);
-    while (len > 1 && outdir[len - 1] == '/')
-        len--;
-    snprintf(tmp, sizeof tmp, "%.*s.partial-%ld", (int)len, outdir, (long)getpid());
-    rc = btf_mkdirs(tmp, err);
+    /* Into a temporary sibling folder, renamed into place as a whole. */
+    btf_output_dir *od = NULL;
+    rc = btf_output_dir_begin(outdir, &od, err);
     if (rc == 0)
-        rc = generate_into(&m, &dirs, tmp, &o, err);
-    if (rc == 0) {
-        rmdir(outdir); /* an empty OUTDIR (checked above) is replaced */
-        if (rename(tmp, outdir) != 0)
-            rc = btf_fail(err, BTF_E_IO, "%s: cannot move the dataset into place: %s", outdir,
-                          strerror(errno));
-    }
-    if (rc)
-        btf_remove_tree(tmp);
+        rc = generate_into(&m, &dirs, btf_output_dir_path(od), &o, err);
+    if (rc == 0)
+        rc = btf_output_dir_commit(od, err);
+    else
+        btf_output_dir_abort(od);
     btf_dirset_free(&dirs);
     btf_material_free(&m);
     return rc;

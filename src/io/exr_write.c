@@ -14,8 +14,8 @@
  *
  * We do the file I/O ourselves (pwrite on our own descriptor), so a failing
  * system call is reported as such, and so the writer writes to the
- * temporary name from btf_tmp_path() and the file appears only through
- * btf_commit_file().
+ * temporary file from btf_tmp_create() (O_EXCL | O_NOFOLLOW), fsync'd, and
+ * the file appears only through btf_commit_file().
  *
  * Provenance (btf_exr_meta): string attributes btfcarVersion, and with a
  * model btfcarModel, btfcarSeed, btfcarSubspace, and with directions
@@ -172,9 +172,10 @@ static exr_result_t writer_header(btf_exr_writer *w, const btf_exr_meta *meta)
  * one-chunk staging buffer. */
 static btf_status writer_start(btf_exr_writer *w, const btf_exr_meta *meta, btf_error *err)
 {
-    int fd = open(w->tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0)
-        return btf_fail(err, BTF_E_IO, "%s: cannot create: %s", w->path, strerror(errno));
+    int fd;
+    btf_status rc = btf_tmp_create(w->path, w->tmp, sizeof w->tmp, &fd, err);
+    if (rc)
+        return rc;
     w->io.fd = fd;
     w->tmp_created = 1;
     exr_context_initializer_t init = btf_exr_initializer(&w->io);
@@ -220,8 +221,8 @@ btf_status btf_exr_writer_open_meta(const char *path, int width, int height, int
         return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
     }
     w->io.path = w->path;
-    btf_status rc = btf_tmp_path(path, w->tmp, sizeof w->tmp, err);
-    if (!rc) {
+    btf_status rc = BTF_OK;
+    {
         btf_exr_io *prev = btf_exr_sink_enter(&w->io);
         rc = writer_start(w, meta, err);
         btf_exr_sink_leave(prev);
@@ -375,8 +376,11 @@ static btf_status writer_finish(btf_exr_writer *w, btf_error *err)
         return btf_exr_fail(err, &w->io, rv ? rv : EXR_ERR_WRITE_IO, 1, "cannot finish EXR file");
     int fd = w->io.fd;
     w->io.fd = -1;
-    if (close(fd) != 0)
-        return btf_fail(err, BTF_E_IO, "%s: write failed: %s", w->path, strerror(errno));
+    int e = fsync(fd) != 0 ? errno : 0;
+    if (close(fd) != 0 && !e)
+        e = errno;
+    if (e)
+        return btf_fail(err, BTF_E_IO, "%s: write failed: %s", w->path, strerror(e));
     btf_status rc = btf_commit_file(w->tmp, w->path, err);
     w->tmp_created = 0; /* renamed, or removed by btf_commit_file */
     return rc;

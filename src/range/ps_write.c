@@ -1,9 +1,9 @@
 /*
  * ps_write.c — the range-map stage's results on disk (Haindl & Filip 2007,
  * section II.B): normals, albedo and height as float EXR for programs, each
- * with a PNG preview for people (ps_preview.c). Each file is written
- * atomically by the image writers, so an interrupted run leaves no
- * half-written file under a final name.
+ * with a PNG preview for people (ps_preview.c). The six files are written
+ * into a temporary sibling folder and moved into place as a set
+ * (btf_output_dir_begin/commit): a failure or an interrupt leaves none.
  */
 #include "range/range.h"
 #include "core/core.h"
@@ -33,17 +33,23 @@ btf_status btf_ps_write(const btf_ps_result *r, const btf_image *mask, const cha
     if (!r || !outdir || !r->normal.data || !r->albedo.data || !r->height.data)
         return btf_fail(err, BTF_E_ARG,
                         "photostereo: nothing to write (empty result or no folder)");
-    btf_status rc = btf_mkdirs(outdir, err);
+    btf_output_dir *od;
+    btf_status rc = btf_output_dir_begin(outdir, &od, err);
     if (rc)
         return rc;
+    const char *dir = btf_output_dir_path(od);
     btf_image prev = {0};
     if ((rc = btf_normals_preview(&r->normal, &prev, err)) == BTF_OK)
-        rc = write_pair(outdir, "normals", &r->normal, &prev, err);
+        rc = write_pair(dir, "normals", &r->normal, &prev, err);
     btf_image_free(&prev);
     if (rc == BTF_OK)
-        rc = write_pair(outdir, "albedo", &r->albedo, &r->albedo, err);
+        rc = write_pair(dir, "albedo", &r->albedo, &r->albedo, err);
     if (rc == BTF_OK && (rc = btf_height_relief(&r->height, mask, &prev, err)) == BTF_OK)
-        rc = write_pair(outdir, "height", &r->height, &prev, err);
+        rc = write_pair(dir, "height", &r->height, &prev, err);
     btf_image_free(&prev);
-    return rc;
+    if (rc) {
+        btf_output_dir_abort(od);
+        return rc;
+    }
+    return btf_output_dir_commit(od, err);
 }

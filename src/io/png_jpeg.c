@@ -7,9 +7,10 @@
  * warning. Here every message goes to a handler: nothing is printed, an
  * error becomes the one-line error text naming the file, and libjpeg's
  * data-corruption warnings (bad Huffman code, premature end of a segment or
- * of the file, extraneous bytes, lost sync) are errors too. Benign warnings
- * (an unknown JFIF revision, a bad ICC marker, PNG ancillary-chunk CRCs,
- * which libpng discards) are dropped silently.
+ * of the file, extraneous bytes, lost sync) and libpng's warnings about the
+ * image data (IDAT) are errors too. Benign warnings (an unknown JFIF
+ * revision, a bad ICC marker, colour profiles, ancillary-chunk CRCs, which
+ * libpng discards) are dropped silently.
  *
  * Output as the OpenCV bridge gave it: 8- or 16-bit (native byte order)
  * samples, 1 or 3 channels, RGB order, alpha dropped, palette expanded.
@@ -50,10 +51,19 @@ static void png_on_error(png_structp png, png_const_charp msg)
     png_longjmp(png, 1);
 }
 
+/* Silent. libpng reports damage to the image data that it could read past
+ * (a failed zlib check at the stream's end, after the last row) as an
+ * "IDAT: ..." warning: that is an error here. Spare data after the image
+ * (some encoders write it) and everything outside IDAT (ancillary chunks,
+ * colour profiles) are not. */
 static void png_on_warning(png_structp png, png_const_charp msg)
 {
-    (void)png;
-    (void)msg; /* silent: libpng warns about what it can decode anyway */
+    if (!msg || strncmp(msg, "IDAT: ", 6) != 0 || strstr(msg, "Too much image data") ||
+        strstr(msg, "Extra compressed data"))
+        return;
+    png_state *s = png_get_error_ptr(png);
+    snprintf(s->msg, sizeof s->msg, "%s", msg);
+    png_longjmp(png, 1);
 }
 
 static void png_read_mem(png_structp png, png_bytep out, png_size_t len)

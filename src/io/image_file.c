@@ -246,6 +246,9 @@ static btf_status decode_png_jpeg(btf_source *src, const btf_read_opts *o, btf_i
         rc = btf_check_pixels(src->name, hdr.width, hdr.height, o->max_pixels, err);
     if (rc)
         return rc;
+    /* The output first: a file too large for memory fails before decoding. */
+    if ((rc = btf_image_alloc(out, hdr.width, hdr.height, hdr.channels, err)))
+        return btf_error_name(err, src->name);
     const unsigned char *bytes;
     unsigned char *owned;
     if ((rc = btf_source_bytes(src, &bytes, &owned, err)))
@@ -255,21 +258,15 @@ static btf_status decode_png_jpeg(btf_source *src, const btf_read_opts *o, btf_i
     free(owned);
     if (rc)
         return rc;
-    if (d.width != hdr.width || d.height != hdr.height) {
-        free(d.pixels);
-        return btf_fail(err, BTF_E_FORMAT, "%s: decoded size %dx%d differs from header %dx%d",
-                        src->name, d.width, d.height, hdr.width, hdr.height);
-    }
-    rc = btf_image_alloc(out, d.width, d.height, d.channels, err);
-    if (rc == 0) {
-        size_t count = (size_t)d.width * d.height * d.channels;
-        if (d.depth16)
-            convert_16bit(d.pixels, count, o->srgb_16bit, out->data);
-        else
-            convert_8bit(d.pixels, count, o->linear_8bit, out->data);
-    } else {
-        btf_error_name(err, src->name);
-    }
+    if (d.width != hdr.width || d.height != hdr.height || d.channels != hdr.channels)
+        rc = btf_fail(err, BTF_E_FORMAT, "%s: decoded %dx%d, %d channels, differs from the "
+                      "header's %dx%d, %d channels", src->name, d.width, d.height, d.channels,
+                      hdr.width, hdr.height, hdr.channels);
+    size_t count = (size_t)d.width * d.height * d.channels;
+    if (rc == 0 && d.depth16)
+        convert_16bit(d.pixels, count, o->srgb_16bit, out->data);
+    else if (rc == 0)
+        convert_8bit(d.pixels, count, o->linear_8bit, out->data);
     free(d.pixels);
     return rc;
 }

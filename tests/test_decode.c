@@ -6,6 +6,8 @@
 #include "testutil.h"
 
 #include <math.h>
+#include <stdio.h> /* before jpeglib.h */
+#include <jpeglib.h>
 #include <png.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -304,6 +306,53 @@ static void png_layouts(void **state)
     }
 }
 
+/* A CMYK JPEG (libjpeg writes Adobe's inverted convention): decoded as RGB,
+ * R = C K / 255 and so on, as OpenCV did. */
+static void cmyk_jpeg(void **state)
+{
+    (void)state;
+    const char *p = tu_fmt("%s/cmyk.jpg", tu_dir);
+    char path[4096];
+    snprintf(path, sizeof path, "%s", p);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    struct jpeg_compress_struct c;
+    struct jpeg_error_mgr jerr;
+    c.err = jpeg_std_error(&jerr);
+    jpeg_create_compress(&c);
+    jpeg_stdio_dest(&c, f);
+    c.image_width = 16;
+    c.image_height = 8;
+    c.input_components = 4;
+    c.in_color_space = JCS_CMYK;
+    jpeg_set_defaults(&c);
+    jpeg_set_quality(&c, 100, TRUE);
+    jpeg_start_compress(&c, TRUE);
+    unsigned char row[16 * 4];
+    for (int x = 0; x < 16; x++)
+        row[4 * x] = 200, row[4 * x + 1] = 100, row[4 * x + 2] = 50, row[4 * x + 3] = 128;
+    while (c.next_scanline < c.image_height) {
+        JSAMPROW r = row;
+        jpeg_write_scanlines(&c, &r, 1);
+    }
+    jpeg_finish_compress(&c);
+    jpeg_destroy_compress(&c);
+    fclose(f);
+    btf_error e = {0};
+    btf_image img;
+    TU_OK(btf_image_read(path, NULL, &img, &e), &e);
+    assert_int_equal(img.channels, 3);
+    const int want[3] = {200 * 128 / 255, 100 * 128 / 255, 50 * 128 / 255};
+    for (int i = 0; i < 16 * 8; i++)
+        for (int k = 0; k < 3; k++) {
+            float v = btf_linear_to_srgb(img.data[3 * i + k]) * 255.0f;
+            if (fabsf(v - want[k]) > 2.0f)
+                print_error("pixel %d channel %d: %g, expected %d\n", i, k, v, want[k]);
+            assert_true(fabsf(v - want[k]) <= 2.0f);
+        }
+    btf_image_free(&img);
+}
+
 static void gradient_file(const char *path, int jpeg)
 {
     btf_error e = {0};
@@ -423,6 +472,7 @@ int main(void)
         cmocka_unit_test(pixel_cap),
         cmocka_unit_test(dataset_cap),
         cmocka_unit_test(png_layouts),
+        cmocka_unit_test(cmyk_jpeg),
         cmocka_unit_test(corrupt_bodies),
     };
     return cmocka_run_group_tests_name("decode", tests, tu_setup_dir, tu_teardown_dir);

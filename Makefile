@@ -47,7 +47,7 @@ CLI       := $(BUILD)/btfcar
 
 # The shared library's major version (docs/install.md, "Shared library and
 # soname"): raised on every ABI break.
-SOVERSION := 2
+SOVERSION := 3
 SONAME    := libbtfcar.so.$(SOVERSION)
 # It exports exactly the functions include/btfcar.h declares: the objects
 # are compiled with hidden visibility (the header's declarations are under

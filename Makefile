@@ -21,11 +21,11 @@ CPPFLAGS  := -Iinclude -Isrc -Isrc/synth -Igpu -I$(BUILD)/gen -I/usr/include/Ope
 CFLAGS    := -std=c11 $(COMMON)
 CXXFLAGS  := -std=c++17 $(COMMON) -I/usr/include/opencv4
 LDLIBS    := -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
-             -lvulkan -lz -lstdc++ -lm -lpthread
+             -lpng16 -ljpeg -lvulkan -lz -lstdc++ -lm -lpthread
 # The same for btfcar.pc: the dependencies that have a pkg-config file
 # (Requires.private) and the libraries that have none (Libs.private; Debian's
 # OpenCV -dev packages ship no opencv4.pc).
-PC_REQUIRES_PRIVATE := OpenEXR vulkan zlib
+PC_REQUIRES_PRIVATE := OpenEXR vulkan zlib libpng libjpeg
 PC_LIBS_PRIVATE     := -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lstdc++ -lm -pthread
 
 LIB_C     := $(sort $(wildcard src/*/*.c) $(wildcard gpu/*.c))

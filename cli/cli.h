@@ -63,6 +63,12 @@ int cmd_synthesise(int argc, char **argv);
  * rows over a btf_fit_opts (fo) with a tag. */
 int cli_parse_neighbourhood(const char *value, void *dest, char *why, size_t n);
 void cli_show_neighbourhood(const void *dest, char *buf, size_t n);
+/* --max-pixels N into a uint64_t (btf_read_opts.max_pixels and
+ * btf_dataset_opts.max_pixels), set to BTF_DEFAULT_MAX_PIXELS before parsing. */
+#define CLI_MAX_PIXELS_OPTION(dest_)                                                       \
+    {.name = "--max-pixels", .kind = CLI_U64, .dest = (dest_), .meta = "N",               \
+     .help = "refuse images of more than N pixels, from the header, before\n"             \
+             "decoding (docs/api.md, \"Resource limits\")"}
 #define CLI_MODEL_OPTIONS(fo, tag_)                                                        \
     {.name = "--levels", .kind = CLI_INT, .dest = &(fo)->levels, .meta = "L|auto",         \
      .help = "pyramid levels; auto: from the image size and its correlation length,\n"    \

@@ -128,7 +128,8 @@ static int write_subspace_images(const btf_segmentation *s, const btf_dataset *d
 static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_analyse_opts ao)
 {
     btf_error err = {0};
-    btf_dataset_opts dopts = {.progress = cli_progress_fn(c)};
+    btf_dataset_opts dopts = {.progress = cli_progress_fn(c),
+                              .max_pixels = ao.photostereo.read.max_pixels};
     btf_dataset *ds;
     double t0 = now();
     if (btf_dataset_open(dataset, &dopts, &ds, &err) != 0)
@@ -176,6 +177,7 @@ int cmd_analyse(int argc, char **argv)
     int stage = -1;
     btf_analyse_opts ao = btf_analyse_defaults();
     ao.segment.kmeans.seed = 1; /* the command's seed; the library's default is 0 */
+    ao.photostereo.read.max_pixels = BTF_DEFAULT_MAX_PIXELS;
     btf_segment_opts *so = &ao.segment;
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
@@ -204,6 +206,7 @@ int cmd_analyse(int argc, char **argv)
          .help = "longer side of the range tile kept in the model (at most the\n"
                  "image's); the shorter side follows the image's aspect ratio",
          .lo = 1, .hi = 4096, .tag = TAG_LATER},
+        CLI_MAX_PIXELS_OPTION(&ao.photostereo.read.max_pixels),
         {0}};
     cli_spec spec = {.cmd = "analyse", .args = "DATASET",
                      .alt_usage = "       btfcar analyse DATASET -o OUTDIR --stage segment "
@@ -223,7 +226,8 @@ int cmd_analyse(int argc, char **argv)
         return cli_usage_error(&c, "%s is not used by --stage segment", later);
 
     btf_error err = {0};
-    btf_dataset_opts dopts = {.progress = cli_progress_fn(&c)};
+    btf_dataset_opts dopts = {.progress = cli_progress_fn(&c),
+                              .max_pixels = ao.photostereo.read.max_pixels};
     btf_dataset *ds;
     double t0 = now();
     if (btf_dataset_open(dataset, &dopts, &ds, &err) != 0)

@@ -75,10 +75,10 @@ static int dataset_json(const btf_dataset_info *in, int verify)
     return 0;
 }
 
-static int info_dataset(cli_ctx *c, const char *path, int verify, int json)
+static int info_dataset(cli_ctx *c, const char *path, int verify, int json, uint64_t max_px)
 {
     btf_error err = {0};
-    btf_dataset_opts o = {.progress = cli_progress_fn(c)};
+    btf_dataset_opts o = {.progress = cli_progress_fn(c), .max_pixels = max_px};
     btf_dataset *ds;
     if (btf_dataset_open(path, &o, &ds, &err) != 0)
         return cli_lib_error(c, &err);
@@ -176,6 +176,7 @@ int cmd_info(int argc, char **argv)
     cli_ctx c = {"info", 0};
     const char *path = NULL;
     int verify = 0, json = 0, devices = 0;
+    uint64_t max_px = BTF_DEFAULT_MAX_PIXELS;
     cli_opt opts[] = {
         {.name = "--json", .kind = CLI_FLAG, .dest = &json,
          .help = "print one JSON document instead (schema: docs/model-format.md)"},
@@ -186,6 +187,7 @@ int cmd_info(int argc, char **argv)
          .help = "list the Vulkan devices GPU synthesis can use: index (for\n"
                  "--device and BTF_VK_DEVICE), type, Vulkan version, largest storage\n"
                  "buffer, name"},
+        CLI_MAX_PIXELS_OPTION(&max_px),
         {0}};
     cli_spec spec = {.cmd = "info", .args = "DATASET|MODEL",
                      .alt_usage = "       btfcar info --devices [--json]", .about = ABOUT,
@@ -211,5 +213,5 @@ int cmd_info(int argc, char **argv)
             return cli_lib_error(&c, &err);
         btf_model_free(&m); /* cannot happen: the signature did not match */
     }
-    return info_dataset(&c, path, verify, json);
+    return info_dataset(&c, path, verify, json, max_px);
 }

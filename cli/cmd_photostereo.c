@@ -74,6 +74,7 @@ static int parse_args(cli_ctx *c, int argc, char **argv, ps_args *p)
     static const int method_values[] = {BTF_INTEGRATE_POISSON, BTF_INTEGRATE_FC};
     btf_photostereo_opts *o = &p->o;
     *o = btf_photostereo_defaults();
+    o->read.max_pixels = BTF_DEFAULT_MAX_PIXELS;
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &p->outdir,
          .meta = "OUTDIR", .help = "the folder for the results", .required = 1},
@@ -109,6 +110,7 @@ static int parse_args(cli_ctx *c, int argc, char **argv, ps_args *p)
          .help = "plain least squares, no robust rule (for comparison)"},
         {.name = "--threads", .kind = CLI_INT, .dest = &o->threads, .meta = "T",
          .help = "worker threads", .lo = 1, .hi = 64, .zero_means = "all CPUs"},
+        CLI_MAX_PIXELS_OPTION(&o->read.max_pixels),
         {0}};
     cli_spec spec = {.cmd = "photostereo", .args = "DATASET",
                      .alt_usage = "       btfcar photostereo --manifest FILE -o OUTDIR [options]",
@@ -131,7 +133,8 @@ static int run(const cli_ctx *c, const ps_args *p, btf_ps_result *r, btf_error *
 {
     if (p->manifest)
         return btf_photostereo_manifest(p->manifest, &p->o, r, err);
-    btf_dataset_opts dopts = {.skip_verify = 1, .progress = cli_progress_fn(c)};
+    btf_dataset_opts dopts = {.skip_verify = 1, .progress = cli_progress_fn(c),
+                              .max_pixels = p->o.read.max_pixels};
     btf_dataset *ds;
     int rc = btf_dataset_open(p->dataset, &dopts, &ds, err);
     if (rc)
@@ -153,7 +156,8 @@ int cmd_photostereo(int argc, char **argv)
     p.o.progress = cli_progress_fn(&c);
     btf_error err = {0};
     btf_image mask = {0};
-    if (p.mask && btf_image_read(p.mask, NULL, &mask, &err) != 0)
+    btf_read_opts mro = {.max_pixels = p.o.read.max_pixels};
+    if (p.mask && btf_image_read(p.mask, &mro, &mask, &err) != 0)
         return cli_lib_error(&c, &err);
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);

@@ -17,10 +17,13 @@ int cmd_texture_fit(int argc, char **argv)
     cli_ctx c = {"texture-fit", 0};
     const char *out = NULL;
     btf_fit_opts fo = btf_fit_defaults();
+    btf_read_opts ro = btf_read_defaults();
+    ro.channels = 3;
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
          .meta = "MODEL", .help = "the model file to write (atomically)", .required = 1},
         CLI_MODEL_OPTIONS(&fo, 0),
+        CLI_MAX_PIXELS_OPTION(&ro.max_pixels),
         {0}};
     cli_spec spec = {.cmd = "texture-fit", .args = "IMAGE", .about = ABOUT, .min_args = 1,
                      .max_args = 1, .opts = opts};
@@ -32,7 +35,6 @@ int cmd_texture_fit(int argc, char **argv)
         return 1;
     btf_error err = {0};
     btf_image img;
-    btf_read_opts ro = {.channels = 3};
     if (btf_image_read(image, &ro, &img, &err) != 0)
         return cli_lib_error(&c, &err);
     fo.car.warn = c.quiet ? NULL : cli_warning;
@@ -40,6 +42,11 @@ int cmd_texture_fit(int argc, char **argv)
     btf_model m;
     int rc = btf_texture_fit(&img, &fo, &m, &err);
     btf_image_free(&img);
+    if (rc == BTF_E_NOMEM) { /* name the file: the library only saw pixels */
+        char m[sizeof err.msg];
+        memcpy(m, err.msg, sizeof m);
+        snprintf(err.msg, sizeof err.msg, "%s: %s", image, m);
+    }
     if (rc)
         return cli_lib_error(&c, &err);
     rc = btf_model_write(out, &m, &err);

@@ -99,13 +99,23 @@ btf_status btf_image_probe_memory(const void *data, size_t n, const char *name,
                                   btf_image_header *hdr, btf_error *err);
 btf_status btf_image_probe(const char *path, btf_image_header *hdr, btf_error *err);
 
+/* The default cap on the pixels of one decoded image: 2^28 (16384 x 16384,
+ * 3 GiB as float RGB, about 12 GB at texture-fit's peak; docs/api.md,
+ * "Resource limits"). Files over the cap are refused from their header,
+ * before any pixel is decoded, so a small file cannot claim gigabytes. */
+#define BTF_DEFAULT_MAX_PIXELS ((uint64_t)1 << 28)
+
 typedef struct btf_read_opts {
     int channels;       /* 0: 3 for colour files, 1 for grey; 1 or 3 forces it */
     int linear_8bit;    /* 0 (default): 8-bit files are sRGB and are linearised;
                            1: 8-bit values are taken as linear (v/255) */
     int srgb_16bit;     /* 0 (default): 16-bit PNG is linear (v/65535); 1: sRGB */
+    uint64_t max_pixels; /* width x height above this is refused (BTF_E_UNSUPPORTED,
+                           naming the file, its size and the cap) from the
+                           header; 0: BTF_DEFAULT_MAX_PIXELS */
 } btf_read_opts;
-/* The defaults: every field 0 (as above). */
+/* The defaults: channels, linear_8bit, srgb_16bit 0 (as above), max_pixels
+ * BTF_DEFAULT_MAX_PIXELS (a zeroed struct behaves the same). */
 btf_read_opts btf_read_defaults(void);
 
 /* Decodes PNG (8/16-bit), JPEG or EXR (half/float) held in memory (n bytes
@@ -283,8 +293,12 @@ typedef struct btf_dataset_opts {
     int skip_verify;         /* 0: probe every image (size, structure); 1: only the first */
     btf_progress_fn progress;
     void *progress_user;
+    uint64_t max_pixels;     /* the cap on each image's pixels, checked when the
+                                headers are probed and when an image is read
+                                (btf_read_opts.max_pixels); 0: the default */
 } btf_dataset_opts;
-/* The defaults: every field 0 (probe every image, no progress). */
+/* The defaults: every field 0 (probe every image, no progress), max_pixels
+ * BTF_DEFAULT_MAX_PIXELS. */
 btf_dataset_opts btf_dataset_defaults(void);
 
 /* Detects the layout of `path` (a folder, or a manifest .tsv file), collects

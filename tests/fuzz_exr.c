@@ -48,7 +48,7 @@ static void check_read(const unsigned char *data, size_t size, int channels,
     btf_source_memory(&src, data, size, NAME);
     btf_image img;
     btf_error e = {0};
-    int rc = btf_exr_read_source(&src, channels, &img, &e);
+    int rc = btf_exr_read_source(&src, channels, 0, &img, &e);
     if (rc != 0) {
         check_error(rc, &e);
         if (img.data)

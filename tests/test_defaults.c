@@ -51,10 +51,12 @@ static void documented_values(void **state)
     assert_int_equal(d.skip_verify, 0);
     assert_null(d.progress);
     assert_null(d.progress_user);
+    assert_true(d.max_pixels == BTF_DEFAULT_MAX_PIXELS);
     btf_read_opts r = btf_read_defaults();
     assert_int_equal(r.channels, 0);
     assert_int_equal(r.linear_8bit, 0);
     assert_int_equal(r.srgb_16bit, 0);
+    assert_true(r.max_pixels == BTF_DEFAULT_MAX_PIXELS);
 
     btf_analyse_opts a = btf_analyse_defaults();
     assert_memory_equal(&a.segment, &s, sizeof s);

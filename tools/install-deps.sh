@@ -5,7 +5,7 @@ set -eu
 
 PKGS="build-essential g++ pkg-config clang
 libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
-libopenexr-dev
+libopenexr-dev libpng-dev libjpeg62-turbo-dev
 libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
 glslang-tools spirv-tools
 libcmocka-dev zlib1g-dev time"

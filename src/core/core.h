@@ -19,6 +19,14 @@
 /* Image sides beyond this are refused before any allocation: 2^16 keeps
  * width*height*3 floats far from size_t overflow and matches EXR practice. */
 #define BTF_MAX_SIDE 65536
+/* The decoding cap (btf_read_opts.max_pixels; 0: BTF_DEFAULT_MAX_PIXELS):
+ * BTF_E_UNSUPPORTED naming the file, its size and the cap when width x
+ * height exceeds it (core/image.c). */
+int btf_check_pixels(const char *name, int width, int height, uint64_t max_pixels,
+                     btf_error *err);
+/* Prefixes err's message with "NAME: " (out-of-memory messages of work on a
+ * file); returns err's code. */
+int btf_error_name(btf_error *err, const char *name);
 
 /* Fills err (if non-NULL) with a formatted one-line message; returns code. */
 int btf_fail(btf_error *err, int code, const char *fmt, ...) BTF_PRINTF(3, 4);

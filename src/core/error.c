@@ -6,6 +6,7 @@
 
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 const char *btf_status_name(btf_status status)
 {
@@ -36,4 +37,16 @@ int btf_fail(btf_error *err, int code, const char *fmt, ...)
         err->code = code;
     }
     return code;
+}
+
+int btf_error_name(btf_error *err, const char *name)
+{
+    if (!err)
+        return BTF_E_NOMEM;
+    if (name && strncmp(err->msg, name, strlen(name)) != 0) {
+        char m[sizeof err->msg];
+        memcpy(m, err->msg, sizeof m);
+        btf_fail(err, err->code, "%s: %s", name, m[0] ? m : btf_status_name(err->code));
+    }
+    return err->code;
 }

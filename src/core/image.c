@@ -27,6 +27,19 @@ btf_status btf_image_alloc(btf_image *img, int width, int height, int channels,
     return BTF_OK;
 }
 
+int btf_check_pixels(const char *name, int width, int height, uint64_t max_pixels,
+                     btf_error *err)
+{
+    uint64_t cap = max_pixels ? max_pixels : BTF_DEFAULT_MAX_PIXELS;
+    uint64_t n = (uint64_t)(width > 0 ? width : 0) * (uint64_t)(height > 0 ? height : 0);
+    if (n <= cap)
+        return BTF_OK;
+    return btf_fail(err, BTF_E_UNSUPPORTED,
+                    "%s: %dx%d image (%llu pixels) exceeds the cap of %llu decoded pixels "
+                    "(--max-pixels raises it)",
+                    name, width, height, (unsigned long long)n, (unsigned long long)cap);
+}
+
 void btf_image_free(btf_image *img)
 {
     if (!img)

@@ -1,6 +1,7 @@
 /*
  * cv_bridge.cpp — the one C++ file: a thin C interface over the parts of
- * OpenCV 4 that have no C API: PNG/JPEG decoding and encoding in memory,
+ * OpenCV 4 that have no C API: PNG/JPEG encoding in memory (decoding is
+ * io/png_jpeg.c, with libpng/libjpeg's messages under our control),
  * the linear-RGB to CIE Lab conversion (segmentation features, Haindl &
  * Filip 2007, section II.A), and the 2D DFT and DCT (range-map integration,
  * section II.B). Nothing here throws across the boundary: every OpenCV
@@ -41,57 +42,6 @@ template <class Body> static int guarded(char *errbuf, size_t errlen, Body body)
         set_error(errbuf, errlen, "unknown OpenCV failure");
     }
     return -1;
-}
-
-/* Decodes a PNG/JPEG held in memory as stored: 8- or 16-bit, 1 or 3
- * channels, RGB order (OpenCV's BGR is swapped here so no caller sees it).
- * Alpha dropped. */
-extern "C" int btfcv_decode(const void *data, size_t n, int *w, int *h, int *c, int *depth16,
-                            void **pixels, char *errbuf, size_t errlen)
-{
-    *pixels = nullptr;
-    return guarded(errbuf, errlen, [&]() -> int {
-        /* OpenCV sizes a buffer Mat with an int. */
-        if (n == 0 || n > (size_t)INT32_MAX) {
-            set_error(errbuf, errlen, n ? "too large to decode" : "cannot decode image");
-            return -1;
-        }
-        const cv::Mat encoded(1, (int)n, CV_8U, const_cast<void *>(data));
-        cv::Mat m = cv::imdecode(encoded, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH |
-                                          cv::IMREAD_ANYCOLOR);
-        if (m.empty()) {
-            set_error(errbuf, errlen, "cannot decode image");
-            return -1;
-        }
-        if (m.depth() != CV_8U && m.depth() != CV_16U) {
-            set_error(errbuf, errlen, "unsupported sample type (not 8- or 16-bit)");
-            return -1;
-        }
-        cv::Mat rgb;
-        switch (m.channels()) {
-        case 1: rgb = m; break;
-        case 3: cv::cvtColor(m, rgb, cv::COLOR_BGR2RGB); break;
-        case 4: cv::cvtColor(m, rgb, cv::COLOR_BGRA2RGB); break;
-        default:
-            set_error(errbuf, errlen, "unsupported channel count");
-            return -1;
-        }
-        if (!rgb.isContinuous())
-            rgb = rgb.clone();
-        size_t bytes = rgb.total() * rgb.elemSize();
-        void *buf = std::malloc(bytes ? bytes : 1);
-        if (!buf) {
-            set_error(errbuf, errlen, "out of memory");
-            return -1;
-        }
-        std::memcpy(buf, rgb.data, bytes);
-        *w = rgb.cols;
-        *h = rgb.rows;
-        *c = rgb.channels();
-        *depth16 = rgb.depth() == CV_16U;
-        *pixels = buf;
-        return 0;
-    });
 }
 
 /* Encodes 8-bit RGB or grey pixels to a memory buffer (".png" or ".jpg"). */

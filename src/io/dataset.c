@@ -24,6 +24,7 @@ struct btf_dataset {
     char root[BTF_DATASET_PATH_MAX];
     btf_dataset_entries files; /* owns the path strings */
     char **paths;     /* [view * n_lights + light], pointers into files */
+    uint64_t max_pixels; /* btf_dataset_opts.max_pixels */
 };
 
 /* The distinct light (or view) directions of the entries as a set. */
@@ -108,6 +109,8 @@ static btf_status probe_files(btf_dataset *ds, const btf_dataset_opts *o, btf_er
         const char *p = ds->paths[i];
         if (i == 0 || !o->skip_verify) {
             btf_status rc = btf_image_probe(p, &h, err);
+            if (!rc)
+                rc = btf_check_pixels(p, h.width, h.height, o->max_pixels, err);
             if (rc)
                 return rc;
             if (i == 0) {
@@ -146,7 +149,8 @@ void btf_dataset_close(btf_dataset *ds)
 
 btf_dataset_opts btf_dataset_defaults(void)
 {
-    return (btf_dataset_opts){.skip_verify = 0, .progress = NULL, .progress_user = NULL};
+    return (btf_dataset_opts){.skip_verify = 0, .progress = NULL, .progress_user = NULL,
+                              .max_pixels = BTF_DEFAULT_MAX_PIXELS};
 }
 
 btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_dataset **out,
@@ -157,6 +161,7 @@ btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_
     btf_dataset *ds = btf_calloc(1, sizeof *ds, err);
     if (!ds)
         return BTF_E_NOMEM;
+    ds->max_pixels = o.max_pixels;
     snprintf(ds->root, sizeof ds->root, "%s", path);
     size_t rl = strlen(ds->root);
     while (rl > 1 && ds->root[rl - 1] == '/')
@@ -204,7 +209,7 @@ btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_imag
     if (!p)
         return btf_fail(err, BTF_E_ARG, "%s: no (view %d, light %d) in a %d x %d dataset", ds->root,
                         view, light, ds->info.n_views, ds->info.n_lights);
-    btf_read_opts ro = {.channels = 3};
+    btf_read_opts ro = {.channels = 3, .max_pixels = ds->max_pixels};
     btf_status rc = btf_image_read(p, &ro, out, err);
     if (rc == BTF_OK && (out->width != ds->info.width || out->height != ds->info.height)) {
         rc = btf_fail(err, BTF_E_DATA, "%s: size %dx%d differs from the dataset's %dx%d", p,

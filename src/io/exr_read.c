@@ -473,7 +473,8 @@ btf_status btf_exr_probe_source(btf_source *src, btf_image_header *hdr, btf_erro
     return rc;
 }
 
-btf_status btf_exr_read_source(btf_source *src, int channels, btf_image *out, btf_error *err)
+btf_status btf_exr_read_source(btf_source *src, int channels, uint64_t max_pixels, btf_image *out,
+                               btf_error *err)
 {
     if (!src || !out)
         return btf_fail(err, BTF_E_ARG, "btf_exr_read: NULL argument");
@@ -487,6 +488,8 @@ btf_status btf_exr_read_source(btf_source *src, int channels, btf_image *out, bt
     btf_status rc = in_open(&in, src, err);
     if (!rc)
         rc = in_inspect(&in, err);
+    if (!rc)
+        rc = btf_check_pixels(src->name, in.width, in.height, max_pixels, err);
     /* A cut-off or damaged chunk table fails here, before the image is
      * allocated (a header may claim 65536 x 65536 in a few kilobytes). */
     if (!rc)
@@ -523,7 +526,7 @@ btf_status btf_exr_read(const char *path, int channels, btf_image *out, btf_erro
     btf_source src;
     btf_status rc = btf_source_open(&src, path, err);
     if (!rc)
-        rc = btf_exr_read_source(&src, channels, out, err);
+        rc = btf_exr_read_source(&src, channels, 0, out, err);
     btf_source_close(&src);
     return rc;
 }

@@ -1,8 +1,10 @@
 /*
  * image_file.c — image files: format detection by signature, a cheap
  * structural probe of PNG and JPEG (catches truncation without decoding),
- * decoding into linear float through OpenCV (PNG, JPEG; io/cv_bridge.cpp)
- * or OpenEXR (io/exr_read.c), and the PNG and JPEG writers.
+ * decoding into linear float through libpng/libjpeg (io/png_jpeg.c) or
+ * OpenEXR (io/exr_read.c), the decoding cap (btf_read_opts.max_pixels),
+ * checked from the header, and the PNG and JPEG writers (OpenCV,
+ * io/cv_bridge.cpp).
  *
  * Every reader works on a byte source (io/source.c), so decoding from
  * memory and from a file is one code path: btf_image_decode wraps a buffer,
@@ -18,7 +20,8 @@
 
 btf_read_opts btf_read_defaults(void)
 {
-    return (btf_read_opts){.channels = 0, .linear_8bit = 0, .srgb_16bit = 0};
+    return (btf_read_opts){.channels = 0, .linear_8bit = 0, .srgb_16bit = 0,
+                           .max_pixels = BTF_DEFAULT_MAX_PIXELS};
 }
 
 static btf_file_format format_of_signature(const unsigned char *sig, size_t n)
@@ -232,39 +235,39 @@ static btf_status convert_channels(btf_image *img, int want, btf_error *err)
     return BTF_OK;
 }
 
-/* PNG or JPEG: the probe's checks, then OpenCV's decoder on the bytes. */
-static btf_status decode_cv(btf_source *src, const btf_read_opts *o, btf_image *out,
-                            btf_error *err)
+/* PNG or JPEG: the probe's checks and the pixel cap from the header, then
+ * libpng or libjpeg on the bytes (io/png_jpeg.c, silent). */
+static btf_status decode_png_jpeg(btf_source *src, const btf_read_opts *o, btf_image *out,
+                                  btf_error *err)
 {
     btf_image_header hdr;
     btf_status rc = probe_source(src, &hdr, err);
+    if (!rc)
+        rc = btf_check_pixels(src->name, hdr.width, hdr.height, o->max_pixels, err);
     if (rc)
         return rc;
+    /* The output first: a file too large for memory fails before decoding. */
+    if ((rc = btf_image_alloc(out, hdr.width, hdr.height, hdr.channels, err)))
+        return btf_error_name(err, src->name);
     const unsigned char *bytes;
     unsigned char *owned;
     if ((rc = btf_source_bytes(src, &bytes, &owned, err)))
-        return rc;
-    int w, h, c, d16;
-    void *px;
-    char msg[256];
-    int bad = btfcv_decode(bytes, (size_t)src->size, &w, &h, &c, &d16, &px, msg, sizeof msg);
+        return btf_error_name(err, src->name);
+    btf_decoded d;
+    rc = btf_png_jpeg_decode(bytes, (size_t)src->size, hdr.format, src->name, &d, err);
     free(owned);
-    if (bad)
-        return btf_fail(err, BTF_E_FORMAT, "%s: %s", src->name, msg);
-    if (w != hdr.width || h != hdr.height) {
-        free(px);
-        return btf_fail(err, BTF_E_FORMAT, "%s: decoded size %dx%d differs from header %dx%d",
-                        src->name, w, h, hdr.width, hdr.height);
-    }
-    rc = btf_image_alloc(out, w, h, c, err);
-    if (rc == 0) {
-        size_t count = (size_t)w * h * c;
-        if (d16)
-            convert_16bit(px, count, o->srgb_16bit, out->data);
-        else
-            convert_8bit(px, count, o->linear_8bit, out->data);
-    }
-    free(px);
+    if (rc)
+        return rc;
+    if (d.width != hdr.width || d.height != hdr.height || d.channels != hdr.channels)
+        rc = btf_fail(err, BTF_E_FORMAT, "%s: decoded %dx%d, %d channels, differs from the "
+                      "header's %dx%d, %d channels", src->name, d.width, d.height, d.channels,
+                      hdr.width, hdr.height, hdr.channels);
+    size_t count = (size_t)d.width * d.height * d.channels;
+    if (rc == 0 && d.depth16)
+        convert_16bit(d.pixels, count, o->srgb_16bit, out->data);
+    else if (rc == 0)
+        convert_8bit(d.pixels, count, o->linear_8bit, out->data);
+    free(d.pixels);
     return rc;
 }
 
@@ -276,16 +279,16 @@ static btf_status decode_source(btf_source *src, const btf_read_opts *o, btf_ima
     switch (format_of_source(src)) {
     case BTF_FILE_EXR:
         /* The EXR reader converts the channel count while it copies. */
-        return btf_exr_read_source(src, o->channels, out, err);
+        return btf_exr_read_source(src, o->channels, o->max_pixels, out, err);
     case BTF_FILE_PNG:
     case BTF_FILE_JPEG:
-        rc = decode_cv(src, o, out, err);
+        rc = decode_png_jpeg(src, o, out, err);
         break;
     default:
         return btf_fail(err, BTF_E_FORMAT, "%s: not a PNG, JPEG or EXR file", src->name);
     }
-    if (rc == 0)
-        rc = convert_channels(out, o->channels, err);
+    if (rc == 0 && (rc = convert_channels(out, o->channels, err)))
+        btf_error_name(err, src->name);
     if (rc)
         btf_image_free(out);
     return rc;

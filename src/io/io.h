@@ -55,11 +55,13 @@ btf_status btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, 
                           btf_error *err);
 
 /* EXR reading (io/exr_read.c) from any source: the header probe and the
- * decoder (channels 0: as in the file; 1 or 3 converts). The path forms open
+ * decoder (channels 0: as in the file; 1 or 3 converts; max_pixels as in
+ * btf_read_opts, checked from the header). The path forms open
  * the file and call these. The writers are public (btf_image_write_exr,
  * btf_exr_writer_open; io/exr_write.c). */
 btf_status btf_exr_probe_source(btf_source *src, btf_image_header *hdr, btf_error *err);
-btf_status btf_exr_read_source(btf_source *src, int channels, btf_image *out, btf_error *err);
+btf_status btf_exr_read_source(btf_source *src, int channels, uint64_t max_pixels, btf_image *out,
+                               btf_error *err);
 btf_status btf_exr_probe(const char *path, btf_image_header *hdr, btf_error *err);
 btf_status btf_exr_read(const char *path, int channels, btf_image *out, btf_error *err);
 
@@ -84,10 +86,19 @@ typedef struct btf_dataset_entries {
 btf_status btf_dataset_list_entries(const char *path, btf_dataset_entries *l, btf_error *err);
 void btf_dataset_entries_free(btf_dataset_entries *l);
 
+/* PNG and JPEG decoding (io/png_jpeg.c) with libpng and libjpeg, silently:
+ * errors and data-corruption warnings become BTF_E_FORMAT naming `name`.
+ * pixels: width x height x channels (1 or 3, RGB) samples, 8-bit or (depth16)
+ * native uint16; the caller frees them. */
+typedef struct btf_decoded {
+    int width, height, channels, depth16;
+    void *pixels;
+} btf_decoded;
+btf_status btf_png_jpeg_decode(const void *data, size_t n, btf_file_format format,
+                               const char *name, btf_decoded *out, btf_error *err);
+
 /* The OpenCV bridge (io/cv_bridge.cpp), a C interface with its own small
  * convention: 0 on success, -1 with the error text in errbuf. */
-int btfcv_decode(const void *data, size_t n, int *w, int *h, int *c, int *depth16,
-                 void **pixels, char *errbuf, size_t errlen);
 int btfcv_encode(const char *ext, int w, int h, int c, const unsigned char *pixels,
                  int jpeg_quality, unsigned char **out, size_t *outlen,
                  char *errbuf, size_t errlen);

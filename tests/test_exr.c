@@ -512,12 +512,19 @@ static void every_compression(void **state)
         EXR_COMPRESSION_ZIP,   EXR_COMPRESSION_PIZ, EXR_COMPRESSION_PXR24,
         EXR_COMPRESSION_B44,   EXR_COMPRESSION_B44A};
     /* DWAA/DWAB: OpenEXRCore 3.1 can neither write nor read them (see
-     * dwa_is_unsupported). */
+     * dwa_is_unsupported). B44/B44A: refused before decoding, because the
+     * library's B44 decoder crashes on damaged files (fuzz_exr). */
     for (int i = 0; i < 8; i++) {
         tu_exr_spec s = {EXR_STORAGE_SCANLINE, comp[i], 0, 0, 0, 45, 70, 4, {"A", "B", "G", "R"},
                       {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
         tu_exr_write_raw(p, &s, pattern);
         btf_image b;
+        if (comp[i] == EXR_COMPRESSION_B44 || comp[i] == EXR_COMPRESSION_B44A) {
+            assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
+            assert_non_null(strstr(e.msg, "B44"));
+            assert_non_null(strstr(e.msg, p));
+            continue;
+        }
         TU_OK(btf_exr_read(p, 0, &b, &e), &e);
         assert_int_equal(b.channels, 3);
         /* Exact for the lossless ones (PXR24 is lossless on half); B44 and

@@ -212,6 +212,16 @@ static btf_status in_inspect(exr_in *in, btf_error *err)
     if (in->storage != EXR_STORAGE_SCANLINE && in->storage != EXR_STORAGE_TILED)
         return btf_fail(err, BTF_E_FORMAT, "%s: unknown EXR storage type %d", path,
                         (int)in->storage);
+    /* OpenEXR 3.1's B44/B44A decoder (Debian 12) reads out of bounds on a
+     * damaged file (found by fuzz_exr); such files are refused before any
+     * chunk is decoded rather than risk a crash. */
+    exr_compression_t comp;
+    rv = exr_get_compression(in->ctx, 0, &comp);
+    if (rv != EXR_ERR_SUCCESS)
+        return btf_exr_fail(err, &in->io, rv, 0, "bad compression attribute");
+    if (comp == EXR_COMPRESSION_B44 || comp == EXR_COMPRESSION_B44A)
+        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: B44/B44A-compressed EXR is not supported "
+                        "(convert it, e.g. to ZIP or PIZ)", path);
     exr_attr_box2i_t dw;
     rv = exr_get_data_window(in->ctx, 0, &dw);
     if (rv != EXR_ERR_SUCCESS)

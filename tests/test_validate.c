@@ -156,11 +156,116 @@ static void stability_check_is_cheap(void **state)
     free(data);
 }
 
+/* A manifest of 2 views (theta_v 0 and 45) x 6 lights of rendered leather,
+ * rows interleaved by view; with `dup` the last row repeats the first path.
+ * Returns the manifest path (static). */
+static const char *multiview_manifest(const char *name, int dup, int only_view)
+{
+    static char path[4096];
+    static int rendered;
+    const btf_dir views[2] = {{0, 0}, {45, 90}};
+    const btf_dir lights[6] = {{30, 0}, {30, 120}, {30, 240}, {50, 60}, {50, 180}, {50, 300}};
+    btf_error e = {0};
+    if (!rendered) {
+        for (int v = 0; v < 2; v++)
+            for (int l = 0; l < 6; l++) {
+                btf_image img;
+                tu_material_image("leather", 24, 3, views[v], lights[l], &img);
+                TU_OK(btf_image_write_png(tu_fmt("%s/mv_v%d_l%d.png", tu_dir, v, l), &img, &e),
+                      &e);
+                btf_image_free(&img);
+            }
+        rendered = 1;
+    }
+    snprintf(path, sizeof path, "%s/%s.tsv", tu_dir, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, only_view >= 0 ? "path\ttheta_l\tphi_l\n" : "path\ttheta_l\tphi_l\ttheta_v\tphi_v\n");
+    for (int l = 0; l < 6; l++)
+        for (int v = 0; v < 2; v++) {
+            if (only_view >= 0 && v != only_view)
+                continue;
+            fprintf(f, "mv_v%d_l%d.png\t%g\t%g", v, l, lights[l].theta, lights[l].phi);
+            if (only_view < 0)
+                fprintf(f, "\t%g\t%g", views[v].theta, views[v].phi);
+            fprintf(f, "\n");
+        }
+    if (dup)
+        fprintf(f, "mv_v0_l0.png\t70\t10\t0\t0\n");
+    fclose(f);
+    return path;
+}
+
+static int same_image(const btf_image *a, const btf_image *b)
+{
+    return a->width == b->width && a->height == b->height && a->channels == b->channels &&
+           !memcmp(a->data, b->data, (size_t)a->width * a->height * a->channels * sizeof(float));
+}
+
+/* Photometric stereo on a manifest of several views uses the images of one
+ * view (the one nearest the normal, or --view's), never a mix; a view far
+ * from all is an error; the same file twice is an error. */
+static void photostereo_multiview_manifest(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_ps_result all, one, v45, only45;
+    char mv[4096], single[4096], single45[4096];
+    snprintf(mv, sizeof mv, "%s", multiview_manifest("mv", 0, -1));
+    snprintf(single, sizeof single, "%s", multiview_manifest("mv0", 0, 0));
+    snprintf(single45, sizeof single45, "%s", multiview_manifest("mv1", 0, 1));
+    TU_OK(btf_photostereo_manifest(mv, NULL, &all, &e), &e);
+    assert_int_equal(all.view, 0);
+    assert_true(all.view_dir.theta == 0.0);
+    TU_OK(btf_photostereo_manifest(single, NULL, &one, &e), &e);
+    assert_int_equal(one.view, -1);
+    assert_true(same_image(&all.normal, &one.normal)); /* only view 0's images */
+    const btf_dir want = {44, 91};
+    TU_OK(btf_photostereo_manifest_view(mv, &want, NULL, &v45, &e), &e);
+    assert_int_equal(v45.view, 1);
+    assert_true(v45.view_dir.theta == 45.0 && v45.view_dir.phi == 90.0);
+    TU_OK(btf_photostereo_manifest(single45, NULL, &only45, &e), &e);
+    assert_true(same_image(&v45.normal, &only45.normal));
+    btf_ps_result_free(&all);
+    btf_ps_result_free(&one);
+    btf_ps_result_free(&v45);
+    btf_ps_result_free(&only45);
+    btf_ps_result r;
+    const btf_dir far = {80, 270};
+    assert_int_equal(btf_photostereo_manifest_view(mv, &far, NULL, &r, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, mv));
+    assert_non_null(strstr(e.msg, "no view near theta 80 phi 270"));
+    assert_int_equal(btf_photostereo_manifest_view(single, &want, NULL, &r, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "no theta_v and phi_v columns"));
+    const char *dup = multiview_manifest("mvdup", 1, -1);
+    assert_int_equal(btf_photostereo_manifest(dup, NULL, &r, &e), BTF_E_FORMAT);
+    assert_non_null(strstr(e.msg, "mv_v0_l0.png is listed again (first on line 2)"));
+    /* The command: --view picks the view and the summary names it. */
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s photostereo --manifest %s --view 45,90 -o %s/mv.out",
+                                   tu_cli(), mv, tu_dir), &err), 0);
+    assert_non_null(strstr(err, "view theta 45 phi 90"));
+    free(err);
+    const char *bad[] = {"--view 45", "--view ' 45,90'", "--view 95,0", "--view 45,-1",
+                         "--view +45,90"};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        assert_int_equal(tu_run(tu_fmt("%s photostereo --manifest %s %s -o %s/mv.bad", tu_cli(),
+                                       mv, bad[i], tu_dir), &err), 2);
+        free(err);
+    }
+    assert_int_equal(tu_run(tu_fmt("%s photostereo --manifest %s --view 80,270 -o %s/mv.bad",
+                                   tu_cli(), mv, tu_dir), &err), 1);
+    assert_non_null(strstr(err, "no view near"));
+    assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    free(err);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(unstable_model_rejected),
         cmocka_unit_test(stability_check_is_cheap),
+        cmocka_unit_test(photostereo_multiview_manifest),
     };
     return cmocka_run_group_tests_name("validate", tests, tu_setup_dir, tu_teardown_dir);
 }

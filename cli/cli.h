@@ -28,6 +28,11 @@ int cli_usage_error(const cli_ctx *c, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
 /* Strict number parsing: the whole string must be a number in range. */
+/* Whether s starts as a plain decimal number does: a digit, or '.' and a
+ * digit, after at most one '-' when allow_minus (no spaces, no '+'; the
+ * strict start every number option has, since strtol and strtod skip
+ * spaces and take signs). */
+int cli_plain_number(const char *s, int allow_minus);
 int cli_parse_int(const char *s, long lo, long hi, long *out);
 int cli_parse_u64(const char *s, uint64_t *out);
 /* "WxH" */

@@ -37,6 +37,8 @@ static int parse_trim(const char *s, void *dest, char *why, size_t n)
     memcpy(buf, s, (size_t)(comma - s));
     buf[comma - s] = '\0';
     errno = 0;
+    if (!cli_plain_number(buf, 0) || !cli_plain_number(comma + 1, 0))
+        return -1;
     lo = strtod(buf, &end);
     if (end == buf || *end || errno)
         return -1;
@@ -75,8 +77,7 @@ static int parse_view(const char *s, void *dest, char *why, size_t n)
     memcpy(buf, s, (size_t)(comma - s));
     buf[comma - s] = '\0';
     errno = 0;
-    if (!((buf[0] >= '0' && buf[0] <= '9') || buf[0] == '.') ||
-        !((comma[1] >= '0' && comma[1] <= '9') || comma[1] == '.'))
+    if (!cli_plain_number(buf, 0) || !cli_plain_number(comma + 1, 0))
         return -1;
     double theta = strtod(buf, &end);
     if (end == buf || *end || errno)

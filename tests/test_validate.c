@@ -260,12 +260,38 @@ static void photostereo_multiview_manifest(void **state)
     free(err);
 }
 
+/* Numbers are parsed strictly: no leading space, no '+', no sign on
+ * unsigned values, no hex floats; each a usage error before any work. */
+static void numbers_are_strict(void **state)
+{
+    (void)state;
+    const char *bad[] = {
+        "synthesise m --size 4x4 -o x --seed ' -1'", "synthesise m --size 4x4 -o x --seed +5",
+        "synthesise m --size 4x4 -o x --seed ' 5'", "synthesise m --size 4x4 -o x --seed '5 '",
+        "synthesise m --size 4x4 -o x --seed -1", "synthesise m --size ' 4x4' -o x",
+        "synthesise m --size 4x+4 -o x", "synthesise m --size 4x4 -o x --device ' 0'",
+        "texture-fit t.png -o x --levels +2", "texture-fit t.png -o x --levels ' 2'",
+        "photostereo d -o x --dark ' 0.5'", "photostereo d -o x --outlier +2",
+        "photostereo d -o x --outlier 0x2p0", "photostereo d -o x --saturation inf",
+        "photostereo d -o x --threads ' 2'", "photostereo d -o x --trim ' 0.1,0.1'",
+        "photostereo d -o x --trim 0.1,+0.1"};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        char *err = NULL;
+        int rc = tu_run(tu_fmt("%s %s", tu_cli(), bad[i]), &err);
+        if (rc != 2)
+            print_error("%s: exit %d, %s\n", bad[i], rc, err ? err : "");
+        assert_int_equal(rc, 2);
+        free(err);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(unstable_model_rejected),
         cmocka_unit_test(stability_check_is_cheap),
         cmocka_unit_test(photostereo_multiview_manifest),
+        cmocka_unit_test(numbers_are_strict),
     };
     return cmocka_run_group_tests_name("validate", tests, tu_setup_dir, tu_teardown_dir);
 }

@@ -285,6 +285,39 @@ static void numbers_are_strict(void **state)
     }
 }
 
+/* A dataset manifest listing one file under two directions is an error
+ * naming both lines; info on an image says what it is and what to run. */
+static void duplicates_and_info_on_image(void **state)
+{
+    (void)state;
+    multiview_manifest("mvimg", 0, 0); /* renders the images */
+    const char *ds = tu_fmt("%s/dup_ds.tsv", tu_dir);
+    char dsp[4096];
+    snprintf(dsp, sizeof dsp, "%s", ds);
+    const char *text = "path\ttheta_l\tphi_l\ttheta_v\tphi_v\n"
+                       "mv_v0_l0.png\t0\t0\t0\t0\n"
+                       "mv_v0_l1.png\t30\t0\t0\t0\n"
+                       "mv_v0_l0.png\t30\t90\t0\t0\n";
+    tu_write_file(dsp, text, strlen(text));
+    btf_error e = {0};
+    btf_dataset *d;
+    btf_dataset_opts o = {.skip_verify = 1};
+    assert_int_not_equal(btf_dataset_open(dsp, &o, &d, &e), 0);
+    assert_non_null(strstr(e.msg, "mv_v0_l0.png is listed again (first on line 2)"));
+    assert_non_null(strstr(e.msg, tu_fmt("%s:4", dsp)));
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s info %s", tu_cli(), dsp), &err), 1);
+    assert_non_null(strstr(err, "listed again"));
+    free(err);
+    const char *png = tu_fmt("%s/mv_v0_l0.png", tu_dir);
+    assert_int_equal(tu_run(tu_fmt("%s info %s", tu_cli(), png), &err), 1);
+    assert_non_null(strstr(err, "a PNG image of 24x24"));
+    assert_non_null(strstr(err, "texture-fit"));
+    assert_null(strstr(err, "not a text file"));
+    assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    free(err);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -292,6 +325,7 @@ int main(void)
         cmocka_unit_test(stability_check_is_cheap),
         cmocka_unit_test(photostereo_multiview_manifest),
         cmocka_unit_test(numbers_are_strict),
+        cmocka_unit_test(duplicates_and_info_on_image),
     };
     return cmocka_run_group_tests_name("validate", tests, tu_setup_dir, tu_teardown_dir);
 }

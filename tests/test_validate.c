@@ -318,6 +318,90 @@ static void duplicates_and_info_on_image(void **state)
     free(err);
 }
 
+static void collect_warning(void *user, const char *msg)
+{
+    char *buf = user;
+    size_t n = strlen(buf);
+    snprintf(buf + n, 4096 - n, "%s\n", msg);
+}
+
+/* The CAR fit's variance floor is relative: an image scaled by 1e-30 (or
+ * 1e-35) gives the same neighbourhoods and coefficients as the original and
+ * sigmas scaled alike, not an empty model. A band below the floor is
+ * treated as constant with a warning. */
+static void variance_floor_is_relative(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image img;
+    tu_material_image("wood", 32, 4, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
+    btf_fit_opts fo = btf_fit_defaults();
+    fo.levels = 2;
+    btf_model ref;
+    TU_OK(btf_texture_fit(&img, &fo, &ref, &e), &e);
+    const double scales[] = {1e-30, 1e-35, 1e30};
+    for (int k = 0; k < 3; k++) {
+        btf_image s;
+        TU_OK(btf_image_alloc(&s, img.width, img.height, 3, &e), &e);
+        for (size_t i = 0; i < (size_t)img.width * img.height * 3; i++)
+            s.data[i] = (float)(img.data[i] * scales[k]);
+        btf_model m;
+        TU_OK(btf_texture_fit(&s, &fo, &m, &e), &e);
+        int modelled = 0;
+        for (int b = 0; b < 3; b++)
+            for (int l = 0; l < 2; l++) {
+                const btf_car_band *x = &m.subspaces[0].bands[b][l], *r = &ref.subspaces[0].bands[b][l];
+                assert_int_equal(x->n, r->n);
+                modelled += x->n > 0 && x->sigma > 0.0f;
+                for (int i = 0; i < x->n; i++)
+                    assert_true(fabs(x->gamma[i] - r->gamma[i]) < 0.02);
+                if (r->sigma > 0.0f)
+                    assert_true(fabs(x->sigma / (r->sigma * scales[k]) - 1.0) < 0.02);
+            }
+        assert_true(modelled > 0);
+        btf_model_free(&m);
+        btf_image_free(&s);
+    }
+    btf_model_free(&ref);
+    btf_image_free(&img);
+    /* A band of 1 + 1e-14 noise: constant, with a warning saying so. */
+    enum { W = 16 };
+    double band[W * W];
+    for (int i = 0; i < W * W; i++)
+        band[i] = 1.0 + 1e-14 * ((i * 7919) % 13 - 6);
+    char warned[4096] = "";
+    btf_car_fit_opts co = btf_car_fit_defaults();
+    co.warn = collect_warning;
+    co.warn_user = warned;
+    btf_car_band out;
+    TU_OK(btf_car_fit(band, W, W, &co, &out, NULL, &e), &e);
+    assert_int_equal(out.n, 0);
+    assert_non_null(strstr(warned, "treated as constant"));
+}
+
+/* --levels beyond what the image allows is capped, and the cap is said. */
+static void levels_cap_is_printed(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image img;
+    tu_material_image("leather", 20, 1, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
+    const char *png = tu_fmt("%s/small.png", tu_dir);
+    char p[4096];
+    snprintf(p, sizeof p, "%s", png);
+    TU_OK(btf_image_write_png(p, &img, &e), &e);
+    btf_image_free(&img);
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit %s -o %s.btfcar --levels 8", tu_cli(), p, p),
+                            &err), 0);
+    assert_non_null(strstr(err, "8 pyramid levels asked for, 5 used"));
+    free(err);
+    btf_model m;
+    TU_OK(btf_model_read(tu_fmt("%s.btfcar", p), &m, &e), &e);
+    assert_int_equal(m.subspaces[0].levels, 5);
+    btf_model_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -326,6 +410,8 @@ int main(void)
         cmocka_unit_test(photostereo_multiview_manifest),
         cmocka_unit_test(numbers_are_strict),
         cmocka_unit_test(duplicates_and_info_on_image),
+        cmocka_unit_test(variance_floor_is_relative),
+        cmocka_unit_test(levels_cap_is_printed),
     };
     return cmocka_run_group_tests_name("validate", tests, tu_setup_dir, tu_teardown_dir);
 }

@@ -294,8 +294,21 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
     if (!isfinite(mean) || !isfinite(sd))
         return btf_fail(err, BTF_E_NUMERIC, "CAR fit: band mean or variance overflows");
     out->mean = to_float(mean);
-    if (!(sd > 1e-12 * (fabs(mean) + 1e-300)) || !(sd > 1e-30)) {
-        /* A constant band: nothing to model beyond its mean. */
+    /* A constant band: nothing to model beyond its mean. The floor is
+     * relative to the band's own values (its largest magnitude), so a band
+     * of any scale (an image scaled by 1e-30 as well as by 1e30) is modelled
+     * alike; below it the variation is rounding noise of its values. */
+    double big = 0.0;
+    for (size_t i = 0; i < n; i++)
+        if (fabs(band[i]) > big)
+            big = fabs(band[i]);
+    if (!(sd > 1e-12 * big)) {
+        if (sd > 0.0) {
+            char text[200];
+            snprintf(text, sizeof text, "treated as constant: its standard deviation %.3g is "
+                     "below 1e-12 of its largest magnitude %.3g", sd, big);
+            warn(&o, text);
+        }
         if (info)
             *info = inf;
         return BTF_OK;

@@ -644,6 +644,11 @@ btf_exr_meta btf_model_exr_meta(const btf_model *m, const char *model_path, int 
 
 /* Warnings from a long computation (e.g. a model made stable by force). */
 typedef void (*btf_warning_fn)(void *user, const char *message);
+/* A CAR fit warns "... the model misses N% of the band's variance ..." when
+ * synthesis would give at least this fraction less than the band's variance
+ * (a periodic pattern): a loss worth showing even to a quiet caller. */
+#define BTF_CAR_MISSED_LOUD 0.2
+#define BTF_CAR_MISSED_TEXT "the model misses"
 
 /* Neighbourhood SPEC: comma-separated causal "row:col" offsets, e.g.
  * "0:-1,-1:0,-1:-1,-1:1". A non-causal or repeated offset is an error. */
@@ -788,6 +793,12 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
  * runs this many columns on either side (docs/synthesis.md). */
 btf_status btf_synth_margin(const btf_model *m, int subspace, int band, int level, int *margin,
                             btf_error *err);
+/* The fraction (0..1) of the band's stationary variance that synthesis
+ * misses in its first rows and columns (the margin too short for a nearly
+ * periodic pattern): 0 for a band whose margin is below the largest, else
+ * measured on a test field (docs/synthesis.md). */
+btf_status btf_synth_missed_variance(const btf_model *m, int subspace, int band, int level,
+                                     double *missed, btf_error *err);
 
 /* ------------------------------------------------------ synthesis (GPU) */
 

@@ -402,6 +402,52 @@ static void levels_cap_is_printed(void **state)
     btf_model_free(&m);
 }
 
+/* A 1-pixel checkerboard: the fit says how much of the variance the model
+ * misses, even with --quiet, and info says it again. */
+static void periodic_pattern_reported(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image img;
+    TU_OK(btf_image_alloc(&img, 48, 48, 3, &e), &e);
+    for (int y = 0; y < 48; y++)
+        for (int x = 0; x < 48; x++)
+            for (int c = 0; c < 3; c++)
+                img.data[(y * 48 + x) * 3 + c] = ((x + y) & 1) ? 0.8f : 0.2f;
+    char png[4096];
+    snprintf(png, sizeof png, "%s/checker.png", tu_dir);
+    TU_OK(btf_image_write_png(png, &img, &e), &e);
+    btf_image_free(&img);
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s -o %s.btfcar --levels 1", tu_cli(), png,
+                                   png), &err), 0);
+    assert_non_null(strstr(err, "the model misses"));
+    assert_non_null(strstr(err, "of the band's variance"));
+    free(err);
+    int st;
+    char *out = tu_capture(tu_fmt("%s info %s.btfcar", tu_cli(), png), &st);
+    assert_int_equal(st, 0);
+    assert_non_null(strstr(out, "of its variance in synthesis (a periodic pattern?)"));
+    free(out);
+    btf_model m;
+    TU_OK(btf_model_read(tu_fmt("%s.btfcar", png), &m, &e), &e);
+    double missed = -1;
+    TU_OK(btf_synth_missed_variance(&m, 0, 0, 0, &missed, &e), &e);
+    assert_true(missed > 0.5);
+    btf_model_free(&m);
+    /* An ordinary texture misses nothing and says nothing. */
+    tu_material_image("wood", 32, 4, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
+    TU_OK(btf_image_write_png(png, &img, &e), &e);
+    btf_image_free(&img);
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s -o %s.btfcar", tu_cli(), png, png), &err),
+                     0);
+    assert_null(strstr(err, "the model misses"));
+    free(err);
+    out = tu_capture(tu_fmt("%s info %s.btfcar", tu_cli(), png), &st);
+    assert_null(strstr(out, "misses"));
+    free(out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -412,6 +458,7 @@ int main(void)
         cmocka_unit_test(duplicates_and_info_on_image),
         cmocka_unit_test(variance_floor_is_relative),
         cmocka_unit_test(levels_cap_is_printed),
+        cmocka_unit_test(periodic_pattern_reported),
     };
     return cmocka_run_group_tests_name("validate", tests, tu_setup_dir, tu_teardown_dir);
 }

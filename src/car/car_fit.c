@@ -398,7 +398,19 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
     if (margin == BTF_SYNTH_MARGIN_MAX) {
         /* Nearly unstable: its correlation outreaches the largest margin. */
         double short_by = btf_car_margin_shortfall(out, BTF_SYNTH_MARGIN_MAX);
-        if (short_by > BTF_SYNTH_MARGIN_EPS) {
+        /* What synthesis really gives against the band's own variance: a
+         * pure periodic pattern comes out (nearly) flat. */
+        double got = btf_car_synth_variance(out, BTF_SYNTH_MARGIN_MAX);
+        double missed = got < 0.0 ? -1.0 : 1.0 - got / (sd * sd);
+        if (missed >= BTF_CAR_MISSED_LOUD) {
+            char text[300];
+            snprintf(text, sizeof text, BTF_CAR_MISSED_TEXT " %.0f%% of the band's variance: "
+                     "synthesis gives %.3g of its %.3g (a periodic pattern, such as a 1-pixel "
+                     "checkerboard, is beyond a CAR model: its recursion does not settle within "
+                     "the %d-pixel synthesis margin)", 100.0 * (missed > 1.0 ? 1.0 : missed),
+                     got, sd * sd, BTF_SYNTH_MARGIN_MAX);
+            warn(&o, text);
+        } else if (short_by > BTF_SYNTH_MARGIN_EPS) {
             char text[200];
             snprintf(text, sizeof text, "correlation reaches beyond the %d-pixel synthesis "
                      "margin: the first rows and columns of a synthesis miss at least %.2g%% of "

@@ -165,3 +165,42 @@ double btf_car_stationary_variance(const btf_car_band *b)
     spectrum(b, 256, &mn, &inv);
     return (double)b->sigma * b->sigma * inv;
 }
+
+double btf_car_synth_variance(const btf_car_band *b, int margin)
+{
+    /* The field synthesis runs (synth/field.c): zeros outside, the window
+     * starting `margin` rows below the top and `margin` columns in from
+     * either side; the window is its first WIN x WIN pixels. */
+    enum { WIN = 64, P = 64 };
+    if (margin < 0)
+        margin = 0;
+    for (int k = 0; k < b->n; k++)
+        if (b->offsets[k].row < -P || b->offsets[k].col < -P || b->offsets[k].col > P)
+            return -1.0;
+    int rows = margin + WIN, cols = 2 * margin + WIN, w = cols + 2 * P;
+    double *pad = calloc((size_t)(rows + P) * (size_t)w, sizeof(double));
+    if (!pad)
+        return -1.0;
+    long rel[BTF_CAR_MAX_NEIGHBOURS];
+    for (int k = 0; k < b->n; k++)
+        rel[k] = (long)b->offsets[k].row * w + b->offsets[k].col;
+    btf_rng rng;
+    btf_rng_seed(&rng, 271828);
+    double sum = 0.0, sq = 0.0, sigma = b->sigma;
+    for (int y = 0; y < rows; y++) {
+        double *row = pad + (size_t)(y + P) * w + P;
+        for (int x = 0; x < cols; x++) {
+            double s = 0.0;
+            for (int k = 0; k < b->n; k++)
+                s += b->gamma[k] * row[x + rel[k]];
+            row[x] = s + sigma * (btf_rng_uniform(&rng) - 0.5) * 3.4641016151377544;
+            if (y >= margin && x >= margin && x < margin + WIN) {
+                sum += row[x];
+                sq += row[x] * row[x];
+            }
+        }
+    }
+    free(pad);
+    double n = (double)WIN * WIN, mean = sum / n, v = sq / n - mean * mean;
+    return isfinite(v) && v > 0.0 ? v : 0.0;
+}

@@ -39,6 +39,7 @@ static void marked_model(float marker, unsigned char **data, size_t *size)
     b->n = 1;
     b->offsets[0] = (btf_offset){0, -1};
     b->gamma[0] = marker;
+    b->sigma = 0.0123457f; /* a second marker */
     TU_OK(btf_model_encode(&m, data, size, &e), &e);
     btf_model_free(&m);
 }
@@ -118,6 +119,24 @@ static void unstable_model_rejected(void **state)
     }
     struct stat st;
     assert_int_not_equal(stat(tu_fmt("%s.out/subspace_00.exr", path), &st), 0);
+    /* A valid model whose synthesis overflows (sigma near FLT_MAX): the
+     * library's error comes prefixed with the model file. */
+    marked_model(marker, &data, &size);
+    bad = patch_model(data, size, marker, 0.25f, &bad_size);
+    free(data);
+    unsigned char *huge = patch_model(bad, bad_size, 0.0123457f, 3e38f, &size);
+    free(bad);
+    snprintf(path, sizeof path, "%s/overflow.btfcar", tu_dir);
+    tu_write_file(path, huge, size);
+    free(huge);
+    char *err = NULL;
+    int rc = tu_run(tu_fmt("%s synthesise %s --size 16x16 --backend cpu -o %s.out", tu_cli(), path,
+                           path), &err);
+    print_message("%s", err);
+    assert_int_equal(rc, 1);
+    assert_true(strncmp(err, tu_fmt("btfcar synthesise: %s: ", path), strlen(path) + 21) == 0);
+    assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    free(err);
 }
 
 /* Reading a model stays fast with the stability checks: a 20-subspace model

@@ -28,6 +28,11 @@ int cli_usage_error(const cli_ctx *c, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
 /* Strict number parsing: the whole string must be a number in range. */
+/* Whether s starts as a plain decimal number does: a digit, or '.' and a
+ * digit, after at most one '-' when allow_minus (no spaces, no '+'; the
+ * strict start every number option has, since strtol and strtod skip
+ * spaces and take signs). */
+int cli_plain_number(const char *s, int allow_minus);
 int cli_parse_int(const char *s, long lo, long hi, long *out);
 int cli_parse_u64(const char *s, uint64_t *out);
 /* "WxH" */
@@ -88,6 +93,9 @@ void cli_show_neighbourhood(const void *dest, char *buf, size_t n);
 
 /* A btf_warning_fn printing "btfcar CMD: warning: ..." (user: the cli_ctx). */
 void cli_warning(void *user, const char *message);
+/* The same for the warnings --quiet still shows: a model that misses much
+ * of a band's variance (BTF_CAR_MISSED_TEXT). */
+void cli_loud_warning(void *user, const char *message);
 /* The CAR parameters of one subspace, as text. */
 void cli_print_subspace(const btf_subspace_model *s, int index);
 

@@ -213,5 +213,14 @@ int cmd_info(int argc, char **argv)
             return cli_lib_error(&c, &err);
         btf_model_free(&m); /* cannot happen: the signature did not match */
     }
+    /* An image is neither: say what it is and what models it. */
+    struct stat st;
+    btf_image_header hdr;
+    btf_error ierr = {0};
+    if (stat(path, &st) == 0 && S_ISREG(st.st_mode) && btf_image_probe(path, &hdr, &ierr) == 0)
+        return cli_error(&c, "%s: %s %s image of %dx%d, not a dataset or a model; to model it "
+                         "as a texture run: btfcar texture-fit %s -o MODEL.btfcar", path,
+                         hdr.format == BTF_FILE_EXR ? "an" : "a", format_name(hdr.format), hdr.width,
+                         hdr.height, path);
     return info_dataset(&c, path, verify, json, max_px);
 }

@@ -37,6 +37,8 @@ static int parse_trim(const char *s, void *dest, char *why, size_t n)
     memcpy(buf, s, (size_t)(comma - s));
     buf[comma - s] = '\0';
     errno = 0;
+    if (!cli_plain_number(buf, 0) || !cli_plain_number(comma + 1, 0))
+        return -1;
     lo = strtod(buf, &end);
     if (end == buf || *end || errno)
         return -1;
@@ -58,7 +60,43 @@ static void show_trim(const void *dest, char *buf, size_t n)
 typedef struct ps_args {
     const char *dataset, *manifest, *outdir, *mask;
     btf_photostereo_opts o;
+    btf_dir view;
+    int has_view;
 } ps_args;
+
+/* "THETA,PHI" in degrees into p->view (theta 0..90, phi 0..360). */
+static int parse_view(const char *s, void *dest, char *why, size_t n)
+{
+    ps_args *p = dest;
+    btf_dir *d = &p->view;
+    char buf[64], *end;
+    const char *comma = strchr(s, ',');
+    snprintf(why, n, "THETA,PHI in degrees, theta 0..90, phi 0..360");
+    if (!comma || (size_t)(comma - s) >= sizeof buf)
+        return -1;
+    memcpy(buf, s, (size_t)(comma - s));
+    buf[comma - s] = '\0';
+    errno = 0;
+    if (!cli_plain_number(buf, 0) || !cli_plain_number(comma + 1, 0))
+        return -1;
+    double theta = strtod(buf, &end);
+    if (end == buf || *end || errno)
+        return -1;
+    double phi = strtod(comma + 1, &end);
+    if (end == comma + 1 || *end || errno || !(theta >= 0.0 && theta <= 90.0) ||
+        !(phi >= 0.0 && phi <= 360.0))
+        return -1;
+    d->theta = theta;
+    d->phi = phi >= 360.0 ? 0.0 : phi;
+    p->has_view = 1;
+    return 0;
+}
+
+static void show_view(const void *dest, char *buf, size_t n)
+{
+    (void)dest;
+    snprintf(buf, n, "the view nearest the normal");
+}
 
 /* On the command line 0 turns a rule off; the library says so with < 0
  * (its 0 means the default). */
@@ -80,6 +118,10 @@ static int parse_args(cli_ctx *c, int argc, char **argv, ps_args *p)
          .meta = "OUTDIR", .help = "the folder for the results", .required = 1},
         {.name = "--manifest", .kind = CLI_STRING, .dest = &p->manifest, .meta = "FILE",
          .help = "read the images and lights from a manifest"},
+        {.name = "--view", .kind = CLI_CUSTOM, .dest = p, .meta = "THETA,PHI",
+         .help = "use the images of the view nearest THETA,PHI (degrees; a dataset, or a\n"
+                 "manifest with theta_v phi_v columns)",
+         .parse = parse_view, .show = show_view},
         {.name = "--mask", .kind = CLI_STRING, .dest = &p->mask, .meta = "IMAGE",
          .help = "work on the mask's non-zero pixels only (zero elsewhere)"},
         {.name = "--integrate", .kind = CLI_CHOICE, .dest = &o->integrate.method,
@@ -131,15 +173,16 @@ static int parse_args(cli_ctx *c, int argc, char **argv, ps_args *p)
 
 static int run(const cli_ctx *c, const ps_args *p, btf_ps_result *r, btf_error *err)
 {
+    const btf_dir *view = p->has_view ? &p->view : NULL;
     if (p->manifest)
-        return btf_photostereo_manifest(p->manifest, &p->o, r, err);
+        return btf_photostereo_manifest_view(p->manifest, view, &p->o, r, err);
     btf_dataset_opts dopts = {.skip_verify = 1, .progress = cli_progress_fn(c),
                               .max_pixels = p->o.read.max_pixels};
     btf_dataset *ds;
     int rc = btf_dataset_open(p->dataset, &dopts, &ds, err);
     if (rc)
         return rc;
-    rc = btf_photostereo_dataset(ds, &p->o, r, err);
+    rc = btf_photostereo_dataset_view(ds, view, &p->o, r, err);
     btf_dataset_close(ds);
     return rc;
 }

@@ -24,6 +24,7 @@ typedef struct sink {
     btf_image *preview;
     int height;
     btf_progress_fn progress;
+    int write_failed; /* the error is the output's, not the model's */
 } sink;
 
 static int put_rows(void *user, int y, int nrows, const float *rows, btf_error *err)
@@ -34,7 +35,9 @@ static int put_rows(void *user, int y, int nrows, const float *rows, btf_error *
                (size_t)nrows * s->preview->width * 3 * sizeof(float));
     if (s->progress && ((y + nrows) % 256 == 0 || y + nrows == s->height))
         s->progress(NULL, (double)(y + nrows) / s->height, "synthesising");
-    return btf_exr_writer_put_rows(s->exr, rows, nrows, err);
+    int rc = btf_exr_writer_put_rows(s->exr, rows, nrows, err);
+    s->write_failed = rc != 0;
+    return rc;
 }
 
 /* "0,3,5" or "all" into a 0/1 table of m->n_subspaces entries: plain
@@ -119,6 +122,18 @@ static int env_gpu(btf_gpu_opts *o, int *index, btf_error *err)
  * held at once (the CPU path streams rows instead). */
 #define GPU_IMAGE_BUDGET (1ull << 30)
 
+/* A library synthesis error names the model it came from (unless it does
+ * already): "MODEL: message". Returns rc. */
+static int name_model(int rc, const char *model, btf_error *err)
+{
+    if (rc && model && !strstr(err->msg, model)) {
+        char msg[sizeof err->msg];
+        snprintf(msg, sizeof msg, "%s: %s", model, err->msg);
+        snprintf(err->msg, sizeof err->msg, "%s", msg);
+    }
+    return rc;
+}
+
 /* The GPU path: the chosen subspaces in groups that fit the memory budget,
  * each group in as few jobs as the device allows. */
 static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick,
@@ -142,7 +157,8 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick,
     int rc = 0;
     for (int start = 0; rc == 0 && start < n; start += group) {
         int k = n - start < group ? n - start : group;
-        rc = btf_gpu_synthesise(g, m, subs + start, k, so, imgs, err);
+        rc = name_model(btf_gpu_synthesise(g, m, subs + start, k, so, imgs, err),
+                        out->model_path, err);
         for (int j = 0; rc == 0 && j < k; j++)
             rc = write_image(&imgs[j], m, subs[start + j], so->seed, out, err);
         for (int j = 0; j < k; j++)
@@ -201,6 +217,8 @@ static int synth_one(const cli_ctx *c, const btf_model *m, int k, const btf_synt
     rc = btf_exr_writer_open_meta(path, w, h, 3, out->half, &meta, &s.exr, err);
     if (rc == 0) {
         rc = btf_synthesise(m, k, so, put_rows, &s, err);
+        if (!s.write_failed)
+            name_model(rc, out->model_path, err);
         if (rc)
             btf_exr_writer_abort(s.exr);
         else

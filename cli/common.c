@@ -86,9 +86,18 @@ int cli_usage_error(const cli_ctx *c, const char *fmt, ...)
     return 2;
 }
 
+int cli_plain_number(const char *s, int allow_minus)
+{
+    if (allow_minus && *s == '-')
+        s++;
+    return (*s >= '0' && *s <= '9') || (*s == '.' && s[1] >= '0' && s[1] <= '9');
+}
+
 int cli_parse_int(const char *s, long lo, long hi, long *out)
 {
     char *end;
+    if (!cli_plain_number(s, 1) || *s == '.' || (*s == '-' && s[1] == '.'))
+        return -1;
     errno = 0;
     long v = strtol(s, &end, 10);
     if (end == s || *end || errno || v < lo || v > hi)
@@ -101,7 +110,7 @@ int cli_parse_u64(const char *s, uint64_t *out)
 {
     char *end;
     errno = 0;
-    if (*s == '-')
+    if (!cli_plain_number(s, 0) || *s == '.')
         return -1;
     unsigned long long v = strtoull(s, &end, 10); /* "010" is ten, not eight */
     if (end == s || *end || errno)

@@ -19,6 +19,17 @@ static int band_margin(const btf_model *m, int s, int b, int l)
     return margin;
 }
 
+/* The fraction of a band's variance synthesis misses (0 should the library
+ * run out of memory: the report is not the model's check). */
+static double band_missed(const btf_model *m, int s, int b, int l)
+{
+    double missed = 0.0;
+    btf_error err = {0};
+    if (btf_synth_missed_variance(m, s, b, l, &missed, &err) != 0)
+        missed = 0.0;
+    return missed;
+}
+
 /* "0:-1,-1:0", the neighbourhood SPEC syntax of the command line. */
 static void format_neighbourhood(const btf_car_band *b, char *buf, size_t n)
 {
@@ -69,8 +80,13 @@ static void text_subspace(const btf_model *m, int s)
             printf("  band %d level %d: %s  gamma", b, l, cb->n ? nb : "(none)");
             for (int i = 0; i < cb->n; i++)
                 printf(" %.6g", cb->gamma[i]);
-            printf("  sigma %.6g  mean %.6g  margin %d\n", cb->sigma, cb->mean,
+            printf("  sigma %.6g  mean %.6g  margin %d", cb->sigma, cb->mean,
                    band_margin(m, s, b, l));
+            double missed = band_missed(m, s, b, l);
+            if (missed >= 0.01)
+                printf("  misses %.0f%% of its variance in synthesis%s", 100.0 * missed,
+                       missed >= BTF_CAR_MISSED_LOUD ? " (a periodic pattern?)" : "");
+            printf("\n");
         }
 }
 
@@ -105,7 +121,7 @@ static int model_text(const btf_model *m, const model_file *mf)
     return 0;
 }
 
-static void json_band(FILE *f, const btf_car_band *b, int margin)
+static void json_band(FILE *f, const btf_car_band *b, int margin, double missed)
 {
     char nb[BTF_CAR_MAX_NEIGHBOURS * 10 + 1];
     format_neighbourhood(b, nb, sizeof nb);
@@ -120,7 +136,7 @@ static void json_band(FILE *f, const btf_car_band *b, int margin)
     cli_json_f32(f, b->sigma);
     fputs(", \"mean\": ", f);
     cli_json_f32(f, b->mean);
-    fprintf(f, ", \"margin\": %d", margin);
+    fprintf(f, ", \"margin\": %d, \"missed_variance\": %.3g", margin, missed);
     fputc('}', f);
 }
 
@@ -140,7 +156,7 @@ static void json_subspace(FILE *f, const btf_model *m, int s)
         fputs(b ? ",\n    [" : "\n    [", f);
         for (int l = 0; l < sm->levels; l++) {
             fputs(l ? ",\n     " : "", f);
-            json_band(f, &sm->bands[b][l], band_margin(m, s, b, l));
+            json_band(f, &sm->bands[b][l], band_margin(m, s, b, l), band_missed(m, s, b, l));
         }
         fputc(']', f);
     }

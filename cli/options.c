@@ -30,6 +30,8 @@ static int parse_double(const char *s, double *out)
 {
     char *end;
     errno = 0;
+    if (!cli_plain_number(s, 1) || strpbrk(s, "xX")) /* decimal only, no hex floats */
+        return -1;
     double v = strtod(s, &end);
     if (end == s || *end || errno || !isfinite(v))
         return -1;

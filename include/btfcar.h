@@ -582,7 +582,7 @@ typedef struct btf_ps_result {
     int pixels;            /* inside the mask */
     int fitted, fallback;  /* pixels with a fit / with the fallback normal (0, 0, 1) */
     double condition;      /* condition number of sum l l^T over all lights */
-    int view;              /* dataset: the view used; -1 otherwise */
+    int view;              /* dataset, manifest with views: the view used; -1 otherwise */
     btf_dir view_dir;
 } btf_ps_result;
 
@@ -598,9 +598,24 @@ btf_status btf_photostereo_dataset(const btf_dataset *ds, const btf_photostereo_
 /* The same from a manifest: a TSV file with a header line naming its columns:
  * path (relative to the manifest's folder, or absolute), the light either as
  * theta_l, phi_l (degrees) or as lx, ly, lz (a vector in the frame above),
- * and optionally r, g, b (the light's intensity). */
+ * optionally r, g, b (the light's intensity), and optionally theta_v, phi_v
+ * (the view: only the images of the view nearest the normal are used, see
+ * btf_photostereo_manifest_view). A path listed twice is an error. */
 btf_status btf_photostereo_manifest(const char *path, const btf_photostereo_opts *opts,
                                     btf_ps_result *out, btf_error *err);
+/* The same with the view chosen: a dataset, or a manifest with theta_v and
+ * phi_v columns (a BTF manifest of several views; each (view, light) pair
+ * once), uses the images of its view nearest `view` (within 5 degrees, else
+ * BTF_E_ARG), or with view NULL of its view nearest the normal (smallest
+ * theta_v, as btf_photostereo_dataset and btf_photostereo_manifest do).
+ * out->view and out->view_dir say which (view: its index in the dataset, or
+ * among the manifest's distinct views in the order of first appearance). */
+btf_status btf_photostereo_dataset_view(const btf_dataset *ds, const btf_dir *view,
+                                        const btf_photostereo_opts *opts, btf_ps_result *out,
+                                        btf_error *err);
+btf_status btf_photostereo_manifest_view(const char *path, const btf_dir *view,
+                                         const btf_photostereo_opts *opts, btf_ps_result *out,
+                                         btf_error *err);
 void btf_ps_result_free(btf_ps_result *r);
 
 /* Previews for people: normals as RGB (n + 1) / 2 (the usual normal-map
@@ -680,6 +695,11 @@ btf_exr_meta btf_model_exr_meta(const btf_model *m, const char *model_path, int 
 
 /* Warnings from a long computation (e.g. a model made stable by force). */
 typedef void (*btf_warning_fn)(void *user, const char *message);
+/* A CAR fit warns "... the model misses N% of the band's variance ..." when
+ * synthesis would give at least this fraction less than the band's variance
+ * (a periodic pattern): a loss worth showing even to a quiet caller. */
+#define BTF_CAR_MISSED_LOUD 0.2
+#define BTF_CAR_MISSED_TEXT "the model misses"
 
 /* Neighbourhood SPEC: comma-separated causal "row:col" offsets, e.g.
  * "0:-1,-1:0,-1:-1,-1:1". A non-causal or repeated offset is an error. */
@@ -824,6 +844,12 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
  * runs this many columns on either side (docs/synthesis.md). */
 btf_status btf_synth_margin(const btf_model *m, int subspace, int band, int level, int *margin,
                             btf_error *err);
+/* The fraction (0..1) of the band's stationary variance that synthesis
+ * misses in its first rows and columns (the margin too short for a nearly
+ * periodic pattern): 0 for a band whose margin is below the largest, else
+ * measured on a test field (docs/synthesis.md). */
+btf_status btf_synth_missed_variance(const btf_model *m, int subspace, int band, int level,
+                                     double *missed, btf_error *err);
 
 /* ------------------------------------------------------ synthesis (GPU) */
 

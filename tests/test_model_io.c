@@ -75,10 +75,15 @@ static void make_subspace(btf_subspace_model *sm, btf_rng *r, int view, int ligh
         for (int l = 0; l < levels; l++) {
             btf_car_band *cb = &sm->bands[b][l];
             cb->n = irand(r, nmin, nmax);
+            double sum = 0.0;
             for (int i = 0; i < cb->n; i++) {
                 cb->offsets[i] = FAMILY[i];
                 cb->gamma[i] = urand(r, -0.3f, 0.3f);
+                sum += fabs(cb->gamma[i]);
             }
+            /* Stable, as fitting makes them (the validator checks): sum |gamma| < 1. */
+            for (int i = 0; i < cb->n && sum >= 0.95; i++)
+                cb->gamma[i] = (float)(cb->gamma[i] * 0.95 / sum);
             cb->sigma = urand(r, 0.0f, 0.05f);
             cb->mean = b == 0 ? urand(r, -0.01f, 0.01f) : 0.0f;
         }

@@ -61,4 +61,13 @@ double btf_car_margin_shortfall(const btf_car_band *b, int m);
 typedef enum btf_stability { BTF_UNSTABLE = 0, BTF_STABLE = 1, BTF_STABILITY_UNKNOWN = -1 } btf_stability;
 btf_stability btf_car_stability(const btf_car_band *b);
 
+/* The variance synthesis gives a band in its first rows and columns: the
+ * sample variance of the 64 x 64 window of a field started `margin` rows
+ * above and columns beside it from zeros (as synth/field.c does), with the
+ * band's noise (a fixed seed). Far below btf_car_stationary_variance when
+ * the margin is too short for the band (a nearly periodic pattern, such as
+ * a 1-pixel checkerboard, whose recursion barely decays). -1 when out of
+ * memory. Costs (margin + 64) (2 margin + 64) n multiply-adds. */
+double btf_car_synth_variance(const btf_car_band *b, int margin);
+
 #endif

@@ -294,8 +294,21 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
     if (!isfinite(mean) || !isfinite(sd))
         return btf_fail(err, BTF_E_NUMERIC, "CAR fit: band mean or variance overflows");
     out->mean = to_float(mean);
-    if (!(sd > 1e-12 * (fabs(mean) + 1e-300)) || !(sd > 1e-30)) {
-        /* A constant band: nothing to model beyond its mean. */
+    /* A constant band: nothing to model beyond its mean. The floor is
+     * relative to the band's own values (its largest magnitude), so a band
+     * of any scale (an image scaled by 1e-30 as well as by 1e30) is modelled
+     * alike; below it the variation is rounding noise of its values. */
+    double big = 0.0;
+    for (size_t i = 0; i < n; i++)
+        if (fabs(band[i]) > big)
+            big = fabs(band[i]);
+    if (!(sd > 1e-12 * big)) {
+        if (sd > 0.0) {
+            char text[200];
+            snprintf(text, sizeof text, "treated as constant: its standard deviation %.3g is "
+                     "below 1e-12 of its largest magnitude %.3g", sd, big);
+            warn(&o, text);
+        }
         if (info)
             *info = inf;
         return BTF_OK;
@@ -385,7 +398,19 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
     if (margin == BTF_SYNTH_MARGIN_MAX) {
         /* Nearly unstable: its correlation outreaches the largest margin. */
         double short_by = btf_car_margin_shortfall(out, BTF_SYNTH_MARGIN_MAX);
-        if (short_by > BTF_SYNTH_MARGIN_EPS) {
+        /* What synthesis really gives against the band's own variance: a
+         * pure periodic pattern comes out (nearly) flat. */
+        double got = btf_car_synth_variance(out, BTF_SYNTH_MARGIN_MAX);
+        double missed = got < 0.0 ? -1.0 : 1.0 - got / (sd * sd);
+        if (missed >= BTF_CAR_MISSED_LOUD) {
+            char text[300];
+            snprintf(text, sizeof text, BTF_CAR_MISSED_TEXT " %.0f%% of the band's variance: "
+                     "synthesis gives %.3g of its %.3g (a periodic pattern, such as a 1-pixel "
+                     "checkerboard, is beyond a CAR model: its recursion does not settle within "
+                     "the %d-pixel synthesis margin)", 100.0 * (missed > 1.0 ? 1.0 : missed),
+                     got, sd * sd, BTF_SYNTH_MARGIN_MAX);
+            warn(&o, text);
+        } else if (short_by > BTF_SYNTH_MARGIN_EPS) {
             char text[200];
             snprintf(text, sizeof text, "correlation reaches beyond the %d-pixel synthesis "
                      "margin: the first rows and columns of a synthesis miss at least %.2g%% of "

@@ -13,6 +13,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* |A(w1, w2)|^2 on an n x n grid of the frequency torus: min and the mean of
  * its inverse (the stationary variance for unit noise). */
@@ -38,6 +39,38 @@ static void spectrum(const btf_car_band *b, int n, double *min_a2, double *mean_
     *mean_inv = acc / ((double)n * n);
 }
 
+/* The least |A(w1, w2)|^2 on an n x n grid (n <= 64), by table: the offsets
+ * are integers, so every phase is 2 pi k / n for k = (i r + j c) mod n, and
+ * n sines and cosines serve the whole grid (the validator runs this on every
+ * band of a model it reads, so it must be cheap). */
+static double spectrum_min(const btf_car_band *b, int n)
+{
+    double ct[64], st[64];
+    for (int k = 0; k < n; k++) {
+        ct[k] = cos(2.0 * 3.14159265358979323846 * k / n);
+        st[k] = sin(2.0 * 3.14159265358979323846 * k / n);
+    }
+    int rr[BTF_CAR_MAX_NEIGHBOURS], cc[BTF_CAR_MAX_NEIGHBOURS];
+    for (int s = 0; s < b->n; s++) {
+        rr[s] = ((b->offsets[s].row % n) + n) % n;
+        cc[s] = ((b->offsets[s].col % n) + n) % n;
+    }
+    double mn = INFINITY;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double re = 1.0, im = 0.0;
+            for (int s = 0; s < b->n; s++) {
+                int k = (i * rr[s] + j * cc[s]) % n;
+                re -= b->gamma[s] * ct[k];
+                im += b->gamma[s] * st[k];
+            }
+            double a2 = re * re + im * im;
+            if (a2 < mn)
+                mn = a2;
+        }
+    return mn;
+}
+
 /* Runs the recursion on a rows x cols field of unit noise (zero boundary).
  * A stable model does not grow: neither down the rows (the last quarter of
  * rows against the quarter before) nor along them (the last quarter of
@@ -45,23 +78,40 @@ static void spectrum(const btf_car_band *b, int n, double *min_a2, double *mean_
  * the variance near an edge). 1: grows, 0: does not, -1: out of memory. */
 static int recursion_grows(const btf_car_band *b)
 {
-    enum { R = 160, C = 192 };
-    double *f = calloc((size_t)R * C, sizeof(double));
-    if (!f)
+    enum { R = 160, C = 192, P = 64 /* offsets reach at most 64 (model/model_check.c) */ };
+    /* The field within a zero frame of P cells above, left and right, so
+     * that the neighbours need no bounds tests (a zero neighbour adds 0). */
+    enum { W = C + 2 * P };
+    for (int k = 0; k < b->n; k++)
+        if (b->offsets[k].row < -P || b->offsets[k].col < -P || b->offsets[k].col > P)
+            return 1; /* beyond any model's reach: not a recursion we run */
+    double *pad = calloc((size_t)(R + P) * W, sizeof(double));
+    double *f = malloc((size_t)R * C * sizeof(double));
+    if (!pad || !f) {
+        free(pad);
+        free(f);
         return -1;
+    }
+    long rel[BTF_CAR_MAX_NEIGHBOURS];
+    double g[BTF_CAR_MAX_NEIGHBOURS];
+    for (int k = 0; k < b->n; k++) {
+        rel[k] = (long)b->offsets[k].row * W + b->offsets[k].col;
+        g[k] = b->gamma[k];
+    }
     btf_rng rng;
     btf_rng_seed(&rng, 12345);
-    for (int y = 0; y < R; y++)
+    for (int y = 0; y < R; y++) {
+        double *row = pad + (size_t)(y + P) * W + P;
         for (int x = 0; x < C; x++) {
             double s = 0.0;
-            for (int k = 0; k < b->n; k++) {
-                int yy = y + b->offsets[k].row, xx = x + b->offsets[k].col;
-                if (yy >= 0 && xx >= 0 && xx < C)
-                    s += b->gamma[k] * f[yy * C + xx];
-            }
+            for (int k = 0; k < b->n; k++)
+                s += g[k] * row[x + rel[k]];
             /* Uniform noise of unit variance is enough to excite growth. */
-            f[y * C + x] = s + (btf_rng_uniform(&rng) - 0.5) * 3.4641016151377544;
+            row[x] = s + (btf_rng_uniform(&rng) - 0.5) * 3.4641016151377544;
         }
+        memcpy(f + (size_t)y * C, row, C * sizeof(double));
+    }
+    free(pad);
     double rows1 = 0.0, rows2 = 0.0, cols1 = 0.0, cols2 = 0.0;
     for (int y = R / 2; y < R; y++)
         for (int x = C / 4; x < C; x++) {
@@ -97,8 +147,7 @@ btf_stability btf_car_stability(const btf_car_band *b)
     }
     if (sum < 1.0)
         return BTF_STABLE;
-    double mn, inv;
-    spectrum(b, 64, &mn, &inv);
+    double mn = spectrum_min(b, 64);
     if (!(mn > 1e-6))
         return BTF_UNSTABLE;
     int grows = recursion_grows(b);
@@ -115,4 +164,43 @@ double btf_car_stationary_variance(const btf_car_band *b)
     double mn, inv;
     spectrum(b, 256, &mn, &inv);
     return (double)b->sigma * b->sigma * inv;
+}
+
+double btf_car_synth_variance(const btf_car_band *b, int margin)
+{
+    /* The field synthesis runs (synth/field.c): zeros outside, the window
+     * starting `margin` rows below the top and `margin` columns in from
+     * either side; the window is its first WIN x WIN pixels. */
+    enum { WIN = 64, P = 64 };
+    if (margin < 0)
+        margin = 0;
+    for (int k = 0; k < b->n; k++)
+        if (b->offsets[k].row < -P || b->offsets[k].col < -P || b->offsets[k].col > P)
+            return -1.0;
+    int rows = margin + WIN, cols = 2 * margin + WIN, w = cols + 2 * P;
+    double *pad = calloc((size_t)(rows + P) * (size_t)w, sizeof(double));
+    if (!pad)
+        return -1.0;
+    long rel[BTF_CAR_MAX_NEIGHBOURS];
+    for (int k = 0; k < b->n; k++)
+        rel[k] = (long)b->offsets[k].row * w + b->offsets[k].col;
+    btf_rng rng;
+    btf_rng_seed(&rng, 271828);
+    double sum = 0.0, sq = 0.0, sigma = b->sigma;
+    for (int y = 0; y < rows; y++) {
+        double *row = pad + (size_t)(y + P) * w + P;
+        for (int x = 0; x < cols; x++) {
+            double s = 0.0;
+            for (int k = 0; k < b->n; k++)
+                s += b->gamma[k] * row[x + rel[k]];
+            row[x] = s + sigma * (btf_rng_uniform(&rng) - 0.5) * 3.4641016151377544;
+            if (y >= margin && x >= margin && x < margin + WIN) {
+                sum += row[x];
+                sq += row[x] * row[x];
+            }
+        }
+    }
+    free(pad);
+    double n = (double)WIN * WIN, mean = sum / n, v = sq / n - mean * mean;
+    return isfinite(v) && v > 0.0 ? v : 0.0;
 }

@@ -127,6 +127,13 @@ btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
         levels--;
     out->levels = levels;
     const char *base = o.car.what ? o.car.what : "subspace";
+    if (o.levels && levels < o.levels && o.car.warn) {
+        char msg[256];
+        snprintf(msg, sizeof msg, "%s: %d pyramid levels asked for, %d used (the most a %dx%d "
+                 "image allows: every level keeps at least one pixel per side)", base, o.levels,
+                 levels, img->width, img->height);
+        o.car.warn(o.car.warn_user, msg);
+    }
     for (int b = 0; rc == 0 && b < 3; b++) {
         char what[128];
         snprintf(what, sizeof what, "%s band %d", base, b);

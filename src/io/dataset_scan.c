@@ -158,6 +158,39 @@ static btf_status scan_folder(btf_dataset_entries *l, const char *dir, const int
     return rc;
 }
 
+typedef struct path_row {
+    const char *path;
+    int row;
+} path_row;
+
+static int by_path(const void *a, const void *b)
+{
+    const path_row *x = a, *y = b;
+    int c = strcmp(x->path, y->path);
+    return c ? c : (x->row > y->row) - (x->row < y->row);
+}
+
+/* The same file under two directions would stand for two images: an error
+ * naming both lines (entries 0.. are the manifest's rows in order). */
+static btf_status no_duplicate_paths(const btf_dataset_entries *l, const btf_tsv *t,
+                                     const char *path, btf_error *err)
+{
+    path_row *order = malloc((size_t)(l->count > 0 ? l->count : 1) * sizeof *order);
+    if (!order)
+        return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
+    for (int i = 0; i < l->count; i++)
+        order[i] = (path_row){l->items[i].path, i};
+    qsort(order, (size_t)l->count, sizeof *order, by_path);
+    btf_status rc = BTF_OK;
+    for (int i = 1; i < l->count && rc == BTF_OK; i++)
+        if (!strcmp(order[i - 1].path, order[i].path))
+            rc = btf_fail(err, BTF_E_DATA, "%s:%d: %s is listed again (first on line %d); each "
+                          "image under one (light, view) pair", path, t->line_no[order[i].row],
+                          order[i].path, t->line_no[order[i - 1].row]);
+    free(order);
+    return rc;
+}
+
 static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_error *err)
 {
     btf_tsv t;
@@ -200,6 +233,8 @@ static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_er
     }
     if (rc == BTF_OK && t.nrows == 0)
         rc = btf_fail(err, BTF_E_DATA, "%s: manifest lists no images", path);
+    if (rc == BTF_OK && l->count == t.nrows)
+        rc = no_duplicate_paths(l, &t, path, err);
     btf_tsv_free(&t);
     return rc;
 }

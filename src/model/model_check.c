@@ -93,6 +93,16 @@ static btf_status check_band(const btf_car_band *b, const char *where, const cha
                      b->sigma);
     if (!isfinite(b->mean))
         return failf(err, code, name, "%s: mean is %g (expected a finite number)", where, b->mean);
+    /* The criterion fitting stabilises to (car/stability.c): an unstable
+     * recursion would make synthesis overflow or return huge values. */
+    btf_stability st = btf_car_stability(b);
+    if (st == BTF_STABILITY_UNKNOWN)
+        return btf_fail(err, BTF_E_NOMEM, "%s: %s: out of memory checking the CAR stability",
+                        name, where);
+    if (st == BTF_UNSTABLE)
+        return failf(err, code, name,
+                     "%s: the CAR coefficients are unstable (the recursion grows; expected a "
+                     "stable model, as fitting makes)", where);
     return BTF_OK;
 }
 

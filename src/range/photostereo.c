@@ -283,6 +283,13 @@ btf_status btf_photostereo(const btf_ps_input *in, const btf_photostereo_opts *o
 btf_status btf_photostereo_dataset(const btf_dataset *ds, const btf_photostereo_opts *opts,
                                    btf_ps_result *out, btf_error *err)
 {
+    return btf_photostereo_dataset_view(ds, NULL, opts, out, err);
+}
+
+btf_status btf_photostereo_dataset_view(const btf_dataset *ds, const btf_dir *want,
+                                        const btf_photostereo_opts *opts, btf_ps_result *out,
+                                        btf_error *err)
+{
     btf_status rc = btf_ps_result_start(out, err);
     if (rc)
         return rc;
@@ -292,12 +299,11 @@ btf_status btf_photostereo_dataset(const btf_dataset *ds, const btf_photostereo_
     if (opts)
         o = *opts;
     const btf_dataset_info *info = btf_dataset_get_info(ds);
-    /* The view closest to the normal: the images are then (nearly)
-     * orthographic and unshifted by parallax. */
+    /* The view asked for, else the one closest to the normal: the images
+     * are then (nearly) orthographic and unshifted by parallax. */
     int view = 0;
-    for (int v = 1; v < info->n_views; v++)
-        if (info->views->dirs[v].theta < info->views->dirs[view].theta)
-            view = v;
+    if ((rc = btf_ps_pick_view(info->views->dirs, info->n_views, want, info->root, &view, err)))
+        return rc;
     int n = info->n_lights;
     double *lights = btf_alloc((size_t)n * 3, sizeof(double), err);
     const char **paths = btf_alloc((size_t)n, sizeof(char *), err);

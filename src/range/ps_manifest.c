@@ -3,7 +3,9 @@
  * on ordinary captures listed in a manifest: a TSV file (read by io/tsv.c)
  * with a header line naming its columns: path (relative to the manifest's
  * folder, or absolute), the light as theta_l, phi_l (degrees) or as lx,
- * ly, lz (a vector), and optionally r, g, b (the light's intensity). The
+ * ly, lz (a vector), optionally r, g, b (the light's intensity), and
+ * optionally theta_v, phi_v (the view: a BTF manifest of several views gives
+ * the images of one view, never a mix; each file once). The
  * table is turned into lights, intensities and paths here; the run itself
  * is photostereo.c's. Every message names the manifest, and a bad value its
  * line and column, since a person wrote the file.
@@ -18,7 +20,7 @@
 
 /* The manifest's columns; -1 when absent. */
 typedef struct manifest_columns {
-    int path, theta, phi, lx, ly, lz, r, g, b;
+    int path, theta, phi, lx, ly, lz, r, g, b, theta_v, phi_v;
 } manifest_columns;
 
 /* What a manifest describes: count images, their lights and intensities. */
@@ -27,6 +29,7 @@ typedef struct manifest {
     double *lights;       /* count x 3 */
     double *intensity;    /* count x 3, or NULL without r g b columns */
     char **paths;         /* count, resolved against the manifest's folder */
+    btf_dir *views;       /* count, or NULL without theta_v phi_v columns */
 } manifest;
 
 static btf_status find_columns(const btf_tsv *t, const char *path, manifest_columns *c,
@@ -41,6 +44,11 @@ static btf_status find_columns(const btf_tsv *t, const char *path, manifest_colu
     c->r = btf_tsv_column(t, "r");
     c->g = btf_tsv_column(t, "g");
     c->b = btf_tsv_column(t, "b");
+    c->theta_v = btf_tsv_column(t, "theta_v");
+    c->phi_v = btf_tsv_column(t, "phi_v");
+    if ((c->theta_v >= 0) != (c->phi_v >= 0))
+        return btf_fail(err, BTF_E_FORMAT, "%s: incomplete columns: give theta_v and phi_v "
+                        "together or not at all", path);
     if (c->path < 0)
         return btf_fail(err, BTF_E_FORMAT, "%s: no 'path' column in the header line", path);
     int angles = (c->theta >= 0) + (c->phi >= 0), vec = (c->lx >= 0) + (c->ly >= 0) + (c->lz >= 0);
@@ -95,6 +103,54 @@ static btf_status read_row(const btf_tsv *t, const char *path, int row, const ma
     return BTF_OK;
 }
 
+/* Row `row`'s view (theta_v, phi_v columns) into *d. */
+static btf_status read_view(const btf_tsv *t, const char *path, int row, const manifest_columns *c,
+                            btf_dir *d, btf_error *err)
+{
+    btf_status rc;
+    if ((rc = btf_tsv_number(t, path, row, c->theta_v, &d->theta, err)) ||
+        (rc = btf_tsv_number(t, path, row, c->phi_v, &d->phi, err)))
+        return rc;
+    if (!(d->theta >= 0.0 && d->theta <= 90.0) || !(d->phi >= 0.0 && d->phi < 360.0))
+        return btf_fail(err, BTF_E_FORMAT, "%s:%d: view theta_v %g phi_v %g out of range "
+                        "(theta 0..90, phi 0..360 degrees)", path, t->line_no[row], d->theta,
+                        d->phi);
+    return BTF_OK;
+}
+
+typedef struct path_row {
+    const char *path;
+    int row;
+} path_row;
+
+static int by_path(const void *a, const void *b)
+{
+    const path_row *x = a, *y = b;
+    int c = strcmp(x->path, y->path);
+    return c ? c : (x->row > y->row) - (x->row < y->row);
+}
+
+/* The same file under two rows (two lights, or two views) would weigh one
+ * image twice or mix views: an error naming both lines. */
+static btf_status no_duplicate_paths(const btf_tsv *t, const char *path, const manifest *m,
+                                     btf_error *err)
+{
+    path_row *order = btf_alloc((size_t)m->count, sizeof(path_row), err);
+    if (!order)
+        return BTF_E_NOMEM;
+    for (int i = 0; i < m->count; i++)
+        order[i] = (path_row){m->paths[i], i};
+    qsort(order, (size_t)m->count, sizeof *order, by_path);
+    btf_status rc = BTF_OK;
+    for (int i = 1; i < m->count && rc == BTF_OK; i++)
+        if (!strcmp(order[i - 1].path, order[i].path))
+            rc = btf_fail(err, BTF_E_FORMAT, "%s:%d: %s is listed again (first on line %d); "
+                          "each image once", path, t->line_no[order[i].row], order[i].path,
+                          t->line_no[order[i - 1].row]);
+    free(order);
+    return rc;
+}
+
 /* A manifest's relative path, from the manifest's folder. */
 static btf_status resolve_path(const char *manifest_path, const char *rel, char **out,
                                btf_error *err)
@@ -120,6 +176,7 @@ static void manifest_free(manifest *m)
     free(m->paths);
     free(m->lights);
     free(m->intensity);
+    free(m->views);
     memset(m, 0, sizeof *m);
 }
 
@@ -141,19 +198,86 @@ static btf_status manifest_parse(const btf_tsv *t, const char *path, manifest *m
     m->paths = btf_calloc((size_t)n, sizeof(char *), err);
     if (!m->lights || !m->paths || (c.r >= 0 && !m->intensity))
         rc = BTF_E_NOMEM;
+    if (rc == BTF_OK && c.theta_v >= 0 && !(m->views = btf_alloc((size_t)n, sizeof(btf_dir), err)))
+        rc = BTF_E_NOMEM;
     for (int i = 0; i < n && rc == BTF_OK; i++) {
         rc = read_row(t, path, i, &c, m->lights + 3 * i,
                       m->intensity ? m->intensity + 3 * i : NULL, err);
+        if (rc == BTF_OK && m->views)
+            rc = read_view(t, path, i, &c, &m->views[i], err);
         if (rc == BTF_OK)
             rc = resolve_path(path, btf_tsv_cell(t, i, c.path), &m->paths[i], err);
     }
+    if (rc == BTF_OK)
+        rc = no_duplicate_paths(t, path, m, err);
     if (rc)
         manifest_free(m);
     return rc;
 }
 
+/* Keeps only the rows of one view: the one nearest want, or nearest the
+ * normal (the first of equals); *view its index among the distinct views in
+ * the order of first appearance. A manifest without view columns is one
+ * view (-1). */
+static btf_status manifest_keep_view(manifest *m, const char *path, const btf_dir *want,
+                                     int *view, btf_dir *view_dir, btf_error *err)
+{
+    *view = -1;
+    if (!m->views) {
+        if (want)
+            return btf_fail(err, BTF_E_ARG, "%s: a view was asked for but the manifest has no "
+                            "theta_v and phi_v columns (one view)", path);
+        return BTF_OK;
+    }
+    btf_dir *distinct = btf_alloc((size_t)m->count, sizeof(btf_dir), err);
+    if (!distinct)
+        return BTF_E_NOMEM;
+    int nd = 0;
+    for (int i = 0; i < m->count; i++) {
+        int k = 0;
+        while (k < nd && !(distinct[k].theta == m->views[i].theta &&
+                           distinct[k].phi == m->views[i].phi))
+            k++;
+        if (k == nd)
+            distinct[nd++] = m->views[i];
+    }
+    int v;
+    btf_status rc = btf_ps_pick_view(distinct, nd, want, path, &v, err);
+    btf_dir d = distinct[v < 0 ? 0 : v];
+    free(distinct);
+    if (rc)
+        return rc;
+    int kept = 0;
+    for (int i = 0; i < m->count; i++) {
+        if (m->views[i].theta == d.theta && m->views[i].phi == d.phi) {
+            m->paths[kept] = m->paths[i];
+            memmove(m->lights + 3 * kept, m->lights + 3 * i, 3 * sizeof(double));
+            if (m->intensity)
+                memmove(m->intensity + 3 * kept, m->intensity + 3 * i, 3 * sizeof(double));
+            m->views[kept] = m->views[i];
+            kept++;
+        } else {
+            free(m->paths[i]);
+        }
+    }
+    m->count = kept;
+    if (kept < 3)
+        return btf_fail(err, BTF_E_FORMAT, "%s: %d images of view theta_v %g phi_v %g; "
+                        "photometric stereo needs at least 3", path, kept, d.theta, d.phi);
+    *view = v;
+    *view_dir = d;
+    return BTF_OK;
+}
+
 btf_status btf_photostereo_manifest(const char *path, const btf_photostereo_opts *opts,
                                     btf_ps_result *out, btf_error *err)
+{
+    return btf_photostereo_manifest_view(path, NULL, opts, out, err);
+}
+
+btf_status btf_photostereo_manifest_view(const char *path, const btf_dir *want,
+                                         const btf_photostereo_opts *opts, btf_ps_result *out,
+                                         btf_error *err)
 {
     btf_status rc = btf_ps_result_start(out, err);
     if (rc)
@@ -171,10 +295,18 @@ btf_status btf_photostereo_manifest(const char *path, const btf_photostereo_opts
     btf_tsv_free(&t);
     if (rc)
         return rc;
+    int view;
+    btf_dir view_dir = {0, 0};
+    if ((rc = manifest_keep_view(&m, path, want, &view, &view_dir, err))) {
+        manifest_free(&m);
+        return rc;
+    }
     /* The size comes from the first image (btf_ps_run probes it). */
     btf_ps_source src = {.name = path, .count = m.count, .paths = (const char *const *)m.paths,
                          .read = o.read, .channels = 3};
     rc = btf_ps_run(&src, m.lights, m.intensity, &o, out, err);
+    out->view = view;
+    out->view_dir = view_dir;
     manifest_free(&m);
     if (rc)
         btf_ps_result_free(out);

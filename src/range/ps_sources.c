@@ -69,3 +69,31 @@ btf_status btf_ps_mask_inside(const char *name, const btf_image *mask, int width
     *pixels = n;
     return BTF_OK;
 }
+
+/* The angle in degrees between two directions. */
+static double angle_between(btf_dir a, btf_dir b)
+{
+    double u[3], v[3];
+    btf_dir_to_vec(a, u);
+    btf_dir_to_vec(b, v);
+    double d = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    d = d > 1.0 ? 1.0 : d < -1.0 ? -1.0 : d;
+    return acos(d) * 57.29577951308232;
+}
+
+btf_status btf_ps_pick_view(const btf_dir *dirs, int n, const btf_dir *want, const char *name,
+                            int *view, btf_error *err)
+{
+    int best = 0;
+    for (int v = 1; v < n; v++)
+        if (want ? angle_between(dirs[v], *want) < angle_between(dirs[best], *want)
+                 : dirs[v].theta < dirs[best].theta)
+            best = v;
+    if (want && !(angle_between(dirs[best], *want) <= BTF_PS_VIEW_TOL))
+        return btf_fail(err, BTF_E_ARG, "%s: no view near theta %g phi %g (the nearest of its %d "
+                        "views is theta %g phi %g, %.1f degrees away; at most %g)", name,
+                        want->theta, want->phi, n, dirs[best].theta, dirs[best].phi,
+                        angle_between(dirs[best], *want), BTF_PS_VIEW_TOL);
+    *view = best;
+    return BTF_OK;
+}

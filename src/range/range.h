@@ -150,6 +150,14 @@ btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
 btf_status btf_ps_mask_inside(const char *name, const btf_image *mask, int width, int height,
                               unsigned char *inside, int *pixels, btf_error *err);
 
+/* The view photometric stereo uses among n distinct view directions: the
+ * one nearest `want` (NULL: nearest the normal, smallest theta, the first
+ * of equals, as analyse does) into *view. BTF_E_ARG naming `name` when
+ * want is more than BTF_PS_VIEW_TOL degrees from every view. */
+#define BTF_PS_VIEW_TOL 5.0
+btf_status btf_ps_pick_view(const btf_dir *dirs, int n, const btf_dir *want, const char *name,
+                            int *view, btf_error *err);
+
 /* -------------------------------------- passes over images: ps_passes.c */
 
 /* Pass 1: every image's grey samples into grey (count x width x height),

@@ -19,6 +19,7 @@
 
 #include "btf_shared.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -178,6 +179,25 @@ btf_status btf_synth_margin(const btf_model *m, int subspace, int band, int leve
                         "levels 0..%d", band, level, subspace, m->subspaces[subspace].levels - 1);
     if ((*margin = btf_model_margin(m, subspace, band, level)) < 0)
         return btf_fail(err, BTF_E_NOMEM, "out of memory");
+    return BTF_OK;
+}
+
+btf_status btf_synth_missed_variance(const btf_model *m, int subspace, int band, int level,
+                                     double *missed, btf_error *err)
+{
+    int margin;
+    btf_status rc = btf_synth_margin(m, subspace, band, level, &margin, err);
+    if (rc)
+        return rc;
+    *missed = 0.0;
+    const btf_car_band *b = &m->subspaces[subspace].bands[band][level];
+    if (margin < BTF_SYNTH_MARGIN_MAX || b->n == 0 || !(b->sigma > 0.0f))
+        return BTF_OK; /* the transient dies within the margin (car/margin.c) */
+    double stat = btf_car_stationary_variance(b), got = btf_car_synth_variance(b, margin);
+    if (got < 0.0)
+        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+    if (stat > 0.0 && isfinite(stat))
+        *missed = got >= stat ? 0.0 : 1.0 - got / stat;
     return BTF_OK;
 }
 

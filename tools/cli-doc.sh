@@ -12,8 +12,10 @@ error. Long work draws a progress bar on stderr when it is a terminal;
 `--quiet` silences it. Environment: `BTF_VK_DEVICE`, `BTF_VK_VALIDATION`,
 `VK_DRIVER_FILES` (docs/gpu.md); `BTF_NOISE_PORTABLE=1` (the portable noise
 loop instead of AVX2) and `BTF_SYNTH_WAVE=0` (CPU fields row by row instead
-of the wavefront), both giving the same images (docs/synthesis.md). This
-file is made by tools/cli-doc.sh.
+of the wavefront), both giving the same images (docs/synthesis.md);
+`BTF_EXR_THREAD=0` (synthesise compresses and writes on its synthesising
+thread, not beside it; the same bytes). This file is made by
+tools/cli-doc.sh.
 
 ```
 HEAD

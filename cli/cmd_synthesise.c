@@ -262,9 +262,9 @@ static void print_phases(const phases *p, int gpu, const char *comp, int half, d
     const btf_exr_times *e = &p->exr;
     double synth = p->synth - p->rows;
     fprintf(stderr, "phases (s): model read %.4f; %s %.4f; rows staged %.4f; waiting for the "
-            "writer %.4f; EXR open %.4f; previews %.4f\n", p->read, gpu ? "GPU synthesis "
-            "(+ EXR writes)" : "synthesis", gpu ? p->close : synth, e->stage_s,
-            e->wait_s + (gpu ? 0 : p->close), p->exr_open, p->preview);
+            "writer %.4f, at close %.4f; EXR open %.4f; previews %.4f\n", p->read,
+            gpu ? "GPU synthesis (+ EXR writes)" : "synthesis", gpu ? p->close : synth,
+            e->stage_s, e->wait_s, gpu ? 0 : p->close, p->exr_open, p->preview);
     fprintf(stderr, "writer thread (s): convert %.4f; compress (%s) %.4f; write %.4f; "
             "%d %s files, %.1f MB\n", e->convert_s, comp, e->compress_s, e->write_s, e->files,
             half ? "half" : "float", (double)e->bytes / 1e6);

@@ -42,13 +42,9 @@
 
 #define HALF_MAX_VALUE 65504.0f
 
-/* The library's write callback: pwrite in a loop on our descriptor. */
-static int64_t io_write(exr_const_context_t ctxt, void *user, const void *buffer, uint64_t sz,
-                        uint64_t offset, exr_stream_error_func_ptr_t error_cb)
+/* pwrite in a loop on our descriptor. */
+static int64_t write_at(btf_exr_io *io, const void *buffer, uint64_t sz, uint64_t offset)
 {
-    (void)ctxt;
-    (void)error_cb;
-    btf_exr_io *io = user;
     if (offset > (uint64_t)INT64_MAX - sz) {
         io->sys_errno = EFBIG;
         return -1;
@@ -91,8 +87,16 @@ static double now_s(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* Chunks are written through a buffer of this many bytes: one-scanline
+ * chunks (NONE, RLE, ZIPS) would otherwise cost a system call per row. */
+#define WRITE_BUFFER ((size_t)1 << 20)
+
 struct btf_exr_writer {
-    btf_exr_io io;              /* our descriptor on the temporary file */
+    btf_exr_io io;              /* our descriptor on the temporary file; first,
+                                   so that the write callback finds the writer */
+    unsigned char *wbuf;        /* bytes for offsets wbuf_at.. not yet written */
+    size_t wbuf_len;
+    uint64_t wbuf_at;
     exr_context_t ctx;
     exr_encode_pipeline_t enc;
     int enc_started;
@@ -123,6 +127,41 @@ struct btf_exr_writer {
     pthread_mutex_t mu;
     pthread_cond_t cv;
 };
+
+/* Writes out the buffered bytes. */
+static int flush_buffer(btf_exr_writer *w)
+{
+    if (!w->wbuf_len)
+        return 0;
+    int64_t r = write_at(&w->io, w->wbuf, w->wbuf_len, w->wbuf_at);
+    w->wbuf_len = 0;
+    return r < 0 ? -1 : 0;
+}
+
+/* The library's write callback: bytes that follow the buffered ones join
+ * them; anything else (the offset table, a full buffer) flushes first.
+ * The file's bytes are the same either way. */
+static int64_t io_write(exr_const_context_t ctxt, void *user, const void *buffer, uint64_t sz,
+                        uint64_t offset, exr_stream_error_func_ptr_t error_cb)
+{
+    (void)ctxt;
+    (void)error_cb;
+    btf_exr_writer *w = user; /* user is &w->io, its first member */
+    if (w->wbuf && w->wbuf_len && offset == w->wbuf_at + w->wbuf_len &&
+        sz <= WRITE_BUFFER - w->wbuf_len) {
+        memcpy(w->wbuf + w->wbuf_len, buffer, (size_t)sz);
+        w->wbuf_len += (size_t)sz;
+        return (int64_t)sz;
+    }
+    if (flush_buffer(w) != 0)
+        return -1;
+    if (!w->wbuf || sz >= WRITE_BUFFER / 2)
+        return write_at(&w->io, buffer, sz, offset);
+    memcpy(w->wbuf, buffer, (size_t)sz);
+    w->wbuf_len = (size_t)sz;
+    w->wbuf_at = offset;
+    return (int64_t)sz;
+}
 
 static const struct {
     const char *name;
@@ -241,6 +280,8 @@ static btf_status start_slabs(btf_exr_writer *w, btf_error *err)
         if (!(w->slabs[i].data = btf_alloc((size_t)w->slab_rows * row, sizeof(float), err)))
             return BTF_E_NOMEM;
     w->stage = w->slabs[0].data;
+    if (!(w->wbuf = btf_alloc(WRITE_BUFFER, 1, err)))
+        return BTF_E_NOMEM;
     if (!w->background)
         return BTF_OK;
     if (pthread_mutex_init(&w->mu, NULL) != 0)
@@ -634,6 +675,8 @@ static btf_status writer_finish(btf_exr_writer *w, btf_error *err)
         exr_encoding_destroy(w->ctx, &w->enc);
     w->enc_started = 0;
     exr_result_t rv = exr_finish(&w->ctx);
+    if (flush_buffer(w) != 0 && rv == EXR_ERR_SUCCESS)
+        rv = EXR_ERR_WRITE_IO;
     if (rv != EXR_ERR_SUCCESS || w->io.sys_errno)
         return btf_exr_fail(err, &w->io, rv ? rv : EXR_ERR_WRITE_IO, 1, "cannot finish EXR file");
     off_t end = lseek(w->io.fd, 0, SEEK_END);
@@ -696,6 +739,7 @@ void btf_exr_writer_abort(btf_exr_writer *w)
         btf_abort_file(w->tmp);
     for (int i = 0; i < NSLAB; i++)
         free(w->slabs[i].data);
+    free(w->wbuf);
     free(w->path);
     free(w);
 }

@@ -425,6 +425,62 @@ static void writer_options(void **state)
     btf_image_free(&ref[1]);
 }
 
+/* The writer's own packer (F16C) against OpenEXRCore's, byte for byte:
+ * values at half's rounding ties, its subnormals and limits, float
+ * subnormals, signed zeros, random ones; widths past the 1024-pixel blocks;
+ * grey and RGB; each lossless compression. */
+static void fast_pack_is_the_library_s(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char d[1024];
+    fresh_dir(d, sizeof d, "pack");
+    int w = 1500, h = 20;
+    for (int c = 1; c <= 3; c += 2) {
+        btf_image a;
+        random_image(&a, w, h, c, 11, -70000.0f, 70000.0f);
+        uint32_t s = 5;
+        for (size_t i = 0; i < (size_t)w * h * c; i++) {
+            uint32_t r = rng_next(&s);
+            float v;
+            switch (i % 6) {
+            case 0: /* a tie or near one: 11 bits plus a half ulp, +-1 */
+                v = ldexpf((float)((r & 0x7ff) | 0x800) + 0.5f, (int)(r >> 11) % 40 - 36);
+                v = nextafterf(v, (r >> 20) % 3 == 0 ? 0.0f : (r >> 20) % 3 == 1 ? 1e9f : v);
+                break;
+            case 1: /* half subnormals and below */
+                v = ldexpf((float)(r & 0xffff), -30 - (int)(r >> 16) % 12);
+                break;
+            case 2: /* float subnormals, signed zeros */
+                v = (r & 1) ? -0.0f : ldexpf((float)(r >> 8), -150);
+                break;
+            default:
+                v = a.data[i] / (float)(1u << (r % 20));
+            }
+            a.data[i] = (r & 0x80000000u) ? -v : v;
+        }
+        for (int half = 0; half <= 1; half++)
+            for (int comp = BTF_EXR_ZIP; comp <= BTF_EXR_PIZ; comp++) {
+                char path[2][1024];
+                for (int lib = 0; lib <= 1; lib++) {
+                    snprintf(path[lib], sizeof path[lib], "%s/p%d.exr", d, lib);
+                    btf_exr_library_pack = lib;
+                    btf_exr_opts o = btf_exr_defaults();
+                    o.half = half, o.compression = comp, o.background = lib;
+                    TU_OK(btf_image_write_exr_opts(path[lib], &a, &o, NULL, &e), &e);
+                }
+                btf_exr_library_pack = 0;
+                size_t n1, n2;
+                unsigned char *d1 = slurp(path[0], &n1), *d2 = slurp(path[1], &n2);
+                assert_int_equal(n1, n2);
+                assert_memory_equal(d1, d2, n1);
+                free(d1);
+                free(d2);
+            }
+        btf_image_free(&a);
+    }
+}
+
 static void writer_closed_early(void **state)
 {
     (void)state;
@@ -1155,6 +1211,7 @@ int main(void)
         cmocka_unit_test(channel_conversion),
         cmocka_unit_test(streaming_equals_one_shot),
         cmocka_unit_test(writer_options),
+        cmocka_unit_test(fast_pack_is_the_library_s),
         cmocka_unit_test(writer_closed_early),
         cmocka_unit_test(writer_misuse),
         cmocka_unit_test(non_finite_input_refused),

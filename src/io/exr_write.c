@@ -483,13 +483,86 @@ static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
     return rv;
 }
 
-/* The library's packing (float to the file's type, channels planar) and
- * chunk writing, timed. */
+int btf_exr_library_pack = 0;
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#include <immintrin.h>
+#define HAVE_FAST_PACK 1
+
+/* n floats to half with F16C, round to nearest even: what Imath's
+ * imath_float_to_half (the library's conversion) computes, which itself
+ * uses this instruction where the compiler may. */
+__attribute__((target("f16c,avx"))) static void halves_f16c(uint16_t *dst, const float *src,
+                                                            size_t n)
+{
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8)
+        _mm_storeu_si128((__m128i *)(dst + i),
+                         _mm256_cvtps_ph(_mm256_loadu_ps(src + i), _MM_FROUND_TO_NEAREST_INT));
+    for (; i < n; i++)
+        dst[i] = (uint16_t)_mm_extract_epi16(
+            _mm_cvtps_ph(_mm_set_ss(src[i]), _MM_FROUND_TO_NEAREST_INT), 0);
+}
+
+/* The chunk's rows from the interleaved stage into the file's layout (per
+ * scanline, each channel's samples in the file's channel order, little
+ * endian), as the library's packer does, converting a row at a time. */
+static exr_result_t fast_pack(exr_encode_pipeline_t *enc)
+{
+    btf_exr_writer *w = enc->encoding_user_data;
+    int width = enc->chunk.width, lines = enc->chunk.height, nc = enc->channel_count;
+    size_t row = (size_t)width * (size_t)w->channels, esize = w->half ? 2 : 4;
+    uint64_t bytes = (uint64_t)lines * (uint64_t)width * (uint64_t)nc * esize;
+    if (bytes > enc->packed_alloc_size || !enc->packed_buffer || nc != w->channels)
+        return EXR_ERR_OUT_OF_MEMORY;
+    uint16_t tmp[1024 * 3];
+    unsigned char *out = enc->packed_buffer;
+    const float *src = (const float *)enc->channels[0].encode_from_ptr;
+    int slot[3];
+    for (int c = 0; c < nc; c++) {
+        slot[c] = channel_slot(enc->channels[c].channel_name);
+        src = slot[c] == 0 ? (const float *)enc->channels[c].encode_from_ptr : src;
+    }
+    for (int y = 0; y < lines; y++, src += row, out += row * esize) {
+        if (!w->half) {
+            for (int c = 0; c < nc; c++) {
+                float *o = (float *)(void *)out + (size_t)c * width;
+                for (int x = 0; x < width; x++)
+                    o[x] = src[(size_t)x * nc + slot[c]];
+            }
+            continue;
+        }
+        /* half: 1024 pixels at a time through tmp, then to each plane */
+        for (int x0 = 0; x0 < width; x0 += 1024) {
+            int n = width - x0 < 1024 ? width - x0 : 1024;
+            halves_f16c(tmp, src + (size_t)x0 * nc, (size_t)n * nc);
+            for (int c = 0; c < nc; c++) {
+                uint16_t *o = (uint16_t *)(void *)out + (size_t)c * width + x0;
+                for (int x = 0; x < n; x++)
+                    o[x] = tmp[x * nc + slot[c]];
+            }
+        }
+    }
+    enc->packed_bytes = bytes;
+    return EXR_ERR_SUCCESS;
+}
+#endif
+
+/* The library's packing (float to the file's type, channels planar), or
+ * ours where the CPU has F16C (the same bytes, a few times faster); timed,
+ * as is the chunk writing. */
 static exr_result_t timed_pack(exr_encode_pipeline_t *enc)
 {
     btf_exr_writer *w = enc->encoding_user_data;
     double t0 = now_s();
-    exr_result_t rv = w->pack(enc);
+    exr_result_t rv;
+#ifdef HAVE_FAST_PACK
+    if (!btf_exr_library_pack && __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx"))
+        rv = fast_pack(enc);
+    else
+#endif
+        rv = w->pack(enc);
     w->t.convert_s += now_s() - t0;
     return rv;
 }

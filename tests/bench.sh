@@ -88,7 +88,9 @@ def=$med
 $SYN -v 2>&1 >/dev/null | sed 's/^/   --verbose: /'
 if command -v exrheader >/dev/null 2>&1; then
     exrheader "$TMP/p/subspace_00.exr" >"$TMP/hdr" 2>&1 &&
-        echo "   exrheader reads it: $(grep -E '^compression|^channels' "$TMP/hdr" | tr -s ' \n' ' ')" ||
+        echo "   exrheader reads it: $(sed -n 's/^compression (type compression): //p' "$TMP/hdr")"\
+             "compression, $(grep -c 'floating-point' "$TMP/hdr") channels of"\
+             "$(grep -o '[0-9]*-bit floating-point' "$TMP/hdr" | head -1)" ||
         echo "bench: exrheader cannot read $TMP/p/subspace_00.exr"
 else
     echo "   (exrheader not installed: make deps installs openexr)"

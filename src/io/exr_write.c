@@ -40,6 +40,15 @@
 #include <time.h>
 #include <unistd.h>
 
+/* x86-64: chunks packed with F16C where the CPU has it (fast_pack). */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#include <cpuid.h>
+#include <immintrin.h>
+#define HAVE_FAST_PACK 1
+static int have_f16c(void);
+#endif
+
 #define HALF_MAX_VALUE 65504.0f
 
 /* pwrite in a loop on our descriptor. */
@@ -116,6 +125,7 @@ struct btf_exr_writer {
     exr_result_t (*write)(exr_encode_pipeline_t *);
     btf_exr_times t, *times;    /* this file's figures; where they go at close */
     uint64_t bytes;             /* the file's size, once finished */
+    int fast_pack;              /* pack with F16C (fast_pack), not the library */
     /* background writing (background 1) */
     int background, has_thread, nslab;
     slab slabs[NSLAB];
@@ -358,6 +368,9 @@ btf_status btf_exr_writer_open_opts(const char *path, int width, int height, int
     w->comp = COMPRESSIONS[o.compression].exr;
     w->background = o.background != 0;
     w->times = o.times;
+#ifdef HAVE_FAST_PACK
+    w->fast_pack = !btf_exr_library_pack && have_f16c();
+#endif
     w->path = strdup(path);
     if (!w->path) {
         free(w);
@@ -485,10 +498,7 @@ static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
 
 int btf_exr_library_pack = 0;
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && \
-    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-#include <immintrin.h>
-#define HAVE_FAST_PACK 1
+#ifdef HAVE_FAST_PACK
 
 /* n floats to half with F16C, round to nearest even: what Imath's
  * imath_float_to_half (the library's conversion) computes, which itself
@@ -503,6 +513,20 @@ __attribute__((target("f16c,avx"))) static void halves_f16c(uint16_t *dst, const
     for (; i < n; i++)
         dst[i] = (uint16_t)_mm_extract_epi16(
             _mm_cvtps_ph(_mm_set_ss(src[i]), _MM_FROUND_TO_NEAREST_INT), 0);
+}
+
+/* Whether the CPU (and the OS, for the AVX registers) has F16C and AVX:
+ * CPUID leaf 1, ECX bits 29 (F16C), 28 (AVX), 27 (OSXSAVE), and XCR0's
+ * SSE and AVX state bits. (Not __builtin_cpu_supports: clang's knows no
+ * "f16c".) */
+static int have_f16c(void)
+{
+    unsigned a, b, c, d;
+    if (!__get_cpuid(1, &a, &b, &c, &d) || (c & 0x38000000u) != 0x38000000u)
+        return 0;
+    unsigned lo, hi;
+    __asm__("xgetbv" : "=a"(lo), "=d"(hi) : "c"(0));
+    return (lo & 6u) == 6u;
 }
 
 /* The chunk's rows from the interleaved stage into the file's layout (per
@@ -558,7 +582,7 @@ static exr_result_t timed_pack(exr_encode_pipeline_t *enc)
     double t0 = now_s();
     exr_result_t rv;
 #ifdef HAVE_FAST_PACK
-    if (!btf_exr_library_pack && __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx"))
+    if (w->fast_pack)
         rv = fast_pack(enc);
     else
 #endif

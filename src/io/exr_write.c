@@ -3,10 +3,14 @@
  * scanline writer, and the one-shot writer built on it.
  *
  * Channel "Y", or "B", "G", "R" (EXR stores channels sorted by name), HALF
- * or FLOAT, scanlines in increasing y, ZIP compression: lossless deflate
- * (zlib level 4, see writer_header) over 16-scanline chunks, read by every
- * EXR implementation, good on smooth data and deterministic (the same
- * pixels give the same bytes). Non-finite input is refused (BTF_E_ARG)
+ * or FLOAT, scanlines in increasing y, compressed as btf_exr_opts says: by
+ * default ZIP, lossless deflate (zlib level 4, see writer_header) over
+ * 16-scanline chunks, read by every EXR implementation, good on smooth data
+ * and deterministic (the same pixels give the same bytes); btfcar
+ * synthesise writes half without compression (docs/synthesis.md, "EXR
+ * output"). With btf_exr_opts.background a thread of the writer packs,
+ * compresses and writes the staged slabs (a bounded queue, see NSLAB) while
+ * the caller makes the next rows: the same bytes in the same order. Non-finite input is refused (BTF_E_ARG)
  * because such a file could not be read back; half output is clamped to
  * +-65504 so it never holds Inf. A chunk that does not shrink is stored raw
  * (see compress_or_store: works around OpenEXRCore 3.1.5 writing unreadable
@@ -285,7 +289,8 @@ static btf_status start_slabs(btf_exr_writer *w, btf_error *err)
     size_t chunk = (size_t)w->lines * row * sizeof(float);
     int per = w->background && chunk < SLAB_BYTES ? (int)(SLAB_BYTES / chunk) : 1;
     w->slab_rows = w->lines * per < w->height ? w->lines * per : w->height;
-    w->nslab = w->background ? NSLAB : 1;
+    /* chunks of 4 MiB or more (wide rows, 16- or 32-row chunks): 3 slabs */
+    w->nslab = !w->background ? 1 : chunk >= ((size_t)4 << 20) ? 3 : NSLAB;
     for (int i = 0; i < w->nslab; i++)
         if (!(w->slabs[i].data = btf_alloc((size_t)w->slab_rows * row, sizeof(float), err)))
             return BTF_E_NOMEM;

@@ -257,7 +257,8 @@ static int synth_one(const cli_ctx *c, const btf_model *m, int k, const btf_synt
 /* --verbose: the phases on stderr. Synthesis and staging rows run on this
  * thread; convert, compress and write on the writer's thread beside them
  * (waiting: this thread held up by a full queue or at close). */
-static void print_phases(const phases *p, int gpu, const char *comp, int half, double total)
+static void print_phases(const phases *p, int gpu, const char *comp, int half, int bg,
+                         double total)
 {
     const btf_exr_times *e = &p->exr;
     double synth = p->synth - p->rows;
@@ -265,8 +266,9 @@ static void print_phases(const phases *p, int gpu, const char *comp, int half, d
             "writer %.4f, at close %.4f; EXR open %.4f; previews %.4f\n", p->read,
             gpu ? "GPU synthesis (+ EXR writes)" : "synthesis", gpu ? p->close : synth,
             e->stage_s, e->wait_s, gpu ? 0 : p->close, p->exr_open, p->preview);
-    fprintf(stderr, "writer thread (s): convert %.4f; compress (%s) %.4f; write %.4f; "
-            "%d %s files, %.1f MB\n", e->convert_s, comp, e->compress_s, e->write_s, e->files,
+    fprintf(stderr, "%s (s): convert %.4f; compress (%s) %.4f; write %.4f; %d %s files, "
+            "%.1f MB\n", bg ? "writer thread" : "output, on this thread", e->convert_s, comp,
+            e->compress_s, e->write_s, e->files,
             half ? "half" : "float", (double)e->bytes / 1e6);
     fprintf(stderr, "total %.4f s from start to exit (process start not included)\n", total);
 }
@@ -389,6 +391,7 @@ int cmd_synthesise(int argc, char **argv)
                done, done == 1 ? "" : "s", w, h, devname, s,
                (double)w * h * done / (s > 0 ? s : 1e-9) / 1e6, outdir);
     if (verbose)
-        print_phases(&ph, gpu_used, comps[comp], !as_float, now_s() - t_start);
+        print_phases(&ph, gpu_used, comps[comp], !as_float, out.exr.background,
+                     now_s() - t_start);
     return 0;
 }

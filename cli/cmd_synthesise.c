@@ -10,6 +10,9 @@
 #include <time.h>
 
 
+/* The default EXR compression (docs/synthesis.md, "EXR output"). */
+#define DEFAULT_COMPRESSION BTF_EXR_NONE
+
 static const char ABOUT[] =
     "Generates subspace images of the model at any size, seamless and stationary\n"
     "(paper section II.C), streaming rows to OUTDIR/subspace_NN.exr (linear RGB)\n"
@@ -17,7 +20,21 @@ static const char ABOUT[] =
     "(docs/synthesis.md). The same model and seed give the same pixels on every\n"
     "backend. Environment: BTF_VK_DEVICE=N names the Vulkan device when --device\n"
     "is not given; BTF_SYNTH_WAVE=0 and BTF_NOISE_PORTABLE=1 select the CPU's\n"
-    "row-by-row field generator and portable noise loop (same pixels, slower).\n";
+    "row-by-row field generator and portable noise loop (same pixels, slower);\n"
+    "BTF_EXR_THREAD=0 compresses and writes on the synthesising thread (same bytes).\n";
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Where the time goes (--verbose): seconds per phase of the whole run. */
+typedef struct phases {
+    double read, synth, rows, close, preview, exr_open;
+    btf_exr_times exr;
+} phases;
 
 typedef struct sink {
     btf_exr_writer *exr;
@@ -25,7 +42,10 @@ typedef struct sink {
     int height;
     btf_progress_fn progress;
     int write_failed; /* the error is the output's, not the model's */
+    double *rows_s; /* time spent in put_rows */
 } sink;
+
+static int put_rows_timed(void *user, int y, int nrows, const float *rows, btf_error *err);
 
 static int put_rows(void *user, int y, int nrows, const float *rows, btf_error *err)
 {
@@ -37,6 +57,14 @@ static int put_rows(void *user, int y, int nrows, const float *rows, btf_error *
         s->progress(NULL, (double)(y + nrows) / s->height, "synthesising");
     int rc = btf_exr_writer_put_rows(s->exr, rows, nrows, err);
     s->write_failed = rc != 0;
+    return rc;
+}
+
+static int put_rows_timed(void *user, int y, int nrows, const float *rows, btf_error *err)
+{
+    double t0 = now_s();
+    int rc = put_rows(user, y, nrows, rows, err);
+    *((sink *)user)->rows_s += now_s() - t0;
     return rc;
 }
 
@@ -67,7 +95,9 @@ static int parse_list(const char *s, int n, unsigned char *pick)
 typedef struct output {
     const char *dir;
     const char *model_path; /* provenance in each EXR header */
-    int preview, half;
+    int preview;
+    btf_exr_opts exr;       /* half, compression, background, times */
+    phases *ph;
 } output;
 
 /* Writes one image already in memory as EXR (+ preview). */
@@ -77,11 +107,15 @@ static int write_image(const btf_image *img, const btf_model *m, int k, uint64_t
     char path[4096];
     snprintf(path, sizeof path, "%s/subspace_%02d.exr", out->dir, k);
     btf_exr_meta meta = btf_model_exr_meta(m, out->model_path, k, seed);
-    int rc = btf_image_write_exr_meta(path, img, out->half, &meta, err);
+    double t0 = now_s();
+    int rc = btf_image_write_exr_opts(path, img, &out->exr, &meta, err);
+    double t1 = now_s();
+    out->ph->close += t1 - t0;
     if (rc == 0 && out->preview) {
         snprintf(path, sizeof path, "%s/subspace_%02d.png", out->dir, k);
         rc = btf_image_write_png(path, img, err);
     }
+    out->ph->preview += now_s() - t1;
     return rc;
 }
 
@@ -207,29 +241,54 @@ static int synth_one(const cli_ctx *c, const btf_model *m, int k, const btf_synt
     int w = so->width, h = so->height, preview = out->preview;
     char path[4096];
     snprintf(path, sizeof path, "%s/subspace_%02d.exr", out->dir, k);
-    sink s = {.height = h, .progress = cli_progress_fn(c)};
+    sink s = {.height = h, .progress = cli_progress_fn(c), .rows_s = &out->ph->rows};
     btf_image img = {0};
     int rc = 0;
     if (preview && (rc = btf_image_alloc(&img, w, h, 3, err)))
         return rc;
     s.preview = preview ? &img : NULL;
     btf_exr_meta meta = btf_model_exr_meta(m, out->model_path, k, so->seed);
-    rc = btf_exr_writer_open_meta(path, w, h, 3, out->half, &meta, &s.exr, err);
+    double t0 = now_s();
+    rc = btf_exr_writer_open_opts(path, w, h, 3, &out->exr, &meta, &s.exr, err);
+    double t1 = now_s();
+    out->ph->exr_open += t1 - t0;
     if (rc == 0) {
-        rc = btf_synthesise(m, k, so, put_rows, &s, err);
+        rc = btf_synthesise(m, k, so, put_rows_timed, &s, err);
+        t0 = now_s(), out->ph->synth += t0 - t1; /* put_rows included */
         if (!s.write_failed)
             name_model(rc, out->model_path, err);
         if (rc)
             btf_exr_writer_abort(s.exr);
         else
             rc = btf_exr_writer_close(s.exr, err);
+        t1 = now_s(), out->ph->close += t1 - t0;
     }
     if (rc == 0 && preview) {
         snprintf(path, sizeof path, "%s/subspace_%02d.png", out->dir, k);
         rc = btf_image_write_png(path, &img, err);
+        out->ph->preview += now_s() - t1;
     }
     btf_image_free(&img);
     return rc;
+}
+
+/* --verbose: the phases on stderr. Synthesis and staging rows run on this
+ * thread; convert, compress and write on the writer's thread beside them
+ * (waiting: this thread held up by a full queue or at close). */
+static void print_phases(const phases *p, int gpu, const char *comp, int half, int bg,
+                         double total)
+{
+    const btf_exr_times *e = &p->exr;
+    double synth = p->synth - p->rows;
+    fprintf(stderr, "phases (s): model read %.4f; %s %.4f; rows staged %.4f; waiting for the "
+            "writer %.4f, at close %.4f; EXR open %.4f; previews %.4f\n", p->read,
+            gpu ? "GPU synthesis (+ EXR writes)" : "synthesis", gpu ? p->close : synth,
+            e->stage_s, e->wait_s, gpu ? 0 : p->close, p->exr_open, p->preview);
+    fprintf(stderr, "%s (s): convert %.4f; compress (%s) %.4f; write %.4f; %d %s files, "
+            "%.1f MB\n", bg ? "writer thread" : "output, on this thread", e->convert_s, comp,
+            e->compress_s, e->write_s, e->files,
+            half ? "half" : "float", (double)e->bytes / 1e6);
+    fprintf(stderr, "total %.4f s from start to exit (process start not included)\n", total);
 }
 
 int cmd_synthesise(int argc, char **argv)
@@ -237,8 +296,12 @@ int cmd_synthesise(int argc, char **argv)
     cli_ctx c = {"synthesise", 0};
     static const char *const backends[] = {"cpu", "gpu", "auto", NULL};
     const char *model = NULL, *outdir = NULL, *list = "all";
+    static const char *const comps[] = {"zip", "none", "rle", "zips", "piz", "pxr24", "b44",
+                                        "b44a", NULL}; /* btf_exr_compression's order */
     int size[2] = {0, 0}, preview = 0, half = 0, device = -1, backend_index = 2;
+    int as_float = 0, comp = DEFAULT_COMPRESSION, verbose = 0;
     uint64_t seed = 1;
+    double t_start = now_s();
     cli_opt opts[] = {
         {.name = "--size", .kind = CLI_SIZE, .dest = size, .meta = "WxH",
          .help = "output size in pixels", .lo = 1, .hi = 65536, .required = 1},
@@ -257,7 +320,15 @@ int cmd_synthesise(int argc, char **argv)
         {.name = "--preview", .kind = CLI_FLAG, .dest = &preview,
          .help = "also write subspace_NN.png (8-bit sRGB; up to 8192x8192)"},
         {.name = "--half", .kind = CLI_FLAG, .dest = &half,
-         .help = "write half-float EXR (default: float)"},
+         .help = "write half-float EXR (the default)"},
+        {.name = "--float", .kind = CLI_FLAG, .dest = &as_float,
+         .help = "write 32-bit float EXR (twice the bytes; docs/synthesis.md)"},
+        {.name = "--compression", .kind = CLI_CHOICE, .dest = &comp, .meta = "NAME",
+         .help = "EXR compression: none, rle, zips, zip, piz (lossless); pxr24 (lossy\n"
+                 "for float), b44, b44a (lossy for half); measured in docs/synthesis.md",
+         .choices = comps},
+        {.name = "--verbose", .short_name = "-v", .kind = CLI_FLAG, .dest = &verbose,
+         .help = "print where the time went, phase by phase, at the end"},
         {0}};
     cli_spec spec = {.cmd = "synthesise", .args = "MODEL", .about = ABOUT, .min_args = 1,
                      .max_args = 1, .opts = opts};
@@ -270,12 +341,17 @@ int cmd_synthesise(int argc, char **argv)
         return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
     if (preview && (double)w * h > 8192.0 * 8192.0)
         return cli_usage_error(&c, "--preview is limited to 8192x8192 pixels");
+    if (half && as_float)
+        return cli_usage_error(&c, "--half and --float exclude each other");
     if (cli_check_output(&c, outdir, BTF_OUTPUT_FOLDER))
         return 1;
     btf_error err = {0};
     btf_model m;
+    phases ph = {0};
+    double t_read = now_s();
     if (btf_model_read(model, &m, &err) != 0)
         return cli_lib_error(&c, &err);
+    ph.read = now_s() - t_read;
     unsigned char *pick = calloc((size_t)m.n_subspaces, 1);
     int rc = pick ? 0 : 1;
     if (rc == 0 && parse_list(list, m.n_subspaces, pick) != 0) {
@@ -305,7 +381,14 @@ int cmd_synthesise(int argc, char **argv)
     btf_synth_opts so = btf_synth_defaults();
     so.width = w, so.height = h, so.seed = seed;
     env_cpu_switches(&so);
-    output out = {.dir = btf_output_dir_path(od), .model_path = model, .preview = preview, .half = half};
+    output out = {.dir = btf_output_dir_path(od), .model_path = model, .preview = preview, .ph = &ph};
+    out.exr = btf_exr_defaults();
+    out.exr.half = !as_float;
+    out.exr.compression = comp;
+    /* compress and write beside synthesis; BTF_EXR_THREAD=0: on this thread */
+    const char *bg = getenv("BTF_EXR_THREAD");
+    out.exr.background = !(bg && !strcmp(bg, "0"));
+    out.exr.times = &ph.exr;
     if (rc == 0 && gpu) {
         rc = synth_gpu(gpu, &m, pick, &so, &out, &err);
     } else {
@@ -318,6 +401,7 @@ int cmd_synthesise(int argc, char **argv)
     else
         btf_output_dir_abort(od);
     clock_gettime(CLOCK_MONOTONIC, &t1);
+    int gpu_used = gpu != NULL;
     char devname[300];
     snprintf(devname, sizeof devname, "%s", gpu ? btf_gpu_device_name(gpu) : "cpu");
     btf_gpu_close(gpu);
@@ -331,5 +415,8 @@ int cmd_synthesise(int argc, char **argv)
         printf("synthesised %d subspace image%s of %dx%d on %s in %.3f s (%.1f Mpixel/s) into %s\n",
                done, done == 1 ? "" : "s", w, h, devname, s,
                (double)w * h * done / (s > 0 ? s : 1e-9) / 1e6, outdir);
+    if (verbose)
+        print_phases(&ph, gpu_used, comps[comp], !as_float, out.exr.background,
+                     now_s() - t_start);
     return 0;
 }

@@ -264,6 +264,60 @@ btf_status btf_exr_writer_open_meta(const char *path, int width, int height, int
                                     int half, const btf_exr_meta *meta, btf_exr_writer **out,
                                     btf_error *err);
 
+/* EXR compression (OpenEXR's methods; docs/synthesis.md, "EXR output",
+ * measures them on synthesised images). ZIP is 0, the default. NONE, RLE,
+ * ZIPS, ZIP and PIZ are lossless; PXR24 is lossless for half and rounds
+ * float to 24 bits; B44 and B44A are lossy, for half only (float output
+ * with them is BTF_E_UNSUPPORTED: OpenEXRCore 3.1.5 writes such files
+ * wrong). (OpenEXRCore 3.1 cannot write DWAA/DWAB.) */
+typedef enum btf_exr_compression {
+    BTF_EXR_ZIP = 0,  /* zlib (level 4) over 16-row chunks */
+    BTF_EXR_NONE,     /* raw scanlines */
+    BTF_EXR_RLE,      /* run lengths of bytes */
+    BTF_EXR_ZIPS,     /* zlib (level 4) per scanline */
+    BTF_EXR_PIZ,      /* wavelet + Huffman over 32-row chunks */
+    BTF_EXR_PXR24,
+    BTF_EXR_B44,
+    BTF_EXR_B44A
+} btf_exr_compression;
+
+/* The name ("zip", "none", ...) of a compression; NULL if out of range. */
+const char *btf_exr_compression_name(int compression);
+
+/* Seconds an EXR writer spent, added to at close (abort adds nothing): on
+ * checking and staging rows (stage_s, the caller's thread), converting and
+ * packing them (convert_s), compressing (compress_s), writing the header,
+ * chunks and offset table (write_s), and the caller waiting for a free
+ * buffer while the background thread catches up (wait_s); bytes: file
+ * sizes; files: files committed. With background 1 convert, compress and
+ * write run beside the caller. */
+typedef struct btf_exr_times {
+    double stage_s, convert_s, compress_s, write_s, wait_s;
+    uint64_t bytes;
+    int files;
+} btf_exr_times;
+
+typedef struct btf_exr_opts {
+    int half;           /* 0 (default): 32-bit float; 1: half, clamped to +-65504 */
+    int compression;    /* btf_exr_compression; 0: ZIP */
+    int background;     /* 0 (default): the caller compresses and writes; 1: a
+                           thread of the writer does, while the caller makes
+                           the next rows (a bounded queue of a few chunks,
+                           about 256 KiB or one chunk each); same bytes */
+    btf_exr_times *times; /* NULL (default), or figures added to at close */
+} btf_exr_opts;
+/* The defaults: every field 0 (float, ZIP, no thread, no figures). */
+btf_exr_opts btf_exr_defaults(void);
+
+/* btf_exr_writer_open_meta and btf_image_write_exr_meta with options (NULL:
+ * btf_exr_defaults()); the options' half replaces the half argument. */
+btf_status btf_exr_writer_open_opts(const char *path, int width, int height, int channels,
+                                    const btf_exr_opts *opts, const btf_exr_meta *meta,
+                                    btf_exr_writer **out, btf_error *err);
+btf_status btf_image_write_exr_opts(const char *path, const btf_image *img,
+                                    const btf_exr_opts *opts, const btf_exr_meta *meta,
+                                    btf_error *err);
+
 /* ----------------------------------------------------------------- datasets */
 
 typedef enum btf_layout {

@@ -6,8 +6,11 @@ set -u
 BTFCAR=${BTF_CLI:-build/btfcar}
 export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}
 echo "== machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GiB", $2/1048576}' /proc/meminfo), $(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)"
+SYNTH_MODEL=""
 for b in "$@"; do
     case "$b" in
+    *bench_synth_model)
+        SYNTH_MODEL=$b ;; # below, on the paper's workload
     *bench_gpu)
         for n in 1 2; do
             LP_NUM_THREADS=$n "$b" || echo "bench: $(basename "$b") exited with $?"
@@ -54,6 +57,49 @@ echo "== model file: the whole analysis of the 81 x 81 x 256^2 material"
 timed "analyse (all stages)" "$BTFCAR" analyse -q "$G" -o "$TMP/m.btfcar"
 bytes=$(stat -c %s "$TMP/m.btfcar")
 echo "   model $bytes bytes (target <= 16384); ratio to the raw 8-bit images (81*81*256*256*3 = 1289945088 bytes) 1 : $((1289945088 / bytes)); paper ~1 : 10^5"
+
+echo "== the paper's workload through the command: 15 subspace images of 512x512, 3 bands, 3 levels"
+# The model: 15 subspaces of the 256^2 material, 3 pyramid levels (as bench_car's).
+"$BTFCAR" analyse -q "$G" -o "$TMP/paper.btfcar" --subspaces 15 --levels 3 --no-range
+P=$TMP/paper.btfcar
+if [ -n "$SYNTH_MODEL" ]; then
+    "$SYNTH_MODEL" "$P" 512x512 9 >"$TMP/mem" || echo "bench: bench_synth_model exited with $?"
+    sed '/^median_s /d' "$TMP/mem"
+    mem=$(sed -n 's/^median_s //p' "$TMP/mem")
+fi
+# median5 LABEL CMD...: 5 runs of the whole process; median wall time in $med.
+median5() {
+    label=$1
+    shift
+    times=""
+    for run in 1 2 3 4 5; do
+        /usr/bin/time -f "%e %M" -o "$TMP/time" "$@" >"$TMP/out" 2>"$TMP/err" ||
+            { echo "bench: $label failed: $(tail -1 "$TMP/err")"; return 1; }
+        times="$times $(cut -d' ' -f1 "$TMP/time")"
+    done
+    med=$(echo $times | tr ' ' '\n' | sort -n | sed -n 3p)
+    echo "$label: median $med s (runs:$times), peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB,"\
+         "$(du -sb "$TMP/p" | cut -f1) bytes"
+}
+SYN="$BTFCAR synthesise -q $P --backend cpu --size 512x512 -o $TMP/p"
+median5 "synthesise, default options (half, none, writer thread)" $SYN
+def=$med
+[ -n "${mem:-}" ] && echo "   whole process / in-memory synthesis: $(echo "$def $mem" | awk '{printf "%.2f", $1/$2}') (target <= 4)"
+$SYN -v 2>&1 >/dev/null | sed 's/^/   --verbose: /'
+if command -v exrheader >/dev/null 2>&1; then
+    exrheader "$TMP/p/subspace_00.exr" >"$TMP/hdr" 2>&1 &&
+        echo "   exrheader reads it: $(sed -n 's/^compression (type compression): //p' "$TMP/hdr")"\
+             "compression, $(grep -c 'floating-point' "$TMP/hdr") channels of"\
+             "$(grep -o '[0-9]*-bit floating-point' "$TMP/hdr" | head -1)" ||
+        echo "bench: exrheader cannot read $TMP/p/subspace_00.exr"
+else
+    echo "   (exrheader not installed: make deps installs openexr)"
+fi
+median5 "synthesise --float --compression zip (0.3.0's default)" $SYN --float --compression zip
+median5 "synthesise, defaults, BTF_EXR_THREAD=0 (one thread)" env BTF_EXR_THREAD=0 $SYN
+for c in rle zips zip piz; do
+    median5 "synthesise --compression $c" $SYN --compression $c
+done
 
 echo "== streaming synthesis to EXR: memory grows with the width, not the height"
 for h in 512 2048; do

@@ -57,6 +57,11 @@ static void documented_values(void **state)
     assert_int_equal(r.linear_8bit, 0);
     assert_int_equal(r.srgb_16bit, 0);
     assert_true(r.max_pixels == BTF_DEFAULT_MAX_PIXELS);
+    btf_exr_opts x = btf_exr_defaults();
+    assert_int_equal(x.half, 0);
+    assert_int_equal(x.compression, BTF_EXR_ZIP);
+    assert_int_equal(x.background, 0);
+    assert_null(x.times);
 
     btf_analyse_opts a = btf_analyse_defaults();
     assert_memory_equal(&a.segment, &s, sizeof s);

@@ -316,6 +316,171 @@ static void streaming_equals_one_shot(void **state)
     assert_int_equal(stray_files(d, NULL), 0);
 }
 
+/* The writer's options: every compression it offers, half and float, with
+ * and without the background thread. The thread's file is the caller's,
+ * byte for byte; the lossless ones give the pixels back (half: those of the
+ * default half file); the figures count both files. Wide rows (25 KB) make
+ * several 256 KiB slabs per image, so the queue fills and wraps. */
+static void writer_options(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char d[1024];
+    fresh_dir(d, sizeof d, "opts");
+    int w = 2100, h = 203, c = 3;
+    btf_image a, ref[2];
+    random_image(&a, w, h, c, 7, -2.0f, 2.0f);
+    for (int half = 0; half <= 1; half++) {
+        const char *p = tu_fmt("%s/ref.exr", d);
+        TU_OK(btf_image_write_exr(p, &a, half, &e), &e);
+        TU_OK(btf_exr_read(p, 0, &ref[half], &e), &e);
+        remove(p);
+    }
+    assert_string_equal(btf_exr_compression_name(BTF_EXR_PIZ), "piz");
+    assert_string_equal(btf_exr_compression_name(0), "zip");
+    assert_null(btf_exr_compression_name(BTF_EXR_B44A + 1));
+    assert_null(btf_exr_compression_name(-1));
+    for (int comp = BTF_EXR_ZIP; comp <= BTF_EXR_B44A; comp++)
+        for (int half = comp >= BTF_EXR_B44; half <= 1; half++) { /* B44: half only */
+            char path[2][1024];
+            btf_exr_times t = {0};
+            for (int bg = 0; bg <= 1; bg++) {
+                snprintf(path[bg], sizeof path[bg], "%s/%s_%d_%d.exr", d,
+                         btf_exr_compression_name(comp), half, bg);
+                btf_exr_opts o = btf_exr_defaults();
+                o.half = half, o.compression = comp, o.background = bg, o.times = &t;
+                btf_exr_writer *wr = NULL;
+                TU_OK(btf_exr_writer_open_opts(path[bg], w, h, c, &o, NULL, &wr, &e), &e);
+                for (int row = 0, n = 1; row < h; row += n, n = n * 3 % 37 + 1) {
+                    n = n < h - row ? n : h - row;
+                    TU_OK(btf_exr_writer_put_rows(wr, a.data + (size_t)row * w * c, n, &e), &e);
+                    assert_false(file_exists(path[bg]));
+                }
+                TU_OK(btf_exr_writer_close(wr, &e), &e);
+            }
+            size_t n1, n2;
+            unsigned char *d1 = slurp(path[0], &n1), *d2 = slurp(path[1], &n2);
+            assert_int_equal(n1, n2);
+            assert_memory_equal(d1, d2, n1);
+            free(d1);
+            free(d2);
+            assert_int_equal(t.files, 2);
+            assert_true(t.bytes == 2 * (uint64_t)n1);
+            assert_true(t.write_s > 0 && t.convert_s > 0 && t.stage_s > 0);
+            btf_image b;
+            TU_OK(btf_exr_read(path[1], 0, &b, &e), &e);
+            int lossless = comp <= BTF_EXR_PIZ || (comp == BTF_EXR_PXR24 && half);
+            if (lossless)
+                assert_same_image(&ref[half], &b);
+            /* The lossy ones: PXR24 keeps 16 bits of float mantissa; B44 on
+             * white noise errs by up to ~1.5 here (it suits smooth images). */
+            double worst = 0;
+            for (size_t i = 0; i < (size_t)w * h * c; i++)
+                worst = fmax(worst, fabs((double)b.data[i] - ref[half].data[i]));
+            assert_true(worst < (comp == BTF_EXR_PXR24 ? 4e-5 : 4.0));
+            btf_image_free(&b);
+            remove(path[0]);
+            remove(path[1]);
+        }
+    /* One row, and fewer rows than a slab, through the thread. */
+    for (int rows = 1; rows <= 3; rows += 2) {
+        const char *p = tu_fmt("%s/small.exr", d);
+        btf_exr_opts o = btf_exr_defaults();
+        o.background = 1, o.compression = BTF_EXR_PIZ;
+        btf_image small = {.width = w, .height = rows, .channels = c, .data = a.data};
+        TU_OK(btf_image_write_exr_opts(p, &small, &o, NULL, &e), &e);
+        btf_image b;
+        TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+        assert_int_equal(b.height, rows);
+        assert_memory_equal(b.data, a.data, (size_t)w * rows * c * sizeof(float));
+        btf_image_free(&b);
+        remove(p);
+    }
+    btf_exr_opts bad = btf_exr_defaults();
+    bad.compression = BTF_EXR_B44A + 1;
+    btf_exr_writer *wr = NULL;
+    assert_int_equal(btf_exr_writer_open_opts(tu_fmt("%s/bad.exr", d), 4, 4, 3, &bad, NULL, &wr,
+                                              &e), BTF_E_ARG);
+    assert_null(wr);
+    bad.compression = BTF_EXR_B44;
+    assert_int_equal(btf_exr_writer_open_opts(tu_fmt("%s/bad.exr", d), 4, 4, 3, &bad, NULL, &wr,
+                                              &e), BTF_E_UNSUPPORTED);
+    assert_non_null(strstr(e.msg, "half"));
+    assert_int_equal(stray_files(d, NULL), 0);
+    /* A non-finite value with the thread: refused at once, nothing left. */
+    btf_exr_opts o = btf_exr_defaults();
+    o.background = 1;
+    const char *p = tu_fmt("%s/nan.exr", d);
+    TU_OK(btf_exr_writer_open_opts(p, w, h, c, &o, NULL, &wr, &e), &e);
+    TU_OK(btf_exr_writer_put_rows(wr, a.data, 100, &e), &e);
+    a.data[(size_t)150 * w * c + 5] = NAN;
+    assert_int_equal(btf_exr_writer_put_rows(wr, a.data + (size_t)100 * w * c, 103, &e),
+                     BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "(1, 150)"));
+    assert_int_equal(btf_exr_writer_close(wr, &e), BTF_E_ARG);
+    assert_false(file_exists(p));
+    assert_int_equal(stray_files(d, NULL), 0);
+    btf_image_free(&a);
+    btf_image_free(&ref[0]);
+    btf_image_free(&ref[1]);
+}
+
+/* The writer's own packer (F16C) against OpenEXRCore's, byte for byte:
+ * values at half's rounding ties, its subnormals and limits, float
+ * subnormals, signed zeros, random ones; widths past the 1024-pixel blocks;
+ * grey and RGB; each lossless compression. */
+static void fast_pack_is_the_library_s(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char d[1024];
+    fresh_dir(d, sizeof d, "pack");
+    int w = 1500, h = 20;
+    for (int c = 1; c <= 3; c += 2) {
+        btf_image a;
+        random_image(&a, w, h, c, 11, -70000.0f, 70000.0f);
+        uint32_t s = 5;
+        for (size_t i = 0; i < (size_t)w * h * c; i++) {
+            uint32_t r = rng_next(&s);
+            float v;
+            switch (i % 6) {
+            case 0: /* a tie or near one: 11 bits plus a half ulp, +-1 */
+                v = ldexpf((float)((r & 0x7ff) | 0x800) + 0.5f, (int)(r >> 11) % 40 - 36);
+                v = nextafterf(v, (r >> 20) % 3 == 0 ? 0.0f : (r >> 20) % 3 == 1 ? 1e9f : v);
+                break;
+            case 1: /* half subnormals and below */
+                v = ldexpf((float)(r & 0xffff), -30 - (int)(r >> 16) % 12);
+                break;
+            case 2: /* float subnormals, signed zeros */
+                v = (r & 1) ? -0.0f : ldexpf((float)(r >> 8), -150);
+                break;
+            default:
+                v = a.data[i] / (float)(1u << (r % 20));
+            }
+            a.data[i] = (r & 0x80000000u) ? -v : v;
+        }
+        for (int half = 0; half <= 1; half++)
+            for (int comp = BTF_EXR_ZIP; comp <= BTF_EXR_PIZ; comp++) {
+                char path[2][1024];
+                for (int lib = 0; lib <= 1; lib++) {
+                    snprintf(path[lib], sizeof path[lib], "%s/p%d.exr", d, lib);
+                    btf_exr_library_pack = lib;
+                    btf_exr_opts o = btf_exr_defaults();
+                    o.half = half, o.compression = comp, o.background = lib;
+                    TU_OK(btf_image_write_exr_opts(path[lib], &a, &o, NULL, &e), &e);
+                }
+                btf_exr_library_pack = 0;
+                size_t n1, n2;
+                unsigned char *d1 = slurp(path[0], &n1), *d2 = slurp(path[1], &n2);
+                assert_int_equal(n1, n2);
+                assert_memory_equal(d1, d2, n1);
+                free(d1);
+                free(d2);
+            }
+        btf_image_free(&a);
+    }
+}
+
 static void writer_closed_early(void **state)
 {
     (void)state;
@@ -1052,6 +1217,8 @@ int main(void)
         cmocka_unit_test(extreme_values),
         cmocka_unit_test(channel_conversion),
         cmocka_unit_test(streaming_equals_one_shot),
+        cmocka_unit_test(writer_options),
+        cmocka_unit_test(fast_pack_is_the_library_s),
         cmocka_unit_test(writer_closed_early),
         cmocka_unit_test(writer_misuse),
         cmocka_unit_test(non_finite_input_refused),

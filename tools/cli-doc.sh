@@ -12,10 +12,12 @@ error. Long work draws a progress bar on stderr when it is a terminal;
 `--quiet` silences it. Environment: `BTF_VK_DEVICE`, `BTF_VK_VALIDATION`,
 `VK_DRIVER_FILES` (docs/gpu.md); `BTF_NOISE_PORTABLE=1` (the portable noise
 loop instead of AVX2) and `BTF_SYNTH_WAVE=0` (CPU fields row by row instead
-of the wavefront), both giving the same images (docs/synthesis.md). Numbers
-are plain decimals: no leading space, no `+`, a `-` only where negative
-values make sense (`--seed " -1"`, `+5` or `0x10` are usage errors). This
-file is made by tools/cli-doc.sh.
+of the wavefront), both giving the same images (docs/synthesis.md);
+`BTF_EXR_THREAD=0` (synthesise compresses and writes on its synthesising
+thread, not beside it; the same bytes). Numbers are plain decimals: no
+leading space, no `+`, a `-` only where negative values make sense
+(`--seed " -1"`, `+5` or `0x10` are usage errors). This file is made by
+tools/cli-doc.sh.
 
 Outputs are checked before any work (the folder exists and takes files; no
 folder where a file is wanted) and written atomically: temporary names

@@ -8,7 +8,7 @@ libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
 libopenexr-dev libpng-dev libjpeg62-turbo-dev
 libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
 glslang-tools spirv-tools
-libcmocka-dev zlib1g-dev time"
+libcmocka-dev zlib1g-dev time openexr"
 
 missing=""
 for p in $PKGS; do

@@ -9,7 +9,9 @@
  */
 #include "model/model.h"
 #include "car/car.h"
+#include "core/core.h"
 
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -39,6 +41,44 @@ void btf_model_internal_free(struct btf_model_internal *in)
     free(in);
 }
 
+/* The bands in the order the budget is spent: subspace, band, level. */
+typedef struct margin_jobs {
+    const btf_model *m;
+    kept_margin *kept;
+    int *band;      /* job -> kept index */
+    double *work;   /* job -> the work its margin took; -1: not computed */
+    double budget;  /* < 0: none */
+    _Atomic long long spent; /* work of the jobs done: past the budget, no more */
+} margin_jobs;
+
+/* Work units a band may take at most, by far (the largest margin test of
+ * car/margin.c is about 1e7): counting from here stays exact in double. */
+#define UNLIMITED 1e15
+
+static btf_status margin_job(void *user, int j, int worker, btf_error *err)
+{
+    (void)worker, (void)err;
+    margin_jobs *mj = user;
+    int i = mj->band[j], l = i % BTF_MAX_LEVELS, b = i / BTF_MAX_LEVELS % 3;
+    int k = i / BTF_MAX_LEVELS / 3;
+    mj->work[j] = -1.0;
+    if (mj->budget >= 0 && (double)atomic_load(&mj->spent) > mj->budget)
+        return BTF_OK; /* the walk in turn takes it from here */
+    double left = UNLIMITED;
+    kept_margin *e = &mj->kept[i];
+    e->margin = btf_car_margin_within(&mj->m->subspaces[k].bands[b][l], &left);
+    mj->work[j] = UNLIMITED - left;
+    atomic_fetch_add(&mj->spent, (long long)mj->work[j]);
+    return e->margin < 0 ? BTF_E_NOMEM : BTF_OK;
+}
+
+/* The bands' margins on every CPU, each as if alone (and none started once
+ * the work done passes the budget); then the budget spent in order, as one
+ * thread computing them in turn would: while it lasts for a band, that
+ * band's margin is the one computed; from the first band it does not cover
+ * (or that was not computed), the rest are computed in turn with what is
+ * left. So the margins are those of the single-threaded walk, bit for bit,
+ * and the work at most the budget plus one band per CPU. */
 btf_status btf_model_keep_margins(btf_model *m, double budget)
 {
     btf_model_internal_free(m->internal);
@@ -46,14 +86,20 @@ btf_status btf_model_keep_margins(btf_model *m, double budget)
     if (m->n_subspaces <= 0)
         return BTF_OK;
     struct btf_model_internal *in = calloc(1, sizeof *in);
-    kept_margin *kept = calloc((size_t)m->n_subspaces * 3 * BTF_MAX_LEVELS, sizeof *kept);
-    if (!in || !kept) {
+    size_t nkept = (size_t)m->n_subspaces * 3 * BTF_MAX_LEVELS;
+    kept_margin *kept = calloc(nkept, sizeof *kept);
+    margin_jobs mj = {m, kept, calloc(nkept, sizeof(int)), calloc(nkept, sizeof(double)), budget,
+                      0};
+    if (!in || !kept || !mj.band || !mj.work) {
         free(in);
         free(kept);
+        free(mj.band);
+        free(mj.work);
         return BTF_E_NOMEM;
     }
     in->n_subspaces = m->n_subspaces;
     in->margins = kept;
+    int jobs = 0;
     for (int k = 0; k < m->n_subspaces; k++)
         for (int b = 0; b < 3; b++)
             for (int l = 0; l < m->subspaces[k].levels && l < BTF_MAX_LEVELS; l++) {
@@ -62,11 +108,29 @@ btf_status btf_model_keep_margins(btf_model *m, double budget)
                 e->n = cb->n;
                 memcpy(e->offsets, cb->offsets, sizeof e->offsets);
                 memcpy(e->gamma, cb->gamma, sizeof e->gamma);
-                if ((e->margin = btf_car_margin_within(cb, budget < 0 ? NULL : &budget)) < 0) {
-                    btf_model_internal_free(in);
-                    return BTF_E_NOMEM;
-                }
+                mj.band[jobs++] = (int)kept_index(k, b, l);
             }
+    btf_error perr = {0};
+    btf_status rc = btf_pool_run(jobs, 0, margin_job, &mj, NULL, &perr);
+    for (int j = 0; rc == BTF_OK && budget >= 0 && j < jobs; j++) {
+        if (mj.work[j] >= 0 && budget >= mj.work[j]) {
+            budget -= mj.work[j];
+            continue;
+        }
+        for (; j < jobs; j++) { /* the budget runs out in band j: in turn from here */
+            int i = mj.band[j], l = i % BTF_MAX_LEVELS, b = i / BTF_MAX_LEVELS % 3;
+            int k = i / BTF_MAX_LEVELS / 3;
+            if ((kept[i].margin = btf_car_margin_within(&m->subspaces[k].bands[b][l],
+                                                        &budget)) < 0)
+                rc = BTF_E_NOMEM;
+        }
+    }
+    free(mj.band);
+    free(mj.work);
+    if (rc != BTF_OK) {
+        btf_model_internal_free(in);
+        return BTF_E_NOMEM;
+    }
     m->internal = in;
     return BTF_OK;
 }

@@ -296,8 +296,8 @@ int cmd_synthesise(int argc, char **argv)
     cli_ctx c = {"synthesise", 0};
     static const char *const backends[] = {"cpu", "gpu", "auto", NULL};
     const char *model = NULL, *outdir = NULL, *list = "all";
-    static const char *const comps[] = {"zip", "none", "rle", "zips", "piz", "pxr24", "b44",
-                                        "b44a", NULL}; /* btf_exr_compression's order */
+    static const char *const comps[] = {"zip", "none", "rle", "zips", "piz", "pxr24",
+                                        NULL}; /* btf_exr_compression's order */
     int size[2] = {0, 0}, preview = 0, half = 0, device = -1, backend_index = 2;
     int as_float = 0, comp = DEFAULT_COMPRESSION, verbose = 0;
     uint64_t seed = 1;
@@ -325,7 +325,7 @@ int cmd_synthesise(int argc, char **argv)
          .help = "write 32-bit float EXR (twice the bytes; docs/synthesis.md)"},
         {.name = "--compression", .kind = CLI_CHOICE, .dest = &comp, .meta = "NAME",
          .help = "EXR compression: none, rle, zips, zip, piz (lossless); pxr24 (lossy\n"
-                 "for float), b44, b44a (lossy for half); measured in docs/synthesis.md",
+                 "for float); measured in docs/synthesis.md",
          .choices = comps},
         {.name = "--verbose", .short_name = "-v", .kind = CLI_FLAG, .dest = &verbose,
          .help = "print where the time went, phase by phase, at the end"},

@@ -267,18 +267,17 @@ btf_status btf_exr_writer_open_meta(const char *path, int width, int height, int
 /* EXR compression (OpenEXR's methods; docs/synthesis.md, "EXR output",
  * measures them on synthesised images). ZIP is 0, the default. NONE, RLE,
  * ZIPS, ZIP and PIZ are lossless; PXR24 is lossless for half and rounds
- * float to 24 bits; B44 and B44A are lossy, for half only (float output
- * with them is BTF_E_UNSUPPORTED: OpenEXRCore 3.1.5 writes such files
- * wrong). (OpenEXRCore 3.1 cannot write DWAA/DWAB.) */
+ * float to 24 bits. B44/B44A are not offered: btfcar refuses to read them
+ * (OpenEXRCore 3.1's B44 decoder crashes on damaged files), they are lossy
+ * by up to 1.5 on synthesised noise, and OpenEXRCore 3.1.5 writes float B44
+ * wrong. (OpenEXRCore 3.1 cannot write DWAA/DWAB.) */
 typedef enum btf_exr_compression {
     BTF_EXR_ZIP = 0,  /* zlib (level 4) over 16-row chunks */
     BTF_EXR_NONE,     /* raw scanlines */
     BTF_EXR_RLE,      /* run lengths of bytes */
     BTF_EXR_ZIPS,     /* zlib (level 4) per scanline */
     BTF_EXR_PIZ,      /* wavelet + Huffman over 32-row chunks */
-    BTF_EXR_PXR24,
-    BTF_EXR_B44,
-    BTF_EXR_B44A
+    BTF_EXR_PXR24
 } btf_exr_compression;
 
 /* The name ("zip", "none", ...) of a compression; NULL if out of range. */

@@ -184,7 +184,6 @@ static const struct {
     [BTF_EXR_ZIP] = {"zip", EXR_COMPRESSION_ZIP},       [BTF_EXR_NONE] = {"none", EXR_COMPRESSION_NONE},
     [BTF_EXR_RLE] = {"rle", EXR_COMPRESSION_RLE},       [BTF_EXR_ZIPS] = {"zips", EXR_COMPRESSION_ZIPS},
     [BTF_EXR_PIZ] = {"piz", EXR_COMPRESSION_PIZ},       [BTF_EXR_PXR24] = {"pxr24", EXR_COMPRESSION_PXR24},
-    [BTF_EXR_B44] = {"b44", EXR_COMPRESSION_B44},       [BTF_EXR_B44A] = {"b44a", EXR_COMPRESSION_B44A},
 };
 #define N_COMPRESSIONS ((int)(sizeof COMPRESSIONS / sizeof COMPRESSIONS[0]))
 
@@ -358,11 +357,6 @@ btf_status btf_exr_writer_open_opts(const char *path, int width, int height, int
         return btf_fail(err, BTF_E_ARG, "%s: channels %d: expected 1 or 3", path, channels);
     if (o.compression < 0 || o.compression >= N_COMPRESSIONS)
         return btf_fail(err, BTF_E_ARG, "%s: unknown EXR compression %d", path, o.compression);
-    /* OpenEXRCore 3.1.5 writes B44 files with float channels that read back
-     * wrong (B44 is defined for half; float should be stored as is). */
-    if ((o.compression == BTF_EXR_B44 || o.compression == BTF_EXR_B44A) && !o.half)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: %s compression is for half output only",
-                        path, COMPRESSIONS[o.compression].name);
     btf_exr_writer *w = btf_calloc(1, sizeof *w, err);
     if (!w)
         return BTF_E_NOMEM;

@@ -326,6 +326,8 @@ typedef struct decoder {
     int started;
     float *buf;      /* one chunk, nsrc floats per pixel, interleaved */
     size_t cap;      /* floats in buf */
+    float *unused;   /* one plane per channel we do not keep (see bind_outputs) */
+    size_t unused_cap;
 } decoder;
 
 static int slot_of(const exr_in *in, const char *name)
@@ -340,12 +342,33 @@ static int slot_of(const exr_in *in, const char *name)
  * interleaved floats (the library converts HALF); others are skipped. */
 static btf_status bind_outputs(exr_in *in, decoder *d, const exr_chunk_info_t *ci, btf_error *err)
 {
+    /* Channels we do not keep are decoded too, each into a plane of its
+     * own: OpenEXRCore 3.1's unpackers crash on some damaged files when a
+     * channel is skipped (decode_to_ptr NULL; found by fuzz_exr). */
+    size_t plane = (size_t)ci->width * (size_t)ci->height;
+    size_t need = plane * (size_t)d->dec.channel_count;
+    if (need > d->unused_cap) {
+        free(d->unused);
+        d->unused_cap = 0;
+        if (!(d->unused = btf_alloc(need, sizeof(float), err)))
+            return BTF_E_NOMEM;
+        d->unused_cap = need;
+    }
     int bound = 0;
     for (int c = 0; c < d->dec.channel_count; c++) {
         exr_coding_channel_info_t *ch = &d->dec.channels[c];
         int k = slot_of(in, ch->channel_name);
         if (k < 0) {
-            ch->decode_to_ptr = NULL;
+            if (ch->width > ci->width || ch->height > ci->height || ch->width < 0 ||
+                ch->height < 0)
+                return btf_fail(err, BTF_E_FORMAT, "%s: EXR channel %s is larger than its chunk",
+                                in->io.path, ch->channel_name);
+            ch->decode_to_ptr = (uint8_t *)(d->unused + plane * (size_t)c);
+            ch->user_pixel_stride = (int32_t)sizeof(float);
+            ch->user_line_stride = (int32_t)((size_t)(ch->width > 0 ? ch->width : 1) *
+                                             sizeof(float));
+            ch->user_data_type = EXR_PIXEL_FLOAT;
+            ch->user_bytes_per_element = (int16_t)sizeof(float);
             continue;
         }
         /* Our channels are not subsampled, so each must cover the chunk:
@@ -453,6 +476,7 @@ static btf_status read_pixels(exr_in *in, int channels, btf_image *out, btf_erro
     if (d.started)
         exr_decoding_destroy(in->ctx, &d.dec);
     free(d.buf);
+    free(d.unused);
     return rc;
 }
 

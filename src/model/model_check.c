@@ -199,8 +199,9 @@ static btf_status check_stability(const btf_model *m, const char *name, btf_stat
                           "checking the CAR stability", name, s, b, l);
         else if (sj.result[j] == BTF_UNSTABLE)
             rc = failf(err, code, name,
-                       "subspace %d, band %d, level %d: the CAR coefficients are unstable (the "
-                       "recursion grows; expected a stable model, as fitting makes)", s, b, l);
+                       "subspace %d, band %d, level %d: the CAR coefficients are unstable "
+                       "(expected a stable recursion, as fitting makes; this one grows)", s, b,
+                       l);
     }
     free(sj.result);
     return rc;

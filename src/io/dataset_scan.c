@@ -158,36 +158,23 @@ static btf_status scan_folder(btf_dataset_entries *l, const char *dir, const int
     return rc;
 }
 
-typedef struct path_row {
-    const char *path;
-    int row;
-} path_row;
-
-static int by_path(const void *a, const void *b)
-{
-    const path_row *x = a, *y = b;
-    int c = strcmp(x->path, y->path);
-    return c ? c : (x->row > y->row) - (x->row < y->row);
-}
-
 /* The same file under two directions would stand for two images: an error
  * naming both lines (entries 0.. are the manifest's rows in order). */
 static btf_status no_duplicate_paths(const btf_dataset_entries *l, const btf_tsv *t,
                                      const char *path, btf_error *err)
 {
-    path_row *order = malloc((size_t)(l->count > 0 ? l->count : 1) * sizeof *order);
-    if (!order)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
+    const char **names = btf_alloc((size_t)(l->count > 0 ? l->count : 1), sizeof *names, err);
+    if (!names)
+        return BTF_E_NOMEM;
     for (int i = 0; i < l->count; i++)
-        order[i] = (path_row){l->items[i].path, i};
-    qsort(order, (size_t)l->count, sizeof *order, by_path);
-    btf_status rc = BTF_OK;
-    for (int i = 1; i < l->count && rc == BTF_OK; i++)
-        if (!strcmp(order[i - 1].path, order[i].path))
-            rc = btf_fail(err, BTF_E_DATA, "%s:%d: %s is listed again (first on line %d); each "
-                          "image under one (light, view) pair", path, t->line_no[order[i].row],
-                          order[i].path, t->line_no[order[i - 1].row]);
-    free(order);
+        names[i] = l->items[i].path;
+    int first, again;
+    btf_status rc = btf_first_repeat(names, l->count, &first, &again, err);
+    free(names);
+    if (rc == BTF_OK && first >= 0)
+        rc = btf_fail(err, BTF_E_DATA, "%s:%d: %s is listed again (first on line %d); each "
+                      "image under one (light, view) pair", path, t->line_no[again],
+                      l->items[again].path, t->line_no[first]);
     return rc;
 }
 

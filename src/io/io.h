@@ -51,6 +51,11 @@ btf_status btf_tsv_read(const char *path, btf_tsv *t, btf_error *err);
 void btf_tsv_free(btf_tsv *t);
 int btf_tsv_column(const btf_tsv *t, const char *name); /* -1 if absent */
 const char *btf_tsv_cell(const btf_tsv *t, int row, int col);
+/* The first name that appears twice among names[0 .. n-1]: *first and
+ * *again get the indices of its first and of its next occurrence, both -1
+ * when every name is distinct (manifests list each file once). */
+btf_status btf_first_repeat(const char *const *names, int n, int *first, int *again,
+                            btf_error *err);
 btf_status btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
                           btf_error *err);
 

@@ -190,3 +190,39 @@ btf_status btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, 
     *out = v;
     return BTF_OK;
 }
+
+typedef struct name_index {
+    const char *name;
+    int index;
+} name_index;
+
+static int by_name_then_index(const void *a, const void *b)
+{
+    const name_index *x = a, *y = b;
+    int c = strcmp(x->name, y->name);
+    return c ? c : (x->index > y->index) - (x->index < y->index);
+}
+
+btf_status btf_first_repeat(const char *const *names, int n, int *first, int *again,
+                            btf_error *err)
+{
+    *first = *again = -1;
+    if (n < 2)
+        return BTF_OK;
+    name_index *order = btf_alloc((size_t)n, sizeof *order, err);
+    if (!order)
+        return BTF_E_NOMEM;
+    for (int i = 0; i < n; i++)
+        order[i] = (name_index){names[i], i};
+    qsort(order, (size_t)n, sizeof *order, by_name_then_index);
+    /* Sorted by name, then index: the repeat with the smallest index pair
+     * in sort order is the one reported (deterministic). */
+    for (int i = 1; i < n; i++)
+        if (!strcmp(order[i - 1].name, order[i].name)) {
+            *first = order[i - 1].index;
+            *again = order[i].index;
+            break;
+        }
+    free(order);
+    return BTF_OK;
+}

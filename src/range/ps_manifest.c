@@ -118,36 +118,18 @@ static btf_status read_view(const btf_tsv *t, const char *path, int row, const m
     return BTF_OK;
 }
 
-typedef struct path_row {
-    const char *path;
-    int row;
-} path_row;
-
-static int by_path(const void *a, const void *b)
-{
-    const path_row *x = a, *y = b;
-    int c = strcmp(x->path, y->path);
-    return c ? c : (x->row > y->row) - (x->row < y->row);
-}
-
 /* The same file under two rows (two lights, or two views) would weigh one
  * image twice or mix views: an error naming both lines. */
 static btf_status no_duplicate_paths(const btf_tsv *t, const char *path, const manifest *m,
                                      btf_error *err)
 {
-    path_row *order = btf_alloc((size_t)m->count, sizeof(path_row), err);
-    if (!order)
-        return BTF_E_NOMEM;
-    for (int i = 0; i < m->count; i++)
-        order[i] = (path_row){m->paths[i], i};
-    qsort(order, (size_t)m->count, sizeof *order, by_path);
-    btf_status rc = BTF_OK;
-    for (int i = 1; i < m->count && rc == BTF_OK; i++)
-        if (!strcmp(order[i - 1].path, order[i].path))
-            rc = btf_fail(err, BTF_E_FORMAT, "%s:%d: %s is listed again (first on line %d); "
-                          "each image once", path, t->line_no[order[i].row], order[i].path,
-                          t->line_no[order[i - 1].row]);
-    free(order);
+    int first, again;
+    btf_status rc = btf_first_repeat((const char *const *)m->paths, m->count, &first, &again,
+                                     err);
+    if (rc == BTF_OK && first >= 0)
+        rc = btf_fail(err, BTF_E_FORMAT, "%s:%d: %s is listed again (first on line %d); "
+                      "each image once", path, t->line_no[again], m->paths[again],
+                      t->line_no[first]);
     return rc;
 }
 

@@ -215,14 +215,6 @@ const char *cli_first_seen(const cli_spec *s, int tag)
     return first ? first->name : NULL;
 }
 
-int cli_given(const cli_spec *s, const char *name)
-{
-    for (const cli_opt *o = s->opts; !is_end(o); o++)
-        if (!strcmp(o->name, name))
-            return o->seen != 0;
-    return 0;
-}
-
 /* ------------------------------------------------------------------ help */
 
 /* "--size WxH" or "-o, --output DIR" */

@@ -72,7 +72,5 @@ int cli_parse(struct cli_ctx *c, cli_spec *s, int argc, char **argv, const char 
 void cli_help(const cli_spec *s);
 /* The name of the first option given with this tag, or NULL. */
 const char *cli_first_seen(const cli_spec *s, int tag);
-/* Whether the option named `name` was given. */
-int cli_given(const cli_spec *s, const char *name);
 
 #endif

@@ -1050,17 +1050,6 @@ static void library_is_silent(void **state)
 
 /* ------------------------------------------------------------ provenance */
 
-/* The string attribute `name` of part 0, or NULL when absent. */
-static const char *exr_string(exr_const_context_t ctx, const char *name)
-{
-    int32_t len = 0;
-    const char *s = NULL;
-    if (exr_attr_get_string(ctx, 0, name, &len, &s) != EXR_ERR_SUCCESS)
-        return NULL;
-    assert_int_equal((int)strlen(s), len);
-    return s;
-}
-
 static exr_context_t open_exr(const char *path)
 {
     exr_context_t ctx = NULL;
@@ -1106,12 +1095,12 @@ static void provenance_attributes(void **state)
             TU_OK(btf_exr_writer_close(w, &e), &e);
 
             exr_context_t ctx = open_exr(with);
-            assert_string_equal(exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
-            assert_string_equal(exr_string(ctx, "btfcarModel"), "models/leather.btfcar");
-            assert_string_equal(exr_string(ctx, "btfcarSeed"), "18446744073709551615");
-            assert_string_equal(exr_string(ctx, "btfcarSubspace"), "7");
-            assert_string_equal(exr_string(ctx, "btfcarView"), "30 45");
-            assert_string_equal(exr_string(ctx, "btfcarLight"), "75 352.5");
+            assert_string_equal(tu_exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
+            assert_string_equal(tu_exr_string(ctx, "btfcarModel"), "models/leather.btfcar");
+            assert_string_equal(tu_exr_string(ctx, "btfcarSeed"), "18446744073709551615");
+            assert_string_equal(tu_exr_string(ctx, "btfcarSubspace"), "7");
+            assert_string_equal(tu_exr_string(ctx, "btfcarView"), "30 45");
+            assert_string_equal(tu_exr_string(ctx, "btfcarLight"), "75 352.5");
             exr_attr_chromaticities_t ch;
             assert_int_equal(exr_attr_get_chromaticities(ctx, 0, "chromaticities", &ch),
                              EXR_ERR_SUCCESS);
@@ -1123,8 +1112,8 @@ static void provenance_attributes(void **state)
 
             /* Without metadata: none of it. */
             ctx = open_exr(plain);
-            assert_null(exr_string(ctx, "btfcarVersion"));
-            assert_null(exr_string(ctx, "btfcarModel"));
+            assert_null(tu_exr_string(ctx, "btfcarVersion"));
+            assert_null(tu_exr_string(ctx, "btfcarModel"));
             assert_int_not_equal(exr_attr_get_chromaticities(ctx, 0, "chromaticities", &ch),
                                  EXR_ERR_SUCCESS);
             exr_finish(&ctx);
@@ -1148,17 +1137,17 @@ static void provenance_attributes(void **state)
     btf_exr_meta some = {.model = "m.btfcar", .seed = 0, .subspace = 0};
     TU_OK(btf_image_write_exr_meta(p, &a, 1, &some, &e), &e);
     exr_context_t ctx = open_exr(p);
-    assert_string_equal(exr_string(ctx, "btfcarSeed"), "0");
-    assert_string_equal(exr_string(ctx, "btfcarSubspace"), "0");
-    assert_null(exr_string(ctx, "btfcarView"));
-    assert_null(exr_string(ctx, "btfcarLight"));
+    assert_string_equal(tu_exr_string(ctx, "btfcarSeed"), "0");
+    assert_string_equal(tu_exr_string(ctx, "btfcarSubspace"), "0");
+    assert_null(tu_exr_string(ctx, "btfcarView"));
+    assert_null(tu_exr_string(ctx, "btfcarLight"));
     exr_finish(&ctx);
     btf_exr_meta none = {0};
     TU_OK(btf_image_write_exr_meta(p, &a, 1, &none, &e), &e);
     ctx = open_exr(p);
-    assert_string_equal(exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
-    assert_null(exr_string(ctx, "btfcarModel"));
-    assert_null(exr_string(ctx, "btfcarSeed"));
+    assert_string_equal(tu_exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
+    assert_null(tu_exr_string(ctx, "btfcarModel"));
+    assert_null(tu_exr_string(ctx, "btfcarSeed"));
     exr_finish(&ctx);
     btf_image_free(&a);
     remove(p);

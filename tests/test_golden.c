@@ -115,14 +115,6 @@ static void cpu_synthesis_is_unchanged(void **state)
     check_images(dir, expect, 6, 256, 256);
 }
 
-/* The string attribute `name` of part 0, or NULL when absent. */
-static const char *exr_string(exr_const_context_t ctx, const char *name)
-{
-    int32_t len = 0;
-    const char *s = NULL;
-    return exr_attr_get_string(ctx, 0, name, &len, &s) == EXR_ERR_SUCCESS ? s : NULL;
-}
-
 /* What btfcar synthesise writes into each EXR header: where the pixels came
  * from (model file, seed, subspace and its representative directions,
  * version) and their primaries, on both backends. */
@@ -135,14 +127,14 @@ static void check_provenance(const char *dir_fmt, const char *seed, const btf_mo
         exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
         assert_int_equal(exr_start_read(&ctx, tu_fmt("%s/subspace_%02d.exr", dir, k), &init),
                          EXR_ERR_SUCCESS);
-        assert_string_equal(exr_string(ctx, "btfcarModel"), model_path);
-        assert_string_equal(exr_string(ctx, "btfcarSeed"), seed);
-        assert_string_equal(exr_string(ctx, "btfcarSubspace"), tu_fmt("%d", k));
-        assert_string_equal(exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
+        assert_string_equal(tu_exr_string(ctx, "btfcarModel"), model_path);
+        assert_string_equal(tu_exr_string(ctx, "btfcarSeed"), seed);
+        assert_string_equal(tu_exr_string(ctx, "btfcarSubspace"), tu_fmt("%d", k));
+        assert_string_equal(tu_exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
         const btf_subspace_model *s = &m->subspaces[k];
         btf_dir v = m->views.dirs[s->view], l = m->lights.dirs[s->light];
-        assert_string_equal(exr_string(ctx, "btfcarView"), tu_fmt("%g %g", v.theta, v.phi));
-        assert_string_equal(exr_string(ctx, "btfcarLight"), tu_fmt("%g %g", l.theta, l.phi));
+        assert_string_equal(tu_exr_string(ctx, "btfcarView"), tu_fmt("%g %g", v.theta, v.phi));
+        assert_string_equal(tu_exr_string(ctx, "btfcarLight"), tu_fmt("%g %g", l.theta, l.phi));
         exr_attr_chromaticities_t ch;
         assert_int_equal(exr_attr_get_chromaticities(ctx, 0, "chromaticities", &ch),
                          EXR_ERR_SUCCESS);

@@ -290,3 +290,13 @@ void tu_material_image(const char *name, int size, unsigned seed, btf_dir view, 
     TU_OK(btf_material_render(&mat, view, light, img, &e), &e);
     btf_material_free(&mat);
 }
+
+const char *tu_exr_string(exr_const_context_t ctx, const char *name)
+{
+    int32_t len = 0;
+    const char *s = NULL;
+    if (exr_attr_get_string(ctx, 0, name, &len, &s) != EXR_ERR_SUCCESS)
+        return NULL;
+    assert_int_equal((int)strlen(s), len);
+    return s;
+}

@@ -52,6 +52,9 @@ typedef struct tu_exr_spec {
 } tu_exr_spec;
 
 typedef float (*tu_exr_value_fn)(int c, int x, int y);
+/* The string attribute `name` of part 0 of an open EXR, or NULL when absent
+ * (asserts the stored length matches the text). */
+const char *tu_exr_string(exr_const_context_t ctx, const char *name);
 void tu_exr_write_raw(const char *path, const tu_exr_spec *s, tu_exr_value_fn value);
 
 /* Under ASan, keeps the Vulkan validation layer loaded after the loader lets

@@ -54,6 +54,9 @@ int cli_check_output(const cli_ctx *c, const char *path, btf_output_kind kind);
  * (btf_remove_temporaries) and exit with 128 + the signal. */
 void cli_install_signal_cleanup(void);
 
+/* Monotonic wall-clock seconds, for the timings commands print. */
+double cli_now(void);
+
 /* "12.3 MB" */
 void cli_format_bytes(uint64_t bytes, char *buf, size_t n);
 

@@ -26,13 +26,6 @@ static const char ABOUT[] =
 /* Options only the stages after the segmentation use. */
 enum { TAG_LATER = 1 };
 
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
 /* Writes text that was built in memory (open_memstream) to path atomically:
  * the whole file appears or none does. Frees the text. */
 static int write_text(const char *path, FILE *mem, char **text, size_t *len, btf_error *err)
@@ -131,7 +124,7 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_ana
     btf_dataset_opts dopts = {.progress = cli_progress_fn(c),
                               .max_pixels = ao.photostereo.read.max_pixels};
     btf_dataset *ds;
-    double t0 = now();
+    double t0 = cli_now();
     if (btf_dataset_open(dataset, &dopts, &ds, &err) != 0)
         return cli_lib_error(c, &err);
     ao.progress = cli_progress_fn(c);
@@ -161,7 +154,7 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_ana
                m.n_subspaces, m.n_subspaces == 1 ? "" : "s", m.range_width, m.range_height);
         printf("compression   1 : %.0f against the raw 8-bit images (%.0f bytes)\n",
                raw / (double)size, raw);
-        printf("time          %.1f s\n", now() - t0);
+        printf("time          %.1f s\n", cli_now() - t0);
         for (int k = 0; k < m.n_subspaces; k++)
             cli_print_subspace(&m.subspaces[k], k);
     }
@@ -229,17 +222,17 @@ int cmd_analyse(int argc, char **argv)
     btf_dataset_opts dopts = {.progress = cli_progress_fn(&c),
                               .max_pixels = ao.photostereo.read.max_pixels};
     btf_dataset *ds;
-    double t0 = now();
+    double t0 = cli_now();
     if (btf_dataset_open(dataset, &dopts, &ds, &err) != 0)
         return cli_lib_error(&c, &err);
     so->features.progress = cli_progress_fn(&c);
     btf_segmentation seg;
-    double t1 = now();
+    double t1 = cli_now();
     if (btf_segment(ds, so, &seg, &err) != 0) {
         btf_dataset_close(ds);
         return cli_lib_error(&c, &err);
     }
-    double t2 = now();
+    double t2 = cli_now();
     cli_progress_done();
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     char path[4096];

@@ -23,13 +23,6 @@ static const char ABOUT[] =
     "row-by-row field generator and portable noise loop (same pixels, slower);\n"
     "BTF_EXR_THREAD=0 compresses and writes on the synthesising thread (same bytes).\n";
 
-static double now_s(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
 /* Where the time goes (--verbose): seconds per phase of the whole run. */
 typedef struct phases {
     double read, synth, rows, close, preview, exr_open;
@@ -62,9 +55,9 @@ static int put_rows(void *user, int y, int nrows, const float *rows, btf_error *
 
 static int put_rows_timed(void *user, int y, int nrows, const float *rows, btf_error *err)
 {
-    double t0 = now_s();
+    double t0 = cli_now();
     int rc = put_rows(user, y, nrows, rows, err);
-    *((sink *)user)->rows_s += now_s() - t0;
+    *((sink *)user)->rows_s += cli_now() - t0;
     return rc;
 }
 
@@ -107,15 +100,15 @@ static int write_image(const btf_image *img, const btf_model *m, int k, uint64_t
     char path[4096];
     snprintf(path, sizeof path, "%s/subspace_%02d.exr", out->dir, k);
     btf_exr_meta meta = btf_model_exr_meta(m, out->model_path, k, seed);
-    double t0 = now_s();
+    double t0 = cli_now();
     int rc = btf_image_write_exr_opts(path, img, &out->exr, &meta, err);
-    double t1 = now_s();
+    double t1 = cli_now();
     out->ph->close += t1 - t0;
     if (rc == 0 && out->preview) {
         snprintf(path, sizeof path, "%s/subspace_%02d.png", out->dir, k);
         rc = btf_image_write_png(path, img, err);
     }
-    out->ph->preview += now_s() - t1;
+    out->ph->preview += cli_now() - t1;
     return rc;
 }
 
@@ -248,25 +241,25 @@ static int synth_one(const cli_ctx *c, const btf_model *m, int k, const btf_synt
         return rc;
     s.preview = preview ? &img : NULL;
     btf_exr_meta meta = btf_model_exr_meta(m, out->model_path, k, so->seed);
-    double t0 = now_s();
+    double t0 = cli_now();
     rc = btf_exr_writer_open_opts(path, w, h, 3, &out->exr, &meta, &s.exr, err);
-    double t1 = now_s();
+    double t1 = cli_now();
     out->ph->exr_open += t1 - t0;
     if (rc == 0) {
         rc = btf_synthesise(m, k, so, put_rows_timed, &s, err);
-        t0 = now_s(), out->ph->synth += t0 - t1; /* put_rows included */
+        t0 = cli_now(), out->ph->synth += t0 - t1; /* put_rows included */
         if (!s.write_failed)
             name_model(rc, out->model_path, err);
         if (rc)
             btf_exr_writer_abort(s.exr);
         else
             rc = btf_exr_writer_close(s.exr, err);
-        t1 = now_s(), out->ph->close += t1 - t0;
+        t1 = cli_now(), out->ph->close += t1 - t0;
     }
     if (rc == 0 && preview) {
         snprintf(path, sizeof path, "%s/subspace_%02d.png", out->dir, k);
         rc = btf_image_write_png(path, &img, err);
-        out->ph->preview += now_s() - t1;
+        out->ph->preview += cli_now() - t1;
     }
     btf_image_free(&img);
     return rc;
@@ -301,7 +294,7 @@ int cmd_synthesise(int argc, char **argv)
     int size[2] = {0, 0}, preview = 0, half = 0, device = -1, backend_index = 2;
     int as_float = 0, comp = DEFAULT_COMPRESSION, verbose = 0;
     uint64_t seed = 1;
-    double t_start = now_s();
+    double t_start = cli_now();
     cli_opt opts[] = {
         {.name = "--size", .kind = CLI_SIZE, .dest = size, .meta = "WxH",
          .help = "output size in pixels", .lo = 1, .hi = 65536, .required = 1},
@@ -348,10 +341,10 @@ int cmd_synthesise(int argc, char **argv)
     btf_error err = {0};
     btf_model m;
     phases ph = {0};
-    double t_read = now_s();
+    double t_read = cli_now();
     if (btf_model_read(model, &m, &err) != 0)
         return cli_lib_error(&c, &err);
-    ph.read = now_s() - t_read;
+    ph.read = cli_now() - t_read;
     unsigned char *pick = calloc((size_t)m.n_subspaces, 1);
     int rc = pick ? 0 : 1;
     if (rc == 0 && parse_list(list, m.n_subspaces, pick) != 0) {
@@ -417,6 +410,6 @@ int cmd_synthesise(int argc, char **argv)
                (double)w * h * done / (s > 0 ? s : 1e-9) / 1e6, outdir);
     if (verbose)
         print_phases(&ph, gpu_used, comps[comp], !as_float, out.exr.background,
-                     now_s() - t_start);
+                     cli_now() - t_start);
     return 0;
 }

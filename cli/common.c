@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 int cli_error(const cli_ctx *c, const char *fmt, ...)
@@ -176,4 +177,11 @@ void cli_format_bytes(uint64_t bytes, char *buf, size_t n)
         snprintf(buf, n, "%" PRIu64 " B", bytes);
     else
         snprintf(buf, n, "%.1f %s (%" PRIu64 " bytes)", v, unit[u], bytes);
+}
+
+double cli_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }

@@ -20,13 +20,13 @@ COMMON    := -Wall -Wextra -Werror $(NO_TRUNC) -ffp-contract=off -fPIC -pthread 
 CPPFLAGS  := -Iinclude -Isrc -Isrc/synth -Igpu -I$(BUILD)/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE
 CFLAGS    := -std=c11 $(COMMON)
 CXXFLAGS  := -std=c++17 $(COMMON) -I/usr/include/opencv4
-LDLIBS    := -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
-             -lpng16 -ljpeg -lvulkan -lz -lstdc++ -lm -lpthread
+LDLIBS    := -lopencv_imgproc -lopencv_core -lOpenEXRCore-3_1 \
+             -lpng16 -ljpeg -lvulkan -lz -lcjson -lassimp -lstdc++ -lm -lpthread
 # The same for btfcar.pc: the dependencies that have a pkg-config file
 # (Requires.private) and the libraries that have none (Libs.private; Debian's
 # OpenCV -dev packages ship no opencv4.pc).
-PC_REQUIRES_PRIVATE := OpenEXR vulkan zlib libpng libjpeg
-PC_LIBS_PRIVATE     := -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lstdc++ -lm -pthread
+PC_REQUIRES_PRIVATE := OpenEXR vulkan zlib libpng libjpeg libcjson assimp
+PC_LIBS_PRIVATE     := -lopencv_imgproc -lopencv_core -lstdc++ -lm -pthread
 
 LIB_C     := $(sort $(wildcard src/*/*.c) $(wildcard gpu/*.c))
 LIB_CXX   := $(sort $(wildcard src/*/*.cpp))

@@ -964,6 +964,135 @@ const char *btf_gpu_first_validation_message(const btf_gpu *g);
 btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
                               const btf_synth_opts *opts, btf_image *outs, btf_error *err);
 
+/* ------------------------------------------ hemisphere interpolation (render) */
+
+/* Haindl & Filip 2007, section III and Fig. 1: a pixel's local view (or
+ * light) direction is interpolated from the three measured directions that
+ * enclose it, with barycentric weights, on a triangulation of the measured
+ * set (src/render/hemisphere.c, docs/render.md). Local directions are in
+ * the tangent frame: x along the texture's columns (phi = 0), y up the
+ * image (phi = 90), z the surface normal. */
+typedef struct btf_hemisphere btf_hemisphere; /* opaque */
+
+/* Triangulates a direction set (any set of >= 3 directions not all on one
+ * great circle through the pole... see docs/render.md for the rules). */
+btf_status btf_hemisphere_build(const btf_dirset *set, btf_hemisphere **out, btf_error *err);
+void btf_hemisphere_free(btf_hemisphere *h);
+/* The three set indices enclosing local direction v (any non-zero vector:
+ * beyond the outermost ring and below the horizon too, by the rule in
+ * docs/render.md) and their weights: w >= 0, summing to 1, continuous in
+ * v, 1 at a measured direction. A zero or non-finite v is taken as the
+ * pole. */
+void btf_hemisphere_lookup(const btf_hemisphere *h, const float v[3], int idx[3], float w[3]);
+
+/* The flat tables the CPU and GPU lookups both read (the lookup itself is
+ * src/render/btf_hemisphere_lookup.h, the same text for C and GLSL). The
+ * pointers stay owned by h. */
+typedef struct btf_hemisphere_table {
+    int n_points, n_triangles;
+    const float *points;        /* [n_points][2]: the projected directions */
+    const int32_t *triangles;   /* [n_triangles][3]: point indices, counter-clockwise */
+    int grid;                   /* grid x grid cells over [-1, 1]^2 */
+    const int32_t *cell_start;  /* [grid * grid + 1]: cell c's triangles are */
+    const int32_t *cell_tris;   /*   cell_tris[cell_start[c] .. cell_start[c + 1]) */
+    int n_cell_tris;
+    int n_hull;                 /* the outer boundary, counter-clockwise: */
+    const int32_t *hull;        /*   [n_hull] point indices */
+} btf_hemisphere_table;
+void btf_hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t);
+
+/* ---------------------------------------------------- range and normal map */
+
+/* The model's range tile (paper section II.B) enlarged to a seamless
+ * width x height map in analysed-image texels: the map wraps (its right
+ * edge continues into its left, its bottom into its top) at any size
+ * (docs/render.md says how). height: width x height x 1, heights in
+ * analysed-image texels (multiply by a relief scale to exaggerate);
+ * normal: width x height x 3 unit normals in the tangent frame (x right,
+ * y up the image, z out), derived from the heights with wrap-around
+ * differences. Either output may be NULL. A model without a range map
+ * gives a flat map (heights 0, normals (0, 0, 1)). */
+btf_status btf_range_map(const btf_model *m, int width, int height, btf_image *height_out,
+                         btf_image *normal_out, btf_error *err);
+
+/* ----------------------------------------------------------------- scenes */
+
+/* A scene for btf_render_scene (src/scene/, docs/scene.md): a pinhole
+ * camera, lights and objects, buildable by a program without a file.
+ * World units are arbitrary; right-handed coordinates. */
+typedef struct btf_camera {
+    double position[3], target[3], up[3];
+    double fov_deg;                 /* vertical field of view, (0, 180) */
+} btf_camera;
+
+typedef enum btf_light_kind { BTF_LIGHT_DIRECTIONAL = 0, BTF_LIGHT_POINT } btf_light_kind;
+
+typedef struct btf_light {
+    btf_light_kind kind;
+    double direction[3];            /* directional: towards the light (unit) */
+    double position[3];             /* point: its position; falls off as 1/d^2 */
+    float rgb[3];                   /* intensity per channel */
+} btf_light;
+
+typedef enum btf_object_kind {
+    BTF_OBJECT_PLANE = 0,           /* a square of side `size` around center, normal `axis` */
+    BTF_OBJECT_SPHERE,              /* center, radius */
+    BTF_OBJECT_CYLINDER,            /* center (of its axis), axis, radius, height; open ends */
+    BTF_OBJECT_MESH                 /* triangles with UVs */
+} btf_object_kind;
+
+typedef struct btf_mesh {
+    int n_vertices, n_triangles;
+    float *positions;               /* [n_vertices][3] */
+    float *normals;                 /* [n_vertices][3] or NULL (face normals) */
+    float *uvs;                     /* [n_vertices][2], in texture units (scaled by texture_scale) */
+    uint32_t *indices;              /* [n_triangles][3] */
+} btf_mesh;
+
+typedef struct btf_object {
+    btf_object_kind kind;
+    double center[3];
+    double axis[3];                 /* plane normal, cylinder axis; unit */
+    double radius, height, size;
+    double texture_scale;           /* texels of the material per world unit */
+    double rotation_deg;            /* the material turned on the surface */
+    btf_mesh mesh;                  /* BTF_OBJECT_MESH: owned by the scene */
+} btf_object;
+
+typedef struct btf_scene {
+    btf_camera camera;
+    int n_lights;
+    btf_light *lights;
+    int n_objects;
+    btf_object *objects;
+    float background[3];            /* linear RGB */
+} btf_scene;
+
+/* Reads a JSON scene file (docs/scene.md; meshes through assimp): any bad
+ * key, type, value, missing or UV-less mesh is one error naming the file
+ * and the key. */
+btf_status btf_scene_load(const char *path, btf_scene *out, btf_error *err);
+/* Checks a scene built in memory (degenerate camera, zero radius, ...). */
+btf_status btf_scene_check(const btf_scene *s, btf_error *err);
+void btf_scene_free(btf_scene *s);
+
+/* What ray casting gives per pixel: the G-buffer the renderer shades (and
+ * uploads for the GPU pass). Pixel (x, y), row y from the top. */
+typedef struct btf_gbuffer {
+    int width, height;
+    int32_t *object;                /* object index, -1: background */
+    float *uv;                      /* [2] material texels: u along columns, v down rows */
+    float *frame;                   /* [9] tangent (phi = 0), bitangent (phi = 90), normal; world */
+    float *position;                /* [3] world hit point */
+    float *view;                    /* [3] world unit vector from the hit towards the eye */
+} btf_gbuffer;
+
+/* Casts one ray per pixel centre (BVH over mesh triangles), on `threads`
+ * threads (0: all CPUs). */
+btf_status btf_scene_trace(const btf_scene *s, int width, int height, int threads,
+                           btf_gbuffer *out, btf_error *err);
+void btf_gbuffer_free(btf_gbuffer *g);
+
 #ifdef __cplusplus
 }
 #endif

@@ -4,11 +4,12 @@
 set -eu
 
 PKGS="build-essential g++ pkg-config clang
-libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+libopencv-core-dev libopencv-imgproc-dev
 libopenexr-dev libpng-dev libjpeg62-turbo-dev
 libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
 glslang-tools spirv-tools
-libcmocka-dev zlib1g-dev time openexr"
+libcmocka-dev zlib1g-dev time openexr
+libcjson-dev libassimp-dev"
 
 missing=""
 for p in $PKGS; do

@@ -1,21 +1,18 @@
 /*
  * cv_bridge.cpp — the one C++ file: a thin C interface over the parts of
- * OpenCV 4 that have no C API: PNG/JPEG encoding in memory (decoding is
- * io/png_jpeg.c, with libpng/libjpeg's messages under our control),
- * the linear-RGB to CIE Lab conversion (segmentation features, Haindl &
+ * OpenCV 4 that have no C API: the linear-RGB to CIE Lab conversion (segmentation features, Haindl &
  * Filip 2007, section II.A), and the 2D DFT and DCT (range-map integration,
  * section II.B). Nothing here throws across the boundary: every OpenCV
- * exception becomes an error text.
+ * exception becomes an error text. (PNG/JPEG go through libpng and libjpeg
+ * directly, io/png_jpeg*.c: imgcodecs alone loaded ~125 libraries.)
  */
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
-#include <vector>
 
 extern "C" {
 #include "core/core.h"
@@ -42,45 +39,6 @@ template <class Body> static int guarded(char *errbuf, size_t errlen, Body body)
         set_error(errbuf, errlen, "unknown OpenCV failure");
     }
     return -1;
-}
-
-/* Encodes 8-bit RGB or grey pixels to a memory buffer (".png" or ".jpg"). */
-extern "C" int btfcv_encode(const char *ext, int w, int h, int c,
-                            const unsigned char *pixels, int jpeg_quality,
-                            unsigned char **out, size_t *outlen, char *errbuf,
-                            size_t errlen)
-{
-    *out = nullptr;
-    *outlen = 0;
-    return guarded(errbuf, errlen, [&]() -> int {
-        cv::Mat m(h, w, c == 3 ? CV_8UC3 : CV_8UC1, const_cast<unsigned char *>(pixels));
-        cv::Mat bgr;
-        if (c == 3)
-            cv::cvtColor(m, bgr, cv::COLOR_RGB2BGR);
-        else
-            bgr = m;
-        std::vector<int> params;
-        if (std::strcmp(ext, ".jpg") == 0) {
-            params = {cv::IMWRITE_JPEG_QUALITY, jpeg_quality};
-        } else {
-            /* Level 3: files within a few % of level 9 at a fraction of the time. */
-            params = {cv::IMWRITE_PNG_COMPRESSION, 3};
-        }
-        std::vector<unsigned char> buf;
-        if (!cv::imencode(ext, bgr, buf, params)) {
-            set_error(errbuf, errlen, "encoder failed");
-            return -1;
-        }
-        unsigned char *copy = static_cast<unsigned char *>(std::malloc(buf.size() ? buf.size() : 1));
-        if (!copy) {
-            set_error(errbuf, errlen, "out of memory");
-            return -1;
-        }
-        std::memcpy(copy, buf.data(), buf.size());
-        *out = copy;
-        *outlen = buf.size();
-        return 0;
-    });
 }
 
 /* Linear RGB (floats, interleaved, n pixels) to CIE L*a*b* (D65), using

@@ -343,8 +343,8 @@ static unsigned char *to_srgb8(const btf_image *img, btf_error *err)
     return b;
 }
 
-static btf_status write_cv(const char *path, const char *ext, const btf_image *img, int quality,
-                           btf_error *err)
+static btf_status write_encoded(const char *path, btf_file_format format, const btf_image *img,
+                                int quality, btf_error *err)
 {
     if (!img || !img->data || (img->channels != 1 && img->channels != 3))
         return btf_fail(err, BTF_E_ARG, "%s: no image to write", path);
@@ -354,8 +354,8 @@ static btf_status write_cv(const char *path, const char *ext, const btf_image *i
     unsigned char *enc;
     size_t len;
     char msg[256];
-    int bad = btfcv_encode(ext, img->width, img->height, img->channels, px, quality, &enc,
-                           &len, msg, sizeof msg);
+    int bad = btf_png_jpeg_encode(format, img->width, img->height, img->channels, px, quality,
+                                  &enc, &len, msg, sizeof msg);
     free(px);
     if (bad)
         return btf_fail(err, BTF_E_IO, "%s: cannot encode: %s", path, msg);
@@ -366,7 +366,7 @@ static btf_status write_cv(const char *path, const char *ext, const btf_image *i
 
 btf_status btf_image_write_png(const char *path, const btf_image *img, btf_error *err)
 {
-    return write_cv(path, ".png", img, 0, err);
+    return write_encoded(path, BTF_FILE_PNG, img, 0, err);
 }
 
 btf_status btf_image_write_jpeg(const char *path, const btf_image *img, int quality,
@@ -374,5 +374,5 @@ btf_status btf_image_write_jpeg(const char *path, const btf_image *img, int qual
 {
     if (quality < 1 || quality > 100)
         return btf_fail(err, BTF_E_ARG, "%s: JPEG quality %d: expected 1..100", path, quality);
-    return write_cv(path, ".jpg", img, quality, err);
+    return write_encoded(path, BTF_FILE_JPEG, img, quality, err);
 }

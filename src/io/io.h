@@ -102,11 +102,14 @@ typedef struct btf_decoded {
 btf_status btf_png_jpeg_decode(const void *data, size_t n, btf_file_format format,
                                const char *name, btf_decoded *out, btf_error *err);
 
+/* Encodes 8-bit sRGB pixels (1 or 3 channels, RGB order) as PNG (zlib level
+ * 3) or JPEG (jpeg_quality 1..100) into a malloc'd buffer; returns 0, or -1
+ * with the reason in msg. Nothing is printed. */
+int btf_png_jpeg_encode(btf_file_format format, int w, int h, int c,
+                        const unsigned char *pixels, int jpeg_quality, unsigned char **out,
+                        size_t *outlen, char *msg, size_t msglen);
 /* The OpenCV bridge (io/cv_bridge.cpp), a C interface with its own small
  * convention: 0 on success, -1 with the error text in errbuf. */
-int btfcv_encode(const char *ext, int w, int h, int c, const unsigned char *pixels,
-                 int jpeg_quality, unsigned char **out, size_t *outlen,
-                 char *errbuf, size_t errlen);
 int btfcv_rgb_to_lab(const float *rgb, size_t n, float *lab, char *errbuf, size_t errlen);
 int btfcv_dft2(double *re, double *im, int w, int h, int inverse, char *errbuf, size_t errlen);
 int btfcv_dct2(double *a, int w, int h, int inverse, char *errbuf, size_t errlen);

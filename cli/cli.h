@@ -35,6 +35,9 @@ int cli_usage_error(const cli_ctx *c, const char *fmt, ...)
 int cli_plain_number(const char *s, int allow_minus);
 int cli_parse_int(const char *s, long lo, long hi, long *out);
 int cli_parse_u64(const char *s, uint64_t *out);
+/* "THETA,PHI" in degrees (theta 0..90, phi 0..360; 360 becomes 0): 0, or
+ * -1 with what was expected in why. */
+int cli_parse_dir(const char *s, btf_dir *d, char *why, size_t n);
 /* "WxH" */
 int cli_parse_size(const char *s, int *w, int *h);
 
@@ -66,6 +69,7 @@ int cmd_photostereo(int argc, char **argv);
 int cmd_analyse(int argc, char **argv);
 int cmd_texture_fit(int argc, char **argv);
 int cmd_synthesise(int argc, char **argv);
+int cmd_render(int argc, char **argv);
 
 /* The model options shared by analyse and texture-fit, as option-table
  * rows over a btf_fit_opts (fo) with a tag. */

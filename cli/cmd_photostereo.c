@@ -68,26 +68,8 @@ typedef struct ps_args {
 static int parse_view(const char *s, void *dest, char *why, size_t n)
 {
     ps_args *p = dest;
-    btf_dir *d = &p->view;
-    char buf[64], *end;
-    const char *comma = strchr(s, ',');
-    snprintf(why, n, "THETA,PHI in degrees, theta 0..90, phi 0..360");
-    if (!comma || (size_t)(comma - s) >= sizeof buf)
+    if (cli_parse_dir(s, &p->view, why, n) != 0)
         return -1;
-    memcpy(buf, s, (size_t)(comma - s));
-    buf[comma - s] = '\0';
-    errno = 0;
-    if (!cli_plain_number(buf, 0) || !cli_plain_number(comma + 1, 0))
-        return -1;
-    double theta = strtod(buf, &end);
-    if (end == buf || *end || errno)
-        return -1;
-    double phi = strtod(comma + 1, &end);
-    if (end == comma + 1 || *end || errno || !(theta >= 0.0 && theta <= 90.0) ||
-        !(phi >= 0.0 && phi <= 360.0))
-        return -1;
-    d->theta = theta;
-    d->phi = phi >= 360.0 ? 0.0 : phi;
     p->has_view = 1;
     return 0;
 }

@@ -185,3 +185,27 @@ double cli_now(void)
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
+
+int cli_parse_dir(const char *s, btf_dir *d, char *why, size_t n)
+{
+    char buf[64], *end;
+    const char *comma = strchr(s, ',');
+    snprintf(why, n, "THETA,PHI in degrees, theta 0..90, phi 0..360");
+    if (!comma || (size_t)(comma - s) >= sizeof buf)
+        return -1;
+    memcpy(buf, s, (size_t)(comma - s));
+    buf[comma - s] = '\0';
+    errno = 0;
+    if (!cli_plain_number(buf, 0) || !cli_plain_number(comma + 1, 0))
+        return -1;
+    double theta = strtod(buf, &end);
+    if (end == buf || *end || errno)
+        return -1;
+    double phi = strtod(comma + 1, &end);
+    if (end == comma + 1 || *end || errno || !(theta >= 0.0 && theta <= 90.0) ||
+        !(phi >= 0.0 && phi <= 360.0))
+        return -1;
+    d->theta = theta;
+    d->phi = phi >= 360.0 ? 0.0 : phi;
+    return 0;
+}

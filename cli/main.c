@@ -17,6 +17,7 @@ static const struct {
     {"photostereo", cmd_photostereo, "normals, albedo and range map by robust photometric stereo"},
     {"texture-fit", cmd_texture_fit, "model one colour texture with the multi-scale 2D CAR model"},
     {"synthesise", cmd_synthesise, "generate subspace images of a model at any size (CPU or GPU)"},
+    {"render", cmd_render, "render the material on a scene, or flat for one (view, light) pair"},
 };
 
 static void usage(FILE *f)

@@ -1093,6 +1093,67 @@ btf_status btf_scene_trace(const btf_scene *s, int width, int height, int thread
                            btf_gbuffer *out, btf_error *err);
 void btf_gbuffer_free(btf_gbuffer *g);
 
+/* ---------------------------------------------------------------- render */
+
+/* The paper's rendering stage (Haindl & Filip 2007, section III, Fig. 1;
+ * src/render/, docs/render.md): per pixel, the local view and light
+ * directions select the 3 nearest measured views x 3 nearest lights; the
+ * nine (view, light) pairs select subspace images through the index table,
+ * which are sampled at parallax-shifted texture coordinates and blended with
+ * the barycentric weights; the result is relit by the range map's normals. */
+typedef struct btf_render_opts {
+    int width, height;   /* frame size, 1..BTF_RENDER_MAX_SIDE; 0: 512 */
+    uint64_t seed;       /* synthesis seed of the subspace images */
+    int threads;         /* 0: all CPUs */
+    double relief;       /* range map height scale (parallax and bump); 0: off; < 0: 1 */
+    int texture_size;    /* side of the synthesised tileable subspace images and
+                            range map, in analysed texels; 0: what the visible
+                            surface needs (docs/render.md) */
+    int all_subspaces;   /* 1: synthesise every subspace, not only the needed ones */
+} btf_render_opts;
+#define BTF_RENDER_MAX_SIDE 16384
+btf_render_opts btf_render_defaults(void);
+
+/* What a render did (times in seconds). */
+typedef struct btf_render_info {
+    int needed, total;   /* subspaces synthesised, of the model's */
+    int texture_size;
+    double trace_s, synth_s, shade_s;
+} btf_render_info;
+
+/* The subspaces (needed[k] = 1) that the nine pairs of any pixel of g
+ * select under any of the lights, and their count. needed has
+ * m->n_subspaces entries. */
+btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf_light *lights,
+                             int n_lights, uint8_t *needed, int *count, btf_error *err);
+
+/* A material ready to shade with: the model's hemisphere tables, its
+ * range and normal map, and the synthesised (tileable) subspace images
+ * (only those with needed[k] set; needed NULL: all), all of side
+ * texture_size. Kept in memory; repeated renders reuse it. */
+typedef struct btf_render_material btf_render_material;
+btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,
+                                     int texture_size, uint64_t seed, int threads,
+                                     btf_render_material **out, btf_error *err);
+void btf_render_material_free(btf_render_material *rm);
+
+/* Shades a G-buffer into out (linear RGB, g's size; allocated here). A pixel
+ * that needs a subspace the material was not built with is an error. */
+btf_status btf_render_shade(const btf_render_material *rm, const btf_gbuffer *g,
+                            const btf_light *lights, int n_lights, const float background[3],
+                            double relief, int threads, btf_image *out, btf_error *err);
+
+/* The whole render of a scene: trace, the needed subspaces, synthesis, shade. */
+btf_status btf_render_scene(const btf_model *m, const btf_scene *s, const btf_render_opts *opts,
+                            btf_image *out, btf_render_info *info, btf_error *err);
+
+/* The model's counterpart of one measured image: a flat patch seen from
+ * `view` and lit (unit white directional light) from `light`,
+ * orthographic, texel (x, y) of the frame at texture texel (x, y). */
+btf_status btf_render_flat(const btf_model *m, btf_dir view, btf_dir light,
+                           const btf_render_opts *opts, btf_image *out, btf_render_info *info,
+                           btf_error *err);
+
 #ifdef __cplusplus
 }
 #endif

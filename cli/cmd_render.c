@@ -1,0 +1,148 @@
+/* cmd_render.c — btfcar render: the material on geometry (Haindl & Filip
+ * 2007, section III): a JSON scene (--scene), or a flat patch seen from one
+ * (view, light) pair (--view/--light), the model's counterpart of one
+ * measured image. The library does the work (src/render/, src/scene/). */
+#include "cli.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+static const char ABOUT[] =
+    "Renders the material. With --scene, the objects of a JSON scene file\n"
+    "(docs/scene.md) under its lights; with --view and --light, a flat patch\n"
+    "seen and lit from those directions (orthographic, one texel per pixel), to\n"
+    "lay beside the measured image of that pair. Per pixel, the 3 nearest\n"
+    "measured views x 3 nearest lights select subspace images, blended with\n"
+    "barycentric weights at parallax-shifted texture coordinates and relit by\n"
+    "the range map's normals (docs/render.md). Only the subspaces the frame\n"
+    "needs are synthesised, tileable, in memory. IMAGE: .png (8-bit sRGB) or\n"
+    ".exr (linear float).\n";
+
+typedef struct dir_arg {
+    btf_dir dir;
+    int given;
+} dir_arg;
+
+static int parse_dir_arg(const char *s, void *dest, char *why, size_t n)
+{
+    dir_arg *d = dest;
+    if (cli_parse_dir(s, &d->dir, why, n) != 0)
+        return -1;
+    d->given = 1;
+    return 0;
+}
+
+static int has_suffix(const char *s, const char *suffix)
+{
+    size_t a = strlen(s), b = strlen(suffix);
+    return a >= b && !strcasecmp(s + a - b, suffix);
+}
+
+static btf_status write_image(const char *path, const btf_image *img, btf_error *err)
+{
+    if (has_suffix(path, ".exr"))
+        return btf_image_write_exr(path, img, 0, err);
+    return btf_image_write_png(path, img, err);
+}
+
+int cmd_render(int argc, char **argv)
+{
+    cli_ctx c = {"render", 0};
+    static const char *const backends[] = {"cpu", NULL};
+    const char *model = NULL, *scene_path = NULL, *out_path = NULL;
+    dir_arg view = {{0, 0}, 0}, light = {{0, 0}, 0};
+    btf_render_opts ro = btf_render_defaults();
+    int size[2] = {512, 512}, backend = 0, all = 0;
+    double t_start = cli_now();
+    cli_opt opts[] = {
+        {.name = "--scene", .kind = CLI_STRING, .dest = &scene_path, .meta = "FILE",
+         .help = "the JSON scene to render (docs/scene.md, examples/)"},
+        {.name = "--view", .kind = CLI_CUSTOM, .dest = &view, .meta = "THETA,PHI",
+         .help = "flat render: the view direction (degrees)", .parse = parse_dir_arg},
+        {.name = "--light", .kind = CLI_CUSTOM, .dest = &light, .meta = "THETA,PHI",
+         .help = "flat render: the light direction (degrees)", .parse = parse_dir_arg},
+        {.name = "--size", .kind = CLI_SIZE, .dest = size, .meta = "WxH",
+         .help = "frame size in pixels", .lo = 1, .hi = BTF_RENDER_MAX_SIDE},
+        {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out_path,
+         .meta = "IMAGE", .help = "the image to write: .png (8-bit sRGB) or .exr (linear)",
+         .required = 1},
+        {.name = "--seed", .kind = CLI_U64, .dest = &ro.seed, .meta = "S",
+         .help = "synthesis seed of the subspace images; the same seed gives the same\n"
+                 "pixels"},
+        {.name = "--relief", .kind = CLI_DOUBLE, .dest = &ro.relief, .meta = "R",
+         .help = "range map height scale for parallax and bump mapping; 0 turns\n"
+                 "both off", .lo = 0, .hi = 1e6},
+        {.name = "--texture-size", .kind = CLI_INT, .dest = &ro.texture_size, .meta = "N|auto",
+         .help = "side of the tileable subspace images in texels; auto: what the\n"
+                 "visible surface spans (at most 1024)",
+         .lo = 8, .hi = BTF_RENDER_MAX_SIDE, .word = "auto", .word_value = 0},
+        {.name = "--threads", .kind = CLI_INT, .dest = &ro.threads, .meta = "N",
+         .help = "threads for tracing, synthesis and shading; 0: all CPUs", .lo = 0,
+         .hi = 1024},
+        {.name = "--all-subspaces", .kind = CLI_FLAG, .dest = &all,
+         .help = "synthesise every subspace, not only those the frame needs"},
+        {.name = "--backend", .kind = CLI_CHOICE, .dest = &backend, .meta = "cpu",
+         .help = "cpu: the CPU renderer", .choices = backends},
+        {0}};
+    cli_spec spec = {.cmd = "render", .args = "MODEL", .about = ABOUT, .min_args = 1,
+                     .max_args = 1, .opts = opts};
+    int nargs, prc = cli_parse(&c, &spec, argc, argv, &model, &nargs);
+    if (prc >= 0)
+        return prc;
+    int flat = view.given || light.given;
+    if (flat && scene_path)
+        return cli_usage_error(&c, "--scene and --view/--light exclude each other");
+    if (!flat && !scene_path)
+        return cli_usage_error(&c, "give --scene FILE, or --view THETA,PHI and --light THETA,PHI");
+    if (flat && !(view.given && light.given))
+        return cli_usage_error(&c, "a flat render needs both --view and --light");
+    if (!has_suffix(out_path, ".png") && !has_suffix(out_path, ".exr"))
+        return cli_usage_error(&c, "%s: expected a .png or .exr output", out_path);
+    if (cli_check_output(&c, out_path, BTF_OUTPUT_FILE))
+        return 1;
+    ro.width = size[0];
+    ro.height = size[1];
+    ro.all_subspaces = all;
+    btf_error err = {0};
+    btf_scene scene;
+    memset(&scene, 0, sizeof scene);
+    if (scene_path && btf_scene_load(scene_path, &scene, &err) != 0)
+        return cli_lib_error(&c, &err);
+    btf_model m;
+    double t_read = cli_now();
+    if (btf_model_read(model, &m, &err) != 0) {
+        btf_scene_free(&scene);
+        return cli_lib_error(&c, &err);
+    }
+    t_read = cli_now() - t_read;
+    btf_image img = {0};
+    btf_render_info info;
+    memset(&info, 0, sizeof info);
+    btf_status rc = flat ? btf_render_flat(&m, view.dir, light.dir, &ro, &img, &info, &err)
+                         : btf_render_scene(&m, &scene, &ro, &img, &info, &err);
+    double t_write = cli_now();
+    if (rc == BTF_OK)
+        rc = write_image(out_path, &img, &err);
+    t_write = cli_now() - t_write;
+    btf_image_free(&img);
+    btf_model_free(&m);
+    btf_scene_free(&scene);
+    if (rc) {
+        if (!strchr(err.msg, ':')) { /* name the model when the library could not */
+            char why[sizeof err.msg];
+            snprintf(why, sizeof why, "%s", err.msg);
+            cli_set_error(&err, rc, "%s: %s", model, why);
+        }
+        return cli_lib_error(&c, &err);
+    }
+    if (!c.quiet) {
+        printf("subspaces: %d needed of %d (tileable, %dx%d texels)\n", info.needed, info.total,
+               info.texture_size, info.texture_size);
+        printf("backend cpu: model read %.3f s, trace %.3f s, synthesis %.3f s, shade %.3f s, "
+               "write %.3f s; total %.3f s\n", t_read, info.trace_s, info.synth_s,
+               info.shade_s, t_write, cli_now() - t_start);
+        printf("rendered %dx%d into %s\n", ro.width, ro.height, out_path);
+    }
+    return 0;
+}

@@ -1,0 +1,133 @@
+/*
+ * render_material.c — the material ready to shade with: the triangulated
+ * direction sets (render/hemisphere.c), the range and normal map of the
+ * texture's size (btf_range_map), and the tileable subspace images the
+ * scene needs (btf_synthesise with tileable set), synthesised once, in
+ * parallel, kept in memory for the frame and never written to disk.
+ */
+#include "render/shade.h"
+#include "core/core.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* 2^(levels - 1) of the deepest pyramid: a tileable synthesis needs each
+ * side divisible by it (docs/synthesis.md, "Tileable synthesis"). */
+static int texture_step(const btf_model *m)
+{
+    int levels = 1;
+    for (int k = 0; k < m->n_subspaces; k++)
+        if (m->subspaces[k].levels > levels)
+            levels = m->subspaces[k].levels;
+    return 1 << (levels - 1);
+}
+
+int btf_render_texture_side(const btf_model *m, int side)
+{
+    int step = texture_step(m);
+    if (side < 8)
+        side = 8;
+    if (side > BTF_RENDER_MAX_SIDE)
+        side = BTF_RENDER_MAX_SIDE;
+    return (side + step - 1) / step * step;
+}
+
+typedef struct synth_jobs {
+    const btf_model *m;
+    const int *which;
+    btf_render_material *rm;
+    uint64_t seed;
+} synth_jobs;
+
+static btf_status synth_job(void *user, int j, int worker, btf_error *err)
+{
+    (void)worker;
+    synth_jobs *s = user;
+    int k = s->which[j];
+    btf_synth_opts o = btf_synth_defaults();
+    o.width = o.height = s->rm->size;
+    o.seed = s->seed;
+    o.tileable = 1;
+    return btf_synthesise_image(s->m, k, &o, &s->rm->tex[k], err);
+}
+
+void btf_render_material_free(btf_render_material *rm)
+{
+    if (!rm)
+        return;
+    btf_hemisphere_free(rm->views);
+    btf_hemisphere_free(rm->lights);
+    btf_image_free(&rm->height);
+    btf_image_free(&rm->normal);
+    if (rm->tex)
+        for (int k = 0; k < rm->n_subspaces; k++)
+            btf_image_free(&rm->tex[k]);
+    free(rm->tex);
+    free(rm->index);
+    free(rm);
+}
+
+static btf_status build_tables(const btf_model *m, btf_render_material *rm, btf_error *err)
+{
+    size_t pairs = (size_t)m->views.count * (size_t)m->lights.count;
+    rm->n_views = m->views.count;
+    rm->n_lights = m->lights.count;
+    rm->n_subspaces = m->n_subspaces;
+    rm->index = btf_alloc(pairs, 1, err);
+    rm->tex = btf_alloc((size_t)m->n_subspaces, sizeof *rm->tex, err);
+    if (!rm->index || !rm->tex)
+        return BTF_E_NOMEM;
+    memcpy(rm->index, m->index, pairs);
+    memset(rm->tex, 0, (size_t)m->n_subspaces * sizeof *rm->tex);
+    for (size_t i = 0; i < pairs; i++)
+        if (rm->index[i] >= m->n_subspaces)
+            return btf_fail(err, BTF_E_FORMAT, "index table entry %zu names subspace %d of %d",
+                            i, rm->index[i], m->n_subspaces);
+    btf_status rc = btf_hemisphere_build(&m->views, &rm->views, err);
+    return rc ? rc : btf_hemisphere_build(&m->lights, &rm->lights, err);
+}
+
+btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,
+                                     int texture_size, uint64_t seed, int threads,
+                                     btf_render_material **out, btf_error *err)
+{
+    if (!out)
+        return btf_fail(err, BTF_E_ARG, "render material: no output given");
+    *out = NULL;
+    btf_status rc = btf_render_check_model(m, err);
+    if (rc)
+        return rc;
+    int side = btf_render_texture_side(m, texture_size);
+    if (side != texture_size)
+        return btf_fail(err, BTF_E_ARG, "texture size %d: expected a multiple of %d (the "
+                        "model's pyramid) from 8 to %d, e.g. %d", texture_size, texture_step(m),
+                        BTF_RENDER_MAX_SIDE, side);
+    btf_render_material *rm = btf_alloc(1, sizeof *rm, err);
+    if (!rm)
+        return BTF_E_NOMEM;
+    memset(rm, 0, sizeof *rm);
+    rm->size = side;
+    int *which = NULL;
+    if ((rc = build_tables(m, rm, err)) ||
+        (rc = btf_range_map(m, side, side, &rm->height, &rm->normal, err)))
+        goto fail;
+    which = btf_alloc((size_t)m->n_subspaces, sizeof *which, err);
+    if (!which) {
+        rc = BTF_E_NOMEM;
+        goto fail;
+    }
+    int n = 0;
+    for (int k = 0; k < m->n_subspaces; k++)
+        if (!needed || needed[k])
+            which[n++] = k;
+    synth_jobs sj = {m, which, rm, seed};
+    if ((rc = btf_pool_run(n, threads, synth_job, &sj, NULL, err)))
+        goto fail;
+    free(which);
+    *out = rm;
+    return BTF_OK;
+fail:
+    free(which);
+    btf_render_material_free(rm);
+    return rc;
+}

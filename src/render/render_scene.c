@@ -1,0 +1,240 @@
+/*
+ * render_scene.c — the whole render (Haindl & Filip 2007, section III):
+ * trace the scene into a G-buffer (src/scene/), find the subspaces its
+ * pixels need (render/needed.c), synthesise only those, tileable, at the
+ * size the visible surface needs (render/render_material.c), and shade
+ * (render/shade.c). Also the flat (view, light) render, the model's
+ * counterpart of one measured image.
+ */
+#include "render/shade.h"
+#include "core/core.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+/* The auto texture size stops here: a surface that shows more texels than
+ * this sees the tileable images repeat (docs/render.md). */
+#define AUTO_TEXTURE_MAX 1024
+
+btf_render_opts btf_render_defaults(void)
+{
+    btf_render_opts o;
+    memset(&o, 0, sizeof o);
+    o.width = o.height = 512;
+    o.relief = 1.0;
+    return o;
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static btf_status resolve_opts(const btf_render_opts *in, btf_render_opts *o, btf_error *err)
+{
+    btf_render_opts d = btf_render_defaults();
+    *o = in ? *in : d;
+    if (o->width == 0)
+        o->width = d.width;
+    if (o->height == 0)
+        o->height = d.height;
+    if (o->relief < 0.0)
+        o->relief = d.relief;
+    if (o->width < 1 || o->height < 1 || o->width > BTF_RENDER_MAX_SIDE ||
+        o->height > BTF_RENDER_MAX_SIDE)
+        return btf_fail(err, BTF_E_ARG, "frame %dx%d: each side must be 1..%d", o->width,
+                        o->height, BTF_RENDER_MAX_SIDE);
+    if (!isfinite(o->relief) || o->relief > 1e6)
+        return btf_fail(err, BTF_E_ARG, "relief %g: expected 0..1e6", o->relief);
+    if (o->texture_size < 0 || o->texture_size > BTF_RENDER_MAX_SIDE)
+        return btf_fail(err, BTF_E_ARG, "texture size %d: expected 0 (auto) or 8..%d",
+                        o->texture_size, BTF_RENDER_MAX_SIDE);
+    return BTF_OK;
+}
+
+/* The texels the visible surface spans: the largest extent of the hit
+ * pixels' texture coordinates along u or v, per object, over all objects
+ * (at most AUTO_TEXTURE_MAX; 0 when nothing is hit). */
+static int visible_extent(const btf_gbuffer *g, btf_error *err)
+{
+    size_t n = (size_t)g->width * (size_t)g->height;
+    int objects = 0;
+    for (size_t p = 0; p < n; p++)
+        if (g->object[p] >= objects)
+            objects = g->object[p] + 1;
+    if (objects == 0)
+        return 0;
+    double *box = btf_alloc((size_t)objects, 4 * sizeof(double), err);
+    if (!box)
+        return -1;
+    for (int k = 0; k < objects; k++) {
+        box[4 * k] = box[4 * k + 1] = INFINITY;
+        box[4 * k + 2] = box[4 * k + 3] = -INFINITY;
+    }
+    for (size_t p = 0; p < n; p++) {
+        int k = g->object[p];
+        for (int a = 0; a < 2 && k >= 0; a++) {
+            double u = g->uv[2 * p + a];
+            if (!isfinite(u))
+                continue;
+            box[4 * k + a] = u < box[4 * k + a] ? u : box[4 * k + a];
+            box[4 * k + 2 + a] = u > box[4 * k + 2 + a] ? u : box[4 * k + 2 + a];
+        }
+    }
+    double ext = 0.0;
+    for (int k = 0; k < objects; k++)
+        for (int a = 0; a < 2; a++)
+            if (box[4 * k + 2 + a] - box[4 * k + a] > ext)
+                ext = box[4 * k + 2 + a] - box[4 * k + a];
+    free(box);
+    return ext > AUTO_TEXTURE_MAX ? AUTO_TEXTURE_MAX : (int)ceil(ext);
+}
+
+/* Needed set, material, shading of a G-buffer: the part both renders share. */
+static btf_status render_gbuffer(const btf_model *m, const btf_gbuffer *g,
+                                 const btf_light *lights, int n_lights, const float bg[3],
+                                 const btf_render_opts *o, btf_image *out,
+                                 btf_render_info *info, btf_error *err)
+{
+    uint8_t *needed = btf_alloc((size_t)m->n_subspaces, 1, err);
+    if (!needed)
+        return BTF_E_NOMEM;
+    int count = 0;
+    double t0 = now_s();
+    btf_render_material *rm = NULL;
+    btf_status rc = btf_render_needed(m, g, lights, n_lights, needed, &count, err);
+    if (rc == BTF_OK && o->all_subspaces) {
+        memset(needed, 1, (size_t)m->n_subspaces);
+        count = m->n_subspaces;
+    }
+    int want = o->texture_size;
+    if (rc == BTF_OK && want == 0 && (want = visible_extent(g, err)) < 0)
+        rc = BTF_E_NOMEM;
+    int side = btf_render_texture_side(m, want);
+    if (rc == BTF_OK && o->texture_size && side != o->texture_size)
+        rc = btf_fail(err, BTF_E_ARG, "texture size %d: expected a multiple of the model's "
+                      "pyramid step, e.g. %d", o->texture_size, side);
+    if (rc == BTF_OK)
+        rc = btf_render_material_build(m, needed, side, o->seed, o->threads, &rm, err);
+    double t1 = now_s();
+    if (rc == BTF_OK)
+        rc = btf_render_shade(rm, g, lights, n_lights, bg, o->relief, o->threads, out, err);
+    double t2 = now_s();
+    if (info) {
+        info->needed = count;
+        info->total = m->n_subspaces;
+        info->texture_size = side;
+        info->synth_s = t1 - t0;
+        info->shade_s = t2 - t1;
+    }
+    btf_render_material_free(rm);
+    free(needed);
+    return rc;
+}
+
+btf_status btf_render_scene(const btf_model *m, const btf_scene *s, const btf_render_opts *opts,
+                            btf_image *out, btf_render_info *info, btf_error *err)
+{
+    btf_render_opts o;
+    btf_status rc = resolve_opts(opts, &o, err);
+    if (rc || (rc = btf_render_check_model(m, err)))
+        return rc;
+    if (!s || !out)
+        return btf_fail(err, BTF_E_ARG, "render: no scene or output given");
+    if ((rc = btf_scene_check(s, err)))
+        return rc;
+    if (info)
+        memset(info, 0, sizeof *info);
+    double t0 = now_s();
+    btf_gbuffer g;
+    memset(&g, 0, sizeof g);
+    if ((rc = btf_scene_trace(s, o.width, o.height, o.threads, &g, err)))
+        return rc;
+    double t1 = now_s();
+    rc = render_gbuffer(m, &g, s->lights, s->n_lights, s->background, &o, out, info, err);
+    if (info)
+        info->trace_s = t1 - t0;
+    btf_gbuffer_free(&g);
+    return rc;
+}
+
+/* The orthographic G-buffer of a flat patch: texel (x, y) at pixel (x, y),
+ * the tangent frame the world's axes, one view for all pixels. */
+static btf_status flat_gbuffer(int w, int h, const float view[3], btf_gbuffer *g,
+                               btf_error *err)
+{
+    size_t n = (size_t)w * (size_t)h;
+    memset(g, 0, sizeof *g);
+    g->width = w;
+    g->height = h;
+    g->object = btf_alloc(n, sizeof *g->object, err);
+    g->uv = btf_alloc(n, 2 * sizeof(float), err);
+    g->frame = btf_alloc(n, 9 * sizeof(float), err);
+    g->position = btf_alloc(n, 3 * sizeof(float), err);
+    g->view = btf_alloc(n, 3 * sizeof(float), err);
+    if (!g->object || !g->uv || !g->frame || !g->position || !g->view) {
+        btf_gbuffer_free(g);
+        return BTF_E_NOMEM;
+    }
+    static const float identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            size_t p = (size_t)y * (size_t)w + (size_t)x;
+            g->object[p] = 0;
+            g->uv[2 * p] = (float)x + 0.5f;
+            g->uv[2 * p + 1] = (float)y + 0.5f;
+            memcpy(g->frame + 9 * p, identity, sizeof identity);
+            g->position[3 * p] = g->uv[2 * p];
+            g->position[3 * p + 1] = -g->uv[2 * p + 1];
+            g->position[3 * p + 2] = 0.0f;
+            memcpy(g->view + 3 * p, view, 3 * sizeof(float));
+        }
+    return BTF_OK;
+}
+
+static btf_status check_flat_dir(const char *what, btf_dir d, btf_error *err)
+{
+    if (!(d.theta >= 0.0 && d.theta <= 90.0) || !isfinite(d.phi))
+        return btf_fail(err, BTF_E_ARG, "%s direction (theta %g, phi %g): theta must be in "
+                        "[0, 90] degrees and phi finite", what, d.theta, d.phi);
+    return BTF_OK;
+}
+
+btf_status btf_render_flat(const btf_model *m, btf_dir view, btf_dir light,
+                           const btf_render_opts *opts, btf_image *out, btf_render_info *info,
+                           btf_error *err)
+{
+    btf_render_opts o;
+    btf_status rc = resolve_opts(opts, &o, err);
+    if (rc || (rc = btf_render_check_model(m, err)) ||
+        (rc = check_flat_dir("view", view, err)) || (rc = check_flat_dir("light", light, err)))
+        return rc;
+    if (!out)
+        return btf_fail(err, BTF_E_ARG, "render: no output given");
+    if (info)
+        memset(info, 0, sizeof *info);
+    double v[3], l[3];
+    btf_dir_to_vec(view, v);
+    btf_dir_to_vec(light, l);
+    float vf[3] = {(float)v[0], (float)v[1], (float)v[2]};
+    btf_light sun;
+    memset(&sun, 0, sizeof sun);
+    sun.kind = BTF_LIGHT_DIRECTIONAL;
+    for (int i = 0; i < 3; i++) {
+        sun.direction[i] = l[i];
+        sun.rgb[i] = 1.0f;
+    }
+    btf_gbuffer g;
+    if ((rc = flat_gbuffer(o.width, o.height, vf, &g, err)))
+        return rc;
+    if (o.texture_size == 0) /* a frame-sized texture: one texel per pixel, no repeat */
+        o.texture_size = btf_render_texture_side(m, o.width > o.height ? o.width : o.height);
+    static const float black[3] = {0.0f, 0.0f, 0.0f};
+    rc = render_gbuffer(m, &g, &sun, 1, black, &o, out, info, err);
+    btf_gbuffer_free(&g);
+    return rc;
+}

@@ -39,6 +39,49 @@ static int has_suffix(const char *s, const char *suffix)
     return a >= b && !strcasecmp(s + a - b, suffix);
 }
 
+/* --beside DATASET: the measured image of the (view, light) pair, read at
+ * the measured directions nearest those asked for (within 0.5 degree). */
+static btf_status read_measured(const char *dataset, btf_dir view, btf_dir light,
+                                btf_image *out, btf_error *err)
+{
+    btf_dataset *ds;
+    btf_status rc = btf_dataset_open(dataset, NULL, &ds, err);
+    if (rc)
+        return rc;
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    int v = btf_dirset_find(in->views, view, 0.5), l = btf_dirset_find(in->lights, light, 0.5);
+    if (v < 0 || l < 0)
+        rc = cli_set_error(err, BTF_E_ARG, "%s: no measured %s at theta %g, phi %g (within "
+                           "0.5 degree) to lay beside the render", dataset,
+                           v < 0 ? "view" : "light", v < 0 ? view.theta : light.theta,
+                           v < 0 ? view.phi : light.phi);
+    else
+        rc = btf_dataset_read(ds, v, l, out, err);
+    btf_dataset_close(ds);
+    return rc;
+}
+
+/* [measured | model] side by side, the measured image at its own size and
+ * the render's height the larger of the two (the rest black). */
+static btf_status side_by_side(const btf_image *a, const btf_image *b, btf_image *out,
+                               btf_error *err)
+{
+    int h = a->height > b->height ? a->height : b->height;
+    btf_status rc = btf_image_alloc(out, a->width + b->width, h, 3, err);
+    if (rc)
+        return rc;
+    memset(out->data, 0, (size_t)out->width * h * 3 * sizeof(float));
+    for (int y = 0; y < h; y++) {
+        float *row = out->data + (size_t)y * out->width * 3;
+        if (y < a->height)
+            memcpy(row, a->data + (size_t)y * a->width * 3, (size_t)a->width * 3 * sizeof(float));
+        if (y < b->height)
+            memcpy(row + (size_t)a->width * 3, b->data + (size_t)y * b->width * 3,
+                   (size_t)b->width * 3 * sizeof(float));
+    }
+    return BTF_OK;
+}
+
 static btf_status write_image(const char *path, const btf_image *img, btf_error *err)
 {
     if (has_suffix(path, ".exr"))
@@ -50,7 +93,7 @@ int cmd_render(int argc, char **argv)
 {
     cli_ctx c = {"render", 0};
     static const char *const backends[] = {"cpu", NULL};
-    const char *model = NULL, *scene_path = NULL, *out_path = NULL;
+    const char *model = NULL, *scene_path = NULL, *out_path = NULL, *beside = NULL;
     dir_arg view = {{0, 0}, 0}, light = {{0, 0}, 0};
     btf_render_opts ro = btf_render_defaults();
     int size[2] = {512, 512}, backend = 0, all = 0;
@@ -62,6 +105,9 @@ int cmd_render(int argc, char **argv)
          .help = "flat render: the view direction (degrees)", .parse = parse_dir_arg},
         {.name = "--light", .kind = CLI_CUSTOM, .dest = &light, .meta = "THETA,PHI",
          .help = "flat render: the light direction (degrees)", .parse = parse_dir_arg},
+        {.name = "--beside", .kind = CLI_STRING, .dest = &beside, .meta = "DATASET",
+         .help = "flat render: write the measured image of the pair (from DATASET) on\n"
+                 "the left and the render on the right"},
         {.name = "--size", .kind = CLI_SIZE, .dest = size, .meta = "WxH",
          .help = "frame size in pixels", .lo = 1, .hi = BTF_RENDER_MAX_SIDE},
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out_path,
@@ -97,6 +143,8 @@ int cmd_render(int argc, char **argv)
         return cli_usage_error(&c, "give --scene FILE, or --view THETA,PHI and --light THETA,PHI");
     if (flat && !(view.given && light.given))
         return cli_usage_error(&c, "a flat render needs both --view and --light");
+    if (beside && !flat)
+        return cli_usage_error(&c, "--beside goes with a flat render (--view, --light)");
     if (!has_suffix(out_path, ".png") && !has_suffix(out_path, ".exr"))
         return cli_usage_error(&c, "%s: expected a .png or .exr output", out_path);
     if (cli_check_output(&c, out_path, BTF_OUTPUT_FILE))
@@ -116,11 +164,22 @@ int cmd_render(int argc, char **argv)
         return cli_lib_error(&c, &err);
     }
     t_read = cli_now() - t_read;
-    btf_image img = {0};
+    btf_image img = {0}, measured = {0};
+    if (beside && read_measured(beside, view.dir, light.dir, &measured, &err) != 0) {
+        btf_model_free(&m);
+        return cli_lib_error(&c, &err);
+    }
     btf_render_info info;
     memset(&info, 0, sizeof info);
     btf_status rc = flat ? btf_render_flat(&m, view.dir, light.dir, &ro, &img, &info, &err)
                          : btf_render_scene(&m, &scene, &ro, &img, &info, &err);
+    if (rc == BTF_OK && beside) {
+        btf_image both = {0};
+        rc = side_by_side(&measured, &img, &both, &err);
+        btf_image_free(&img);
+        img = both;
+    }
+    btf_image_free(&measured);
     double t_write = cli_now();
     if (rc == BTF_OK)
         rc = write_image(out_path, &img, &err);

@@ -3,7 +3,9 @@
 #   1. generate a procedural material (81 x 81 images) in the UBO2003 layout;
 #   2. read it back and describe it;
 #   3. analyse it into one model file (segmentation, range map, CAR models);
-#   4. synthesise every subspace image at twice the measured size, seamless.
+#   4. synthesise every subspace image at twice the measured size, seamless;
+#   5. render the material on a sphere and a cylinder under two lights, and a
+#      flat (view, light) sample beside the measured image of that pair.
 # Usage: examples/demo.sh [PATH/TO/btfcar]   (make demo passes build/btfcar)
 set -eu
 BTFCAR=${1:-build/btfcar}
@@ -12,7 +14,9 @@ MATERIAL=${DEMO_MATERIAL:-leather}
 SIZE=${DEMO_SIZE:-128}
 BIG=$((SIZE * 2))
 
-rm -rf "$OUT/$MATERIAL" "$OUT/$MATERIAL.btfcar" "$OUT/$MATERIAL-segments" "$OUT/$MATERIAL-synth"
+EXAMPLES=$(dirname "$0")
+rm -rf "$OUT/$MATERIAL" "$OUT/$MATERIAL.btfcar" "$OUT/$MATERIAL-segments" "$OUT/$MATERIAL-synth" \
+    "$OUT/$MATERIAL-scene.png" "$OUT/$MATERIAL-flat.png"
 mkdir -p "$OUT"
 echo "== 1. btfcar generate --material $MATERIAL --size $SIZE $OUT/$MATERIAL"
 "$BTFCAR" generate --material "$MATERIAL" --size "$SIZE" --seed 1 "$OUT/$MATERIAL"
@@ -30,6 +34,16 @@ echo "== 4. btfcar synthesise --size ${BIG}x${BIG} (every subspace image)"
 "$BTFCAR" synthesise "$OUT/$MATERIAL.btfcar" --size "${BIG}x${BIG}" --preview \
     -o "$OUT/$MATERIAL-synth"
 echo
+echo "== 5a. btfcar render --scene $EXAMPLES/demo.json (a sphere and a cylinder, two lights)"
+"$BTFCAR" render "$OUT/$MATERIAL.btfcar" --scene "$EXAMPLES/demo.json" --size 640x400 \
+    -o "$OUT/$MATERIAL-scene.png"
+echo
+echo "== 5b. btfcar render --view 30,60 --light 45,0 --beside the dataset (measured | model)"
+"$BTFCAR" render "$OUT/$MATERIAL.btfcar" --view 30,60 --light 45,0 --size "${SIZE}x${SIZE}" \
+    --beside "$OUT/$MATERIAL" -o "$OUT/$MATERIAL-flat.png"
+echo
 echo "demo: dataset in $OUT/$MATERIAL/ (ground truth in truth/), index table picture"
 echo "      $OUT/$MATERIAL-segments/index.png, model $OUT/$MATERIAL.btfcar, synthesised"
-echo "      subspace images in $OUT/$MATERIAL-synth/subspace_NN.{exr,png}"
+echo "      subspace images in $OUT/$MATERIAL-synth/subspace_NN.{exr,png}, the rendered"
+echo "      scene $OUT/$MATERIAL-scene.png, and the measured image of (view 30,60; light"
+echo "      45,0) beside the model's flat render of it in $OUT/$MATERIAL-flat.png"

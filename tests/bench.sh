@@ -7,10 +7,13 @@ BTFCAR=${BTF_CLI:-build/btfcar}
 export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}
 echo "== machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GiB", $2/1048576}' /proc/meminfo), $(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)"
 SYNTH_MODEL=""
+RENDER_BENCH=""
 for b in "$@"; do
     case "$b" in
     *bench_synth_model)
         SYNTH_MODEL=$b ;; # below, on the paper's workload
+    *bench_render)
+        RENDER_BENCH=$b ;; # below, on the analysed material
     *bench_gpu)
         for n in 1 2; do
             LP_NUM_THREADS=$n "$b" || echo "bench: $(basename "$b") exited with $?"
@@ -79,7 +82,7 @@ median5() {
     done
     med=$(echo $times | tr ' ' '\n' | sort -n | sed -n 3p)
     echo "$label: median $med s (runs:$times), peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB,"\
-         "$(du -sb "$TMP/p" | cut -f1) bytes"
+         "$(du -sb "${MEDIAN5_OUTPUT:-$TMP/p}" | cut -f1) bytes"
 }
 SYN="$BTFCAR synthesise -q $P --backend cpu --size 512x512 -o $TMP/p"
 median5 "synthesise, default options (half, none, writer thread)" $SYN
@@ -110,3 +113,16 @@ if [ "${BENCH_FULL:-0}" = 1 ]; then
         --backend cpu --half --size 32768x32768 -o "$TMP/s"
     echo "synthesise 32768x32768 to half EXR: $(cut -d' ' -f1 "$TMP/time") s, peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB (target <= 256 MB)"
 fi
+
+echo "== render: a 1024^2 sphere of the analysed 256^2 material under one light (examples/sphere.json)"
+SPHERE=$(dirname "$0")/../examples/sphere.json
+if [ -n "$RENDER_BENCH" ]; then
+    "$RENDER_BENCH" "$TMP/m.btfcar" "$SPHERE" 1024x1024 7 || echo "bench: bench_render exited with $?"
+fi
+MEDIAN5_OUTPUT=$TMP/sphere.png
+REN="$BTFCAR render -q $TMP/m.btfcar --scene $SPHERE --size 1024x1024 -o $TMP/sphere.png"
+median5 "render the sphere, whole process (needed subspaces only)" $REN
+needed=$med
+"$BTFCAR" render "$TMP/m.btfcar" --scene "$SPHERE" --size 1024x1024 -o "$TMP/sphere.png" | sed -n 's/^/   /p'
+median5 "render the sphere, whole process, --all-subspaces" $REN --all-subspaces
+echo "   the needed-only rule saves $(echo "$needed $med" | awk '{printf "%.0f%%", 100 * (1 - $1 / $2)}') of the whole process"

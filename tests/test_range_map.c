@@ -64,6 +64,14 @@ static steps measure_steps(const float *t, int w, int h)
     return s;
 }
 
+static int count_lines(const char *s)
+{
+    int n = 0;
+    for (; *s; s++)
+        n += *s == '\n';
+    return n;
+}
+
 static double correlation(const float *a, const float *b, size_t n)
 {
     double ma = 0, mb = 0, sab = 0, saa = 0, sbb = 0;
@@ -370,6 +378,85 @@ static void normals_of_known_slopes(void **state)
     btf_image_free(&hy);
 }
 
+/* ---------------------------------------------------------------- CLI */
+
+#define OLD_MODEL "tests/data/model-v1.0.btfcar"
+
+/* btfcar synthesise --range writes range.exr and normal.exr beside the
+ * subspace images, the same floats btf_range_map gives; --subspace none
+ * writes only them. */
+static void cli_writes_range_maps(void **state)
+{
+    (void)state;
+    const char *out = tu_fmt("%s/with", tu_dir);
+    char *msg = NULL;
+    int rc = tu_run(tu_fmt("%s synthesise %s --range --size 70x45 --quiet -o %s", tu_cli(),
+                           OLD_MODEL, out), &msg);
+    if (rc)
+        fail_msg("synthesise --range: %s", msg ? msg : "");
+    free(msg);
+    btf_model m;
+    btf_error e = {0};
+    TU_OK(btf_model_read(OLD_MODEL, &m, &e), &e);
+    assert_int_equal(tu_count_files(out), m.n_subspaces + 2);
+    btf_image want_h, want_n, got_h, got_n;
+    TU_OK(btf_range_map(&m, 70, 45, &want_h, &want_n, &e), &e);
+    TU_OK(btf_image_read(tu_fmt("%s/range.exr", out), NULL, &got_h, &e), &e);
+    TU_OK(btf_image_read(tu_fmt("%s/normal.exr", out), NULL, &got_n, &e), &e);
+    assert_int_equal(got_h.channels, 1);
+    assert_int_equal(got_n.channels, 3);
+    assert_int_equal(got_h.width, 70);
+    assert_int_equal(got_h.height, 45);
+    assert_memory_equal(got_h.data, want_h.data, sizeof(float) * 70 * 45);
+    assert_memory_equal(got_n.data, want_n.data, sizeof(float) * 70 * 45 * 3);
+    btf_image_free(&got_h);
+    btf_image_free(&got_n);
+    const char *only = tu_fmt("%s/only", tu_dir);
+    assert_int_equal(tu_run(tu_fmt("%s synthesise %s --range --subspace none --size 70x45 "
+                                   "--quiet -o %s", tu_cli(), OLD_MODEL, only), NULL), 0);
+    assert_int_equal(tu_count_files(only), 2);
+    TU_OK(btf_image_read(tu_fmt("%s/range.exr", only), NULL, &got_h, &e), &e);
+    assert_memory_equal(got_h.data, want_h.data, sizeof(float) * 70 * 45);
+    btf_image_free(&got_h);
+    btf_image_free(&want_h);
+    btf_image_free(&want_n);
+    btf_model_free(&m);
+}
+
+/* A model without a range map: --range is a one-line error naming the
+ * model, and no output folder is left; --subspace none alone is a usage
+ * error. */
+static void cli_range_errors(void **state)
+{
+    (void)state;
+    btf_model m;
+    btf_error e = {0};
+    TU_OK(btf_model_read(OLD_MODEL, &m, &e), &e);
+    free(m.range);
+    m.range = NULL;
+    m.range_width = m.range_height = 0;
+    char *model = strdup(tu_fmt("%s/norange.btfcar", tu_dir));
+    TU_OK(btf_model_write(model, &m, &e), &e);
+    btf_model_free(&m);
+    const char *out = tu_fmt("%s/none", tu_dir);
+    char *msg = NULL;
+    int rc = tu_run(tu_fmt("%s synthesise %s --range --size 8x8 -o %s", tu_cli(), model, out),
+                    &msg);
+    assert_int_equal(rc, 1);
+    assert_non_null(msg);
+    assert_non_null(strstr(msg, model));
+    assert_non_null(strstr(msg, "no range map"));
+    assert_int_equal(count_lines(msg), 1);
+    free(msg);
+    assert_int_equal(tu_count_files(out), 0);
+    rc = tu_run(tu_fmt("%s synthesise %s --subspace none --size 8x8 -o %s", tu_cli(), OLD_MODEL,
+                       out), &msg);
+    assert_int_equal(rc, 2);
+    assert_non_null(strstr(msg, "--subspace none"));
+    free(msg);
+    free(model);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -381,6 +468,8 @@ int main(void)
         cmocka_unit_test(no_range_is_flat),
         cmocka_unit_test(bad_input),
         cmocka_unit_test(normals_of_known_slopes),
+        cmocka_unit_test(cli_writes_range_maps),
+        cmocka_unit_test(cli_range_errors),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, tu_setup_dir, tu_teardown_dir);
 }

@@ -21,7 +21,11 @@ static const char ABOUT[] =
     "backend. Environment: BTF_VK_DEVICE=N names the Vulkan device when --device\n"
     "is not given; BTF_SYNTH_WAVE=0 and BTF_NOISE_PORTABLE=1 select the CPU's\n"
     "row-by-row field generator and portable noise loop (same pixels, slower);\n"
-    "BTF_EXR_THREAD=0 compresses and writes on the synthesising thread (same bytes).\n";
+    "BTF_EXR_THREAD=0 compresses and writes on the synthesising thread (same bytes).\n"
+    "--range adds the model's range map enlarged to the same size, seamless, as\n"
+    "OUTDIR/range.exr (heights in analysed-image texels) and OUTDIR/normal.exr\n"
+    "(unit normals, x right, y up, z out), both 32-bit float (docs/render.md);\n"
+    "--subspace none with --range writes only those two.\n";
 
 /* Where the time goes (--verbose): seconds per phase of the whole run. */
 typedef struct phases {
@@ -61,12 +65,12 @@ static int put_rows_timed(void *user, int y, int nrows, const float *rows, btf_e
     return rc;
 }
 
-/* "0,3,5" or "all" into a 0/1 table of m->n_subspaces entries: plain
- * decimal numbers only (no sign, no spaces), each once. */
+/* "0,3,5", "all" or "none" into a 0/1 table of m->n_subspaces entries:
+ * plain decimal numbers only (no sign, no spaces), each once. */
 static int parse_list(const char *s, int n, unsigned char *pick)
 {
     memset(pick, !strcmp(s, "all"), (size_t)n);
-    if (!strcmp(s, "all"))
+    if (!strcmp(s, "all") || !strcmp(s, "none"))
         return 0;
     if (!*s)
         return -1;
@@ -158,6 +162,28 @@ static int name_model(int rc, const char *model, btf_error *err)
         snprintf(msg, sizeof msg, "%s: %s", model, err->msg);
         snprintf(err->msg, sizeof err->msg, "%s", msg);
     }
+    return rc;
+}
+
+/* --range: the seamless range map and its normal map at the output size
+ * (btf_range_map; docs/render.md), as 32-bit float EXR whatever --half
+ * says, since heights and normals are data, not colours. */
+static int write_range_maps(const btf_model *m, int w, int h, const output *out, btf_error *err)
+{
+    btf_image hm, nm;
+    int rc = btf_range_map(m, w, h, &hm, &nm, err);
+    if (rc)
+        return name_model(rc, out->model_path, err);
+    btf_exr_opts o = out->exr;
+    o.half = 0;
+    char path[4096];
+    snprintf(path, sizeof path, "%s/range.exr", out->dir);
+    rc = btf_image_write_exr_opts(path, &hm, &o, NULL, err);
+    snprintf(path, sizeof path, "%s/normal.exr", out->dir);
+    if (rc == 0)
+        rc = btf_image_write_exr_opts(path, &nm, &o, NULL, err);
+    btf_image_free(&hm);
+    btf_image_free(&nm);
     return rc;
 }
 
@@ -292,7 +318,7 @@ int cmd_synthesise(int argc, char **argv)
     static const char *const comps[] = {"zip", "none", "rle", "zips", "piz", "pxr24",
                                         NULL}; /* btf_exr_compression's order */
     int size[2] = {0, 0}, preview = 0, half = 0, device = -1, backend_index = 2;
-    int as_float = 0, comp = DEFAULT_COMPRESSION, verbose = 0;
+    int as_float = 0, comp = DEFAULT_COMPRESSION, verbose = 0, range = 0;
     uint64_t seed = 1;
     double t_start = cli_now();
     cli_opt opts[] = {
@@ -301,7 +327,10 @@ int cmd_synthesise(int argc, char **argv)
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &outdir,
          .meta = "OUTDIR", .help = "the folder for subspace_NN.exr", .required = 1},
         {.name = "--subspace", .kind = CLI_STRING, .dest = &list, .meta = "LIST",
-         .help = "comma-separated subspace numbers, or all"},
+         .help = "comma-separated subspace numbers, all, or none (with --range)"},
+        {.name = "--range", .kind = CLI_FLAG, .dest = &range,
+         .help = "also write range.exr and normal.exr: the range map at the same\n"
+                 "size, seamless, and its normals (docs/render.md)"},
         {.name = "--seed", .kind = CLI_U64, .dest = &seed, .meta = "S",
          .help = "noise seed; the same seed gives the same pixels"},
         {.name = "--backend", .kind = CLI_CHOICE, .dest = &backend_index, .meta = "cpu|gpu|auto",
@@ -352,11 +381,26 @@ int cmd_synthesise(int argc, char **argv)
         int n = m.n_subspaces;
         btf_model_free(&m);
         return cli_usage_error(&c, "--subspace '%s': expected distinct numbers 0..%d, "
-                               "comma-separated, or all", list, n - 1);
+                               "comma-separated, all, or none", list, n - 1);
+    }
+    if (rc == 0 && !strcmp(list, "none") && !range) {
+        free(pick);
+        btf_model_free(&m);
+        return cli_usage_error(&c, "--subspace none writes nothing without --range");
+    }
+    if (rc == 0 && range && !m.range) {
+        free(pick);
+        btf_model_free(&m);
+        cli_set_error(&err, BTF_E_DATA, "%s: no range map in the model (analysed with "
+                      "--no-range, or a texture model); --range needs one", model);
+        return cli_lib_error(&c, &err);
     }
     /* The device first: a refusal leaves no output folder behind. */
     btf_gpu *gpu = NULL;
-    if (rc == 0) {
+    int picked = 0;
+    for (int k = 0; k < m.n_subspaces && pick; k++)
+        picked += pick[k];
+    if (rc == 0 && picked) {
         gpu = open_gpu(backend, device, (uint64_t)w * h * 12, &err);
         if (!gpu && (!strcmp(backend, "gpu") || device >= 0))
             rc = 1;
@@ -389,6 +433,10 @@ int cmd_synthesise(int argc, char **argv)
             if (pick[k])
                 rc = synth_one(&c, &m, k, &so, &out, &err);
     }
+    double range_s = cli_now();
+    if (rc == 0 && range)
+        rc = write_range_maps(&m, w, h, &out, &err);
+    range_s = cli_now() - range_s; /* not in the synthesis rate */
     if (rc == 0)
         rc = btf_output_dir_commit(od, &err);
     else
@@ -403,11 +451,15 @@ int cmd_synthesise(int argc, char **argv)
     if (rc)
         return cli_lib_error(&c, &err);
     cli_progress_done();
-    double s = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
-    if (!c.quiet)
+    double s = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec) -
+               range_s;
+    if (!c.quiet && done)
         printf("synthesised %d subspace image%s of %dx%d on %s in %.3f s (%.1f Mpixel/s) into %s\n",
                done, done == 1 ? "" : "s", w, h, devname, s,
                (double)w * h * done / (s > 0 ? s : 1e-9) / 1e6, outdir);
+    if (!c.quiet && range)
+        printf("range map and normal map of %dx%d into %s/range.exr, %s/normal.exr\n", w, h,
+               outdir, outdir);
     if (verbose)
         print_phases(&ph, gpu_used, comps[comp], !as_float, out.exr.background,
                      cli_now() - t_start);

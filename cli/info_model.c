@@ -111,8 +111,12 @@ static int model_text(const btf_model *m, const model_file *mf)
     if (m->range) {
         float lo, hi;
         range_bounds(m, &lo, &hi);
-        printf("range map   %d x %d, texel %g, heights %.6g..%.6g\n", m->range_width,
-               m->range_height, m->range_texel, lo, hi);
+        /* the tile in memory is periodic: a 1.0 file's is made so on reading */
+        printf("range map   %d x %d periodic tile%s, texel %g (a period of %g x %g analysed "
+               "texels), heights %.6g..%.6g\n", m->range_width, m->range_height,
+               mf->major == 1 && mf->minor == 0 ? " (made periodic on reading: format 1.0)" : "",
+               m->range_texel, m->range_width * (double)m->range_texel,
+               m->range_height * (double)m->range_texel, lo, hi);
     } else {
         printf("range map   none\n");
     }
@@ -207,7 +211,7 @@ static int model_json(const btf_model *m, const model_file *mf)
         cli_json_f32(f, lo);
         fputs(", \"max\": ", f);
         cli_json_f32(f, hi);
-        fputc('}', f);
+        fputs(", \"periodic\": true}", f);
     } else {
         fputs("null", f);
     }

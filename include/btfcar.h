@@ -1014,6 +1014,19 @@ void btf_hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t);
  * gives a flat map (heights 0, normals (0, 0, 1)). */
 btf_status btf_range_map(const btf_model *m, int width, int height, btf_image *height_out,
                          btf_image *normal_out, btf_error *err);
+/* The unit normals of the height map scale * h (1 channel) into normal
+ * (allocated here, 3 channels, same size): n = normalize(-dh/dx, -dh/dy, 1)
+ * with x right and y up the image (rows grow downwards), from wrap-around
+ * central differences, so a map that wraps gives normals that wrap. Finite
+ * heights give finite unit normals (scale finite; huge slopes included). */
+btf_status btf_normal_map(const btf_image *height, double scale, btf_image *normal,
+                          btf_error *err);
+/* Makes a range tile periodic in place (analysis does, and reading a model
+ * file of format 1.0 does): the periodic component of Moisan's periodic-
+ * plus-smooth decomposition (docs/render.md), which keeps the tile's mean
+ * and detail and removes the jumps between opposite edges. Heights must be
+ * finite (BTF_E_DATA). */
+btf_status btf_range_make_periodic(float *heights, int width, int height, btf_error *err);
 
 /* ----------------------------------------------------------------- scenes */
 

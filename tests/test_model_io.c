@@ -368,8 +368,10 @@ static void tw_payload(tbuf *b, const btf_model *m)
 }
 
 /* A RANG section from quantised heights q (predictor residuals computed
- * here, as the format describes). */
-static void tw_range(tbuf *b, int w, int h, float texel, int e, int32_t k, const uint16_t *q)
+ * here, as the format describes); flags -1: the 1.0 layout, which ends
+ * before the flags byte, else the 1.1 layout with that flags byte. */
+static void tw_range(tbuf *b, int w, int h, float texel, int e, int32_t k, const uint16_t *q,
+                     int flags)
 {
     size_t n = (size_t)w * h;
     unsigned char *planes = malloc(2 * n);
@@ -397,6 +399,10 @@ static void tw_range(tbuf *b, int w, int h, float texel, int e, int32_t k, const
     tb_u16(b, (unsigned)e & 0xFFFF);
     tb_u32(b, (uint32_t)k);
     tb_put(b, planes, 2 * n);
+    if (flags >= 0) {
+        unsigned char f = (unsigned char)flags;
+        tb_put(b, &f, 1);
+    }
     tb_end(b, body);
     free(planes);
 }
@@ -998,7 +1004,7 @@ static void expect_bad_range(int w, int h, float texel, int e, int32_t k, const 
     tbuf t = {0};
     tw_payload(&t, &m);
     if (q) {
-        tw_range(&t, w, h, texel, e, k, q);
+        tw_range(&t, w, h, texel, e, k, q, 1);
     } else {
         size_t body = tb_section(&t, "RANG");
         tb_u16(&t, (unsigned)w);
@@ -1026,11 +1032,31 @@ static void range_rules(void **state)
         make_model(&m, &SMALL);
         tbuf t = {0};
         tw_payload(&t, &m);
-        tw_range(&t, 2, 1, 2.0f, 0, 0, ok);
+        tw_range(&t, 2, 1, 2.0f, 0, 0, ok, 1);
+        size_t fn;
+        unsigned char *f = tw_wrap(t.p, t.n, 1, 1, 1, &fn);
+        decode_ok(f, fn, &d);
+        assert_true(d.range[0] == 0.5f && d.range[1] == 40000.5f);
+        free_model(&d);
+        free(f);
+        free(t.p);
+        free_model(&m);
+    }
+    /* The same heights in the 1.0 layout: made periodic on reading. Two
+     * samples side by side are a slope, which no periodic tile keeps
+     * (btf_range_make_periodic removes the mean slope first): the tile
+     * becomes flat at its mean. */
+    {
+        btf_model m, d;
+        make_model(&m, &SMALL);
+        tbuf t = {0};
+        tw_payload(&t, &m);
+        tw_range(&t, 2, 1, 2.0f, 0, 0, ok, -1);
         size_t fn;
         unsigned char *f = tw_wrap(t.p, t.n, 1, 0, 1, &fn);
         decode_ok(f, fn, &d);
-        assert_true(d.range[0] == 0.5f && d.range[1] == 40000.5f);
+        assert_float_equal(d.range[0], 20000.5f, 1e-2);
+        assert_float_equal(d.range[1], 20000.5f, 1e-2);
         free_model(&d);
         free(f);
         free(t.p);
@@ -1046,6 +1072,171 @@ static void range_rules(void **state)
     expect_bad_range(2, 1, 0.0f, 0, 0, ok, "texel 0");
     expect_bad_range(0, 1, 2.0f, 0, 0, ok, "size 0 x 1");
     expect_bad_range(4096, 4097, 2.0f, 0, 0, NULL, "at most 16777216 samples");
+}
+
+/* The mean jump across the tile's wrap-around edges (last column to first,
+ * last row to first) over the mean step between neighbours inside: about 1
+ * for a periodic tile, large for a tile with a trend. */
+static double wrap_jump_ratio(const float *t, int w, int h)
+{
+    double wrap = 0.0, inside = 0.0;
+    long nw = 0, ni = 0;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            double v = t[(size_t)y * w + x];
+            double r = t[(size_t)y * w + (x + 1) % w], d = t[(size_t)((y + 1) % h) * w + x];
+            if (x == w - 1)
+                wrap += fabs(r - v), nw++;
+            else
+                inside += fabs(r - v), ni++;
+            if (y == h - 1)
+                wrap += fabs(d - v), nw++;
+            else
+                inside += fabs(d - v), ni++;
+        }
+    return (wrap / nw) / (inside / ni);
+}
+
+/* A model file of format 1.0 (tests/data/model-v1.0.btfcar, written by the
+ * 1.0 writer from `btfcar analyse` of a 32-pixel leather) reads, its range
+ * tile converted to a periodic one; written again it is a 1.1 file that
+ * reads back to the same model, bit for bit. */
+static void old_version_file(void **state)
+{
+    (void)state;
+    const char *path = "tests/data/model-v1.0.btfcar";
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        fail_msg("%s: not found (run the test from the repository root)", path);
+    unsigned char hdr[15];
+    assert_int_equal(fread(hdr, 1, sizeof hdr, f), sizeof hdr);
+    fclose(f);
+    assert_int_equal(hdr[11] | hdr[12] << 8, 1);
+    assert_int_equal(hdr[13] | hdr[14] << 8, 0); /* the old version indeed */
+    btf_model m, d;
+    btf_error e = {0};
+    TU_OK(btf_model_read(path, &m, &e), &e);
+    assert_non_null(m.range);
+    assert_int_equal(m.range_width, 16);
+    assert_int_equal(m.range_height, 16);
+    double ratio = wrap_jump_ratio(m.range, m.range_width, m.range_height);
+    print_message("format 1.0 tile after conversion: wrap jump / inside step = %.3f\n", ratio);
+    assert_true(ratio <= 1.5);
+    /* Written again: quantised once more (within the documented bound),
+     * then a fixed point, bytes and model. */
+    float lo, hi;
+    range_bounds(&m, &lo, &hi);
+    size_t n, n2;
+    unsigned char *b = encode_ok(&m, &n);
+    assert_int_equal(b[13] | b[14] << 8, 1);
+    decode_ok(b, n, &d);
+    assert_models_equal(&m, &d, (hi - lo) / 65535.0);
+    btf_model d2;
+    unsigned char *b2 = encode_ok(&d, &n2);
+    assert_int_equal(n, n2);
+    assert_memory_equal(b, b2, n);
+    decode_ok(b2, n2, &d2);
+    assert_models_equal(&d, &d2, 0.0);
+    free(b);
+    free(b2);
+    free_model(&m);
+    free_model(&d);
+    free_model(&d2);
+}
+
+/* A non-periodic tile (a ramp with ripples) in the 1.0 layout is read as
+ * btf_range_make_periodic makes it; in the 1.1 layout (flag set) it is read
+ * as it is. The conversion keeps the ripples: the converted tile correlates
+ * with the ramp-free ripples, and their 4-neighbour Laplacian is u's at
+ * every interior texel (Moisan's p has u's Laplacian there). */
+static void format_1_0_tile_is_made_periodic(void **state)
+{
+    (void)state;
+    enum { W = 12, H = 9 };
+    uint16_t q[W * H];
+    double ripple[W * H], v[W * H], lo = 1e300;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            ripple[y * W + x] = 300.0 * sin(1.3 * x + 0.4) * cos(0.9 * y);
+            v[y * W + x] = 2500.0 * x + 1200.0 * y + ripple[y * W + x];
+            lo = fmin(lo, v[y * W + x]);
+        }
+    /* min q 0 and a span over 2^15: the canonical grid is e = 0, k = 0 */
+    for (int i = 0; i < W * H; i++)
+        q[i] = (uint16_t)(v[i] - lo);
+    for (int flags = -1; flags <= 1; flags += 2) {
+        btf_model m, d;
+        make_model(&m, &SMALL);
+        tbuf t = {0};
+        tw_payload(&t, &m);
+        tw_range(&t, W, H, 2.0f, 0, 0, q, flags);
+        size_t fn;
+        unsigned char *f = tw_wrap(t.p, t.n, 1, flags < 0 ? 0 : 1, 1, &fn);
+        decode_ok(f, fn, &d);
+        float raw[W * H], want[W * H];
+        for (int i = 0; i < W * H; i++)
+            raw[i] = want[i] = (float)q[i] + 0.5f; /* the grid's values, e = k = 0 */
+        btf_error e = {0};
+        if (flags < 0)
+            TU_OK(btf_range_make_periodic(want, W, H, &e), &e);
+        assert_memory_equal(d.range, want, sizeof want);
+        if (flags < 0) {
+            assert_true(wrap_jump_ratio(raw, W, H) > 5.0);
+            assert_true(wrap_jump_ratio(d.range, W, H) < 1.5);
+            double sp = 0, sr = 0, spp = 0, srr = 0, spr = 0, mean_raw = 0, mean_p = 0;
+            for (int i = 0; i < W * H; i++)
+                mean_raw += raw[i], mean_p += d.range[i];
+            assert_float_equal(mean_p / (W * H), mean_raw / (W * H), 1e-2);
+            for (int y = 1; y < H - 1; y++)
+                for (int x = 1; x < W - 1; x++) {
+                    int i = y * W + x;
+                    double lp = d.range[i - 1] + d.range[i + 1] + d.range[i - W] +
+                                d.range[i + W] - 4.0 * d.range[i];
+                    double lu = raw[i - 1] + raw[i + 1] + raw[i - W] + raw[i + W] - 4.0 * raw[i];
+                    assert_float_equal(lp, lu, 0.05);
+                }
+            for (int i = 0; i < W * H; i++) {
+                double a = d.range[i] - mean_p / (W * H), r = ripple[i];
+                sp += a, sr += r, spp += a * a, srr += r * r, spr += a * r;
+            }
+            double n = W * H, cov = spr / n - sp * sr / (n * n);
+            double corr = cov / sqrt((spp / n - sp * sp / (n * n)) * (srr / n - sr * sr / (n * n)));
+            print_message("converted tile vs its ripples: correlation %.3f\n", corr);
+            assert_true(corr > 0.8);
+        }
+        free_model(&d);
+        free(f);
+        free(t.p);
+        free_model(&m);
+    }
+}
+
+/* The 1.1 layout as written: version 1.1 with a range map (1.0 without),
+ * the RANG body ending in the flags byte 0x01 (periodic). */
+static void range_layout_1_1(void **state)
+{
+    (void)state;
+    model_spec spec = {1, 1, 1, 2, 0, 5, 3, 9};
+    btf_model m;
+    make_model(&m, &spec);
+    size_t n, pn;
+    unsigned char *b = encode_ok(&m, &n);
+    assert_int_equal(b[13] | b[14] << 8, 1);
+    unsigned char *p = tw_unwrap(b, n, &pn);
+    size_t pos = 0, found = 0;
+    while (pos + 8 <= pn) {
+        size_t len = p[pos + 4] | p[pos + 5] << 8 | p[pos + 6] << 16 | (size_t)p[pos + 7] << 24;
+        if (!memcmp(p + pos, "RANG", 4)) {
+            found = 1;
+            assert_int_equal(len, 14 + 2 * 5 * 3 + 1);
+            assert_int_equal(p[pos + 8 + len - 1], 0x01);
+        }
+        pos += 8 + len;
+    }
+    assert_true(found);
+    free(p);
+    free(b);
+    free_model(&m);
 }
 
 /* The encoder refuses what the format cannot hold, writing nothing. */
@@ -1333,7 +1524,7 @@ static void info_model(void **state)
     if (!json_valid(out))
         fail_msg("invalid JSON:\n%s", out);
     assert_non_null(strstr(out, "\"format\": \"btfcar-model\""));
-    assert_non_null(strstr(out, "\"version\": [1, 0]"));
+    assert_non_null(strstr(out, "\"version\": [1, 1]")); /* 1.1: it has a range map */
     assert_non_null(strstr(out, tu_fmt("\"file_bytes\": %lld", (long long)st.st_size)));
     assert_int_equal(count_of(out, "\"name\": \"ubo81\""), 2);
     assert_int_equal(count_of(out, "\"count\": 81"), 2);
@@ -1456,6 +1647,9 @@ int main(void)
         cmocka_unit_test(directions),
         cmocka_unit_test(sections),
         cmocka_unit_test(range_rules),
+        cmocka_unit_test(old_version_file),
+        cmocka_unit_test(format_1_0_tile_is_made_periodic),
+        cmocka_unit_test(range_layout_1_1),
         cmocka_unit_test(encoder_rules),
         cmocka_unit_test(write_is_atomic),
         cmocka_unit_test(realistic_size),

@@ -86,7 +86,10 @@ static btf_status range_tile(const btf_image *h, int n, btf_model *m, btf_error 
     m->range_texel = (float)((double)g.p / (double)g.q);
     free(acc);
     free(cnt);
-    return BTF_OK;
+    /* The tile must tile: its periodic component (Moisan's periodic-plus-
+     * smooth decomposition, docs/render.md) keeps the detail and drops the
+     * jumps between opposite edges that the area average keeps. */
+    return btf_range_make_periodic(m->range, g.tw, g.th, err);
 }
 
 static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_model *m,

@@ -34,8 +34,11 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
                                                  'R',  '\r', '\n', 0x1a, '\n'};
 
 #define FMT_MAJOR 1
-#define FMT_MINOR 0
+/* 1.1 added the RANG flags (the tile is periodic); a model without a range
+ * map is still written as 1.0, the lowest version that holds it. */
+#define FMT_MINOR_RANGE_FLAGS 1
 #define HEADER_BYTES 26 /* signature .. stored size, version 1.0 */
+#define RANG_PERIODIC 0x01u /* RANG flags bit 0: the tile is periodic */
 #define CRC_BYTES 4
 #define COMP_STORED 0
 #define COMP_ZLIB 1
@@ -314,6 +317,9 @@ static btf_status put_range(wbuf *b, const btf_model *m, const char *name, btf_e
     w_u16(b, (unsigned)e & 0xFFFFu);
     w_u32(b, (uint32_t)k);
     w_bytes(b, planes, 2 * n);
+    /* The tile in memory is periodic (analysis and the reader make it so;
+     * docs/model-format.md, version 1.1). */
+    w_u8(b, RANG_PERIODIC);
     w_section_end(b, body);
     free(q);
     free(planes);
@@ -342,8 +348,8 @@ static btf_status build_payload(const btf_model *m, wbuf *b, const char *name, b
 
 /* Wraps the payload: header, deflated (or stored, when deflate does not
  * help) body, CRC-32 of everything before it. */
-static btf_status wrap_payload(const wbuf *pl, const char *name, unsigned char **data,
-                               size_t *size, btf_error *err)
+static btf_status wrap_payload(const wbuf *pl, unsigned minor, const char *name,
+                               unsigned char **data, size_t *size, btf_error *err)
 {
     uLongf zlen = compressBound((uLong)pl->n);
     unsigned char *out = alloc_named(HEADER_BYTES + (size_t)zlen + CRC_BYTES, 1, 0, name, err);
@@ -358,7 +364,7 @@ static btf_status wrap_payload(const wbuf *pl, const char *name, unsigned char *
     }
     memcpy(out, SIGNATURE, SIG_LEN);
     out[11] = FMT_MAJOR, out[12] = 0;
-    out[13] = FMT_MINOR, out[14] = 0;
+    out[13] = (unsigned char)minor, out[14] = 0;
     out[15] = HEADER_BYTES, out[16] = 0;
     out[17] = (unsigned char)comp;
     put_u32(out + 18, (uint32_t)pl->n);
@@ -388,7 +394,7 @@ static btf_status encode_named(const btf_model *m, const char *name, unsigned ch
         rc = failf(err, BTF_E_DATA, name, "model of %zu bytes (expected at most %zu)", pl.n,
                    MAX_PAYLOAD_BYTES);
     if (rc == BTF_OK)
-        rc = wrap_payload(&pl, name, data, size, err);
+        rc = wrap_payload(&pl, m->range ? FMT_MINOR_RANGE_FLAGS : 0, name, data, size, err);
     free(pl.p);
     return rc;
 }
@@ -712,6 +718,9 @@ static btf_status read_range(const span *sp, btf_model *m, const char *name, btf
     const unsigned char *planes = r_take(&r, 2 * n);
     if (!planes)
         return short_section(S_RANG, name, err);
+    /* Version 1.1's flags; a 1.0 section ends before them. Bits other than
+     * bit 0 are reserved (written 0, ignored). */
+    int periodic = r.pos < r.n && (r.p[r.pos] & RANG_PERIODIC);
     if (e < BTF_RANGE_GRID_E_MIN || e > BTF_RANGE_GRID_E_MAX || k < -BTF_RANGE_GRID_K_LIMIT ||
         k >= BTF_RANGE_GRID_K_LIMIT)
         return failf(err, BTF_E_FORMAT, name,
@@ -755,6 +764,13 @@ static btf_status read_range(const span *sp, btf_model *m, const char *name, btf
         return failf(err, BTF_E_FORMAT, name,
                      "range map: grid 2^%d, offset %ld is not canonical for heights %g..%g "
                      "(expected 2^%d, offset %ld)", e, (long)k, lo, hi, ce, (long)ck);
+    /* A tile not marked periodic (format 1.0) is converted now, as the
+     * analysis of today would have stored it. */
+    btf_error pe = {0};
+    if (!periodic && btf_range_make_periodic(m->range, w, h, &pe) != BTF_OK)
+        return failf(err, pe.code == BTF_E_NOMEM ? BTF_E_NOMEM : BTF_E_FORMAT, name,
+                     "range map of format 1.0 not made periodic: %s (expected a DFT of %d x %d "
+                     "to succeed)", pe.msg, w, h);
     return BTF_OK;
 }
 

@@ -209,13 +209,20 @@ BTF_FN btf_hemi_weights btf_hemi_clamp(btf_hemi_weights r)
 /* The hull rule: the nearest point of the hull's boundary (a convex polygon,
  * so the nearest point moves continuously with (x, y)); weights 1 - u and u
  * on the edge's ends and 0 on the apex of the triangle that owns the edge.
- * The first nearest edge wins a tie (at a vertex both give the same weights). */
+ * The nearest point is found structurally, not by comparing distances
+ * (which near a vertex differ by O(u^2) and would let rounding pick a point
+ * O(sqrt(ulp)) away): a point outside an edge's line whose foot falls on
+ * the edge has that foot as its nearest point; otherwise (a vertex's
+ * region, or rounding inside the hull) the nearest of the edges' clamped
+ * feet, the first on a tie (at a vertex both give the same weights). */
 BTF_FN btf_hemi_weights btf_hemi_hull_rule(BTF_HEMI_TABLE tab, float x, float y)
 {
     int n = BTF_HEMI_N_HULL(tab);
     int best = 0;
+    int strip = -1;
     float best_d = 3.0e38f;
     float best_u = 0.0f;
+    float strip_u = 0.0f;
     for (int i = 0; i < n; i++) {
         int ia = BTF_HEMI_HULL(tab, i);
         int ib = BTF_HEMI_HULL(tab, i + 1 < n ? i + 1 : 0);
@@ -232,6 +239,13 @@ BTF_FN btf_hemi_weights btf_hemi_hull_rule(BTF_HEMI_TABLE tab, float x, float y)
         BTF_PRECISE float pey = py * ey;
         BTF_PRECISE float pe = pex + pey;
         BTF_PRECISE float u = pe / ee;
+        BTF_PRECISE float epy = ex * py;
+        BTF_PRECISE float epx = ey * px;
+        BTF_PRECISE float side = epy - epx; /* < 0: outside this edge */
+        if (strip < 0 && side < 0.0f && u >= 0.0f && u <= 1.0f) {
+            strip = i;
+            strip_u = u;
+        }
         u = u > 0.0f ? u : 0.0f;
         u = u < 1.0f ? u : 1.0f;
         BTF_PRECISE float uex = u * ex;
@@ -246,6 +260,10 @@ BTF_FN btf_hemi_weights btf_hemi_hull_rule(BTF_HEMI_TABLE tab, float x, float y)
             best = i;
             best_u = u;
         }
+    }
+    if (strip >= 0) {
+        best = strip;
+        best_u = strip_u;
     }
     int ia = BTF_HEMI_HULL(tab, best);
     int ib = BTF_HEMI_HULL(tab, best + 1 < n ? best + 1 : 0);

@@ -202,30 +202,37 @@ static int insert(dt *d, int p, int cap)
 }
 
 /* The first triangle: the farthest pair (i, j) and the point k farthest from
- * their line; returns -1 when every point is within the line tolerance. */
+ * their line, each the first in set order within BTF_DELAUNAY_SAME_EPS of
+ * the largest (a ring has many farthest pairs; the last bits must not
+ * choose). Returns -1 when every point is within that of the line. */
+static double dist(const dt *d, int a, int b)
+{
+    return hypot(pt(d, b)[0] - pt(d, a)[0], pt(d, b)[1] - pt(d, a)[1]);
+}
+
 static int first_triangle(const dt *d, int *i_out, int *j_out, int *k_out)
 {
-    int i = 0, j = 0, k = -1;
-    double best = -1.0;
+    const double tol = BTF_DELAUNAY_SAME_EPS;
+    double best = 0.0;
     for (int a = 0; a < d->n; a++)
-        for (int b = a + 1; b < d->n; b++) {
-            double dd = hypot(pt(d, b)[0] - pt(d, a)[0], pt(d, b)[1] - pt(d, a)[1]);
-            if (dd > best) {
-                best = dd;
+        for (int b = a + 1; b < d->n; b++)
+            best = fmax(best, dist(d, a, b));
+    int i = -1, j = -1, k = -1;
+    for (int a = 0; a < d->n && i < 0; a++)
+        for (int b = a + 1; b < d->n; b++)
+            if (dist(d, a, b) >= best - tol) {
                 i = a;
                 j = b;
+                break;
             }
-        }
     double far = 0.0;
-    for (int c = 0; c < d->n; c++) {
-        double s = fabs(side(d, i, j, c));
-        if (s > far) {
-            far = s;
-            k = c;
-        }
-    }
-    if (k < 0 || far <= BTF_DELAUNAY_SAME_EPS)
+    for (int c = 0; c < d->n; c++)
+        far = fmax(far, fabs(side(d, i, j, c)));
+    if (far <= tol)
         return -1;
+    for (int c = 0; c < d->n && k < 0; c++)
+        if (fabs(side(d, i, j, c)) >= far - tol)
+            k = c;
     if (side(d, i, j, k) < 0.0) {
         int t = i;
         i = j;

@@ -154,10 +154,12 @@ BTF_FN float btf_hemi_cross(float px, float py, float qx, float qy, float rx, fl
     return d;
 }
 
-/* The barycentric weights of (x, y) in triangle t, unclamped. Each weight is
- * the edge function of the opposite edge measured from that edge's start, so
- * at a vertex the two other weights are exactly 0. */
-BTF_FN btf_hemi_weights btf_hemi_barycentric(BTF_HEMI_TABLE tab, int t, float x, float y)
+/* The barycentric weights of (x, y) in triangle t, unclamped, as edge
+ * functions not yet divided by their sum s (twice the triangle's area):
+ * each is measured from the start of the edge opposite its vertex, so at a
+ * vertex the two others are exactly 0. The caller divides by their sum
+ * (btf_hemi_normalise) only for the triangle it keeps. */
+BTF_FN btf_hemi_weights btf_hemi_edges(BTF_HEMI_TABLE tab, int t, float x, float y)
 {
     int i0 = BTF_HEMI_TRIANGLE(tab, t, 0);
     int i1 = BTF_HEMI_TRIANGLE(tab, t, 1);
@@ -171,17 +173,24 @@ BTF_FN btf_hemi_weights btf_hemi_barycentric(BTF_HEMI_TABLE tab, int t, float x,
     BTF_PRECISE float e0 = btf_hemi_cross(bx, by, cx, cy, x, y);
     BTF_PRECISE float e1 = btf_hemi_cross(cx, cy, ax, ay, x, y);
     BTF_PRECISE float e2 = btf_hemi_cross(ax, ay, bx, by, x, y);
-    BTF_PRECISE float s01 = e0 + e1;
-    BTF_PRECISE float s = s01 + e2;
-    /* s is twice the triangle's area, whatever (x, y); the table has no
-     * degenerate triangle, but a sliver whose float area is not positive is
-     * skipped (weights -1 lose to any triangle and lead to the hull rule). */
-    if (!(s > 0.0f))
-        return BTF_HEMI_WEIGHTS(i0, i1, i2, -1.0f, -1.0f, -1.0f);
-    BTF_PRECISE float w0 = e0 / s;
-    BTF_PRECISE float w1 = e1 / s;
-    BTF_PRECISE float w2 = e2 / s;
-    return BTF_HEMI_WEIGHTS(i0, i1, i2, w0, w1, w2);
+    return BTF_HEMI_WEIGHTS(i0, i1, i2, e0, e1, e2);
+}
+
+/* The edge functions divided by their sum; the weights of t. */
+BTF_FN btf_hemi_weights btf_hemi_normalise(btf_hemi_weights r)
+{
+    BTF_PRECISE float s01 = r.w0 + r.w1;
+    BTF_PRECISE float s = s01 + r.w2;
+    BTF_PRECISE float w0 = r.w0 / s;
+    BTF_PRECISE float w1 = r.w1 / s;
+    BTF_PRECISE float w2 = r.w2 / s;
+    return BTF_HEMI_WEIGHTS(r.i0, r.i1, r.i2, w0, w1, w2);
+}
+
+/* The barycentric weights of (x, y) in triangle t, unclamped. */
+BTF_FN btf_hemi_weights btf_hemi_barycentric(BTF_HEMI_TABLE tab, int t, float x, float y)
+{
+    return btf_hemi_normalise(btf_hemi_edges(tab, t, x, y));
 }
 
 BTF_FN float btf_hemi_min3(float a, float b, float c)
@@ -218,12 +227,40 @@ BTF_FN btf_hemi_weights btf_hemi_clamp(btf_hemi_weights r)
 BTF_FN btf_hemi_weights btf_hemi_hull_rule(BTF_HEMI_TABLE tab, float x, float y)
 {
     int n = BTF_HEMI_N_HULL(tab);
-    int best = 0;
-    int strip = -1;
-    float best_d = 3.0e38f;
+    int best = -1;
     float best_u = 0.0f;
-    float strip_u = 0.0f;
+    /* The edge whose outer strip holds the point (at most one, convex). */
     for (int i = 0; i < n; i++) {
+        int ia = BTF_HEMI_HULL(tab, i);
+        int ib = BTF_HEMI_HULL(tab, i + 1 < n ? i + 1 : 0);
+        float ax = BTF_HEMI_POINT(tab, ia, 0);
+        float ay = BTF_HEMI_POINT(tab, ia, 1);
+        BTF_PRECISE float ex = BTF_HEMI_POINT(tab, ib, 0) - ax;
+        BTF_PRECISE float ey = BTF_HEMI_POINT(tab, ib, 1) - ay;
+        BTF_PRECISE float px = x - ax;
+        BTF_PRECISE float py = y - ay;
+        BTF_PRECISE float epy = ex * py;
+        BTF_PRECISE float epx = ey * px;
+        BTF_PRECISE float side = epy - epx; /* < 0: outside this edge */
+        if (!(side < 0.0f))
+            continue;
+        BTF_PRECISE float pex = px * ex;
+        BTF_PRECISE float pey = py * ey;
+        BTF_PRECISE float pe = pex + pey;
+        BTF_PRECISE float exx = ex * ex;
+        BTF_PRECISE float eyy = ey * ey;
+        BTF_PRECISE float ee = exx + eyy;
+        if (pe >= 0.0f && pe <= ee) {
+            BTF_PRECISE float u = pe / ee;
+            best = i;
+            best_u = u < 1.0f ? u : 1.0f;
+            break;
+        }
+    }
+    /* Otherwise: the nearest of the edges' clamped feet. */
+    float best_d = 3.0e38f;
+    int fallback = best < 0 ? n : 0;
+    for (int i = 0; i < fallback; i++) {
         int ia = BTF_HEMI_HULL(tab, i);
         int ib = BTF_HEMI_HULL(tab, i + 1 < n ? i + 1 : 0);
         float ax = BTF_HEMI_POINT(tab, ia, 0);
@@ -239,13 +276,6 @@ BTF_FN btf_hemi_weights btf_hemi_hull_rule(BTF_HEMI_TABLE tab, float x, float y)
         BTF_PRECISE float pey = py * ey;
         BTF_PRECISE float pe = pex + pey;
         BTF_PRECISE float u = pe / ee;
-        BTF_PRECISE float epy = ex * py;
-        BTF_PRECISE float epx = ey * px;
-        BTF_PRECISE float side = epy - epx; /* < 0: outside this edge */
-        if (strip < 0 && side < 0.0f && u >= 0.0f && u <= 1.0f) {
-            strip = i;
-            strip_u = u;
-        }
         u = u > 0.0f ? u : 0.0f;
         u = u < 1.0f ? u : 1.0f;
         BTF_PRECISE float uex = u * ex;
@@ -261,18 +291,15 @@ BTF_FN btf_hemi_weights btf_hemi_hull_rule(BTF_HEMI_TABLE tab, float x, float y)
             best_u = u;
         }
     }
-    if (strip >= 0) {
-        best = strip;
-        best_u = strip_u;
-    }
-    int ia = BTF_HEMI_HULL(tab, best);
-    int ib = BTF_HEMI_HULL(tab, best + 1 < n ? best + 1 : 0);
+    int ja = BTF_HEMI_HULL(tab, best);
+    int jb = BTF_HEMI_HULL(tab, best + 1 < n ? best + 1 : 0);
     BTF_PRECISE float wa = 1.0f - best_u;
-    return BTF_HEMI_WEIGHTS(ia, ib, BTF_HEMI_HULL_APEX(tab, best), wa, best_u, 0.0f);
+    return BTF_HEMI_WEIGHTS(ja, jb, BTF_HEMI_HULL_APEX(tab, best), wa, best_u, 0.0f);
 }
 
-/* The weights of a projected point (x, y): the triangle of its grid cell in
- * which its smallest weight is largest (the first such in the cell's list);
+/* The weights of a projected point (x, y): the first triangle of its grid
+ * cell (in the cell's list, which is in triangle order) that contains it
+ * (smallest weight >= 0), else the one whose smallest weight is largest;
  * if even that one's smallest weight is below -BTF_HEMI_INSIDE_EPS the
  * point is beyond the hull (or in a cell no triangle reaches), and the hull
  * rule applies. */
@@ -295,13 +322,24 @@ BTF_FN btf_hemi_weights btf_hemi_locate(BTF_HEMI_TABLE tab, float x, float y)
     btf_hemi_weights best = BTF_HEMI_WEIGHTS(0, 0, 0, 1.0f, 0.0f, 0.0f);
     float best_m = -3.0e38f;
     for (int j = j0; j < j1; j++) {
-        btf_hemi_weights r = btf_hemi_barycentric(tab, BTF_HEMI_CELL_TRI(tab, j), x, y);
-        float m = btf_hemi_min3(r.w0, r.w1, r.w2);
+        btf_hemi_weights r = btf_hemi_edges(tab, BTF_HEMI_CELL_TRI(tab, j), x, y);
+        BTF_PRECISE float s01 = r.w0 + r.w1;
+        BTF_PRECISE float s = s01 + r.w2;
+        /* A sliver whose float area is not positive is skipped. */
+        if (!(s > 0.0f))
+            continue;
+        BTF_PRECISE float e = btf_hemi_min3(r.w0, r.w1, r.w2);
+        BTF_PRECISE float m = e / s;
         if (m > best_m) {
             best_m = m;
             best = r;
         }
+        /* Inside or on an edge: no other triangle does better (a neighbour
+         * sharing the edge ties at 0), so the first one found is kept. */
+        if (m >= 0.0f)
+            break;
     }
+    best = btf_hemi_normalise(best);
     if (best_m >= -BTF_HEMI_INSIDE_EPS)
         return btf_hemi_clamp(best);
     return btf_hemi_hull_rule(tab, x, y);

@@ -74,11 +74,12 @@ static int cell_of(double v, int g)
 
 /* The uniform grid over [-1, 1]^2: each cell lists, in triangle order, the
  * triangles whose (widened) bounding box meets it, so a point's cell holds
- * every triangle that contains it. About 8 cells per triangle. */
+ * every triangle that contains it. About 32 cells per triangle, so that a
+ * cell holds one or two. */
 static btf_status build_grid(btf_hemisphere *h, btf_error *err)
 {
     int g = 16;
-    while (g * g < 8 * h->n_triangles && g < 256)
+    while (g * g < 32 * h->n_triangles && g < 256)
         g *= 2;
     h->grid = g;
     h->cell_start = btf_calloc((size_t)g * g + 1, sizeof *h->cell_start, err);

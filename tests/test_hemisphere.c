@@ -7,6 +7,7 @@
 #include "testutil.h"
 #include "render/render.h"
 #include "render/btf_hemisphere_lookup.h"
+#include "hemisphere_check_spv.h" /* gpu/hemisphere_check.comp: the lookup as GLSL */
 
 #include <math.h>
 #include <stdlib.h>
@@ -522,6 +523,14 @@ static void bad_sets(void **state)
     btf_hemisphere_free(NULL);
 }
 
+/* The build compiled the same lookup text as GLSL and spirv-val passed it. */
+static void lookup_compiles_as_glsl(void **state)
+{
+    (void)state;
+    assert_true(sizeof hemisphere_check_spv > 64);
+    assert_int_equal(hemisphere_check_spv[0], 0x07230203u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -533,6 +542,7 @@ int main(void)
         cmocka_unit_test(delaunay_valid_and_covering),
         cmocka_unit_test(independent_of_floating_noise),
         cmocka_unit_test(bad_sets),
+        cmocka_unit_test(lookup_compiles_as_glsl),
     };
     return cmocka_run_group_tests_name("hemisphere", tests, NULL, NULL);
 }

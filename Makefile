@@ -90,7 +90,7 @@ $(BUILD)/%.o: %.cpp $(LIB_H)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c $< -o $@
 
 # Shaders: GLSL -> SPIR-V as a C array, validated by spirv-val.
-$(BUILD)/gen/%_spv.h: gpu/%.comp $(wildcard gpu/*.glsl src/synth/btf_*.h)
+$(BUILD)/gen/%_spv.h: gpu/%.comp $(wildcard gpu/*.glsl src/synth/btf_*.h src/render/btf_*.h)
 	@mkdir -p $(dir $@)
 	glslangValidator -V --target-env vulkan1.1 -Igpu -Isrc/synth --vn $*_spv -o $@.spv.h $<
 	glslangValidator -V --target-env vulkan1.1 -Igpu -Isrc/synth -o $@.spv $<

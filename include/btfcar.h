@@ -974,15 +974,24 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
  * image (phi = 90), z the surface normal. */
 typedef struct btf_hemisphere btf_hemisphere; /* opaque */
 
-/* Triangulates a direction set (any set of >= 3 directions not all on one
- * great circle through the pole... see docs/render.md for the rules). */
+/* Triangulates a direction set: the directions projected to the unit disk
+ * (azimuthal equidistant, radius theta / 90 degrees, azimuth phi), then a
+ * Delaunay triangulation of the points, ties between cocircular points
+ * broken by the set's order, and a grid of cells over [-1, 1]^2 listing the
+ * triangles that may cover each. Errors (BTF_E_ARG, naming the set): fewer
+ * than 3 directions, more than BTF_HEMISPHERE_MAX_POINTS, a theta outside
+ * [0, 90] or non-finite, two directions on the same projected point (e.g.
+ * the pole twice), all directions on one line after the projection (one
+ * great circle through the pole). */
+#define BTF_HEMISPHERE_MAX_POINTS 1024
 btf_status btf_hemisphere_build(const btf_dirset *set, btf_hemisphere **out, btf_error *err);
 void btf_hemisphere_free(btf_hemisphere *h);
 /* The three set indices enclosing local direction v (any non-zero vector:
  * beyond the outermost ring and below the horizon too, by the rule in
  * docs/render.md) and their weights: w >= 0, summing to 1, continuous in
  * v, 1 at a measured direction. A zero or non-finite v is taken as the
- * pole. */
+ * pole. Beyond the hull the third weight is 0 (idx[2] then names the apex
+ * of the triangle on that hull edge). */
 void btf_hemisphere_lookup(const btf_hemisphere *h, const float v[3], int idx[3], float w[3]);
 
 /* The flat tables the CPU and GPU lookups both read (the lookup itself is
@@ -990,14 +999,16 @@ void btf_hemisphere_lookup(const btf_hemisphere *h, const float v[3], int idx[3]
  * pointers stay owned by h. */
 typedef struct btf_hemisphere_table {
     int n_points, n_triangles;
-    const float *points;        /* [n_points][2]: the projected directions */
+    const float *points;        /* [n_points][2]: the projected directions, set order */
     const int32_t *triangles;   /* [n_triangles][3]: point indices, counter-clockwise */
-    int grid;                   /* grid x grid cells over [-1, 1]^2 */
+    int grid;                   /* grid x grid cells over [-1, 1]^2, row-major from (-1, -1) */
     const int32_t *cell_start;  /* [grid * grid + 1]: cell c's triangles are */
     const int32_t *cell_tris;   /*   cell_tris[cell_start[c] .. cell_start[c + 1]) */
     int n_cell_tris;
     int n_hull;                 /* the outer boundary, counter-clockwise: */
-    const int32_t *hull;        /*   [n_hull] point indices */
+    const int32_t *hull;        /*   [n_hull] point indices (collinear ones included) */
+    const int32_t *hull_apex;   /* [n_hull]: the third vertex of the triangle on edge
+                                   hull[i] -> hull[(i + 1) % n_hull] */
 } btf_hemisphere_table;
 void btf_hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t);
 

@@ -1069,16 +1069,18 @@ typedef struct btf_mesh {
     int n_vertices, n_triangles;
     float *positions;               /* [n_vertices][3] */
     float *normals;                 /* [n_vertices][3] or NULL (face normals) */
-    float *uvs;                     /* [n_vertices][2], in texture units (scaled by texture_scale) */
+    float *uvs;                     /* [n_vertices][2]: UV channel 0, top-left origin (v down
+                                       the rows), in the file's units; the trace multiplies by
+                                       texture_scale and turns by rotation_deg */
     uint32_t *indices;              /* [n_triangles][3] */
 } btf_mesh;
 
 typedef struct btf_object {
     btf_object_kind kind;
-    double center[3];
-    double axis[3];                 /* plane normal, cylinder axis; unit */
+    double center[3];               /* mesh: added to its vertices */
+    double axis[3];                 /* plane normal, sphere pole, cylinder axis; unit */
     double radius, height, size;
-    double texture_scale;           /* texels of the material per world unit */
+    double texture_scale;           /* texels of the material per world unit (mesh: per UV unit) */
     double rotation_deg;            /* the material turned on the surface */
     btf_mesh mesh;                  /* BTF_OBJECT_MESH: owned by the scene */
 } btf_object;
@@ -1101,7 +1103,13 @@ btf_status btf_scene_check(const btf_scene *s, btf_error *err);
 void btf_scene_free(btf_scene *s);
 
 /* What ray casting gives per pixel: the G-buffer the renderer shades (and
- * uploads for the GPU pass). Pixel (x, y), row y from the top. */
+ * uploads for the GPU pass). Pixel (x, y), row y from the top; arrays are
+ * row-major, p = y * width + x. frame rows: T (direction of increasing u),
+ * B (decreasing v: up the texture image), N (shading normal towards the
+ * eye); orthonormal, T x B = N. uv may be negative or beyond the texture
+ * (the renderer wraps); a surface seen from behind has u negated so that
+ * the material never reads mirrored (docs/scene.md). Background pixels:
+ * object -1, uv 0, position 0, frame the identity, view still the ray's. */
 typedef struct btf_gbuffer {
     int width, height;
     int32_t *object;                /* object index, -1: background */
@@ -1111,8 +1119,10 @@ typedef struct btf_gbuffer {
     float *view;                    /* [3] world unit vector from the hit towards the eye */
 } btf_gbuffer;
 
-/* Casts one ray per pixel centre (BVH over mesh triangles), on `threads`
- * threads (0: all CPUs). */
+/* Casts one ray per pixel centre (BVH over mesh triangles, built per call),
+ * on `threads` threads (0: all CPUs); the result does not depend on the
+ * thread count. Checks the scene first (btf_scene_check). width, height in
+ * 1 .. 65536. */
 btf_status btf_scene_trace(const btf_scene *s, int width, int height, int threads,
                            btf_gbuffer *out, btf_error *err);
 void btf_gbuffer_free(btf_gbuffer *g);

@@ -36,7 +36,7 @@ typedef struct fixture {
 
 static void project_d(double theta, double phi, double *x, double *y)
 {
-    double r = theta / 90.0;
+    double r = sqrt(1.0 - cos(theta * PI / 180.0)); /* btf_hemi_project */
     *x = r * cos(phi * PI / 180.0);
     *y = r * sin(phi * PI / 180.0);
 }

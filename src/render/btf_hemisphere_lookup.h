@@ -9,7 +9,7 @@
  * "Interpolation over the hemisphere".
  *
  * The arithmetic is float, each result BTF_PRECISE, in one written order.
- * Unlike btf_noise.h the lookup needs atan2, sqrt and division, whose last
+ * Unlike btf_noise.h the lookup needs sqrt and division, whose last
  * bits GPU drivers do not pin down, so the two sides agree to a few ulp
  * (weights within ~1e-6), not bit for bit; where a point lies on an edge
  * shared by two triangles either side may pick either, and the weights
@@ -38,7 +38,7 @@
  *
  * Keep this file in the common subset of C11 and GLSL 4.50 (the rules of
  * src/synth/btf_noise.h, except for the library calls named above, which
- * go through BTF_HEMI_ATAN2 and BTF_HEMI_SQRT): ASCII only, no pointers or
+ * go through BTF_HEMI_SQRT): ASCII only, no pointers or
  * arrays in the shared part, no casts "(T)x" (BTF_HEMI_F2I, BTF_U2F-like
  * BTF_HEMI_I2F), float constants with the f suffix.
  */
@@ -49,7 +49,6 @@
 
 #if defined(BTF_GLSL) || defined(VULKAN) || defined(GL_core_profile) || defined(GL_ES)
 /* ------------------------------------------------------------------ GLSL */
-#define BTF_HEMI_ATAN2(y, x) atan(y, x)
 #define BTF_HEMI_SQRT(x) sqrt(x)
 #define BTF_HEMI_F2I(f) int(f)
 #define BTF_HEMI_I2F(i) float(i)
@@ -64,7 +63,6 @@ struct btf_hemi_weights {
 #include <math.h>
 #include "btfcar.h"
 
-#define BTF_HEMI_ATAN2(y, x) atan2f(y, x)
 #define BTF_HEMI_SQRT(x) sqrtf(x)
 #define BTF_HEMI_F2I(f) ((int)(f))
 #define BTF_HEMI_I2F(i) ((float)(i))
@@ -92,9 +90,6 @@ static inline btf_hemi_weights btf_make_hemi_weights(int a, int b, int c, float 
 
 /* ============================================== shared part: C and GLSL */
 
-/* 2 / pi: theta in radians to the projected radius (theta / 90 degrees). */
-#define BTF_HEMI_2_OVER_PI 0.636619772f
-#define BTF_HEMI_HALF_PI 1.57079633f
 /* A point belongs to a triangle when its smallest barycentric weight is at
  * least -BTF_HEMI_INSIDE_EPS: well above the float rounding of the weights
  * (~1e-6 for triangles of the sets the project knows), so no point inside
@@ -109,11 +104,15 @@ BTF_FN float btf_hemi_abs(float a)
     return a < 0.0f ? -a : a;
 }
 
-/* The azimuthal equidistant projection of local direction (vx, vy, vz):
- * radius theta / 90 degrees along azimuth phi; theta clamped to 90 degrees
- * at and below the horizon. Zero or non-finite vectors: the pole; straight
- * down (no azimuth): the horizon at phi = 0. The vector is first divided by
- * its largest component, so no length overflows or underflows the squares. */
+/* The projection of local direction (vx, vy, vz) to the unit disk:
+ * Lambert's azimuthal equal-area projection scaled so that the horizon is
+ * the unit circle, radius sqrt(1 - cos theta) along azimuph phi. For a
+ * vector of length L that is (vx, vy) / sqrt(L (L + vz)): two square roots
+ * and no arc tangent (the lookup runs twice per pixel per light). theta is
+ * clamped to 90 degrees at and below the horizon (vz taken as 0). Zero or
+ * non-finite vectors: the pole; straight down (no azimuth): the horizon at
+ * phi = 0. The vector is first divided by its largest component, so no
+ * length overflows or underflows the squares. */
 BTF_FN btf_vec2 btf_hemi_project(float vx, float vy, float vz)
 {
     float ax = btf_hemi_abs(vx);
@@ -126,18 +125,20 @@ BTF_FN btf_vec2 btf_hemi_project(float vx, float vy, float vz)
     BTF_PRECISE float a = vx / m;
     BTF_PRECISE float b = vy / m;
     BTF_PRECISE float c = vz / m;
+    c = c > 0.0f ? c : 0.0f;
     BTF_PRECISE float aa = a * a;
     BTF_PRECISE float bb = b * b;
     BTF_PRECISE float rr = aa + bb;
-    BTF_PRECISE float rho = BTF_HEMI_SQRT(rr);
-    if (!(rho > 0.0f))
-        return c >= 0.0f ? BTF_VEC2(0.0f, 0.0f) : BTF_VEC2(1.0f, 0.0f);
-    BTF_PRECISE float theta = BTF_HEMI_ATAN2(rho, c);
-    theta = theta < BTF_HEMI_HALF_PI ? theta : BTF_HEMI_HALF_PI;
-    BTF_PRECISE float r = theta * BTF_HEMI_2_OVER_PI;
-    BTF_PRECISE float s = r / rho;
-    BTF_PRECISE float x = a * s;
-    BTF_PRECISE float y = b * s;
+    if (!(rr > 0.0f))
+        return vz >= 0.0f ? BTF_VEC2(0.0f, 0.0f) : BTF_VEC2(1.0f, 0.0f);
+    BTF_PRECISE float cc = c * c;
+    BTF_PRECISE float ll = rr + cc;
+    BTF_PRECISE float l = BTF_HEMI_SQRT(ll);
+    BTF_PRECISE float lc = l + c;
+    BTF_PRECISE float q = l * lc;
+    BTF_PRECISE float d = BTF_HEMI_SQRT(q);
+    BTF_PRECISE float x = a / d;
+    BTF_PRECISE float y = b / d;
     return BTF_VEC2(x, y);
 }
 

@@ -38,9 +38,12 @@ void btf_hemisphere_free(btf_hemisphere *h)
     free(h);
 }
 
-/* The azimuthal equidistant projection of the set, in double: radius
- * theta / 90, angle phi. Keeps each ring of equal theta a circle (so convex)
- * and the pole at the origin. */
+/* The projection of the set, in double (the lookup's, btf_hemi_project):
+ * Lambert's azimuthal equal-area projection scaled to the unit disk, radius
+ * sqrt(1 - cos theta), angle phi. Keeps each ring of equal theta a circle
+ * (so convex), the pole at the origin and the horizon on the unit circle;
+ * equal solid angles get equal areas, so triangles of an even sampling are
+ * evenly sized. */
 static btf_status project_set(const btf_dirset *set, const char *name, double *xy,
                               btf_error *err)
 {
@@ -50,7 +53,7 @@ static btf_status project_set(const btf_dirset *set, const char *name, double *x
             return btf_fail(err, BTF_E_ARG,
                             "%s: direction %d (theta %g, phi %g): theta must be in [0, 90]",
                             name, i, d.theta, d.phi);
-        double r = d.theta / 90.0, p = d.phi * (BTF_PI / 180.0);
+        double r = sqrt(1.0 - cos(d.theta * (BTF_PI / 180.0))), p = d.phi * (BTF_PI / 180.0);
         xy[2 * i] = r * cos(p);
         xy[2 * i + 1] = r * sin(p);
     }

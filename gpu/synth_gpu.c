@@ -631,6 +631,8 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
     btf_status rc = BTF_OK;
     if (!m || n < 0)
         rc = btf_fail(err, BTF_E_ARG, "GPU synthesis: no model, or %d images", n);
+    if (rc == BTF_OK && o.tileable) /* the torus fields are DFT solves (src/synth/torus.c) */
+        rc = btf_fail(err, BTF_E_ARG, "tileable synthesis runs on the CPU backend");
     if (rc == BTF_OK && n > 0 &&
         !(margins = btf_calloc((size_t)n, sizeof *margins, err)))
         rc = BTF_E_NOMEM;

@@ -875,7 +875,20 @@ typedef struct btf_synth_opts {
     int portable_noise;  /* 1: the portable noise loop instead of AVX2 (and so
                             no wavefront, which draws its noise with AVX2) */
     int row_by_row;      /* 1: CAR fields row by row instead of the wavefront */
+    /* 1: a tileable image (CPU only; docs/synthesis.md, "Tileable
+     * synthesis"): every CAR field runs on the W x H torus, solved exactly
+     * by a 2D DFT, and the pyramid collapses with wrap-around, so the right
+     * edge continues into the left and the bottom into the top with the
+     * model's statistics everywhere. Whole fields are held (about 70 bytes
+     * a pixel, at most BTF_SYNTH_TILE_MAX_PIXELS pixels) instead of
+     * streamed; both sides must be multiples of 2^(levels - 1) (BTF_E_ARG
+     * otherwise); the same seed gives the same bytes on one build and CPU;
+     * the switches above do not apply. btf_gpu_synthesise refuses it
+     * (BTF_E_ARG). */
+    int tileable;
 } btf_synth_opts;
+/* The largest tileable synthesis, width x height (8192 x 8192). */
+#define BTF_SYNTH_TILE_MAX_PIXELS (1ull << 26)
 
 /* The defaults that a zero field of btf_synth_opts stands for. */
 btf_synth_opts btf_synth_defaults(void);

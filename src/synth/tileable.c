@@ -119,6 +119,23 @@ static btf_status band_plane(const btf_subspace_model *sm, int subspace, int ban
     return rc;
 }
 
+/* The three spectral bands are independent: one pool job each. */
+typedef struct band_jobs {
+    const btf_subspace_model *sm;
+    int subspace, w, h, vector_noise;
+    uint64_t seed;
+    float *planes;
+} band_jobs;
+
+static btf_status band_job(void *user, int band, int worker, btf_error *err)
+{
+    (void)worker;
+    const band_jobs *j = user;
+    size_t n = (size_t)j->w * j->h;
+    return band_plane(j->sm, j->subspace, band, j->w, j->h, j->seed, j->vector_noise,
+                      j->planes + n * band, err);
+}
+
 btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_synth_opts *o,
                                    int w, int h, btf_rows_fn fn, void *user, btf_error *err)
 {
@@ -131,8 +148,10 @@ btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_s
     if (!planes)
         return BTF_E_NOMEM;
     float *rgb = planes + n * 3, *scratch = rgb + (size_t)w * 3;
-    for (int b = 0; rc == BTF_OK && b < 3; b++)
-        rc = band_plane(sm, subspace, b, w, h, o->seed, !o->portable_noise, planes + n * b, err);
+    band_jobs jobs = {sm, subspace, w, h, !o->portable_noise, o->seed, planes};
+    /* a band's plane depends on the band alone: the same bytes on any
+     * number of threads (0: every CPU, at most 3 here) */
+    rc = btf_pool_run(3, 0, band_job, &jobs, NULL, err);
     for (int y = 0; rc == BTF_OK && y < h; y++) {
         size_t at = (size_t)y * w;
         if (btf_unmix_row(sm, planes + at, planes + n + at, planes + 2 * n + at, w, scratch, rgb))

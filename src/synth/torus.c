@@ -87,40 +87,71 @@ static btf_status noise_field(const btf_car_band *b, uint32_t stream, int w, int
 }
 
 /* Divides the spectrum (re, im) by A(k1, k2) at every grid frequency;
- * BTF_E_NUMERIC when |A|^2 falls below the floor somewhere. */
+ * BTF_E_NUMERIC when |A|^2 falls below the floor somewhere. The offsets
+ * are grouped by row: A = 1 - sum_j exp(i 2 pi k2 dr_j / H) Q_j(k1) with
+ * Q_j(k1) = sum over the offsets s of row dr_j of gamma_s
+ * exp(i 2 pi k1 dc_s / W), tabulated once, so a frequency costs one complex
+ * multiply-add per distinct row (3 or 4) instead of one per offset. */
 static btf_status divide_by_a(const btf_car_band *b, int w, int h, double *re, double *im,
                               const char *what, btf_error *err)
 {
-    double *cw = btf_alloc((size_t)(w + h) * 2, sizeof(double), err);
+    int rows[BTF_CAR_MAX_NEIGHBOURS], nr = 0;
+    for (int s = 0; s < b->n; s++) {
+        int j = 0;
+        while (j < nr && rows[j] != b->offsets[s].row)
+            j++;
+        if (j == nr)
+            rows[nr++] = b->offsets[s].row;
+    }
+    /* unit roots of both sides, then Q_j's real and imaginary rows */
+    double *cw = btf_alloc((size_t)(w + h) * 2 + (size_t)nr * w * 2, sizeof(double), err);
     if (!cw)
         return BTF_E_NOMEM;
-    double *ch = cw + (size_t)w * 2;
+    double *ch = cw + (size_t)w * 2, *q = ch + (size_t)h * 2;
     unit_roots(w, cw);
     unit_roots(h, ch);
+    for (int j = 0; j < nr; j++) {
+        double *qr = q + (size_t)j * 2 * w, *qi = qr + w;
+        for (int k1 = 0; k1 < w; k1++) {
+            double sr = 0.0, si = 0.0;
+            for (int s = 0; s < b->n; s++)
+                if (b->offsets[s].row == rows[j]) {
+                    const double *pc = cw + 2 * wrap((long)k1 * b->offsets[s].col, w);
+                    sr += (double)b->gamma[s] * pc[0];
+                    si += (double)b->gamma[s] * pc[1];
+                }
+            qr[k1] = sr, qi[k1] = si;
+        }
+    }
     double min_a2 = INFINITY;
     int min_k1 = 0, min_k2 = 0;
-    for (int k2 = 0; k2 < h; k2++)
+    for (int k2 = 0; k2 < h; k2++) {
+        double rr[BTF_CAR_MAX_NEIGHBOURS], ri[BTF_CAR_MAX_NEIGHBOURS];
+        for (int j = 0; j < nr; j++) {
+            const double *pr = ch + 2 * wrap((long)k2 * rows[j], h);
+            rr[j] = pr[0], ri[j] = pr[1];
+        }
+        double *xr = re + (size_t)k2 * w, *xi = im + (size_t)k2 * w;
         for (int k1 = 0; k1 < w; k1++) {
             double ar = 1.0, ai = 0.0;
-            for (int s = 0; s < b->n; s++) {
-                const double *pc = cw + 2 * wrap((long)k1 * b->offsets[s].col, w);
-                const double *pr = ch + 2 * wrap((long)k2 * b->offsets[s].row, h);
-                double er = pc[0] * pr[0] - pc[1] * pr[1], ei = pc[0] * pr[1] + pc[1] * pr[0];
-                ar -= (double)b->gamma[s] * er;
-                ai -= (double)b->gamma[s] * ei;
+            for (int j = 0; j < nr; j++) {
+                double qr = q[(size_t)j * 2 * w + k1], qi = q[(size_t)j * 2 * w + w + k1];
+                ar -= rr[j] * qr - ri[j] * qi;
+                ai -= rr[j] * qi + ri[j] * qr;
             }
             double a2 = ar * ar + ai * ai;
-            if (a2 < min_a2)
-                min_a2 = a2, min_k1 = k1, min_k2 = k2;
-            if (!(a2 >= SYNTH_TORUS_MIN_A2))
-                continue; /* refused below, after the minimum is known */
-            size_t i = (size_t)k2 * w + k1;
-            double xr = re[i], xi = im[i];
-            re[i] = (xr * ar + xi * ai) / a2; /* X conj(A) / |A|^2 */
-            im[i] = (xi * ar - xr * ai) / a2;
+            if (!(a2 >= SYNTH_TORUS_MIN_A2)) { /* refused below, once the minimum is known */
+                if (!(a2 >= min_a2))
+                    min_a2 = a2, min_k1 = k1, min_k2 = k2;
+                continue;
+            }
+            double vr = xr[k1], vi = xi[k1];
+            xr[k1] = (vr * ar + vi * ai) / a2; /* X conj(A) / |A|^2 */
+            xi[k1] = (vi * ar - vr * ai) / a2;
         }
+    }
     free(cw);
-    if (!(min_a2 >= SYNTH_TORUS_MIN_A2))
+    if (min_a2 < SYNTH_TORUS_MIN_A2 || isnan(min_a2))
         return btf_fail(err, BTF_E_NUMERIC, "%s: the CAR model is singular on the %dx%d torus "
                         "(|A|^2 = %.3g < %.0e at frequency (%d, %d)): its recursion is unstable",
                         what, w, h, min_a2, SYNTH_TORUS_MIN_A2, min_k1, min_k2);

@@ -382,8 +382,11 @@ static void sizes_and_extremes(void **state)
     fitted_model(3, &m);
     btf_error e = {0};
     btf_image img;
-    const int bad[][2] = {{1, 1}, {258, 256}, {256, 2}, {3, 4}, {16384, 8192}};
-    for (int i = 0; i < 5; i++) {
+    const int bad[][2] = {{1, 1}, {258, 256}, {256, 2}, {3, 4}, {16384, 8192}, {4084, 256},
+                          {256, 524}};
+    const char *why[] = {"multiples of 4", "multiples of 4", "multiples of 4", "multiples of 4",
+                         "pixels", "4084 has the prime factor 1021", "prime factor 131"};
+    for (int i = 0; i < 7; i++) {
         btf_synth_opts o = {.width = bad[i][0], .height = bad[i][1], .tileable = 1};
         e = (btf_error){0};
         assert_int_equal(btf_synthesise_image(&m, 0, &o, &img, &e), BTF_E_ARG);
@@ -392,9 +395,10 @@ static void sizes_and_extremes(void **state)
         snprintf(size, sizeof size, "%dx%d", bad[i][0], bad[i][1]);
         print_message("%s\n", e.msg);
         assert_non_null(strstr(e.msg, size));
-        assert_non_null(strstr(e.msg, i < 4 ? "multiples of 4" : "pixels"));
+        assert_non_null(strstr(e.msg, why[i]));
     }
-    /* the streaming call refuses the same (btf_synthesise checks too) */
+    assert_non_null(strstr(e.msg, "; 520 would do")); /* 524 = 4 x 131; 520 = 2^3 5 13 */
+    /* 6 is no multiple of 4 either; 4 x 4 (the coarsest level 1 x 1) works */
     btf_synth_opts o = {.width = 6, .height = 8, .tileable = 1};
     assert_int_equal(btf_synthesise_image(&m, 0, &o, &img, &e), BTF_E_ARG);
     o.width = 4, o.height = 4;

@@ -25,6 +25,28 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The largest prime factor of n >= 1 (1 for n = 1). */
+static int largest_prime_factor(int n)
+{
+    int p = 1;
+    for (int d = 2; (long)d * d <= n; d++)
+        while (n % d == 0)
+            p = d, n /= d;
+    return n > 1 ? n : p;
+}
+
+/* The multiple of `factor` nearest to side whose prime factors are all at
+ * most BTF_SYNTH_TILE_MAX_PRIME (the smaller of two at the same distance). */
+static int nearest_smooth(int side, int factor)
+{
+    for (int d = 0;; d += factor) {
+        if (side - d >= factor && largest_prime_factor(side - d) <= BTF_SYNTH_TILE_MAX_PRIME)
+            return side - d;
+        if (largest_prime_factor(side + d) <= BTF_SYNTH_TILE_MAX_PRIME)
+            return side + d;
+    }
+}
+
 btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error *err)
 {
     int factor = 1 << (levels - 1);
@@ -34,9 +56,19 @@ btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error
                         "level tiles", width, height, levels, factor);
     if ((uint64_t)width * (uint64_t)height > BTF_SYNTH_TILE_MAX_PIXELS)
         return btf_fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: more than %llu pixels "
-                        "(it holds whole fields, about 70 bytes a pixel); the streaming "
+                        "(it holds whole fields, about 85 bytes a pixel); the streaming "
                         "synthesis has no such bound", width, height,
                         (unsigned long long)BTF_SYNTH_TILE_MAX_PIXELS);
+    /* OpenCV's DFT costs a length-n transform about n p for a prime factor
+     * p: a side of a large prime would take hours (docs/synthesis.md). */
+    for (int k = 0; k < 2; k++) {
+        int side = k ? height : width, p = largest_prime_factor(side);
+        if (p > BTF_SYNTH_TILE_MAX_PRIME)
+            return btf_fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: %d has the prime "
+                            "factor %d, and the DFT that solves the torus is slow for primes "
+                            "above %d; %d would do", width, height, side, p,
+                            BTF_SYNTH_TILE_MAX_PRIME, nearest_smooth(side, factor));
+    }
     return BTF_OK;
 }
 

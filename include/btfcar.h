@@ -898,7 +898,8 @@ typedef struct btf_synth_opts {
 btf_synth_opts btf_synth_defaults(void);
 
 /* Synthesises subspace image `subspace` of the model (opts may be NULL),
- * streaming: memory grows with the width, not the height. Per spectral band
+ * streaming: memory grows with the width, not the height (tileable: whole
+ * fields on a torus instead, btf_synth_opts.tileable). Per spectral band
  * and pyramid level the CAR recursion runs with a burn-in margin
  * (docs/synthesis.md) so the field is stationary from its first pixel; the
  * pyramid is collapsed and the colour decorrelation undone. The noise is a

@@ -627,6 +627,8 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
     btf_synth_opts o = btf_synth_resolve(opts);
     for (int j = 0; j < n; j++)
         memset(&outs[j], 0, sizeof outs[j]);
+    if (o.tileable) /* the torus fields are DFT solves (src/synth/torus.c); before g is used */
+        return btf_fail(err, BTF_E_ARG, "tileable synthesis runs on the CPU backend");
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
     btf_status rc = BTF_OK;
     if (!m || n < 0)

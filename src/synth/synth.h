@@ -4,6 +4,8 @@
  * the inverse decorrelation), one section per file, callers above callees:
  *
  *   synthesise.c   the public calls: options, checks, the row loop
+ *   tileable.c     tileable synthesis: the pyramid on a torus, whole planes
+ *   torus.c        one CAR field on a torus, solved by a 2D DFT
  *   collapse.c     the pyramid of one band, streamed row by row
  *   upsample.c     pyrUp of rows (horizontal pairs, vertical sums)
  *   field.c        one CAR field of a level: its ring of rows, and which
@@ -47,6 +49,29 @@ typedef struct synth_paths {
     int vector_noise; /* the AVX2 noise loop (when the CPU has AVX2) */
     int wave;         /* the wavefront (where the band and the CPU qualify) */
 } synth_paths;
+
+/* ------------------------------------------------------------ tileable.c */
+
+/* Tileable synthesis of subspace `subspace` (checked) at w x h (checked
+ * against BTF_SYNTH_MAX_SIDE): each level a CAR field on its torus, the
+ * pyramid collapsed with wrap-around, rows handed to fn in order. */
+btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_synth_opts *o,
+                                   int w, int h, btf_rows_fn fn, void *user, btf_error *err);
+/* A tileable size: both sides multiples of 2^(levels - 1), at most
+ * BTF_SYNTH_TILE_MAX_PIXELS pixels (BTF_E_ARG naming the size otherwise). */
+btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error *err);
+
+/* --------------------------------------------------------------- torus.c */
+
+/* The zero-mean CAR field of band b on the w x h torus (periodic
+ * boundaries) into out (w h floats, row-major), driven by the noise of
+ * `stream` at rows and columns 0 .. h - 1, 0 .. w - 1: exactly
+ * Y = sum_s gamma_s Y(wrapped neighbour) + sigma e at every pixel, up to
+ * rounding. BTF_E_NUMERIC (the message starting with `what`) when the
+ * recursion is singular at a grid frequency. */
+btf_status synth_torus_field(const btf_car_band *b, uint32_t stream, int w, int h,
+                             uint64_t seed, int vector_noise, const char *what, float *out,
+                             btf_error *err);
 
 /* ------------------------------------------------------------ noise_row.c */
 

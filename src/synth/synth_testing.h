@@ -3,7 +3,7 @@
  * (CAR synthesis, Haindl & Filip 2007, section II.C): a single CAR field,
  * forced margins, the GPU's buffer limit and tiling. Not part of the public
  * API; the definitions live beside the code they reach into
- * (src/synth/synthesise.c, gpu/synth_gpu.c).
+ * (src/synth/synthesise.c, src/synth/torus.c, gpu/synth_gpu.c).
  */
 #ifndef BTF_SYNTH_TESTING_H
 #define BTF_SYNTH_TESTING_H
@@ -16,6 +16,11 @@
 btf_status btf_car_synthesise_field(const btf_car_band *band, int margin, uint32_t stream,
                                     const btf_synth_opts *opts, btf_rows_fn fn, void *user,
                                     btf_error *err);
+
+/* One CAR field alone on the w x h torus (tileable synthesis' generator,
+ * src/synth/torus.c), zero-mean (without band->mean), into out (w h floats). */
+btf_status btf_car_torus_field(const btf_car_band *band, uint32_t stream, int w, int h,
+                               uint64_t seed, float *out, btf_error *err);
 
 /* btf_synthesise with margins[band][level] instead of the bands' own
  * (NULL: their own). */

@@ -31,6 +31,7 @@ btf_synth_opts btf_synth_defaults(void)
         .seed = 0,
         .portable_noise = 0,
         .row_by_row = 0,
+        .tileable = 0, /* streaming, no wrap-around */
     };
     return o;
 }
@@ -46,6 +47,7 @@ btf_synth_opts btf_synth_resolve(const btf_synth_opts *opts)
     o.seed = o.seed ? o.seed : d.seed;
     o.portable_noise = o.portable_noise ? o.portable_noise : d.portable_noise;
     o.row_by_row = o.row_by_row ? o.row_by_row : d.row_by_row;
+    o.tileable = o.tileable ? o.tileable : d.tileable;
     return o;
 }
 
@@ -95,6 +97,8 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
         rc = output_size(m, subspace, &o, &width, &height, err);
     if (rc)
         return rc;
+    if (o.tileable) /* whole fields on a torus: no margins (tileable.c) */
+        return btf_synthesise_tileable(m, subspace, &o, width, height, fn, user, err);
     const btf_subspace_model *sm = &m->subspaces[subspace];
     int margin[3][BTF_MAX_LEVELS];
     for (int b = 0; b < 3; b++)
@@ -157,6 +161,8 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
     btf_status rc = check_subspace(m, subspace, err);
     if (rc == BTF_OK)
         rc = output_size(m, subspace, &o, &w, &h, err);
+    if (rc == BTF_OK && o.tileable) /* refused before its image is allocated */
+        rc = btf_synth_check_tileable(w, h, m->subspaces[subspace].levels, err);
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, w, h, 3, err);
     if (rc)

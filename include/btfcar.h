@@ -1051,10 +1051,11 @@ btf_status btf_range_map(const btf_model *m, int width, int height, btf_image *h
 btf_status btf_normal_map(const btf_image *height, double scale, btf_image *normal,
                           btf_error *err);
 /* Makes a range tile periodic in place (analysis does, and reading a model
- * file of format 1.0 does): the periodic component of Moisan's periodic-
- * plus-smooth decomposition (docs/render.md), which keeps the tile's mean
- * and detail and removes the jumps between opposite edges. Heights must be
- * finite (BTF_E_DATA). */
+ * file of format 1.0 does): its mean slope removed, then a variance-
+ * preserving cross-fade with itself shifted by half a period along each
+ * axis (docs/render.md), which keeps the tile's mean and variance and
+ * removes the jumps between opposite edges. Heights must be finite
+ * (BTF_E_DATA). */
 btf_status btf_range_make_periodic(float *heights, int width, int height, btf_error *err);
 
 /* ----------------------------------------------------------------- scenes */

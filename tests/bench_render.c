@@ -15,7 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int fail(const btf_error *e)
+static int bench_fail(const btf_error *e)
 {
     fprintf(stderr, "bench_render: %s\n", e->msg);
     return 1;
@@ -36,20 +36,20 @@ int main(int argc, char **argv)
     btf_model m;
     btf_scene s;
     if (btf_model_read(argv[1], &m, &e) || btf_scene_load(argv[2], &s, &e))
-        return fail(&e);
+        return bench_fail(&e);
     btf_gbuffer g;
     double t0 = tu_now();
     if (btf_scene_trace(&s, w, h, 0, &g, &e))
-        return fail(&e);
+        return bench_fail(&e);
     double t1 = tu_now();
     uint8_t *need = malloc((size_t)m.n_subspaces);
     int count = 0;
     if (btf_render_needed(&m, &g, s.lights, s.n_lights, need, &count, &e))
-        return fail(&e);
+        return bench_fail(&e);
     double t2 = tu_now();
     btf_render_material *rm;
     if (btf_render_material_build(&m, need, 512, 1, 0, &rm, &e))
-        return fail(&e);
+        return bench_fail(&e);
     double t3 = tu_now();
     printf("render %dx%d of %s: trace %.3f s, needed-subspace walk %.3f s (%d of %d), "
            "synthesis of those at 512^2 %.3f s\n", w, h, argv[2], t1 - t0, t2 - t1, count,
@@ -61,7 +61,7 @@ int main(int argc, char **argv)
             double a = tu_now();
             if (btf_render_shade(rm, &g, s.lights, s.n_lights, s.background, 1.0, threads, &img,
                                  &e))
-                return fail(&e);
+                return bench_fail(&e);
             t[r] = tu_now() - a;
             btf_image_free(&img);
         }

@@ -44,7 +44,8 @@ static void project_d(double theta, double phi, double *x, double *y)
 /* The direction whose projection is (x, y) (|(x, y)| <= 1). */
 static void unproject(double x, double y, float v[3])
 {
-    double r = hypot(x, y), th = r * (PI / 2), ph = atan2(y, x);
+    /* r = sqrt(1 - cos theta) (btf_hemi_project), so cos theta = 1 - r^2 */
+    double r = hypot(x, y), th = acos(fmax(-1.0, 1.0 - r * r)), ph = atan2(y, x);
     v[0] = (float)(sin(th) * cos(ph));
     v[1] = (float)(sin(th) * sin(ph));
     v[2] = (float)cos(th);

@@ -1146,9 +1146,9 @@ static void old_version_file(void **state)
 
 /* A non-periodic tile (a ramp with ripples) in the 1.0 layout is read as
  * btf_range_make_periodic makes it; in the 1.1 layout (flag set) it is read
- * as it is. The conversion keeps the ripples: the converted tile correlates
- * with the ramp-free ripples, and their 4-neighbour Laplacian is u's at
- * every interior texel (Moisan's p has u's Laplacian there). */
+ * as it is. The conversion keeps the ripples: in the middle of the tile,
+ * where the cross-fade keeps mostly the tile itself, the converted tile
+ * correlates with the ramp-free ripples. */
 static void format_1_0_tile_is_made_periodic(void **state)
 {
     (void)state;
@@ -1187,22 +1187,20 @@ static void format_1_0_tile_is_made_periodic(void **state)
             for (int i = 0; i < W * H; i++)
                 mean_raw += raw[i], mean_p += d.range[i];
             assert_float_equal(mean_p / (W * H), mean_raw / (W * H), 1e-2);
-            for (int y = 1; y < H - 1; y++)
-                for (int x = 1; x < W - 1; x++) {
+            /* The middle half along both axes is mostly the tile itself (the
+             * cross-fade's weight of the original is >= 0.7 there). */
+            int cnt = 0;
+            for (int y = H / 4; y < H - H / 4; y++)
+                for (int x = W / 4; x < W - W / 4; x++) {
                     int i = y * W + x;
-                    double lp = d.range[i - 1] + d.range[i + 1] + d.range[i - W] +
-                                d.range[i + W] - 4.0 * d.range[i];
-                    double lu = raw[i - 1] + raw[i + 1] + raw[i - W] + raw[i + W] - 4.0 * raw[i];
-                    assert_float_equal(lp, lu, 0.05);
+                    double a = d.range[i] - mean_p / (W * H), r = ripple[i];
+                    sp += a, sr += r, spp += a * a, srr += r * r, spr += a * r;
+                    cnt++;
                 }
-            for (int i = 0; i < W * H; i++) {
-                double a = d.range[i] - mean_p / (W * H), r = ripple[i];
-                sp += a, sr += r, spp += a * a, srr += r * r, spr += a * r;
-            }
-            double n = W * H, cov = spr / n - sp * sr / (n * n);
+            double n = cnt, cov = spr / n - sp * sr / (n * n);
             double corr = cov / sqrt((spp / n - sp * sp / (n * n)) * (srr / n - sr * sr / (n * n)));
             print_message("converted tile vs its ripples: correlation %.3f\n", corr);
-            assert_true(corr > 0.8);
+            assert_true(corr > 0.7);
         }
         free_model(&d);
         free(f);

@@ -126,13 +126,54 @@ static void periodic_tile_keeps_content(void **state)
     btf_error e = {0};
     TU_OK(btf_range_make_periodic(p, w, h, &e), &e);
     steps su = measure_steps(u, w, h), sp = measure_steps(p, w, h);
-    double corr = correlation(u, p, (size_t)w * h);
+    /* The middle half along both axes is mostly the tile itself (the
+     * cross-fade's weight of the original is >= 0.7 there). */
+    int mw = w - 2 * (w / 4), mh = h - 2 * (h / 4);
+    float *cu = malloc(sizeof(float) * mw * mh), *cp = malloc(sizeof(float) * mw * mh);
+    for (int y = 0; y < mh; y++)
+        for (int x = 0; x < mw; x++) {
+            cu[y * mw + x] = u[(y + h / 4) * w + x + w / 4];
+            cp[y * mw + x] = p[(y + h / 4) * w + x + w / 4];
+        }
+    double corr = correlation(cu, cp, (size_t)mw * mh);
+    free(cu);
+    free(cp);
     print_message("tile %dx%d: wrap/inside mean step %.3f -> %.3f; correlation %.4f\n", w, h,
                   su.wrap_mean / su.inside_mean, sp.wrap_mean / sp.inside_mean, corr);
     assert_true(su.wrap_mean > 1.5 * su.inside_mean); /* the input does not wrap */
-    assert_true(sp.wrap_mean <= sp.inside_mean);      /* the output does */
-    assert_true(sp.wrap_max <= sp.inside_max);
-    assert_true(corr > 0.9);
+    /* The output wraps with steps like the inside ones: neither a jump nor a
+     * flattened seam (a seam of small steps shows as a line under a grazing
+     * light). */
+    assert_true(sp.wrap_mean <= 1.3 * sp.inside_mean);
+    assert_true(sp.wrap_mean >= 0.5 * sp.inside_mean); /* this tile's steps at w/2: 0.56 */
+    assert_true(sp.wrap_max <= 1.3 * sp.inside_max);
+    assert_true(corr > 0.75);
+    /* On a rough (white-noise) surface the steps across the wrap are the
+     * inside ones: no flattened seam (Moisan's periodic component gave 0.4
+     * to 0.5 here), and the variance is kept. */
+    {
+        int n = 48 * 40;
+        float *r = malloc(sizeof(float) * n), *q = malloc(sizeof(float) * n);
+        btf_rng g;
+        btf_rng_seed(&g, 11);
+        double vr = 0, vq = 0;
+        for (int i = 0; i < n; i++)
+            r[i] = q[i] = (float)btf_rng_uniform(&g) + 0.01f * (i % 48);
+        TU_OK(btf_range_make_periodic(q, 48, 40, &e), &e);
+        steps sq = measure_steps(q, 48, 40);
+        double mr = 0, mq = 0;
+        for (int i = 0; i < n; i++)
+            mr += r[i] - 0.01 * (i % 48), mq += q[i];
+        mr /= n, mq /= n;
+        for (int i = 0; i < n; i++)
+            vr += pow(r[i] - 0.01 * (i % 48) - mr, 2), vq += pow(q[i] - mq, 2);
+        print_message("white-noise tile: wrap/inside mean step %.3f, variance ratio %.3f\n",
+                      sq.wrap_mean / sq.inside_mean, vq / vr);
+        assert_true(sq.wrap_mean >= 0.8 * sq.inside_mean && sq.wrap_mean <= 1.25 * sq.inside_mean);
+        assert_true(vq / vr > 0.85 && vq / vr < 1.15);
+        free(r);
+        free(q);
+    }
     double mu = 0, mp = 0;
     for (int i = 0; i < w * h; i++)
         mu += u[i], mp += p[i];

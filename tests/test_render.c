@@ -86,7 +86,7 @@ static void test_flat_equals_subspace(void **state)
     TU_OK(btf_synthesise_image(&m, 2, &so, &ref, &e), &e);
     double worst = 0.0;
     for (size_t i = 0; i < (size_t)64 * 64 * 3; i++) {
-        double d = fabs(img.data[i] - ref.data[i]);
+        double d = fabs(img.data[i] - fmax(ref.data[i], 0.0)); /* no negative radiance */
         worst = d > worst ? d : worst;
     }
     assert_true(worst < 1e-5);

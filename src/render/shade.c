@@ -17,8 +17,9 @@
  *     (l_z), so a flat range map multiplies by exactly 1; a light below the
  *     surface's horizon (l_z <= 0) gives nothing.
  *
- * Each light adds its intensity times that; background pixels get the
- * background colour.
+ * Each light adds its intensity times that; a negative sum (the CAR
+ * model's Gaussian tails) becomes 0; background pixels get the background
+ * colour.
  */
 #include "render/shade.h"
 #include "core/core.h"
@@ -170,8 +171,10 @@ static int shade_pixel(const shade_job *j, size_t p, float out[3])
     for (int k = 0; k < j->n_lights; k++)
         if (light_term(j, p, frame, iv, wv, &j->lights[k], &t, n, acc) < 0)
             return -1;
+    /* No negative radiance: the CAR model's Gaussian tails can take a
+     * subspace image below 0 (docs/render.md). */
     for (int ch = 0; ch < 3; ch++)
-        out[ch] = isfinite(acc[ch]) ? acc[ch] : 0.0f;
+        out[ch] = isfinite(acc[ch]) && acc[ch] > 0.0f ? acc[ch] : 0.0f;
     return 0;
 }
 

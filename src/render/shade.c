@@ -142,6 +142,11 @@ static int light_term(const shade_job *j, size_t p, const float *frame, const in
     float ndotl = n[0] * ll[0] + n[1] * ll[1] + n[2] * ll[2];
     float flat = ll[2] > BTF_FLAT_MIN_Z ? ll[2] : BTF_FLAT_MIN_Z;
     float factor = ndotl > 0.0f ? ndotl / flat : 0.0f;
+    /* Beyond the outermost measured light ring the hull rule keeps that
+     * ring's images, whose irradiance is cos(theta_outer): continue the
+     * foreshortening down to 0 at the horizon (docs/render.md). */
+    if (ll[2] < rm->light_outer_z)
+        factor *= ll[2] / rm->light_outer_z;
     for (int ch = 0; ch < 3; ch++)
         acc[ch] += rgb[ch] * c[ch] * factor;
     return 0;

@@ -17,6 +17,7 @@ struct btf_render_material {
     uint8_t *index;          /* [view * n_lights + light] -> subspace (a copy) */
     btf_hemisphere *views;   /* triangulations of the two direction sets */
     btf_hemisphere *lights;
+    float light_outer_z;     /* cos of the largest measured light theta */
     int size;                /* side of every image below */
     btf_image height;        /* size x size x 1, heights in texels */
     btf_image normal;        /* size x size x 3, unit tangent-frame normals */

@@ -114,8 +114,8 @@ if [ "${BENCH_FULL:-0}" = 1 ]; then
     echo "synthesise 32768x32768 to half EXR: $(cut -d' ' -f1 "$TMP/time") s, peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB (target <= 256 MB)"
 fi
 
-echo "== render: a 1024^2 sphere of the analysed 256^2 material under one light (examples/sphere.json)"
-SPHERE=$(dirname "$0")/../examples/sphere.json
+echo "== render: a 1024^2 sphere of the analysed 256^2 material under one light (examples/sphere-one-light.json)"
+SPHERE=$(dirname "$0")/../examples/sphere-one-light.json
 if [ -n "$RENDER_BENCH" ]; then
     "$RENDER_BENCH" "$TMP/m.btfcar" "$SPHERE" 1024x1024 7 || echo "bench: bench_render exited with $?"
 fi

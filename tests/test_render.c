@@ -347,6 +347,144 @@ static void test_bad_input(void **state)
     btf_model_free(&m);
 }
 
+/* A plane (normal +z, side 60) seen by a camera at `theta` degrees from its
+ * normal, 20 units away, with a field of view of fov degrees; one light. */
+static void plane_scene(btf_scene *sc, double theta, double fov)
+{
+    memset(sc, 0, sizeof *sc);
+    double t = theta * 3.14159265358979323846 / 180.0;
+    sc->camera = (btf_camera){{0, -20 * sin(t), 20 * cos(t)}, {0, 0, 0}, {0, 0, 1}, fov};
+    if (theta < 1e-9)
+        sc->camera.up[1] = 1, sc->camera.up[2] = 0;
+    sc->n_lights = 1;
+    sc->lights = calloc(1, sizeof *sc->lights);
+    sc->lights[0] = (btf_light){.kind = BTF_LIGHT_DIRECTIONAL, .direction = {0, 0.6, 0.8},
+                                .rgb = {1, 1, 1}};
+    sc->n_objects = 1;
+    sc->objects = calloc(1, sizeof *sc->objects);
+    sc->objects[0] = (btf_object){.kind = BTF_OBJECT_PLANE, .center = {0, 0, 0},
+                                  .axis = {0, 0, 1}, .size = 60, .texture_scale = 16};
+}
+
+/* Model only what the scene requires: a plane seen along its normal needs
+ * the subspaces of the first rings only, the same plane seen at 65 degrees
+ * those of the outer rings, a sphere (every view from 0 to 90 degrees)
+ * all six; each render reports the count it synthesised. */
+static void test_scene_needs(void **state)
+{
+    (void)state;
+    btf_model m;
+    ring_model(&m, 0.05f);
+    btf_error e = {0};
+    btf_render_opts o = opts_of(48, 48, 1.0);
+    btf_render_info near, grazing, all;
+    btf_image img = {0};
+    btf_scene sc;
+    plane_scene(&sc, 0.0, 8.0);
+    TU_OK(btf_render_scene(&m, &sc, &o, &img, &near, &e), &e);
+    btf_image_free(&img);
+    btf_scene_free(&sc);
+    plane_scene(&sc, 65.0, 30.0);
+    TU_OK(btf_render_scene(&m, &sc, &o, &img, &grazing, &e), &e);
+    btf_image_free(&img);
+    btf_scene_free(&sc);
+    print_message("needed: head-on %d, at 65 degrees %d of %d\n", near.needed, grazing.needed,
+                  RINGS);
+    /* views within 4 degrees of the pole: the pole and the 15-degree ring */
+    assert_int_equal(near.needed, 2);
+    /* views from about 50 to 80 degrees: the rings 45, 60 and 75 */
+    assert_int_equal(grazing.needed, 3);
+    assert_true(near.needed < grazing.needed);
+    plane_scene(&sc, 0.0, 8.0);
+    sc.objects[0] = (btf_object){.kind = BTF_OBJECT_SPHERE, .center = {0, 0, 0}, .radius = 1.0,
+                                 .axis = {0, 1, 0}, .texture_scale = 16};
+    sc.camera.fov_deg = 30;
+    TU_OK(btf_render_scene(&m, &sc, &o, &img, &all, &e), &e);
+    assert_int_equal(all.needed, RINGS);
+    /* --all-subspaces synthesises them all, and shades the same pixels. */
+    btf_image every = {0};
+    btf_render_opts oa = o;
+    oa.all_subspaces = 1;
+    btf_scene_free(&sc);
+    plane_scene(&sc, 0.0, 8.0);
+    btf_image_free(&img);
+    btf_render_info ia;
+    TU_OK(btf_render_scene(&m, &sc, &o, &img, &near, &e), &e);
+    TU_OK(btf_render_scene(&m, &sc, &oa, &every, &ia, &e), &e);
+    assert_int_equal(ia.needed, RINGS);
+    assert_memory_equal(img.data, every.data, (size_t)48 * 48 * 3 * sizeof(float));
+    btf_image_free(&img);
+    btf_image_free(&every);
+    btf_scene_free(&sc);
+    btf_model_free(&m);
+}
+
+/* The command: a flat render and a scene render of a model file, the
+ * summary lines, the same bytes for the same seed, and the usage errors. */
+static void test_cli_render(void **state)
+{
+    (void)state;
+    char *dir = tu_tmpdir();
+    btf_model m;
+    ring_model(&m, 0.05f);
+    btf_error e = {0};
+    const char *model = tu_fmt("%s/rings.btfcar", dir);
+    char *mp = strdup(model);
+    TU_OK(btf_model_write(mp, &m, &e), &e);
+    btf_model_free(&m);
+    char *err = NULL;
+    int st = -1;
+    const char *cli = tu_cli();
+    char *out = tu_capture(tu_fmt("%s render %s --view 30,60 --light 45,0 --size 32x32 -o %s/a.png",
+                                  cli, mp, dir), &st);
+    assert_int_equal(st, 0);
+    assert_non_null(strstr(out, "subspaces: 1 needed of 6"));
+    assert_non_null(strstr(out, "backend cpu"));
+    free(out);
+    assert_int_equal(tu_run(tu_fmt("%s render -q %s --view 30,60 --light 45,0 --size 32x32 -o %s/b.png",
+                                   cli, mp, dir), NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("cmp -s %s/a.png %s/b.png", dir, dir), NULL), 0);
+    const char *scene = tu_fmt("%s/s.json", dir);
+    char *sp = strdup(scene);
+    const char *json = "{\"camera\": {\"position\": [0, 0, 4], \"target\": [0, 0, 0], "
+                       "\"up\": [0, 1, 0], \"fov\": 40}, \"lights\": [{\"type\": "
+                       "\"directional\", \"direction\": [1, 1, 1], \"intensity\": 1}], "
+                       "\"objects\": [{\"type\": \"sphere\", \"center\": [0, 0, 0], "
+                       "\"radius\": 1, \"texture_scale\": 16}]}";
+    tu_write_file(sp, json, strlen(json));
+    assert_int_equal(tu_run(tu_fmt("%s render -q %s --scene %s --size 40x30 -o %s/s.exr", cli, mp,
+                                   sp, dir), NULL), 0);
+    btf_image img = {0};
+    TU_OK(btf_image_read(tu_fmt("%s/s.exr", dir), NULL, &img, &e), &e);
+    assert_int_equal(img.width, 40);
+    assert_int_equal(img.height, 30);
+    btf_image_free(&img);
+    /* usage errors: exit 2, no output */
+    assert_int_equal(tu_run(tu_fmt("%s render %s --size 8x8 -o %s/c.png", cli, mp, dir), &err), 2);
+    assert_non_null(strstr(err, "--scene"));
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s render %s --view 1,1 --scene %s -o %s/c.png", cli, mp, sp,
+                                   dir), &err), 2);
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s render %s --view 1,1 --light 1,1 -o %s/c.tif", cli, mp,
+                                   dir), &err), 2);
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s render %s --view 95,1 --light 1,1 -o %s/c.png", cli, mp,
+                                   dir), &err), 2);
+    free(err);
+    /* a bad scene: one line naming the file, exit 1, no output */
+    tu_write_file(sp, "{\"camera\": 3}", 13);
+    assert_int_equal(tu_run(tu_fmt("%s render %s --scene %s -o %s/c.png", cli, mp, sp, dir),
+                            &err), 1);
+    assert_non_null(strstr(err, "s.json"));
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("test -e %s/c.png", dir), NULL), 1);
+    free(mp);
+    free(sp);
+    tu_rmtree(dir);
+    free(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -358,6 +496,8 @@ int main(void)
         cmocka_unit_test(test_shade_rules),
         cmocka_unit_test(test_extremes),
         cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_scene_needs),
+        cmocka_unit_test(test_cli_render),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

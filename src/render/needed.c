@@ -14,31 +14,46 @@
 typedef struct needed_walk {
     const btf_model *m;
     const btf_gbuffer *g;
-    const btf_light *lights;
-    int n_lights;
-    btf_hemisphere *views, *lts;
+    btf_shade_ctx *ctx;   /* tables, index and lights (no images) */
     uint8_t *rows_needed; /* [row][n_subspaces]: each row's own marks */
 } needed_walk;
 
+/* The subspaces of the pairs of lookups hv x hl whose two weights count
+ * (the rule of btf_shade_blend). */
+static void mark_pairs(const btf_shade_ctx *ctx, btf_hemi_weights hv, btf_hemi_weights hl,
+                       uint8_t *mark)
+{
+    if (!(btf_shade_kept(hv.w0, hv.w1, hv.w2) > 0.0f) ||
+        !(btf_shade_kept(hl.w0, hl.w1, hl.w2) > 0.0f))
+        return;
+    for (int i = 0; i < 3; i++) {
+        if (!(btf_shade_w(hv, i) >= BTF_RENDER_MIN_WEIGHT))
+            continue;
+        for (int j = 0; j < 3; j++)
+            if (btf_shade_w(hl, j) >= BTF_RENDER_MIN_WEIGHT)
+                mark[BTF_SHADE_INDEX(ctx, btf_shade_i(hv, i) * ctx->n_lights_set +
+                                              btf_shade_i(hl, j))] = 1;
+    }
+}
+
+/* The directions of pixel p as btf_shade_pixel takes them. */
 static void mark_pixel(const needed_walk *w, size_t p, uint8_t *mark)
 {
-    const float *frame = w->g->frame + 9 * p;
-    float vl[3], ll[3], dir[3], rgb[3];
-    btf_render_local_view(frame, w->g->view + 3 * p, vl);
-    int iv[3], il[3];
-    float wv[3], wl[3];
-    btf_hemisphere_lookup(w->views, vl, iv, wv);
-    for (int k = 0; k < w->n_lights; k++) {
-        if (!btf_render_light_at(&w->lights[k], w->g->position + 3 * p, dir, rgb))
-            continue;
-        btf_render_to_local(frame, dir, ll);
-        if (!(ll[2] > 0.0f))
+    const btf_shade_ctx *ctx = w->ctx;
+    const float *f = w->g->frame + 9 * p, *pos = w->g->position + 3 * p, *e = w->g->view + 3 * p;
+    float vz = btf_shade_dot3(f[6], f[7], f[8], e[0], e[1], e[2]);
+    vz = vz > BTF_RENDER_MIN_Z ? vz : BTF_RENDER_MIN_Z;
+    btf_hemi_weights hv = btf_hemi_lookup(&ctx->views, btf_shade_dot3(f[0], f[1], f[2], e[0], e[1], e[2]),
+                                          btf_shade_dot3(f[3], f[4], f[5], e[0], e[1], e[2]), vz);
+    for (int j = 0; j < ctx->n_lights; j++) {
+        btf_rgb d = btf_shade_light_dir(ctx, j, pos[0], pos[1], pos[2]);
+        float lz = btf_shade_dot3(f[6], f[7], f[8], d.r, d.g, d.b);
+        if (!(lz > 0.0f))
             continue; /* below the surface's horizon: no light (docs/render.md) */
-        btf_hemisphere_lookup(w->lts, ll, il, wl);
-        btf_render_pairs pairs;
-        btf_render_pairs_of(w->m->index, w->m->lights.count, iv, wv, il, wl, &pairs);
-        for (int d = 0; d < pairs.n; d++)
-            mark[pairs.sub[d]] = 1;
+        btf_hemi_weights hl =
+            btf_hemi_lookup(&ctx->lights, btf_shade_dot3(f[0], f[1], f[2], d.r, d.g, d.b),
+                            btf_shade_dot3(f[3], f[4], f[5], d.r, d.g, d.b), lz);
+        mark_pairs(ctx, hv, hl, mark);
     }
 }
 
@@ -73,10 +88,20 @@ btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf
         return rc;
     if (!g || !needed || (n_lights > 0 && !lights) || n_lights < 0)
         return btf_fail(err, BTF_E_ARG, "needed subspaces: missing G-buffer or lights");
-    needed_walk w = {m, g, lights, n_lights, NULL, NULL, NULL};
-    if ((rc = btf_hemisphere_build(&m->views, &w.views, err)) ||
-        (rc = btf_hemisphere_build(&m->lights, &w.lts, err)))
+    needed_walk w = {m, g, NULL, NULL};
+    btf_hemisphere *views = NULL, *lts = NULL;
+    w.ctx = btf_alloc(1, sizeof *w.ctx, err);
+    if (!w.ctx)
+        return BTF_E_NOMEM;
+    memset(w.ctx, 0, sizeof *w.ctx);
+    if ((rc = btf_render_ctx_lights(w.ctx, lights, n_lights, err)) ||
+        (rc = btf_hemisphere_build(&m->views, &views, err)) ||
+        (rc = btf_hemisphere_build(&m->lights, &lts, err)))
         goto done;
+    btf_hemisphere_get_table(views, &w.ctx->views);
+    btf_hemisphere_get_table(lts, &w.ctx->lights);
+    w.ctx->index = m->index;
+    w.ctx->n_lights_set = m->lights.count;
     w.rows_needed = btf_alloc((size_t)(g->height > 0 ? g->height : 1),
                               (size_t)m->n_subspaces, err);
     if (!w.rows_needed) {
@@ -97,7 +122,8 @@ btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf
         *count = n;
 done:
     free(w.rows_needed);
-    btf_hemisphere_free(w.views);
-    btf_hemisphere_free(w.lts);
+    free(w.ctx);
+    btf_hemisphere_free(views);
+    btf_hemisphere_free(lts);
     return rc;
 }

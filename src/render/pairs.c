@@ -1,90 +1,44 @@
 /*
- * pairs.c — the nine (view, light) pairs of a pixel (Haindl & Filip 2007,
- * section III: the 3 nearest measured views x the 3 nearest lights, with
- * barycentric weights) reduced to the distinct subspace images they select
- * through the index table, each with its summed weight: equal subspaces
- * are sampled once. Weights below BTF_RENDER_MIN_WEIGHT are dropped and the
- * rest renormalised (a discontinuity of at most ~2e-5 in the blend). Shared by the needed-subspace walk and the shading.
+ * pairs.c — the C side's context of the shared shading
+ * (btf_render_shared.h): the material's tables and images, the lights.
  */
 #include "render/shade.h"
+#include "core/core.h"
 
-/* Weights below this are rounding (a measured direction's own weight is 1
- * only to ~1e-6): they are dropped and the rest renormalised, so that a
- * pixel at a measured pair selects that pair's subspace alone. */
-#define BTF_RENDER_MIN_WEIGHT 1e-5f
+#include <string.h>
 
-/* The weights kept and their sum. */
-static float kept_sum(const float w[3])
+btf_status btf_render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, int n_lights,
+                                 btf_error *err)
 {
-    float s = 0.0f;
-    for (int i = 0; i < 3; i++)
-        if (w[i] >= BTF_RENDER_MIN_WEIGHT)
-            s += w[i];
-    return s;
-}
-
-void btf_render_pairs_of(const uint8_t *index, int n_lights, const int iv[3],
-                         const float wv[3], const int il[3], const float wl[3],
-                         btf_render_pairs *out)
-{
-    out->n = 0;
-    float sv = kept_sum(wv), sl = kept_sum(wl);
-    if (!(sv > 0.0f) || !(sl > 0.0f))
-        return;
-    for (int i = 0; i < 3; i++) {
-        if (!(wv[i] >= BTF_RENDER_MIN_WEIGHT))
-            continue;
-        for (int j = 0; j < 3; j++) {
-            if (!(wl[j] >= BTF_RENDER_MIN_WEIGHT))
-                continue;
-            int k = index[(size_t)iv[i] * (size_t)n_lights + (size_t)il[j]];
-            float w = (wv[i] / sv) * (wl[j] / sl);
-            int d = 0;
-            while (d < out->n && out->sub[d] != k)
-                d++;
-            if (d == out->n) {
-                out->sub[d] = k;
-                out->w[d] = 0.0f;
-                out->n++;
-            }
-            out->w[d] += w;
-        }
-    }
-}
-
-void btf_render_local_view(const float *frame, const float view[3], float out[3])
-{
-    btf_render_to_local(frame, view, out);
-    if (!(out[2] > BTF_RENDER_MIN_Z))
-        out[2] = BTF_RENDER_MIN_Z;
-}
-
-int btf_render_light_at(const btf_light *l, const float p[3], float dir[3], float rgb[3])
-{
-    float scale = 1.0f;
-    if (l->kind == BTF_LIGHT_POINT) {
-        double d[3], n2 = 0.0;
-        for (int i = 0; i < 3; i++) {
-            d[i] = l->position[i] - (double)p[i];
-            n2 += d[i] * d[i];
-        }
-        if (!(n2 > 1e-24) || !isfinite(n2))
-            return 0;
-        double inv = 1.0 / sqrt(n2);
-        for (int i = 0; i < 3; i++)
-            dir[i] = (float)(d[i] * inv);
-        scale = (float)(1.0 / n2);
-    } else {
+    if (n_lights < 0 || n_lights > BTF_RENDER_MAX_LIGHTS)
+        return btf_fail(err, BTF_E_ARG, "%d lights: the renderer takes at most %d", n_lights,
+                        BTF_RENDER_MAX_LIGHTS);
+    ctx->n_lights = n_lights;
+    for (int j = 0; j < n_lights; j++) {
+        const btf_light *l = &lights[j];
+        ctx->kind[j] = l->kind == BTF_LIGHT_POINT ? 1 : 0;
         double n2 = 0.0;
-        for (int i = 0; i < 3; i++)
-            n2 += l->direction[i] * l->direction[i];
-        if (!(n2 > 0.0) || !isfinite(n2))
-            return 0;
-        double inv = 1.0 / sqrt(n2);
-        for (int i = 0; i < 3; i++)
-            dir[i] = (float)(l->direction[i] * inv);
+        for (int k = 0; k < 3; k++)
+            n2 += l->direction[k] * l->direction[k];
+        double inv = n2 > 0.0 && isfinite(n2) ? 1.0 / sqrt(n2) : 0.0;
+        for (int k = 0; k < 3; k++) {
+            ctx->vec[j][k] = ctx->kind[j] ? (float)l->position[k] : (float)(l->direction[k] * inv);
+            ctx->rgb[j][k] = l->rgb[k];
+        }
     }
-    for (int i = 0; i < 3; i++)
-        rgb[i] = l->rgb[i] * scale;
-    return 1;
+    return BTF_OK;
+}
+
+void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_material *rm)
+{
+    btf_hemisphere_get_table(rm->views, &ctx->views);
+    btf_hemisphere_get_table(rm->lights, &ctx->lights);
+    ctx->size = rm->size;
+    ctx->n_lights_set = rm->n_lights;
+    ctx->index = rm->index;
+    for (int k = 0; k < rm->n_subspaces && k < BTF_SHADE_CTX_MAX_SUBSPACES; k++)
+        ctx->tex[k] = rm->tex[k].data;
+    ctx->height = rm->height.data;
+    ctx->normal = rm->normal.data;
+    ctx->light_outer_z = rm->light_outer_z;
 }

@@ -1,8 +1,9 @@
 /*
  * shade.h — the renderer's private parts (src/render/): the material ready
- * to shade with, and the small vector and sampling helpers that the needed-
- * subspace walk and the shading share, so that both take the very same
- * directions and weights (docs/render.md).
+ * to shade with, and the C side of the shading text shared with the GPU
+ * pass (btf_render_shared.h): the context its accessors read. The needed-
+ * subspace walk and the shading both go through that text, so they take the
+ * very same directions and weights (docs/render.md).
  */
 #ifndef BTF_RENDER_SHADE_H
 #define BTF_RENDER_SHADE_H
@@ -24,6 +25,37 @@ struct btf_render_material {
     btf_image *tex;          /* [n_subspaces]; data NULL where not built */
 };
 
+/* What the shared shading reads on the CPU. */
+#define BTF_SHADE_CTX_MAX_SUBSPACES 256
+typedef struct btf_shade_ctx {
+    btf_hemisphere_table views, lights;
+    int size, n_lights_set;
+    const uint8_t *index;
+    const float *tex[BTF_SHADE_CTX_MAX_SUBSPACES]; /* NULL: not synthesised */
+    const float *height, *normal;
+    float light_outer_z;
+    int n_lights;
+    int kind[16];
+    float vec[16][3], rgb[16][3];
+} btf_shade_ctx;
+
+#define BTF_SHADE_CTX const btf_shade_ctx *
+#define BTF_SHADE_VIEWS(ctx) (&(ctx)->views)
+#define BTF_SHADE_LIGHTS(ctx) (&(ctx)->lights)
+#define BTF_SHADE_SIZE(ctx) ((ctx)->size)
+#define BTF_SHADE_N_LIGHTS_SET(ctx) ((ctx)->n_lights_set)
+#define BTF_SHADE_INDEX(ctx, i) ((int)(ctx)->index[i])
+#define BTF_SHADE_HAVE(ctx, k) ((ctx)->tex[k] != NULL)
+#define BTF_SHADE_TEX(ctx, k, i) ((ctx)->tex[k][i])
+#define BTF_SHADE_HEIGHT(ctx, i) ((ctx)->height[i])
+#define BTF_SHADE_NORMAL(ctx, i) ((ctx)->normal[i])
+#define BTF_SHADE_LIGHT_OUTER_Z(ctx) ((ctx)->light_outer_z)
+#define BTF_SHADE_N_LIGHTS(ctx) ((ctx)->n_lights)
+#define BTF_SHADE_LIGHT_KIND(ctx, j) ((ctx)->kind[j])
+#define BTF_SHADE_LIGHT_VEC(ctx, j, k) ((ctx)->vec[j][k])
+#define BTF_SHADE_LIGHT_RGB(ctx, j, k) ((ctx)->rgb[j][k])
+#include "render/btf_render_shared.h"
+
 /* A model that can be rendered: subspaces, an index table, directions. */
 btf_status btf_render_check_model(const btf_model *m, btf_error *err);
 
@@ -31,34 +63,12 @@ btf_status btf_render_check_model(const btf_model *m, btf_error *err);
  * divides (a multiple of 2^(levels - 1)), at least 8. */
 int btf_render_texture_side(const btf_model *m, int side);
 
-/* The light's direction from world point p (unit) and its intensity there:
- * a point light falls off as 1 / d^2. 0 when the light is at p. */
-int btf_render_light_at(const btf_light *l, const float p[3], float dir[3], float rgb[3]);
+/* The lights as the shared shading reads them (directions made unit);
+ * BTF_E_ARG for more than BTF_RENDER_MAX_LIGHTS. */
+btf_status btf_render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, int n_lights,
+                                 btf_error *err);
 
-/* A world vector in the pixel's tangent frame (frame: T, B, N rows). */
-static inline void btf_render_to_local(const float *frame, const float w[3], float out[3])
-{
-    for (int i = 0; i < 3; i++)
-        out[i] = frame[3 * i] * w[0] + frame[3 * i + 1] * w[1] + frame[3 * i + 2] * w[2];
-}
-
-/* The pairs of a pixel: three views x three lights with their weights, the
- * subspace of each (the same rule in the walk and the shading: a pair
- * counts when both its weights are > 0). */
-typedef struct btf_render_pairs {
-    int n;               /* distinct subspaces, <= 9 */
-    int sub[9];
-    float w[9];          /* summed weight per distinct subspace */
-} btf_render_pairs;
-
-void btf_render_pairs_of(const uint8_t *index, int n_lights, const int iv[3],
-                         const float wv[3], const int il[3], const float wl[3],
-                         btf_render_pairs *out);
-
-/* The local view direction of a pixel, its z kept above the horizon by
- * BTF_RENDER_MIN_Z (an interpolated mesh normal can turn slightly away
- * from the eye). */
-#define BTF_RENDER_MIN_Z 1e-3f
-void btf_render_local_view(const float *frame, const float view[3], float out[3]);
+/* The context of a material (lights not set). */
+void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_material *rm);
 
 #endif

@@ -1,0 +1,422 @@
+/*
+ * btf_render_shared.h — the per-pixel shading of the renderer (Haindl &
+ * Filip 2007, section III and Fig. 1; docs/render.md, "Shading"), as the
+ * very same text for the CPU renderer (src/render/shade.c, C11 with
+ * -ffp-contract=off) and the GPU render pass (gpu/render.comp, GLSL 4.50),
+ * so that the two cannot drift: the constants, the wrapped bilinear taps,
+ * the parallax shift, the relief normal, the pair weights, the bump factor
+ * and the horizon fade. The direction lookup is btf_hemisphere_lookup.h's.
+ *
+ * Data access goes through accessor macros that the includer defines
+ * BEFORE including this file (the C side's are below); every function
+ * takes a first parameter `ctx` of type BTF_SHADE_CTX:
+ *
+ *   BTF_SHADE_CTX                   C: const struct btf_shade_ctx *; GLSL: int
+ *   BTF_SHADE_VIEWS(ctx)            the views' BTF_HEMI_TABLE
+ *   BTF_SHADE_LIGHTS(ctx)           the lights' BTF_HEMI_TABLE
+ *   BTF_SHADE_SIZE(ctx)             int: side of the textures
+ *   BTF_SHADE_N_LIGHTS_SET(ctx)     int: measured lights (the index table's row)
+ *   BTF_SHADE_INDEX(ctx, i)         int: subspace of pair i = view * n + light
+ *   BTF_SHADE_HAVE(ctx, k)          int: 1 when subspace k was synthesised
+ *   BTF_SHADE_TEX(ctx, k, i)        float: subspace k's float i (pixel * 3 + c)
+ *   BTF_SHADE_HEIGHT(ctx, i)        float: range map height of pixel i
+ *   BTF_SHADE_NORMAL(ctx, i)        float: normal map float i (pixel * 3 + c)
+ *   BTF_SHADE_LIGHT_OUTER_Z(ctx)    float: cos of the largest measured light theta
+ *   BTF_SHADE_N_LIGHTS(ctx)         int: the scene's lights
+ *   BTF_SHADE_LIGHT_KIND(ctx, j)    int: 0 directional, 1 point (btf_light_kind)
+ *   BTF_SHADE_LIGHT_VEC(ctx, j, k)  float: unit direction towards it, or position
+ *   BTF_SHADE_LIGHT_RGB(ctx, j, k)  float: intensity
+ *
+ * The arithmetic is float, each result BTF_PRECISE, in one written order;
+ * sqrt and division are the only operations whose last bits GPU drivers do
+ * not pin down, so the two paths agree to rounding (tests/test_gpu_render.c
+ * measures it). Keep this file in the common subset of C and GLSL (the
+ * rules of src/synth/btf_noise.h and btf_hemisphere_lookup.h).
+ */
+#ifndef BTF_RENDER_SHARED_H
+#define BTF_RENDER_SHARED_H
+
+#include "btf_hemisphere_lookup.h"
+
+/* Weights below this are rounding (a measured direction's own weight is 1
+ * only to ~1e-6): they are dropped and the rest renormalised, so that a
+ * pixel at a measured pair selects that pair's subspace alone. */
+#define BTF_RENDER_MIN_WEIGHT 1e-5f
+/* A view below the horizon (an interpolated mesh normal turned slightly
+ * away from the eye) is held at this height. */
+#define BTF_RENDER_MIN_Z 1e-3f
+/* Parallax shifts grow as 1 / v_z towards grazing views; past 75.5 degrees
+ * they are held at 4 h (offset limiting), which keeps them bounded. */
+#define BTF_PARALLAX_MIN_Z 0.25f
+/* The flat surface's n . l below which the normalisation is held: lights
+ * within 3 degrees of the horizon fade out instead of dividing by ~0. */
+#define BTF_FLAT_MIN_Z 0.05f
+/* Texture coordinates beyond this are taken as 0 (and NaN fails it). */
+#define BTF_RENDER_COORD_MAX 1.0e30f
+/* At most this many lights per scene (the GPU pass's uniform block). */
+#define BTF_RENDER_MAX_LIGHTS 16
+
+#if defined(BTF_GLSL) || defined(VULKAN) || defined(GL_core_profile) || defined(GL_ES)
+/* ------------------------------------------------------------------ GLSL */
+struct btf_tap1 {
+    int i0, i1;
+    float f;
+};
+struct btf_rgb {
+    float r, g, b;
+};
+#define BTF_TAP1(a, b, c) btf_tap1(a, b, c)
+#define BTF_RGB(a, b, c) btf_rgb(a, b, c)
+#define BTF_FLOOR(x) floor(x)
+#define BTF_ABS(x) abs(x)
+#else
+/* --------------------------------------------------------------------- C */
+typedef struct btf_tap1 {
+    int i0, i1;
+    float f;
+} btf_tap1;
+typedef struct btf_rgb {
+    float r, g, b;
+} btf_rgb;
+static inline btf_tap1 btf_make_tap1(int a, int b, float c)
+{
+    btf_tap1 t = {a, b, c};
+    return t;
+}
+static inline btf_rgb btf_make_rgb(float a, float b, float c)
+{
+    btf_rgb t = {a, b, c};
+    return t;
+}
+#define BTF_TAP1(a, b, c) btf_make_tap1(a, b, c)
+#define BTF_RGB(a, b, c) btf_make_rgb(a, b, c)
+#define BTF_FLOOR(x) floorf(x)
+#define BTF_ABS(x) fabsf(x)
+#endif
+
+/* ============================================== shared part: C and GLSL */
+
+/* The two taps and the fraction of a wrapped linear lookup at texture
+ * coordinate x (texel centres at i + 1/2) on a side of s texels. The
+ * coordinate is first brought near [0, s) in float (a wrong period there
+ * moves by whole periods, which the integer wrap undoes), then wrapped as
+ * an integer. */
+BTF_FN btf_tap1 btf_shade_tap1(float x, int s)
+{
+    BTF_PRECISE float t = x - 0.5f;
+    if (!(BTF_ABS(t) < BTF_RENDER_COORD_MAX))
+        t = 0.0f;
+    float sf = BTF_HEMI_I2F(s);
+    BTF_PRECISE float q = t / sf;
+    float k = BTF_FLOOR(q);
+    BTF_PRECISE float sk = sf * k;
+    BTF_PRECISE float r = t - sk;
+    float fl = BTF_FLOOR(r);
+    BTF_PRECISE float f = r - fl;
+    int i = BTF_HEMI_F2I(fl);
+    i = i < 0 ? s - 1 - ((-i - 1) % s) : i % s;
+    int i1 = i + 1 == s ? 0 : i + 1;
+    return BTF_TAP1(i, i1, f);
+}
+
+/* Linear interpolation a (1 - f) + b f. */
+BTF_FN float btf_shade_lerp(float a, float b, float f)
+{
+    BTF_PRECISE float g = 1.0f - f;
+    BTF_PRECISE float p = a * g;
+    BTF_PRECISE float q = b * f;
+    BTF_PRECISE float s = p + q;
+    return s;
+}
+
+/* Subspace k's channel c, bilinear at taps (tx, ty). */
+BTF_FN float btf_shade_tex(BTF_SHADE_CTX ctx, int k, btf_tap1 tx, btf_tap1 ty, int c)
+{
+    int s = BTF_SHADE_SIZE(ctx);
+    float a = BTF_SHADE_TEX(ctx, k, 3 * (ty.i0 * s + tx.i0) + c);
+    float b = BTF_SHADE_TEX(ctx, k, 3 * (ty.i0 * s + tx.i1) + c);
+    float d = BTF_SHADE_TEX(ctx, k, 3 * (ty.i1 * s + tx.i0) + c);
+    float e = BTF_SHADE_TEX(ctx, k, 3 * (ty.i1 * s + tx.i1) + c);
+    return btf_shade_lerp(btf_shade_lerp(a, b, tx.f), btf_shade_lerp(d, e, tx.f), ty.f);
+}
+
+BTF_FN float btf_shade_height(BTF_SHADE_CTX ctx, btf_tap1 tx, btf_tap1 ty)
+{
+    int s = BTF_SHADE_SIZE(ctx);
+    float a = BTF_SHADE_HEIGHT(ctx, ty.i0 * s + tx.i0);
+    float b = BTF_SHADE_HEIGHT(ctx, ty.i0 * s + tx.i1);
+    float d = BTF_SHADE_HEIGHT(ctx, ty.i1 * s + tx.i0);
+    float e = BTF_SHADE_HEIGHT(ctx, ty.i1 * s + tx.i1);
+    return btf_shade_lerp(btf_shade_lerp(a, b, tx.f), btf_shade_lerp(d, e, tx.f), ty.f);
+}
+
+BTF_FN float btf_shade_normal(BTF_SHADE_CTX ctx, btf_tap1 tx, btf_tap1 ty, int c)
+{
+    int s = BTF_SHADE_SIZE(ctx);
+    float a = BTF_SHADE_NORMAL(ctx, 3 * (ty.i0 * s + tx.i0) + c);
+    float b = BTF_SHADE_NORMAL(ctx, 3 * (ty.i0 * s + tx.i1) + c);
+    float d = BTF_SHADE_NORMAL(ctx, 3 * (ty.i1 * s + tx.i0) + c);
+    float e = BTF_SHADE_NORMAL(ctx, 3 * (ty.i1 * s + tx.i1) + c);
+    return btf_shade_lerp(btf_shade_lerp(a, b, tx.f), btf_shade_lerp(d, e, tx.f), ty.f);
+}
+
+/* The sum of the weights that count (>= BTF_RENDER_MIN_WEIGHT). */
+BTF_FN float btf_shade_kept(float a, float b, float c)
+{
+    BTF_PRECISE float s = 0.0f;
+    if (a >= BTF_RENDER_MIN_WEIGHT)
+        s = s + a;
+    if (b >= BTF_RENDER_MIN_WEIGHT)
+        s = s + b;
+    if (c >= BTF_RENDER_MIN_WEIGHT)
+        s = s + c;
+    return s;
+}
+
+/* Weight j (0..2) of a lookup and its index. */
+BTF_FN float btf_shade_w(btf_hemi_weights h, int j)
+{
+    return j == 0 ? h.w0 : j == 1 ? h.w1 : h.w2;
+}
+BTF_FN int btf_shade_i(btf_hemi_weights h, int j)
+{
+    return j == 0 ? h.i0 : j == 1 ? h.i1 : h.i2;
+}
+
+/* The nine pairs' blend of the subspace images at taps (tx, ty): pairs whose
+ * two weights count, renormalised. Pairs of the same subspace are summed
+ * into one weight and sampled once. A pair of a subspace that was not
+ * synthesised makes the result negative in r (-1: the caller reports it). */
+BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_weights hl,
+                               btf_tap1 tx, btf_tap1 ty)
+{
+    float sv = btf_shade_kept(hv.w0, hv.w1, hv.w2);
+    float sl = btf_shade_kept(hl.w0, hl.w1, hl.w2);
+    BTF_PRECISE float r = 0.0f;
+    BTF_PRECISE float g = 0.0f;
+    BTF_PRECISE float b = 0.0f;
+    if (!(sv > 0.0f) || !(sl > 0.0f))
+        return BTF_RGB(0.0f, 0.0f, 0.0f);
+    int n = BTF_SHADE_N_LIGHTS_SET(ctx);
+    /* The distinct subspaces in first-seen order with summed weights. */
+    int k0 = -1, k1 = -1, k2 = -1, k3 = -1, k4 = -1, k5 = -1, k6 = -1, k7 = -1, k8 = -1;
+    float w0 = 0.0f, w1 = 0.0f, w2 = 0.0f, w3 = 0.0f, w4 = 0.0f, w5 = 0.0f, w6 = 0.0f,
+          w7 = 0.0f, w8 = 0.0f;
+    for (int i = 0; i < 3; i++) {
+        float wv = btf_shade_w(hv, i);
+        if (!(wv >= BTF_RENDER_MIN_WEIGHT))
+            continue;
+        for (int j = 0; j < 3; j++) {
+            float wl = btf_shade_w(hl, j);
+            if (!(wl >= BTF_RENDER_MIN_WEIGHT))
+                continue;
+            int k = BTF_SHADE_INDEX(ctx, btf_shade_i(hv, i) * n + btf_shade_i(hl, j));
+            BTF_PRECISE float a = wv / sv;
+            BTF_PRECISE float c = wl / sl;
+            BTF_PRECISE float w = a * c;
+            if (k0 < 0 || k0 == k) { k0 = k; w0 = w0 + w; }
+            else if (k1 < 0 || k1 == k) { k1 = k; w1 = w1 + w; }
+            else if (k2 < 0 || k2 == k) { k2 = k; w2 = w2 + w; }
+            else if (k3 < 0 || k3 == k) { k3 = k; w3 = w3 + w; }
+            else if (k4 < 0 || k4 == k) { k4 = k; w4 = w4 + w; }
+            else if (k5 < 0 || k5 == k) { k5 = k; w5 = w5 + w; }
+            else if (k6 < 0 || k6 == k) { k6 = k; w6 = w6 + w; }
+            else if (k7 < 0 || k7 == k) { k7 = k; w7 = w7 + w; }
+            else { k8 = k; w8 = w8 + w; }
+        }
+    }
+    for (int d = 0; d < 9; d++) {
+        int k = d == 0 ? k0 : d == 1 ? k1 : d == 2 ? k2 : d == 3 ? k3 : d == 4 ? k4
+              : d == 5 ? k5 : d == 6 ? k6 : d == 7 ? k7 : k8;
+        float w = d == 0 ? w0 : d == 1 ? w1 : d == 2 ? w2 : d == 3 ? w3 : d == 4 ? w4
+                : d == 5 ? w5 : d == 6 ? w6 : d == 7 ? w7 : w8;
+        if (k < 0)
+            break;
+        if (BTF_SHADE_HAVE(ctx, k) == 0)
+            return BTF_RGB(-1.0f, 0.0f, 0.0f);
+        BTF_PRECISE float tr = w * btf_shade_tex(ctx, k, tx, ty, 0);
+        BTF_PRECISE float tg = w * btf_shade_tex(ctx, k, tx, ty, 1);
+        BTF_PRECISE float tb = w * btf_shade_tex(ctx, k, tx, ty, 2);
+        r = r + tr;
+        g = g + tg;
+        b = b + tb;
+    }
+    return BTF_RGB(r, g, b);
+}
+
+/* The bump factor of docs/render.md: max(0, n . l) / max(l_z,
+ * BTF_FLAT_MIN_Z) with n the relief-scaled normal (nx, ny, nz), times the
+ * horizon fade l_z / cos(theta_outer) beyond the outermost light ring; 0
+ * for l_z <= 0. */
+BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, float lx,
+                            float ly, float lz)
+{
+    if (!(lz > 0.0f))
+        return 0.0f;
+    BTF_PRECISE float a = nx * lx;
+    BTF_PRECISE float b = ny * ly;
+    BTF_PRECISE float c = nz * lz;
+    BTF_PRECISE float ab = a + b;
+    BTF_PRECISE float ndotl = ab + c;
+    float flat = lz > BTF_FLAT_MIN_Z ? lz : BTF_FLAT_MIN_Z;
+    BTF_PRECISE float factor = ndotl > 0.0f ? ndotl / flat : 0.0f;
+    float outer = BTF_SHADE_LIGHT_OUTER_Z(ctx);
+    if (lz < outer) {
+        BTF_PRECISE float fade = lz / outer;
+        factor = factor * fade;
+    }
+    return factor;
+}
+
+/* The relief-scaled unit normal at taps (tx, ty): the map's normal is
+ * (-h_x, -h_y, 1) normalised, so scaling the heights by r scales its x and
+ * y by r against z. r = 0 (or a degenerate normal): (0, 0, 1). */
+BTF_FN btf_rgb btf_shade_relief_normal(BTF_SHADE_CTX ctx, btf_tap1 tx, btf_tap1 ty, float r)
+{
+    if (r == 0.0f)
+        return BTF_RGB(0.0f, 0.0f, 1.0f);
+    BTF_PRECISE float x = r * btf_shade_normal(ctx, tx, ty, 0);
+    BTF_PRECISE float y = r * btf_shade_normal(ctx, tx, ty, 1);
+    float z = btf_shade_normal(ctx, tx, ty, 2);
+    BTF_PRECISE float xx = x * x;
+    BTF_PRECISE float yy = y * y;
+    BTF_PRECISE float zz = z * z;
+    BTF_PRECISE float s1 = xx + yy;
+    BTF_PRECISE float s2 = s1 + zz;
+    BTF_PRECISE float len = BTF_HEMI_SQRT(s2);
+    if (!(len > 1e-20f) || !(len < BTF_RENDER_COORD_MAX))
+        return BTF_RGB(0.0f, 0.0f, 1.0f);
+    BTF_PRECISE float a = x / len;
+    BTF_PRECISE float b = y / len;
+    BTF_PRECISE float c = z / len;
+    return BTF_RGB(a, b, c);
+}
+
+/* A world vector w in the frame (rows T, B, N) given as nine floats. */
+BTF_FN float btf_shade_dot3(float a0, float a1, float a2, float b0, float b1, float b2)
+{
+    BTF_PRECISE float p = a0 * b0;
+    BTF_PRECISE float q = a1 * b1;
+    BTF_PRECISE float r = a2 * b2;
+    BTF_PRECISE float s = p + q;
+    BTF_PRECISE float t = s + r;
+    return t;
+}
+
+/* The parallax-shifted texture coordinate (u, v): (u, v) += h (v_x, -v_y) /
+ * max(v_z, BTF_PARALLAX_MIN_Z), h the relief-scaled height at (u, v). The
+ * result's r and g are u' and v'. */
+BTF_FN btf_rgb btf_shade_parallax(BTF_SHADE_CTX ctx, float u, float v, float vx, float vy,
+                                  float vz, float relief)
+{
+    if (relief == 0.0f)
+        return BTF_RGB(u, v, 0.0f);
+    int s = BTF_SHADE_SIZE(ctx);
+    btf_tap1 tx = btf_shade_tap1(u, s);
+    btf_tap1 ty = btf_shade_tap1(v, s);
+    BTF_PRECISE float h = relief * btf_shade_height(ctx, tx, ty);
+    float z = vz > BTF_PARALLAX_MIN_Z ? vz : BTF_PARALLAX_MIN_Z;
+    BTF_PRECISE float dx = h * vx;
+    BTF_PRECISE float dy = h * vy;
+    BTF_PRECISE float sx = dx / z;
+    BTF_PRECISE float sy = dy / z;
+    BTF_PRECISE float u2 = u + sx;
+    BTF_PRECISE float v2 = v - sy;
+    return BTF_RGB(u2, v2, 0.0f);
+}
+
+/* The unit world direction from (px, py, pz) towards light j; (0, 0, 0)
+ * for a point light at the point itself. */
+BTF_FN btf_rgb btf_shade_light_dir(BTF_SHADE_CTX ctx, int j, float px, float py, float pz)
+{
+    float dx = BTF_SHADE_LIGHT_VEC(ctx, j, 0);
+    float dy = BTF_SHADE_LIGHT_VEC(ctx, j, 1);
+    float dz = BTF_SHADE_LIGHT_VEC(ctx, j, 2);
+    if (BTF_SHADE_LIGHT_KIND(ctx, j) != 1)
+        return BTF_RGB(dx, dy, dz);
+    BTF_PRECISE float qx = dx - px;
+    BTF_PRECISE float qy = dy - py;
+    BTF_PRECISE float qz = dz - pz;
+    float d2 = btf_shade_dot3(qx, qy, qz, qx, qy, qz);
+    if (!(d2 > 1e-24f) || !(d2 < BTF_RENDER_COORD_MAX))
+        return BTF_RGB(0.0f, 0.0f, 0.0f);
+    BTF_PRECISE float d = BTF_HEMI_SQRT(d2);
+    BTF_PRECISE float x = qx / d;
+    BTF_PRECISE float y = qy / d;
+    BTF_PRECISE float z = qz / d;
+    return BTF_RGB(x, y, z);
+}
+
+/* Light j's intensity scale at the point: 1, or 1 / d^2 for a point light. */
+BTF_FN float btf_shade_light_scale(BTF_SHADE_CTX ctx, int j, float px, float py, float pz)
+{
+    if (BTF_SHADE_LIGHT_KIND(ctx, j) != 1)
+        return 1.0f;
+    BTF_PRECISE float qx = BTF_SHADE_LIGHT_VEC(ctx, j, 0) - px;
+    BTF_PRECISE float qy = BTF_SHADE_LIGHT_VEC(ctx, j, 1) - py;
+    BTF_PRECISE float qz = BTF_SHADE_LIGHT_VEC(ctx, j, 2) - pz;
+    float d2 = btf_shade_dot3(qx, qy, qz, qx, qy, qz);
+    if (!(d2 > 1e-24f) || !(d2 < BTF_RENDER_COORD_MAX))
+        return 0.0f;
+    BTF_PRECISE float inv = 1.0f / d2;
+    return inv;
+}
+
+/* One pixel (docs/render.md, "Shading"): frame rows T (f0..f2), B (f3..f5),
+ * N (f6..f8), world hit (px, py, pz), world unit vector to the eye (ex, ey,
+ * ez), texture coordinate (u, v). Returns the linear RGB, >= 0 and finite;
+ * r = -1 when a pair selects a subspace that was not synthesised. */
+BTF_FN btf_rgb btf_shade_pixel(BTF_SHADE_CTX ctx, float f0, float f1, float f2, float f3,
+                               float f4, float f5, float f6, float f7, float f8, float px,
+                               float py, float pz, float ex, float ey, float ez, float u,
+                               float v, float relief)
+{
+    float vx = btf_shade_dot3(f0, f1, f2, ex, ey, ez);
+    float vy = btf_shade_dot3(f3, f4, f5, ex, ey, ez);
+    float vz = btf_shade_dot3(f6, f7, f8, ex, ey, ez);
+    vz = vz > BTF_RENDER_MIN_Z ? vz : BTF_RENDER_MIN_Z;
+    btf_hemi_weights hv = btf_hemi_lookup(BTF_SHADE_VIEWS(ctx), vx, vy, vz);
+    btf_rgb uv2 = btf_shade_parallax(ctx, u, v, vx, vy, vz, relief);
+    int s = BTF_SHADE_SIZE(ctx);
+    btf_tap1 tx = btf_shade_tap1(uv2.r, s);
+    btf_tap1 ty = btf_shade_tap1(uv2.g, s);
+    btf_rgb n = btf_shade_relief_normal(ctx, tx, ty, relief);
+    BTF_PRECISE float r = 0.0f;
+    BTF_PRECISE float g = 0.0f;
+    BTF_PRECISE float b = 0.0f;
+    for (int j = 0; j < BTF_SHADE_N_LIGHTS(ctx); j++) {
+        btf_rgb d = btf_shade_light_dir(ctx, j, px, py, pz);
+        float scale = btf_shade_light_scale(ctx, j, px, py, pz);
+        float dx = d.r, dy = d.g, dz = d.b;
+        float lx = btf_shade_dot3(f0, f1, f2, dx, dy, dz);
+        float ly = btf_shade_dot3(f3, f4, f5, dx, dy, dz);
+        float lz = btf_shade_dot3(f6, f7, f8, dx, dy, dz);
+        if (!(lz > 0.0f))
+            continue; /* below the surface's horizon: no light */
+        btf_hemi_weights hl = btf_hemi_lookup(BTF_SHADE_LIGHTS(ctx), lx, ly, lz);
+        btf_rgb c = btf_shade_blend(ctx, hv, hl, tx, ty);
+        if (c.r < -0.5f)
+            return c;
+        float factor = btf_shade_bump(ctx, n.r, n.g, n.b, lx, ly, lz);
+        BTF_PRECISE float ir = BTF_SHADE_LIGHT_RGB(ctx, j, 0) * scale;
+        BTF_PRECISE float ig = BTF_SHADE_LIGHT_RGB(ctx, j, 1) * scale;
+        BTF_PRECISE float ib = BTF_SHADE_LIGHT_RGB(ctx, j, 2) * scale;
+        BTF_PRECISE float cr = c.r * factor;
+        BTF_PRECISE float cg = c.g * factor;
+        BTF_PRECISE float cb = c.b * factor;
+        BTF_PRECISE float tr = ir * cr;
+        BTF_PRECISE float tg = ig * cg;
+        BTF_PRECISE float tb = ib * cb;
+        r = r + tr;
+        g = g + tg;
+        b = b + tb;
+    }
+    /* No negative radiance (the CAR model's Gaussian tails), nothing
+     * non-finite. */
+    r = r > 0.0f && r < BTF_RENDER_COORD_MAX ? r : 0.0f;
+    g = g > 0.0f && g < BTF_RENDER_COORD_MAX ? g : 0.0f;
+    b = b > 0.0f && b < BTF_RENDER_COORD_MAX ? b : 0.0f;
+    return BTF_RGB(r, g, b);
+}
+
+#endif /* BTF_RENDER_SHARED_H */

@@ -57,6 +57,12 @@ int cli_check_output(const cli_ctx *c, const char *path, btf_output_kind kind);
  * (btf_remove_temporaries) and exit with 128 + the signal. */
 void cli_install_signal_cleanup(void);
 
+/* The GPU for --backend cpu|gpu|auto and --device N (-1: none named;
+ * BTF_VK_DEVICE and BTF_VK_VALIDATION read here): NULL for cpu, and for
+ * auto when no real GPU is present (err says why; not a failure); for gpu
+ * or a named device NULL is a failure, with err set. */
+btf_gpu *cli_open_gpu(const char *backend, int device, btf_error *err);
+
 /* Monotonic wall-clock seconds, for the timings commands print. */
 double cli_now(void);
 

@@ -92,11 +92,11 @@ static btf_status write_image(const char *path, const btf_image *img, btf_error 
 int cmd_render(int argc, char **argv)
 {
     cli_ctx c = {"render", 0};
-    static const char *const backends[] = {"cpu", NULL};
+    static const char *const backends[] = {"cpu", "gpu", "auto", NULL};
     const char *model = NULL, *scene_path = NULL, *out_path = NULL, *beside = NULL;
     dir_arg view = {{0, 0}, 0}, light = {{0, 0}, 0};
     btf_render_opts ro = btf_render_defaults();
-    int size[2] = {512, 512}, backend = 0, all = 0;
+    int size[2] = {512, 512}, backend = 2, all = 0, device = -1;
     double t_start = cli_now();
     cli_opt opts[] = {
         {.name = "--scene", .kind = CLI_STRING, .dest = &scene_path, .meta = "FILE",
@@ -128,8 +128,12 @@ int cmd_render(int argc, char **argv)
          .hi = 1024},
         {.name = "--all-subspaces", .kind = CLI_FLAG, .dest = &all,
          .help = "synthesise every subspace, not only those the frame needs"},
-        {.name = "--backend", .kind = CLI_CHOICE, .dest = &backend, .meta = "cpu",
-         .help = "cpu: the CPU renderer", .choices = backends},
+        {.name = "--backend", .kind = CLI_CHOICE, .dest = &backend, .meta = "cpu|gpu|auto",
+         .help = "cpu: the CPU renderer; gpu: the two Vulkan compute passes (synthesis,\n"
+                 "render) on any device, lavapipe included; auto: a real GPU if present,\n"
+                 "else the CPU", .choices = backends},
+        {.name = "--device", .kind = CLI_INT, .dest = &device, .meta = "N",
+         .help = "Vulkan device index (btfcar info --devices)", .lo = 0, .hi = 255},
         {0}};
     cli_spec spec = {.cmd = "render", .args = "MODEL", .about = ABOUT, .min_args = 1,
                      .max_args = 1, .opts = opts};
@@ -147,6 +151,8 @@ int cmd_render(int argc, char **argv)
         return cli_usage_error(&c, "--beside goes with a flat render (--view, --light)");
     if (!has_suffix(out_path, ".png") && !has_suffix(out_path, ".exr"))
         return cli_usage_error(&c, "%s: expected a .png or .exr output", out_path);
+    if (device >= 0 && backend == 0)
+        return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
     if (cli_check_output(&c, out_path, BTF_OUTPUT_FILE))
         return 1;
     ro.width = size[0];
@@ -171,8 +177,25 @@ int cmd_render(int argc, char **argv)
     }
     btf_render_info info;
     memset(&info, 0, sizeof info);
-    btf_status rc = flat ? btf_render_flat(&m, view.dir, light.dir, &ro, &img, &info, &err)
-                         : btf_render_scene(&m, &scene, &ro, &img, &info, &err);
+    btf_gpu *gpu = cli_open_gpu(backends[backend], device, &err);
+    btf_status rc = BTF_OK;
+    if (!gpu && (backend == 1 || device >= 0))
+        rc = err.code ? err.code : BTF_E_UNSUPPORTED;
+    else if (!gpu)
+        err = (btf_error){0}; /* auto: the CPU runs, the GPU's reason is spent */
+    char devname[300];
+    snprintf(devname, sizeof devname, "%s", gpu ? btf_gpu_device_name(gpu) : "cpu");
+    if (rc == BTF_OK && gpu)
+        rc = flat ? btf_gpu_render_flat(gpu, &m, view.dir, light.dir, &ro, &img, &info, &err)
+                  : btf_gpu_render_scene(gpu, &m, &scene, &ro, &img, &info, &err);
+    else if (rc == BTF_OK)
+        rc = flat ? btf_render_flat(&m, view.dir, light.dir, &ro, &img, &info, &err)
+                  : btf_render_scene(&m, &scene, &ro, &img, &info, &err);
+    if (rc == BTF_OK && gpu && btf_gpu_validation_errors(gpu))
+        rc = cli_set_error(&err, BTF_E_UNSUPPORTED, "Vulkan validation: %s",
+                           btf_gpu_first_validation_message(gpu));
+    int used_gpu = gpu != NULL;
+    btf_gpu_close(gpu);
     if (rc == BTF_OK && beside) {
         btf_image both = {0};
         rc = side_by_side(&measured, &img, &both, &err);
@@ -198,9 +221,10 @@ int cmd_render(int argc, char **argv)
     if (!c.quiet) {
         printf("subspaces: %d needed of %d (tileable, %dx%d texels)\n", info.needed, info.total,
                info.texture_size, info.texture_size);
-        printf("backend cpu: model read %.3f s, trace %.3f s, synthesis %.3f s, shade %.3f s, "
-               "write %.3f s; total %.3f s\n", t_read, info.trace_s, info.synth_s,
-               info.shade_s, t_write, cli_now() - t_start);
+        printf("backend %s (%s): model read %.3f s, trace %.3f s, %s %.3f s, %s %.3f s, "
+               "write %.3f s; total %.3f s\n", used_gpu ? "gpu" : "cpu", devname, t_read,
+               info.trace_s, used_gpu ? "synthesis pass" : "synthesis", info.synth_s,
+               used_gpu ? "render pass" : "shade", info.shade_s, t_write, cli_now() - t_start);
         printf("rendered %dx%d into %s\n", ro.width, ro.height, out_path);
     }
     return 0;

@@ -209,3 +209,47 @@ int cli_parse_dir(const char *s, btf_dir *d, char *why, size_t n)
     d->phi = phi >= 360.0 ? 0.0 : phi;
     return 0;
 }
+
+/* BTF_VK_DEVICE and BTF_VK_VALIDATION into o (*index -1 when unset). */
+static int env_gpu_opts(btf_gpu_opts *o, int *index, btf_error *err)
+{
+    const char *d = getenv("BTF_VK_DEVICE"), *v = getenv("BTF_VK_VALIDATION");
+    *index = -1;
+    if (d && *d) {
+        long n = 0;
+        for (const char *c = d; *c; c++) {
+            if (*c < '0' || *c > '9' || n > 100000)
+                return cli_set_error(err, BTF_E_ARG, "BTF_VK_DEVICE='%s': expected a device "
+                                     "index (see btfcar info --devices)", d);
+            n = n * 10 + (*c - '0');
+        }
+        *index = (int)n;
+    }
+    if (v && *v && strcmp(v, "0") && strcmp(v, "1"))
+        return cli_set_error(err, BTF_E_ARG, "BTF_VK_VALIDATION='%s': expected 0 or 1", v);
+    o->validation = v && !strcmp(v, "1");
+    return 0;
+}
+
+btf_gpu *cli_open_gpu(const char *backend, int device, btf_error *err)
+{
+    if (!strcmp(backend, "cpu"))
+        return NULL;
+    /* A named device is as explicit as --backend gpu: its errors are errors. */
+    int explicit_gpu = !strcmp(backend, "gpu") || device >= 0;
+    btf_gpu_opts o = btf_gpu_defaults();
+    int env_device;
+    btf_gpu *g = NULL;
+    int rc = env_gpu_opts(&o, &env_device, err), from_env = device < 0 && env_device >= 0;
+    if (from_env)
+        device = env_device;
+    o.use_device = device >= 0;
+    o.device = device < 0 ? 0 : device;
+    o.allow_cpu = explicit_gpu;
+    if (rc == 0 && btf_gpu_open(&o, &g, err) != 0 && from_env) {
+        char msg[sizeof err->msg];
+        snprintf(msg, sizeof msg, "BTF_VK_DEVICE=%d: %s", device, err->msg);
+        snprintf(err->msg, sizeof err->msg, "%s", msg);
+    }
+    return g;
+}

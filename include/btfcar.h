@@ -1207,6 +1207,23 @@ btf_status btf_render_flat(const btf_model *m, btf_dir view, btf_dir light,
                            const btf_render_opts *opts, btf_image *out, btf_render_info *info,
                            btf_error *err);
 
+/* -------------------------------------------------------- render (GPU) */
+
+/* The GPU render pass (gpu/render_gpu.c, docs/render.md, "On the GPU"):
+ * the same plan as btf_render_scene / btf_render_flat (G-buffer traced on
+ * the CPU, the needed subspaces), then two compute passes on g's device:
+ * the needed subspaces synthesised tileable into one device buffer, left
+ * there, and a render shader running the CPU renderer's shading text
+ * (src/render/btf_render_shared.h). A frame beyond the device's buffer
+ * limits is rendered in bands of rows. info's synth_s and shade_s are the
+ * two passes. */
+btf_status btf_gpu_render_scene(btf_gpu *g, const btf_model *m, const btf_scene *s,
+                                const btf_render_opts *opts, btf_image *out,
+                                btf_render_info *info, btf_error *err);
+btf_status btf_gpu_render_flat(btf_gpu *g, const btf_model *m, btf_dir view, btf_dir light,
+                               const btf_render_opts *opts, btf_image *out,
+                               btf_render_info *info, btf_error *err);
+
 #ifdef __cplusplus
 }
 #endif

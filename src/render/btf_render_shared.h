@@ -258,8 +258,8 @@ BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, flo
     BTF_PRECISE float c = nz * lz;
     BTF_PRECISE float ab = a + b;
     BTF_PRECISE float ndotl = ab + c;
-    float flat = lz > BTF_FLAT_MIN_Z ? lz : BTF_FLAT_MIN_Z;
-    BTF_PRECISE float factor = ndotl > 0.0f ? ndotl / flat : 0.0f;
+    float flatz = lz > BTF_FLAT_MIN_Z ? lz : BTF_FLAT_MIN_Z;
+    BTF_PRECISE float factor = ndotl > 0.0f ? ndotl / flatz : 0.0f;
     float outer = BTF_SHADE_LIGHT_OUTER_Z(ctx);
     if (lz < outer) {
         BTF_PRECISE float fade = lz / outer;

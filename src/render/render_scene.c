@@ -94,74 +94,113 @@ static int visible_extent(const btf_gbuffer *g, btf_error *err)
     return ext > AUTO_TEXTURE_MAX ? AUTO_TEXTURE_MAX : (int)ceil(ext);
 }
 
-/* Needed set, material, shading of a G-buffer: the part both renders share. */
-static btf_status render_gbuffer(const btf_model *m, const btf_gbuffer *g,
-                                 const btf_light *lights, int n_lights, const float bg[3],
-                                 const btf_render_opts *o, btf_image *out,
-                                 btf_render_info *info, btf_error *err)
+/* The needed set and the texture side of a traced plan. */
+static btf_status plan_needs(const btf_model *m, btf_render_plan *p, btf_error *err)
 {
-    uint8_t *needed = btf_alloc((size_t)m->n_subspaces, 1, err);
-    if (!needed)
-        return BTF_E_NOMEM;
-    int count = 0;
     double t0 = now_s();
-    btf_render_material *rm = NULL;
-    btf_status rc = btf_render_needed(m, g, lights, n_lights, needed, &count, err);
-    if (rc == BTF_OK && o->all_subspaces) {
-        memset(needed, 1, (size_t)m->n_subspaces);
-        count = m->n_subspaces;
+    p->needed = btf_alloc((size_t)m->n_subspaces, 1, err);
+    if (!p->needed)
+        return BTF_E_NOMEM;
+    btf_status rc = btf_render_needed(m, &p->g, p->lights, p->n_lights, p->needed, &p->count,
+                                      err);
+    if (rc)
+        return rc;
+    if (p->o.all_subspaces) {
+        memset(p->needed, 1, (size_t)m->n_subspaces);
+        p->count = m->n_subspaces;
     }
-    int want = o->texture_size;
-    if (rc == BTF_OK && want == 0 && (want = visible_extent(g, err)) < 0)
-        rc = BTF_E_NOMEM;
-    int side = btf_render_texture_side(m, want);
-    if (rc == BTF_OK && o->texture_size && side != o->texture_size)
-        rc = btf_fail(err, BTF_E_ARG, "texture size %d: expected a multiple of the model's "
-                      "pyramid step, e.g. %d", o->texture_size, side);
-    if (rc == BTF_OK)
-        rc = btf_render_material_build(m, needed, side, o->seed, o->threads, &rm, err);
-    double t1 = now_s();
-    if (rc == BTF_OK)
-        rc = btf_render_shade(rm, g, lights, n_lights, bg, o->relief, o->threads, out, err);
-    double t2 = now_s();
-    if (info) {
-        info->needed = count;
-        info->total = m->n_subspaces;
-        info->texture_size = side;
-        info->synth_s = t1 - t0;
-        info->shade_s = t2 - t1;
-    }
-    btf_render_material_free(rm);
-    free(needed);
+    int want = p->o.texture_size;
+    if (want == 0 && (want = visible_extent(&p->g, err)) < 0)
+        return BTF_E_NOMEM;
+    p->side = btf_render_texture_side(m, want);
+    if (p->o.texture_size && p->side != p->o.texture_size)
+        return btf_fail(err, BTF_E_ARG, "texture size %d: expected a multiple of the model's "
+                        "pyramid step, e.g. %d", p->o.texture_size, p->side);
+    p->needed_s = now_s() - t0;
+    return BTF_OK;
+}
+
+void btf_render_plan_free(btf_render_plan *p)
+{
+    if (!p)
+        return;
+    btf_gbuffer_free(&p->g);
+    free(p->needed);
+    memset(p, 0, sizeof *p);
+}
+
+btf_status btf_render_plan_scene(const btf_model *m, const btf_scene *s,
+                                 const btf_render_opts *opts, btf_render_plan *p,
+                                 btf_error *err)
+{
+    memset(p, 0, sizeof *p);
+    btf_status rc = resolve_opts(opts, &p->o, err);
+    if (rc || (rc = btf_render_check_model(m, err)))
+        return rc;
+    if (!s)
+        return btf_fail(err, BTF_E_ARG, "render: no scene given");
+    if ((rc = btf_scene_check(s, err)))
+        return rc;
+    if (s->n_lights > BTF_RENDER_MAX_LIGHTS)
+        return btf_fail(err, BTF_E_ARG, "scene: %d lights: the renderer takes at most %d",
+                        s->n_lights, BTF_RENDER_MAX_LIGHTS);
+    double t0 = now_s();
+    if ((rc = btf_scene_trace(s, p->o.width, p->o.height, p->o.threads, &p->g, err)))
+        return rc;
+    p->trace_s = now_s() - t0;
+    p->lights = s->lights;
+    p->n_lights = s->n_lights;
+    memcpy(p->background, s->background, sizeof p->background);
+    if ((rc = plan_needs(m, p, err)))
+        btf_render_plan_free(p);
     return rc;
+}
+
+void btf_render_plan_info(const btf_model *m, const btf_render_plan *p, btf_render_info *info)
+{
+    if (!info)
+        return;
+    info->needed = p->count;
+    info->total = m->n_subspaces;
+    info->texture_size = p->side;
+    info->trace_s = p->trace_s;
 }
 
 btf_status btf_render_scene(const btf_model *m, const btf_scene *s, const btf_render_opts *opts,
                             btf_image *out, btf_render_info *info, btf_error *err)
 {
-    btf_render_opts o;
-    btf_status rc = resolve_opts(opts, &o, err);
-    if (rc || (rc = btf_render_check_model(m, err)))
-        return rc;
-    if (!s || !out)
-        return btf_fail(err, BTF_E_ARG, "render: no scene or output given");
-    if ((rc = btf_scene_check(s, err)))
-        return rc;
+    if (!out)
+        return btf_fail(err, BTF_E_ARG, "render: no output given");
     if (info)
         memset(info, 0, sizeof *info);
-    double t0 = now_s();
-    btf_gbuffer g;
-    memset(&g, 0, sizeof g);
-    if ((rc = btf_scene_trace(s, o.width, o.height, o.threads, &g, err)))
-        return rc;
-    double t1 = now_s();
-    rc = render_gbuffer(m, &g, s->lights, s->n_lights, s->background, &o, out, info, err);
-    if (info)
-        info->trace_s = t1 - t0;
-    btf_gbuffer_free(&g);
+    btf_render_plan p;
+    btf_status rc = btf_render_plan_scene(m, s, opts, &p, err);
+    if (rc == BTF_OK)
+        rc = btf_render_plan_cpu(m, &p, out, info, err);
+    btf_render_plan_free(&p);
     return rc;
 }
 
+btf_status btf_render_plan_cpu(const btf_model *m, const btf_render_plan *p, btf_image *out,
+                               btf_render_info *info, btf_error *err)
+{
+    btf_render_material *rm = NULL;
+    double t0 = now_s();
+    btf_status rc = btf_render_material_build(m, p->needed, p->side, p->o.seed, p->o.threads,
+                                              &rm, err);
+    double t1 = now_s();
+    if (rc == BTF_OK)
+        rc = btf_render_shade(rm, &p->g, p->lights, p->n_lights, p->background, p->o.relief,
+                              p->o.threads, out, err);
+    double t2 = now_s();
+    btf_render_plan_info(m, p, info);
+    if (info) {
+        info->synth_s = p->needed_s + (t1 - t0);
+        info->shade_s = t2 - t1;
+    }
+    btf_render_material_free(rm);
+    return rc;
+}
 /* The orthographic G-buffer of a flat patch: texel (x, y) at pixel (x, y),
  * the tangent frame the world's axes, one view for all pixels. */
 static btf_status flat_gbuffer(int w, int h, const float view[3], btf_gbuffer *g,
@@ -204,37 +243,48 @@ static btf_status check_flat_dir(const char *what, btf_dir d, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_render_flat(const btf_model *m, btf_dir view, btf_dir light,
-                           const btf_render_opts *opts, btf_image *out, btf_render_info *info,
-                           btf_error *err)
+btf_status btf_render_plan_flat(const btf_model *m, btf_dir view, btf_dir light,
+                                const btf_render_opts *opts, btf_render_plan *p,
+                                btf_error *err)
 {
-    btf_render_opts o;
-    btf_status rc = resolve_opts(opts, &o, err);
+    memset(p, 0, sizeof *p);
+    btf_status rc = resolve_opts(opts, &p->o, err);
     if (rc || (rc = btf_render_check_model(m, err)) ||
         (rc = check_flat_dir("view", view, err)) || (rc = check_flat_dir("light", light, err)))
         return rc;
-    if (!out)
-        return btf_fail(err, BTF_E_ARG, "render: no output given");
-    if (info)
-        memset(info, 0, sizeof *info);
     double v[3], l[3];
     btf_dir_to_vec(view, v);
     btf_dir_to_vec(light, l);
     float vf[3] = {(float)v[0], (float)v[1], (float)v[2]};
-    btf_light sun;
-    memset(&sun, 0, sizeof sun);
-    sun.kind = BTF_LIGHT_DIRECTIONAL;
+    p->sun.kind = BTF_LIGHT_DIRECTIONAL;
     for (int i = 0; i < 3; i++) {
-        sun.direction[i] = l[i];
-        sun.rgb[i] = 1.0f;
+        p->sun.direction[i] = l[i];
+        p->sun.rgb[i] = 1.0f;
     }
-    btf_gbuffer g;
-    if ((rc = flat_gbuffer(o.width, o.height, vf, &g, err)))
+    p->lights = &p->sun;
+    p->n_lights = 1;
+    if ((rc = flat_gbuffer(p->o.width, p->o.height, vf, &p->g, err)))
         return rc;
-    if (o.texture_size == 0) /* a frame-sized texture: one texel per pixel, no repeat */
-        o.texture_size = btf_render_texture_side(m, o.width > o.height ? o.width : o.height);
-    static const float black[3] = {0.0f, 0.0f, 0.0f};
-    rc = render_gbuffer(m, &g, &sun, 1, black, &o, out, info, err);
-    btf_gbuffer_free(&g);
+    if (p->o.texture_size == 0) /* a frame-sized texture: one texel per pixel, no repeat */
+        p->o.texture_size =
+            btf_render_texture_side(m, p->o.width > p->o.height ? p->o.width : p->o.height);
+    if ((rc = plan_needs(m, p, err)))
+        btf_render_plan_free(p);
+    return rc;
+}
+
+btf_status btf_render_flat(const btf_model *m, btf_dir view, btf_dir light,
+                           const btf_render_opts *opts, btf_image *out, btf_render_info *info,
+                           btf_error *err)
+{
+    if (!out)
+        return btf_fail(err, BTF_E_ARG, "render: no output given");
+    if (info)
+        memset(info, 0, sizeof *info);
+    btf_render_plan p;
+    btf_status rc = btf_render_plan_flat(m, view, light, opts, &p, err);
+    if (rc == BTF_OK)
+        rc = btf_render_plan_cpu(m, &p, out, info, err);
+    btf_render_plan_free(&p);
     return rc;
 }

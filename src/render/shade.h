@@ -71,4 +71,33 @@ btf_status btf_render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, in
 /* The context of a material (lights not set). */
 void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_material *rm);
 
+/* What a render does before it synthesises and shades, the same for both
+ * backends: the options resolved, the G-buffer traced (or the flat
+ * patch's), the lights, the needed subspaces and the texture side. The
+ * lights point into the scene (or at `sun`, the flat render's light). */
+typedef struct btf_render_plan {
+    btf_render_opts o;
+    btf_gbuffer g;
+    const btf_light *lights;
+    int n_lights;
+    btf_light sun;
+    float background[3];
+    uint8_t *needed;
+    int count, side;
+    double trace_s, needed_s;
+} btf_render_plan;
+
+btf_status btf_render_plan_scene(const btf_model *m, const btf_scene *s,
+                                 const btf_render_opts *opts, btf_render_plan *p,
+                                 btf_error *err);
+btf_status btf_render_plan_flat(const btf_model *m, btf_dir view, btf_dir light,
+                                const btf_render_opts *opts, btf_render_plan *p,
+                                btf_error *err);
+void btf_render_plan_free(btf_render_plan *p);
+/* The CPU backend on a plan: synthesis of the needed subspaces, shading. */
+btf_status btf_render_plan_cpu(const btf_model *m, const btf_render_plan *p, btf_image *out,
+                               btf_render_info *info, btf_error *err);
+/* The counts and the trace time of a plan into info. */
+void btf_render_plan_info(const btf_model *m, const btf_render_plan *p, btf_render_info *info);
+
 #endif

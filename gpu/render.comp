@@ -1,0 +1,76 @@
+// render.comp -- the second GPU pass (Haindl & Filip 2007, section III and
+// Fig. 1; docs/render.md, "On the GPU"): per pixel of a G-buffer traced on
+// the host, the local view and light directions, the triangle lookups and
+// barycentric weights (src/render/btf_hemisphere_lookup.h), the index-table
+// lookup, the parallax-shifted reads of the subspace images the first pass
+// (synthesis) left in a device buffer, the relit result
+// (src/render/btf_render_shared.h: the very text the CPU renderer runs).
+// One invocation per pixel; the layout of the parameters is
+// gpu/render_layout.h.
+#version 450
+#extension GL_GOOGLE_include_directive : require
+
+#define BTF_GLSL 1
+#include "render_layout.h"
+
+layout(local_size_x = 64) in;
+
+layout(std430, set = 0, binding = 0) readonly buffer GBuf { float gb[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Tex { float tex[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Maps { float maps[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Ints { int pi[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Floats { float pf[]; };
+layout(std430, set = 0, binding = 5) writeonly buffer Out { float rgb[]; };
+
+#define BTF_TAB_I(tab, f) pi[BTF_RP_TAB + (tab) * BTF_RP_TAB_STRIDE + (f)]
+#define BTF_HEMI_TABLE int
+#define BTF_HEMI_POINT(tab, i, k) pf[BTF_TAB_I(tab, BTF_RP_T_PTS) + 2 * (i) + (k)]
+#define BTF_HEMI_TRIANGLE(tab, t, k) pi[BTF_TAB_I(tab, BTF_RP_T_TRI) + 3 * (t) + (k)]
+#define BTF_HEMI_GRID(tab) BTF_TAB_I(tab, BTF_RP_T_GRID)
+#define BTF_HEMI_CELL_START(tab, c) pi[BTF_TAB_I(tab, BTF_RP_T_CS) + (c)]
+#define BTF_HEMI_CELL_TRI(tab, j) pi[BTF_TAB_I(tab, BTF_RP_T_CT) + (j)]
+#define BTF_HEMI_N_HULL(tab) BTF_TAB_I(tab, BTF_RP_T_NHULL)
+#define BTF_HEMI_HULL(tab, i) pi[BTF_TAB_I(tab, BTF_RP_T_HULL) + (i)]
+#define BTF_HEMI_HULL_APEX(tab, i) pi[BTF_TAB_I(tab, BTF_RP_T_APEX) + (i)]
+
+#define BTF_SHADE_CTX int
+#define BTF_SHADE_VIEWS(ctx) 0
+#define BTF_SHADE_LIGHTS(ctx) 1
+#define BTF_SHADE_SIZE(ctx) pi[BTF_RP_SIZE]
+#define BTF_SHADE_N_LIGHTS_SET(ctx) pi[BTF_RP_NSET]
+#define BTF_SHADE_INDEX(ctx, i) pi[pi[BTF_RP_INDEX] + (i)]
+#define BTF_SHADE_HAVE(ctx, k) pi[pi[BTF_RP_HAVE] + (k)]
+#define BTF_SHADE_TEX(ctx, k, i) tex[pi[pi[BTF_RP_TEXOFF] + (k)] + (i)]
+#define BTF_SHADE_HEIGHT(ctx, i) maps[i]
+#define BTF_SHADE_NORMAL(ctx, i) maps[pi[BTF_RP_NORMAL] + (i)]
+#define BTF_SHADE_LIGHT_OUTER_Z(ctx) pf[BTF_RP_OUTER]
+#define BTF_SHADE_N_LIGHTS(ctx) pi[BTF_RP_NLIGHTS]
+#define BTF_SHADE_LIGHT_KIND(ctx, j) pi[BTF_RP_KIND + (j)]
+#define BTF_SHADE_LIGHT_VEC(ctx, j, k) pf[BTF_RP_VEC + 3 * (j) + (k)]
+#define BTF_SHADE_LIGHT_RGB(ctx, j, k) pf[BTF_RP_RGB + 3 * (j) + (k)]
+
+#include "btf_render_shared.h"
+
+void main()
+{
+    uint p = gl_GlobalInvocationID.y * uint(pi[BTF_RP_ROW_PIX]) + gl_GlobalInvocationID.x;
+    if (p >= uint(pi[BTF_RP_NPIX]))
+        return;
+    uint g = p * uint(BTF_RP_GB);
+    if (gb[g] < 0.0) {
+        rgb[3u * p] = pf[BTF_RP_BG];
+        rgb[3u * p + 1u] = pf[BTF_RP_BG + 1];
+        rgb[3u * p + 2u] = pf[BTF_RP_BG + 2];
+        return;
+    }
+    btf_rgb c = btf_shade_pixel(0, gb[g + 3u], gb[g + 4u], gb[g + 5u], gb[g + 6u], gb[g + 7u],
+                                gb[g + 8u], gb[g + 9u], gb[g + 10u], gb[g + 11u], gb[g + 12u],
+                                gb[g + 13u], gb[g + 14u], gb[g + 15u], gb[g + 16u],
+                                gb[g + 17u], gb[g + 1u], gb[g + 2u], pf[BTF_RP_RELIEF]);
+    // A pixel that selects a subspace the first pass did not synthesise: NaN
+    // in red tells the host (which never lets that happen: the needed set is
+    // the shading's own rule).
+    rgb[3u * p] = c.r < -0.5 ? uintBitsToFloat(0x7fc00000u) : c.r;
+    rgb[3u * p + 1u] = c.g;
+    rgb[3u * p + 2u] = c.b;
+}

@@ -1,0 +1,396 @@
+/*
+ * render_gpu.c — the GPU render pass (Haindl & Filip 2007, section III;
+ * docs/render.md, "On the GPU"): the second of the two compute passes. The
+ * host traces the scene into a G-buffer (src/scene/) and finds the needed
+ * subspaces (render/needed.c) as the CPU renderer does (one plan,
+ * render/render_scene.c); the first pass synthesises those subspaces
+ * tileable into one device buffer (btf_gpu_synthesise_device), which stays
+ * on the device; this pass (gpu/render.comp) shades every pixel from the
+ * G-buffer, the hemisphere tables, the index table, that buffer and the
+ * range and normal maps, with the shading text the CPU runs
+ * (src/render/btf_render_shared.h).
+ *
+ * Why the G-buffer comes from the host: ray casting against meshes needs a
+ * BVH, which the CPU builds and traverses at 2-9 Mrays/s (docs/scene.md);
+ * uploading 72 bytes per pixel is cheap beside synthesis, keeps one
+ * tracer for both backends (so their hit sets are identical and the parity
+ * test compares shading alone), and frees the shader from geometry. A
+ * frame whose G-buffer or output would pass the device's largest storage
+ * buffer is rendered in bands of rows.
+ */
+#include "render/shade.h"
+#include "core/core.h"
+
+#include "render_layout.h"
+#include "synth_gpu.h"
+#include "vk.h"
+
+#include "render_spv.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The host copies of the parameter buffers (gpu/render_layout.h). */
+typedef struct params {
+    int32_t *ints;
+    size_t n_ints, cap_ints;
+    float *floats;
+    size_t n_floats, cap_floats;
+} params;
+
+static int grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return 0;
+    size_t c = *cap ? *cap : 256;
+    while (c < need)
+        c *= 2;
+    void *q = realloc(*p, c * elem);
+    if (!q)
+        return -1;
+    *p = q;
+    *cap = c;
+    return 0;
+}
+
+/* Appends n ints (or floats) and returns their offset; -1: no memory. */
+static long put_ints(params *pr, const int32_t *v, size_t n)
+{
+    if (grow((void **)&pr->ints, &pr->cap_ints, pr->n_ints + n, sizeof *pr->ints))
+        return -1;
+    memcpy(pr->ints + pr->n_ints, v, n * sizeof *v);
+    pr->n_ints += n;
+    return (long)(pr->n_ints - n);
+}
+
+static long put_floats(params *pr, const float *v, size_t n)
+{
+    if (grow((void **)&pr->floats, &pr->cap_floats, pr->n_floats + n, sizeof *pr->floats))
+        return -1;
+    memcpy(pr->floats + pr->n_floats, v, n * sizeof *v);
+    pr->n_floats += n;
+    return (long)(pr->n_floats - n);
+}
+
+/* One hemisphere table into the parameter buffers, its offsets at tab. */
+static int put_table(params *pr, int tab, const btf_hemisphere_table *t)
+{
+    int32_t *h = pr->ints + BTF_RP_TAB + tab * BTF_RP_TAB_STRIDE;
+    int grid = t->grid;
+    long tri = put_ints(pr, t->triangles, (size_t)t->n_triangles * 3);
+    long cs = put_ints(pr, t->cell_start, (size_t)grid * grid + 1);
+    long ct = put_ints(pr, t->cell_tris, (size_t)t->n_cell_tris);
+    long hull = put_ints(pr, t->hull, (size_t)t->n_hull);
+    long apex = put_ints(pr, t->hull_apex, (size_t)t->n_hull);
+    long pts = put_floats(pr, t->points, (size_t)t->n_points * 2);
+    if (tri < 0 || cs < 0 || ct < 0 || hull < 0 || apex < 0 || pts < 0)
+        return -1;
+    h = pr->ints + BTF_RP_TAB + tab * BTF_RP_TAB_STRIDE; /* the buffer may have moved */
+    h[BTF_RP_T_GRID] = grid;
+    h[BTF_RP_T_NHULL] = t->n_hull;
+    h[BTF_RP_T_TRI] = (int32_t)tri;
+    h[BTF_RP_T_CS] = (int32_t)cs;
+    h[BTF_RP_T_CT] = (int32_t)ct;
+    h[BTF_RP_T_HULL] = (int32_t)hull;
+    h[BTF_RP_T_APEX] = (int32_t)apex;
+    h[BTF_RP_T_PTS] = (int32_t)pts;
+    return 0;
+}
+
+/* Everything the pass reads but the G-buffer and the images. */
+static btf_status build_params(const btf_model *m, const btf_render_plan *p,
+                               const btf_hemisphere *views, const btf_hemisphere *lights,
+                               const int *subs, int n, const uint64_t *offsets, params *pr,
+                               btf_error *err)
+{
+    int32_t zero[BTF_RP_INTS] = {0};
+    float fzero[BTF_RP_FLOATS] = {0};
+    if (put_ints(pr, zero, BTF_RP_INTS) < 0 || put_floats(pr, fzero, BTF_RP_FLOATS) < 0)
+        return btf_fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
+    size_t pairs = (size_t)m->views.count * (size_t)m->lights.count;
+    int32_t *tmp = btf_alloc(pairs + 2 * (size_t)m->n_subspaces + 1, sizeof *tmp, err);
+    if (!tmp)
+        return BTF_E_NOMEM;
+    for (size_t i = 0; i < pairs; i++)
+        tmp[i] = m->index[i];
+    long idx = put_ints(pr, tmp, pairs);
+    for (int k = 0; k < m->n_subspaces; k++)
+        tmp[k] = 0, tmp[m->n_subspaces + k] = 0;
+    for (int i = 0; i < n; i++) {
+        tmp[subs[i]] = 1;
+        tmp[m->n_subspaces + subs[i]] = (int32_t)offsets[i];
+    }
+    long have = put_ints(pr, tmp, (size_t)m->n_subspaces);
+    long texoff = put_ints(pr, tmp + m->n_subspaces, (size_t)m->n_subspaces);
+    free(tmp);
+    btf_hemisphere_table tv, tl;
+    btf_hemisphere_get_table(views, &tv);
+    btf_hemisphere_get_table(lights, &tl);
+    if (idx < 0 || have < 0 || texoff < 0 || put_table(pr, 0, &tv) || put_table(pr, 1, &tl))
+        return btf_fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
+    btf_shade_ctx *ctx = btf_alloc(1, sizeof *ctx, err);
+    if (!ctx)
+        return BTF_E_NOMEM;
+    btf_status rc = btf_render_ctx_lights(ctx, p->lights, p->n_lights, err);
+    int32_t *hi = pr->ints;
+    float *hf = pr->floats;
+    hi[BTF_RP_SIZE] = p->side;
+    hi[BTF_RP_NSET] = m->lights.count;
+    hi[BTF_RP_NLIGHTS] = p->n_lights;
+    hi[BTF_RP_INDEX] = (int32_t)idx;
+    hi[BTF_RP_HAVE] = (int32_t)have;
+    hi[BTF_RP_TEXOFF] = (int32_t)texoff;
+    hi[BTF_RP_NORMAL] = p->side * p->side;
+    double outer = 0.0;
+    for (int i = 0; i < m->lights.count; i++)
+        outer = m->lights.dirs[i].theta > outer ? m->lights.dirs[i].theta : outer;
+    hf[BTF_RP_OUTER] = (float)cos(outer * (3.14159265358979323846 / 180.0));
+    hf[BTF_RP_RELIEF] = (float)p->o.relief;
+    for (int c = 0; c < 3; c++)
+        hf[BTF_RP_BG + c] = p->background[c];
+    for (int j = 0; rc == BTF_OK && j < p->n_lights; j++) {
+        hi[BTF_RP_KIND + j] = ctx->kind[j];
+        for (int k = 0; k < 3; k++) {
+            hf[BTF_RP_VEC + 3 * j + k] = ctx->vec[j][k];
+            hf[BTF_RP_RGB + 3 * j + k] = ctx->rgb[j][k];
+        }
+    }
+    free(ctx);
+    return rc;
+}
+
+/* Rows [y0, y1) of the G-buffer, packed BTF_RP_GB floats per pixel. */
+static void pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out)
+{
+    for (size_t p = (size_t)y0 * g->width, q = 0; p < (size_t)y1 * g->width; p++, q++) {
+        float *o = out + q * BTF_RP_GB;
+        o[0] = g->object[p] >= 0 ? 1.0f : -1.0f;
+        o[1] = g->uv[2 * p];
+        o[2] = g->uv[2 * p + 1];
+        memcpy(o + 3, g->frame + 9 * p, 9 * sizeof(float));
+        memcpy(o + 12, g->position + 3 * p, 3 * sizeof(float));
+        memcpy(o + 15, g->view + 3 * p, 3 * sizeof(float));
+    }
+}
+
+/* The range and normal maps of the texture side, one buffer. */
+static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, btf_vk_buffer **out,
+                              btf_error *err)
+{
+    btf_image h = {0}, n = {0};
+    btf_status rc = btf_range_map(m, side, side, &h, &n, err);
+    size_t px = (size_t)side * side;
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_create(vk, px * 4 * sizeof(float), out, err);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_upload(vk, *out, 0, h.data, px * sizeof(float), err);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_upload(vk, *out, px * sizeof(float), n.data, px * 3 * sizeof(float),
+                                  err);
+    btf_image_free(&h);
+    btf_image_free(&n);
+    return rc;
+}
+
+/* Rows of the frame per band: the G-buffer and output of a band must each
+ * fit one storage buffer (and the ints must index them). */
+static int band_rows(const btf_vk *vk, int width, int height)
+{
+    uint64_t lim = btf_vk_info(vk)->max_storage_buffer_range;
+    if (lim > (1ull << 31) - 4)
+        lim = (1ull << 31) - 4;
+    uint64_t per_row = (uint64_t)width * BTF_RP_GB * sizeof(float);
+    uint64_t rows = per_row ? lim / per_row : (uint64_t)height;
+    return rows >= (uint64_t)height ? height : (int)rows;
+}
+
+typedef struct pass {
+    btf_vk *vk;
+    btf_vk_pipeline *pipe;
+    btf_vk_buffer *bufs[6]; /* gbuf, tex, maps, ints, floats, out */
+    params pr;
+} pass;
+
+static void pass_free(pass *ps)
+{
+    btf_vk_pipeline_destroy(ps->pipe);
+    for (int i = 0; i < 6; i++)
+        if (i != 1) /* the images are the synthesis' buffer */
+            btf_vk_buffer_destroy(ps->bufs[i]);
+    free(ps->pr.ints);
+    free(ps->pr.floats);
+}
+
+/* One band of rows [y0, y1): upload, dispatch, download into out. */
+static btf_status run_band(pass *ps, const btf_gbuffer *g, int y0, int y1, float *scratch,
+                           btf_image *out, btf_error *err)
+{
+    size_t npix = (size_t)(y1 - y0) * g->width;
+    pack_gbuffer(g, y0, y1, scratch);
+    uint32_t groups = (uint32_t)((npix + 63) / 64);
+    uint32_t gx = groups < 65535 ? groups : 65535, gy = (groups + gx - 1) / gx;
+    ps->pr.ints[BTF_RP_NPIX] = (int32_t)npix;
+    ps->pr.ints[BTF_RP_ROW_PIX] = (int32_t)(gx * 64);
+    btf_status rc = btf_vk_buffer_upload(ps->vk, ps->bufs[0], 0, scratch,
+                                         npix * BTF_RP_GB * sizeof(float), err);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_upload(ps->vk, ps->bufs[3], 0, ps->pr.ints,
+                                  ps->pr.n_ints * sizeof(int32_t), err);
+    btf_vk_job *job = NULL;
+    if (rc == BTF_OK)
+        rc = btf_vk_job_begin(ps->vk, &job, err);
+    if (rc == BTF_OK)
+        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 6, NULL, 0, gx, gy, 1, err);
+    if (rc == BTF_OK) {
+        rc = btf_vk_job_submit_wait(job, err);
+        job = NULL;
+    }
+    btf_vk_job_abort(job);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_download(ps->vk, ps->bufs[5], 0,
+                                    out->data + (size_t)y0 * g->width * 3,
+                                    npix * 3 * sizeof(float), err);
+    for (size_t i = 0; rc == BTF_OK && i < npix; i++)
+        if (isnan(out->data[((size_t)y0 * g->width + i) * 3]))
+            rc = btf_fail(err, BTF_E_ARG, "GPU render: a pixel selects a subspace the first "
+                          "pass did not synthesise");
+    return rc;
+}
+
+/* The pass over the whole frame, in bands. */
+static btf_status shade_frame(pass *ps, const btf_gbuffer *g, btf_image *out, btf_error *err)
+{
+    int rows = band_rows(ps->vk, g->width, g->height);
+    if (rows < 1)
+        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU render: one row of %d pixels needs more "
+                        "than the device's largest storage buffer", g->width);
+    size_t band_px = (size_t)rows * g->width;
+    float *scratch = btf_alloc(band_px, BTF_RP_GB * sizeof(float), err);
+    if (!scratch)
+        return BTF_E_NOMEM;
+    btf_status rc = btf_vk_buffer_create(ps->vk, band_px * BTF_RP_GB * sizeof(float),
+                                         &ps->bufs[0], err);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_create(ps->vk, band_px * 3 * sizeof(float), &ps->bufs[5], err);
+    for (int y0 = 0; rc == BTF_OK && y0 < g->height; y0 += rows)
+        rc = run_band(ps, g, y0, y0 + rows < g->height ? y0 + rows : g->height, scratch, out,
+                      err);
+    free(scratch);
+    return rc;
+}
+
+static btf_status upload_params(pass *ps, btf_error *err)
+{
+    btf_status rc = btf_vk_buffer_create(ps->vk, ps->pr.n_ints * sizeof(int32_t), &ps->bufs[3],
+                                         err);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_create(ps->vk, ps->pr.n_floats * sizeof(float), &ps->bufs[4], err);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_upload(ps->vk, ps->bufs[4], 0, ps->pr.floats,
+                                  ps->pr.n_floats * sizeof(float), err);
+    return rc;
+}
+
+/* The GPU backend on a plan: the first pass (synthesis into a device
+ * buffer), the second (this shader), the frame downloaded. */
+static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_render_plan *p,
+                                  btf_image *out, btf_render_info *info, btf_error *err)
+{
+    pass ps;
+    memset(&ps, 0, sizeof ps);
+    ps.vk = btf_gpu_vk(gpu);
+    int *subs = btf_alloc((size_t)m->n_subspaces, sizeof *subs, err);
+    uint64_t *offs = btf_alloc((size_t)m->n_subspaces, sizeof *offs, err);
+    btf_hemisphere *views = NULL, *lights = NULL;
+    btf_vk_buffer *tex = NULL;
+    btf_status rc = subs && offs ? BTF_OK : BTF_E_NOMEM;
+    int n = 0;
+    for (int k = 0; rc == BTF_OK && k < m->n_subspaces; k++)
+        if (p->needed[k])
+            subs[n++] = k;
+    double t0 = now_s();
+    btf_synth_opts so = btf_synth_defaults();
+    so.width = so.height = p->side;
+    so.seed = p->o.seed;
+    so.tileable = 1;
+    if (rc == BTF_OK && n > 0)
+        rc = btf_gpu_synthesise_device(gpu, m, subs, n, &so, &tex, offs, err);
+    double t1 = now_s();
+    if (rc == BTF_OK && !tex) /* nothing needed: a buffer the shader may bind, never read */
+        rc = btf_vk_buffer_create(ps.vk, 16, &tex, err);
+    ps.bufs[1] = tex;
+    if (rc == BTF_OK)
+        rc = btf_hemisphere_build(&m->views, &views, err);
+    if (rc == BTF_OK)
+        rc = btf_hemisphere_build(&m->lights, &lights, err);
+    if (rc == BTF_OK)
+        rc = build_params(m, p, views, lights, subs, n, offs, &ps.pr, err);
+    if (rc == BTF_OK)
+        rc = upload_params(&ps, err);
+    if (rc == BTF_OK)
+        rc = upload_maps(ps.vk, m, p->side, &ps.bufs[2], err);
+    if (rc == BTF_OK)
+        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 6, 0, NULL, 0,
+                                    &ps.pipe, err);
+    if (rc == BTF_OK && (rc = btf_image_alloc(out, p->g.width, p->g.height, 3, err)) == BTF_OK) {
+        rc = shade_frame(&ps, &p->g, out, err);
+        if (rc)
+            btf_image_free(out);
+    }
+    double t2 = now_s();
+    btf_render_plan_info(m, p, info);
+    if (info) {
+        info->synth_s = p->needed_s + (t1 - t0);
+        info->shade_s = t2 - t1;
+    }
+    pass_free(&ps);
+    btf_vk_buffer_destroy(tex);
+    btf_hemisphere_free(views);
+    btf_hemisphere_free(lights);
+    free(subs);
+    free(offs);
+    return rc;
+}
+
+btf_status btf_gpu_render_scene(btf_gpu *g, const btf_model *m, const btf_scene *s,
+                                const btf_render_opts *opts, btf_image *out,
+                                btf_render_info *info, btf_error *err)
+{
+    if (!g || !out)
+        return btf_fail(err, BTF_E_ARG, "GPU render: no device or output given");
+    memset(out, 0, sizeof *out);
+    if (info)
+        memset(info, 0, sizeof *info);
+    btf_render_plan p;
+    btf_status rc = btf_render_plan_scene(m, s, opts, &p, err);
+    if (rc == BTF_OK)
+        rc = render_plan_gpu(g, m, &p, out, info, err);
+    btf_render_plan_free(&p);
+    return rc;
+}
+
+btf_status btf_gpu_render_flat(btf_gpu *g, const btf_model *m, btf_dir view, btf_dir light,
+                               const btf_render_opts *opts, btf_image *out,
+                               btf_render_info *info, btf_error *err)
+{
+    if (!g || !out)
+        return btf_fail(err, BTF_E_ARG, "GPU render: no device or output given");
+    memset(out, 0, sizeof *out);
+    if (info)
+        memset(info, 0, sizeof *info);
+    btf_render_plan p;
+    btf_status rc = btf_render_plan_flat(m, view, light, opts, &p, err);
+    if (rc == BTF_OK)
+        rc = render_plan_gpu(g, m, &p, out, info, err);
+    btf_render_plan_free(&p);
+    return rc;
+}

@@ -4,7 +4,7 @@
  * the inverse decorrelation), one section per file, callers above callees:
  *
  *   synthesise.c   the public calls: options, checks, the row loop
- *   tileable.c     tileable synthesis: the pyramid on a torus, whole planes
+ *   tileable.c     the DFT torus reference of tileable synthesis (tests only)
  *   torus.c        one CAR field on a torus, solved by a 2D DFT
  *   collapse.c     the pyramid of one band, streamed row by row
  *   upsample.c     pyrUp of rows (horizontal pairs, vertical sums)

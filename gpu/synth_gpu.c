@@ -713,17 +713,18 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
         memset(&outs[j], 0, sizeof outs[j]);
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
     int *w = n > 0 ? btf_calloc((size_t)n * 2, sizeof(int), err) : NULL;
+    int *h = w ? w + n : NULL; /* widths, heights */
     btf_status rc = n > 0 && !w ? BTF_E_NOMEM : BTF_OK;
     if (rc == BTF_OK)
-        rc = check_all(m, subspaces, n, &o, w, w + (n > 0 ? n : 0), &margins, err);
+        rc = check_all(m, subspaces, n, &o, w, h, &margins, err);
     if (rc == BTF_OK && !g)
         rc = btf_fail(err, BTF_E_ARG, "GPU synthesis: no GPU (btf_gpu_open)");
     for (int j = 0; rc == 0 && j < n; j++)
-        rc = btf_image_alloc(&outs[j], w[j], w[n + j], 3, err);
+        rc = btf_image_alloc(&outs[j], w[j], h[j], 3, err);
     batch_dest d = {outs, NULL, NULL};
     if (rc == BTF_OK)
-        rc = run_all(g, m, subspaces, n, &o, w, w + n, (const int (*)[3][BTF_MAX_LEVELS])margins,
-                     &d, err);
+        rc = run_all(g, m, subspaces, n, &o, w, h, (const int (*)[3][BTF_MAX_LEVELS])margins, &d,
+                     err);
     if (rc)
         for (int j = 0; j < n; j++)
             btf_image_free(&outs[j]);

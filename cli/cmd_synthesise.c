@@ -17,11 +17,12 @@ static const char ABOUT[] =
     "Generates subspace images of the model at any size, seamless and stationary\n"
     "(paper section II.C), streaming rows to OUTDIR/subspace_NN.exr (linear RGB)\n"
     "as they are produced: memory grows with the width, not the height\n"
-    "(docs/synthesis.md); --tileable holds whole fields instead, for images that\n"
-    "tile without a seam. The same model and seed give the same pixels on every\n"
-    "backend. Environment: BTF_VK_DEVICE=N names the Vulkan device when --device\n"
-    "is not given; BTF_SYNTH_WAVE=0 and BTF_NOISE_PORTABLE=1 select the CPU's\n"
-    "row-by-row field generator and portable noise loop (same pixels, slower);\n"
+    "(docs/synthesis.md); --tileable makes images that tile without a seam (the\n"
+    "same streaming with periodic noise, on either backend). The same model and\n"
+    "seed give the same pixels on every backend. Environment: BTF_VK_DEVICE=N\n"
+    "names the Vulkan device when --device is not given; BTF_SYNTH_WAVE=0 and\n"
+    "BTF_NOISE_PORTABLE=1 select the CPU's row-by-row field generator and\n"
+    "portable noise loop (same pixels, slower);\n"
     "BTF_EXR_THREAD=0 compresses and writes on the synthesising thread (same bytes).\n"
     "--range adds the model's range map enlarged to the same size, seamless, as\n"
     "OUTDIR/range.exr (heights in analysed-image texels) and OUTDIR/normal.exr\n"
@@ -342,7 +343,7 @@ int cmd_synthesise(int argc, char **argv)
          .help = "Vulkan device index (btfcar info --devices)", .lo = 0, .hi = 255},
         {.name = "--tileable", .kind = CLI_FLAG, .dest = &tileable,
          .help = "a tileable image: right edge continues into left, bottom into top\n"
-                 "(CPU; both sides multiples of 2^(levels-1); whole fields in memory)"},
+                 "(both sides multiples of 2^(levels-1); CPU or GPU, the same pixels)"},
         {.name = "--preview", .kind = CLI_FLAG, .dest = &preview,
          .help = "also write subspace_NN.png (8-bit sRGB; up to 8192x8192)"},
         {.name = "--half", .kind = CLI_FLAG, .dest = &half,
@@ -365,11 +366,6 @@ int cmd_synthesise(int argc, char **argv)
     int w = size[0], h = size[1];
     if (device >= 0 && !strcmp(backend, "cpu"))
         return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
-    if (tileable && (!strcmp(backend, "gpu") || device >= 0))
-        return cli_usage_error(&c, "--tileable: tileable synthesis runs on the CPU backend "
-                               "(--backend cpu or auto)");
-    if (tileable) /* auto: the CPU, the one backend that has it */
-        backend = "cpu";
     if (preview && (double)w * h > 8192.0 * 8192.0)
         return cli_usage_error(&c, "--preview is limited to 8192x8192 pixels");
     if (half && as_float)

@@ -7,7 +7,8 @@
 // earlier wavefront steps when the step is t = a r + c with a > dc / |dr| for
 // every offset of an earlier row (a = 2 for the usual up-right neighbour), so
 // every pixel of one step is computed at once, a barrier between steps. No
-// spin-waiting between workgroups (no forward-progress guarantee). The sums,
+// spin-waiting between workgroups (no forward-progress guarantee). Tileable
+// fields take the noise of their coordinates modulo the level's period. The sums,
 // noise and zero boundary are those of the CPU reference (src/synth/rows.c):
 // the results are bit-identical.
 #version 450
@@ -57,8 +58,13 @@ void main()
                 acc = btf_car_accumulate(acc, tasks[t].gamma[k],
                                          field_at(base, fw, r + tasks[t].off_r[k],
                                                   c + tasks[t].off_c[k]));
-            uint urow = uint(tasks[t].fy0 + r + BTF_NOISE_ORIGIN);
-            uint ucol = uint(tasks[t].fx0 + c + BTF_NOISE_ORIGIN);
+            int nr = tasks[t].fy0 + r, nc = tasks[t].fx0 + c;
+            if (tasks[t].period_w > 0) { // tileable: periodic noise, as src/synth/rows.c
+                nr = btf_period_coord(nr, tasks[t].period_h);
+                nc = btf_period_coord(nc, tasks[t].period_w);
+            }
+            uint urow = uint(nr + BTF_NOISE_ORIGIN);
+            uint ucol = uint(nc + BTF_NOISE_ORIGIN);
             float e = btf_noise1(pc.seed_lo, pc.seed_hi, tasks[t].stream, urow, ucol);
             acc = btf_car_output(acc, tasks[t].sigma, e);
             for (int k = np; k < n; k++)

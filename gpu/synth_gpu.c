@@ -13,7 +13,11 @@
  * kept per model by src/model/model_margins.c) and the float formulas
  * (src/synth/btf_shared.h) are the CPU's. One job (command buffer) per
  * strip of rows of a batch of subspace images; batches and strips are cut
- * so that every buffer fits the device's limits.
+ * so that every buffer fits the device's limits. Tileable synthesis is the
+ * same computation with periodic noise (gpu_task.period_w, period_h;
+ * docs/synthesis.md, "Tileable synthesis"). The images go to host memory
+ * (btf_gpu_synthesise) or stay in one device buffer
+ * (btf_gpu_synthesise_device, gpu/synth_gpu.h).
  */
 #include "synth/synth.h"
 #include "core/core.h"
@@ -22,6 +26,7 @@
 #include "btf_shared.h"
 #include "geometry.h"
 #include "synth/synth_testing.h"
+#include "synth_gpu.h"
 #include "vk.h"
 
 #include "synth_collapse_spv.h"
@@ -39,6 +44,7 @@ typedef struct gpu_task {
     uint32_t field_off, gauss_off;
     uint32_t stream;
     int32_t n_offsets, n_earlier, slope, coarse;
+    int32_t period_w, period_h;
     float sigma, mean;
     int32_t off_r[24];
     int32_t off_c[24];
@@ -53,7 +59,7 @@ typedef struct gpu_unmix {
     int32_t width, height;
 } gpu_unmix;
 
-_Static_assert(sizeof(gpu_task) == 360, "gpu_task must match synth_task.glsl");
+_Static_assert(sizeof(gpu_task) == 368, "gpu_task must match synth_task.glsl");
 _Static_assert(sizeof(gpu_unmix) == 72, "gpu_unmix must match synth_task.glsl");
 _Static_assert(BTF_CAR_MAX_NEIGHBOURS == 24, "synth_task.glsl holds 24 offsets");
 
@@ -169,7 +175,7 @@ static int wavefront_slope(const btf_car_band *b)
  * column to the nearest. The rows (fy0, rows_given, fh, y0, window_h) are set per
  * strip. */
 static void fill_task(gpu_task *t, const btf_car_band *b, int margin, uint32_t stream, int x0,
-                      int x1)
+                      int x1, int period_w, int period_h)
 {
     memset(t, 0, sizeof *t);
     t->x0 = x0, t->window_w = x1 - x0;
@@ -178,6 +184,7 @@ static void fill_task(gpu_task *t, const btf_car_band *b, int margin, uint32_t s
     t->sigma = b->sigma, t->mean = b->mean;
     t->slope = wavefront_slope(b);
     t->coarse = -1;
+    t->period_w = period_w, t->period_h = period_h;
     int k = 0, same[BTF_CAR_MAX_NEIGHBOURS];
     for (int s = 0; s < b->n; s++)
         if (b->offsets[s].row != 0) {
@@ -208,10 +215,10 @@ typedef struct field_state {
 } field_state;
 
 /* A batch: n_images subspace images of one size synthesised together,
- * strip by strip. Tasks are grouped by level (the collapse dispatches one
+ * strip by strip (tileable: periodic noise). Tasks are grouped by level (the collapse dispatches one
  * level at a time). */
 typedef struct batch {
-    int n_images, width, height, strip;
+    int n_images, width, height, strip, tileable;
     gpu_task *tasks;
     field_state *fs;
     int ntasks;
@@ -284,10 +291,11 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
 /* Builds the batch and sizes its buffers for strips of `strip` rows;
  * margins[j][b][l] of image j. */
 static int build_batch(const btf_model *m, const int *subs, const int (*margins)[3][BTF_MAX_LEVELS],
-                       int n, int w, int h, int strip, batch *bt, btf_error *err)
+                       int n, int w, int h, int strip, int tileable, batch *bt, btf_error *err)
 {
     memset(bt, 0, sizeof *bt);
     bt->n_images = n, bt->width = w, bt->height = h, bt->strip = strip;
+    bt->tileable = tileable;
     int max_levels = 0, count[BTF_MAX_LEVELS] = {0};
     for (int j = 0; j < n; j++) {
         const btf_subspace_model *sm = &m->subspaces[subs[j]];
@@ -316,9 +324,11 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
             int prev = -1;
             for (int l = 0; l < sm->levels; l++) {
                 int ti = fill[l]++;
+                /* tileable: level l's period, (w >> l) x (h >> l), as on the CPU
+                 * (src/synth/collapse.c) */
                 fill_task(&bt->tasks[ti], &sm->bands[b][l], margins[j][b][l],
                           btf_noise_stream((uint32_t)subs[j], (uint32_t)b, (uint32_t)l), xs.lo,
-                          xs.hi);
+                          xs.hi, tileable ? w >> l : 0, tileable ? h >> l : 0);
                 bt->fs[ti].level = l;
                 bt->fs[ti].reach_up = field_reach_up(&bt->tasks[ti]);
                 if (prev >= 0)
@@ -482,9 +492,17 @@ static int record_carry(btf_vk_job *job, const batch *bt, const batch_buffers *b
     return rc;
 }
 
+/* Where a batch's images go: host images, or a device buffer at float
+ * offsets dev_off[j] (btf_gpu_synthesise_device). */
+typedef struct batch_dest {
+    btf_image *images;
+    btf_vk_buffer *dev;
+    const uint64_t *dev_off;
+} batch_dest;
+
 /* One strip of every image of the batch: one job. */
 static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, uint64_t seed,
-                     btf_image *outs, int *keep, btf_error *err)
+                     const batch_dest *dst, int *keep, btf_error *err)
 {
     int first = y0 == 0;
     strip_rows(bt, y0, y1, first, keep, keep + bt->ntasks);
@@ -531,26 +549,32 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
     if (rc == 0)
         rc = dispatch_range(g, job, g->unmix, ub, 3, upush, 1, 0, (uint32_t)bt->n_images,
                             chunks((uint64_t)bt->width * (y1 - y0)), err);
+    uint64_t strip_bytes = 4ull * bt->width * (y1 - y0) * 3;
+    for (int j = 0; rc == 0 && dst->dev && j < bt->n_images; j++) /* on the device */
+        rc = btf_vk_job_copy(job, b->out, 4ull * bt->unmix[j].out_off, dst->dev,
+                             4ull * (dst->dev_off[j] + (uint64_t)y0 * bt->width * 3), strip_bytes,
+                             err);
     if (rc == 0) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
     }
-    for (int j = 0; rc == 0 && j < bt->n_images; j++)
+    for (int j = 0; rc == 0 && !dst->dev && j < bt->n_images; j++)
         rc = btf_vk_buffer_download(g->vk, b->out, 4ull * bt->unmix[j].out_off,
-                                    outs[j].data + (size_t)y0 * bt->width * 3,
-                                    4ull * bt->width * (y1 - y0) * 3, err);
+                                    dst->images[j].data + (size_t)y0 * bt->width * 3,
+                                    strip_bytes, err);
     btf_vk_job_abort(job);
     return rc;
 }
 
-static int run_batch(btf_gpu *g, batch *bt, uint64_t seed, btf_image *outs, btf_error *err)
+static int run_batch(btf_gpu *g, batch *bt, uint64_t seed, const batch_dest *dst,
+                     btf_error *err)
 {
     batch_buffers b;
     int *keep = btf_calloc((size_t)bt->ntasks * 2, sizeof(int), err);
     int rc = keep ? buffers_make(g, bt, &b, err) : BTF_E_NOMEM;
     for (int y = 0; rc == 0 && y < bt->height; y += bt->strip) {
         int y1 = y + bt->strip < bt->height ? y + bt->strip : bt->height;
-        rc = run_strip(g, bt, &b, y, y1, seed, outs, keep, err);
+        rc = run_strip(g, bt, &b, y, y1, seed, dst, keep, err);
         g->jobs++;
     }
     g->batches++;
@@ -590,11 +614,11 @@ static btf_status check_request(const btf_model *m, const int *subs, int n,
  * strips, whose buffers fit `limit` bytes; BTF_E_UNSUPPORTED if even one image
  * in strips of one row does not fit (the width alone is too large). */
 static int plan_batch(const btf_model *m, const int *subs, const int (*margins)[3][BTF_MAX_LEVELS],
-                      int n, int w, int h, uint64_t limit, batch *bt, btf_error *err)
+                      int n, int w, int h, int tileable, uint64_t limit, batch *bt, btf_error *err)
 {
     for (int k = n; k >= 1; k = k / 2) {
         for (int strip = h;; strip = (strip + 1) / 2) {
-            int rc = build_batch(m, subs, margins, k, w, h, strip, bt, err);
+            int rc = build_batch(m, subs, margins, k, w, h, strip, tileable, bt, err);
             if (rc)
                 return rc;
             if (batch_need(bt) <= limit && bt->field_floats <= 0x7FFFFFFFull)
@@ -621,54 +645,130 @@ static void image_size(const btf_model *m, int sub, const btf_synth_opts *o, int
     *h = o->height ? o->height : m->subspaces[sub].height;
 }
 
+btf_vk *btf_gpu_vk(btf_gpu *g)
+{
+    return g->vk;
+}
+
+/* The checks of a request (before g is used) and the images' sizes and
+ * margins (margins[j], n entries, allocated here). */
+static btf_status check_all(const btf_model *m, const int *subspaces, int n,
+                            const btf_synth_opts *o, int *w, int *h,
+                            int (**margins)[3][BTF_MAX_LEVELS], btf_error *err)
+{
+    *margins = NULL;
+    if (!m || n < 0 || (n > 0 && !subspaces))
+        return btf_fail(err, BTF_E_ARG, "GPU synthesis: no model, or %d images", n);
+    if (n > 0 && !(*margins = btf_calloc((size_t)n, sizeof **margins, err)))
+        return BTF_E_NOMEM;
+    btf_status rc = check_request(m, subspaces, n, *margins, err);
+    for (int j = 0; rc == 0 && j < n; j++) {
+        image_size(m, subspaces[j], o, &w[j], &h[j]);
+        rc = btf_synth_check_size(w[j], h[j], err);
+        if (rc == 0 && o->tileable) /* the CPU's rule and message */
+            rc = btf_synth_check_tileable(w[j], h[j], m->subspaces[subspaces[j]].levels, err);
+    }
+    return rc;
+}
+
+/* Images [0, n) of one request, batch by batch (a batch holds images of
+ * one size) into dst; images[j] (host) are checked for Inf and NaN. */
+static btf_status run_all(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
+                          const btf_synth_opts *o, const int *w, const int *h,
+                          const int (*margins)[3][BTF_MAX_LEVELS], const batch_dest *dst,
+                          btf_error *err)
+{
+    g->jobs = g->batches = 0;
+    uint64_t limit = btf_vk_info(g->vk)->max_storage_buffer_range;
+    if (g->max_buffer_bytes && g->max_buffer_bytes < limit)
+        limit = g->max_buffer_bytes;
+    btf_status rc = BTF_OK;
+    for (int start = 0; rc == 0 && start < n;) {
+        int width = w[start], height = h[start], same = 1;
+        while (start + same < n && w[start + same] == width && h[start + same] == height)
+            same++;
+        batch bt;
+        rc = plan_batch(m, subspaces + start, margins + start, same, width, height,
+                        o->tileable != 0, limit, &bt, err);
+        if (rc)
+            break;
+        batch_dest d = {dst->images ? dst->images + start : NULL, dst->dev,
+                        dst->dev_off ? dst->dev_off + start : NULL};
+        rc = run_batch(g, &bt, o->seed, &d, err);
+        for (int j = 0; rc == 0 && dst->images && j < bt.n_images; j++)
+            for (int y = 0; rc == 0 && y < height; y++)
+                rc = btf_check_finite_row(dst->images[start + j].data + (size_t)y * width * 3,
+                                          (size_t)width * 3, subspaces[start + j], y, err);
+        start += bt.n_images;
+        batch_free(&bt);
+    }
+    return rc;
+}
+
 btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
                               const btf_synth_opts *opts, btf_image *outs, btf_error *err)
 {
     btf_synth_opts o = btf_synth_resolve(opts);
     for (int j = 0; j < n; j++)
         memset(&outs[j], 0, sizeof outs[j]);
-    if (o.tileable) /* the torus fields are DFT solves (src/synth/torus.c); before g is used */
-        return btf_fail(err, BTF_E_ARG, "tileable synthesis runs on the CPU backend");
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
-    btf_status rc = BTF_OK;
-    if (!m || n < 0)
-        rc = btf_fail(err, BTF_E_ARG, "GPU synthesis: no model, or %d images", n);
-    if (rc == BTF_OK && n > 0 &&
-        !(margins = btf_calloc((size_t)n, sizeof *margins, err)))
-        rc = BTF_E_NOMEM;
+    int *w = n > 0 ? btf_calloc((size_t)n * 2, sizeof(int), err) : NULL;
+    int *h = w ? w + n : NULL; /* widths, heights */
+    btf_status rc = n > 0 && !w ? BTF_E_NOMEM : BTF_OK;
     if (rc == BTF_OK)
-        rc = check_request(m, subspaces, n, margins, err);
-    for (int j = 0; rc == 0 && j < n; j++) {
-        int w, h;
-        image_size(m, subspaces[j], &o, &w, &h);
-        if ((rc = btf_synth_check_size(w, h, err)) == BTF_OK)
-            rc = btf_image_alloc(&outs[j], w, h, 3, err);
-    }
-    g->jobs = g->batches = 0;
-    uint64_t limit = btf_vk_info(g->vk)->max_storage_buffer_range;
-    if (g->max_buffer_bytes && g->max_buffer_bytes < limit)
-        limit = g->max_buffer_bytes;
-    for (int start = 0; rc == 0 && start < n;) {
-        /* a batch holds images of one size */
-        int width = outs[start].width, height = outs[start].height, same = 1;
-        while (start + same < n && outs[start + same].width == width &&
-               outs[start + same].height == height)
-            same++;
-        batch bt;
-        rc = plan_batch(m, subspaces + start, margins + start, same, width, height, limit, &bt,
-                        err);
-        if (rc == 0)
-            rc = run_batch(g, &bt, o.seed, outs + start, err);
-        for (int j = 0; rc == 0 && j < bt.n_images; j++)
-            for (int y = 0; rc == 0 && y < height; y++)
-                rc = btf_check_finite_row(outs[start + j].data + (size_t)y * width * 3,
-                                          (size_t)width * 3, subspaces[start + j], y, err);
-        start += bt.n_images;
-        batch_free(&bt);
-    }
+        rc = check_all(m, subspaces, n, &o, w, h, &margins, err);
+    if (rc == BTF_OK && !g)
+        rc = btf_fail(err, BTF_E_ARG, "GPU synthesis: no GPU (btf_gpu_open)");
+    for (int j = 0; rc == 0 && j < n; j++)
+        rc = btf_image_alloc(&outs[j], w[j], h[j], 3, err);
+    batch_dest d = {outs, NULL, NULL};
+    if (rc == BTF_OK)
+        rc = run_all(g, m, subspaces, n, &o, w, h, (const int (*)[3][BTF_MAX_LEVELS])margins, &d,
+                     err);
     if (rc)
         for (int j = 0; j < n; j++)
             btf_image_free(&outs[j]);
     free(margins);
+    free(w);
+    return rc;
+}
+
+btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
+                                     const btf_synth_opts *opts, btf_vk_buffer **out,
+                                     uint64_t *offsets, btf_error *err)
+{
+    btf_synth_opts o = btf_synth_resolve(opts);
+    *out = NULL;
+    if (!g || n < 1 || !offsets)
+        return btf_fail(err, BTF_E_ARG, "GPU synthesis to the device: no GPU, no offsets or "
+                        "%d images (at least 1)", n);
+    int (*margins)[3][BTF_MAX_LEVELS] = NULL;
+    int *w = btf_calloc((size_t)n * 2, sizeof(int), err);
+    btf_status rc = w ? check_all(m, subspaces, n, &o, w, w + n, &margins, err) : BTF_E_NOMEM;
+    uint64_t floats = 0;
+    for (int j = 0; rc == 0 && j < n; j++) {
+        offsets[j] = floats;
+        floats += (uint64_t)w[j] * w[n + j] * 3;
+    }
+    uint64_t limit = btf_vk_info(g->vk)->max_storage_buffer_range;
+    if (g->max_buffer_bytes && g->max_buffer_bytes < limit)
+        limit = g->max_buffer_bytes;
+    if (rc == 0 && 4 * floats > limit)
+        rc = btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis to the device: %d images need "
+                      "%.1f MiB in one storage buffer, more than the device's limit of %.1f MiB; "
+                      "synthesise fewer or smaller images at once", n, 4 * floats / 1048576.0,
+                      limit / 1048576.0);
+    if (rc == 0)
+        rc = btf_vk_buffer_create(g->vk, 4 * floats, out, err);
+    batch_dest d = {NULL, *out, offsets};
+    if (rc == 0)
+        rc = run_all(g, m, subspaces, n, &o, w, w + n, (const int (*)[3][BTF_MAX_LEVELS])margins,
+                     &d, err);
+    if (rc) {
+        btf_vk_buffer_destroy(*out);
+        *out = NULL;
+    }
+    free(margins);
+    free(w);
     return rc;
 }

@@ -21,6 +21,8 @@ struct Task {
     int n_earlier;            // of which the first n_earlier are on earlier rows
     int slope;                // wavefront slope a: pixel (r, c) is ready at step a r + c
     int coarse;               // the task of level + 1 of the same band, or -1
+    int period_w, period_h;   // tileable: pixel (r, c) takes the noise of (r mod period_h,
+                              // c mod period_w), btf_period_coord; 0: not periodic
     float sigma, mean;
     int off_r[24];
     int off_c[24];

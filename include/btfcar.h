@@ -875,31 +875,25 @@ typedef struct btf_synth_opts {
     int portable_noise;  /* 1: the portable noise loop instead of AVX2 (and so
                             no wavefront, which draws its noise with AVX2) */
     int row_by_row;      /* 1: CAR fields row by row instead of the wavefront */
-    /* 1: a tileable image (CPU only; docs/synthesis.md, "Tileable
-     * synthesis"): every CAR field runs on the W x H torus, solved exactly
-     * by a 2D DFT, and the pyramid collapses with wrap-around, so the right
-     * edge continues into the left and the bottom into the top with the
-     * model's statistics everywhere. Whole fields are held (about 85 bytes
-     * a pixel, at most BTF_SYNTH_TILE_MAX_PIXELS pixels) instead of
-     * streamed; both sides must be multiples of 2^(levels - 1) with no
-     * prime factor above BTF_SYNTH_TILE_MAX_PRIME (BTF_E_ARG otherwise,
-     * naming the size); the same seed gives the same bytes on one build and CPU;
-     * the switches above do not apply. btf_gpu_synthesise refuses it
-     * (BTF_E_ARG). */
+    /* 1: a tileable image (docs/synthesis.md, "Tileable synthesis"): the
+     * streaming synthesis with periodic noise, level l's field driven by
+     * the noise of (row mod (H >> l), column mod (W >> l)), so that each
+     * window converges, within the margin, to the CAR field on its torus
+     * and the pyramid collapses to an image whose right edge continues
+     * into the left and the bottom into the top with the model's
+     * statistics everywhere. Memory and sizes as streaming, but both sides
+     * must be multiples of 2^(levels - 1) (BTF_E_ARG otherwise, naming the
+     * size); the fields run row by row (no wavefront). The same seed gives
+     * the same bytes on every CPU path and on the GPU (btf_gpu_synthesise). */
     int tileable;
 } btf_synth_opts;
-/* The largest tileable synthesis, width x height (8192 x 8192). */
-#define BTF_SYNTH_TILE_MAX_PIXELS (1ull << 26)
-/* The largest prime factor a tileable side may have (its DFT's cost grows
- * with it): 1000, 1080, 1920 and every power of two qualify. */
-#define BTF_SYNTH_TILE_MAX_PRIME 127
 
 /* The defaults that a zero field of btf_synth_opts stands for. */
 btf_synth_opts btf_synth_defaults(void);
 
 /* Synthesises subspace image `subspace` of the model (opts may be NULL),
- * streaming: memory grows with the width, not the height (tileable: whole
- * fields on a torus instead, btf_synth_opts.tileable). Per spectral band
+ * streaming: memory grows with the width, not the height (tileable too,
+ * btf_synth_opts.tileable). Per spectral band
  * and pyramid level the CAR recursion runs with a burn-in margin
  * (docs/synthesis.md) so the field is stationary from its first pixel; the
  * pyramid is collapsed and the colour decorrelation undone. The noise is a

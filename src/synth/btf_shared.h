@@ -43,6 +43,16 @@ BTF_FN int btf_floordiv2(int a)
     return a >= 0 ? a / 2 : -((-a + 1) / 2);
 }
 
+/* Tileable synthesis (docs/synthesis.md, "Tileable synthesis"): a field
+ * pixel at signed coordinate a takes the noise of a mod n (floor-mod, n >
+ * 0), burn-in rows and margin columns included, so that the streaming
+ * recursion converges to the field on the torus. Written without % on a
+ * negative operand (undefined in GLSL). */
+BTF_FN int btf_period_coord(int a, int n)
+{
+    return a >= 0 ? a % n : (n - 1) - ((-a - 1) % n);
+}
+
 /* One step of the neighbourhood sum: acc + gamma * y. */
 BTF_FN float btf_car_accumulate(float acc, float gamma, float y)
 {

@@ -53,8 +53,10 @@ btf_status synth_band_init(synth_band *sb, const btf_car_band *bands, const int 
         for (int k = 0; k < 3; k++)
             lv->up_row_of[k] = INT32_MIN;
         uint32_t stream = btf_noise_stream((uint32_t)subspace, (uint32_t)band, (uint32_t)l);
+        /* tileable: level l's noise has the period of its share of the
+         * output, (w >> l) x (h >> l) (docs/synthesis.md, "Tileable synthesis") */
         btf_status rc = synth_field_init(&lv->field, &bands[l], margins[l], stream, xs.lo, xs.hi,
-                                         ys.lo, ys.hi, paths, err);
+                                         ys.lo, ys.hi, w >> l, h >> l, paths, err);
         if (rc == BTF_OK && !(lv->gauss_row = btf_alloc((size_t)(xs.hi - xs.lo), sizeof(float),
                                                        err)))
             rc = BTF_E_NOMEM;

@@ -9,7 +9,8 @@
  *
  * Two generators fill the ring, with the same bits: the wavefront
  * (wave.c, eight rows per AVX2 step) where the band, the width and the CPU
- * qualify and the caller allows it, else row by row (rows.c).
+ * qualify and the caller allows it, else row by row (rows.c). A tileable
+ * field (periodic noise, the same recursion) always runs row by row.
  */
 #include "core/core.h"
 #include "synth/synth.h"
@@ -18,8 +19,8 @@
 #include <string.h>
 
 btf_status synth_field_init(synth_field *f, const btf_car_band *band, int margin,
-                            uint32_t stream, int x0, int x1, int y0, int y1,
-                            const synth_paths *paths, btf_error *err)
+                            uint32_t stream, int x0, int x1, int y0, int y1, int period_w,
+                            int period_h, const synth_paths *paths, btf_error *err)
 {
     memset(f, 0, sizeof *f);
     f->band = band;
@@ -39,7 +40,12 @@ btf_status synth_field_init(synth_field *f, const btf_car_band *band, int margin
             f->pad = c;
     }
     f->depth = up + 2;
-    int wave = paths->wave && btf_wave_supported(band, f->fw);
+    int periodic = paths->tileable && period_w > 0 && period_h > 0;
+    /* The wavefront draws each lane's noise blocks inline from its
+     * coordinates; periodic noise is a lookup of one period instead (rows.c),
+     * so periodic fields run row by row (the same sums: the same bits as the
+     * GPU's, which wraps the coordinates of every pixel's noise). */
+    int wave = paths->wave && !periodic && btf_wave_supported(band, f->fw);
     if (wave) {
         f->depth = BTF_WAVE_DEPTH;
         f->pad = btf_wave_pad();
@@ -58,6 +64,11 @@ btf_status synth_field_init(synth_field *f, const btf_car_band *band, int margin
     if (wave) /* the wave draws its noise lane by lane: no noise or sum rows */
         return (f->wave = btf_wave_new(band, f->fw, f->fx0, f->next, stream, f->ring, f->depth,
                                        f->pad, err)) ? BTF_OK : BTF_E_NOMEM;
+    if (periodic) {
+        f->period_w = period_w, f->period_h = period_h;
+        if (!(f->period_noise = btf_alloc((size_t)period_w + 4, sizeof(float), err)))
+            return BTF_E_NOMEM;
+    }
     f->noise = btf_alloc((size_t)f->fw + 6, sizeof(float), err);
     f->noise_next = btf_alloc((size_t)f->fw + 6, sizeof(float), err);
     f->acc = btf_alloc((size_t)f->fw, sizeof(float), err);
@@ -72,6 +83,7 @@ void synth_field_free(synth_field *f)
     free(f->noise_next);
     free(f->acc);
     free(f->acc_next);
+    free(f->period_noise);
     btf_wave_free(f->wave);
     memset(f, 0, sizeof *f);
 }

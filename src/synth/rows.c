@@ -93,11 +93,26 @@ typedef struct row_job {
     float *out;         /* the row in the ring, field column 0 */
 } row_job;
 
-/* The Gaussians of one field row (noise_row.c): column c uses component
- * c & 3 of block c >> 2. */
-static void noise_row(const synth_field *f, uint32_t seed_lo, uint32_t seed_hi, uint32_t urow,
-                      float *e)
+/* The Gaussians of field row r (noise_row.c): column c uses component
+ * c & 3 of block c >> 2 of row r, with c and r offset by BTF_NOISE_ORIGIN.
+ * A tileable field takes those of (r mod period_h, c mod period_w): one
+ * period of the row drawn once, read periodically (the noise the GPU
+ * shader draws pixel by pixel). */
+static void noise_row(const synth_field *f, uint32_t seed_lo, uint32_t seed_hi, int r, float *e)
 {
+    if (f->period_w > 0) {
+        uint32_t row = (uint32_t)(btf_period_coord(r, f->period_h) + BTF_NOISE_ORIGIN);
+        uint32_t b0 = (uint32_t)BTF_NOISE_ORIGIN >> 2, n = ((uint32_t)f->period_w + 3u) >> 2;
+        btf_noise_blocks(seed_lo, seed_hi, f->stream, row, b0, n, f->vector_noise,
+                         f->period_noise);
+        int c = btf_period_coord(f->fx0, f->period_w);
+        for (int i = 0; i < f->fw; i++) {
+            e[i] = f->period_noise[c];
+            c = c + 1 == f->period_w ? 0 : c + 1;
+        }
+        return;
+    }
+    uint32_t urow = (uint32_t)(r + BTF_NOISE_ORIGIN);
     uint32_t c0 = (uint32_t)(f->fx0 + BTF_NOISE_ORIGIN), c1 = c0 + (uint32_t)f->fw;
     uint32_t b0 = c0 >> 2, b1 = (c1 + 3u) >> 2;
     /* out[4 * (b - b0) + lane] is column b * 4 + lane */
@@ -115,7 +130,7 @@ static void row_job_init(row_job *j, synth_field *f, int r, float *noise, float 
     const btf_car_band *b = f->band;
     j->f = f;
     j->noise = noise + 3;
-    noise_row(f, seed_lo, seed_hi, (uint32_t)(r + BTF_NOISE_ORIGIN), noise + 3);
+    noise_row(f, seed_lo, seed_hi, r, noise + 3);
     j->n_earlier = 0;
     for (int s = 0; s < b->n; s++)
         if (b->offsets[s].row != 0) {

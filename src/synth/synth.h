@@ -4,7 +4,7 @@
  * the inverse decorrelation), one section per file, callers above callees:
  *
  *   synthesise.c   the public calls: options, checks, the row loop
- *   tileable.c     tileable synthesis: the pyramid on a torus, whole planes
+ *   tileable.c     the DFT torus reference of tileable synthesis (tests only)
  *   torus.c        one CAR field on a torus, solved by a 2D DFT
  *   collapse.c     the pyramid of one band, streamed row by row
  *   upsample.c     pyrUp of rows (horizontal pairs, vertical sums)
@@ -48,18 +48,23 @@ btf_synth_opts btf_synth_resolve(const btf_synth_opts *opts);
 typedef struct synth_paths {
     int vector_noise; /* the AVX2 noise loop (when the CPU has AVX2) */
     int wave;         /* the wavefront (where the band and the CPU qualify) */
+    int tileable;     /* periodic noise: level l's field repeats its (W >> l) x (H >> l)
+                       * window's noise (btf_synth_opts.tileable) */
 } synth_paths;
+
+/* A tileable size: both sides multiples of 2^(levels - 1), so that every
+ * level has a whole period (BTF_E_ARG naming the size otherwise). */
+btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error *err);
 
 /* ------------------------------------------------------------ tileable.c */
 
-/* Tileable synthesis of subspace `subspace` (checked) at w x h (checked
- * against BTF_SYNTH_MAX_SIDE): each level a CAR field on its torus, the
- * pyramid collapsed with wrap-around, rows handed to fn in order. */
+/* The test reference of tileable synthesis (synth_testing.h,
+ * btf_synthesise_torus_dft): each level a CAR field solved exactly on its
+ * torus (torus.c), the pyramid collapsed with wrap-around, rows handed to
+ * fn in order. Whole planes in memory: sizes up to BTF_SYNTH_TILE_MAX_PIXELS
+ * with no prime factor above BTF_SYNTH_TILE_MAX_PRIME (BTF_E_ARG). */
 btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_synth_opts *o,
                                    int w, int h, btf_rows_fn fn, void *user, btf_error *err);
-/* A tileable size: both sides multiples of 2^(levels - 1), at most
- * BTF_SYNTH_TILE_MAX_PIXELS pixels (BTF_E_ARG naming the size otherwise). */
-btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error *err);
 
 /* --------------------------------------------------------------- torus.c */
 
@@ -179,6 +184,9 @@ typedef struct synth_field {
                             * BTF_WAVE_DEPTH */
     int next;              /* next field row to generate */
     int vector_noise;      /* synth_paths.vector_noise */
+    int period_w, period_h; /* tileable: the noise of field pixel (r, c) is that of
+                            * (r mod period_h, c mod period_w); 0: not periodic */
+    float *period_noise;   /* period_w + 4 floats: one period of a row's noise */
     int same_row_shape;    /* btf_car_same_row_shape, and its gammas */
     float same_row_gamma3[3];
     int n_same_row;        /* the same-row offsets in adding order */
@@ -198,10 +206,14 @@ static inline float *synth_field_ring_row(const synth_field *f, int r)
 }
 
 /* A field over window columns [x0, x1) and rows [y0, y1) with `margin`
- * (rows above, columns either side), zeros outside. */
+ * (rows above, columns either side), zeros outside; period_w, period_h > 0
+ * (paths->tileable): its noise is periodic with that period (floor-mod of
+ * the field coordinates, the burn-in rows and margin columns included), so
+ * that the window converges to the field on the period_w x period_h torus
+ * (docs/synthesis.md, "Tileable synthesis"). Periodic fields run row by row. */
 btf_status synth_field_init(synth_field *f, const btf_car_band *band, int margin,
-                            uint32_t stream, int x0, int x1, int y0, int y1,
-                            const synth_paths *paths, btf_error *err);
+                            uint32_t stream, int x0, int x1, int y0, int y1, int period_w,
+                            int period_h, const synth_paths *paths, btf_error *err);
 void synth_field_free(synth_field *f);
 /* Zero-mean row y (increasing from call to call) of one field, over its
  * window. */

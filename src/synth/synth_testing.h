@@ -17,10 +17,24 @@ btf_status btf_car_synthesise_field(const btf_car_band *band, int margin, uint32
                                     const btf_synth_opts *opts, btf_rows_fn fn, void *user,
                                     btf_error *err);
 
+/* The DFT reference's bounds: width x height (8192 x 8192), and the largest
+ * prime factor of a side (its DFT's cost grows with it). */
+#define BTF_SYNTH_TILE_MAX_PIXELS (1ull << 26)
+#define BTF_SYNTH_TILE_MAX_PRIME 127
+
 /* One CAR field alone on the w x h torus (tileable synthesis' generator,
  * src/synth/torus.c), zero-mean (without band->mean), into out (w h floats). */
 btf_status btf_car_torus_field(const btf_car_band *band, uint32_t stream, int w, int h,
                                uint64_t seed, float *out, btf_error *err);
+
+/* The exact tileable reference (src/synth/tileable.c): subspace image of
+ * opts' size (0: the analysed size) with every CAR field solved on its
+ * level's torus by a 2D DFT and the pyramid collapsed with wrap-around;
+ * the streaming tileable synthesis (btf_synth_opts.tileable) converges to
+ * it. Sizes within BTF_SYNTH_TILE_MAX_PIXELS, prime factors at most
+ * BTF_SYNTH_TILE_MAX_PRIME; BTF_E_NUMERIC where a level is singular. */
+btf_status btf_synthesise_torus_dft(const btf_model *m, int subspace, const btf_synth_opts *opts,
+                                    btf_image *out, btf_error *err);
 
 /* btf_synthesise with margins[band][level] instead of the bands' own
  * (NULL: their own). */

@@ -54,7 +54,8 @@ btf_synth_opts btf_synth_resolve(const btf_synth_opts *opts)
 static synth_paths paths_of(const btf_synth_opts *o)
 {
     synth_paths p = {.vector_noise = !o->portable_noise,
-                     .wave = !o->portable_noise && !o->row_by_row};
+                     .wave = !o->portable_noise && !o->row_by_row,
+                     .tileable = o->tileable != 0};
     return p;
 }
 
@@ -85,6 +86,20 @@ static btf_status output_size(const btf_model *m, int subspace, const btf_synth_
     return btf_synth_check_size(*w, *h, err);
 }
 
+/* Tileable synthesis is the streaming recursion driven by periodic noise
+ * (field.c, rows.c; docs/synthesis.md, "Tileable synthesis"): level l's
+ * period is (W >> l) x (H >> l), whole only when 2^(levels - 1) divides
+ * both sides. No other bound: memory is the streaming path's. */
+btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error *err)
+{
+    int factor = 1 << (levels - 1);
+    if (width % factor || height % factor)
+        return btf_fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: with %d pyramid levels "
+                        "both sides must be multiples of %d (2^(levels - 1)), so that every "
+                        "level tiles", width, height, levels, factor);
+    return BTF_OK;
+}
+
 btf_status btf_synthesise_margins(const btf_model *m, int subspace,
                                   const int (*margins)[BTF_MAX_LEVELS],
                                   const btf_synth_opts *opts, btf_rows_fn fn, void *user,
@@ -97,8 +112,9 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
         rc = output_size(m, subspace, &o, &width, &height, err);
     if (rc)
         return rc;
-    if (o.tileable) /* whole fields on a torus: no margins (tileable.c) */
-        return btf_synthesise_tileable(m, subspace, &o, width, height, fn, user, err);
+    if (o.tileable && (rc = btf_synth_check_tileable(width, height,
+                                                     m->subspaces[subspace].levels, err)))
+        return rc;
     const btf_subspace_model *sm = &m->subspaces[subspace];
     int margin[3][BTF_MAX_LEVELS];
     for (int b = 0; b < 3; b++)
@@ -224,7 +240,8 @@ btf_status btf_car_synthesise_field(const btf_car_band *band, int margin, uint32
         return rc;
     synth_paths paths = paths_of(&o);
     synth_field f;
-    rc = synth_field_init(&f, band, margin, stream, 0, width, 0, height, &paths, err);
+    int pw = o.tileable ? width : 0, ph = o.tileable ? height : 0; /* one level */
+    rc = synth_field_init(&f, band, margin, stream, 0, width, 0, height, pw, ph, &paths, err);
     float *row = rc ? NULL : btf_alloc((size_t)width, sizeof(float), err);
     if (!rc && !row)
         rc = BTF_E_NOMEM;

@@ -1,7 +1,10 @@
 /*
- * tileable.c — tileable synthesis of a subspace image (docs/synthesis.md,
- * "Tileable synthesis"): the pyramid of Haindl & Filip 2007, section II.C,
- * on a torus. Every level l of every spectral band is a CAR field on the
+ * tileable.c — the exact reference of tileable synthesis (docs/synthesis.md,
+ * "Tileable synthesis"), for tests only (synth_testing.h,
+ * btf_synthesise_torus_dft): the pyramid of Haindl & Filip 2007, section
+ * II.C, on a torus. Production tileable synthesis is the streaming
+ * recursion driven by periodic noise (field.c, rows.c), whose window
+ * converges to these fields; tests/test_synth_tileable.c measures how close. Every level l of every spectral band is a CAR field on the
  * (W >> l) x (H >> l) torus (torus.c); the pyramid collapses as in the
  * streaming path, G_l = mean_l + Y_l + up(G_{l+1}), with the same pyrUp
  * weights (btf_up_row, btf_level_sum_row) but coarse indices taken modulo
@@ -17,6 +20,7 @@
  */
 #include "core/core.h"
 #include "synth/synth.h"
+#include "synth/synth_testing.h"
 
 #include "btf_noise.h"
 #include "btf_shared.h"
@@ -47,13 +51,13 @@ static int nearest_smooth(int side, int factor)
     }
 }
 
-btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error *err)
+/* The DFT reference's sizes: tileable ones, within its memory and prime
+ * factor bounds. */
+static btf_status check_torus_size(int width, int height, int levels, btf_error *err)
 {
-    int factor = 1 << (levels - 1);
-    if (width % factor || height % factor)
-        return btf_fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: with %d pyramid levels "
-                        "both sides must be multiples of %d (2^(levels - 1)), so that every "
-                        "level tiles", width, height, levels, factor);
+    btf_status rc = btf_synth_check_tileable(width, height, levels, err);
+    if (rc)
+        return rc;
     if ((uint64_t)width * (uint64_t)height > BTF_SYNTH_TILE_MAX_PIXELS)
         return btf_fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: more than %llu pixels "
                         "(it holds whole fields, about 85 bytes a pixel); the streaming "
@@ -67,7 +71,7 @@ btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error
             return btf_fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: %d has the prime "
                             "factor %d, and the DFT that solves the torus is slow for primes "
                             "above %d; %d would do", width, height, side, p,
-                            BTF_SYNTH_TILE_MAX_PRIME, nearest_smooth(side, factor));
+                            BTF_SYNTH_TILE_MAX_PRIME, nearest_smooth(side, 1 << (levels - 1)));
     }
     return BTF_OK;
 }
@@ -168,11 +172,20 @@ static btf_status band_job(void *user, int band, int worker, btf_error *err)
                       j->planes + n * band, err);
 }
 
+static int image_rows(void *user, int y, int nrows, const float *rows, btf_error *err)
+{
+    (void)err;
+    btf_image *img = user;
+    size_t n = (size_t)img->width * 3;
+    memcpy(img->data + (size_t)y * n, rows, (size_t)nrows * n * sizeof(float));
+    return 0;
+}
+
 btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_synth_opts *o,
                                    int w, int h, btf_rows_fn fn, void *user, btf_error *err)
 {
     const btf_subspace_model *sm = &m->subspaces[subspace];
-    btf_status rc = btf_synth_check_tileable(w, h, sm->levels, err);
+    btf_status rc = check_torus_size(w, h, sm->levels, err);
     if (rc)
         return rc;
     size_t n = (size_t)w * h;
@@ -196,5 +209,27 @@ btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_s
         }
     }
     free(planes);
+    return rc;
+}
+
+btf_status btf_synthesise_torus_dft(const btf_model *m, int subspace, const btf_synth_opts *opts,
+                                    btf_image *out, btf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    btf_synth_opts o = btf_synth_resolve(opts);
+    if (!m || subspace < 0 || subspace >= m->n_subspaces)
+        return btf_fail(err, BTF_E_ARG, "subspace %d: the model has %d", subspace,
+                        m ? m->n_subspaces : 0);
+    const btf_subspace_model *sm = &m->subspaces[subspace];
+    int w = o.width ? o.width : sm->width, h = o.height ? o.height : sm->height;
+    btf_status rc = btf_synth_check_size(w, h, err);
+    if (rc == BTF_OK)
+        rc = check_torus_size(w, h, sm->levels, err);
+    if (rc == BTF_OK)
+        rc = btf_image_alloc(out, w, h, 3, err);
+    if (rc == BTF_OK)
+        rc = btf_synthesise_tileable(m, subspace, &o, w, h, image_rows, out, err);
+    if (rc)
+        btf_image_free(out);
     return rc;
 }

@@ -1,0 +1,37 @@
+/*
+ * synth_gpu.h — private GPU synthesis calls for other GPU passes of the
+ * library (the render pass of issue 16), not part of the public API
+ * (include/btfcar.h): subspace images synthesised into one device buffer
+ * that stays on the device, and the Vulkan layer of a btf_gpu so that
+ * another file can create pipelines and dispatch on the same device
+ * (gpu/vk.h). Defined in gpu/synth_gpu.c.
+ */
+#ifndef BTF_SYNTH_GPU_H
+#define BTF_SYNTH_GPU_H
+
+#include "btfcar.h"
+#include "vk.h"
+
+#include <stdint.h>
+
+/* The Vulkan device, queue and allocator of g (owned by g: valid until
+ * btf_gpu_close; never destroy it). */
+btf_vk *btf_gpu_vk(btf_gpu *g);
+
+/* Synthesises subspace images subspaces[0 .. n - 1] (1 <= n) with opts as
+ * btf_gpu_synthesise does (the same bits, tileable included) into ONE
+ * device buffer it creates, *out (the caller destroys it with
+ * btf_vk_buffer_destroy): image i, linear RGB floats interleaved,
+ * row-major, width x height x 3 (opts' size, 0: the analysed one), starts
+ * at float index offsets[i] (n entries, filled here). Nothing passes
+ * through the host; the images are not checked for Inf or NaN here (the
+ * formulas are btf_gpu_synthesise's, which checks them on download).
+ * BTF_E_UNSUPPORTED when all n images together exceed one storage buffer
+ * of the device (maxStorageBufferRange, or the testing limit of
+ * btf_gpu_set_max_buffer_bytes), the message naming both sizes; BTF_E_ARG
+ * for bad requests as btf_gpu_synthesise. On error *out is NULL. */
+btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
+                                     const btf_synth_opts *opts, btf_vk_buffer **out,
+                                     uint64_t *offsets, btf_error *err);
+
+#endif

@@ -203,9 +203,9 @@ static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, btf_vk_b
 
 /* Rows of the frame per band: the G-buffer and output of a band must each
  * fit one storage buffer (and the ints must index them). */
-static int band_rows(const btf_vk *vk, int width, int height)
+static int band_rows(const btf_gpu *g, int width, int height)
 {
-    uint64_t lim = btf_vk_info(vk)->max_storage_buffer_range;
+    uint64_t lim = btf_gpu_max_buffer_bytes(g);
     if (lim > (1ull << 31) - 4)
         lim = (1ull << 31) - 4;
     uint64_t per_row = (uint64_t)width * BTF_RP_GB * sizeof(float);
@@ -214,6 +214,7 @@ static int band_rows(const btf_vk *vk, int width, int height)
 }
 
 typedef struct pass {
+    btf_gpu *gpu;
     btf_vk *vk;
     btf_vk_pipeline *pipe;
     btf_vk_buffer *bufs[6]; /* gbuf, tex, maps, ints, floats, out */
@@ -269,7 +270,7 @@ static btf_status run_band(pass *ps, const btf_gbuffer *g, int y0, int y1, float
 /* The pass over the whole frame, in bands. */
 static btf_status shade_frame(pass *ps, const btf_gbuffer *g, btf_image *out, btf_error *err)
 {
-    int rows = band_rows(ps->vk, g->width, g->height);
+    int rows = band_rows(ps->gpu, g->width, g->height);
     if (rows < 1)
         return btf_fail(err, BTF_E_UNSUPPORTED, "GPU render: one row of %d pixels needs more "
                         "than the device's largest storage buffer", g->width);
@@ -307,6 +308,7 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
 {
     pass ps;
     memset(&ps, 0, sizeof ps);
+    ps.gpu = gpu;
     ps.vk = btf_gpu_vk(gpu);
     int *subs = btf_alloc((size_t)m->n_subspaces, sizeof *subs, err);
     uint64_t *offs = btf_alloc((size_t)m->n_subspaces, sizeof *offs, err);

@@ -645,6 +645,12 @@ static void image_size(const btf_model *m, int sub, const btf_synth_opts *o, int
     *h = o->height ? o->height : m->subspaces[sub].height;
 }
 
+uint64_t btf_gpu_max_buffer_bytes(const btf_gpu *g)
+{
+    uint64_t dev = btf_vk_info(g->vk)->max_storage_buffer_range;
+    return g->max_buffer_bytes && g->max_buffer_bytes < dev ? g->max_buffer_bytes : dev;
+}
+
 btf_vk *btf_gpu_vk(btf_gpu *g)
 {
     return g->vk;

@@ -17,6 +17,9 @@
 /* The Vulkan device, queue and allocator of g (owned by g: valid until
  * btf_gpu_close; never destroy it). */
 btf_vk *btf_gpu_vk(btf_gpu *g);
+/* The largest storage buffer this btf_gpu uses: the device's limit, or
+ * less where btf_gpu_set_max_buffer_bytes lowered it (tests). */
+uint64_t btf_gpu_max_buffer_bytes(const btf_gpu *g);
 
 /* Synthesises subspace images subspaces[0 .. n - 1] (1 <= n) with opts as
  * btf_gpu_synthesise does (the same bits, tileable included) into ONE

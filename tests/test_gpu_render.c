@@ -8,12 +8,15 @@
  * bits the driver does not pin down. The stated tolerance: every pixel
  * within 1e-3 of the image's range, except a counted share of at most
  * 0.1 % of the pixels (those where a rounding moves a texel tap or a
- * triangle choice); the test prints the figures.
+ * triangle choice); the test prints the figures. On lavapipe the result is
+ * bit-identical (its sqrt and division are the CPU's), and there the test
+ * requires it.
  */
 #include "testutil.h"
 #include "synth/synth_testing.h" /* btf_gpu_set_max_buffer_bytes */
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -123,6 +126,10 @@ static void compare(const char *what, const btf_image *c, const btf_image *g)
                   "(%.4f %%), %zu bit-identical\n", what, worst, beyond, n,
                   100.0 * (double)beyond / (double)n, equal);
     assert_true((double)beyond <= 0.001 * (double)n);
+    /* On lavapipe (the CPU's own IEEE sqrt and division) the two paths are
+     * bit for bit the same: reachable, so required there. */
+    if (btf_gpu_is_cpu(gpu))
+        assert_int_equal(equal, n);
 }
 
 static void test_flat_parity(void **state)
@@ -208,14 +215,16 @@ static void test_bands(void **state)
     btf_scene s;
     sphere_scene(&s);
     btf_render_opts o = btf_render_defaults();
-    o.width = 64;
-    o.height = 48;
+    o.width = 256;
+    o.height = 192;
     btf_image one = {0}, banded = {0};
     TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &one, NULL, &e), &e);
-    btf_gpu_set_max_buffer_bytes(gpu, 64 * 7 * 18 * 4); /* 7 rows of G-buffer */
+    /* 1 MiB: the subspace images still fit, the 3.5 MB G-buffer goes in 4
+     * bands of 56 rows */
+    btf_gpu_set_max_buffer_bytes(gpu, 1u << 20);
     TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &banded, NULL, &e), &e);
     btf_gpu_set_max_buffer_bytes(gpu, 0);
-    assert_memory_equal(one.data, banded.data, (size_t)64 * 48 * 3 * sizeof(float));
+    assert_memory_equal(one.data, banded.data, (size_t)256 * 192 * 3 * sizeof(float));
     btf_image_free(&one);
     btf_image_free(&banded);
     no_validation_messages();

@@ -131,26 +131,6 @@ static void env_cpu_switches(btf_synth_opts *o)
 
 /* BTF_VK_DEVICE=N (a device index; unset or empty: none, *index -1) and
  * BTF_VK_VALIDATION=0|1 into the GPU options. */
-static int env_gpu(btf_gpu_opts *o, int *index, btf_error *err)
-{
-    const char *d = getenv("BTF_VK_DEVICE"), *v = getenv("BTF_VK_VALIDATION");
-    *index = -1;
-    if (d && *d) {
-        long n = 0;
-        for (const char *c = d; *c; c++) {
-            if (*c < '0' || *c > '9' || n > 100000)
-                return cli_set_error(err, BTF_E_ARG, "BTF_VK_DEVICE='%s': expected a device "
-                                     "index (see btfcar info --devices)", d);
-            n = n * 10 + (*c - '0');
-        }
-        *index = (int)n;
-    }
-    if (v && *v && strcmp(v, "0") && strcmp(v, "1"))
-        return cli_set_error(err, BTF_E_ARG, "BTF_VK_VALIDATION='%s': expected 0 or 1", v);
-    o->validation = v && !strcmp(v, "1");
-    return 0;
-}
-
 /* The GPU path returns whole images; at most this many bytes of them are
  * held at once (the CPU path streams rows instead). */
 #define GPU_IMAGE_BUDGET (1ull << 30)
@@ -230,30 +210,14 @@ static btf_gpu *open_gpu(const char *backend, int device, uint64_t image_bytes, 
 {
     if (!strcmp(backend, "cpu"))
         return NULL;
-    /* A named device is as explicit as --backend gpu: its errors are errors. */
-    int explicit_gpu = !strcmp(backend, "gpu") || device >= 0;
     if (image_bytes > GPU_IMAGE_BUDGET) {
         cli_set_error(err, BTF_E_UNSUPPORTED, "the GPU backend holds whole images in memory and one "
                  "image needs %.1f GiB, more than its %.0f GiB budget; --backend cpu streams",
                  image_bytes / 1073741824.0, GPU_IMAGE_BUDGET / 1073741824.0);
         return NULL;
     }
-    btf_gpu_opts o = btf_gpu_defaults();
-    int env_device;
-    btf_gpu *g = NULL;
-    int rc = env_gpu(&o, &env_device, err), from_env = device < 0 && env_device >= 0;
-    if (from_env)
-        device = env_device;
-    o.use_device = device >= 0;
-    o.device = device < 0 ? 0 : device;
-    o.allow_cpu = explicit_gpu;
-    if (rc == 0 && btf_gpu_open(&o, &g, err) != 0 && from_env) {
-        char msg[sizeof err->msg];
-        snprintf(msg, sizeof msg, "BTF_VK_DEVICE=%d: %s", device, err->msg);
-        snprintf(err->msg, sizeof err->msg, "%s", msg);
-    }
     /* auto without a GPU is no failure: the CPU runs and the summary says so. */
-    return g;
+    return cli_open_gpu(backend, device, err);
 }
 
 static int synth_one(const cli_ctx *c, const btf_model *m, int k, const btf_synth_opts *so,

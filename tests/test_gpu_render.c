@@ -232,12 +232,81 @@ static void test_bands(void **state)
     btf_model_free(&m);
 }
 
+/* Limits: a device buffer too small for even the images is one clear
+ * error, not a crash; the GPU stays usable after it. */
+static void test_limits(void **state)
+{
+    (void)state;
+    btf_model m;
+    test_model(&m);
+    btf_error e = {0};
+    btf_render_opts o = btf_render_defaults();
+    o.width = 64;
+    o.height = 64;
+    btf_image img = {0};
+    btf_dir v = {10, 0}, l = {30, 90};
+    btf_gpu_set_max_buffer_bytes(gpu, 4096);
+    int rc = btf_gpu_render_flat(gpu, &m, v, l, &o, &img, NULL, &e);
+    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    assert_true(rc == BTF_E_UNSUPPORTED || rc == BTF_E_ARG);
+    assert_null(strchr(e.msg, '\n'));
+    assert_non_null(strstr(e.msg, "buffer"));
+    assert_null(img.data);
+    TU_OK(btf_gpu_render_flat(gpu, &m, v, l, &o, &img, NULL, &e), &e);
+    btf_image_free(&img);
+    no_validation_messages();
+    btf_model_free(&m);
+}
+
+/* The command: --backend gpu (validation on) names the device and both
+ * passes and writes the CPU's bytes; --backend auto takes the CPU where
+ * the only device is lavapipe. */
+static void test_cli_backends(void **state)
+{
+    (void)state;
+    char *dir = tu_tmpdir();
+    btf_model m;
+    test_model(&m);
+    btf_error e = {0};
+    char *mp = strdup(tu_fmt("%s/m.btfcar", dir));
+    TU_OK(btf_model_write(mp, &m, &e), &e);
+    btf_model_free(&m);
+    const char *validate = getenv("BTF_ASAN") ? "" : "BTF_VK_VALIDATION=1";
+    int st = -1;
+    char *out = tu_capture(tu_fmt("%s %s render %s --view 40,10 --light 30,250 --size 48x40 "
+                                  "--backend gpu -o %s/g.png", validate, tu_cli(), mp, dir), &st);
+    assert_int_equal(st, 0);
+    assert_non_null(strstr(out, "backend gpu ("));
+    assert_non_null(strstr(out, "synthesis pass"));
+    assert_non_null(strstr(out, "render pass"));
+    free(out);
+    assert_int_equal(tu_run(tu_fmt("%s render -q %s --view 40,10 --light 30,250 --size 48x40 "
+                                   "--backend cpu -o %s/c.png", tu_cli(), mp, dir), NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("cmp -s %s/g.png %s/c.png", dir, dir), NULL), 0);
+    if (btf_gpu_is_cpu(gpu)) {
+        out = tu_capture(tu_fmt("%s render %s --view 40,10 --light 30,250 --size 8x8 "
+                                "--backend auto -o %s/a.png", tu_cli(), mp, dir), &st);
+        assert_int_equal(st, 0);
+        assert_non_null(strstr(out, "backend cpu"));
+        free(out);
+    }
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s render %s --view 1,1 --light 1,1 --backend cpu "
+                                   "--device 0 -o %s/x.png", tu_cli(), mp, dir), &err), 2);
+    free(err);
+    free(mp);
+    tu_rmtree(dir);
+    free(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_flat_parity),
         cmocka_unit_test(test_sphere_parity),
         cmocka_unit_test(test_bands),
+        cmocka_unit_test(test_limits),
+        cmocka_unit_test(test_cli_backends),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

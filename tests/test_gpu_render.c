@@ -15,6 +15,8 @@
 #include "testutil.h"
 #include "synth/synth_testing.h" /* btf_gpu_set_max_buffer_bytes */
 
+#include "scene_sphere_obj.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -299,6 +301,44 @@ static void test_cli_backends(void **state)
     free(dir);
 }
 
+/* A mesh of more than 100,000 triangles (a tessellated sphere, OBJ through
+ * assimp) renders on the GPU as on the CPU: the G-buffer is traced on the
+ * host, so the triangle count costs the render pass nothing. */
+static void test_big_mesh(void **state)
+{
+    (void)state;
+    char *dir = tu_tmpdir();
+    char *obj = strdup(tu_fmt("%s/sphere.obj", dir)), *json = strdup(tu_fmt("%s/s.json", dir));
+    assert_int_equal(write_sphere_obj(obj, 224, 256), 0);
+    const char *text = "{\"camera\": {\"position\": [0, 0.8, 4], \"target\": [0, 0, 0], "
+                       "\"fov\": 40}, \"lights\": [{\"type\": \"directional\", "
+                       "\"direction\": [0.3, 0.5, 1]}], \"objects\": [{\"type\": \"mesh\", "
+                       "\"file\": \"sphere.obj\", \"texture_scale\": 40}]}";
+    tu_write_file(json, text, strlen(text));
+    btf_scene s;
+    btf_error e = {0};
+    TU_OK(btf_scene_load(json, &s, &e), &e);
+    assert_true(s.objects[0].mesh.n_triangles >= 100000);
+    btf_model m;
+    test_model(&m);
+    btf_render_opts o = btf_render_defaults();
+    o.width = 128;
+    o.height = 96;
+    btf_image c = {0}, g = {0};
+    TU_OK(btf_render_scene(&m, &s, &o, &c, NULL, &e), &e);
+    TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &g, NULL, &e), &e);
+    compare("114,688-triangle mesh", &c, &g);
+    btf_image_free(&c);
+    btf_image_free(&g);
+    no_validation_messages();
+    btf_scene_free(&s);
+    btf_model_free(&m);
+    free(obj);
+    free(json);
+    tu_rmtree(dir);
+    free(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -306,6 +346,7 @@ int main(void)
         cmocka_unit_test(test_sphere_parity),
         cmocka_unit_test(test_bands),
         cmocka_unit_test(test_limits),
+        cmocka_unit_test(test_big_mesh),
         cmocka_unit_test(test_cli_backends),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -35,6 +35,8 @@ int cli_usage_error(const cli_ctx *c, const char *fmt, ...)
 int cli_plain_number(const char *s, int allow_minus);
 int cli_parse_int(const char *s, long lo, long hi, long *out);
 int cli_parse_u64(const char *s, uint64_t *out);
+/* "A,B": two plain non-negative decimal numbers (cli_plain_number): 0, or -1. */
+int cli_parse_pair(const char *s, double *a, double *b);
 /* "THETA,PHI" in degrees (theta 0..90, phi 0..360; 360 becomes 0): 0, or
  * -1 with what was expected in why. */
 int cli_parse_dir(const char *s, btf_dir *d, char *why, size_t n);

@@ -28,22 +28,9 @@ static const char ABOUT[] =
 static int parse_trim(const char *s, void *dest, char *why, size_t n)
 {
     btf_photostereo_opts *o = dest;
-    char buf[64], *end;
-    const char *comma = strchr(s, ',');
     double lo, hi;
     snprintf(why, n, "LOW,HIGH fractions in [0, 1) with LOW + HIGH < 1");
-    if (!comma || (size_t)(comma - s) >= sizeof buf)
-        return -1;
-    memcpy(buf, s, (size_t)(comma - s));
-    buf[comma - s] = '\0';
-    errno = 0;
-    if (!cli_plain_number(buf, 0) || !cli_plain_number(comma + 1, 0))
-        return -1;
-    lo = strtod(buf, &end);
-    if (end == buf || *end || errno)
-        return -1;
-    hi = strtod(comma + 1, &end);
-    if (end == comma + 1 || *end || errno || !(lo >= 0.0 && lo <= 0.99) ||
+    if (cli_parse_pair(s, &lo, &hi) != 0 || !(lo >= 0.0 && lo <= 0.99) ||
         !(hi >= 0.0 && hi <= 0.99) || lo + hi >= 1.0)
         return -1;
     o->trim_low = lo;

@@ -186,11 +186,10 @@ double cli_now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-int cli_parse_dir(const char *s, btf_dir *d, char *why, size_t n)
+int cli_parse_pair(const char *s, double *a, double *b)
 {
     char buf[64], *end;
     const char *comma = strchr(s, ',');
-    snprintf(why, n, "THETA,PHI in degrees, theta 0..90, phi 0..360");
     if (!comma || (size_t)(comma - s) >= sizeof buf)
         return -1;
     memcpy(buf, s, (size_t)(comma - s));
@@ -198,11 +197,20 @@ int cli_parse_dir(const char *s, btf_dir *d, char *why, size_t n)
     errno = 0;
     if (!cli_plain_number(buf, 0) || !cli_plain_number(comma + 1, 0))
         return -1;
-    double theta = strtod(buf, &end);
+    *a = strtod(buf, &end);
     if (end == buf || *end || errno)
         return -1;
-    double phi = strtod(comma + 1, &end);
-    if (end == comma + 1 || *end || errno || !(theta >= 0.0 && theta <= 90.0) ||
+    *b = strtod(comma + 1, &end);
+    if (end == comma + 1 || *end || errno)
+        return -1;
+    return 0;
+}
+
+int cli_parse_dir(const char *s, btf_dir *d, char *why, size_t n)
+{
+    double theta, phi;
+    snprintf(why, n, "THETA,PHI in degrees, theta 0..90, phi 0..360");
+    if (cli_parse_pair(s, &theta, &phi) != 0 || !(theta >= 0.0 && theta <= 90.0) ||
         !(phi >= 0.0 && phi <= 360.0))
         return -1;
     d->theta = theta;

@@ -27,19 +27,7 @@ static btf_gpu *gpu;
 static int setup(void **state)
 {
     (void)state;
-    const char *icd = "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json";
-    if (!getenv("VK_DRIVER_FILES"))
-        setenv("VK_DRIVER_FILES", icd, 1);
-    if (!getenv("VK_ICD_FILENAMES"))
-        setenv("VK_ICD_FILENAMES", icd, 1);
-    tu_vk_keep_layer_loaded();
-    btf_gpu_opts o = {.allow_cpu = 1, .validation = 1};
-    btf_error e = {0};
-    if (btf_gpu_open(&o, &gpu, &e) != 0) {
-        fprintf(stderr, "test_gpu_render: %s\n", e.msg);
-        return -1;
-    }
-    return 0;
+    return tu_gpu_open(&gpu, "test_gpu_render");
 }
 
 static int teardown(void **state)
@@ -51,11 +39,7 @@ static int teardown(void **state)
 
 static void no_validation_messages(void)
 {
-    unsigned n = btf_gpu_validation_errors(gpu);
-    if (n)
-        print_error("validation: %u message(s), first: %s\n", n,
-                    btf_gpu_first_validation_message(gpu));
-    assert_int_equal(n, 0);
+    tu_gpu_no_validation_messages(gpu);
 }
 
 /* The 81 views and lights, 4 subspaces by view ring and light half, each a

@@ -300,3 +300,29 @@ const char *tu_exr_string(exr_const_context_t ctx, const char *name)
     assert_int_equal((int)strlen(s), len);
     return s;
 }
+
+int tu_gpu_open(btf_gpu **g, const char *test)
+{
+    const char *icd = "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json";
+    if (!getenv("VK_DRIVER_FILES"))
+        setenv("VK_DRIVER_FILES", icd, 1);
+    if (!getenv("VK_ICD_FILENAMES"))
+        setenv("VK_ICD_FILENAMES", icd, 1);
+    tu_vk_keep_layer_loaded();
+    btf_gpu_opts o = {.allow_cpu = 1, .validation = 1};
+    btf_error e = {0};
+    if (btf_gpu_open(&o, g, &e) != 0) {
+        fprintf(stderr, "%s: %s\n", test, e.msg);
+        return -1;
+    }
+    return 0;
+}
+
+void tu_gpu_no_validation_messages(btf_gpu *g)
+{
+    unsigned n = btf_gpu_validation_errors(g);
+    if (n)
+        print_error("validation: %u message(s), first: %s\n", n,
+                    btf_gpu_first_validation_message(g));
+    assert_int_equal(n, 0);
+}

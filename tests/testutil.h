@@ -61,6 +61,12 @@ void tu_exr_write_raw(const char *path, const tu_exr_spec *s, tu_exr_value_fn va
  * it go, so that LeakSanitizer can name its frames and the suppression of its
  * known leak (tests/lsan.supp) matches. A no-op otherwise. */
 void tu_vk_keep_layer_loaded(void);
+/* The GPU tests' device: lavapipe unless VK_DRIVER_FILES names another
+ * driver, CPU devices allowed, the Khronos validation layer on. 0, or -1
+ * with the reason printed under the test's name. */
+int tu_gpu_open(btf_gpu **g, const char *test);
+/* Fails the test on any validation message of g (printing the first). */
+void tu_gpu_no_validation_messages(btf_gpu *g);
 
 /* Wall-clock seconds (CLOCK_MONOTONIC), and the median of n values (sorts
  * them): for the benchmark programs. */

@@ -363,36 +363,47 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     return rc;
 }
 
-btf_status btf_gpu_render_scene(btf_gpu *g, const btf_model *m, const btf_scene *s,
-                                const btf_render_opts *opts, btf_image *out,
-                                btf_render_info *info, btf_error *err)
+/* Checks and clears the outputs of a GPU render. */
+static btf_status begin(btf_gpu *g, btf_image *out, btf_render_info *info, btf_error *err)
 {
     if (!g || !out)
         return btf_fail(err, BTF_E_ARG, "GPU render: no device or output given");
     memset(out, 0, sizeof *out);
     if (info)
         memset(info, 0, sizeof *info);
-    btf_render_plan p;
-    btf_status rc = btf_render_plan_scene(m, s, opts, &p, err);
+    return BTF_OK;
+}
+
+/* Runs the passes on a plan built with status rc, then frees it. */
+static btf_status finish(btf_gpu *g, const btf_model *m, btf_render_plan *p, btf_status rc,
+                         btf_image *out, btf_render_info *info, btf_error *err)
+{
     if (rc == BTF_OK)
-        rc = render_plan_gpu(g, m, &p, out, info, err);
-    btf_render_plan_free(&p);
+        rc = render_plan_gpu(g, m, p, out, info, err);
+    btf_render_plan_free(p);
     return rc;
+}
+
+btf_status btf_gpu_render_scene(btf_gpu *g, const btf_model *m, const btf_scene *s,
+                                const btf_render_opts *opts, btf_image *out,
+                                btf_render_info *info, btf_error *err)
+{
+    btf_status rc = begin(g, out, info, err);
+    if (rc)
+        return rc;
+    btf_render_plan p;
+    rc = btf_render_plan_scene(m, s, opts, &p, err);
+    return finish(g, m, &p, rc, out, info, err);
 }
 
 btf_status btf_gpu_render_flat(btf_gpu *g, const btf_model *m, btf_dir view, btf_dir light,
                                const btf_render_opts *opts, btf_image *out,
                                btf_render_info *info, btf_error *err)
 {
-    if (!g || !out)
-        return btf_fail(err, BTF_E_ARG, "GPU render: no device or output given");
-    memset(out, 0, sizeof *out);
-    if (info)
-        memset(info, 0, sizeof *info);
+    btf_status rc = begin(g, out, info, err);
+    if (rc)
+        return rc;
     btf_render_plan p;
-    btf_status rc = btf_render_plan_flat(m, view, light, opts, &p, err);
-    if (rc == BTF_OK)
-        rc = render_plan_gpu(g, m, &p, out, info, err);
-    btf_render_plan_free(&p);
-    return rc;
+    rc = btf_render_plan_flat(m, view, light, opts, &p, err);
+    return finish(g, m, &p, rc, out, info, err);
 }

@@ -1048,8 +1048,9 @@ btf_status btf_normal_map(const btf_image *height, double scale, btf_image *norm
  * file of format 1.0 does): its mean slope removed, then a variance-
  * preserving cross-fade with itself shifted by half a period along each
  * axis (docs/render.md), which keeps the tile's mean and variance and
- * removes the jumps between opposite edges. Heights must be finite
- * (BTF_E_DATA). */
+ * removes the jumps between opposite edges; the result lies on the model
+ * file's 16-bit height grid, so writing it loses nothing. Heights must be
+ * finite (BTF_E_DATA). */
 btf_status btf_range_make_periodic(float *heights, int width, int height, btf_error *err);
 
 /* ----------------------------------------------------------------- scenes */

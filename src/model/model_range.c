@@ -31,6 +31,24 @@ int btf_range_grid_choose(double lo, double hi, int *e, int32_t *k)
     return -1;
 }
 
+int btf_range_snap(float *h, size_t n)
+{
+    if (n == 0)
+        return 0;
+    float lo = h[0], hi = h[0];
+    for (size_t i = 1; i < n; i++) {
+        lo = h[i] < lo ? h[i] : lo;
+        hi = h[i] > hi ? h[i] : hi;
+    }
+    int e;
+    int32_t k;
+    if (btf_range_grid_choose(lo, hi, &e, &k) != 0)
+        return -1;
+    for (size_t i = 0; i < n; i++)
+        h[i] = btf_range_grid_value(e, k, (unsigned)(floor(ldexp(h[i], -e)) - k));
+    return 0;
+}
+
 float btf_range_grid_value(int e, int32_t k, unsigned q)
 {
     return (float)ldexp((double)k + (double)q + 0.5, e);

@@ -7,6 +7,7 @@
 #ifndef BTF_RANGE_CODE_H
 #define BTF_RANGE_CODE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 /* The range map's grid: h = (k + q + 1/2) 2^e, q in [0, 65535], with
@@ -23,6 +24,10 @@
 int btf_range_grid_choose(double lo, double hi, int *e, int32_t *k);
 /* The height of grid value q: (k + q + 1/2) 2^e as a float. */
 float btf_range_grid_value(int e, int32_t k, unsigned q);
+/* Moves n finite heights onto their canonical grid, as writing and reading
+ * them would (a tile on its grid is a fixed point of the file); -1 when
+ * their span fits no grid (they stay). */
+int btf_range_snap(float *h, size_t n);
 /* The prediction of quantised sample (x, y) of a w-wide tile q from its
  * left, upper and upper-left neighbours (those before it in row order). */
 unsigned btf_range_predict(const uint16_t *q, int w, int x, int y);

@@ -30,6 +30,7 @@
  * shifted copy keeps a fold.
  */
 #include "model/model.h"
+#include "model/range_code.h"
 
 #include <float.h>
 #include <math.h>
@@ -136,6 +137,9 @@ btf_status btf_range_make_periodic(float *heights, int width, int height, btf_er
     mean -= drift / (double)n;
     for (size_t i = 0; i < n; i++)
         heights[i] = finite_float(u[i] + mean);
+    /* On the model file's 16-bit grid, so that writing the tile loses
+     * nothing and a converted 1.0 file re-reads to the same model. */
+    btf_range_snap(heights, n);
     free(u);
     return BTF_OK;
 }

@@ -1237,16 +1237,18 @@ btf_texture_distance_opts btf_texture_distance_defaults(void);
 
 /* One component: raw (its own unit, docs/measure.md), self (the same
  * distance between disjoint crops of the reference: the mean over the six
- * pairs of its four quadrants) and normalised = raw / max(self, floor)
- * (1.0: as close as the material is to itself; floor, per component, keeps
- * a constant reference finite). */
+ * pairs of its four quadrants, times sqrt((1/Nref + 1/Nimg) / (2/Nquadrant))
+ * for the sample sizes, N the pixels; 1/2 for equal sizes) and normalised
+ * = raw / max(self, floor) (1.0: as close as the material is to itself;
+ * floor, per component, keeps a constant reference finite). */
 typedef struct btf_distance_component {
     double raw, self, normalised;
 } btf_distance_component;
 
 typedef struct btf_texture_distances {
     btf_distance_component spectrum;    /* (a) radially binned log power
-                                           spectrum of L*, weighted RMS, dB */
+                                           spectrum of luminance Y, weighted
+                                           RMS, dB */
     btf_distance_component first_order; /* (b) earth mover's distance of each
                                            Lab channel's values, mean of 3 */
     btf_distance_component structure;   /* (c) Laplacian-pyramid band

@@ -108,7 +108,7 @@ btf_status ms_band_stats(const ms_view *v, int levels, ms_band *out, btf_error *
     double *blur = g + n, *tmp = blur + n;
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++)
-            g[(size_t)y * w + x] = v->lab[3 * ((size_t)(v->y0 + y) * v->stride + v->x0 + x)];
+            g[(size_t)y * w + x] = v->lab[MS_CH * ((size_t)(v->y0 + y) * v->stride + v->x0 + x)];
     for (int l = 0; l < levels; l++) {
         binomial_blur(g, tmp, blur, w, h);
         for (size_t i = 0; i < (size_t)w * h; i++)

@@ -25,7 +25,7 @@ void ms_sort_channels(const ms_view *v, float *sorted[3])
         size_t i = 0;
         for (int y = 0; y < v->h; y++)
             for (int x = 0; x < v->w; x++)
-                sorted[c][i++] = v->lab[3 * ((size_t)(v->y0 + y) * v->stride + v->x0 + x) + c];
+                sorted[c][i++] = v->lab[MS_CH * ((size_t)(v->y0 + y) * v->stride + v->x0 + x) + c];
         qsort(sorted[c], i, sizeof(float), cmp_float);
     }
 }

@@ -21,7 +21,12 @@
  * one pyramid band. */
 #define MS_MIN_SIDE 16
 
-/* A rectangle of a Lab image (3 floats per pixel, L in [0, 100]). */
+/* The floats per pixel of a measured image: L*, a*, b* (L* in [0, 100])
+ * and the linear luminance Y (exposure-scaled, not clamped). */
+#define MS_CH 4
+#define MS_Y 3
+
+/* A rectangle of a measured image (MS_CH floats per pixel). */
 typedef struct ms_view {
     const float *lab;
     int stride;          /* pixels per row of the whole image */
@@ -46,9 +51,10 @@ typedef struct ms_desc {
     int levels;
 } ms_desc;
 
-/* measure/lab.c: the image (1 or 3 channels, linear) as Lab floats, each
- * value multiplied by scale first and clamped to [0, 1] (the OpenCV
- * conversion's range). Non-finite pixels are an error naming `name`. */
+/* measure/lab.c: the image (1 or 3 channels, linear) as MS_CH floats per
+ * pixel: Lab of each value multiplied by scale and clamped to [0, 1] (the
+ * OpenCV conversion's range), and Y of the scaled values. Non-finite
+ * pixels are an error naming `name`. */
 btf_status ms_lab(const btf_image *img, double scale, const char *name, float **lab,
                   btf_error *err);
 /* The exposure the reference fixes for both images: 1 / its largest value
@@ -56,7 +62,7 @@ btf_status ms_lab(const btf_image *img, double scale, const char *name, float **
 double ms_exposure(const btf_image *ref);
 
 /* measure/spectrum.c: the radially binned log power spectrum of the view's
- * L channel, Hann-windowed, bins of width 1/s cycles per pixel
+ * luminance Y, Hann-windowed, bins of width 1/s cycles per pixel
  * (k = 1 .. nbins = s / 2). out holds nbins values. */
 btf_status ms_spectrum(const ms_view *v, int s, double *out, btf_error *err);
 double ms_spectrum_distance(const double *a, const double *b, int nbins);

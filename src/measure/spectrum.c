@@ -1,7 +1,10 @@
 /*
  * spectrum.c — component (a) of the texture distance (docs/measure.md,
- * "Spectrum"): the radially averaged power spectrum of lightness L*, on a
- * log scale, compared bin by bin. Without pixel correspondence the power
+ * "Spectrum"): the radially averaged power spectrum of luminance, on a log
+ * scale, compared bin by bin. Luminance is linear Y (Rec. 709 weights), not
+ * L*: a spectrum is a second-order statistic of a linear quantity, the one
+ * a Gaussian model (and the phase-randomisation baseline) reproduces; the
+ * perceptual non-linearity of L* would mix the histogram into it. Without pixel correspondence the power
  * spectrum is what a stationary Gaussian texture is (the CAR model of the
  * paper, section II.C, is one), and its radial profile says at which scales
  * the texture has its contrast.
@@ -25,9 +28,9 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* Power below this (L*^2 per unit bandwidth, -60 dB) is taken as this:
- * a constant view has a finite log spectrum. */
-#define POWER_FLOOR 1e-6
+/* Power below this (Y^2 per unit bandwidth, -120 dB; Y is about 1 at
+ * white) is taken as this: a constant view has a finite log spectrum. */
+#define POWER_FLOOR 1e-12
 
 static void hann(double *w, int n)
 {
@@ -54,7 +57,7 @@ btf_status ms_spectrum(const ms_view *v, int s, double *out, btf_error *err)
     double wsum = 0.0, mean = 0.0, w2x = 0.0, w2y = 0.0;
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
-            double l = v->lab[3 * ((size_t)(v->y0 + y) * v->stride + v->x0 + x)];
+            double l = v->lab[MS_CH * ((size_t)(v->y0 + y) * v->stride + v->x0 + x) + MS_Y];
             wsum += wx[x] * wy[y];
             mean += wx[x] * wy[y] * l;
         }
@@ -65,7 +68,7 @@ btf_status ms_spectrum(const ms_view *v, int s, double *out, btf_error *err)
         w2y += wy[y] * wy[y];
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
-            double l = v->lab[3 * ((size_t)(v->y0 + y) * v->stride + v->x0 + x)];
+            double l = v->lab[MS_CH * ((size_t)(v->y0 + y) * v->stride + v->x0 + x) + MS_Y];
             re[(size_t)y * w + x] = (l - mean) * wx[x] * wy[y];
             im[(size_t)y * w + x] = 0.0;
         }

@@ -71,6 +71,21 @@ static int all_finite(const btf_texture_distances *d)
     return isfinite(d->combined);
 }
 
+/* The quadrants are a quarter of the reference: their statistics are
+ * noisier than the whole reference's and the image's, and what separates
+ * two samples of one stationary texture is mostly that noise, whose
+ * standard deviation falls as 1 / sqrt(pixels). The distance between two
+ * samples of N1 and N2 pixels then grows as sqrt(1/N1 + 1/N2): the
+ * quadrants' self-distance is rescaled from sqrt(2/Nq) to
+ * sqrt(1/Nref + 1/Nimg), so that a faithful image of any size scores about
+ * 1 (docs/measure.md, "Normalisation"). Same sizes: the factor is 1/2. */
+static double sample_correction(const btf_image *ref, const btf_image *img)
+{
+    double nq = (double)(ref->width / 2) * (double)(ref->height / 2);
+    double nr = (double)ref->width * ref->height, ni = (double)img->width * img->height;
+    return sqrt((1.0 / nr + 1.0 / ni) / (2.0 / nq));
+}
+
 /* The three raw distances of one pair of views. */
 static void distances(const ms_desc *a, const ms_desc *b, double out[3], double lab[3])
 {
@@ -104,6 +119,9 @@ static btf_status measure(const float *lab_ref, const btf_image *ref, const floa
                 for (int k = 0; k < 3; k++)
                     self[k] += pair[k] / 6.0;
             }
+        double c = sample_correction(ref, img);
+        for (int k = 0; k < 3; k++)
+            self[k] *= c;
         component(&out->spectrum, raw[0], self[0], FLOOR_SPECTRUM);
         component(&out->first_order, raw[1], self[1], FLOOR_FIRST_ORDER);
         component(&out->structure, raw[2], self[2], FLOOR_STRUCTURE);

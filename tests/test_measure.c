@@ -460,6 +460,7 @@ static void extremes(void **state)
     measure(&twice, &scaled, &d);
     assert_true(d.first_order.normalised > 2.0);
     btf_image_free(&twice);
+    btf_image_free(&scaled);
     copy(&tex, &scaled);
     scaled.data[77] = NAN;
     btf_texture_distance_opts o = {.image_name = "nan.exr"};

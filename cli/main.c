@@ -18,6 +18,7 @@ static const struct {
     {"texture-fit", cmd_texture_fit, "model one colour texture with the multi-scale 2D CAR model"},
     {"synthesise", cmd_synthesise, "generate subspace images of a model at any size (CPU or GPU)"},
     {"render", cmd_render, "render the material on a scene, or flat for one (view, light) pair"},
+    {"compare", cmd_compare, "distances between two textures, normalised by the reference's own"},
 };
 
 static void usage(FILE *f)

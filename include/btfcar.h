@@ -1219,6 +1219,75 @@ btf_status btf_gpu_render_flat(btf_gpu *g, const btf_model *m, btf_dir view, btf
                                const btf_render_opts *opts, btf_image *out,
                                btf_render_info *info, btf_error *err);
 
+/* --------------------------------------- texture distances (issue 17) */
+
+/* Distances between two colour textures without pixel correspondence
+ * (src/measure/, docs/measure.md): any two sizes, each side at least 16.
+ * Both images are measured in CIE Lab (linear RGB converted by OpenCV;
+ * values above 1 scaled by one exposure the reference fixes, 1 / its
+ * largest value, the same for both; negative values count as 0). */
+typedef struct btf_texture_distance_opts {
+    int levels;                 /* structure: pyramid levels; 0: as many as
+                                   the smallest view compared allows (bands of
+                                   at least 8 pixels), at most 6 */
+    const char *reference_name; /* start the error messages (NULL: "reference") */
+    const char *image_name;     /* (NULL: "image") */
+} btf_texture_distance_opts;
+/* levels 0, both names NULL (a zeroed struct behaves the same). */
+btf_texture_distance_opts btf_texture_distance_defaults(void);
+
+/* One component: raw (its own unit, docs/measure.md), self (the same
+ * distance between disjoint crops of the reference: the mean over the six
+ * pairs of its four quadrants, times sqrt((1/Nref + 1/Nimg) / (2/Nquadrant))
+ * for the sample sizes, N the pixels; 1/2 for equal sizes) and normalised
+ * = raw / max(self, floor) (1.0: as close as the material is to itself;
+ * floor, per component, keeps a constant reference finite). */
+typedef struct btf_distance_component {
+    double raw, self, normalised;
+} btf_distance_component;
+
+typedef struct btf_texture_distances {
+    btf_distance_component spectrum;    /* (a) radially binned log power
+                                           spectrum of luminance Y, weighted
+                                           RMS, dB */
+    btf_distance_component first_order; /* (b) earth mover's distance of each
+                                           Lab channel's values, mean of 3 */
+    btf_distance_component structure;   /* (c) Laplacian-pyramid band
+                                           statistics, mean absolute difference */
+    double combined;                    /* mean of the three normalised values */
+    double first_order_lab[3];          /* raw EMD of L*, a*, b* alone */
+    int spectrum_bins;                  /* rings of width 1/s cycles/pixel, s the
+                                           smallest side compared; s / 2 rings */
+    int levels;                         /* pyramid levels compared */
+    double exposure;                    /* the scale applied before Lab */
+} btf_texture_distances;
+
+/* ref: the material (1 or 3 channels); img: what is compared with it.
+ * Deterministic; every value finite. BTF_E_ARG for a side below 16 (naming
+ * the image and its size), BTF_E_DATA for a non-finite pixel. */
+btf_status btf_texture_distance(const btf_image *ref, const btf_image *img,
+                                const btf_texture_distance_opts *opts,
+                                btf_texture_distances *out, btf_error *err);
+
+/* The baseline to beat (src/measure/phase_randomise.c, docs/measure.md,
+ * "Phase-randomisation baseline"): a Gaussian texture with the exemplar's
+ * power spectrum. The colours are decorrelated as the model does (mean,
+ * PCA basis); each decorrelated channel's periodic component (Moisan's
+ * periodic + smooth decomposition, which removes the border cross from
+ * the spectrum) keeps its DFT amplitude and gets independent random
+ * phases, Hermitian-symmetric so that the result is real; the
+ * decorrelation is undone. The texture is made at the exemplar's size and
+ * is periodic: other sizes wrap it (tile it, or crop it). seed chooses the
+ * phases; the same seed gives the same image. out: width x height, the
+ * exemplar's channel count (1 or 3). */
+btf_status btf_phase_randomise(const btf_image *exemplar, int width, int height, uint64_t seed,
+                               btf_image *out, btf_error *err);
+/* The storage the baseline needs for a width x height exemplar: per colour
+ * channel the non-redundant half of the amplitude spectrum, height x
+ * (width / 2 + 1) float32 (about width x height / 2), for 3 channels, plus
+ * the mean colour and the 3 x 3 basis (12 float32). */
+uint64_t btf_phase_randomise_bytes(int width, int height);
+
 #ifdef __cplusplus
 }
 #endif

@@ -135,24 +135,36 @@ static double model_distance(const btf_image *ex, const btf_model *m, const doub
     }
     for (int b = 0; b < bins; b++)
         syn[b] /= SEEDS;
-    if (getenv("SCALES_DEBUG")) {
-        for (int b = 0; b < bins; b++)
-            printf(" %5.2f", log(syn[b] / ex_power[b]));
-        printf("\n");
-    }
     return spectrum_distance(ex_power, syn, bins);
 }
 
 typedef struct texture {
     const char *material;
-    int size;
     btf_dir view, light;
+    int monotone; /* whether more levels must be no worse (not fabric: see below) */
 } texture;
 
+/* Three exemplars (seeds) per material: one exemplar's coarsest bins hold a
+ * handful of periodogram samples, and the ordering of the depths on one
+ * exemplar is partly chance; the means over three are what is asserted. */
+static const unsigned EXEMPLAR_SEEDS[] = {3, 5, 7};
+#define N_SEEDS 3
+#define SIZE 128
+/* More levels may cost at most this much spectrum distance (ln units): the
+ * spread of the means between runs of other seeds is about 0.05. */
+#define LEVELS_TOLERANCE 0.10
+/* The measured choice (--levels auto) may be this far from the best depth
+ * the test finds: it measures octaves of the dominant band, the test
+ * half-octaves of the luminance. */
+#define AUTO_TOLERANCE 0.15
+
+/* The woven fabric is a periodic pattern: its spectrum is a set of peaks
+ * that no CAR model holds, and its deeper pyramids reproduce them worse
+ * (docs/model.md); only the measured choice is asserted on it. */
 static const texture TEXTURES[] = {
-    {"leather", 128, {0, 0}, {30, 0}},
-    {"fabric", 128, {0, 0}, {45, 30}},
-    {"wood", 128, {0, 0}, {30, 0}},
+    {"leather", {0, 0}, {30, 0}, 1},
+    {"fabric", {0, 0}, {45, 30}, 0},
+    {"wood", {0, 0}, {30, 0}, 1},
 };
 #define N_TEXTURES (int)(sizeof TEXTURES / sizeof TEXTURES[0])
 
@@ -164,27 +176,26 @@ static void fit(const btf_image *img, int levels, btf_model *m)
     TU_OK(btf_texture_fit(img, &fo, m, &e), &e);
 }
 
-/* Prints, per texture, the spectrum distance for 1, 2, 3 levels and auto,
- * and the neighbourhood sizes chosen; asserts more levels are no worse. */
-static void test_levels_reproduce_spectrum(void **state)
+/* The spectrum distance of 1, 2, 3 levels and of auto (d[0]), averaged over
+ * the exemplars; prints each, with the neighbourhood sizes chosen. */
+static void distances(const texture *tx, double d[4])
 {
-    (void)state;
-    for (int t = 0; t < N_TEXTURES; t++) {
-        const texture *tx = &TEXTURES[t];
+    for (int l = 0; l <= 3; l++)
+        d[l] = 0.0;
+    for (int s = 0; s < N_SEEDS; s++) {
         btf_image img;
-        tu_material_image(tx->material, tx->size, getenv("SCALES_SEED") ? atoi(getenv("SCALES_SEED")) : 3, tx->view, tx->light, &img);
+        tu_material_image(tx->material, SIZE, EXEMPLAR_SEEDS[s], tx->view, tx->light, &img);
         double ex[MAX_BINS] = {0};
         int bins = radial_power(&img, ex);
-        double d[4];
         for (int l = 0; l <= 3; l++) {
             btf_model m;
             double t0 = tu_now();
             fit(&img, l, &m);
-            double secs = tu_now() - t0;
-            d[l] = model_distance(&img, &m, ex, bins);
+            double secs = tu_now() - t0, dl = model_distance(&img, &m, ex, bins);
+            d[l] += dl / N_SEEDS;
             const btf_subspace_model *sm = &m.subspaces[0];
-            printf("%-8s levels %s%d: spectrum distance %.3f, fit %.3f s, neighbours",
-                   tx->material, l ? "" : "auto=", sm->levels, d[l], secs);
+            printf("%-8s seed %u levels %s%d: spectrum distance %.3f, fit %.3f s, neighbours",
+                   tx->material, EXEMPLAR_SEEDS[s], l ? "" : "auto=", sm->levels, dl, secs);
             for (int b = 0; b < 3; b++) {
                 printf(b ? " |" : " ");
                 for (int k = 0; k < sm->levels; k++)
@@ -194,14 +205,147 @@ static void test_levels_reproduce_spectrum(void **state)
             btf_model_free(&m);
         }
         btf_image_free(&img);
-        (void)d;
     }
+    printf("%-8s mean: auto %.3f, 1 level %.3f, 2 levels %.3f, 3 levels %.3f\n", tx->material,
+           d[0], d[1], d[2], d[3]);
+}
+
+/* Issue 17 point 5: more pyramid levels reproduce the luminance power
+ * spectrum no worse than fewer (on leather, 3 levels were worse than 1
+ * before the levels were fitted as complements), and --levels auto comes
+ * near the best depth on every material. */
+static void test_levels_reproduce_spectrum(void **state)
+{
+    (void)state;
+    for (int t = 0; t < N_TEXTURES; t++) {
+        double d[4];
+        distances(&TEXTURES[t], d);
+        for (int l = 0; l <= 3; l++)
+            assert_true(isfinite(d[l]) && d[l] >= 0.0);
+        double best = fmin(d[1], fmin(d[2], d[3]));
+        assert_true(d[0] <= best + AUTO_TOLERANCE);
+        if (!TEXTURES[t].monotone)
+            continue;
+        assert_true(d[2] <= d[1] + LEVELS_TOLERANCE);
+        assert_true(d[3] <= d[2] + LEVELS_TOLERANCE);
+        assert_true(d[3] <= d[1] + LEVELS_TOLERANCE);
+    }
+}
+
+/* Issue 17 point 4: the Bayesian rule's choice is interior to the candidate
+ * family (below its 24 offsets) on the test textures: the data, not the
+ * family, limit it. Every band of a one-level model of leather and wood, and
+ * most bands of the fabric (a periodic weave, which long models suit). */
+static void test_neighbourhood_choice_is_interior(void **state)
+{
+    (void)state;
+    int interior = 0, total = 0;
+    for (int t = 0; t < N_TEXTURES; t++) {
+        btf_image img;
+        tu_material_image(TEXTURES[t].material, SIZE, 3, TEXTURES[t].view, TEXTURES[t].light,
+                          &img);
+        btf_model m;
+        fit(&img, 1, &m);
+        for (int b = 0; b < 3; b++) {
+            const btf_car_band *cb = &m.subspaces[0].bands[b][0];
+            assert_true(cb->n >= 1 && cb->n <= BTF_CAR_MAX_NEIGHBOURS);
+            if (TEXTURES[t].monotone)
+                assert_true(cb->n < BTF_CAR_MAX_NEIGHBOURS);
+            interior += cb->n < BTF_CAR_MAX_NEIGHBOURS;
+            total++;
+        }
+        btf_model_free(&m);
+        btf_image_free(&img);
+    }
+    assert_true(interior * 3 >= total * 2);
+}
+
+/* The complement fit on a field that is a sum of two independent ones: the
+ * fitted model's stationary variance is the difference of the variances
+ * (the Laplacian level alone would miss the cross term), and a degenerate
+ * complement (sub equal to band) falls back to the difference band (here
+ * constant zero: a model of no variance). */
+static void test_complement_fit(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    int w = 96, h = 96;
+    btf_image img;
+    tu_material_image("leather", w, 3, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
+    double *g = malloc(sizeof(double) * w * h), *u = malloc(sizeof(double) * w * h);
+    assert_non_null(g);
+    assert_non_null(u);
+    double vg = 0.0, vu = 0.0, mg = 0.0, mu = 0.0;
+    uint32_t lcg = 12345u;
+    for (int i = 0; i < w * h; i++) {
+        lcg = lcg * 1664525u + 1013904223u;
+        u[i] = img.data[3 * i + 1];                                /* a smooth part */
+        g[i] = u[i] + 0.05 * ((double)(lcg >> 8) / 16777216.0 - 0.5); /* plus white noise */
+        mg += g[i], mu += u[i];
+    }
+    mg /= w * h, mu /= w * h;
+    for (int i = 0; i < w * h; i++)
+        vg += (g[i] - mg) * (g[i] - mg), vu += (u[i] - mu) * (u[i] - mu);
+    vg /= w * h, vu /= w * h;
+    btf_car_fit_opts o = btf_car_fit_defaults();
+    btf_car_band b;
+    TU_OK(btf_car_fit_complement(g, u, w, h, &o, &b, NULL, &e), &e);
+    double v = btf_car_stationary_variance(&b);
+    printf("complement: model variance %.4g, G %.4g - sub %.4g = %.4g\n", v, vg, vu, vg - vu);
+    assert_true(isfinite(v));
+    assert_true(fabs(v - (vg - vu)) < 0.25 * (vg - vu));
+    assert_true(fabs(b.mean - (mg - mu)) < 1e-6);
+    TU_OK(btf_car_fit_complement(u, u, w, h, &o, &b, NULL, &e), &e);
+    assert_true(b.sigma == 0.0f);
+    free(g);
+    free(u);
+    btf_image_free(&img);
+}
+
+/* The measured depth on extremes: tiny, constant and 1 x N bands choose 1
+ * level; a band with coarse structure chooses more than 1. */
+static void test_choose_levels_extremes(void **state)
+{
+    (void)state;
+    double flat[64 * 64];
+    for (int i = 0; i < 64 * 64; i++)
+        flat[i] = 0.25;
+    assert_int_equal(btf_auto_levels(flat, 64, 64), 1);
+    assert_int_equal(btf_auto_levels(flat, 1, 1), 1);
+    assert_int_equal(btf_auto_levels(flat, 64, 1), 1);
+    assert_int_equal(btf_levels_cap(16, 16), 1);
+    assert_int_equal(btf_levels_cap(32, 32), 2);
+    assert_int_equal(btf_levels_cap(4096, 64), 3);
+    btf_error e = {0};
+    double d[BTF_MAX_LEVELS];
+    int levels = 0;
+    btf_car_fit_opts o = btf_car_fit_defaults();
+    TU_OK(btf_choose_levels(flat, 64, 64, &o, &levels, d, &e), &e);
+    assert_int_equal(levels, 1);
+    /* wood's grain: structure at coarse scales */
+    btf_image img;
+    tu_material_image("wood", 128, 3, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
+    double *band = malloc(sizeof(double) * 128 * 128);
+    assert_non_null(band);
+    for (int i = 0; i < 128 * 128; i++)
+        band[i] = img.data[3 * i] + img.data[3 * i + 1] + img.data[3 * i + 2];
+    TU_OK(btf_choose_levels(band, 128, 128, &o, &levels, d, &e), &e);
+    printf("wood: distances by depth %.3f %.3f %.3f, chose %d\n", d[0], d[1], d[2], levels);
+    assert_true(levels >= 2);
+    for (int l = 0; l < 3; l++)
+        assert_true(isfinite(d[l]) && d[l] >= 0.0);
+    assert_true(d[levels - 1] <= d[0]);
+    free(band);
+    btf_image_free(&img);
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_levels_reproduce_spectrum),
+        cmocka_unit_test(test_neighbourhood_choice_is_interior),
+        cmocka_unit_test(test_complement_fit),
+        cmocka_unit_test(test_choose_levels_extremes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -141,6 +141,9 @@ static btf_status depth_distance(const btf_car_band *models, int levels, int w, 
     return BTF_OK;
 }
 
+static btf_status choose(const double *band, int w, int h, const btf_car_fit_opts *car, int cap,
+                         int *levels, double *distance, btf_error *err);
+
 btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit_opts *car,
                              int *levels, double *distance, btf_error *err)
 {
@@ -150,13 +153,36 @@ btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit
     int cap = btf_levels_cap(w, h);
     if (cap == 1)
         return BTF_OK;
+    /* The distances are ratios: measured on the band scaled to its largest
+     * magnitude, so that no trial synthesis overflows floats where the
+     * band's own values would. */
+    size_t n = (size_t)w * h;
+    double big = 0.0;
+    for (size_t i = 0; i < n; i++)
+        if (fabs(band[i]) > big)
+            big = fabs(band[i]);
+    if (!(big > 0.0) || !isfinite(big))
+        return BTF_OK; /* zero (or not finite: the fit refuses it) */
+    double *z = btf_alloc(n, sizeof(double), err);
+    if (!z)
+        return BTF_E_NOMEM;
+    for (size_t i = 0; i < n; i++)
+        z[i] = band[i] / big;
+    btf_status rc = choose(z, w, h, car, cap, levels, distance, err);
+    free(z);
+    return rc;
+}
+
+static btf_status choose(const double *band, int w, int h, const btf_car_fit_opts *car, int cap,
+                         int *levels, double *distance, btf_error *err)
+{
     double e_band[MAX_OCTAVES], total = 0.0;
     int octaves = octave_energies(band, w, h, e_band, err);
     if (octaves < 0)
         return BTF_E_NOMEM;
     for (int i = 0; i < octaves; i++)
         total += e_band[i];
-    if (!(total > 0.0) || !isfinite(total))
+    if (!(total > 1e-24) || !isfinite(total))
         return BTF_OK; /* a constant band: nothing to place at any scale */
     /* Octaves a million times weaker than the band count as empty alike. */
     double floor_e = 1e-6 * total, best = INFINITY;
@@ -168,8 +194,13 @@ btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit
         btf_status rc = btf_fit_band_levels(band, w, h, L, &quiet, "levels", models, err);
         if (rc == BTF_OK)
             rc = depth_distance(models, L, w, h, e_band, octaves, floor_e, &d, err);
-        if (rc)
+        if (rc == BTF_E_NOMEM)
             return rc;
+        if (rc) { /* a depth that cannot be fitted or synthesised is not chosen */
+            if (err)
+                err->code = 0, err->msg[0] = '\0';
+            continue;
+        }
         if (distance)
             distance[L - 1] = d;
         if (d < best - MARGIN) {

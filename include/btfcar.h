@@ -763,12 +763,12 @@ void btf_neighbourhood_format(const btf_offset *offsets, int n, char *buf, size_
 typedef struct btf_car_fit_opts {
     int n_fixed;                          /* 0: choose by the Bayesian rule */
     btf_offset fixed[BTF_CAR_MAX_NEIGHBOURS];
-    int max_neighbours;                   /* auto: largest candidate; 0: 14 */
+    int max_neighbours;                   /* auto: largest candidate; 0: 24 */
     btf_warning_fn warn;
     void *warn_user;
     const char *what;                     /* names the sub-band in warnings */
 } btf_car_fit_opts;
-/* The defaults: the Bayesian choice among candidates of at most 14
+/* The defaults: the Bayesian choice among candidates of at most 24
  * neighbours, no warnings callback. */
 btf_car_fit_opts btf_car_fit_defaults(void);
 

@@ -83,22 +83,24 @@ static void demo_model_file_is_unchanged(void **state)
     (void)state;
     uint64_t h = hash_file(model_path);
     print_message("model file: 0x%016llx\n", (unsigned long long)h);
-    /* format 1.1 (issue 15): the periodic range tile and its RANG flags
-     * byte; was 0x5941461f4c59f500 in format 1.0 */
-    assert_true(h == 0x466160cca9c7fc78ull);
+    /* issue 17: the 24-offset candidate family, Laplacian levels fitted as
+     * complements and the measured --levels auto change the demo's fit; was
+     * 0x466160cca9c7fc78 in format 1.1 (issue 15: the periodic range tile
+     * and its RANG flags byte), 0x5941461f4c59f500 in format 1.0 */
+    assert_true(h == 0x60a952524712cc07ull);
 }
 
 /* Expected pixel hashes of subspace_00 .. subspace_05. */
 static void check_images(const char *dir, const uint64_t *expect, int n, int w, int h)
 {
-    for (int k = 0; k < n; k++) {
+    int same = 0;
+    for (int k = 0; k < n; k++) { /* all printed before any assertion */
         int iw = 0, ih = 0;
         uint64_t hv = hash_pixels(tu_fmt("%s/subspace_%02d.exr", dir, k), &iw, &ih);
         print_message("%s subspace %d: 0x%016llx\n", dir, k, (unsigned long long)hv);
-        assert_int_equal(iw, w);
-        assert_int_equal(ih, h);
-        assert_true(hv == expect[k]);
+        same += iw == w && ih == h && hv == expect[k];
     }
+    assert_int_equal(same, n);
 }
 
 static void cpu_synthesis_is_unchanged(void **state)
@@ -111,8 +113,8 @@ static void cpu_synthesis_is_unchanged(void **state)
     assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 256x256 --seed 7 --float --quiet "
                                    "-o %s", tu_cli(), model_path, dir), NULL), 0);
     static const uint64_t expect[6] = {
-        0x440b9765b8bc540bull, 0x8ad156b2726e5a96ull, 0xac9df49db7aafa57ull,
-        0x6e4a2d1a47347959ull, 0x5da770423ba57f19ull, 0xc699a12870c98a18ull,
+        0x8e5cfeaff20656a7ull, 0x2eaa52f7313644b2ull, 0xa137dae96ff33d8dull,
+        0x44a9ebd840fe7223ull, 0x988ff9687b064433ull, 0x6e8671a4488683f3ull,
     };
     check_images(dir, expect, 6, 256, 256);
 }
@@ -165,8 +167,8 @@ static void gpu_synthesis_is_unchanged(void **state)
     assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 200x130 --seed 3 --backend gpu --float "
                                    "--quiet -o %s", tu_cli(), model_path, dir), NULL), 0);
     static const uint64_t expect[6] = {
-        0xe8c750f159a44f7dull, 0x990fe2776bf04b41ull, 0x970da093f40fa984ull,
-        0x8ca97bfcf096b156ull, 0x3d7c473681be2727ull, 0x7a028b9e064c45faull,
+        0xf44a0ad846951e9bull, 0x135b4c42cb4e627eull, 0x5bc95fff925977ccull,
+        0xbc59b98da2f3c68aull, 0x3fdb3f5b4606163eull, 0x66655515bd328e3aull,
     };
     check_images(dir, expect, 6, 200, 130);
 }
@@ -177,8 +179,8 @@ static void tileable_synthesis_is_unchanged(void **state)
 {
     (void)state;
     static const uint64_t expect[6] = {
-        0x0d01a91b93041675ull, 0x005f0f0139d50d1eull, 0xc890d2cff44a5fcdull,
-        0x889a906e7a126fdbull, 0xd32f9be743a84bc5ull, 0xaf96dc28c8e6b596ull,
+        0x334b9ac05a6d8641ull, 0xb663640502a304faull, 0x918e23733f919675ull,
+        0x1466114c5c6dcf7eull, 0x20aed1c48aac4648ull, 0x258305288fd3d617ull,
     };
     const char *backends[2] = {"cpu", "gpu"};
     for (int b = 0; b < 2; b++) {

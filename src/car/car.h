@@ -34,6 +34,34 @@ btf_status btf_pyramid_build(const double *band, int w, int h, int levels, btf_p
 btf_status btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err);
 void btf_pyramid_free(btf_pyramid *p);
 
+/* The CAR fit of a Laplacian level that independent synthesis of the
+ * levels needs (car/car_fit.c, docs/model.md "Levels that add up"): band
+ * is the Gaussian level G_l, sub the up-sampled coarser level up(G_{l+1});
+ * the model's moments are G_l's less sub's, so that a field of it plus an
+ * independent field with sub's statistics has G_l's autocovariance at the
+ * neighbourhood's lags. Where that difference has no variance or is not
+ * positive definite, the fit of the difference band G_l - sub instead. */
+btf_status btf_car_fit_complement(const double *band, const double *sub, int w, int h,
+                                  const btf_car_fit_opts *opts, btf_car_band *out,
+                                  btf_car_fit_info *info, btf_error *err);
+
+/* The CAR models of one band's pyramid of `levels` levels, out[0] the
+ * finest (car/subspace_fit.c): the coarsest is fitted to the low-pass, every
+ * finer one by btf_car_fit_complement. what names the band in warnings. */
+btf_status btf_fit_band_levels(const double *band, int w, int h, int levels,
+                               const btf_car_fit_opts *car, const char *what, btf_car_band *out,
+                               btf_error *err);
+
+/* The measured choice of the pyramid depth (car/levels.c, docs/model.md
+ * "Choosing the levels"): for 1 .. btf_levels_cap(w, h) levels, the band's
+ * models are fitted and synthesised, and the depth whose synthesis' octave
+ * energies come closest to the band's wins. distance[L - 1] (when not NULL,
+ * BTF_MAX_LEVELS entries, -1 where not tried) gets each depth's distance. */
+btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit_opts *car,
+                             int *levels, double *distance, btf_error *err);
+/* The most levels the choice considers for a w x h band. */
+int btf_levels_cap(int w, int h);
+
 /* Synthesis margins (car/margin.c): the rows above its window a band's
  * CAR field starts, and the columns it runs on either side, so that the
  * zero boundary's transient has died out (below BTF_SYNTH_MARGIN_EPS of the

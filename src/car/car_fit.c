@@ -16,8 +16,10 @@
  * positive definite: no explicit inverse, no failure on a constant band.
  *
  * Neighbourhood choice ("model only what the data requires"). Candidates are
- * a nested family (the first 1, 2, 3, 4, 6, 8, 10, 12, 14 offsets of
- * FAMILY below). Each is scored by its log marginal likelihood in closed form
+ * a nested family (the first 1, 2, 3, 4, 6, ..., 22, 24 offsets of FAMILY
+ * below; until issue 17 it stopped at 14, and 14 won on every band of
+ * every photograph tried: the family, not the data, limited the choice). Each is scored by its log marginal
+ * likelihood in closed form
  *     ln p(Y | I) = (eta/2) ln v0 - (1/2) ln |V_xx + V0| + a0 ln b0 - a_t ln b_t
  *                   + ln Gamma(a_t) - ln Gamma(a0) - (t/2) ln 2 pi,
  *     a_t = a0 + t/2,  b_t = b0 + lambda/2,
@@ -46,11 +48,19 @@
 #define PRIOR_A0 1.0
 #define PRIOR_B0 0.01
 
-static const btf_offset FAMILY[14] = {{0, -1}, {-1, 0}, {-1, -1}, {-1, 1}, {0, -2},
-                                      {-2, 0}, {-1, -2}, {-1, 2}, {-2, -1}, {-2, 1},
-                                      {-2, -2}, {-2, 2}, {0, -3}, {-3, 0}};
-static const int FAMILY_SIZES[] = {1, 2, 3, 4, 6, 8, 10, 12, 14};
-#define N_FAMILY_SIZES 9
+/* The candidate family, nearest first: a ring of offsets at a time, each
+ * ring symmetric about the column (so that no direction is favoured). Its
+ * 24 offsets are every causal offset within 3 rows up and 3 columns either
+ * way (the full half-plane block of 7 x 3 plus the 3 to the left): the
+ * whole of BTF_CAR_MAX_NEIGHBOURS, the GPU task record's 24 offsets, and
+ * within the AVX2 wavefront's reach (src/synth/wave.c: 3 rows up, 4
+ * columns), so that the larger models keep the fast synthesis path. */
+static const btf_offset FAMILY[BTF_CAR_MAX_NEIGHBOURS] = {
+    {0, -1},  {-1, 0},  {-1, -1}, {-1, 1},  {0, -2},  {-2, 0},  {-1, -2}, {-1, 2},
+    {-2, -1}, {-2, 1},  {-2, -2}, {-2, 2},  {0, -3},  {-3, 0},  {-3, -1}, {-3, 1},
+    {-1, -3}, {-1, 3},  {-3, -2}, {-3, 2},  {-2, -3}, {-2, 3},  {-3, -3}, {-3, 3}};
+static const int FAMILY_SIZES[] = {1, 2, 3, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24};
+#define N_FAMILY_SIZES 14
 
 /* ---------------------------------------------------------------- algebra */
 
@@ -114,7 +124,7 @@ static reach reach_of(const btf_offset *o, int n)
 
 /* V = sum over the pixels where all n offsets fit of [y; x][y; x]^T,
  * (n+1) x (n+1), row-major; returns t, the number of pixels. */
-static long accumulate(const double *z, int w, int h, const btf_offset *o, int n, double *v)
+static long accumulate_one(const double *z, int w, int h, const btf_offset *o, int n, double *v)
 {
     reach r = reach_of(o, n);
     int m = n + 1;
@@ -134,6 +144,22 @@ static long accumulate(const double *z, int w, int h, const btf_offset *o, int n
     for (int i = 0; i < m; i++)
         for (int j = i + 1; j < m; j++)
             v[i * m + j] = v[j * m + i];
+    return t;
+}
+
+/* The moments V of z, less those of `sub` when it is not NULL (the
+ * complement fit of btf_car_fit_complement: the moments of a field whose
+ * autocovariance is z's minus sub's). */
+static long accumulate(const double *z, const double *sub, int w, int h, const btf_offset *o,
+                       int n, double *v)
+{
+    long t = accumulate_one(z, w, h, o, n, v);
+    if (sub) {
+        double vs[(BTF_CAR_MAX_NEIGHBOURS + 1) * (BTF_CAR_MAX_NEIGHBOURS + 1)];
+        accumulate_one(sub, w, h, o, n, vs);
+        for (int i = 0; i < (n + 1) * (n + 1); i++)
+            v[i] -= vs[i];
+    }
     return t;
 }
 
@@ -259,7 +285,7 @@ static int stabilise(btf_car_band *b, double *factor)
 
 btf_car_fit_opts btf_car_fit_defaults(void)
 {
-    return (btf_car_fit_opts){.n_fixed = 0, .max_neighbours = 14};
+    return (btf_car_fit_opts){.n_fixed = 0, .max_neighbours = BTF_CAR_MAX_NEIGHBOURS};
 }
 
 /* The options with every zero (or negative) count replaced by its default. */
@@ -271,8 +297,13 @@ static btf_car_fit_opts resolve_opts(const btf_car_fit_opts *opts)
     return o;
 }
 
-btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
-                       btf_car_band *out, btf_car_fit_info *info, btf_error *err)
+/* The fit of `band`, or with `sub` (not NULL) the complement fit: the
+ * moments are band's less sub's, the mean band's less sub's. Returns 1 (and
+ * fits nothing) when the complement has no variance or no candidate fits it,
+ * so that the caller can fall back to the difference band. */
+static btf_status fit(const double *band, const double *sub, int w, int h,
+                      const btf_car_fit_opts *opts, btf_car_band *out, btf_car_fit_info *info,
+                      btf_error *err)
 {
     btf_car_fit_opts o = resolve_opts(opts);
     btf_car_fit_info inf = {.chosen = -1, .shrink = 1.0};
@@ -287,12 +318,23 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
                             o.fixed[i].col);
     size_t n = (size_t)w * h;
     for (size_t i = 0; i < n; i++)
-        if (!isfinite(band[i]))
+        if (!isfinite(band[i]) || (sub && !isfinite(sub[i])))
             return btf_fail(err, BTF_E_ARG, "CAR fit: sample %zu of the band is not finite", i);
-    double mean, sd;
+    double mean, sd, sub_mean = 0.0, sub_sd = 0.0;
     moments(band, n, &mean, &sd);
-    if (!isfinite(mean) || !isfinite(sd))
+    if (sub)
+        moments(sub, n, &sub_mean, &sub_sd);
+    if (!isfinite(mean) || !isfinite(sd) || !isfinite(sub_mean) || !isfinite(sub_sd))
         return btf_fail(err, BTF_E_NUMERIC, "CAR fit: band mean or variance overflows");
+    double band_mean = mean;
+    if (sub) {
+        /* the complement's variance: what the band holds beyond sub */
+        double var = (sd - sub_sd) * (sd + sub_sd);
+        if (!(var > 1e-6 * sd * sd))
+            return 1;
+        mean -= sub_mean;
+        sd = sqrt(var);
+    }
     out->mean = to_float(mean);
     /* A constant band: nothing to model beyond its mean. The floor is
      * relative to the band's own values (its largest magnitude), so a band
@@ -302,6 +344,8 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
     for (size_t i = 0; i < n; i++)
         if (fabs(band[i]) > big)
             big = fabs(band[i]);
+    if (sub && !(sd > 1e-12 * big))
+        return 1;
     if (!(sd > 1e-12 * big)) {
         if (sd > 0.0) {
             char text[200];
@@ -313,11 +357,13 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
             *info = inf;
         return BTF_OK;
     }
-    double *z = btf_alloc(n, sizeof(double), err);
+    double *z = btf_alloc(sub ? 2 * n : n, sizeof(double), err), *zs = sub ? z + n : NULL;
     if (!z)
         return BTF_E_NOMEM;
     for (size_t i = 0; i < n; i++)
-        z[i] = (band[i] - mean) / sd;
+        z[i] = (band[i] - band_mean) / sd;
+    for (size_t i = 0; sub && i < n; i++)
+        zs[i] = (sub[i] - sub_mean) / sd;
 
     const btf_offset *offs = o.n_fixed ? o.fixed : FAMILY;
     int maxn = o.max_neighbours;
@@ -336,7 +382,7 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
     double v[(BTF_CAR_MAX_NEIGHBOURS + 1) * (BTF_CAR_MAX_NEIGHBOURS + 1)];
     long t = 0;
     while (nsizes > 0) {
-        t = accumulate(z, w, h, offs, sizes[nsizes - 1], v);
+        t = accumulate(z, zs, w, h, offs, sizes[nsizes - 1], v);
         if (t >= 2L * sizes[nsizes - 1] + 4)
             break;
         nsizes--;
@@ -359,6 +405,10 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
             memcpy(g, gc, (size_t)sizes[c] * sizeof(double));
         }
         inf.candidates++;
+    }
+    if (inf.chosen < 0 && sub) {
+        free(z);
+        return 1; /* the complement's moments are not positive definite */
     }
     if (inf.chosen < 0) {
         /* No neighbourhood fits (1 x 1, 1 x N images): white noise. */
@@ -421,4 +471,29 @@ btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts 
     if (info)
         *info = inf;
     return BTF_OK;
+}
+
+btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
+                       btf_car_band *out, btf_car_fit_info *info, btf_error *err)
+{
+    return fit(band, NULL, w, h, opts, out, info, err);
+}
+
+btf_status btf_car_fit_complement(const double *band, const double *sub, int w, int h,
+                                  const btf_car_fit_opts *opts, btf_car_band *out,
+                                  btf_car_fit_info *info, btf_error *err)
+{
+    btf_status rc = fit(band, sub, w, h, opts, out, info, err);
+    if ((int)rc != 1)
+        return rc;
+    /* No complement to fit: the difference band itself. */
+    size_t n = (size_t)w * h;
+    double *d = btf_alloc(n, sizeof(double), err);
+    if (!d)
+        return BTF_E_NOMEM;
+    for (size_t i = 0; i < n; i++)
+        d[i] = band[i] - sub[i];
+    rc = fit(d, NULL, w, h, opts, out, info, err);
+    free(d);
+    return rc;
 }

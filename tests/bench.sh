@@ -8,12 +8,15 @@ export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64
 echo "== machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GiB", $2/1048576}' /proc/meminfo), $(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)"
 SYNTH_MODEL=""
 RENDER_BENCH=""
+FIDELITY_BENCH=""
 for b in "$@"; do
     case "$b" in
     *bench_synth_model)
         SYNTH_MODEL=$b ;; # below, on the paper's workload
     *bench_render)
         RENDER_BENCH=$b ;; # below, on the analysed material
+    *bench_fidelity)
+        FIDELITY_BENCH=$b ;; # below, on the generated materials and photographs
     *bench_gpu)
         for n in 1 2; do
             LP_NUM_THREADS=$n "$b" || echo "bench: $(basename "$b") exited with $?"
@@ -129,3 +132,22 @@ needed=$med
 "$BTFCAR" render "$TMP/m.btfcar" --scene "$SPHERE" --size 1024x1024 -o "$TMP/sphere.png" | sed -n 's/^/   /p'
 median5 "render the sphere, whole process, --all-subspaces" $REN --all-subspaces
 echo "   the needed-only rule saves $(echo "$needed $med" | awk '{printf "%.0f%%", 100 * (1 - $1 / $2)}') of the whole process"
+
+echo "== fidelity (docs/fidelity.md): texture distances of btfcar's syntheses and the phase-randomisation baseline"
+if [ -n "$FIDELITY_BENCH" ]; then
+    set --
+    for mat in leather fabric wood; do
+        "$BTFCAR" generate -q --material $mat --size 128 --seed 3 "$TMP/f$mat" &&
+            "$BTFCAR" analyse -q "$TMP/f$mat" -o "$TMP/f$mat-seg" --stage segment &&
+            for img in "$TMP/f$mat-seg"/subspace_*.exr; do
+                cp "$img" "$TMP/$mat-$(basename "$img")"
+                set -- "$@" "$TMP/$mat-$(basename "$img")"
+            done
+    done
+    if sh "$(dirname "$0")/../tools/fetch-textures.sh" "$TMP/tex" >/dev/null 2>&1; then
+        set -- "$@" "$TMP"/tex/*.pat
+    else
+        echo "   (no photographs: tools/fetch-textures.sh could not download gimp-data)"
+    fi
+    "$FIDELITY_BENCH" "$@" || echo "bench: bench_fidelity exited with $?"
+fi

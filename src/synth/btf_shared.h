@@ -111,6 +111,28 @@ BTF_FN float btf_unmix(float mean, float b0, float b1, float b2, float v0, float
     return s2;
 }
 
+/* The marginal transfer (docs/synthesis.md, "Marginals"), per band: v
+ * clamped to the first and last knot [z0, zn], then on the segment i whose
+ * knot z <= v (found by counting knots, src/synth/marginal.c and
+ * gpu/synth_unmix.comp alike), q + (v - z) * slope, clamped to [q, q_next].
+ * Every step is monotone in v and segment i ends at q_next where segment
+ * i + 1 starts, so the map is monotone; the clamps are written as
+ * comparisons (not min/max, whose signed zeros differ between C, AVX2 and
+ * GLSL). Only sub, mul, add and compares: exact in Vulkan as in C. */
+BTF_FN float btf_clampf(float v, float lo, float hi)
+{
+    float a = v < lo ? lo : v;
+    return a > hi ? hi : a;
+}
+
+BTF_FN float btf_transfer(float v, float z, float slope, float q, float q_next)
+{
+    BTF_PRECISE float d = v - z;
+    BTF_PRECISE float p = d * slope;
+    BTF_PRECISE float s = q + p;
+    return btf_clampf(s, q, q_next);
+}
+
 #if !defined(BTF_GLSL) && !defined(VULKAN) && !defined(GL_core_profile) && !defined(GL_ES)
 /* C only: the four Gaussians of one noise block into an array. */
 static inline void btf_noise_block(btf_uint seed_lo, btf_uint seed_hi, btf_uint stream,

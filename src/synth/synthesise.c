@@ -131,14 +131,16 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
     for (; made < 3 && rc == 0; made++)
         rc = synth_band_init(&sb[made], sm->bands[made], margin[made], sm->levels, subspace, made,
                              width, height, o.seed, &paths, err);
-    float *row = rc ? NULL : btf_alloc((size_t)width * 6, sizeof(float), err);
-    float *plane = row ? row + (size_t)width * 3 : NULL; /* 3 planar channels */
+    btf_marginal_table mt;
+    btf_marginal_table_make(sm, &mt);
+    float *row = rc ? NULL : btf_alloc((size_t)width * (3 + BTF_UNMIX_SCRATCH), sizeof(float), err);
+    float *plane = row ? row + (size_t)width * 3 : NULL; /* btf_unmix_row's scratch */
     if (!rc && !row)
         rc = BTF_E_NOMEM;
     for (int y = 0; rc == 0 && y < height; y++) {
         const float *g0[3];
         synth_gauss_rows(sb, 3, 0, y, g0);
-        if (btf_unmix_row(sm, g0[0], g0[1], g0[2], width, plane, row)) /* the message names y */
+        if (btf_unmix_row(sm, &mt, g0[0], g0[1], g0[2], width, plane, row)) /* the message names y */
             rc = btf_check_finite_row(row, (size_t)width * 3, subspace, y, err);
         if (rc == 0) {
             int got = fn(user, y, 1, row, err);

@@ -1,0 +1,108 @@
+/*
+ * marginal.c — the marginal transfer of synthesis (docs/synthesis.md,
+ * "Marginals"; issue 17): the CAR fields of paper section II.C are linear
+ * filters of Gaussian noise, so each collapsed band is Gaussian, where the
+ * material's decorrelated channels are skewed. Before the decorrelation is
+ * undone each band v goes through a monotone piecewise-linear map from the
+ * synthesised band's distribution onto the exemplar's quantiles, and the
+ * RGB result is clamped to the exemplar's RGB box (src/synth/colour.c).
+ *
+ * Knots: z_j = synth_mean + synth_sd * N_j, N_j the standard normal quantile
+ * of p_j = j / 31 for j = 1..30, and of 1/4096 and 1 - 1/4096 for the first
+ * and last knot, which carry the exemplar's minimum and maximum. Below z_0
+ * and above z_31 the map is flat (the exemplar's range). The table is made
+ * once per synthesis on the host, in double rounded to float, for the CPU
+ * and the GPU (gpu/synth_gpu.c) alike: both then run btf_transfer of
+ * btf_shared.h on the same floats and agree bit for bit.
+ */
+#include "core/core.h"
+#include "synth/synth.h"
+
+#include "btf_shared.h"
+
+#include <float.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Phi^-1(p_j), made exactly antisymmetric (statistics.NormalDist). */
+const double btf_marginal_normal_knots[BTF_MARGIN_KNOTS] = {
+    -3.4871041041144313, -1.8485962885014087, -1.5179291595942783, -1.3001534333634233,
+    -1.1309776082451579, -0.98916862734063515, -0.86489435868528297, -0.75272879425816974,
+    -0.64932391318646587, -0.55244258464677443, -0.460494539103116, -0.37228936046519095,
+    -0.28689391692303923, -0.20354423153248624, -0.12158738275048298, -0.04044050856564621,
+    0.04044050856564621, 0.12158738275048298, 0.20354423153248624, 0.28689391692303923,
+    0.37228936046519095, 0.460494539103116, 0.55244258464677443, 0.64932391318646587,
+    0.75272879425816974, 0.86489435868528297, 0.98916862734063515, 1.1309776082451579,
+    1.3001534333634233, 1.5179291595942783, 1.8485962885014087, 3.4871041041144313};
+
+void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t)
+{
+    memset(t, 0, sizeof *t);
+    const btf_marginal *mg = &sm->marginal;
+    if (mg->knots != BTF_MARGIN_KNOTS)
+        return; /* no transfer: identity, no clamp (format 1.0, 1.1) */
+    t->on = 1;
+    for (int b = 0; b < 3; b++) {
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
+            t->z[b][j] = (float)((double)mg->synth_mean[b] +
+                                 (double)mg->synth_sd[b] * btf_marginal_normal_knots[j]);
+            t->q[b][j] = mg->quantile[b][j];
+        }
+        for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++) {
+            /* a zero-width segment is never entered (no v has z_j <= v <
+             * z_j+1); a slope past the float range is capped, not Inf, so
+             * that (v - z) * slope is never 0 * Inf */
+            double dz = (double)t->z[b][j + 1] - t->z[b][j];
+            double s = dz > 0 ? ((double)t->q[b][j + 1] - t->q[b][j]) / dz : 0.0;
+            t->slope[b][j] = s < FLT_MAX ? (float)s : FLT_MAX;
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        t->lo[k] = mg->rgb_lo[k];
+        t->hi[k] = mg->rgb_hi[k];
+    }
+}
+
+static inline uint32_t nonfinite(float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, sizeof u);
+    return (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
+}
+
+/* The segment index is a count of interior knots at or below v: the same
+ * index a search would give, in loops over the row the compiler
+ * vectorises. */
+int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width,
+                     float *out, int *seg)
+{
+    const float *z = t->z[band], *q = t->q[band], *sl = t->slope[band];
+    float z0 = z[0], zn = z[BTF_MARGIN_KNOTS - 1];
+    uint32_t bad = 0;
+    for (int x = 0; x < width; x++) {
+        bad |= nonfinite(v[x]);
+        out[x] = btf_clampf(v[x], z0, zn);
+        seg[x] = 0;
+    }
+    for (int j = 1; j + 1 < BTF_MARGIN_KNOTS; j++) {
+        float zj = z[j];
+        for (int x = 0; x < width; x++)
+            seg[x] += zj <= out[x];
+    }
+    for (int x = 0; x < width; x++) {
+        int i = seg[x];
+        out[x] = btf_transfer(out[x], z[i], sl[i], q[i], q[i + 1]);
+    }
+    return bad != 0;
+}
+
+void btf_marginal_clamp_rgb(const btf_marginal_table *t, float *row, int width)
+{
+    float l0 = t->lo[0], l1 = t->lo[1], l2 = t->lo[2];
+    float h0 = t->hi[0], h1 = t->hi[1], h2 = t->hi[2];
+    for (int x = 0; x < width; x++) {
+        row[3 * x] = btf_clampf(row[3 * x], l0, h0);
+        row[3 * x + 1] = btf_clampf(row[3 * x + 1], l1, h1);
+        row[3 * x + 2] = btf_clampf(row[3 * x + 2], l2, h2);
+    }
+}

@@ -47,7 +47,13 @@ void main()
         float b0 = gauss[jobs[j].gauss_off[0] + p];
         float b1 = gauss[jobs[j].gauss_off[1] + p];
         float b2 = gauss[jobs[j].gauss_off[2] + p];
-        if (on) {
+        // a non-finite band skips the transfer, so that the host's finite
+        // test refuses the image as the CPU does (btf_unmix_row)
+        uint e = 0x7F800000u;
+        bool finite = (floatBitsToUint(b0) & e) != e && (floatBitsToUint(b1) & e) != e &&
+                      (floatBitsToUint(b2) & e) != e;
+        bool apply = on && finite;
+        if (apply) {
             b0 = transfer_band(j, 0, b0);
             b1 = transfer_band(j, 1, b1);
             b2 = transfer_band(j, 2, b2);
@@ -55,7 +61,7 @@ void main()
         for (int k = 0; k < 3; k++) {
             float v = btf_unmix(jobs[j].mean[k], jobs[j].basis[k], jobs[j].basis[3 + k],
                                 jobs[j].basis[6 + k], b0, b1, b2);
-            if (on)
+            if (apply)
                 v = btf_clampf(v, jobs[j].lo[k], jobs[j].hi[k]);
             rgb[jobs[j].out_off + 3u * p + uint(k)] = v;
         }

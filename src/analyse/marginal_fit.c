@@ -94,6 +94,24 @@ static btf_status measure_synthesis(const btf_model *m, int subspace, float mean
     return rc;
 }
 
+/* Every number within the model file's limit for transfers (1e37,
+ * docs/model-format.md): differences of knots and slopes stay finite. */
+static int within_limits(const btf_marginal *mg)
+{
+    const float lim = 1e37f;
+    for (int b = 0; b < 3; b++) {
+        if (!(fabsf(mg->synth_mean[b]) <= lim && mg->synth_sd[b] <= lim))
+            return 0;
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+            if (!(fabsf(mg->quantile[b][j]) <= lim))
+                return 0;
+    }
+    for (int k = 0; k < 3; k++)
+        if (!(mg->rgb_hi[k] <= lim))
+            return 0;
+    return 1;
+}
+
 btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, btf_error *err)
 {
     if (!img || !img->data || img->channels != 3 || img->width < 1 || img->height < 1)
@@ -125,12 +143,28 @@ btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, b
         btf_decorrelate(img, sm->mean, sm->basis, bands);
         for (int b = 0; b < 3; b++)
             band_quantiles(bands[b], n, mg.quantile[b]);
-        rc = measure_synthesis(m, subspace, mg.synth_mean, mg.synth_sd, err);
+        btf_error me = {0};
+        rc = measure_synthesis(m, subspace, mg.synth_mean, mg.synth_sd, &me);
+        if (rc == BTF_E_NUMERIC) {
+            /* the model's synthesis overflows float (values near the float
+             * limit): no transfer, so that synthesis refuses it as before
+             * instead of clamping Inf away */
+            for (int b = 0; b < 3; b++)
+                free(bands[b]);
+            sm->marginal.knots = 0;
+            return BTF_OK;
+        }
+        if (rc)
+            btf_fail(err, rc, "%s", me.msg);
     }
     for (int b = 0; b < 3; b++)
         free(bands[b]);
     if (rc)
         return rc;
+    if (!within_limits(&mg)) {
+        sm->marginal.knots = 0; /* values the file cannot hold safely: none */
+        return BTF_OK;
+    }
     mg.knots = BTF_MARGIN_KNOTS;
     sm->marginal = mg;
     return BTF_OK;

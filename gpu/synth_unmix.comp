@@ -36,6 +36,36 @@ float transfer_band(uint j, int b, float v)
                         jobs[j].q[base + i + 1]);
 }
 
+// The colour into the exemplar's box, as gamut_pixel (src/synth/marginal.c).
+void gamut(uint j, inout float c[3])
+{
+    int inside = 1;
+    for (int k = 0; k < 3; k++)
+        inside &= btf_in_box(c[k], jobs[j].lo[k], jobs[j].hi[k]);
+    if (inside != 0)
+        return;
+    float d[3];
+    for (int k = 0; k < 3; k++) {
+        precise float dk = c[k] - jobs[j].mean[k];
+        d[k] = dk;
+    }
+    float a = 0.0, b = 1.0;
+    for (int s = 0; s < BTF_GAMUT_STEPS; s++) {
+        float m = btf_midpoint(a, b);
+        int in_ = 1;
+        for (int k = 0; k < 3; k++)
+            in_ &= btf_in_box(btf_gamut_point(jobs[j].mean[k], m, d[k]), jobs[j].lo[k],
+                              jobs[j].hi[k]);
+        if (in_ != 0)
+            a = m;
+        else
+            b = m;
+    }
+    for (int k = 0; k < 3; k++)
+        c[k] = btf_clampf(btf_gamut_point(jobs[j].mean[k], a, d[k]), jobs[j].lo[k],
+                          jobs[j].hi[k]);
+}
+
 void main()
 {
     uint j = pc.job_base + gl_WorkGroupID.x;
@@ -58,12 +88,13 @@ void main()
             b1 = transfer_band(j, 1, b1);
             b2 = transfer_band(j, 2, b2);
         }
-        for (int k = 0; k < 3; k++) {
-            float v = btf_unmix(jobs[j].mean[k], jobs[j].basis[k], jobs[j].basis[3 + k],
-                                jobs[j].basis[6 + k], b0, b1, b2);
-            if (apply)
-                v = btf_clampf(v, jobs[j].lo[k], jobs[j].hi[k]);
-            rgb[jobs[j].out_off + 3u * p + uint(k)] = v;
-        }
+        float c[3];
+        for (int k = 0; k < 3; k++)
+            c[k] = btf_unmix(jobs[j].mean[k], jobs[j].basis[k], jobs[j].basis[3 + k],
+                             jobs[j].basis[6 + k], b0, b1, b2);
+        if (apply)
+            gamut(j, c);
+        for (int k = 0; k < 3; k++)
+            rgb[jobs[j].out_off + 3u * p + uint(k)] = c[k];
     }
 }

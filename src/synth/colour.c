@@ -158,7 +158,7 @@ int btf_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t, con
     for (int b = 0; b < 3; b++)
         bad |= btf_marginal_row(t, b, in[b], width, tb + (size_t)b * width, seg);
     bad |= unmix_plain(sm, tb, tb + width, tb + 2 * (size_t)width, width, plane, row);
-    btf_marginal_clamp_rgb(t, row, width);
+    btf_marginal_clamp_rgb(t, sm->mean, row, width);
     return bad;
 }
 

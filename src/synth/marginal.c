@@ -5,7 +5,8 @@
  * material's decorrelated channels are skewed. Before the decorrelation is
  * undone each band v goes through a monotone piecewise-linear map from the
  * synthesised band's distribution onto the exemplar's quantiles, and the
- * RGB result is clamped to the exemplar's RGB box (src/synth/colour.c).
+ * RGB result is brought into the exemplar's RGB box (btf_shared.h,
+ * "Gamut"; src/synth/colour.c).
  *
  * Knots: z_j = synth_mean + synth_sd * N_j, N_j the standard normal quantile
  * of p_j = j / 31 for j = 1..30, and of 1/4096 and 1 - 1/4096 for the first
@@ -96,13 +97,33 @@ int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int 
     return bad != 0;
 }
 
-void btf_marginal_clamp_rgb(const btf_marginal_table *t, float *row, int width)
+/* One colour into the box (btf_shared.h, "Gamut"): as gpu/synth_unmix.comp. */
+static void gamut_pixel(const btf_marginal_table *t, const float mean[3], float *c)
 {
-    float l0 = t->lo[0], l1 = t->lo[1], l2 = t->lo[2];
-    float h0 = t->hi[0], h1 = t->hi[1], h2 = t->hi[2];
-    for (int x = 0; x < width; x++) {
-        row[3 * x] = btf_clampf(row[3 * x], l0, h0);
-        row[3 * x + 1] = btf_clampf(row[3 * x + 1], l1, h1);
-        row[3 * x + 2] = btf_clampf(row[3 * x + 2], l2, h2);
+    if (btf_in_box(c[0], t->lo[0], t->hi[0]) && btf_in_box(c[1], t->lo[1], t->hi[1]) &&
+        btf_in_box(c[2], t->lo[2], t->hi[2]))
+        return;
+    float d[3];
+    for (int k = 0; k < 3; k++)
+        d[k] = c[k] - mean[k]; /* one rounding (no contraction), as the shader's precise */
+    float a = 0.0f, b = 1.0f;
+    for (int s = 0; s < BTF_GAMUT_STEPS; s++) {
+        float m = btf_midpoint(a, b);
+        int in = 1;
+        for (int k = 0; k < 3; k++)
+            in &= btf_in_box(btf_gamut_point(mean[k], m, d[k]), t->lo[k], t->hi[k]);
+        if (in)
+            a = m;
+        else
+            b = m;
     }
+    for (int k = 0; k < 3; k++)
+        c[k] = btf_clampf(btf_gamut_point(mean[k], a, d[k]), t->lo[k], t->hi[k]);
+}
+
+void btf_marginal_clamp_rgb(const btf_marginal_table *t, const float mean[3], float *row,
+                            int width)
+{
+    for (int x = 0; x < width; x++)
+        gamut_pixel(t, mean, row + 3 * x);
 }

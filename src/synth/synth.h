@@ -123,8 +123,10 @@ void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t
  * nonzero when a v is Inf or NaN. */
 int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width,
                      float *out, int *seg);
-/* Clamps an interleaved RGB row to the table's box. */
-void btf_marginal_clamp_rgb(const btf_marginal_table *t, float *row, int width);
+/* Brings an interleaved RGB row into the table's box, each colour moved
+ * towards mean (btf_shared.h, "Gamut"). */
+void btf_marginal_clamp_rgb(const btf_marginal_table *t, const float mean[3], float *row,
+                            int width);
 
 /* ---------------------------------------------------------------- colour.c */
 

@@ -135,6 +135,26 @@ static int unmix_avx2(const btf_subspace_model *sm, const float *b0, const float
 #pragma GCC pop_options
 #endif
 
+/* btf_unmix per channel into three planes (no interleave): the gamut
+ * works on them. */
+SYNTH_AVX2_CLONES
+static int unmix_planes(const btf_subspace_model *sm, const float *b0, const float *b1,
+                        const float *b2, int width, float *plane)
+{
+    uint32_t bad = 0;
+    for (int k = 0; k < 3; k++) {
+        float *p = plane + (size_t)k * width;
+        float mean = sm->mean[k], c0 = sm->basis[k], c1 = sm->basis[3 + k];
+        float c2 = sm->basis[6 + k];
+        for (int x = 0; x < width; x++) {
+            float v = btf_unmix(mean, c0, c1, c2, b0[x], b1[x], b2[x]);
+            bad |= nonfinite_bits(v);
+            p[x] = v;
+        }
+    }
+    return bad != 0;
+}
+
 static int unmix_plain(const btf_subspace_model *sm, const float *b0, const float *b1,
                        const float *b2, int width, float *plane, float *row)
 {
@@ -157,8 +177,10 @@ int btf_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t, con
     int bad = 0;
     for (int b = 0; b < 3; b++)
         bad |= btf_marginal_row(t, b, in[b], width, tb + (size_t)b * width, seg);
-    bad |= unmix_plain(sm, tb, tb + width, tb + 2 * (size_t)width, width, plane, row);
-    btf_marginal_clamp_rgb(t, sm->mean, row, width);
+    bad |= unmix_planes(sm, tb, tb + width, tb + 2 * (size_t)width, width, plane);
+    float *p1 = plane + width, *p2 = plane + 2 * (size_t)width;
+    btf_marginal_gamut_planes(t, sm->mean, plane, p1, p2, width);
+    interleave3(plane, p1, p2, width, row);
     return bad;
 }
 

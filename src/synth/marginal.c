@@ -64,6 +64,9 @@ void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t
     }
 }
 
+static int marginal_row_portable(const btf_marginal_table *t, int band, const float *v,
+                                 int width, float *out, int *seg);
+
 static inline uint32_t nonfinite(float v)
 {
     uint32_t u;
@@ -71,11 +74,66 @@ static inline uint32_t nonfinite(float v)
     return (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
 }
 
+#ifdef SYNTH_HAVE_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include <immintrin.h>
+
+/* btf_marginal_row 8 values at a time: the same count of knots, exact
+ * gathers of the segment's numbers, btf_transfer's sub, mul, add (no FMA)
+ * and its clamps as max(lo, v) and min(hi, a), which are the comparisons
+ * `v < lo ? lo : v` and `a > hi ? hi : a` lane by lane, signed zeros
+ * included. The last width % 8 values go through the portable loop. */
+static int marginal_row_avx2(const btf_marginal_table *t, int band, const float *v, int width,
+                             float *out, int *seg, int *tail)
+{
+    const float *z = t->z[band], *q = t->q[band], *sl = t->slope[band];
+    __m256 z0 = _mm256_set1_ps(z[0]), zn = _mm256_set1_ps(z[BTF_MARGIN_KNOTS - 1]);
+    __m256 zj[BTF_MARGIN_KNOTS];
+    for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+        zj[j] = _mm256_set1_ps(z[j]);
+    const __m256i expo = _mm256_set1_epi32(0x7F800000);
+    __m256i bad = _mm256_setzero_si256();
+    int x = 0;
+    for (; x + 8 <= width; x += 8) {
+        __m256 in = _mm256_loadu_ps(v + x);
+        __m256i e = _mm256_and_si256(_mm256_castps_si256(in), expo);
+        bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(e, expo));
+        __m256 c = _mm256_min_ps(zn, _mm256_max_ps(z0, in));
+        __m256i i = _mm256_setzero_si256();
+        for (int j = 1; j + 1 < BTF_MARGIN_KNOTS; j++) /* a true compare is -1 */
+            i = _mm256_sub_epi32(i, _mm256_castps_si256(_mm256_cmp_ps(zj[j], c, _CMP_LE_OQ)));
+        __m256 zi = _mm256_i32gather_ps(z, i, 4), si = _mm256_i32gather_ps(sl, i, 4);
+        __m256 qi = _mm256_i32gather_ps(q, i, 4), qn = _mm256_i32gather_ps(q + 1, i, 4);
+        __m256 r = _mm256_add_ps(qi, _mm256_mul_ps(_mm256_sub_ps(c, zi), si));
+        _mm256_storeu_ps(out + x, _mm256_min_ps(qn, _mm256_max_ps(qi, r)));
+    }
+    *tail = x;
+    (void)seg;
+    return !_mm256_testz_si256(bad, bad);
+}
+#pragma GCC pop_options
+#endif
+
 /* The segment index is a count of interior knots at or below v: the same
  * index a search would give, in loops over the row the compiler
- * vectorises. */
+ * vectorises (by hand with AVX2). */
 int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width,
                      float *out, int *seg)
+{
+#ifdef SYNTH_HAVE_AVX2
+    if (__builtin_cpu_supports("avx2")) {
+        int done = 0, bad = marginal_row_avx2(t, band, v, width, out, seg, &done);
+        if (done == width)
+            return bad;
+        return marginal_row_portable(t, band, v + done, width - done, out + done, seg) | bad;
+    }
+#endif
+    return marginal_row_portable(t, band, v, width, out, seg);
+}
+
+static int marginal_row_portable(const btf_marginal_table *t, int band, const float *v,
+                                 int width, float *out, int *seg)
 {
     const float *z = t->z[band], *q = t->q[band], *sl = t->slope[band];
     float z0 = z[0], zn = z[BTF_MARGIN_KNOTS - 1];
@@ -121,9 +179,25 @@ static void gamut_pixel(const btf_marginal_table *t, const float mean[3], float 
         c[k] = btf_clampf(btf_gamut_point(mean[k], a, d[k]), t->lo[k], t->hi[k]);
 }
 
-void btf_marginal_clamp_rgb(const btf_marginal_table *t, const float mean[3], float *row,
-                            int width)
+/* Planar: a vectorised test of the box, the rare colours outside it one by
+ * one (gamut_pixel). */
+SYNTH_AVX2_CLONES
+void btf_marginal_gamut_planes(const btf_marginal_table *t, const float mean[3], float *p0,
+                               float *p1, float *p2, int width)
 {
-    for (int x = 0; x < width; x++)
-        gamut_pixel(t, mean, row + 3 * x);
+    float l0 = t->lo[0], l1 = t->lo[1], l2 = t->lo[2];
+    float h0 = t->hi[0], h1 = t->hi[1], h2 = t->hi[2];
+    for (int x0 = 0; x0 < width; x0 += 64) {
+        int x1 = x0 + 64 < width ? x0 + 64 : width, out = 0;
+        for (int x = x0; x < x1; x++)
+            out |= !(btf_in_box(p0[x], l0, h0) & btf_in_box(p1[x], l1, h1) &
+                     btf_in_box(p2[x], l2, h2));
+        if (!out)
+            continue;
+        for (int x = x0; x < x1; x++) {
+            float c[3] = {p0[x], p1[x], p2[x]};
+            gamut_pixel(t, mean, c);
+            p0[x] = c[0], p1[x] = c[1], p2[x] = c[2];
+        }
+    }
 }

@@ -123,10 +123,10 @@ void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t
  * nonzero when a v is Inf or NaN. */
 int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width,
                      float *out, int *seg);
-/* Brings an interleaved RGB row into the table's box, each colour moved
- * towards mean (btf_shared.h, "Gamut"). */
-void btf_marginal_clamp_rgb(const btf_marginal_table *t, const float mean[3], float *row,
-                            int width);
+/* Brings the colours of three planes (R, G, B) into the table's box, each
+ * moved towards mean (btf_shared.h, "Gamut"). */
+void btf_marginal_gamut_planes(const btf_marginal_table *t, const float mean[3], float *p0,
+                               float *p1, float *p2, int width);
 
 /* ---------------------------------------------------------------- colour.c */
 

@@ -88,6 +88,17 @@ static void text_subspace(const btf_model *m, int s)
                        missed >= BTF_CAR_MISSED_LOUD ? " (a periodic pattern?)" : "");
             printf("\n");
         }
+    const btf_marginal *mg = &sm->marginal;
+    if (!mg->knots) {
+        printf("  marginals none (Gaussian bands: no transfer, no clamp)\n");
+        return;
+    }
+    printf("  marginals %d-knot transfer per band; exemplar range", mg->knots);
+    for (int b = 0; b < 3; b++)
+        printf(" [%.6g, %.6g]", mg->quantile[b][0], mg->quantile[b][mg->knots - 1]);
+    printf("; synthesised sd %.6g %.6g %.6g; RGB box [%.6g %.6g %.6g]..[%.6g %.6g %.6g]\n",
+           mg->synth_sd[0], mg->synth_sd[1], mg->synth_sd[2], mg->rgb_lo[0], mg->rgb_lo[1],
+           mg->rgb_lo[2], mg->rgb_hi[0], mg->rgb_hi[1], mg->rgb_hi[2]);
 }
 
 static int model_text(const btf_model *m, const model_file *mf)
@@ -108,6 +119,13 @@ static int model_text(const btf_model *m, const model_file *mf)
         printf("lights      none (a single texture)\n");
     }
     printf("subspaces   %d\n", m->n_subspaces);
+    int with = 0;
+    for (int s = 0; s < m->n_subspaces; s++)
+        with += m->subspaces[s].marginal.knots != 0;
+    printf("marginals   %s (%d of %d subspaces)\n",
+           with ? "transfers onto the exemplar's histogram, RGB clamped to its range"
+                : "none (Gaussian bands; format 1.0/1.1 or fitted without them)",
+           with, m->n_subspaces);
     if (m->range) {
         float lo, hi;
         range_bounds(m, &lo, &hi);
@@ -164,7 +182,26 @@ static void json_subspace(FILE *f, const btf_model *m, int s)
         }
         fputc(']', f);
     }
-    fputs("]}", f);
+    const btf_marginal *mg = &sm->marginal;
+    fputs("],\n   \"marginal\": ", f);
+    if (!mg->knots) {
+        fputs("null}", f);
+        return;
+    }
+    fprintf(f, "{\"knots\": %d, \"synth_mean\": ", mg->knots);
+    cli_json_f32s(f, mg->synth_mean, 3);
+    fputs(", \"synth_sd\": ", f);
+    cli_json_f32s(f, mg->synth_sd, 3);
+    fputs(", \"quantiles\": [", f);
+    for (int b = 0; b < 3; b++) {
+        fputs(b ? ", " : "", f);
+        cli_json_f32s(f, mg->quantile[b], mg->knots);
+    }
+    fputs("], \"rgb_lo\": ", f);
+    cli_json_f32s(f, mg->rgb_lo, 3);
+    fputs(", \"rgb_hi\": ", f);
+    cli_json_f32s(f, mg->rgb_hi, 3);
+    fputs("}}", f);
 }
 
 static void json_index(FILE *f, const btf_model *m)

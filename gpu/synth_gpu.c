@@ -57,11 +57,15 @@ typedef struct gpu_unmix {
     uint32_t gauss_off[3];
     uint32_t out_off;
     int32_t width, height;
+    int32_t transfer;           /* the marginal transfer (src/synth/marginal.c) is on */
+    float z[3][BTF_MARGIN_KNOTS], q[3][BTF_MARGIN_KNOTS], slope[3][BTF_MARGIN_KNOTS];
+    float lo[3], hi[3];
 } gpu_unmix;
 
 _Static_assert(sizeof(gpu_task) == 368, "gpu_task must match synth_task.glsl");
-_Static_assert(sizeof(gpu_unmix) == 72, "gpu_unmix must match synth_task.glsl");
+_Static_assert(sizeof(gpu_unmix) == 76 + 9 * 4 * BTF_MARGIN_KNOTS + 24, "gpu_unmix must match synth_task.glsl");
 _Static_assert(BTF_CAR_MAX_NEIGHBOURS == 24, "synth_task.glsl holds 24 offsets");
+_Static_assert(BTF_MARGIN_KNOTS == 32, "synth_task.glsl holds 32 knots");
 
 struct btf_gpu {
     btf_vk *vk;
@@ -340,6 +344,14 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
         memcpy(bt->unmix[j].mean, sm->mean, sizeof bt->unmix[j].mean);
         memcpy(bt->unmix[j].basis, sm->basis, sizeof bt->unmix[j].basis);
         bt->unmix[j].width = w;
+        btf_marginal_table mt; /* the CPU's very table (src/synth/marginal.c) */
+        btf_marginal_table_make(sm, &mt);
+        bt->unmix[j].transfer = mt.on;
+        memcpy(bt->unmix[j].z, mt.z, sizeof mt.z);
+        memcpy(bt->unmix[j].q, mt.q, sizeof mt.q);
+        memcpy(bt->unmix[j].slope, mt.slope, sizeof mt.slope);
+        memcpy(bt->unmix[j].lo, mt.lo, sizeof mt.lo);
+        memcpy(bt->unmix[j].hi, mt.hi, sizeof mt.hi);
     }
     /* Walk the strips once to size every field's buffer rows. */
     for (int y = 0; y < h; y += strip)

@@ -36,4 +36,9 @@ struct Unmix {
     uint gauss_off[3];        // level-0 G windows of bands 0, 1, 2
     uint out_off;             // offset (floats) of the RGB image in Out[]
     int width, height;        // the image's width, the strip's rows
+    int transfer;             // 1: the marginal transfer is on (src/synth/marginal.c)
+    float z[96];              // [band * 32 + j]: knots, exemplar quantiles, segment slopes
+    float q[96];
+    float slope[96];
+    float lo[3], hi[3];       // the RGB clamp
 };

@@ -2,7 +2,9 @@
 // & Filip 2007, section II.C, the last step of synthesis; section III, the
 // 3 x 3 inverse decorrelation matrix applied to each colour pixel):
 // rgb_k = mean_k + sum_b basis[b][k] band_b, with btf_unmix as on the CPU
-// (src/synth/colour.c).
+// (src/synth/colour.c); with a marginal transfer, each band through it
+// first and the RGB result clamped to the exemplar's box after
+// (src/synth/marginal.c, the table made on the host by the same function).
 // One workgroup per subspace image, a grid-stride loop over its pixels.
 #version 450
 #extension GL_GOOGLE_include_directive : require
@@ -22,19 +24,77 @@ layout(push_constant) uniform Params {
     uint job_base;
 } pc;
 
+// The marginal transfer of band b at v: as btf_marginal_row (src/synth/marginal.c).
+float transfer_band(uint j, int b, float v)
+{
+    int base = b * 32;
+    float c = btf_clampf(v, jobs[j].z[base], jobs[j].z[base + 31]);
+    int i = 0;
+    for (int k = 1; k < 31; k++)
+        i += jobs[j].z[base + k] <= c ? 1 : 0;
+    return btf_transfer(c, jobs[j].z[base + i], jobs[j].slope[base + i], jobs[j].q[base + i],
+                        jobs[j].q[base + i + 1]);
+}
+
+// The colour into the exemplar's box, as gamut_pixel (src/synth/marginal.c).
+void gamut(uint j, inout float c[3])
+{
+    int inside = 1;
+    for (int k = 0; k < 3; k++)
+        inside &= btf_in_box(c[k], jobs[j].lo[k], jobs[j].hi[k]);
+    if (inside != 0)
+        return;
+    float d[3];
+    for (int k = 0; k < 3; k++) {
+        precise float dk = c[k] - jobs[j].mean[k];
+        d[k] = dk;
+    }
+    float a = 0.0, b = 1.0;
+    for (int s = 0; s < BTF_GAMUT_STEPS; s++) {
+        float m = btf_midpoint(a, b);
+        int in_ = 1;
+        for (int k = 0; k < 3; k++)
+            in_ &= btf_in_box(btf_gamut_point(jobs[j].mean[k], m, d[k]), jobs[j].lo[k],
+                              jobs[j].hi[k]);
+        if (in_ != 0)
+            a = m;
+        else
+            b = m;
+    }
+    for (int k = 0; k < 3; k++)
+        c[k] = btf_clampf(btf_gamut_point(jobs[j].mean[k], a, d[k]), jobs[j].lo[k],
+                          jobs[j].hi[k]);
+}
+
 void main()
 {
     uint j = pc.job_base + gl_WorkGroupID.x;
     uint count = uint(jobs[j].width) * uint(jobs[j].height);
     uint p_end = min(count, (gl_WorkGroupID.y + 1u) * uint(BTF_GPU_CHUNK));
+    bool on = jobs[j].transfer != 0;
     for (uint p = gl_WorkGroupID.y * uint(BTF_GPU_CHUNK) + gl_LocalInvocationID.x; p < p_end;
          p += 64u) {
         float b0 = gauss[jobs[j].gauss_off[0] + p];
         float b1 = gauss[jobs[j].gauss_off[1] + p];
         float b2 = gauss[jobs[j].gauss_off[2] + p];
+        // a non-finite band skips the transfer, so that the host's finite
+        // test refuses the image as the CPU does (btf_unmix_row)
+        uint e = 0x7F800000u;
+        bool finite = (floatBitsToUint(b0) & e) != e && (floatBitsToUint(b1) & e) != e &&
+                      (floatBitsToUint(b2) & e) != e;
+        bool apply = on && finite;
+        if (apply) {
+            b0 = transfer_band(j, 0, b0);
+            b1 = transfer_band(j, 1, b1);
+            b2 = transfer_band(j, 2, b2);
+        }
+        float c[3];
         for (int k = 0; k < 3; k++)
-            rgb[jobs[j].out_off + 3u * p + uint(k)] =
-                btf_unmix(jobs[j].mean[k], jobs[j].basis[k], jobs[j].basis[3 + k],
-                          jobs[j].basis[6 + k], b0, b1, b2);
+            c[k] = btf_unmix(jobs[j].mean[k], jobs[j].basis[k], jobs[j].basis[3 + k],
+                             jobs[j].basis[6 + k], b0, b1, b2);
+        if (apply)
+            gamut(j, c);
+        for (int k = 0; k < 3; k++)
+            rgb[jobs[j].out_off + 3u * p + uint(k)] = c[k];
     }
 }

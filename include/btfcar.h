@@ -709,6 +709,25 @@ typedef struct btf_car_band {
     float mean;                              /* mean of the sub-band */
 } btf_car_band;
 
+/* Marginal transfer of a subspace (docs/synthesis.md, "Marginals"): the CAR
+ * fields' collapsed bands are Gaussian, the material's decorrelated channels
+ * are not; synthesis sends each band v through the monotone piecewise-linear
+ * map with knots z_j = synth_mean + synth_sd * N_j (N_j the standard normal
+ * quantiles of the documented probabilities) onto the exemplar's quantiles
+ * quantile[j], clamped to [quantile[0], quantile[last]] (the exemplar's
+ * range), and the RGB result to [rgb_lo, rgb_hi] (the exemplar's RGB box,
+ * rgb_lo >= 0). knots 0: no transfer (identity, no clamp), as in a model
+ * file of format 1.0 or 1.1. */
+#define BTF_MARGIN_KNOTS 32
+typedef struct btf_marginal {
+    int knots;                            /* 0 or BTF_MARGIN_KNOTS */
+    float synth_mean[3], synth_sd[3];     /* per band: the synthesised band's mean and
+                                             standard deviation (sd >= 0) */
+    float quantile[3][BTF_MARGIN_KNOTS];  /* per band: the exemplar's quantiles, nondecreasing;
+                                             [0] its minimum, [last] its maximum */
+    float rgb_lo[3], rgb_hi[3];           /* the exemplar's linear RGB range, 0 <= lo <= hi */
+} btf_marginal;
+
 typedef struct btf_subspace_model {
     int view, light;           /* the representative image's pair; -1 for a texture */
     int width, height;         /* size of the analysed image */
@@ -717,6 +736,8 @@ typedef struct btf_subspace_model {
                                   orthonormal, so rgb = mean + basis^T band */
     int levels;                /* pyramid levels, 1..BTF_MAX_LEVELS; level 0 is the finest */
     btf_car_band bands[3][BTF_MAX_LEVELS]; /* [spectral band][level] */
+    btf_marginal marginal;     /* knots 0: none (btf_fit_subspace leaves it so;
+                                  btf_fit_marginals fills it) */
 } btf_subspace_model;
 
 typedef struct btf_model {
@@ -823,6 +844,12 @@ btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
  * index table, no range map. */
 btf_status btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_model *out,
                            btf_error *err);
+/* The marginal transfer of subspace `subspace` of m from its exemplar img
+ * (linear RGB, the image the subspace was fitted to): the exemplar's
+ * decorrelated quantiles and RGB range, and the mean and standard deviation
+ * of each band of a synthesis of the subspace (512 x 512, a fixed seed, no
+ * transfer). btf_texture_fit and btf_analyse call it for every subspace. */
+btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, btf_error *err);
 /* The automatic number of pyramid levels for a band (docs/model.md). */
 int btf_auto_levels(const double *band, int w, int h);
 

@@ -272,6 +272,20 @@ int main(int argc, char **argv)
     small_model(&m, 0, 1);
     write_seeds(argv[1], "texture-range", &m);
     btf_model_free(&m);
+    /* format 1.2: a marginal transfer on subspace 0 (MARG), none on 1 */
+    small_model(&m, 1, 1);
+    btf_marginal *mg = &m.subspaces[0].marginal;
+    mg->knots = BTF_MARGIN_KNOTS;
+    for (int b = 0; b < 3; b++) {
+        mg->synth_mean[b] = 0.01f * (float)b;
+        mg->synth_sd[b] = 0.1f / (float)(b + 1);
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+            mg->quantile[b][j] = -0.2f + 0.4f * (float)(j * j) / (float)(31 * 31);
+    }
+    for (int k = 0; k < 3; k++)
+        mg->rgb_lo[k] = 0.0f, mg->rgb_hi[k] = 0.75f;
+    write_seeds(argv[1], "marginals", &m);
+    btf_model_free(&m);
     return 0;
 }
 

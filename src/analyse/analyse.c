@@ -121,6 +121,8 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         btf_fit_opts fo = o->fit;
         fo.car.what = what;
         rc = btf_fit_subspace(&img, &fo, &m->subspaces[k], err);
+        if (rc == BTF_OK) /* the histogram to keep (src/analyse/marginal_fit.c) */
+            rc = btf_fit_marginals(&img, m, k, err);
         btf_image_free(&img);
         if (rc)
             return rc;

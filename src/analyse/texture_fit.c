@@ -2,7 +2,8 @@
  * texture_fit.c — the model of one ordinary colour texture (Haindl & Filip
  * 2007, section II.C without II.A and II.B): a model of one subspace, fitted
  * by car/subspace_fit.c, with no direction sets, no index table and no
- * range map, and the margins synthesis will use kept with it.
+ * range map, and the margins synthesis will use kept with it, and the
+ * marginal transfer that keeps the texture's histogram.
  */
 #include "core/core.h"
 #include "model/model.h"
@@ -25,6 +26,8 @@ btf_status btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_m
     btf_status rc = btf_fit_subspace(img, opts, &out->subspaces[0], err);
     if (rc == 0 && btf_model_keep_margins(out, -1.0) != BTF_OK) /* for synthesis */
         rc = btf_fail(err, BTF_E_NOMEM, "out of memory");
+    if (rc == 0) /* the histogram to keep (src/analyse/marginal_fit.c) */
+        rc = btf_fit_marginals(img, out, 0, err);
     if (rc)
         btf_model_free(out);
     return rc;

@@ -118,6 +118,48 @@ static btf_status check_basis(const float *basis, int s, const char *name, btf_s
     return BTF_OK;
 }
 
+/* The marginal transfer (docs/model-format.md, "MARG"): none, or 32 knots
+ * per band with finite numbers, sd >= 0, nondecreasing quantiles, knots
+ * z = mean +- 3.49 sd and quantiles well inside the float range (so that
+ * slopes and differences of knots stay finite), and an RGB box 0 <= lo <=
+ * hi. */
+#define MARGIN_LIMIT 1e37f
+static btf_status check_marginal(const btf_marginal *mg, int s, const char *name,
+                                 btf_status code, btf_error *err)
+{
+    if (mg->knots == 0)
+        return BTF_OK;
+    if (mg->knots != BTF_MARGIN_KNOTS)
+        return failf(err, code, name, "subspace %d: marginal transfer of %d knots (expected 0 or %d)",
+                     s, mg->knots, BTF_MARGIN_KNOTS);
+    for (int b = 0; b < 3; b++) {
+        float mu = mg->synth_mean[b], sd = mg->synth_sd[b];
+        if (!(fabsf(mu) <= MARGIN_LIMIT) || !(sd >= 0.0f && sd <= MARGIN_LIMIT))
+            return failf(err, code, name,
+                         "subspace %d, band %d: marginal transfer mean %g, sd %g (expected finite, "
+                         "sd >= 0, magnitudes at most 1e37)", s, b, mu, sd);
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
+            float q = mg->quantile[b][j];
+            if (!(fabsf(q) <= MARGIN_LIMIT))
+                return failf(err, code, name,
+                             "subspace %d, band %d: marginal quantile %d is %g (expected a finite "
+                             "number of magnitude at most 1e37)", s, b, j, q);
+            if (j > 0 && q < mg->quantile[b][j - 1])
+                return failf(err, code, name,
+                             "subspace %d, band %d: marginal quantile %d is %g, below quantile %d, "
+                             "%g (expected nondecreasing quantiles)", s, b, j, q, j - 1,
+                             mg->quantile[b][j - 1]);
+        }
+    }
+    for (int k = 0; k < 3; k++)
+        if (!(mg->rgb_lo[k] >= 0.0f && mg->rgb_lo[k] <= mg->rgb_hi[k] &&
+              mg->rgb_hi[k] <= MARGIN_LIMIT))
+            return failf(err, code, name,
+                         "subspace %d: RGB range [%g, %g] of channel %d (expected 0 <= low <= high, "
+                         "finite)", s, mg->rgb_lo[k], mg->rgb_hi[k], k);
+    return BTF_OK;
+}
+
 static btf_status check_subspace(const btf_model *m, int s, const char *name, btf_status code,
                                  btf_error *err)
 {
@@ -151,7 +193,7 @@ static btf_status check_subspace(const btf_model *m, int s, const char *name, bt
             if ((rc = check_band(&sm->bands[b][l], where, name, code, err)))
                 return rc;
         }
-    return BTF_OK;
+    return check_marginal(&sm->marginal, s, name, code, err);
 }
 
 /* Every band's stability, by the criterion fitting stabilises to

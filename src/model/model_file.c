@@ -37,6 +37,9 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 /* 1.1 added the RANG flags (the tile is periodic); a model without a range
  * map is still written as 1.0, the lowest version that holds it. */
 #define FMT_MINOR_RANGE_FLAGS 1
+/* 1.2 added the MARG section (marginal transfers); a model without one is
+ * written as 1.1 or 1.0. */
+#define FMT_MINOR_MARGINALS 2
 #define HEADER_BYTES 26 /* signature .. stored size, version 1.0 */
 #define RANG_PERIODIC 0x01u /* RANG flags bit 0: the tile is periodic */
 #define CRC_BYTES 4
@@ -49,8 +52,8 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 #define MAX_FILE_BYTES ((size_t)64 << 20)
 #define MAX_PAYLOAD_BYTES ((size_t)64 << 20)
 
-enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_COUNT };
-static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG"};
+enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_MARG, S_COUNT };
+static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG", "MARG"};
 
 /* ------------------------------------------------------------- messages */
 
@@ -277,6 +280,39 @@ static void put_subspaces(wbuf *b, const btf_model *m)
     w_section_end(b, body);
 }
 
+static int has_marginals(const btf_model *m)
+{
+    for (int s = 0; s < m->n_subspaces; s++)
+        if (m->subspaces[s].marginal.knots)
+            return 1;
+    return 0;
+}
+
+/* MARG (version 1.2): per subspace a u8 knot count, 0 or 32; with 32, per
+ * band its synthesised mean and sd and 32 quantiles, then the RGB box. */
+static void put_marginals(wbuf *b, const btf_model *m)
+{
+    size_t body = w_section_begin(b, S_MARG);
+    w_u16(b, (unsigned)m->n_subspaces);
+    for (int s = 0; s < m->n_subspaces; s++) {
+        const btf_marginal *mg = &m->subspaces[s].marginal;
+        w_u8(b, (unsigned)mg->knots);
+        if (!mg->knots)
+            continue;
+        for (int band = 0; band < 3; band++) {
+            w_f32(b, mg->synth_mean[band]);
+            w_f32(b, mg->synth_sd[band]);
+            for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+                w_f32(b, mg->quantile[band][j]);
+        }
+        for (int k = 0; k < 3; k++)
+            w_f32(b, mg->rgb_lo[k]);
+        for (int k = 0; k < 3; k++)
+            w_f32(b, mg->rgb_hi[k]);
+    }
+    w_section_end(b, body);
+}
+
 /* Quantises the heights on their canonical grid and writes the predictor
  * residuals as two byte planes (low bytes, then high bytes): the high plane
  * of a smooth surface is nearly all zeros. */
@@ -341,6 +377,8 @@ static btf_status build_payload(const btf_model *m, wbuf *b, const char *name, b
         if (rc)
             return rc;
     }
+    if (has_marginals(m))
+        put_marginals(b, m);
     if (b->failed)
         return failf(err, BTF_E_NOMEM, name, "out of memory encoding the model");
     return BTF_OK;
@@ -394,7 +432,10 @@ static btf_status encode_named(const btf_model *m, const char *name, unsigned ch
         rc = failf(err, BTF_E_DATA, name, "model of %zu bytes (expected at most %zu)", pl.n,
                    MAX_PAYLOAD_BYTES);
     if (rc == BTF_OK)
-        rc = wrap_payload(&pl, m->range ? FMT_MINOR_RANGE_FLAGS : 0, name, data, size, err);
+        rc = wrap_payload(&pl, has_marginals(m) ? FMT_MINOR_MARGINALS
+                               : m->range       ? FMT_MINOR_RANGE_FLAGS
+                                                : 0,
+                          name, data, size, err);
     free(pl.p);
     return rc;
 }
@@ -774,6 +815,45 @@ static btf_status read_range(const span *sp, btf_model *m, const char *name, btf
     return BTF_OK;
 }
 
+/* MARG: counts checked here, the numbers by btf_model_validate. A model
+ * without the section (format 1.0, 1.1) keeps knots 0: no transfer. */
+static btf_status read_marginals(const span *sp, btf_model *m, const char *name, btf_error *err)
+{
+    rbuf r = {sp->p, sp->n, 0, 0};
+    unsigned count = r_u16(&r);
+    if (r.short_read)
+        return short_section(S_MARG, name, err);
+    if ((int)count != m->n_subspaces)
+        return failf(err, BTF_E_FORMAT, name,
+                     "section MARG: %u subspaces (expected %d, as SUBS)", count, m->n_subspaces);
+    for (int s = 0; s < m->n_subspaces; s++) {
+        btf_marginal *mg = &m->subspaces[s].marginal;
+        unsigned knots = r_u8(&r);
+        if (r.short_read)
+            return short_section(S_MARG, name, err);
+        if (knots != 0 && knots != BTF_MARGIN_KNOTS)
+            return failf(err, BTF_E_FORMAT, name,
+                         "section MARG: subspace %d has %u knots (expected 0 or %d)", s, knots,
+                         BTF_MARGIN_KNOTS);
+        mg->knots = (int)knots;
+        if (!knots)
+            continue;
+        for (int band = 0; band < 3; band++) {
+            mg->synth_mean[band] = r_f32(&r);
+            mg->synth_sd[band] = r_f32(&r);
+            for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+                mg->quantile[band][j] = r_f32(&r);
+        }
+        for (int k = 0; k < 3; k++)
+            mg->rgb_lo[k] = r_f32(&r);
+        for (int k = 0; k < 3; k++)
+            mg->rgb_hi[k] = r_f32(&r);
+        if (r.short_read)
+            return short_section(S_MARG, name, err);
+    }
+    return BTF_OK;
+}
+
 static btf_status read_payload(const unsigned char *p, size_t n, btf_model *m, const char *name,
                                btf_error *err)
 {
@@ -798,6 +878,8 @@ static btf_status read_payload(const unsigned char *p, size_t n, btf_model *m, c
     if ((rc = read_subspaces(&sec[S_SUBS], m, name, err)))
         return rc;
     if (sec[S_RANG].present && (rc = read_range(&sec[S_RANG], m, name, err)))
+        return rc;
+    if (sec[S_MARG].present && (rc = read_marginals(&sec[S_MARG], m, name, err)))
         return rc;
     return btf_model_validate(m, name, BTF_E_FORMAT, err);
 }

@@ -111,6 +111,57 @@ BTF_FN float btf_unmix(float mean, float b0, float b1, float b2, float v0, float
     return s2;
 }
 
+/* The marginal transfer (docs/synthesis.md, "Marginals"), per band: v
+ * clamped to the first and last knot [z0, zn], then on the segment i whose
+ * knot z <= v (found by counting knots, src/synth/marginal.c and
+ * gpu/synth_unmix.comp alike), q + (v - z) * slope, clamped to [q, q_next].
+ * Every step is monotone in v and segment i ends at q_next where segment
+ * i + 1 starts, so the map is monotone; the clamps are written as
+ * comparisons (not min/max, whose signed zeros differ between C, AVX2 and
+ * GLSL). Only sub, mul, add and compares: exact in Vulkan as in C. */
+BTF_FN float btf_clampf(float v, float lo, float hi)
+{
+    float a = v < lo ? lo : v;
+    return a > hi ? hi : a;
+}
+
+BTF_FN float btf_transfer(float v, float z, float slope, float q, float q_next)
+{
+    BTF_PRECISE float d = v - z;
+    BTF_PRECISE float p = d * slope;
+    BTF_PRECISE float s = q + p;
+    return btf_clampf(s, q, q_next);
+}
+
+/* Gamut (docs/synthesis.md, "Marginals"): a colour outside the exemplar's
+ * RGB box is moved towards the subspace's mean colour, c(t) = mean + t d
+ * with d = rgb - mean, to the largest t in [0, 1] found by
+ * BTF_GAMUT_STEPS halvings (division-free, so exact on every GPU) that
+ * keeps all three channels in the box; then each channel is clamped to the
+ * box (which only matters when the mean itself is outside it). Moving along
+ * d keeps the colour on the exemplar's colour line or plane, where a
+ * per-channel clamp alone would leave it (new colours in a weak band). */
+#define BTF_GAMUT_STEPS 12
+
+BTF_FN float btf_gamut_point(float mean, float t, float d)
+{
+    BTF_PRECISE float p = t * d;
+    BTF_PRECISE float c = mean + p;
+    return c;
+}
+
+BTF_FN float btf_midpoint(float a, float b)
+{
+    BTF_PRECISE float s = a + b;
+    BTF_PRECISE float m = s * 0.5f;
+    return m;
+}
+
+BTF_FN int btf_in_box(float c, float lo, float hi)
+{
+    return (c >= lo && c <= hi) ? 1 : 0;
+}
+
 #if !defined(BTF_GLSL) && !defined(VULKAN) && !defined(GL_core_profile) && !defined(GL_ES)
 /* C only: the four Gaussians of one noise block into an array. */
 static inline void btf_noise_block(btf_uint seed_lo, btf_uint seed_hi, btf_uint stream,

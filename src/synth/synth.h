@@ -105,13 +105,39 @@ btf_status btf_synth_check_band(const btf_car_band *b, int margin, btf_error *er
 /* A synthesis size: 1..BTF_SYNTH_MAX_SIDE on each side. */
 btf_status btf_synth_check_size(int width, int height, btf_error *err);
 
+/* -------------------------------------------------------------- marginal.c */
+
+/* A subspace's marginal transfer as synthesis applies it (docs/synthesis.md,
+ * "Marginals"): knots, exemplar quantiles and segment slopes per band, the
+ * RGB box; on 0: none (identity, no clamp). Made on the host for the CPU and
+ * the GPU alike. */
+typedef struct btf_marginal_table {
+    int on;
+    float z[3][BTF_MARGIN_KNOTS], q[3][BTF_MARGIN_KNOTS], slope[3][BTF_MARGIN_KNOTS];
+    float lo[3], hi[3];
+} btf_marginal_table;
+/* The standard normal quantiles N_j of the knots. */
+extern const double btf_marginal_normal_knots[BTF_MARGIN_KNOTS];
+void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t);
+/* out[x] = the transfer of band `band` at v[x] (seg: width ints of scratch);
+ * nonzero when a v is Inf or NaN. */
+int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width,
+                     float *out, int *seg);
+/* Brings the colours of three planes (R, G, B) into the table's box, each
+ * moved towards mean (btf_shared.h, "Gamut"). */
+void btf_marginal_gamut_planes(const btf_marginal_table *t, const float mean[3], float *p0,
+                               float *p1, float *p2, int width);
+
 /* ---------------------------------------------------------------- colour.c */
 
-/* One row of a subspace image from its three bands: inverse decorrelation
- * (btf_unmix per channel), interleaved RGB into row (plane: 3 width floats
- * of scratch). Returns nonzero when a value is Inf or NaN. */
-int btf_unmix_row(const btf_subspace_model *sm, const float *b0, const float *b1,
-                  const float *b2, int width, float *plane, float *row);
+/* Scratch floats per pixel that btf_unmix_row needs. */
+#define BTF_UNMIX_SCRATCH 7
+/* One row of a subspace image from its three bands: the marginal transfer
+ * (t, when on), inverse decorrelation (btf_unmix per channel), the RGB
+ * clamp (when on), interleaved RGB into row (scratch: BTF_UNMIX_SCRATCH *
+ * width floats). Returns nonzero when a value is Inf or NaN. */
+int btf_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t, const float *b0,
+                  const float *b1, const float *b2, int width, float *scratch, float *row);
 /* BTF_E_NUMERIC naming the subspace and row if any of n values is not
  * finite: no synthesis hands out Inf or NaN (a model fitted to values near
  * the float limit can overflow); both backends check their output with it. */

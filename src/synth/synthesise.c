@@ -100,6 +100,68 @@ btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error
     return BTF_OK;
 }
 
+/* With a marginal transfer the colour step (transfer, inverse decorrelation,
+ * gamut: src/synth/colour.c) costs as much as the fields: the collapse
+ * hands over COLOUR_BLOCK rows of the three bands, which are coloured on
+ * every CPU (a row's bytes depend on the row alone), then passed on in
+ * order. Memory grows with the width, as before. */
+#define COLOUR_BLOCK 32
+typedef struct colour_job {
+    const btf_subspace_model *sm;
+    const btf_marginal_table *mt;
+    int width, subspace, y0;
+    float *bands;   /* [row][band][width] */
+    float *rgb;     /* [row][width * 3] */
+    float *scratch; /* [worker][width * BTF_UNMIX_SCRATCH] */
+} colour_job;
+
+static btf_status colour_row(void *user, int j, int worker, btf_error *err)
+{
+    colour_job *c = user;
+    size_t w = (size_t)c->width;
+    const float *b = c->bands + (size_t)j * 3 * w;
+    float *rgb = c->rgb + (size_t)j * 3 * w;
+    if (btf_unmix_row(c->sm, c->mt, b, b + w, b + 2 * w, c->width,
+                      c->scratch + (size_t)worker * w * BTF_UNMIX_SCRATCH, rgb))
+        return btf_check_finite_row(rgb, 3 * w, c->subspace, c->y0 + j, err);
+    return BTF_OK;
+}
+
+static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal_table *mt,
+                                synth_band *sb, int width, int height, int subspace,
+                                btf_rows_fn fn, void *user, btf_error *err)
+{
+    int workers = btf_pool_workers(0, COLOUR_BLOCK);
+    size_t w = (size_t)width;
+    colour_job c = {sm, mt, width, subspace, 0, NULL, NULL, NULL};
+    c.bands = btf_alloc(w * 3 * COLOUR_BLOCK, sizeof(float), err);
+    c.rgb = c.bands ? btf_alloc(w * 3 * COLOUR_BLOCK, sizeof(float), err) : NULL;
+    c.scratch = c.rgb ? btf_alloc(w * BTF_UNMIX_SCRATCH * (size_t)workers, sizeof(float), err)
+                      : NULL;
+    btf_status rc = c.scratch ? BTF_OK : BTF_E_NOMEM;
+    for (int y0 = 0; rc == BTF_OK && y0 < height; y0 += COLOUR_BLOCK) {
+        int n = height - y0 < COLOUR_BLOCK ? height - y0 : COLOUR_BLOCK;
+        for (int j = 0; j < n; j++) {
+            const float *g0[3];
+            synth_gauss_rows(sb, 3, 0, y0 + j, g0);
+            for (int b = 0; b < 3; b++)
+                memcpy(c.bands + ((size_t)j * 3 + b) * w, g0[b], w * sizeof(float));
+        }
+        c.y0 = y0;
+        rc = btf_pool_run(n, 0, colour_row, &c, NULL, err);
+        for (int j = 0; rc == BTF_OK && j < n; j++) {
+            int got = fn(user, y0 + j, 1, c.rgb + (size_t)j * 3 * w, err);
+            rc = got > 0 ? BTF_E_IO : (btf_status)got;
+            if (rc && err && !err->msg[0])
+                btf_fail(err, rc, "synthesis stopped by its consumer");
+        }
+    }
+    free(c.bands);
+    free(c.rgb);
+    free(c.scratch);
+    return rc;
+}
+
 btf_status btf_synthesise_margins(const btf_model *m, int subspace,
                                   const int (*margins)[BTF_MAX_LEVELS],
                                   const btf_synth_opts *opts, btf_rows_fn fn, void *user,
@@ -131,14 +193,22 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
     for (; made < 3 && rc == 0; made++)
         rc = synth_band_init(&sb[made], sm->bands[made], margin[made], sm->levels, subspace, made,
                              width, height, o.seed, &paths, err);
-    float *row = rc ? NULL : btf_alloc((size_t)width * 6, sizeof(float), err);
-    float *plane = row ? row + (size_t)width * 3 : NULL; /* 3 planar channels */
+    btf_marginal_table mt;
+    btf_marginal_table_make(sm, &mt);
+    if (rc == 0 && mt.on) {
+        rc = colour_blocks(sm, &mt, sb, width, height, subspace, fn, user, err);
+        for (int b = 0; b < made; b++)
+            synth_band_free(&sb[b]);
+        return rc;
+    }
+    float *row = rc ? NULL : btf_alloc((size_t)width * (3 + BTF_UNMIX_SCRATCH), sizeof(float), err);
+    float *plane = row ? row + (size_t)width * 3 : NULL; /* btf_unmix_row's scratch */
     if (!rc && !row)
         rc = BTF_E_NOMEM;
     for (int y = 0; rc == 0 && y < height; y++) {
         const float *g0[3];
         synth_gauss_rows(sb, 3, 0, y, g0);
-        if (btf_unmix_row(sm, g0[0], g0[1], g0[2], width, plane, row)) /* the message names y */
+        if (btf_unmix_row(sm, &mt, g0[0], g0[1], g0[2], width, plane, row)) /* the message names y */
             rc = btf_check_finite_row(row, (size_t)width * 3, subspace, y, err);
         if (rc == 0) {
             int got = fn(user, y, 1, row, err);

@@ -189,7 +189,9 @@ btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_s
     if (rc)
         return rc;
     size_t n = (size_t)w * h;
-    float *planes = btf_alloc(n * 3 + (size_t)w * 6, sizeof(float), err);
+    btf_marginal_table mt;
+    btf_marginal_table_make(sm, &mt);
+    float *planes = btf_alloc(n * 3 + (size_t)w * (3 + BTF_UNMIX_SCRATCH), sizeof(float), err);
     if (!planes)
         return BTF_E_NOMEM;
     float *rgb = planes + n * 3, *scratch = rgb + (size_t)w * 3;
@@ -199,7 +201,7 @@ btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_s
     rc = btf_pool_run(3, 0, band_job, &jobs, NULL, err);
     for (int y = 0; rc == BTF_OK && y < h; y++) {
         size_t at = (size_t)y * w;
-        if (btf_unmix_row(sm, planes + at, planes + n + at, planes + 2 * n + at, w, scratch, rgb))
+        if (btf_unmix_row(sm, &mt, planes + at, planes + n + at, planes + 2 * n + at, w, scratch, rgb))
             rc = btf_check_finite_row(rgb, (size_t)w * 3, subspace, y, err);
         if (rc == BTF_OK) {
             int got = fn(user, y, 1, rgb, err);

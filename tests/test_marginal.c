@@ -1,0 +1,256 @@
+/*
+ * test_marginal.c — the marginal transfer (docs/synthesis.md, "Marginals";
+ * src/synth/marginal.c, src/analyse/marginal_fit.c): the map is monotone
+ * and stays in the exemplar's range for any input, hits the quantiles at
+ * the knots; syntheses of fitted generated materials have no negative
+ * pixel, stay in the exemplar's RGB box, and match its histogram better
+ * than without; degenerate images stay finite; the model file keeps the
+ * transfer bit for bit, writes 1.2 only with one, and the validator
+ * refuses broken transfers.
+ */
+#include "testutil.h"
+#include "synth/synth.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static btf_subspace_model skewed_subspace(void)
+{
+    btf_subspace_model sm = {0};
+    sm.basis[0] = sm.basis[4] = sm.basis[8] = 1.0f;
+    sm.marginal.knots = BTF_MARGIN_KNOTS;
+    for (int b = 0; b < 3; b++) {
+        sm.marginal.synth_mean[b] = 0.1f * (float)b;
+        sm.marginal.synth_sd[b] = 0.5f;
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++) /* skewed, with a flat run */
+            sm.marginal.quantile[b][j] = j < 5 ? -0.1f : -0.1f + 0.002f * (float)((j - 4) * (j - 4));
+    }
+    for (int k = 0; k < 3; k++)
+        sm.marginal.rgb_lo[k] = 0.0f, sm.marginal.rgb_hi[k] = 2.0f;
+    return sm;
+}
+
+static void transfer_is_monotone_and_bounded(void **state)
+{
+    (void)state;
+    btf_subspace_model sm = skewed_subspace();
+    btf_marginal_table t;
+    btf_marginal_table_make(&sm, &t);
+    assert_true(t.on);
+    enum { N = 20001 };
+    static float v[N + 4], out[N + 4];
+    static int seg[N + 4];
+    for (int i = 0; i < N; i++)
+        v[i] = -6.0f + 12.0f * (float)i / (float)(N - 1);
+    v[N] = -FLT_MAX, v[N + 1] = FLT_MAX, v[N + 2] = -0.0f, v[N + 3] = 1e30f;
+    for (int b = 0; b < 3; b++) {
+        assert_int_equal(btf_marginal_row(&t, b, v, N + 4, out, seg), 0);
+        const float *q = sm.marginal.quantile[b];
+        for (int i = 0; i < N + 4; i++) {
+            assert_true(out[i] >= q[0] && out[i] <= q[BTF_MARGIN_KNOTS - 1]);
+            if (i > 0 && i < N)
+                assert_true(out[i] >= out[i - 1]); /* monotone */
+        }
+        assert_true(out[N] == q[0] && out[N + 1] == q[BTF_MARGIN_KNOTS - 1]);
+        /* at a knot, its quantile */
+        for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++) {
+            float z = t.z[b][j], o;
+            btf_marginal_row(&t, b, &z, 1, &o, seg);
+            assert_true(o == q[j]);
+        }
+    }
+    float inf = INFINITY;
+    assert_int_equal(btf_marginal_row(&t, 0, &inf, 1, out, seg), 1); /* reported */
+    /* no transfer: the table is off */
+    sm.marginal.knots = 0;
+    btf_marginal_table_make(&sm, &t);
+    assert_false(t.on);
+}
+
+/* The earth mover's distance of band b between two images of equal size
+ * (sorted samples; linear RGB units, the basis is orthonormal); *sd: the
+ * exemplar band's standard deviation. */
+static double band_emd(const btf_image *a, const btf_image *s, const btf_subspace_model *sm,
+                       int b, double *sd)
+{
+    size_t n = (size_t)a->width * a->height;
+    double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), m = 0, var = 0, d = 0;
+    for (size_t i = 0; i < n; i++) {
+        x[i] = y[i] = 0;
+        for (int k = 0; k < 3; k++) {
+            x[i] += sm->basis[3 * b + k] * ((double)a->data[3 * i + k] - sm->mean[k]);
+            y[i] += sm->basis[3 * b + k] * ((double)s->data[3 * i + k] - sm->mean[k]);
+        }
+        m += x[i];
+    }
+    m /= (double)n;
+    for (size_t i = 0; i < n; i++)
+        var += (x[i] - m) * (x[i] - m);
+    qsort(x, n, sizeof *x, cmp_double);
+    qsort(y, n, sizeof *y, cmp_double);
+    for (size_t i = 0; i < n; i++)
+        d += fabs(x[i] - y[i]);
+    free(x);
+    free(y);
+    *sd = sqrt(var / (double)n);
+    return d / (double)n;
+}
+
+/* Generated materials, dark and grazing pairs among them: with the
+ * transfer no pixel is negative and every pixel is in the exemplar's box;
+ * the summed EMD of the bands drops (each material). */
+static void materials_keep_their_marginals(void **state)
+{
+    (void)state;
+    const char *names[3] = {"leather", "fabric", "wood"};
+    btf_dir pairs[3][2] = {{{0, 0}, {45, 30}}, {{30, 90}, {75, 120}}, {{60, 18}, {60, 200}}};
+    btf_error e = {0};
+    for (int mi = 0; mi < 3; mi++)
+        for (int p = 0; p < 3; p++) {
+            btf_image img;
+            tu_material_image(names[mi], 64, 3, pairs[p][0], pairs[p][1], &img);
+            btf_model m;
+            btf_fit_opts fo = btf_fit_defaults();
+            fo.levels = 2;
+            TU_OK(btf_texture_fit(&img, &fo, &m, &e), &e);
+            btf_subspace_model *sm = &m.subspaces[0];
+            assert_int_equal(sm->marginal.knots, BTF_MARGIN_KNOTS);
+            btf_synth_opts so = btf_synth_defaults();
+            so.seed = 11;
+            btf_image on, off;
+            TU_OK(btf_synthesise_image(&m, 0, &so, &on, &e), &e);
+            btf_marginal keep = sm->marginal;
+            sm->marginal.knots = 0;
+            TU_OK(btf_synthesise_image(&m, 0, &so, &off, &e), &e);
+            sm->marginal = keep;
+            size_t n = (size_t)img.width * img.height;
+            float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {0, 0, 0};
+            for (size_t i = 0; i < 3 * n; i++) {
+                lo[i % 3] = fminf(lo[i % 3], img.data[i]);
+                hi[i % 3] = fmaxf(hi[i % 3], img.data[i]);
+            }
+            for (size_t i = 0; i < 3 * n; i++) {
+                assert_true(on.data[i] >= 0.0f);
+                assert_true(on.data[i] >= lo[i % 3] && on.data[i] <= hi[i % 3]);
+            }
+            /* each band's distance, their sum in RGB units, and band 0's
+             * relative distance */
+            double e_on = 0, e_off = 0, sd, r_on = 0, r_off = 0;
+            for (int b = 0; b < 3; b++) {
+                double a = band_emd(&img, &on, sm, b, &sd), c = band_emd(&img, &off, sm, b, &sd);
+                print_message("%s pair %d band %d: EMD/sd %.3f without, %.3f with\n", names[mi],
+                              p, b, c / sd, a / sd);
+                assert_true(a < c); /* every band closer to the exemplar's histogram */
+                e_on += a;
+                e_off += c;
+                if (b == 0)
+                    r_on = a / sd, r_off = c / sd;
+            }
+            assert_true(e_on < e_off);
+            assert_true(r_on < r_off);
+            btf_image_free(&on);
+            btf_image_free(&off);
+            btf_image_free(&img);
+            btf_model_free(&m);
+        }
+}
+
+/* 1x1, constant and huge-valued images: a transfer (or none where synthesis
+ * would overflow float), finite output, in the box. */
+static void degenerate_images(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    int sizes[3][2] = {{1, 1}, {8, 8}, {3, 17}};
+    for (int s = 0; s < 3; s++) {
+        btf_image img;
+        TU_OK(btf_image_alloc(&img, sizes[s][0], sizes[s][1], 3, &e), &e);
+        for (int i = 0; i < sizes[s][0] * sizes[s][1] * 3; i++)
+            img.data[i] = s == 2 ? (float)(i % 5) * 0.2f : 0.25f; /* constant, then not */
+        btf_model m;
+        TU_OK(btf_texture_fit(&img, NULL, &m, &e), &e);
+        assert_int_equal(m.subspaces[0].marginal.knots, BTF_MARGIN_KNOTS);
+        btf_synth_opts so = {.width = 33, .height = 9, .seed = 2};
+        btf_image out;
+        TU_OK(btf_synthesise_image(&m, 0, &so, &out, &e), &e);
+        for (int i = 0; i < 33 * 9 * 3; i++) {
+            assert_true(isfinite(out.data[i]) && out.data[i] >= 0.0f);
+            if (s < 2)
+                assert_true(fabsf(out.data[i] - 0.25f) < 1e-6f);
+        }
+        btf_image_free(&out);
+        btf_image_free(&img);
+        btf_model_free(&m);
+    }
+}
+
+static void file_keeps_the_transfer(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image img;
+    tu_material_image("wood", 32, 1, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
+    btf_model m, r;
+    TU_OK(btf_texture_fit(&img, NULL, &m, &e), &e);
+    unsigned char *d = NULL, *d0 = NULL;
+    size_t n, n0;
+    TU_OK(btf_model_encode(&m, &d, &n, &e), &e);
+    assert_int_equal(d[13], 2); /* format 1.2 */
+    TU_OK(btf_model_decode(d, n, "t", &r, &e), &e);
+    assert_memory_equal(&r.subspaces[0].marginal, &m.subspaces[0].marginal, sizeof(btf_marginal));
+    btf_model_free(&r);
+    /* without a transfer: 1.0 as before, and it reads back with none */
+    btf_marginal keep = m.subspaces[0].marginal;
+    memset(&m.subspaces[0].marginal, 0, sizeof keep);
+    TU_OK(btf_model_encode(&m, &d0, &n0, &e), &e);
+    assert_int_equal(d0[13], 0);
+    print_message("bytes added by the transfer (one subspace, deflated): %zu\n", n - n0);
+    TU_OK(btf_model_decode(d0, n0, "t", &r, &e), &e);
+    assert_int_equal(r.subspaces[0].marginal.knots, 0);
+    btf_model_free(&r);
+    /* the validator: broken transfers are refused with a message */
+    struct { int what; const char *needle; } cases[] = {
+        {0, "nondecreasing"}, {1, "sd"}, {2, "RGB range"}, {3, "knots"}, {4, "quantile"}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        m.subspaces[0].marginal = keep;
+        btf_marginal *mg = &m.subspaces[0].marginal;
+        switch (cases[c].what) {
+        case 0: mg->quantile[1][5] = mg->quantile[1][4] - 1.0f; break;
+        case 1: mg->synth_sd[2] = -1.0f; break;
+        case 2: mg->rgb_lo[0] = -0.5f; break;
+        case 3: mg->knots = 7; break;
+        default: mg->quantile[0][3] = NAN; break;
+        }
+        unsigned char *bad = NULL;
+        size_t nb;
+        btf_error be = {0};
+        assert_int_equal(btf_model_encode(&m, &bad, &nb, &be), BTF_E_DATA);
+        print_message("refused: %s\n", be.msg);
+        assert_non_null(strstr(be.msg, cases[c].needle));
+        assert_null(bad);
+    }
+    m.subspaces[0].marginal = keep;
+    free(d);
+    free(d0);
+    btf_model_free(&m);
+    btf_image_free(&img);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(transfer_is_monotone_and_bounded),
+        cmocka_unit_test(materials_keep_their_marginals),
+        cmocka_unit_test(degenerate_images),
+        cmocka_unit_test(file_keeps_the_transfer),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

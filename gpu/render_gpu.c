@@ -30,14 +30,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* The host copies of the parameter buffers (gpu/render_layout.h). */
 typedef struct params {
@@ -150,10 +142,7 @@ static btf_status build_params(const btf_model *m, const btf_render_plan *p,
     hi[BTF_RP_HAVE] = (int32_t)have;
     hi[BTF_RP_TEXOFF] = (int32_t)texoff;
     hi[BTF_RP_NORMAL] = p->side * p->side;
-    double outer = 0.0;
-    for (int i = 0; i < m->lights.count; i++)
-        outer = m->lights.dirs[i].theta > outer ? m->lights.dirs[i].theta : outer;
-    hf[BTF_RP_OUTER] = (float)cos(outer * (3.14159265358979323846 / 180.0));
+    hf[BTF_RP_OUTER] = btf_render_light_outer_z(m);
     hf[BTF_RP_RELIEF] = (float)p->o.relief;
     for (int c = 0; c < 3; c++)
         hf[BTF_RP_BG + c] = p->background[c];
@@ -319,14 +308,14 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     for (int k = 0; rc == BTF_OK && k < m->n_subspaces; k++)
         if (p->needed[k])
             subs[n++] = k;
-    double t0 = now_s();
+    double t0 = btf_now();
     btf_synth_opts so = btf_synth_defaults();
     so.width = so.height = p->side;
     so.seed = p->o.seed;
     so.tileable = 1;
     if (rc == BTF_OK && n > 0)
         rc = btf_gpu_synthesise_device(gpu, m, subs, n, &so, &tex, offs, err);
-    double t1 = now_s();
+    double t1 = btf_now();
     if (rc == BTF_OK && !tex) /* nothing needed: a buffer the shader may bind, never read */
         rc = btf_vk_buffer_create(ps.vk, 16, &tex, err);
     ps.bufs[1] = tex;
@@ -348,7 +337,7 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
         if (rc)
             btf_image_free(out);
     }
-    double t2 = now_s();
+    double t2 = btf_now();
     btf_render_plan_info(m, p, info);
     if (info) {
         info->synth_s = p->needed_s + (t1 - t0);

@@ -58,6 +58,8 @@ int btf_path_join(char *out, size_t n, const char *dir, const char *name, btf_er
 
 /* Number of online CPUs (at least 1). */
 int btf_cpu_count(void);
+/* Monotonic wall-clock seconds, for the times stages report. */
+double btf_now(void);
 
 /* The thread pool (core/pool.c): btf_pool_run runs jobs 0..jobs-1, each
  * exactly once, over btf_pool_workers(threads, jobs) threads (threads 0:

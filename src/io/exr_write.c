@@ -44,7 +44,6 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
 /* x86-64: chunks packed with F16C where the CPU has it (fast_pack). */
@@ -95,13 +94,6 @@ typedef struct slab {
     float *data;
     int y0, nrows;
 } slab;
-
-static double now_s(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 /* Chunks are written through a buffer of this many bytes: one-scanline
  * chunks (NONE, RLE, ZIPS) would otherwise cost a system call per row. */
@@ -340,9 +332,9 @@ static btf_status writer_start(btf_exr_writer *w, const btf_exr_meta *meta, btf_
         w->ctx = NULL; /* exr_start_write frees it on failure */
         return btf_exr_fail(err, &w->io, rv, 1, "cannot start EXR file");
     }
-    double t0 = now_s();
+    double t0 = btf_now();
     rv = writer_header(w, meta);
-    w->t.write_s += now_s() - t0;
+    w->t.write_s += btf_now() - t0;
     if (rv != EXR_ERR_SUCCESS)
         return btf_exr_fail(err, &w->io, rv, 1, "cannot write EXR header");
     return start_slabs(w, err);
@@ -487,7 +479,7 @@ static btf_status bind_inputs(btf_exr_writer *w, const float *rows, btf_error *e
 static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
 {
     btf_exr_writer *w = enc->encoding_user_data;
-    double t0 = now_s();
+    double t0 = btf_now();
     exr_result_t rv = w->compress(enc);
     if (rv == EXR_ERR_SUCCESS && enc->compressed_bytes >= enc->packed_bytes) {
         if (enc->compressed_buffer != enc->packed_buffer) {
@@ -500,7 +492,7 @@ static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
         }
         enc->compressed_bytes = enc->packed_bytes;
     }
-    w->t.compress_s += now_s() - t0;
+    w->t.compress_s += btf_now() - t0;
     return rv;
 }
 
@@ -587,7 +579,7 @@ static exr_result_t fast_pack(exr_encode_pipeline_t *enc)
 static exr_result_t timed_pack(exr_encode_pipeline_t *enc)
 {
     btf_exr_writer *w = enc->encoding_user_data;
-    double t0 = now_s();
+    double t0 = btf_now();
     exr_result_t rv;
 #ifdef HAVE_FAST_PACK
     if (w->fast_pack)
@@ -595,16 +587,16 @@ static exr_result_t timed_pack(exr_encode_pipeline_t *enc)
     else
 #endif
         rv = w->pack(enc);
-    w->t.convert_s += now_s() - t0;
+    w->t.convert_s += btf_now() - t0;
     return rv;
 }
 
 static exr_result_t timed_write(exr_encode_pipeline_t *enc)
 {
     btf_exr_writer *w = enc->encoding_user_data;
-    double t0 = now_s();
+    double t0 = btf_now();
     exr_result_t rv = w->write(enc);
-    w->t.write_s += now_s() - t0;
+    w->t.write_s += btf_now() - t0;
     return rv;
 }
 
@@ -700,7 +692,7 @@ static btf_status flush_slab(btf_exr_writer *w, btf_error *err)
     w->rows_staged = 0;
     if (!w->has_thread)
         return write_rows(w, w->stage, y0, n, err);
-    double t0 = now_s();
+    double t0 = btf_now();
     pthread_mutex_lock(&w->mu);
     btf_status rc = thread_status(w, err);
     if (!rc) {
@@ -715,7 +707,7 @@ static btf_status flush_slab(btf_exr_writer *w, btf_error *err)
     }
     pthread_mutex_unlock(&w->mu);
     w->stage = w->slabs[w->fill].data;
-    w->t.wait_s += now_s() - t0;
+    w->t.wait_s += btf_now() - t0;
     return rc;
 }
 
@@ -752,9 +744,9 @@ btf_status btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nro
      * (and w->io) belong to the thread. */
     btf_exr_io *prev = w->has_thread ? NULL : btf_exr_sink_enter(&w->io);
     for (int i = 0; i < nrows && !rc; i++) {
-        double t0 = now_s();
+        double t0 = btf_now();
         rc = stage_row(w, rows + (size_t)i * rowlen, err);
-        w->t.stage_s += now_s() - t0;
+        w->t.stage_s += btf_now() - t0;
         if (!rc && (w->rows_staged == w->slab_rows || w->rows_done == w->height))
             rc = flush_slab(w, err);
     }
@@ -775,7 +767,7 @@ static btf_status writer_finish(btf_exr_writer *w, btf_error *err)
             *err = w->thread_err;
         return w->thread_err.code ? (btf_status)w->thread_err.code : BTF_E_IO;
     }
-    double t0 = now_s();
+    double t0 = btf_now();
     if (w->enc_started)
         exr_encoding_destroy(w->ctx, &w->enc);
     w->enc_started = 0;
@@ -795,7 +787,7 @@ static btf_status writer_finish(btf_exr_writer *w, btf_error *err)
         return btf_fail(err, BTF_E_IO, "%s: write failed: %s", w->path, strerror(e));
     btf_status rc = btf_commit_file(w->tmp, w->path, err);
     w->tmp_created = 0; /* renamed, or removed by btf_commit_file */
-    w->t.write_s += now_s() - t0;
+    w->t.write_s += btf_now() - t0;
     return rc;
 }
 

@@ -42,3 +42,11 @@ void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_materia
     ctx->normal = rm->normal.data;
     ctx->light_outer_z = rm->light_outer_z;
 }
+
+float btf_render_light_outer_z(const btf_model *m)
+{
+    double outer = 0.0;
+    for (int i = 0; i < m->lights.count; i++)
+        outer = m->lights.dirs[i].theta > outer ? m->lights.dirs[i].theta : outer;
+    return (float)cos(outer * (3.14159265358979323846 / 180.0));
+}

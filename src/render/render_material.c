@@ -84,10 +84,7 @@ static btf_status build_tables(const btf_model *m, btf_render_material *rm, btf_
         if (rm->index[i] >= m->n_subspaces)
             return btf_fail(err, BTF_E_FORMAT, "index table entry %zu names subspace %d of %d",
                             i, rm->index[i], m->n_subspaces);
-    double outer = 0.0;
-    for (int i = 0; i < m->lights.count; i++)
-        outer = m->lights.dirs[i].theta > outer ? m->lights.dirs[i].theta : outer;
-    rm->light_outer_z = (float)cos(outer * (3.14159265358979323846 / 180.0));
+    rm->light_outer_z = btf_render_light_outer_z(m);
     btf_status rc = btf_hemisphere_build(&m->views, &rm->views, err);
     return rc ? rc : btf_hemisphere_build(&m->lights, &rm->lights, err);
 }

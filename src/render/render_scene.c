@@ -12,7 +12,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 /* The auto texture size stops here: a surface that shows more texels than
  * this sees the tileable images repeat (docs/render.md). */
@@ -25,13 +24,6 @@ btf_render_opts btf_render_defaults(void)
     o.width = o.height = 512;
     o.relief = 1.0;
     return o;
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 static btf_status resolve_opts(const btf_render_opts *in, btf_render_opts *o, btf_error *err)
@@ -97,7 +89,7 @@ static int visible_extent(const btf_gbuffer *g, btf_error *err)
 /* The needed set and the texture side of a traced plan. */
 static btf_status plan_needs(const btf_model *m, btf_render_plan *p, btf_error *err)
 {
-    double t0 = now_s();
+    double t0 = btf_now();
     p->needed = btf_alloc((size_t)m->n_subspaces, 1, err);
     if (!p->needed)
         return BTF_E_NOMEM;
@@ -116,7 +108,7 @@ static btf_status plan_needs(const btf_model *m, btf_render_plan *p, btf_error *
     if (p->o.texture_size && p->side != p->o.texture_size)
         return btf_fail(err, BTF_E_ARG, "texture size %d: expected a multiple of the model's "
                         "pyramid step, e.g. %d", p->o.texture_size, p->side);
-    p->needed_s = now_s() - t0;
+    p->needed_s = btf_now() - t0;
     return BTF_OK;
 }
 
@@ -144,10 +136,10 @@ btf_status btf_render_plan_scene(const btf_model *m, const btf_scene *s,
     if (s->n_lights > BTF_RENDER_MAX_LIGHTS)
         return btf_fail(err, BTF_E_ARG, "scene: %d lights: the renderer takes at most %d",
                         s->n_lights, BTF_RENDER_MAX_LIGHTS);
-    double t0 = now_s();
+    double t0 = btf_now();
     if ((rc = btf_scene_trace(s, p->o.width, p->o.height, p->o.threads, &p->g, err)))
         return rc;
-    p->trace_s = now_s() - t0;
+    p->trace_s = btf_now() - t0;
     p->lights = s->lights;
     p->n_lights = s->n_lights;
     memcpy(p->background, s->background, sizeof p->background);
@@ -185,14 +177,14 @@ btf_status btf_render_plan_cpu(const btf_model *m, const btf_render_plan *p, btf
                                btf_render_info *info, btf_error *err)
 {
     btf_render_material *rm = NULL;
-    double t0 = now_s();
+    double t0 = btf_now();
     btf_status rc = btf_render_material_build(m, p->needed, p->side, p->o.seed, p->o.threads,
                                               &rm, err);
-    double t1 = now_s();
+    double t1 = btf_now();
     if (rc == BTF_OK)
         rc = btf_render_shade(rm, &p->g, p->lights, p->n_lights, p->background, p->o.relief,
                               p->o.threads, out, err);
-    double t2 = now_s();
+    double t2 = btf_now();
     btf_render_plan_info(m, p, info);
     if (info) {
         info->synth_s = p->needed_s + (t1 - t0);

@@ -63,6 +63,10 @@ btf_status btf_render_check_model(const btf_model *m, btf_error *err);
  * divides (a multiple of 2^(levels - 1)), at least 8. */
 int btf_render_texture_side(const btf_model *m, int side);
 
+/* cos of the largest measured light theta: below it a light is beyond the
+ * outermost ring (btf_shade_bump's horizon fade). */
+float btf_render_light_outer_z(const btf_model *m);
+
 /* The lights as the shared shading reads them (directions made unit);
  * BTF_E_ARG for more than BTF_RENDER_MAX_LIGHTS. */
 btf_status btf_render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, int n_lights,

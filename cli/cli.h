@@ -35,6 +35,11 @@ int cli_usage_error(const cli_ctx *c, const char *fmt, ...)
 int cli_plain_number(const char *s, int allow_minus);
 int cli_parse_int(const char *s, long lo, long hi, long *out);
 int cli_parse_u64(const char *s, uint64_t *out);
+/* Whether s ends in suffix, ignoring case (".png", ".exr"). */
+int cli_has_suffix(const char *s, const char *suffix);
+/* An output image by its name: .exr as linear 32-bit float, anything else
+ * as 8-bit sRGB PNG (the commands check the suffix first). */
+btf_status cli_write_image(const char *path, const btf_image *img, btf_error *err);
 /* "A,B": two plain non-negative decimal numbers (cli_plain_number): 0, or -1. */
 int cli_parse_pair(const char *s, double *a, double *b);
 /* "THETA,PHI" in degrees (theta 0..90, phi 0..360; 360 becomes 0): 0, or

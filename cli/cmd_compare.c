@@ -23,12 +23,6 @@ static const char ABOUT[] =
     "REFERENCE (its power spectrum, random phases) at REFERENCE's size to OUT (.png\n"
     "or .exr), and measures it.\n";
 
-static int has_suffix(const char *s, const char *suffix)
-{
-    size_t a = strlen(s), b = strlen(suffix);
-    return a >= b && !strcasecmp(s + a - b, suffix);
-}
-
 static void add_component(cJSON *o, const char *key, const btf_distance_component *c,
                           const char *unit)
 {
@@ -108,8 +102,7 @@ static int write_baseline(cli_ctx *c, const btf_image *ref, const char *path, ui
     btf_error err = {0};
     if (btf_phase_randomise(ref, ref->width, ref->height, seed, out, &err) != 0)
         return cli_lib_error(c, &err);
-    btf_status rc = has_suffix(path, ".exr") ? btf_image_write_exr(path, out, 0, &err)
-                                             : btf_image_write_png(path, out, &err);
+    btf_status rc = cli_write_image(path, out, &err);
     if (rc != 0) {
         btf_image_free(out);
         return cli_lib_error(c, &err);
@@ -151,7 +144,7 @@ int cmd_compare(int argc, char **argv)
     if (baseline ? nargs != 1 : nargs != 2)
         return cli_usage_error(&c, baseline ? "--baseline takes REFERENCE alone, no IMAGE"
                                             : "needs REFERENCE and IMAGE");
-    if (baseline && !has_suffix(baseline, ".png") && !has_suffix(baseline, ".exr"))
+    if (baseline && !cli_has_suffix(baseline, ".png") && !cli_has_suffix(baseline, ".exr"))
         return cli_usage_error(&c, "--baseline %s: expected a .png or .exr file", baseline);
     if (baseline && cli_check_output(&c, baseline, BTF_OUTPUT_FILE))
         return 1;

@@ -33,12 +33,6 @@ static int parse_dir_arg(const char *s, void *dest, char *why, size_t n)
     return 0;
 }
 
-static int has_suffix(const char *s, const char *suffix)
-{
-    size_t a = strlen(s), b = strlen(suffix);
-    return a >= b && !strcasecmp(s + a - b, suffix);
-}
-
 /* --beside DATASET: the measured image of the (view, light) pair, read at
  * the measured directions nearest those asked for (within 0.5 degree). */
 static btf_status read_measured(const char *dataset, btf_dir view, btf_dir light,
@@ -80,13 +74,6 @@ static btf_status side_by_side(const btf_image *a, const btf_image *b, btf_image
                    (size_t)b->width * 3 * sizeof(float));
     }
     return BTF_OK;
-}
-
-static btf_status write_image(const char *path, const btf_image *img, btf_error *err)
-{
-    if (has_suffix(path, ".exr"))
-        return btf_image_write_exr(path, img, 0, err);
-    return btf_image_write_png(path, img, err);
 }
 
 int cmd_render(int argc, char **argv)
@@ -149,7 +136,7 @@ int cmd_render(int argc, char **argv)
         return cli_usage_error(&c, "a flat render needs both --view and --light");
     if (beside && !flat)
         return cli_usage_error(&c, "--beside goes with a flat render (--view, --light)");
-    if (!has_suffix(out_path, ".png") && !has_suffix(out_path, ".exr"))
+    if (!cli_has_suffix(out_path, ".png") && !cli_has_suffix(out_path, ".exr"))
         return cli_usage_error(&c, "%s: expected a .png or .exr output", out_path);
     if (device >= 0 && backend == 0)
         return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
@@ -205,7 +192,7 @@ int cmd_render(int argc, char **argv)
     btf_image_free(&measured);
     double t_write = cli_now();
     if (rc == BTF_OK)
-        rc = write_image(out_path, &img, &err);
+        rc = cli_write_image(out_path, &img, &err);
     t_write = cli_now() - t_write;
     btf_image_free(&img);
     btf_model_free(&m);

@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -260,4 +261,17 @@ btf_gpu *cli_open_gpu(const char *backend, int device, btf_error *err)
         snprintf(err->msg, sizeof err->msg, "%s", msg);
     }
     return g;
+}
+
+int cli_has_suffix(const char *s, const char *suffix)
+{
+    size_t a = strlen(s), b = strlen(suffix);
+    return a >= b && !strcasecmp(s + a - b, suffix);
+}
+
+btf_status cli_write_image(const char *path, const btf_image *img, btf_error *err)
+{
+    if (cli_has_suffix(path, ".exr"))
+        return btf_image_write_exr(path, img, 0, err);
+    return btf_image_write_png(path, img, err);
 }

@@ -6,7 +6,6 @@
 #include <cjson/cJSON.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 
 static const char ABOUT[] =
     "Measures how far IMAGE is from the texture REFERENCE (PNG, JPEG or EXR; any\n"

@@ -6,7 +6,6 @@
 
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 
 static const char ABOUT[] =
     "Renders the material. With --scene, the objects of a JSON scene file\n"

@@ -1315,6 +1315,24 @@ btf_status btf_phase_randomise(const btf_image *exemplar, int width, int height,
  * the mean colour and the 3 x 3 basis (12 float32). */
 uint64_t btf_phase_randomise_bytes(int width, int height);
 
+/* ------------------------------------ report: compression accounting (issue 18) */
+/* What a model file costs, section by section, and what two plain codecs
+ * would store for the same data (src/report/, docs/report.md). */
+
+/* (end of compression accounting) */
+
+/* ------------------------------------- report: quality per direction (issue 18) */
+/* How close the model comes to the measurement, pair by pair, measured by
+ * the texture distances above (src/report/, docs/report.md). */
+
+/* (end of quality per direction) */
+
+/* ------------------------------------ report: sweep, presets, the page (issue 18) */
+/* The speed/accuracy trade measured over a grid of settings, the presets
+ * chosen from it, and the report page (src/report/, docs/report.md). */
+
+/* (end of sweep, presets, the page) */
+
 #ifdef __cplusplus
 }
 #endif

@@ -162,6 +162,31 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_ana
     return rc ? cli_lib_error(c, &err) : 0;
 }
 
+static int seen(const cli_opt *opts, const char *name)
+{
+    for (; opts->name; opts++)
+        if (!strcmp(opts->name, name))
+            return opts->seen;
+    return 0;
+}
+
+/* The preset's settings, except those the command line gives itself. */
+static void apply_preset(const char *name, const cli_opt *opts, btf_analyse_opts *ao)
+{
+    btf_analyse_opts p = *ao;
+    btf_error err = {0};
+    if (btf_analyse_preset(name, &p, &err) != 0)
+        return; /* the option table only takes the preset names */
+    if (!seen(opts, "--subspaces"))
+        ao->segment.subspaces = p.segment.subspaces;
+    if (!seen(opts, "--levels"))
+        ao->fit.levels = p.fit.levels;
+    if (!seen(opts, "--neighbourhood") && !seen(opts, "--neighborhood")) {
+        ao->fit.car.n_fixed = p.fit.car.n_fixed;
+        memcpy(ao->fit.car.fixed, p.fit.car.fixed, sizeof p.fit.car.fixed);
+    }
+}
+
 int cmd_analyse(int argc, char **argv)
 {
     cli_ctx c = {"analyse", 0};
@@ -172,10 +197,16 @@ int cmd_analyse(int argc, char **argv)
     ao.segment.kmeans.seed = 1; /* the command's seed; the library's default is 0 */
     ao.photostereo.read.max_pixels = BTF_DEFAULT_MAX_PIXELS;
     btf_segment_opts *so = &ao.segment;
+    int preset = -1;
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
          .meta = "OUT", .help = "the model file to write (a folder with --stage segment)",
          .required = 1},
+        {.name = "--preset", .kind = CLI_CHOICE, .dest = &preset, .meta = "NAME",
+         .help = "a measured point of the speed/accuracy trade: fast, balanced (the\n"
+                 "defaults) or accurate sets --subspaces, --levels and --neighbourhood\n"
+                 "(each given explicitly wins; docs/report.md, \"Presets\")",
+         .choices = btf_analyse_preset_names()},
         {.name = "--stage", .kind = CLI_CHOICE, .dest = &stage, .meta = "STAGE",
          .help = "stop after this stage", .choices = stages},
         {.name = "--subspaces", .kind = CLI_INT, .dest = &so->subspaces, .meta = "K|auto",
@@ -209,6 +240,8 @@ int cmd_analyse(int argc, char **argv)
     int nargs, prc = cli_parse(&c, &spec, argc, argv, &dataset, &nargs);
     if (prc >= 0)
         return prc;
+    if (preset >= 0)
+        apply_preset(btf_analyse_preset_names()[preset], opts, &ao);
     if (cli_check_output(&c, out, stage < 0 ? BTF_OUTPUT_FILE : BTF_OUTPUT_FOLDER))
         return 1;
     if (stage < 0)

@@ -850,6 +850,10 @@ btf_status btf_texture_fit(const btf_image *img, const btf_fit_opts *opts, btf_m
  * of each band of a synthesis of the subspace (512 x 512, a fixed seed, no
  * transfer). btf_texture_fit and btf_analyse call it for every subspace. */
 btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, btf_error *err);
+/* The candidate neighbourhood family of the Bayesian choice (docs/model.md):
+ * its BTF_CAR_MAX_NEIGHBOURS causal offsets in order, nearest first; a
+ * "fixed order n" neighbourhood is its first n. Returns the count. */
+int btf_car_candidate_offsets(btf_offset offsets[BTF_CAR_MAX_NEIGHBOURS]);
 /* The automatic number of pyramid levels for a band (docs/model.md). */
 int btf_auto_levels(const double *band, int w, int h);
 
@@ -870,6 +874,14 @@ typedef struct btf_analyse_opts {
     btf_progress_fn progress;         /* stage progress (features, fits) */
     void *progress_user;
     btf_analyse_report *report;       /* NULL, or filled in when btf_analyse succeeds */
+    /* Work shared between analyses of one dataset (the sweep of
+     * btf_sweep_run): features (NULL: computed) are the dataset's, as
+     * btf_dataset_features gives them with segment.features.bins bins,
+     * feature_dim floats per image; range_from (NULL: photometric stereo)
+     * is a model of the same dataset whose range tile is copied. */
+    const float *features;
+    int feature_dim;
+    const btf_model *range_from;
 } btf_analyse_opts;
 /* The defaults: those of each stage's options, a range map with a 64-texel
  * tile, no progress, no report. */
@@ -881,6 +893,11 @@ btf_analyse_opts btf_analyse_defaults(void);
  * keeps the image's aspect ratio: one scale, range_texel, for both axes. */
 btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
                        btf_error *err);
+/* Stage 2 alone: the range tile of the dataset (photometric stereo, as
+ * btf_analyse makes it) into out's range fields; nothing else of out is
+ * touched. For work shared between analyses (btf_analyse_opts.range_from). */
+btf_status btf_analyse_range(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
+                             btf_error *err);
 
 /* ------------------------------------------------------ synthesis (CPU) */
 /* Paper section II.C (synthesis): per spectral band, every pyramid level is
@@ -1142,6 +1159,12 @@ btf_status btf_scene_load(const char *path, btf_scene *out, btf_error *err);
 /* Checks a scene built in memory (degenerate camera, zero radius, ...). */
 btf_status btf_scene_check(const btf_scene *s, btf_error *err);
 void btf_scene_free(btf_scene *s);
+/* The material preview scene (src/scene/scene_sphere.c): a unit sphere
+ * filling most of the frame, seen along -z, under one white directional
+ * light given as a direction in the camera's frame (theta 0: from the
+ * camera), texture_scale texels per world unit, a dark background. Free
+ * it with btf_scene_free. */
+btf_status btf_scene_sphere(btf_dir light, double texture_scale, btf_scene *out, btf_error *err);
 
 /* What ray casting gives per pixel: the G-buffer the renderer shades (and
  * uploads for the GPU pass). Pixel (x, y), row y from the top; arrays are
@@ -1325,11 +1348,143 @@ uint64_t btf_phase_randomise_bytes(int width, int height);
 /* How close the model comes to the measurement, pair by pair, measured by
  * the texture distances above (src/report/, docs/report.md). */
 
+typedef struct btf_quality_opts {
+    int all;                  /* 1: every (view, light) pair of the dataset */
+    int views, lights;        /* the spread measured when not all: this many views and
+                                 lights, farthest apart on the hemisphere (0: 9 each;
+                                 more than the dataset has: all of them) */
+    uint64_t seed;            /* synthesis seed of the flat renders (0 is a seed) */
+    double relief;            /* range map height scale of the flat renders, as
+                                 btf_render_opts.relief (< 0: 1; 0: off) */
+    int threads;              /* 0: all CPUs */
+    btf_progress_fn progress;
+    void *progress_user;
+    /* Called once per measured pair with the measured image and the model's
+     * flat render of it (both linear RGB, the dataset's size), from worker
+     * threads and so possibly at the same time for different pairs; a
+     * non-zero btf_status return (with err filled) stops the measurement.
+     * NULL: none. */
+    btf_status (*on_pair)(void *user, int pair, int view, int light, const btf_image *measured,
+                          const btf_image *model, btf_error *err);
+    void *on_pair_user;
+} btf_quality_opts;
+/* The defaults: the 9 x 9 spread, seed 0, relief 1, all CPUs, no callbacks. */
+btf_quality_opts btf_quality_defaults(void);
+
+typedef struct btf_pair_quality {
+    int view, light;          /* dataset indices */
+    int subspace;             /* the model's index-table entry for the pair */
+    btf_texture_distances d;  /* measured image (reference) against the flat render */
+} btf_pair_quality;
+
+typedef struct btf_quality {
+    int n_pairs;
+    btf_pair_quality *pairs;  /* view-major: by view index, then light index */
+    double mean_combined, median_combined, worst_combined;
+    int worst;                /* index into pairs of the largest combined distance */
+    double mean_spectrum, mean_first_order, mean_structure; /* normalised, over pairs */
+    int texture_size;         /* side of the synthesised tileable subspace images */
+    double seconds;           /* the whole measurement */
+} btf_quality;
+
+/* How close the model comes to the measurement in every sampled (view,
+ * light) pair (docs/report.md, "Quality per direction"): the measured
+ * image against the model's flat render of that pair (btf_render_flat:
+ * the same pixels), by btf_texture_distance. The model's subspace images
+ * are synthesised once, tileable, at the dataset's image size; each pair
+ * is shaded and measured on the pool. The model must be of this
+ * dataset's direction sets (BTF_E_ARG otherwise). */
+btf_status btf_quality_measure(const btf_dataset *ds, const btf_model *m,
+                               const btf_quality_opts *opts, btf_quality *out, btf_error *err);
+void btf_quality_free(btf_quality *q);
+/* The spread: indices of the n directions of set farthest apart (the one
+ * nearest the pole first, then each time the one whose smallest angle to
+ * those chosen is largest; ties to the lower index), sorted ascending.
+ * n is clamped to 1..set->count; returns the count written to idx. */
+int btf_spread_directions(const btf_dirset *set, int n, int *idx);
+
 /* (end of quality per direction) */
 
 /* ------------------------------------ report: sweep, presets, the page (issue 18) */
 /* The speed/accuracy trade measured over a grid of settings, the presets
  * chosen from it, and the report page (src/report/, docs/report.md). */
+
+/* One setting of the trade: the analysis options a sweep varies (0: the
+ * analysis's automatic choice). */
+typedef struct btf_sweep_setting {
+    int subspaces;            /* K; 0: auto */
+    int levels;               /* pyramid levels; 0: auto */
+    int neighbours;           /* a fixed neighbourhood of the first n candidate
+                                 offsets (btf_car_candidate_offsets); 0: the
+                                 Bayesian choice */
+} btf_sweep_setting;
+
+typedef struct btf_sweep_point {
+    btf_sweep_setting setting;
+    int k;                    /* subspaces the analysis made */
+    double analyse_s;         /* this setting's analysis: segmentation of the shared
+                                 features, the CAR fits and marginals (the shared
+                                 features and range map: btf_sweep.shared_s) */
+    double synth_s;           /* CPU synthesis of every subspace image at
+                                 synth_size^2, one thread */
+    double gpu_synth_s;       /* the same on the GPU; < 0: not measured */
+    double render_s;          /* the sphere frame (btf_scene_sphere) at
+                                 render_size^2, one thread, CPU */
+    uint64_t bytes;           /* the model file */
+    double mean_combined, worst_combined; /* btf_quality_measure over the spread */
+    int is_default;           /* the setting equals the analysis defaults */
+    int pareto_bytes;         /* on the front of (bytes, mean_combined) */
+    int pareto_time;          /* on the front of (synth_s, mean_combined) */
+    int resumed;              /* read back from the state folder, not measured now */
+} btf_sweep_point;
+
+#define BTF_SWEEP_MAX_VALUES 8
+typedef struct btf_sweep_opts {
+    int n_subspaces, subspaces[BTF_SWEEP_MAX_VALUES];  /* values of K (0: auto);
+                                                          n 0: {0, 2, 4, 8} */
+    int n_levels, levels[BTF_SWEEP_MAX_VALUES];        /* n 0: {0, 1, 2, 3} */
+    int n_neighbours, neighbours[BTF_SWEEP_MAX_VALUES];/* n 0: {0, 4, 8, 12} */
+    btf_analyse_opts analyse;  /* the base settings the grid varies */
+    btf_quality_opts quality;  /* the pairs measured per point (threads ignored) */
+    int synth_size;            /* 0: 512 */
+    int render_size;           /* 0: 256 */
+    btf_gpu *gpu;              /* NULL: no GPU times */
+    const char *state_dir;     /* finished points are kept here, one JSON file each,
+                                  and read back by a later run (resume); NULL: none */
+    int threads;               /* settings run in parallel; 0: all CPUs */
+    btf_progress_fn progress;
+    void *progress_user;
+} btf_sweep_opts;
+/* The defaults: the grids above (4 x 4 x 4 = 64 settings), the analysis and
+ * quality defaults, sizes 512 and 256, no GPU, no state folder, all CPUs. */
+btf_sweep_opts btf_sweep_defaults(void);
+
+typedef struct btf_sweep {
+    int n_points;
+    btf_sweep_point *points;   /* K-major, then levels, then neighbours */
+    double shared_s;           /* features and photometric stereo, once */
+    double seconds;            /* the whole sweep */
+    int resumed;               /* points read back from state_dir */
+} btf_sweep;
+
+/* The speed/accuracy trade (docs/report.md, "The sweep"): the dataset
+ * analysed under every setting of the grid, each model timed (analysis,
+ * synthesis, the sphere frame), sized and measured (btf_quality_measure);
+ * the Pareto fronts marked. The features and the range map are computed
+ * once and shared. Settings run in parallel, one per thread; each finished
+ * point is written to state_dir at once, so an interrupted sweep resumes
+ * where it stopped (a point whose file names another dataset or other
+ * sweep options is measured again). */
+btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_sweep *out,
+                         btf_error *err);
+void btf_sweep_free(btf_sweep *s);
+
+/* Named points of the trade for btfcar analyse --preset (docs/report.md,
+ * "Presets"): "fast", "balanced" (the defaults) or "accurate" set the
+ * subspaces, levels and neighbourhood of o; BTF_E_ARG for another name. */
+btf_status btf_analyse_preset(const char *name, btf_analyse_opts *o, btf_error *err);
+/* The preset names, NULL-terminated. */
+const char *const *btf_analyse_preset_names(void);
 
 /* (end of sweep, presets, the page) */
 

@@ -95,6 +95,20 @@ static btf_status range_tile(const btf_image *h, int n, btf_model *m, btf_error 
 static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_model *m,
                               btf_error *err)
 {
+    if (o->range_from) { /* shared by a sweep: the range does not depend on its settings */
+        const btf_model *r = o->range_from;
+        if (!r->range || r->range_width < 1 || r->range_height < 1)
+            return btf_fail(err, BTF_E_ARG, "analyse: the model to copy the range map from "
+                            "has none");
+        size_t cells = (size_t)r->range_width * (size_t)r->range_height;
+        if (!(m->range = btf_alloc(cells, sizeof(float), err)))
+            return BTF_E_NOMEM;
+        memcpy(m->range, r->range, cells * sizeof(float));
+        m->range_width = r->range_width;
+        m->range_height = r->range_height;
+        m->range_texel = r->range_texel;
+        return BTF_OK;
+    }
     btf_ps_result ps;
     btf_status rc = btf_photostereo_dataset(ds, &o->photostereo, &ps, err);
     if (rc)
@@ -166,7 +180,9 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
         o.segment.features.progress_user = o.progress_user;
     }
     btf_segmentation seg;
-    btf_status rc = btf_segment(ds, &o.segment, &seg, err);
+    btf_status rc = o.features ? btf_segment_features(o.features, in->n_views, in->n_lights,
+                                                      o.feature_dim, &o.segment, &seg, err)
+                               : btf_segment(ds, &o.segment, &seg, err);
     if (rc)
         return rc;
     rc = btf_dirset_copy(&out->views, in->views, err);
@@ -194,4 +210,15 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
     if (rc)
         btf_model_free(out);
     return rc;
+}
+
+btf_status btf_analyse_range(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
+                             btf_error *err)
+{
+    if (!ds || !out)
+        return btf_fail(err, BTF_E_ARG, "analyse: no dataset or no output given");
+    btf_analyse_opts o = resolve_opts(opts);
+    o.range_from = NULL;
+    out->range = NULL;
+    return stage_range(ds, &o, out, err);
 }

@@ -62,6 +62,12 @@ static const btf_offset FAMILY[BTF_CAR_MAX_NEIGHBOURS] = {
 static const int FAMILY_SIZES[] = {1, 2, 3, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24};
 #define N_FAMILY_SIZES 14
 
+int btf_car_candidate_offsets(btf_offset offsets[BTF_CAR_MAX_NEIGHBOURS])
+{
+    memcpy(offsets, FAMILY, sizeof FAMILY);
+    return BTF_CAR_MAX_NEIGHBOURS;
+}
+
 /* ---------------------------------------------------------------- algebra */
 
 /* Cholesky factor of the leading m x m block of a (stride lda) into l; 0 on

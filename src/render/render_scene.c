@@ -195,8 +195,8 @@ btf_status btf_render_plan_cpu(const btf_model *m, const btf_render_plan *p, btf
 }
 /* The orthographic G-buffer of a flat patch: texel (x, y) at pixel (x, y),
  * the tangent frame the world's axes, one view for all pixels. */
-static btf_status flat_gbuffer(int w, int h, const float view[3], btf_gbuffer *g,
-                               btf_error *err)
+btf_status btf_render_flat_gbuffer(int w, int h, const float view[3], btf_gbuffer *g,
+                                  btf_error *err)
 {
     size_t n = (size_t)w * (size_t)h;
     memset(g, 0, sizeof *g);
@@ -255,7 +255,7 @@ btf_status btf_render_plan_flat(const btf_model *m, btf_dir view, btf_dir light,
     }
     p->lights = &p->sun;
     p->n_lights = 1;
-    if ((rc = flat_gbuffer(p->o.width, p->o.height, vf, &p->g, err)))
+    if ((rc = btf_render_flat_gbuffer(p->o.width, p->o.height, vf, &p->g, err)))
         return rc;
     if (p->o.texture_size == 0) /* a frame-sized texture: one texel per pixel, no repeat */
         p->o.texture_size =

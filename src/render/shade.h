@@ -101,6 +101,11 @@ void btf_render_plan_free(btf_render_plan *p);
 /* The CPU backend on a plan: synthesis of the needed subspaces, shading. */
 btf_status btf_render_plan_cpu(const btf_model *m, const btf_render_plan *p, btf_image *out,
                                btf_render_info *info, btf_error *err);
+/* The orthographic G-buffer of a flat patch (the flat render's): texel
+ * (x, y) at pixel (x, y), the tangent frame the world's axes, the unit
+ * vector view towards the eye for every pixel. */
+btf_status btf_render_flat_gbuffer(int w, int h, const float view[3], btf_gbuffer *g,
+                                   btf_error *err);
 /* The counts and the trace time of a plan into info. */
 void btf_render_plan_info(const btf_model *m, const btf_render_plan *p, btf_render_info *info);
 

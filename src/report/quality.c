@@ -1,0 +1,280 @@
+/*
+ * quality.c — how close a model comes to the measurement it was analysed
+ * from, (view, light) pair by pair (issue 18, docs/report.md, "Quality per
+ * direction"). The paper judges its results by eye (Haindl & Filip 2007,
+ * section IV); here each measured image is compared with the model's flat
+ * render of the same pair (paper section III: the nine-image interpolation,
+ * which at a measured pair selects that pair's subspace image alone, plus
+ * parallax and bump mapping) by the texture distances of src/measure/, which
+ * need no pixel correspondence: a CAR synthesis is a new sample of the
+ * material, not a copy of the photograph.
+ */
+#include "core/core.h"
+#include "render/shade.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+btf_quality_opts btf_quality_defaults(void)
+{
+    btf_quality_opts o;
+    memset(&o, 0, sizeof o);
+    o.views = 9;
+    o.lights = 9;
+    o.relief = 1.0;
+    return o;
+}
+
+int btf_spread_directions(const btf_dirset *set, int n, int *idx)
+{
+    int count = set ? set->count : 0;
+    if (count <= 0 || !idx)
+        return 0;
+    if (n < 1)
+        n = 1;
+    if (n > count)
+        n = count;
+    /* Greedy farthest-point sampling: each new direction is the one whose
+     * nearest chosen direction is farthest, so the sample covers the
+     * hemisphere evenly whatever the set's ring structure. */
+    double *near = malloc((size_t)count * sizeof *near);
+    unsigned char *taken = calloc((size_t)count, 1);
+    if (!near || !taken) {
+        free(near);
+        free(taken);
+        return 0;
+    }
+    int first = 0;
+    for (int i = 1; i < count; i++)
+        if (set->dirs[i].theta < set->dirs[first].theta)
+            first = i;
+    for (int i = 0; i < count; i++)
+        near[i] = btf_dir_angle(set->dirs[i], set->dirs[first]);
+    taken[first] = 1;
+    int got = 1;
+    while (got < n) {
+        int best = -1;
+        for (int i = 0; i < count; i++)
+            if (!taken[i] && (best < 0 || near[i] > near[best]))
+                best = i;
+        taken[best] = 1;
+        got++;
+        for (int i = 0; i < count; i++) {
+            double a = btf_dir_angle(set->dirs[i], set->dirs[best]);
+            if (a < near[i])
+                near[i] = a;
+        }
+    }
+    int k = 0;
+    for (int i = 0; i < count; i++)
+        if (taken[i])
+            idx[k++] = i;
+    free(near);
+    free(taken);
+    return k;
+}
+
+/* The model must describe this dataset: the same direction sets (within
+ * the file-name tolerance) and its index table. */
+static btf_status check_match(const btf_dataset_info *in, const btf_model *m, btf_error *err)
+{
+    if (m->views.count != in->n_views || m->lights.count != in->n_lights || !m->index)
+        return btf_fail(err, BTF_E_ARG,
+                        "model of %d views x %d lights does not describe dataset %s "
+                        "(%d views x %d lights)", m->views.count, m->lights.count, in->root,
+                        in->n_views, in->n_lights);
+    for (int i = 0; i < in->n_views; i++)
+        if (btf_dir_angle(m->views.dirs[i], in->views->dirs[i]) > BTF_DIR_NAME_TOLERANCE)
+            return btf_fail(err, BTF_E_ARG, "model's view %d (theta %g, phi %g) is not dataset "
+                            "%s's (theta %g, phi %g)", i, m->views.dirs[i].theta,
+                            m->views.dirs[i].phi, in->root, in->views->dirs[i].theta,
+                            in->views->dirs[i].phi);
+    for (int i = 0; i < in->n_lights; i++)
+        if (btf_dir_angle(m->lights.dirs[i], in->lights->dirs[i]) > BTF_DIR_NAME_TOLERANCE)
+            return btf_fail(err, BTF_E_ARG, "model's light %d (theta %g, phi %g) is not dataset "
+                            "%s's (theta %g, phi %g)", i, m->lights.dirs[i].theta,
+                            m->lights.dirs[i].phi, in->root, in->lights->dirs[i].theta,
+                            in->lights->dirs[i].phi);
+    return BTF_OK;
+}
+
+typedef struct measure_job {
+    const btf_dataset *ds;
+    const btf_dataset_info *in;
+    const btf_model *m;
+    const btf_render_material *rm;
+    const btf_quality_opts *o;
+    btf_quality *q;
+} measure_job;
+
+/* One pair: read the measured image, shade the flat patch as btf_render_flat
+ * does (a unit white directional light, black background), measure. */
+static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
+{
+    (void)worker;
+    measure_job *J = user;
+    btf_pair_quality *pq = &J->q->pairs[job];
+    btf_image meas = {0}, model = {0};
+    btf_gbuffer g;
+    memset(&g, 0, sizeof g);
+    double v[3], l[3];
+    btf_dir_to_vec(J->in->views->dirs[pq->view], v);
+    btf_dir_to_vec(J->in->lights->dirs[pq->light], l);
+    float vf[3] = {(float)v[0], (float)v[1], (float)v[2]};
+    btf_light sun;
+    memset(&sun, 0, sizeof sun);
+    sun.kind = BTF_LIGHT_DIRECTIONAL;
+    for (int i = 0; i < 3; i++) {
+        sun.direction[i] = l[i];
+        sun.rgb[i] = 1.0f;
+    }
+    static const float black[3] = {0, 0, 0};
+    btf_status rc = btf_dataset_read(J->ds, pq->view, pq->light, &meas, err);
+    if (rc == BTF_OK)
+        rc = btf_render_flat_gbuffer(J->in->width, J->in->height, vf, &g, err);
+    if (rc == BTF_OK)
+        rc = btf_render_shade(J->rm, &g, &sun, 1, black, J->o->relief, 1, &model, err);
+    if (rc == BTF_OK) {
+        btf_texture_distance_opts d = btf_texture_distance_defaults();
+        d.reference_name = btf_dataset_path(J->ds, pq->view, pq->light);
+        d.image_name = "the model's flat render";
+        rc = btf_texture_distance(&meas, &model, &d, &pq->d, err);
+    }
+    if (rc == BTF_OK && J->o->on_pair)
+        rc = J->o->on_pair(J->o->on_pair_user, job, pq->view, pq->light, &meas, &model, err);
+    btf_gbuffer_free(&g);
+    btf_image_free(&meas);
+    btf_image_free(&model);
+    return rc;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static void summarise(btf_quality *q)
+{
+    int n = q->n_pairs;
+    double *c = malloc((size_t)n * sizeof *c);
+    double s = 0, sp = 0, fo = 0, st = 0;
+    q->worst = 0;
+    for (int i = 0; i < n; i++) {
+        const btf_texture_distances *d = &q->pairs[i].d;
+        s += d->combined;
+        sp += d->spectrum.normalised;
+        fo += d->first_order.normalised;
+        st += d->structure.normalised;
+        if (d->combined > q->pairs[q->worst].d.combined)
+            q->worst = i;
+        if (c)
+            c[i] = d->combined;
+    }
+    q->mean_combined = s / n;
+    q->mean_spectrum = sp / n;
+    q->mean_first_order = fo / n;
+    q->mean_structure = st / n;
+    q->worst_combined = q->pairs[q->worst].d.combined;
+    if (c) {
+        qsort(c, (size_t)n, sizeof *c, cmp_double);
+        q->median_combined = n % 2 ? c[n / 2] : 0.5 * (c[n / 2 - 1] + c[n / 2]);
+    } else {
+        q->median_combined = q->mean_combined;
+    }
+    free(c);
+}
+
+/* The pairs to measure: all, or the spread of views x the spread of lights. */
+static btf_status choose_pairs(const btf_dataset_info *in, const btf_model *m,
+                               const btf_quality_opts *o, btf_quality *q, btf_error *err)
+{
+    int *vi = btf_alloc((size_t)in->n_views, sizeof(int), err);
+    int *li = btf_alloc((size_t)in->n_lights, sizeof(int), err);
+    if (!vi || !li) {
+        free(vi);
+        free(li);
+        return BTF_E_NOMEM;
+    }
+    int nv, nl;
+    if (o->all) {
+        for (int i = 0; i < in->n_views; i++)
+            vi[i] = i;
+        for (int i = 0; i < in->n_lights; i++)
+            li[i] = i;
+        nv = in->n_views;
+        nl = in->n_lights;
+    } else {
+        nv = btf_spread_directions(in->views, o->views, vi);
+        nl = btf_spread_directions(in->lights, o->lights, li);
+    }
+    btf_status rc = BTF_OK;
+    q->pairs = nv && nl ? btf_calloc((size_t)nv * nl, sizeof *q->pairs, err) : NULL;
+    if (!q->pairs)
+        rc = (nv && nl) ? BTF_E_NOMEM : btf_fail(err, BTF_E_NOMEM, "out of memory");
+    for (int a = 0; rc == BTF_OK && a < nv; a++)
+        for (int b = 0; b < nl; b++) {
+            btf_pair_quality *p = &q->pairs[q->n_pairs++];
+            p->view = vi[a];
+            p->light = li[b];
+            p->subspace = m->index[(size_t)vi[a] * in->n_lights + li[b]];
+        }
+    free(vi);
+    free(li);
+    return rc;
+}
+
+btf_status btf_quality_measure(const btf_dataset *ds, const btf_model *m,
+                               const btf_quality_opts *opts, btf_quality *out, btf_error *err)
+{
+    if (!out)
+        return btf_fail(err, BTF_E_ARG, "quality: no output given");
+    memset(out, 0, sizeof *out);
+    if (!ds || !m)
+        return btf_fail(err, BTF_E_ARG, "quality: no dataset or no model given");
+    btf_quality_opts o = opts ? *opts : btf_quality_defaults();
+    if (o.views <= 0)
+        o.views = 9;
+    if (o.lights <= 0)
+        o.lights = 9;
+    if (o.relief < 0.0)
+        o.relief = 1.0;
+    if (!isfinite(o.relief) || o.relief > 1e6)
+        return btf_fail(err, BTF_E_ARG, "quality: relief %g: expected 0..1e6", o.relief);
+    double t0 = btf_now();
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    btf_status rc = btf_render_check_model(m, err);
+    if (rc || (rc = check_match(in, m, err)) || (rc = choose_pairs(in, m, &o, out, err))) {
+        btf_quality_free(out);
+        return rc;
+    }
+    int side = btf_render_texture_side(m, in->width > in->height ? in->width : in->height);
+    out->texture_size = side;
+    if (o.progress)
+        o.progress(o.progress_user, 0.0, "synthesising the subspace images");
+    btf_render_material *rm = NULL;
+    rc = btf_render_material_build(m, NULL, side, o.seed, o.threads, &rm, err);
+    if (rc == BTF_OK) {
+        measure_job J = {ds, in, m, rm, &o, out};
+        btf_pool_progress pp = {o.progress, o.progress_user, "measuring (view, light) pairs",
+                                0.0, 1.0, 1};
+        rc = btf_pool_run(out->n_pairs, o.threads, measure_pair, &J, &pp, err);
+    }
+    btf_render_material_free(rm);
+    if (rc) {
+        btf_quality_free(out);
+        return rc;
+    }
+    summarise(out);
+    out->seconds = btf_now() - t0;
+    return BTF_OK;
+}
+
+void btf_quality_free(btf_quality *q)
+{
+    if (!q)
+        return;
+    free(q->pairs);
+    memset(q, 0, sizeof *q);
+}

@@ -1,0 +1,490 @@
+/*
+ * sweep.c — the speed/accuracy trade, measured (issue 18, docs/report.md,
+ * "The sweep"): the dataset analysed under a grid of settings — the number
+ * of subspace images K (paper section II.A), the pyramid levels and the CAR
+ * neighbourhood (section II.C) — and each model timed, sized and measured,
+ * so that users choose a setting knowing its price. The per-image features
+ * and the range map do not depend on these settings: they are computed once
+ * and shared (btf_analyse_opts.features, .range_from). Settings run in
+ * parallel, one per thread, each single-threaded inside, so that their
+ * times compare; every finished point is written to the state folder at
+ * once and read back by a later run, so an interrupted sweep resumes.
+ */
+#include "core/core.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+/* The sweep's sphere frame: lit from 45 degrees above, upper left. */
+#define SWEEP_LIGHT_THETA 45.0
+#define SWEEP_LIGHT_PHI 135.0
+
+btf_sweep_opts btf_sweep_defaults(void)
+{
+    btf_sweep_opts o;
+    memset(&o, 0, sizeof o);
+    static const int k[] = {0, 2, 4, 8}, l[] = {0, 1, 2, 3}, n[] = {0, 4, 8, 12};
+    o.n_subspaces = o.n_levels = o.n_neighbours = 4;
+    memcpy(o.subspaces, k, sizeof k);
+    memcpy(o.levels, l, sizeof l);
+    memcpy(o.neighbours, n, sizeof n);
+    o.analyse = btf_analyse_defaults();
+    o.quality = btf_quality_defaults();
+    o.synth_size = 512;
+    o.render_size = 256;
+    return o;
+}
+
+static btf_status resolve(const btf_sweep_opts *in, btf_sweep_opts *o, btf_error *err)
+{
+    btf_sweep_opts d = btf_sweep_defaults();
+    *o = in ? *in : d;
+    if (o->n_subspaces == 0) {
+        o->n_subspaces = d.n_subspaces;
+        memcpy(o->subspaces, d.subspaces, sizeof d.subspaces);
+    }
+    if (o->n_levels == 0) {
+        o->n_levels = d.n_levels;
+        memcpy(o->levels, d.levels, sizeof d.levels);
+    }
+    if (o->n_neighbours == 0) {
+        o->n_neighbours = d.n_neighbours;
+        memcpy(o->neighbours, d.neighbours, sizeof d.neighbours);
+    }
+    if (o->synth_size == 0)
+        o->synth_size = d.synth_size;
+    if (o->render_size == 0)
+        o->render_size = d.render_size;
+    if (o->n_subspaces < 0 || o->n_subspaces > BTF_SWEEP_MAX_VALUES || o->n_levels < 0 ||
+        o->n_levels > BTF_SWEEP_MAX_VALUES || o->n_neighbours < 0 ||
+        o->n_neighbours > BTF_SWEEP_MAX_VALUES)
+        return btf_fail(err, BTF_E_ARG, "sweep: at most %d values per setting",
+                        BTF_SWEEP_MAX_VALUES);
+    for (int i = 0; i < o->n_subspaces; i++)
+        if (o->subspaces[i] < 0 || o->subspaces[i] > 255)
+            return btf_fail(err, BTF_E_ARG, "sweep: subspaces %d: expected 0 (auto) or 1..255",
+                            o->subspaces[i]);
+    for (int i = 0; i < o->n_levels; i++)
+        if (o->levels[i] < 0 || o->levels[i] > BTF_MAX_LEVELS)
+            return btf_fail(err, BTF_E_ARG, "sweep: levels %d: expected 0 (auto) or 1..%d",
+                            o->levels[i], BTF_MAX_LEVELS);
+    for (int i = 0; i < o->n_neighbours; i++)
+        if (o->neighbours[i] < 0 || o->neighbours[i] > BTF_CAR_MAX_NEIGHBOURS)
+            return btf_fail(err, BTF_E_ARG,
+                            "sweep: neighbours %d: expected 0 (auto) or 1..%d",
+                            o->neighbours[i], BTF_CAR_MAX_NEIGHBOURS);
+    if (o->synth_size < 8 || o->synth_size > 8192 || o->render_size < 16 ||
+        o->render_size > 4096)
+        return btf_fail(err, BTF_E_ARG, "sweep: synthesis size %d (8..8192) or render size %d "
+                        "(16..4096) out of range", o->synth_size, o->render_size);
+    return BTF_OK;
+}
+
+typedef struct sweep_ctx {
+    const btf_dataset *ds;
+    const btf_dataset_info *in;
+    const btf_sweep_opts *o;
+    const float *features;
+    int dim;
+    const btf_model *range;
+    btf_sweep *s;
+    pthread_mutex_t gpu_lock;
+    char fingerprint[1024];
+} sweep_ctx;
+
+/* The settings and options a point's figures depend on: a state file
+ * written under others is measured again. */
+static void make_fingerprint(sweep_ctx *c)
+{
+    const btf_dataset_info *in = c->in;
+    const btf_sweep_opts *o = c->o;
+    snprintf(c->fingerprint, sizeof c->fingerprint,
+             "btfcar %s; dataset %s %dx%d views x lights %dx%d, %llu bytes; seed %llu; "
+             "quality %s %dx%d relief %g; synth %d; render %d; range %s",
+             BTF_VERSION_STRING, in->root, in->width, in->height, in->n_views, in->n_lights,
+             (unsigned long long)in->bytes_on_disk, (unsigned long long)o->quality.seed,
+             o->quality.all ? "all" : "spread", o->quality.views, o->quality.lights,
+             o->quality.relief, o->synth_size, o->render_size,
+             o->analyse.no_range ? "none" : "yes");
+}
+
+static void point_name(const btf_sweep_setting *s, char *buf, size_t n)
+{
+    snprintf(buf, n, "point-K%d-L%d-N%d.json", s->subspaces, s->levels, s->neighbours);
+}
+
+static btf_status state_path(const sweep_ctx *c, const btf_sweep_setting *s, char *path,
+                             size_t n, btf_error *err)
+{
+    char name[64];
+    point_name(s, name, sizeof name);
+    return btf_path_join(path, n, c->o->state_dir, name, err);
+}
+
+static double num(const cJSON *o, const char *key, int *ok)
+{
+    const cJSON *j = cJSON_GetObjectItemCaseSensitive(o, key);
+    if (!cJSON_IsNumber(j) || !isfinite(j->valuedouble)) {
+        *ok = 0;
+        return 0.0;
+    }
+    return j->valuedouble;
+}
+
+/* A point read back from its state file: 1 when it is there, whole, and of
+ * this dataset and these options; 0 otherwise (then it is measured). */
+static int read_point(const sweep_ctx *c, btf_sweep_point *p)
+{
+    char path[4096];
+    btf_error e = {0};
+    unsigned char *data = NULL;
+    size_t n = 0;
+    if (!c->o->state_dir || state_path(c, &p->setting, path, sizeof path, &e) ||
+        btf_read_file(path, 1 << 20, &data, &n, &e))
+        return 0;
+    cJSON *j = cJSON_ParseWithLength((const char *)data, n);
+    free(data);
+    if (!j)
+        return 0;
+    const cJSON *fp = cJSON_GetObjectItemCaseSensitive(j, "fingerprint");
+    int ok = cJSON_IsString(fp) && !strcmp(fp->valuestring, c->fingerprint);
+    btf_sweep_point q = *p;
+    ok = ok && num(j, "subspaces", &ok) == p->setting.subspaces &&
+         num(j, "levels", &ok) == p->setting.levels &&
+         num(j, "neighbours", &ok) == p->setting.neighbours;
+    q.k = (int)num(j, "k", &ok);
+    q.analyse_s = num(j, "analyse_s", &ok);
+    q.synth_s = num(j, "synth_s", &ok);
+    q.gpu_synth_s = num(j, "gpu_synth_s", &ok);
+    q.render_s = num(j, "render_s", &ok);
+    q.bytes = (uint64_t)num(j, "bytes", &ok);
+    q.mean_combined = num(j, "mean_combined", &ok);
+    q.worst_combined = num(j, "worst_combined", &ok);
+    cJSON_Delete(j);
+    if (!ok || q.k < 1)
+        return 0;
+    q.resumed = 1;
+    *p = q;
+    return 1;
+}
+
+static btf_status write_point(const sweep_ctx *c, const btf_sweep_point *p, btf_error *err)
+{
+    if (!c->o->state_dir)
+        return BTF_OK;
+    char path[4096];
+    btf_status rc = state_path(c, &p->setting, path, sizeof path, err);
+    if (rc)
+        return rc;
+    cJSON *j = cJSON_CreateObject();
+    if (!j)
+        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+    cJSON_AddStringToObject(j, "format", "btfcar-sweep-point");
+    cJSON_AddStringToObject(j, "fingerprint", c->fingerprint);
+    cJSON_AddNumberToObject(j, "subspaces", p->setting.subspaces);
+    cJSON_AddNumberToObject(j, "levels", p->setting.levels);
+    cJSON_AddNumberToObject(j, "neighbours", p->setting.neighbours);
+    cJSON_AddNumberToObject(j, "k", p->k);
+    cJSON_AddNumberToObject(j, "analyse_s", p->analyse_s);
+    cJSON_AddNumberToObject(j, "synth_s", p->synth_s);
+    cJSON_AddNumberToObject(j, "gpu_synth_s", p->gpu_synth_s);
+    cJSON_AddNumberToObject(j, "render_s", p->render_s);
+    cJSON_AddNumberToObject(j, "bytes", (double)p->bytes);
+    cJSON_AddNumberToObject(j, "mean_combined", p->mean_combined);
+    cJSON_AddNumberToObject(j, "worst_combined", p->worst_combined);
+    char *text = cJSON_Print(j);
+    cJSON_Delete(j);
+    if (!text)
+        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+    rc = btf_write_file_atomic(path, text, strlen(text), err);
+    cJSON_free(text);
+    return rc;
+}
+
+/* The analysis options of one setting, single-threaded, on the shared work. */
+static btf_analyse_opts setting_opts(const sweep_ctx *c, const btf_sweep_setting *s)
+{
+    btf_analyse_opts a = c->o->analyse;
+    a.segment.subspaces = s->subspaces;
+    a.segment.features.threads = 1;
+    a.photostereo.threads = 1;
+    a.fit.levels = s->levels;
+    a.fit.car.n_fixed = 0;
+    if (s->neighbours > 0) {
+        btf_offset fam[BTF_CAR_MAX_NEIGHBOURS];
+        btf_car_candidate_offsets(fam);
+        memcpy(a.fit.car.fixed, fam, (size_t)s->neighbours * sizeof fam[0]);
+        a.fit.car.n_fixed = s->neighbours;
+    }
+    a.fit.car.warn = NULL;
+    a.progress = NULL;
+    a.report = NULL;
+    a.features = c->features;
+    a.feature_dim = c->dim;
+    a.range_from = c->range;
+    return a;
+}
+
+/* Every subspace image at synth_size^2, one thread (the CPU reference). */
+static btf_status time_synthesis(const btf_model *m, const btf_sweep_opts *o, double *seconds,
+                                 btf_error *err)
+{
+    double t0 = btf_now();
+    for (int k = 0; k < m->n_subspaces; k++) {
+        btf_synth_opts so = btf_synth_defaults();
+        so.width = so.height = o->synth_size;
+        so.seed = o->quality.seed;
+        btf_image img = {0};
+        btf_status rc = btf_synthesise_image(m, k, &so, &img, err);
+        btf_image_free(&img);
+        if (rc)
+            return rc;
+    }
+    *seconds = btf_now() - t0;
+    return BTF_OK;
+}
+
+/* The same on the GPU, all subspaces in one call; one setting at a time
+ * holds the device (the mutex), so the times are the device's alone. */
+static btf_status time_gpu_synthesis(const btf_model *m, const btf_sweep_opts *o,
+                                     pthread_mutex_t *gpu_lock, double *seconds, btf_error *err)
+{
+    *seconds = -1.0;
+    if (!o->gpu)
+        return BTF_OK;
+    int n = m->n_subspaces;
+    int *ks = btf_alloc((size_t)n, sizeof(int), err);
+    btf_image *imgs = btf_calloc((size_t)n, sizeof(btf_image), err);
+    if (!ks || !imgs) {
+        free(ks);
+        free(imgs);
+        return BTF_E_NOMEM;
+    }
+    for (int k = 0; k < n; k++)
+        ks[k] = k;
+    btf_synth_opts so = btf_synth_defaults();
+    so.width = so.height = o->synth_size;
+    so.seed = o->quality.seed;
+    pthread_mutex_lock(gpu_lock);
+    double t0 = btf_now();
+    btf_status rc = btf_gpu_synthesise(o->gpu, m, ks, n, &so, imgs, err);
+    *seconds = btf_now() - t0;
+    pthread_mutex_unlock(gpu_lock);
+    for (int k = 0; k < n; k++)
+        btf_image_free(&imgs[k]);
+    free(imgs);
+    free(ks);
+    return rc;
+}
+
+/* The sphere frame, the whole render (trace, needed subspaces, synthesis,
+ * shading), one thread. */
+static btf_status time_render(const btf_model *m, const btf_sweep_opts *o, double *seconds,
+                              btf_error *err)
+{
+    btf_scene sc;
+    btf_dir light = {SWEEP_LIGHT_THETA, SWEEP_LIGHT_PHI};
+    btf_status rc = btf_scene_sphere(light, 128.0, &sc, err);
+    if (rc)
+        return rc;
+    btf_render_opts ro = btf_render_defaults();
+    ro.width = ro.height = o->render_size;
+    ro.seed = o->quality.seed;
+    ro.threads = 1;
+    btf_image img = {0};
+    double t0 = btf_now();
+    rc = btf_render_scene(m, &sc, &ro, &img, NULL, err);
+    *seconds = btf_now() - t0;
+    btf_image_free(&img);
+    btf_scene_free(&sc);
+    return rc;
+}
+
+static btf_status measure_point(sweep_ctx *c, btf_sweep_point *p, btf_error *err)
+{
+    btf_analyse_opts a = setting_opts(c, &p->setting);
+    btf_model m;
+    double t0 = btf_now();
+    btf_status rc = btf_analyse(c->ds, &a, &m, err);
+    if (rc)
+        return rc;
+    p->analyse_s = btf_now() - t0;
+    p->k = m.n_subspaces;
+    unsigned char *bytes = NULL;
+    size_t size = 0;
+    rc = btf_model_encode(&m, &bytes, &size, err);
+    free(bytes);
+    p->bytes = size;
+    if (rc == BTF_OK)
+        rc = time_synthesis(&m, c->o, &p->synth_s, err);
+    if (rc == BTF_OK)
+        rc = time_gpu_synthesis(&m, c->o, &c->gpu_lock, &p->gpu_synth_s, err);
+    if (rc == BTF_OK)
+        rc = time_render(&m, c->o, &p->render_s, err);
+    if (rc == BTF_OK) {
+        btf_quality_opts q = c->o->quality;
+        q.threads = 1;
+        q.progress = NULL;
+        q.on_pair = NULL;
+        btf_quality r;
+        rc = btf_quality_measure(c->ds, &m, &q, &r, err);
+        if (rc == BTF_OK) {
+            p->mean_combined = r.mean_combined;
+            p->worst_combined = r.worst_combined;
+        }
+        btf_quality_free(&r);
+    }
+    btf_model_free(&m);
+    return rc;
+}
+
+static btf_status sweep_job(void *user, int job, int worker, btf_error *err)
+{
+    (void)worker;
+    sweep_ctx *c = user;
+    btf_sweep_point *p = &c->s->points[job];
+    if (read_point(c, p))
+        return BTF_OK;
+    btf_status rc = measure_point(c, p, err);
+    if (rc == BTF_OK)
+        rc = write_point(c, p, err);
+    if (rc) {
+        /* Name the setting, keep the cause. */
+        char why[sizeof err->msg];
+        snprintf(why, sizeof why, "%s", err->msg);
+        btf_fail(err, rc, "sweep point K %d, levels %d, neighbours %d: %s",
+                 p->setting.subspaces, p->setting.levels, p->setting.neighbours, why);
+    }
+    return rc;
+}
+
+/* Pareto-optimal points of (x, mean_combined), both smaller-is-better: no
+ * other point is at least as good in both and better in one. */
+static void mark_front(btf_sweep *s, int by_bytes)
+{
+    for (int i = 0; i < s->n_points; i++) {
+        const btf_sweep_point *a = &s->points[i];
+        double ax = by_bytes ? (double)a->bytes : a->synth_s;
+        int dominated = 0;
+        for (int j = 0; j < s->n_points && !dominated; j++) {
+            const btf_sweep_point *b = &s->points[j];
+            double bx = by_bytes ? (double)b->bytes : b->synth_s;
+            dominated = j != i && bx <= ax && b->mean_combined <= a->mean_combined &&
+                        (bx < ax || b->mean_combined < a->mean_combined);
+        }
+        if (by_bytes)
+            s->points[i].pareto_bytes = !dominated;
+        else
+            s->points[i].pareto_time = !dominated;
+    }
+}
+
+static btf_status make_grid(const btf_sweep_opts *o, btf_sweep *s, btf_error *err)
+{
+    int n = o->n_subspaces * o->n_levels * o->n_neighbours;
+    if (n < 1)
+        return btf_fail(err, BTF_E_ARG, "sweep: an empty grid");
+    s->points = btf_calloc((size_t)n, sizeof *s->points, err);
+    if (!s->points)
+        return BTF_E_NOMEM;
+    int def_n = o->analyse.fit.car.n_fixed;
+    for (int a = 0; a < o->n_subspaces; a++)
+        for (int b = 0; b < o->n_levels; b++)
+            for (int c = 0; c < o->n_neighbours; c++) {
+                btf_sweep_point *p = &s->points[s->n_points++];
+                p->setting.subspaces = o->subspaces[a];
+                p->setting.levels = o->levels[b];
+                p->setting.neighbours = o->neighbours[c];
+                p->is_default = p->setting.subspaces == o->analyse.segment.subspaces &&
+                                p->setting.levels == o->analyse.fit.levels &&
+                                p->setting.neighbours == def_n;
+            }
+    return BTF_OK;
+}
+
+static btf_status make_state_dir(const char *dir, btf_error *err)
+{
+    struct stat st;
+    if (stat(dir, &st) == 0)
+        return S_ISDIR(st.st_mode) ? BTF_OK
+                                   : btf_fail(err, BTF_E_IO, "%s: not a folder", dir);
+    if (mkdir(dir, 0777) != 0)
+        return btf_fail(err, BTF_E_IO, "%s: cannot create the sweep's state folder", dir);
+    return BTF_OK;
+}
+
+btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_sweep *out,
+                         btf_error *err)
+{
+    if (!out)
+        return btf_fail(err, BTF_E_ARG, "sweep: no output given");
+    memset(out, 0, sizeof *out);
+    if (!ds)
+        return btf_fail(err, BTF_E_ARG, "sweep: no dataset given");
+    btf_sweep_opts o;
+    btf_status rc = resolve(opts, &o, err);
+    if (rc || (rc = make_grid(&o, out, err)))
+        return rc;
+    if (o.state_dir && (rc = make_state_dir(o.state_dir, err))) {
+        btf_sweep_free(out);
+        return rc;
+    }
+    double t0 = btf_now();
+    sweep_ctx c = {.ds = ds, .in = btf_dataset_get_info(ds), .o = &o, .s = out};
+    pthread_mutex_init(&c.gpu_lock, NULL);
+    make_fingerprint(&c);
+    /* Resumed points first: when all are there, nothing shared is computed. */
+    int missing = 0;
+    for (int i = 0; i < out->n_points; i++)
+        if (!read_point(&c, &out->points[i]))
+            missing++;
+    float *features = NULL;
+    btf_model range;
+    memset(&range, 0, sizeof range);
+    if (missing) {
+        if (o.progress)
+            o.progress(o.progress_user, 0.0, "sweep: features of every image");
+        btf_feature_opts fo = o.analyse.segment.features;
+        fo.threads = o.threads;
+        fo.progress = NULL;
+        rc = btf_dataset_features(ds, &fo, &features, &c.dim, err);
+        if (rc == BTF_OK && !o.analyse.no_range) {
+            btf_analyse_opts a = o.analyse;
+            a.photostereo.threads = o.threads;
+            rc = btf_analyse_range(ds, &a, &range, err);
+            c.range = &range;
+        }
+        c.features = features;
+        out->shared_s = btf_now() - t0;
+    }
+    if (rc == BTF_OK) {
+        btf_pool_progress pp = {o.progress, o.progress_user, "sweep: settings", 0.0, 1.0, 1};
+        rc = btf_pool_run(out->n_points, o.threads, sweep_job, &c, &pp, err);
+    }
+    pthread_mutex_destroy(&c.gpu_lock);
+    free(features);
+    btf_model_free(&range);
+    if (rc) {
+        btf_sweep_free(out);
+        return rc;
+    }
+    for (int i = 0; i < out->n_points; i++)
+        out->resumed += out->points[i].resumed;
+    mark_front(out, 1);
+    mark_front(out, 0);
+    out->seconds = btf_now() - t0;
+    return BTF_OK;
+}
+
+void btf_sweep_free(btf_sweep *s)
+{
+    if (!s)
+        return;
+    free(s->points);
+    memset(s, 0, sizeof *s);
+}

@@ -1,0 +1,329 @@
+/*
+ * test_report.c — the report's measurements (src/report/, docs/report.md):
+ * the spread of directions, quality per (view, light) pair, the sweep and
+ * its resume, the presets, the analysis on shared work, the preview scene.
+ *
+ * One small generated material (81 x 81 images of 32^2) and its model, made
+ * once for the group.
+ */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+static char dataset[4096];
+static btf_dataset *ds;
+static btf_model model;
+
+static btf_analyse_opts quick(void)
+{
+    btf_analyse_opts o = btf_analyse_defaults();
+    o.segment.subspaces = 3;
+    o.segment.kmeans.seed = 1;
+    o.fit.levels = 1;
+    return o;
+}
+
+static int setup(void **state)
+{
+    tu_setup_dir(state);
+    btf_error e = {0};
+    snprintf(dataset, sizeof dataset, "%s/leather", tu_dir);
+    btf_generate_opts g = btf_generate_defaults();
+    g.size = 32;
+    g.seed = 2;
+    if (btf_generate("leather", dataset, &g, &e) || btf_dataset_open(dataset, NULL, &ds, &e)) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
+    btf_analyse_opts o = quick();
+    if (btf_analyse(ds, &o, &model, &e)) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    btf_model_free(&model);
+    btf_dataset_close(ds);
+    return tu_teardown_dir(state);
+}
+
+/* The spread starts at the pole, covers the rings and never repeats. */
+static void test_spread(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_dirset set;
+    TU_OK(btf_dirset_ubo81(&set, &e), &e);
+    int idx[81];
+    assert_int_equal(btf_spread_directions(&set, 9, idx), 9);
+    assert_int_equal(idx[0], 0); /* the pole, and indices ascending */
+    int rings_hit[6] = {0};
+    for (int i = 0; i < 9; i++) {
+        if (i)
+            assert_true(idx[i] > idx[i - 1]);
+        rings_hit[(int)lround(set.dirs[idx[i]].theta / 15.0)] = 1;
+    }
+    int outer = rings_hit[4] + rings_hit[5];
+    assert_true(outer >= 1); /* far points are on the outer rings */
+    /* n beyond the set: all of it; n < 1: one. */
+    assert_int_equal(btf_spread_directions(&set, 500, idx), 81);
+    for (int i = 0; i < 81; i++)
+        assert_int_equal(idx[i], i);
+    assert_int_equal(btf_spread_directions(&set, 0, idx), 1);
+    assert_int_equal(btf_spread_directions(NULL, 3, idx), 0);
+    btf_dirset_free(&set);
+}
+
+typedef struct seen_pairs {
+    int calls;
+    int bad;
+} seen_pairs;
+
+static btf_status count_pair(void *user, int pair, int view, int light, const btf_image *meas,
+                             const btf_image *mod, btf_error *err)
+{
+    (void)pair, (void)view, (void)light, (void)err;
+    seen_pairs *s = user;
+    __atomic_add_fetch(&s->calls, 1, __ATOMIC_SEQ_CST);
+    if (meas->width != mod->width || meas->height != mod->height || mod->channels != 3)
+        __atomic_add_fetch(&s->bad, 1, __ATOMIC_SEQ_CST);
+    return BTF_OK;
+}
+
+/* Every sampled pair measured once, finite, summarised consistently; the
+ * same result on 1 and 2 threads. */
+static void test_quality(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_quality_opts o = btf_quality_defaults();
+    o.views = 4;
+    o.lights = 3;
+    o.threads = 1;
+    seen_pairs seen = {0, 0};
+    o.on_pair = count_pair;
+    o.on_pair_user = &seen;
+    btf_quality q, q2;
+    TU_OK(btf_quality_measure(ds, &model, &o, &q, &e), &e);
+    assert_int_equal(q.n_pairs, 12);
+    assert_int_equal(seen.calls, 12);
+    assert_int_equal(seen.bad, 0);
+    double sum = 0, worst = 0;
+    for (int i = 0; i < q.n_pairs; i++) {
+        const btf_pair_quality *p = &q.pairs[i];
+        assert_true(isfinite(p->d.combined) && p->d.combined >= 0);
+        assert_int_equal(p->subspace, model.index[p->view * 81 + p->light]);
+        sum += p->d.combined;
+        worst = p->d.combined > worst ? p->d.combined : worst;
+        if (i)
+            assert_true(p->view > q.pairs[i - 1].view ||
+                        (p->view == q.pairs[i - 1].view && p->light > q.pairs[i - 1].light));
+    }
+    assert_true(fabs(q.mean_combined - sum / 12) < 1e-9);
+    assert_true(q.worst_combined == worst && q.pairs[q.worst].d.combined == worst);
+    assert_true(q.median_combined <= worst && q.median_combined >= 0);
+    assert_int_equal(q.texture_size, 32);
+    o.threads = 2;
+    o.on_pair = NULL;
+    TU_OK(btf_quality_measure(ds, &model, &o, &q2, &e), &e);
+    for (int i = 0; i < q.n_pairs; i++)
+        assert_true(q.pairs[i].d.combined == q2.pairs[i].d.combined);
+    btf_quality_free(&q);
+    btf_quality_free(&q2);
+}
+
+/* A model that is not of the dataset, and bad options, are errors. */
+static void test_quality_errors(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_quality q;
+    btf_model tex;
+    btf_image img;
+    TU_OK(btf_image_alloc(&img, 32, 32, 3, &e), &e);
+    for (int i = 0; i < 32 * 32 * 3; i++)
+        img.data[i] = 0.5f;
+    btf_fit_opts fo = btf_fit_defaults();
+    TU_OK(btf_texture_fit(&img, &fo, &tex, &e), &e);
+    assert_int_not_equal(btf_quality_measure(ds, &tex, NULL, &q, &e), BTF_OK);
+    btf_quality_opts o = btf_quality_defaults();
+    o.relief = NAN;
+    assert_int_equal(btf_quality_measure(ds, &model, &o, &q, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "relief"));
+    assert_int_equal(btf_quality_measure(NULL, &model, NULL, &q, &e), BTF_E_ARG);
+    btf_model_free(&tex);
+    btf_image_free(&img);
+}
+
+/* Shared features and range give the very model a full analysis gives. */
+static void test_analyse_shared(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_analyse_opts o = quick();
+    float *features;
+    int dim;
+    TU_OK(btf_dataset_features(ds, &o.segment.features, &features, &dim, &e), &e);
+    btf_model range;
+    memset(&range, 0, sizeof range);
+    TU_OK(btf_analyse_range(ds, &o, &range, &e), &e);
+    o.features = features;
+    o.feature_dim = dim;
+    o.range_from = &range;
+    btf_model m;
+    TU_OK(btf_analyse(ds, &o, &m, &e), &e);
+    unsigned char *a, *b;
+    size_t na, nb;
+    TU_OK(btf_model_encode(&model, &a, &na, &e), &e);
+    TU_OK(btf_model_encode(&m, &b, &nb, &e), &e);
+    assert_int_equal(na, nb);
+    assert_memory_equal(a, b, na);
+    free(a);
+    free(b);
+    free(features);
+    btf_model_free(&m);
+    /* A model without a range map to copy from is an error. */
+    btf_model none;
+    memset(&none, 0, sizeof none);
+    o.range_from = &none;
+    assert_int_equal(btf_analyse(ds, &o, &m, &e), BTF_E_ARG);
+    btf_model_free(&range);
+}
+
+/* A 2 x 1 x 2 grid: every point measured, finite; the fronts marked; a
+ * second run resumes every point from the state folder, and a point file
+ * of other options is measured again. */
+static void test_sweep_resume(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_sweep_opts o = btf_sweep_defaults();
+    o.analyse = quick();
+    o.analyse.segment.subspaces = 0;
+    o.n_subspaces = 2, o.subspaces[0] = 0, o.subspaces[1] = 2;
+    o.n_levels = 1, o.levels[0] = 1;
+    o.n_neighbours = 2, o.neighbours[0] = 0, o.neighbours[1] = 4;
+    o.quality.views = 2, o.quality.lights = 2;
+    o.synth_size = 64, o.render_size = 32;
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s/sweep", tu_dir);
+    o.state_dir = dir;
+    btf_sweep s;
+    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    assert_int_equal(s.n_points, 4);
+    assert_int_equal(s.resumed, 0);
+    int fronts = 0, defaults = 0;
+    for (int i = 0; i < 4; i++) {
+        const btf_sweep_point *p = &s.points[i];
+        assert_true(p->k >= 1 && p->bytes > 100);
+        assert_true(isfinite(p->mean_combined) && p->worst_combined >= p->mean_combined);
+        assert_true(p->analyse_s > 0 && p->synth_s > 0 && p->render_s > 0);
+        assert_true(p->gpu_synth_s < 0);
+        fronts += p->pareto_bytes;
+        defaults += p->is_default;
+    }
+    assert_int_equal(s.points[2].k, 2);
+    assert_true(fronts >= 1);
+    assert_int_equal(defaults, 1); /* K auto, levels 1, auto neighbours: the base's */
+    assert_true(s.points[0].is_default);
+    assert_int_equal(tu_count_files(dir), 4);
+    btf_sweep again;
+    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
+    assert_int_equal(again.resumed, 4);
+    for (int i = 0; i < 4; i++) {
+        /* cJSON keeps 15 significant digits unless that loses more than an ulp */
+        assert_true(fabs(again.points[i].mean_combined - s.points[i].mean_combined) <=
+                    1e-12 * s.points[i].mean_combined);
+        assert_true(again.points[i].bytes == s.points[i].bytes);
+    }
+    btf_sweep_free(&again);
+    /* Other quality options: nothing resumed. A damaged file: measured again. */
+    tu_write_file(tu_fmt("%s/point-K0-L1-N0.json", dir), "{\"format\":", 10);
+    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
+    assert_int_equal(again.resumed, 3);
+    btf_sweep_free(&again);
+    o.quality.views = 3;
+    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
+    assert_int_equal(again.resumed, 0);
+    btf_sweep_free(&again);
+    btf_sweep_free(&s);
+    /* Bad grids. */
+    o.n_levels = 1, o.levels[0] = 99;
+    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "levels 99"));
+}
+
+static void test_presets(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const char *const *names = btf_analyse_preset_names();
+    int n = 0;
+    for (; names[n]; n++) {
+        btf_analyse_opts o = btf_analyse_defaults();
+        TU_OK(btf_analyse_preset(names[n], &o, &e), &e);
+        assert_true(o.fit.car.n_fixed >= 0 && o.fit.car.n_fixed <= BTF_CAR_MAX_NEIGHBOURS);
+        assert_true(o.fit.levels >= 0 && o.fit.levels <= BTF_MAX_LEVELS);
+    }
+    assert_int_equal(n, 3);
+    btf_analyse_opts o = btf_analyse_defaults(), d = btf_analyse_defaults();
+    TU_OK(btf_analyse_preset("balanced", &o, &e), &e);
+    assert_int_equal(o.segment.subspaces, d.segment.subspaces);
+    assert_int_equal(o.fit.levels, d.fit.levels);
+    assert_int_equal(o.fit.car.n_fixed, d.fit.car.n_fixed);
+    assert_int_equal(btf_analyse_preset("fastest", &o, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "fastest"));
+    assert_int_equal(btf_analyse_preset(NULL, &o, &e), BTF_E_ARG);
+    /* The family the fixed orders are cut from: causal, distinct. */
+    btf_offset fam[BTF_CAR_MAX_NEIGHBOURS];
+    assert_int_equal(btf_car_candidate_offsets(fam), BTF_CAR_MAX_NEIGHBOURS);
+    for (int i = 0; i < BTF_CAR_MAX_NEIGHBOURS; i++) {
+        assert_true(fam[i].row < 0 || (fam[i].row == 0 && fam[i].col < 0));
+        for (int j = 0; j < i; j++)
+            assert_false(fam[i].row == fam[j].row && fam[i].col == fam[j].col);
+    }
+}
+
+/* The preview scene renders: the sphere is in the middle, the corners are
+ * background, the pole light and a horizon light both finite. */
+static void test_sphere_scene(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_dir lights[] = {{0, 0}, {90, 270}, {45, 135}};
+    for (int i = 0; i < 3; i++) {
+        btf_scene s;
+        TU_OK(btf_scene_sphere(lights[i], 64.0, &s, &e), &e);
+        btf_render_opts ro = btf_render_defaults();
+        ro.width = ro.height = 48;
+        btf_image img = {0};
+        TU_OK(btf_render_scene(&model, &s, &ro, &img, NULL, &e), &e);
+        for (int k = 0; k < 48 * 48 * 3; k++)
+            assert_true(isfinite(img.data[k]) && img.data[k] >= 0);
+        assert_true(fabsf(img.data[0] - 0.04f) < 1e-6); /* a corner: the background */
+        btf_image_free(&img);
+        btf_scene_free(&s);
+    }
+    btf_scene s;
+    assert_int_equal(btf_scene_sphere((btf_dir){95, 0}, 64.0, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf_scene_sphere((btf_dir){45, 0}, 0.0, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf_scene_sphere((btf_dir){45, NAN}, 1.0, &s, &e), BTF_E_ARG);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_spread),        cmocka_unit_test(test_quality),
+        cmocka_unit_test(test_quality_errors), cmocka_unit_test(test_analyse_shared),
+        cmocka_unit_test(test_sweep_resume),  cmocka_unit_test(test_presets),
+        cmocka_unit_test(test_sphere_scene),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}

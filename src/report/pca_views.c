@@ -14,7 +14,7 @@
  * methods use (Meseth, Mueller & Klein 2003 fit per view; PCA per view is
  * the textbook form). docs/report-compression.md.
  *
- * Memory: one view's images per worker thread (views run in parallel over
+ * Memory: one view's images (float and int16) per worker thread (views run in parallel over
  * core/pool.c); each view's result depends on that view alone, so the
  * results do not depend on the thread count.
  */
@@ -23,6 +23,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #define DEFAULT_MAX_RMS 2.0
 #define DEFAULT_BITS 16
@@ -65,21 +68,100 @@ typedef struct job_ctx {
     double *residual;        /* [views]: the discarded eigenvalues' sum */
 } job_ctx;
 
-/* Sum of a[i] b[i], in float over 8 lanes of up to GRAM_BLOCK / 8 products,
- * added up in double. */
+/* Sum of a[i] b[i] in double, over 8 lanes (products of floats are exact
+ * in double; float products would leave about 10^-3 of a level in the
+ * discarded eigenvalues of data of known rank). The path of values that
+ * are not all whole levels (EXR, 16-bit files). */
 static double dot(const float *a, const float *b, size_t n)
 {
-    float acc[8] = {0};
+    double acc[8] = {0};
     size_t i = 0;
     for (; i + 8 <= n; i += 8)
         for (int k = 0; k < 8; k++)
-            acc[k] += a[i + k] * b[i + k];
+            acc[k] += (double)a[i + k] * (double)b[i + k];
     double s = 0;
     for (; i < n; i++)
         s += (double)a[i] * b[i];
     for (int k = 0; k < 8; k++)
         s += acc[k];
     return s;
+}
+
+/* The same for whole levels 0..255 held as int16, exactly: the path of
+ * 8-bit files. n <= GRAM_BLOCK keeps each 32-bit lane below 2^31
+ * (GRAM_BLOCK / 8 steps of two products of at most 255^2). */
+static int64_t dot16(const int16_t *a, const int16_t *b, size_t n)
+{
+    size_t i = 0;
+    int64_t s = 0;
+#ifdef __SSE2__
+    __m128i acc = _mm_setzero_si128();
+    for (; i + 8 <= n; i += 8)
+        acc = _mm_add_epi32(acc, _mm_madd_epi16(_mm_loadu_si128((const __m128i *)(a + i)),
+                                                _mm_loadu_si128((const __m128i *)(b + i))));
+    int32_t lane[4];
+    _mm_storeu_si128((__m128i *)lane, acc);
+    s = (int64_t)lane[0] + lane[1] + lane[2] + lane[3];
+#endif
+    for (; i < n; i++)
+        s += (int32_t)a[i] * b[i];
+    return s;
+}
+
+/* The Gram matrix of the centred images (lower triangle and diagonal
+ * filled, n x n). Whole levels: the uncentred Gram matrix exactly in
+ * integers, centred afterwards (H G H, H = I - 1 1^T / n); else the images
+ * are centred in place and their products summed in double. */
+static void gram_matrix(float *x, int16_t *xi, int n, size_t d, double *gram)
+{
+    if (xi) {
+        int64_t *g = (int64_t *)calloc((size_t)n * n, sizeof *g);
+        /* (no memory: fall through to the float path) */
+        if (g) {
+            for (size_t p0 = 0; p0 < d; p0 += GRAM_BLOCK) {
+                size_t len = d - p0 < GRAM_BLOCK ? d - p0 : GRAM_BLOCK;
+                for (int i = 0; i < n; i++)
+                    for (int j = 0; j <= i; j++)
+                        g[i * n + j] += dot16(xi + (size_t)i * d + p0, xi + (size_t)j * d + p0, len);
+            }
+            for (int i = 0; i < n; i++)
+                for (int j = 0; j < i; j++)
+                    g[j * n + i] = g[i * n + j];
+            double total = 0;
+            double *row = (double *)calloc((size_t)n, sizeof *row);
+            if (row) {
+                for (int i = 0; i < n; i++) {
+                    int64_t r = 0;
+                    for (int j = 0; j < n; j++)
+                        r += g[i * n + j];
+                    row[i] = (double)r;
+                    total += (double)r;
+                }
+                for (int i = 0; i < n; i++)
+                    for (int j = 0; j <= i; j++)
+                        gram[i * n + j] = ((double)g[i * n + j] - row[i] / n) - row[j] / n +
+                                          total / ((double)n * n);
+                free(row);
+                free(g);
+                return;
+            }
+            free(g);
+        }
+    }
+    for (size_t p = 0; p < d; p++) {
+        double mean = 0;
+        for (int l = 0; l < n; l++)
+            mean += x[(size_t)l * d + p];
+        float mu = (float)(mean / n);
+        for (int l = 0; l < n; l++)
+            x[(size_t)l * d + p] -= mu;
+    }
+    for (size_t p0 = 0; p0 < d; p0 += GRAM_BLOCK) {
+        size_t len = d - p0 < GRAM_BLOCK ? d - p0 : GRAM_BLOCK;
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j <= i; j++)
+                gram[i * n + j] += dot(x + (size_t)i * d + p0, x + (size_t)j * d + p0, len);
+    }
 }
 
 static btf_status view_job(void *user, int view, int worker, btf_error *err)
@@ -90,17 +172,18 @@ static btf_status view_job(void *user, int view, int worker, btf_error *err)
     int n = info->n_lights;
     size_t d = (size_t)info->width * info->height * 3;
     float *x = btf_alloc((size_t)n * d, sizeof *x, NULL);
-    double *mean = btf_calloc(d, sizeof *mean, NULL);
+    int16_t *xi = btf_alloc((size_t)n * d, sizeof *xi, NULL);
     double *gram = btf_calloc((size_t)n * n, sizeof *gram, NULL);
     double *val = btf_alloc((size_t)n, sizeof *val, NULL);
     double *vec = btf_alloc((size_t)n * n, sizeof *vec, NULL);
     btf_image img = {0};
     btf_status rc = BTF_OK;
-    if (!x || !mean || !gram || !val || !vec) {
+    if (!x || !xi || !gram || !val || !vec) {
         rc = btf_fail(err, BTF_E_NOMEM, "%s: out of memory for the images of view %d (%zu x %zu values)",
                       info->root, view, (size_t)n, d);
         goto done;
     }
+    int whole = 1; /* every value a whole level (8-bit files) */
     for (int l = 0; l < n; l++) {
         if ((rc = btf_dataset_read(c->ds, view, l, &img, err)))
             goto done;
@@ -111,22 +194,15 @@ static btf_status view_job(void *user, int view, int worker, btf_error *err)
             goto done;
         }
         float *row = x + (size_t)l * d;
+        int16_t *irow = xi + (size_t)l * d;
         btf_srgb_levels(c->levels, img.data, d, row);
-        for (size_t p = 0; p < d; p++)
-            mean[p] += row[p];
+        for (size_t p = 0; p < d && whole; p++) {
+            irow[p] = (int16_t)row[p];
+            whole = (float)irow[p] == row[p];
+        }
         btf_image_free(&img);
     }
-    for (size_t p = 0; p < d; p++) {
-        float mu = (float)(mean[p] / n);
-        for (int l = 0; l < n; l++)
-            x[(size_t)l * d + p] -= mu;
-    }
-    for (size_t p0 = 0; p0 < d; p0 += GRAM_BLOCK) {
-        size_t len = d - p0 < GRAM_BLOCK ? d - p0 : GRAM_BLOCK;
-        for (int i = 0; i < n; i++)
-            for (int j = 0; j <= i; j++)
-                gram[i * n + j] += dot(x + (size_t)i * d + p0, x + (size_t)j * d + p0, len);
-    }
+    gram_matrix(x, whole ? xi : NULL, n, d, gram);
     for (int i = 0; i < n; i++)
         for (int j = 0; j < i; j++)
             gram[j * n + i] = gram[i * n + j];
@@ -162,7 +238,7 @@ static btf_status view_job(void *user, int view, int worker, btf_error *err)
 done:
     btf_image_free(&img);
     free(x);
-    free(mean);
+    free(xi);
     free(gram);
     free(val);
     free(vec);

@@ -1363,7 +1363,8 @@ typedef struct btf_model_bytes {
  * the file. BTF_E_DATA when m cannot be encoded. */
 btf_status btf_model_byte_breakdown(const btf_model *m, btf_model_bytes *out, btf_error *err);
 
-/* The raw BTF a dataset holds: what the report's ratios divide. */
+/* The raw BTF a dataset holds: what the report's ratios divide (also
+ * filled into the PCA and JPEG results below). */
 typedef struct btf_raw_bytes {
     int views, lights, width, height;
     uint64_t raw;           /* views x lights x width x height x 3, one byte per value */
@@ -1402,6 +1403,9 @@ typedef struct btf_pca_result {
     double seconds;         /* wall-clock time of the call */
 } btf_pca_result;
 
+/* Views in parallel (opts->threads), one view's images in memory per
+ * thread; the results do not depend on the thread count. opts NULL: the
+ * defaults. Free out with btf_pca_result_free (NULL and twice are fine). */
 btf_status btf_pca_contrast(const btf_dataset *ds, const btf_pca_opts *opts,
                             btf_pca_result *out, btf_error *err);
 void btf_pca_result_free(btf_pca_result *r);

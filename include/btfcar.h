@@ -1342,6 +1342,116 @@ uint64_t btf_phase_randomise_bytes(int width, int height);
 /* What a model file costs, section by section, and what two plain codecs
  * would store for the same data (src/report/, docs/report.md). */
 
+/* The parts of an encoded model file (docs/report-compression.md). */
+typedef enum btf_model_part {
+    BTF_MODEL_PART_CONTAINER = 0, /* the 26-byte file header and the CRC-32 */
+    BTF_MODEL_PART_DEFLATE,       /* zlib's header and Adler-32, deflate's block
+                                     headers, code tables, end-of-block codes
+                                     and final padding (0 when stored) */
+    BTF_MODEL_PART_FRAMING,       /* section tags and lengths, the subspace and
+                                     marginal counts, each subspace's
+                                     representative pair and analysed size */
+    BTF_MODEL_PART_DIRECTIONS,    /* VIEW and LGHT: names, counts, directions */
+    BTF_MODEL_PART_INDEX,         /* INDX: the index table */
+    BTF_MODEL_PART_SPECTRAL,      /* per subspace: the mean colour and the 3 x 3 basis */
+    BTF_MODEL_PART_LEVELS,        /* per subspace: the pyramid level count */
+    BTF_MODEL_PART_NEIGHBOURHOODS,/* per band: neighbour count and offsets */
+    BTF_MODEL_PART_GAMMAS,        /* per band: the CAR coefficients */
+    BTF_MODEL_PART_SIGMAS,        /* per band: the noise deviation */
+    BTF_MODEL_PART_BAND_MEANS,    /* per band: the sub-band mean */
+    BTF_MODEL_PART_MARGINALS,     /* MARG: per subspace its knot count and transfer */
+    BTF_MODEL_PART_RANGE,         /* RANG: the range/normal tile, all of its body */
+    BTF_MODEL_PART_COUNT
+} btf_model_part;
+
+/* A short name of a part ("gammas", ...); "?" out of range. */
+const char *btf_model_part_name(int part);
+
+typedef struct btf_model_bytes {
+    uint64_t total;         /* the encoded file's size (btf_model_encode) */
+    uint64_t payload;       /* its payload before deflate */
+    int deflated;           /* 1: the payload is stored deflated, 0: stored as is */
+    /* Bytes of the file by part; they add up to total exactly. A deflated
+     * payload's bits are given to the payload bytes they code: a literal's
+     * code to its byte, a match's length and distance codes (with their
+     * extra bits) shared evenly by the bytes it copies; the sums in bits
+     * are rounded to whole bytes by largest remainder. */
+    uint64_t file[BTF_MODEL_PART_COUNT];
+    /* Bytes of the payload by part before deflate; they add up to payload.
+     * (CONTAINER and DEFLATE are 0 here.) */
+    uint64_t raw[BTF_MODEL_PART_COUNT];
+} btf_model_bytes;
+
+/* Encodes m (btf_model_encode: same bytes) and accounts for every byte of
+ * the file. BTF_E_DATA when m cannot be encoded. */
+btf_status btf_model_byte_breakdown(const btf_model *m, btf_model_bytes *out, btf_error *err);
+
+/* The raw BTF a dataset holds: what the report's ratios divide (also
+ * filled into the PCA and JPEG results below). */
+typedef struct btf_raw_bytes {
+    int views, lights, width, height;
+    uint64_t raw;           /* views x lights x width x height x 3, one byte per value */
+    uint64_t on_disk;       /* btf_dataset_info.bytes_on_disk: the image files' sizes */
+} btf_raw_bytes;
+btf_status btf_dataset_raw_bytes(const btf_dataset *ds, btf_raw_bytes *out, btf_error *err);
+
+/* The pixel-wise contrast: per view, a PCA of its n_lights images. Values
+ * are the images' sRGB encoding clamped to [0, 1] and scaled to 0..255 (for
+ * 8-bit files exactly the stored values). c is the smallest number of
+ * components whose RMS error over the view's values (from the discarded
+ * eigenvalues) is at most max_rms; stored: the mean image, c eigen-images and
+ * n_lights x c weights, each value in `bits` bits (docs/report-compression.md). */
+typedef struct btf_pca_opts {
+    double max_rms;         /* 0: 2.0, in 8-bit sRGB levels */
+    int bits;               /* bits per stored value, 1..32; 0: 16 */
+    int max_components;     /* cap on c per view, 1..n_lights; 0: n_lights */
+    int threads;            /* 0: the number of online CPUs */
+    btf_progress_fn progress;
+    void *progress_user;
+} btf_pca_opts;
+/* The defaults: max_rms 2.0, bits 16, max_components 0 (no cap: n_lights),
+ * threads 0 (all CPUs), no progress. */
+btf_pca_opts btf_pca_defaults(void);
+
+typedef struct btf_pca_result {
+    int views, lights, width, height;
+    int *components;        /* [views]: c of each view (malloc'd) */
+    double *view_rms;       /* [views]: each view's RMS error, 8-bit levels (malloc'd) */
+    int min_components, max_components;
+    double mean_components; /* over the views */
+    double rms;             /* over every value of the dataset, 8-bit levels */
+    uint64_t bytes;         /* sum over views of (W H 3 (1 + c) + n_lights c) x bits / 8, rounded up per view */
+    btf_raw_bytes raw;
+    double ratio;           /* raw.raw / bytes */
+    double seconds;         /* wall-clock time of the call */
+} btf_pca_result;
+
+/* Views in parallel (opts->threads), one view's images in memory per
+ * thread; the results do not depend on the thread count. opts NULL: the
+ * defaults. Free out with btf_pca_result_free (NULL and twice are fine). */
+btf_status btf_pca_contrast(const btf_dataset *ds, const btf_pca_opts *opts,
+                            btf_pca_result *out, btf_error *err);
+void btf_pca_result_free(btf_pca_result *r);
+
+/* The subspace-image contrast: each subspace's representative measured image
+ * (m->subspaces[k].view, .light, read from ds) encoded as JPEG in memory,
+ * plus the index table (views x lights bytes, one per pair, uncompressed). */
+typedef struct btf_jpeg_contrast {
+    int images;             /* the subspaces */
+    int quality;            /* the JPEG quality used */
+    uint64_t jpeg_bytes;    /* the JPEGs together */
+    uint64_t index_bytes;   /* views x lights */
+    uint64_t bytes;         /* jpeg_bytes + index_bytes */
+    double rms;             /* the JPEGs' error against the images, 8-bit sRGB levels */
+    btf_raw_bytes raw;
+    double ratio;           /* raw.raw / bytes */
+} btf_jpeg_contrast;
+
+/* quality 1..100; 0: 90. The model must be a BTF model of ds (same view and
+ * light counts, subspace pairs in range); BTF_E_DATA otherwise. */
+btf_status btf_jpeg_subspace_contrast(const btf_dataset *ds, const btf_model *m, int quality,
+                                      btf_jpeg_contrast *out, btf_error *err);
+
 /* (end of compression accounting) */
 
 /* ------------------------------------- report: quality per direction (issue 18) */

@@ -43,4 +43,17 @@ void btf_model_internal_free(struct btf_model_internal *in);
  * computed for, else btf_car_margin; -1 when out of memory. */
 int btf_model_margin(const btf_model *m, int k, int b, int l);
 
+/* For the report's accounting (src/report/model_bytes.c): btf_model_encode
+ * (the same file bytes in *data, *size), also handing out the payload
+ * before deflate and, per payload byte, the btf_model_part it belongs to
+ * (both malloc'd, n bytes each; the caller frees them with free). On
+ * failure nothing is handed out. */
+typedef struct btf_model_payload_parts {
+    unsigned char *payload;
+    unsigned char *part;
+    size_t n;
+} btf_model_payload_parts;
+btf_status btf_model_encode_parts(const btf_model *m, unsigned char **data, size_t *size,
+                                  btf_model_payload_parts *parts, btf_error *err);
+
 #endif

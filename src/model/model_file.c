@@ -76,7 +76,19 @@ typedef struct wbuf {
     unsigned char *p;
     size_t n, cap;
     int failed; /* sticky: an allocation failed */
+    /* With `labelled`, lab[i] is the btf_model_part of byte i (the current
+     * `part` when it was written), for the report's accounting
+     * (btf_model_encode_parts); lab has the same capacity as p. */
+    int labelled;
+    unsigned char part;
+    unsigned char *lab;
 } wbuf;
+
+/* What the following bytes hold (btf_model_part, include/btfcar.h). */
+static void w_part(wbuf *b, btf_model_part part)
+{
+    b->part = (unsigned char)part;
+}
 
 static void w_bytes(wbuf *b, const void *src, size_t n)
 {
@@ -87,14 +99,20 @@ static void w_bytes(wbuf *b, const void *src, size_t n)
         while (cap - b->n < n)
             cap *= 2;
         unsigned char *p = realloc(b->p, cap);
-        if (!p) {
+        if (p)
+            b->p = p;
+        unsigned char *lab = p && b->labelled ? realloc(b->lab, cap) : NULL;
+        if (lab)
+            b->lab = lab;
+        if (!p || (b->labelled && !lab)) {
             b->failed = 1;
             return;
         }
-        b->p = p;
         b->cap = cap;
     }
     memcpy(b->p + b->n, src, n);
+    if (b->labelled)
+        memset(b->lab + b->n, b->part, n);
     b->n += n;
 }
 
@@ -142,6 +160,7 @@ static void w_f64(wbuf *b, double f)
  * when the body is complete. */
 static size_t w_section_begin(wbuf *b, int tag)
 {
+    w_part(b, BTF_MODEL_PART_FRAMING);
     w_bytes(b, TAGS[tag], 4);
     w_u32(b, 0);
     return b->n;
@@ -234,6 +253,7 @@ static double r_f64(rbuf *r)
 static void put_dirset(wbuf *b, int tag, const btf_dirset *s)
 {
     size_t body = w_section_begin(b, tag);
+    w_part(b, BTF_MODEL_PART_DIRECTIONS);
     size_t len = strlen(s->name);
     w_u8(b, (unsigned)len);
     w_bytes(b, s->name, len);
@@ -247,14 +267,18 @@ static void put_dirset(wbuf *b, int tag, const btf_dirset *s)
 
 static void put_band(wbuf *b, const btf_car_band *c)
 {
+    w_part(b, BTF_MODEL_PART_NEIGHBOURHOODS);
     w_u8(b, (unsigned)c->n);
     for (int i = 0; i < c->n; i++) {
         w_u8(b, (unsigned)(uint8_t)c->offsets[i].row);
         w_u8(b, (unsigned)(uint8_t)c->offsets[i].col);
     }
+    w_part(b, BTF_MODEL_PART_GAMMAS);
     for (int i = 0; i < c->n; i++)
         w_f32(b, c->gamma[i]);
+    w_part(b, BTF_MODEL_PART_SIGMAS);
     w_f32(b, c->sigma);
+    w_part(b, BTF_MODEL_PART_BAND_MEANS);
     w_f32(b, c->mean);
 }
 
@@ -264,14 +288,17 @@ static void put_subspaces(wbuf *b, const btf_model *m)
     w_u16(b, (unsigned)m->n_subspaces);
     for (int s = 0; s < m->n_subspaces; s++) {
         const btf_subspace_model *sm = &m->subspaces[s];
+        w_part(b, BTF_MODEL_PART_FRAMING);
         w_u16(b, (unsigned)sm->view & 0xFFFFu);
         w_u16(b, (unsigned)sm->light & 0xFFFFu);
         w_u32(b, (uint32_t)sm->width);
         w_u32(b, (uint32_t)sm->height);
+        w_part(b, BTF_MODEL_PART_SPECTRAL);
         for (int c = 0; c < 3; c++)
             w_f32(b, sm->mean[c]);
         for (int i = 0; i < 9; i++)
             w_f32(b, sm->basis[i]);
+        w_part(b, BTF_MODEL_PART_LEVELS);
         w_u8(b, (unsigned)sm->levels);
         for (int band = 0; band < 3; band++)
             for (int l = 0; l < sm->levels; l++)
@@ -296,6 +323,7 @@ static void put_marginals(wbuf *b, const btf_model *m)
     w_u16(b, (unsigned)m->n_subspaces);
     for (int s = 0; s < m->n_subspaces; s++) {
         const btf_marginal *mg = &m->subspaces[s].marginal;
+        w_part(b, BTF_MODEL_PART_MARGINALS);
         w_u8(b, (unsigned)mg->knots);
         if (!mg->knots)
             continue;
@@ -347,6 +375,7 @@ static btf_status put_range(wbuf *b, const btf_model *m, const char *name, btf_e
         planes[n + i] = (unsigned char)(z >> 8);
     }
     size_t body = w_section_begin(b, S_RANG);
+    w_part(b, BTF_MODEL_PART_RANGE);
     w_u16(b, (unsigned)m->range_width);
     w_u16(b, (unsigned)m->range_height);
     w_f32(b, m->range_texel);
@@ -368,6 +397,7 @@ static btf_status build_payload(const btf_model *m, wbuf *b, const char *name, b
         put_dirset(b, S_VIEW, &m->views);
         put_dirset(b, S_LGHT, &m->lights);
         size_t body = w_section_begin(b, S_INDX);
+        w_part(b, BTF_MODEL_PART_INDEX);
         w_bytes(b, m->index, (size_t)m->views.count * m->lights.count);
         w_section_end(b, body);
     }
@@ -414,8 +444,9 @@ static btf_status wrap_payload(const wbuf *pl, unsigned minor, const char *name,
     return BTF_OK;
 }
 
+/* parts: NULL, or where the payload and its labels go (btf_model_encode_parts). */
 static btf_status encode_named(const btf_model *m, const char *name, unsigned char **data,
-                               size_t *size, btf_error *err)
+                               size_t *size, btf_model_payload_parts *parts, btf_error *err)
 {
     if (!data || !size)
         return failf(err, BTF_E_ARG, name, "no output buffer");
@@ -427,6 +458,7 @@ static btf_status encode_named(const btf_model *m, const char *name, unsigned ch
     if (rc)
         return rc;
     wbuf pl = {0};
+    pl.labelled = parts != NULL;
     rc = build_payload(m, &pl, name, err);
     if (rc == BTF_OK && pl.n > MAX_PAYLOAD_BYTES)
         rc = failf(err, BTF_E_DATA, name, "model of %zu bytes (expected at most %zu)", pl.n,
@@ -436,13 +468,29 @@ static btf_status encode_named(const btf_model *m, const char *name, unsigned ch
                                : m->range       ? FMT_MINOR_RANGE_FLAGS
                                                 : 0,
                           name, data, size, err);
+    if (rc == BTF_OK && parts) {
+        parts->payload = pl.p;
+        parts->part = pl.lab;
+        parts->n = pl.n;
+        return BTF_OK;
+    }
     free(pl.p);
+    free(pl.lab);
     return rc;
 }
 
 btf_status btf_model_encode(const btf_model *m, unsigned char **data, size_t *size, btf_error *err)
 {
-    return encode_named(m, "model", data, size, err);
+    return encode_named(m, "model", data, size, NULL, err);
+}
+
+btf_status btf_model_encode_parts(const btf_model *m, unsigned char **data, size_t *size,
+                                  btf_model_payload_parts *parts, btf_error *err)
+{
+    if (!parts)
+        return failf(err, BTF_E_ARG, "model", "no payload parts to fill");
+    memset(parts, 0, sizeof *parts);
+    return encode_named(m, "model", data, size, parts, err);
 }
 
 btf_status btf_model_write(const char *path, const btf_model *m, btf_error *err)
@@ -451,7 +499,7 @@ btf_status btf_model_write(const char *path, const btf_model *m, btf_error *err)
         return btf_fail(err, BTF_E_ARG, "model: no path to write to");
     unsigned char *data;
     size_t size;
-    btf_status rc = encode_named(m, path, &data, &size, err);
+    btf_status rc = encode_named(m, path, &data, &size, NULL, err);
     if (rc)
         return rc;
     rc = btf_write_file_atomic(path, data, size, err);

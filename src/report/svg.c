@@ -146,6 +146,8 @@ void btf_axis_make(btf_axis *a, double lo, double hi, int log)
             l0 -= 0.30103, l1 += 0.30103; /* one value: half to twice it */
         double pad = 0.05 * (l1 - l0);
         l0 -= pad, l1 += pad;
+        l0 = l0 < -300 ? -300 : l0; /* keep pow() finite and non-zero */
+        l1 = l1 > 300 ? 300 : l1;
         a->lo = pow(10, l0), a->hi = pow(10, l1);
         double span = l1 - l0;
         a->nticks = 0;
@@ -173,8 +175,11 @@ void btf_axis_make(btf_axis *a, double lo, double hi, int log)
         double d = lo == 0 ? 1 : 0.1 * fabs(lo);
         lo -= d, hi += d;
     }
-    if (fabs(lo) > 1e300 || fabs(hi) > 1e300)
-        lo = lo < -1e300 ? -1e300 : lo, hi = hi > 1e300 ? 1e300 : hi;
+    /* Far from overflow: the nice bounds and ticks stay finite. */
+    lo = lo < -1e300 ? -1e300 : lo > 1e300 ? 1e300 : lo;
+    hi = hi > 1e300 ? 1e300 : hi < -1e300 ? -1e300 : hi;
+    if (!(hi > lo))
+        hi = lo + fabs(lo) * 0.1 + 1;
     linear_ticks(a, lo, hi, 1);
     if (a->nticks < 2 || !(a->hi > a->lo)) {
         a->lo = lo, a->hi = hi, a->nticks = 2;

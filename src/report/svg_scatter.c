@@ -69,11 +69,11 @@ static void place_label(btf_buf *out, double px, double py, const char *text, co
 
 static void diamond(btf_buf *out, double x, double y, double r)
 {
-    char a[32], b[32], c[32], d[32], e[32], f[32];
+    char a[32], b[32], c[32], d[32], e[32], f[32], g[32];
     btf_buf_printf(out, "<path d=\"M%s %sL%s %sL%s %sL%s %sZ\" fill=\"%s\" stroke=\"#222222\" "
                         "stroke-width=\"1\"/>\n",
                    btf_svg_num(a, x), btf_svg_num(b, y - r), btf_svg_num(c, x + r), btf_svg_num(d, y),
-                   btf_svg_num(e, x), btf_svg_num(f, y + r), a, d, MARK_COLOUR);
+                   btf_svg_num(e, x), btf_svg_num(f, y + r), btf_svg_num(g, x - r), d, MARK_COLOUR);
 }
 
 btf_status btf_svg_scatter(const btf_scatter *s, btf_buf *out, btf_error *err)
@@ -101,7 +101,7 @@ btf_status btf_svg_scatter(const btf_scatter *s, btf_buf *out, btf_error *err)
         is_front = btf_calloc((size_t)n, sizeof *is_front, err);
         vx = btf_alloc((size_t)n, sizeof *vx, err);
         vy = btf_alloc((size_t)n, sizeof *vy, err);
-        placed = btf_alloc((size_t)n + 1, sizeof *placed, err);
+        placed = btf_alloc(2 * (size_t)n + 1, sizeof *placed, err);
         if (!ok || !front || !is_front || !vx || !vy || !placed) {
             free(ok), free(front), free(is_front), free(vx), free(vy), free(placed);
             return BTF_E_NOMEM;
@@ -235,19 +235,24 @@ btf_status btf_svg_scatter(const btf_scatter *s, btf_buf *out, btf_error *err)
     }
     /* Labels: the marked point's first (it matters most), then the front's,
      * then (all_labels) the rest. */
+    /* Labels keep off the points too: each point is a small box first. */
     int np = 0;
+    for (int k = 0; k < nv; k++) {
+        double px = PX(vx[k]), py = PY(vy[k]);
+        placed[np++] = (box){px - 4, py - 4, px + 4, py + 4};
+    }
     if (mark_shown && s->labels && s->labels[s->marked])
         place_label(out, PX(s->x[s->marked]), PY(s->y[s->marked]), s->labels[s->marked], &plot, placed,
-                    &np, n + 1, "font-weight=\"bold\"");
+                    &np, 2 * n + 1, "font-weight=\"bold\"");
     for (int k = 0; s->labels && k < nfront; k++) {
         int i = front[k];
         if (s->labels[i] && !(mark_shown && i == s->marked))
-            place_label(out, PX(s->x[i]), PY(s->y[i]), s->labels[i], &plot, placed, &np, n + 1, NULL);
+            place_label(out, PX(s->x[i]), PY(s->y[i]), s->labels[i], &plot, placed, &np, 2 * n + 1, NULL);
     }
     for (int k = 0; s->labels && s->all_labels && k < nv; k++) {
         int i = ok[k];
         if (s->labels[i] && !is_front[i] && !(mark_shown && i == s->marked))
-            place_label(out, PX(s->x[i]), PY(s->y[i]), s->labels[i], &plot, placed, &np, n + 1,
+            place_label(out, PX(s->x[i]), PY(s->y[i]), s->labels[i], &plot, placed, &np, 2 * n + 1,
                         "fill=\"#666666\"");
     }
     if (nv == 0)

@@ -44,6 +44,8 @@ SPIRV_H   := $(SHADERS:gpu/%.comp=$(BUILD)/gen/%_spv.h)
 STATIC    := $(BUILD)/libbtfcar.a
 SHARED    := $(BUILD)/libbtfcar.so
 CLI       := $(BUILD)/btfcar
+# The browser check of HTML pages (tools/check-page.c; the report's test).
+CHECK_PAGE := $(BUILD)/check-page
 
 # The shared library's major version (docs/install.md, "Shared library and
 # soname"): raised on every ABI break.
@@ -62,7 +64,7 @@ $(LIB_OBJ): CXXFLAGS += -fvisibility=hidden
 
 .PHONY: all deps test test-run asan bench demo install uninstall fuzz fuzz-build clean help check-shaders noise-stream check-exports check-install check-layering
 
-all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN) $(BUILD)/noise_stream
+all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN) $(BUILD)/noise_stream $(CHECK_PAGE)
 
 help:
 	@echo "make deps     install missing Debian packages (apt-get; needs root)"
@@ -71,6 +73,7 @@ help:
 	@echo "make asan     the whole test suite under ASan + UBSan (build-asan/)"
 	@echo "make demo     deps + build + generate a material and analyse it end to end"
 	@echo "make bench    benchmarks (figures; never fails on time)"
+	@echo "build/check-page PAGE.html [SHOT.png]  a page in headless Chromium: no console errors, every image shown"
 	@echo "make noise-stream  build/noise_stream: raw noise words for dieharder"
 	@echo "make fuzz     libFuzzer targets with clang (FUZZ_SECONDS=30 each)"
 	@echo "make install  PREFIX=/usr/local: library, header, btfcar, pkg-config file"
@@ -132,8 +135,8 @@ check-layering: $(LIB_OBJ)
 	@sh tools/check-layering.sh $(LIB_OBJ)
 
 # Run every test program; tests/run.sh prints the final "N passed, N failed".
-test-run: $(TEST_BIN) $(CLI) check-exports check-layering
-	@BTF_CLI=$(abspath $(CLI)) sh tests/run.sh $(TEST_BIN)
+test-run: $(TEST_BIN) $(CLI) $(CHECK_PAGE) check-exports check-layering
+	@BTF_CLI=$(abspath $(CLI)) BTF_CHECK_PAGE=$(abspath $(CHECK_PAGE)) sh tests/run.sh $(TEST_BIN)
 
 test: deps
 	@$(MAKE) --no-print-directory all
@@ -234,6 +237,14 @@ $(SYNTH_O3): CFLAGS += -O3
 SCHED_FLAGS := $(shell $(CC) -fschedule-insns -fsched-pressure -Werror -x c -c /dev/null \
                  -o /dev/null 2>/dev/null && echo -fschedule-insns -fsched-pressure)
 $(BUILD)/src/synth/noise_row.o $(BUILD)/src/synth/wave.o: CFLAGS += $(SCHED_FLAGS)
+
+# Opens an HTML page in headless Chromium (Debian's chromium, from make deps)
+# over the DevTools protocol and fails on console errors or warnings, failed
+# loads and images that do not decode; takes a screenshot. Not part of the
+# library: build/check-page [--size WxH] [--timeout S] PAGE.html [SHOT.png]
+$(CHECK_PAGE): tools/check-page.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< -lcjson
 
 # The raw words of one synthesis noise stream, for statistical test suites
 # (docs/synthesis.md, "Noise"): build/noise_stream | dieharder -a -g 200

@@ -3,13 +3,15 @@
 # Idempotent: when everything is present it runs no apt command at all.
 set -eu
 
+# chromium: the browser test of `btfcar report` (build/check-page, tools/check-page.c).
 PKGS="build-essential g++ pkg-config clang
 libopencv-core-dev libopencv-imgproc-dev
 libopenexr-dev libpng-dev libjpeg62-turbo-dev
 libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
 glslang-tools spirv-tools
 libcmocka-dev zlib1g-dev time openexr
-libcjson-dev libassimp-dev"
+libcjson-dev libassimp-dev
+chromium"
 
 missing=""
 for p in $PKGS; do

@@ -203,9 +203,10 @@ int cmd_analyse(int argc, char **argv)
          .meta = "OUT", .help = "the model file to write (a folder with --stage segment)",
          .required = 1},
         {.name = "--preset", .kind = CLI_CHOICE, .dest = &preset, .meta = "NAME",
-         .help = "a measured point of the speed/accuracy trade: fast, balanced (the\n"
-                 "defaults) or accurate sets --subspaces, --levels and --neighbourhood\n"
-                 "(each given explicitly wins; docs/report.md, \"Presets\")",
+         .help = "a measured point of the speed/accuracy trade: fast (K 2, 1 level,\n"
+                 "auto neighbourhood), balanced (K 4, 2 levels, 8 neighbours) or\n"
+                 "accurate (K 8, 3 levels, 8 neighbours) sets --subspaces, --levels and\n"
+                 "--neighbourhood (each given explicitly wins; docs/report.md, \"Presets\")",
          .choices = btf_analyse_preset_names()},
         {.name = "--stage", .kind = CLI_CHOICE, .dest = &stage, .meta = "STAGE",
          .help = "stop after this stage", .choices = stages},

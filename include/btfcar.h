@@ -1461,8 +1461,8 @@ btf_status btf_jpeg_subspace_contrast(const btf_dataset *ds, const btf_model *m,
 typedef struct btf_quality_opts {
     int all;                  /* 1: every (view, light) pair of the dataset */
     int views, lights;        /* the spread measured when not all: this many views and
-                                 lights, farthest apart on the hemisphere (0: 9 each;
-                                 more than the dataset has: all of them) */
+                                 lights (btf_spread_directions; 0: 9 each; more than
+                                 the dataset has: all of them) */
     uint64_t seed;            /* synthesis seed of the flat renders (0 is a seed) */
     double relief;            /* range map height scale of the flat renders, as
                                  btf_render_opts.relief (< 0: 1; 0: off) */
@@ -1507,10 +1507,11 @@ typedef struct btf_quality {
 btf_status btf_quality_measure(const btf_dataset *ds, const btf_model *m,
                                const btf_quality_opts *opts, btf_quality *out, btf_error *err);
 void btf_quality_free(btf_quality *q);
-/* The spread: indices of the n directions of set farthest apart (the one
- * nearest the pole first, then each time the one whose smallest angle to
- * those chosen is largest; ties to the lower index), sorted ascending.
- * n is clamped to 1..set->count; returns the count written to idx. */
+/* The spread: indices of n directions of set, evenly strided through the
+ * set's order (ring by ring from the pole, phi ascending in a ring):
+ * idx[i] = floor(i count / n), so every ring gets its share and the
+ * azimuths vary. n is clamped to 1..set->count; returns the count written
+ * to idx. */
 int btf_spread_directions(const btf_dirset *set, int n, int *idx);
 
 /* (end of quality per direction) */
@@ -1595,6 +1596,53 @@ void btf_sweep_free(btf_sweep *s);
 btf_status btf_analyse_preset(const char *name, btf_analyse_opts *o, btf_error *err);
 /* The preset names, NULL-terminated. */
 const char *const *btf_analyse_preset_names(void);
+
+/* The report (docs/report.md): DIR/index.html, self-contained (PNG
+ * pictures and SVG plots beside it, no scripts, nothing fetched), and
+ * DIR/report.json with the same numbers (keys: docs/report.md). */
+typedef struct btf_report_opts {
+    const char *dataset_name;    /* shown; NULL: the dataset's root */
+    const char *model_name;      /* shown; NULL: "model" */
+    btf_quality_opts quality;    /* the pairs measured (all or the spread), seed, relief */
+    btf_dir sphere_light;        /* the preview's light in the camera's frame; both 0 and
+                                    sphere_light_set 0: theta 45, phi 135 (upper left) */
+    int sphere_light_set;
+    int sphere_size;             /* the preview's side in pixels; 0: 384 */
+    int worst;                   /* the worst pairs shown with pictures; 0: 6 */
+    btf_pca_opts pca;            /* the per-view PCA contrast */
+    int jpeg_quality;            /* the JPEG contrast; 0: 90 */
+    int sweep;                   /* 1: measure the trade (btf_sweep_run; its finished
+                                    points are kept in DIR/sweep/ and resumed) */
+    btf_sweep_opts sweep_opts;   /* the grid and its options (state_dir is set here) */
+    int threads;                 /* 0: all CPUs */
+    btf_progress_fn progress;
+    void *progress_user;
+} btf_report_opts;
+/* The defaults: the 9 x 9 spread of pairs, the preview lit from (45, 135) at
+ * 384 px, the 6 worst pairs, the PCA and sweep defaults, JPEG quality 90,
+ * no sweep, all CPUs. */
+btf_report_opts btf_report_defaults(void);
+
+/* What a report found, for the command's summary. */
+typedef struct btf_report_summary {
+    uint64_t model_bytes, raw_bytes;
+    double ratio;                /* raw_bytes / model_bytes */
+    int pairs;                   /* measured */
+    double mean_combined, worst_combined;
+    int sweep_points, sweep_resumed;
+    double seconds;
+} btf_report_summary;
+
+/* Writes the report of model m (analysed from ds) into the folder dir:
+ * compression (the model file by part, per-view PCA and JPEG contrasts),
+ * quality per sampled (view, light) pair with pictures and a heat map, the
+ * preview sphere, and with opts->sweep the measured trade. The report's
+ * files appear as a whole (btf_output_dir_*); the sweep's state folder is
+ * written as it goes, so that an interrupted report resumes its sweep.
+ * summary may be NULL. */
+btf_status btf_report_write(const btf_dataset *ds, const btf_model *m, const char *dir,
+                            const btf_report_opts *opts, btf_report_summary *summary,
+                            btf_error *err);
 
 /* (end of sweep, presets, the page) */
 

@@ -35,44 +35,15 @@ int btf_spread_directions(const btf_dirset *set, int n, int *idx)
         n = 1;
     if (n > count)
         n = count;
-    /* Greedy farthest-point sampling: each new direction is the one whose
-     * nearest chosen direction is farthest, so the sample covers the
-     * hemisphere evenly whatever the set's ring structure. */
-    double *near = malloc((size_t)count * sizeof *near);
-    unsigned char *taken = calloc((size_t)count, 1);
-    if (!near || !taken) {
-        free(near);
-        free(taken);
-        return 0;
-    }
-    int first = 0;
-    for (int i = 1; i < count; i++)
-        if (set->dirs[i].theta < set->dirs[first].theta)
-            first = i;
-    for (int i = 0; i < count; i++)
-        near[i] = btf_dir_angle(set->dirs[i], set->dirs[first]);
-    taken[first] = 1;
-    int got = 1;
-    while (got < n) {
-        int best = -1;
-        for (int i = 0; i < count; i++)
-            if (!taken[i] && (best < 0 || near[i] > near[best]))
-                best = i;
-        taken[best] = 1;
-        got++;
-        for (int i = 0; i < count; i++) {
-            double a = btf_dir_angle(set->dirs[i], set->dirs[best]);
-            if (a < near[i])
-                near[i] = a;
-        }
-    }
-    int k = 0;
-    for (int i = 0; i < count; i++)
-        if (taken[i])
-            idx[k++] = i;
-    free(near);
-    free(taken);
-    return k;
+    /* Evenly strided through the set's order (ring by ring, theta
+     * ascending, phi ascending in a ring), from its first direction: every
+     * ring gets its share by the number of directions it holds, and the
+     * azimuths within a ring walk round as the stride crosses it. (Farthest-
+     * point sampling, tried first, takes the pole and the outermost ring
+     * and leaves the middle rings out.) */
+    for (int i = 0; i < n; i++)
+        idx[i] = (int)((long long)i * count / n);
+    return n;
 }
 
 /* The model must describe this dataset: the same direction sets (within

@@ -1,0 +1,188 @@
+/* cmd_report.c — btfcar report: what a model costs and how close it comes,
+ * as a page people can look at (issue 18; library: src/report/,
+ * docs/report.md). */
+#include "cli.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static const char ABOUT[] =
+    "Writes the report of MODEL, analysed from DATASET, into the folder DIR:\n"
+    "index.html (self-contained: PNG and SVG files beside it, no scripts) and\n"
+    "report.json (the same numbers; keys: docs/report.md). It holds:\n"
+    "  compression  the model file by part against the raw BTF, the paper's\n"
+    "               1 : 10^5, a per-view PCA and JPEG of the subspace images;\n"
+    "  quality      each sampled (view, light) pair: the measured image beside\n"
+    "               the model's flat render, the texture distances (docs/measure.md),\n"
+    "               a heat map over views x lights, the worst pairs;\n"
+    "  preview      the material on a sphere (--light);\n"
+    "  the trade    with --sweep: the dataset analysed over a grid of settings\n"
+    "               (subspaces, levels, neighbourhood), each timed, sized and\n"
+    "               measured, with Pareto plots. Finished points are kept in\n"
+    "               DIR/sweep/: an interrupted sweep resumes where it stopped.\n";
+
+/* "auto,2,4" into a sweep grid: 0 for auto. */
+typedef struct grid_arg {
+    int *n;
+    int *values;
+    int hi;
+} grid_arg;
+
+static int parse_grid(const char *s, void *dest, char *why, size_t n)
+{
+    grid_arg *g = dest;
+    snprintf(why, n, "a comma-separated list of at most %d values, each auto or 1..%d",
+             BTF_SWEEP_MAX_VALUES, g->hi);
+    int count = 0;
+    const char *p = s;
+    while (*p) {
+        const char *end = strchr(p, ',');
+        size_t len = end ? (size_t)(end - p) : strlen(p);
+        char item[32];
+        if (len == 0 || len >= sizeof item || count == BTF_SWEEP_MAX_VALUES)
+            return -1;
+        memcpy(item, p, len);
+        item[len] = '\0';
+        long v;
+        if (!strcmp(item, "auto"))
+            v = 0;
+        else if (cli_parse_int(item, 1, g->hi, &v) != 0)
+            return -1;
+        g->values[count++] = (int)v;
+        p = end ? end + 1 : p + len;
+        if (end && !*p)
+            return -1;
+    }
+    if (!count)
+        return -1;
+    *g->n = count;
+    return 0;
+}
+
+static void show_grid(const void *dest, char *buf, size_t n)
+{
+    const grid_arg *g = dest;
+    size_t k = 0;
+    buf[0] = '\0';
+    for (int i = 0; i < *g->n && k < n; i++) {
+        int w = g->values[i] ? snprintf(buf + k, n - k, "%s%d", i ? "," : "", g->values[i])
+                             : snprintf(buf + k, n - k, "%sauto", i ? "," : "");
+        if (w < 0)
+            break;
+        k += (size_t)w;
+    }
+}
+
+static int parse_light(const char *s, void *dest, char *why, size_t n)
+{
+    return cli_parse_dir(s, dest, why, n);
+}
+
+static void show_light(const void *dest, char *buf, size_t n)
+{
+    const btf_dir *d = dest;
+    snprintf(buf, n, "%g,%g", d->theta, d->phi);
+}
+
+int cmd_report(int argc, char **argv)
+{
+    cli_ctx c = {"report", 0};
+    const char *out = NULL;
+    btf_report_opts ro = btf_report_defaults();
+    btf_sweep_opts *so = &ro.sweep_opts;
+    so->analyse.segment.kmeans.seed = 1; /* analyse's seed: the sweep's default is the command's */
+    grid_arg gk = {&so->n_subspaces, so->subspaces, 255};
+    grid_arg gl = {&so->n_levels, so->levels, BTF_MAX_LEVELS};
+    grid_arg gn = {&so->n_neighbours, so->neighbours, BTF_CAR_MAX_NEIGHBOURS};
+    uint64_t max_pixels = BTF_DEFAULT_MAX_PIXELS;
+    cli_opt opts[] = {
+        {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
+         .meta = "DIR", .help = "the report's folder (index.html, report.json, pictures)",
+         .required = 1},
+        {.name = "--all", .kind = CLI_FLAG, .dest = &ro.quality.all,
+         .help = "measure every (view, light) pair, not a spread (pictures stay those\n"
+                 "of the spread and of the worst pairs)"},
+        {.name = "--views", .kind = CLI_INT, .dest = &ro.quality.views, .meta = "N",
+         .help = "the spread: this many views, strided ring by ring over the hemisphere",
+         .lo = 1, .hi = 100000},
+        {.name = "--lights", .kind = CLI_INT, .dest = &ro.quality.lights, .meta = "N",
+         .help = "the spread: this many lights", .lo = 1, .hi = 100000},
+        {.name = "--worst", .kind = CLI_INT, .dest = &ro.worst, .meta = "N",
+         .help = "the worst pairs shown with pictures", .lo = 1, .hi = 100},
+        {.name = "--light", .kind = CLI_CUSTOM, .dest = &ro.sphere_light, .meta = "THETA,PHI",
+         .help = "the preview sphere's light, in the camera's frame (theta 0: from\n"
+                 "the camera)", .parse = parse_light, .show = show_light},
+        {.name = "--preview-size", .kind = CLI_INT, .dest = &ro.sphere_size, .meta = "N",
+         .help = "the preview's side in pixels", .lo = 16, .hi = 4096},
+        {.name = "--seed", .kind = CLI_U64, .dest = &ro.quality.seed, .meta = "S",
+         .help = "synthesis seed of the renders"},
+        {.name = "--relief", .kind = CLI_DOUBLE, .dest = &ro.quality.relief, .meta = "R",
+         .help = "range map height scale of the renders (0: flat)", .lo = 0, .hi = 1e6},
+        {.name = "--pca-error", .kind = CLI_DOUBLE, .dest = &ro.pca.max_rms, .meta = "E",
+         .help = "the per-view PCA's RMS error target, in 8-bit sRGB levels", .lo = 0.01,
+         .hi = 255},
+        {.name = "--jpeg-quality", .kind = CLI_INT, .dest = &ro.jpeg_quality, .meta = "Q",
+         .help = "the JPEG contrast's quality", .lo = 1, .hi = 100},
+        {.name = "--sweep", .kind = CLI_FLAG, .dest = &ro.sweep,
+         .help = "measure the speed/accuracy trade over a grid of settings"},
+        {.name = "--sweep-subspaces", .kind = CLI_CUSTOM, .dest = &gk, .meta = "LIST",
+         .help = "--sweep: the values of K", .parse = parse_grid, .show = show_grid},
+        {.name = "--sweep-levels", .kind = CLI_CUSTOM, .dest = &gl, .meta = "LIST",
+         .help = "--sweep: the pyramid levels", .parse = parse_grid, .show = show_grid},
+        {.name = "--sweep-neighbours", .kind = CLI_CUSTOM, .dest = &gn, .meta = "LIST",
+         .help = "--sweep: fixed neighbourhoods of the first N candidate offsets\n"
+                 "(auto: the Bayesian choice)", .parse = parse_grid, .show = show_grid},
+        {.name = "--threads", .kind = CLI_INT, .dest = &ro.threads, .meta = "T",
+         .help = "threads (the sweep: settings run in parallel)", .lo = 1, .hi = 64,
+         .zero_means = "all CPUs"},
+        CLI_MAX_PIXELS_OPTION(&max_pixels),
+        {0}};
+    cli_spec spec = {.cmd = "report", .args = "DATASET MODEL", .about = ABOUT, .min_args = 2,
+                     .max_args = 2, .opts = opts};
+    const char *args[2];
+    int nargs, prc = cli_parse(&c, &spec, argc, argv, args, &nargs);
+    if (prc >= 0)
+        return prc;
+    if (cli_check_output(&c, out, BTF_OUTPUT_FOLDER))
+        return 1;
+    btf_error err = {0};
+    double t0 = cli_now();
+    btf_model m;
+    if (btf_model_read(args[1], &m, &err) != 0)
+        return cli_lib_error(&c, &err);
+    btf_dataset_opts dopts = {.progress = cli_progress_fn(&c), .max_pixels = max_pixels};
+    btf_dataset *ds;
+    if (btf_dataset_open(args[0], &dopts, &ds, &err) != 0) {
+        btf_model_free(&m);
+        return cli_lib_error(&c, &err);
+    }
+    ro.dataset_name = args[0];
+    ro.model_name = args[1];
+    ro.progress = cli_progress_fn(&c);
+    ro.progress_user = NULL;
+    /* Only a real GPU is timed (--backend auto's rule): lavapipe runs on
+     * these same cores and says nothing about a GPU. */
+    btf_error gerr = {0};
+    btf_gpu *gpu = ro.sweep ? cli_open_gpu("auto", -1, &gerr) : NULL;
+    so->gpu = gpu;
+    btf_report_summary sum;
+    int rc = btf_report_write(ds, &m, out, &ro, &sum, &err);
+    cli_progress_done();
+    btf_gpu_close(gpu);
+    btf_dataset_close(ds);
+    btf_model_free(&m);
+    if (rc)
+        return cli_lib_error(&c, &err);
+    if (!c.quiet) {
+        printf("report        %s/index.html (and report.json)\n", out);
+        printf("compression   1 : %.0f (model %llu bytes, raw %llu bytes)\n", sum.ratio,
+               (unsigned long long)sum.model_bytes, (unsigned long long)sum.raw_bytes);
+        printf("quality       mean combined distance %.2f, worst %.2f over %d pairs\n",
+               sum.mean_combined, sum.worst_combined, sum.pairs);
+        if (ro.sweep)
+            printf("sweep         %d settings (%d resumed from %s/sweep/)\n", sum.sweep_points,
+                   sum.sweep_resumed, out);
+        printf("time          %.1f s\n", cli_now() - t0);
+    }
+    return 0;
+}

@@ -111,7 +111,7 @@ void cli_show_neighbourhood(const void *dest, char *buf, size_t n);
     {.name = "--max-neighbours", .kind = CLI_INT, .dest = &(fo)->car.max_neighbours,       \
      .meta = "N", .help = "auto: the largest candidate considered (the paper's models\n"  \
                           "have fewer than 4)",                                            \
-     .lo = 1, .hi = 14, .tag = (tag_)}
+     .lo = 1, .hi = BTF_CAR_MAX_NEIGHBOURS, .tag = (tag_)}
 
 /* A btf_warning_fn printing "btfcar CMD: warning: ..." (user: the cli_ctx). */
 void cli_warning(void *user, const char *message);

@@ -202,7 +202,8 @@ int cmd_analyse(int argc, char **argv)
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
          .meta = "OUT", .help = "the model file to write (a folder with --stage segment)",
          .required = 1},
-        {.name = "--preset", .kind = CLI_CHOICE, .dest = &preset, .meta = "NAME",
+        {.name = "--preset", .kind = CLI_CHOICE, .dest = &preset,
+         .meta = "fast|balanced|accurate",
          .help = "a measured point of the speed/accuracy trade: fast (K 2, 1 level,\n"
                  "auto neighbourhood), balanced (K 4, 2 levels, 8 neighbours) or\n"
                  "accurate (K 8, 3 levels, 8 neighbours) sets --subspaces, --levels and\n"

@@ -1,0 +1,277 @@
+/*
+ * test_report_page.c — `btfcar report` as a user runs it (issue 18,
+ * docs/report.md): the folder's files, every picture the page names is
+ * there, no script, report.json parses and agrees with the model file, the
+ * page opens in headless Chromium with no console error and no missing
+ * image (tools/check-page.c), --all, the sweep and its resume, bad input.
+ *
+ * One small generated material (81 x 81 images of 32^2) and its model.
+ */
+#include "testutil.h"
+
+#include <cjson/cJSON.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static char dataset[4096], model_path[4096];
+
+static int setup(void **state)
+{
+    tu_setup_dir(state);
+    btf_error e = {0};
+    snprintf(dataset, sizeof dataset, "%s/leather", tu_dir);
+    snprintf(model_path, sizeof model_path, "%s/leather.btfcar", tu_dir);
+    btf_generate_opts g = btf_generate_defaults();
+    g.size = 32;
+    g.seed = 4;
+    btf_dataset *ds;
+    btf_model m;
+    btf_analyse_opts o = btf_analyse_defaults();
+    o.segment.subspaces = 3;
+    o.fit.levels = 1;
+    if (btf_generate("leather", dataset, &g, &e) || btf_dataset_open(dataset, NULL, &ds, &e) ||
+        btf_analyse(ds, &o, &m, &e) || btf_model_write(model_path, &m, &e)) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
+    btf_model_free(&m);
+    btf_dataset_close(ds);
+    return 0;
+}
+
+static const char *checker(void)
+{
+    const char *c = getenv("BTF_CHECK_PAGE");
+    return c && *c ? c : "build/check-page";
+}
+
+static char *read_text(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *s = malloc((size_t)n + 1);
+    assert_int_equal(fread(s, 1, (size_t)n, f), (size_t)n);
+    s[n] = '\0';
+    fclose(f);
+    return s;
+}
+
+static long file_size(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (long)st.st_size : -1;
+}
+
+/* Every src="..." of the page names a file of the folder; returns how many. */
+static int check_sources(const char *dir, const char *html)
+{
+    int n = 0;
+    for (const char *p = strstr(html, "src=\""); p; p = strstr(p + 1, "src=\"")) {
+        const char *a = p + 5, *b = strchr(a, '"');
+        assert_non_null(b);
+        char name[256];
+        assert_true((size_t)(b - a) < sizeof name);
+        memcpy(name, a, (size_t)(b - a));
+        name[b - a] = '\0';
+        assert_null(strchr(name, '/')); /* beside the page, nothing fetched */
+        if (file_size(tu_fmt("%s/%s", dir, name)) <= 0)
+            fail_msg("the page names %s, which is not in %s", name, dir);
+        n++;
+    }
+    return n;
+}
+
+static cJSON *read_json(const char *dir)
+{
+    char *text = read_text(tu_fmt("%s/report.json", dir));
+    cJSON *j = cJSON_Parse(text);
+    free(text);
+    assert_non_null(j);
+    return j;
+}
+
+static double num(const cJSON *o, const char *path)
+{
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", path);
+    const cJSON *j = o;
+    for (char *k = strtok(buf, "."); k; k = strtok(NULL, "."))
+        j = cJSON_GetObjectItemCaseSensitive(j, k);
+    if (!cJSON_IsNumber(j))
+        fail_msg("report.json: %s is not a number", path);
+    return j->valuedouble;
+}
+
+/* The report of a 3 x 3 spread: its files, the page, the JSON, Chromium. */
+static void test_report_spread(void **state)
+{
+    (void)state;
+    const char *dir = tu_fmt("%s/rep", tu_dir);
+    char *dir_copy = strdup(dir);
+    char *err = NULL;
+    int rc = tu_run(tu_fmt("%s report %s %s -o %s --views 3 --lights 3 --worst 2 "
+                           "--preview-size 96 -q", tu_cli(), dataset, model_path, dir_copy),
+                    &err);
+    if (rc != 0)
+        fail_msg("btfcar report failed (%d): %s", rc, err ? err : "");
+    free(err);
+    char *html = read_text(tu_fmt("%s/index.html", dir_copy));
+    assert_null(strstr(html, "<script"));
+    assert_null(strstr(html, "http://"));
+    assert_null(strstr(html, "https://"));
+    assert_non_null(strstr(html, "sphere.png"));
+    assert_non_null(strstr(html, "heatmap.svg"));
+    /* 9 pictured pairs (the 2 worst among them, shown twice) + sphere + heat map */
+    assert_int_equal(check_sources(dir_copy, html), 9 + 2 + 2);
+    assert_int_equal(tu_count_files(dir_copy), 9 + 4);
+    free(html);
+    cJSON *j = read_json(dir_copy);
+    assert_int_equal((long)num(j, "compression.model_bytes"), file_size(model_path));
+    assert_int_equal((long)num(j, "compression.raw_bytes"), 81L * 81 * 32 * 32 * 3);
+    assert_int_equal((int)num(j, "quality.pairs"), 9);
+    assert_true(num(j, "quality.worst_combined") >= num(j, "quality.mean_combined"));
+    assert_true(cJSON_IsNull(cJSON_GetObjectItemCaseSensitive(j, "sweep")));
+    const cJSON *pairs = cJSON_GetObjectItemCaseSensitive(
+        cJSON_GetObjectItemCaseSensitive(j, "quality"), "pairs_measured");
+    assert_int_equal(cJSON_GetArraySize(pairs), 9);
+    /* the parts of the model file add up to it */
+    const cJSON *parts = cJSON_GetObjectItemCaseSensitive(
+        cJSON_GetObjectItemCaseSensitive(j, "compression"), "model_parts");
+    double sum = 0;
+    for (const cJSON *p = parts->child; p; p = p->next)
+        sum += p->valuedouble;
+    assert_int_equal((long)sum, file_size(model_path));
+    cJSON_Delete(j);
+    /* In a real browser: loads with no console error and no missing image. */
+    const char *shot = tu_fmt("%s/shot.png", tu_dir);
+    char *shot_copy = strdup(shot);
+    err = NULL;
+    rc = tu_run(tu_fmt("%s --size 1024x1400 %s/index.html %s", checker(), dir_copy, shot_copy),
+                &err);
+    if (rc != 0)
+        fail_msg("check-page on the report: %d: %s", rc, err ? err : "");
+    free(err);
+    assert_true(file_size(shot_copy) > 10000);
+    free(shot_copy);
+    free(dir_copy);
+}
+
+/* --all: every pair measured; pictures stay the default spread's and the
+ * worst pairs'. */
+static void test_report_all(void **state)
+{
+    (void)state;
+    char *dir = strdup(tu_fmt("%s/rep-all", tu_dir));
+    char *err = NULL;
+    int rc = tu_run(tu_fmt("%s report %s %s -o %s --all --preview-size 32 -q", tu_cli(), dataset,
+                           model_path, dir), &err);
+    if (rc != 0)
+        fail_msg("btfcar report --all failed (%d): %s", rc, err ? err : "");
+    free(err);
+    cJSON *j = read_json(dir);
+    assert_int_equal((int)num(j, "quality.pairs"), 81 * 81);
+    cJSON_Delete(j);
+    int files = tu_count_files(dir);
+    assert_true(files >= 81 + 4 && files <= 81 + 6 + 4);
+    char *html = read_text(tu_fmt("%s/index.html", dir));
+    check_sources(dir, html);
+    free(html);
+    free(dir);
+}
+
+/* The sweep: 2 settings measured, then resumed; the page has its plots. */
+static void test_report_sweep(void **state)
+{
+    (void)state;
+    char *dir = strdup(tu_fmt("%s/rep-sweep", tu_dir));
+    const char *args = "--views 2 --lights 2 --preview-size 32 --sweep --sweep-subspaces 2 "
+                       "--sweep-levels 1 --sweep-neighbours auto,4";
+    char *cmd = strdup(tu_fmt("%s report %s %s -o %s %s", tu_cli(), dataset, model_path, dir,
+                              args));
+    char *out = tu_capture(cmd, &(int){0});
+    assert_non_null(strstr(out, "2 settings (0 resumed"));
+    free(out);
+    assert_int_equal(tu_count_files(tu_fmt("%s/sweep", dir)), 2);
+    cJSON *j = read_json(dir);
+    const cJSON *pts = cJSON_GetObjectItemCaseSensitive(
+        cJSON_GetObjectItemCaseSensitive(j, "sweep"), "points");
+    assert_int_equal(cJSON_GetArraySize(pts), 2);
+    cJSON_Delete(j);
+    assert_true(file_size(tu_fmt("%s/pareto-bytes.svg", dir)) > 0);
+    assert_true(file_size(tu_fmt("%s/pareto-time.svg", dir)) > 0);
+    out = tu_capture(cmd, &(int){0});
+    assert_non_null(strstr(out, "2 settings (2 resumed"));
+    free(out);
+    char *err = NULL;
+    int rc = tu_run(tu_fmt("%s %s/index.html", checker(), dir), &err);
+    if (rc != 0)
+        fail_msg("check-page on the sweep's report: %d: %s", rc, err ? err : "");
+    free(err);
+    free(cmd);
+    free(dir);
+}
+
+/* Bad input: one line naming the problem, non-zero, no report folder. */
+static void test_report_errors(void **state)
+{
+    (void)state;
+    char *err = NULL;
+    const char *dir = tu_fmt("%s/bad", tu_dir);
+    char *d = strdup(dir);
+    int rc = tu_run(tu_fmt("%s report %s/none %s -o %s", tu_cli(), tu_dir, model_path, d), &err);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(err, "none"));
+    free(err);
+    assert_int_equal(access(d, F_OK), -1);
+    /* A model of another material (a texture model: no directions). */
+    btf_error e = {0};
+    btf_image img;
+    TU_OK(btf_image_alloc(&img, 32, 32, 3, &e), &e);
+    for (int i = 0; i < 32 * 32 * 3; i++)
+        img.data[i] = 0.25f + 0.5f * (float)((i * 7919) % 101) / 101.0f;
+    btf_model tex;
+    btf_fit_opts fo = btf_fit_defaults();
+    TU_OK(btf_texture_fit(&img, &fo, &tex, &e), &e);
+    char *tex_path = strdup(tu_fmt("%s/tex.btfcar", tu_dir));
+    TU_OK(btf_model_write(tex_path, &tex, &e), &e);
+    btf_model_free(&tex);
+    btf_image_free(&img);
+    err = NULL;
+    rc = tu_run(tu_fmt("%s report %s %s -o %s", tu_cli(), dataset, tex_path, d), &err);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(err, "btfcar report:"));
+    assert_null(strchr(strchr(err, '\n') + 1, '\n')); /* one line */
+    free(err);
+    assert_int_equal(access(d, F_OK), -1);
+    /* A corrupt model file names it. */
+    tu_write_file(tex_path, "BTFCAR\0\0garbage", 15);
+    err = NULL;
+    rc = tu_run(tu_fmt("%s report %s %s -o %s", tu_cli(), dataset, tex_path, d), &err);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(err, "tex.btfcar"));
+    free(err);
+    assert_int_equal(access(d, F_OK), -1);
+    /* Usage errors. */
+    assert_int_equal(tu_run(tu_fmt("%s report %s %s -o %s --sweep-levels 1,,2", tu_cli(), dataset,
+                                   model_path, d), NULL), 2);
+    assert_int_equal(tu_run(tu_fmt("%s report %s -o %s", tu_cli(), dataset, d), NULL), 2);
+    free(tex_path);
+    free(d);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_report_spread),
+        cmocka_unit_test(test_report_all),
+        cmocka_unit_test(test_report_sweep),
+        cmocka_unit_test(test_report_errors),
+    };
+    return cmocka_run_group_tests(tests, setup, tu_teardown_dir);
+}

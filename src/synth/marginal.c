@@ -6,14 +6,18 @@
  * undone each band v goes through a monotone piecewise-linear map from the
  * synthesised band's distribution onto the exemplar's quantiles, and the
  * RGB result is brought into the exemplar's RGB box (btf_shared.h,
- * "Gamut"; src/synth/colour.c).
+ * "Gamut"). btf_marginal_unmix_row does the whole colour step of a row.
  *
- * Knots: z_j = synth_mean + synth_sd * N_j, N_j the standard normal quantile
- * of p_j = j / 31 for j = 1..30, and of 1/4096 and 1 - 1/4096 for the first
- * and last knot, which carry the exemplar's minimum and maximum. Below z_0
- * and above z_31 the map is flat (the exemplar's range). The table is made
- * once per synthesis on the host, in double rounded to float, for the CPU
- * and the GPU (gpu/synth_gpu.c) alike: both then run btf_transfer of
+ * The model keeps, per band, the exemplar's quantiles at p_j = j / 31 for
+ * j = 1..30, and at 1/4096 and 1 - 1/4096 for the first and last; their
+ * knots are z_j = synth_mean + synth_sd * N_j, N_j the standard normal
+ * quantile of p_j: the map through (z_j, q_j), flat beyond the end knots.
+ * Synthesis evaluates that map resampled at BTF_MARGIN_SEGS + 1 equally
+ * spaced points from z_0 to z_31, linear between them (btf_shared.h): the
+ * segment is then found by one multiply and a floor, not by comparing v
+ * with 30 knots, which made the transfer cost as much as the CAR fields.
+ * The table is made on the host, in double rounded to float, for the CPU
+ * and the GPU (gpu/synth_gpu.c) alike: both then run the formulas of
  * btf_shared.h on the same floats and agree bit for bit.
  */
 #include "core/core.h"
@@ -22,8 +26,13 @@
 #include "btf_shared.h"
 
 #include <float.h>
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
+
+_Static_assert(BTF_MARGIN_SEGS == 32 &&
+                   sizeof(((btf_marginal_table *)0)->q[0]) == BTF_MARGIN_SEGS * sizeof(float),
+               "btf_knot_pos clamps to 32; the table and the AVX2 lookups hold 32");
 
 /* Phi^-1(p_j), made exactly antisymmetric (statistics.NormalDist). */
 const double btf_marginal_normal_knots[BTF_MARGIN_KNOTS] = {
@@ -36,6 +45,22 @@ const double btf_marginal_normal_knots[BTF_MARGIN_KNOTS] = {
     0.75272879425816974, 0.86489435868528297, 0.98916862734063515, 1.1309776082451579,
     1.3001534333634233, 1.5179291595942783, 1.8485962885014087, 3.4871041041144313};
 
+/* The model's map of one band at v (double): linear between its knots,
+ * flat beyond the ends. */
+static double model_map(const double *z, const float *q, double v)
+{
+    if (!(v > z[0]))
+        return q[0];
+    if (v >= z[BTF_MARGIN_KNOTS - 1])
+        return q[BTF_MARGIN_KNOTS - 1];
+    int j = 0;
+    while (j + 2 < BTF_MARGIN_KNOTS && z[j + 1] <= v)
+        j++;
+    double dz = z[j + 1] - z[j];
+    double f = dz > 0 ? (v - z[j]) / dz : 1.0;
+    return (double)q[j] + f * ((double)q[j + 1] - q[j]);
+}
+
 void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t)
 {
     memset(t, 0, sizeof *t);
@@ -44,28 +69,44 @@ void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t
         return; /* no transfer: identity, no clamp (format 1.0, 1.1) */
     t->on = 1;
     for (int b = 0; b < 3; b++) {
-        for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
-            t->z[b][j] = (float)((double)mg->synth_mean[b] +
-                                 (double)mg->synth_sd[b] * btf_marginal_normal_knots[j]);
-            t->q[b][j] = mg->quantile[b][j];
+        const float *q = mg->quantile[b];
+        double z[BTF_MARGIN_KNOTS];
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+            z[j] = (double)mg->synth_mean[b] + (double)mg->synth_sd[b] * btf_marginal_normal_knots[j];
+        double ih = (double)BTF_MARGIN_SEGS / (z[BTF_MARGIN_KNOTS - 1] - z[0]);
+        float val[BTF_MARGIN_SEGS + 1];
+        if (!(ih > 0 && ih <= 1e30)) {
+            /* sd 0 (or below 1e-30 of the range): every v on one point, the
+             * exemplar's median; t is 0 whatever v is */
+            t->z0[b] = 0.0f, t->inv_h[b] = 0.0f;
+            for (int k = 0; k <= BTF_MARGIN_SEGS; k++)
+                val[k] = (float)(0.5 * ((double)q[15] + q[16]));
+        } else {
+            t->z0[b] = (float)z[0], t->inv_h[b] = (float)ih;
+            /* point k is where the float arithmetic puts t = k */
+            for (int k = 0; k <= BTF_MARGIN_SEGS; k++)
+                val[k] = (float)model_map(z, q, (double)t->z0[b] + k / (double)t->inv_h[b]);
+            val[0] = q[0], val[BTF_MARGIN_SEGS] = q[BTF_MARGIN_KNOTS - 1];
         }
-        for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++) {
-            /* a zero-width segment is never entered (no v has z_j <= v <
-             * z_j+1); a slope past the float range is capped, not Inf, so
-             * that (v - z) * slope is never 0 * Inf */
-            double dz = (double)t->z[b][j + 1] - t->z[b][j];
-            double s = dz > 0 ? ((double)t->q[b][j + 1] - t->q[b][j]) / dz : 0.0;
-            t->slope[b][j] = s < FLT_MAX ? (float)s : FLT_MAX;
+        for (int k = 0; k < BTF_MARGIN_SEGS; k++) {
+            /* the rise, lowered where rounding would carry q + dq past the
+             * next point (f <= 1, so then no value of the segment passes
+             * it: the map stays monotone); never negative */
+            float dq = val[k + 1] - val[k];
+            while (dq > 0.0f && val[k] + dq > val[k + 1])
+                dq = nextafterf(dq, 0.0f);
+            t->q[b][k] = val[k];
+            t->dq[b][k] = dq > 0.0f ? dq : 0.0f;
         }
     }
     for (int k = 0; k < 3; k++) {
+        t->mean[k] = sm->mean[k];
         t->lo[k] = mg->rgb_lo[k];
         t->hi[k] = mg->rgb_hi[k];
+        t->nlo[k] = (float)((double)sm->mean[k] - mg->rgb_lo[k]);
+        t->nhi[k] = (float)((double)mg->rgb_hi[k] - sm->mean[k]);
     }
 }
-
-static int marginal_row_portable(const btf_marginal_table *t, int band, const float *v,
-                                 int width, float *out, int *seg);
 
 static inline uint32_t nonfinite(float v)
 {
@@ -74,167 +115,212 @@ static inline uint32_t nonfinite(float v)
     return (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
 }
 
-#ifdef SYNTH_HAVE_AVX2
-#pragma GCC push_options
-#pragma GCC target("avx2")
-#include <immintrin.h>
-
-/* btf_marginal_row 8 values at a time: the same count of knots, exact
- * gathers of the segment's numbers, btf_transfer's sub, mul, add (no FMA)
- * and its clamps as max(lo, v) and min(hi, a), which are the comparisons
- * `v < lo ? lo : v` and `a > hi ? hi : a` lane by lane, signed zeros
- * included. The last width % 8 values go through the portable loop. */
-/* table[i] for 32-entry tables held in four vectors: four in-register
- * permutes and three blends instead of a gather (a gather of 8 costs about
- * as much as the whole transfer did); the same value is fetched, so the
- * bits do not change. */
-static inline __m256 lookup32(const __m256 tab[4], __m256i i)
+/* The transfer of band b at v (finite or not: the caller tests). */
+static inline float transfer1(const btf_marginal_table *t, int b, float v)
 {
-    __m256 a = _mm256_permutevar8x32_ps(tab[0], i), b = _mm256_permutevar8x32_ps(tab[1], i);
-    __m256 c = _mm256_permutevar8x32_ps(tab[2], i), d = _mm256_permutevar8x32_ps(tab[3], i);
-    __m256i hi = _mm256_srli_epi32(i, 3); /* which vector: 0..3 */
-    __m256 m0 = _mm256_castsi256_ps(_mm256_slli_epi32(hi, 31));
-    __m256 m1 = _mm256_castsi256_ps(_mm256_slli_epi32(hi, 30));
-    return _mm256_blendv_ps(_mm256_blendv_ps(a, b, m0), _mm256_blendv_ps(c, d, m0), m1);
+    float x = btf_knot_pos(v, t->z0[b], t->inv_h[b]);
+    int i = x >= 1.0f ? (int)x : 0; /* x >= 0: the floor (and 0 for NaN) */
+    i = i < BTF_MARGIN_SEGS - 1 ? i : BTF_MARGIN_SEGS - 1;
+    return btf_transfer(x, (float)i, t->q[b][i], t->dq[b][i]);
 }
 
-static void load32(const float *src, __m256 tab[4])
+int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width, float *out)
 {
-    for (int k = 0; k < 4; k++)
-        tab[k] = _mm256_loadu_ps(src + 8 * k);
-}
-
-static int marginal_row_avx2(const btf_marginal_table *t, int band, const float *v, int width,
-                             float *out, int *seg, int *tail)
-{
-    const float *z = t->z[band], *q = t->q[band], *sl = t->slope[band];
-    __m256 z0 = _mm256_set1_ps(z[0]), zn = _mm256_set1_ps(z[BTF_MARGIN_KNOTS - 1]);
-    __m256 zj[BTF_MARGIN_KNOTS];
-    for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
-        zj[j] = _mm256_set1_ps(z[j]);
-    /* q shifted by one: q1[i] = q[i + 1] (the segment index is at most 30) */
-    float q1s[BTF_MARGIN_KNOTS];
-    for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++)
-        q1s[j] = q[j + 1];
-    q1s[BTF_MARGIN_KNOTS - 1] = q[BTF_MARGIN_KNOTS - 1];
-    __m256 tz[4], ts[4], tq[4], tq1[4];
-    load32(z, tz);
-    load32(sl, ts);
-    load32(q, tq);
-    load32(q1s, tq1);
-    const __m256i expo = _mm256_set1_epi32(0x7F800000);
-    __m256i bad = _mm256_setzero_si256();
-    int x = 0;
-    for (; x + 8 <= width; x += 8) {
-        __m256 in = _mm256_loadu_ps(v + x);
-        __m256i e = _mm256_and_si256(_mm256_castps_si256(in), expo);
-        bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(e, expo));
-        __m256 c = _mm256_min_ps(zn, _mm256_max_ps(z0, in));
-        /* the count of interior knots at or below c, in two independent
-         * halves (a true compare is -1) */
-        __m256i i0 = _mm256_setzero_si256(), i1 = _mm256_setzero_si256();
-        for (int j = 1; j + 1 < BTF_MARGIN_KNOTS; j += 2) {
-            i0 = _mm256_sub_epi32(i0, _mm256_castps_si256(_mm256_cmp_ps(zj[j], c, _CMP_LE_OQ)));
-            if (j + 2 < BTF_MARGIN_KNOTS)
-                i1 = _mm256_sub_epi32(i1, _mm256_castps_si256(
-                                              _mm256_cmp_ps(zj[j + 1], c, _CMP_LE_OQ)));
-        }
-        __m256i i = _mm256_add_epi32(i0, i1);
-        __m256 zi = lookup32(tz, i), si = lookup32(ts, i);
-        __m256 qi = lookup32(tq, i), qn = lookup32(tq1, i);
-        __m256 r = _mm256_add_ps(qi, _mm256_mul_ps(_mm256_sub_ps(c, zi), si));
-        _mm256_storeu_ps(out + x, _mm256_min_ps(qn, _mm256_max_ps(qi, r)));
-    }
-    *tail = x;
-    (void)seg;
-    return !_mm256_testz_si256(bad, bad);
-}
-#pragma GCC pop_options
-#endif
-
-/* The segment index is a count of interior knots at or below v: the same
- * index a search would give, in loops over the row the compiler
- * vectorises (by hand with AVX2). */
-int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width,
-                     float *out, int *seg)
-{
-#ifdef SYNTH_HAVE_AVX2
-    if (__builtin_cpu_supports("avx2")) {
-        int done = 0, bad = marginal_row_avx2(t, band, v, width, out, seg, &done);
-        if (done == width)
-            return bad;
-        return marginal_row_portable(t, band, v + done, width - done, out + done, seg) | bad;
-    }
-#endif
-    return marginal_row_portable(t, band, v, width, out, seg);
-}
-
-static int marginal_row_portable(const btf_marginal_table *t, int band, const float *v,
-                                 int width, float *out, int *seg)
-{
-    const float *z = t->z[band], *q = t->q[band], *sl = t->slope[band];
-    float z0 = z[0], zn = z[BTF_MARGIN_KNOTS - 1];
     uint32_t bad = 0;
     for (int x = 0; x < width; x++) {
         bad |= nonfinite(v[x]);
-        out[x] = btf_clampf(v[x], z0, zn);
-        seg[x] = 0;
-    }
-    for (int j = 1; j + 1 < BTF_MARGIN_KNOTS; j++) {
-        float zj = z[j];
-        for (int x = 0; x < width; x++)
-            seg[x] += zj <= out[x];
-    }
-    for (int x = 0; x < width; x++) {
-        int i = seg[x];
-        out[x] = btf_transfer(out[x], z[i], sl[i], q[i], q[i + 1]);
+        out[x] = transfer1(t, band, v[x]);
     }
     return bad != 0;
 }
 
 /* One colour into the box (btf_shared.h, "Gamut"): as gpu/synth_unmix.comp. */
-static void gamut_pixel(const btf_marginal_table *t, const float mean[3], float *c)
+void btf_marginal_gamut(const btf_marginal_table *t, float c[3])
 {
     if (btf_in_box(c[0], t->lo[0], t->hi[0]) && btf_in_box(c[1], t->lo[1], t->hi[1]) &&
         btf_in_box(c[2], t->lo[2], t->hi[2]))
         return;
-    float d[3];
-    for (int k = 0; k < 3; k++)
-        d[k] = c[k] - mean[k]; /* one rounding (no contraction), as the shader's precise */
-    float a = 0.0f, b = 1.0f;
-    for (int s = 0; s < BTF_GAMUT_STEPS; s++) {
-        float m = btf_midpoint(a, b);
-        int in = 1;
-        for (int k = 0; k < 3; k++)
-            in &= btf_in_box(btf_gamut_point(mean[k], m, d[k]), t->lo[k], t->hi[k]);
-        if (in)
-            a = m;
-        else
-            b = m;
+    float s = 1.0f;
+    for (int k = 0; k < 3; k++) {
+        float sk = btf_gamut_share(c[k], t->mean[k], t->lo[k], t->hi[k], t->nlo[k], t->nhi[k]);
+        s = sk < s ? sk : s;
     }
-    for (int k = 0; k < 3; k++)
-        c[k] = btf_clampf(btf_gamut_point(mean[k], a, d[k]), t->lo[k], t->hi[k]);
+    s = s < 0.0f ? 0.0f : s;
+    for (int k = 0; k < 3; k++) {
+        float d = c[k] - t->mean[k]; /* one rounding (no contraction), as the shader's precise */
+        c[k] = btf_clampf(btf_gamut_point(t->mean[k], s, d), t->lo[k], t->hi[k]);
+    }
 }
 
-/* Planar: a vectorised test of the box, the rare colours outside it one by
- * one (gamut_pixel). */
-SYNTH_AVX2_CLONES
-void btf_marginal_gamut_planes(const btf_marginal_table *t, const float mean[3], float *p0,
-                               float *p1, float *p2, int width)
+/* The colour step of pixels [x0, width) one at a time: transfer, unmix,
+ * gamut, interleaved into row. */
+static int unmix_row_portable(const btf_subspace_model *sm, const btf_marginal_table *t,
+                              const float *const *band, int x0, int width, float *row)
 {
-    float l0 = t->lo[0], l1 = t->lo[1], l2 = t->lo[2];
-    float h0 = t->hi[0], h1 = t->hi[1], h2 = t->hi[2];
-    for (int x0 = 0; x0 < width; x0 += 64) {
-        int x1 = x0 + 64 < width ? x0 + 64 : width, out = 0;
-        for (int x = x0; x < x1; x++)
-            out |= !(btf_in_box(p0[x], l0, h0) & btf_in_box(p1[x], l1, h1) &
-                     btf_in_box(p2[x], l2, h2));
-        if (!out)
-            continue;
-        for (int x = x0; x < x1; x++) {
-            float c[3] = {p0[x], p1[x], p2[x]};
-            gamut_pixel(t, mean, c);
-            p0[x] = c[0], p1[x] = c[1], p2[x] = c[2];
+    uint32_t bad = 0;
+    for (int x = x0; x < width; x++) {
+        float v[3], c[3];
+        for (int b = 0; b < 3; b++) {
+            bad |= nonfinite(band[b][x]);
+            v[b] = transfer1(t, b, band[b][x]);
+        }
+        for (int k = 0; k < 3; k++)
+            c[k] = btf_unmix(sm->mean[k], sm->basis[k], sm->basis[3 + k], sm->basis[6 + k], v[0],
+                             v[1], v[2]);
+        btf_marginal_gamut(t, c);
+        for (int k = 0; k < 3; k++)
+            row[3 * x + k] = c[k];
+    }
+    return bad != 0;
+}
+
+#ifdef SYNTH_HAVE_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include <immintrin.h>
+
+/* table[i] for 32-entry tables held in four vectors: four in-register
+ * permutes and three blends instead of a gather (a gather of 8 costs about
+ * as much as the rest of a band's transfer); the same value is fetched, so
+ * the bits do not change. m0, m1: bits 3 and 4 of i as sign bits. */
+static inline __m256 lookup32(const __m256 tab[4], __m256i i, __m256 m0, __m256 m1)
+{
+    __m256 a = _mm256_permutevar8x32_ps(tab[0], i), b = _mm256_permutevar8x32_ps(tab[1], i);
+    __m256 c = _mm256_permutevar8x32_ps(tab[2], i), d = _mm256_permutevar8x32_ps(tab[3], i);
+    return _mm256_blendv_ps(_mm256_blendv_ps(a, b, m0), _mm256_blendv_ps(c, d, m0), m1);
+}
+
+typedef struct band_avx2 {
+    __m256 z0, ih, q[4], dq[4];
+} band_avx2;
+
+/* btf_knot_pos, the segment, btf_transfer: the same operations (no FMA),
+ * the clamps as max(lo, v) and min(hi, a), which are the comparisons
+ * `v < lo ? lo : v` and `a > hi ? hi : a` lane by lane, signed zeros
+ * included. */
+static inline __m256 transfer8(const band_avx2 *bt, __m256 v)
+{
+    const __m256 zero = _mm256_setzero_ps(), segs = _mm256_set1_ps((float)BTF_MARGIN_SEGS);
+    const __m256 last = _mm256_set1_ps((float)(BTF_MARGIN_SEGS - 1));
+    __m256 x = _mm256_mul_ps(_mm256_sub_ps(v, bt->z0), bt->ih);
+    x = _mm256_min_ps(segs, _mm256_max_ps(zero, x));
+    __m256 fl = _mm256_min_ps(last, _mm256_floor_ps(x));
+    __m256i i = _mm256_cvttps_epi32(fl);
+    __m256 m0 = _mm256_castsi256_ps(_mm256_slli_epi32(i, 28));
+    __m256 m1 = _mm256_castsi256_ps(_mm256_slli_epi32(i, 27));
+    __m256 q = lookup32(bt->q, i, m0, m1), dq = lookup32(bt->dq, i, m0, m1);
+    return _mm256_add_ps(q, _mm256_mul_ps(_mm256_sub_ps(x, fl), dq));
+}
+
+/* btf_marginal_gamut on 8 colours, applied where `out` is set: each
+ * btf_gamut_share and btf_recip step as a vector op in the shared order;
+ * `d < 0 ? -d : d` as a blend, the min and max as in transfer8. */
+static inline void gamut8(const btf_marginal_table *t, __m256 c[3], __m256 out)
+{
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    const __m256 two = _mm256_set1_ps(2.0f);
+    const __m256 rmin = _mm256_set1_ps(BTF_RECIP_MIN), rmax = _mm256_set1_ps(BTF_RECIP_MAX);
+    const __m256i magic = _mm256_set1_epi32(0x7EF311C7);
+    __m256 s = one, d[3];
+    for (int k = 0; k < 3; k++) {
+        __m256 mean = _mm256_set1_ps(t->mean[k]);
+        __m256 lo = _mm256_set1_ps(t->lo[k]), hi = _mm256_set1_ps(t->hi[k]);
+        d[k] = _mm256_sub_ps(c[k], mean);
+        __m256 ad = _mm256_blendv_ps(d[k], _mm256_sub_ps(zero, d[k]),
+                                     _mm256_cmp_ps(d[k], zero, _CMP_LT_OQ));
+        __m256 x = _mm256_min_ps(rmax, _mm256_max_ps(rmin, ad));
+        __m256 r = _mm256_castsi256_ps(_mm256_sub_epi32(magic, _mm256_castps_si256(x)));
+        for (int n = 0; n < 3; n++)
+            r = _mm256_mul_ps(r, _mm256_sub_ps(two, _mm256_mul_ps(x, r)));
+        __m256 above = _mm256_cmp_ps(c[k], hi, _CMP_GT_OQ);
+        __m256 below = _mm256_cmp_ps(c[k], lo, _CMP_LT_OQ);
+        __m256 num = _mm256_blendv_ps(_mm256_set1_ps(t->nlo[k]), _mm256_set1_ps(t->nhi[k]),
+                                      above);
+        __m256 sk = _mm256_blendv_ps(one, _mm256_mul_ps(num, r), _mm256_or_ps(above, below));
+        s = _mm256_min_ps(sk, s); /* sk < s ? sk : s */
+    }
+    s = _mm256_max_ps(zero, s); /* s < 0 ? 0 : s */
+    for (int k = 0; k < 3; k++) {
+        __m256 lo = _mm256_set1_ps(t->lo[k]), hi = _mm256_set1_ps(t->hi[k]);
+        __m256 p = _mm256_add_ps(_mm256_set1_ps(t->mean[k]), _mm256_mul_ps(s, d[k]));
+        p = _mm256_min_ps(hi, _mm256_max_ps(lo, p));
+        c[k] = _mm256_blendv_ps(c[k], p, out);
+    }
+}
+
+/* The colour step, 8 pixels at a time, all in registers: the three
+ * transfers, btf_unmix's multiplies and adds in its order, the box test
+ * (gamut8 only for the vectors with a colour outside, a few percent of
+ * them), and the RGB interleave by three lane permutations and six blends
+ * straight into the row. Returns the pixels done (a multiple of 8). */
+static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table *t,
+                          const float *const *band, int width, float *row, int *bad_out)
+{
+    band_avx2 bt[3];
+    __m256 mean[3], c0[3], c1[3], c2[3], lo[3], hi[3];
+    for (int b = 0; b < 3; b++) {
+        bt[b].z0 = _mm256_set1_ps(t->z0[b]);
+        bt[b].ih = _mm256_set1_ps(t->inv_h[b]);
+        for (int k = 0; k < 4; k++) {
+            bt[b].q[k] = _mm256_loadu_ps(t->q[b] + 8 * k);
+            bt[b].dq[k] = _mm256_loadu_ps(t->dq[b] + 8 * k);
         }
     }
+    for (int k = 0; k < 3; k++) {
+        mean[k] = _mm256_set1_ps(sm->mean[k]);
+        c0[k] = _mm256_set1_ps(sm->basis[k]);
+        c1[k] = _mm256_set1_ps(sm->basis[3 + k]);
+        c2[k] = _mm256_set1_ps(sm->basis[6 + k]);
+        lo[k] = _mm256_set1_ps(t->lo[k]);
+        hi[k] = _mm256_set1_ps(t->hi[k]);
+    }
+    const __m256i expo = _mm256_set1_epi32(0x7F800000);
+    const __m256i pa = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
+    const __m256i pb = _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2);
+    const __m256i pc = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
+    __m256i bad = _mm256_setzero_si256();
+    int x = 0;
+    for (; x + 8 <= width; x += 8) {
+        __m256 v[3], ch[3];
+        for (int b = 0; b < 3; b++) {
+            __m256 in = _mm256_loadu_ps(band[b] + x);
+            __m256i e = _mm256_and_si256(_mm256_castps_si256(in), expo);
+            bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(e, expo));
+            v[b] = transfer8(&bt[b], in);
+        }
+        __m256 inside = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        for (int k = 0; k < 3; k++) {
+            __m256 s = _mm256_add_ps(mean[k], _mm256_mul_ps(c0[k], v[0]));
+            s = _mm256_add_ps(s, _mm256_mul_ps(c1[k], v[1]));
+            ch[k] = _mm256_add_ps(s, _mm256_mul_ps(c2[k], v[2]));
+            inside = _mm256_and_ps(inside, _mm256_and_ps(_mm256_cmp_ps(ch[k], lo[k], _CMP_GE_OQ),
+                                                         _mm256_cmp_ps(ch[k], hi[k], _CMP_LE_OQ)));
+        }
+        if (_mm256_movemask_ps(inside) != 0xFF)
+            gamut8(t, ch, _mm256_xor_ps(inside, _mm256_castsi256_ps(_mm256_set1_epi32(-1))));
+        __m256 a = _mm256_permutevar8x32_ps(ch[0], pa);
+        __m256 b = _mm256_permutevar8x32_ps(ch[1], pb);
+        __m256 c = _mm256_permutevar8x32_ps(ch[2], pc);
+        /* r g b r g b r g | b r g b r g b r | g b r g b r g b */
+        _mm256_storeu_ps(row + 3 * x, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24));
+        _mm256_storeu_ps(row + 3 * x + 8, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49));
+        _mm256_storeu_ps(row + 3 * x + 16, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92));
+    }
+    *bad_out = !_mm256_testz_si256(bad, bad);
+    return x;
+}
+#pragma GCC pop_options
+#endif
+
+int btf_marginal_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t,
+                           const float *b0, const float *b1, const float *b2, int width,
+                           float *row)
+{
+    const float *band[3] = {b0, b1, b2};
+    int x = 0, bad = 0;
+#ifdef SYNTH_HAVE_AVX2
+    if (__builtin_cpu_supports("avx2") && !t->portable)
+        x = unmix_row_avx2(sm, t, band, width, row, &bad);
+#endif
+    return unmix_row_portable(sm, t, band, x, width, row) | bad;
 }

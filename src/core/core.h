@@ -84,6 +84,22 @@ int btf_pool_workers(int threads, int jobs);
 btf_status btf_pool_run(int jobs, int threads, btf_pool_job_fn job, void *user,
                         const btf_pool_progress *progress, btf_error *err);
 
+/* A relay (core/pool.c): one second thread that runs jobs handed to it one
+ * at a time while the calling thread goes on with its own work (a
+ * pipeline: synthesis colours one block of rows while it computes the
+ * next). btf_relay_post(r, j) hands job j over and returns at once;
+ * btf_relay_wait returns when it is done, with its status and message;
+ * every post is followed by one wait before the next post. Where no
+ * thread can run beside the caller (one CPU, or none could be started)
+ * the post runs the job itself, so results never depend on the thread.
+ * job gets worker 1. btf_relay_start returns NULL only when out of memory
+ * (err set). */
+typedef struct btf_relay btf_relay;
+btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err);
+void btf_relay_post(btf_relay *r, int job);
+btf_status btf_relay_wait(btf_relay *r, btf_error *err);
+void btf_relay_stop(btf_relay *r);
+
 /* Directions named in whole degrees (file names) match a known set within
  * this many degrees (core/directions.c, io/dataset.c). */
 #define BTF_DIR_NAME_TOLERANCE 0.75

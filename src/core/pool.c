@@ -16,11 +16,17 @@
  * Progress is reported from the calling thread only, so that a caller's
  * callback need not be thread-safe nor care which thread it runs on; after
  * the last job the final fraction is always reported once.
+ *
+ * The relay (btf_relay_*) is the other shape of parallel work: a pipeline
+ * of two stages, the caller's and one long-lived helper thread's, handing
+ * over a job at a time. A batch per hand-over would start and join a
+ * thread each time (tens of microseconds, hundreds of times per image).
  */
 #include "core/core.h"
 
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stdlib.h>
 
 typedef struct pool_run {
     int jobs;
@@ -124,4 +130,101 @@ btf_status btf_pool_run(int jobs, int threads, btf_pool_job_fn job, void *user,
     if (progress && progress->fn)
         report(&r, jobs);
     return BTF_OK;
+}
+
+struct btf_relay {
+    btf_pool_job_fn job;
+    void *user;
+    int threaded;          /* a helper thread runs the jobs */
+    pthread_t tid;
+    pthread_mutex_t lock;  /* guards what follows */
+    pthread_cond_t cond;
+    int posted, done, stop; /* posted: the job to run, -1 none; done: it ran */
+    btf_status status;
+    btf_error error;
+};
+
+static void *relay_main(void *arg)
+{
+    btf_relay *r = arg;
+    pthread_mutex_lock(&r->lock);
+    for (;;) {
+        while (r->posted < 0 && !r->stop)
+            pthread_cond_wait(&r->cond, &r->lock);
+        if (r->posted < 0)
+            break;
+        int j = r->posted;
+        pthread_mutex_unlock(&r->lock);
+        btf_error e = {0};
+        btf_status rc = r->job(r->user, j, 1, &e);
+        pthread_mutex_lock(&r->lock);
+        r->status = rc;
+        r->error = e;
+        r->posted = -1;
+        r->done = 1;
+        pthread_cond_broadcast(&r->cond);
+    }
+    pthread_mutex_unlock(&r->lock);
+    return NULL;
+}
+
+btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err)
+{
+    btf_relay *r = btf_calloc(1, sizeof *r, err);
+    if (!r)
+        return NULL;
+    r->job = job;
+    r->user = user;
+    r->posted = -1;
+    pthread_mutex_init(&r->lock, NULL);
+    pthread_cond_init(&r->cond, NULL);
+    /* one CPU: a second thread would only take turns with the caller */
+    r->threaded = btf_cpu_count() > 1 && pthread_create(&r->tid, NULL, relay_main, r) == 0;
+    return r;
+}
+
+void btf_relay_post(btf_relay *r, int job)
+{
+    if (!r->threaded) {
+        btf_error e = {0};
+        r->status = r->job(r->user, job, 1, &e);
+        r->error = e;
+        r->done = 1;
+        return;
+    }
+    pthread_mutex_lock(&r->lock);
+    r->posted = job;
+    r->done = 0;
+    pthread_cond_broadcast(&r->cond);
+    pthread_mutex_unlock(&r->lock);
+}
+
+btf_status btf_relay_wait(btf_relay *r, btf_error *err)
+{
+    if (r->threaded) {
+        pthread_mutex_lock(&r->lock);
+        while (!r->done)
+            pthread_cond_wait(&r->cond, &r->lock);
+        pthread_mutex_unlock(&r->lock);
+    }
+    r->done = 0;
+    if (r->status && err)
+        *err = r->error;
+    return r->status;
+}
+
+void btf_relay_stop(btf_relay *r)
+{
+    if (!r)
+        return;
+    if (r->threaded) {
+        pthread_mutex_lock(&r->lock);
+        r->stop = 1;
+        pthread_cond_broadcast(&r->cond);
+        pthread_mutex_unlock(&r->lock);
+        pthread_join(r->tid, NULL);
+    }
+    pthread_cond_destroy(&r->cond);
+    pthread_mutex_destroy(&r->lock);
+    free(r);
 }

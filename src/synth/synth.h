@@ -298,5 +298,8 @@ void synth_band_free(synth_band *sb);
 /* Row y of G_l of each of the nb (1..3) bands of one subspace, which step
  * together, over the level's window; rows asked in increasing order. */
 void synth_gauss_rows(synth_band *sb, int nb, int l, int y, const float **out);
+/* Row y of G_0 of each band written to dst[b] (the level's width) instead
+ * of the band's own row: a caller that keeps rows saves a copy. */
+void synth_gauss_rows_to(synth_band *sb, int nb, int y, float *const *dst);
 
 #endif

@@ -112,9 +112,11 @@ static void cpu_synthesis_is_unchanged(void **state)
     /* --float: the hashes are of float pixels (the default output is half) */
     assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 256x256 --seed 7 --float --quiet "
                                    "-o %s", tu_cli(), model_path, dir), NULL), 0);
+    /* changed deliberately (issue 17): the marginal transfer on a uniform
+     * grid of 32 segments and the closed-form gamut step */
     static const uint64_t expect[6] = {
-        0xd9462994eafe41bbull, 0xcb57f3e84d900bc0ull, 0x9ad207a4690f60dbull,
-        0x8c35a25d8327cdddull, 0x5ccb5026f4f25d39ull, 0x4022ed8146305788ull,
+        0x3522949ea9caf2e9ull, 0xcf73c84be44ecb66ull, 0xeddc32494470f80full,
+        0x7797366b83e50b9cull, 0x81b6ad9b26eecbafull, 0x9091e36570233f5full,
     };
     check_images(dir, expect, 6, 256, 256);
 }
@@ -166,9 +168,10 @@ static void gpu_synthesis_is_unchanged(void **state)
     snprintf(dir, sizeof dir, "%s", out);
     assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 200x130 --seed 3 --backend gpu --float "
                                    "--quiet -o %s", tu_cli(), model_path, dir), NULL), 0);
+    /* changed deliberately (issue 17), as the CPU's */
     static const uint64_t expect[6] = {
-        0xb87f7c34bfb0dd50ull, 0xed2aeddfbff45809ull, 0xe25d4c21fefe36f3ull,
-        0xad7d8d7c6a890193ull, 0x3a92638313865a01ull, 0xcbe0e8b3ff511f30ull,
+        0xf94c746c704b81c2ull, 0x0a2f5548894f0289ull, 0x2df395a15d3d8490ull,
+        0x101e8ee3afa914a4ull, 0x1d42b403bfc2f839ull, 0x18c2ddf9d783a5f4ull,
     };
     check_images(dir, expect, 6, 200, 130);
 }
@@ -178,9 +181,10 @@ static void gpu_synthesis_is_unchanged(void **state)
 static void tileable_synthesis_is_unchanged(void **state)
 {
     (void)state;
+    /* changed deliberately (issue 17), as above */
     static const uint64_t expect[6] = {
-        0x7356d78f6d1bd3faull, 0x68b6a1d4ded05edfull, 0x0f556b449f2dbb32ull,
-        0xe80acdf8d5ffb7e6ull, 0xaf2fe3fbe53e4513ull, 0x0a1b27530cb5dcbeull,
+        0xa2e411177ad49eb0ull, 0xe8dd9aff745f4793ull, 0x27fb66bbc658162bull,
+        0x9b860349d3f6608bull, 0x094f27536e9c2b03ull, 0xa1ac65cfc7cf9f3eull,
     };
     const char *backends[2] = {"cpu", "gpu"};
     for (int b = 0; b < 2; b++) {

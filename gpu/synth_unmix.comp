@@ -27,11 +27,11 @@ layout(push_constant) uniform Params {
 // The marginal transfer of band b at v: as transfer1 (src/synth/marginal.c).
 float transfer_band(uint j, int b, float v)
 {
-    float t = btf_knot_pos(v, jobs[j].z0[b], jobs[j].inv_h[b]);
-    float fl = floor(t);
-    fl = fl > 31.0 ? 31.0 : fl; // BTF_MARGIN_SEGS - 1
-    int i = b * 32 + int(fl);
-    return btf_transfer(t, fl, jobs[j].q[i], jobs[j].dq[i]);
+    float t = btf_knot_pos(v, jobs[j].origin[b], jobs[j].inv_h[b], jobs[j].tlo[b],
+                           jobs[j].thi[b]);
+    float fl = btf_knot_segment(floor(t));
+    int i = b * 16 + (int(fl) & 15); // the lower tail's -1 is entry 15
+    return btf_transfer(t, fl, jobs[j].q[i], jobs[j].dq[i], jobs[j].qmin[b], jobs[j].qmax[b]);
 }
 
 // The colour into the exemplar's box, as btf_marginal_gamut (src/synth/marginal.c).

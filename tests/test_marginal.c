@@ -86,8 +86,8 @@ static void transfer_is_monotone_and_bounded(void **state)
                       b, worst, (double)(q[BTF_MARGIN_KNOTS - 1] - q[0]));
         assert_true(worst < 0.01 * (q[BTF_MARGIN_KNOTS - 1] - q[0]));
         /* at a point of the grid, its table value */
-        for (int k = 0; k < 32; k++) {
-            float z = t.z0[b] + (float)k / t.inv_h[b], o, x = (z - t.z0[b]) * t.inv_h[b];
+        for (int k = 0; k < BTF_MARGIN_SEGS; k++) {
+            float z = t.origin[b] + (float)k / t.inv_h[b], o, x = (z - t.origin[b]) * t.inv_h[b];
             btf_marginal_row(&t, b, &z, 1, &o);
             if (x == (float)k)
                 assert_true(o == t.q[b][k]);

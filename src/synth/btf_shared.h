@@ -113,18 +113,24 @@ BTF_FN float btf_unmix(float mean, float b0, float b1, float b2, float v0, float
 
 /* The marginal transfer (docs/synthesis.md, "Marginals"), per band: a
  * monotone piecewise-linear map on BTF_MARGIN_SEGS segments of equal width
- * between the band's first and last knot z0 and zn, so that the segment of
- * v is found by a subtraction, a multiplication and a floor instead of a
- * search (the colour step is on the critical path of synthesis). v's place
- * on the grid, t = (v - z0) * inv_h clamped to [0, SEGS]; its segment
- * i = min(floor(t), SEGS - 1) and f = t - i in [0, 1] (exact: Sterbenz);
- * the value q_i + f * dq_i. The table (src/synth/marginal.c) is made on the
- * host so that q_i + dq_i <= q_{i+1}: every step is monotone under
- * round-to-nearest and a segment ends at or below where the next starts,
- * so the map is monotone without a clamp per segment. The clamps are
- * comparisons (not min/max, whose signed zeros differ between C, AVX2 and
- * GLSL). Only sub, mul, add, floor and compares: exact in Vulkan as in C. */
-#define BTF_MARGIN_SEGS 32
+ * between the band's second and last-but-one knot, and one segment beyond
+ * each (the model's first and last segments), so that the segment of v is
+ * found by a subtraction, a multiplication and a floor instead of a search
+ * (the colour step runs beside the CAR fields and must keep up). v's place
+ * on the grid, t = (v - origin) * inv_h clamped to [tlo, thi] (where the
+ * end knots fall); its segment fl = floor(t) clamped to [-1, SEGS]: -1 and
+ * SEGS are the tails, whose f runs past [0, 1]; entry fl & 15 of the
+ * band's 16-entry table (the lower tail is entry 15), so that the CPU
+ * fetches it with two in-register permutes; f = t - fl; the value
+ * q + f * dq clamped to the exemplar's range [qmin, qmax]. The table
+ * (src/synth/marginal.c) is made on the host so that q + dq does not pass
+ * the next segment's q: every step is monotone under round-to-nearest and
+ * a segment ends at or below where the next starts, so the map is
+ * monotone. The clamps are comparisons (not min/max, whose signed zeros
+ * differ between C, AVX2 and GLSL). Only sub, mul, add, floor and
+ * compares: exact in Vulkan as in C. */
+#define BTF_MARGIN_SEGS 14
+#define BTF_MARGIN_TABLE 16
 
 BTF_FN float btf_clampf(float v, float lo, float hi)
 {
@@ -132,21 +138,26 @@ BTF_FN float btf_clampf(float v, float lo, float hi)
     return a > hi ? hi : a;
 }
 
-BTF_FN float btf_knot_pos(float v, float z0, float inv_h)
+BTF_FN float btf_knot_pos(float v, float origin, float inv_h, float tlo, float thi)
 {
-    BTF_PRECISE float d = v - z0;
+    BTF_PRECISE float d = v - origin;
     BTF_PRECISE float t = d * inv_h;
-    return btf_clampf(t, 0.0f, 32.0f); /* BTF_MARGIN_SEGS */
+    return btf_clampf(t, tlo, thi);
 }
 
-/* fl: the segment's start, min(floor(t), SEGS - 1), taken by the caller
- * (floorf / floor / _mm256_floor_ps: exact everywhere). */
-BTF_FN float btf_transfer(float t, float fl, float q, float dq)
+/* fl: floor(t) (floorf / floor / _mm256_floor_ps: exact everywhere),
+ * clamped by btf_knot_segment. */
+BTF_FN float btf_knot_segment(float fl)
+{
+    return btf_clampf(fl, -1.0f, 14.0f); /* BTF_MARGIN_SEGS */
+}
+
+BTF_FN float btf_transfer(float t, float fl, float q, float dq, float qmin, float qmax)
 {
     BTF_PRECISE float f = t - fl;
     BTF_PRECISE float p = f * dq;
     BTF_PRECISE float s = q + p;
-    return s;
+    return btf_clampf(s, qmin, qmax);
 }
 
 /* Gamut (docs/synthesis.md, "Marginals"): a colour outside the exemplar's

@@ -12,10 +12,15 @@
  * j = 1..30, and at 1/4096 and 1 - 1/4096 for the first and last; their
  * knots are z_j = synth_mean + synth_sd * N_j, N_j the standard normal
  * quantile of p_j: the map through (z_j, q_j), flat beyond the end knots.
- * Synthesis evaluates that map resampled at BTF_MARGIN_SEGS + 1 equally
- * spaced points from z_0 to z_31, linear between them (btf_shared.h): the
- * segment is then found by one multiply and a floor, not by comparing v
- * with 30 knots, which made the transfer cost as much as the CAR fields.
+ * Synthesis evaluates that map on a grid made for speed: BTF_MARGIN_SEGS
+ * segments of equal width from z_1 to z_30, where it is resampled (linear
+ * between the grid's points, which cuts the corners of the model's map at
+ * its knots by a small fraction of the range), and the model's own first
+ * and last segments beyond (btf_shared.h). The segment of a value is then
+ * found by one multiply and a floor, not by comparing it with 30 knots,
+ * and its numbers by two in-register permutes of 16-entry tables: the
+ * transfer cost as much as the CAR fields with the search, and still a
+ * third of them with 32 segments (the lookups dominate).
  * The table is made on the host, in double rounded to float, for the CPU
  * and the GPU (gpu/synth_gpu.c) alike: both then run the formulas of
  * btf_shared.h on the same floats and agree bit for bit.
@@ -30,9 +35,9 @@
 #include <stdint.h>
 #include <string.h>
 
-_Static_assert(BTF_MARGIN_SEGS == 32 &&
-                   sizeof(((btf_marginal_table *)0)->q[0]) == BTF_MARGIN_SEGS * sizeof(float),
-               "btf_knot_pos clamps to 32; the table and the AVX2 lookups hold 32");
+_Static_assert(BTF_MARGIN_SEGS == 14 && BTF_MARGIN_TABLE == 16 &&
+                   sizeof(((btf_marginal_table *)0)->q[0]) == BTF_MARGIN_TABLE * sizeof(float),
+               "btf_knot_segment clamps to 14; the table and the AVX2 lookups hold 16");
 
 /* Phi^-1(p_j), made exactly antisymmetric (statistics.NormalDist). */
 const double btf_marginal_normal_knots[BTF_MARGIN_KNOTS] = {
@@ -61,8 +66,19 @@ static double model_map(const double *z, const float *q, double v)
     return (double)q[j] + f * ((double)q[j + 1] - q[j]);
 }
 
+/* The largest rise dq <= want (and >= 0) with q + f * dq <= next for every
+ * f <= 1, in float: q + dq itself may round past next. */
+static float rise(float q, float want, float next)
+{
+    float dq = want;
+    while (dq > 0.0f && q + dq > next)
+        dq = nextafterf(dq, 0.0f);
+    return dq > 0.0f ? dq : 0.0f;
+}
+
 void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t)
 {
+    enum { S = BTF_MARGIN_SEGS, LOWER = BTF_MARGIN_TABLE - 1, LAST = BTF_MARGIN_KNOTS - 1 };
     memset(t, 0, sizeof *t);
     const btf_marginal *mg = &sm->marginal;
     if (mg->knots != BTF_MARGIN_KNOTS)
@@ -73,31 +89,45 @@ void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t
         double z[BTF_MARGIN_KNOTS];
         for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
             z[j] = (double)mg->synth_mean[b] + (double)mg->synth_sd[b] * btf_marginal_normal_knots[j];
-        double ih = (double)BTF_MARGIN_SEGS / (z[BTF_MARGIN_KNOTS - 1] - z[0]);
-        float val[BTF_MARGIN_SEGS + 1];
+        t->qmin[b] = q[0], t->qmax[b] = q[LAST];
+        double ih = (double)S / (z[LAST - 1] - z[1]);
         if (!(ih > 0 && ih <= 1e30)) {
             /* sd 0 (or below 1e-30 of the range): every v on one point, the
              * exemplar's median; t is 0 whatever v is */
-            t->z0[b] = 0.0f, t->inv_h[b] = 0.0f;
-            for (int k = 0; k <= BTF_MARGIN_SEGS; k++)
-                val[k] = (float)(0.5 * ((double)q[15] + q[16]));
-        } else {
-            t->z0[b] = (float)z[0], t->inv_h[b] = (float)ih;
-            /* point k is where the float arithmetic puts t = k */
-            for (int k = 0; k <= BTF_MARGIN_SEGS; k++)
-                val[k] = (float)model_map(z, q, (double)t->z0[b] + k / (double)t->inv_h[b]);
-            val[0] = q[0], val[BTF_MARGIN_SEGS] = q[BTF_MARGIN_KNOTS - 1];
+            for (int k = 0; k < BTF_MARGIN_TABLE; k++)
+                t->q[b][k] = (float)(0.5 * ((double)q[15] + q[16]));
+            continue;
         }
-        for (int k = 0; k < BTF_MARGIN_SEGS; k++) {
-            /* the rise, lowered where rounding would carry q + dq past the
-             * next point (f <= 1, so then no value of the segment passes
-             * it: the map stays monotone); never negative */
-            float dq = val[k + 1] - val[k];
-            while (dq > 0.0f && val[k] + dq > val[k + 1])
-                dq = nextafterf(dq, 0.0f);
+        float o = (float)z[1], h = (float)ih;
+        t->origin[b] = o, t->inv_h[b] = h;
+        /* where the end knots fall, by the very float operations of
+         * btf_knot_pos */
+        float z0 = (float)z[0], zn = (float)z[LAST];
+        float tlo = (z0 - o) * h, thi = (zn - o) * h;
+        tlo = tlo < -1.0f ? tlo : -1.0f, thi = thi > (float)S ? thi : (float)S;
+        t->tlo[b] = tlo, t->thi[b] = thi;
+        /* grid point k (t = k) at the model's map; the tails continue the
+         * model's first and last segments */
+        float val[S + 1];
+        for (int k = 0; k <= S; k++)
+            val[k] = (float)model_map(z, q, (double)o + k / (double)h);
+        for (int k = 0; k < S; k++) {
             t->q[b][k] = val[k];
-            t->dq[b][k] = dq > 0.0f ? dq : 0.0f;
+            t->dq[b][k] = rise(val[k], val[k + 1] - val[k], val[k + 1]);
         }
+        /* upper tail: from val[S] at t = S to q_last at thi */
+        t->q[b][S] = val[S];
+        t->dq[b][S] = thi > (float)S ? (float)(((double)q[LAST] - val[S]) / ((double)thi - S))
+                                     : 0.0f;
+        if (!(t->dq[b][S] >= 0.0f))
+            t->dq[b][S] = 0.0f;
+        /* lower tail: f = t + 1 in [tlo + 1, 1), from q_0 at tlo up to
+         * val[0] at t = 0 */
+        double sl = tlo < -1.0f ? ((double)val[0] - q[0]) / (-(double)tlo) : 0.0;
+        float sf = sl > 0 && sl < FLT_MAX ? (float)sl : 0.0f;
+        float ql = (float)((double)val[0] - sf);
+        t->q[b][LOWER] = ql;
+        t->dq[b][LOWER] = rise(ql, sf, val[0]);
     }
     for (int k = 0; k < 3; k++) {
         t->mean[k] = sm->mean[k];
@@ -115,13 +145,24 @@ static inline uint32_t nonfinite(float v)
     return (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
 }
 
+/* floor(x) without a call into libm (floorf is one on plain x86-64, and
+ * took most of the portable loop's time): exact for |x| < 2^30, x itself
+ * otherwise (NaN included). */
+static inline float floor_small(float x)
+{
+    if (!(x > -1073741824.0f && x < 1073741824.0f))
+        return x;
+    float tr = (float)(int)x;
+    return tr > x ? tr - 1.0f : tr;
+}
+
 /* The transfer of band b at v (finite or not: the caller tests). */
 static inline float transfer1(const btf_marginal_table *t, int b, float v)
 {
-    float x = btf_knot_pos(v, t->z0[b], t->inv_h[b]);
-    int i = x >= 1.0f ? (int)x : 0; /* x >= 0: the floor (and 0 for NaN) */
-    i = i < BTF_MARGIN_SEGS - 1 ? i : BTF_MARGIN_SEGS - 1;
-    return btf_transfer(x, (float)i, t->q[b][i], t->dq[b][i]);
+    float x = btf_knot_pos(v, t->origin[b], t->inv_h[b], t->tlo[b], t->thi[b]);
+    float fl = btf_knot_segment(floor_small(x));
+    int i = fl > -1.0f ? (int)fl : BTF_MARGIN_TABLE - 1; /* -1 (and NaN): the lower tail */
+    return btf_transfer(x, fl, t->q[b][i], t->dq[b][i], t->qmin[b], t->qmax[b]);
 }
 
 int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width, float *out)
@@ -179,37 +220,36 @@ static int unmix_row_portable(const btf_subspace_model *sm, const btf_marginal_t
 #pragma GCC target("avx2")
 #include <immintrin.h>
 
-/* table[i] for 32-entry tables held in four vectors: four in-register
- * permutes and three blends instead of a gather (a gather of 8 costs about
- * as much as the rest of a band's transfer); the same value is fetched, so
- * the bits do not change. m0, m1: bits 3 and 4 of i as sign bits. */
-static inline __m256 lookup32(const __m256 tab[4], __m256i i, __m256 m0, __m256 m1)
+/* table[i & 15] for 16-entry tables held in two vectors: two in-register
+ * permutes (by the low 3 bits) and a blend (by bit 3, as sign bit m)
+ * instead of a gather (a pair of gathers cost as much as two 32-entry
+ * lookups, and those as much as the rest of the colour step); the same
+ * value is fetched, so the bits do not change. */
+static inline __m256 lookup16(const __m256 tab[2], __m256i i, __m256 m)
 {
-    __m256 a = _mm256_permutevar8x32_ps(tab[0], i), b = _mm256_permutevar8x32_ps(tab[1], i);
-    __m256 c = _mm256_permutevar8x32_ps(tab[2], i), d = _mm256_permutevar8x32_ps(tab[3], i);
-    return _mm256_blendv_ps(_mm256_blendv_ps(a, b, m0), _mm256_blendv_ps(c, d, m0), m1);
+    return _mm256_blendv_ps(_mm256_permutevar8x32_ps(tab[0], i),
+                            _mm256_permutevar8x32_ps(tab[1], i), m);
 }
 
 typedef struct band_avx2 {
-    __m256 z0, ih, q[4], dq[4];
+    __m256 origin, ih, tlo, thi, qmin, qmax, q[2], dq[2];
 } band_avx2;
 
-/* btf_knot_pos, the segment, btf_transfer: the same operations (no FMA),
- * the clamps as max(lo, v) and min(hi, a), which are the comparisons
- * `v < lo ? lo : v` and `a > hi ? hi : a` lane by lane, signed zeros
- * included. */
+/* btf_knot_pos, btf_knot_segment, the entry, btf_transfer: the same operations
+ * (no FMA), the clamps as max(lo, v) and min(hi, a), which are the
+ * comparisons `v < lo ? lo : v` and `a > hi ? hi : a` lane by lane, signed
+ * zeros included; the lower tail's -1 is entry 15 by its low bits. */
 static inline __m256 transfer8(const band_avx2 *bt, __m256 v)
 {
-    const __m256 zero = _mm256_setzero_ps(), segs = _mm256_set1_ps((float)BTF_MARGIN_SEGS);
-    const __m256 last = _mm256_set1_ps((float)(BTF_MARGIN_SEGS - 1));
-    __m256 x = _mm256_mul_ps(_mm256_sub_ps(v, bt->z0), bt->ih);
-    x = _mm256_min_ps(segs, _mm256_max_ps(zero, x));
-    __m256 fl = _mm256_min_ps(last, _mm256_floor_ps(x));
+    const __m256 minus1 = _mm256_set1_ps(-1.0f), segs = _mm256_set1_ps((float)BTF_MARGIN_SEGS);
+    __m256 x = _mm256_mul_ps(_mm256_sub_ps(v, bt->origin), bt->ih);
+    x = _mm256_min_ps(bt->thi, _mm256_max_ps(bt->tlo, x));
+    __m256 fl = _mm256_min_ps(segs, _mm256_max_ps(minus1, _mm256_floor_ps(x)));
     __m256i i = _mm256_cvttps_epi32(fl);
-    __m256 m0 = _mm256_castsi256_ps(_mm256_slli_epi32(i, 28));
-    __m256 m1 = _mm256_castsi256_ps(_mm256_slli_epi32(i, 27));
-    __m256 q = lookup32(bt->q, i, m0, m1), dq = lookup32(bt->dq, i, m0, m1);
-    return _mm256_add_ps(q, _mm256_mul_ps(_mm256_sub_ps(x, fl), dq));
+    __m256 m = _mm256_castsi256_ps(_mm256_slli_epi32(i, 28));
+    __m256 q = lookup16(bt->q, i, m), dq = lookup16(bt->dq, i, m);
+    __m256 r = _mm256_add_ps(q, _mm256_mul_ps(_mm256_sub_ps(x, fl), dq));
+    return _mm256_min_ps(bt->qmax, _mm256_max_ps(bt->qmin, r));
 }
 
 /* btf_marginal_gamut on 8 colours, applied where `out` is set: each
@@ -259,9 +299,13 @@ static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table
     band_avx2 bt[3];
     __m256 mean[3], c0[3], c1[3], c2[3], lo[3], hi[3];
     for (int b = 0; b < 3; b++) {
-        bt[b].z0 = _mm256_set1_ps(t->z0[b]);
+        bt[b].origin = _mm256_set1_ps(t->origin[b]);
         bt[b].ih = _mm256_set1_ps(t->inv_h[b]);
-        for (int k = 0; k < 4; k++) {
+        bt[b].tlo = _mm256_set1_ps(t->tlo[b]);
+        bt[b].thi = _mm256_set1_ps(t->thi[b]);
+        bt[b].qmin = _mm256_set1_ps(t->qmin[b]);
+        bt[b].qmax = _mm256_set1_ps(t->qmax[b]);
+        for (int k = 0; k < 2; k++) {
             bt[b].q[k] = _mm256_loadu_ps(t->q[b] + 8 * k);
             bt[b].dq[k] = _mm256_loadu_ps(t->dq[b] + 8 * k);
         }

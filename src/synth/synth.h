@@ -108,15 +108,16 @@ btf_status btf_synth_check_size(int width, int height, btf_error *err);
 /* -------------------------------------------------------------- marginal.c */
 
 /* A subspace's marginal transfer as synthesis applies it (docs/synthesis.md,
- * "Marginals"; the formulas in btf_shared.h): per band the first knot z0,
- * the inverse of the segments' width, each segment's start value and rise;
- * the subspace's mean colour, the RGB box and the mean's distances to its
- * sides; on 0: none (identity, no clamp). Made on the host for the CPU and
- * the GPU alike. portable 1 (tests): no AVX2. */
+ * "Marginals"; the formulas in btf_shared.h): per band the grid's origin,
+ * the inverse of its segments' width, where the end knots fall on it, the
+ * exemplar's range, each segment's start value and rise (BTF_MARGIN_TABLE
+ * entries); the subspace's mean colour, the RGB box and the mean's
+ * distances to its sides; on 0: none (identity, no clamp). Made on the
+ * host for the CPU and the GPU alike. portable 1 (tests): no AVX2. */
 typedef struct btf_marginal_table {
     int on, portable;
-    float z0[3], inv_h[3];
-    float q[3][32], dq[3][32]; /* BTF_MARGIN_SEGS of btf_shared.h */
+    float origin[3], inv_h[3], tlo[3], thi[3], qmin[3], qmax[3];
+    float q[3][16], dq[3][16]; /* BTF_MARGIN_TABLE of btf_shared.h */
     float mean[3], lo[3], hi[3], nlo[3], nhi[3];
 } btf_marginal_table;
 /* The standard normal quantiles N_j of the model's knots. */

@@ -135,34 +135,46 @@ btf_status btf_pool_run(int jobs, int threads, btf_pool_job_fn job, void *user,
 struct btf_relay {
     btf_pool_job_fn job;
     void *user;
-    int threaded;          /* a helper thread runs the jobs */
+    int threaded;           /* a helper thread takes jobs too */
     pthread_t tid;
-    pthread_mutex_t lock;  /* guards what follows */
-    pthread_cond_t cond;
-    int posted, done, stop; /* posted: the job to run, -1 none; done: it ran */
-    btf_status status;
+    pthread_mutex_t lock;   /* guards what follows */
+    pthread_cond_t cond;    /* a new batch (for the helper), a batch done (for the caller) */
+    int first, count;       /* the batch: jobs first .. first + count - 1 */
+    int next, done, stop;   /* jobs handed out, jobs finished */
+    btf_status status;      /* the batch's first failure */
     btf_error error;
 };
+
+/* Runs jobs of the batch until none is left; called and returns with the
+ * lock held. A job runs unlocked; a failure stops the hand-out. */
+static void relay_run(btf_relay *r, int worker)
+{
+    while (r->next < r->count) {
+        int j = r->first + r->next++;
+        pthread_mutex_unlock(&r->lock);
+        btf_error e = {0};
+        btf_status rc = r->job(r->user, j, worker, &e);
+        pthread_mutex_lock(&r->lock);
+        if (rc != BTF_OK && r->status == BTF_OK) {
+            r->status = rc;
+            r->error = e;
+            r->count = r->next; /* the jobs handed out still finish */
+        }
+        if (++r->done == r->count)
+            pthread_cond_broadcast(&r->cond);
+    }
+}
 
 static void *relay_main(void *arg)
 {
     btf_relay *r = arg;
     pthread_mutex_lock(&r->lock);
     for (;;) {
-        while (r->posted < 0 && !r->stop)
+        while (r->next >= r->count && !r->stop)
             pthread_cond_wait(&r->cond, &r->lock);
-        if (r->posted < 0)
-            break;
-        int j = r->posted;
-        pthread_mutex_unlock(&r->lock);
-        btf_error e = {0};
-        btf_status rc = r->job(r->user, j, 1, &e);
-        pthread_mutex_lock(&r->lock);
-        r->status = rc;
-        r->error = e;
-        r->posted = -1;
-        r->done = 1;
-        pthread_cond_broadcast(&r->cond);
+        if (r->next >= r->count)
+            break; /* stopped */
+        relay_run(r, 1);
     }
     pthread_mutex_unlock(&r->lock);
     return NULL;
@@ -175,7 +187,6 @@ btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err)
         return NULL;
     r->job = job;
     r->user = user;
-    r->posted = -1;
     pthread_mutex_init(&r->lock, NULL);
     pthread_cond_init(&r->cond, NULL);
     /* one CPU: a second thread would only take turns with the caller */
@@ -183,34 +194,29 @@ btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err)
     return r;
 }
 
-void btf_relay_post(btf_relay *r, int job)
+void btf_relay_post(btf_relay *r, int first, int count)
 {
-    if (!r->threaded) {
-        btf_error e = {0};
-        r->status = r->job(r->user, job, 1, &e);
-        r->error = e;
-        r->done = 1;
-        return;
-    }
     pthread_mutex_lock(&r->lock);
-    r->posted = job;
-    r->done = 0;
-    pthread_cond_broadcast(&r->cond);
+    r->first = first;
+    r->count = count > 0 ? count : 0;
+    r->next = r->done = 0;
+    r->status = BTF_OK;
+    if (r->threaded)
+        pthread_cond_broadcast(&r->cond);
     pthread_mutex_unlock(&r->lock);
 }
 
 btf_status btf_relay_wait(btf_relay *r, btf_error *err)
 {
-    if (r->threaded) {
-        pthread_mutex_lock(&r->lock);
-        while (!r->done)
-            pthread_cond_wait(&r->cond, &r->lock);
-        pthread_mutex_unlock(&r->lock);
-    }
-    r->done = 0;
-    if (r->status && err)
+    pthread_mutex_lock(&r->lock);
+    relay_run(r, 0); /* what the helper has not taken yet, the caller does */
+    while (r->done < r->count)
+        pthread_cond_wait(&r->cond, &r->lock);
+    btf_status rc = r->status;
+    if (rc && err)
         *err = r->error;
-    return r->status;
+    pthread_mutex_unlock(&r->lock);
+    return rc;
 }
 
 void btf_relay_stop(btf_relay *r)

@@ -101,40 +101,39 @@ btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error
 }
 
 /* With a marginal transfer the colour step (transfer, inverse
- * decorrelation, gamut: src/synth/marginal.c) costs about a quarter of the
+ * decorrelation, gamut: src/synth/marginal.c) costs about a fifth of the
  * CAR fields and the collapse. Both run at once, as a pipeline over blocks
  * of COLOUR_BLOCK rows: the calling thread collapses block k + 1 straight
- * into one of two buffers while a relay thread (core/pool.c) colours block
- * k from the other; the caller then hands block k's rows to fn, in order
- * and on its own thread, as without a transfer. A row's bytes depend on
- * the row alone, so the thread that colours it does not matter. Memory
- * grows with the width, as before. (A batch of the pool per block, as
- * before, started and joined a thread 16 times per 512-row image and left
- * the fields waiting for each block's colours.) */
+ * into one of two buffers while a relay thread (core/pool.c) colours the
+ * rows of block k from the other; then the caller colours whatever rows
+ * of block k the relay has not taken (all of them when the relay gets no
+ * CPU: never slower than one thread) and hands them to fn, in order and on
+ * its own thread, as without a transfer. A row's bytes depend on the row
+ * alone, so the thread that colours it does not matter. Memory grows with
+ * the width, as before. (A batch of the pool per block, as before, started
+ * and joined a thread 16 times per 512-row image and left the fields
+ * waiting for each block's colours.) */
 #define COLOUR_BLOCK 32
 typedef struct colour_job {
     const btf_subspace_model *sm;
     const btf_marginal_table *mt;
-    int width, height, subspace;
+    int width, subspace;
     float *bands[2];  /* [row][band][width] of blocks k even, odd */
     float *rgb[2];    /* [row][width * 3] */
-    float *scratch;   /* width * BTF_UNMIX_SCRATCH (btf_unmix_row) */
+    float *scratch;   /* [worker][width * BTF_UNMIX_SCRATCH] (btf_unmix_row) */
 } colour_job;
 
-/* Block k: rows k * COLOUR_BLOCK on, from bands[k & 1] to rgb[k & 1]. */
-static btf_status colour_block(void *user, int k, int worker, btf_error *err)
+/* Row y of the image, in block y / COLOUR_BLOCK. */
+static btf_status colour_row(void *user, int y, int worker, btf_error *err)
 {
-    (void)worker;
     colour_job *c = user;
-    size_t w = (size_t)c->width;
-    int y0 = k * COLOUR_BLOCK;
-    int n = c->height - y0 < COLOUR_BLOCK ? c->height - y0 : COLOUR_BLOCK;
-    for (int j = 0; j < n; j++) {
-        const float *b = c->bands[k & 1] + (size_t)j * 3 * w;
-        float *rgb = c->rgb[k & 1] + (size_t)j * 3 * w;
-        if (btf_unmix_row(c->sm, c->mt, b, b + w, b + 2 * w, c->width, c->scratch, rgb))
-            return btf_check_finite_row(rgb, 3 * w, c->subspace, y0 + j, err);
-    }
+    size_t w = (size_t)c->width, j = (size_t)(y % COLOUR_BLOCK);
+    int k = y / COLOUR_BLOCK;
+    const float *b = c->bands[k & 1] + j * 3 * w;
+    float *rgb = c->rgb[k & 1] + j * 3 * w;
+    if (btf_unmix_row(c->sm, c->mt, b, b + w, b + 2 * w, c->width,
+                      c->scratch + (size_t)worker * w * BTF_UNMIX_SCRATCH, rgb))
+        return btf_check_finite_row(rgb, 3 * w, c->subspace, y, err);
     return BTF_OK;
 }
 
@@ -143,43 +142,37 @@ static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal
                                 btf_rows_fn fn, void *user, btf_error *err)
 {
     size_t w = (size_t)width, block = w * 3 * COLOUR_BLOCK;
-    colour_job c = {sm, mt, width, height, subspace, {NULL, NULL}, {NULL, NULL}, NULL};
-    float *mem = btf_alloc(4 * block + w * BTF_UNMIX_SCRATCH, sizeof(float), err);
+    colour_job c = {sm, mt, width, subspace, {NULL, NULL}, {NULL, NULL}, NULL};
+    float *mem = btf_alloc(4 * block + 2 * w * BTF_UNMIX_SCRATCH, sizeof(float), err);
     if (!mem)
         return BTF_E_NOMEM;
     for (int i = 0; i < 2; i++)
         c.bands[i] = mem + (size_t)i * block, c.rgb[i] = mem + (size_t)(2 + i) * block;
     c.scratch = mem + 4 * block;
-    btf_relay *relay = btf_relay_start(colour_block, &c, err);
+    btf_relay *relay = btf_relay_start(colour_row, &c, err);
     btf_status rc = relay ? BTF_OK : BTF_E_NOMEM;
-    int blocks = (height + COLOUR_BLOCK - 1) / COLOUR_BLOCK, posted = 0;
+    int blocks = (height + COLOUR_BLOCK - 1) / COLOUR_BLOCK;
     for (int k = 0; rc == BTF_OK && k <= blocks; k++) {
-        if (k < blocks) { /* the fields of block k, while block k - 1 is coloured */
-            int y0 = k * COLOUR_BLOCK;
-            for (int j = 0; j < COLOUR_BLOCK && y0 + j < height; j++) {
-                float *b = c.bands[k & 1] + (size_t)j * 3 * w;
-                float *const dst[3] = {b, b + w, b + 2 * w};
-                synth_gauss_rows_to(sb, 3, y0 + j, dst);
-            }
+        int y0 = k * COLOUR_BLOCK, n = height - y0 < COLOUR_BLOCK ? height - y0 : COLOUR_BLOCK;
+        /* the fields of block k, while block k - 1 is coloured */
+        for (int j = 0; k < blocks && j < n; j++) {
+            float *b = c.bands[k & 1] + (size_t)j * 3 * w;
+            float *const dst[3] = {b, b + w, b + 2 * w};
+            synth_gauss_rows_to(sb, 3, y0 + j, dst);
         }
         if (k > 0) {
-            posted = 0;
             rc = btf_relay_wait(relay, err);
-            int y0 = (k - 1) * COLOUR_BLOCK;
-            for (int j = 0; rc == BTF_OK && j < COLOUR_BLOCK && y0 + j < height; j++) {
-                int got = fn(user, y0 + j, 1, c.rgb[(k - 1) & 1] + (size_t)j * 3 * w, err);
+            int p0 = y0 - COLOUR_BLOCK;
+            for (int j = 0; rc == BTF_OK && j < COLOUR_BLOCK && p0 + j < height; j++) {
+                int got = fn(user, p0 + j, 1, c.rgb[(k - 1) & 1] + (size_t)j * 3 * w, err);
                 rc = got > 0 ? BTF_E_IO : (btf_status)got;
                 if (rc && err && !err->msg[0])
                     btf_fail(err, rc, "synthesis stopped by its consumer");
             }
         }
-        if (rc == BTF_OK && k < blocks) {
-            btf_relay_post(relay, k);
-            posted = 1;
-        }
+        if (rc == BTF_OK && k < blocks)
+            btf_relay_post(relay, y0, n);
     }
-    if (posted) /* stopped with a block in the relay: let it finish */
-        btf_relay_wait(relay, NULL);
     btf_relay_stop(relay);
     free(mem);
     return rc;

@@ -166,6 +166,23 @@ static void colour_step_paths_agree(void **state)
     }
     print_message("%d of %d colours outside the box\n", outside, W);
     assert_true(outside > W / 10);
+    /* Inf or NaN in a band, within the vector loop or its tail: reported on
+     * both paths, and btf_unmix_row then carries it into the colours, so
+     * that the finite test refuses the row (the GPU skips the transfer) */
+    const float odd[2] = {INFINITY, NAN};
+    const int at[3] = {100, W - 2, 0};
+    static float scratch[BTF_UNMIX_SCRATCH * W];
+    for (int o = 0; o < 2; o++)
+        for (int a = 0; a < 3; a++) {
+            float keep = b[a][at[a]];
+            b[a][at[a]] = odd[o];
+            assert_int_not_equal(btf_marginal_unmix_row(&sm, &t, b[0], b[1], b[2], W, ra), 0);
+            assert_int_not_equal(btf_marginal_unmix_row(&sm, &tp, b[0], b[1], b[2], W, rp), 0);
+            assert_int_not_equal(btf_unmix_row(&sm, &t, b[0], b[1], b[2], W, scratch, ra), 0);
+            btf_error e = {0};
+            assert_int_equal(btf_check_finite_row(ra, 3 * W, 0, 0, &e), BTF_E_NUMERIC);
+            b[a][at[a]] = keep;
+        }
 }
 
 /* btf_recip: within 1e-6 of 1/x over its range, and the same on both ends. */

@@ -318,7 +318,9 @@ static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table
         lo[k] = _mm256_set1_ps(t->lo[k]);
         hi[k] = _mm256_set1_ps(t->hi[k]);
     }
-    const __m256i expo = _mm256_set1_epi32(0x7F800000);
+    /* the finite test as the largest magnitude's bits (and, unsigned max):
+     * Inf or NaN when they reach the exponent's all-ones */
+    const __m256i magn = _mm256_set1_epi32(0x7FFFFFFF);
     const __m256i pa = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
     const __m256i pb = _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2);
     const __m256i pc = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
@@ -328,8 +330,7 @@ static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table
         __m256 v[3], ch[3];
         for (int b = 0; b < 3; b++) {
             __m256 in = _mm256_loadu_ps(band[b] + x);
-            __m256i e = _mm256_and_si256(_mm256_castps_si256(in), expo);
-            bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(e, expo));
+            bad = _mm256_max_epu32(bad, _mm256_and_si256(_mm256_castps_si256(in), magn));
             v[b] = transfer8(&bt[b], in);
         }
         __m256 inside = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
@@ -350,6 +351,7 @@ static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table
         _mm256_storeu_ps(row + 3 * x + 8, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49));
         _mm256_storeu_ps(row + 3 * x + 16, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92));
     }
+    bad = _mm256_cmpgt_epi32(bad, _mm256_set1_epi32(0x7F7FFFFF));
     *bad_out = !_mm256_testz_si256(bad, bad);
     return x;
 }

@@ -58,14 +58,15 @@ typedef struct gpu_unmix {
     uint32_t out_off;
     int32_t width, height;
     int32_t transfer;           /* the marginal transfer (src/synth/marginal.c) is on */
-    float z[3][BTF_MARGIN_KNOTS], q[3][BTF_MARGIN_KNOTS], slope[3][BTF_MARGIN_KNOTS];
-    float lo[3], hi[3];
+    float origin[3], inv_h[3], tlo[3], thi[3], qmin[3], qmax[3];
+    float q[3][BTF_MARGIN_TABLE], dq[3][BTF_MARGIN_TABLE];
+    float lo[3], hi[3], nlo[3], nhi[3];
 } gpu_unmix;
 
 _Static_assert(sizeof(gpu_task) == 368, "gpu_task must match synth_task.glsl");
-_Static_assert(sizeof(gpu_unmix) == 76 + 9 * 4 * BTF_MARGIN_KNOTS + 24, "gpu_unmix must match synth_task.glsl");
+_Static_assert(sizeof(gpu_unmix) == 76 + 72 + 6 * 4 * BTF_MARGIN_TABLE + 48, "gpu_unmix must match synth_task.glsl");
 _Static_assert(BTF_CAR_MAX_NEIGHBOURS == 24, "synth_task.glsl holds 24 offsets");
-_Static_assert(BTF_MARGIN_KNOTS == 32, "synth_task.glsl holds 32 knots");
+_Static_assert(BTF_MARGIN_TABLE == 16, "synth_task.glsl holds 16 entries per band");
 
 struct btf_gpu {
     btf_vk *vk;
@@ -347,11 +348,18 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
         btf_marginal_table mt; /* the CPU's very table (src/synth/marginal.c) */
         btf_marginal_table_make(sm, &mt);
         bt->unmix[j].transfer = mt.on;
-        memcpy(bt->unmix[j].z, mt.z, sizeof mt.z);
+        memcpy(bt->unmix[j].origin, mt.origin, sizeof mt.origin);
+        memcpy(bt->unmix[j].inv_h, mt.inv_h, sizeof mt.inv_h);
+        memcpy(bt->unmix[j].tlo, mt.tlo, sizeof mt.tlo);
+        memcpy(bt->unmix[j].thi, mt.thi, sizeof mt.thi);
+        memcpy(bt->unmix[j].qmin, mt.qmin, sizeof mt.qmin);
+        memcpy(bt->unmix[j].qmax, mt.qmax, sizeof mt.qmax);
         memcpy(bt->unmix[j].q, mt.q, sizeof mt.q);
-        memcpy(bt->unmix[j].slope, mt.slope, sizeof mt.slope);
+        memcpy(bt->unmix[j].dq, mt.dq, sizeof mt.dq);
         memcpy(bt->unmix[j].lo, mt.lo, sizeof mt.lo);
         memcpy(bt->unmix[j].hi, mt.hi, sizeof mt.hi);
+        memcpy(bt->unmix[j].nlo, mt.nlo, sizeof mt.nlo);
+        memcpy(bt->unmix[j].nhi, mt.nhi, sizeof mt.nhi);
     }
     /* Walk the strips once to size every field's buffer rows. */
     for (int y = 0; y < h; y += strip)

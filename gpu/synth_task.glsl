@@ -37,8 +37,11 @@ struct Unmix {
     uint out_off;             // offset (floats) of the RGB image in Out[]
     int width, height;        // the image's width, the strip's rows
     int transfer;             // 1: the marginal transfer is on (src/synth/marginal.c)
-    float z[96];              // [band * 32 + j]: knots, exemplar quantiles, segment slopes
-    float q[96];
-    float slope[96];
-    float lo[3], hi[3];       // the RGB clamp
+    float origin[3], inv_h[3]; // per band: the grid (btf_knot_pos), the end knots on it,
+    float tlo[3], thi[3];      // the exemplar's range
+    float qmin[3], qmax[3];
+    float q[48];              // [band * 16 + i]: segment i's start value and rise
+    float dq[48];
+    float lo[3], hi[3];       // the RGB box, the mean's distances below and above
+    float nlo[3], nhi[3];
 };

@@ -3,7 +3,7 @@
 // 3 x 3 inverse decorrelation matrix applied to each colour pixel):
 // rgb_k = mean_k + sum_b basis[b][k] band_b, with btf_unmix as on the CPU
 // (src/synth/colour.c); with a marginal transfer, each band through it
-// first and the RGB result clamped to the exemplar's box after
+// first and the RGB result brought into the exemplar's box after
 // (src/synth/marginal.c, the table made on the host by the same function).
 // One workgroup per subspace image, a grid-stride loop over its pixels.
 #version 450
@@ -24,19 +24,17 @@ layout(push_constant) uniform Params {
     uint job_base;
 } pc;
 
-// The marginal transfer of band b at v: as btf_marginal_row (src/synth/marginal.c).
+// The marginal transfer of band b at v: as transfer1 (src/synth/marginal.c).
 float transfer_band(uint j, int b, float v)
 {
-    int base = b * 32;
-    float c = btf_clampf(v, jobs[j].z[base], jobs[j].z[base + 31]);
-    int i = 0;
-    for (int k = 1; k < 31; k++)
-        i += jobs[j].z[base + k] <= c ? 1 : 0;
-    return btf_transfer(c, jobs[j].z[base + i], jobs[j].slope[base + i], jobs[j].q[base + i],
-                        jobs[j].q[base + i + 1]);
+    float t = btf_knot_pos(v, jobs[j].origin[b], jobs[j].inv_h[b], jobs[j].tlo[b],
+                           jobs[j].thi[b]);
+    float fl = btf_knot_segment(floor(t));
+    int i = b * 16 + (int(fl) & 15); // the lower tail's -1 is entry 15
+    return btf_transfer(t, fl, jobs[j].q[i], jobs[j].dq[i], jobs[j].qmin[b], jobs[j].qmax[b]);
 }
 
-// The colour into the exemplar's box, as gamut_pixel (src/synth/marginal.c).
+// The colour into the exemplar's box, as btf_marginal_gamut (src/synth/marginal.c).
 void gamut(uint j, inout float c[3])
 {
     int inside = 1;
@@ -44,26 +42,17 @@ void gamut(uint j, inout float c[3])
         inside &= btf_in_box(c[k], jobs[j].lo[k], jobs[j].hi[k]);
     if (inside != 0)
         return;
-    float d[3];
+    float s = 1.0;
+    for (int k = 0; k < 3; k++) {
+        float sk = btf_gamut_share(c[k], jobs[j].mean[k], jobs[j].lo[k], jobs[j].hi[k],
+                                   jobs[j].nlo[k], jobs[j].nhi[k]);
+        s = sk < s ? sk : s;
+    }
+    s = s < 0.0 ? 0.0 : s;
     for (int k = 0; k < 3; k++) {
         precise float dk = c[k] - jobs[j].mean[k];
-        d[k] = dk;
+        c[k] = btf_clampf(btf_gamut_point(jobs[j].mean[k], s, dk), jobs[j].lo[k], jobs[j].hi[k]);
     }
-    float a = 0.0, b = 1.0;
-    for (int s = 0; s < BTF_GAMUT_STEPS; s++) {
-        float m = btf_midpoint(a, b);
-        int in_ = 1;
-        for (int k = 0; k < 3; k++)
-            in_ &= btf_in_box(btf_gamut_point(jobs[j].mean[k], m, d[k]), jobs[j].lo[k],
-                              jobs[j].hi[k]);
-        if (in_ != 0)
-            a = m;
-        else
-            b = m;
-    }
-    for (int k = 0; k < 3; k++)
-        c[k] = btf_clampf(btf_gamut_point(jobs[j].mean[k], a, d[k]), jobs[j].lo[k],
-                          jobs[j].hi[k]);
 }
 
 void main()

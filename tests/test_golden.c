@@ -112,9 +112,12 @@ static void cpu_synthesis_is_unchanged(void **state)
     /* --float: the hashes are of float pixels (the default output is half) */
     assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 256x256 --seed 7 --float --quiet "
                                    "-o %s", tu_cli(), model_path, dir), NULL), 0);
+    /* changed deliberately (issue 17): the marginal transfer on a uniform
+     * grid (14 segments plus the model's end segments) and the closed-form
+     * gamut step */
     static const uint64_t expect[6] = {
-        0xd9462994eafe41bbull, 0xcb57f3e84d900bc0ull, 0x9ad207a4690f60dbull,
-        0x8c35a25d8327cdddull, 0x5ccb5026f4f25d39ull, 0x4022ed8146305788ull,
+        0xded4b0a8acc8c1beull, 0x1b230c3814a3b858ull, 0xbc4f70c9edb99518ull,
+        0xdb50e0c99b23af3dull, 0xc04916f3a57dbae0ull, 0x8d224c60c9fd1496ull,
     };
     check_images(dir, expect, 6, 256, 256);
 }
@@ -166,9 +169,10 @@ static void gpu_synthesis_is_unchanged(void **state)
     snprintf(dir, sizeof dir, "%s", out);
     assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 200x130 --seed 3 --backend gpu --float "
                                    "--quiet -o %s", tu_cli(), model_path, dir), NULL), 0);
+    /* changed deliberately (issue 17), as the CPU's */
     static const uint64_t expect[6] = {
-        0xb87f7c34bfb0dd50ull, 0xed2aeddfbff45809ull, 0xe25d4c21fefe36f3ull,
-        0xad7d8d7c6a890193ull, 0x3a92638313865a01ull, 0xcbe0e8b3ff511f30ull,
+        0x12079c412f075727ull, 0xa02dbeafda092b72ull, 0x7b464a36858f2fc8ull,
+        0x1f6ef5e8c36a5126ull, 0x1efb721d0ed6e256ull, 0x83e059e532bd1958ull,
     };
     check_images(dir, expect, 6, 200, 130);
 }
@@ -178,9 +182,10 @@ static void gpu_synthesis_is_unchanged(void **state)
 static void tileable_synthesis_is_unchanged(void **state)
 {
     (void)state;
+    /* changed deliberately (issue 17), as above */
     static const uint64_t expect[6] = {
-        0x7356d78f6d1bd3faull, 0x68b6a1d4ded05edfull, 0x0f556b449f2dbb32ull,
-        0xe80acdf8d5ffb7e6ull, 0xaf2fe3fbe53e4513ull, 0x0a1b27530cb5dcbeull,
+        0x7fe5b70fa39e3daaull, 0xdff5a98d6f75e965ull, 0x96940f5d27824ad4ull,
+        0x3059ba57f01f0aeaull, 0x45374fe32d325c2cull, 0x24a271520a9daebeull,
     };
     const char *backends[2] = {"cpu", "gpu"};
     for (int b = 0; b < 2; b++) {

@@ -11,6 +11,8 @@
 #include "testutil.h"
 #include "synth/synth.h"
 
+#include "btf_shared.h"
+
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -38,6 +40,22 @@ static btf_subspace_model skewed_subspace(void)
     return sm;
 }
 
+/* The model's map through (z_j, q_j) at v, in double (the definition the
+ * table resamples). */
+static double model_map(const btf_marginal *mg, int b, double v)
+{
+    double z[BTF_MARGIN_KNOTS];
+    for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+        z[j] = (double)mg->synth_mean[b] + (double)mg->synth_sd[b] * btf_marginal_normal_knots[j];
+    if (v <= z[0])
+        return mg->quantile[b][0];
+    for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++)
+        if (v < z[j + 1])
+            return mg->quantile[b][j] + (v - z[j]) / (z[j + 1] - z[j]) *
+                                            ((double)mg->quantile[b][j + 1] - mg->quantile[b][j]);
+    return mg->quantile[b][BTF_MARGIN_KNOTS - 1];
+}
+
 static void transfer_is_monotone_and_bounded(void **state)
 {
     (void)state;
@@ -47,32 +65,141 @@ static void transfer_is_monotone_and_bounded(void **state)
     assert_true(t.on);
     enum { N = 20001 };
     static float v[N + 4], out[N + 4];
-    static int seg[N + 4];
     for (int i = 0; i < N; i++)
         v[i] = -6.0f + 12.0f * (float)i / (float)(N - 1);
     v[N] = -FLT_MAX, v[N + 1] = FLT_MAX, v[N + 2] = -0.0f, v[N + 3] = 1e30f;
     for (int b = 0; b < 3; b++) {
-        assert_int_equal(btf_marginal_row(&t, b, v, N + 4, out, seg), 0);
+        assert_int_equal(btf_marginal_row(&t, b, v, N + 4, out), 0);
         const float *q = sm.marginal.quantile[b];
+        double worst = 0;
         for (int i = 0; i < N + 4; i++) {
             assert_true(out[i] >= q[0] && out[i] <= q[BTF_MARGIN_KNOTS - 1]);
             if (i > 0 && i < N)
                 assert_true(out[i] >= out[i - 1]); /* monotone */
+            double e = fabs(out[i] - model_map(&sm.marginal, b, v[i]));
+            worst = e > worst ? e : worst;
         }
         assert_true(out[N] == q[0] && out[N + 1] == q[BTF_MARGIN_KNOTS - 1]);
-        /* at a knot, its quantile */
-        for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++) {
-            float z = t.z[b][j], o;
-            btf_marginal_row(&t, b, &z, 1, &o, seg);
-            assert_true(o == q[j]);
+        /* the resampled map stays close to the model's: within a few
+         * thousandths of the range here (it cuts the corners at the knots) */
+        print_message("band %d: largest difference from the model's map %.2e of a range %.3f\n",
+                      b, worst, (double)(q[BTF_MARGIN_KNOTS - 1] - q[0]));
+        assert_true(worst < 0.01 * (q[BTF_MARGIN_KNOTS - 1] - q[0]));
+        /* at a point of the grid, its table value */
+        for (int k = 0; k < BTF_MARGIN_SEGS; k++) {
+            float z = t.origin[b] + (float)k / t.inv_h[b], o, x = (z - t.origin[b]) * t.inv_h[b];
+            btf_marginal_row(&t, b, &z, 1, &o);
+            if (x == (float)k)
+                assert_true(o == t.q[b][k]);
         }
     }
     float inf = INFINITY;
-    assert_int_equal(btf_marginal_row(&t, 0, &inf, 1, out, seg), 1); /* reported */
+    assert_int_equal(btf_marginal_row(&t, 0, &inf, 1, out), 1); /* reported */
     /* no transfer: the table is off */
     sm.marginal.knots = 0;
     btf_marginal_table_make(&sm, &t);
     assert_false(t.on);
+}
+
+/* The colour step's AVX2 loop (8 pixels at a time, the gamut on vectors)
+ * gives the bits of its portable loop, hence of the shader, on colours
+ * inside and outside the box, extremes and zeros included; every colour
+ * ends in the box, on the segment from the mean towards where it was. */
+static void colour_step_paths_agree(void **state)
+{
+    (void)state;
+    btf_subspace_model sm = skewed_subspace();
+    const float basis[9] = {0.57735f, 0.57735f, 0.57735f, 0.70711f, 0.0f, -0.70711f,
+                            0.40825f, -0.8165f, 0.40825f};
+    memcpy(sm.basis, basis, sizeof basis);
+    sm.mean[0] = 0.3f, sm.mean[1] = 0.2f, sm.mean[2] = 0.1f;
+    for (int k = 0; k < 3; k++)
+        sm.marginal.rgb_lo[k] = 0.02f * (float)k, sm.marginal.rgb_hi[k] = 0.45f - 0.1f * (float)k;
+    btf_marginal_table t, tp;
+    btf_marginal_table_make(&sm, &t);
+    tp = t;
+    tp.portable = 1;
+    enum { W = 4099 };
+    static float b[3][W], ra[3 * W], rp[3 * W], plain[3 * W];
+    uint64_t r = 12345;
+    for (int i = 0; i < W; i++)
+        for (int k = 0; k < 3; k++) {
+            r = r * 6364136223846793005ull + 1442695040888963407ull;
+            b[k][i] = ((float)(r >> 40) / 16777216.0f - 0.5f) * (i % 7 == 0 ? 40.0f : 2.0f);
+        }
+    b[0][5] = -0.0f, b[1][6] = FLT_MAX, b[2][7] = -FLT_MAX, b[0][8] = 1e-30f;
+    int outside = 0;
+    assert_int_equal(btf_marginal_unmix_row(&sm, &t, b[0], b[1], b[2], W, ra), 0);
+    assert_int_equal(btf_marginal_unmix_row(&sm, &tp, b[0], b[1], b[2], W, rp), 0);
+    assert_memory_equal(ra, rp, sizeof ra);
+    /* the colours before the gamut: the transfer's bands unmixed */
+    for (int i = 0; i < W; i++) {
+        float v[3];
+        for (int k = 0; k < 3; k++)
+            btf_marginal_row(&t, k, &b[k][i], 1, &v[k]);
+        for (int k = 0; k < 3; k++)
+            plain[3 * i + k] = sm.mean[k] + basis[k] * v[0] + basis[3 + k] * v[1] +
+                               basis[6 + k] * v[2];
+    }
+    for (int i = 0; i < W; i++) {
+        int in = 1;
+        for (int k = 0; k < 3; k++) {
+            assert_true(ra[3 * i + k] >= t.lo[k] && ra[3 * i + k] <= t.hi[k]);
+            in &= plain[3 * i + k] >= t.lo[k] && plain[3 * i + k] <= t.hi[k];
+        }
+        if (in)
+            continue;
+        outside++;
+        /* moved along the line to the mean, to its border: the shares of
+         * the three channels agree where the mean is inside the box */
+        double s = -1;
+        for (int k = 0; k < 3; k++) {
+            double d = (double)plain[3 * i + k] - sm.mean[k];
+            if (fabs(d) < 1e-3)
+                continue;
+            double sk = ((double)ra[3 * i + k] - sm.mean[k]) / d;
+            assert_true(sk >= -1e-5 && sk <= 1.0 + 1e-5);
+            if (s >= 0)
+                assert_true(fabs(sk - s) < 1e-4);
+            s = sk;
+        }
+    }
+    print_message("%d of %d colours outside the box\n", outside, W);
+    assert_true(outside > W / 10);
+    /* Inf or NaN in a band, within the vector loop or its tail: reported on
+     * both paths, and btf_unmix_row then carries it into the colours, so
+     * that the finite test refuses the row (the GPU skips the transfer) */
+    const float odd[2] = {INFINITY, NAN};
+    const int at[3] = {100, W - 2, 0};
+    static float scratch[BTF_UNMIX_SCRATCH * W];
+    for (int o = 0; o < 2; o++)
+        for (int a = 0; a < 3; a++) {
+            float keep = b[a][at[a]];
+            b[a][at[a]] = odd[o];
+            assert_int_not_equal(btf_marginal_unmix_row(&sm, &t, b[0], b[1], b[2], W, ra), 0);
+            assert_int_not_equal(btf_marginal_unmix_row(&sm, &tp, b[0], b[1], b[2], W, rp), 0);
+            assert_int_not_equal(btf_unmix_row(&sm, &t, b[0], b[1], b[2], W, scratch, ra), 0);
+            btf_error e = {0};
+            assert_int_equal(btf_check_finite_row(ra, 3 * W, 0, 0, &e), BTF_E_NUMERIC);
+            b[a][at[a]] = keep;
+        }
+}
+
+/* btf_recip: within 1e-6 of 1/x over its range, and the same on both ends. */
+static void reciprocal_is_close(void **state)
+{
+    (void)state;
+    double worst = 0;
+    for (int e = -40; e < 40; e++)
+        for (int m = 0; m < 1000; m++) {
+            float x = ldexpf(1.0f + (float)m / 1000.0f, e);
+            if (x > BTF_RECIP_MAX)
+                continue;
+            double err = fabs((double)btf_recip(x) * x - 1.0);
+            worst = err > worst ? err : worst;
+        }
+    print_message("btf_recip: largest relative error %.2e\n", worst);
+    assert_true(worst < 1e-6);
 }
 
 /* The earth mover's distance of band b between two images of equal size
@@ -248,6 +375,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(transfer_is_monotone_and_bounded),
+        cmocka_unit_test(colour_step_paths_agree),
+        cmocka_unit_test(reciprocal_is_close),
         cmocka_unit_test(materials_keep_their_marginals),
         cmocka_unit_test(degenerate_images),
         cmocka_unit_test(file_keeps_the_transfer),

@@ -4,7 +4,10 @@
  * job runs exactly once whatever the thread count, worker indices stay
  * below btf_pool_workers, the first failure is returned with its message
  * and stops the batch, and progress comes from the calling thread only,
- * in order, ending at its `to` fraction.
+ * in order, ending at its `to` fraction. The relay (btf_relay_*): every job
+ * of every batch runs exactly once, while the caller works on, on worker 0
+ * or 1; the caller does the jobs a busy helper has not taken; the first
+ * failure stops the batch and comes back with its message.
  */
 #include "testutil.h"
 #include "core/core.h"
@@ -140,6 +143,100 @@ static void progress_from_caller(void **state)
     }
 }
 
+typedef struct relay_log {
+    atomic_int runs[JOBS];
+    atomic_int by_caller, fail_at;
+    pthread_t caller;
+    atomic_int slow; /* jobs on the helper sleep, so that the caller takes some */
+} relay_log;
+
+static btf_status relay_job(void *user, int j, int worker, btf_error *err)
+{
+    relay_log *l = user;
+    assert_true(j >= 0 && j < JOBS);
+    assert_true(worker == 0 || worker == 1);
+    int on_caller = pthread_equal(pthread_self(), l->caller) != 0;
+    assert_int_equal(worker == 0, on_caller);
+    atomic_fetch_add(&l->by_caller, on_caller);
+    if (!on_caller && atomic_load(&l->slow)) {
+        struct timespec ts = {0, 200000};
+        nanosleep(&ts, NULL);
+    }
+    atomic_fetch_add(&l->runs[j], 1);
+    if (j == atomic_load(&l->fail_at))
+        return btf_fail(err, BTF_E_IO, "job %d failed", j);
+    return BTF_OK;
+}
+
+static void relay_runs_every_job_once(void **state)
+{
+    (void)state;
+    static relay_log l;
+    memset(&l, 0, sizeof l);
+    atomic_store(&l.fail_at, -1);
+    l.caller = pthread_self();
+    btf_error e = {0};
+    btf_relay *r = btf_relay_start(relay_job, &l, &e);
+    assert_non_null(r);
+    /* batches of 0..40 jobs, the caller busy meanwhile or not */
+    int first = 0;
+    for (int n = 0; first + n <= JOBS && n <= 40; first += n, n++) {
+        btf_relay_post(r, first, n);
+        volatile double x = 0;
+        for (int i = 0; i < (n % 3) * 20000; i++)
+            x += i;
+        assert_int_equal(btf_relay_wait(r, &e), BTF_OK);
+        for (int j = first; j < first + n; j++)
+            assert_int_equal(atomic_load(&l.runs[j]), 1);
+    }
+    for (int j = first; j < JOBS; j++)
+        assert_int_equal(atomic_load(&l.runs[j]), 0);
+    /* a slow helper: the caller takes what it has not */
+    atomic_store(&l.slow, 1);
+    atomic_store(&l.by_caller, 0);
+    memset(l.runs, 0, sizeof l.runs);
+    btf_relay_post(r, 0, 200);
+    assert_int_equal(btf_relay_wait(r, &e), BTF_OK);
+    for (int j = 0; j < 200; j++)
+        assert_int_equal(atomic_load(&l.runs[j]), 1);
+    if (btf_cpu_count() > 1)
+        print_message("caller ran %d of 200 jobs beside a slow helper\n",
+                      atomic_load(&l.by_caller));
+    assert_true(atomic_load(&l.by_caller) > 0);
+    btf_relay_stop(r);
+}
+
+static void relay_first_failure(void **state)
+{
+    (void)state;
+    static relay_log l;
+    memset(&l, 0, sizeof l);
+    l.caller = pthread_self();
+    atomic_store(&l.fail_at, 57);
+    btf_error e = {0};
+    btf_relay *r = btf_relay_start(relay_job, &l, &e);
+    assert_non_null(r);
+    btf_relay_post(r, 0, 400);
+    assert_int_equal(btf_relay_wait(r, &e), BTF_E_IO);
+    assert_string_equal(e.msg, "job 57 failed");
+    int ran = 0;
+    for (int j = 0; j < 400; j++) {
+        assert_true(atomic_load(&l.runs[j]) <= 1);
+        ran += atomic_load(&l.runs[j]);
+    }
+    assert_true(ran < 400); /* the hand-out stopped */
+    /* the relay serves the next batch as before */
+    atomic_store(&l.fail_at, -1);
+    memset(l.runs, 0, sizeof l.runs);
+    btf_error e2 = {0};
+    btf_relay_post(r, 500, 10);
+    assert_int_equal(btf_relay_wait(r, &e2), BTF_OK);
+    for (int j = 500; j < 510; j++)
+        assert_int_equal(atomic_load(&l.runs[j]), 1);
+    btf_relay_stop(r);
+    btf_relay_stop(NULL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -147,6 +244,8 @@ int main(void)
         cmocka_unit_test(workers_clamped),
         cmocka_unit_test(first_failure_wins),
         cmocka_unit_test(progress_from_caller),
+        cmocka_unit_test(relay_runs_every_job_once),
+        cmocka_unit_test(relay_first_failure),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

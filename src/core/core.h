@@ -84,6 +84,24 @@ int btf_pool_workers(int threads, int jobs);
 btf_status btf_pool_run(int jobs, int threads, btf_pool_job_fn job, void *user,
                         const btf_pool_progress *progress, btf_error *err);
 
+/* A relay (core/pool.c): a helper thread that works through a batch of
+ * jobs while the calling thread goes on with its own work (a pipeline:
+ * synthesis colours one block of rows while it computes the next).
+ * btf_relay_post(r, first, count) hands jobs first .. first + count - 1
+ * over and returns at once; btf_relay_wait runs the jobs the helper has
+ * not taken yet on the calling thread, so a helper that gets no CPU holds
+ * nothing up, then returns when all are done, with the first failure's
+ * status and message (which stops the hand-out). Every post is followed by
+ * one wait before the next. job gets worker 0 on the calling thread, 1 on
+ * the helper; as with the pool, a job's output must depend on its index
+ * alone. With one CPU, or when no thread can be started, the wait runs
+ * them all. btf_relay_start returns NULL only when out of memory. */
+typedef struct btf_relay btf_relay;
+btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err);
+void btf_relay_post(btf_relay *r, int first, int count);
+btf_status btf_relay_wait(btf_relay *r, btf_error *err);
+void btf_relay_stop(btf_relay *r);
+
 /* Directions named in whole degrees (file names) match a known set within
  * this many degrees (core/directions.c, io/dataset.c). */
 #define BTF_DIR_NAME_TOLERANCE 0.75

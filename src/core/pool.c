@@ -16,11 +16,17 @@
  * Progress is reported from the calling thread only, so that a caller's
  * callback need not be thread-safe nor care which thread it runs on; after
  * the last job the final fraction is always reported once.
+ *
+ * The relay (btf_relay_*) is the other shape of parallel work: a pipeline
+ * of two stages, the caller's and one long-lived helper thread's, handing
+ * over a job at a time. A batch per hand-over would start and join a
+ * thread each time (tens of microseconds, hundreds of times per image).
  */
 #include "core/core.h"
 
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stdlib.h>
 
 typedef struct pool_run {
     int jobs;
@@ -124,4 +130,107 @@ btf_status btf_pool_run(int jobs, int threads, btf_pool_job_fn job, void *user,
     if (progress && progress->fn)
         report(&r, jobs);
     return BTF_OK;
+}
+
+struct btf_relay {
+    btf_pool_job_fn job;
+    void *user;
+    int threaded;           /* a helper thread takes jobs too */
+    pthread_t tid;
+    pthread_mutex_t lock;   /* guards what follows */
+    pthread_cond_t cond;    /* a new batch (for the helper), a batch done (for the caller) */
+    int first, count;       /* the batch: jobs first .. first + count - 1 */
+    int next, done, stop;   /* jobs handed out, jobs finished */
+    btf_status status;      /* the batch's first failure */
+    btf_error error;
+};
+
+/* Runs jobs of the batch until none is left; called and returns with the
+ * lock held. A job runs unlocked; a failure stops the hand-out. */
+static void relay_run(btf_relay *r, int worker)
+{
+    while (r->next < r->count) {
+        int j = r->first + r->next++;
+        pthread_mutex_unlock(&r->lock);
+        btf_error e = {0};
+        btf_status rc = r->job(r->user, j, worker, &e);
+        pthread_mutex_lock(&r->lock);
+        if (rc != BTF_OK && r->status == BTF_OK) {
+            r->status = rc;
+            r->error = e;
+            r->count = r->next; /* the jobs handed out still finish */
+        }
+        if (++r->done == r->count)
+            pthread_cond_broadcast(&r->cond);
+    }
+}
+
+static void *relay_main(void *arg)
+{
+    btf_relay *r = arg;
+    pthread_mutex_lock(&r->lock);
+    for (;;) {
+        while (r->next >= r->count && !r->stop)
+            pthread_cond_wait(&r->cond, &r->lock);
+        if (r->next >= r->count)
+            break; /* stopped */
+        relay_run(r, 1);
+    }
+    pthread_mutex_unlock(&r->lock);
+    return NULL;
+}
+
+btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err)
+{
+    btf_relay *r = btf_calloc(1, sizeof *r, err);
+    if (!r)
+        return NULL;
+    r->job = job;
+    r->user = user;
+    pthread_mutex_init(&r->lock, NULL);
+    pthread_cond_init(&r->cond, NULL);
+    /* one CPU: a second thread would only take turns with the caller */
+    r->threaded = btf_cpu_count() > 1 && pthread_create(&r->tid, NULL, relay_main, r) == 0;
+    return r;
+}
+
+void btf_relay_post(btf_relay *r, int first, int count)
+{
+    pthread_mutex_lock(&r->lock);
+    r->first = first;
+    r->count = count > 0 ? count : 0;
+    r->next = r->done = 0;
+    r->status = BTF_OK;
+    if (r->threaded)
+        pthread_cond_broadcast(&r->cond);
+    pthread_mutex_unlock(&r->lock);
+}
+
+btf_status btf_relay_wait(btf_relay *r, btf_error *err)
+{
+    pthread_mutex_lock(&r->lock);
+    relay_run(r, 0); /* what the helper has not taken yet, the caller does */
+    while (r->done < r->count)
+        pthread_cond_wait(&r->cond, &r->lock);
+    btf_status rc = r->status;
+    if (rc && err)
+        *err = r->error;
+    pthread_mutex_unlock(&r->lock);
+    return rc;
+}
+
+void btf_relay_stop(btf_relay *r)
+{
+    if (!r)
+        return;
+    if (r->threaded) {
+        pthread_mutex_lock(&r->lock);
+        r->stop = 1;
+        pthread_cond_broadcast(&r->cond);
+        pthread_mutex_unlock(&r->lock);
+        pthread_join(r->tid, NULL);
+    }
+    pthread_cond_destroy(&r->cond);
+    pthread_mutex_destroy(&r->lock);
+    free(r);
 }

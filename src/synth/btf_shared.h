@@ -111,38 +111,68 @@ BTF_FN float btf_unmix(float mean, float b0, float b1, float b2, float v0, float
     return s2;
 }
 
-/* The marginal transfer (docs/synthesis.md, "Marginals"), per band: v
- * clamped to the first and last knot [z0, zn], then on the segment i whose
- * knot z <= v (found by counting knots, src/synth/marginal.c and
- * gpu/synth_unmix.comp alike), q + (v - z) * slope, clamped to [q, q_next].
- * Every step is monotone in v and segment i ends at q_next where segment
- * i + 1 starts, so the map is monotone; the clamps are written as
- * comparisons (not min/max, whose signed zeros differ between C, AVX2 and
- * GLSL). Only sub, mul, add and compares: exact in Vulkan as in C. */
+/* The marginal transfer (docs/synthesis.md, "Marginals"), per band: a
+ * monotone piecewise-linear map on BTF_MARGIN_SEGS segments of equal width
+ * between the band's second and last-but-one knot, and one segment beyond
+ * each (the model's first and last segments), so that the segment of v is
+ * found by a subtraction, a multiplication and a floor instead of a search
+ * (the colour step runs beside the CAR fields and must keep up). v's place
+ * on the grid, t = (v - origin) * inv_h clamped to [tlo, thi] (where the
+ * end knots fall); its segment fl = floor(t) clamped to [-1, SEGS]: -1 and
+ * SEGS are the tails, whose f runs past [0, 1]; entry fl & 15 of the
+ * band's 16-entry table (the lower tail is entry 15), so that the CPU
+ * fetches it with two in-register permutes; f = t - fl; the value
+ * q + f * dq clamped to the exemplar's range [qmin, qmax]. The table
+ * (src/synth/marginal.c) is made on the host so that q + dq does not pass
+ * the next segment's q: every step is monotone under round-to-nearest and
+ * a segment ends at or below where the next starts, so the map is
+ * monotone. The clamps are comparisons (not min/max, whose signed zeros
+ * differ between C, AVX2 and GLSL). Only sub, mul, add, floor and
+ * compares: exact in Vulkan as in C. */
+#define BTF_MARGIN_SEGS 14
+#define BTF_MARGIN_TABLE 16
+
 BTF_FN float btf_clampf(float v, float lo, float hi)
 {
     float a = v < lo ? lo : v;
     return a > hi ? hi : a;
 }
 
-BTF_FN float btf_transfer(float v, float z, float slope, float q, float q_next)
+BTF_FN float btf_knot_pos(float v, float origin, float inv_h, float tlo, float thi)
 {
-    BTF_PRECISE float d = v - z;
-    BTF_PRECISE float p = d * slope;
+    BTF_PRECISE float d = v - origin;
+    BTF_PRECISE float t = d * inv_h;
+    return btf_clampf(t, tlo, thi);
+}
+
+/* fl: floor(t) (floorf / floor / _mm256_floor_ps: exact everywhere),
+ * clamped by btf_knot_segment. */
+BTF_FN float btf_knot_segment(float fl)
+{
+    return btf_clampf(fl, -1.0f, 14.0f); /* BTF_MARGIN_SEGS */
+}
+
+BTF_FN float btf_transfer(float t, float fl, float q, float dq, float qmin, float qmax)
+{
+    BTF_PRECISE float f = t - fl;
+    BTF_PRECISE float p = f * dq;
     BTF_PRECISE float s = q + p;
-    return btf_clampf(s, q, q_next);
+    return btf_clampf(s, qmin, qmax);
 }
 
 /* Gamut (docs/synthesis.md, "Marginals"): a colour outside the exemplar's
  * RGB box is moved towards the subspace's mean colour, c(t) = mean + t d
- * with d = rgb - mean, to the largest t in [0, 1] found by
- * BTF_GAMUT_STEPS halvings (division-free, so exact on every GPU) that
- * keeps all three channels in the box; then each channel is clamped to the
- * box (which only matters when the mean itself is outside it). Moving along
- * d keeps the colour on the exemplar's colour line or plane, where a
- * per-channel clamp alone would leave it (new colours in a weak band). */
-#define BTF_GAMUT_STEPS 12
-
+ * with d = rgb - mean, to the largest t in [0, 1] that keeps all three
+ * channels in the box, t = min over the channels outside of
+ * (bound - mean) / |d| (bound: the side it crossed); then each channel is
+ * clamped to the box (which absorbs the rounding of t and matters only
+ * when the mean itself is outside it). Moving along d keeps the colour on
+ * the exemplar's colour line or plane, where a per-channel clamp alone
+ * would leave it (new colours in a weak band). A closed form where 12
+ * halvings were (a tenth of the work, and branch-free, so the CPU runs it
+ * on 8 pixels at a time). The quotient comes from btf_recip, not a
+ * division: Vulkan's division is not correctly rounded, so the CPU and
+ * the GPU would differ. */
 BTF_FN float btf_gamut_point(float mean, float t, float d)
 {
     BTF_PRECISE float p = t * d;
@@ -150,16 +180,47 @@ BTF_FN float btf_gamut_point(float mean, float t, float d)
     return c;
 }
 
-BTF_FN float btf_midpoint(float a, float b)
-{
-    BTF_PRECISE float s = a + b;
-    BTF_PRECISE float m = s * 0.5f;
-    return m;
-}
-
 BTF_FN int btf_in_box(float c, float lo, float hi)
 {
     return (c >= lo && c <= hi) ? 1 : 0;
+}
+
+/* 1 / x for x in [2^-40, 2^40] (the caller clamps), without a division:
+ * a first guess from the bits (within 12.5 %), then three Newton steps
+ * r (2 - x r), each squaring the relative error (to about 1e-7). Integer
+ * and float ops only, so the same bits in C, AVX2 and GLSL; no subnormal
+ * on the way (flushed on some GPUs). */
+#define BTF_RECIP_MIN 9.094947017729282e-13f /* 2^-40 */
+#define BTF_RECIP_MAX 1099511627776.0f        /* 2^40 */
+
+BTF_FN float btf_recip_step(float x, float r)
+{
+    BTF_PRECISE float e = x * r;
+    BTF_PRECISE float n = 2.0f - e;
+    BTF_PRECISE float s = r * n;
+    return s;
+}
+
+BTF_FN float btf_recip(float x)
+{
+    float r = btf_bits_float(0x7EF311C7u - btf_float_bits(x));
+    r = btf_recip_step(x, r);
+    r = btf_recip_step(x, r);
+    return btf_recip_step(x, r);
+}
+
+/* The largest share of d = c - mean that channel c allows: 1 inside
+ * [lo, hi]; above hi, nhi / |d| (nhi = hi - mean); below lo, nlo / |d|
+ * (nlo = mean - lo). nhi and nlo come from the host's table. */
+BTF_FN float btf_gamut_share(float c, float mean, float lo, float hi, float nlo, float nhi)
+{
+    BTF_PRECISE float d = c - mean;
+    BTF_PRECISE float nd = 0.0f - d;
+    float ad = d < 0.0f ? nd : d;
+    float r = btf_recip(btf_clampf(ad, BTF_RECIP_MIN, BTF_RECIP_MAX));
+    float num = c > hi ? nhi : nlo;
+    BTF_PRECISE float s = num * r;
+    return (c > hi || c < lo) ? s : 1.0f;
 }
 
 #if !defined(BTF_GLSL) && !defined(VULKAN) && !defined(GL_core_profile) && !defined(GL_ES)

@@ -105,7 +105,22 @@ static void up_rows(synth_band *sb, int nb, int l, int i, const float **out)
         out[b] = sb[b].level[l].up_rows[slot];
 }
 
+static void gauss_rows(synth_band *sb, int nb, int l, int y, const float **out,
+                       float *const *dst);
+
 void synth_gauss_rows(synth_band *sb, int nb, int l, int y, const float **out)
+{
+    gauss_rows(sb, nb, l, y, out, NULL);
+}
+
+void synth_gauss_rows_to(synth_band *sb, int nb, int y, float *const *dst)
+{
+    const float *out[3];
+    gauss_rows(sb, nb, 0, y, out, dst);
+}
+
+static void gauss_rows(synth_band *sb, int nb, int l, int y, const float **out,
+                       float *const *dst)
 {
     const float *f[3];
     field_rows(sb, nb, l, y, f);
@@ -124,13 +139,13 @@ void synth_gauss_rows(synth_band *sb, int nb, int l, int y, const float **out)
     for (int n = 0; n < nb; n++) {
         synth_level *lv = &sb[n].level[l];
         int w = lv->x1 - lv->x0;
-        float mean = lv->field.band->mean;
+        float mean = lv->field.band->mean, *g = dst ? dst[n] : lv->gauss_row;
         if (last)
-            btf_level_sum_row(w, mean, f[n], NULL, NULL, NULL, lv->gauss_row);
+            btf_level_sum_row(w, mean, f[n], NULL, NULL, NULL, g);
         else if (y & 1)
-            btf_level_sum_row(w, mean, f[n], NULL, b[n], c[n], lv->gauss_row);
+            btf_level_sum_row(w, mean, f[n], NULL, b[n], c[n], g);
         else
-            btf_level_sum_row(w, mean, f[n], a[n], b[n], c[n], lv->gauss_row);
-        out[n] = lv->gauss_row;
+            btf_level_sum_row(w, mean, f[n], a[n], b[n], c[n], g);
+        out[n] = g;
     }
 }

@@ -6,8 +6,7 @@
  * btf_unmix of src/synth/btf_shared.h, as in the GPU shader
  * gpu/synth_unmix.comp; the AVX2 loop performs its operations in the same
  * order, so every path gives the same bits. With a marginal transfer
- * (src/synth/marginal.c) the bands go through it first and the RGB result
- * is clamped to the exemplar's box after.
+ * the whole colour step is src/synth/marginal.c's (btf_marginal_unmix_row).
  */
 #include "core/core.h"
 #include "synth/synth.h"
@@ -135,26 +134,6 @@ static int unmix_avx2(const btf_subspace_model *sm, const float *b0, const float
 #pragma GCC pop_options
 #endif
 
-/* btf_unmix per channel into three planes (no interleave): the gamut
- * works on them. */
-SYNTH_AVX2_CLONES
-static int unmix_planes(const btf_subspace_model *sm, const float *b0, const float *b1,
-                        const float *b2, int width, float *plane)
-{
-    uint32_t bad = 0;
-    for (int k = 0; k < 3; k++) {
-        float *p = plane + (size_t)k * width;
-        float mean = sm->mean[k], c0 = sm->basis[k], c1 = sm->basis[3 + k];
-        float c2 = sm->basis[6 + k];
-        for (int x = 0; x < width; x++) {
-            float v = btf_unmix(mean, c0, c1, c2, b0[x], b1[x], b2[x]);
-            bad |= nonfinite_bits(v);
-            p[x] = v;
-        }
-    }
-    return bad != 0;
-}
-
 static int unmix_plain(const btf_subspace_model *sm, const float *b0, const float *b1,
                        const float *b2, int width, float *plane, float *row)
 {
@@ -170,18 +149,12 @@ int btf_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t, con
 {
     if (!t || !t->on)
         return unmix_plain(sm, b0, b1, b2, width, scratch, row);
-    /* scratch: the three transferred bands, the unmix planes, the segments */
-    float *tb = scratch + 3 * (size_t)width, *plane = scratch;
-    int *seg = (int *)(scratch + 6 * (size_t)width);
-    const float *in[3] = {b0, b1, b2};
-    int bad = 0;
-    for (int b = 0; b < 3; b++)
-        bad |= btf_marginal_row(t, b, in[b], width, tb + (size_t)b * width, seg);
-    bad |= unmix_planes(sm, tb, tb + width, tb + 2 * (size_t)width, width, plane);
-    float *p1 = plane + width, *p2 = plane + 2 * (size_t)width;
-    btf_marginal_gamut_planes(t, sm->mean, plane, p1, p2, width);
-    interleave3(plane, p1, p2, width, row);
-    return bad;
+    if (!btf_marginal_unmix_row(sm, t, b0, b1, b2, width, row))
+        return 0;
+    /* A band is Inf or NaN: the row without the transfer, which carries it
+     * into the colours, so that the caller's finite test refuses the image
+     * (the GPU skips the transfer of such a pixel, gpu/synth_unmix.comp). */
+    return unmix_plain(sm, b0, b1, b2, width, scratch, row);
 }
 
 btf_status btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err)

@@ -6,14 +6,23 @@
  * undone each band v goes through a monotone piecewise-linear map from the
  * synthesised band's distribution onto the exemplar's quantiles, and the
  * RGB result is brought into the exemplar's RGB box (btf_shared.h,
- * "Gamut"; src/synth/colour.c).
+ * "Gamut"). btf_marginal_unmix_row does the whole colour step of a row.
  *
- * Knots: z_j = synth_mean + synth_sd * N_j, N_j the standard normal quantile
- * of p_j = j / 31 for j = 1..30, and of 1/4096 and 1 - 1/4096 for the first
- * and last knot, which carry the exemplar's minimum and maximum. Below z_0
- * and above z_31 the map is flat (the exemplar's range). The table is made
- * once per synthesis on the host, in double rounded to float, for the CPU
- * and the GPU (gpu/synth_gpu.c) alike: both then run btf_transfer of
+ * The model keeps, per band, the exemplar's quantiles at p_j = j / 31 for
+ * j = 1..30, and at 1/4096 and 1 - 1/4096 for the first and last; their
+ * knots are z_j = synth_mean + synth_sd * N_j, N_j the standard normal
+ * quantile of p_j: the map through (z_j, q_j), flat beyond the end knots.
+ * Synthesis evaluates that map on a grid made for speed: BTF_MARGIN_SEGS
+ * segments of equal width from z_1 to z_30, where it is resampled (linear
+ * between the grid's points, which cuts the corners of the model's map at
+ * its knots by a small fraction of the range), and the model's own first
+ * and last segments beyond (btf_shared.h). The segment of a value is then
+ * found by one multiply and a floor, not by comparing it with 30 knots,
+ * and its numbers by two in-register permutes of 16-entry tables: the
+ * transfer cost as much as the CAR fields with the search, and still a
+ * third of them with 32 segments (the lookups dominate).
+ * The table is made on the host, in double rounded to float, for the CPU
+ * and the GPU (gpu/synth_gpu.c) alike: both then run the formulas of
  * btf_shared.h on the same floats and agree bit for bit.
  */
 #include "core/core.h"
@@ -22,8 +31,13 @@
 #include "btf_shared.h"
 
 #include <float.h>
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
+
+_Static_assert(BTF_MARGIN_SEGS == 14 && BTF_MARGIN_TABLE == 16 &&
+                   sizeof(((btf_marginal_table *)0)->q[0]) == BTF_MARGIN_TABLE * sizeof(float),
+               "btf_knot_segment clamps to 14; the table and the AVX2 lookups hold 16");
 
 /* Phi^-1(p_j), made exactly antisymmetric (statistics.NormalDist). */
 const double btf_marginal_normal_knots[BTF_MARGIN_KNOTS] = {
@@ -36,36 +50,93 @@ const double btf_marginal_normal_knots[BTF_MARGIN_KNOTS] = {
     0.75272879425816974, 0.86489435868528297, 0.98916862734063515, 1.1309776082451579,
     1.3001534333634233, 1.5179291595942783, 1.8485962885014087, 3.4871041041144313};
 
+/* The model's map of one band at v (double): linear between its knots,
+ * flat beyond the ends. */
+static double model_map(const double *z, const float *q, double v)
+{
+    if (!(v > z[0]))
+        return q[0];
+    if (v >= z[BTF_MARGIN_KNOTS - 1])
+        return q[BTF_MARGIN_KNOTS - 1];
+    int j = 0;
+    while (j + 2 < BTF_MARGIN_KNOTS && z[j + 1] <= v)
+        j++;
+    double dz = z[j + 1] - z[j];
+    double f = dz > 0 ? (v - z[j]) / dz : 1.0;
+    return (double)q[j] + f * ((double)q[j + 1] - q[j]);
+}
+
+/* The largest rise dq <= want (and >= 0) with q + f * dq <= next for every
+ * f <= 1, in float: q + dq itself may round past next. */
+static float rise(float q, float want, float next)
+{
+    float dq = want;
+    while (dq > 0.0f && q + dq > next)
+        dq = nextafterf(dq, 0.0f);
+    return dq > 0.0f ? dq : 0.0f;
+}
+
 void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t)
 {
+    enum { S = BTF_MARGIN_SEGS, LOWER = BTF_MARGIN_TABLE - 1, LAST = BTF_MARGIN_KNOTS - 1 };
     memset(t, 0, sizeof *t);
     const btf_marginal *mg = &sm->marginal;
     if (mg->knots != BTF_MARGIN_KNOTS)
         return; /* no transfer: identity, no clamp (format 1.0, 1.1) */
     t->on = 1;
     for (int b = 0; b < 3; b++) {
-        for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
-            t->z[b][j] = (float)((double)mg->synth_mean[b] +
-                                 (double)mg->synth_sd[b] * btf_marginal_normal_knots[j]);
-            t->q[b][j] = mg->quantile[b][j];
+        const float *q = mg->quantile[b];
+        double z[BTF_MARGIN_KNOTS];
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+            z[j] = (double)mg->synth_mean[b] + (double)mg->synth_sd[b] * btf_marginal_normal_knots[j];
+        t->qmin[b] = q[0], t->qmax[b] = q[LAST];
+        double ih = (double)S / (z[LAST - 1] - z[1]);
+        if (!(ih > 0 && ih <= 1e30)) {
+            /* sd 0 (or below 1e-30 of the range): every v on one point, the
+             * exemplar's median; t is 0 whatever v is */
+            for (int k = 0; k < BTF_MARGIN_TABLE; k++)
+                t->q[b][k] = (float)(0.5 * ((double)q[15] + q[16]));
+            continue;
         }
-        for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++) {
-            /* a zero-width segment is never entered (no v has z_j <= v <
-             * z_j+1); a slope past the float range is capped, not Inf, so
-             * that (v - z) * slope is never 0 * Inf */
-            double dz = (double)t->z[b][j + 1] - t->z[b][j];
-            double s = dz > 0 ? ((double)t->q[b][j + 1] - t->q[b][j]) / dz : 0.0;
-            t->slope[b][j] = s < FLT_MAX ? (float)s : FLT_MAX;
+        float o = (float)z[1], h = (float)ih;
+        t->origin[b] = o, t->inv_h[b] = h;
+        /* where the end knots fall, by the very float operations of
+         * btf_knot_pos */
+        float z0 = (float)z[0], zn = (float)z[LAST];
+        float tlo = (z0 - o) * h, thi = (zn - o) * h;
+        tlo = tlo < -1.0f ? tlo : -1.0f, thi = thi > (float)S ? thi : (float)S;
+        t->tlo[b] = tlo, t->thi[b] = thi;
+        /* grid point k (t = k) at the model's map; the tails continue the
+         * model's first and last segments */
+        float val[S + 1];
+        for (int k = 0; k <= S; k++)
+            val[k] = (float)model_map(z, q, (double)o + k / (double)h);
+        for (int k = 0; k < S; k++) {
+            t->q[b][k] = val[k];
+            t->dq[b][k] = rise(val[k], val[k + 1] - val[k], val[k + 1]);
         }
+        /* upper tail: from val[S] at t = S to q_last at thi */
+        t->q[b][S] = val[S];
+        t->dq[b][S] = thi > (float)S ? (float)(((double)q[LAST] - val[S]) / ((double)thi - S))
+                                     : 0.0f;
+        if (!(t->dq[b][S] >= 0.0f))
+            t->dq[b][S] = 0.0f;
+        /* lower tail: f = t + 1 in [tlo + 1, 1), from q_0 at tlo up to
+         * val[0] at t = 0 */
+        double sl = tlo < -1.0f ? ((double)val[0] - q[0]) / (-(double)tlo) : 0.0;
+        float sf = sl > 0 && sl < FLT_MAX ? (float)sl : 0.0f;
+        float ql = (float)((double)val[0] - sf);
+        t->q[b][LOWER] = ql;
+        t->dq[b][LOWER] = rise(ql, sf, val[0]);
     }
     for (int k = 0; k < 3; k++) {
+        t->mean[k] = sm->mean[k];
         t->lo[k] = mg->rgb_lo[k];
         t->hi[k] = mg->rgb_hi[k];
+        t->nlo[k] = (float)((double)sm->mean[k] - mg->rgb_lo[k]);
+        t->nhi[k] = (float)((double)mg->rgb_hi[k] - sm->mean[k]);
     }
 }
-
-static int marginal_row_portable(const btf_marginal_table *t, int band, const float *v,
-                                 int width, float *out, int *seg);
 
 static inline uint32_t nonfinite(float v)
 {
@@ -74,167 +145,231 @@ static inline uint32_t nonfinite(float v)
     return (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
 }
 
-#ifdef SYNTH_HAVE_AVX2
-#pragma GCC push_options
-#pragma GCC target("avx2")
-#include <immintrin.h>
-
-/* btf_marginal_row 8 values at a time: the same count of knots, exact
- * gathers of the segment's numbers, btf_transfer's sub, mul, add (no FMA)
- * and its clamps as max(lo, v) and min(hi, a), which are the comparisons
- * `v < lo ? lo : v` and `a > hi ? hi : a` lane by lane, signed zeros
- * included. The last width % 8 values go through the portable loop. */
-/* table[i] for 32-entry tables held in four vectors: four in-register
- * permutes and three blends instead of a gather (a gather of 8 costs about
- * as much as the whole transfer did); the same value is fetched, so the
- * bits do not change. */
-static inline __m256 lookup32(const __m256 tab[4], __m256i i)
+/* The transfer of band b at v (finite or not: the caller tests), written
+ * without branches so that the compiler can keep a row's loop free of
+ * mispredictions (a branchy version took 8 ns per value): floor(x) from a
+ * conversion to int (floorf is a call into libm on plain x86-64), exact as
+ * x is clamped to [tlo, thi], small; NaN taken as tlo for the conversion
+ * (the result is NaN all the same); the entry fl & 15 (the lower tail's
+ * -1 is 15). */
+static inline float transfer1(const btf_marginal_table *t, int b, float v)
 {
-    __m256 a = _mm256_permutevar8x32_ps(tab[0], i), b = _mm256_permutevar8x32_ps(tab[1], i);
-    __m256 c = _mm256_permutevar8x32_ps(tab[2], i), d = _mm256_permutevar8x32_ps(tab[3], i);
-    __m256i hi = _mm256_srli_epi32(i, 3); /* which vector: 0..3 */
-    __m256 m0 = _mm256_castsi256_ps(_mm256_slli_epi32(hi, 31));
-    __m256 m1 = _mm256_castsi256_ps(_mm256_slli_epi32(hi, 30));
-    return _mm256_blendv_ps(_mm256_blendv_ps(a, b, m0), _mm256_blendv_ps(c, d, m0), m1);
+    float x = btf_knot_pos(v, t->origin[b], t->inv_h[b], t->tlo[b], t->thi[b]);
+    float xs = x > t->tlo[b] ? x : t->tlo[b]; /* x, or tlo for NaN (a maxss) */
+    float tr = (float)(int)xs;
+    float fl = btf_knot_segment(tr - (float)(tr > xs)); /* no branch to mispredict */
+    unsigned i = (unsigned)(int)fl & 15u;
+    return btf_transfer(x, fl, t->q[b][i], t->dq[b][i], t->qmin[b], t->qmax[b]);
 }
 
-static void load32(const float *src, __m256 tab[4])
+int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width, float *out)
 {
-    for (int k = 0; k < 4; k++)
-        tab[k] = _mm256_loadu_ps(src + 8 * k);
-}
-
-static int marginal_row_avx2(const btf_marginal_table *t, int band, const float *v, int width,
-                             float *out, int *seg, int *tail)
-{
-    const float *z = t->z[band], *q = t->q[band], *sl = t->slope[band];
-    __m256 z0 = _mm256_set1_ps(z[0]), zn = _mm256_set1_ps(z[BTF_MARGIN_KNOTS - 1]);
-    __m256 zj[BTF_MARGIN_KNOTS];
-    for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
-        zj[j] = _mm256_set1_ps(z[j]);
-    /* q shifted by one: q1[i] = q[i + 1] (the segment index is at most 30) */
-    float q1s[BTF_MARGIN_KNOTS];
-    for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++)
-        q1s[j] = q[j + 1];
-    q1s[BTF_MARGIN_KNOTS - 1] = q[BTF_MARGIN_KNOTS - 1];
-    __m256 tz[4], ts[4], tq[4], tq1[4];
-    load32(z, tz);
-    load32(sl, ts);
-    load32(q, tq);
-    load32(q1s, tq1);
-    const __m256i expo = _mm256_set1_epi32(0x7F800000);
-    __m256i bad = _mm256_setzero_si256();
-    int x = 0;
-    for (; x + 8 <= width; x += 8) {
-        __m256 in = _mm256_loadu_ps(v + x);
-        __m256i e = _mm256_and_si256(_mm256_castps_si256(in), expo);
-        bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(e, expo));
-        __m256 c = _mm256_min_ps(zn, _mm256_max_ps(z0, in));
-        /* the count of interior knots at or below c, in two independent
-         * halves (a true compare is -1) */
-        __m256i i0 = _mm256_setzero_si256(), i1 = _mm256_setzero_si256();
-        for (int j = 1; j + 1 < BTF_MARGIN_KNOTS; j += 2) {
-            i0 = _mm256_sub_epi32(i0, _mm256_castps_si256(_mm256_cmp_ps(zj[j], c, _CMP_LE_OQ)));
-            if (j + 2 < BTF_MARGIN_KNOTS)
-                i1 = _mm256_sub_epi32(i1, _mm256_castps_si256(
-                                              _mm256_cmp_ps(zj[j + 1], c, _CMP_LE_OQ)));
-        }
-        __m256i i = _mm256_add_epi32(i0, i1);
-        __m256 zi = lookup32(tz, i), si = lookup32(ts, i);
-        __m256 qi = lookup32(tq, i), qn = lookup32(tq1, i);
-        __m256 r = _mm256_add_ps(qi, _mm256_mul_ps(_mm256_sub_ps(c, zi), si));
-        _mm256_storeu_ps(out + x, _mm256_min_ps(qn, _mm256_max_ps(qi, r)));
-    }
-    *tail = x;
-    (void)seg;
-    return !_mm256_testz_si256(bad, bad);
-}
-#pragma GCC pop_options
-#endif
-
-/* The segment index is a count of interior knots at or below v: the same
- * index a search would give, in loops over the row the compiler
- * vectorises (by hand with AVX2). */
-int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width,
-                     float *out, int *seg)
-{
-#ifdef SYNTH_HAVE_AVX2
-    if (__builtin_cpu_supports("avx2")) {
-        int done = 0, bad = marginal_row_avx2(t, band, v, width, out, seg, &done);
-        if (done == width)
-            return bad;
-        return marginal_row_portable(t, band, v + done, width - done, out + done, seg) | bad;
-    }
-#endif
-    return marginal_row_portable(t, band, v, width, out, seg);
-}
-
-static int marginal_row_portable(const btf_marginal_table *t, int band, const float *v,
-                                 int width, float *out, int *seg)
-{
-    const float *z = t->z[band], *q = t->q[band], *sl = t->slope[band];
-    float z0 = z[0], zn = z[BTF_MARGIN_KNOTS - 1];
     uint32_t bad = 0;
     for (int x = 0; x < width; x++) {
         bad |= nonfinite(v[x]);
-        out[x] = btf_clampf(v[x], z0, zn);
-        seg[x] = 0;
-    }
-    for (int j = 1; j + 1 < BTF_MARGIN_KNOTS; j++) {
-        float zj = z[j];
-        for (int x = 0; x < width; x++)
-            seg[x] += zj <= out[x];
-    }
-    for (int x = 0; x < width; x++) {
-        int i = seg[x];
-        out[x] = btf_transfer(out[x], z[i], sl[i], q[i], q[i + 1]);
+        out[x] = transfer1(t, band, v[x]);
     }
     return bad != 0;
 }
 
 /* One colour into the box (btf_shared.h, "Gamut"): as gpu/synth_unmix.comp. */
-static void gamut_pixel(const btf_marginal_table *t, const float mean[3], float *c)
+void btf_marginal_gamut(const btf_marginal_table *t, float c[3])
 {
     if (btf_in_box(c[0], t->lo[0], t->hi[0]) && btf_in_box(c[1], t->lo[1], t->hi[1]) &&
         btf_in_box(c[2], t->lo[2], t->hi[2]))
         return;
-    float d[3];
-    for (int k = 0; k < 3; k++)
-        d[k] = c[k] - mean[k]; /* one rounding (no contraction), as the shader's precise */
-    float a = 0.0f, b = 1.0f;
-    for (int s = 0; s < BTF_GAMUT_STEPS; s++) {
-        float m = btf_midpoint(a, b);
-        int in = 1;
-        for (int k = 0; k < 3; k++)
-            in &= btf_in_box(btf_gamut_point(mean[k], m, d[k]), t->lo[k], t->hi[k]);
-        if (in)
-            a = m;
-        else
-            b = m;
+    float s = 1.0f;
+    for (int k = 0; k < 3; k++) {
+        float sk = btf_gamut_share(c[k], t->mean[k], t->lo[k], t->hi[k], t->nlo[k], t->nhi[k]);
+        s = sk < s ? sk : s;
     }
-    for (int k = 0; k < 3; k++)
-        c[k] = btf_clampf(btf_gamut_point(mean[k], a, d[k]), t->lo[k], t->hi[k]);
+    s = s < 0.0f ? 0.0f : s;
+    for (int k = 0; k < 3; k++) {
+        float d = c[k] - t->mean[k]; /* one rounding (no contraction), as the shader's precise */
+        c[k] = btf_clampf(btf_gamut_point(t->mean[k], s, d), t->lo[k], t->hi[k]);
+    }
 }
 
-/* Planar: a vectorised test of the box, the rare colours outside it one by
- * one (gamut_pixel). */
-SYNTH_AVX2_CLONES
-void btf_marginal_gamut_planes(const btf_marginal_table *t, const float mean[3], float *p0,
-                               float *p1, float *p2, int width)
+/* The colour step of pixels [x0, width), 64 at a time: the bands' transfers
+ * in loops over the pixels, then per pixel the unmix, the gamut (a test
+ * that rarely fails, then btf_marginal_gamut) and the interleave. */
+static int unmix_row_portable(const btf_subspace_model *sm, const btf_marginal_table *t,
+                              const float *const *band, int x0, int width, float *row)
 {
-    float l0 = t->lo[0], l1 = t->lo[1], l2 = t->lo[2];
-    float h0 = t->hi[0], h1 = t->hi[1], h2 = t->hi[2];
-    for (int x0 = 0; x0 < width; x0 += 64) {
-        int x1 = x0 + 64 < width ? x0 + 64 : width, out = 0;
-        for (int x = x0; x < x1; x++)
-            out |= !(btf_in_box(p0[x], l0, h0) & btf_in_box(p1[x], l1, h1) &
-                     btf_in_box(p2[x], l2, h2));
-        if (!out)
-            continue;
-        for (int x = x0; x < x1; x++) {
-            float c[3] = {p0[x], p1[x], p2[x]};
-            gamut_pixel(t, mean, c);
-            p0[x] = c[0], p1[x] = c[1], p2[x] = c[2];
+    uint32_t bad = 0;
+    float v[3][64];
+    for (int c0 = x0; c0 < width; c0 += 64) {
+        int n = width - c0 < 64 ? width - c0 : 64;
+        for (int b = 0; b < 3; b++)
+            for (int i = 0; i < n; i++) {
+                bad |= nonfinite(band[b][c0 + i]);
+                v[b][i] = transfer1(t, b, band[b][c0 + i]);
+            }
+        for (int i = 0; i < n; i++) {
+            float c[3];
+            for (int k = 0; k < 3; k++)
+                c[k] = btf_unmix(sm->mean[k], sm->basis[k], sm->basis[3 + k], sm->basis[6 + k],
+                                 v[0][i], v[1][i], v[2][i]);
+            btf_marginal_gamut(t, c);
+            for (int k = 0; k < 3; k++)
+                row[3 * (c0 + i) + k] = c[k];
         }
     }
+    return bad != 0;
+}
+
+#ifdef SYNTH_HAVE_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include <immintrin.h>
+
+/* table[i & 15] for 16-entry tables held in two vectors: two in-register
+ * permutes (by the low 3 bits) and a blend (by bit 3, as sign bit m)
+ * instead of a gather (a pair of gathers cost as much as two 32-entry
+ * lookups, and those as much as the rest of the colour step); the same
+ * value is fetched, so the bits do not change. */
+static inline __m256 lookup16(const __m256 tab[2], __m256i i, __m256 m)
+{
+    return _mm256_blendv_ps(_mm256_permutevar8x32_ps(tab[0], i),
+                            _mm256_permutevar8x32_ps(tab[1], i), m);
+}
+
+typedef struct band_avx2 {
+    __m256 origin, ih, tlo, thi, qmin, qmax, q[2], dq[2];
+} band_avx2;
+
+/* btf_knot_pos, btf_knot_segment, the entry, btf_transfer: the same operations
+ * (no FMA), the clamps as max(lo, v) and min(hi, a), which are the
+ * comparisons `v < lo ? lo : v` and `a > hi ? hi : a` lane by lane, signed
+ * zeros included; the lower tail's -1 is entry 15 by its low bits. */
+static inline __m256 transfer8(const band_avx2 *bt, __m256 v)
+{
+    const __m256 minus1 = _mm256_set1_ps(-1.0f), segs = _mm256_set1_ps((float)BTF_MARGIN_SEGS);
+    __m256 x = _mm256_mul_ps(_mm256_sub_ps(v, bt->origin), bt->ih);
+    x = _mm256_min_ps(bt->thi, _mm256_max_ps(bt->tlo, x));
+    __m256 fl = _mm256_min_ps(segs, _mm256_max_ps(minus1, _mm256_floor_ps(x)));
+    __m256i i = _mm256_cvttps_epi32(fl);
+    __m256 m = _mm256_castsi256_ps(_mm256_slli_epi32(i, 28));
+    __m256 q = lookup16(bt->q, i, m), dq = lookup16(bt->dq, i, m);
+    __m256 r = _mm256_add_ps(q, _mm256_mul_ps(_mm256_sub_ps(x, fl), dq));
+    return _mm256_min_ps(bt->qmax, _mm256_max_ps(bt->qmin, r));
+}
+
+/* btf_marginal_gamut on 8 colours, applied where `out` is set: each
+ * btf_gamut_share and btf_recip step as a vector op in the shared order;
+ * `d < 0 ? -d : d` as a blend, the min and max as in transfer8. */
+static inline void gamut8(const btf_marginal_table *t, __m256 c[3], __m256 out)
+{
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    const __m256 two = _mm256_set1_ps(2.0f);
+    const __m256 rmin = _mm256_set1_ps(BTF_RECIP_MIN), rmax = _mm256_set1_ps(BTF_RECIP_MAX);
+    const __m256i magic = _mm256_set1_epi32(0x7EF311C7);
+    __m256 s = one, d[3];
+    for (int k = 0; k < 3; k++) {
+        __m256 mean = _mm256_set1_ps(t->mean[k]);
+        __m256 lo = _mm256_set1_ps(t->lo[k]), hi = _mm256_set1_ps(t->hi[k]);
+        d[k] = _mm256_sub_ps(c[k], mean);
+        __m256 ad = _mm256_blendv_ps(d[k], _mm256_sub_ps(zero, d[k]),
+                                     _mm256_cmp_ps(d[k], zero, _CMP_LT_OQ));
+        __m256 x = _mm256_min_ps(rmax, _mm256_max_ps(rmin, ad));
+        __m256 r = _mm256_castsi256_ps(_mm256_sub_epi32(magic, _mm256_castps_si256(x)));
+        for (int n = 0; n < 3; n++)
+            r = _mm256_mul_ps(r, _mm256_sub_ps(two, _mm256_mul_ps(x, r)));
+        __m256 above = _mm256_cmp_ps(c[k], hi, _CMP_GT_OQ);
+        __m256 below = _mm256_cmp_ps(c[k], lo, _CMP_LT_OQ);
+        __m256 num = _mm256_blendv_ps(_mm256_set1_ps(t->nlo[k]), _mm256_set1_ps(t->nhi[k]),
+                                      above);
+        __m256 sk = _mm256_blendv_ps(one, _mm256_mul_ps(num, r), _mm256_or_ps(above, below));
+        s = _mm256_min_ps(sk, s); /* sk < s ? sk : s */
+    }
+    s = _mm256_max_ps(zero, s); /* s < 0 ? 0 : s */
+    for (int k = 0; k < 3; k++) {
+        __m256 lo = _mm256_set1_ps(t->lo[k]), hi = _mm256_set1_ps(t->hi[k]);
+        __m256 p = _mm256_add_ps(_mm256_set1_ps(t->mean[k]), _mm256_mul_ps(s, d[k]));
+        p = _mm256_min_ps(hi, _mm256_max_ps(lo, p));
+        c[k] = _mm256_blendv_ps(c[k], p, out);
+    }
+}
+
+/* The colour step, 8 pixels at a time, all in registers: the three
+ * transfers, btf_unmix's multiplies and adds in its order, the box test
+ * (gamut8 only for the vectors with a colour outside, a few percent of
+ * them), and the RGB interleave by three lane permutations and six blends
+ * straight into the row. Returns the pixels done (a multiple of 8). */
+static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table *t,
+                          const float *const *band, int width, float *row, int *bad_out)
+{
+    band_avx2 bt[3];
+    __m256 mean[3], c0[3], c1[3], c2[3], lo[3], hi[3];
+    for (int b = 0; b < 3; b++) {
+        bt[b].origin = _mm256_set1_ps(t->origin[b]);
+        bt[b].ih = _mm256_set1_ps(t->inv_h[b]);
+        bt[b].tlo = _mm256_set1_ps(t->tlo[b]);
+        bt[b].thi = _mm256_set1_ps(t->thi[b]);
+        bt[b].qmin = _mm256_set1_ps(t->qmin[b]);
+        bt[b].qmax = _mm256_set1_ps(t->qmax[b]);
+        for (int k = 0; k < 2; k++) {
+            bt[b].q[k] = _mm256_loadu_ps(t->q[b] + 8 * k);
+            bt[b].dq[k] = _mm256_loadu_ps(t->dq[b] + 8 * k);
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        mean[k] = _mm256_set1_ps(sm->mean[k]);
+        c0[k] = _mm256_set1_ps(sm->basis[k]);
+        c1[k] = _mm256_set1_ps(sm->basis[3 + k]);
+        c2[k] = _mm256_set1_ps(sm->basis[6 + k]);
+        lo[k] = _mm256_set1_ps(t->lo[k]);
+        hi[k] = _mm256_set1_ps(t->hi[k]);
+    }
+    /* the finite test as the largest magnitude's bits (and, unsigned max):
+     * Inf or NaN when they reach the exponent's all-ones */
+    const __m256i magn = _mm256_set1_epi32(0x7FFFFFFF);
+    const __m256i pa = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
+    const __m256i pb = _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2);
+    const __m256i pc = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
+    __m256i bad = _mm256_setzero_si256();
+    int x = 0;
+    for (; x + 8 <= width; x += 8) {
+        __m256 v[3], ch[3];
+        for (int b = 0; b < 3; b++) {
+            __m256 in = _mm256_loadu_ps(band[b] + x);
+            bad = _mm256_max_epu32(bad, _mm256_and_si256(_mm256_castps_si256(in), magn));
+            v[b] = transfer8(&bt[b], in);
+        }
+        __m256 inside = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        for (int k = 0; k < 3; k++) {
+            __m256 s = _mm256_add_ps(mean[k], _mm256_mul_ps(c0[k], v[0]));
+            s = _mm256_add_ps(s, _mm256_mul_ps(c1[k], v[1]));
+            ch[k] = _mm256_add_ps(s, _mm256_mul_ps(c2[k], v[2]));
+            inside = _mm256_and_ps(inside, _mm256_and_ps(_mm256_cmp_ps(ch[k], lo[k], _CMP_GE_OQ),
+                                                         _mm256_cmp_ps(ch[k], hi[k], _CMP_LE_OQ)));
+        }
+        if (_mm256_movemask_ps(inside) != 0xFF)
+            gamut8(t, ch, _mm256_xor_ps(inside, _mm256_castsi256_ps(_mm256_set1_epi32(-1))));
+        __m256 a = _mm256_permutevar8x32_ps(ch[0], pa);
+        __m256 b = _mm256_permutevar8x32_ps(ch[1], pb);
+        __m256 c = _mm256_permutevar8x32_ps(ch[2], pc);
+        /* r g b r g b r g | b r g b r g b r | g b r g b r g b */
+        _mm256_storeu_ps(row + 3 * x, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24));
+        _mm256_storeu_ps(row + 3 * x + 8, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49));
+        _mm256_storeu_ps(row + 3 * x + 16, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92));
+    }
+    bad = _mm256_cmpgt_epi32(bad, _mm256_set1_epi32(0x7F7FFFFF));
+    *bad_out = !_mm256_testz_si256(bad, bad);
+    return x;
+}
+#pragma GCC pop_options
+#endif
+
+int btf_marginal_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t,
+                           const float *b0, const float *b1, const float *b2, int width,
+                           float *row)
+{
+    const float *band[3] = {b0, b1, b2};
+    int x = 0, bad = 0;
+#ifdef SYNTH_HAVE_AVX2
+    if (__builtin_cpu_supports("avx2") && !t->portable)
+        x = unmix_row_avx2(sm, t, band, width, row, &bad);
+#endif
+    return unmix_row_portable(sm, t, band, x, width, row) | bad;
 }

@@ -108,30 +108,40 @@ btf_status btf_synth_check_size(int width, int height, btf_error *err);
 /* -------------------------------------------------------------- marginal.c */
 
 /* A subspace's marginal transfer as synthesis applies it (docs/synthesis.md,
- * "Marginals"): knots, exemplar quantiles and segment slopes per band, the
- * RGB box; on 0: none (identity, no clamp). Made on the host for the CPU and
- * the GPU alike. */
+ * "Marginals"; the formulas in btf_shared.h): per band the grid's origin,
+ * the inverse of its segments' width, where the end knots fall on it, the
+ * exemplar's range, each segment's start value and rise (BTF_MARGIN_TABLE
+ * entries); the subspace's mean colour, the RGB box and the mean's
+ * distances to its sides; on 0: none (identity, no clamp). Made on the
+ * host for the CPU and the GPU alike. portable 1 (tests): no AVX2. */
 typedef struct btf_marginal_table {
-    int on;
-    float z[3][BTF_MARGIN_KNOTS], q[3][BTF_MARGIN_KNOTS], slope[3][BTF_MARGIN_KNOTS];
-    float lo[3], hi[3];
+    int on, portable;
+    float origin[3], inv_h[3], tlo[3], thi[3], qmin[3], qmax[3];
+    float q[3][16], dq[3][16]; /* BTF_MARGIN_TABLE of btf_shared.h */
+    float mean[3], lo[3], hi[3], nlo[3], nhi[3];
 } btf_marginal_table;
-/* The standard normal quantiles N_j of the knots. */
+/* The standard normal quantiles N_j of the model's knots. */
 extern const double btf_marginal_normal_knots[BTF_MARGIN_KNOTS];
 void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t);
-/* out[x] = the transfer of band `band` at v[x] (seg: width ints of scratch);
- * nonzero when a v is Inf or NaN. */
+/* out[x] = the transfer of band `band` at v[x]; nonzero when a v is Inf or
+ * NaN. */
 int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width,
-                     float *out, int *seg);
-/* Brings the colours of three planes (R, G, B) into the table's box, each
- * moved towards mean (btf_shared.h, "Gamut"). */
-void btf_marginal_gamut_planes(const btf_marginal_table *t, const float mean[3], float *p0,
-                               float *p1, float *p2, int width);
+                     float *out);
+/* One colour c into the table's box, moved towards the mean
+ * (btf_shared.h, "Gamut"). */
+void btf_marginal_gamut(const btf_marginal_table *t, float c[3]);
+/* The colour step of one row with the transfer on (t->on): each band
+ * through it, the inverse decorrelation (btf_unmix), the gamut, RGB
+ * interleaved into row. Nonzero when a band value is Inf or NaN (row then
+ * holds no meaningful colour). */
+int btf_marginal_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t,
+                           const float *b0, const float *b1, const float *b2, int width,
+                           float *row);
 
 /* ---------------------------------------------------------------- colour.c */
 
 /* Scratch floats per pixel that btf_unmix_row needs. */
-#define BTF_UNMIX_SCRATCH 7
+#define BTF_UNMIX_SCRATCH 3
 /* One row of a subspace image from its three bands: the marginal transfer
  * (t, when on), inverse decorrelation (btf_unmix per channel), the RGB
  * clamp (when on), interleaved RGB into row (scratch: BTF_UNMIX_SCRATCH *
@@ -289,5 +299,8 @@ void synth_band_free(synth_band *sb);
 /* Row y of G_l of each of the nb (1..3) bands of one subspace, which step
  * together, over the level's window; rows asked in increasing order. */
 void synth_gauss_rows(synth_band *sb, int nb, int l, int y, const float **out);
+/* Row y of G_0 of each band written to dst[b] (the level's width) instead
+ * of the band's own row: a caller that keeps rows saves a copy. */
+void synth_gauss_rows_to(synth_band *sb, int nb, int y, float *const *dst);
 
 #endif

@@ -100,30 +100,40 @@ btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error
     return BTF_OK;
 }
 
-/* With a marginal transfer the colour step (transfer, inverse decorrelation,
- * gamut: src/synth/colour.c) costs as much as the fields: the collapse
- * hands over COLOUR_BLOCK rows of the three bands, which are coloured on
- * every CPU (a row's bytes depend on the row alone), then passed on in
- * order. Memory grows with the width, as before. */
+/* With a marginal transfer the colour step (transfer, inverse
+ * decorrelation, gamut: src/synth/marginal.c) costs about a fifth of the
+ * CAR fields and the collapse. Both run at once, as a pipeline over blocks
+ * of COLOUR_BLOCK rows: the calling thread collapses block k + 1 straight
+ * into one of two buffers while a relay thread (core/pool.c) colours the
+ * rows of block k from the other; then the caller colours whatever rows
+ * of block k the relay has not taken (all of them when the relay gets no
+ * CPU: never slower than one thread) and hands them to fn, in order and on
+ * its own thread, as without a transfer. A row's bytes depend on the row
+ * alone, so the thread that colours it does not matter. Memory grows with
+ * the width, as before. (A batch of the pool per block, as before, started
+ * and joined a thread 16 times per 512-row image and left the fields
+ * waiting for each block's colours.) */
 #define COLOUR_BLOCK 32
 typedef struct colour_job {
     const btf_subspace_model *sm;
     const btf_marginal_table *mt;
-    int width, subspace, y0;
-    float *bands;   /* [row][band][width] */
-    float *rgb;     /* [row][width * 3] */
-    float *scratch; /* [worker][width * BTF_UNMIX_SCRATCH] */
+    int width, subspace;
+    float *bands[2];  /* [row][band][width] of blocks k even, odd */
+    float *rgb[2];    /* [row][width * 3] */
+    float *scratch;   /* [worker][width * BTF_UNMIX_SCRATCH] (btf_unmix_row) */
 } colour_job;
 
-static btf_status colour_row(void *user, int j, int worker, btf_error *err)
+/* Row y of the image, in block y / COLOUR_BLOCK. */
+static btf_status colour_row(void *user, int y, int worker, btf_error *err)
 {
     colour_job *c = user;
-    size_t w = (size_t)c->width;
-    const float *b = c->bands + (size_t)j * 3 * w;
-    float *rgb = c->rgb + (size_t)j * 3 * w;
+    size_t w = (size_t)c->width, j = (size_t)(y % COLOUR_BLOCK);
+    int k = y / COLOUR_BLOCK;
+    const float *b = c->bands[k & 1] + j * 3 * w;
+    float *rgb = c->rgb[k & 1] + j * 3 * w;
     if (btf_unmix_row(c->sm, c->mt, b, b + w, b + 2 * w, c->width,
                       c->scratch + (size_t)worker * w * BTF_UNMIX_SCRATCH, rgb))
-        return btf_check_finite_row(rgb, 3 * w, c->subspace, c->y0 + j, err);
+        return btf_check_finite_row(rgb, 3 * w, c->subspace, y, err);
     return BTF_OK;
 }
 
@@ -131,34 +141,40 @@ static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal
                                 synth_band *sb, int width, int height, int subspace,
                                 btf_rows_fn fn, void *user, btf_error *err)
 {
-    int workers = btf_pool_workers(0, COLOUR_BLOCK);
-    size_t w = (size_t)width;
-    colour_job c = {sm, mt, width, subspace, 0, NULL, NULL, NULL};
-    c.bands = btf_alloc(w * 3 * COLOUR_BLOCK, sizeof(float), err);
-    c.rgb = c.bands ? btf_alloc(w * 3 * COLOUR_BLOCK, sizeof(float), err) : NULL;
-    c.scratch = c.rgb ? btf_alloc(w * BTF_UNMIX_SCRATCH * (size_t)workers, sizeof(float), err)
-                      : NULL;
-    btf_status rc = c.scratch ? BTF_OK : BTF_E_NOMEM;
-    for (int y0 = 0; rc == BTF_OK && y0 < height; y0 += COLOUR_BLOCK) {
-        int n = height - y0 < COLOUR_BLOCK ? height - y0 : COLOUR_BLOCK;
-        for (int j = 0; j < n; j++) {
-            const float *g0[3];
-            synth_gauss_rows(sb, 3, 0, y0 + j, g0);
-            for (int b = 0; b < 3; b++)
-                memcpy(c.bands + ((size_t)j * 3 + b) * w, g0[b], w * sizeof(float));
+    size_t w = (size_t)width, block = w * 3 * COLOUR_BLOCK;
+    colour_job c = {sm, mt, width, subspace, {NULL, NULL}, {NULL, NULL}, NULL};
+    float *mem = btf_alloc(4 * block + 2 * w * BTF_UNMIX_SCRATCH, sizeof(float), err);
+    if (!mem)
+        return BTF_E_NOMEM;
+    for (int i = 0; i < 2; i++)
+        c.bands[i] = mem + (size_t)i * block, c.rgb[i] = mem + (size_t)(2 + i) * block;
+    c.scratch = mem + 4 * block;
+    btf_relay *relay = btf_relay_start(colour_row, &c, err);
+    btf_status rc = relay ? BTF_OK : BTF_E_NOMEM;
+    int blocks = (height + COLOUR_BLOCK - 1) / COLOUR_BLOCK;
+    for (int k = 0; rc == BTF_OK && k <= blocks; k++) {
+        int y0 = k * COLOUR_BLOCK, n = height - y0 < COLOUR_BLOCK ? height - y0 : COLOUR_BLOCK;
+        /* the fields of block k, while block k - 1 is coloured */
+        for (int j = 0; k < blocks && j < n; j++) {
+            float *b = c.bands[k & 1] + (size_t)j * 3 * w;
+            float *const dst[3] = {b, b + w, b + 2 * w};
+            synth_gauss_rows_to(sb, 3, y0 + j, dst);
         }
-        c.y0 = y0;
-        rc = btf_pool_run(n, 0, colour_row, &c, NULL, err);
-        for (int j = 0; rc == BTF_OK && j < n; j++) {
-            int got = fn(user, y0 + j, 1, c.rgb + (size_t)j * 3 * w, err);
-            rc = got > 0 ? BTF_E_IO : (btf_status)got;
-            if (rc && err && !err->msg[0])
-                btf_fail(err, rc, "synthesis stopped by its consumer");
+        if (k > 0) {
+            rc = btf_relay_wait(relay, err);
+            int p0 = y0 - COLOUR_BLOCK;
+            for (int j = 0; rc == BTF_OK && j < COLOUR_BLOCK && p0 + j < height; j++) {
+                int got = fn(user, p0 + j, 1, c.rgb[(k - 1) & 1] + (size_t)j * 3 * w, err);
+                rc = got > 0 ? BTF_E_IO : (btf_status)got;
+                if (rc && err && !err->msg[0])
+                    btf_fail(err, rc, "synthesis stopped by its consumer");
+            }
         }
+        if (rc == BTF_OK && k < blocks)
+            btf_relay_post(relay, y0, n);
     }
-    free(c.bands);
-    free(c.rgb);
-    free(c.scratch);
+    btf_relay_stop(relay);
+    free(mem);
     return rc;
 }
 

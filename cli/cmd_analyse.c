@@ -205,8 +205,8 @@ int cmd_analyse(int argc, char **argv)
         {.name = "--preset", .kind = CLI_CHOICE, .dest = &preset,
          .meta = "fast|balanced|accurate",
          .help = "a measured point of the speed/accuracy trade: fast (K 2, 1 level,\n"
-                 "auto neighbourhood), balanced (K 4, 2 levels, 8 neighbours) or\n"
-                 "accurate (K 8, 3 levels, 8 neighbours) sets --subspaces, --levels and\n"
+                 "8 neighbours), balanced (K 4, 2 levels, 8 neighbours) or accurate\n"
+                 "(K 8, 3 levels, 12 neighbours) sets --subspaces, --levels and\n"
                  "--neighbourhood (each given explicitly wins; docs/report.md, \"Presets\")",
          .choices = btf_analyse_preset_names()},
         {.name = "--stage", .kind = CLI_CHOICE, .dest = &stage, .meta = "STAGE",

@@ -226,4 +226,14 @@ int btf_sym_eigen(double *a, int n, double *val, double *vec);
  * without the argument checks. */
 void btf_raw_bytes_of(const btf_dataset_info *info, btf_raw_bytes *out);
 
+/* ------------------------------------------------------ the sweep's state */
+
+/* A sweep point's state file (report/sweep.c), text of n bytes: 1 when it
+ * is a whole point of the setting p->setting written under fingerprint,
+ * with values a measurement can give (then *p holds them, resumed set);
+ * 0 for anything else (*p untouched), never a crash: the file is read back
+ * from a folder anyone may have edited. */
+int btf_sweep_point_parse(const char *text, size_t n, const char *fingerprint,
+                          btf_sweep_point *p);
+
 #endif

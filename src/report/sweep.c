@@ -11,6 +11,7 @@
  * once and read back by a later run, so an interrupted sweep resumes.
  */
 #include "core/core.h"
+#include "report/report.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -136,6 +137,38 @@ static double num(const cJSON *o, const char *key, int *ok)
     return j->valuedouble;
 }
 
+int btf_sweep_point_parse(const char *text, size_t n, const char *fingerprint,
+                          btf_sweep_point *p)
+{
+    cJSON *j = cJSON_ParseWithLength(text, n);
+    if (!j)
+        return 0;
+    const cJSON *fp = cJSON_GetObjectItemCaseSensitive(j, "fingerprint");
+    int ok = cJSON_IsString(fp) && fp->valuestring && !strcmp(fp->valuestring, fingerprint);
+    btf_sweep_point q = *p;
+    ok = ok && num(j, "subspaces", &ok) == p->setting.subspaces &&
+         num(j, "levels", &ok) == p->setting.levels &&
+         num(j, "neighbours", &ok) == p->setting.neighbours;
+    double k = num(j, "k", &ok), bytes = num(j, "bytes", &ok);
+    q.analyse_s = num(j, "analyse_s", &ok);
+    q.synth_s = num(j, "synth_s", &ok);
+    q.gpu_synth_s = num(j, "gpu_synth_s", &ok);
+    q.render_s = num(j, "render_s", &ok);
+    q.mean_combined = num(j, "mean_combined", &ok);
+    q.worst_combined = num(j, "worst_combined", &ok);
+    cJSON_Delete(j);
+    /* Numbers a measurement can give, and nothing a cast would mangle. */
+    if (!ok || !(k >= 1 && k <= 255) || !(bytes >= 1 && bytes <= 1e15) || q.analyse_s < 0 ||
+        q.synth_s < 0 || q.render_s < 0 || q.mean_combined < 0 ||
+        q.worst_combined < q.mean_combined)
+        return 0;
+    q.k = (int)k;
+    q.bytes = (uint64_t)bytes;
+    q.resumed = 1;
+    *p = q;
+    return 1;
+}
+
 /* A point read back from its state file: 1 when it is there, whole, and of
  * this dataset and these options; 0 otherwise (then it is measured). */
 static int read_point(const sweep_ctx *c, btf_sweep_point *p)
@@ -147,30 +180,9 @@ static int read_point(const sweep_ctx *c, btf_sweep_point *p)
     if (!c->o->state_dir || state_path(c, &p->setting, path, sizeof path, &e) ||
         btf_read_file(path, 1 << 20, &data, &n, &e))
         return 0;
-    cJSON *j = cJSON_ParseWithLength((const char *)data, n);
+    int ok = btf_sweep_point_parse((const char *)data, n, c->fingerprint, p);
     free(data);
-    if (!j)
-        return 0;
-    const cJSON *fp = cJSON_GetObjectItemCaseSensitive(j, "fingerprint");
-    int ok = cJSON_IsString(fp) && !strcmp(fp->valuestring, c->fingerprint);
-    btf_sweep_point q = *p;
-    ok = ok && num(j, "subspaces", &ok) == p->setting.subspaces &&
-         num(j, "levels", &ok) == p->setting.levels &&
-         num(j, "neighbours", &ok) == p->setting.neighbours;
-    q.k = (int)num(j, "k", &ok);
-    q.analyse_s = num(j, "analyse_s", &ok);
-    q.synth_s = num(j, "synth_s", &ok);
-    q.gpu_synth_s = num(j, "gpu_synth_s", &ok);
-    q.render_s = num(j, "render_s", &ok);
-    q.bytes = (uint64_t)num(j, "bytes", &ok);
-    q.mean_combined = num(j, "mean_combined", &ok);
-    q.worst_combined = num(j, "worst_combined", &ok);
-    cJSON_Delete(j);
-    if (!ok || q.k < 1)
-        return 0;
-    q.resumed = 1;
-    *p = q;
-    return 1;
+    return ok;
 }
 
 static btf_status write_point(const sweep_ctx *c, const btf_sweep_point *p, btf_error *err)

@@ -298,6 +298,33 @@ static void fit_does_not_depend_on_threads(void **state)
     btf_rf_model_free(&one);
 }
 
+static void zero_null_and_defaults_agree(void **state)
+{
+    (void)state;
+    btf_rf_opts d = btf_rf_defaults();
+    assert_int_equal(d.fit, BTF_RF_PTM);
+    assert_int_equal(d.lobes, 2);
+    assert_int_equal(d.iterations, 40);
+    assert_true(d.memory == (size_t)256 << 20);
+    btf_rf_opts z;
+    memset(&z, 0, sizeof z);
+    btf_rf_model a, b;
+    btf_error e = {0};
+    TU_OK(btf_rf_fit(ds, &z, &a, &e), &e);
+    TU_OK(btf_rf_fit(ds, NULL, &b, &e), &e);
+    size_t n = (size_t)ptm.fields * ptm.slots * ptm.width * ptm.height;
+    assert_memory_equal(a.codes, ptm.codes, n * sizeof(uint16_t));
+    assert_memory_equal(b.codes, ptm.codes, n * sizeof(uint16_t));
+    btf_rf_model_free(&a);
+    btf_rf_model_free(&b);
+    /* invalid options are BTF_E_ARG, and the output is left empty */
+    z.lobes = BTF_RF_MAX_LOBES + 1;
+    assert_int_equal(btf_rf_fit(ds, &z, &a, &e), BTF_E_ARG);
+    assert_null(a.codes);
+    z.lobes = 0, z.fit = 3;
+    assert_int_equal(btf_rf_fit(ds, &z, &a, &e), BTF_E_ARG);
+}
+
 static void flat_render_at_a_measured_view_is_the_field(void **state)
 {
     (void)state;
@@ -600,6 +627,7 @@ int main(void)
         cmocka_unit_test(view_weights_are_bilinear),
         cmocka_unit_test(fits_are_finite_and_measured),
         cmocka_unit_test(fit_does_not_depend_on_threads),
+        cmocka_unit_test(zero_null_and_defaults_agree),
         cmocka_unit_test(flat_render_at_a_measured_view_is_the_field),
         cmocka_unit_test(file_round_trip),
         cmocka_unit_test(corrupt_files_are_errors),

@@ -5,7 +5,8 @@
 #   3. analyse it into one model file (segmentation, range map, CAR models);
 #   4. synthesise every subspace image at twice the measured size, seamless;
 #   5. render the material on a sphere and a cylinder under two lights, and a
-#      flat (view, light) sample beside the measured image of that pair.
+#      flat (view, light) sample beside the measured image of that pair;
+#   6. write the report: compression, quality per direction, the preview.
 # Usage: examples/demo.sh [PATH/TO/btfcar]   (make demo passes build/btfcar)
 set -eu
 BTFCAR=${1:-build/btfcar}
@@ -16,7 +17,7 @@ BIG=$((SIZE * 2))
 
 EXAMPLES=$(dirname "$0")
 rm -rf "$OUT/$MATERIAL" "$OUT/$MATERIAL.btfcar" "$OUT/$MATERIAL-segments" "$OUT/$MATERIAL-synth" \
-    "$OUT/$MATERIAL-scene.png" "$OUT/$MATERIAL-flat.png"
+    "$OUT/$MATERIAL-scene.png" "$OUT/$MATERIAL-flat.png" "$OUT/$MATERIAL-report"
 mkdir -p "$OUT"
 echo "== 1. btfcar generate --material $MATERIAL --size $SIZE $OUT/$MATERIAL"
 "$BTFCAR" generate --material "$MATERIAL" --size "$SIZE" --seed 1 "$OUT/$MATERIAL"
@@ -42,8 +43,12 @@ echo "== 5b. btfcar render --view 30,60 --light 45,0 --beside the dataset (measu
 "$BTFCAR" render "$OUT/$MATERIAL.btfcar" --view 30,60 --light 45,0 --size "${SIZE}x${SIZE}" \
     --beside "$OUT/$MATERIAL" -o "$OUT/$MATERIAL-flat.png"
 echo
+echo "== 6. btfcar report (compression, quality per direction, the preview)"
+"$BTFCAR" report "$OUT/$MATERIAL" "$OUT/$MATERIAL.btfcar" -o "$OUT/$MATERIAL-report"
+echo
 echo "demo: dataset in $OUT/$MATERIAL/ (ground truth in truth/), index table picture"
 echo "      $OUT/$MATERIAL-segments/index.png, model $OUT/$MATERIAL.btfcar, synthesised"
 echo "      subspace images in $OUT/$MATERIAL-synth/subspace_NN.{exr,png}, the rendered"
 echo "      scene $OUT/$MATERIAL-scene.png, and the measured image of (view 30,60; light"
 echo "      45,0) beside the model's flat render of it in $OUT/$MATERIAL-flat.png"
+echo "report: open $OUT/$MATERIAL-report/index.html in a browser (numbers in report.json)"

@@ -158,3 +158,37 @@ if [ -n "$FIDELITY_BENCH" ]; then
     fi
     "$FIDELITY_BENCH" "$@" || echo "bench: bench_fidelity exited with $?"
 fi
+
+echo "== report (docs/report.md): the 81 x 81 x 128^2 leather, default sample (81 pairs), target <= 60 s"
+R=$TMP/rl
+"$BTFCAR" generate -q --material leather --size 128 --seed 1 "$R" &&
+    "$BTFCAR" analyse -q "$R" -o "$R.btfcar" || echo "bench: the report's material failed"
+MEDIAN5_OUTPUT=$TMP/rep
+timed "btfcar report, whole process" sh -c "rm -rf $TMP/rep && $BTFCAR report -q $R $R.btfcar -o $TMP/rep"
+report_s=$med
+sed -n 's/^[[:space:]]*"seconds":[[:space:]]*\(.*\),$/   report.json seconds: \1/p' "$TMP/rep/report.json" | head -1
+echo "   $(du -sb "$TMP/rep" | cut -f1) bytes in $(ls "$TMP/rep" | wc -l) files"
+/usr/bin/time -f "%e %M" -o "$TMP/time" "$BTFCAR" report -q "$R" "$R.btfcar" -o "$TMP/rep-all" --all ||
+    echo "bench: report --all failed"
+echo "report --all (6561 pairs): $(cut -d' ' -f1 "$TMP/time") s, peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB"
+/usr/bin/time -f "%e %M" -o "$TMP/time" "$BTFCAR" report -q "$R" "$R.btfcar" -o "$TMP/rep-sw" \
+    --sweep --sweep-subspaces auto,4 --sweep-levels auto,2 --sweep-neighbours auto,8 ||
+    echo "bench: report --sweep failed"
+sw=$(cut -d' ' -f1 "$TMP/time")
+echo "report --sweep, 8 settings: $sw s, peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB;" \
+     "$(echo "$sw $report_s" | awk '{printf "%.1f", ($1 - $2) / 8}') s per setting beyond the report"
+/usr/bin/time -f "%e" -o "$TMP/time" "$BTFCAR" report -q "$R" "$R.btfcar" -o "$TMP/rep-sw" \
+    --sweep --sweep-subspaces auto,4 --sweep-levels auto,2 --sweep-neighbours auto,8
+echo "   the same again, every point resumed: $(cat "$TMP/time") s"
+
+echo "== presets (btfcar analyse --preset): cost and quality on the 128^2 leather"
+for p in fast balanced accurate; do
+    /usr/bin/time -f "%e" -o "$TMP/time" "$BTFCAR" analyse -q "$R" -o "$TMP/$p.btfcar" --preset $p ||
+        { echo "bench: --preset $p failed"; continue; }
+    a=$(cat "$TMP/time")
+    "$BTFCAR" report -q "$R" "$TMP/$p.btfcar" -o "$TMP/rep-$p" || continue
+    q=$(sed -n 's/^[[:space:]]*"mean_combined":[[:space:]]*\(.*\),$/\1/p' "$TMP/rep-$p/report.json" | head -1)
+    "$BTFCAR" synthesise -q "$TMP/$p.btfcar" --size 512x512 -o "$TMP/syn-$p" --backend cpu
+    median5 "   $p: synthesise every subspace at 512^2" sh -c "rm -rf $TMP/syn-$p && $BTFCAR synthesise -q $TMP/$p.btfcar --size 512x512 -o $TMP/syn-$p --backend cpu" >/dev/null
+    echo "$p: analyse $a s, model $(stat -c %s "$TMP/$p.btfcar") bytes, synthesis of every subspace at 512^2 (whole process, median of 5) $med s, mean combined distance $q"
+done

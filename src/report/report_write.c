@@ -81,12 +81,6 @@ static void step(step_progress *s, const btf_report_opts *o, double from, double
     s->to = to;
 }
 
-void btf_report_pair_file(const btf_report_data *d, int pair, char *buf, size_t n)
-{
-    const btf_pair_quality *p = &d->q.pairs[pair];
-    snprintf(buf, n, "pair-v%02d-l%02d.png", p->view, p->light);
-}
-
 /* measured | model, side by side with a 4-pixel dark gap. */
 static btf_status side_by_side(const btf_image *a, const btf_image *b, btf_image *out,
                                btf_error *err)
@@ -135,7 +129,7 @@ static btf_status on_pair(void *user, int pair, int view, int light, const btf_i
     if (!c->want[(size_t)view * c->d->in->n_lights + light])
         return BTF_OK;
     char name[64];
-    snprintf(name, sizeof name, "pair-v%02d-l%02d.png", view, light);
+    btf_report_pair_file(c->d, pair, name, sizeof name);
     c->d->pictured[pair] = 1;
     return write_pair(c->dir, name, meas, model, err);
 }

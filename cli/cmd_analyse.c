@@ -21,10 +21,21 @@ static const char ABOUT[] =
     "index.png (x = view, y = light, one colour per subspace), index.tsv,\n"
     "subspaces.tsv, and each subspace image as subspace_NN.exr + .png preview;\n"
     "the options of the later stages (--levels, --neighbourhood, --max-neighbours,\n"
-    "--no-range, --range-size) are then a usage error.\n";
+    "--no-range, --range-size) are then a usage error.\n"
+    "With --family rf it fits per-view reflectance fields instead (Meseth, Mueller\n"
+    "& Klein 2003; docs/rf.md): per measured view and texel a PTM or K lobes over\n"
+    "the lights, on luminance, with the view's average colour per texel; render\n"
+    "and info take the file it writes.\n";
 
-/* Options only the stages after the segmentation use. */
-enum { TAG_LATER = 1 };
+/* Options only the stages after the segmentation use; options of the
+ * reflectance-field family only. */
+enum { TAG_LATER = 1, TAG_RF = 2 };
+
+/* The CAR family's options, which --family rf does not use. */
+static const char *const CAR_ONLY[] = {"--preset", "--stage", "--subspaces", "--bins", "--seed",
+                                       "--restarts", "--levels", "--neighbourhood",
+                                       "--neighborhood", "--max-neighbours", "--no-range",
+                                       "--range-size", NULL};
 
 /* Writes text that was built in memory (open_memstream) to path atomically:
  * the whole file appears or none does. Frees the text. */
@@ -162,6 +173,57 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_ana
     return rc ? cli_lib_error(c, &err) : 0;
 }
 
+/* --family rf: the per-view reflectance fields of Meseth, Müller & Klein
+ * 2003 (src/rf/, docs/rf.md) into a reflectance-field model file. */
+static int analyse_rf(cli_ctx *c, const char *dataset, const char *out, btf_rf_opts ro,
+                      uint64_t max_pixels)
+{
+    btf_error err = {0};
+    btf_dataset_opts dopts = {.progress = cli_progress_fn(c), .max_pixels = max_pixels};
+    btf_dataset *ds;
+    double t0 = cli_now();
+    if (btf_dataset_open(dataset, &dopts, &ds, &err) != 0)
+        return cli_lib_error(c, &err);
+    btf_rf_fit_info info;
+    ro.info = &info;
+    ro.progress = cli_progress_fn(c);
+    btf_rf_model m;
+    int rc = btf_rf_fit(ds, &ro, &m, &err);
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    double raw = (double)in->n_views * in->n_lights * in->width * in->height * 3.0;
+    btf_dataset_close(ds);
+    if (rc)
+        return cli_lib_error(c, &err);
+    cli_progress_done();
+    unsigned char *bytes = NULL;
+    size_t size = 0;
+    rc = btf_rf_encode(&m, &bytes, &size, &err);
+    if (rc == 0)
+        rc = btf_write_file_atomic(out, bytes, size, &err);
+    free(bytes);
+    if (rc == 0 && !c->quiet) {
+        double texels = (double)m.width * m.height;
+        printf("fit           %s", btf_rf_fit_name(m.fit));
+        if (m.fit != BTF_RF_PTM)
+            printf(", %d lobe%s, %lld Levenberg-Marquardt solves, %.1f steps each", m.lobes,
+                   m.lobes == 1 ? "" : "s", info.lm_runs,
+                   info.lm_runs ? (double)info.lm_iterations / info.lm_runs : 0.0);
+        printf("\n");
+        printf("error         mean |Y data - Y model| %.5f (mean luminance %.5f, %.1f %%)\n",
+               info.mean_abs_error, info.mean_luminance,
+               info.mean_luminance > 0 ? 100.0 * info.mean_abs_error / info.mean_luminance : 0.0);
+        printf("model         %s: %zu bytes, %.1f bytes per texel (%d field%s x %d slots x 2 "
+               "bytes before deflate)\n", out, size, size / texels, m.fields,
+               m.fields == 1 ? "" : "s", m.slots);
+        printf("compression   1 : %.1f against the raw 8-bit images (%.0f bytes)\n",
+               raw / (double)size, raw);
+        printf("time          %.1f s (reading %.1f s, fitting %.1f s)\n", cli_now() - t0,
+               info.read_s, info.fit_s);
+    }
+    btf_rf_model_free(&m);
+    return rc ? cli_lib_error(c, &err) : 0;
+}
+
 static int seen(const cli_opt *opts, const char *name)
 {
     for (; opts->name; opts++)
@@ -197,11 +259,30 @@ int cmd_analyse(int argc, char **argv)
     ao.segment.kmeans.seed = 1; /* the command's seed; the library's default is 0 */
     ao.photostereo.read.max_pixels = BTF_DEFAULT_MAX_PIXELS;
     btf_segment_opts *so = &ao.segment;
-    int preset = -1;
+    int preset = -1, family = 0;
+    static const char *const families[] = {"car", "rf", NULL};
+    static const char *const fits[] = {"ptm", "lobes", "lafortune", NULL};
+    btf_rf_opts ro = btf_rf_defaults();
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
          .meta = "OUT", .help = "the model file to write (a folder with --stage segment)",
          .required = 1},
+        {.name = "--family", .kind = CLI_CHOICE, .dest = &family, .meta = "car|rf",
+         .help = "car: the probabilistic CAR model (paper section II); rf: per-view\n"
+                 "reflectance fields fitted per texel (Meseth et al. 2003, docs/rf.md),\n"
+                 "the accuracy end of the trade, megabytes instead of kilobytes",
+         .choices = families},
+        {.name = "--fit", .kind = CLI_CHOICE, .dest = &ro.fit, .meta = "ptm|lobes|lafortune",
+         .help = "--family rf: ptm, a biquadratic polynomial per view and texel; lobes,\n"
+                 "K non-linear lobes per view and texel (Levenberg-Marquardt); lafortune,\n"
+                 "one Lafortune model (K lobes) per texel over all views, for contrast",
+         .choices = fits, .tag = TAG_RF},
+        {.name = "--lobes", .kind = CLI_INT, .dest = &ro.lobes, .meta = "K",
+         .help = "--family rf: lobes of the lobes and lafortune fits", .lo = 1,
+         .hi = BTF_RF_MAX_LOBES, .tag = TAG_RF},
+        {.name = "--iterations", .kind = CLI_INT, .dest = &ro.iterations, .meta = "N",
+         .help = "--family rf: Levenberg-Marquardt steps per texel at most", .lo = 1,
+         .hi = 10000, .tag = TAG_RF},
         {.name = "--preset", .kind = CLI_CHOICE, .dest = &preset,
          .meta = "fast|balanced|accurate",
          .help = "a measured point of the speed/accuracy trade: fast (K 2, 1 level,\n"
@@ -242,6 +323,17 @@ int cmd_analyse(int argc, char **argv)
     int nargs, prc = cli_parse(&c, &spec, argc, argv, &dataset, &nargs);
     if (prc >= 0)
         return prc;
+    if (family == 1) {
+        for (int i = 0; CAR_ONLY[i]; i++)
+            if (seen(opts, CAR_ONLY[i]))
+                return cli_usage_error(&c, "%s is not used by --family rf", CAR_ONLY[i]);
+        if (cli_check_output(&c, out, BTF_OUTPUT_FILE))
+            return 1;
+        ro.threads = so->features.threads;
+        return analyse_rf(&c, dataset, out, ro, ao.photostereo.read.max_pixels);
+    }
+    if (cli_first_seen(&spec, TAG_RF))
+        return cli_usage_error(&c, "%s goes with --family rf", cli_first_seen(&spec, TAG_RF));
     if (preset >= 0)
         apply_preset(btf_analyse_preset_names()[preset], opts, &ao);
     if (cli_check_output(&c, out, stage < 0 ? BTF_OUTPUT_FILE : BTF_OUTPUT_FOLDER))

@@ -12,8 +12,9 @@
 #include <sys/stat.h>
 
 static const char ABOUT[] =
-    "Describes a BTF dataset or a model file (MODEL.btfcar, recognised by its\n"
-    "signature), or with --devices the Vulkan devices.\n\n"
+    "Describes a BTF dataset or a model file (MODEL.btfcar, or a reflectance-field\n"
+    "model of analyse --family rf, recognised by its signature), or with --devices\n"
+    "the Vulkan devices.\n\n"
     "A dataset: its layout (UBO2003, UTIA or a manifest .tsv), the number of\n"
     "images, views and lights, the image size, the direction sets and the bytes on\n"
     "disk. Every image's header and structure is checked (a missing or duplicated\n"
@@ -101,7 +102,7 @@ static int info_dataset(cli_ctx *c, const char *path, int verify, int json, uint
 static const unsigned char MODEL_STEM[7] = {0x89, 'B', 'T', 'F', 'C', 'A', 'R'};
 
 /* 1 when path is a file that starts like a model; its version and size. */
-static int sniff_model(const char *path, model_file *mf)
+static int sniff_model(const char *path, model_file *mf, int *rf)
 {
     FILE *f = fopen(path, "rb");
     if (!f)
@@ -109,7 +110,8 @@ static int sniff_model(const char *path, model_file *mf)
     unsigned char head[15] = {0};
     size_t n = fread(head, 1, sizeof head, f);
     fclose(f);
-    if (n < sizeof MODEL_STEM || memcmp(head, MODEL_STEM, sizeof MODEL_STEM) != 0)
+    *rf = btf_rf_sniff(head, n); /* a reflectance-field model (docs/rf.md) */
+    if (!*rf && (n < sizeof MODEL_STEM || memcmp(head, MODEL_STEM, sizeof MODEL_STEM) != 0))
         return 0;
     struct stat st;
     mf->path = path;
@@ -201,8 +203,9 @@ int cmd_info(int argc, char **argv)
     if (!path)
         return cli_usage_error(&c, "DATASET or MODEL is required");
     model_file mf;
-    if (sniff_model(path, &mf))
-        return cli_info_model(&c, &mf, json);
+    int rf = 0;
+    if (sniff_model(path, &mf, &rf))
+        return rf ? cli_info_rf(&c, &mf, json) : cli_info_model(&c, &mf, json);
     /* A file named like a model that does not start like one: say what the
      * model reader finds, rather than trying it as a manifest. */
     size_t len = strlen(path);

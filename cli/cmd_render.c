@@ -16,7 +16,10 @@ static const char ABOUT[] =
     "barycentric weights at parallax-shifted texture coordinates and relit by\n"
     "the range map's normals (docs/render.md). Only the subspaces the frame\n"
     "needs are synthesised, tileable, in memory. IMAGE: .png (8-bit sRGB) or\n"
-    ".exr (linear float).\n";
+    ".exr (linear float).\n"
+    "A reflectance-field model (analyse --family rf, docs/rf.md) renders flat on\n"
+    "the CPU: the four closest measured views' fields at the exact light,\n"
+    "bilinear in theta and phi; its texels repeat across the frame.\n";
 
 typedef struct dir_arg {
     btf_dir dir;
@@ -73,6 +76,75 @@ static btf_status side_by_side(const btf_image *a, const btf_image *b, btf_image
                    (size_t)b->width * 3 * sizeof(float));
     }
     return BTF_OK;
+}
+
+/* 1 when path starts like a reflectance-field model (docs/rf.md). */
+static int is_rf_model(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    unsigned char head[16];
+    size_t n = fread(head, 1, sizeof head, f);
+    fclose(f);
+    return btf_rf_sniff(head, n);
+}
+
+/* The flat render of a reflectance-field model (Meseth et al. 2003,
+ * section 5.4: the four closest measured views at the exact light), on the
+ * CPU, with --beside as for a CAR model. */
+static int render_rf(cli_ctx *c, const char *model, btf_dir view, btf_dir light,
+                     const char *beside, const char *out_path, int width, int height,
+                     int threads, double t_start)
+{
+    btf_error err = {0};
+    btf_rf_model m;
+    double t_read = cli_now();
+    if (btf_rf_read(model, &m, &err) != 0)
+        return cli_lib_error(c, &err);
+    t_read = cli_now() - t_read;
+    btf_image img = {0}, measured = {0};
+    btf_status rc = beside ? read_measured(beside, view, light, &measured, &err) : BTF_OK;
+    double t_shade = cli_now();
+    if (rc == BTF_OK)
+        rc = btf_rf_render_flat(&m, view, light, width, height, threads, &img, &err);
+    t_shade = cli_now() - t_shade;
+    int idx[4];
+    double w[4];
+    btf_rf_view_weights(&m.views, view, idx, w);
+    if (rc == BTF_OK && beside) {
+        btf_image both = {0};
+        rc = side_by_side(&measured, &img, &both, &err);
+        btf_image_free(&img);
+        img = both;
+    }
+    btf_image_free(&measured);
+    double t_write = cli_now();
+    if (rc == BTF_OK)
+        rc = cli_write_image(out_path, &img, &err);
+    t_write = cli_now() - t_write;
+    btf_image_free(&img);
+    if (rc) {
+        btf_rf_model_free(&m);
+        return cli_lib_error(c, &err);
+    }
+    if (!c->quiet) {
+        if (m.fit == BTF_RF_LAFORTUNE)
+            printf("reflectance-field model (lafortune): evaluated at the view itself\n");
+        else {
+            printf("reflectance-field model (%s): views", btf_rf_fit_name(m.fit));
+            for (int i = 0; i < 4; i++)
+                if (w[i] != 0.0)
+                    printf(" %d (%g, %g) x %.4f", idx[i], m.views.dirs[idx[i]].theta,
+                           m.views.dirs[idx[i]].phi, w[i]);
+            printf("\n");
+        }
+        printf("backend cpu: model read %.3f s, shade %.3f s, write %.3f s; total %.3f s\n",
+               t_read, t_shade, t_write, cli_now() - t_start);
+        printf("rendered %dx%d into %s\n", width, height, out_path);
+    }
+    btf_rf_model_free(&m);
+    return 0;
 }
 
 int cmd_render(int argc, char **argv)
@@ -141,6 +213,16 @@ int cmd_render(int argc, char **argv)
         return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
     if (cli_check_output(&c, out_path, BTF_OUTPUT_FILE))
         return 1;
+    if (is_rf_model(model)) {
+        if (scene_path)
+            return cli_usage_error(&c, "%s is a reflectance-field model: it renders flat "
+                                   "(--view, --light), not scenes", model);
+        if (backend == 1 || device >= 0)
+            return cli_usage_error(&c, "%s is a reflectance-field model: it renders on the "
+                                   "CPU only", model);
+        return render_rf(&c, model, view.dir, light.dir, beside, out_path, size[0], size[1],
+                         ro.threads, t_start);
+    }
     ro.width = size[0];
     ro.height = size[1];
     ro.all_subspaces = all;

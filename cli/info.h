@@ -19,6 +19,8 @@ typedef struct model_file {
 /* The model report (info_model.c): reads and checks the whole file, then
  * prints it as text or one JSON document; the exit status. */
 int cli_info_model(cli_ctx *c, const model_file *mf, int json);
+/* The same for a reflectance-field model (info_rf.c; docs/rf.md). */
+int cli_info_rf(cli_ctx *c, const model_file *mf, int json);
 
 /* info_format.c */
 /* "ubo81: 81 directions, theta 0..75 in 6 rings" */

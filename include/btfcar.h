@@ -1646,6 +1646,142 @@ btf_status btf_report_write(const btf_dataset *ds, const btf_model *m, const cha
 
 /* (end of sweep, presets, the page) */
 
+/* ------------------------------------- reflectance fields (issue 19) */
+
+/* The pixel-wise alternative to the CAR model, the accuracy end of the
+ * speed/accuracy trade (Meseth, Müller & Klein 2003, "Preserving realism in
+ * real-time rendering of bidirectional texture functions"; docs/rf.md):
+ * per measured view v and texel x a reflectance field RF_v(x, l) is fitted
+ * over the light directions l (paper section 3.1), on luminance, with the
+ * colour from the per-view, per-texel average chromaticity (section 4.2);
+ * rendering interpolates the four closest measured views (section 5.4).
+ *
+ *  - BTF_RF_PTM: a biquadratic polynomial texture map in the light's (lu, lv)
+ *    = (lx, ly), linear least squares: a0 lu^2 + a1 lv^2 + a2 lu lv + a3 lu
+ *    + a4 lv + a5 (6 parameters).
+ *  - BTF_RF_LOBES: k non-linear lobes, equation (1), <(a,b,c), l>^n, fitted
+ *    by Levenberg-Marquardt, kept as rho <d, l>^n with the unit direction
+ *    d = (x, y, 1) / |(x, y, 1)| and rho = |(a,b,c)|^n (the same function;
+ *    this form cannot overflow): 4 parameters per lobe (rho, x, y, log2 n).
+ *  - BTF_RF_LAFORTUNE: for contrast, one Lafortune model per texel over all
+ *    views (Table 1's first column): rho_d l_z + sum of k lobes
+ *    rho (cx lx vx + cy ly vy + cz lz vz)^n, 1 + 5k parameters, one colour
+ *    per texel.
+ *
+ * Every parameter is kept as a 16-bit code with a per-field (per-view)
+ * scale and offset per parameter slot: v = lo + code (hi - lo) / 65535, an
+ * error of at most (hi - lo) / 131070 (docs/rf.md, "Quantisation").
+ * Clamps keep every evaluation finite: rho in [0, BTF_RF_MAX_RHO], n in
+ * [BTF_RF_MIN_EXPONENT, BTF_RF_MAX_EXPONENT], |x|, |y| <= 16 and
+ * |cx|, |cy|, |cz| <= 1, so no lobe exceeds its rho. */
+typedef enum btf_rf_fit_kind {
+    BTF_RF_PTM = 0,       /* default */
+    BTF_RF_LOBES = 1,
+    BTF_RF_LAFORTUNE = 2
+} btf_rf_fit_kind;
+#define BTF_RF_MAX_LOBES 4
+#define BTF_RF_MAX_RHO 1.0e4f
+#define BTF_RF_MIN_EXPONENT 0.25f
+#define BTF_RF_MAX_EXPONENT 1024.0f
+/* The parameter slots of a texel in one field: its luminance parameters,
+ * then 3 chromaticity factors (rgb = chroma x luminance). */
+#define BTF_RF_MAX_SLOTS (1 + 5 * BTF_RF_MAX_LOBES + 3)
+
+/* The name of a fit ("ptm", "lobes", "lafortune"); NULL if out of range. */
+const char *btf_rf_fit_name(int fit);
+
+/* Where a fit spent its time and how well it did (NULL: not wanted). */
+typedef struct btf_rf_fit_info {
+    double read_s, fit_s, seconds;  /* decoding the images, fitting, in all */
+    double mean_abs_error;          /* mean |Y data - Y model| over every texel and
+                                       image, with the quantised parameters */
+    double mean_luminance;          /* the data's mean luminance */
+    long long lm_runs, lm_iterations; /* Levenberg-Marquardt solves and their steps */
+} btf_rf_fit_info;
+
+typedef struct btf_rf_opts {
+    int fit;            /* btf_rf_fit_kind; 0: PTM */
+    int lobes;          /* k for lobes and lafortune, 1..BTF_RF_MAX_LOBES; 0: 2 */
+    int iterations;     /* Levenberg-Marquardt steps per texel at most; 0: 40 */
+    int threads;        /* 0: all CPUs */
+    size_t memory;      /* lafortune: bytes of luminance held at once (texel rows
+                           are fitted in passes over the dataset); 0: 256 MiB */
+    btf_rf_fit_info *info; /* NULL, or filled */
+    btf_progress_fn progress;
+    void *progress_user;
+} btf_rf_opts;
+/* The defaults: PTM, 2 lobes, 40 iterations, all CPUs, 256 MiB. */
+btf_rf_opts btf_rf_defaults(void);
+
+/* A fitted model. codes[(field * height * width + texel) * slots + s] is
+ * slot s of a texel (texel = y * width + x) in field `field` (a view, or
+ * the one field of a Lafortune model); lo/hi[field * slots + s] its range. */
+typedef struct btf_rf_model {
+    int fit;                   /* btf_rf_fit_kind */
+    int lobes;                 /* k */
+    int width, height;         /* texels */
+    btf_dirset views, lights;  /* the measured directions */
+    int params;                /* luminance parameters per texel and field */
+    int slots;                 /* params + 3 */
+    int fields;                /* views.count (ptm, lobes) or 1 (lafortune) */
+    float *lo, *hi;            /* [fields * slots] */
+    uint16_t *codes;           /* [fields * width * height * slots] */
+} btf_rf_model;
+void btf_rf_model_free(btf_rf_model *m);
+/* Luminance parameters per texel and field of a fit with k lobes. */
+int btf_rf_param_count(int fit, int lobes);
+
+/* Fits the dataset: per view, the n_lights images are read (one view's
+ * lights at a time; lafortune: every image, texel rows in passes bounded by
+ * opts->memory), converted to luminance Y = 0.2126 R + 0.7152 G + 0.0722 B,
+ * and every texel fitted in parallel (the result does not depend on the
+ * thread count). Dark, saturated and constant texels give finite fits. */
+btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_model *out,
+                      btf_error *err);
+
+/* The four closest measured views of a direction (paper section 5.4): the
+ * two measured theta rings around theta (one at the pole or beyond the
+ * last ring), on each the two measured azimuths around phi, bilinear weights
+ * in theta and phi that sum to 1. idx[i] and w[i], i < 4 (an index may
+ * repeat, e.g. at the pole; unused weights are 0). */
+void btf_rf_view_weights(const btf_dirset *views, btf_dir view, int idx[4], double w[4]);
+
+/* Linear RGB of texel (x, y) (wrapped into the tile) of field `field`
+ * (a view index; 0 for lafortune) lit from `light` (view: the view
+ * direction, used by lafortune only). */
+void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
+                       int y, float rgb[3]);
+/* The same at any view: the four closest views' fields weighted
+ * (btf_rf_view_weights); lafortune evaluates its one field at the view. */
+void btf_rf_eval(const btf_rf_model *m, btf_dir view, btf_dir light, int x, int y,
+                 float rgb[3]);
+/* The flat (view, light) render of docs/render.md with an RF model: pixel
+ * (x, y) is texel (x mod width, y mod height), lit by one unit light.
+ * width/height 0: the model's. threads 0: all CPUs. */
+btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light, int width,
+                              int height, int threads, btf_image *out, btf_error *err);
+
+/* Table 1 of the paper: the mean |Y data - Y model| over every texel and
+ * (view, light) image of ds, the model evaluated at the measured directions;
+ * mean_luminance: the data's. The dataset must have the model's size and
+ * direction sets. */
+btf_status btf_rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
+                        double *mean_abs_error, double *mean_luminance, btf_error *err);
+
+/* The file (docs/rf.md, "File"): the container of MODEL.btfcar (version,
+ * zlib, CRC-32) with its own signature "\x89BTFRFL\r\n\x1a\n" and sections.
+ * name (NULL: "buffer") names the buffer in messages. The decoder checks
+ * everything and never trusts a size it has not bounded. */
+btf_status btf_rf_encode(const btf_rf_model *m, unsigned char **data, size_t *size,
+                         btf_error *err);
+btf_status btf_rf_decode(const unsigned char *data, size_t size, const char *name,
+                         btf_rf_model *out, btf_error *err);
+btf_status btf_rf_write(const char *path, const btf_rf_model *m, btf_error *err);
+btf_status btf_rf_read(const char *path, btf_rf_model *out, btf_error *err);
+/* 1 when the bytes start like a reflectance-field file (the signature's
+ * first 7 bytes), else 0. */
+int btf_rf_sniff(const unsigned char *data, size_t size);
+
 #ifdef __cplusplus
 }
 #endif

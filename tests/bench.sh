@@ -117,6 +117,13 @@ if [ "${BENCH_FULL:-0}" = 1 ]; then
     echo "synthesise 32768x32768 to half EXR: $(cut -d' ' -f1 "$TMP/time") s, peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB (target <= 256 MB)"
 fi
 
+echo "== reflectance fields (docs/rf.md): the PTM fit of the 81 x 81 x 256^2 material through the command, 2 threads"
+timed "analyse --family rf --fit ptm" "$BTFCAR" analyse -q "$G" --family rf --fit ptm --threads 2 -o "$TMP/rf.btfcar"
+rfbytes=$(stat -c %s "$TMP/rf.btfcar")
+echo "   model $rfbytes bytes, $((rfbytes / 65536)) bytes per texel; $((rfbytes / bytes)) x the CAR model's $bytes bytes"
+timed "render --view 37.5,100 --light 45,20 (1024^2, 4 views blended)" "$BTFCAR" render -q "$TMP/rf.btfcar" --view 37.5,100 --light 45,20 --size 1024x1024 --threads 2 -o "$TMP/rf.png"
+rm -f "$TMP/rf.btfcar"
+
 echo "== render: a 1024^2 sphere of the analysed 256^2 material under one light (examples/sphere-one-light.json)"
 SPHERE=$(dirname "$0")/../examples/sphere-one-light.json
 if [ -n "$RENDER_BENCH" ]; then

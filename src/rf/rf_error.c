@@ -1,0 +1,88 @@
+/*
+ * rf_error.c — the fitting error of Meseth, Müller & Klein 2003, Table 1:
+ * "average luminance difference between data and model", here the mean of
+ * |Y_data - Y_model| over every texel of every (view, light) image, with
+ * Y = 0.2126 R + 0.7152 G + 0.0722 B of linear RGB, the model evaluated at
+ * the measured view (its own field) and light. The dataset is streamed one
+ * image at a time, images in parallel; per-image sums are added in image
+ * order, so the figure does not depend on the thread count.
+ */
+#include "rf/rf.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct err_ctx {
+    const btf_dataset *ds;
+    const btf_rf_model *m;
+    int nl;
+    double *e, *s; /* per image */
+} err_ctx;
+
+static btf_status image_job(void *user, int i, int worker, btf_error *err)
+{
+    (void)worker;
+    err_ctx *c = user;
+    const btf_rf_model *m = c->m;
+    int v = i / c->nl, l = i % c->nl;
+    btf_image img = {0};
+    btf_status rc = btf_dataset_read(c->ds, v, l, &img, err);
+    if (rc)
+        return rc;
+    if (img.width != m->width || img.height != m->height) {
+        rc = btf_fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the model)",
+                      btf_dataset_path(c->ds, v, l), img.width, img.height, m->width, m->height);
+        btf_image_free(&img);
+        return rc;
+    }
+    double lv[3], vv[3], e = 0.0, s = 0.0;
+    btf_dir_to_vec(m->lights.dirs[l], lv);
+    btf_dir_to_vec(m->views.dirs[v], vv);
+    int field = m->fit == BTF_RF_LAFORTUNE ? 0 : v;
+    float p[BTF_RF_MAX_SLOTS];
+    size_t texels = (size_t)m->width * m->height;
+    for (size_t t = 0; t < texels; t++) {
+        const float *px = img.data + 3 * t;
+        float rgb[3];
+        for (int k = 0; k < 3; k++)
+            rgb[k] = isfinite(px[k]) ? px[k] : 0.0f;
+        double d = rf_luminance(rgb);
+        rf_texel_params(m, field, t, p);
+        e += fabs(d - rf_lum_eval(m->fit, m->lobes, p, lv, vv));
+        s += d;
+    }
+    btf_image_free(&img);
+    c->e[i] = e, c->s[i] = s;
+    return BTF_OK;
+}
+
+btf_status btf_rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
+                        double *mean_abs_error, double *mean_luminance, btf_error *err)
+{
+    if (!ds || !m || !m->codes)
+        return btf_fail(err, BTF_E_ARG, "btf_rf_error: no dataset or no model");
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    if (in->n_views != m->views.count || in->n_lights != m->lights.count ||
+        in->width != m->width || in->height != m->height)
+        return btf_fail(err, BTF_E_DATA, "%s: %d views x %d lights of %dx%d (expected the "
+                        "model's %d x %d of %dx%d)", in->root, in->n_views, in->n_lights,
+                        in->width, in->height, m->views.count, m->lights.count, m->width,
+                        m->height);
+    int n = in->n_views * in->n_lights;
+    err_ctx c = {ds, m, in->n_lights, btf_calloc((size_t)n, sizeof(double), err),
+                 btf_calloc((size_t)n, sizeof(double), err)};
+    btf_status rc = c.e && c.s ? btf_pool_run(n, threads, image_job, &c, NULL, err) : BTF_E_NOMEM;
+    if (rc == BTF_OK) {
+        double e = 0.0, s = 0.0;
+        for (int i = 0; i < n; i++)
+            e += c.e[i], s += c.s[i];
+        double count = (double)n * m->width * m->height;
+        if (mean_abs_error)
+            *mean_abs_error = e / count;
+        if (mean_luminance)
+            *mean_luminance = s / count;
+    }
+    free(c.e);
+    free(c.s);
+    return rc;
+}

@@ -1,0 +1,637 @@
+/*
+ * test_rf.c — the reflectance-field family (issue 19; Meseth, Müller &
+ * Klein 2003; src/rf/, docs/rf.md): a PTM texel recovered exactly, a known
+ * lobe recovered by Levenberg–Marquardt, finite fits at the extremes (black,
+ * saturated, constant, NaN, grazing), the four-view weights, fits of a
+ * generated dataset (thread-independent, errors consistent), the file's
+ * round trip and its corrupt forms, the flat render at a measured view,
+ * and the command line.
+ */
+#include "testutil.h"
+
+#include "rf/rf.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <zlib.h>
+
+static char *dir;
+static btf_dataset *ds;
+static btf_rf_model ptm, lobes, laf;
+static btf_rf_fit_info ptm_info, lobes_info, laf_info;
+static char dataset_path[4096];
+
+static void fit(int kind, int threads, btf_rf_model *m, btf_rf_fit_info *info)
+{
+    btf_error e = {0};
+    btf_rf_opts o = btf_rf_defaults();
+    o.fit = kind;
+    o.threads = threads;
+    o.info = info;
+    TU_OK(btf_rf_fit(ds, &o, m, &e), &e);
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    dir = tu_tmpdir();
+    btf_error e = {0};
+    btf_generate_opts g = {.size = 16, .seed = 3};
+    snprintf(dataset_path, sizeof dataset_path, "%s/leather", dir);
+    if (btf_generate("leather", dataset_path, &g, &e) != 0 ||
+        btf_dataset_open(dataset_path, NULL, &ds, &e) != 0) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
+    btf_rf_opts o = btf_rf_defaults();
+    o.threads = 2;
+    o.info = &ptm_info;
+    if (btf_rf_fit(ds, &o, &ptm, &e) != 0)
+        return fprintf(stderr, "setup: %s\n", e.msg), -1;
+    o.fit = BTF_RF_LOBES, o.info = &lobes_info;
+    if (btf_rf_fit(ds, &o, &lobes, &e) != 0)
+        return fprintf(stderr, "setup: %s\n", e.msg), -1;
+    o.fit = BTF_RF_LAFORTUNE, o.info = &laf_info;
+    if (btf_rf_fit(ds, &o, &laf, &e) != 0)
+        return fprintf(stderr, "setup: %s\n", e.msg), -1;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    btf_rf_model_free(&ptm);
+    btf_rf_model_free(&lobes);
+    btf_rf_model_free(&laf);
+    btf_dataset_close(ds);
+    tu_rmtree(dir);
+    free(dir);
+    return 0;
+}
+
+/* The unit light vectors of ubo81. */
+static int ubo_lights(double *l, btf_dirset *set)
+{
+    btf_error e = {0};
+    TU_OK(btf_dirset_ubo81(set, &e), &e);
+    for (int j = 0; j < set->count; j++)
+        btf_dir_to_vec(set->dirs[j], l + 3 * j);
+    return set->count;
+}
+
+/* ------------------------------------------------------------ the fits */
+
+static void ptm_recovers_known_coefficients(void **state)
+{
+    (void)state;
+    btf_dirset set;
+    double l[81 * 3], pinv[6 * 81], a[6];
+    int n = ubo_lights(l, &set);
+    const double truth[6] = {-0.31, 0.12, 0.05, 0.2, -0.07, 0.45};
+    float y[81];
+    for (int j = 0; j < n; j++) {
+        double b[6], s = 0.0;
+        rf_ptm_basis(l[3 * j], l[3 * j + 1], b);
+        for (int r = 0; r < 6; r++)
+            s += truth[r] * b[r];
+        y[j] = (float)s;
+    }
+    btf_error e = {0};
+    TU_OK(rf_ptm_operator(&set, pinv, &e), &e);
+    rf_ptm_apply(pinv, n, y, a);
+    for (int r = 0; r < 6; r++) /* exact up to the float data */
+        assert_true(fabs(a[r] - truth[r]) < 1e-6);
+    /* Quantised: within the stated (hi - lo) / 131070 of the fitted value. */
+    float vals[4 * 6], lo[6], hi[6];
+    uint16_t codes[4 * 6];
+    for (int t = 0; t < 4; t++)
+        for (int r = 0; r < 6; r++)
+            vals[t * 6 + r] = (float)(truth[r] * (1.0 + 0.3 * t) + 0.01 * t);
+    rf_quantise_field(vals, 4, 6, lo, hi, codes);
+    for (int t = 0; t < 4; t++)
+        for (int r = 0; r < 6; r++) {
+            float back = rf_dequantise(codes[t * 6 + r], lo[r], hi[r]);
+            assert_true(fabsf(back - vals[t * 6 + r]) <= (hi[r] - lo[r]) / 131070.0f * 1.001f +
+                                                               1e-7f);
+        }
+    btf_dirset_free(&set);
+}
+
+static double lobes_residual(int k, const float *p, const double *l, const float *y, int n)
+{
+    double worst = 0.0;
+    for (int j = 0; j < n; j++) {
+        double d = fabs(rf_lum_eval(BTF_RF_LOBES, k, p, l + 3 * j, NULL) - y[j]);
+        worst = d > worst ? d : worst;
+    }
+    return worst;
+}
+
+static void lm_recovers_a_known_lobe(void **state)
+{
+    (void)state;
+    btf_dirset set;
+    double l[81 * 3], pinv[6 * 81], a[6];
+    int n = ubo_lights(l, &set);
+    btf_error e = {0};
+    TU_OK(rf_ptm_operator(&set, pinv, &e), &e);
+    const float truth[4] = {0.8f, 0.3f, -0.2f, (float)log2(12.0)};
+    float y[81], out[8];
+    for (int j = 0; j < n; j++)
+        y[j] = (float)rf_lobe_eval(truth, l + 3 * j);
+    rf_ptm_apply(pinv, n, y, a);
+    int steps = rf_lobes_fit(1, n, l, y, a, 100, out);
+    assert_true(steps > 0);
+    assert_true(fabsf(out[0] - truth[0]) < 2e-3f);
+    assert_true(fabsf(out[1] - truth[1]) < 2e-3f);
+    assert_true(fabsf(out[2] - truth[2]) < 2e-3f);
+    assert_true(fabsf(out[3] - truth[3]) < 1e-2f);
+    assert_true(lobes_residual(1, out, l, y, n) < 1e-4);
+    /* Two lobes, a broad and a narrow one, initialised from the high pass. */
+    const float two[8] = {0.3f, 0.0f, 0.1f, 0.0f, 0.6f, -0.5f, 0.4f, (float)log2(30.0)};
+    for (int j = 0; j < n; j++)
+        y[j] = (float)(rf_lobe_eval(two, l + 3 * j) + rf_lobe_eval(two + 4, l + 3 * j));
+    rf_ptm_apply(pinv, n, y, a);
+    rf_lobes_fit(2, n, l, y, a, 200, out);
+    assert_true(lobes_residual(2, out, l, y, n) < 2e-3);
+    btf_dirset_free(&set);
+}
+
+static void all_finite(const float *p, int n)
+{
+    for (int i = 0; i < n; i++)
+        assert_true(isfinite(p[i]));
+}
+
+static void extremes_give_finite_fits(void **state)
+{
+    (void)state;
+    btf_dirset set;
+    double l[81 * 3], pinv[6 * 81], a[6], v[81 * 3];
+    int n = ubo_lights(l, &set);
+    btf_error e = {0};
+    TU_OK(rf_ptm_operator(&set, pinv, &e), &e);
+    for (int j = 0; j < n; j++) /* views for the Lafortune fit: a grazing one */
+        v[3 * j] = 0.99, v[3 * j + 1] = 0.0, v[3 * j + 2] = sqrt(1 - 0.99 * 0.99);
+    float y[81], out[BTF_RF_MAX_SLOTS];
+    for (int c = 0; c < 7; c++) {
+        for (int j = 0; j < n; j++)
+            y[j] = c == 0   ? 0.0f                               /* black */
+                   : c == 1 ? 1.0f                               /* saturated */
+                   : c == 2 ? 0.37f                              /* constant */
+                   : c == 3 ? (j == 40 ? 1.0f : 0.0f)            /* one light only */
+                   : c == 4 ? (j % 2 ? NAN : 0.5f)               /* NaN in the data */
+                   : c == 5 ? 1e30f                              /* huge */
+                            : (l[3 * j + 2] < 0.3 ? 1.0f : 0.0f); /* grazing lights only */
+        float clean[81];
+        for (int j = 0; j < n; j++)
+            clean[j] = isfinite(y[j]) ? y[j] : 0.0f;
+        rf_ptm_apply(pinv, n, clean, a);
+        for (int k = 1; k <= BTF_RF_MAX_LOBES; k++) {
+            rf_lobes_fit(k, n, l, y, a, 40, out);
+            all_finite(out, 4 * k);
+            rf_lafortune_fit(k, n, l, v, y, 40, out);
+            all_finite(out, 1 + 5 * k);
+        }
+        /* evaluation anywhere, grazing and below the horizon too */
+        for (int j = 0; j <= 180; j++) {
+            double th = j * M_PI / 180.0, lv[3] = {sin(th), 0.0, cos(th)};
+            assert_true(isfinite(rf_lum_eval(BTF_RF_LOBES, BTF_RF_MAX_LOBES, out, lv, lv)));
+            assert_true(isfinite(rf_lum_eval(BTF_RF_LAFORTUNE, BTF_RF_MAX_LOBES, out, lv, lv)));
+        }
+    }
+    /* Stored values at their extremes (a damaged but CRC-valid file) are clamped. */
+    const float wild[BTF_RF_MAX_SLOTS] = {1e30f, -1e30f, 1e30f, 1e30f, 1e30f, 1e30f,
+                                          -1e30f, 1e30f, 3e38f, 3e38f, -3e38f};
+    for (int j = 0; j < n; j++) {
+        double yl = rf_lum_eval(BTF_RF_LOBES, 2, wild, l + 3 * j, l + 3 * j);
+        double yf = rf_lum_eval(BTF_RF_LAFORTUNE, 2, wild, l + 3 * j, l + 3 * j);
+        assert_true(isfinite(yl) && yl <= 2.0 * BTF_RF_MAX_RHO);
+        assert_true(isfinite(yf) && yf <= 3.0 * BTF_RF_MAX_RHO);
+    }
+    btf_dirset_free(&set);
+}
+
+static void view_weights_are_bilinear(void **state)
+{
+    (void)state;
+    btf_dirset set;
+    btf_error e = {0};
+    TU_OK(btf_dirset_ubo81(&set, &e), &e);
+    int idx[4];
+    double w[4];
+    /* at every measured view: weight 1 on it */
+    for (int v = 0; v < set.count; v++) {
+        btf_rf_view_weights(&set, set.dirs[v], idx, w);
+        double on = 0.0;
+        for (int i = 0; i < 4; i++)
+            on += idx[i] == v ? w[i] : 0.0;
+        assert_true(fabs(on - 1.0) < 1e-12);
+    }
+    /* everywhere: four weights in [0, 1] summing to 1, views from two rings */
+    for (double th = 0; th <= 90; th += 2.5)
+        for (double ph = 0; ph < 360; ph += 7.3) {
+            btf_rf_view_weights(&set, (btf_dir){th, ph}, idx, w);
+            double s = 0.0;
+            for (int i = 0; i < 4; i++) {
+                assert_true(w[i] >= 0.0 && w[i] <= 1.0);
+                assert_true(idx[i] >= 0 && idx[i] < set.count);
+                s += w[i];
+            }
+            assert_true(fabs(s - 1.0) < 1e-12);
+        }
+    /* halfway between rings 15 and 30 at phi 0: 1/2 on (15, 0) and (30, 0) */
+    btf_rf_view_weights(&set, (btf_dir){22.5, 0}, idx, w);
+    assert_true(fabs(set.dirs[idx[0]].theta - 15) < 1e-9 && fabs(w[0] - 0.5) < 1e-12);
+    assert_true(fabs(set.dirs[idx[2]].theta - 30) < 1e-9 && fabs(w[2] - 0.5) < 1e-12);
+    /* between two azimuths of ring 15 (60 degrees apart): linear in phi */
+    btf_rf_view_weights(&set, (btf_dir){15, 45}, idx, w);
+    assert_true(fabs(set.dirs[idx[0]].phi - 0) < 1e-9 && fabs(w[0] - 0.25) < 1e-12);
+    assert_true(fabs(set.dirs[idx[1]].phi - 60) < 1e-9 && fabs(w[1] - 0.75) < 1e-12);
+    /* past the last ring: that ring alone, wrapping around phi = 360 */
+    btf_rf_view_weights(&set, (btf_dir){85, 355}, idx, w);
+    assert_true(fabs(set.dirs[idx[0]].theta - 75) < 1e-9 && fabs(w[0] + w[1] - 1.0) < 1e-12);
+    btf_dirset_free(&set);
+}
+
+/* ---------------------------------------------------------- the dataset */
+
+static void fits_are_finite_and_measured(void **state)
+{
+    (void)state;
+    const btf_rf_model *ms[3] = {&ptm, &lobes, &laf};
+    const btf_rf_fit_info *is[3] = {&ptm_info, &lobes_info, &laf_info};
+    for (int k = 0; k < 3; k++) {
+        const btf_rf_model *m = ms[k];
+        assert_int_equal(m->width, 16);
+        assert_int_equal(m->fields, k == 2 ? 1 : 81);
+        assert_int_equal(m->slots, btf_rf_param_count(m->fit, k ? 2 : 0) + 3);
+        for (int i = 0; i < m->fields * m->slots; i++)
+            assert_true(isfinite(m->lo[i]) && m->lo[i] <= m->hi[i]);
+        /* the fit's own error equals btf_rf_error's on the same data */
+        double e = -1, s = -1;
+        btf_error err = {0};
+        TU_OK(btf_rf_error(ds, m, 2, &e, &s, &err), &err);
+        assert_true(fabs(e - is[k]->mean_abs_error) <= 1e-9 * (e + 1e-12));
+        assert_true(fabs(s - is[k]->mean_luminance) <= 1e-9 * s);
+        assert_true(e > 0.0 && e < s);
+        print_message("fit %-9s mean |dY| %.5f (mean Y %.4f)\n", btf_rf_fit_name(m->fit), e, s);
+    }
+    /* The non-linear lobes fit the measured reflectance fields better than
+     * the biquadratic (the paper's Table 1), and the per-view fields better
+     * than one Lafortune model over all views. */
+    assert_true(lobes_info.mean_abs_error < ptm_info.mean_abs_error);
+    assert_true(ptm_info.mean_abs_error < laf_info.mean_abs_error);
+    assert_true(lobes_info.lm_runs == 81 * 16 * 16);
+}
+
+static void fit_does_not_depend_on_threads(void **state)
+{
+    (void)state;
+    btf_rf_model one;
+    fit(BTF_RF_LOBES, 1, &one, NULL);
+    size_t n = (size_t)one.fields * one.slots * one.width * one.height;
+    assert_memory_equal(one.codes, lobes.codes, n * sizeof(uint16_t));
+    assert_memory_equal(one.lo, lobes.lo, (size_t)one.fields * one.slots * sizeof(float));
+    btf_rf_model_free(&one);
+}
+
+static void zero_null_and_defaults_agree(void **state)
+{
+    (void)state;
+    btf_rf_opts d = btf_rf_defaults();
+    assert_int_equal(d.fit, BTF_RF_PTM);
+    assert_int_equal(d.lobes, 2);
+    assert_int_equal(d.iterations, 40);
+    assert_true(d.memory == (size_t)256 << 20);
+    btf_rf_opts z;
+    memset(&z, 0, sizeof z);
+    btf_rf_model a, b;
+    btf_error e = {0};
+    TU_OK(btf_rf_fit(ds, &z, &a, &e), &e);
+    TU_OK(btf_rf_fit(ds, NULL, &b, &e), &e);
+    size_t n = (size_t)ptm.fields * ptm.slots * ptm.width * ptm.height;
+    assert_memory_equal(a.codes, ptm.codes, n * sizeof(uint16_t));
+    assert_memory_equal(b.codes, ptm.codes, n * sizeof(uint16_t));
+    btf_rf_model_free(&a);
+    btf_rf_model_free(&b);
+    /* invalid options are BTF_E_ARG, and the output is left empty */
+    z.lobes = BTF_RF_MAX_LOBES + 1;
+    assert_int_equal(btf_rf_fit(ds, &z, &a, &e), BTF_E_ARG);
+    assert_null(a.codes);
+    z.lobes = 0, z.fit = 3;
+    assert_int_equal(btf_rf_fit(ds, &z, &a, &e), BTF_E_ARG);
+}
+
+static void flat_render_at_a_measured_view_is_the_field(void **state)
+{
+    (void)state;
+    const btf_rf_model *ms[3] = {&ptm, &lobes, &laf};
+    btf_error e = {0};
+    for (int k = 0; k < 3; k++) {
+        const btf_rf_model *m = ms[k];
+        int v = 23, l = 47;
+        btf_dir view = m->views.dirs[v], light = m->lights.dirs[l];
+        btf_image img;
+        TU_OK(btf_rf_render_flat(m, view, light, 0, 0, 2, &img, &e), &e);
+        assert_int_equal(img.width, 16);
+        double lv[3], vv[3];
+        btf_dir_to_vec(light, lv);
+        btf_dir_to_vec(view, vv);
+        for (int y = 0; y < 16; y++)
+            for (int x = 0; x < 16; x++) {
+                float p[BTF_RF_MAX_SLOTS], rgb[3];
+                int field = m->fit == BTF_RF_LAFORTUNE ? 0 : v;
+                rf_texel_params(m, field, (size_t)y * 16 + x, p);
+                double lum = rf_lum_eval(m->fit, m->lobes, p, lv, vv);
+                btf_rf_eval_field(m, field, view, light, x, y, rgb);
+                for (int c = 0; c < 3; c++) {
+                    float want = (float)(lum * p[m->params + c]);
+                    assert_true(img.data[(y * 16 + x) * 3 + c] == want);
+                    assert_true(rgb[c] == want);
+                }
+            }
+        /* a larger frame repeats the texels; between views it blends them */
+        btf_image big, mid;
+        TU_OK(btf_rf_render_flat(m, view, light, 40, 20, 1, &big, &e), &e);
+        assert_true(big.data[(3 * 40 + 37) * 3 + 1] == img.data[(3 * 16 + 5) * 3 + 1]);
+        TU_OK(btf_rf_render_flat(m, (btf_dir){37.5, 100}, light, 0, 0, 2, &mid, &e), &e);
+        for (size_t i = 0; i < (size_t)16 * 16 * 3; i++)
+            assert_true(isfinite(mid.data[i]) && mid.data[i] >= 0.0f);
+        btf_image_free(&img);
+        btf_image_free(&big);
+        btf_image_free(&mid);
+    }
+}
+
+/* ---------------------------------------------------------------- files */
+
+static void assert_same_model(const btf_rf_model *a, const btf_rf_model *b)
+{
+    assert_int_equal(a->fit, b->fit);
+    assert_int_equal(a->lobes, b->lobes);
+    assert_int_equal(a->width, b->width);
+    assert_int_equal(a->height, b->height);
+    assert_int_equal(a->fields, b->fields);
+    assert_int_equal(a->slots, b->slots);
+    assert_int_equal(a->views.count, b->views.count);
+    assert_string_equal(a->views.name, b->views.name);
+    assert_memory_equal(a->views.dirs, b->views.dirs, a->views.count * sizeof(btf_dir));
+    assert_memory_equal(a->lights.dirs, b->lights.dirs, a->lights.count * sizeof(btf_dir));
+    size_t planes = (size_t)a->fields * a->slots;
+    assert_memory_equal(a->lo, b->lo, planes * sizeof(float));
+    assert_memory_equal(a->hi, b->hi, planes * sizeof(float));
+    assert_memory_equal(a->codes, b->codes,
+                        planes * a->width * a->height * sizeof(uint16_t));
+}
+
+static void file_round_trip(void **state)
+{
+    (void)state;
+    const btf_rf_model *ms[3] = {&ptm, &lobes, &laf};
+    btf_error e = {0};
+    for (int k = 0; k < 3; k++) {
+        unsigned char *d1, *d2;
+        size_t n1, n2;
+        TU_OK(btf_rf_encode(ms[k], &d1, &n1, &e), &e);
+        assert_true(btf_rf_sniff(d1, n1));
+        btf_rf_model back;
+        TU_OK(btf_rf_decode(d1, n1, "m.rf", &back, &e), &e);
+        assert_same_model(ms[k], &back);
+        TU_OK(btf_rf_encode(&back, &d2, &n2, &e), &e);
+        assert_int_equal(n1, n2);
+        assert_memory_equal(d1, d2, n1);
+        const char *path = tu_fmt("%s/m%d.btfcar", dir, k);
+        TU_OK(btf_rf_write(path, ms[k], &e), &e);
+        btf_rf_model_free(&back);
+        TU_OK(btf_rf_read(path, &back, &e), &e);
+        assert_same_model(ms[k], &back);
+        btf_rf_model_free(&back);
+        free(d1);
+        free(d2);
+    }
+}
+
+/* A tiny model: 2 views, 1 light, 1 x 2 texels. */
+static void tiny_model(btf_rf_model *m)
+{
+    btf_error e = {0};
+    memset(m, 0, sizeof *m);
+    btf_dir v[2] = {{0, 0}, {30, 90}}, l[1] = {{45, 0}};
+    TU_OK(btf_dirset_from_list(&m->views, v, 2, &e), &e);
+    TU_OK(btf_dirset_from_list(&m->lights, l, 1, &e), &e);
+    m->fit = BTF_RF_PTM, m->params = 6, m->slots = 9, m->fields = 2;
+    m->width = 1, m->height = 2;
+    m->lo = calloc(18, sizeof(float));
+    m->hi = calloc(18, sizeof(float));
+    m->codes = calloc(36, sizeof(uint16_t));
+    for (int i = 0; i < 18; i++)
+        m->hi[i] = 1.0f;
+    for (int i = 0; i < 36; i++)
+        m->codes[i] = (uint16_t)(i * 1000);
+}
+
+/* Re-wraps a (modified) payload as a stored container with a valid CRC. */
+static unsigned char *rewrap(const unsigned char *payload, size_t n, size_t *size)
+{
+    unsigned char *out = malloc(26 + n + 4);
+    memcpy(out, "\x89" "BTFRFL\r\n\x1a\n", 11);
+    out[11] = 1, out[12] = 0, out[13] = 0, out[14] = 0, out[15] = 26, out[16] = 0, out[17] = 0;
+    for (int i = 0; i < 4; i++)
+        out[18 + i] = out[22 + i] = (unsigned char)(n >> (8 * i));
+    memcpy(out + 26, payload, n);
+    uint32_t crc = (uint32_t)crc32(0L, out, (uInt)(26 + n));
+    for (int i = 0; i < 4; i++)
+        out[26 + n + i] = (unsigned char)(crc >> (8 * i));
+    *size = 26 + n + 4;
+    return out;
+}
+
+static void expect_format_error(const unsigned char *d, size_t n, const char *what)
+{
+    btf_rf_model m;
+    btf_error e = {0};
+    int rc = btf_rf_decode(d, n, "bad.rf", &m, &e);
+    if (rc != BTF_E_FORMAT)
+        print_error("%s: rc %d, %s\n", what, rc, e.msg);
+    assert_int_equal(rc, BTF_E_FORMAT);
+    assert_true(strncmp(e.msg, "bad.rf: ", 8) == 0);
+    assert_null(m.codes);
+}
+
+static void corrupt_files_are_errors(void **state)
+{
+    (void)state;
+    btf_rf_model m;
+    tiny_model(&m);
+    btf_error e = {0};
+    unsigned char *d;
+    size_t n;
+    TU_OK(btf_rf_encode(&m, &d, &n, &e), &e);
+    /* every truncation, every single flipped bit of the first bytes and the CRC */
+    for (size_t k = 0; k < n; k++)
+        expect_format_error(d, k, "truncated");
+    for (size_t k = 0; k < n; k++) {
+        d[k] ^= 0x10;
+        expect_format_error(d, n, "flipped");
+        d[k] ^= 0x10;
+    }
+    /* text-mode damage and a newer major version */
+    unsigned char *t = malloc(n + 1);
+    memcpy(t, d, 7);
+    t[7] = '\n';
+    memcpy(t + 8, d + 9, n - 9);
+    expect_format_error(t, n - 1, "text mode");
+    /* valid CRC, wrong content: the payload rewrapped after changes */
+    unsigned char *payload = malloc(1 << 16);
+    uLongf plen = 1 << 16;
+    size_t hdr = 26;
+    uint32_t stored = d[22] | d[23] << 8 | d[24] << 16 | (uint32_t)d[25] << 24;
+    if (d[17] == 1)
+        assert_int_equal(uncompress(payload, &plen, d + hdr, stored), Z_OK);
+    else
+        memcpy(payload, d + hdr, stored), plen = stored;
+    unsigned char *p2 = malloc(plen);
+    size_t sz;
+    /* find RFHD and RFQR */
+    size_t at = 0, rfhd = 0, rfqr = 0;
+    while (at + 8 <= plen) {
+        size_t len = payload[at + 4] | payload[at + 5] << 8 | payload[at + 6] << 16;
+        if (!memcmp(payload + at, "RFHD", 4))
+            rfhd = at + 8;
+        if (!memcmp(payload + at, "RFQR", 4))
+            rfqr = at + 8;
+        at += 8 + len;
+    }
+    assert_true(rfhd && rfqr);
+    unsigned char *w = rewrap(payload, plen, &sz); /* unchanged: still valid */
+    btf_rf_model ok;
+    TU_OK(btf_rf_decode(w, sz, "ok", &ok, &e), &e);
+    assert_same_model(&m, &ok);
+    btf_rf_model_free(&ok);
+    free(w);
+    struct { size_t off; unsigned char val; const char *what; } bad[] = {
+        {rfhd + 0, 7, "fit 7"},          {rfhd + 1, 2, "ptm with lobes"},
+        {rfhd + 2, 9, "params"},         {rfhd + 14, 5, "fields"},
+        {rfhd + 6, 0, "width 0"},        {rfqr + 3, 0x7f, "lo NaN or huge"},
+        {rfqr + 7, 0xff, "hi NaN"},      {rfqr + 3, 0x4f, "lo above hi"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        memcpy(p2, payload, plen);
+        p2[bad[i].off] = bad[i].val;
+        if (bad[i].off == rfqr + 3)
+            p2[rfqr + 2] = 0xc0; /* 0x7fc0....: NaN; 0x4fc0....: 6.4e9 > hi */
+        w = rewrap(p2, plen, &sz);
+        expect_format_error(w, sz, bad[i].what);
+        free(w);
+    }
+    /* a section missing; a section twice */
+    memcpy(p2, payload, plen);
+    memcpy(p2 + rfhd - 8, "XXXX", 4);
+    w = rewrap(p2, plen, &sz);
+    expect_format_error(w, sz, "no RFHD");
+    free(w);
+    memcpy(p2, payload, plen);
+    memcpy(p2 + rfqr - 8, "RFHD", 4);
+    w = rewrap(p2, plen, &sz);
+    expect_format_error(w, sz, "RFHD twice");
+    free(w);
+    /* The CAR reader refuses an RF file and the RF reader a CAR file, by name. */
+    const char *rfpath = tu_fmt("%s/tiny.btfcar", dir);
+    tu_write_file(rfpath, d, n);
+    btf_model cm;
+    assert_int_not_equal(btf_model_read(rfpath, &cm, &e), BTF_OK);
+    assert_non_null(strstr(e.msg, "tiny.btfcar"));
+    /* The encoder refuses what the decoder would */
+    m.hi[3] = -1.0f;
+    assert_int_equal(btf_rf_encode(&m, &t, &sz, &e), BTF_E_DATA);
+    free(payload);
+    free(p2);
+    free(t);
+    free(d);
+    btf_rf_model_free(&m);
+}
+
+/* ------------------------------------------------------------- commands */
+
+static void command_line(void **state)
+{
+    (void)state;
+    const char *cli = tu_cli();
+    char *errtext = NULL;
+    const char *model = tu_fmt("%s/cli-rf.btfcar", dir);
+    char m[4096];
+    snprintf(m, sizeof m, "%s", model);
+    assert_int_equal(tu_run(tu_fmt("%s analyse -q %s --family rf --fit lobes --lobes 1 "
+                                   "--threads 2 -o %s", cli, dataset_path, m), NULL), 0);
+    btf_rf_model back;
+    btf_error e = {0};
+    TU_OK(btf_rf_read(m, &back, &e), &e);
+    assert_int_equal(back.fit, BTF_RF_LOBES);
+    assert_int_equal(back.lobes, 1);
+    btf_rf_model_free(&back);
+    int status;
+    char *out = tu_capture(tu_fmt("%s info %s", cli, m), &status);
+    assert_int_equal(status, 0);
+    assert_non_null(strstr(out, "reflectance-field model"));
+    assert_non_null(strstr(out, "lobes: 1 non-linear lobe"));
+    free(out);
+    out = tu_capture(tu_fmt("%s info --json %s", cli, m), &status);
+    assert_int_equal(status, 0);
+    assert_non_null(strstr(out, "\"format\": \"btfcar-rf-model\""));
+    free(out);
+    const char *png = tu_fmt("%s/rf.png", dir);
+    char p[4096];
+    snprintf(p, sizeof p, "%s", png);
+    assert_int_equal(tu_run(tu_fmt("%s render -q %s --view 30,60 --light 45,0 --size 32x24 "
+                                   "--beside %s -o %s", cli, m, dataset_path, p), NULL), 0);
+    btf_image img;
+    TU_OK(btf_image_read(p, NULL, &img, &e), &e);
+    assert_int_equal(img.width, 16 + 32);
+    assert_int_equal(img.height, 24);
+    btf_image_free(&img);
+    /* usage errors: exit status 2 */
+    assert_int_equal(tu_run(tu_fmt("%s render %s --scene x.json -o %s", cli, m, p), NULL), 2);
+    assert_int_equal(tu_run(tu_fmt("%s render %s --view 0,0 --light 0,0 --backend gpu -o %s",
+                                   cli, m, p), NULL), 2);
+    assert_int_equal(tu_run(tu_fmt("%s analyse %s --fit ptm -o %s/x.btfcar", cli,
+                                   dataset_path, dir), NULL), 2);
+    assert_int_equal(tu_run(tu_fmt("%s analyse %s --family rf --subspaces 3 -o %s/x.btfcar",
+                                   cli, dataset_path, dir), NULL), 2);
+    assert_int_equal(tu_run(tu_fmt("%s analyse %s --family rf --fit cubic -o %s/x.btfcar",
+                                   cli, dataset_path, dir), NULL), 2);
+    /* a damaged file: one line naming it, exit 1, no crash */
+    FILE *f = fopen(m, "r+b");
+    assert_non_null(f);
+    fseek(f, 40, SEEK_SET);
+    fputc(0x55, f);
+    fclose(f);
+    assert_int_equal(tu_run(tu_fmt("%s info %s", cli, m), &errtext), 1);
+    assert_non_null(strstr(errtext, m));
+    assert_non_null(strstr(errtext, "CRC-32"));
+    free(errtext);
+    assert_int_equal(tu_run(tu_fmt("%s render %s --view 0,0 --light 0,0 -o %s", cli, m, p),
+                            &errtext), 1);
+    assert_non_null(strstr(errtext, m));
+    free(errtext);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(ptm_recovers_known_coefficients),
+        cmocka_unit_test(lm_recovers_a_known_lobe),
+        cmocka_unit_test(extremes_give_finite_fits),
+        cmocka_unit_test(view_weights_are_bilinear),
+        cmocka_unit_test(fits_are_finite_and_measured),
+        cmocka_unit_test(fit_does_not_depend_on_threads),
+        cmocka_unit_test(zero_null_and_defaults_agree),
+        cmocka_unit_test(flat_render_at_a_measured_view_is_the_field),
+        cmocka_unit_test(file_round_trip),
+        cmocka_unit_test(corrupt_files_are_errors),
+        cmocka_unit_test(command_line),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}

@@ -26,6 +26,7 @@
 #include "io/ubo2014.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -137,7 +138,16 @@ static btf_status out_open(outfile *o, const char *path, uint64_t size, btf_erro
     if (rc)
         return rc;
     o->size = (size_t)size;
-    if (ftruncate(o->fd, (off_t)size) != 0)
+    /* The temporary is open for writing only; a shared writable mapping
+     * needs it open for reading too: the same new file, reopened. */
+    int rw = open(o->tmp, O_RDWR | O_NOFOLLOW | O_CLOEXEC);
+    if (rw < 0) {
+        rc = btf_fail(err, BTF_E_IO, "%s: cannot reopen %s: %s", path, o->tmp, strerror(errno));
+    } else {
+        close(o->fd);
+        o->fd = rw;
+    }
+    if (rc == BTF_OK && ftruncate(o->fd, (off_t)size) != 0)
         rc = btf_fail(err, BTF_E_IO, "%s: cannot make a file of %llu bytes: %s", path,
                       (unsigned long long)size, strerror(errno));
     if (rc == BTF_OK) {

@@ -469,6 +469,9 @@ static void test_cli_info_export(void **state)
     assert_int_equal(btf_dataset_get_info(utia)->n_lights, 4);
     btf_dataset_close(utia);
     btf_dataset_close(ds);
+    /* photometric stereo reads the pairs through the dataset (no file per image) */
+    assert_int_equal(tu_run(tu_fmt("%s photostereo -q %s -o %s/ps", tu_cli(), p, tu_dir), NULL), 0);
+    assert_true(tu_count_files(tu_fmt("%s/ps", tu_dir)) >= 3);
     /* no such direction; bad input through the CLI */
     char *msg = NULL;
     st = tu_run(tu_fmt("%s export %s --view 10,10 --light 0,0 -o %s/x.png", tu_cli(), p, tu_dir), &msg);

@@ -18,7 +18,9 @@ static const char ABOUT[] =
     "A dataset: its layout (UBO2003, UTIA or a manifest .tsv), the number of\n"
     "images, views and lights, the image size, the direction sets and the bytes on\n"
     "disk. Every image's header and structure is checked (a missing or duplicated\n"
-    "(light, view) pair, mixed sizes or a truncated file is an error).\n\n"
+    "(light, view) pair, mixed sizes or a truncated file is an error). A Bonn .btf\n"
+    "file (DFMF, FMF, PVF, BDIF) is a dataset too: also its variant, components per\n"
+    "channel, colour model and the bytes of its factors.\n\n"
     "A model: its direction sets, the index table, every subspace (representative\n"
     "(view, light) pair, analysed size, mean colour, spectral basis, pyramid levels,\n"
     "and per band and level the CAR neighbourhood as row:col offsets, gamma, sigma\n"
@@ -37,7 +39,34 @@ static const char *format_name(btf_file_format f)
     }
 }
 
-static int dataset_text(const btf_dataset_info *in, int verify)
+/* A Bonn .btf file's own fields (layout UBO2014). */
+static void ubo_text(const btf_ubo2014_info *u)
+{
+    printf("btf file    %s (%s), meta version %d\n", u->variant, u->signature, u->meta_version);
+    if (u->components[1] || u->components[2])
+        printf("components  R %d, G %d, B %d (per channel)\n", u->components[0],
+               u->components[1], u->components[2]);
+    else if (u->components[0])
+        printf("components  %d (shared by the channels)\n", u->components[0]);
+    if (u->colour_model >= 0)
+        printf("colour      model %d\n", u->colour_model);
+    printf("scalars     %d bytes%s%s\n", u->scalar_size, u->scalar_size == 2 ? " (half)" : "",
+           u->transposed ? ", transposed layout" : "");
+    char b[64];
+    cli_format_bytes(u->data_bytes, b, sizeof b);
+    printf("data        %s mapped (%llu bytes)\n", b, (unsigned long long)u->data_bytes);
+    printf("cosine      %s\n", u->cosine_flag ? "flag set: divided by cos(theta_l)" : "flag 0");
+    printf("rgb scale   %g %g %g (stored; not applied)\n", u->rgb_scale[0], u->rgb_scale[1],
+           u->rgb_scale[2]);
+    if (u->dynamic_range)
+        printf("range       stored as ln(value + 1e-5)\n");
+    if (u->rotations)
+        printf("rotations   %d (skipped)\n", u->rotations);
+    if (u->measurement_setup[0])
+        printf("setup       %s\n", u->measurement_setup);
+}
+
+static int dataset_text(const btf_dataset_info *in, int verify, const btf_ubo2014_info *u)
 {
     char views[128], lights[128], bytes[64];
     cli_describe_set(in->views, views, sizeof views);
@@ -47,17 +76,23 @@ static int dataset_text(const btf_dataset_info *in, int verify)
     printf("layout      %s\n", btf_layout_name(in->layout));
     printf("images      %d (%d views x %d lights)\n", in->n_views * in->n_lights, in->n_views,
            in->n_lights);
-    printf("image size  %d x %d, %d channel%s, %s\n", in->width, in->height, in->channels,
-           in->channels == 1 ? "" : "s", format_name(in->format));
+    if (u)
+        printf("image size  %d x %d, %d channels, reconstructed from the file\n", in->width,
+               in->height, in->channels);
+    else
+        printf("image size  %d x %d, %d channel%s, %s\n", in->width, in->height, in->channels,
+               in->channels == 1 ? "" : "s", format_name(in->format));
     printf("views       %s\n", views);
     printf("lights      %s\n", lights);
     printf("on disk     %s\n", bytes);
+    if (u)
+        ubo_text(u);
     if (verify)
         printf("verified    every image decoded\n");
     return 0;
 }
 
-static int dataset_json(const btf_dataset_info *in, int verify)
+static int dataset_json(const btf_dataset_info *in, int verify, const btf_ubo2014_info *u)
 {
     FILE *f = stdout;
     fputs("{\"format\": \"btfcar-dataset\", \"path\": ", f);
@@ -67,11 +102,21 @@ static int dataset_json(const btf_dataset_info *in, int verify)
     fprintf(f, ",\n \"images\": %d, \"width\": %d, \"height\": %d, \"channels\": %d, "
                "\"file_format\": \"%s\", \"bytes_on_disk\": %llu, \"verified\": %s,\n \"views\": ",
             in->n_views * in->n_lights, in->width, in->height, in->channels,
-            format_name(in->format), (unsigned long long)in->bytes_on_disk,
+            u ? "btf" : format_name(in->format), (unsigned long long)in->bytes_on_disk,
             verify ? "true" : "false");
     cli_json_dirset(f, in->views);
     fputs(",\n \"lights\": ", f);
     cli_json_dirset(f, in->lights);
+    if (u) {
+        fputs(",\n \"btf\": {\"variant\": ", f);
+        cli_json_string(f, u->variant);
+        fputs(", \"signature\": ", f);
+        cli_json_string(f, u->signature);
+        fprintf(f, ", \"components\": [%d, %d, %d], \"colour_model\": %d, \"scalar_size\": %d, "
+                   "\"cosine_flag\": %d, \"data_bytes\": %llu}",
+                u->components[0], u->components[1], u->components[2], u->colour_model,
+                u->scalar_size, u->cosine_flag, (unsigned long long)u->data_bytes);
+    }
     fputs("}\n", f);
     return 0;
 }
@@ -89,7 +134,8 @@ static int info_dataset(cli_ctx *c, const char *path, int verify, int json, uint
     }
     cli_progress_done();
     const btf_dataset_info *in = btf_dataset_get_info(ds);
-    int rc = json ? dataset_json(in, verify) : dataset_text(in, verify);
+    const btf_ubo2014_info *u = btf_dataset_ubo2014(ds);
+    int rc = json ? dataset_json(in, verify, u) : dataset_text(in, verify, u);
     btf_dataset_close(ds);
     return rc;
 }

@@ -19,6 +19,7 @@ static const struct {
     {"synthesise", cmd_synthesise, "generate subspace images of a model at any size (CPU or GPU)"},
     {"render", cmd_render, "render the material on a scene, or flat for one (view, light) pair"},
     {"compare", cmd_compare, "distances between two textures, normalised by the reference's own"},
+    {"export", cmd_export, "write a dataset's images (a Bonn .btf file's, reconstructed) as files"},
     {"report", cmd_report, "a page of what a model costs, how close it comes, and the trade"},
 };
 

@@ -323,7 +323,9 @@ typedef enum btf_layout {
     BTF_LAYOUT_UNKNOWN = 0,
     BTF_LAYOUT_UBO2003,  /* "NNNNN tlAAA plBBB tvCCC pvDDD.jpg", per-view folders or flat */
     BTF_LAYOUT_UTIA,     /* tvCCC_pvDDD/tlAAA_plBBB_tvCCC_pvDDD.(png|exr) */
-    BTF_LAYOUT_MANIFEST  /* TSV: path theta_l phi_l theta_v phi_v */
+    BTF_LAYOUT_MANIFEST, /* TSV: path theta_l phi_l theta_v phi_v */
+    BTF_LAYOUT_UBO2014   /* one Bonn BTFDBB .btf file: DFMF, FMF, PVF or BDIF
+                            (docs/datasets.md, "UBO2014 .btf files") */
 } btf_layout;
 
 const char *btf_layout_name(btf_layout layout);
@@ -392,6 +394,32 @@ void btf_dataset_iter_end(btf_dataset_iter *it);
 btf_status btf_dataset_verify_pixels(const btf_dataset *ds, btf_progress_fn progress,
                                      void *user, btf_error *err);
 
+/* What a UBO2014 .btf file holds (layout BTF_LAYOUT_UBO2014), beyond
+ * btf_dataset_info: the format variant and its header fields. Every image is
+ * reconstructed on demand from the file, which is memory-mapped, never read
+ * into the heap (docs/datasets.md, "UBO2014 .btf files"). */
+typedef struct btf_ubo2014_info {
+    char signature[12];     /* "!DFMF08FCR", "!FMF12FCER", ... */
+    const char *variant;    /* "DFMF", "FMF", "PVF" or "BDIF" */
+    int meta_version;       /* the meta block's version */
+    char measurement_setup[81], image_sensor[81], light_source[81];
+    float ppmm;             /* pixels per millimetre, as stored */
+    float rgb_scale[3];     /* rgb_scale_factor, as stored; not applied */
+    int cosine_flag;        /* non-zero: the data hold cos(theta_l), divided out */
+    int n_channels;         /* stored channels (3) */
+    int colour_model;       /* DFMF: the decorrelation (0 RGB, 11 Ylog_UdivY_VdivY, ...); else -1 */
+    int scalar_size;        /* bytes per stored factor or value: 2 (half), 4, 8 */
+    int components[3];      /* DFMF: per channel; FMF, PVF: [0] (shared); BDIF: 0 */
+    int transposed;         /* factor layout with the pixels as rows */
+    int rotations;          /* num_rotations (read and skipped) */
+    int dynamic_range;      /* FMF: data stored as ln(value + 1e-5) */
+    uint64_t data_bytes;    /* the factor matrices (or BDIF images) in the mapping */
+    uint64_t file_bytes;
+} btf_ubo2014_info;
+/* The .btf details of a dataset of layout BTF_LAYOUT_UBO2014; NULL for any
+ * other layout. Lives as long as the dataset. */
+const btf_ubo2014_info *btf_dataset_ubo2014(const btf_dataset *ds);
+
 /* ------------------------------------------------------ procedural materials */
 
 /* A material: a periodic height field (in texel units) with an albedo and the
@@ -436,6 +464,69 @@ btf_generate_opts btf_generate_defaults(void);
  * (per-view folders), and outdir/truth/{height,normals,albedo}.exr. */
 btf_status btf_generate(const char *material, const char *outdir,
                         const btf_generate_opts *opts, btf_error *err);
+
+/* Writing UBO2014 .btf files (src/io/ubo_write.c; docs/datasets.md,
+ * "UBO2014 .btf files"). The images come from a callback: image(user, view,
+ * light, out, err) fills *out (linear RGB, width x height, 3 channels;
+ * btf_image_alloc'd, the writer frees it) for view and light indices into
+ * the given sets; it is called for each pair in view-major order, twice per
+ * pair for DFMF (two passes). */
+typedef btf_status (*btf_pair_image_fn)(void *user, int view, int light, btf_image *out,
+                                        btf_error *err);
+
+typedef enum btf_ubo2014_variant {
+    BTF_UBO2014_DFMF = 0, /* "!DFMF08FCR": per channel U x (S V)', colour model 0 (RGB) */
+    BTF_UBO2014_BDIF      /* "!BDIF06R2!": every value as a half float, uncompressed */
+} btf_ubo2014_variant;
+
+typedef struct btf_ubo2014_write_opts {
+    int variant;          /* btf_ubo2014_variant; 0: DFMF */
+    int components;       /* DFMF: components per channel (at most the matrix's
+                             rank); 0: 16 */
+    int scalar_size;      /* DFMF: 2 (half) or 4 (float); 0: 2 */
+    uint64_t max_bytes;   /* DFMF: the cap on the working memory of the
+                             factorisation (the Gram matrices, or the images
+                             when there are fewer images than pixels); 0: 2^31 */
+    btf_progress_fn progress;
+    void *progress_user;
+} btf_ubo2014_write_opts;
+/* The defaults: DFMF, 16 components, half, 2 GiB, no progress. */
+btf_ubo2014_write_opts btf_ubo2014_write_defaults(void);
+
+/* What a written file costs and how far its values are from the images. */
+typedef struct btf_ubo2014_write_stats {
+    int components[3];    /* DFMF: per channel, as written */
+    double rms_error[3];  /* RMS of (file value - image value) per channel, over
+                             every pixel of every pair (DFMF: truncation and
+                             rounding; BDIF: half rounding) */
+    double max_error[3];  /* the largest |file value - image value| */
+    double energy[3];     /* DFMF: fraction of the sum of squares kept */
+    uint64_t bytes;       /* the file's size */
+} btf_ubo2014_write_stats;
+
+/* Writes the BTF of views x lights images of width x height to path
+ * (atomically). DFMF: per channel the truncated SVD of the (view, light) x
+ * pixel matrix, computed from the Gram matrix of its smaller side
+ * (deterministic). stats may be NULL. */
+btf_status btf_ubo2014_write(const char *path, const btf_dirset *views, const btf_dirset *lights,
+                             int width, int height, btf_pair_image_fn image, void *user,
+                             const btf_ubo2014_write_opts *opts, btf_ubo2014_write_stats *stats,
+                             btf_error *err);
+
+/* Given factors, written as a DFMF file as they are: per channel c,
+ * u[c] is (n_views * n_lights) x components[c] (row view * n_lights +
+ * light) and sxv[c] is (width * height) x components[c] (row y * width + x),
+ * both row-major. */
+typedef struct btf_ubo2014_factors {
+    int colour_model;     /* stored as is (0: RGB; 11: Ylog_UdivY_VdivY, ...) */
+    int cosine_flag;      /* stored as is */
+    int scalar_size;      /* 2 (half; 0 means this), 4 (float) or 8 (double) */
+    int components[3];
+    const float *u[3], *sxv[3];
+} btf_ubo2014_factors;
+btf_status btf_ubo2014_write_factors(const char *path, const btf_dirset *views,
+                                     const btf_dirset *lights, int width, int height,
+                                     const btf_ubo2014_factors *f, btf_error *err);
 
 /* ------------------------------------------ analyse, stage 1: segmentation */
 /* Paper section II.A: the (view, light) images are clustered by k-means on

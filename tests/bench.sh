@@ -17,6 +17,14 @@ for b in "$@"; do
         RENDER_BENCH=$b ;; # below, on the analysed material
     *bench_fidelity)
         FIDELITY_BENCH=$b ;; # below, on the generated materials and photographs
+    *bench_btf)
+        echo "== Bonn .btf: every image of a 151 x 151 DFMF file reconstructed (bench_btf)"
+        "$b" 128 16 || echo "bench: bench_btf exited with $?"
+        if [ "${BENCH_FULL:-0}" = 1 ]; then
+            "$b" 400 16 || echo "bench: bench_btf exited with $?"
+        else
+            "$b" 400 16 2000 || echo "bench: bench_btf exited with $?"
+        fi ;;
     *bench_gpu)
         for n in 1 2; do
             LP_NUM_THREADS=$n "$b" || echo "bench: $(basename "$b") exited with $?"

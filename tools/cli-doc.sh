@@ -30,7 +30,7 @@ are removed (docs/design.md, "Writes are atomic").
 HEAD
 "$B" --help
 echo '```'
-for c in generate info analyse photostereo texture-fit synthesise render compare report; do
+for c in generate info analyse photostereo texture-fit synthesise render compare report export; do
     printf '\n## btfcar %s\n\n```\n' "$c"
     "$B" "$c" --help
     echo '```'

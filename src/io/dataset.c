@@ -8,10 +8,14 @@
  * entries, checks that the set is complete and unique, and (unless asked
  * not to) probes every file's header and structure. Pixels are decoded one
  * image at a time, on demand: read by pair, iterate, or verify them all.
+ * A Bonn .btf file (layout UBO2014, recognised by its signature) is opened
+ * by io/ubo_open.c instead, and each image is reconstructed from it by
+ * io/ubo_decode.c.
  */
 #include <stdio.h>
 #include "core/core.h"
 #include "io/io.h"
+#include "io/ubo2014.h"
 
 #include <errno.h>
 #include <stdlib.h>
@@ -25,6 +29,7 @@ struct btf_dataset {
     btf_dataset_entries files; /* owns the path strings */
     char **paths;     /* [view * n_lights + light], pointers into files */
     uint64_t max_pixels; /* btf_dataset_opts.max_pixels */
+    ubo_open_file *ubo;  /* layout UBO2014: the mapped file */
 };
 
 /* The distinct light (or view) directions of the entries as a set. */
@@ -144,7 +149,40 @@ void btf_dataset_close(btf_dataset *ds)
     btf_dirset_free(&ds->views);
     btf_dirset_free(&ds->lights);
     free(ds->paths);
+    ubo_close(ds->ubo);
     free(ds);
+}
+
+/* A .btf file: the mapped file's sets and sizes become the dataset's. */
+static btf_status open_ubo(btf_dataset *ds, const btf_dataset_opts *o, btf_error *err)
+{
+    btf_status rc = ubo_open(ds->root, &ds->ubo, err);
+    if (rc == BTF_OK)
+        rc = btf_dirset_copy(&ds->views, &ds->ubo->views, err);
+    if (rc == BTF_OK)
+        rc = btf_dirset_copy(&ds->lights, &ds->ubo->lights, err);
+    if (rc == BTF_OK)
+        rc = btf_check_pixels(ds->root, (int)ds->ubo->f.width, (int)ds->ubo->f.height,
+                              o->max_pixels, err);
+    if (rc)
+        return rc;
+    ds->info.layout = BTF_LAYOUT_UBO2014;
+    ds->info.root = ds->root;
+    ds->info.n_views = ds->views.count;
+    ds->info.n_lights = ds->lights.count;
+    ds->info.views = &ds->views;
+    ds->info.lights = &ds->lights;
+    ds->info.width = (int)ds->ubo->f.width;
+    ds->info.height = (int)ds->ubo->f.height;
+    ds->info.channels = 3;
+    ds->info.format = BTF_FILE_UNKNOWN;
+    ds->info.bytes_on_disk = ds->ubo->f.size;
+    return BTF_OK;
+}
+
+const btf_ubo2014_info *btf_dataset_ubo2014(const btf_dataset *ds)
+{
+    return ds && ds->ubo ? &ds->ubo->f.info : NULL;
 }
 
 btf_dataset_opts btf_dataset_defaults(void)
@@ -166,6 +204,15 @@ btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_
     size_t rl = strlen(ds->root);
     while (rl > 1 && ds->root[rl - 1] == '/')
         ds->root[--rl] = '\0';
+    if (ubo_sniff(ds->root)) {
+        btf_status urc = open_ubo(ds, &o, err);
+        if (urc) {
+            btf_dataset_close(ds);
+            return urc;
+        }
+        *out = ds;
+        return BTF_OK;
+    }
     btf_status rc = btf_dataset_list_entries(ds->root, &ds->files, err);
     if (rc == BTF_OK)
         rc = collect_dirs(&ds->files, 0, &ds->views, err);
@@ -199,6 +246,8 @@ const char *btf_dataset_path(const btf_dataset *ds, int view, int light)
 {
     if (view < 0 || light < 0 || view >= ds->info.n_views || light >= ds->info.n_lights)
         return NULL;
+    if (ds->ubo)
+        return ds->root; /* every image is in the one file */
     return ds->paths[(size_t)view * ds->info.n_lights + light];
 }
 
@@ -209,6 +258,15 @@ btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_imag
     if (!p)
         return btf_fail(err, BTF_E_ARG, "%s: no (view %d, light %d) in a %d x %d dataset", ds->root,
                         view, light, ds->info.n_views, ds->info.n_lights);
+    if (ds->ubo) {
+        btf_status rc = btf_image_alloc(out, ds->info.width, ds->info.height, 3, err);
+        if (rc == BTF_OK)
+            rc = ubo_decode(&ds->ubo->f, ds->ubo->view_index[view], ds->ubo->light_index[light],
+                            out->data, err);
+        if (rc)
+            btf_image_free(out);
+        return rc;
+    }
     btf_read_opts ro = {.channels = 3, .max_pixels = ds->max_pixels};
     btf_status rc = btf_image_read(p, &ro, out, err);
     if (rc == BTF_OK && (out->width != ds->info.width || out->height != ds->info.height)) {

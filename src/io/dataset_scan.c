@@ -30,6 +30,7 @@ const char *btf_layout_name(btf_layout layout)
     case BTF_LAYOUT_UBO2003: return "UBO2003";
     case BTF_LAYOUT_UTIA: return "UTIA";
     case BTF_LAYOUT_MANIFEST: return "manifest";
+    case BTF_LAYOUT_UBO2014: return "UBO2014";
     default: return "unknown";
     }
 }

@@ -317,7 +317,8 @@ btf_status btf_photostereo_dataset_view(const btf_dataset *ds, const btf_dir *wa
         paths[i] = btf_dataset_path(ds, view, i);
     }
     btf_ps_source src = {.name = info->root, .count = n, .paths = paths, .read = o.read,
-                         .width = info->width, .height = info->height, .channels = 3};
+                         .width = info->width, .height = info->height, .channels = 3,
+                         .ds = ds, .view = view};
     rc = btf_ps_run(&src, lights, NULL, &o, out, err);
     out->view = view;
     out->view_dir = info->views->dirs[view];

@@ -31,7 +31,8 @@ btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
     }
     btf_read_opts ro = src->read;
     ro.channels = 3; /* the fit's grey value and the albedo need the colour */
-    btf_status rc = btf_image_read(src->paths[i], &ro, tmp, err);
+    btf_status rc = src->ds ? btf_dataset_read(src->ds, src->view, i, tmp, err)
+                            : btf_image_read(src->paths[i], &ro, tmp, err);
     if (rc)
         return rc;
     if (tmp->width != src->width || tmp->height != src->height) {

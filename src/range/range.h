@@ -136,6 +136,9 @@ typedef struct btf_ps_source {
     int count;
     const btf_image *images;   /* in memory, or NULL */
     const char *const *paths;  /* files otherwise */
+    const btf_dataset *ds;     /* or a dataset's images of one view (a .btf file
+                                  has no file per image): read with btf_dataset_read */
+    int view;
     btf_read_opts read;
     int width, height, channels; /* 0 x 0 for files until btf_ps_source_probe */
 } btf_ps_source;

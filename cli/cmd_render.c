@@ -17,9 +17,10 @@ static const char ABOUT[] =
     "the range map's normals (docs/render.md). Only the subspaces the frame\n"
     "needs are synthesised, tileable, in memory. IMAGE: .png (8-bit sRGB) or\n"
     ".exr (linear float).\n"
-    "A reflectance-field model (analyse --family rf, docs/rf.md) renders flat on\n"
-    "the CPU: the four closest measured views' fields at the exact light,\n"
-    "bilinear in theta and phi; its texels repeat across the frame.\n";
+    "A reflectance-field model (analyse --family rf, docs/rf.md) renders on the\n"
+    "CPU, flat or a scene: per pixel the four closest measured views' fields at\n"
+    "the exact light, bilinear in theta and phi; its texels repeat across the\n"
+    "surface.\n";
 
 typedef struct dir_arg {
     btf_dir dir;
@@ -90,25 +91,35 @@ static int is_rf_model(const char *path)
     return btf_rf_sniff(head, n);
 }
 
-/* The flat render of a reflectance-field model (Meseth et al. 2003,
- * section 5.4: the four closest measured views at the exact light), on the
- * CPU, with --beside as for a CAR model. */
-static int render_rf(cli_ctx *c, const char *model, btf_dir view, btf_dir light,
-                     const char *beside, const char *out_path, int width, int height,
-                     int threads, double t_start)
+/* The render of a reflectance-field model (Meseth et al. 2003, section
+ * 5.4: the four closest measured views at the exact light), on the CPU:
+ * flat, with --beside as for a CAR model, or a scene (scene_path). */
+static int render_rf(cli_ctx *c, const char *model, const char *scene_path, btf_dir view,
+                     btf_dir light, const char *beside, const char *out_path, int width,
+                     int height, int threads, double t_start)
 {
     btf_error err = {0};
+    btf_scene scene;
+    memset(&scene, 0, sizeof scene);
+    if (scene_path && btf_scene_load(scene_path, &scene, &err) != 0)
+        return cli_lib_error(c, &err);
     btf_rf_model m;
     double t_read = cli_now();
-    if (btf_rf_read(model, &m, &err) != 0)
+    if (btf_rf_read(model, &m, &err) != 0) {
+        btf_scene_free(&scene);
         return cli_lib_error(c, &err);
+    }
     t_read = cli_now() - t_read;
     btf_image img = {0}, measured = {0};
     btf_status rc = beside ? read_measured(beside, view, light, &measured, &err) : BTF_OK;
+    btf_render_info info = {0};
     double t_shade = cli_now();
-    if (rc == BTF_OK)
+    if (rc == BTF_OK && scene_path)
+        rc = btf_rf_render_scene(&m, &scene, width, height, threads, &img, &info, &err);
+    else if (rc == BTF_OK)
         rc = btf_rf_render_flat(&m, view, light, width, height, threads, &img, &err);
     t_shade = cli_now() - t_shade;
+    btf_scene_free(&scene);
     int idx[4];
     double w[4];
     btf_rf_view_weights(&m.views, view, idx, w);
@@ -128,7 +139,14 @@ static int render_rf(cli_ctx *c, const char *model, btf_dir view, btf_dir light,
         btf_rf_model_free(&m);
         return cli_lib_error(c, &err);
     }
-    if (!c->quiet) {
+    if (!c->quiet && scene_path) {
+        printf("reflectance-field model (%s): per pixel the four closest measured views at "
+               "the exact light\n", btf_rf_fit_name(m.fit));
+        printf("backend cpu: model read %.3f s, trace %.3f s, shade %.3f s, write %.3f s; "
+               "total %.3f s\n", t_read, info.trace_s, info.shade_s, t_write,
+               cli_now() - t_start);
+        printf("rendered %dx%d into %s\n", width, height, out_path);
+    } else if (!c->quiet) {
         if (m.fit == BTF_RF_LAFORTUNE)
             printf("reflectance-field model (lafortune): evaluated at the view itself\n");
         else {
@@ -214,13 +232,10 @@ int cmd_render(int argc, char **argv)
     if (cli_check_output(&c, out_path, BTF_OUTPUT_FILE))
         return 1;
     if (is_rf_model(model)) {
-        if (scene_path)
-            return cli_usage_error(&c, "%s is a reflectance-field model: it renders flat "
-                                   "(--view, --light), not scenes", model);
         if (backend == 1 || device >= 0)
             return cli_usage_error(&c, "%s is a reflectance-field model: it renders on the "
                                    "CPU only", model);
-        return render_rf(&c, model, view.dir, light.dir, beside, out_path, size[0], size[1],
+        return render_rf(&c, model, scene_path, view.dir, light.dir, beside, out_path, size[0], size[1],
                          ro.threads, t_start);
     }
     ro.width = size[0];

@@ -1852,6 +1852,20 @@ void btf_rf_eval(const btf_rf_model *m, btf_dir view, btf_dir light, int x, int 
 btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light, int width,
                               int height, int threads, btf_image *out, btf_error *err);
 
+/* A scene (btf_scene_load, docs/scene.md) rendered with an RF model on the
+ * CPU: traced into the CAR renderer's G-buffer (btf_scene_trace); per pixel
+ * the local view and light directions in the tangent frame (as
+ * btf_render_shade takes them: a light below the surface's horizon gives
+ * nothing, a point light falls off as 1/d^2), the texel floor(uv) wrapped
+ * into the model's texels, the four closest views' fields at the exact
+ * light blended (the flat render's arithmetic), times each light's
+ * intensity; background pixels the scene's background. No parallax or bump
+ * mapping (the fields hold the relief). width/height 0: 512; threads 0:
+ * all CPUs. info (NULL: not wanted): trace_s and shade_s, the rest 0. */
+btf_status btf_rf_render_scene(const btf_rf_model *m, const btf_scene *s, int width,
+                               int height, int threads, btf_image *out, btf_render_info *info,
+                               btf_error *err);
+
 /* Table 1 of the paper: the mean |Y data - Y model| over every texel and
  * (view, light) image of ds, the model evaluated at the measured directions;
  * mean_luminance: the data's. The dataset must have the model's size and

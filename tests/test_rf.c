@@ -366,6 +366,159 @@ static void flat_render_at_a_measured_view_is_the_field(void **state)
     }
 }
 
+/* ---------------------------------------------------------------- scenes */
+
+/* A plane (normal +z, side n world units, one texel per unit) seen head-on
+ * by a camera 10^4 units away whose frame of n x n pixels spans it exactly:
+ * pixel (x, y) is texel (x, y), the tangent frame the world's axes and the
+ * view within 0.05 degree of the normal. One light. */
+static void head_on_scene(btf_scene *sc, int n, btf_light light)
+{
+    memset(sc, 0, sizeof *sc);
+    double d = 1e4;
+    sc->camera = (btf_camera){{0, 0, d}, {0, 0, 0}, {0, 1, 0},
+                              2.0 * atan(0.5 * n / d) * 180.0 / M_PI};
+    sc->n_lights = 1;
+    sc->lights = calloc(1, sizeof *sc->lights);
+    sc->lights[0] = light;
+    sc->n_objects = 1;
+    sc->objects = calloc(1, sizeof *sc->objects);
+    sc->objects[0] = (btf_object){.kind = BTF_OBJECT_PLANE, .center = {0, 0, 0},
+                                  .axis = {0, 0, 1}, .size = n, .texture_scale = 1};
+    sc->background[0] = 0.25f;
+}
+
+/* A copy of m whose every field is field f: any view blends to field f. */
+static void uniform_fields(const btf_rf_model *m, int f, btf_rf_model *out)
+{
+    *out = *m;
+    size_t texels = (size_t)m->width * m->height * m->slots;
+    out->lo = malloc((size_t)m->fields * m->slots * sizeof(float));
+    out->hi = malloc((size_t)m->fields * m->slots * sizeof(float));
+    out->codes = malloc((size_t)m->fields * texels * sizeof(uint16_t));
+    assert_non_null(out->codes);
+    memset(&out->views, 0, sizeof out->views);
+    memset(&out->lights, 0, sizeof out->lights);
+    btf_error e = {0};
+    TU_OK(btf_dirset_from_list(&out->views, m->views.dirs, m->views.count, &e), &e);
+    TU_OK(btf_dirset_from_list(&out->lights, m->lights.dirs, m->lights.count, &e), &e);
+    for (int k = 0; k < m->fields; k++) {
+        memcpy(out->lo + (size_t)k * m->slots, m->lo + (size_t)f * m->slots,
+               m->slots * sizeof(float));
+        memcpy(out->hi + (size_t)k * m->slots, m->hi + (size_t)f * m->slots,
+               m->slots * sizeof(float));
+        memcpy(out->codes + k * texels, m->codes + f * texels, texels * sizeof(uint16_t));
+    }
+}
+
+static int close_to(float a, float b, double rel)
+{
+    return isfinite(a) && fabs((double)a - b) <= rel * fabs((double)b) + 1e-7;
+}
+
+/* btf_rf_render_scene on a plane seen head-on under a light at a measured
+ * direction is the flat render at the pole (texel for texel), for a
+ * directional and a point light; a sphere renders finite, non-negative
+ * pixels whatever the thread count; bad input is an error. */
+static void scene_render_is_the_flat_render_head_on(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const int n = 17; /* odd: the centre pixel looks straight down the normal */
+    const btf_rf_model *ms[3] = {&ptm, &lobes, &laf};
+    for (int k = 0; k < 3; k++) {
+        btf_dir light = ms[k]->lights.dirs[47];
+        btf_light sun = {.kind = BTF_LIGHT_DIRECTIONAL, .rgb = {1, 1, 1}};
+        btf_dir_to_vec(light, sun.direction);
+        btf_rf_model u;
+        uniform_fields(ms[k], 0, &u);
+        const btf_rf_model *both[2] = {ms[k], &u};
+        for (int which = 0; which < 2; which++) {
+            const btf_rf_model *m = both[which];
+            btf_scene sc;
+            head_on_scene(&sc, n, sun);
+            btf_image flat, img;
+            btf_render_info info;
+            TU_OK(btf_rf_render_flat(m, (btf_dir){0, 0}, light, n, n, 1, &flat, &e), &e);
+            TU_OK(btf_rf_render_scene(m, &sc, n, n, 2, &img, &info, &e), &e);
+            assert_int_equal(img.width, n);
+            assert_int_equal(img.height, n);
+            assert_true(info.trace_s >= 0 && info.shade_s >= 0);
+            /* the centre pixel: the pole itself (every model); elsewhere the
+             * view is off the pole by < 0.05 degree, which only a model whose
+             * fields are all one (u; not Lafortune's view-dependent lobes)
+             * ignores */
+            int all = which == 1 && m->fit != BTF_RF_LAFORTUNE;
+            int nonzero = 0;
+            for (int y = 0; y < n; y++)
+                for (int x = 0; x < n; x++) {
+                    if (!all && !(x == n / 2 && y == n / 2))
+                        continue;
+                    for (int c = 0; c < 3; c++) {
+                        size_t i = ((size_t)y * n + x) * 3 + c;
+                        assert_true(close_to(img.data[i], flat.data[i], 1e-5));
+                        nonzero += flat.data[i] > 0.0f;
+                    }
+                }
+            assert_true(nonzero > 0);
+            /* a point light far along the same direction, its intensity
+             * the squared distance: the centre pixel again */
+            btf_image pt;
+            btf_light *l = &sc.lights[0];
+            l->kind = BTF_LIGHT_POINT;
+            for (int c = 0; c < 3; c++)
+                l->position[c] = 1000.0 * l->direction[c], l->rgb[c] = 1e6f;
+            TU_OK(btf_rf_render_scene(m, &sc, n, n, 1, &pt, NULL, &e), &e);
+            size_t ci = ((size_t)(n / 2) * n + n / 2) * 3;
+            for (int c = 0; c < 3; c++)
+                assert_true(close_to(pt.data[ci + c], flat.data[ci + c], 1e-5));
+            btf_image_free(&pt);
+            btf_image_free(&flat);
+            btf_image_free(&img);
+            btf_scene_free(&sc);
+        }
+        btf_rf_model_free(&u);
+    }
+    /* a sphere: finite, non-negative, lit somewhere, the background around
+     * it, the same for any thread count */
+    btf_scene sp;
+    TU_OK(btf_scene_sphere((btf_dir){30, 45}, 16, &sp, &e), &e);
+    sp.background[0] = 0.5f, sp.background[1] = 0.25f, sp.background[2] = 0.125f;
+    for (int k = 0; k < 3; k++) {
+        btf_image a, b;
+        TU_OK(btf_rf_render_scene(ms[k], &sp, 48, 40, 1, &a, NULL, &e), &e);
+        TU_OK(btf_rf_render_scene(ms[k], &sp, 48, 40, 2, &b, NULL, &e), &e);
+        assert_memory_equal(a.data, b.data, (size_t)48 * 40 * 3 * sizeof(float));
+        int lit = 0;
+        for (size_t i = 0; i < (size_t)48 * 40 * 3; i++) {
+            assert_true(isfinite(a.data[i]) && a.data[i] >= 0.0f);
+            lit += a.data[i] > 0.0f;
+        }
+        assert_true(lit > 0);
+        assert_true(a.data[0] == 0.5f && a.data[1] == 0.25f && a.data[2] == 0.125f);
+        size_t ci = ((size_t)20 * 48 + 24) * 3;
+        assert_true(a.data[ci] + a.data[ci + 1] + a.data[ci + 2] > 0.0f);
+        btf_image_free(&a);
+        btf_image_free(&b);
+    }
+    /* bad input: errors, the output left empty */
+    btf_image img;
+    assert_int_equal(btf_rf_render_scene(NULL, &sp, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_null(img.data);
+    assert_int_equal(btf_rf_render_scene(&ptm, NULL, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf_rf_render_scene(&ptm, &sp, -1, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf_rf_render_scene(&ptm, &sp, 8, BTF_RENDER_MAX_SIDE + 1, 1, &img, NULL,
+                                         &e), BTF_E_ARG);
+    assert_int_equal(btf_rf_render_scene(&ptm, &sp, 8, 8, 1, NULL, NULL, &e), BTF_E_ARG);
+    btf_rf_model empty;
+    memset(&empty, 0, sizeof empty);
+    assert_int_equal(btf_rf_render_scene(&empty, &sp, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    sp.objects[0].radius = 0.0;
+    assert_int_not_equal(btf_rf_render_scene(&ptm, &sp, 8, 8, 1, &img, NULL, &e), BTF_OK);
+    assert_null(img.data);
+    btf_scene_free(&sp);
+}
+
 /* ---------------------------------------------------------------- files */
 
 static void assert_same_model(const btf_rf_model *a, const btf_rf_model *b)
@@ -593,7 +746,31 @@ static void command_line(void **state)
     assert_int_equal(img.height, 24);
     btf_image_free(&img);
     /* usage errors: exit status 2 */
-    assert_int_equal(tu_run(tu_fmt("%s render %s --scene x.json -o %s", cli, m, p), NULL), 2);
+    /* a scene: the objects under its lights */
+    const char *scene = tu_fmt("%s/rf-scene.json", dir);
+    char sp[4096];
+    snprintf(sp, sizeof sp, "%s", scene);
+    const char *json = "{\"camera\": {\"position\": [0, 0, 4], \"target\": [0, 0, 0], "
+                       "\"up\": [0, 1, 0], \"fov\": 40}, \"lights\": [{\"type\": "
+                       "\"directional\", \"direction\": [1, 1, 1], \"intensity\": 1}], "
+                       "\"objects\": [{\"type\": \"sphere\", \"center\": [0, 0, 0], "
+                       "\"radius\": 1, \"texture_scale\": 16}]}";
+    tu_write_file(sp, json, strlen(json));
+    out = tu_capture(tu_fmt("%s render %s --scene %s --size 40x30 --threads 2 -o %s", cli, m,
+                            sp, p), &status);
+    assert_int_equal(status, 0);
+    assert_non_null(strstr(out, "trace"));
+    free(out);
+    TU_OK(btf_image_read(p, NULL, &img, &e), &e);
+    assert_int_equal(img.width, 40);
+    assert_int_equal(img.height, 30);
+    btf_image_free(&img);
+    assert_int_equal(tu_run(tu_fmt("%s render %s --scene %s/missing.json -o %s", cli, m, dir,
+                                   p), NULL), 1);
+    assert_int_equal(tu_run(tu_fmt("%s render %s --scene %s --backend gpu -o %s", cli, m, sp,
+                                   p), NULL), 2);
+    assert_int_equal(tu_run(tu_fmt("%s render %s --scene %s --view 0,0 --light 0,0 -o %s", cli,
+                                   m, sp, p), NULL), 2);
     assert_int_equal(tu_run(tu_fmt("%s render %s --view 0,0 --light 0,0 --backend gpu -o %s",
                                    cli, m, p), NULL), 2);
     assert_int_equal(tu_run(tu_fmt("%s analyse %s --fit ptm -o %s/x.btfcar", cli,
@@ -629,6 +806,7 @@ int main(void)
         cmocka_unit_test(fit_does_not_depend_on_threads),
         cmocka_unit_test(zero_null_and_defaults_agree),
         cmocka_unit_test(flat_render_at_a_measured_view_is_the_field),
+        cmocka_unit_test(scene_render_is_the_flat_render_head_on),
         cmocka_unit_test(file_round_trip),
         cmocka_unit_test(corrupt_files_are_errors),
         cmocka_unit_test(command_line),

@@ -112,6 +112,56 @@ static inline void rf_texel_params(const btf_rf_model *m, int f, size_t t, float
         p[s] = rf_dequantise(q[s], lo[s], hi[s]);
 }
 
+/* The fields a render at one view blends (paper section 5.4): the four
+ * closest measured views with their weights (btf_rf_view_weights; zero
+ * weights dropped) and the view vector each is evaluated with (its own
+ * measured direction); a Lafortune model's one field at the view itself
+ * (view: its direction, vvec: its unit vector). Shared by the flat render
+ * (rf_render.c) and the scene render (rf_scene.c), so that both blend with
+ * the same arithmetic. */
+typedef struct rf_views {
+    int n;
+    int field[4];
+    double w[4];
+    double v[4][3];
+} rf_views;
+
+static inline void rf_views_at(const btf_rf_model *m, btf_dir view, const double vvec[3],
+                               rf_views *o)
+{
+    o->n = 0;
+    if (m->fit == BTF_RF_LAFORTUNE) {
+        o->n = 1, o->field[0] = 0, o->w[0] = 1.0;
+        for (int k = 0; k < 3; k++)
+            o->v[0][k] = vvec[k];
+        return;
+    }
+    int idx[4];
+    double w[4];
+    btf_rf_view_weights(&m->views, view, idx, w);
+    for (int i = 0; i < 4; i++)
+        if (w[i] != 0.0) {
+            o->field[o->n] = idx[i], o->w[o->n] = w[i];
+            btf_dir_to_vec(m->views.dirs[idx[i]], o->v[o->n]);
+            o->n++;
+        }
+}
+
+/* Linear RGB of texel t under unit light l (tangent frame): the blend of
+ * the fields of vs, each field's luminance times its chromaticity. */
+static inline void rf_blend(const btf_rf_model *m, const rf_views *vs, size_t t,
+                            const double l[3], double sum[3])
+{
+    float p[BTF_RF_MAX_SLOTS];
+    sum[0] = sum[1] = sum[2] = 0.0;
+    for (int i = 0; i < vs->n; i++) {
+        rf_texel_params(m, vs->field[i], t, p);
+        double lum = rf_lum_eval(m->fit, m->lobes, p, l, vs->v[i]);
+        for (int k = 0; k < 3; k++)
+            sum[k] += vs->w[i] * (float)(lum * p[m->params + k]);
+    }
+}
+
 /* rf_lm.c: a bounded Levenberg-Marquardt least-squares solver for a few
  * parameters (at most RF_LM_MAX). fn adds up the squared residuals at p
  * into *cost, and, when jtj is not NULL, JᵀJ (upper triangle, row-major

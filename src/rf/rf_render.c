@@ -5,7 +5,8 @@
  * y mod height), seen from one view and lit by one unit directional light
  * at the exact light direction; the four closest measured views' fields
  * (rf_interp.c) are evaluated and blended with their weights (equation (3)
- * with one light). Rows are shaded in parallel.
+ * with one light; rf.h's rf_views_at and rf_blend, which the scene render
+ * shares). Rows are shaded in parallel.
  */
 #include "rf/rf.h"
 
@@ -15,10 +16,8 @@
 typedef struct render_ctx {
     const btf_rf_model *m;
     btf_image *out;
-    int n;               /* fields blended (1..4) */
-    int field[4];
-    double w[4];
-    double l[3], v[4][3];
+    rf_views vs;         /* the fields blended (1..4), rf.h */
+    double l[3];
 } render_ctx;
 
 static btf_status row_job(void *user, int y, int worker, btf_error *err)
@@ -26,18 +25,11 @@ static btf_status row_job(void *user, int y, int worker, btf_error *err)
     (void)worker, (void)err;
     const render_ctx *c = user;
     const btf_rf_model *m = c->m;
-    float p[BTF_RF_MAX_SLOTS];
     float *row = c->out->data + (size_t)y * c->out->width * 3;
     int ty = y % m->height;
     for (int x = 0; x < c->out->width; x++) {
-        size_t t = (size_t)ty * m->width + x % m->width;
-        double sum[3] = {0, 0, 0};
-        for (int i = 0; i < c->n; i++) {
-            rf_texel_params(m, c->field[i], t, p);
-            double lum = rf_lum_eval(m->fit, m->lobes, p, c->l, c->v[i]);
-            for (int k = 0; k < 3; k++)
-                sum[k] += c->w[i] * (float)(lum * p[m->params + k]);
-        }
+        double sum[3];
+        rf_blend(m, &c->vs, (size_t)ty * m->width + x % m->width, c->l, sum);
         for (int k = 0; k < 3; k++)
             row[3 * x + k] = (float)sum[k];
     }
@@ -61,20 +53,9 @@ btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light
     memset(&c, 0, sizeof c);
     c.m = m;
     btf_dir_to_vec(light, c.l);
-    if (m->fit == BTF_RF_LAFORTUNE) {
-        c.n = 1, c.field[0] = 0, c.w[0] = 1.0;
-        btf_dir_to_vec(view, c.v[0]);
-    } else {
-        int idx[4];
-        double w[4];
-        btf_rf_view_weights(&m->views, view, idx, w);
-        for (int i = 0; i < 4; i++)
-            if (w[i] != 0.0) {
-                c.field[c.n] = idx[i], c.w[c.n] = w[i];
-                btf_dir_to_vec(m->views.dirs[idx[i]], c.v[c.n]);
-                c.n++;
-            }
-    }
+    double vv[3];
+    btf_dir_to_vec(view, vv);
+    rf_views_at(m, view, vv, &c.vs);
     btf_status rc = btf_image_alloc(out, width ? width : m->width, height ? height : m->height, 3,
                                     err);
     if (rc)

@@ -19,13 +19,31 @@ static const char ABOUT[] =
     "  the trade    with --sweep: the dataset analysed over a grid of settings\n"
     "               (subspaces, levels, neighbourhood), each timed, sized and\n"
     "               measured, with Pareto plots. Finished points are kept in\n"
-    "               DIR/sweep/: an interrupted sweep resumes where it stopped.\n";
+    "               DIR/sweep/: an interrupted sweep resumes where it stopped.\n"
+    "A reflectance-field MODEL (analyse --family rf, docs/rf.md) gets its own\n"
+    "report: its file against the raw BTF, per pair the texture distances and\n"
+    "the pixel-wise mean |dY| (measured against its flat render), the mean |dY|\n"
+    "over every image, the worst pairs by |dY|, the preview; no --sweep, and\n"
+    "--seed, --relief, --pca-error and --jpeg-quality do not apply.\n";
+
+/* 1 when path starts like a reflectance-field model (docs/rf.md). */
+static int is_rf_model(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    unsigned char head[16];
+    size_t n = fread(head, 1, sizeof head, f);
+    fclose(f);
+    return btf_rf_sniff(head, n);
+}
 
 /* "auto,2,4" into a sweep grid: 0 for auto. */
 typedef struct grid_arg {
     int *n;
     int *values;
     int hi;
+    int given;  /* set when the option was parsed */
 } grid_arg;
 
 static int parse_grid(const char *s, void *dest, char *why, size_t n)
@@ -56,6 +74,7 @@ static int parse_grid(const char *s, void *dest, char *why, size_t n)
     if (!count)
         return -1;
     *g->n = count;
+    g->given = 1;
     return 0;
 }
 
@@ -91,9 +110,9 @@ int cmd_report(int argc, char **argv)
     btf_report_opts ro = btf_report_defaults();
     btf_sweep_opts *so = &ro.sweep_opts;
     so->analyse.segment.kmeans.seed = 1; /* analyse's seed: the sweep's default is the command's */
-    grid_arg gk = {&so->n_subspaces, so->subspaces, 255};
-    grid_arg gl = {&so->n_levels, so->levels, BTF_MAX_LEVELS};
-    grid_arg gn = {&so->n_neighbours, so->neighbours, BTF_CAR_MAX_NEIGHBOURS};
+    grid_arg gk = {&so->n_subspaces, so->subspaces, 255, 0};
+    grid_arg gl = {&so->n_levels, so->levels, BTF_MAX_LEVELS, 0};
+    grid_arg gn = {&so->n_neighbours, so->neighbours, BTF_CAR_MAX_NEIGHBOURS, 0};
     uint64_t max_pixels = BTF_DEFAULT_MAX_PIXELS;
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
@@ -145,15 +164,23 @@ int cmd_report(int argc, char **argv)
         return prc;
     if (cli_check_output(&c, out, BTF_OUTPUT_FOLDER))
         return 1;
+    int rf = is_rf_model(args[1]);
+    if (rf && (ro.sweep || gk.given || gl.given || gn.given))
+        return cli_usage_error(&c, "%s is a reflectance-field model: --sweep varies the CAR "
+                               "analysis and does not apply", args[1]);
     btf_error err = {0};
     double t0 = cli_now();
     btf_model m;
-    if (btf_model_read(args[1], &m, &err) != 0)
+    btf_rf_model rm;
+    memset(&m, 0, sizeof m);
+    memset(&rm, 0, sizeof rm);
+    if ((rf ? btf_rf_read(args[1], &rm, &err) : btf_model_read(args[1], &m, &err)) != 0)
         return cli_lib_error(&c, &err);
     btf_dataset_opts dopts = {.progress = cli_progress_fn(&c), .max_pixels = max_pixels};
     btf_dataset *ds;
     if (btf_dataset_open(args[0], &dopts, &ds, &err) != 0) {
         btf_model_free(&m);
+        btf_rf_model_free(&rm);
         return cli_lib_error(&c, &err);
     }
     ro.dataset_name = args[0];
@@ -166,11 +193,13 @@ int cmd_report(int argc, char **argv)
     btf_gpu *gpu = ro.sweep ? cli_open_gpu("auto", -1, &gerr) : NULL;
     so->gpu = gpu;
     btf_report_summary sum;
-    int rc = btf_report_write(ds, &m, out, &ro, &sum, &err);
+    int rc = rf ? btf_rf_report_write(ds, &rm, out, &ro, &sum, &err)
+                : btf_report_write(ds, &m, out, &ro, &sum, &err);
     cli_progress_done();
     btf_gpu_close(gpu);
     btf_dataset_close(ds);
     btf_model_free(&m);
+    btf_rf_model_free(&rm);
     if (rc)
         return cli_lib_error(&c, &err);
     if (!c.quiet) {
@@ -179,6 +208,11 @@ int cmd_report(int argc, char **argv)
                (unsigned long long)sum.model_bytes, (unsigned long long)sum.raw_bytes);
         printf("quality       mean combined distance %.2f, worst %.2f over %d pairs\n",
                sum.mean_combined, sum.worst_combined, sum.pairs);
+        if (rf)
+            printf("pixel-wise    mean |dY| %.5f over every image (%.1f %% of the mean "
+                   "luminance %.4f)\n", sum.mean_abs_error,
+                   sum.mean_luminance > 0 ? 100.0 * sum.mean_abs_error / sum.mean_luminance
+                                          : 0.0, sum.mean_luminance);
         if (ro.sweep)
             printf("sweep         %d settings (%d resumed from %s/sweep/)\n", sum.sweep_points,
                    sum.sweep_resumed, out);

@@ -1722,6 +1722,9 @@ typedef struct btf_report_summary {
     double mean_combined, worst_combined;
     int sweep_points, sweep_resumed;
     double seconds;
+    double mean_abs_error;       /* btf_rf_report_write only: mean |Y data - Y model| over
+                                    every image (btf_rf_error); 0 for a CAR report */
+    double mean_luminance;       /* the data's mean luminance (RF reports only) */
 } btf_report_summary;
 
 /* Writes the report of model m (analysed from ds) into the folder dir:
@@ -1872,6 +1875,20 @@ btf_status btf_rf_render_scene(const btf_rf_model *m, const btf_scene *s, int wi
  * direction sets. */
 btf_status btf_rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
                         double *mean_abs_error, double *mean_luminance, btf_error *err);
+
+/* The report of an RF model (docs/report.md, "Reflectance-field models"),
+ * the counterpart of btf_report_write in the same folder layout: the model
+ * file's bytes against the raw BTF; per sampled pair (opts->quality: the
+ * spread or all) the measured image against btf_rf_render_flat of that
+ * pair by btf_texture_distance and the pixel-wise mean |dY|; the mean |dY|
+ * over every image (btf_rf_error); pictures of the sampled pairs and of the
+ * opts->worst pairs by |dY|; the preview sphere (btf_rf_render_scene);
+ * DIR/index.html and DIR/report.json. The model must be of ds (size and
+ * direction sets; BTF_E_ARG). opts->sweep is BTF_E_ARG (no CAR settings to
+ * trade); the PCA, JPEG and relief options do not apply. */
+btf_status btf_rf_report_write(const btf_dataset *ds, const btf_rf_model *m, const char *dir,
+                               const btf_report_opts *opts, btf_report_summary *summary,
+                               btf_error *err);
 
 /* The file (docs/rf.md, "File"): the container of MODEL.btfcar (version,
  * zlib, CRC-32) with its own signature "\x89BTFRFL\r\n\x1a\n" and sections.

@@ -265,6 +265,67 @@ static void test_report_errors(void **state)
     free(d);
 }
 
+/* A reflectance-field model's report (issue 19, point 4): its file
+ * against the raw BTF, per pair the texture distances and the pixel-wise
+ * |dY|, the pictures, the page in Chromium; --sweep is a usage error. */
+static void test_report_rf(void **state)
+{
+    (void)state;
+    char *rf = strdup(tu_fmt("%s/leather-rf.btfcar", tu_dir));
+    char *dir = strdup(tu_fmt("%s/rep-rf", tu_dir));
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s analyse -q %s --family rf --fit ptm --threads 2 -o %s",
+                                   tu_cli(), dataset, rf), NULL), 0);
+    int status;
+    char *out = tu_capture(tu_fmt("%s report %s %s -o %s --views 3 --lights 3 --worst 2 "
+                                  "--preview-size 96 --threads 2", tu_cli(), dataset, rf, dir),
+                           &status);
+    assert_int_equal(status, 0);
+    assert_non_null(strstr(out, "pixel-wise    mean |dY|"));
+    free(out);
+    char *html = read_text(tu_fmt("%s/index.html", dir));
+    assert_null(strstr(html, "<script"));
+    assert_null(strstr(html, "http://"));
+    assert_non_null(strstr(html, "reflectance-field model"));
+    assert_non_null(strstr(html, "|ΔY|"));
+    /* 9 pictured pairs (the 2 worst among them, shown twice) + sphere + heat map */
+    assert_int_equal(check_sources(dir, html), 9 + 2 + 2);
+    assert_int_equal(tu_count_files(dir), 9 + 4);
+    free(html);
+    cJSON *j = read_json(dir);
+    const cJSON *fam = cJSON_GetObjectItemCaseSensitive(j, "family");
+    assert_true(cJSON_IsString(fam) && strcmp(fam->valuestring, "rf") == 0);
+    assert_int_equal((long)num(j, "compression.model_bytes"), file_size(rf));
+    assert_int_equal((long)num(j, "compression.raw_bytes"), 81L * 81 * 32 * 32 * 3);
+    assert_int_equal((int)num(j, "quality.pairs"), 9);
+    assert_true(num(j, "pixelwise.mean_abs_dy") > 0.0);
+    assert_true(num(j, "pixelwise.mean_abs_dy") < num(j, "pixelwise.mean_luminance"));
+    assert_true(num(j, "pixelwise.worst_pair_abs_dy") >= num(j, "pixelwise.mean_pair_abs_dy"));
+    assert_true(num(j, "quality.worst_combined") >= num(j, "quality.mean_combined"));
+    const cJSON *pairs = cJSON_GetObjectItemCaseSensitive(
+        cJSON_GetObjectItemCaseSensitive(j, "quality"), "pairs_measured");
+    assert_int_equal(cJSON_GetArraySize(pairs), 9);
+    assert_true(num(pairs->child, "mean_abs_dy") >= 0.0);
+    cJSON_Delete(j);
+    char *shot = strdup(tu_fmt("%s/shot-rf.png", tu_dir));
+    int rc = tu_run(tu_fmt("%s --size 1024x1400 %s/index.html %s", checker(), dir, shot), &err);
+    if (rc != 0)
+        fail_msg("check-page on the RF report: %d: %s", rc, err ? err : "");
+    free(err);
+    assert_true(file_size(shot) > 10000);
+    /* no sweep for this family: a usage error, nothing written */
+    char *d2 = strdup(tu_fmt("%s/rep-rf-sweep", tu_dir));
+    assert_int_equal(tu_run(tu_fmt("%s report %s %s -o %s --sweep", tu_cli(), dataset, rf, d2),
+                            NULL), 2);
+    assert_int_equal(tu_run(tu_fmt("%s report %s %s -o %s --sweep-levels 1,2", tu_cli(),
+                                   dataset, rf, d2), NULL), 2);
+    assert_int_equal(access(d2, F_OK), -1);
+    free(d2);
+    free(shot);
+    free(dir);
+    free(rf);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -272,6 +333,7 @@ int main(void)
         cmocka_unit_test(test_report_all),
         cmocka_unit_test(test_report_sweep),
         cmocka_unit_test(test_report_errors),
+        cmocka_unit_test(test_report_rf),
     };
     return cmocka_run_group_tests(tests, setup, tu_teardown_dir);
 }

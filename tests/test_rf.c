@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <zlib.h>
 
 static char *dir;
@@ -586,6 +587,48 @@ static void tiny_model(btf_rf_model *m)
         m->codes[i] = (uint16_t)(i * 1000);
 }
 
+/* btf_rf_report_write: the summary's numbers are the model file's bytes,
+ * the raw BTF and btf_rf_error's; a sweep, a model of another dataset and
+ * missing arguments are errors that leave no folder. */
+static void rf_report(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_report_opts o = btf_report_defaults();
+    o.quality.views = 2, o.quality.lights = 3;
+    o.sphere_size = 32, o.worst = 2, o.threads = 2;
+    btf_report_summary sum;
+    char d[4096];
+    snprintf(d, sizeof d, "%s/rf-report", dir);
+    TU_OK(btf_rf_report_write(ds, &lobes, d, &o, &sum, &e), &e);
+    unsigned char *data;
+    size_t size;
+    TU_OK(btf_rf_encode(&lobes, &data, &size, &e), &e);
+    free(data);
+    assert_int_equal(sum.model_bytes, size);
+    assert_int_equal(sum.raw_bytes, 81ULL * 81 * 16 * 16 * 3);
+    assert_true(fabs(sum.ratio - (double)sum.raw_bytes / size) < 1e-9 * sum.ratio);
+    assert_int_equal(sum.pairs, 6);
+    double mae, meany;
+    TU_OK(btf_rf_error(ds, &lobes, 2, &mae, &meany, &e), &e);
+    assert_true(sum.mean_abs_error == mae && sum.mean_luminance == meany);
+    assert_true(isfinite(sum.mean_combined) && sum.worst_combined >= sum.mean_combined);
+    assert_int_equal(tu_count_files(d), 6 + 4); /* pairs, index, json, sphere, heat map */
+    o.sweep = 1;
+    snprintf(d, sizeof d, "%s/rf-report-2", dir);
+    assert_int_equal(btf_rf_report_write(ds, &lobes, d, &o, &sum, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "sweep"));
+    o.sweep = 0;
+    btf_rf_model tiny;
+    tiny_model(&tiny);
+    assert_int_equal(btf_rf_report_write(ds, &tiny, d, &o, &sum, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "does not describe"));
+    btf_rf_model_free(&tiny);
+    assert_int_equal(btf_rf_report_write(NULL, &lobes, d, &o, &sum, &e), BTF_E_ARG);
+    assert_int_equal(btf_rf_report_write(ds, NULL, d, &o, &sum, &e), BTF_E_ARG);
+    assert_int_equal(access(d, F_OK), -1);
+}
+
 /* Re-wraps a (modified) payload as a stored container with a valid CRC. */
 static unsigned char *rewrap(const unsigned char *payload, size_t n, size_t *size)
 {
@@ -809,6 +852,7 @@ int main(void)
         cmocka_unit_test(scene_render_is_the_flat_render_head_on),
         cmocka_unit_test(file_round_trip),
         cmocka_unit_test(corrupt_files_are_errors),
+        cmocka_unit_test(rf_report),
         cmocka_unit_test(command_line),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

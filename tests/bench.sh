@@ -2,7 +2,7 @@
 # make bench: the benchmark programs given as arguments, then command-level
 # benchmarks. Figures only: medians of several runs, throughput, peak memory,
 # ratios. Nothing here fails on time. BENCH_FULL=1 adds the 32768^2 synthesis.
-# BENCH_BTF400=0 skips the UBO2014-sized .btf run (about 8 minutes on 2 cores:
+# BENCH_BTF400=0 skips the UBO2014-sized .btf run (about 5.5 minutes on 2 cores:
 # 22,801 images of 400^2 reconstructed, then btfcar analyse on the file).
 set -u
 BTFCAR=${BTF_CLI:-build/btfcar}

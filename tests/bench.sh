@@ -2,10 +2,14 @@
 # make bench: the benchmark programs given as arguments, then command-level
 # benchmarks. Figures only: medians of several runs, throughput, peak memory,
 # ratios. Nothing here fails on time. BENCH_FULL=1 adds the 32768^2 synthesis.
+# BENCH_BTF400=0 skips the UBO2014-sized .btf run (about 5.5 minutes on 2 cores:
+# 22,801 images of 400^2 reconstructed, then btfcar analyse on the file).
 set -u
 BTFCAR=${BTF_CLI:-build/btfcar}
 export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}
 echo "== machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GiB", $2/1048576}' /proc/meminfo), $(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)"
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
 SYNTH_MODEL=""
 RENDER_BENCH=""
 FIDELITY_BENCH=""
@@ -18,12 +22,20 @@ for b in "$@"; do
     *bench_fidelity)
         FIDELITY_BENCH=$b ;; # below, on the generated materials and photographs
     *bench_btf)
-        echo "== Bonn .btf: every image of a 151 x 151 DFMF file reconstructed (bench_btf)"
+        echo "== Bonn .btf: every image of a 151 x 151 DFMF file reconstructed (bench_btf; factors of the leather at 20^2, S x V tiled)"
         "$b" 128 16 || echo "bench: bench_btf exited with $?"
-        if [ "${BENCH_FULL:-0}" = 1 ]; then
-            "$b" 400 16 || echo "bench: bench_btf exited with $?"
-        else
-            "$b" 400 16 2000 || echo "bench: bench_btf exited with $?"
+        BTF400=$TMP/ubo400.btf
+        if [ "${BENCH_BTF400:-1}" = 1 ]; then
+            echo "== UBO2014's shape: 151 x 151 images of 400^2, K 16 per channel, model 11: all 22,801 reconstructed, then btfcar analyse on the file (goal <= 5 min, <= 2 GB)"
+            /usr/bin/time -f "%e %M" -o "$TMP/time" "$b" 400 16 0 20 "$BTF400" ||
+                echo "bench: bench_btf exited with $?"
+            echo "   bench_btf process: $(cut -d' ' -f1 "$TMP/time") s, peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB"
+            if [ -f "$BTF400" ]; then
+                /usr/bin/time -f "%e %M" -o "$TMP/time" "$BTFCAR" analyse -q "$BTF400" -o "$TMP/ubo400.btfcar" >"$TMP/out" 2>"$TMP/err" &&
+                    echo "btfcar analyse of the 400^2 .btf, end to end: $(cut -d' ' -f1 "$TMP/time") s, peak RSS $(($(cut -d' ' -f2 "$TMP/time") / 1024)) MB, model $(stat -c %s "$TMP/ubo400.btfcar") bytes" ||
+                    echo "bench: analyse of the 400^2 .btf failed: $(tail -1 "$TMP/err")"
+                rm -f "$BTF400" "$TMP/ubo400.btfcar"
+            fi
         fi ;;
     *bench_gpu)
         for n in 1 2; do
@@ -34,8 +46,6 @@ for b in "$@"; do
     esac
 done
 
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
 median3() { echo "$@" | tr ' ' '\n' | sed '/^$/d' | sort -n | sed -n 2p; }
 # timed LABEL CMD...: runs CMD 3 times, prints the median wall time and the
 # peak RSS of the last run; leaves the last run's output in place.

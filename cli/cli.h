@@ -45,6 +45,13 @@ int cli_parse_pair(const char *s, double *a, double *b);
 /* "THETA,PHI" in degrees (theta 0..90, phi 0..360; 360 becomes 0): 0, or
  * -1 with what was expected in why. */
 int cli_parse_dir(const char *s, btf_dir *d, char *why, size_t n);
+/* A --view/--light style option: the direction and whether it was given;
+ * cli_parse_dir_arg is its CLI_CUSTOM parser. */
+typedef struct cli_dir_arg {
+    btf_dir dir;
+    int given;
+} cli_dir_arg;
+int cli_parse_dir_arg(const char *s, void *dest, char *why, size_t n);
 /* "WxH" */
 int cli_parse_size(const char *s, int *w, int *h);
 

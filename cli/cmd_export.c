@@ -18,20 +18,6 @@ static const char ABOUT[] =
     "folder DIR in the UTIA layout, DIR/tvCCC_pvDDD/tlAAA_plBBB_tvCCC_pvDDD.exr (linear\n"
     "half float), which btfcar reads back as a dataset. Images are made one at a time.\n";
 
-typedef struct dir_arg {
-    btf_dir dir;
-    int given;
-} dir_arg;
-
-static int parse_dir_arg(const char *s, void *dest, char *why, size_t n)
-{
-    dir_arg *d = dest;
-    if (cli_parse_dir(s, &d->dir, why, n) != 0)
-        return -1;
-    d->given = 1;
-    return 0;
-}
-
 static int find_dir(const cli_ctx *c, const btf_dirset *set, btf_dir d, const char *what,
                     const char *path)
 {
@@ -105,14 +91,14 @@ int cmd_export(int argc, char **argv)
 {
     cli_ctx c = {"export", 0};
     const char *in_path = NULL, *out = NULL;
-    dir_arg view = {{0, 0}, 0}, light = {{0, 0}, 0};
+    cli_dir_arg view = {{0, 0}, 0}, light = {{0, 0}, 0};
     int all = 0;
     uint64_t max_px = BTF_DEFAULT_MAX_PIXELS;
     cli_opt opts[] = {
         {.name = "--view", .kind = CLI_CUSTOM, .dest = &view, .meta = "THETA,PHI",
-         .help = "the view direction (degrees)", .parse = parse_dir_arg},
+         .help = "the view direction (degrees)", .parse = cli_parse_dir_arg},
         {.name = "--light", .kind = CLI_CUSTOM, .dest = &light, .meta = "THETA,PHI",
-         .help = "the light direction (degrees)", .parse = parse_dir_arg},
+         .help = "the light direction (degrees)", .parse = cli_parse_dir_arg},
         {.name = "--all", .kind = CLI_FLAG, .dest = &all,
          .help = "every (view, light) pair, into the folder given by -o (UTIA layout)"},
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,

@@ -22,20 +22,6 @@ static const char ABOUT[] =
     "the exact light, bilinear in theta and phi; its texels repeat across the\n"
     "surface.\n";
 
-typedef struct dir_arg {
-    btf_dir dir;
-    int given;
-} dir_arg;
-
-static int parse_dir_arg(const char *s, void *dest, char *why, size_t n)
-{
-    dir_arg *d = dest;
-    if (cli_parse_dir(s, &d->dir, why, n) != 0)
-        return -1;
-    d->given = 1;
-    return 0;
-}
-
 /* --beside DATASET: the measured image of the (view, light) pair, read at
  * the measured directions nearest those asked for (within 0.5 degree). */
 static btf_status read_measured(const char *dataset, btf_dir view, btf_dir light,
@@ -170,7 +156,7 @@ int cmd_render(int argc, char **argv)
     cli_ctx c = {"render", 0};
     static const char *const backends[] = {"cpu", "gpu", "auto", NULL};
     const char *model = NULL, *scene_path = NULL, *out_path = NULL, *beside = NULL;
-    dir_arg view = {{0, 0}, 0}, light = {{0, 0}, 0};
+    cli_dir_arg view = {{0, 0}, 0}, light = {{0, 0}, 0};
     btf_render_opts ro = btf_render_defaults();
     int size[2] = {512, 512}, backend = 2, all = 0, device = -1;
     double t_start = cli_now();
@@ -178,9 +164,9 @@ int cmd_render(int argc, char **argv)
         {.name = "--scene", .kind = CLI_STRING, .dest = &scene_path, .meta = "FILE",
          .help = "the JSON scene to render (docs/scene.md, examples/)"},
         {.name = "--view", .kind = CLI_CUSTOM, .dest = &view, .meta = "THETA,PHI",
-         .help = "flat render: the view direction (degrees)", .parse = parse_dir_arg},
+         .help = "flat render: the view direction (degrees)", .parse = cli_parse_dir_arg},
         {.name = "--light", .kind = CLI_CUSTOM, .dest = &light, .meta = "THETA,PHI",
-         .help = "flat render: the light direction (degrees)", .parse = parse_dir_arg},
+         .help = "flat render: the light direction (degrees)", .parse = cli_parse_dir_arg},
         {.name = "--beside", .kind = CLI_STRING, .dest = &beside, .meta = "DATASET",
          .help = "flat render: write the measured image of the pair (from DATASET) on\n"
                  "the left and the render on the right"},

@@ -219,6 +219,15 @@ int cli_parse_dir(const char *s, btf_dir *d, char *why, size_t n)
     return 0;
 }
 
+int cli_parse_dir_arg(const char *s, void *dest, char *why, size_t n)
+{
+    cli_dir_arg *d = dest;
+    if (cli_parse_dir(s, &d->dir, why, n) != 0)
+        return -1;
+    d->given = 1;
+    return 0;
+}
+
 /* BTF_VK_DEVICE and BTF_VK_VALIDATION into o (*index -1 when unset). */
 static int env_gpu_opts(btf_gpu_opts *o, int *index, btf_error *err)
 {

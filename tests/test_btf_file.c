@@ -417,9 +417,10 @@ static void test_memory_bounded(void **state)
     btf_dataset_iter_end(&it);
     assert_int_equal(rc, 0);
     assert_int_equal(count, n);
+    unsigned long long data_bytes = in->data_bytes; /* in lives as long as ds */
     btf_dataset_close(ds);
     print_message("heap (RssAnon) %ld kB before, %ld kB peak while reading %d images of a %llu-byte "
-                  "factor file\n", before, peak, count, (unsigned long long)in->data_bytes);
+                  "factor file\n", before, peak, count, data_bytes);
     assert_true(before > 0);
     assert_true(peak - before < 16 * 1024); /* < 16 MB: a few 3 MB images, not the 50 MB */
 }

@@ -187,13 +187,13 @@ static void test_analyse_shared(void **state)
     assert_memory_equal(a, b, na);
     free(a);
     free(b);
-    free(features);
     btf_model_free(&m);
     /* A model without a range map to copy from is an error. */
     btf_model none;
     memset(&none, 0, sizeof none);
     o.range_from = &none;
     assert_int_equal(btf_analyse(ds, &o, &m, &e), BTF_E_ARG);
+    free(features);
     btf_model_free(&range);
 }
 

@@ -239,7 +239,7 @@ static cJSON *pump(cdp *c, int id, double until)
 {
     for (;;) {
         char *nul;
-        while ((nul = memchr(c->buf, '\0', c->len))) {
+        while (c->len && (nul = memchr(c->buf, '\0', c->len))) {
             size_t n = (size_t)(nul - c->buf) + 1;
             cJSON *m = cJSON_Parse(c->buf);
             memmove(c->buf, c->buf + n, c->len - n);

@@ -422,7 +422,10 @@ static void test_memory_bounded(void **state)
     print_message("heap (RssAnon) %ld kB before, %ld kB peak while reading %d images of a %llu-byte "
                   "factor file\n", before, peak, count, data_bytes);
     assert_true(before > 0);
-    assert_true(peak - before < 16 * 1024); /* < 16 MB: a few 3 MB images, not the 50 MB */
+    /* Under ASan freed blocks wait in its quarantine (256 MB), so the heap
+     * grows with every image read: the bound means nothing there. */
+    if (!getenv("BTF_ASAN"))
+        assert_true(peak - before < 16 * 1024); /* < 16 MB: a few 3 MB images, not the 50 MB */
 }
 
 static void test_cli_info_export(void **state)

@@ -9,6 +9,7 @@
  * temporary folder that moves into place as a whole.
  */
 #include "core/core.h"
+#include "report/report.h"
 #include "report/report_data.h"
 
 #include <errno.h>
@@ -81,41 +82,6 @@ static void step(step_progress *s, const btf_report_opts *o, double from, double
     s->to = to;
 }
 
-/* measured | model, side by side with a 4-pixel dark gap. */
-static btf_status side_by_side(const btf_image *a, const btf_image *b, btf_image *out,
-                               btf_error *err)
-{
-    int gap = 4, w = a->width + gap + b->width, h = a->height > b->height ? a->height : b->height;
-    btf_status rc = btf_image_alloc(out, w, h, 3, err);
-    if (rc)
-        return rc;
-    for (size_t i = 0; i < (size_t)w * h * 3; i++)
-        out->data[i] = 0.02f;
-    for (int y = 0; y < h; y++) {
-        if (y < a->height)
-            memcpy(out->data + (size_t)y * w * 3, a->data + (size_t)y * a->width * 3,
-                   (size_t)a->width * 3 * sizeof(float));
-        if (y < b->height)
-            memcpy(out->data + ((size_t)y * w + a->width + gap) * 3,
-                   b->data + (size_t)y * b->width * 3, (size_t)b->width * 3 * sizeof(float));
-    }
-    return BTF_OK;
-}
-
-static btf_status write_pair(const char *dir, const char *name, const btf_image *meas,
-                             const btf_image *model, btf_error *err)
-{
-    char path[4096];
-    btf_image both = {0};
-    btf_status rc = btf_path_join(path, sizeof path, dir, name, err);
-    if (rc == BTF_OK)
-        rc = side_by_side(meas, model, &both, err);
-    if (rc == BTF_OK)
-        rc = btf_image_write_png(path, &both, err);
-    btf_image_free(&both);
-    return rc;
-}
-
 typedef struct pair_ctx {
     btf_report_data *d;
     const char *dir;
@@ -131,7 +97,7 @@ static btf_status on_pair(void *user, int pair, int view, int light, const btf_i
     char name[64];
     btf_report_pair_file(c->d, pair, name, sizeof name);
     c->d->pictured[pair] = 1;
-    return write_pair(c->dir, name, meas, model, err);
+    return btf_report_write_pair(c->dir, name, meas, model, err);
 }
 
 /* Which pairs get pictures: all measured ones for the spread; with every
@@ -212,7 +178,7 @@ static btf_status worst_pairs(btf_report_data *d, const btf_dataset *ds, const c
         char name[64];
         btf_report_pair_file(d, i, name, sizeof name);
         if (rc == BTF_OK)
-            rc = write_pair(dir, name, &meas, &model, err);
+            rc = btf_report_write_pair(dir, name, &meas, &model, err);
         btf_image_free(&meas);
         btf_image_free(&model);
         if (rc)

@@ -15,6 +15,7 @@
  * place as a whole.
  */
 #include "core/core.h"
+#include "report/report.h"
 #include "report/rf_report_data.h"
 
 #include <math.h>
@@ -43,34 +44,6 @@ static btf_status check_match(const btf_dataset_info *in, const btf_rf_model *m,
                             b.theta, b.phi);
     }
     return BTF_OK;
-}
-
-/* measured | model, side by side with a 4-pixel dark gap (the CAR
- * report's pictures). */
-static btf_status write_pair(const char *dir, const char *name, const btf_image *a,
-                             const btf_image *b, btf_error *err)
-{
-    int gap = 4, w = a->width + gap + b->width, h = a->height > b->height ? a->height : b->height;
-    btf_image both = {0};
-    btf_status rc = btf_image_alloc(&both, w, h, 3, err);
-    if (rc)
-        return rc;
-    for (size_t i = 0; i < (size_t)w * h * 3; i++)
-        both.data[i] = 0.02f;
-    for (int y = 0; y < h; y++) {
-        if (y < a->height)
-            memcpy(both.data + (size_t)y * w * 3, a->data + (size_t)y * a->width * 3,
-                   (size_t)a->width * 3 * sizeof(float));
-        if (y < b->height)
-            memcpy(both.data + ((size_t)y * w + a->width + gap) * 3,
-                   b->data + (size_t)y * b->width * 3, (size_t)b->width * 3 * sizeof(float));
-    }
-    char path[4096];
-    rc = btf_path_join(path, sizeof path, dir, name, err);
-    if (rc == BTF_OK)
-        rc = btf_image_write_png(path, &both, err);
-    btf_image_free(&both);
-    return rc;
 }
 
 static double lum(const float *p)
@@ -119,7 +92,7 @@ static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
         (J->picture_all || J->want[(size_t)p->view * d->in->n_lights + p->light])) {
         char name[64];
         btf_rf_report_pair_file(d, i, name, sizeof name);
-        rc = write_pair(J->dir, name, &meas, &model, err);
+        rc = btf_report_write_pair(J->dir, name, &meas, &model, err);
         p->pictured = rc == BTF_OK;
     }
     btf_image_free(&meas);

@@ -285,6 +285,7 @@ int cmd_synthesise(int argc, char **argv)
                                         NULL}; /* btf_exr_compression's order */
     int size[2] = {0, 0}, preview = 0, half = 0, device = -1, backend_index = 2;
     int as_float = 0, comp = DEFAULT_COMPRESSION, verbose = 0, range = 0, tileable = 0;
+    int match = 0;
     uint64_t seed = 1;
     double t_start = cli_now();
     cli_opt opts[] = {
@@ -308,6 +309,10 @@ int cmd_synthesise(int argc, char **argv)
         {.name = "--tileable", .kind = CLI_FLAG, .dest = &tileable,
          .help = "a tileable image: right edge continues into left, bottom into top\n"
                  "(both sides multiples of 2^(levels-1); CPU or GPU, the same pixels)"},
+        {.name = "--match-colours", .kind = CLI_FLAG, .dest = &match,
+         .help = "give each image the exemplar's CIE Lab histogram, whatever the\n"
+                 "realisation (docs/synthesis.md, \"Colour matching\"): holds each whole\n"
+                 "image in memory and costs a pass over it; models of format 1.3"},
         {.name = "--preview", .kind = CLI_FLAG, .dest = &preview,
          .help = "also write subspace_NN.png (8-bit sRGB; up to 8192x8192)"},
         {.name = "--half", .kind = CLI_FLAG, .dest = &half,
@@ -386,6 +391,7 @@ int cmd_synthesise(int argc, char **argv)
         done += pick[k];
     btf_synth_opts so = btf_synth_defaults();
     so.width = w, so.height = h, so.seed = seed, so.tileable = tileable;
+    so.match_colours = match;
     env_cpu_switches(&so);
     output out = {.dir = btf_output_dir_path(od), .model_path = model, .preview = preview, .ph = &ph};
     out.exr = btf_exr_defaults();

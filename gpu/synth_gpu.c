@@ -693,6 +693,11 @@ static btf_status check_all(const btf_model *m, const int *subspaces, int n,
         rc = btf_synth_check_size(w[j], h[j], err);
         if (rc == 0 && o->tileable) /* the CPU's rule and message */
             rc = btf_synth_check_tileable(w[j], h[j], m->subspaces[subspaces[j]].levels, err);
+        const btf_marginal *mg = rc == 0 ? &m->subspaces[subspaces[j]].marginal : NULL;
+        if (mg && o->match_colours && !(mg->knots && mg->lab_knots)) /* the CPU's message */
+            rc = btf_fail(err, BTF_E_ARG, "colour matching: subspace %d holds no Lab histogram "
+                          "(a model file of format 1.2 or older: analyse the material again)",
+                          subspaces[j]);
     }
     return rc;
 }
@@ -751,6 +756,10 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
     if (rc == BTF_OK)
         rc = run_all(g, m, subspaces, n, &o, w, h, (const int (*)[3][BTF_MAX_LEVELS])margins, &d,
                      err);
+    /* colour matching reads each whole image (its histogram): on the host,
+     * by the CPU's code, so that equal images stay equal (docs/gpu.md) */
+    for (int j = 0; rc == BTF_OK && o.match_colours && j < n; j++)
+        rc = btf_colour_match(m, subspaces[j], &outs[j], err);
     if (rc)
         for (int j = 0; j < n; j++)
             btf_image_free(&outs[j]);
@@ -768,6 +777,9 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
     if (!g || n < 1 || !offsets)
         return btf_fail(err, BTF_E_ARG, "GPU synthesis to the device: no GPU, no offsets or "
                         "%d images (at least 1)", n);
+    if (o.match_colours)
+        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis to the device: colour matching "
+                        "(btf_synth_opts.match_colours) runs on the host only (btf_gpu_synthesise)");
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
     int *w = btf_calloc((size_t)n * 2, sizeof(int), err);
     btf_status rc = w ? check_all(m, subspaces, n, &o, w, w + n, &margins, err) : BTF_E_NOMEM;

@@ -817,6 +817,15 @@ typedef struct btf_marginal {
     float quantile[3][BTF_MARGIN_KNOTS];  /* per band: the exemplar's quantiles, nondecreasing;
                                              [0] its minimum, [last] its maximum */
     float rgb_lo[3], rgb_hi[3];           /* the exemplar's linear RGB range, 0 <= lo <= hi */
+    /* The exemplar's CIE Lab histogram (format 1.3, docs/synthesis.md,
+     * "Colour matching"): L*, a*, b* of its RGB times the distances'
+     * exposure (1, or 1 / the largest rgb_hi when that is above 1) at
+     * probabilities j / 31, [0] the
+     * minimum, [last] the maximum; nondecreasing, L* in [0, 100], a*, b* in
+     * [-128, 128]. lab_knots 0: none (a file of format 1.2 or older), and
+     * btf_colour_match refuses the subspace. Only with knots. */
+    int lab_knots;                        /* 0 or BTF_MARGIN_KNOTS */
+    float lab_quantile[3][BTF_MARGIN_KNOTS];
 } btf_marginal;
 
 typedef struct btf_subspace_model {
@@ -1021,6 +1030,14 @@ typedef struct btf_synth_opts {
      * size); the fields run row by row (no wavefront). The same seed gives
      * the same bytes on every CPU path and on the GPU (btf_gpu_synthesise). */
     int tileable;
+    /* 1: after synthesis, each CIE Lab channel of the whole image through
+     * the monotone map from its own histogram onto the exemplar's
+     * (btf_colour_match): the first-order statistics of the material
+     * whatever the realisation; costs a whole image in memory (the streaming
+     * btf_synthesise then keeps one) and a pass over it; the model must hold
+     * Lab quantiles (format 1.3), else BTF_E_ARG. CPU and btf_gpu_synthesise
+     * (on the host after the read-back: the same bytes); not the GPU render. */
+    int match_colours;
 } btf_synth_opts;
 
 /* The defaults that a zero field of btf_synth_opts stands for. */
@@ -1039,6 +1056,20 @@ btf_status btf_synthesise(const btf_model *m, int subspace, const btf_synth_opts
 /* The same into an image (linear RGB), allocated here. */
 btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synth_opts *opts,
                                 btf_image *out, btf_error *err);
+/* Colour matching (src/synth/colour_match.c, docs/synthesis.md, "Colour
+ * matching"): the per-band marginal transfer gives each decorrelated band
+ * the exemplar's histogram, but the bands are synthesised independently
+ * where the material's chroma depends on its lightness, and a small
+ * synthesis' histogram strays from the model's with its realisation: both
+ * show in the CIE Lab histograms (issue 17's first-order distance). This
+ * pass measures img's own L*, a*, b* quantiles (every pixel up to 256 x
+ * 256, a regular grid of as many beyond), sends each channel of every pixel
+ * through the piecewise-linear map from them onto the model's
+ * lab_quantile, converts back and clamps into the exemplar's RGB box.
+ * Monotone per channel, deterministic, finite; a tileable image stays
+ * tileable. BTF_E_ARG when the subspace holds no Lab quantiles or img is
+ * not RGB. */
+btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, btf_error *err);
 /* The synthesis margin of one band (0..2) and pyramid level of a subspace in
  * pixels: its CAR field starts this many rows above the level's window and
  * runs this many columns on either side (docs/synthesis.md). */

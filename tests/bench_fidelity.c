@@ -3,15 +3,17 @@
  * for each exemplar, the texture distances (src/measure/, docs/measure.md)
  * between the exemplar and a synthesis of the same size by
  *   - btfcar's default model (auto levels, auto neighbourhoods),
+ *   - the same with colour matching (btf_synth_opts.match_colours),
  *   - 1, 2 and 3 pyramid levels (auto neighbourhoods),
  *   - fixed neighbourhoods of 4, 8 and 12 causal offsets (auto levels),
  *   - the phase-randomisation baseline (btf_phase_randomise),
  * with the model's bytes (the model file's encoding) against the baseline's
  * stored spectrum, and the synthesis time. Prints one markdown table row
  * per (exemplar, variant) and a summary; with --sheet PATH, writes the
- * first exemplar, its default synthesis and its baseline side by side.
+ * first exemplar, its default synthesis, its colour-matched one and its baseline side by side.
  *
- *   bench_fidelity [--sheet PATH] IMAGE...
+ *   bench_fidelity [--sheet PATH] IMAGE...   (sheet: exemplar | default |
+ *                                             colour match | baseline)
  * IMAGE: PNG, JPEG or EXR (btf_image_read), or a GIMP pattern (.pat: the
  * photographs tools/fetch-textures.sh extracts from Debian's gimp-data).
  * Without arguments (make bench runs every bench program so) it says how
@@ -77,17 +79,19 @@ typedef struct variant {
     int levels;          /* 0: auto */
     const char *fixed;   /* NULL: the Bayesian choice */
     int baseline;
+    int match;           /* 1: colour matching (btf_synth_opts.match_colours) */
 } variant;
 
 static const variant VARIANTS[] = {
-    {"default", 0, NULL, 0},
-    {"1 level", 1, NULL, 0},
-    {"2 levels", 2, NULL, 0},
-    {"3 levels", 3, NULL, 0},
-    {"fixed 4", 0, "0:-1,-1:0,-1:-1,-1:1", 0},
-    {"fixed 8", 0, "0:-1,-1:0,-1:-1,-1:1,0:-2,-2:0,-1:-2,-1:2", 0},
-    {"fixed 12", 0, "0:-1,-1:0,-1:-1,-1:1,0:-2,-2:0,-1:-2,-1:2,-2:-1,-2:1,-2:-2,-2:2", 0},
-    {"baseline", 0, NULL, 1},
+    {"default", 0, NULL, 0, 0},
+    {"colour match", 0, NULL, 0, 1},
+    {"1 level", 1, NULL, 0, 0},
+    {"2 levels", 2, NULL, 0, 0},
+    {"3 levels", 3, NULL, 0, 0},
+    {"fixed 4", 0, "0:-1,-1:0,-1:-1,-1:1", 0, 0},
+    {"fixed 8", 0, "0:-1,-1:0,-1:-1,-1:1,0:-2,-2:0,-1:-2,-1:2", 0, 0},
+    {"fixed 12", 0, "0:-1,-1:0,-1:-1,-1:1,0:-2,-2:0,-1:-2,-1:2,-2:-1,-2:1,-2:-2,-2:2", 0, 0},
+    {"baseline", 0, NULL, 1, 0},
 };
 #define N_VARIANTS (int)(sizeof VARIANTS / sizeof VARIANTS[0])
 
@@ -122,6 +126,7 @@ static int synthesise_variant(const variant *v, const btf_image *ex, btf_image *
     so.width = ex->width;
     so.height = ex->height;
     so.seed = 1;
+    so.match_colours = v->match;
     double t1 = tu_now();
     int rc = btf_synthesise_image(&m, 0, &so, out, e);
     *secs = tu_now() - t1;
@@ -139,16 +144,17 @@ static size_t negatives(const btf_image *img)
     return k;
 }
 
-/* [exemplar | default | baseline] into one image. */
-static void write_sheet(const char *path, const btf_image *parts[3])
+/* [exemplar | default | colour match | baseline] into one image. */
+#define SHEET_PARTS 4
+static void write_sheet(const char *path, const btf_image *parts[SHEET_PARTS])
 {
     int w = parts[0]->width, h = parts[0]->height;
     btf_image s;
     btf_error e = {0};
-    if (btf_image_alloc(&s, 3 * w + 8, h, 3, &e))
+    if (btf_image_alloc(&s, SHEET_PARTS * w + 4 * (SHEET_PARTS - 1), h, 3, &e))
         return;
     memset(s.data, 0, (size_t)s.width * h * 3 * sizeof(float));
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < SHEET_PARTS; k++)
         for (int y = 0; y < h; y++)
             memcpy(s.data + ((size_t)y * s.width + (size_t)k * (w + 4)) * 3,
                    parts[k]->data + (size_t)y * w * 3, (size_t)w * 3 * sizeof(float));
@@ -181,7 +187,7 @@ int main(int argc, char **argv)
             continue;
         }
         const char *base = strrchr(argv[a], '/') ? strrchr(argv[a], '/') + 1 : argv[a];
-        btf_image keep[2] = {{0}};
+        btf_image keep[3] = {{0}}; /* default, colour match, baseline */
         double comb[N_VARIANTS], fo[N_VARIANTS];
         uint64_t by[N_VARIANTS];
         int ok = 1;
@@ -205,8 +211,10 @@ int main(int argc, char **argv)
                    1000.0 * secs, negatives(&out));
             if (v == 0)
                 keep[0] = out;
-            else if (VARIANTS[v].baseline)
+            else if (VARIANTS[v].match && !keep[1].data)
                 keep[1] = out;
+            else if (VARIANTS[v].baseline)
+                keep[2] = out;
             else
                 btf_image_free(&out);
         }
@@ -218,12 +226,12 @@ int main(int argc, char **argv)
             }
             counted++;
             if (sheet && a == first) {
-                const btf_image *parts[3] = {&ex, &keep[0], &keep[1]};
+                const btf_image *parts[SHEET_PARTS] = {&ex, &keep[0], &keep[1], &keep[2]};
                 write_sheet(sheet, parts);
             }
         }
-        btf_image_free(&keep[0]);
-        btf_image_free(&keep[1]);
+        for (int k = 0; k < 3; k++)
+            btf_image_free(&keep[k]);
         btf_image_free(&ex);
     }
     if (counted == 0)
@@ -231,7 +239,7 @@ int main(int argc, char **argv)
     printf("\nover %d exemplars: mean combined distance, worst first-order component, mean "
            "bytes\n", counted);
     for (int v = 0; v < N_VARIANTS; v++)
-        printf("   %-9s combined %.2f, worst first order %.2f, %.0f bytes\n", VARIANTS[v].name,
+        printf("   %-12s combined %.2f, worst first order %.2f, %.0f bytes\n", VARIANTS[v].name,
                sum_comb[v] / counted, worst_first[v], sum_bytes[v] / counted);
     printf("   default against baseline: combined %.2f vs %.2f (%s); baseline stores %.0f x the "
            "model's bytes\n", sum_comb[0] / counted, sum_comb[N_VARIANTS - 1] / counted,

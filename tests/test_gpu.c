@@ -2,6 +2,7 @@
  * reference: bit-identical output for several models, sizes and seeds, with
  * the Khronos validation layer on and no message allowed. */
 #include "synth/synth_testing.h"
+#include "synth_gpu.h"
 #include "testutil.h"
 
 #include <math.h>
@@ -42,8 +43,9 @@ static void fit(btf_model *m, int levels, const char *spec)
     btf_image_free(&img);
 }
 
-/* Compares GPU and CPU synthesis of every subspace of m at w x h. */
-static void compare(const btf_model *m, int w, int h, uint64_t seed)
+/* Compares GPU and CPU synthesis of every subspace of m at w x h (match:
+ * with colour matching, btf_synth_opts.match_colours). */
+static void compare_opts(const btf_model *m, int w, int h, uint64_t seed, int match)
 {
     btf_error e = {0};
     int n = m->n_subspaces, subs[8] = {0};
@@ -51,7 +53,7 @@ static void compare(const btf_model *m, int w, int h, uint64_t seed)
     btf_image gpu_out[8];
     for (int k = 0; k < n; k++)
         subs[k] = k;
-    btf_synth_opts o = {.width = w, .height = h, .seed = seed};
+    btf_synth_opts o = {.width = w, .height = h, .seed = seed, .match_colours = match};
     TU_OK(btf_gpu_synthesise(gpu, m, subs, n, &o, gpu_out, &e), &e);
     for (int k = 0; k < n; k++) {
         btf_image cpu_out;
@@ -66,6 +68,35 @@ static void compare(const btf_model *m, int w, int h, uint64_t seed)
         btf_image_free(&cpu_out);
         btf_image_free(&gpu_out[k]);
     }
+    no_validation_messages();
+}
+
+static void compare(const btf_model *m, int w, int h, uint64_t seed)
+{
+    compare_opts(m, w, h, seed, 0);
+}
+
+/* Colour matching reads the whole image: on the host after the read-back,
+ * by the CPU's code, so the GPU's images stay the CPU's bytes; the device
+ * path (the render's) refuses it. */
+static void parity_colour_match(void **state)
+{
+    (void)state;
+    btf_model m;
+    fit(&m, 2, NULL);
+    assert_int_equal(m.subspaces[0].marginal.lab_knots, BTF_MARGIN_KNOTS);
+    compare_opts(&m, 1, 1, 1, 1);
+    compare_opts(&m, 96, 70, 4, 1);
+    btf_error e = {0};
+    btf_synth_opts so = {.width = 16, .height = 16, .seed = 1, .match_colours = 1};
+    int zero = 0;
+    uint64_t off = 0;
+    btf_vk_buffer *buf = NULL;
+    assert_int_equal(btf_gpu_synthesise_device(gpu, &m, &zero, 1, &so, &buf, &off, &e),
+                     BTF_E_UNSUPPORTED);
+    assert_non_null(strstr(e.msg, "colour matching"));
+    assert_null(buf);
+    btf_model_free(&m);
     no_validation_messages();
 }
 
@@ -321,6 +352,7 @@ int main(void)
         cmocka_unit_test(parity_several_subspaces),
         cmocka_unit_test(parity_long_loops),
         cmocka_unit_test(parity_when_tiled),
+        cmocka_unit_test(parity_colour_match),
         cmocka_unit_test(bad_requests),
         cmocka_unit_test(devices_defaults_and_sizes),
         cmocka_unit_test(cli_backends_agree),

@@ -14,10 +14,13 @@
  *     bands' variances, so that whatever the pyramid and the CAR fits make
  *     of the variance is what the map starts from,
  *   - the exemplar's linear RGB range, its low end at least 0: the box the
- *     RGB result is clamped to.
+ *     RGB result is clamped to,
+ *   - the exemplar's CIE L*, a*, b* quantiles at the same probabilities,
+ *     for colour matching (synth/colour_match.c, format 1.3).
  */
 #include "car/car.h"
 #include "core/core.h"
+#include "synth/synth.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -165,6 +168,10 @@ btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, b
         sm->marginal.knots = 0; /* values the file cannot hold safely: none */
         return BTF_OK;
     }
+    /* the exemplar's Lab histogram, for colour matching (synth/colour_match.c) */
+    if ((rc = btf_lab_quantiles(img, btf_lab_scale(&mg), mg.lab_quantile, err)))
+        return rc;
+    mg.lab_knots = BTF_MARGIN_KNOTS;
     mg.knots = BTF_MARGIN_KNOTS;
     sm->marginal = mg;
     return BTF_OK;

@@ -124,6 +124,35 @@ static btf_status check_basis(const float *basis, int s, const char *name, btf_s
  * slopes and differences of knots stay finite), and an RGB box 0 <= lo <=
  * hi. */
 #define MARGIN_LIMIT 1e37f
+
+/* The exemplar's Lab histogram (docs/model-format.md, "LABQ"): none, or 32
+ * nondecreasing quantiles per channel, L* in [0, 100], a* and b* in
+ * [-128, 128] (what the file's codes can hold). */
+static btf_status check_lab(const btf_marginal *mg, int s, const char *name, btf_status code,
+                            btf_error *err)
+{
+    if (mg->lab_knots == 0)
+        return BTF_OK;
+    if (mg->lab_knots != BTF_MARGIN_KNOTS)
+        return failf(err, code, name, "subspace %d: Lab histogram of %d knots (expected 0 or %d)",
+                     s, mg->lab_knots, BTF_MARGIN_KNOTS);
+    static const char CH[3][3] = {"L*", "a*", "b*"};
+    for (int c = 0; c < 3; c++) {
+        float lo = c == 0 ? 0.0f : -128.0f, hi = c == 0 ? 100.0f : 128.0f;
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
+            float q = mg->lab_quantile[c][j];
+            if (!(q >= lo && q <= hi))
+                return failf(err, code, name, "subspace %d: %s quantile %d is %g (expected %g..%g)",
+                             s, CH[c], j, q, lo, hi);
+            if (j > 0 && q < mg->lab_quantile[c][j - 1])
+                return failf(err, code, name,
+                             "subspace %d: %s quantile %d is %g, below quantile %d, %g (expected "
+                             "nondecreasing quantiles)", s, CH[c], j, q, j - 1,
+                             mg->lab_quantile[c][j - 1]);
+        }
+    }
+    return BTF_OK;
+}
 static btf_status check_marginal(const btf_marginal *mg, int s, const char *name,
                                  btf_status code, btf_error *err)
 {
@@ -157,7 +186,7 @@ static btf_status check_marginal(const btf_marginal *mg, int s, const char *name
             return failf(err, code, name,
                          "subspace %d: RGB range [%g, %g] of channel %d (expected 0 <= low <= high, "
                          "finite)", s, mg->rgb_lo[k], mg->rgb_hi[k], k);
-    return BTF_OK;
+    return check_lab(mg, s, name, code, err);
 }
 
 static btf_status check_subspace(const btf_model *m, int s, const char *name, btf_status code,

@@ -17,6 +17,7 @@
  */
 #include "car/car.h"
 #include "model/model.h"
+#include "synth/synth.h"
 #include "model/range_code.h"
 
 #include <math.h>
@@ -40,6 +41,9 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 /* 1.2 added the MARG section (marginal transfers); a model without one is
  * written as 1.1 or 1.0. */
 #define FMT_MINOR_MARGINALS 2
+/* 1.3 added the LABQ section (the exemplars' CIE Lab histograms, for
+ * colour matching); a model without one is written as 1.2 or older. */
+#define FMT_MINOR_LAB 3
 #define HEADER_BYTES 26 /* signature .. stored size, version 1.0 */
 #define RANG_PERIODIC 0x01u /* RANG flags bit 0: the tile is periodic */
 #define CRC_BYTES 4
@@ -52,8 +56,8 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 #define MAX_FILE_BYTES ((size_t)64 << 20)
 #define MAX_PAYLOAD_BYTES ((size_t)64 << 20)
 
-enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_MARG, S_COUNT };
-static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG", "MARG"};
+enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_MARG, S_LABQ, S_COUNT };
+static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG", "MARG", "LABQ"};
 
 /* ------------------------------------------------------------- messages */
 
@@ -341,6 +345,33 @@ static void put_marginals(wbuf *b, const btf_model *m)
     w_section_end(b, body);
 }
 
+static int has_lab(const btf_model *m)
+{
+    for (int s = 0; s < m->n_subspaces; s++)
+        if (m->subspaces[s].marginal.knots && m->subspaces[s].marginal.lab_knots)
+            return 1;
+    return 0;
+}
+
+/* LABQ (version 1.3): per subspace a u8 knot count, 0 or 32 (0 where MARG
+ * has none); with 32, per channel L*, a*, b* its 32 quantiles as u16 codes
+ * over [0, 100] and [-128, 128] (synth/colour_lab.c). */
+static void put_lab(wbuf *b, const btf_model *m)
+{
+    size_t body = w_section_begin(b, S_LABQ);
+    w_u16(b, (unsigned)m->n_subspaces);
+    for (int s = 0; s < m->n_subspaces; s++) {
+        const btf_marginal *mg = &m->subspaces[s].marginal;
+        int knots = mg->knots ? mg->lab_knots : 0;
+        w_part(b, BTF_MODEL_PART_MARGINALS);
+        w_u8(b, (unsigned)knots);
+        for (int c = 0; knots && c < 3; c++)
+            for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+                w_u16(b, btf_lab_code(c, mg->lab_quantile[c][j]));
+    }
+    w_section_end(b, body);
+}
+
 /* Quantises the heights on their canonical grid and writes the predictor
  * residuals as two byte planes (low bytes, then high bytes): the high plane
  * of a smooth surface is nearly all zeros. */
@@ -409,6 +440,8 @@ static btf_status build_payload(const btf_model *m, wbuf *b, const char *name, b
     }
     if (has_marginals(m))
         put_marginals(b, m);
+    if (has_lab(m))
+        put_lab(b, m);
     if (b->failed)
         return failf(err, BTF_E_NOMEM, name, "out of memory encoding the model");
     return BTF_OK;
@@ -464,7 +497,8 @@ static btf_status encode_named(const btf_model *m, const char *name, unsigned ch
         rc = failf(err, BTF_E_DATA, name, "model of %zu bytes (expected at most %zu)", pl.n,
                    MAX_PAYLOAD_BYTES);
     if (rc == BTF_OK)
-        rc = wrap_payload(&pl, has_marginals(m) ? FMT_MINOR_MARGINALS
+        rc = wrap_payload(&pl, has_lab(m)         ? FMT_MINOR_LAB
+                               : has_marginals(m) ? FMT_MINOR_MARGINALS
                                : m->range       ? FMT_MINOR_RANGE_FLAGS
                                                 : 0,
                           name, data, size, err);
@@ -902,6 +936,38 @@ static btf_status read_marginals(const span *sp, btf_model *m, const char *name,
     return BTF_OK;
 }
 
+/* LABQ: counts checked here (a subspace without MARG knots has none), the
+ * numbers by btf_model_validate. A model without the section (format 1.2
+ * or older) keeps lab_knots 0: no colour matching. */
+static btf_status read_lab(const span *sp, btf_model *m, const char *name, btf_error *err)
+{
+    rbuf r = {sp->p, sp->n, 0, 0};
+    unsigned count = r_u16(&r);
+    if (r.short_read)
+        return short_section(S_LABQ, name, err);
+    if ((int)count != m->n_subspaces)
+        return failf(err, BTF_E_FORMAT, name,
+                     "section LABQ: %u subspaces (expected %d, as SUBS)", count, m->n_subspaces);
+    for (int s = 0; s < m->n_subspaces; s++) {
+        btf_marginal *mg = &m->subspaces[s].marginal;
+        unsigned knots = r_u8(&r);
+        if (r.short_read)
+            return short_section(S_LABQ, name, err);
+        if (knots != 0 && (knots != BTF_MARGIN_KNOTS || !mg->knots))
+            return failf(err, BTF_E_FORMAT, name,
+                         "section LABQ: subspace %d has %u knots (expected 0%s%s)", s, knots,
+                         mg->knots ? " or " : ": it has no marginal transfer",
+                         mg->knots ? "32" : "");
+        mg->lab_knots = (int)knots;
+        for (int c = 0; knots && c < 3; c++)
+            for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+                mg->lab_quantile[c][j] = btf_lab_decode(c, r_u16(&r));
+        if (r.short_read)
+            return short_section(S_LABQ, name, err);
+    }
+    return BTF_OK;
+}
+
 static btf_status read_payload(const unsigned char *p, size_t n, btf_model *m, const char *name,
                                btf_error *err)
 {
@@ -928,6 +994,8 @@ static btf_status read_payload(const unsigned char *p, size_t n, btf_model *m, c
     if (sec[S_RANG].present && (rc = read_range(&sec[S_RANG], m, name, err)))
         return rc;
     if (sec[S_MARG].present && (rc = read_marginals(&sec[S_MARG], m, name, err)))
+        return rc;
+    if (sec[S_LABQ].present && (rc = read_lab(&sec[S_LABQ], m, name, err)))
         return rc;
     return btf_model_validate(m, name, BTF_E_FORMAT, err);
 }

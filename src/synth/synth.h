@@ -105,6 +105,27 @@ btf_status btf_synth_check_band(const btf_car_band *b, int margin, btf_error *er
 /* A synthesis size: 1..BTF_SYNTH_MAX_SIDE on each side. */
 btf_status btf_synth_check_size(int width, int height, btf_error *err);
 
+/* ------------------------------------------------------------ colour_lab.c */
+
+/* CIE L*a*b* as OpenCV's float conversion (docs/synthesis.md, "Colour
+ * matching"), of linear RGB times scale (negative light as none) and back
+ * (divided by scale, unclamped). */
+#define BTF_LAB_SAMPLE ((size_t)256 * 256) /* pixels a quantile estimate reads at most */
+float btf_lab_scale(const btf_marginal *mg); /* 1 / the largest rgb_hi, or 1 */
+void btf_lab_from_rgb(const float rgb[3], float scale, float lab[3]);
+void btf_rgb_from_lab(const float lab[3], float scale, float rgb[3]);
+/* An RGB image's L*, a*, b* quantiles at j / (BTF_MARGIN_KNOTS - 1), from
+ * every pixel up to BTF_LAB_SAMPLE (the standard error of a quantile of
+ * 65,536 samples is far below the bench's self-distances), else a regular
+ * grid of pixels; clamped to
+ * L* in [0, 100], a*, b* in [-128, 128], nondecreasing. */
+btf_status btf_lab_quantiles(const btf_image *img, float scale, float q[3][BTF_MARGIN_KNOTS],
+                             btf_error *err);
+/* A Lab value of channel c as the model file's 16-bit code and back
+ * (monotone; decode(code(v)) is what a file keeps of v). */
+unsigned btf_lab_code(int c, float v);
+float btf_lab_decode(int c, unsigned code);
+
 /* -------------------------------------------------------------- marginal.c */
 
 /* A subspace's marginal transfer as synthesis applies it (docs/synthesis.md,

@@ -32,6 +32,7 @@ btf_synth_opts btf_synth_defaults(void)
         .portable_noise = 0,
         .row_by_row = 0,
         .tileable = 0, /* streaming, no wrap-around */
+        .match_colours = 0, /* opt-in: it holds the whole image */
     };
     return o;
 }
@@ -178,6 +179,23 @@ static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal
     return rc;
 }
 
+static int to_image(void *user, int y, int nrows, const float *rows, btf_error *err);
+static btf_status matched_rows(const btf_model *m, int subspace,
+                               const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *o,
+                               int width, int height, btf_rows_fn fn, void *user, btf_error *err);
+
+/* Colour matching needs the model's Lab histogram: refused before any work. */
+static btf_status check_match(const btf_model *m, int subspace, const btf_synth_opts *o,
+                              btf_error *err)
+{
+    const btf_marginal *mg = &m->subspaces[subspace].marginal;
+    if (o->match_colours && !(mg->knots && mg->lab_knots))
+        return btf_fail(err, BTF_E_ARG,
+                        "colour matching: subspace %d holds no Lab histogram (a model file of "
+                        "format 1.2 or older: analyse the material again)", subspace);
+    return BTF_OK;
+}
+
 btf_status btf_synthesise_margins(const btf_model *m, int subspace,
                                   const int (*margins)[BTF_MAX_LEVELS],
                                   const btf_synth_opts *opts, btf_rows_fn fn, void *user,
@@ -188,8 +206,12 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
     btf_status rc = check_subspace(m, subspace, err);
     if (rc == BTF_OK)
         rc = output_size(m, subspace, &o, &width, &height, err);
+    if (rc == BTF_OK)
+        rc = check_match(m, subspace, &o, err);
     if (rc)
         return rc;
+    if (o.match_colours)
+        return matched_rows(m, subspace, margins, &o, width, height, fn, user, err);
     if (o.tileable && (rc = btf_synth_check_tileable(width, height,
                                                      m->subspaces[subspace].levels, err)))
         return rc;
@@ -254,6 +276,32 @@ static int to_image(void *user, int y, int nrows, const float *rows, btf_error *
     return 0;
 }
 
+/* The streaming synthesis with colour matching: the whole image is made
+ * first (the match reads all of it), matched, then handed over row by row. */
+static btf_status matched_rows(const btf_model *m, int subspace,
+                               const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *o,
+                               int width, int height, btf_rows_fn fn, void *user, btf_error *err)
+{
+    btf_image img;
+    btf_status rc = btf_image_alloc(&img, width, height, 3, err);
+    if (rc)
+        return rc;
+    btf_synth_opts plain = *o;
+    plain.match_colours = 0;
+    plain.width = width, plain.height = height;
+    rc = btf_synthesise_margins(m, subspace, margins, &plain, to_image, &img, err);
+    if (rc == BTF_OK)
+        rc = btf_colour_match(m, subspace, &img, err);
+    for (int y = 0; rc == BTF_OK && y < height; y++) {
+        int got = fn(user, y, 1, img.data + (size_t)y * width * 3, err);
+        rc = got > 0 ? BTF_E_IO : (btf_status)got;
+        if (rc && err && !err->msg[0])
+            btf_fail(err, rc, "synthesis stopped by its consumer");
+    }
+    btf_image_free(&img);
+    return rc;
+}
+
 btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synth_opts *opts,
                                 btf_image *out, btf_error *err)
 {
@@ -266,11 +314,17 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
     if (rc == BTF_OK && o.tileable) /* refused before its image is allocated */
         rc = btf_synth_check_tileable(w, h, m->subspaces[subspace].levels, err);
     if (rc == BTF_OK)
+        rc = check_match(m, subspace, &o, err);
+    if (rc == BTF_OK)
         rc = btf_image_alloc(out, w, h, 3, err);
     if (rc)
         return rc;
     o.width = w, o.height = h;
+    int match = o.match_colours;
+    o.match_colours = 0; /* matched here, in the image itself */
     rc = btf_synthesise(m, subspace, &o, to_image, out, err);
+    if (rc == BTF_OK && match)
+        rc = btf_colour_match(m, subspace, out, err);
     if (rc)
         btf_image_free(out);
     return rc;

@@ -99,6 +99,12 @@ static void text_subspace(const btf_model *m, int s)
     printf("; synthesised sd %.6g %.6g %.6g; RGB box [%.6g %.6g %.6g]..[%.6g %.6g %.6g]\n",
            mg->synth_sd[0], mg->synth_sd[1], mg->synth_sd[2], mg->rgb_lo[0], mg->rgb_lo[1],
            mg->rgb_lo[2], mg->rgb_hi[0], mg->rgb_hi[1], mg->rgb_hi[2]);
+    if (mg->lab_knots)
+        printf("  colours   Lab histogram: L* %.4g..%.4g (median %.4g), a* %.4g..%.4g, b* "
+               "%.4g..%.4g\n", mg->lab_quantile[0][0], mg->lab_quantile[0][mg->lab_knots - 1],
+               mg->lab_quantile[0][mg->lab_knots / 2], mg->lab_quantile[1][0],
+               mg->lab_quantile[1][mg->lab_knots - 1], mg->lab_quantile[2][0],
+               mg->lab_quantile[2][mg->lab_knots - 1]);
 }
 
 static int model_text(const btf_model *m, const model_file *mf)
@@ -126,6 +132,13 @@ static int model_text(const btf_model *m, const model_file *mf)
            with ? "transfers onto the exemplar's histogram, RGB clamped to its range"
                 : "none (Gaussian bands; format 1.0/1.1 or fitted without them)",
            with, m->n_subspaces);
+    int lab = 0;
+    for (int s = 0; s < m->n_subspaces; s++)
+        lab += m->subspaces[s].marginal.knots && m->subspaces[s].marginal.lab_knots;
+    printf("colours     %s (%d of %d subspaces)\n",
+           lab ? "the exemplar's CIE Lab histogram: synthesise --match-colours can keep it"
+               : "no Lab histogram (format 1.2 or older): no --match-colours",
+           lab, m->n_subspaces);
     if (m->range) {
         float lo, hi;
         range_bounds(m, &lo, &hi);
@@ -201,7 +214,16 @@ static void json_subspace(FILE *f, const btf_model *m, int s)
     cli_json_f32s(f, mg->rgb_lo, 3);
     fputs(", \"rgb_hi\": ", f);
     cli_json_f32s(f, mg->rgb_hi, 3);
-    fputs("}}", f);
+    fputs(", \"lab_quantiles\": ", f);
+    if (!mg->lab_knots) {
+        fputs("null}}", f);
+        return;
+    }
+    for (int c = 0; c < 3; c++) {
+        fputs(c ? ", " : "[", f);
+        cli_json_f32s(f, mg->lab_quantile[c], mg->lab_knots);
+    }
+    fputs("]}}", f);
 }
 
 static void json_index(FILE *f, const btf_model *m)

@@ -285,6 +285,15 @@ int main(int argc, char **argv)
     for (int k = 0; k < 3; k++)
         mg->rgb_lo[k] = 0.0f, mg->rgb_hi[k] = 0.75f;
     write_seeds(argv[1], "marginals", &m);
+    /* format 1.3: and the exemplar's Lab histogram (LABQ), values a 16-bit
+     * code holds exactly as the decoder computes them */
+    mg->lab_knots = BTF_MARGIN_KNOTS;
+    for (int c = 0; c < 3; c++)
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
+            double low = c == 0 ? 0.0 : -128.0, span = c == 0 ? 100.0 : 256.0;
+            mg->lab_quantile[c][j] = (float)(low + span * (double)(20000 + 700 * j) / 65535.0);
+        }
+    write_seeds(argv[1], "lab", &m);
     btf_model_free(&m);
     return 0;
 }

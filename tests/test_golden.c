@@ -83,11 +83,13 @@ static void demo_model_file_is_unchanged(void **state)
     (void)state;
     uint64_t h = hash_file(model_path);
     print_message("model file: 0x%016llx\n", (unsigned long long)h);
-    /* format 1.2 (issue 17): the MARG section of marginal transfers, and the
-     * fit of the 24-offset family with complement levels and the measured
-     * --levels auto; was 0x466160cca9c7fc78 in format 1.1 (issue 15: the periodic range tile
+    /* format 1.3 (issue 17): the LABQ section of the exemplars' CIE Lab
+     * histograms for colour matching; was 0x7f43cc9068708f5c in format 1.2
+     * (the MARG section of marginal transfers, and the fit of the 24-offset
+     * family with complement levels and the measured --levels auto),
+     * 0x466160cca9c7fc78 in format 1.1 (issue 15: the periodic range tile
      * and its RANG flags byte) and 0x5941461f4c59f500 in format 1.0 */
-    assert_true(h == 0x7f43cc9068708f5cull);
+    assert_true(h == 0x8b38e17b719eef1bull);
 }
 
 /* Expected pixel hashes of subspace_00 .. subspace_05. */

@@ -66,6 +66,15 @@ static uint64_t sum_parts(const uint64_t *v)
 
 /* The checks every breakdown passes: the parts add up to the encoder's
  * file and payload; the raw parts have the sizes the format gives them. */
+/* LABQ is written when one subspace has a Lab histogram (model_file.c). */
+static int has_lab_any(const btf_model *m)
+{
+    for (int s = 0; s < m->n_subspaces; s++)
+        if (m->subspaces[s].marginal.knots && m->subspaces[s].marginal.lab_knots)
+            return 1;
+    return 0;
+}
+
 static void check_breakdown(const btf_model *m, const btf_model_bytes *b)
 {
     btf_error e = {0};
@@ -94,7 +103,9 @@ static void check_breakdown(const btf_model *m, const btf_model_bytes *b)
         for (int k = 0; k < 3; k++)
             for (int l = 0; l < sm->levels; l++)
                 neighbours += sm->bands[k][l].n;
+        /* MARG: 1 + 3 x (2 + 32) x 4 + 6 x 4 bytes; LABQ: 1 + 3 x 32 x 2 */
         marginals += sm->marginal.knots ? 433 : 1;
+        marginals += !has_lab_any(m) ? 0 : sm->marginal.knots && sm->marginal.lab_knots ? 193 : 1;
     }
     assert_int_equal(b->raw[BTF_MODEL_PART_SPECTRAL], 48 * m->n_subspaces);
     assert_int_equal(b->raw[BTF_MODEL_PART_LEVELS], m->n_subspaces);
@@ -114,9 +125,13 @@ static void check_breakdown(const btf_model *m, const btf_model_bytes *b)
     else
         assert_int_equal(b->raw[BTF_MODEL_PART_RANGE], 0);
     /* Framing: the section headers, the counts, 12 bytes per subspace. */
-    int sections = 1 + (m->views.count ? 3 : 0) + (m->range ? 1 : 0) + has_marg;
+    int has_lab = 0;
+    for (int s = 0; s < m->n_subspaces; s++)
+        has_lab |= m->subspaces[s].marginal.knots && m->subspaces[s].marginal.lab_knots;
+    int sections = 1 + (m->views.count ? 3 : 0) + (m->range ? 1 : 0) + has_marg + has_lab;
     assert_int_equal(b->raw[BTF_MODEL_PART_FRAMING],
-                     8 * sections + 2 + (has_marg ? 2 : 0) + 12 * m->n_subspaces);
+                     8 * sections + 2 + (has_marg ? 2 : 0) + (has_lab ? 2 : 0) +
+                         12 * m->n_subspaces);
     if (m->views.count)
         assert_int_equal(b->raw[BTF_MODEL_PART_DIRECTIONS],
                          2 * 3 + strlen(m->views.name) + strlen(m->lights.name) +

@@ -382,7 +382,8 @@ static btf_status open_container(const unsigned char *data, size_t size, const c
                      "signature \\x89BTFRFL)");
     if (size < SIG_LEN || memcmp(data, SIGNATURE, SIG_LEN) != 0)
         return failn(err, BTF_E_FORMAT, name, "damaged signature: the file went through a "
-                     "text-mode transfer (line endings converted)");
+                     "text-mode transfer (expected \\x89BTFRFL\\r\\n\\x1a\\n; line endings "
+                     "converted)");
     if (size < HEADER_BYTES + CRC_BYTES)
         return failn(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected at least %d)",
                      size, HEADER_BYTES + CRC_BYTES);
@@ -516,20 +517,32 @@ static btf_status read_map(const span *s, const char *name, btf_rf_model *m, btf
     return BTF_OK;
 }
 
+/* A section tag for a message: printable ASCII, anything else '?', so
+ * that the message stays one line. */
+static const char *tag_text(const unsigned char *p, char buf[5])
+{
+    for (int i = 0; i < 4; i++)
+        buf[i] = p[i] >= 0x20 && p[i] < 0x7f ? (char)p[i] : '?';
+    buf[4] = 0;
+    return buf;
+}
+
 static btf_status decode_payload(const unsigned char *p, size_t n, const char *name,
                                  unsigned major, btf_rf_model *m, btf_error *err)
 {
+    char tag[5];
     span sec[S_COUNT];
     memset(sec, 0, sizeof sec);
     size_t at = 0;
     while (at < n) {
         if (n - at < 8)
-            return failn(err, BTF_E_FORMAT, name, "truncated section header at payload byte %zu",
-                         at);
+            return failn(err, BTF_E_FORMAT, name, "truncated section header at payload byte %zu "
+                         "(expected 8 bytes)", at);
         size_t len = get_u32(p + at + 4);
         if (len > n - at - 8)
-            return failn(err, BTF_E_FORMAT, name, "section '%.4s' of %zu bytes at payload byte "
-                         "%zu runs past the payload's %zu bytes", (const char *)p + at, len, at, n);
+            return failn(err, BTF_E_FORMAT, name, "section '%s' of %zu bytes at payload byte "
+                         "%zu runs past the payload (expected at most %zu bytes)",
+                         tag_text(p + at, tag), len, at, n - at - 8);
         for (int s = 0; s < S_COUNT; s++)
             if (!memcmp(p + at, TAGS[s], 4)) {
                 if (sec[s].present)

@@ -214,8 +214,7 @@ static int parse_surface(const char *v, void *dest, char *why, size_t n)
 
 /* The sampled fit's own lines (paper section 6, docs/rf.md). */
 static void print_sample(const btf_rf_model *m, const btf_rf_fit_info *info,
-                         const btf_rf_sample_opts *so, const btf_rf_bytes *b,
-                         const btf_dataset_info *in)
+                         const btf_rf_sample_opts *so, const btf_dataset_info *in)
 {
     printf("sample        %dx%d texels at (%d, %d) of the %dx%d images, chosen and the "
            "representative image made in %.1f s\n", m->width, m->height, m->sample_x,
@@ -226,10 +225,6 @@ static void print_sample(const btf_rf_model *m, const btf_rf_fit_info *info,
     if (m->fit != BTF_RF_LAFORTUNE)
         printf("sample error  mean |Y data - Y model| %.5f on the sample's own texels\n",
                info->sample_mean_abs_error);
-    printf("memory        %llu bytes of coefficients + %llu bytes of coordinate map = %llu "
-           "(the file: %llu, of which the map %llu)\n", (unsigned long long)b->coefficients,
-           (unsigned long long)b->map, (unsigned long long)(b->coefficients + b->map),
-           (unsigned long long)b->file, (unsigned long long)b->file_map);
 }
 
 /* --family rf: the per-view reflectance fields of Meseth, Müller & Klein
@@ -273,18 +268,24 @@ static int analyse_rf(cli_ctx *c, const char *dataset, const char *out, btf_rf_o
         rc = btf_rf_model_bytes(&m, &b, &err);
     if (rc == 0 && !c->quiet) {
         double texels = (double)m.width * m.height;
-        if (m.map)
-            print_sample(&m, &info, so, &b, &shown);
         printf("fit           %s", btf_rf_fit_name(m.fit));
         if (m.fit != BTF_RF_PTM)
             printf(", %d lobe%s, %lld Levenberg-Marquardt solves, %.1f steps each", m.lobes,
                    m.lobes == 1 ? "" : "s", info.lm_runs,
                    info.lm_runs ? (double)info.lm_iterations / info.lm_runs : 0.0);
         printf("\n");
+        if (m.map)
+            print_sample(&m, &info, so, &shown);
         printf("error         mean |Y data - Y model| %.5f (mean luminance %.5f, %.1f %%)%s\n",
                info.mean_abs_error, info.mean_luminance,
                info.mean_luminance > 0 ? 100.0 * info.mean_abs_error / info.mean_luminance : 0.0,
                m.map ? " over every image, the surface through the map" : "");
+        if (m.map)
+            printf("memory        %llu bytes of coefficients + %llu bytes of coordinate map = "
+                   "%llu (the file: %llu, of which the map %llu)\n",
+                   (unsigned long long)b.coefficients, (unsigned long long)b.map,
+                   (unsigned long long)(b.coefficients + b.map), (unsigned long long)b.file,
+                   (unsigned long long)b.file_map);
         printf("model         %s: %zu bytes, %.1f bytes per %stexel (%d field%s x %d slots x "
                "2 bytes before deflate)\n", out, size, size / texels, m.map ? "sample " : "",
                m.fields, m.fields == 1 ? "" : "s", m.slots);

@@ -1922,9 +1922,10 @@ btf_status btf_rf_model_bytes(const btf_rf_model *m, btf_rf_bytes *out, btf_erro
  * repeat, e.g. at the pole; unused weights are 0). */
 void btf_rf_view_weights(const btf_dirset *views, btf_dir view, int idx[4], double w[4]);
 
-/* Linear RGB of texel (x, y) (wrapped into the tile) of field `field`
- * (a view index; 0 for lafortune) lit from `light` (view: the view
- * direction, used by lafortune only). */
+/* Linear RGB of texel (x, y) (wrapped into the surface, btf_rf_surface_size;
+ * a sampled model's through its coordinate map) of field `field` (a view
+ * index; 0 for lafortune) lit from `light` (view: the view direction, used
+ * by lafortune only). */
 void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
                        int y, float rgb[3]);
 /* The same at any view: the four closest views' fields weighted
@@ -1932,8 +1933,9 @@ void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir l
 void btf_rf_eval(const btf_rf_model *m, btf_dir view, btf_dir light, int x, int y,
                  float rgb[3]);
 /* The flat (view, light) render of docs/render.md with an RF model: pixel
- * (x, y) is texel (x mod width, y mod height), lit by one unit light.
- * width/height 0: the model's. threads 0: all CPUs. */
+ * (x, y) is surface texel (x mod width, y mod height) (btf_rf_surface_size;
+ * a sampled model's through its map), lit by one unit light. width/height
+ * 0: the surface's. threads 0: all CPUs. */
 btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light, int width,
                               int height, int threads, btf_image *out, btf_error *err);
 
@@ -1942,7 +1944,8 @@ btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light
  * the local view and light directions in the tangent frame (as
  * btf_render_shade takes them: a light below the surface's horizon gives
  * nothing, a point light falls off as 1/d^2), the texel floor(uv) wrapped
- * into the model's texels, the four closest views' fields at the exact
+ * into the model's surface (through a sampled model's map), the four
+ * closest views' fields at the exact
  * light blended (the flat render's arithmetic), times each light's
  * intensity; background pixels the scene's background. No parallax or bump
  * mapping (the fields hold the relief). width/height 0: 512; threads 0:
@@ -1953,8 +1956,10 @@ btf_status btf_rf_render_scene(const btf_rf_model *m, const btf_scene *s, int wi
 
 /* Table 1 of the paper: the mean |Y data - Y model| over every texel and
  * (view, light) image of ds, the model evaluated at the measured directions;
- * mean_luminance: the data's. The dataset must have the model's size and
- * direction sets. */
+ * mean_luminance: the data's. The dataset must have the model's direction
+ * sets, and its size unless the model is sampled: then data texel (x, y)
+ * is compared with surface texel (x, y), wrapped, as the flat render shows
+ * it (no correspondence outside the sample's own place). */
 btf_status btf_rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
                         double *mean_abs_error, double *mean_luminance, btf_error *err);
 

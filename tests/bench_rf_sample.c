@@ -7,8 +7,8 @@
  * as the report computes it, btf_rf_error) and the texture distance
  * (btf_texture_distance's combined figure, as `btfcar compare` prints it)
  * of the flat render against the measured image over 3 x 3 (view, light)
- * pairs; then what the map costs on larger surfaces. Figures only; never
- * fails on time.
+ * pairs; then (PTM) what the map costs on larger surfaces. Figures only;
+ * never fails on time.
  *
  * Usage: bench_rf_sample [SIZE [SAMPLE [FIT [MATERIAL]]]]
  *        (default 64 32 ptm, every material; FIT ptm|lobes|lafortune)
@@ -121,8 +121,8 @@ static void surfaces(const btf_dataset *ds, int fit, int sample)
         }
         double per_texel = (double)b.coefficients / ((double)sample * sample);
         printf("  %5d^2 surface: coefficients %.2f MB + map %.2f MB in memory (file %.2f MB, "
-               "map %.1f KB of it), quilting %.2f s; a whole fit: %.0f MB\n", sides[k],
-               b.coefficients / 1e6, b.map / 1e6, b.file / 1e6, b.file_map / 1e3, info.quilt_s,
+               "map %.3f MB of it), quilting %.2f s; a whole fit: %.0f MB\n", sides[k],
+               b.coefficients / 1e6, b.map / 1e6, b.file / 1e6, b.file_map / 1e6, info.quilt_s,
                per_texel * sides[k] * sides[k] / 1e6);
         btf_rf_model_free(&m);
     }
@@ -172,7 +172,8 @@ int main(int argc, char **argv)
     int rc = 0;
     for (int k = 0; k < 3; k++)
         if (!only || !strcmp(only, materials[k]))
-            rc |= material(materials[k], size, sample, fit, k == 0 || only != NULL);
+            rc |= material(materials[k], size, sample, fit,
+                           (k == 0 || only != NULL) && fit == BTF_RF_PTM);
     printf("  (texture: btf_texture_distance's combined figure, flat render against the "
            "measured image, mean over 3 x 3 pairs; 1.0 is as close as the material is to "
            "itself)\n");

@@ -25,14 +25,19 @@ static const char ABOUT[] =
     "With --family rf it fits per-view reflectance fields instead (Meseth, Mueller\n"
     "& Klein 2003; docs/rf.md): per measured view and texel a PTM or K lobes over\n"
     "the lights, on luminance, with the view's average colour per texel; render\n"
-    "and info take the file it writes.\n";
+    "and info take the file it writes. With --sample N it fits only an N x N\n"
+    "sample and stores a map of texture coordinates into it from an image\n"
+    "quilting of the sample (the paper's section 6, memory reduction): the file\n"
+    "is the sample's coefficients plus the map, whatever the surface's size, and\n"
+    "outside the sample's own place the surface no longer corresponds texel for\n"
+    "texel to the data.\n";
 
 /* Options only the stages after the segmentation use; options of the
  * reflectance-field family only. */
 enum { TAG_LATER = 1, TAG_RF = 2 };
 
 /* The CAR family's options, which --family rf does not use. */
-static const char *const CAR_ONLY[] = {"--preset", "--stage", "--subspaces", "--bins", "--seed",
+static const char *const CAR_ONLY[] = {"--preset", "--stage", "--subspaces", "--bins",
                                        "--restarts", "--levels", "--neighbourhood",
                                        "--neighborhood", "--max-neighbours", "--no-range",
                                        "--range-size", NULL};
@@ -173,10 +178,60 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_ana
     return rc ? cli_lib_error(c, &err) : 0;
 }
 
+/* "N" (N x N) or "WxH", each side 1..hi, into ((int *)dest)[0..1]. */
+static int parse_sides(const char *v, int *wh, long hi, char *why, size_t n)
+{
+    long a, b;
+    const char *x = strchr(v, 'x');
+    char buf[64];
+    int ok;
+    if (!x) {
+        ok = cli_parse_int(v, 1, hi, &a) == 0;
+        b = a;
+    } else {
+        ok = (size_t)(x - v) < sizeof buf;
+        if (ok) {
+            memcpy(buf, v, (size_t)(x - v));
+            buf[x - v] = '\0';
+            ok = !cli_parse_int(buf, 1, hi, &a) && !cli_parse_int(x + 1, 1, hi, &b);
+        }
+    }
+    if (!ok) {
+        snprintf(why, n, "N or WxH, each side 1..%ld", hi);
+        return -1;
+    }
+    wh[0] = (int)a, wh[1] = (int)b;
+    return 0;
+}
+static int parse_sample(const char *v, void *dest, char *why, size_t n)
+{
+    return parse_sides(v, dest, 65536, why, n);
+}
+static int parse_surface(const char *v, void *dest, char *why, size_t n)
+{
+    return parse_sides(v, dest, BTF_RF_MAX_SURFACE_SIDE, why, n);
+}
+
+/* The sampled fit's own lines (paper section 6, docs/rf.md). */
+static void print_sample(const btf_rf_model *m, const btf_rf_fit_info *info,
+                         const btf_rf_sample_opts *so, const btf_dataset_info *in)
+{
+    printf("sample        %dx%d texels at (%d, %d) of the %dx%d images, chosen and the "
+           "representative image made in %.1f s\n", m->width, m->height, m->sample_x,
+           m->sample_y, in->width, in->height, info->sample_s);
+    printf("map           %dx%d surface texels by image quilting (block %d, overlap %d, seed "
+           "%llu) in %.2f s\n", m->surface_width, m->surface_height, info->quilt_block,
+           info->quilt_overlap, (unsigned long long)so->seed, info->quilt_s);
+    if (m->fit != BTF_RF_LAFORTUNE)
+        printf("sample error  mean |Y data - Y model| %.5f on the sample's own texels\n",
+               info->sample_mean_abs_error);
+}
+
 /* --family rf: the per-view reflectance fields of Meseth, Müller & Klein
- * 2003 (src/rf/, docs/rf.md) into a reflectance-field model file. */
+ * 2003 (src/rf/, docs/rf.md) into a reflectance-field model file; with a
+ * sample (so->width > 0), the memory reduction of its section 6. */
 static int analyse_rf(cli_ctx *c, const char *dataset, const char *out, btf_rf_opts ro,
-                      uint64_t max_pixels)
+                      const btf_rf_sample_opts *so, uint64_t max_pixels)
 {
     btf_error err = {0};
     btf_dataset_opts dopts = {.progress = cli_progress_fn(c), .max_pixels = max_pixels};
@@ -188,9 +243,16 @@ static int analyse_rf(cli_ctx *c, const char *dataset, const char *out, btf_rf_o
     ro.info = &info;
     ro.progress = cli_progress_fn(c);
     btf_rf_model m;
-    int rc = btf_rf_fit(ds, &ro, &m, &err);
     const btf_dataset_info *in = btf_dataset_get_info(ds);
+    if (so->width > in->width || so->height > in->height) {
+        int w = in->width, h = in->height;
+        btf_dataset_close(ds);
+        return cli_usage_error(c, "--sample %dx%d is larger than the dataset's %dx%d images",
+                               so->width, so->height, w, h);
+    }
+    int rc = so->width ? btf_rf_fit_sampled(ds, &ro, so, &m, &err) : btf_rf_fit(ds, &ro, &m, &err);
     double raw = (double)in->n_views * in->n_lights * in->width * in->height * 3.0;
+    btf_dataset_info shown = *in;
     btf_dataset_close(ds);
     if (rc)
         return cli_lib_error(c, &err);
@@ -201,6 +263,9 @@ static int analyse_rf(cli_ctx *c, const char *dataset, const char *out, btf_rf_o
     if (rc == 0)
         rc = btf_write_file_atomic(out, bytes, size, &err);
     free(bytes);
+    btf_rf_bytes b = {0};
+    if (rc == 0 && m.map)
+        rc = btf_rf_model_bytes(&m, &b, &err);
     if (rc == 0 && !c->quiet) {
         double texels = (double)m.width * m.height;
         printf("fit           %s", btf_rf_fit_name(m.fit));
@@ -209,16 +274,29 @@ static int analyse_rf(cli_ctx *c, const char *dataset, const char *out, btf_rf_o
                    m.lobes == 1 ? "" : "s", info.lm_runs,
                    info.lm_runs ? (double)info.lm_iterations / info.lm_runs : 0.0);
         printf("\n");
-        printf("error         mean |Y data - Y model| %.5f (mean luminance %.5f, %.1f %%)\n",
+        if (m.map)
+            print_sample(&m, &info, so, &shown);
+        printf("error         mean |Y data - Y model| %.5f (mean luminance %.5f, %.1f %%)%s\n",
                info.mean_abs_error, info.mean_luminance,
-               info.mean_luminance > 0 ? 100.0 * info.mean_abs_error / info.mean_luminance : 0.0);
-        printf("model         %s: %zu bytes, %.1f bytes per texel (%d field%s x %d slots x 2 "
-               "bytes before deflate)\n", out, size, size / texels, m.fields,
-               m.fields == 1 ? "" : "s", m.slots);
+               info.mean_luminance > 0 ? 100.0 * info.mean_abs_error / info.mean_luminance : 0.0,
+               m.map ? " over every image, the surface through the map" : "");
+        if (m.map)
+            printf("memory        %llu bytes of coefficients + %llu bytes of coordinate map = "
+                   "%llu (the file: %llu, of which the map %llu)\n",
+                   (unsigned long long)b.coefficients, (unsigned long long)b.map,
+                   (unsigned long long)(b.coefficients + b.map), (unsigned long long)b.file,
+                   (unsigned long long)b.file_map);
+        printf("model         %s: %zu bytes, %.1f bytes per %stexel (%d field%s x %d slots x "
+               "2 bytes before deflate)\n", out, size, size / texels, m.map ? "sample " : "",
+               m.fields, m.fields == 1 ? "" : "s", m.slots);
         printf("compression   1 : %.1f against the raw 8-bit images (%.0f bytes)\n",
                raw / (double)size, raw);
-        printf("time          %.1f s (reading %.1f s, fitting %.1f s)\n", cli_now() - t0,
+        printf("time          %.1f s (reading %.1f s, fitting %.1f s", cli_now() - t0,
                info.read_s, info.fit_s);
+        if (m.map)
+            printf(", sample and map %.1f s, error pass %.1f s", info.sample_s + info.quilt_s,
+                   info.error_s);
+        printf(")\n");
     }
     btf_rf_model_free(&m);
     return rc ? cli_lib_error(c, &err) : 0;
@@ -263,6 +341,8 @@ int cmd_analyse(int argc, char **argv)
     static const char *const families[] = {"car", "rf", NULL};
     static const char *const fits[] = {"ptm", "lobes", "lafortune", NULL};
     btf_rf_opts ro = btf_rf_defaults();
+    btf_rf_sample_opts sample_opts = btf_rf_sample_defaults();
+    int sample[2] = {0, 0}, surface[2] = {0, 0};
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
          .meta = "OUT", .help = "the model file to write (a folder with --stage segment)",
@@ -283,6 +363,15 @@ int cmd_analyse(int argc, char **argv)
         {.name = "--iterations", .kind = CLI_INT, .dest = &ro.iterations, .meta = "N",
          .help = "--family rf: Levenberg-Marquardt steps per texel at most", .lo = 1,
          .hi = 10000, .tag = TAG_RF},
+        {.name = "--sample", .kind = CLI_CUSTOM, .dest = sample, .meta = "N|WxH",
+         .help = "--family rf: fit only an N x N (W x H) sample of the images, the window\n"
+                 "most like the whole in statistics, and store a map of texture coordinates\n"
+                 "into it from an image quilting of the sample (paper section 6, docs/rf.md)",
+         .parse = parse_sample, .tag = TAG_RF},
+        {.name = "--surface", .kind = CLI_CUSTOM, .dest = surface, .meta = "N|WxH",
+         .help = "--family rf --sample: the texels the coordinate map covers (default:\n"
+                 "the dataset's size)",
+         .parse = parse_surface, .tag = TAG_RF},
         {.name = "--preset", .kind = CLI_CHOICE, .dest = &preset,
          .meta = "fast|balanced|accurate",
          .help = "a measured point of the speed/accuracy trade: fast (K 2, 1 level,\n"
@@ -300,7 +389,8 @@ int cmd_analyse(int argc, char **argv)
         {.name = "--bins", .kind = CLI_INT, .dest = &so->features.bins, .meta = "B",
          .help = "histogram bins per Lab channel", .lo = 2, .hi = 4096},
         {.name = "--seed", .kind = CLI_U64, .dest = &so->kmeans.seed, .meta = "S",
-         .help = "k-means seed; same seed, same result"},
+         .help = "k-means seed (--family rf --sample: the quilting's); same seed, same\n"
+                 "result"},
         {.name = "--restarts", .kind = CLI_INT, .dest = &so->kmeans.restarts, .meta = "R",
          .help = "k-means restarts, the best kept", .lo = 1, .hi = 1000},
         {.name = "--threads", .kind = CLI_INT, .dest = &so->features.threads, .meta = "T",
@@ -327,10 +417,17 @@ int cmd_analyse(int argc, char **argv)
         for (int i = 0; CAR_ONLY[i]; i++)
             if (seen(opts, CAR_ONLY[i]))
                 return cli_usage_error(&c, "%s is not used by --family rf", CAR_ONLY[i]);
+        if (!sample[0] && (seen(opts, "--surface") || seen(opts, "--seed")))
+            return cli_usage_error(&c, "%s goes with --sample", seen(opts, "--surface")
+                                                                    ? "--surface" : "--seed");
         if (cli_check_output(&c, out, BTF_OUTPUT_FILE))
             return 1;
         ro.threads = so->features.threads;
-        return analyse_rf(&c, dataset, out, ro, ao.photostereo.read.max_pixels);
+        btf_rf_sample_opts *rs = &sample_opts;
+        rs->width = sample[0], rs->height = sample[1];
+        rs->surface_width = surface[0], rs->surface_height = surface[1];
+        rs->seed = so->kmeans.seed;
+        return analyse_rf(&c, dataset, out, ro, rs, ao.photostereo.read.max_pixels);
     }
     if (cli_first_seen(&spec, TAG_RF))
         return cli_usage_error(&c, "%s goes with --family rf", cli_first_seen(&spec, TAG_RF));

@@ -3,7 +3,9 @@
  * Klein 2003; docs/rf.md): the fit, its size, the direction sets, the bytes
  * per texel, and the quantisation ranges of each parameter slot over the
  * fields, as text or (--json) one JSON document ("format":
- * "btfcar-rf-model"). cmd_info.c recognises the file by its signature.
+ * "btfcar-rf-model"); of a sampled model (the paper's section 6) also the
+ * sample, the surface its coordinate map covers and what each costs.
+ * cmd_info.c recognises the file by its signature.
  */
 #include "info.h"
 
@@ -37,6 +39,13 @@ int cli_info_rf(cli_ctx *c, const model_file *mf, int json)
         return cli_lib_error(c, &err);
     double texels = (double)m.width * m.height;
     double code_bytes = (double)m.fields * m.slots * 2.0;
+    btf_rf_bytes b;
+    if (btf_rf_model_bytes(&m, &b, &err) != 0) {
+        btf_rf_model_free(&m);
+        return cli_lib_error(c, &err);
+    }
+    int sw, sh;
+    btf_rf_surface_size(&m, &sw, &sh);
     if (json) {
         printf("{\"format\": \"btfcar-rf-model\", \"version\": [%u, %u], \"file\": ", mf->major,
                mf->minor);
@@ -49,6 +58,15 @@ int cli_info_rf(cli_ctx *c, const model_file *mf, int json)
         cli_json_dirset(stdout, &m.views);
         printf(",\n \"lights\": ");
         cli_json_dirset(stdout, &m.lights);
+        printf(",\n \"surface_width\": %d, \"surface_height\": %d, \"coefficient_bytes\": "
+               "%llu, \"map_bytes\": %llu, \"file_map_bytes\": %llu, \"sample\": ", sw, sh,
+               (unsigned long long)b.coefficients, (unsigned long long)b.map,
+               (unsigned long long)b.file_map);
+        if (m.map)
+            printf("{\"x\": %d, \"y\": %d, \"width\": %d, \"height\": %d}", m.sample_x,
+                   m.sample_y, m.width, m.height);
+        else
+            printf("null");
         printf(",\n \"slot_ranges\": [");
         for (int s = 0; s < m.slots; s++) {
             char name[32];
@@ -82,6 +100,16 @@ int cli_info_rf(cli_ctx *c, const model_file *mf, int json)
             printf("fit         lafortune: rho_d l_z + %d Lafortune lobe%s per texel over all "
                    "views\n", m.lobes, m.lobes == 1 ? "" : "s");
         printf("texels      %d x %d\n", m.width, m.height);
+        if (m.map) {
+            printf("sample      the texels above are a sample at (%d, %d) of the data; a %d x %d "
+                   "coordinate map into it (image quilting, paper section 6) is the surface\n",
+                   m.sample_x, m.sample_y, sw, sh);
+            printf("memory      %llu bytes of coefficients + %llu bytes of coordinate map "
+                   "(%llu in all; in the file %lld, of which the map %llu)\n",
+                   (unsigned long long)b.coefficients, (unsigned long long)b.map,
+                   (unsigned long long)(b.coefficients + b.map), mf->bytes,
+                   (unsigned long long)b.file_map);
+        }
         printf("views       %s\n", vs);
         printf("lights      %s\n", ls);
         printf("fields      %d, each %d luminance parameters + 3 chromaticity factors per texel, "

@@ -1822,6 +1822,15 @@ typedef struct btf_rf_fit_info {
                                        image, with the quantised parameters */
     double mean_luminance;          /* the data's mean luminance */
     long long lm_runs, lm_iterations; /* Levenberg-Marquardt solves and their steps */
+    /* btf_rf_fit_sampled only (paper section 6); then mean_abs_error and
+     * mean_luminance are over every image and texel of the dataset through
+     * the coordinate map (btf_rf_error), seconds the whole call's. */
+    double sample_mean_abs_error; /* the fit's error on the sample's own texels
+                                     (per-view fits; 0 for lafortune) */
+    double sample_s;              /* reading the head-on view, choosing the sample */
+    double quilt_s;               /* synthesising the coordinate map */
+    double error_s;               /* the error pass over the dataset */
+    int quilt_block, quilt_overlap; /* the block and overlap sides used */
 } btf_rf_fit_info;
 
 typedef struct btf_rf_opts {
@@ -1834,8 +1843,14 @@ typedef struct btf_rf_opts {
     btf_rf_fit_info *info; /* NULL, or filled */
     btf_progress_fn progress;
     void *progress_user;
+    /* Fit only the window of crop_width x crop_height texels at (crop_x,
+     * crop_y) of the dataset's images (crop_width and crop_height 0: every
+     * texel); the model has the window's size. A texel's fit depends only on
+     * its data, so a window's codes are the whole fit's texels requantised
+     * over the window. btf_rf_fit_sampled fits its sample so. */
+    int crop_x, crop_y, crop_width, crop_height;
 } btf_rf_opts;
-/* The defaults: PTM, 2 lobes, 40 iterations, all CPUs, 256 MiB. */
+/* The defaults: PTM, 2 lobes, 40 iterations, all CPUs, 256 MiB, no crop. */
 btf_rf_opts btf_rf_defaults(void);
 
 /* A fitted model. codes[(field * height * width + texel) * slots + s] is
@@ -1851,8 +1866,22 @@ typedef struct btf_rf_model {
     int fields;                /* views.count (ptm, lobes) or 1 (lafortune) */
     float *lo, *hi;            /* [fields * slots] */
     uint16_t *codes;           /* [fields * width * height * slots] */
+    /* Memory reduction (paper section 6; btf_rf_fit_sampled): map NULL (the
+     * model describes its width x height texels), or the texture coordinates
+     * of a surface of surface_width x surface_height texels into the fitted
+     * width x height sample: surface texel (x, y) is sample texel
+     * (map[2 (y surface_width + x)], map[2 (y surface_width + x) + 1]).
+     * (sample_x, sample_y): where the sample lies in the dataset's images,
+     * and in the surface, whose texels there map to themselves. */
+    int surface_width, surface_height;
+    int sample_x, sample_y;
+    uint16_t *map;             /* [surface_height * surface_width * 2], or NULL */
 } btf_rf_model;
 void btf_rf_model_free(btf_rf_model *m);
+/* The texels the model describes: the coordinate map's size when it has one,
+ * else width x height. Every evaluation (flat and scene render, btf_rf_eval,
+ * btf_rf_error) wraps coordinates into this surface. */
+void btf_rf_surface_size(const btf_rf_model *m, int *width, int *height);
 /* Luminance parameters per texel and field of a fit with k lobes. */
 int btf_rf_param_count(int fit, int lobes);
 
@@ -1864,6 +1893,59 @@ int btf_rf_param_count(int fit, int lobes);
 btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_model *out,
                       btf_error *err);
 
+/* Memory reduction as in the paper's section 6: the fields are fitted on a
+ * small sample of the material only, and a coordinate map from a texture
+ * synthesis of the sample (image quilting, Efros & Freeman 2001, the
+ * paper's reference 6, with the minimum-error boundary cut) says which
+ * sample texel every texel of the surface shows, so that the model's size
+ * is the sample's coefficients plus the map (docs/rf.md, "Memory
+ * reduction"). The synthesis runs on one representative image, the
+ * head-on view's Lambertian fit b = rho n over its lights (albedo and
+ * relief orientation), so that one map serves every view and light. The
+ * sample keeps its place: the surface's texels under it map to themselves
+ * (the data's pixel correspondence holds there, and only there). */
+typedef struct btf_rf_sample_opts {
+    int width, height;          /* the sample's texels, 1..the images' sides (required) */
+    int placed;                 /* 1: the sample's window is at (x, y); 0: the window
+                                   whose statistics (mean and spread of the
+                                   representative image's channels) are closest to
+                                   the whole image's (the first on ties) */
+    int x, y;
+    int surface_width, surface_height; /* the map's size, 1..BTF_RF_MAX_SURFACE_SIDE;
+                                   0: the dataset's */
+    int block;                  /* the quilting block's side; 0: half the sample's
+                                   shorter side, at most 32 (at least 1) */
+    int overlap;                /* the blocks' overlap, 1..block / 2; 0: block / 4
+                                   (0 for blocks under 4: a plain random tiling) */
+    double tolerance;           /* candidates within (1 + tolerance) of the best
+                                   overlap error are drawn from; 0: 0.1 */
+    uint64_t seed;              /* the quilting's draws; same seed, same map */
+} btf_rf_sample_opts;
+#define BTF_RF_MAX_SURFACE_SIDE 8192
+/* The defaults: every field 0 (an unset size is BTF_E_ARG). */
+btf_rf_sample_opts btf_rf_sample_defaults(void);
+/* Fits the dataset's sample (btf_rf_fit with the crop of so's window; opts
+ * as btf_rf_fit's, its crop ignored) and synthesises the coordinate map of
+ * the surface; opts->info (NULL: not wanted) gets the fit's figures, the
+ * sample's and the map's, and the error over the whole dataset through the
+ * map (one more pass over the images). A sample of the whole image on a
+ * surface of the image's size gives the identity map and the whole fit's
+ * codes. Deterministic for a seed, for any thread count. */
+btf_status btf_rf_fit_sampled(const btf_dataset *ds, const btf_rf_opts *opts,
+                              const btf_rf_sample_opts *so, btf_rf_model *out,
+                              btf_error *err);
+
+/* What a model costs (docs/rf.md, "Memory reduction"): in memory, the
+ * coefficients (fields x slots x (2 bytes per texel + 8 for the range)) and
+ * the coordinate map (4 bytes per surface texel; 0 without one), and in
+ * the file (btf_rf_encode, deflated) in all and for the map alone (the
+ * file's bytes less those of the same model without its map). */
+typedef struct btf_rf_bytes {
+    uint64_t coefficients, map;   /* in memory */
+    uint64_t file, file_map;      /* the file; of which the map */
+} btf_rf_bytes;
+btf_status btf_rf_model_bytes(const btf_rf_model *m, btf_rf_bytes *out, btf_error *err);
+
 /* The four closest measured views of a direction (paper section 5.4): the
  * two measured theta rings around theta (one at the pole or beyond the
  * last ring), on each the two measured azimuths around phi, bilinear weights
@@ -1871,9 +1953,10 @@ btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_mod
  * repeat, e.g. at the pole; unused weights are 0). */
 void btf_rf_view_weights(const btf_dirset *views, btf_dir view, int idx[4], double w[4]);
 
-/* Linear RGB of texel (x, y) (wrapped into the tile) of field `field`
- * (a view index; 0 for lafortune) lit from `light` (view: the view
- * direction, used by lafortune only). */
+/* Linear RGB of texel (x, y) (wrapped into the surface, btf_rf_surface_size;
+ * a sampled model's through its coordinate map) of field `field` (a view
+ * index; 0 for lafortune) lit from `light` (view: the view direction, used
+ * by lafortune only). */
 void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
                        int y, float rgb[3]);
 /* The same at any view: the four closest views' fields weighted
@@ -1881,8 +1964,9 @@ void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir l
 void btf_rf_eval(const btf_rf_model *m, btf_dir view, btf_dir light, int x, int y,
                  float rgb[3]);
 /* The flat (view, light) render of docs/render.md with an RF model: pixel
- * (x, y) is texel (x mod width, y mod height), lit by one unit light.
- * width/height 0: the model's. threads 0: all CPUs. */
+ * (x, y) is surface texel (x mod width, y mod height) (btf_rf_surface_size;
+ * a sampled model's through its map), lit by one unit light. width/height
+ * 0: the surface's. threads 0: all CPUs. */
 btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light, int width,
                               int height, int threads, btf_image *out, btf_error *err);
 
@@ -1891,7 +1975,8 @@ btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light
  * the local view and light directions in the tangent frame (as
  * btf_render_shade takes them: a light below the surface's horizon gives
  * nothing, a point light falls off as 1/d^2), the texel floor(uv) wrapped
- * into the model's texels, the four closest views' fields at the exact
+ * into the model's surface (through a sampled model's map), the four
+ * closest views' fields at the exact
  * light blended (the flat render's arithmetic), times each light's
  * intensity; background pixels the scene's background. No parallax or bump
  * mapping (the fields hold the relief). width/height 0: 512; threads 0:
@@ -1902,8 +1987,10 @@ btf_status btf_rf_render_scene(const btf_rf_model *m, const btf_scene *s, int wi
 
 /* Table 1 of the paper: the mean |Y data - Y model| over every texel and
  * (view, light) image of ds, the model evaluated at the measured directions;
- * mean_luminance: the data's. The dataset must have the model's size and
- * direction sets. */
+ * mean_luminance: the data's. The dataset must have the model's direction
+ * sets, and its size unless the model is sampled: then data texel (x, y)
+ * is compared with surface texel (x, y), wrapped, as the flat render shows
+ * it (no correspondence outside the sample's own place). */
 btf_status btf_rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
                         double *mean_abs_error, double *mean_luminance, btf_error *err);
 

@@ -1,18 +1,24 @@
 /*
- * fuzz_model.c — libFuzzer target for the model decoder (src/model/model_file.c,
- * docs/model-format.md). The decoder must never crash, leak or read out of
- * bounds; a failure must be BTF_E_FORMAT (or BTF_E_NOMEM) with one line
- * naming the input, and leave the model empty. Whatever it accepts must
- * re-encode, and decode(encode(m)) must be m, field for field, with
- * encode(decode(encode(m))) the same bytes.
+ * fuzz_model.c — libFuzzer target for the model decoders: the CAR model's
+ * (src/model/model_file.c, docs/model-format.md) and the reflectance-field
+ * model's (src/rf/rf_file.c, docs/rf.md, "File", with the coordinate map
+ * of a sampled model, RFMP, format 2). A decoder must never crash, leak or
+ * read out of bounds; a failure must be BTF_E_FORMAT (or BTF_E_NOMEM) with
+ * one line naming the input, and leave the model empty. Whatever it accepts
+ * must re-encode, and decode(encode(m)) must be m, field for field, with
+ * encode(decode(encode(m))) the same bytes; an accepted reflectance-field
+ * model is also evaluated (a small flat render through its map), so that a
+ * map the decoder let through cannot send a lookup out of the codes.
  *
  * Two kinds of input, told apart by the first byte:
  *  - 0x89 (how every model file starts): the input is a whole file, so the
- *    signature, version, sizes, CRC and zlib checks are exercised;
+ *    signature, version, sizes, CRC and zlib checks are exercised (a
+ *    reflectance-field file, told by its signature, goes to its decoder);
  *  - anything else: the rest of the input is a payload (the sections), put
- *    in a container with a correct CRC (stored when the byte is even,
- *    deflated when odd), so that mutations reach the section parser and the
- *    validator instead of all dying at the CRC.
+ *    in a container with a correct CRC (stored when bit 0 of the byte is
+ *    clear, deflated when set; bit 1 set: a reflectance-field container, of
+ *    format 2 when bit 2 is set, else 1), so that mutations reach the
+ *    section parser and the validator instead of all dying at the CRC.
  *
  * Build from the repository root (`make fuzz-build` does this for every
  * tests/fuzz_*.c, library sources instrumented too):
@@ -46,6 +52,7 @@
  */
 #include "btfcar.h"
 
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -118,6 +125,81 @@ static void check_round_trip(const btf_model *m)
     free(d2);
 }
 
+/* ------------------------------------------------ reflectance fields */
+
+static const unsigned char RF_SIG[11] = {0x89, 'B', 'T', 'F', 'R', 'F', 'L', '\r', '\n', 0x1a,
+                                         '\n'};
+
+/* The reflectance-field container (major 1 or 2) around a payload. */
+static unsigned char *wrap_rf(const unsigned char *payload, size_t n, int deflate, int major,
+                              size_t *size)
+{
+    unsigned char *f = wrap(payload, n, deflate, size);
+    memcpy(f, RF_SIG, 11);
+    f[11] = (unsigned char)major;
+    size_t end = *size - 4;
+    put_u32(f + end, (uint32_t)crc32(0L, f, (uInt)end));
+    return f;
+}
+
+static int rf_models_equal(const btf_rf_model *a, const btf_rf_model *b)
+{
+    if (!dirsets_equal(&a->views, &b->views) || !dirsets_equal(&a->lights, &b->lights) ||
+        a->fit != b->fit || a->lobes != b->lobes || a->width != b->width ||
+        a->height != b->height || a->params != b->params || a->slots != b->slots ||
+        a->fields != b->fields || !a->map != !b->map)
+        return 0;
+    size_t planes = (size_t)a->fields * a->slots, texels = (size_t)a->width * a->height;
+    if (memcmp(a->lo, b->lo, planes * sizeof(float)) || memcmp(a->hi, b->hi, planes * sizeof(float)) ||
+        memcmp(a->codes, b->codes, planes * texels * sizeof(uint16_t)))
+        return 0;
+    if (!a->map)
+        return 1;
+    return a->surface_width == b->surface_width && a->surface_height == b->surface_height &&
+           a->sample_x == b->sample_x && a->sample_y == b->sample_y &&
+           !memcmp(a->map, b->map, (size_t)a->surface_width * a->surface_height * 4);
+}
+
+static int rf_model_empty(const btf_rf_model *m)
+{
+    return !m->views.dirs && !m->lights.dirs && !m->lo && !m->hi && !m->codes && !m->map;
+}
+
+static void run_rf_one(const unsigned char *data, size_t size)
+{
+    btf_rf_model m;
+    btf_error e = {0};
+    int rc = btf_rf_decode(data, size, "fuzz", &m, &e);
+    if (rc != 0) {
+        if ((rc != BTF_E_FORMAT && rc != BTF_E_NOMEM) || e.code != rc ||
+            strncmp(e.msg, "fuzz: ", 6) != 0 || strchr(e.msg, '\n') || !rf_model_empty(&m) ||
+            (rc == BTF_E_FORMAT && !strstr(e.msg, "(expected")))
+            abort();
+        return;
+    }
+    unsigned char *d1 = NULL, *d2 = NULL;
+    size_t n1, n2;
+    btf_rf_model r;
+    if (btf_rf_encode(&m, &d1, &n1, &e) != 0 || btf_rf_decode(d1, n1, "fuzz", &r, &e) != 0 ||
+        !rf_models_equal(&m, &r) || btf_rf_encode(&r, &d2, &n2, &e) != 0 || n1 != n2 ||
+        memcmp(d1, d2, n1))
+        abort();
+    /* every evaluation path reads the codes through the map */
+    btf_image img;
+    if (btf_rf_render_flat(&m, m.views.dirs[0], m.lights.dirs[0], 5, 3, 1, &img, &e) != 0)
+        abort();
+    for (int i = 0; i < 5 * 3 * 3; i++)
+        if (!isfinite(img.data[i]))
+            abort();
+    btf_image_free(&img);
+    float rgb[3];
+    btf_rf_eval(&m, m.views.dirs[m.views.count - 1], m.lights.dirs[0], -7, 1 << 20, rgb);
+    btf_rf_model_free(&r);
+    btf_rf_model_free(&m);
+    free(d1);
+    free(d2);
+}
+
 static void run_one(const unsigned char *data, size_t size)
 {
     btf_model m;
@@ -137,8 +219,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size > 0 && data[0] != 0x89) {
         size_t n;
-        unsigned char *f = wrap(data + 1, size - 1, data[0] & 1, &n);
-        run_one(f, n);
+        int rf = data[0] & 2;
+        unsigned char *f = rf ? wrap_rf(data + 1, size - 1, data[0] & 1, data[0] & 4 ? 2 : 1, &n)
+                              : wrap(data + 1, size - 1, data[0] & 1, &n);
+        if (rf)
+            run_rf_one(f, n);
+        else
+            run_one(f, n);
         free(f);
         return 0;
     }
@@ -148,7 +235,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         abort();
     if (size)
         memcpy(copy, data, size);
-    run_one(copy, size);
+    if (btf_rf_sniff(copy, size))
+        run_rf_one(copy, size);
+    else
+        run_one(copy, size);
     free(copy);
     return 0;
 }
@@ -256,6 +346,71 @@ static void write_seeds(const char *dir, const char *name, const btf_model *m)
     free(d);
 }
 
+/* A small reflectance-field model: 2 views, 2 lights, a 3 x 2 sample of
+ * lobes; with a 5 x 4 coordinate map when sampled (format 2). */
+static void small_rf(btf_rf_model *m, int sampled)
+{
+    btf_error e = {0};
+    memset(m, 0, sizeof *m);
+    btf_dir v[2] = {{0, 0}, {30, 90}}, l[2] = {{0, 0}, {45, 90}};
+    if (btf_dirset_from_list(&m->views, v, 2, &e) || btf_dirset_from_list(&m->lights, l, 2, &e))
+        exit(1);
+    m->fit = BTF_RF_LOBES, m->lobes = 1, m->params = 4, m->slots = 7, m->fields = 2;
+    m->width = 3, m->height = 2;
+    m->lo = calloc(14, sizeof(float));
+    m->hi = calloc(14, sizeof(float));
+    m->codes = calloc(2 * 6 * 7, sizeof(uint16_t));
+    for (int i = 0; i < 14; i++)
+        m->lo[i] = -0.5f * (float)(i % 3), m->hi[i] = 1.0f + (float)(i % 4);
+    for (int i = 0; i < 2 * 6 * 7; i++)
+        m->codes[i] = (uint16_t)(i * 777);
+    if (sampled) {
+        m->surface_width = 5, m->surface_height = 4, m->sample_x = 1, m->sample_y = 2;
+        m->map = malloc(5 * 4 * 2 * sizeof(uint16_t));
+        for (int t = 0; t < 20; t++)
+            m->map[2 * t] = (uint16_t)((t * 7) % 3), m->map[2 * t + 1] = (uint16_t)((t / 5) % 2);
+    }
+}
+
+/* The file itself, and (prefixed by its mode byte) its payload. */
+static void write_rf_seeds(const char *dir, const char *name, const btf_rf_model *m)
+{
+    btf_error e = {0};
+    unsigned char *d;
+    size_t n;
+    if (btf_rf_encode(m, &d, &n, &e)) {
+        fprintf(stderr, "%s\n", e.msg);
+        exit(1);
+    }
+    char fname[256];
+    snprintf(fname, sizeof fname, "%s.btfcar", name);
+    write_file(dir, fname, d, n);
+    uLongf raw = d[18] | d[19] << 8 | d[20] << 16 | (uLongf)d[21] << 24;
+    unsigned char *p = malloc(raw + 1);
+    p[0] = (unsigned char)(2 | (m->map ? 4 : 0));
+    if (d[17] == 1) {
+        if (uncompress(p + 1, &raw, d + 26, (uLong)(n - 30)) != Z_OK)
+            exit(1);
+    } else {
+        memcpy(p + 1, d + 26, raw);
+    }
+    snprintf(fname, sizeof fname, "%s.payload", name);
+    write_file(dir, fname, p, raw + 1);
+    size_t wn;
+    unsigned char *w = wrap_rf(p + 1, raw, 0, m->map ? 2 : 1, &wn);
+    btf_rf_model r;
+    if (btf_rf_decode(w, wn, "seed", &r, &e)) {
+        fprintf(stderr, "%s\n", e.msg);
+        exit(1);
+    }
+    btf_rf_model_free(&r);
+    run_rf_one(w, wn);
+    run_rf_one(d, n);
+    free(w);
+    free(p);
+    free(d);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 2) {
@@ -295,6 +450,14 @@ int main(int argc, char **argv)
         }
     write_seeds(argv[1], "lab", &m);
     btf_model_free(&m);
+    /* reflectance fields: format 1.0, and a sampled model (format 2.0, RFMP) */
+    btf_rf_model rm;
+    small_rf(&rm, 0);
+    write_rf_seeds(argv[1], "rf", &rm);
+    btf_rf_model_free(&rm);
+    small_rf(&rm, 1);
+    write_rf_seeds(argv[1], "rf-sampled", &rm);
+    btf_rf_model_free(&rm);
     return 0;
 }
 

@@ -11,7 +11,9 @@
  * image of the dataset the paper's Table 1 error (btf_rf_error). Pictures
  * of the sampled and the worst pairs, the preview sphere
  * (btf_rf_render_scene). No sweep: an RF model has no CAR settings to
- * trade. Everything is written into a temporary folder that moves into
+ * trade. A sampled model (the paper's section 6) is measured like any
+ * other, its surface through the coordinate map, and its compression
+ * figures split into the sample's coefficients and the map. Everything is written into a temporary folder that moves into
  * place as a whole.
  */
 #include "core/core.h"
@@ -27,8 +29,9 @@
 static btf_status check_match(const btf_dataset_info *in, const btf_rf_model *m,
                               btf_error *err)
 {
-    if (m->width != in->width || m->height != in->height || m->views.count != in->n_views ||
-        m->lights.count != in->n_lights)
+    /* a sampled model's surface is compared as the flat render shows it */
+    if ((!m->map && (m->width != in->width || m->height != in->height)) ||
+        m->views.count != in->n_views || m->lights.count != in->n_lights)
         return btf_fail(err, BTF_E_ARG, "reflectance-field model of %d views x %d lights of "
                         "%dx%d texels does not describe dataset %s (%d views x %d lights of "
                         "%dx%d)", m->views.count, m->lights.count, m->width, m->height,
@@ -215,11 +218,9 @@ static btf_status measure_all(btf_rf_report_data *d, const btf_dataset *ds, cons
     const btf_report_opts *o = d->o;
     if (o->progress)
         o->progress(o->progress_user, 0.0, "model file and raw bytes");
-    unsigned char *data = NULL, *want = NULL;
-    size_t size = 0;
-    btf_status rc = btf_rf_encode(d->m, &data, &size, err);
-    free(data);
-    d->file_bytes = size;
+    unsigned char *want = NULL;
+    btf_status rc = btf_rf_model_bytes(d->m, &d->bytes, err);
+    d->file_bytes = d->bytes.file;
     if (rc == BTF_OK)
         rc = btf_dataset_raw_bytes(ds, &d->raw, err);
     if (rc == BTF_OK && o->progress)

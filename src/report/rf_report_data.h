@@ -24,6 +24,7 @@ typedef struct btf_rf_report_data {
     char date[64];
     /* compression */
     uint64_t file_bytes;       /* btf_rf_encode: the model file */
+    btf_rf_bytes bytes;        /* coefficients and coordinate map (section 6) */
     btf_raw_bytes raw;
     /* pixel-wise error over every image (btf_rf_error, the paper's Table 1) */
     double mean_abs_error, mean_luminance;

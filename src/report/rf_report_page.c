@@ -140,6 +140,24 @@ static void pair_figure(btf_buf *b, const btf_rf_report_data *d, int i)
                    name, w * scale, h * scale, vd, ld, vd, ld, p->mean_abs_dy, p->d.combined);
 }
 
+/* A sampled model's memory (section 6): the sample's coefficients and the
+ * coordinate map, in memory and in the file. */
+static void sample_rows(btf_buf *b, const btf_rf_report_data *d)
+{
+    const btf_rf_model *m = d->m;
+    const btf_rf_bytes *y = &d->bytes;
+    char t[64], u[64], r[64];
+    btf_buf_printf(b, "<tr><td class=\"l\">of which the %d×%d sample's coefficients (in "
+                      "memory: %s)</td><td>%s</td><td>%s</td></tr>\n", m->width, m->height,
+                   hr_bytes(y->coefficients, u, sizeof u),
+                   hr_bytes(y->file - y->file_map, t, sizeof t),
+                   ratio_text(d->raw.raw, y->file - y->file_map, r, sizeof r));
+    btf_buf_printf(b, "<tr><td class=\"l\">and the %d×%d coordinate map (in memory: %s, 4 "
+                      "bytes per texel)</td><td>%s</td><td>–</td></tr>\n", m->surface_width,
+                   m->surface_height, hr_bytes(y->map, u, sizeof u),
+                   hr_bytes(y->file_map, t, sizeof t));
+}
+
 static void page(btf_buf *b, const btf_rf_report_data *d)
 {
     const btf_dataset_info *in = d->in;
@@ -189,13 +207,29 @@ static void page(btf_buf *b, const btf_rf_report_data *d)
                    ratio_text(d->raw.raw, d->raw.on_disk, r, sizeof r));
     btf_buf_printf(b, "<tr><td class=\"l\">reflectance-field model file (%d fields × %d "
                       "slots × 16 bits per texel, deflated)</td><td>%s</td><td><b>%s</b></td>"
-                      "</tr>\n</table>\n", m->fields, m->slots,
+                      "</tr>\n", m->fields, m->slots,
                    hr_bytes(d->file_bytes, t, sizeof t),
                    ratio_text(d->raw.raw, d->file_bytes, r, sizeof r));
-    btf_buf_printf(b, "<p class=\"note\">%.1f bytes of the file per texel. The model keeps "
-                      "every texel (docs/rf.md), so it is judged pixel by pixel as well as by "
-                      "the texture distances.</p>\n",
-                   (double)d->file_bytes / ((double)in->width * in->height));
+    if (m->map)
+        sample_rows(b, d);
+    btf_buf_puts(b, "</table>\n");
+    if (m->map)
+        btf_buf_printf(b, "<p class=\"note\">%.1f bytes of the file per texel. Memory "
+                          "reduction (paper section 6, docs/rf.md): the fields are fitted on a "
+                          "%d×%d sample at (%d, %d) only, and a %d×%d map of texture "
+                          "coordinates from an image quilting of the sample says which sample "
+                          "texel each texel of the surface shows. The data's pixel "
+                          "correspondence holds on the sample's own place only; elsewhere the "
+                          "pixel-wise error measures a new arrangement of the material, and "
+                          "the texture distances are the fairer figure.</p>\n",
+                       (double)d->file_bytes / ((double)in->width * in->height), m->width,
+                       m->height, m->sample_x, m->sample_y, m->surface_width,
+                       m->surface_height);
+    else
+        btf_buf_printf(b, "<p class=\"note\">%.1f bytes of the file per texel. The model "
+                          "keeps every texel (docs/rf.md), so it is judged pixel by pixel as "
+                          "well as by the texture distances.</p>\n",
+                       (double)d->file_bytes / ((double)in->width * in->height));
     /* quality */
     btf_buf_printf(b, "<h2>Quality per direction</h2>\n<p class=\"note\">%d (view, light) "
                       "pairs: each measured image against the model's flat render of that "
@@ -272,6 +306,18 @@ static btf_status json(const btf_rf_report_data *d, const char *dir, btf_error *
     cJSON_AddNumberToObject(c, "ratio", d->file_bytes ? (double)d->raw.raw / d->file_bytes : 0);
     cJSON_AddNumberToObject(c, "bytes_per_texel",
                             (double)d->file_bytes / ((double)d->in->width * d->in->height));
+    cJSON_AddNumberToObject(c, "coefficient_bytes", (double)d->bytes.coefficients);
+    cJSON_AddNumberToObject(c, "map_bytes", (double)d->bytes.map);
+    cJSON_AddNumberToObject(c, "file_map_bytes", (double)d->bytes.file_map);
+    if (d->m->map) {
+        cJSON *s = cJSON_AddObjectToObject(rf, "sample");
+        cJSON_AddNumberToObject(s, "x", d->m->sample_x);
+        cJSON_AddNumberToObject(s, "y", d->m->sample_y);
+        cJSON_AddNumberToObject(s, "width", d->m->width);
+        cJSON_AddNumberToObject(s, "height", d->m->height);
+        cJSON_AddNumberToObject(s, "surface_width", d->m->surface_width);
+        cJSON_AddNumberToObject(s, "surface_height", d->m->surface_height);
+    }
     cJSON *pw = cJSON_AddObjectToObject(root, "pixelwise");
     cJSON_AddNumberToObject(pw, "mean_abs_dy", d->mean_abs_error);
     cJSON_AddNumberToObject(pw, "mean_luminance", d->mean_luminance);

@@ -6,8 +6,14 @@
  * the measured view (its own field) and light. The dataset is streamed one
  * image at a time, images in parallel; per-image sums are added in image
  * order, so the figure does not depend on the thread count.
+ *
+ * A sampled model (section 6) is measured as the flat render shows it:
+ * data texel (x, y) against surface texel (x, y), wrapped into the surface,
+ * through the coordinate map (rf_map.h). Outside the sample's own place no
+ * surface texel corresponds to the data's, and the figure says so.
  */
 #include "rf/rf.h"
+#include "rf/rf_map.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -29,9 +35,11 @@ static btf_status image_job(void *user, int i, int worker, btf_error *err)
     btf_status rc = btf_dataset_read(c->ds, v, l, &img, err);
     if (rc)
         return rc;
-    if (img.width != m->width || img.height != m->height) {
-        rc = btf_fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the model)",
-                      btf_dataset_path(c->ds, v, l), img.width, img.height, m->width, m->height);
+    const btf_dataset_info *in = btf_dataset_get_info(c->ds);
+    if (img.width != in->width || img.height != in->height) {
+        rc = btf_fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the dataset)",
+                      btf_dataset_path(c->ds, v, l), img.width, img.height, in->width,
+                      in->height);
         btf_image_free(&img);
         return rc;
     }
@@ -40,17 +48,18 @@ static btf_status image_job(void *user, int i, int worker, btf_error *err)
     btf_dir_to_vec(m->views.dirs[v], vv);
     int field = m->fit == BTF_RF_LAFORTUNE ? 0 : v;
     float p[BTF_RF_MAX_SLOTS];
-    size_t texels = (size_t)m->width * m->height;
-    for (size_t t = 0; t < texels; t++) {
-        const float *px = img.data + 3 * t;
-        float rgb[3];
-        for (int k = 0; k < 3; k++)
-            rgb[k] = isfinite(px[k]) ? px[k] : 0.0f;
-        double d = rf_luminance(rgb);
-        rf_texel_params(m, field, t, p);
-        e += fabs(d - rf_lum_eval(m->fit, m->lobes, p, lv, vv));
-        s += d;
-    }
+    int sw = rf_surface_w(m), sh = rf_surface_h(m);
+    for (int y = 0; y < img.height; y++)
+        for (int x = 0; x < img.width; x++) {
+            const float *px = img.data + 3 * ((size_t)y * img.width + x);
+            float rgb[3];
+            for (int k = 0; k < 3; k++)
+                rgb[k] = isfinite(px[k]) ? px[k] : 0.0f;
+            double d = rf_luminance(rgb);
+            rf_texel_params(m, field, rf_surface_texel(m, x % sw, y % sh), p);
+            e += fabs(d - rf_lum_eval(m->fit, m->lobes, p, lv, vv));
+            s += d;
+        }
     btf_image_free(&img);
     c->e[i] = e, c->s[i] = s;
     return BTF_OK;
@@ -63,7 +72,7 @@ btf_status btf_rf_error(const btf_dataset *ds, const btf_rf_model *m, int thread
         return btf_fail(err, BTF_E_ARG, "btf_rf_error: no dataset or no model");
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     if (in->n_views != m->views.count || in->n_lights != m->lights.count ||
-        in->width != m->width || in->height != m->height)
+        (!m->map && (in->width != m->width || in->height != m->height)))
         return btf_fail(err, BTF_E_DATA, "%s: %d views x %d lights of %dx%d (expected the "
                         "model's %d x %d of %dx%d)", in->root, in->n_views, in->n_lights,
                         in->width, in->height, m->views.count, m->lights.count, m->width,
@@ -76,7 +85,7 @@ btf_status btf_rf_error(const btf_dataset *ds, const btf_rf_model *m, int thread
         double e = 0.0, s = 0.0;
         for (int i = 0; i < n; i++)
             e += c.e[i], s += c.s[i];
-        double count = (double)n * m->width * m->height;
+        double count = (double)n * in->width * in->height;
         if (mean_abs_error)
             *mean_abs_error = e / count;
         if (mean_luminance)

@@ -5,20 +5,22 @@
  * average colour of that field, and at an arbitrary view the four closest
  * measured views' colours weighted as section 5.4 does ("multiply the
  * resulting luminances by the average colors for the reflectance field and
- * the weights w_v, and add them").
+ * the weights w_v, and add them"). (x, y) is a texel of the surface, through
+ * a sampled model's coordinate map (section 6, rf_map.h).
  */
 #include "rf/rf.h"
+#include "rf/rf_map.h"
 
 void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
                        int y, float rgb[3])
 {
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
-    if (!m || !m->codes || field < 0 || field >= m->fields)
+    if (!m || !m->codes || field < 0 || field >= m->fields || rf_surface_w(m) < 1 ||
+        rf_surface_h(m) < 1)
         return;
-    x %= m->width, y %= m->height;
-    x += x < 0 ? m->width : 0, y += y < 0 ? m->height : 0;
+    x = rf_wrap(x, rf_surface_w(m)), y = rf_wrap(y, rf_surface_h(m));
     float p[BTF_RF_MAX_SLOTS];
-    rf_texel_params(m, field, (size_t)y * m->width + x, p);
+    rf_texel_params(m, field, rf_surface_texel(m, x, y), p);
     double l[3], v[3];
     btf_dir_to_vec(light, l);
     btf_dir_to_vec(view, v);

@@ -7,7 +7,10 @@
  * sizes), RFQR (per field and slot the quantisation range) and RFCD (the
  * 16-bit codes of Meseth, Müller & Klein 2003's per-view parameter
  * textures, section 5.2, as byte planes: per field and slot the low bytes
- * of every texel, then the high bytes, which deflate better).
+ * of every texel, then the high bytes, which deflate better), and, in a
+ * sampled model (section 6, format 2.0), RFMP: the coordinate map of the
+ * surface into the sample, each texel's shift from the identity, which is
+ * constant over a quilted block and so deflates to little.
  *
  * One validator serves both directions: the encoder refuses a model the
  * decoder would reject, and the decoder trusts nothing it has not checked
@@ -15,6 +18,7 @@
  * bounds-checked); a corrupt or truncated file is BTF_E_FORMAT naming it.
  */
 #include "rf/rf.h"
+#include "rf/rf_map.h"
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -27,6 +31,7 @@
 static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'R', 'F',
                                                  'L',  '\r', '\n', 0x1a, '\n'};
 #define FMT_MAJOR 1
+#define FMT_MAJOR_MAP 2 /* an older reader must not skip RFMP: a new major */
 #define FMT_MINOR 0
 #define HEADER_BYTES 26
 #define CRC_BYTES 4
@@ -39,9 +44,12 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'R', 'F',
 #define MAX_SIDE 65536
 #define MAX_ABS_RANGE 1e30f
 
-enum { S_VIEW, S_LGHT, S_RFHD, S_RFQR, S_RFCD, S_COUNT };
-static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "RFHD", "RFQR", "RFCD"};
+enum { S_VIEW, S_LGHT, S_RFHD, S_RFQR, S_RFCD, S_RFMP, S_COUNT };
+#define S_REQUIRED S_RFMP /* the sections before it are in every file */
+static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "RFHD", "RFQR", "RFCD", "RFMP"};
 #define RFHD_BYTES 17
+#define RFMP_HEAD 17
+#define RFMP_VERSION 1
 
 static btf_status failn(btf_error *err, int code, const char *name, const char *fmt, ...)
     BTF_PRINTF(4, 5);
@@ -92,6 +100,29 @@ static btf_status check_dirset(const btf_dirset *s, const char *what, const char
     return BTF_OK;
 }
 
+/* A sampled model's map (section 6): a surface within the bounds, every
+ * entry a texel of the sample. */
+static btf_status validate_map(const btf_rf_model *m, const char *name, int code,
+                               btf_error *err)
+{
+    if (m->surface_width < 1 || m->surface_height < 1 ||
+        m->surface_width > BTF_RF_MAX_SURFACE_SIDE || m->surface_height > BTF_RF_MAX_SURFACE_SIDE)
+        return failn(err, code, name, "coordinate map of %dx%d texels (expected sides 1..%d)",
+                     m->surface_width, m->surface_height, BTF_RF_MAX_SURFACE_SIDE);
+    if (m->sample_x < 0 || m->sample_y < 0 || m->sample_x > MAX_SIDE - m->width ||
+        m->sample_y > MAX_SIDE - m->height)
+        return failn(err, code, name, "sample at (%d, %d) (expected a place within %d texels)",
+                     m->sample_x, m->sample_y, MAX_SIDE);
+    size_t n = (size_t)m->surface_width * m->surface_height;
+    for (size_t t = 0; t < n; t++)
+        if (m->map[2 * t] >= m->width || m->map[2 * t + 1] >= m->height)
+            return failn(err, code, name, "coordinate map: texel (%zu, %zu) shows (%u, %u) "
+                         "(expected a texel of the %dx%d sample)", t % m->surface_width,
+                         t / m->surface_width, m->map[2 * t], m->map[2 * t + 1], m->width,
+                         m->height);
+    return BTF_OK;
+}
+
 /* The rules both directions share; code: BTF_E_DATA (encoder) or
  * BTF_E_FORMAT (decoder). The codes are not checked: any code is legal. */
 static btf_status validate(const btf_rf_model *m, const char *name, int code, btf_error *err)
@@ -124,7 +155,7 @@ static btf_status validate(const btf_rf_model *m, const char *name, int code, bt
             return failn(err, code, name, "field %d, slot %d: range [%g, %g] (expected finite, "
                          "lo <= hi, magnitudes <= 1e30)", i / m->slots, i % m->slots, a, b);
     }
-    return BTF_OK;
+    return m->map ? validate_map(m, name, code, err) : BTF_OK;
 }
 
 /* ------------------------------------------------------------- writing */
@@ -201,6 +232,31 @@ static void w_dirset(wbuf *b, int s, const btf_dirset *d)
     w_section_end(b, body);
 }
 
+/* RFMP: u8 version, u32 surface width and height, u32 sample x and y,
+ * then per surface texel the shift of its sample texel from the identity
+ * (the texel's place less the sample's, wrapped into the sample) as byte
+ * planes: x shifts' low bytes, their high bytes, y shifts' low, high. */
+static void w_map(wbuf *b, const btf_rf_model *m)
+{
+    size_t body = w_section(b, S_RFMP);
+    w_u8(b, RFMP_VERSION);
+    w_u32(b, (uint32_t)m->surface_width), w_u32(b, (uint32_t)m->surface_height);
+    w_u32(b, (uint32_t)m->sample_x), w_u32(b, (uint32_t)m->sample_y);
+    size_t n = (size_t)m->surface_width * m->surface_height;
+    unsigned char *p = w_reserve(b, 4 * n);
+    if (p)
+        for (size_t t = 0; t < n; t++) {
+            int x = (int)(t % m->surface_width), y = (int)(t / m->surface_width);
+            unsigned dx = (unsigned)rf_wrap(m->map[2 * t] - rf_wrap(x - m->sample_x, m->width),
+                                            m->width);
+            unsigned dy = (unsigned)rf_wrap(m->map[2 * t + 1] -
+                                                rf_wrap(y - m->sample_y, m->height),
+                                            m->height);
+            p[t] = dx & 255, p[n + t] = dx >> 8, p[2 * n + t] = dy & 255, p[3 * n + t] = dy >> 8;
+        }
+    w_section_end(b, body);
+}
+
 btf_status btf_rf_encode(const btf_rf_model *m, unsigned char **data, size_t *size,
                          btf_error *err)
 {
@@ -215,9 +271,12 @@ btf_status btf_rf_encode(const btf_rf_model *m, unsigned char **data, size_t *si
         return rc;
     size_t texels = (size_t)m->width * m->height;
     size_t planes = (size_t)m->fields * m->slots;
-    if (planes * texels * 2 > MAX_PAYLOAD_BYTES - 65536 - 32 * (size_t)MAX_DIRS - planes * 8)
-        return failn(err, BTF_E_DATA, name, "%zu parameter codes (expected a payload of at most "
-                     "%zu bytes)", planes * texels, MAX_PAYLOAD_BYTES);
+    size_t map_bytes = m->map ? RFMP_HEAD + 4 * (size_t)m->surface_width * m->surface_height : 0;
+    if (planes * texels * 2 + map_bytes >
+        MAX_PAYLOAD_BYTES - 65536 - 32 * (size_t)MAX_DIRS - planes * 8)
+        return failn(err, BTF_E_DATA, name, "%zu parameter codes and %zu bytes of coordinate "
+                     "map (expected a payload of at most %zu bytes)", planes * texels,
+                     map_bytes, MAX_PAYLOAD_BYTES);
     wbuf b = {0};
     w_dirset(&b, S_VIEW, &m->views);
     w_dirset(&b, S_LGHT, &m->lights);
@@ -243,6 +302,8 @@ btf_status btf_rf_encode(const btf_rf_model *m, unsigned char **data, size_t *si
             }
         }
     w_section_end(&b, body);
+    if (m->map)
+        w_map(&b, m);
     if (b.failed) {
         free(b.p);
         return failn(err, BTF_E_NOMEM, name, "out of memory encoding the model");
@@ -260,7 +321,7 @@ btf_status btf_rf_encode(const btf_rf_model *m, unsigned char **data, size_t *si
         memcpy(out + HEADER_BYTES, b.p, b.n);
     }
     memcpy(out, SIGNATURE, SIG_LEN);
-    put_u16(out + 11, FMT_MAJOR);
+    put_u16(out + 11, m->map ? FMT_MAJOR_MAP : FMT_MAJOR);
     put_u16(out + 13, FMT_MINOR);
     put_u16(out + 15, HEADER_BYTES);
     out[17] = (unsigned char)comp;
@@ -314,21 +375,24 @@ static double get_f64(const unsigned char *p)
 
 static btf_status open_container(const unsigned char *data, size_t size, const char *name,
                                  const unsigned char **payload, size_t *payload_n,
-                                 unsigned char **owned, btf_error *err)
+                                 unsigned char **owned, unsigned *major_out, btf_error *err)
 {
     if (size < SIG_STEM || memcmp(data, SIGNATURE, SIG_STEM) != 0)
         return failn(err, BTF_E_FORMAT, name, "not a reflectance-field model (expected the "
                      "signature \\x89BTFRFL)");
     if (size < SIG_LEN || memcmp(data, SIGNATURE, SIG_LEN) != 0)
         return failn(err, BTF_E_FORMAT, name, "damaged signature: the file went through a "
-                     "text-mode transfer (line endings converted)");
+                     "text-mode transfer (expected \\x89BTFRFL\\r\\n\\x1a\\n; line endings "
+                     "converted)");
     if (size < HEADER_BYTES + CRC_BYTES)
         return failn(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected at least %d)",
                      size, HEADER_BYTES + CRC_BYTES);
     unsigned major = get_u16(data + 11), minor = get_u16(data + 13);
-    if (major != FMT_MAJOR)
-        return failn(err, BTF_E_FORMAT, name, "format version %u.%u (expected major version %d%s)",
-                     major, minor, FMT_MAJOR, major > FMT_MAJOR ? "; a newer btfcar reads it" : "");
+    if (major != FMT_MAJOR && major != FMT_MAJOR_MAP)
+        return failn(err, BTF_E_FORMAT, name, "format version %u.%u (expected major version %d "
+                     "or %d%s)", major, minor, FMT_MAJOR, FMT_MAJOR_MAP,
+                     major > FMT_MAJOR_MAP ? "; a newer btfcar reads it" : "");
+    *major_out = major;
     if (size > MAX_FILE_BYTES)
         return failn(err, BTF_E_FORMAT, name, "%zu bytes (expected at most %zu)", size,
                      MAX_FILE_BYTES);
@@ -415,20 +479,70 @@ static btf_status read_dirset(const span *s, const char *what, const char *name,
     return BTF_OK;
 }
 
-static btf_status decode_payload(const unsigned char *p, size_t n, const char *name,
-                                 btf_rf_model *m, btf_error *err)
+/* RFMP (format 2): the map, every shift checked against the sample. */
+static btf_status read_map(const span *s, const char *name, btf_rf_model *m, btf_error *err)
 {
+    if (s->n < RFMP_HEAD || s->p[0] != RFMP_VERSION)
+        return failn(err, BTF_E_FORMAT, name, "RFMP section of %zu bytes, version %d (expected "
+                     "at least %d bytes, version %d)", s->n, s->n ? s->p[0] : -1, RFMP_HEAD,
+                     RFMP_VERSION);
+    uint32_t sw = get_u32(s->p + 1), sh = get_u32(s->p + 5);
+    uint32_t x0 = get_u32(s->p + 9), y0 = get_u32(s->p + 13);
+    if (sw < 1 || sw > BTF_RF_MAX_SURFACE_SIDE || sh < 1 || sh > BTF_RF_MAX_SURFACE_SIDE ||
+        x0 > (uint32_t)(MAX_SIDE - m->width) || y0 > (uint32_t)(MAX_SIDE - m->height))
+        return failn(err, BTF_E_FORMAT, name, "coordinate map of %ux%u texels, sample at (%u, "
+                     "%u) (expected sides 1..%d, a place within %d texels)", sw, sh, x0, y0,
+                     BTF_RF_MAX_SURFACE_SIDE, MAX_SIDE);
+    size_t n = (size_t)sw * sh;
+    if (s->n != RFMP_HEAD + 4 * n)
+        return failn(err, BTF_E_FORMAT, name, "RFMP section of %zu bytes (expected %zu for a "
+                     "%ux%u map)", s->n, RFMP_HEAD + 4 * n, sw, sh);
+    m->map = btf_alloc(n, 2 * sizeof(uint16_t), NULL);
+    if (!m->map)
+        return failn(err, BTF_E_NOMEM, name, "out of memory for a %ux%u coordinate map", sw, sh);
+    m->surface_width = (int)sw, m->surface_height = (int)sh;
+    m->sample_x = (int)x0, m->sample_y = (int)y0;
+    const unsigned char *q = s->p + RFMP_HEAD;
+    for (size_t t = 0; t < n; t++) {
+        unsigned dx = q[t] | (unsigned)q[n + t] << 8, dy = q[2 * n + t] | (unsigned)q[3 * n + t] << 8;
+        if (dx >= (unsigned)m->width || dy >= (unsigned)m->height)
+            return failn(err, BTF_E_FORMAT, name, "coordinate map: texel (%zu, %zu) shifted by "
+                         "(%u, %u) (expected less than the %dx%d sample)", t % sw, t / sw, dx,
+                         dy, m->width, m->height);
+        int x = (int)(t % sw), y = (int)(t / sw);
+        m->map[2 * t] = (uint16_t)rf_wrap(rf_wrap(x - m->sample_x, m->width) + (int)dx, m->width);
+        m->map[2 * t + 1] =
+            (uint16_t)rf_wrap(rf_wrap(y - m->sample_y, m->height) + (int)dy, m->height);
+    }
+    return BTF_OK;
+}
+
+/* A section tag for a message: printable ASCII, anything else '?', so
+ * that the message stays one line. */
+static const char *tag_text(const unsigned char *p, char buf[5])
+{
+    for (int i = 0; i < 4; i++)
+        buf[i] = p[i] >= 0x20 && p[i] < 0x7f ? (char)p[i] : '?';
+    buf[4] = 0;
+    return buf;
+}
+
+static btf_status decode_payload(const unsigned char *p, size_t n, const char *name,
+                                 unsigned major, btf_rf_model *m, btf_error *err)
+{
+    char tag[5];
     span sec[S_COUNT];
     memset(sec, 0, sizeof sec);
     size_t at = 0;
     while (at < n) {
         if (n - at < 8)
-            return failn(err, BTF_E_FORMAT, name, "truncated section header at payload byte %zu",
-                         at);
+            return failn(err, BTF_E_FORMAT, name, "truncated section header at payload byte %zu "
+                         "(expected 8 bytes)", at);
         size_t len = get_u32(p + at + 4);
         if (len > n - at - 8)
-            return failn(err, BTF_E_FORMAT, name, "section '%.4s' of %zu bytes at payload byte "
-                         "%zu runs past the payload's %zu bytes", (const char *)p + at, len, at, n);
+            return failn(err, BTF_E_FORMAT, name, "section '%s' of %zu bytes at payload byte "
+                         "%zu runs past the payload (expected at most %zu bytes)",
+                         tag_text(p + at, tag), len, at, n - at - 8);
         for (int s = 0; s < S_COUNT; s++)
             if (!memcmp(p + at, TAGS[s], 4)) {
                 if (sec[s].present)
@@ -438,10 +552,14 @@ static btf_status decode_payload(const unsigned char *p, size_t n, const char *n
             }
         at += 8 + len;
     }
-    for (int s = 0; s < S_COUNT; s++)
+    for (int s = 0; s < S_REQUIRED; s++)
         if (!sec[s].present)
             return failn(err, BTF_E_FORMAT, name, "no %s section (expected every one of VIEW, "
                          "LGHT, RFHD, RFQR, RFCD)", TAGS[s]);
+    if (sec[S_RFMP].present != (major == FMT_MAJOR_MAP))
+        return failn(err, BTF_E_FORMAT, name, "format %u %s an RFMP section (expected one in "
+                     "format %d, a sampled model, and none in format %d)", major,
+                     sec[S_RFMP].present ? "with" : "without", FMT_MAJOR_MAP, FMT_MAJOR);
     btf_status rc;
     if ((rc = read_dirset(&sec[S_VIEW], "views", name, &m->views, err)) ||
         (rc = read_dirset(&sec[S_LGHT], "lights", name, &m->lights, err)))
@@ -484,6 +602,8 @@ static btf_status decode_payload(const unsigned char *p, size_t n, const char *n
         for (size_t t = 0; t < texels; t++)
             q[t * m->slots] = (uint16_t)(lo[t] | hi[t] << 8);
     }
+    if (sec[S_RFMP].present && (rc = read_map(&sec[S_RFMP], name, m, err)))
+        return rc;
     return validate(m, name, BTF_E_FORMAT, err);
 }
 
@@ -500,10 +620,11 @@ btf_status btf_rf_decode(const unsigned char *data, size_t size, const char *nam
     const unsigned char *payload = NULL;
     size_t n = 0;
     unsigned char *owned = NULL;
+    unsigned major = 0;
     btf_status rc = open_container(data ? data : (const unsigned char *)"", size, name,
-                                   &payload, &n, &owned, err);
+                                   &payload, &n, &owned, &major, err);
     if (rc == BTF_OK)
-        rc = decode_payload(payload, n, name, out, err);
+        rc = decode_payload(payload, n, name, major, out, err);
     free(owned);
     if (rc)
         btf_rf_model_free(out);

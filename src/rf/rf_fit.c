@@ -16,6 +16,10 @@
  * fitted its slots are quantised (rf_quant.c), and the quantised model's
  * luminance error is measured against the view's images still in memory
  * (the Lafortune model's by btf_rf_error, another pass).
+ *
+ * A crop (opts->crop_*) fits one window of the images only, the sample of
+ * the memory reduction of section 6 (rf_sampled.c): each image is cut to
+ * the window as it is read, and everything after sees a smaller dataset.
  */
 #include "rf/rf.h"
 
@@ -29,6 +33,7 @@ typedef struct fit_ctx {
     btf_rf_opts o;
     btf_rf_model *m;
     int nl, nv, w, h, workers;
+    int iw, ih, cx, cy, cropped; /* the images' size; the window fitted */
     size_t texels;
     double *lvec;        /* [nl * 3] light vectors */
     double *pinv;        /* [6 * nl] the PTM operator */
@@ -45,16 +50,28 @@ typedef struct fit_ctx {
     double *lall, *vall; /* [n_img * 3] light and view vectors of every image */
 } fit_ctx;
 
+/* The window (x, y, w, h) of an RGB image, in place: each row moves to an
+ * address at or before its own, so front-to-back memmove is safe. */
+static void crop_image(btf_image *img, int x, int y, int w, int h)
+{
+    for (int r = 0; r < h; r++)
+        memmove(img->data + (size_t)r * w * 3,
+                img->data + ((size_t)(y + r) * img->width + x) * 3, (size_t)w * 3 * sizeof(float));
+    img->width = w, img->height = h;
+}
+
 static btf_status read_job(void *user, int l, int worker, btf_error *err)
 {
     (void)worker;
     fit_ctx *c = user;
     btf_image_free(&c->imgs[l]);
     btf_status rc = btf_dataset_read(c->ds, c->view, l, &c->imgs[l], err);
-    if (rc == BTF_OK && (c->imgs[l].width != c->w || c->imgs[l].height != c->h))
+    if (rc == BTF_OK && (c->imgs[l].width != c->iw || c->imgs[l].height != c->ih))
         rc = btf_fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the dataset)",
                       btf_dataset_path(c->ds, c->view, l), c->imgs[l].width, c->imgs[l].height,
-                      c->w, c->h);
+                      c->iw, c->ih);
+    if (rc == BTF_OK && c->cropped)
+        crop_image(&c->imgs[l], c->cx, c->cy, c->w, c->h);
     return rc;
 }
 
@@ -252,7 +269,10 @@ static btf_status fit_lafortune(fit_ctx *c, btf_rf_opts *o, btf_error *err)
         o->info->fit_s = t_fit;
         (void)t_start;
     }
-    /* The error of the quantised model: one more pass over the images. */
+    /* The error of the quantised model: one more pass over the images (a
+     * window's is measured by btf_rf_fit_sampled, through its map). */
+    if (c->cropped)
+        return BTF_OK;
     double e = 0.0, s = 0.0;
     rc = btf_rf_error(c->ds, m, o->threads, &e, &s, err);
     if (rc == BTF_OK && o->info) {
@@ -285,14 +305,23 @@ btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_mod
     if (o.iterations < 0 || o.threads < 0)
         return btf_fail(err, BTF_E_ARG, "iterations %d, threads %d (expected >= 0)",
                         o.iterations, o.threads);
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    int cropped = o.crop_width != 0 || o.crop_height != 0;
+    if (cropped && (o.crop_width < 1 || o.crop_height < 1 || o.crop_x < 0 || o.crop_y < 0 ||
+                    o.crop_x > in->width - o.crop_width || o.crop_y > in->height - o.crop_height))
+        return btf_fail(err, BTF_E_ARG, "crop of %dx%d at (%d, %d) (expected a window inside "
+                        "the %dx%d images)", o.crop_width, o.crop_height, o.crop_x, o.crop_y,
+                        in->width, in->height);
     double t_start = btf_now();
     if (o.info)
         memset(o.info, 0, sizeof *o.info);
-    const btf_dataset_info *in = btf_dataset_get_info(ds);
     fit_ctx c;
     memset(&c, 0, sizeof c);
     c.ds = ds, c.in = in, c.o = o, c.m = out;
-    c.nl = in->n_lights, c.nv = in->n_views, c.w = in->width, c.h = in->height;
+    c.nl = in->n_lights, c.nv = in->n_views, c.iw = in->width, c.ih = in->height;
+    c.cropped = cropped;
+    c.cx = cropped ? o.crop_x : 0, c.cy = cropped ? o.crop_y : 0;
+    c.w = cropped ? o.crop_width : c.iw, c.h = cropped ? o.crop_height : c.ih;
     c.texels = (size_t)c.w * c.h;
     c.workers = btf_pool_workers(o.threads, c.h > c.nl ? c.h : c.nl);
     out->fit = o.fit;

@@ -1,10 +1,12 @@
 /*
  * rf_model.c — the reflectance-field model's lifetime and vocabulary
  * (Meseth, Müller & Klein 2003, section 4.2): the fits' names, how many
- * parameters each keeps per texel and field, the options' defaults, and
+ * parameters each keeps per texel and field, the options' defaults (the
+ * fit's and the section 6 sample's), the surface a model describes, and
  * freeing a model.
  */
 #include "rf/rf.h"
+#include "rf/rf_map.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -46,5 +48,21 @@ void btf_rf_model_free(btf_rf_model *m)
     free(m->lo);
     free(m->hi);
     free(m->codes);
+    free(m->map);
     memset(m, 0, sizeof *m);
+}
+
+btf_rf_sample_opts btf_rf_sample_defaults(void)
+{
+    btf_rf_sample_opts o;
+    memset(&o, 0, sizeof o);
+    return o;
+}
+
+void btf_rf_surface_size(const btf_rf_model *m, int *width, int *height)
+{
+    if (width)
+        *width = m ? rf_surface_w(m) : 0;
+    if (height)
+        *height = m ? rf_surface_h(m) : 0;
 }

@@ -11,9 +11,12 @@
  * render's pixel (x, y) is texel (x, y)); the four closest measured views'
  * fields are evaluated at the exact light direction and blended (rf.h's
  * rf_views_at and rf_blend, the flat render's code path). No parallax and
- * no bump mapping: the fields hold the surface's relief themselves.
+ * no bump mapping: the fields hold the surface's relief themselves. A
+ * sampled model's (section 6) uv wraps into its surface, and the texel is
+ * looked up through the coordinate map (rf_map.h).
  */
 #include "rf/rf.h"
+#include "rf/rf_map.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -79,8 +82,9 @@ static void shade_pixel(const scene_job *j, size_t p, float *o)
             v[k] /= vn;
     rf_views vs;
     rf_views_at(m, btf_vec_to_dir(v), v, &vs);
-    int tx = wrap_texel(g->uv[2 * p], m->width), ty = wrap_texel(g->uv[2 * p + 1], m->height);
-    size_t t = (size_t)ty * m->width + (size_t)tx;
+    int tx = wrap_texel(g->uv[2 * p], rf_surface_w(m));
+    int ty = wrap_texel(g->uv[2 * p + 1], rf_surface_h(m));
+    size_t t = rf_surface_texel(m, tx, ty);
     double sum[3] = {0, 0, 0};
     for (int i = 0; i < j->s->n_lights; i++) {
         const btf_light *lt = &j->s->lights[i];
@@ -127,7 +131,8 @@ btf_status btf_rf_render_scene(const btf_rf_model *m, const btf_scene *s, int wi
     if (!out)
         return btf_fail(err, BTF_E_ARG, "btf_rf_render_scene: no output image");
     memset(out, 0, sizeof *out);
-    if (!m || !m->codes || m->width < 1 || m->height < 1 || m->fields < 1)
+    if (!m || !m->codes || m->width < 1 || m->height < 1 || m->fields < 1 ||
+        (m->map && (m->surface_width < 1 || m->surface_height < 1)))
         return btf_fail(err, BTF_E_ARG, "btf_rf_render_scene: no model");
     if (!s)
         return btf_fail(err, BTF_E_ARG, "btf_rf_render_scene: no scene given");

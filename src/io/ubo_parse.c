@@ -552,21 +552,22 @@ static btf_status check_finite_pvf(const ubo_file *f, btf_error *err)
 
 static btf_status check_finite(const ubo_file *f, btf_error *err)
 {
-    static const char *const names[3] = {"R/0", "G/1", "B/2"};
+    /* DFMF: one matrix pair per channel; FMF: one for all channels (§4). */
+    static const char *const names[4] = {" of channel R/0", " of channel G/1",
+                                         " of channel B/2", ""};
     if (f->variant == UBO_PVF)
         return check_finite_pvf(f, err);
     int n = f->variant == UBO_DFMF ? 3 : f->variant == UBO_FMF ? 1 : 0;
     for (int ch = 0; ch < n; ch++) {
+        const char *name = names[f->variant == UBO_FMF ? 3 : ch];
         uint64_t bad;
         if (!matrix_finite(&f->u[ch], &bad))
-            return btf_fail(err, BTF_E_DATA, "%s: U of channel %s has a NaN or Inf at row %llu, "
-                            "component %llu", f->name, names[ch],
-                            (unsigned long long)(bad / f->u[ch].k),
+            return btf_fail(err, BTF_E_DATA, "%s: U%s has a NaN or Inf at row %llu, component "
+                            "%llu", f->name, name, (unsigned long long)(bad / f->u[ch].k),
                             (unsigned long long)(bad % f->u[ch].k));
         if (!matrix_finite(&f->sxv[ch], &bad))
-            return btf_fail(err, BTF_E_DATA, "%s: SxV of channel %s has a NaN or Inf at row "
-                            "%llu, component %llu", f->name, names[ch],
-                            (unsigned long long)(bad / f->sxv[ch].k),
+            return btf_fail(err, BTF_E_DATA, "%s: SxV%s has a NaN or Inf at row %llu, component "
+                            "%llu", f->name, name, (unsigned long long)(bad / f->sxv[ch].k),
                             (unsigned long long)(bad % f->sxv[ch].k));
     }
     return BTF_OK;

@@ -11,10 +11,14 @@
  * From images, each view's slot is the PCA of its pixels in the 3 nL
  * dimensions of (light, channel) (btflib's "light fields stacked
  * column-wise": value = W[y W + x] . C[3 l + c] + Mean[3 l + c]): the mean
- * and the covariance over the pixels, its top eigenvectors as C; C and the
- * mean are rounded to the stored scalar and each pixel's W row is then the
- * least-squares fit to them, so the stored factors are the best for each
- * other; the error of the values the reader decodes is measured on the way.
+ * over the pixels, then the top eigenvectors of the centred data's Gram
+ * matrix on its smaller side (the covariance, or the pixels' Gram when
+ * there are fewer pixels than dimensions) give C with unit columns; C and
+ * the mean are rounded to the stored scalar and each pixel's W row is then
+ * the least-squares fit to them, so the stored factors are the best for
+ * each other; the error of the values the reader decodes is measured on
+ * the way. The slots are held until the file is written (a view's K is
+ * known only after its PCA: components with a zero eigenvalue are dropped).
  */
 #include <stdio.h>
 #include "core/core.h"
@@ -135,10 +139,9 @@ static btf_status read_view(const ubo_source *src, int v, float *x, double total
     return rc;
 }
 
-/* The column means (rounded to the stored scalar) and the covariance
- * (dim x dim, full) of X about the exact means. */
-static void mean_cov(const float *x, uint64_t px, uint64_t dim, int s, float *mean,
-                     double *cov, double *mu)
+/* The column means of X: exact into mu, rounded to the stored scalar into
+ * mean; X is then centred on the exact means in place. */
+static void centre(float *x, uint64_t px, uint64_t dim, int s, float *mean, double *mu)
 {
     for (uint64_t d = 0; d < dim; d++)
         mu[d] = 0;
@@ -149,18 +152,53 @@ static void mean_cov(const float *x, uint64_t px, uint64_t dim, int s, float *me
         mu[d] /= (double)px;
         mean[d] = ubo_stored((float)mu[d], s);
     }
-    memset(cov, 0, dim * dim * sizeof *cov);
-    for (uint64_t p = 0; p < px; p++) {
-        const float *row = x + p * dim;
-        for (uint64_t d = 0; d < dim; d++) {
-            double a = row[d] - mu[d];
-            for (uint64_t e = d; e < dim; e++)
-                cov[d * dim + e] += a * (row[e] - mu[e]);
+    for (uint64_t p = 0; p < px; p++)
+        for (uint64_t d = 0; d < dim; d++)
+            x[p * dim + d] = (float)(x[p * dim + d] - mu[d]);
+}
+
+/* The Gram matrix of the smaller side of the centred X (n x n, full):
+ * X X' (pixels) when px <= dim, else X'X (the covariance, dim x dim). */
+static void gram(const float *x, uint64_t px, uint64_t dim, double *g)
+{
+    int by_pixels = px <= dim;
+    uint64_t n = by_pixels ? px : dim, len = by_pixels ? dim : px;
+    for (uint64_t i = 0; i < n; i++)
+        for (uint64_t j = i; j < n; j++) {
+            double d = 0;
+            for (uint64_t t = 0; t < len; t++)
+                d += by_pixels ? (double)x[i * dim + t] * x[j * dim + t]
+                               : (double)x[t * dim + i] * x[t * dim + j];
+            g[i * n + j] = g[j * n + i] = d;
         }
-    }
+}
+
+/* The number of components worth keeping: sqrt(lambda) above 1e-7 of the first. */
+static uint32_t keep(const double *val, uint32_t k)
+{
+    uint32_t kc = 0;
+    double top = val[0] > 0 ? sqrt(val[0]) : 0;
+    while (kc < k && val[kc] > 0 && sqrt(val[kc]) > 1e-7 * top)
+        kc++;
+    return kc ? kc : 1;
+}
+
+/* C (dim x kc, unit columns): the eigenvectors themselves (covariance
+ * side) or X' e_j / sqrt(lambda_j) (pixel side); rounded. */
+static void components(const float *x, uint64_t px, uint64_t dim, const double *val,
+                       const double *vec, uint32_t k, uint32_t kc, int s, float *c)
+{
     for (uint64_t d = 0; d < dim; d++)
-        for (uint64_t e = d + 1; e < dim; e++)
-            cov[e * dim + d] = cov[d * dim + e];
+        for (uint32_t j = 0; j < kc; j++) {
+            double v = vec[d * k + j];
+            if (px <= dim) {
+                v = 0;
+                for (uint64_t p = 0; p < px; p++)
+                    v += vec[p * k + j] * x[p * dim + d];
+                v = val[j] > 0 ? v / sqrt(val[j]) : 0;
+            }
+            c[d * kc + j] = ubo_stored((float)v, s);
+        }
 }
 
 /* The reader's sum (io/ubo_decode.c): 8 lanes, added in one fixed order. */
@@ -172,10 +210,11 @@ static float dot8(const float *a, const float *b, uint32_t k)
     return ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]));
 }
 
-/* W (px x k): each pixel's fit to the rounded C and mean; the errors. */
-static btf_status fit_weights(const float *x, uint64_t px, uint64_t dim, uint32_t k, int s,
-                              const float *mean, const float *c, float *w, double sum2[3],
-                              double maxe[3], btf_error *err)
+/* W (px x k): each pixel's fit to the rounded C and mean (x centred on the
+ * exact means mu); the errors of the decoded values. */
+static btf_status fit_weights(const float *x, const double *mu, uint64_t px, uint64_t dim,
+                              uint32_t k, int s, const float *mean, const float *c, float *w,
+                              double sum2[3], double maxe[3], btf_error *err)
 {
     double *l = btf_calloc((size_t)k * k, sizeof *l, err), b[UBO_MAX_COMPONENTS];
     if (!l)
@@ -196,12 +235,12 @@ static btf_status fit_weights(const float *x, uint64_t px, uint64_t dim, uint32_
             b[j] = 0;
         for (uint64_t d = 0; d < dim; d++)
             for (uint32_t j = 0; j < k; j++)
-                b[j] += ((double)row[d] - mean[d]) * c[d * k + j];
+                b[j] += ((double)row[d] + mu[d] - mean[d]) * c[d * k + j];
         ubo_chol_solve(l, (int)k, b);
         for (uint32_t j = 0; j < k; j++)
             wr[j] = ubo_stored((float)b[j], s);
         for (uint64_t d = 0; d < dim; d++) {
-            double e = (double)(dot8(c + d * k, wr, k) + mean[d]) - row[d];
+            double e = (double)(dot8(c + d * k, wr, k) + mean[d]) - ((double)row[d] + mu[d]);
             sum2[d % 3] += e * e;
             maxe[d % 3] = fmax(maxe[d % 3], fabs(e));
         }
@@ -210,20 +249,16 @@ static btf_status fit_weights(const float *x, uint64_t px, uint64_t dim, uint32_
     return BTF_OK;
 }
 
-/* Working memory of one view and the results of all. */
+/* The working memory of one view. */
 typedef struct pvf_work {
-    float *x, *mean, *c, *w, *ev;
-    double *cov, *mu, *val, *vec;
+    float *x;
+    double *g, *mu, *val, *vec;
 } pvf_work;
 
 static void work_free(pvf_work *w)
 {
     free(w->x);
-    free(w->mean);
-    free(w->c);
-    free(w->w);
-    free(w->ev);
-    free(w->cov);
+    free(w->g);
     free(w->mu);
     free(w->val);
     free(w->vec);
@@ -231,39 +266,63 @@ static void work_free(pvf_work *w)
 
 static btf_status work_alloc(pvf_work *w, uint64_t px, uint64_t dim, uint32_t k, btf_error *err)
 {
-    memset(w, 0, sizeof *w);
+    uint64_t n = px <= dim ? px : dim;
     w->x = btf_alloc(px * dim, sizeof *w->x, err);
-    w->mean = btf_alloc(dim, sizeof *w->mean, err);
-    w->c = btf_alloc(dim * k, sizeof *w->c, err);
-    w->w = btf_alloc(px * k, sizeof *w->w, err);
-    w->ev = btf_alloc(k, sizeof *w->ev, err);
-    w->cov = btf_alloc(dim * dim, sizeof *w->cov, err);
+    w->g = btf_alloc(n * n, sizeof *w->g, err);
     w->mu = btf_alloc(dim, sizeof *w->mu, err);
     w->val = btf_alloc(k, sizeof *w->val, err);
-    w->vec = btf_alloc(dim * k, sizeof *w->vec, err);
-    if (w->x && w->mean && w->c && w->w && w->ev && w->cov && w->mu && w->val && w->vec)
-        return BTF_OK;
-    work_free(w);
-    return BTF_E_NOMEM;
+    w->vec = btf_alloc(n * k, sizeof *w->vec, err);
+    return w->x && w->g && w->mu && w->val && w->vec ? BTF_OK : BTF_E_NOMEM;
 }
 
-/* One view's slot into w (C, mean, W, eigenvalues). */
+/* The slots of all views, in memory until the file is written. */
+typedef struct pvf_slots {
+    ubo_pvf_view *v;
+    int n;
+} pvf_slots;
+
+static void slots_free(pvf_slots *sl)
+{
+    for (int i = 0; sl->v && i < sl->n; i++) {
+        free((void *)sl->v[i].ev);
+        free((void *)sl->v[i].mean);
+        free((void *)sl->v[i].c);
+        free((void *)sl->v[i].w);
+    }
+    free(sl->v);
+}
+
+/* One view's slot: mean, C, W and the eigenvalues, allocated. */
 static btf_status view_slot(const ubo_source *src, int v, uint32_t k, int s, pvf_work *w,
-                            double total[3], double sum2[3], double maxe[3], btf_error *err)
+                            ubo_pvf_view *out, double total[3], double sum2[3], double maxe[3],
+                            btf_error *err)
 {
     uint64_t px = (uint64_t)src->width * src->height, dim = 3 * (uint64_t)src->lights->count;
+    uint64_t n = px <= dim ? px : dim;
+    uint32_t kn = (uint64_t)k < n ? k : (uint32_t)n;
     btf_status rc = read_view(src, v, w->x, total, err);
     if (rc)
         return rc;
-    mean_cov(w->x, px, dim, s, w->mean, w->cov, w->mu);
-    rc = ubo_top_eigen(w->cov, (int)dim, (int)k, w->val, w->vec, err);
+    float *mean = btf_alloc(dim, sizeof *mean, err);
+    if (!mean)
+        return BTF_E_NOMEM;
+    out->mean = mean;
+    centre(w->x, px, dim, s, mean, w->mu);
+    gram(w->x, px, dim, w->g);
+    rc = ubo_top_eigen(w->g, (int)n, (int)kn, w->val, w->vec, err);
     if (rc)
         return rc;
-    for (uint64_t i = 0; i < dim * k; i++)
-        w->c[i] = ubo_stored((float)w->vec[i], s);
-    for (uint32_t j = 0; j < k; j++)
-        w->ev[j] = (float)w->val[j];
-    return fit_weights(w->x, px, dim, k, s, w->mean, w->c, w->w, sum2, maxe, err);
+    uint32_t kc = keep(w->val, kn);
+    float *c = btf_alloc(dim * kc, sizeof *c, err), *wt = btf_alloc(px * kc, sizeof *wt, err);
+    float *ev = btf_alloc(kc, sizeof *ev, err);
+    out->c = c, out->w = wt, out->ev = ev;
+    if (!c || !wt || !ev)
+        return BTF_E_NOMEM;
+    *out = (ubo_pvf_view){kc, (uint32_t)px, (uint32_t)dim, ev, mean, c, wt};
+    for (uint32_t j = 0; j < kc; j++)
+        ev[j] = (float)(w->val[j] / (double)px); /* the covariance's eigenvalues */
+    components(w->x, px, dim, w->val, w->vec, kn, kc, s, c);
+    return fit_weights(w->x, w->mu, px, dim, kc, s, mean, c, wt, sum2, maxe, err);
 }
 
 btf_status ubo_write_pvf_images(const ubo_source *src, const char *signature, int components,
@@ -273,41 +332,37 @@ btf_status ubo_write_pvf_images(const ubo_source *src, const char *signature, in
     const char *path = src->path;
     int nv = src->views->count;
     uint64_t px = (uint64_t)src->width * src->height, dim = 3 * (uint64_t)src->lights->count;
-    uint32_t k = (uint32_t)((uint64_t)components < dim ? (uint64_t)components : dim);
+    uint64_t n = px <= dim ? px : dim;
+    uint32_t k = (uint32_t)((uint64_t)components < n ? (uint64_t)components : n);
     if (k > UBO_MAX_COMPONENTS)
         return btf_fail(err, BTF_E_ARG, "%s: %u components: at most %d", path, k,
                         UBO_MAX_COMPONENTS);
-    uint64_t need = px * dim * 4 + dim * dim * 8 + px * k * 4;
-    if (dim > 46340 || need > max_bytes)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: the PCA of a view's %llu pixels in %llu "
-                        "dimensions needs %llu bytes of working memory, over the cap of %llu "
-                        "(btf_ubo2014_write_opts.max_bytes)", path, (unsigned long long)px,
-                        (unsigned long long)dim, (unsigned long long)need,
-                        (unsigned long long)max_bytes);
-    pvf_work w;
-    btf_status rc = work_alloc(&w, px, dim, k, err);
-    if (rc)
-        return rc;
-    ubo_bytes h = {0};
-    put_pvf_header(&h, signature, 0, k, src->views, src->lights, src->width, src->height);
-    ubo_outfile o;
-    unsigned char *p;
-    rc = ubo_out_header(&o, path, &h, (uint64_t)nv * slot_bytes(scalar, k, (uint32_t)px,
-                                                                 (uint32_t)dim), &p, err);
+    uint64_t need = px * dim * 4 + n * n * 8 + (uint64_t)nv * (dim + px) * k * 4;
+    if (n > 46340 || need > max_bytes)
+        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: the PCA of %d views of %llu pixels in "
+                        "%llu dimensions needs %llu bytes of working memory, over the cap of "
+                        "%llu (btf_ubo2014_write_opts.max_bytes)", path, nv,
+                        (unsigned long long)px, (unsigned long long)dim,
+                        (unsigned long long)need, (unsigned long long)max_bytes);
+    pvf_work w = {0};
+    pvf_slots sl = {btf_calloc((size_t)nv, sizeof *sl.v, err), nv};
+    btf_status rc = sl.v ? work_alloc(&w, px, dim, k, err) : BTF_E_NOMEM;
     double total[3] = {0}, sum2[3] = {0}, maxe[3] = {0};
+    uint32_t kmax = 0;
     for (int v = 0; v < nv && rc == BTF_OK; v++) {
-        rc = view_slot(src, v, k, scalar, &w, total, sum2, maxe, err);
-        ubo_pvf_view sl = {k, (uint32_t)px, (uint32_t)dim, w.ev, w.mean, w.c, w.w};
-        if (rc == BTF_OK)
-            rc = put_slot(&p, scalar, &sl, path, err);
-        ubo_report(src, (double)(v + 1) / nv, "a PCA per view");
+        rc = view_slot(src, v, k, scalar, &w, &sl.v[v], total, sum2, maxe, err);
+        kmax = sl.v[v].k > kmax ? sl.v[v].k : kmax;
+        ubo_report(src, 0.95 * (v + 1) / nv, "a PCA per view");
     }
     work_free(&w);
-    rc = ubo_out_close(&o, path, rc, err);
-    uint64_t n = (uint64_t)nv * src->lights->count;
+    ubo_pvf pv = {signature, 0, scalar, kmax, sl.v};
+    if (rc == BTF_OK)
+        rc = ubo_write_pvf(path, src->views, src->lights, src->width, src->height, &pv, err);
+    slots_free(&sl);
+    uint64_t pairs = (uint64_t)nv * src->lights->count;
     for (int c = 0; rc == BTF_OK && st && c < 3; c++) {
-        st->components[c] = (int)k;
-        st->rms_error[c] = sqrt(sum2[c] / (double)(n * px));
+        st->components[c] = (int)kmax;
+        st->rms_error[c] = sqrt(sum2[c] / (double)(pairs * px));
         st->max_error[c] = maxe[c];
         st->energy[c] = total[c] > 0 ? 1.0 - sum2[c] / total[c] : 1.0;
     }

@@ -23,7 +23,8 @@ static const char *const FORMATS[] = {"ubo2003", "btf", "btf-bdif", "btf-fmf", "
 /* The library's variant of each .btf format above (index - 1). */
 static const int VARIANTS[] = {BTF_UBO2014_DFMF, BTF_UBO2014_BDIF, BTF_UBO2014_FMF,
                                BTF_UBO2014_PVF};
-static const char *const VARIANT_NAMES[] = {"DFMF", "BDIF", "FMF", "PVF"};
+static const char *const VARIANT_NAMES[] = {"DFMF", "BDIF", "FMF", "FMF", "FMF", "FMF", "PVF",
+                                            "PVF"};
 
 typedef struct gen_btf {
     btf_material m;

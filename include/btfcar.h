@@ -478,27 +478,28 @@ typedef enum btf_ubo2014_variant {
     BTF_UBO2014_DFMF = 0, /* "!DFMF08FCR": per channel U x (S V)', colour model 0 (RGB) */
     BTF_UBO2014_BDIF,     /* "!BDIF06R2!": every value as a half float, uncompressed */
     BTF_UBO2014_FMF,      /* "!FMF12FCER": one U x (S V)' for the three channels,
-                             U's row (view * n_lights + light) * 3 + channel */
-    BTF_UBO2014_PVF       /* "!PVF06FCR": per view, the PCA of its (light,
-                             channel) columns over the pixels */
+                             U's row (view * n_lights + light) * 3 + channel;
+                             the extended header of version 2, no height map */
+    BTF_UBO2014_FMF_LOG,  /* the same of ln(value + 1e-5), with the file's
+                             dynamic-range flag set (the reader takes exp(x) -
+                             1e-5); every value must exceed -1e-5 */
+    BTF_UBO2014_FMF06R,   /* "!FMF06FCR": FMF without the extended header */
+    BTF_UBO2014_FMF06,    /* "!FMF06FC": nor the rotations field */
+    BTF_UBO2014_PVF,      /* "!PVF06FCR": per view, the PCA of its pixels'
+                             (light, channel) values: mean, components, weights */
+    BTF_UBO2014_PVF06     /* "!PVF06FC": PVF without the rotations field */
 } btf_ubo2014_variant;
 
 typedef struct btf_ubo2014_write_opts {
     int variant;          /* btf_ubo2014_variant; 0: DFMF */
     int components;       /* DFMF: per channel, FMF: in all, PVF: per view (at
                              most the matrix's rank); 0: 16 */
-    int scalar_size;      /* DFMF, FMF, PVF: 2 (half) or 4 (float); 0: 2 */
+    int scalar_size;      /* all but BDIF: 2 (half) or 4 (float); 0: 2 */
     uint64_t max_bytes;   /* DFMF, FMF, PVF: the cap on the working memory of the
                              factorisation (the Gram matrices, or the images
                              when there are fewer rows than pixels); 0: 2^31 */
     btf_progress_fn progress;
     void *progress_user;
-    const char *signature; /* NULL: the variant's above; FMF may also be
-                             "!FMF06FCR" (no extended header) or "!FMF06FC"
-                             (no rotations field either), PVF "!PVF06FC" */
-    int log_values;       /* FMF "!FMF12FCER": store ln(value + 1e-5), the
-                             dynamic-range reduction the reader undoes; every
-                             value must exceed -1e-5 */
 } btf_ubo2014_write_opts;
 /* The defaults: DFMF, 16 components, half, 2 GiB, no progress. */
 btf_ubo2014_write_opts btf_ubo2014_write_defaults(void);

@@ -19,6 +19,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* A small set: 3 views x 4 lights of 8 x 6 pixels, smooth images. */
 static btf_dirset views, lights;
@@ -128,18 +129,16 @@ static double small_want(const void *user, int v, int l, int x, int y, int c)
 
 typedef struct variant_case {
     int variant;
-    const char *sig;
-    int scalar, components, log_values;
+    const char *sig;                     /* the signature it has */
+    int scalar, components, log_values;  /* log_values: the file's DRR flag */
 } variant_case;
 
 static void write_small(const char *p, const variant_case *vc, btf_ubo2014_write_stats *st)
 {
     btf_ubo2014_write_opts o = btf_ubo2014_write_defaults();
     o.variant = vc->variant;
-    o.signature = vc->sig;
     o.scalar_size = vc->scalar;
     o.components = vc->components;
-    o.log_values = vc->log_values;
     btf_error err = {0};
     int rc = btf_ubo2014_write(p, &views, &lights, W, H, small_image, NULL, &o, st, &err);
     if (rc)
@@ -155,11 +154,11 @@ static void test_round_trip_from_images(void **state)
     (void)state;
     static const variant_case cases[] = {
         {BTF_UBO2014_FMF, "!FMF12FCER", 2, 36, 0}, {BTF_UBO2014_FMF, "!FMF12FCER", 4, 4, 0},
-        {BTF_UBO2014_FMF, "!FMF12FCER", 2, 36, 1}, {BTF_UBO2014_FMF, "!FMF12FCER", 4, 3, 1},
-        {BTF_UBO2014_FMF, "!FMF06FCR", 2, 36, 0},  {BTF_UBO2014_FMF, "!FMF06FCR", 4, 2, 0},
-        {BTF_UBO2014_FMF, "!FMF06FC", 4, 36, 0},   {BTF_UBO2014_FMF, "!FMF06FC", 2, 5, 0},
+        {BTF_UBO2014_FMF_LOG, "!FMF12FCER", 2, 36, 1}, {BTF_UBO2014_FMF_LOG, "!FMF12FCER", 4, 3, 1},
+        {BTF_UBO2014_FMF06R, "!FMF06FCR", 2, 36, 0},  {BTF_UBO2014_FMF06R, "!FMF06FCR", 4, 2, 0},
+        {BTF_UBO2014_FMF06, "!FMF06FC", 4, 36, 0},   {BTF_UBO2014_FMF06, "!FMF06FC", 2, 5, 0},
         {BTF_UBO2014_PVF, "!PVF06FCR", 2, 12, 0},  {BTF_UBO2014_PVF, "!PVF06FCR", 4, 2, 0},
-        {BTF_UBO2014_PVF, "!PVF06FC", 4, 12, 0},   {BTF_UBO2014_PVF, "!PVF06FC", 2, 1, 0},
+        {BTF_UBO2014_PVF06, "!PVF06FC", 4, 12, 0},   {BTF_UBO2014_PVF06, "!PVF06FC", 2, 1, 0},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const variant_case *vc = &cases[i];
@@ -169,7 +168,7 @@ static void test_round_trip_from_images(void **state)
         btf_dataset *ds = open_ok(p);
         const btf_ubo2014_info *u = btf_dataset_ubo2014(ds);
         assert_string_equal(u->signature, vc->sig);
-        assert_string_equal(u->variant, vc->variant == BTF_UBO2014_FMF ? "FMF" : "PVF");
+        assert_string_equal(u->variant, vc->sig[1] == 'F' ? "FMF" : "PVF");
         assert_int_equal(u->scalar_size, vc->scalar);
         assert_int_equal(u->dynamic_range, vc->log_values);
         assert_int_equal(u->transposed, 0);
@@ -182,7 +181,7 @@ static void test_round_trip_from_images(void **state)
                       st.rms_error[1], st.rms_error[2], worst);
         assert_true(worst <= stated * (1 + 1e-3) + (vc->log_values ? 2e-6 : 1e-7));
         /* full rank: only the rounding of the stored scalars */
-        int full = vc->components >= (vc->variant == BTF_UBO2014_FMF ? 36 : 12);
+        int full = vc->components >= (vc->sig[1] == 'F' ? 36 : 12);
         if (full)
             assert_true(worst < (vc->scalar == 2 ? 2e-3 : 2e-6));
         btf_dataset_close(ds);
@@ -220,9 +219,9 @@ static void test_generated_twins(void **state)
     assert_int_equal(btf_material_make("fabric", 8, 3, &src.m, NULL), 0);
     assert_int_equal(btf_dirset_ubo81(&src.d, NULL), 0);
     static const variant_case cases[] = {
-        {BTF_UBO2014_FMF, "!FMF12FCER", 2, 64, 0}, {BTF_UBO2014_FMF, "!FMF12FCER", 2, 64, 1},
-        {BTF_UBO2014_FMF, "!FMF06FCR", 2, 64, 0},  {BTF_UBO2014_FMF, "!FMF06FC", 2, 64, 0},
-        {BTF_UBO2014_PVF, "!PVF06FCR", 2, 64, 0},  {BTF_UBO2014_PVF, "!PVF06FC", 2, 64, 0},
+        {BTF_UBO2014_FMF, "!FMF12FCER", 2, 64, 0}, {BTF_UBO2014_FMF_LOG, "!FMF12FCER", 2, 64, 1},
+        {BTF_UBO2014_FMF06R, "!FMF06FCR", 2, 64, 0},  {BTF_UBO2014_FMF06, "!FMF06FC", 2, 64, 0},
+        {BTF_UBO2014_PVF, "!PVF06FCR", 2, 64, 0},  {BTF_UBO2014_PVF06, "!PVF06FC", 2, 64, 0},
         {BTF_UBO2014_FMF, "!FMF12FCER", 2, 8, 0},  {BTF_UBO2014_PVF, "!PVF06FCR", 2, 4, 0},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -230,9 +229,7 @@ static void test_generated_twins(void **state)
         const char *p = tu_fmt("%s/gen_%zu.btf", tu_dir, i);
         btf_ubo2014_write_opts o = btf_ubo2014_write_defaults();
         o.variant = vc->variant;
-        o.signature = vc->sig;
         o.components = vc->components;
-        o.log_values = vc->log_values;
         btf_ubo2014_write_stats st;
         btf_error err = {0};
         TU_OK(btf_ubo2014_write(p, &src.d, &src.d, 8, 8, render_pair, &src, &o, &st, &err), &err);
@@ -499,9 +496,9 @@ static unsigned char *with_xml(const unsigned char *d, size_t n, size_t sig_len,
 static void test_signature_hazard(void **state)
 {
     (void)state;
-    static const variant_case cases[] = {{BTF_UBO2014_FMF, "!FMF06FC", 4, 3, 0},
-                                         {BTF_UBO2014_PVF, "!PVF06FC", 4, 3, 0},
-                                         {BTF_UBO2014_FMF, "!FMF06FCR", 4, 3, 0},
+    static const variant_case cases[] = {{BTF_UBO2014_FMF06, "!FMF06FC", 4, 3, 0},
+                                         {BTF_UBO2014_PVF06, "!PVF06FC", 4, 3, 0},
+                                         {BTF_UBO2014_FMF06R, "!FMF06FCR", 4, 3, 0},
                                          {BTF_UBO2014_PVF, "!PVF06FCR", 4, 3, 0}};
     for (size_t i = 0; i < 4; i++) {
         const char *p = tu_fmt("%s/hz_%zu.btf", tu_dir, i);
@@ -612,8 +609,9 @@ static void test_fmf_bad_input(void **state)
 {
     (void)state;
     static const char *const sigs[] = {"!FMF12FCER", "!FMF06FCR", "!FMF06FC"};
+    static const int variants[] = {BTF_UBO2014_FMF, BTF_UBO2014_FMF06R, BTF_UBO2014_FMF06};
     for (int i = 0; i < 3; i++) {
-        variant_case vc = {BTF_UBO2014_FMF, sigs[i], 2, 3, 0};
+        variant_case vc = {variants[i], sigs[i], 2, 3, 0};
         const char *p = tu_fmt("%s/badfmf_%d.btf", tu_dir, i);
         write_small(p, &vc, NULL);
         size_t n, sl = strlen(sigs[i]);
@@ -666,7 +664,7 @@ static void test_pvf_bad_input(void **state)
         size_t n, sl = strlen(sig), at;
         unsigned char *d;
         if (i < 2) {
-            variant_case vc = {BTF_UBO2014_PVF, sig, 2, 2, 0};
+            variant_case vc = {i ? BTF_UBO2014_PVF06 : BTF_UBO2014_PVF, sig, 2, 2, 0};
             write_small(p, &vc, NULL);
             d = slurp(p, &n);
             at = header_end(d, sl) + (i == 0 ? 4 : 0); /* num_components */
@@ -708,6 +706,65 @@ static void test_pvf_bad_input(void **state)
         expect_half_nan_fails(d, n, w0 + 2 * (k * 40), "W of PVF view slot 0 has a NaN or Inf at row 40, component 0");
         free(d);
     }
+}
+
+/* ------------------------------------------------- the writer refuses */
+
+static btf_status negative_image(void *user, int v, int l, btf_image *out, btf_error *err)
+{
+    btf_status rc = small_image(user, v, l, out, err);
+    if (rc == BTF_OK && v == 1 && l == 2)
+        out->data[7] = -0.5f; /* below -1e-5: no logarithm */
+    return rc;
+}
+
+/* What the writer refuses, in one line naming the file, and leaves no file. */
+static void expect_write_fails(int variant, int scalar, uint64_t max_bytes, btf_pair_image_fn fn,
+                               const char *what, int code)
+{
+    const char *p = tu_fmt("%s/refused.btf", tu_dir);
+    remove(p);
+    btf_ubo2014_write_opts o = btf_ubo2014_write_defaults();
+    o.variant = variant;
+    o.scalar_size = scalar;
+    o.max_bytes = max_bytes;
+    o.components = 3;
+    btf_error err = {0};
+    int rc = btf_ubo2014_write(p, &views, &lights, W, H, fn, NULL, &o, NULL, &err);
+    assert_int_equal(rc, code);
+    assert_non_null(strstr(err.msg, p));
+    assert_null(strchr(err.msg, '\n'));
+    if (!strstr(err.msg, what))
+        print_error("message \"%s\" lacks \"%s\"\n", err.msg, what);
+    assert_non_null(strstr(err.msg, what));
+    assert_int_not_equal(access(p, F_OK), 0);
+}
+
+static void test_writer_refusals(void **state)
+{
+    (void)state;
+    expect_write_fails(8, 2, 0, small_image, "variant 8", BTF_E_ARG);
+    expect_write_fails(-1, 2, 0, small_image, "variant -1", BTF_E_ARG);
+    expect_write_fails(BTF_UBO2014_FMF, 8, 0, small_image, "scalar size 8", BTF_E_ARG);
+    expect_write_fails(BTF_UBO2014_PVF06, 3, 0, small_image, "scalar size 3", BTF_E_ARG);
+    expect_write_fails(BTF_UBO2014_FMF_LOG, 2, 0, negative_image,
+                       "image (view 1, light 2) has the value -0.5", BTF_E_ARG);
+    expect_write_fails(BTF_UBO2014_FMF06, 2, 1000, small_image, "over the cap", BTF_E_UNSUPPORTED);
+    expect_write_fails(BTF_UBO2014_PVF, 2, 1000, small_image, "over the cap", BTF_E_UNSUPPORTED);
+    /* the linear FMF stores the negative value as it is */
+    const char *p = tu_fmt("%s/negative.btf", tu_dir);
+    btf_ubo2014_write_opts o = btf_ubo2014_write_defaults();
+    o.variant = BTF_UBO2014_FMF;
+    o.scalar_size = 4;
+    o.components = 36;
+    btf_error err = {0};
+    TU_OK(btf_ubo2014_write(p, &views, &lights, W, H, negative_image, NULL, &o, NULL, &err), &err);
+    btf_dataset *ds = open_ok(p);
+    btf_image img = {0};
+    assert_int_equal(btf_dataset_read(ds, 1, 2, &img, NULL), 0);
+    assert_true(fabsf(img.data[7] + 0.5f) < 1e-5f);
+    btf_image_free(&img);
+    btf_dataset_close(ds);
 }
 
 /* ------------------------------------------------------- the fuzz seeds */
@@ -761,6 +818,17 @@ static void test_fuzz_seeds(void **state)
         ubo_free(&f);
         if (out)
             tu_write_file(tu_fmt("%s/%s", out, seeds[i].name), bytes, len);
+        if (!strcmp(seeds[i].name, "fmf06_double.btf")) { /* and the §1 hazard of it */
+            size_t m;
+            uint32_t meta = ubo_rd32(bytes + 8);
+            unsigned char *e = with_xml(bytes, len, 8, (0x152u - meta % 256u) % 256u, &m);
+            TU_OK(ubo_parse(e, m, "seed", 0, &f, &err), &err);
+            assert_string_equal(f.info.signature, "!FMF06FC");
+            ubo_free(&f);
+            if (out)
+                tu_write_file(tu_fmt("%s/fmf06_hazard_xml.btf", out), e, m);
+            free(e);
+        }
         free(bytes);
     }
     float *all[] = {u, sxv, ut, st, mean, c, wt, meanl, cl, wl};
@@ -779,6 +847,7 @@ int main(void)
         cmocka_unit_test(test_signature_hazard),
         cmocka_unit_test(test_fmf_bad_input),
         cmocka_unit_test(test_pvf_bad_input),
+        cmocka_unit_test(test_writer_refusals),
         cmocka_unit_test(test_fuzz_seeds),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -9,6 +9,8 @@
  *         dynamic_range_reduction_method, the height map's sides and
  *         values), "!FMF06FCR" (rotations) or "!FMF06FC" (neither); then
  *         K, the scalar size, K again, rows, columns, S, U and S x V;
+ *         btf_ubo2014_variant names each signature (and the logarithmic
+ *         FMF) as a value of its own;
  *   BDIF  (§6) 4 scan lines per chunk, compression 0, an all-ones mask, no
  *         rotations, chunks of halves per texel;
  *   PVF   (§5) in io/ubo_write_pvf.c.
@@ -277,15 +279,16 @@ static btf_status write_dfmf(const ubo_source *src, const btf_ubo2014_write_opts
 }
 
 static btf_status write_fmf_images(const ubo_source *src, const btf_ubo2014_write_opts *o,
-                                   const char *sig, btf_ubo2014_write_stats *st, btf_error *err)
+                                   const char *sig, int log_values, btf_ubo2014_write_stats *st,
+                                   btf_error *err)
 {
     ubo_factors fa;
-    btf_status rc = ubo_factorise(src, 1, o->log_values, o->components, o->scalar_size,
+    btf_status rc = ubo_factorise(src, 1, log_values, o->components, o->scalar_size,
                                   o->max_bytes, &fa, st, err);
     if (rc)
         return rc;
     uint64_t n = (uint64_t)src->views->count * src->lights->count;
-    ubo_fmf f = {.signature = sig, .header_version = 2, .drr = o->log_values ? 1 : 0,
+    ubo_fmf f = {.signature = sig, .header_version = 2, .drr = log_values ? 1 : 0,
                  .scalar_size = o->scalar_size, .k = (uint32_t)fa.kc[0],
                  .rows = (uint32_t)(3 * n), .cols = (uint32_t)src->width * (uint32_t)src->height,
                  .u = fa.u[0], .sxv = fa.sxv[0]};
@@ -300,42 +303,35 @@ btf_ubo2014_write_opts btf_ubo2014_write_defaults(void)
                                     .scalar_size = 2, .max_bytes = (uint64_t)1 << 31};
 }
 
-/* The signature a variant is written with: the given one if it is one of
- * the variant's, else NULL. */
-static const char *variant_signature(int variant, const char *sig)
-{
-    static const char *const SIGS[][3] = {{"!DFMF08FCR"}, {"!BDIF06R2!"},
-                                          {"!FMF12FCER", "!FMF06FCR", "!FMF06FC"},
-                                          {"!PVF06FCR", "!PVF06FC"}};
-    if (variant < 0 || variant > BTF_UBO2014_PVF)
-        return NULL;
-    if (!sig)
-        return SIGS[variant][0];
-    for (int i = 0; i < 3; i++)
-        if (SIGS[variant][i] && !strcmp(sig, SIGS[variant][i]))
-            return SIGS[variant][i];
-    return NULL;
-}
+/* What each variant is written as: its body, its signature, and for FMF
+ * whether the values are stored as logarithms (§4's dynamic-range flag). */
+static const struct {
+    int body; /* BTF_UBO2014_DFMF, _BDIF, _FMF or _PVF */
+    const char *sig;
+    int log_values;
+} VARIANTS[] = {
+    [BTF_UBO2014_DFMF] = {BTF_UBO2014_DFMF, "!DFMF08FCR", 0},
+    [BTF_UBO2014_BDIF] = {BTF_UBO2014_BDIF, "!BDIF06R2!", 0},
+    [BTF_UBO2014_FMF] = {BTF_UBO2014_FMF, "!FMF12FCER", 0},
+    [BTF_UBO2014_FMF_LOG] = {BTF_UBO2014_FMF, "!FMF12FCER", 1},
+    [BTF_UBO2014_FMF06R] = {BTF_UBO2014_FMF, "!FMF06FCR", 0},
+    [BTF_UBO2014_FMF06] = {BTF_UBO2014_FMF, "!FMF06FC", 0},
+    [BTF_UBO2014_PVF] = {BTF_UBO2014_PVF, "!PVF06FCR", 0},
+    [BTF_UBO2014_PVF06] = {BTF_UBO2014_PVF, "!PVF06FC", 0},
+};
+#define N_VARIANTS ((int)(sizeof VARIANTS / sizeof VARIANTS[0]))
 
-static btf_status check_opts(const char *path, const btf_ubo2014_write_opts *o, const char *sig,
-                             btf_error *err)
+static btf_status check_opts(const char *path, const btf_ubo2014_write_opts *o, btf_error *err)
 {
-    if (o->variant < 0 || o->variant > BTF_UBO2014_PVF)
-        return btf_fail(err, BTF_E_ARG, "%s: variant %d: expected DFMF (0), BDIF (1), FMF (2) or "
-                        "PVF (3)", path, o->variant);
-    if (!sig)
-        return btf_fail(err, BTF_E_ARG, "%s: signature \"%s\" is not one of the %s variant's",
-                        path, o->signature, o->variant == BTF_UBO2014_FMF ? "FMF"
-                        : o->variant == BTF_UBO2014_PVF ? "PVF" : o->variant ? "BDIF" : "DFMF");
+    if (o->variant < 0 || o->variant >= N_VARIANTS)
+        return btf_fail(err, BTF_E_ARG, "%s: variant %d: expected 0 (DFMF) to %d (PVF06)", path,
+                        o->variant, N_VARIANTS - 1);
     if (o->components < 1)
         return btf_fail(err, BTF_E_ARG, "%s: %d components: expected at least 1", path,
                         o->components);
     if (o->variant != BTF_UBO2014_BDIF && o->scalar_size != 2 && o->scalar_size != 4)
         return btf_fail(err, BTF_E_ARG, "%s: scalar size %d: expected 2 (half) or 4 (float)",
                         path, o->scalar_size);
-    if (o->log_values && strcmp(sig, "!FMF12FCER"))
-        return btf_fail(err, BTF_E_ARG, "%s: log_values needs the FMF variant with the extended "
-                        "header (!FMF12FCER), which stores the dynamic-range flag", path);
     return BTF_OK;
 }
 
@@ -353,22 +349,23 @@ btf_status btf_ubo2014_write(const char *path, const btf_dirset *views, const bt
         o.max_bytes = d.max_bytes;
     if (stats)
         memset(stats, 0, sizeof *stats);
-    const char *sig = variant_signature(o.variant, o.signature);
     btf_status rc = ubo_check_sets(path, views, lights, width, height, err);
     if (rc == BTF_OK)
-        rc = check_opts(path, &o, sig, err);
+        rc = check_opts(path, &o, err);
     if (rc == BTF_OK && !image)
         rc = btf_fail(err, BTF_E_ARG, "%s: no image callback", path);
     if (rc)
         return rc;
     ubo_source src = {path, views, lights, width, height, image, user, o.progress,
                       o.progress_user};
-    if (o.variant == BTF_UBO2014_BDIF)
+    int body = VARIANTS[o.variant].body;
+    const char *sig = VARIANTS[o.variant].sig;
+    if (body == BTF_UBO2014_BDIF)
         rc = write_bdif(&src, stats, err);
-    else if (o.variant == BTF_UBO2014_DFMF)
+    else if (body == BTF_UBO2014_DFMF)
         rc = write_dfmf(&src, &o, stats, err);
-    else if (o.variant == BTF_UBO2014_FMF)
-        rc = write_fmf_images(&src, &o, sig, stats, err);
+    else if (body == BTF_UBO2014_FMF)
+        rc = write_fmf_images(&src, &o, sig, VARIANTS[o.variant].log_values, stats, err);
     else
         rc = ubo_write_pvf_images(&src, sig, o.components, o.scalar_size, o.max_bytes, stats, err);
     if (rc == BTF_OK && stats) {

@@ -12,9 +12,10 @@
  * U, and its S x V is the small S x V tiled to SIZE x SIZE (the material is
  * periodic, so the tiling is seamless). The result is a low-rank BTF with the
  * material's directional behaviour at the database's size; rendering and
- * factorising 22,801 images of 400^2 directly would take hours. The format
- * notes leave UBO2014's component count undetermined (§10); K = 16, the
- * writer's default, and the reconstruction's cost is linear in K. The
+ * factorising 22,801 images of 400^2 directly would take hours. The
+ * database's own component count could not be established (the notes'
+ * §10; docs/datasets.md, "The component count", lists what was searched):
+ * K = 16, the writer's default; the reconstruction's cost is linear in K. The
  * 20-texel period of S x V is visible to the analysis (its CAR fits warn).
  *
  *   build/tests/bench_btf [SIZE [K [IMAGES [SRC [KEEP [ANALYSE]]]]]]

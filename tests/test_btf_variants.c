@@ -7,8 +7,9 @@
  * its exact renders and its UBO2003 twin; every layout the reader accepts
  * (transposed FMF, K_file < K, FMF header versions 0-2 with a non-square
  * height map, the dynamic-range reduction, PVF in both orientations, the
- * legacy PVF header, scalars of 4 and 8 bytes) from factors whose values
- * the test computes itself; the !FMF06FC / !PVF06FC hazard; and bad input
+ * legacy PVF header, scalars of 4 and 8 bytes; and the transposed DFMF)
+ * from factors whose values the test computes itself; the !FMF06FC /
+ * !PVF06FC hazard; what the writer refuses; and bad input
  * for each variant (truncation at many offsets, counts that do not fit,
  * NaN factors). Also writes the fuzz seeds (BTF_FUZZ_SEEDS=DIR).
  */
@@ -287,6 +288,8 @@ static void test_generated_twins(void **state)
     }
 }
 
+static size_t header_end(const unsigned char *d, size_t sig_len);
+
 /* ------------------------------------------ layouts from given factors */
 
 /* A value that differs per index and stays small. */
@@ -469,6 +472,67 @@ static void test_pvf_layouts(void **state)
     check_pvf("pvf_legacy", &p);
     for (int i = 0; i < m; i++)
         free(mats[i]);
+}
+
+/* §3's transposed DFMF (btflib: rows = pixels, columns = views x lights,
+ * the roles of U and S x V swapped): a DFMF file rewritten so, per
+ * channel, decodes to the same bits. */
+static void test_dfmf_transposed(void **state)
+{
+    (void)state;
+    uint32_t n = NV * NL, px = W * H, k = 3;
+    float *u[3], *sxv[3];
+    for (int c = 0; c < 3; c++) {
+        u[c] = wave_matrix((uint64_t)n * k, 70 + c);
+        sxv[c] = wave_matrix((uint64_t)px * k, 80 + c);
+    }
+    btf_ubo2014_factors f = {.colour_model = 11, .scalar_size = 4, .components = {3, 3, 3},
+                             .u = {u[0], u[1], u[2]}, .sxv = {sxv[0], sxv[1], sxv[2]}};
+    const char *p = tu_fmt("%s/dfmf_plain.btf", tu_dir);
+    btf_error err = {0};
+    TU_OK(btf_ubo2014_write_factors(p, &views, &lights, W, H, &f, &err), &err);
+    size_t len;
+    unsigned char *d = slurp(p, &len), *t = malloc(len);
+    /* rotations, num_components, color_model, color_mean, color_transform */
+    size_t at = header_end(d, 10) + 4 + 4 + 4 + 12 + 36;
+    memcpy(t, d, at);
+    for (int c = 0; c < 3; c++) {
+        size_t sz = 4, s_bytes = sz * k, ub = sz * n * k, vb = sz * px * k;
+        assert_int_equal(d[at], 4);
+        assert_int_equal(ubo_rd32(d + at + 5), n);
+        memcpy(t + at, d + at, 5);
+        ubo_wr32(t + at + 5, px); /* rows: the pixels */
+        ubo_wr32(t + at + 9, n);  /* columns: the (view, light) pairs */
+        memcpy(t + at + 13, d + at + 13, s_bytes);
+        memcpy(t + at + 13 + s_bytes, d + at + 13 + s_bytes + ub, vb); /* S x V first */
+        memcpy(t + at + 13 + s_bytes + vb, d + at + 13 + s_bytes, ub);
+        at += 13 + s_bytes + ub + vb;
+    }
+    assert_int_equal(at, len);
+    const char *q = tu_fmt("%s/dfmf_transposed.btf", tu_dir);
+    tu_write_file(q, t, len);
+    char pp[4096];
+    snprintf(pp, sizeof pp, "%s", p);
+    btf_dataset *a = open_ok(pp), *b = open_ok(q);
+    assert_int_equal(btf_dataset_ubo2014(a)->transposed, 0);
+    assert_int_equal(btf_dataset_ubo2014(b)->transposed, 1);
+    for (int v = 0; v < NV; v++)
+        for (int l = 0; l < NL; l++) {
+            btf_image x = {0}, y = {0};
+            assert_int_equal(btf_dataset_read(a, v, l, &x, NULL), 0);
+            assert_int_equal(btf_dataset_read(b, v, l, &y, NULL), 0);
+            assert_memory_equal(x.data, y.data, sizeof(float) * 3 * px);
+            btf_image_free(&x);
+            btf_image_free(&y);
+        }
+    btf_dataset_close(a);
+    btf_dataset_close(b);
+    free(d);
+    free(t);
+    for (int c = 0; c < 3; c++) {
+        free(u[c]);
+        free(sxv[c]);
+    }
 }
 
 /* ------------------------------------------------- the signature hazard */
@@ -844,6 +908,7 @@ int main(void)
         cmocka_unit_test(test_generated_twins),
         cmocka_unit_test(test_fmf_layouts),
         cmocka_unit_test(test_pvf_layouts),
+        cmocka_unit_test(test_dfmf_transposed),
         cmocka_unit_test(test_signature_hazard),
         cmocka_unit_test(test_fmf_bad_input),
         cmocka_unit_test(test_pvf_bad_input),

@@ -190,12 +190,13 @@ static void components(const float *x, uint64_t px, uint64_t dim, const double *
 {
     for (uint64_t d = 0; d < dim; d++)
         for (uint32_t j = 0; j < kc; j++) {
-            double v = vec[d * k + j];
+            double v = 0; /* vec is px x k on the pixel side, dim x k otherwise */
             if (px <= dim) {
-                v = 0;
                 for (uint64_t p = 0; p < px; p++)
                     v += vec[p * k + j] * x[p * dim + d];
                 v = val[j] > 0 ? v / sqrt(val[j]) : 0;
+            } else {
+                v = vec[d * k + j];
             }
             c[d * kc + j] = ubo_stored((float)v, s);
         }

@@ -12,13 +12,19 @@ static const char ABOUT[] =
     "Bonn/UTIA sampling and writes it in the UBO2003 layout: OUTDIR/tvCCC_pvDDD/\n"
     "'NNNNN tlAAA plBBB tvCCC pvDDD.jpg' (8-bit sRGB JPEG), with the ground truth in\n"
     "OUTDIR/truth/{height,normals,albedo}.exr. OUTDIR must be new or empty.\n\n"
-    "With --format btf (DFMF, factorised: --components per channel) or btf-bdif\n"
+    "With --format btf (DFMF, factorised: --components per channel), btf-fmf (one\n"
+    "factorisation for the three channels), btf-pvf (a PCA per view) or btf-bdif\n"
     "(every value as a half float) the same images go into one Bonn .btf file,\n"
-    "OUTDIR being the file's name, without the truth; the DFMF factorisation's cost\n"
-    "grows as images x pixels x min(images, pixels), so keep --size small (32: about\n"
-    "a minute). The error of the stored values is printed.\n";
+    "OUTDIR being the file's name, without the truth; the DFMF and FMF\n"
+    "factorisations' cost grows as images x pixels x min(images, pixels), so keep\n"
+    "--size small (32: about a minute). The error of the stored values is printed.\n";
 
-static const char *const FORMATS[] = {"ubo2003", "btf", "btf-bdif", NULL};
+static const char *const FORMATS[] = {"ubo2003", "btf", "btf-bdif", "btf-fmf", "btf-pvf", NULL};
+/* The library's variant of each .btf format above (index - 1). */
+static const int VARIANTS[] = {BTF_UBO2014_DFMF, BTF_UBO2014_BDIF, BTF_UBO2014_FMF,
+                               BTF_UBO2014_PVF};
+static const char *const VARIANT_NAMES[] = {"DFMF", "BDIF", "FMF", "FMF", "FMF", "FMF", "PVF",
+                                            "PVF"};
 
 typedef struct gen_btf {
     btf_material m;
@@ -60,9 +66,8 @@ static int generate_btf(cli_ctx *c, const char *name, const char *path,
     if (!c->quiet) {
         fprintf(stderr, "btfcar generate: %s, %dx%d, seed %llu: 6561 images in %s (%s, %llu "
                         "bytes, %.1f s)\n", name, o->size, o->size, (unsigned long long)o->seed,
-                path, variant == BTF_UBO2014_BDIF ? "BDIF" : "DFMF",
-                (unsigned long long)st.bytes, cli_now() - t0);
-        if (variant == BTF_UBO2014_DFMF)
+                path, VARIANT_NAMES[variant], (unsigned long long)st.bytes, cli_now() - t0);
+        if (variant != BTF_UBO2014_BDIF)
             fprintf(stderr, "btfcar generate: components R %d G %d B %d; error of the stored "
                             "values: RMS %.3g %.3g %.3g, max %.3g %.3g %.3g; energy kept "
                             "%.6f %.6f %.6f\n",
@@ -93,9 +98,11 @@ int cmd_generate(int argc, char **argv)
          .help = "JPEG quality", .lo = 1, .hi = 100},
         {.name = "--format", .kind = CLI_CHOICE, .dest = &format, .meta = "FORMAT",
          .help = "ubo2003: JPEG files in OUTDIR; btf: one DFMF .btf file; btf-bdif:\n"
-                 "one BDIF .btf file (half floats)", .choices = FORMATS},
+                 "one BDIF .btf file (half floats); btf-fmf: one FMF .btf file;\n"
+                 "btf-pvf: one PVF .btf file", .choices = FORMATS},
         {.name = "--components", .kind = CLI_INT, .dest = &components, .meta = "K",
-         .help = "btf: components per channel", .lo = 1, .hi = 4096,
+         .help = "btf: components per channel (btf-fmf: in all, btf-pvf: per view)",
+         .lo = 1, .hi = 4096,
          .zero_means = "16"},
         {.name = "--threads", .kind = CLI_INT, .dest = &o.threads, .meta = "T",
          .help = "worker threads", .lo = 1, .hi = 64, .zero_means = "all CPUs"},
@@ -107,14 +114,13 @@ int cmd_generate(int argc, char **argv)
     if (rc >= 0)
         return rc;
     if (format == 0 && components)
-        return cli_usage_error(&c, "--components needs --format btf");
+        return cli_usage_error(&c, "--components needs --format btf, btf-fmf or btf-pvf");
     if (cli_check_output(&c, outdir, format ? BTF_OUTPUT_FILE : BTF_OUTPUT_FOLDER))
         return 1;
     const char *name = btf_material_names()[material];
     o.progress = cli_progress_fn(&c);
     if (format)
-        return generate_btf(&c, name, outdir, &o, format == 1 ? BTF_UBO2014_DFMF
-                                                               : BTF_UBO2014_BDIF, components);
+        return generate_btf(&c, name, outdir, &o, VARIANTS[format - 1], components);
     btf_error err = {0};
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);

@@ -5,9 +5,6 @@
 #include "cli.h"
 
 #include <string.h>
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
 
 static const struct {
     const char *name;
@@ -37,18 +34,6 @@ static void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
-#ifdef __GLIBC__
-    /* Keep freed memory in the process. The commands that stream images
-     * (analyse, report, photostereo, export) allocate and free a few MB per
-     * image; with glibc's defaults the freed memory goes back to the kernel
-     * (trimmed, or munmap'd) and every image's buffers are fresh pages: on a
-     * 151 x 151 x 400^2 .btf file about 40 % of `btfcar analyse` was page
-     * faults (docs/datasets.md, "UBO2014 .btf files"). 32 MB is the largest
-     * mmap threshold glibc's own adaptive rule reaches; setting it fixes it
-     * there from the start. */
-    mallopt(M_MMAP_THRESHOLD, 32 << 20);
-    mallopt(M_TRIM_THRESHOLD, 512 << 20);
-#endif
     if (argc < 2) {
         usage(stderr);
         return 2;

@@ -476,17 +476,28 @@ typedef btf_status (*btf_pair_image_fn)(void *user, int view, int light, btf_ima
 
 typedef enum btf_ubo2014_variant {
     BTF_UBO2014_DFMF = 0, /* "!DFMF08FCR": per channel U x (S V)', colour model 0 (RGB) */
-    BTF_UBO2014_BDIF      /* "!BDIF06R2!": every value as a half float, uncompressed */
+    BTF_UBO2014_BDIF,     /* "!BDIF06R2!": every value as a half float, uncompressed */
+    BTF_UBO2014_FMF,      /* "!FMF12FCER": one U x (S V)' for the three channels,
+                             U's row (view * n_lights + light) * 3 + channel;
+                             the extended header of version 2, no height map */
+    BTF_UBO2014_FMF_LOG,  /* the same of ln(value + 1e-5), with the file's
+                             dynamic-range flag set (the reader takes exp(x) -
+                             1e-5); every value must exceed -1e-5 */
+    BTF_UBO2014_FMF06R,   /* "!FMF06FCR": FMF without the extended header */
+    BTF_UBO2014_FMF06,    /* "!FMF06FC": nor the rotations field */
+    BTF_UBO2014_PVF,      /* "!PVF06FCR": per view, the PCA of its pixels'
+                             (light, channel) values: mean, components, weights */
+    BTF_UBO2014_PVF06     /* "!PVF06FC": PVF without the rotations field */
 } btf_ubo2014_variant;
 
 typedef struct btf_ubo2014_write_opts {
     int variant;          /* btf_ubo2014_variant; 0: DFMF */
-    int components;       /* DFMF: components per channel (at most the matrix's
-                             rank); 0: 16 */
-    int scalar_size;      /* DFMF: 2 (half) or 4 (float); 0: 2 */
-    uint64_t max_bytes;   /* DFMF: the cap on the working memory of the
+    int components;       /* DFMF: per channel, FMF: in all, PVF: per view (at
+                             most the matrix's rank); 0: 16 */
+    int scalar_size;      /* all but BDIF: 2 (half) or 4 (float); 0: 2 */
+    uint64_t max_bytes;   /* DFMF, FMF, PVF: the cap on the working memory of the
                              factorisation (the Gram matrices, or the images
-                             when there are fewer images than pixels); 0: 2^31 */
+                             when there are fewer rows than pixels); 0: 2^31 */
     btf_progress_fn progress;
     void *progress_user;
 } btf_ubo2014_write_opts;
@@ -495,19 +506,23 @@ btf_ubo2014_write_opts btf_ubo2014_write_defaults(void);
 
 /* What a written file costs and how far its values are from the images. */
 typedef struct btf_ubo2014_write_stats {
-    int components[3];    /* DFMF: per channel, as written */
+    int components[3];    /* DFMF: per channel, as written; FMF: the shared
+                             count, three times; PVF: the largest of a view's */
     double rms_error[3];  /* RMS of (file value - image value) per channel, over
                              every pixel of every pair (DFMF: truncation and
                              rounding; BDIF: half rounding) */
     double max_error[3];  /* the largest |file value - image value| */
-    double energy[3];     /* DFMF: fraction of the sum of squares kept */
+    double energy[3];     /* DFMF, FMF, PVF: 1 - (sum of squared errors) / (sum of
+                             squared values) */
     uint64_t bytes;       /* the file's size */
 } btf_ubo2014_write_stats;
 
 /* Writes the BTF of views x lights images of width x height to path
  * (atomically). DFMF: per channel the truncated SVD of the (view, light) x
  * pixel matrix, computed from the Gram matrix of its smaller side
- * (deterministic). stats may be NULL. */
+ * (deterministic); FMF: the same of the (view, light, channel) x pixel
+ * matrix; PVF: per view the PCA of its pixels' 3 x n_lights values. stats
+ * may be NULL. */
 btf_status btf_ubo2014_write(const char *path, const btf_dirset *views, const btf_dirset *lights,
                              int width, int height, btf_pair_image_fn image, void *user,
                              const btf_ubo2014_write_opts *opts, btf_ubo2014_write_stats *stats,

@@ -12,14 +12,23 @@
  * U, and its S x V is the small S x V tiled to SIZE x SIZE (the material is
  * periodic, so the tiling is seamless). The result is a low-rank BTF with the
  * material's directional behaviour at the database's size; rendering and
- * factorising 22,801 images of 400^2 directly would take hours. The format
- * notes leave UBO2014's component count undetermined (§10); K = 16, the
- * writer's default, and the reconstruction's cost is linear in K. The
+ * factorising 22,801 images of 400^2 directly would take hours. The
+ * database's own component count could not be established (the notes'
+ * §10; docs/datasets.md, "The component count", lists what was searched):
+ * K = 16, the writer's default; the reconstruction's cost is linear in K. The
  * 20-texel period of S x V is visible to the analysis (its CAR fits warn).
  *
- *   build/tests/bench_btf [SIZE [K [IMAGES [SRC [KEEP]]]]]
+ *   build/tests/bench_btf [SIZE [K [IMAGES [SRC [KEEP [ANALYSE]]]]]]
  *       defaults 128, 16, all 22801, 20; KEEP: write the file there and
- *       leave it (tests/bench.sh runs `btfcar analyse` on it)
+ *       leave it ("-": a temporary file)
+ *   build/tests/bench_btf analyse FILE
+ *       btf_analyse on a .btf file (KEEP above) with the library's
+ *       defaults, in a process of its own, as a program using the library
+ *       runs it (no allocator settings of its own): time, page faults,
+ *       peak memory and the model's size and hash. A process of its own:
+ *       glibc raises its mmap and trim thresholds after the first large
+ *       free, so the factorisation above would hide what a fresh program
+ *       sees (docs/datasets.md, "UBO2014 .btf files").
  */
 #include "testutil.h"
 #include "io/ubo2014.h"
@@ -73,12 +82,65 @@ static btf_status render_model11(void *user, int view, int light, btf_image *out
     return BTF_OK;
 }
 
+/* btf_analyse on the file as a program using the library calls it. */
+static int run_analyse(const btf_dataset *ds)
+{
+    btf_analyse_opts ao = btf_analyse_defaults();
+    btf_model m;
+    btf_error err = {0};
+    struct rusage r0, r1;
+    getrusage(RUSAGE_SELF, &r0);
+    double t0 = tu_now();
+    if (btf_analyse(ds, &ao, &m, &err)) {
+        fprintf(stderr, "bench_btf: %s\n", err.msg);
+        return 1;
+    }
+    double ta = tu_now() - t0;
+    getrusage(RUSAGE_SELF, &r1);
+    unsigned char *bytes = NULL;
+    size_t size = 0;
+    if (btf_model_encode(&m, &bytes, &size, &err)) {
+        fprintf(stderr, "bench_btf: %s\n", err.msg);
+        return 1;
+    }
+    uint64_t h = 1469598103934665603ull; /* FNV-1a: the same model, the same hash */
+    for (size_t i = 0; i < size; i++)
+        h = (h ^ bytes[i]) * 1099511628211ull;
+    printf("   btf_analyse (library defaults, no allocator settings) on it: %.1f s (user %.1f s, "
+           "system %.1f s), %ld page faults, peak RSS %ld MB; model %zu bytes, %d subspaces, "
+           "FNV-1a %016llx\n", ta,
+           (double)(r1.ru_utime.tv_sec - r0.ru_utime.tv_sec) +
+               1e-6 * (double)(r1.ru_utime.tv_usec - r0.ru_utime.tv_usec),
+           (double)(r1.ru_stime.tv_sec - r0.ru_stime.tv_sec) +
+               1e-6 * (double)(r1.ru_stime.tv_usec - r0.ru_stime.tv_usec),
+           r1.ru_minflt - r0.ru_minflt, r1.ru_maxrss / 1024, size, m.n_subspaces,
+           (unsigned long long)h);
+    free(bytes);
+    btf_model_free(&m);
+    return 0;
+}
+
+static int analyse_file(const char *path)
+{
+    btf_dataset *ds;
+    btf_error err = {0};
+    if (btf_dataset_open(path, NULL, &ds, &err)) {
+        fprintf(stderr, "bench_btf: %s\n", err.msg);
+        return 1;
+    }
+    int rc = run_analyse(ds);
+    btf_dataset_close(ds);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     int size = argc > 1 ? atoi(argv[1]) : 128, k = argc > 2 ? atoi(argv[2]) : 16;
     long limit = argc > 3 ? atol(argv[3]) : 0;
     int src = argc > 4 ? atoi(argv[4]) : 20;
-    const char *keep = argc > 5 ? argv[5] : NULL;
+    if (argc > 2 && !strcmp(argv[1], "analyse"))
+        return analyse_file(argv[2]);
+    const char *keep = argc > 5 && strcmp(argv[5], "-") ? argv[5] : NULL;
     btf_dirset d;
     btf_error err = {0};
     if (btf_dirset_ubo151(&d, &err))
@@ -174,6 +236,8 @@ int main(int argc, char **argv)
     btf_dataset_iter_begin(&it, ds);
     int rc;
     long count = 0, anon_peak = anon0;
+    struct rusage ru0;
+    getrusage(RUSAGE_SELF, &ru0);
     t0 = tu_now();
     while ((limit == 0 || count < limit) && (rc = btf_dataset_iter_next(&it, &err)) == 1)
         if (++count % 256 == 0) {
@@ -184,6 +248,7 @@ int main(int argc, char **argv)
     btf_dataset_iter_end(&it);
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
+    long faults = ru.ru_minflt - ru0.ru_minflt;
     printf("btf DFMF %d x %d images of %dx%d, K %d %d %d (half), model 11, factors of the "
            "leather at %d^2 (factorised in %.1f s; energy kept %.4f %.4f %.4f) with S x V "
            "tiled: file %.1f MB written in %.2f s, opened (parse, finite check) in %.2f s\n",
@@ -191,8 +256,9 @@ int main(int argc, char **argv)
            st.energy[1], st.energy[2], (double)in->file_bytes / 1e6, tw, topen);
     printf("   reconstructed %ld images in %.2f s: %.1f images/s (%.1f Mpixel/s); heap (RssAnon) "
            "%ld -> %ld kB peak; peak RSS %ld MB incl. the mapped file's pages and the "
-           "factorisation before\n", count, td,
-           count / td, count * (double)px / td / 1e6, anon0, anon_peak, ru.ru_maxrss / 1024);
+           "factorisation before; %ld page faults\n", count, td,
+           count / td, count * (double)px / td / 1e6, anon0, anon_peak, ru.ru_maxrss / 1024,
+           faults);
     btf_dataset_close(ds);
     btf_dirset_free(&d);
     tu_rmtree(dir);

@@ -54,13 +54,23 @@ extern "C" int btfcv_rgb_to_lab(const float *rgb, size_t n, float *lab, char *er
             set_error(errbuf, errlen, "too many pixels");
             return -1;
         }
-        cv::Mat src(1, (int)n, CV_32FC3, const_cast<float *>(rgb));
-        cv::Mat dst(1, (int)n, CV_32FC3, lab);
-        cv::Mat clipped;
         /* OpenCV expects [0, 1]; values above 1 (highlights) are clamped so
-         * that L stays in [0, 100]. */
-        cv::min(cv::max(src, 0.0), 1.0, clipped);
-        cv::cvtColor(clipped, dst, cv::COLOR_LRGB2Lab);
+         * that L stays in [0, 100]. The clamped copy is made a chunk at a
+         * time on the stack: a call allocates nothing on the heap (OpenCV's
+         * two temporaries of the whole image were fresh pages at every
+         * image of an analysis, docs/datasets.md, "UBO2014 .btf files"). */
+        const size_t CHUNK = 1024;
+        float clipped[3 * 1024];
+        for (size_t i0 = 0; i0 < n; i0 += CHUNK) {
+            size_t m = n - i0 < CHUNK ? n - i0 : CHUNK;
+            for (size_t j = 0; j < 3 * m; j++) {
+                float v = rgb[3 * i0 + j];
+                clipped[j] = v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v;
+            }
+            cv::Mat src(1, (int)m, CV_32FC3, clipped);
+            cv::Mat dst(1, (int)m, CV_32FC3, lab + 3 * i0);
+            cv::cvtColor(src, dst, cv::COLOR_LRGB2Lab);
+        }
         return 0;
     });
 }

@@ -277,6 +277,26 @@ btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_imag
     return rc;
 }
 
+btf_status btf_dataset_read_into(const btf_dataset *ds, int view, int light, btf_image *img,
+                                 btf_error *err)
+{
+    int reuse = ds->ubo && img->data && img->width == ds->info.width &&
+                img->height == ds->info.height && img->channels == 3;
+    if (!reuse) {
+        btf_image_free(img);
+        return btf_dataset_read(ds, view, light, img, err);
+    }
+    if (!btf_dataset_path(ds, view, light)) {
+        btf_image_free(img);
+        return btf_dataset_read(ds, view, light, img, err); /* the message */
+    }
+    btf_status rc = ubo_decode(&ds->ubo->f, ds->ubo->view_index[view],
+                               ds->ubo->light_index[light], img->data, err);
+    if (rc)
+        btf_image_free(img);
+    return rc;
+}
+
 void btf_dataset_iter_begin(btf_dataset_iter *it, const btf_dataset *ds)
 {
     memset(it, 0, sizeof *it);
@@ -286,10 +306,11 @@ void btf_dataset_iter_begin(btf_dataset_iter *it, const btf_dataset *ds)
 int btf_dataset_iter_next(btf_dataset_iter *it, btf_error *err)
 {
     const btf_dataset *ds = it->ds;
-    btf_image_free(&it->sample.image);
     int n = ds->info.n_views * ds->info.n_lights;
-    if (it->next >= n)
+    if (it->next >= n) {
+        btf_image_free(&it->sample.image);
         return 0;
+    }
     int k = it->next++;
     btf_sample *s = &it->sample;
     s->view = k / ds->info.n_lights;
@@ -297,7 +318,9 @@ int btf_dataset_iter_next(btf_dataset_iter *it, btf_error *err)
     s->view_dir = ds->views.dirs[s->view];
     s->light_dir = ds->lights.dirs[s->light];
     s->path = btf_dataset_path(ds, s->view, s->light);
-    int rc = btf_dataset_read(ds, s->view, s->light, &s->image, err);
+    /* The sample's buffer is the iterator's: a .btf file's next image is
+     * decoded into it (btf_dataset_read_into). */
+    int rc = btf_dataset_read_into(ds, s->view, s->light, &s->image, err);
     return rc ? rc : 1;
 }
 

@@ -70,6 +70,17 @@ btf_status btf_exr_read_source(btf_source *src, int channels, uint64_t max_pixel
 btf_status btf_exr_probe(const char *path, btf_image_header *hdr, btf_error *err);
 btf_status btf_exr_read(const char *path, int channels, btf_image *out, btf_error *err);
 
+/* btf_dataset_read into a buffer that is reused (io/dataset.c): when img
+ * already holds an image of the dataset's size, a .btf file's image is
+ * decoded straight into it; otherwise (or for image files, which their
+ * decoders allocate) img is freed and read afresh. img must be
+ * zero-initialised or hold an image; on failure it is freed. Streaming
+ * loops keep one such buffer per thread instead of allocating one per
+ * image: on a 151 x 151 x 400^2 .btf file the fresh buffers' page faults
+ * were 40 % of an analysis (docs/datasets.md, "UBO2014 .btf files"). */
+btf_status btf_dataset_read_into(const btf_dataset *ds, int view, int light, btf_image *img,
+                                 btf_error *err);
+
 /* Dataset layouts (io/dataset_scan.c): the image files of a dataset folder
  * (UBO2003 or UTIA names) or manifest as entries, from the names alone;
  * io/dataset.c makes the (view, light) table of them. */

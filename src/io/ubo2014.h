@@ -10,8 +10,12 @@
  *   ubo_decode.c   one (view, light) image from the factors or the values,
  *                  colour models, the cosine rule
  *   ubo_open.c     a file mapped with mmap, its direction sets
- *   ubo_svd.c      the truncated SVD of the writer (Gram matrix, eigenpairs)
- *   ubo_write.c    the DFMF and BDIF writers
+ *   ubo_svd.c      the writers' linear algebra (eigenpairs, Cholesky)
+ *   ubo_out.c      what the writers share: header bytes, the output file,
+ *                  stored scalars, the images of the callback
+ *   ubo_factor.c   the truncated SVD of images for DFMF and FMF
+ *   ubo_write.c    the DFMF, FMF and BDIF writers, btf_ubo2014_write
+ *   ubo_write_pvf.c  the PVF writer (a PCA per view)
  */
 #ifndef BTF_IO_UBO2014_H
 #define BTF_IO_UBO2014_H
@@ -99,6 +103,141 @@ void ubo_close(ubo_open_file *o);
  * descending into val[k], eigenvectors as the columns of vec (n x k,
  * row-major). Deterministic. BTF_E_NUMERIC if it does not converge. */
 btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_error *err);
+/* Cholesky of the k x k h (its lower triangle, in place); 0 if it is not
+ * positive definite. ubo_chol_solve solves (L L') x = b in place. */
+int ubo_cholesky(double *h, int k);
+void ubo_chol_solve(const double *l, int k, double *b);
+
+/* ---- writing (ubo_out.c) ---- */
+
+/* A growable byte buffer for headers; failed is set when memory ran out. */
+typedef struct ubo_bytes {
+    unsigned char *p;
+    size_t n, cap;
+    int failed;
+} ubo_bytes;
+void ubo_put(ubo_bytes *b, const void *data, size_t n);
+void ubo_put_u32(ubo_bytes *b, uint32_t v);
+void ubo_put_u8(ubo_bytes *b, unsigned v);
+void ubo_put_f32(ubo_bytes *b, float f);
+/* §2b: the views, each with the whole light list (radians). */
+void ubo_put_sampling(ubo_bytes *b, const btf_dirset *views, const btf_dirset *lights);
+/* The signature, the meta block (§2a, version 4), the sampling, width and
+ * height: everything up to the rotations (§2c). */
+void ubo_common_header(ubo_bytes *b, const char *sig, const btf_dirset *views,
+                       const btf_dirset *lights, int width, int height, int cosine_flag);
+/* BTF_E_NOMEM naming path if the buffer ran out of memory (and frees it). */
+btf_status ubo_bytes_check(ubo_bytes *b, const char *path, btf_error *err);
+
+/* The output: a temporary file of the final size beside path, mapped for
+ * writing; closing with rc 0 syncs it and renames it into place, else
+ * removes it. */
+typedef struct ubo_outfile {
+    char tmp[4200];
+    int fd;
+    unsigned char *map;
+    size_t size;
+} ubo_outfile;
+btf_status ubo_out_open(ubo_outfile *o, const char *path, uint64_t size, btf_error *err);
+btf_status ubo_out_close(ubo_outfile *o, const char *path, btf_status rc, btf_error *err);
+/* Opens the output of the header h (freed) and body bytes more, copies the
+ * header; *p is where the body starts. */
+btf_status ubo_out_header(ubo_outfile *o, const char *path, ubo_bytes *h, uint64_t body,
+                          unsigned char **p, btf_error *err);
+
+/* A float stored as a scalar of 2, 4 or 8 bytes (§0), and the value the
+ * reader gets back from it. */
+void ubo_store(unsigned char *p, float v, int size);
+float ubo_stored(float v, int size);
+/* n floats stored at *p (advanced); BTF_E_ARG naming what for a NaN or Inf. */
+btf_status ubo_store_all(unsigned char **p, const float *v, uint64_t n, int size, const char *path,
+                         const char *what, btf_error *err);
+static inline void ubo_wr32(unsigned char *p, uint32_t v)
+{
+    p[0] = (unsigned char)v, p[1] = (unsigned char)(v >> 8), p[2] = (unsigned char)(v >> 16),
+    p[3] = (unsigned char)(v >> 24);
+}
+/* Non-empty sets, a size in 1..BTF_MAX_SIDE, 3 x pairs below 2^32. */
+btf_status ubo_check_sets(const char *path, const btf_dirset *views, const btf_dirset *lights,
+                          int width, int height, btf_error *err);
+
+/* The images a writer stores: image(user, v, l) for v, l in the sets. */
+typedef struct ubo_source {
+    const char *path;
+    const btf_dirset *views, *lights;
+    int width, height;
+    btf_pair_image_fn image;
+    void *user;
+    btf_progress_fn progress;
+    void *progress_user;
+} ubo_source;
+/* Image i = view x n_lights + light, checked: width x height x 3, finite. */
+btf_status ubo_get_image(const ubo_source *s, uint64_t i, btf_image *img, btf_error *err);
+void ubo_report(const ubo_source *s, double frac, const char *what);
+
+/* ---- the factorisation of DFMF and FMF (ubo_factor.c) ---- */
+
+#define UBO_MAX_COMPONENTS 4096
+/* fmf 0 (DFMF): matrix c for channel c, n rows; fmf 1: one matrix (u[0],
+ * sxv[0]) of 3 n rows, row 3 i + c for image i's channel c. U is rows x
+ * kc, S x V is pixels x kc, both rounded to the stored scalar. */
+typedef struct ubo_factors {
+    int fmf;
+    int kc[3];
+    float *u[3], *sxv[3];
+} ubo_factors;
+/* The truncated SVD of the images of src (components at most), rounded to
+ * scalar bytes; log_values (FMF): of ln(value + 1e-5). st (may be NULL)
+ * gets the components and the error of the values the reader decodes. */
+btf_status ubo_factorise(const ubo_source *src, int fmf, int log_values, int components,
+                         int scalar, uint64_t max_bytes, ubo_factors *out,
+                         btf_ubo2014_write_stats *st, btf_error *err);
+void ubo_factors_free(ubo_factors *f);
+
+/* ---- FMF and PVF from given factors (ubo_write.c, ubo_write_pvf.c) ----
+ * The library writes these from images through btf_ubo2014_write; the
+ * tests also write every layout the reader accepts through them. */
+
+/* An FMF file (§4). rows x cols is 3 n x pixels (U row (v nL + l) 3 + c,
+ * S x V row y W + x) or, transposed, 3 pixels x n (U row (y W + x) 3 + c,
+ * S x V row v nL + l). */
+typedef struct ubo_fmf {
+    const char *signature;   /* "!FMF12FCER", "!FMF06FCR" or "!FMF06FC" */
+    int header_version;      /* !FMF12FCER: 0, 1 or 2 */
+    uint32_t drr;            /* dynamic_range_reduction_method (version >= 1) */
+    uint32_t hm_a, hm_b;     /* version 2: the height map's sides (0: none) */
+    const float *height_map; /* hm_a x hm_b */
+    int scalar_size;         /* 2, 4 or 8 */
+    uint32_t k, k_file;      /* K; the num_components before the scalar size */
+    uint32_t rows, cols;
+    const float *s, *u, *sxv; /* s: K singular values (NULL: S x V's column norms) */
+} ubo_fmf;
+btf_status ubo_write_fmf(const char *path, const btf_dirset *views, const btf_dirset *lights,
+                         int width, int height, const ubo_fmf *f, btf_error *err);
+
+/* A PVF file (§5): per view, Mean[dim], C[dim x K] and W[num_weights x K]
+ * with dim = 3 nL and num_weights = pixels (value = W[y W + x] . C[3 l + c]
+ * + Mean[3 l + c]) or dim = 3 pixels and num_weights = nL (value =
+ * C[3 (y W + x) + c] . W[l] + Mean[3 (y W + x) + c]). */
+typedef struct ubo_pvf_view {
+    uint32_t k, num_weights, dim;
+    const float *ev, *mean, *c, *w; /* ev: K eigenvalues (NULL: zeros) */
+} ubo_pvf_view;
+typedef struct ubo_pvf {
+    const char *signature;   /* "!PVF06FCR" or "!PVF06FC" */
+    int legacy;              /* the header of magic 301074, without a meta block */
+    int scalar_size;
+    uint32_t num_components; /* the header's (informational) */
+    const ubo_pvf_view *views; /* one slot per view */
+} ubo_pvf;
+btf_status ubo_write_pvf(const char *path, const btf_dirset *views, const btf_dirset *lights,
+                         int width, int height, const ubo_pvf *p, btf_error *err);
+/* PVF from the images of src: per view, the PCA of its 3 nL (light,
+ * channel) columns over the pixels, components at most, stored in the
+ * first layout above. */
+btf_status ubo_write_pvf_images(const ubo_source *src, const char *signature, int components,
+                                int scalar, uint64_t max_bytes, btf_ubo2014_write_stats *st,
+                                btf_error *err);
 
 /* IEEE binary16 <-> binary32, round to nearest even. */
 static inline float ubo_half_to_float(uint16_t h)

@@ -524,21 +524,50 @@ static int matrix_finite(const ubo_matrix *m, uint64_t *bad)
     return 1;
 }
 
+/* §5: a PVF slot's mean, C and W (its eigenvalues are not used). */
+static btf_status check_finite_pvf(const ubo_file *f, btf_error *err)
+{
+    for (uint32_t v = 0; v < f->num_slots; v++) {
+        const ubo_pvf_slot *sl = &f->slots[v];
+        const struct {
+            const unsigned char *p;
+            uint64_t rows;
+            uint32_t k;
+            const char *what;
+        } m[3] = {{sl->mean, sl->dim, 1, "mean"},
+                  {sl->c, sl->dim, sl->k, "C"},
+                  {sl->w, sl->num_weights, sl->k, "W"}};
+        for (int i = 0; i < 3; i++) {
+            ubo_matrix x = {m[i].p, sl->scalar, (uint32_t)m[i].rows, m[i].k};
+            uint64_t bad;
+            if (!matrix_finite(&x, &bad))
+                return btf_fail(err, BTF_E_DATA, "%s: %s of PVF view slot %u has a NaN or Inf at "
+                                "row %llu, component %llu", f->name, m[i].what, v,
+                                (unsigned long long)(bad / m[i].k),
+                                (unsigned long long)(bad % m[i].k));
+        }
+    }
+    return BTF_OK;
+}
+
 static btf_status check_finite(const ubo_file *f, btf_error *err)
 {
-    static const char *const names[3] = {"R/0", "G/1", "B/2"};
+    /* DFMF: one matrix pair per channel; FMF: one for all channels (§4). */
+    static const char *const names[4] = {" of channel R/0", " of channel G/1",
+                                         " of channel B/2", ""};
+    if (f->variant == UBO_PVF)
+        return check_finite_pvf(f, err);
     int n = f->variant == UBO_DFMF ? 3 : f->variant == UBO_FMF ? 1 : 0;
     for (int ch = 0; ch < n; ch++) {
+        const char *name = names[f->variant == UBO_FMF ? 3 : ch];
         uint64_t bad;
         if (!matrix_finite(&f->u[ch], &bad))
-            return btf_fail(err, BTF_E_DATA, "%s: U of channel %s has a NaN or Inf at row %llu, "
-                            "component %llu", f->name, names[ch],
-                            (unsigned long long)(bad / f->u[ch].k),
+            return btf_fail(err, BTF_E_DATA, "%s: U%s has a NaN or Inf at row %llu, component "
+                            "%llu", f->name, name, (unsigned long long)(bad / f->u[ch].k),
                             (unsigned long long)(bad % f->u[ch].k));
         if (!matrix_finite(&f->sxv[ch], &bad))
-            return btf_fail(err, BTF_E_DATA, "%s: SxV of channel %s has a NaN or Inf at row "
-                            "%llu, component %llu", f->name, names[ch],
-                            (unsigned long long)(bad / f->sxv[ch].k),
+            return btf_fail(err, BTF_E_DATA, "%s: SxV%s has a NaN or Inf at row %llu, component "
+                            "%llu", f->name, name, (unsigned long long)(bad / f->sxv[ch].k),
                             (unsigned long long)(bad % f->sxv[ch].k));
     }
     return BTF_OK;
@@ -562,100 +591,71 @@ void ubo_free(ubo_file *f)
     f->slots = NULL;
 }
 
-btf_status ubo_parse(const unsigned char *data, uint64_t size, const char *name, int skip_finite,
-                     ubo_file *f, btf_error *err)
+/* §5: the PVF header, legacy (magic 301074, no meta block) or current. */
+static btf_status parse_pvf(cursor *c, ubo_file *f, int rotations, uint64_t *start)
 {
-    memset(f, 0, sizeof *f);
-    f->name = name ? name : "btf";
-    f->data = data;
-    f->size = size;
-    f->info.colour_model = -1;
-    int s = -1;
-    for (size_t i = 0; i < sizeof SIGS / sizeof SIGS[0] && s < 0; i++) {
-        size_t n = strlen(SIGS[i].sig);
-        if (size >= n && memcmp(data, SIGS[i].sig, n) == 0)
-            s = (int)i;
+    uint32_t first, k = 0, slots = 0;
+    btf_status rc = get_u32(c, &first, "the PVF header");
+    if (!rc && first == 301074u) { /* the legacy header, no meta block */
+        f->nc = 3;
+        f->info.n_channels = 3;
+        rc = get_u32(c, &k, "num_components");
+        if (!rc)
+            rc = parse_size(c, f);
+        if (!rc)
+            rc = get_u32(c, &slots, "num_view_slots");
+        if (!rc)
+            rc = parse_sampling(c, f);
+    } else if (!rc) {
+        c->pos -= 4;
+        rc = parse_meta(c, f);
+        if (!rc)
+            rc = parse_sampling(c, f);
+        if (!rc)
+            rc = parse_size(c, f);
+        if (!rc && rotations)
+            rc = parse_rotations(c, f);
+        if (!rc)
+            rc = get_u32(c, &k, "num_components");
+        if (!rc)
+            rc = get_u32(c, &slots, "num_view_slots");
     }
-    if (s < 0) {
-        char shown[48];
-        size_t n = size < 10 ? (size_t)size : 10, k = 0;
-        for (size_t i = 0; i < n && k + 5 < sizeof shown; i++)
-            k += (size_t)snprintf(shown + k, sizeof shown - k,
-                                  data[i] >= 33 && data[i] < 127 ? "%c" : "\\x%02x", data[i]);
-        shown[k] = '\0';
-        return btf_fail(err, BTF_E_FORMAT,
-                        "%s: unknown signature \"%s\": expected a Bonn .btf file (!DFMF08FCR, "
-                        "!FMF12FCER, !FMF06FCR, !FMF06FC, !PVF06FCR, !PVF06FC, !BDIF06R2!)", f->name,
-                        shown);
-    }
-    f->variant = SIGS[s].variant;
-    f->sig_len = (int)strlen(SIGS[s].sig);
-    snprintf(f->info.signature, sizeof f->info.signature, "%s", SIGS[s].sig);
-    f->info.variant = f->variant == UBO_DFMF  ? "DFMF"
-                      : f->variant == UBO_FMF ? "FMF"
-                      : f->variant == UBO_PVF ? "PVF"
-                                              : "BDIF";
-    f->info.file_bytes = size;
-    cursor c = {f, (uint64_t)f->sig_len, err};
+    if (!rc && f->nc != 3)
+        rc = btf_fail(c->err, BTF_E_UNSUPPORTED,
+                      "%s: %u channels: only 3-channel (RGB) files are supported", f->name, f->nc);
+    *start = c->pos;
+    /* num_components (k) is informational: each slot has its own K. */
+    return rc ? rc : parse_pvf_slots(c, f, slots);
+}
+
+/* The common header (§2) and the body of a DFMF, FMF or BDIF file. */
+static btf_status parse_common(cursor *c, ubo_file *f, int sig)
+{
+    btf_status rc = parse_meta(c, f);
+    if (!rc)
+        rc = parse_sampling(c, f);
+    if (!rc)
+        rc = parse_size(c, f);
+    if (!rc && f->variant == UBO_BDIF)
+        return parse_bdif(c, f);
+    if (!rc && SIGS[sig].rotations)
+        rc = parse_rotations(c, f);
+    if (!rc && f->variant == UBO_DFMF)
+        return parse_dfmf(c, f);
+    return rc ? rc : parse_fmf(c, f, SIGS[sig].extended);
+}
+
+/* The checks after the structure: the end of the file, the colour model,
+ * the cosine rule's lights, finite factors; then the byte counts. */
+static btf_status check_parsed(cursor *c, ubo_file *f, int skip_finite, uint64_t pvf_start)
+{
+    btf_error *err = c->err;
     btf_status rc = BTF_OK;
-    uint32_t pvf_k = 0, pvf_slots = 0;
-    uint64_t pvf_start = 0;
-    if (f->variant == UBO_PVF) {
-        uint32_t first;
-        rc = get_u32(&c, &first, "the PVF header");
-        if (!rc && first == 301074u) { /* §5: the legacy header, no meta block */
-            f->nc = 3;
-            f->info.n_channels = 3;
-            rc = get_u32(&c, &pvf_k, "num_components");
-            if (!rc)
-                rc = parse_size(&c, f);
-            if (!rc)
-                rc = get_u32(&c, &pvf_slots, "num_view_slots");
-            if (!rc)
-                rc = parse_sampling(&c, f);
-        } else if (!rc) {
-            c.pos -= 4;
-            rc = parse_meta(&c, f);
-            if (!rc)
-                rc = parse_sampling(&c, f);
-            if (!rc)
-                rc = parse_size(&c, f);
-            if (!rc && SIGS[s].rotations)
-                rc = parse_rotations(&c, f);
-            if (!rc)
-                rc = get_u32(&c, &pvf_k, "num_components");
-            if (!rc)
-                rc = get_u32(&c, &pvf_slots, "num_view_slots");
-        }
-        if (!rc && f->nc != 3)
-            rc = btf_fail(err, BTF_E_UNSUPPORTED,
-                          "%s: %u channels: only 3-channel (RGB) files are supported", f->name,
-                          f->nc);
-        pvf_start = c.pos;
-        if (!rc)
-            rc = parse_pvf_slots(&c, f, pvf_slots);
-    } else {
-        rc = parse_meta(&c, f);
-        if (!rc)
-            rc = parse_sampling(&c, f);
-        if (!rc)
-            rc = parse_size(&c, f);
-        if (!rc && f->variant == UBO_BDIF)
-            rc = parse_bdif(&c, f);
-        else if (!rc) {
-            if (SIGS[s].rotations)
-                rc = parse_rotations(&c, f);
-            if (!rc && f->variant == UBO_DFMF)
-                rc = parse_dfmf(&c, f);
-            else if (!rc)
-                rc = parse_fmf(&c, f, SIGS[s].extended);
-        }
-    }
-    if (!rc && c.pos != size)
+    if (c->pos != f->size)
         rc = btf_fail(err, BTF_E_FORMAT,
                       "%s: %llu bytes after the end of the %s data at byte %llu (the file must "
-                      "end there)", f->name, (unsigned long long)(size - c.pos),
-                      f->info.variant, (unsigned long long)c.pos);
+                      "end there)", f->name, (unsigned long long)(f->size - c->pos),
+                      f->info.variant, (unsigned long long)c->pos);
     if (!rc && f->variant == UBO_DFMF && !model_supported(f->info.colour_model))
         rc = btf_fail(err, BTF_E_UNSUPPORTED,
                       "%s: colour model %d not supported (0, 1, 3, 4, 9, 10, 11 and 12 are)",
@@ -669,20 +669,93 @@ btf_status ubo_parse(const unsigned char *data, uint64_t size, const char *name,
                               f->light_rad[2 * l] * 57.29577951308232);
     if (!rc && !skip_finite)
         rc = check_finite(f, err);
-    if (!rc) {
-        uint64_t mat = 0;
-        for (int ch = 0; ch < 3; ch++)
-            mat += (uint64_t)f->u[ch].rows * f->u[ch].k * f->u[ch].scalar +
-                   (uint64_t)f->sxv[ch].rows * f->sxv[ch].k * f->sxv[ch].scalar;
-        if (f->variant == UBO_BDIF)
-            mat = f->chunks ? size - (uint64_t)(f->chunk0 - data) : 0;
-        if (f->variant == UBO_PVF)
-            mat = size - pvf_start;
-        f->info.data_bytes = mat;
-        f->info.transposed = f->transposed;
-    }
-    (void)pvf_k;
+    if (rc)
+        return rc;
+    uint64_t mat = 0;
+    for (int ch = 0; ch < 3; ch++)
+        mat += (uint64_t)f->u[ch].rows * f->u[ch].k * f->u[ch].scalar +
+               (uint64_t)f->sxv[ch].rows * f->sxv[ch].k * f->sxv[ch].scalar;
+    if (f->variant == UBO_BDIF)
+        mat = f->chunks ? f->size - (uint64_t)(f->chunk0 - f->data) : 0;
+    if (f->variant == UBO_PVF)
+        mat = f->size - pvf_start;
+    f->info.data_bytes = mat;
+    f->info.transposed = f->transposed;
+    return BTF_OK;
+}
+
+/* The parse with the signature SIGS[sig]. */
+static btf_status parse_as(const unsigned char *data, uint64_t size, const char *name,
+                           int skip_finite, int sig, ubo_file *f, btf_error *err)
+{
+    memset(f, 0, sizeof *f);
+    f->name = name ? name : "btf";
+    f->data = data;
+    f->size = size;
+    f->info.colour_model = -1;
+    f->variant = SIGS[sig].variant;
+    f->sig_len = (int)strlen(SIGS[sig].sig);
+    snprintf(f->info.signature, sizeof f->info.signature, "%s", SIGS[sig].sig);
+    f->info.variant = f->variant == UBO_DFMF  ? "DFMF"
+                      : f->variant == UBO_FMF ? "FMF"
+                      : f->variant == UBO_PVF ? "PVF"
+                                              : "BDIF";
+    f->info.file_bytes = size;
+    cursor c = {f, (uint64_t)f->sig_len, err};
+    uint64_t pvf_start = 0;
+    btf_status rc = f->variant == UBO_PVF ? parse_pvf(&c, f, SIGS[sig].rotations, &pvf_start)
+                                          : parse_common(&c, f, sig);
+    if (!rc)
+        rc = check_parsed(&c, f, skip_finite, pvf_start);
     if (rc)
         ubo_free(f);
     return rc;
+}
+
+static btf_status unknown_signature(const unsigned char *data, uint64_t size, const char *name,
+                                    btf_error *err)
+{
+    char shown[48];
+    size_t n = size < 10 ? (size_t)size : 10, k = 0;
+    for (size_t i = 0; i < n && k + 5 < sizeof shown; i++)
+        k += (size_t)snprintf(shown + k, sizeof shown - k,
+                              data[i] >= 33 && data[i] < 127 ? "%c" : "\\x%02x", data[i]);
+    shown[k] = '\0';
+    return btf_fail(err, BTF_E_FORMAT,
+                    "%s: unknown signature \"%s\": expected a Bonn .btf file (!DFMF08FCR, "
+                    "!FMF12FCER, !FMF06FCR, !FMF06FC, !PVF06FCR, !PVF06FC, !BDIF06R2!)",
+                    name ? name : "btf", shown);
+}
+
+/* The signature is the longest one the file starts with (§1). "!FMF06FC"
+ * and "!PVF06FC" followed by a meta_size whose low byte is 0x52 ('R') also
+ * start like "!FMF06FCR" and "!PVF06FCR" (the notes' §1 hazard): when the
+ * longer reading fails, the shorter one is tried, and kept if it parses;
+ * else the longer reading's error stands. */
+btf_status ubo_parse(const unsigned char *data, uint64_t size, const char *name, int skip_finite,
+                     ubo_file *f, btf_error *err)
+{
+    int tried = 0;
+    btf_error first = {0};
+    btf_status first_rc = BTF_OK;
+    for (size_t i = 0; i < sizeof SIGS / sizeof SIGS[0]; i++) {
+        size_t n = strlen(SIGS[i].sig);
+        if (size < n || memcmp(data, SIGS[i].sig, n) != 0)
+            continue;
+        btf_error e = {0};
+        btf_status rc = parse_as(data, size, name, skip_finite, (int)i, f, &e);
+        if (rc == BTF_OK)
+            return BTF_OK;
+        if (!tried++) {
+            first = e;
+            first_rc = rc;
+        }
+    }
+    if (!tried) {
+        memset(f, 0, sizeof *f);
+        return unknown_signature(data, size, name, err);
+    }
+    if (err)
+        *err = first;
+    return first_rc;
 }

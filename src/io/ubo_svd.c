@@ -1,6 +1,7 @@
 /*
- * ubo_svd.c — the k largest eigenpairs of a symmetric matrix, for the DFMF
- * writer's truncated SVD (io/ubo_write.c): the Gram matrix of the smaller
+ * ubo_svd.c — the writers' linear algebra. The k largest eigenpairs of a
+ * symmetric matrix, for the truncated SVD of DFMF and FMF (io/ubo_factor.c)
+ * and the per-view PCA of PVF (io/ubo_write_pvf.c): the Gram matrix of the smaller
  * side of a channel's (view, light) x pixel matrix has the squared singular
  * values as eigenvalues and the singular vectors of that side as
  * eigenvectors (the factorisation the notes' §3 stores as U and S x V).
@@ -11,6 +12,9 @@
  * Rayleigh-Ritz step (Jacobi on the block) at the end. Both are
  * deterministic: the same matrix gives the same bits. Each eigenvector's
  * sign is fixed so that its largest component is positive.
+ *
+ * And the Cholesky factorisation that fits the stored factors to each
+ * other once one side is rounded (a K x K least-squares solve per row).
  */
 #include <stdio.h>
 #include "core/core.h"
@@ -246,4 +250,40 @@ btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_
     free(tval);
     free(prev);
     return rc;
+}
+
+int ubo_cholesky(double *h, int k)
+{
+    for (int j = 0; j < k; j++) {
+        double d = h[j * k + j];
+        for (int i = 0; i < j; i++)
+            d -= h[j * k + i] * h[j * k + i];
+        if (!(d > 0))
+            return 0;
+        d = sqrt(d);
+        h[j * k + j] = d;
+        for (int r = j + 1; r < k; r++) {
+            double x = h[r * k + j];
+            for (int i = 0; i < j; i++)
+                x -= h[r * k + i] * h[j * k + i];
+            h[r * k + j] = x / d;
+        }
+    }
+    return 1;
+}
+
+void ubo_chol_solve(const double *l, int k, double *b)
+{
+    for (int i = 0; i < k; i++) {
+        double x = b[i];
+        for (int j = 0; j < i; j++)
+            x -= l[i * k + j] * b[j];
+        b[i] = x / l[i * k + i];
+    }
+    for (int i = k - 1; i >= 0; i--) {
+        double x = b[i];
+        for (int j = i + 1; j < k; j++)
+            x -= l[j * k + i] * b[j];
+        b[i] = x / l[i * k + i];
+    }
 }

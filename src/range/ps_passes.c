@@ -103,17 +103,17 @@ btf_status btf_ps_pass_grey(const btf_ps_source *src, const double *intensity, d
                             const btf_photostereo_opts *o, btf_error *err)
 {
     size_t wh = (size_t)src->width * src->height;
+    btf_image tmp = {0}; /* one buffer for every image (btf_ps_source_get) */
     for (int i = 0; i < src->count; i++) {
-        btf_image tmp = {0};
         const btf_image *img;
         btf_status rc = btf_ps_source_get(src, i, &tmp, &img, err);
         if (rc)
             return rc;
         grey_of(img, i, intensity, saturation, inside, grey + (size_t)i * wh);
-        btf_image_free(&tmp);
         if (!src->images)
             btf_ps_report(o, 0.4 * (i + 1) / src->count, "reading images");
     }
+    btf_image_free(&tmp);
     return BTF_OK;
 }
 
@@ -128,16 +128,16 @@ btf_status btf_ps_pass_albedo(const btf_ps_source *src, const double *intensity,
         return BTF_E_NOMEM;
     double *den = num + wh * (size_t)channels;
     btf_status rc = BTF_OK;
+    btf_image tmp = {0}; /* one buffer for every image (btf_ps_source_get) */
     for (int i = 0; i < src->count && rc == BTF_OK; i++) {
-        btf_image tmp = {0};
         const btf_image *img;
         if ((rc = btf_ps_source_get(src, i, &tmp, &img, err)))
             break;
         albedo_add(img, i, intensity, job, num, den);
-        btf_image_free(&tmp);
         if (!src->images)
             btf_ps_report(o, 0.5 + 0.4 * (i + 1) / src->count, "reading images (albedo)");
     }
+    btf_image_free(&tmp);
     for (size_t k = 0; rc == BTF_OK && k < wh; k++) {
         for (int c = 0; c < channels; c++) {
             double a = job->inside[k] && den[k] > 0.0 ? num[k * channels + c] / den[k] : 0.0;

@@ -7,6 +7,7 @@
  */
 #include "range/range.h"
 #include "core/core.h"
+#include "io/io.h"
 
 #include <math.h>
 
@@ -31,8 +32,13 @@ btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
     }
     btf_read_opts ro = src->read;
     ro.channels = 3; /* the fit's grey value and the albedo need the colour */
-    btf_status rc = src->ds ? btf_dataset_read(src->ds, src->view, i, tmp, err)
-                            : btf_image_read(src->paths[i], &ro, tmp, err);
+    btf_status rc;
+    if (src->ds) { /* a .btf file's image goes into tmp's buffer when it has one */
+        rc = btf_dataset_read_into(src->ds, src->view, i, tmp, err);
+    } else {
+        btf_image_free(tmp);
+        rc = btf_image_read(src->paths[i], &ro, tmp, err);
+    }
     if (rc)
         return rc;
     if (tmp->width != src->width || tmp->height != src->height) {

@@ -144,7 +144,9 @@ typedef struct btf_ps_source {
 } btf_ps_source;
 /* The size of a file source from its first image's header. */
 btf_status btf_ps_source_probe(btf_ps_source *src, btf_error *err);
-/* Image i: a pointer into memory, or decoded into *tmp (free it after). */
+/* Image i: a pointer into memory, or decoded into *tmp, zero-initialised
+ * or holding the previous image (a .btf file's image reuses its buffer;
+ * free it after the last). */
 btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
                              const btf_image **img, btf_error *err);
 /* inside[k] = 1 where the mask (NULL: everywhere) is non-zero and finite in

@@ -7,8 +7,11 @@
  * illumination changes move features smoothly.
  *
  * A dataset's features are computed streaming by the thread pool
- * (core/pool.c): each job decodes one image; only the features stay in
- * memory.
+ * (core/pool.c): each job decodes one image into its thread's buffer
+ * (reused from image to image: a fresh buffer per image was fresh pages
+ * each time, 40 % of an analysis of a 400^2 .btf file in page faults,
+ * docs/datasets.md); only the features stay in memory. The Lab conversion
+ * goes through a small buffer on the stack, a chunk of pixels at a time.
  */
 #include "io/io.h"
 #include "core/core.h"
@@ -33,24 +36,24 @@ btf_status btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_e
     if (!img || !img->data || img->channels != 3)
         return btf_fail(err, BTF_E_ARG, "Lab histogram needs an RGB image");
     size_t n = (size_t)img->width * img->height;
-    float *lab = btf_alloc(n * 3, sizeof(float), err);
     uint32_t *count = btf_calloc((size_t)bins * 3, sizeof(uint32_t), err);
-    if (!lab || !count) {
-        free(lab);
-        free(count);
+    if (!count)
         return BTF_E_NOMEM;
-    }
+    const size_t CHUNK = 1024;
+    float lab[3 * 1024];
     char msg[256];
-    if (btfcv_rgb_to_lab(img->data, n, lab, msg, sizeof msg) != 0) {
-        free(lab);
-        free(count);
-        return btf_fail(err, BTF_E_NUMERIC, "Lab conversion failed: %s", msg);
-    }
     const float a = BTF_LAB_A_RANGE;
-    for (size_t i = 0; i < n; i++) {
-        count[bin_of(lab[3 * i], 0.0f, 100.0f, bins)]++;
-        count[bins + bin_of(lab[3 * i + 1], -a, a, bins)]++;
-        count[2 * bins + bin_of(lab[3 * i + 2], -a, a, bins)]++;
+    for (size_t i0 = 0; i0 < n; i0 += CHUNK) {
+        size_t m = n - i0 < CHUNK ? n - i0 : CHUNK;
+        if (btfcv_rgb_to_lab(img->data + 3 * i0, m, lab, msg, sizeof msg) != 0) {
+            free(count);
+            return btf_fail(err, BTF_E_NUMERIC, "Lab conversion failed: %s", msg);
+        }
+        for (size_t i = 0; i < m; i++) {
+            count[bin_of(lab[3 * i], 0.0f, 100.0f, bins)]++;
+            count[bins + bin_of(lab[3 * i + 1], -a, a, bins)]++;
+            count[2 * bins + bin_of(lab[3 * i + 2], -a, a, bins)]++;
+        }
     }
     for (int c = 0; c < 3; c++) {
         uint64_t run = 0;
@@ -59,27 +62,27 @@ btf_status btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_e
             feature[c * bins + b] = (float)((double)run / (double)n);
         }
     }
-    free(lab);
     free(count);
     return BTF_OK;
 }
 
-/* One job per image: decode it, compute its feature into its own row. */
+/* One job per image: decode it into the worker's buffer, compute its
+ * feature into its own row. */
 typedef struct feature_batch {
     const btf_dataset *ds;
     int n_lights, bins, dim;
     float *features;      /* (views x lights) x dim */
+    btf_image *buffers;   /* one per worker, kept from image to image */
 } feature_batch;
 
 static btf_status feature_job(void *user, int image, int worker, btf_error *err)
 {
-    (void)worker;
     const feature_batch *b = user;
-    btf_image img = {0};
-    btf_status rc = btf_dataset_read(b->ds, image / b->n_lights, image % b->n_lights, &img, err);
+    btf_image *img = &b->buffers[worker];
+    btf_status rc = btf_dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
+                                          err);
     if (rc == BTF_OK)
-        rc = btf_lab_cumhist(&img, b->bins, b->features + (size_t)image * b->dim, err);
-    btf_image_free(&img);
+        rc = btf_lab_cumhist(img, b->bins, b->features + (size_t)image * b->dim, err);
     return rc;
 }
 
@@ -101,8 +104,17 @@ btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *o
     b.features = btf_alloc((size_t)total * b.dim, sizeof(float), err);
     if (!b.features)
         return BTF_E_NOMEM;
+    int workers = btf_pool_workers(o.threads, total);
+    b.buffers = btf_calloc((size_t)(workers > 0 ? workers : 1), sizeof *b.buffers, err);
+    if (!b.buffers) {
+        free(b.features);
+        return BTF_E_NOMEM;
+    }
     btf_pool_progress progress = {o.progress, o.progress_user, "image features", 0.0, 1.0, 64};
     btf_status rc = btf_pool_run(total, o.threads, feature_job, &b, &progress, err);
+    for (int w = 0; w < workers; w++)
+        btf_image_free(&b.buffers[w]);
+    free(b.buffers);
     if (rc) {
         free(b.features);
         return rc;

@@ -40,7 +40,10 @@ layout(std430, set = 0, binding = 7) readonly buffer Codes3 { uint c3[]; };
 #define BTF_RF_INV_HEIGHT(c) pf[RFP_INV_H]
 #define BTF_RF_TEXEL uint
 #define BTF_RF_TEXEL_AT(c, x, y) (uint(y) * uint(pi[RFP_WIDTH]) + uint(x))
-#define BTF_RF_LOAD(c, f, t, p) btf_rf_load(f, t, p)
+#define BTF_RF_SRC uvec4
+#define BTF_RF_P(src, s) btf_rf_param(src, s)
+#define BTF_RF_SCRATCH(name) int name = 0
+#define BTF_RF_OPEN(c, f, t, scratch) btf_rf_open(f, t)
 #define BTF_RF_VIEWSET(c) 0
 #define BTF_RF_N_LIGHTS(c) pi[RFP_NLIGHTS]
 #define BTF_RF_LIGHT_KIND(c, j) pi[pi[RFP_LIGHT_KIND] + (j)]
@@ -65,25 +68,26 @@ uint rf_word(int b, uint i)
     return c3[i];
 }
 
-// The dequantised slots of texel t in field f (btf_rf_dequant, as the
-// CPU's rf_texel_params).
-void btf_rf_load(int f, uint t, out float p[BTF_RF_SLOTS_CAP])
+// Where texel t of field f starts: (code buffer, index of its first
+// 16-bit code in that buffer, float offsets of the field's lo and scale),
+// found once per field so that each slot costs one code and two floats.
+uvec4 btf_rf_open(int f, uint t)
 {
     int slots = pi[RFP_SLOTS];
-    int b = pi[pi[RFP_FIELD_BUF] + f];
-    uint base = uint(pi[pi[RFP_FIELD_BASE] + f]);
-    int lo = pi[RFP_LO] + f * slots;
-    int sc = pi[RFP_SCALE] + f * slots;
-    uint i0 = t * uint(slots);
-    for (int s = 0; s < BTF_RF_SLOTS_CAP; s++) {
-        p[s] = 0.0;
-        if (s < slots) {
-            uint i = i0 + uint(s);
-            uint w = rf_word(b, base + (i >> 1u));
-            uint q = (w >> ((i & 1u) * 16u)) & 0xFFFFu;
-            p[s] = btf_rf_dequant(q, pf[lo + s], pf[sc + s]);
-        }
-    }
+    uint b = uint(pi[pi[RFP_FIELD_BUF] + f]);
+    uint c = 2u * uint(pi[pi[RFP_FIELD_BASE] + f]) + t * uint(slots);
+    int k = f * slots;
+    return uvec4(b, c, uint(pi[RFP_LO] + k), uint(pi[RFP_SCALE] + k));
+}
+
+// Slot s of an opened texel, dequantised (btf_rf_dequant, as the CPU's
+// rf_texel_params): read where the shared text uses it.
+float btf_rf_param(uvec4 src, int s)
+{
+    uint c = src.y + uint(s);
+    uint w = rf_word(int(src.x), c >> 1u);
+    uint q = (w >> ((c & 1u) * 16u)) & 0xFFFFu;
+    return btf_rf_dequant(q, pf[src.z + uint(s)], pf[src.w + uint(s)]);
 }
 
 void main()

@@ -36,8 +36,13 @@
  *   BTF_RF_INV_WIDTH(ctx), BTF_RF_INV_HEIGHT(ctx)  float: 1.0f / width, height
  *   BTF_RF_TEXEL                the type of a texel index (C size_t, GLSL uint)
  *   BTF_RF_TEXEL_AT(ctx, x, y)  texel index of (x, y)
- *   BTF_RF_LOAD(ctx, f, t, p)   statement: the dequantised slots of texel t of
- *                               field f into the float array p
+ *   BTF_RF_SRC                  the type of a texel's parameters in one field
+ *                               (C: const float *, its dequantised slots;
+ *                               GLSL: where they start, read on demand)
+ *   BTF_RF_P(src, s)            float: slot s of src
+ *   BTF_RF_SCRATCH(name)        declares the room BTF_RF_OPEN may fill (C:
+ *                               float name[BTF_RF_SLOTS_CAP])
+ *   BTF_RF_OPEN(ctx, f, t, scratch)  the BTF_RF_SRC of texel t of field f
  *   BTF_RF_VIEWSET(ctx)         the measured views' BTF_RFV_SET
  *   BTF_RF_N_LIGHTS(ctx)        int: the scene's lights
  *   BTF_RF_LIGHT_KIND(ctx, j)   int: 0 directional, 1 point (btf_light_kind)
@@ -52,7 +57,8 @@
  * Keep this file in the common subset of C11 and GLSL 4.50 (the rules of
  * src/synth/btf_noise.h, but sqrt and division through BTF_RF_SQRT and
  * "/"): ASCII only, no pointers, arrays only as function parameters and
- * locals of the constant size BTF_RF_SLOTS_CAP, no casts "(T)x" (the
+ * locals of the constant size BTF_RF_SLOTS_CAP (C only, through
+ * BTF_RF_SCRATCH), no casts "(T)x" (the
  * BTF_RF_ macros below), float constants with the f suffix and at most 9
  * significant digits, no GLSL reserved words as names.
  */
@@ -133,8 +139,13 @@ struct btf_rf_pair {
 #define BTF_RF_F2I(x) int(x)
 #define BTF_RF_I2F(i) float(i)
 #define BTF_RF_I2U(i) uint(i)
-/* The shader defines BTF_RF_LOAD(ctx, f, t, p) as btf_rf_load(f, t, p). */
-void btf_rf_load(int f, uint t, out float p[BTF_RF_SLOTS_CAP]);
+/* The shader defines BTF_RF_OPEN(ctx, f, t, scratch) as btf_rf_open(f, t)
+ * and BTF_RF_P(src, s) as btf_rf_param(src, s): the slot
+ * read and dequantised where it is used, so that no private array is
+ * indexed (which lavapipe runs through scratch memory, an order of
+ * magnitude slower). */
+uvec4 btf_rf_open(int f, uint t);
+float btf_rf_param(uvec4 src, int s);
 #else
 /* --------------------------------------------------------------------- C */
 #include <math.h>
@@ -323,8 +334,8 @@ BTF_FN float btf_rf_lafortune_lobe(float rho0, float cx0, float cy0, float cz0, 
  * order, docs/rf.md "File"): light (lx, ly, lz), view (vx, vy, vz)
  * (Lafortune only), unit vectors in the tangent frame. Never negative and
  * never non-finite: a PTM below zero (past the measured lights) gives 0. */
-BTF_FN float btf_rf_lum(const float p[BTF_RF_SLOTS_CAP], int fit, int lobes, float lx, float ly,
-                        float lz, float vx, float vy, float vz)
+BTF_FN float btf_rf_lum(BTF_RF_SRC p, int fit, int lobes, float lx, float ly, float lz, float vx,
+                        float vy, float vz)
 {
     BTF_PRECISE float y = 0.0f;
     if (fit == BTF_RF_FIT_PTM) {
@@ -333,22 +344,24 @@ BTF_FN float btf_rf_lum(const float p[BTF_RF_SLOTS_CAP], int fit, int lobes, flo
         BTF_PRECISE float uu = lx * lx;
         BTF_PRECISE float vv = ly * ly;
         BTF_PRECISE float uv = lx * ly;
-        BTF_PRECISE float t0 = p[0] * uu;
-        BTF_PRECISE float t1 = p[1] * vv;
-        BTF_PRECISE float t2 = p[2] * uv;
-        BTF_PRECISE float t3 = p[3] * lx;
-        BTF_PRECISE float t4 = p[4] * ly;
-        y = ((((t0 + t1) + t2) + t3) + t4) + p[5];
+        BTF_PRECISE float t0 = BTF_RF_P(p, 0) * uu;
+        BTF_PRECISE float t1 = BTF_RF_P(p, 1) * vv;
+        BTF_PRECISE float t2 = BTF_RF_P(p, 2) * uv;
+        BTF_PRECISE float t3 = BTF_RF_P(p, 3) * lx;
+        BTF_PRECISE float t4 = BTF_RF_P(p, 4) * ly;
+        y = ((((t0 + t1) + t2) + t3) + t4) + BTF_RF_P(p, 5);
     } else if (fit == BTF_RF_FIT_LOBES) {
         for (int i = 0; i < lobes; i++)
-            y = y + btf_rf_lobe(p[4 * i], p[4 * i + 1], p[4 * i + 2], p[4 * i + 3], lx, ly, lz);
+            y = y + btf_rf_lobe(BTF_RF_P(p, 4 * i), BTF_RF_P(p, 4 * i + 1),
+                                BTF_RF_P(p, 4 * i + 2), BTF_RF_P(p, 4 * i + 3), lx, ly, lz);
     } else {
-        float rd = btf_rf_clamp(p[0], 0.0f, BTF_RF_RHO_MAX);
+        float rd = btf_rf_clamp(BTF_RF_P(p, 0), 0.0f, BTF_RF_RHO_MAX);
         float lzp = lz > 0.0f ? lz : 0.0f;
         y = rd * lzp;
         for (int i = 0; i < lobes; i++)
-            y = y + btf_rf_lafortune_lobe(p[1 + 5 * i], p[2 + 5 * i], p[3 + 5 * i],
-                                          p[4 + 5 * i], p[5 + 5 * i], lx, ly, lz, vx, vy, vz);
+            y = y + btf_rf_lafortune_lobe(BTF_RF_P(p, 1 + 5 * i), BTF_RF_P(p, 2 + 5 * i),
+                                          BTF_RF_P(p, 3 + 5 * i), BTF_RF_P(p, 4 + 5 * i),
+                                          BTF_RF_P(p, 5 + 5 * i), lx, ly, lz, vx, vy, vz);
     }
     return y > 0.0f && y <= BTF_RF_FLT_MAX ? y : 0.0f;
 }
@@ -376,11 +389,15 @@ BTF_FN btf_rf_pair btf_rf_ring_pair(BTF_RFV_SET s, int a, int b, float phi)
     if (b - a <= 1)
         return BTF_RF_PAIR(a, a, 0.0f);
     float ph = btf_rf_wrap360(phi);
-    /* the last view whose phi <= ph, circularly (before the first: the last) */
+    /* the last view whose phi <= ph, circularly (before the first: the
+     * last); a ring's azimuths ascend (btf_dirset's order), so the scan
+     * stops at the first one past ph */
     int j = b - 1;
-    for (int k = a; k < b; k++)
-        if (BTF_RFV_PHI(s, k) <= ph)
-            j = k;
+    for (int k = a; k < b; k++) {
+        if (!(BTF_RFV_PHI(s, k) <= ph))
+            break;
+        j = k;
+    }
     int j1 = j + 1 < b ? j + 1 : a;
     BTF_PRECISE float gap = BTF_RFV_PHI(s, j1) - BTF_RFV_PHI(s, j);
     if (!(gap > 0.0f))
@@ -469,7 +486,7 @@ BTF_FN btf_rf_rgb btf_rf_blend(BTF_RF_CTX ctx, btf_rf_views vs, BTF_RF_TEXEL t, 
                                float ly, float lz, float vx, float vy, float vz)
 {
     int fit = BTF_RF_FIT(ctx), lobes = BTF_RF_LOBES(ctx), np = BTF_RF_NPARAMS(ctx);
-    float p[BTF_RF_SLOTS_CAP];
+    BTF_RF_SCRATCH(scratch);
     BTF_PRECISE float r = 0.0f;
     BTF_PRECISE float g = 0.0f;
     BTF_PRECISE float b = 0.0f;
@@ -478,11 +495,11 @@ BTF_FN btf_rf_rgb btf_rf_blend(BTF_RF_CTX ctx, btf_rf_views vs, BTF_RF_TEXEL t, 
         int f = i == 0 ? vs.i0 : i == 1 ? vs.i1 : i == 2 ? vs.i2 : vs.i3;
         if (w == 0.0f)
             continue;
-        BTF_RF_LOAD(ctx, f, t, p);
+        BTF_RF_SRC p = BTF_RF_OPEN(ctx, f, t, scratch);
         float lum = btf_rf_lum(p, fit, lobes, lx, ly, lz, vx, vy, vz);
-        BTF_PRECISE float cr = lum * btf_rf_clamp(p[np], 0.0f, BTF_RF_CHROMA_MAX);
-        BTF_PRECISE float cg = lum * btf_rf_clamp(p[np + 1], 0.0f, BTF_RF_CHROMA_MAX);
-        BTF_PRECISE float cb = lum * btf_rf_clamp(p[np + 2], 0.0f, BTF_RF_CHROMA_MAX);
+        BTF_PRECISE float cr = lum * btf_rf_clamp(BTF_RF_P(p, np), 0.0f, BTF_RF_CHROMA_MAX);
+        BTF_PRECISE float cg = lum * btf_rf_clamp(BTF_RF_P(p, np + 1), 0.0f, BTF_RF_CHROMA_MAX);
+        BTF_PRECISE float cb = lum * btf_rf_clamp(BTF_RF_P(p, np + 2), 0.0f, BTF_RF_CHROMA_MAX);
         BTF_PRECISE float tr = w * cr;
         BTF_PRECISE float tg = w * cg;
         BTF_PRECISE float tb = w * cb;

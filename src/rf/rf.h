@@ -66,6 +66,11 @@ static inline int rf_ring_end(const btf_dirset *s, int start)
 }
 
 static inline void rf_texel_params(const btf_rf_model *m, int f, size_t t, float *p);
+static inline const float *rf_texel_open(const btf_rf_model *m, int f, size_t t, float *p)
+{
+    rf_texel_params(m, f, t, p);
+    return p;
+}
 
 #define BTF_RF_CTX const rf_ctx *
 #define BTF_RF_FIT(c) ((c)->m->fit)
@@ -77,7 +82,10 @@ static inline void rf_texel_params(const btf_rf_model *m, int f, size_t t, float
 #define BTF_RF_INV_HEIGHT(c) ((c)->inv_h)
 #define BTF_RF_TEXEL size_t
 #define BTF_RF_TEXEL_AT(c, x, y) ((size_t)(y) * (size_t)(c)->m->width + (size_t)(x))
-#define BTF_RF_LOAD(c, f, t, p) rf_texel_params((c)->m, f, t, p)
+#define BTF_RF_SRC const float *
+#define BTF_RF_P(src, s) ((src)[s])
+#define BTF_RF_SCRATCH(name) float name[BTF_RF_SLOTS_CAP]
+#define BTF_RF_OPEN(c, f, t, scratch) rf_texel_open((c)->m, f, t, scratch)
 #define BTF_RF_VIEWSET(c) (&(c)->m->views)
 #define BTF_RF_N_LIGHTS(c) ((c)->n_lights)
 #define BTF_RF_LIGHT_KIND(c, j) ((int)(c)->lights[j].kind)

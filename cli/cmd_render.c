@@ -230,13 +230,14 @@ int cmd_render(int argc, char **argv)
                  "both off", .lo = 0, .hi = 1e6},
         {.name = "--texture-size", .kind = CLI_INT, .dest = &ro.texture_size, .meta = "N|auto",
          .help = "side of the tileable subspace images in texels; auto: what the\n"
-                 "visible surface spans (at most 1024)",
+                 "visible surface spans (at most 1024). A CAR model only",
          .lo = 8, .hi = BTF_RENDER_MAX_SIDE, .word = "auto", .word_value = 0},
         {.name = "--threads", .kind = CLI_INT, .dest = &ro.threads, .meta = "N",
          .help = "threads for tracing, synthesis and shading; 0: all CPUs", .lo = 0,
          .hi = 1024},
         {.name = "--all-subspaces", .kind = CLI_FLAG, .dest = &all,
-         .help = "synthesise every subspace, not only those the frame needs"},
+         .help = "synthesise every subspace, not only those the frame needs (a CAR\n"
+                 "model only)"},
         {.name = "--backend", .kind = CLI_CHOICE, .dest = &backend, .meta = "cpu|gpu|auto",
          .help = "cpu: the CPU renderer; gpu: the two Vulkan compute passes (synthesis,\n"
                  "render) on any device, lavapipe included; auto: a real GPU if present,\n"

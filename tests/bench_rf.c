@@ -162,6 +162,7 @@ static int bench_sphere(const btf_rf_model *m, btf_gpu *gpu)
 
 int main(int argc, char **argv)
 {
+    setvbuf(stdout, NULL, _IOLBF, 0); /* figures as they come, the fits take minutes */
     int size = argc > 1 ? atoi(argv[1]) : 64;
     const char *material = argc > 2 ? argv[2] : "leather";
     int fit_runs = argc > 3 ? atoi(argv[3]) : 0;

@@ -74,8 +74,8 @@ static int bench_fit(const btf_dataset *ds, int fit, int runs, size_t car, doubl
     return 0;
 }
 
-/* A 1024^2 flat render between views (four fields blended): the CPU's and
- * the GPU's medians. */
+/* A 1024^2 flat render between views (the fields of three or four views
+ * blended; Lafortune's one): the CPU's and the GPU's medians. */
 static int bench_flat(const btf_rf_model *m, btf_gpu *gpu)
 {
     btf_error e = {0};
@@ -90,8 +90,16 @@ static int bench_flat(const btf_rf_model *m, btf_gpu *gpu)
         btf_image_free(&img);
     }
     double c = tu_median(tc, RENDER_RUNS);
-    printf("  flat 1024^2 (%dx%d distinct texels, 4 views), cpu 2 threads: median %.1f ms, "
-           "%.0f Mpixel/s", m->width, m->height, 1e3 * c, 1024.0 * 1024.0 / c / 1e6);
+    int idx[4], fields = 0;
+    double w[4];
+    btf_rf_view_weights(&m->views, v, idx, w);
+    for (int i = 0; i < 4; i++)
+        fields += w[i] != 0.0;
+    printf("  flat 1024^2 (%dx%d distinct texels, %d field%s blended), cpu 2 threads: median "
+           "%.1f ms, %.0f Mpixel/s", m->width, m->height,
+           m->fit == BTF_RF_LAFORTUNE ? 1 : fields,
+           m->fit == BTF_RF_LAFORTUNE || fields == 1 ? "" : "s", 1e3 * c,
+           1024.0 * 1024.0 / c / 1e6);
     if (!gpu) {
         printf("\n");
         return 0;

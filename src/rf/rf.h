@@ -104,7 +104,7 @@ static inline const float *rf_texel_open(const btf_rf_model *m, int f, size_t t,
 _Static_assert(BTF_RF_SLOTS_CAP == BTF_RF_MAX_SLOTS, "btf_rf_shared.h's slot count");
 _Static_assert(BTF_RF_FIT_PTM == BTF_RF_PTM && BTF_RF_FIT_LOBES == BTF_RF_LOBES &&
                BTF_RF_FIT_LAFORTUNE == BTF_RF_LAFORTUNE, "btf_rf_shared.h's fit numbers");
-_Static_assert(BTF_RF_RHO_MAX == BTF_RF_MAX_RHO, "btf_rf_shared.h's rho bound");
+_Static_assert((int)BTF_RF_RHO_MAX == (int)BTF_RF_MAX_RHO, "btf_rf_shared.h's rho bound");
 
 /* An evaluation context of m (no lights). */
 static inline rf_ctx rf_ctx_of(const btf_rf_model *m)

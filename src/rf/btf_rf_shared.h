@@ -56,11 +56,10 @@
  *
  * Keep this file in the common subset of C11 and GLSL 4.50 (the rules of
  * src/synth/btf_noise.h, but sqrt and division through BTF_RF_SQRT and
- * "/"): ASCII only, no pointers, arrays only as function parameters and
- * locals of the constant size BTF_RF_SLOTS_CAP (C only, through
- * BTF_RF_SCRATCH), no casts "(T)x" (the
- * BTF_RF_ macros below), float constants with the f suffix and at most 9
- * significant digits, no GLSL reserved words as names.
+ * "/"): ASCII only, no pointers and no arrays (the one scratch array of
+ * the C side is BTF_RF_SCRATCH's), no casts "(T)x" (the BTF_RF_ macros
+ * below), float constants with the f suffix and at most 9 significant
+ * digits, no GLSL reserved words as names.
  */
 #ifndef BTF_RF_SHARED_H
 #define BTF_RF_SHARED_H

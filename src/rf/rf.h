@@ -4,10 +4,11 @@
  * rendering of bidirectional texture functions"), the pixel-wise accuracy
  * end of btfcar's speed/accuracy trade (docs/rf.md).
  *
- * The scalar model functions and the 16-bit dequantisation are static
- * inline here, so that the fit (rf_fit.c, rf_lobes.c, rf_lafortune.c), the
- * error measure (rf_error.c) and the renderer (rf_eval.c, rf_render.c)
- * evaluate the same arithmetic without calling each other's objects.
+ * The evaluation of a stored model is src/rf/btf_rf_shared.h (one text
+ * for the CPU and the GPU pass, gpu/rf_render.comp), included here with
+ * the C accessors; the fit's error measure (rf_fit.c, rf_error.c), the
+ * evaluation calls (rf_eval.c) and the renderers (rf_render.c, rf_scene.c)
+ * all run it, without calling each other's objects.
  * Private to the library (and the tests); not installed.
  */
 #ifndef BTF_RF_H

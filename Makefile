@@ -93,10 +93,10 @@ $(BUILD)/%.o: %.cpp $(LIB_H)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c $< -o $@
 
 # Shaders: GLSL -> SPIR-V as a C array, validated by spirv-val.
-$(BUILD)/gen/%_spv.h: gpu/%.comp $(wildcard gpu/*.glsl gpu/*.h src/synth/btf_*.h src/render/btf_*.h)
+$(BUILD)/gen/%_spv.h: gpu/%.comp $(wildcard gpu/*.glsl gpu/*.h src/synth/btf_*.h src/render/btf_*.h src/rf/btf_*.h)
 	@mkdir -p $(dir $@)
-	glslangValidator -V --target-env vulkan1.1 -Igpu -Isrc/synth -Isrc/render --vn $*_spv -o $@.spv.h $<
-	glslangValidator -V --target-env vulkan1.1 -Igpu -Isrc/synth -Isrc/render -o $@.spv $<
+	glslangValidator -V --target-env vulkan1.1 -Igpu -Isrc/synth -Isrc/render -Isrc/rf --vn $*_spv -o $@.spv.h $<
+	glslangValidator -V --target-env vulkan1.1 -Igpu -Isrc/synth -Isrc/render -Isrc/rf -o $@.spv $<
 	spirv-val --target-env vulkan1.1 $@.spv
 	mv $@.spv.h $@
 

@@ -17,10 +17,11 @@ static const char ABOUT[] =
     "the range map's normals (docs/render.md). Only the subspaces the frame\n"
     "needs are synthesised, tileable, in memory. IMAGE: .png (8-bit sRGB) or\n"
     ".exr (linear float).\n"
-    "A reflectance-field model (analyse --family rf, docs/rf.md) renders on the\n"
-    "CPU, flat or a scene: per pixel the four closest measured views' fields at\n"
-    "the exact light, bilinear in theta and phi; its texels repeat across the\n"
-    "surface.\n";
+    "A reflectance-field model (analyse --family rf, docs/rf.md) renders flat or\n"
+    "a scene, on the CPU or the GPU as --backend chooses: per pixel the four\n"
+    "closest measured views' fields at the exact light, bilinear in theta and\n"
+    "phi; its texels repeat across the surface (--texture-size, --all-subspaces,\n"
+    "--seed and --relief do not apply; the first two are errors).\n";
 
 /* --beside DATASET: the measured image of the (view, light) pair, read at
  * the measured directions nearest those asked for (within 0.5 degree). */
@@ -77,12 +78,65 @@ static int is_rf_model(const char *path)
     return btf_rf_sniff(head, n);
 }
 
+/* The reflectance-field render on the chosen backend: flat, or a scene. */
+static btf_status rf_render_on(btf_gpu *gpu, const btf_rf_model *m, const btf_scene *scene,
+                               btf_dir view, btf_dir light, int width, int height, int threads,
+                               btf_image *img, btf_render_info *info, btf_error *err)
+{
+    if (gpu && scene)
+        return btf_gpu_rf_render_scene(gpu, m, scene, width, height, threads, img, info, err);
+    if (gpu)
+        return btf_gpu_rf_render_flat(gpu, m, view, light, width, height, img, info, err);
+    if (scene)
+        return btf_rf_render_scene(m, scene, width, height, threads, img, info, err);
+    double t = cli_now();
+    btf_status rc = btf_rf_render_flat(m, view, light, width, height, threads, img, err);
+    info->shade_s = cli_now() - t;
+    return rc;
+}
+
+/* What an RF render prints: the views blended (flat) and the passes. */
+static void rf_report_times(const btf_rf_model *m, int flat, btf_dir view, const char *gpu_name,
+                            const btf_render_info *info, double t_read, double t_write,
+                            double t_start)
+{
+    if (flat && m->fit == BTF_RF_LAFORTUNE) {
+        printf("reflectance-field model (lafortune): evaluated at the view itself\n");
+    } else if (flat) {
+        int idx[4];
+        double w[4];
+        btf_rf_view_weights(&m->views, view, idx, w);
+        printf("reflectance-field model (%s): views", btf_rf_fit_name(m->fit));
+        for (int i = 0; i < 4; i++)
+            if (w[i] != 0.0)
+                printf(" %d (%g, %g) x %.4f", idx[i], m->views.dirs[idx[i]].theta,
+                       m->views.dirs[idx[i]].phi, w[i]);
+        printf("\n");
+    } else {
+        printf("reflectance-field model (%s): per pixel the four closest measured views at "
+               "the exact light\n", btf_rf_fit_name(m->fit));
+    }
+    if (gpu_name)
+        printf("backend gpu (%s): model read %.3f s, ", gpu_name, t_read);
+    else
+        printf("backend cpu: model read %.3f s, ", t_read);
+    if (!flat)
+        printf("trace %.3f s, ", info->trace_s);
+    if (gpu_name)
+        printf("upload %.3f s, render pass %.3f s, ", info->synth_s, info->shade_s);
+    else
+        printf("shade %.3f s, ", info->shade_s);
+    printf("write %.3f s; total %.3f s\n", t_write, cli_now() - t_start);
+}
+
 /* The render of a reflectance-field model (Meseth et al. 2003, section
- * 5.4: the four closest measured views at the exact light), on the CPU:
- * flat, with --beside as for a CAR model, or a scene (scene_path). */
+ * 5.4: the four closest measured views at the exact light), flat (with
+ * --beside as for a CAR model) or a scene (scene_path), on the CPU or on
+ * a Vulkan device as the CAR model's render chooses it (--backend,
+ * --device, BTF_VK_DEVICE; auto: a real GPU only). */
 static int render_rf(cli_ctx *c, const char *model, const char *scene_path, btf_dir view,
                      btf_dir light, const char *beside, const char *out_path, int width,
-                     int height, int threads, double t_start)
+                     int height, int threads, const char *backend, int device, double t_start)
 {
     btf_error err = {0};
     btf_scene scene;
@@ -98,17 +152,26 @@ static int render_rf(cli_ctx *c, const char *model, const char *scene_path, btf_
     t_read = cli_now() - t_read;
     btf_image img = {0}, measured = {0};
     btf_status rc = beside ? read_measured(beside, view, light, &measured, &err) : BTF_OK;
+    /* auto and a sampled model (section 6): the CPU, the one path with its
+     * coordinate map; --backend gpu says why it cannot */
+    int cpu_only = m.map && !strcmp(backend, "auto") && device < 0;
+    btf_gpu *gpu = rc == BTF_OK && !cpu_only ? cli_open_gpu(backend, device, &err) : NULL;
+    if (rc == BTF_OK && !gpu && (!strcmp(backend, "gpu") || device >= 0))
+        rc = err.code ? err.code : BTF_E_UNSUPPORTED;
+    else if (rc == BTF_OK && !gpu)
+        err = (btf_error){0}; /* auto: the CPU runs, the GPU's reason is spent */
+    char devname[300];
+    snprintf(devname, sizeof devname, "%s", gpu ? btf_gpu_device_name(gpu) : "cpu");
+    int used_gpu = gpu != NULL;
     btf_render_info info = {0};
-    double t_shade = cli_now();
-    if (rc == BTF_OK && scene_path)
-        rc = btf_rf_render_scene(&m, &scene, width, height, threads, &img, &info, &err);
-    else if (rc == BTF_OK)
-        rc = btf_rf_render_flat(&m, view, light, width, height, threads, &img, &err);
-    t_shade = cli_now() - t_shade;
+    if (rc == BTF_OK)
+        rc = rf_render_on(gpu, &m, scene_path ? &scene : NULL, view, light, width, height,
+                          threads, &img, &info, &err);
+    if (rc == BTF_OK && gpu && btf_gpu_validation_errors(gpu))
+        rc = cli_set_error(&err, BTF_E_UNSUPPORTED, "Vulkan validation: %s",
+                           btf_gpu_first_validation_message(gpu));
+    btf_gpu_close(gpu);
     btf_scene_free(&scene);
-    int idx[4];
-    double w[4];
-    btf_rf_view_weights(&m.views, view, idx, w);
     if (rc == BTF_OK && beside) {
         btf_image both = {0};
         rc = side_by_side(&measured, &img, &both, &err);
@@ -120,34 +183,21 @@ static int render_rf(cli_ctx *c, const char *model, const char *scene_path, btf_
     if (rc == BTF_OK)
         rc = cli_write_image(out_path, &img, &err);
     t_write = cli_now() - t_write;
+    if (rc == BTF_OK && !c->quiet) {
+        rf_report_times(&m, !scene_path, view, used_gpu ? devname : NULL, &info, t_read, t_write,
+                        t_start);
+        printf("rendered %dx%d into %s\n", img.width, img.height, out_path);
+    }
     btf_image_free(&img);
+    btf_rf_model_free(&m);
     if (rc) {
-        btf_rf_model_free(&m);
+        if (!strchr(err.msg, ':')) { /* name the model when the library could not */
+            char why[sizeof err.msg];
+            snprintf(why, sizeof why, "%s", err.msg);
+            cli_set_error(&err, rc, "%s: %s", model, why);
+        }
         return cli_lib_error(c, &err);
     }
-    if (!c->quiet && scene_path) {
-        printf("reflectance-field model (%s): per pixel the four closest measured views at "
-               "the exact light\n", btf_rf_fit_name(m.fit));
-        printf("backend cpu: model read %.3f s, trace %.3f s, shade %.3f s, write %.3f s; "
-               "total %.3f s\n", t_read, info.trace_s, info.shade_s, t_write,
-               cli_now() - t_start);
-        printf("rendered %dx%d into %s\n", width, height, out_path);
-    } else if (!c->quiet) {
-        if (m.fit == BTF_RF_LAFORTUNE)
-            printf("reflectance-field model (lafortune): evaluated at the view itself\n");
-        else {
-            printf("reflectance-field model (%s): views", btf_rf_fit_name(m.fit));
-            for (int i = 0; i < 4; i++)
-                if (w[i] != 0.0)
-                    printf(" %d (%g, %g) x %.4f", idx[i], m.views.dirs[idx[i]].theta,
-                           m.views.dirs[idx[i]].phi, w[i]);
-            printf("\n");
-        }
-        printf("backend cpu: model read %.3f s, shade %.3f s, write %.3f s; total %.3f s\n",
-               t_read, t_shade, t_write, cli_now() - t_start);
-        printf("rendered %dx%d into %s\n", width, height, out_path);
-    }
-    btf_rf_model_free(&m);
     return 0;
 }
 
@@ -183,13 +233,14 @@ int cmd_render(int argc, char **argv)
                  "both off", .lo = 0, .hi = 1e6},
         {.name = "--texture-size", .kind = CLI_INT, .dest = &ro.texture_size, .meta = "N|auto",
          .help = "side of the tileable subspace images in texels; auto: what the\n"
-                 "visible surface spans (at most 1024)",
+                 "visible surface spans (at most 1024). A CAR model only",
          .lo = 8, .hi = BTF_RENDER_MAX_SIDE, .word = "auto", .word_value = 0},
         {.name = "--threads", .kind = CLI_INT, .dest = &ro.threads, .meta = "N",
          .help = "threads for tracing, synthesis and shading; 0: all CPUs", .lo = 0,
          .hi = 1024},
         {.name = "--all-subspaces", .kind = CLI_FLAG, .dest = &all,
-         .help = "synthesise every subspace, not only those the frame needs"},
+         .help = "synthesise every subspace, not only those the frame needs (a CAR\n"
+                 "model only)"},
         {.name = "--backend", .kind = CLI_CHOICE, .dest = &backend, .meta = "cpu|gpu|auto",
          .help = "cpu: the CPU renderer; gpu: the two Vulkan compute passes (synthesis,\n"
                  "render) on any device, lavapipe included; auto: a real GPU if present,\n"
@@ -218,11 +269,14 @@ int cmd_render(int argc, char **argv)
     if (cli_check_output(&c, out_path, BTF_OUTPUT_FILE))
         return 1;
     if (is_rf_model(model)) {
-        if (backend == 1 || device >= 0)
-            return cli_usage_error(&c, "%s is a reflectance-field model: it renders on the "
-                                   "CPU only", model);
-        return render_rf(&c, model, scene_path, view.dir, light.dir, beside, out_path, size[0], size[1],
-                         ro.threads, t_start);
+        /* the CAR model's texture and synthesis options have nothing to act
+         * on: an RF model keeps its texels, which repeat across the surface */
+        if (ro.texture_size || all)
+            return cli_usage_error(&c, "%s is a reflectance-field model: %s applies to the CAR "
+                                   "model's synthesised textures only", model,
+                                   ro.texture_size ? "--texture-size" : "--all-subspaces");
+        return render_rf(&c, model, scene_path, view.dir, light.dir, beside, out_path, size[0],
+                         size[1], ro.threads, backends[backend], device, t_start);
     }
     ro.width = size[0];
     ro.height = size[1];

@@ -21,6 +21,7 @@
 #include "render/shade.h"
 #include "core/core.h"
 
+#include "render_gpu.h"
 #include "render_layout.h"
 #include "synth_gpu.h"
 #include "vk.h"
@@ -157,8 +158,9 @@ static btf_status build_params(const btf_model *m, const btf_render_plan *p,
     return rc;
 }
 
-/* Rows [y0, y1) of the G-buffer, packed BTF_RP_GB floats per pixel. */
-static void pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out)
+/* Rows [y0, y1) of the G-buffer, packed BTF_RP_GB floats per pixel (also
+ * the reflectance-field pass's input, gpu/render_gpu.h). */
+void btf_render_pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out)
 {
     for (size_t p = (size_t)y0 * g->width, q = 0; p < (size_t)y1 * g->width; p++, q++) {
         float *o = out + q * BTF_RP_GB;
@@ -225,7 +227,7 @@ static btf_status run_band(pass *ps, const btf_gbuffer *g, int y0, int y1, float
                            btf_image *out, btf_error *err)
 {
     size_t npix = (size_t)(y1 - y0) * g->width;
-    pack_gbuffer(g, y0, y1, scratch);
+    btf_render_pack_gbuffer(g, y0, y1, scratch);
     uint32_t groups = (uint32_t)((npix + 63) / 64);
     uint32_t gx = groups < 65535 ? groups : 65535, gy = (groups + gx - 1) / gx;
     ps->pr.ints[BTF_RP_NPIX] = (int32_t)npix;

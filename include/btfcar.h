@@ -1964,8 +1964,9 @@ btf_status btf_rf_model_bytes(const btf_rf_model *m, btf_rf_bytes *out, btf_erro
 /* The four closest measured views of a direction (paper section 5.4): the
  * two measured theta rings around theta (one at the pole or beyond the
  * last ring), on each the two measured azimuths around phi, bilinear weights
- * in theta and phi that sum to 1. idx[i] and w[i], i < 4 (an index may
- * repeat, e.g. at the pole; unused weights are 0). */
+ * in theta and phi that sum to 1 (computed in float, as the renderers
+ * blend: to 1e-6). idx[i] and w[i], i < 4 (an index may repeat, e.g. at
+ * the pole; unused weights are 0). */
 void btf_rf_view_weights(const btf_dirset *views, btf_dir view, int idx[4], double w[4]);
 
 /* Linear RGB of texel (x, y) (wrapped into the surface, btf_rf_surface_size;
@@ -1999,6 +2000,24 @@ btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light
 btf_status btf_rf_render_scene(const btf_rf_model *m, const btf_scene *s, int width,
                                int height, int threads, btf_image *out, btf_render_info *info,
                                btf_error *err);
+
+/* The same two renders on g's Vulkan device (gpu/rf_render_gpu.c,
+ * gpu/rf_render.comp; docs/rf.md, "Rendering on the GPU"), with the
+ * formulas of the CPU renders (one text, src/rf/btf_rf_shared.h): on
+ * lavapipe the pixels are the CPU's bit for bit, on other devices within
+ * the rounding of sqrt and division. The flat render uploads only the (at
+ * most four) fields of the view and shades each distinct texel once; the
+ * scene render traces on the host (threads: 0 all CPUs) and uploads every
+ * field. A model whose codes exceed 4 of the device's largest storage
+ * buffers is BTF_E_UNSUPPORTED. info (NULL: not wanted): trace_s (scene),
+ * synth_s the upload of the model's fields and parameters, shade_s the
+ * render pass with its download. */
+btf_status btf_gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir view,
+                                  btf_dir light, int width, int height, btf_image *out,
+                                  btf_render_info *info, btf_error *err);
+btf_status btf_gpu_rf_render_scene(btf_gpu *g, const btf_rf_model *m, const btf_scene *s,
+                                   int width, int height, int threads, btf_image *out,
+                                   btf_render_info *info, btf_error *err);
 
 /* Table 1 of the paper: the mean |Y data - Y model| over every texel and
  * (view, light) image of ds, the model evaluated at the measured directions;

@@ -39,6 +39,12 @@ for b in "$@"; do
                 rm -f "$BTF400" "$TMP/ubo400.btfcar"
             fi
         fi ;;
+    *bench_rf)
+        # the reflectance-field family on an 81 x 81 x 128^2 material: each
+        # fit with 2 threads (PTM timed 3 times, the two Levenberg-Marquardt
+        # fits once: several minutes each), bytes against the CAR model,
+        # flat and sphere renders on the CPU and on lavapipe (docs/rf.md)
+        "$b" "${BENCH_RF_SIZE:-128}" leather || echo "bench: bench_rf exited with $?" ;;
     *bench_gpu)
         for n in 1 2; do
             LP_NUM_THREADS=$n "$b" || echo "bench: $(basename "$b") exited with $?"
@@ -142,6 +148,9 @@ timed "analyse --family rf --fit ptm" "$BTFCAR" analyse -q "$G" --family rf --fi
 rfbytes=$(stat -c %s "$TMP/rf.btfcar")
 echo "   model $rfbytes bytes, $((rfbytes / 65536)) bytes per texel; $((rfbytes / bytes)) x the CAR model's $bytes bytes"
 timed "render --view 37.5,100 --light 45,20 (1024^2, 4 views blended)" "$BTFCAR" render -q "$TMP/rf.btfcar" --view 37.5,100 --light 45,20 --size 1024x1024 --threads 2 -o "$TMP/rf.png"
+timed "the same, --backend gpu (lavapipe)" "$BTFCAR" render -q "$TMP/rf.btfcar" --view 37.5,100 --light 45,20 --size 1024x1024 --threads 2 --backend gpu -o "$TMP/rf.png"
+timed "render --scene (the one-light sphere, 1024^2)" "$BTFCAR" render -q "$TMP/rf.btfcar" --scene "$(dirname "$0")/../examples/sphere-one-light.json" --size 1024x1024 --threads 2 -o "$TMP/rf.png"
+timed "the same, --backend gpu (lavapipe)" "$BTFCAR" render -q "$TMP/rf.btfcar" --scene "$(dirname "$0")/../examples/sphere-one-light.json" --size 1024x1024 --threads 2 --backend gpu -o "$TMP/rf.png"
 rm -f "$TMP/rf.btfcar"
 
 echo "== render: a 1024^2 sphere of the analysed 256^2 material under one light (examples/sphere-one-light.json)"

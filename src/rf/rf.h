@@ -4,16 +4,18 @@
  * rendering of bidirectional texture functions"), the pixel-wise accuracy
  * end of btfcar's speed/accuracy trade (docs/rf.md).
  *
- * The scalar model functions and the 16-bit dequantisation are static
- * inline here, so that the fit (rf_fit.c, rf_lobes.c, rf_lafortune.c), the
- * error measure (rf_error.c) and the renderer (rf_eval.c, rf_render.c)
- * evaluate the same arithmetic without calling each other's objects.
+ * The evaluation of a stored model is src/rf/btf_rf_shared.h (one text
+ * for the CPU and the GPU pass, gpu/rf_render.comp), included here with
+ * the C accessors; the fit's error measure (rf_fit.c, rf_error.c), the
+ * evaluation calls (rf_eval.c) and the renderers (rf_render.c, rf_scene.c)
+ * all run it, without calling each other's objects.
  * Private to the library (and the tests); not installed.
  */
 #ifndef BTF_RF_H
 #define BTF_RF_H
 
 #include "btfcar.h"
+#include "rf/rf_map.h"
 #include "core/core.h"
 
 #include <math.h>
@@ -43,50 +45,93 @@ static inline double rf_clampd(double v, double lo, double hi)
     return v < lo ? lo : v > hi ? hi : v;
 }
 
-/* One lobe rho <d, l>^n, d = (x, y, 1) / |(x, y, 1)|, l a unit vector; the
- * parameters are clamped to their box first, so any stored value gives a
- * finite result in [0, rho]. p = (rho, x, y, log2 n). */
-static inline double rf_lobe_eval(const float *p, const double l[3])
+/* ------------------------------------------------------------------
+ * The evaluation of a stored model: src/rf/btf_rf_shared.h, the one text
+ * the CPU renderer and the GPU pass (gpu/rf_render.comp) share. Its C
+ * accessors read a model through an rf_ctx.
+ */
+typedef struct rf_ctx {
+    const btf_rf_model *m;
+    const btf_light *lights; /* scene render: the scene's lights */
+    int n_lights;
+    float inv_w, inv_h;      /* 1.0f / the surface's width, height (rf_map.h) */
+} rf_ctx;
+
+/* The ring (views of equal theta, within 1e-6 degree) starting at view
+ * index `start` of a direction set: its end (exclusive). */
+static inline int rf_ring_end(const btf_dirset *s, int start)
 {
-    double rho = rf_clampd(p[0], 0.0, BTF_RF_MAX_RHO);
-    double x = rf_clampd(p[1], -RF_XY_MAX, RF_XY_MAX), y = rf_clampd(p[2], -RF_XY_MAX, RF_XY_MAX);
-    double n = exp2(rf_clampd(p[3], RF_LN_NMIN / M_LN2, RF_LN_NMAX / M_LN2));
-    double c = (x * l[0] + y * l[1] + l[2]) / sqrt(x * x + y * y + 1.0);
-    return c > 0.0 ? rho * pow(c, n) : 0.0;
+    int e = start + 1;
+    while (e < s->count && fabs(s->dirs[e].theta - s->dirs[start].theta) < 1e-6)
+        e++;
+    return e;
 }
 
-/* One Lafortune lobe rho (cx lx vx + cy ly vy + cz lz vz)^n with
- * |c.| <= 1, so the base is at most 1. p = (rho, cx, cy, cz, log2 n). */
-static inline double rf_lafortune_lobe(const float *p, const double l[3], const double v[3])
+static inline void rf_texel_params(const btf_rf_model *m, int f, size_t t, float *p);
+static inline const float *rf_texel_open(const btf_rf_model *m, int f, size_t t, float *p)
 {
-    double rho = rf_clampd(p[0], 0.0, BTF_RF_MAX_RHO);
-    double s = rf_clampd(p[1], -1, 1) * l[0] * v[0] + rf_clampd(p[2], -1, 1) * l[1] * v[1] +
-               rf_clampd(p[3], -1, 1) * l[2] * v[2];
-    double n = exp2(rf_clampd(p[4], RF_LN_NMIN / M_LN2, RF_LN_NMAX / M_LN2));
-    return s > 0.0 ? rho * pow(s, n) : 0.0;
+    rf_texel_params(m, f, t, p);
+    return p;
+}
+
+#define BTF_RF_CTX const rf_ctx *
+#define BTF_RF_FIT(c) ((c)->m->fit)
+#define BTF_RF_LOBES(c) ((c)->m->lobes)
+#define BTF_RF_NPARAMS(c) ((c)->m->params)
+/* the surface's texels: a sampled model's (paper section 6) through its
+ * coordinate map (rf_map.h), the model's own otherwise; the GPU pass has
+ * no map and refuses sampled models */
+#define BTF_RF_WIDTH(c) rf_surface_w((c)->m)
+#define BTF_RF_HEIGHT(c) rf_surface_h((c)->m)
+#define BTF_RF_INV_WIDTH(c) ((c)->inv_w)
+#define BTF_RF_INV_HEIGHT(c) ((c)->inv_h)
+#define BTF_RF_TEXEL size_t
+#define BTF_RF_TEXEL_AT(c, x, y) rf_surface_texel((c)->m, x, y)
+#define BTF_RF_SRC const float *
+#define BTF_RF_P(src, s) ((src)[s])
+#define BTF_RF_SCRATCH(name) float name[BTF_RF_SLOTS_CAP]
+#define BTF_RF_OPEN(c, f, t, scratch) rf_texel_open((c)->m, f, t, scratch)
+#define BTF_RF_VIEWSET(c) (&(c)->m->views)
+#define BTF_RF_N_LIGHTS(c) ((c)->n_lights)
+#define BTF_RF_LIGHT_KIND(c, j) ((int)(c)->lights[j].kind)
+#define BTF_RF_LIGHT_VEC(c, j, k)                                                          \
+    ((c)->lights[j].kind == BTF_LIGHT_POINT ? (float)(c)->lights[j].position[k]            \
+                                            : (float)(c)->lights[j].direction[k])
+#define BTF_RF_LIGHT_RGB(c, j, k) ((c)->lights[j].rgb[k])
+#define BTF_RFV_SET const btf_dirset *
+#define BTF_RFV_COUNT(s) ((s)->count)
+#define BTF_RFV_THETA(s, i) ((float)(s)->dirs[i].theta)
+#define BTF_RFV_PHI(s, i) ((float)(s)->dirs[i].phi)
+#define BTF_RFV_RING_END(s, i) rf_ring_end(s, i)
+
+#include "rf/btf_rf_shared.h"
+
+_Static_assert(BTF_RF_SLOTS_CAP == BTF_RF_MAX_SLOTS, "btf_rf_shared.h's slot count");
+_Static_assert(BTF_RF_FIT_PTM == BTF_RF_PTM && BTF_RF_FIT_LOBES == BTF_RF_LOBES &&
+               BTF_RF_FIT_LAFORTUNE == BTF_RF_LAFORTUNE, "btf_rf_shared.h's fit numbers");
+_Static_assert((int)BTF_RF_RHO_MAX == (int)BTF_RF_MAX_RHO, "btf_rf_shared.h's rho bound");
+
+/* An evaluation context of m (no lights). */
+static inline rf_ctx rf_ctx_of(const btf_rf_model *m)
+{
+    rf_ctx c = {m, NULL, 0, 1.0f / (float)rf_surface_w(m), 1.0f / (float)rf_surface_h(m)};
+    return c;
+}
+
+/* One lobe with parameters p = (rho, x, y, log2 n) at the unit light l. */
+static inline double rf_lobe_eval(const float *p, const double l[3])
+{
+    return btf_rf_lobe(p[0], p[1], p[2], p[3], (float)l[0], (float)l[1], (float)l[2]);
 }
 
 /* The luminance of one texel's field with parameters p (fit's slot order,
- * docs/rf.md): light l, view v (lafortune only). Never negative: a PTM
- * below zero (past the measured lights) gives 0. */
+ * docs/rf.md): light l, view v (lafortune only; may be NULL otherwise),
+ * btf_rf_lum in float. */
 static inline double rf_lum_eval(int fit, int lobes, const float *p, const double l[3],
                                  const double v[3])
 {
-    double y = 0.0;
-    if (fit == BTF_RF_PTM) {
-        double b[6];
-        rf_ptm_basis(l[0], l[1], b);
-        for (int i = 0; i < 6; i++)
-            y += (double)p[i] * b[i];
-    } else if (fit == BTF_RF_LOBES) {
-        for (int i = 0; i < lobes; i++)
-            y += rf_lobe_eval(p + 4 * i, l);
-    } else {
-        y = rf_clampd(p[0], 0.0, BTF_RF_MAX_RHO) * (l[2] > 0.0 ? l[2] : 0.0);
-        for (int i = 0; i < lobes; i++)
-            y += rf_lafortune_lobe(p + 1 + 5 * i, l, v);
-    }
-    return isfinite(y) && y > 0.0 ? y : 0.0;
+    float vx = v ? (float)v[0] : 0.0f, vy = v ? (float)v[1] : 0.0f, vz = v ? (float)v[2] : 1.0f;
+    return btf_rf_lum(p, fit, lobes, (float)l[0], (float)l[1], (float)l[2], vx, vy, vz);
 }
 
 /* 16-bit codes with a per-field, per-slot range [lo, hi]. */
@@ -100,7 +145,7 @@ static inline uint16_t rf_quantise(float v, float lo, float hi)
 }
 static inline float rf_dequantise(uint16_t q, float lo, float hi)
 {
-    return hi > lo ? lo + (float)q * ((hi - lo) / RF_QMAX) : lo;
+    return btf_rf_dequant(q, lo, btf_rf_scale(lo, hi));
 }
 
 /* The dequantised slots of texel t in field f into p (m->slots floats). */
@@ -113,54 +158,44 @@ static inline void rf_texel_params(const btf_rf_model *m, int f, size_t t, float
 }
 
 /* The fields a render at one view blends (paper section 5.4): the four
- * closest measured views with their weights (btf_rf_view_weights; zero
- * weights dropped) and the view vector each is evaluated with (its own
- * measured direction); a Lafortune model's one field at the view itself
- * (view: its direction, vvec: its unit vector). Shared by the flat render
- * (rf_render.c) and the scene render (rf_scene.c), so that both blend with
- * the same arithmetic. */
-typedef struct rf_views {
-    int n;
-    int field[4];
-    double w[4];
-    double v[4][3];
-} rf_views;
+ * closest measured views with their weights (btf_rf_four_views of the
+ * shared header), or a Lafortune model's one field; and the unit view
+ * vector (Lafortune's lobes take it). Shared by the flat render
+ * (rf_render.c) and the GPU pass's host code, so that both blend the same
+ * fields with the same weights. */
+typedef struct rf_look {
+    btf_rf_views vs;
+    float v[3];
+} rf_look;
 
-static inline void rf_views_at(const btf_rf_model *m, btf_dir view, const double vvec[3],
-                               rf_views *o)
+static inline rf_look rf_look_at(const btf_rf_model *m, btf_dir view)
 {
-    o->n = 0;
-    if (m->fit == BTF_RF_LAFORTUNE) {
-        o->n = 1, o->field[0] = 0, o->w[0] = 1.0;
-        for (int k = 0; k < 3; k++)
-            o->v[0][k] = vvec[k];
-        return;
-    }
-    int idx[4];
-    double w[4];
-    btf_rf_view_weights(&m->views, view, idx, w);
-    for (int i = 0; i < 4; i++)
-        if (w[i] != 0.0) {
-            o->field[o->n] = idx[i], o->w[o->n] = w[i];
-            btf_dir_to_vec(m->views.dirs[idx[i]], o->v[o->n]);
-            o->n++;
-        }
+    rf_look o;
+    double vv[3];
+    btf_dir_to_vec(view, vv);
+    for (int k = 0; k < 3; k++)
+        o.v[k] = (float)vv[k];
+    if (m->fit == BTF_RF_LAFORTUNE)
+        o.vs = btf_rf_make_views(0, 0, 0, 0, 1.0f, 0.0f, 0.0f, 0.0f);
+    else
+        o.vs = btf_rf_four_views(&m->views, (float)view.theta, (float)view.phi);
+    return o;
 }
 
-/* Linear RGB of texel t under unit light l (tangent frame): the blend of
- * the fields of vs, each field's luminance times its chromaticity. */
-static inline void rf_blend(const btf_rf_model *m, const rf_views *vs, size_t t,
-                            const double l[3], double sum[3])
-{
-    float p[BTF_RF_MAX_SLOTS];
-    sum[0] = sum[1] = sum[2] = 0.0;
-    for (int i = 0; i < vs->n; i++) {
-        rf_texel_params(m, vs->field[i], t, p);
-        double lum = rf_lum_eval(m->fit, m->lobes, p, l, vs->v[i]);
-        for (int k = 0; k < 3; k++)
-            sum[k] += vs->w[i] * (float)(lum * p[m->params + k]);
-    }
-}
+/* rf_render.c: rows [0, height) of out (any size) from the tile of the
+ * first min(width, tw) x min(height, th) texels (tw x th the model's),
+ * which holds tile_w floats x 3 per row: pixel (x, y) is texel (x mod tw,
+ * y mod th). */
+void rf_tile_expand(const float *tile, int tile_w, int tw, int th, btf_image *out);
+/* rf_render.c: the checks of a flat render (one-line BTF_E_ARG). */
+btf_status rf_flat_check(const btf_rf_model *m, btf_dir view, btf_dir light, int width,
+                         int height, int threads, btf_error *err);
+
+/* rf_scene.c: the checks of a scene render with m and the G-buffer traced
+ * (width, height 0: 512, set here); g is zeroed first, to free in any case
+ * (btf_gbuffer_free). Shared by the CPU and the GPU scene renders. */
+btf_status rf_scene_trace(const btf_rf_model *m, const btf_scene *s, int *width, int *height,
+                          int threads, btf_gbuffer *g, btf_error *err);
 
 /* rf_lm.c: a bounded Levenberg-Marquardt least-squares solver for a few
  * parameters (at most RF_LM_MAX). fn adds up the squared residuals at p

@@ -463,6 +463,10 @@ static btf_status read_dirset(const span *s, const char *what, const char *name,
     if (len > 31 || s->n < 1 + len + 2)
         return failn(err, BTF_E_FORMAT, name, "%s: name of %zu bytes in a section of %zu "
                      "(expected at most 31)", what, len, s->n);
+    for (size_t i = 0; i < len; i++) /* a NUL inside would shorten the name written back */
+        if (s->p[1 + i] < 0x20 || s->p[1 + i] > 0x7e)
+            return failn(err, BTF_E_FORMAT, name, "%s: name byte %zu is 0x%02x (expected "
+                         "printable ASCII)", what, i, s->p[1 + i]);
     memcpy(d->name, s->p + 1, len);
     d->name[len] = 0;
     size_t count = get_u16(s->p + 1 + len);

@@ -152,10 +152,7 @@ static int render_rf(cli_ctx *c, const char *model, const char *scene_path, btf_
     t_read = cli_now() - t_read;
     btf_image img = {0}, measured = {0};
     btf_status rc = beside ? read_measured(beside, view, light, &measured, &err) : BTF_OK;
-    /* auto and a sampled model (section 6): the CPU, the one path with its
-     * coordinate map; --backend gpu says why it cannot */
-    int cpu_only = m.map && !strcmp(backend, "auto") && device < 0;
-    btf_gpu *gpu = rc == BTF_OK && !cpu_only ? cli_open_gpu(backend, device, &err) : NULL;
+    btf_gpu *gpu = rc == BTF_OK ? cli_open_gpu(backend, device, &err) : NULL;
     if (rc == BTF_OK && !gpu && (!strcmp(backend, "gpu") || device >= 0))
         rc = err.code ? err.code : BTF_E_UNSUPPORTED;
     else if (rc == BTF_OK && !gpu)

@@ -11,7 +11,9 @@
 //    btf_rf_shade_pixel.
 // Every formula is src/rf/btf_rf_shared.h, the very text the CPU renderer
 // runs. The model's 16-bit codes come two to a word, field by field, in up
-// to RFP_CODE_BUFS buffers.
+// to RFP_CODE_BUFS buffers; a sampled model's (paper section 6) surface
+// texels are looked up through its coordinate map, which comes in the int
+// buffer (rf_surface_texel below, src/rf/rf_map.h's own lookup).
 #version 450
 #extension GL_GOOGLE_include_directive : require
 
@@ -39,7 +41,7 @@ layout(std430, set = 0, binding = 7) readonly buffer Codes3 { uint c3[]; };
 #define BTF_RF_INV_WIDTH(c) pf[RFP_INV_W]
 #define BTF_RF_INV_HEIGHT(c) pf[RFP_INV_H]
 #define BTF_RF_TEXEL uint
-#define BTF_RF_TEXEL_AT(c, x, y) (uint(y) * uint(pi[RFP_WIDTH]) + uint(x))
+#define BTF_RF_TEXEL_AT(c, x, y) rf_surface_texel(int(x), int(y))
 #define BTF_RF_SRC uvec4
 #define BTF_RF_P(src, s) btf_rf_param(src, s)
 #define BTF_RF_SCRATCH(name) int name = 0
@@ -54,6 +56,21 @@ layout(std430, set = 0, binding = 7) readonly buffer Codes3 { uint c3[]; };
 #define BTF_RFV_THETA(s, i) pf[pi[RFP_THETA] + (i)]
 #define BTF_RFV_PHI(s, i) pf[pi[RFP_PHI] + (i)]
 #define BTF_RFV_RING_END(s, i) pi[pi[RFP_RING_END] + (i)]
+
+// The sample texel (index into the codes) that surface texel (x, y)
+// shows: src/rf/rf_map.h's rf_surface_texel, the map entry's u and v
+// clamped into the sample; a model without a map is its own surface.
+uint rf_surface_texel(int x, int y)
+{
+    if (pi[RFP_MAP] < 0)
+        return uint(y) * uint(pi[RFP_WIDTH]) + uint(x);
+    uint e = uint(pi[uint(pi[RFP_MAP]) + uint(y) * uint(pi[RFP_WIDTH]) + uint(x)]);
+    uint sw = uint(pi[RFP_SAMPLE_W]), sh = uint(pi[RFP_SAMPLE_H]);
+    uint u = e & 0xFFFFu, v = e >> 16u;
+    u = u < sw ? u : sw - 1u;
+    v = v < sh ? v : sh - 1u;
+    return v * sw + u;
+}
 
 #include "btf_rf_shared.h"
 

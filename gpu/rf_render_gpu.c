@@ -5,8 +5,12 @@
  * itself runs in a fragment program; docs/rf.md, "Rendering on the GPU").
  * The host uploads the model's 16-bit codes (two to a 32-bit word, field
  * after field) with each field's and slot's lo and scale, the measured
- * views' angles and rings, and the lights; gpu/rf_render.comp evaluates
- * with src/rf/btf_rf_shared.h, the very text the CPU renderer runs.
+ * views' angles and rings, a sampled model's coordinate map (paper section
+ * 6, src/rf/rf_map.h: one word per surface texel, u | v << 16, in the int
+ * buffer; the shader's BTF_RF_TEXEL_AT looks each texel up through it as
+ * rf_surface_texel does, clamp included) and the lights;
+ * gpu/rf_render.comp evaluates with src/rf/btf_rf_shared.h, the very text
+ * the CPU renderer runs.
  *
  *  - flat (view, light): the fields and weights of the view are the same
  *    for every pixel, so the host computes them (rf_look_at, the CPU's own
@@ -70,13 +74,11 @@ static btf_status check_model(const btf_rf_model *m, btf_error *err)
 {
     if (!m || !m->codes || !m->lo || !m->hi)
         return btf_fail(err, BTF_E_ARG, "GPU RF render: no model");
-    /* the shader reads the codes as the surface; a sampled model's surface
-     * is its coordinate map into them (rf_map.h), which it does not hold */
-    if (m->map)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU RF render: a sampled model (a %dx%d sample "
-                        "and a %dx%d coordinate map, paper section 6) renders on the CPU only "
-                        "(--backend cpu)", m->width, m->height, m->surface_width,
-                        m->surface_height);
+    /* a sampled model's surface is its coordinate map into the codes
+     * (rf_map.h), uploaded with the parameters */
+    if (m->map && (m->surface_width < 1 || m->surface_height < 1))
+        return btf_fail(err, BTF_E_ARG, "GPU RF render: a sampled model with a %dx%d surface "
+                        "(expected sides >= 1)", m->surface_width, m->surface_height);
     int fields = m->fit == BTF_RF_LAFORTUNE ? 1 : m->views.count;
     if (m->fit < BTF_RF_PTM || m->fit > BTF_RF_LAFORTUNE || m->width < 1 || m->height < 1 ||
         m->lobes < 0 || m->lobes > BTF_RF_MAX_LOBES || m->views.count < 1 || !m->views.dirs ||
@@ -184,7 +186,8 @@ static long add_floats(rf_params *pr, const float *v, size_t n)
 }
 
 /* The model's side of the parameters: header, field placement, lo and
- * scale of every field and slot, the views' angles and rings. */
+ * scale of every field and slot, the views' angles and rings, a sampled
+ * model's coordinate map (one word per surface texel, u | v << 16). */
 static btf_status model_params(rf_params *pr, const btf_rf_model *m, const int32_t *buf,
                                const int32_t *base, btf_error *err)
 {
@@ -194,28 +197,35 @@ static btf_status model_params(rf_params *pr, const btf_rf_model *m, const int32
     float *lo = btf_alloc(nfs, sizeof *lo, err), *sc = btf_alloc(nfs, sizeof *sc, err);
     float *th = btf_alloc(nv, sizeof *th, err), *ph = btf_alloc(nv, sizeof *ph, err);
     int32_t *ring = btf_alloc(nv, sizeof *ring, err);
-    btf_status rc = lo && sc && th && ph && ring ? BTF_OK : BTF_E_NOMEM;
+    size_t nmap = m->map ? (size_t)m->surface_width * (size_t)m->surface_height : 0;
+    int32_t *map = m->map ? btf_alloc(nmap, sizeof *map, err) : NULL;
+    btf_status rc = lo && sc && th && ph && ring && (map || !nmap) ? BTF_OK : BTF_E_NOMEM;
+    for (size_t i = 0; rc == BTF_OK && i < nmap; i++)
+        map[i] = (int32_t)((uint32_t)m->map[2 * i] | (uint32_t)m->map[2 * i + 1] << 16);
     for (size_t i = 0; rc == BTF_OK && i < nfs; i++)
         lo[i] = m->lo[i], sc[i] = btf_rf_scale(m->lo[i], m->hi[i]);
     for (size_t i = 0; rc == BTF_OK && i < nv; i++) {
         th[i] = (float)m->views.dirs[i].theta, ph[i] = (float)m->views.dirs[i].phi;
         ring[i] = rf_ring_end(&m->views, (int)i);
     }
-    long o[7] = {-1, -1, -1, -1, -1, -1, -1};
+    long o[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
     if (rc == BTF_OK) {
         add_ints(pr, zi, RFP_INTS), add_floats(pr, zf, RFP_FLOATS);
         o[0] = add_ints(pr, buf, (size_t)m->fields), o[1] = add_ints(pr, base, (size_t)m->fields);
         o[2] = add_ints(pr, ring, nv), o[3] = add_floats(pr, lo, nfs);
         o[4] = add_floats(pr, sc, nfs), o[5] = add_floats(pr, th, nv);
         o[6] = add_floats(pr, ph, nv);
+        o[7] = nmap ? add_ints(pr, map, nmap) : 0;
     }
-    for (int i = 0; rc == BTF_OK && i < 7; i++)
+    for (int i = 0; rc == BTF_OK && i < 8; i++)
         if (o[i] < 0 || pr->n_ints < RFP_INTS || pr->n_floats < RFP_FLOATS)
             rc = btf_fail(err, BTF_E_NOMEM, "GPU RF render: out of memory for the parameters");
     if (rc == BTF_OK) {
         int32_t *h = pr->ints;
         h[RFP_FIT] = m->fit, h[RFP_LOBES] = m->lobes, h[RFP_NPARAMS] = m->params;
-        h[RFP_SLOTS] = m->slots, h[RFP_WIDTH] = m->width, h[RFP_HEIGHT] = m->height;
+        h[RFP_SLOTS] = m->slots, h[RFP_WIDTH] = rf_surface_w(m), h[RFP_HEIGHT] = rf_surface_h(m);
+        h[RFP_SAMPLE_W] = m->width, h[RFP_SAMPLE_H] = m->height;
+        h[RFP_MAP] = nmap ? (int32_t)o[7] : -1;
         h[RFP_NVIEWS] = m->views.count;
         h[RFP_FIELD_BUF] = (int32_t)o[0], h[RFP_FIELD_BASE] = (int32_t)o[1];
         h[RFP_RING_END] = (int32_t)o[2], h[RFP_LO] = (int32_t)o[3];
@@ -223,7 +233,7 @@ static btf_status model_params(rf_params *pr, const btf_rf_model *m, const int32
         rf_ctx c = rf_ctx_of(m);
         pr->floats[RFP_INV_W] = c.inv_w, pr->floats[RFP_INV_H] = c.inv_h;
     }
-    free(lo), free(sc), free(th), free(ph), free(ring);
+    free(lo), free(sc), free(th), free(ph), free(ring), free(map);
     return rc;
 }
 
@@ -291,6 +301,13 @@ static btf_status pass_open(rf_pass *ps, btf_gpu *g, const btf_rf_model *m, cons
 /* The parameter buffers, once complete. */
 static btf_status pass_upload(rf_pass *ps, btf_error *err)
 {
+    /* the int parameters hold a sampled model's map, 4 bytes a surface texel */
+    uint64_t ib = ps->pr.n_ints * sizeof(int32_t);
+    if (ps->pr.ints[RFP_MAP] >= 0 && ib > ps->limit)
+        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU RF render: the int parameters with the "
+                        "coordinate map (%llu bytes) exceed the device's largest storage "
+                        "buffer (%llu bytes); use --backend cpu", (unsigned long long)ib,
+                        (unsigned long long)ps->limit);
     btf_status rc = btf_vk_buffer_create(ps->vk, ps->pr.n_ints * sizeof(int32_t), &ps->bufs[1],
                                          err);
     if (rc == BTF_OK)
@@ -396,8 +413,9 @@ btf_status btf_gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir vie
         rc = rf_flat_check(m, view, light, width, height, 0, err);
     if (rc)
         return rc;
-    width = width ? width : m->width;
-    height = height ? height : m->height;
+    int sw = rf_surface_w(m), sh = rf_surface_h(m);
+    width = width ? width : sw;
+    height = height ? height : sh;
     double t0 = btf_now();
     /* the fields and weights of the view: the CPU render's own call */
     rf_look look = rf_look_at(m, view);
@@ -422,8 +440,8 @@ btf_status btf_gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir vie
         rc = pass_upload(&ps, err);
     }
     double t1 = btf_now();
-    int tile_w = width < m->width ? width : m->width, tile_h = height < m->height ? height
-                                                                                 : m->height;
+    /* the surface's distinct texels, as btf_rf_render_flat shades them */
+    int tile_w = width < sw ? width : sw, tile_h = height < sh ? height : sh;
     float *tile = rc == BTF_OK ? btf_alloc((size_t)tile_w * tile_h, 3 * sizeof(float), err) : NULL;
     if (rc == BTF_OK && !tile)
         rc = BTF_E_NOMEM;
@@ -432,7 +450,7 @@ btf_status btf_gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir vie
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, width, height, 3, err);
     if (rc == BTF_OK)
-        rf_tile_expand(tile, tile_w, m->width, m->height, out);
+        rf_tile_expand(tile, tile_w, sw, sh, out);
     free(tile);
     pass_free(&ps);
     if (rc == BTF_OK && info)

@@ -347,6 +347,66 @@ static void buffers_and_bands(void **state)
     tu_gpu_no_validation_messages(gpu);
 }
 
+/* A sampled model (paper section 6): a 7 x 5 surface over a 4 x 4 model
+ * through a hand-made coordinate map with varied entries, some out of the
+ * sample (u or v >= 4, up to 65535: clamped into it, rf_map.h); flat
+ * renders smaller than, equal to and larger than the surface, and a
+ * sphere, GPU against CPU, for every fit. */
+static void sampled_parity(void **state)
+{
+    (void)state;
+    enum { SW = 7, SH = 5 };
+    uint16_t map[2 * SW * SH];
+    uint32_t st = 99u;
+    for (int i = 0; i < SW * SH; i++) {
+        uint32_t r = next(&st);
+        map[2 * i] = (uint16_t)((i * 3 + 1) % 5), map[2 * i + 1] = (uint16_t)(r % 5);
+        if (i % 6 == 2)
+            map[2 * i] = (uint16_t)(4 + r % 60000);
+        if (i % 7 == 3)
+            map[2 * i + 1] = 65535;
+    }
+    btf_scene s;
+    sphere_scene(&s);
+    const int sizes[][2] = {{0, 0}, {1, 1}, {3, 2}, {7, 5}, {6, 9}, {40, 23}};
+    const btf_dir pairs[][2] = {{{30, 60}, {45, 0}}, {{82, 350}, {89.9, 10}}};
+    btf_error e = {0};
+    for (size_t f = 0; f < NFITS; f++) {
+        btf_rf_model m;
+        make_model(&m, fits[f][0], fits[f][1], 4, 4, 57u + (uint32_t)f, 0);
+        m.map = map, m.surface_width = SW, m.surface_height = SH;
+        for (size_t i = 0; i < sizeof pairs / sizeof pairs[0]; i++)
+            for (size_t z = 0; z < sizeof sizes / sizeof sizes[0]; z++) {
+                btf_image c = {0}, g = {0};
+                TU_OK(btf_rf_render_flat(&m, pairs[i][0], pairs[i][1], sizes[z][0],
+                                         sizes[z][1], 2, &c, &e), &e);
+                TU_OK(btf_gpu_rf_render_flat(gpu, &m, pairs[i][0], pairs[i][1], sizes[z][0],
+                                             sizes[z][1], &g, NULL, &e), &e);
+                if (z == 0) {
+                    assert_int_equal(g.width, SW);
+                    assert_int_equal(g.height, SH);
+                }
+                compare(z == 5 ? tu_fmt("sampled %s k %d, flat %dx%d of a %dx%d surface",
+                                        btf_rf_fit_name(m.fit), m.lobes, c.width, c.height,
+                                        SW, SH)
+                               : "", &c, &g);
+                btf_image_free(&c);
+                btf_image_free(&g);
+            }
+        btf_image c = {0}, g = {0};
+        TU_OK(btf_rf_render_scene(&m, &s, 96, 80, 2, &c, NULL, &e), &e);
+        TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 96, 80, 2, &g, NULL, &e), &e);
+        compare(tu_fmt("sampled %s k %d, sphere 96x80", btf_rf_fit_name(m.fit), m.lobes), &c,
+                &g);
+        btf_image_free(&c);
+        btf_image_free(&g);
+        m.map = NULL, m.surface_width = m.surface_height = 0;
+        btf_rf_model_free(&m);
+    }
+    btf_scene_free(&s);
+    tu_gpu_no_validation_messages(gpu);
+}
+
 /* Bad input: one-line BTF_E_ARG, the output left empty. */
 static void bad_input(void **state)
 {
@@ -374,17 +434,12 @@ static void bad_input(void **state)
     assert_null(strchr(e.msg, '\n'));
     assert_null(img.data);
     m.slots = m.params + 3;
-    /* a sampled model (section 6): the shader holds no coordinate map, so
-     * both passes refuse it with a message, not render the sample tiled */
-    uint16_t map[2 * 6 * 6];
-    for (int i = 0; i < 36; i++)
-        map[2 * i] = (uint16_t)(i % 6 % 4), map[2 * i + 1] = (uint16_t)(i / 6 % 4);
-    m.map = map, m.surface_width = m.surface_height = 6;
-    assert_int_equal(btf_gpu_rf_render_flat(gpu, &m, v, l, 4, 4, &img, NULL, &e),
-                     BTF_E_UNSUPPORTED);
-    assert_non_null(strstr(e.msg, "CPU only"));
-    assert_int_equal(btf_gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e),
-                     BTF_E_UNSUPPORTED);
+    /* a sampled model's surface of 0 sides: refused, not read */
+    uint16_t map1[2] = {0, 0};
+    m.map = map1, m.surface_width = 0, m.surface_height = 1;
+    assert_int_equal(btf_gpu_rf_render_flat(gpu, &m, v, l, 4, 4, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf_gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_null(strchr(e.msg, '\n'));
     assert_null(img.data);
     m.map = NULL, m.surface_width = m.surface_height = 0;
     btf_rf_model_free(&m);
@@ -459,6 +514,7 @@ int main(void)
         cmocka_unit_test(grazing_plane),
         cmocka_unit_test(wild_ranges_stay_finite),
         cmocka_unit_test(buffers_and_bands),
+        cmocka_unit_test(sampled_parity),
         cmocka_unit_test(bad_input),
         cmocka_unit_test(command_line),
     };

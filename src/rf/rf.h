@@ -79,8 +79,8 @@ static inline const float *rf_texel_open(const btf_rf_model *m, int f, size_t t,
 #define BTF_RF_LOBES(c) ((c)->m->lobes)
 #define BTF_RF_NPARAMS(c) ((c)->m->params)
 /* the surface's texels: a sampled model's (paper section 6) through its
- * coordinate map (rf_map.h), the model's own otherwise; the GPU pass has
- * no map and refuses sampled models */
+ * coordinate map (rf_map.h), the model's own otherwise; the GPU pass
+ * (gpu/rf_render.comp) looks them up through the same map, uploaded */
 #define BTF_RF_WIDTH(c) rf_surface_w((c)->m)
 #define BTF_RF_HEIGHT(c) rf_surface_h((c)->m)
 #define BTF_RF_INV_WIDTH(c) ((c)->inv_w)

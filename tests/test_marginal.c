@@ -509,6 +509,26 @@ static void colour_match_extremes(void **state)
             btf_image_free(&img);
             btf_model_free(&m);
         }
+    /* a one-pixel image has one value: it takes the exemplar's median, not
+     * its darkest colour (a half-dark, half-light grey exemplar) */
+    {
+        btf_image two;
+        TU_OK(btf_image_alloc(&two, 16, 16, 3, &e), &e);
+        for (int i = 0; i < 256 * 3; i++)
+            two.data[i] = (i / 3 + i / 48) % 2 ? 0.6f : 0.1f;
+        btf_model m2;
+        TU_OK(btf_texture_fit(&two, NULL, &m2, &e), &e);
+        btf_synth_opts so = {.width = 1, .height = 1, .seed = 9, .match_colours = 1};
+        btf_image one;
+        TU_OK(btf_synthesise_image(&m2, 0, &so, &one, &e), &e);
+        print_message("1x1 of a 0.1 / 0.6 grey exemplar: %g %g %g\n", one.data[0], one.data[1],
+                      one.data[2]);
+        for (int k = 0; k < 3; k++)
+            assert_true(one.data[k] > 0.15f && one.data[k] < 0.55f);
+        btf_image_free(&one);
+        btf_image_free(&two);
+        btf_model_free(&m2);
+    }
     btf_image img;
     tu_material_image("wood", 16, 1, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
     btf_model m;

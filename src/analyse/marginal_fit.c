@@ -171,6 +171,9 @@ btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, b
     /* the exemplar's Lab histogram, for colour matching (synth/colour_match.c) */
     if ((rc = btf_lab_quantiles(img, btf_lab_scale(&mg), mg.lab_quantile, err)))
         return rc;
+    for (int c = 0; c < 3; c++) /* what the model file keeps (monotone: still nondecreasing) */
+        for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
+            mg.lab_quantile[c][j] = btf_lab_decode(c, btf_lab_code(c, mg.lab_quantile[c][j]));
     mg.lab_knots = BTF_MARGIN_KNOTS;
     mg.knots = BTF_MARGIN_KNOTS;
     sm->marginal = mg;

@@ -176,7 +176,6 @@ btf_status btf_lab_quantiles(const btf_image *img, float scale, float q[3][BTF_M
             float lim = c == 0 ? 100.0f : 128.0f, low = c == 0 ? 0.0f : -128.0f;
             float qv = (float)x;
             qv = qv < low ? low : qv > lim ? lim : qv;
-            qv = btf_lab_decode(c, btf_lab_code(c, qv)); /* what the model file keeps */
             q[c][j] = j > 0 && qv < q[c][j - 1] ? q[c][j - 1] : qv;
         }
     }

@@ -37,24 +37,39 @@ typedef struct match_job {
     double slope[3][BTF_MARGIN_KNOTS]; /* of the map from segment j to j + 1 */
 } match_job;
 
-/* The map of one channel: linear between (src[j], dst[j]); a run of equal
- * source knots (a channel constant over a range of probabilities) maps to
- * its first target, so that the result stays monotone and finite. */
-static float map_channel(const float *src, const float *dst, const double *slope, float v)
+/* The first knot of src (nondecreasing) not below v, or K when all are. */
+static int first_not_below(const float *src, float v)
 {
-    if (!(v > src[0]))
-        return dst[0];
-    if (v >= src[BTF_MARGIN_KNOTS - 1])
-        return dst[BTF_MARGIN_KNOTS - 1];
-    int lo = 0, hi = BTF_MARGIN_KNOTS - 1; /* src[lo] < v < src[hi] */
-    while (hi - lo > 1) {
+    int lo = 0, hi = BTF_MARGIN_KNOTS; /* the answer is in [lo, hi] */
+    while (lo < hi) {
         int mid = (lo + hi) / 2;
         if (src[mid] < v)
-            lo = mid;
+            lo = mid + 1;
         else
             hi = mid;
     }
-    return (float)(dst[lo] + ((double)v - src[lo]) * slope[lo]);
+    return lo;
+}
+
+/* The map of one channel: linear between (src[j], dst[j]), flat beyond the
+ * ends. A value equal to a run of knots j0..j1 (a channel constant over
+ * those probabilities: a constant or tiny image) maps to the target at the
+ * run's middle probability, so that a constant image takes the exemplar's
+ * median, not its minimum; monotone and finite either way. */
+static float map_channel(const float *src, const float *dst, const double *slope, float v)
+{
+    if (!(v >= src[0]))
+        return dst[0];
+    if (v > src[BTF_MARGIN_KNOTS - 1])
+        return dst[BTF_MARGIN_KNOTS - 1];
+    int a = first_not_below(src, v);
+    if (src[a] == v) { /* v on knots a..b */
+        int b = a;
+        while (b + 1 < BTF_MARGIN_KNOTS && src[b + 1] == v)
+            b++;
+        return (float)(0.5 * ((double)dst[(a + b) / 2] + dst[(a + b + 1) / 2]));
+    }
+    return (float)(dst[a - 1] + ((double)v - src[a - 1]) * slope[a - 1]);
 }
 
 static btf_status match_rows(void *user, int job, int worker, btf_error *err)

@@ -693,11 +693,8 @@ static btf_status check_all(const btf_model *m, const int *subspaces, int n,
         rc = btf_synth_check_size(w[j], h[j], err);
         if (rc == 0 && o->tileable) /* the CPU's rule and message */
             rc = btf_synth_check_tileable(w[j], h[j], m->subspaces[subspaces[j]].levels, err);
-        const btf_marginal *mg = rc == 0 ? &m->subspaces[subspaces[j]].marginal : NULL;
-        if (mg && o->match_colours && !(mg->knots && mg->lab_knots)) /* the CPU's message */
-            rc = btf_fail(err, BTF_E_ARG, "colour matching: subspace %d holds no Lab histogram "
-                          "(a model file of format 1.2 or older: analyse the material again)",
-                          subspaces[j]);
+        if (rc == 0 && o->match_colours) /* the CPU's rule and message */
+            rc = btf_colour_match_check(m, subspaces[j], err);
     }
     return rc;
 }

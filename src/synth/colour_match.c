@@ -95,7 +95,7 @@ static btf_status match_rows(void *user, int job, int worker, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, btf_error *err)
+btf_status btf_colour_match_check(const btf_model *m, int subspace, btf_error *err)
 {
     if (!m || !m->subspaces || subspace < 0 || subspace >= m->n_subspaces)
         return btf_fail(err, BTF_E_ARG, "colour matching: subspace %d (expected 0..%d)",
@@ -105,6 +105,15 @@ btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, bt
         return btf_fail(err, BTF_E_ARG,
                         "colour matching: subspace %d holds no Lab histogram (a model file of "
                         "format 1.2 or older: analyse the material again)", subspace);
+    return BTF_OK;
+}
+
+btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, btf_error *err)
+{
+    btf_status rc = btf_colour_match_check(m, subspace, err);
+    if (rc)
+        return rc;
+    const btf_marginal *mg = &m->subspaces[subspace].marginal;
     if (!img || !img->data || img->channels != 3 || img->width < 1 || img->height < 1)
         return btf_fail(err, BTF_E_ARG, "colour matching needs an RGB image");
     size_t n = (size_t)img->width * img->height * 3;
@@ -114,7 +123,7 @@ btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, bt
                             i / 3 % (size_t)img->width, i / 3 / (size_t)img->width);
     match_job mj = {img, mg, btf_lab_scale(mg), {{0}}, {{0}}};
     int jobs = (img->height + ROWS_PER_JOB - 1) / ROWS_PER_JOB;
-    btf_status rc = btf_lab_quantiles(img, mj.scale, mj.src, err);
+    rc = btf_lab_quantiles(img, mj.scale, mj.src, err);
     if (rc)
         return rc;
     for (int c = 0; c < 3; c++) /* a segment a value falls inside has src[j] < src[j + 1] */

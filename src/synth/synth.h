@@ -105,6 +105,16 @@ btf_status btf_synth_check_band(const btf_car_band *b, int margin, btf_error *er
 /* A synthesis size: 1..BTF_SYNTH_MAX_SIDE on each side. */
 btf_status btf_synth_check_size(int width, int height, btf_error *err);
 
+/* Hands row y (width x 3 floats) to a btf_rows_fn consumer: its non-zero
+ * answer as a status (positive: BTF_E_IO), with a message when it left none
+ * (synthesise.c; every synthesis path emits its rows so). */
+btf_status btf_synth_emit_row(btf_rows_fn fn, void *user, int y, const float *row,
+                              btf_error *err);
+/* Colour matching can run on subspace `subspace` of m: BTF_E_ARG, naming it,
+ * when it is out of range or holds no Lab histogram (a file of format 1.2
+ * or older) (colour_match.c; synthesis and the GPU check before work). */
+btf_status btf_colour_match_check(const btf_model *m, int subspace, btf_error *err);
+
 /* ------------------------------------------------------------ colour_lab.c */
 
 /* CIE L*a*b* as OpenCV's float conversion (docs/synthesis.md, "Colour

@@ -138,6 +138,16 @@ static btf_status colour_row(void *user, int y, int worker, btf_error *err)
     return BTF_OK;
 }
 
+btf_status btf_synth_emit_row(btf_rows_fn fn, void *user, int y, const float *row,
+                              btf_error *err)
+{
+    int got = fn(user, y, 1, row, err);
+    btf_status rc = got > 0 ? BTF_E_IO : (btf_status)got;
+    if (rc && err && !err->msg[0])
+        btf_fail(err, rc, "synthesis stopped by its consumer");
+    return rc;
+}
+
 static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal_table *mt,
                                 synth_band *sb, int width, int height, int subspace,
                                 btf_rows_fn fn, void *user, btf_error *err)
@@ -164,12 +174,9 @@ static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal
         if (k > 0) {
             rc = btf_relay_wait(relay, err);
             int p0 = y0 - COLOUR_BLOCK;
-            for (int j = 0; rc == BTF_OK && j < COLOUR_BLOCK && p0 + j < height; j++) {
-                int got = fn(user, p0 + j, 1, c.rgb[(k - 1) & 1] + (size_t)j * 3 * w, err);
-                rc = got > 0 ? BTF_E_IO : (btf_status)got;
-                if (rc && err && !err->msg[0])
-                    btf_fail(err, rc, "synthesis stopped by its consumer");
-            }
+            for (int j = 0; rc == BTF_OK && j < COLOUR_BLOCK && p0 + j < height; j++)
+                rc = btf_synth_emit_row(fn, user, p0 + j, c.rgb[(k - 1) & 1] + (size_t)j * 3 * w,
+                                        err);
         }
         if (rc == BTF_OK && k < blocks)
             btf_relay_post(relay, y0, n);
@@ -188,12 +195,7 @@ static btf_status matched_rows(const btf_model *m, int subspace,
 static btf_status check_match(const btf_model *m, int subspace, const btf_synth_opts *o,
                               btf_error *err)
 {
-    const btf_marginal *mg = &m->subspaces[subspace].marginal;
-    if (o->match_colours && !(mg->knots && mg->lab_knots))
-        return btf_fail(err, BTF_E_ARG,
-                        "colour matching: subspace %d holds no Lab histogram (a model file of "
-                        "format 1.2 or older: analyse the material again)", subspace);
-    return BTF_OK;
+    return o->match_colours ? btf_colour_match_check(m, subspace, err) : BTF_OK;
 }
 
 btf_status btf_synthesise_margins(const btf_model *m, int subspace,
@@ -248,12 +250,8 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
         synth_gauss_rows(sb, 3, 0, y, g0);
         if (btf_unmix_row(sm, &mt, g0[0], g0[1], g0[2], width, plane, row)) /* the message names y */
             rc = btf_check_finite_row(row, (size_t)width * 3, subspace, y, err);
-        if (rc == 0) {
-            int got = fn(user, y, 1, row, err);
-            rc = got > 0 ? BTF_E_IO : (btf_status)got;
-        }
-        if (rc && err && !err->msg[0])
-            btf_fail(err, rc, "synthesis stopped by its consumer");
+        if (rc == 0)
+            rc = btf_synth_emit_row(fn, user, y, row, err);
     }
     free(row);
     for (int b = 0; b < made; b++)
@@ -292,12 +290,8 @@ static btf_status matched_rows(const btf_model *m, int subspace,
     rc = btf_synthesise_margins(m, subspace, margins, &plain, to_image, &img, err);
     if (rc == BTF_OK)
         rc = btf_colour_match(m, subspace, &img, err);
-    for (int y = 0; rc == BTF_OK && y < height; y++) {
-        int got = fn(user, y, 1, img.data + (size_t)y * width * 3, err);
-        rc = got > 0 ? BTF_E_IO : (btf_status)got;
-        if (rc && err && !err->msg[0])
-            btf_fail(err, rc, "synthesis stopped by its consumer");
-    }
+    for (int y = 0; rc == BTF_OK && y < height; y++)
+        rc = btf_synth_emit_row(fn, user, y, img.data + (size_t)y * width * 3, err);
     btf_image_free(&img);
     return rc;
 }

@@ -203,12 +203,8 @@ btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_s
         size_t at = (size_t)y * w;
         if (btf_unmix_row(sm, &mt, planes + at, planes + n + at, planes + 2 * n + at, w, scratch, rgb))
             rc = btf_check_finite_row(rgb, (size_t)w * 3, subspace, y, err);
-        if (rc == BTF_OK) {
-            int got = fn(user, y, 1, rgb, err);
-            rc = got > 0 ? BTF_E_IO : (btf_status)got;
-            if (rc && err && !err->msg[0])
-                btf_fail(err, rc, "synthesis stopped by its consumer");
-        }
+        if (rc == BTF_OK)
+            rc = btf_synth_emit_row(fn, user, y, rgb, err);
     }
     free(planes);
     return rc;

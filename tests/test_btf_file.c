@@ -14,42 +14,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
-/* A small set: 3 views x 4 lights of 8 x 6 pixels, smooth images. */
-static btf_dirset views, lights;
-static const int W = 8, H = 6;
-
-static float value(int v, int l, int x, int y, int c)
-{
-    return 0.2f + 0.1f * (float)v + 0.05f * (float)l * (float)(c + 1) +
-           0.01f * (float)(x * (c + 1)) - 0.015f * (float)y + 0.002f * (float)(x * y * l);
-}
-
-static btf_status small_image(void *user, int v, int l, btf_image *out, btf_error *err)
-{
-    (void)user;
-    btf_status rc = btf_image_alloc(out, W, H, 3, err);
-    for (int y = 0; rc == BTF_OK && y < H; y++)
-        for (int x = 0; x < W; x++)
-            for (int c = 0; c < 3; c++)
-                out->data[(y * W + x) * 3 + c] = value(v, l, x, y, c);
-    return rc;
-}
-
-static int setup(void **state)
-{
-    btf_dir vd[3] = {{0, 0}, {30, 90}, {60, 200}};
-    btf_dir ld[4] = {{0, 0}, {20, 10}, {45, 180}, {75, 300}};
-    if (btf_dirset_from_list(&views, vd, 3, NULL) || btf_dirset_from_list(&lights, ld, 4, NULL))
-        return -1;
-    return tu_setup_dir(state);
-}
-
-static int teardown(void **state)
-{
-    btf_dirset_free(&views);
-    btf_dirset_free(&lights);
-    return tu_teardown_dir(state);
-}
+/* The small set of testutil.h: 3 views x 4 lights of 8 x 6 pixels. */
+static const int W = TU_SMALL_W, H = TU_SMALL_H;
 
 /* Opens path as a dataset, asserts its shape and that every image is the
  * small one within tol; returns the largest difference. */
@@ -68,9 +34,9 @@ static double compare_small(const char *path, double tol)
     assert_int_equal(in->width, W);
     assert_int_equal(in->height, H);
     for (int i = 0; i < 3; i++)
-        assert_true(btf_dir_angle(in->views->dirs[i], views.dirs[i]) < 1e-4);
+        assert_true(btf_dir_angle(in->views->dirs[i], tu_small_views.dirs[i]) < 1e-4);
     for (int i = 0; i < 4; i++)
-        assert_true(btf_dir_angle(in->lights->dirs[i], lights.dirs[i]) < 1e-4);
+        assert_true(btf_dir_angle(in->lights->dirs[i], tu_small_lights.dirs[i]) < 1e-4);
     double worst = 0;
     btf_dataset_iter it;
     btf_dataset_iter_begin(&it, ds);
@@ -81,7 +47,8 @@ static double compare_small(const char *path, double tol)
         for (int y = 0; y < H; y++)
             for (int x = 0; x < W; x++)
                 for (int c = 0; c < 3; c++) {
-                    double d = fabs(s->image.data[(y * W + x) * 3 + c] - value(s->view, s->light, x, y, c));
+                    double d = fabs(s->image.data[(y * W + x) * 3 + c] -
+                                    tu_small_value(s->view, s->light, x, y, c));
                     worst = fmax(worst, d);
                 }
         n++;
@@ -102,7 +69,8 @@ static void test_bdif_round_trip(void **state)
     o.variant = BTF_UBO2014_BDIF;
     btf_ubo2014_write_stats st;
     btf_error err = {0};
-    int rc = btf_ubo2014_write(p, &views, &lights, W, H, small_image, NULL, &o, &st, &err);
+    int rc = btf_ubo2014_write(p, &tu_small_views, &tu_small_lights, W, H, tu_small_image, NULL, &o,
+                               &st, &err);
     if (rc)
         print_error("%s\n", err.msg);
     assert_int_equal(rc, 0);
@@ -133,7 +101,8 @@ static void test_dfmf_round_trip(void **state)
         o.scalar_size = 4;
         btf_ubo2014_write_stats st;
         btf_error err = {0};
-        int rc = btf_ubo2014_write(p, &views, &lights, W, H, small_image, NULL, &o, &st, &err);
+        int rc = btf_ubo2014_write(p, &tu_small_views, &tu_small_lights, W, H, tu_small_image, NULL,
+                                   &o, &st, &err);
         if (rc)
             print_error("%s\n", err.msg);
         assert_int_equal(rc, 0);
@@ -154,20 +123,6 @@ static void test_dfmf_round_trip(void **state)
     }
 }
 
-static unsigned char *slurp(const char *path, size_t *n)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long len = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *d = malloc((size_t)len + 1);
-    assert_int_equal(fread(d, 1, (size_t)len, f), (size_t)len);
-    fclose(f);
-    *n = (size_t)len;
-    return d;
-}
-
 /* The small DFMF (half) file's bytes, written once. */
 static unsigned char *dfmf_bytes(size_t *n, int variant)
 {
@@ -175,30 +130,9 @@ static unsigned char *dfmf_bytes(size_t *n, int variant)
     btf_ubo2014_write_opts o = btf_ubo2014_write_defaults();
     o.variant = variant;
     o.components = 5;
-    assert_int_equal(btf_ubo2014_write(p, &views, &lights, W, H, small_image, NULL, &o, NULL, NULL), 0);
-    return slurp(p, n);
-}
-
-/* Opening bytes as a dataset file fails with one line naming it. */
-static void expect_open_fails(const unsigned char *d, size_t n, const char *what, int code)
-{
-    const char *p = tu_fmt("%s/bad.btf", tu_dir);
-    tu_write_file(p, d, n);
-    btf_error err = {0};
-    btf_dataset *ds = NULL;
-    int rc = btf_dataset_open(p, NULL, &ds, &err);
-    if (rc == 0)
-        print_error("opened although %s\n", what);
-    assert_int_not_equal(rc, 0);
-    assert_null(ds);
-    if (code)
-        assert_int_equal(rc, code);
-    assert_non_null(strstr(err.msg, p));
-    assert_null(strchr(err.msg, '\n'));
-    if (what && !strstr(err.msg, what))
-        print_error("message \"%s\" lacks \"%s\"\n", err.msg, what);
-    if (what)
-        assert_non_null(strstr(err.msg, what));
+    assert_int_equal(btf_ubo2014_write(p, &tu_small_views, &tu_small_lights, W, H, tu_small_image,
+                                       NULL, &o, NULL, NULL), 0);
+    return tu_slurp(p, n);
 }
 
 static void test_truncated_everywhere(void **state)
@@ -216,13 +150,13 @@ static void test_truncated_everywhere(void **state)
             assert_non_null(strstr(err.msg, "cut"));
             ubo_free(&f);
         }
-        expect_open_fails(d, n - 1, "truncated", BTF_E_FORMAT);
-        expect_open_fails(d, 12, "truncated", BTF_E_FORMAT);
+        tu_expect_open_fails(d, n - 1, "truncated", BTF_E_FORMAT);
+        tu_expect_open_fails(d, 12, "truncated", BTF_E_FORMAT);
         /* one byte too many */
         unsigned char *e = malloc(n + 1);
         memcpy(e, d, n);
         e[n] = 0;
-        expect_open_fails(e, n + 1, "after the end", BTF_E_FORMAT);
+        tu_expect_open_fails(e, n + 1, "after the end", BTF_E_FORMAT);
         free(e);
         free(d);
     }
@@ -237,73 +171,74 @@ static void test_bad_signature_and_counts(void **state)
     /* unknown signatures */
     memcpy(e, d, n);
     memcpy(e, "!DFMF09FCR", 10);
-    expect_open_fails(e, n, "unknown signature", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "unknown signature", BTF_E_FORMAT);
     memcpy(e, d, n);
     memcpy(e, "!BDIF06R3!", 10);
-    expect_open_fails(e, n, "unknown signature", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "unknown signature", BTF_E_FORMAT);
     /* meta_size that lies */
     memcpy(e, d, n);
     e[10] ^= 1;
-    expect_open_fails(e, n, "meta_size", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "meta_size", BTF_E_FORMAT);
     /* the sampling: nV at 10 + meta_size */
     uint32_t meta = ubo_rd32(d + 10);
     size_t nv_at = 10 + meta;
     memcpy(e, d, n);
     e[nv_at + 3] = 0x7f; /* 2^30 views */
-    expect_open_fails(e, n, "views do not fit", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "views do not fit", BTF_E_FORMAT);
     memcpy(e, d, n);
     e[nv_at + 12] = 0xff; /* view 0's light count */
-    expect_open_fails(e, n, NULL, BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, NULL, BTF_E_FORMAT);
     /* the second view's light count differs */
     memcpy(e, d, n);
     size_t v1 = nv_at + 4 + 12 + 4 * 8;
     e[v1 + 8] = 3;
-    expect_open_fails(e, n, "lights, view 0 has", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "lights, view 0 has", BTF_E_FORMAT);
     /* a NaN theta */
     memcpy(e, d, n);
     e[nv_at + 4 + 2] = 0xc0, e[nv_at + 4 + 3] = 0x7f;
-    expect_open_fails(e, n, "theta", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "theta", BTF_E_FORMAT);
     /* width: after 3 views of (12 + 4 * 8) bytes */
     size_t w_at = nv_at + 4 + 3 * (12 + 32);
     memcpy(e, d, n);
     e[w_at] = 9;
-    expect_open_fails(e, n, "channel 0 is", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "channel 0 is", BTF_E_FORMAT);
     memcpy(e, d, n);
     memset(e + w_at, 0, 4);
-    expect_open_fails(e, n, "image size", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "image size", BTF_E_FORMAT);
     /* DFMF body: rotations (4), num_components (4), model (4) */
     size_t model_at = w_at + 8 + 4 + 4;
     memcpy(e, d, n);
     e[model_at] = 2;
-    expect_open_fails(e, n, "colour model 2 not supported", BTF_E_UNSUPPORTED);
+    tu_expect_open_fails(e, n, "colour model 2 not supported", BTF_E_UNSUPPORTED);
     memcpy(e, d, n);
     e[model_at] = 77;
-    expect_open_fails(e, n, "colour model 77 not supported", BTF_E_UNSUPPORTED);
+    tu_expect_open_fails(e, n, "colour model 77 not supported", BTF_E_UNSUPPORTED);
     /* channel 0: scalar size, K */
     size_t ch0 = model_at + 4 + 12 + 36;
     memcpy(e, d, n);
     e[ch0] = 3;
-    expect_open_fails(e, n, "scalar size 3", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "scalar size 3", BTF_E_FORMAT);
     memcpy(e, d, n);
     e[ch0 + 4] = 0xff; /* K huge */
-    expect_open_fails(e, n, "does not fit", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "does not fit", BTF_E_FORMAT);
     memcpy(e, d, n);
     memset(e + ch0 + 1, 0, 4); /* K = 0 */
-    expect_open_fails(e, n, "0 components", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n, "0 components", BTF_E_FORMAT);
     /* a NaN in U (after S): half 0x7e00, at row 1, component 1 */
     uint32_t k = ubo_rd32(d + ch0 + 1);
     assert_true(k >= 2 && k <= 5);
     size_t u0 = ch0 + 13 + 2 * k;
     memcpy(e, d, n);
     e[u0 + 2 * (k + 1)] = 0x00, e[u0 + 2 * (k + 1) + 1] = 0x7e;
-    expect_open_fails(e, n, "U of channel R/0 has a NaN or Inf at row 1, component 1", BTF_E_DATA);
+    tu_expect_open_fails(e, n, "U of channel R/0 has a NaN or Inf at row 1, component 1",
+                         BTF_E_DATA);
     /* an Inf in SxV of channel 0 */
     size_t sxv0 = u0 + 2 * k * 12;
     memcpy(e, d, n);
     e[sxv0 + 1] = 0x7c, e[sxv0] = 0;
-    expect_open_fails(e, n, "SxV of channel R/0 has a NaN or Inf", BTF_E_DATA);
+    tu_expect_open_fails(e, n, "SxV of channel R/0 has a NaN or Inf", BTF_E_DATA);
     /* not a .btf at all: a text file that starts like one is still checked */
-    expect_open_fails((const unsigned char *)"!DFMF", 5, NULL, 0);
+    tu_expect_open_fails((const unsigned char *)"!DFMF", 5, NULL, 0);
     free(e);
     free(d);
 }
@@ -329,7 +264,8 @@ static void test_colour_model_11(void **state)
                                  .sxv = {sxv[0], sxv[1], sxv[2]}};
         const char *p = tu_fmt("%s/m11_%d.btf", tu_dir, cosine);
         btf_error err = {0};
-        assert_int_equal(btf_ubo2014_write_factors(p, &views, &lights, W, H, &f, &err), 0);
+        assert_int_equal(btf_ubo2014_write_factors(p, &tu_small_views, &tu_small_lights, W, H, &f,
+                                                   &err), 0);
         btf_dataset *ds;
         assert_int_equal(btf_dataset_open(p, NULL, &ds, &err), 0);
         assert_int_equal(btf_dataset_ubo2014(ds)->colour_model, 11);
@@ -338,7 +274,8 @@ static void test_colour_model_11(void **state)
                 btf_image img = {0};
                 assert_int_equal(btf_dataset_read(ds, v, l, &img, &err), 0);
                 int lv = v * 4 + l;
-                double cl = cos((double)(float)(lights.dirs[l].theta * 3.14159265358979323846 / 180.0));
+                double cl = cos((double)(float)(tu_small_lights.dirs[l].theta *
+                                                3.14159265358979323846 / 180.0));
                 for (int i = 0; i < px; i++) {
                     double d0 = (double)(u[0][lv] * sxv[0][i]), d1 = (double)(u[1][lv] * sxv[1][i]),
                            d2 = (double)(u[2][lv] * sxv[2][i]);
@@ -435,7 +372,8 @@ static void test_cli_info_export(void **state)
     snprintf(p, sizeof p, "%s/cli.btf", tu_dir);
     btf_ubo2014_write_opts o = btf_ubo2014_write_defaults();
     o.components = 4;
-    assert_int_equal(btf_ubo2014_write(p, &views, &lights, W, H, small_image, NULL, &o, NULL, NULL), 0);
+    assert_int_equal(btf_ubo2014_write(p, &tu_small_views, &tu_small_lights, W, H, tu_small_image,
+                                       NULL, &o, NULL, NULL), 0);
     int st;
     char *out = tu_capture(tu_fmt("%s info %s", tu_cli(), p), &st);
     assert_int_equal(st, 0);
@@ -485,7 +423,7 @@ static void test_cli_info_export(void **state)
     char bad[4096];
     snprintf(bad, sizeof bad, "%s/trunc.btf", tu_dir);
     size_t n;
-    unsigned char *d = slurp(p, &n);
+    unsigned char *d = tu_slurp(p, &n);
     tu_write_file(bad, d, n / 2);
     free(d);
     st = tu_run(tu_fmt("%s info %s", tu_cli(), bad), &msg);
@@ -564,5 +502,5 @@ int main(void)
         cmocka_unit_test(test_cli_info_export),
         cmocka_unit_test(test_generate_twin),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, tu_setup_small, tu_teardown_small);
 }

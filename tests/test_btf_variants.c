@@ -22,56 +22,8 @@
 #include <string.h>
 #include <unistd.h>
 
-/* A small set: 3 views x 4 lights of 8 x 6 pixels, smooth images. */
-static btf_dirset views, lights;
-static const int W = 8, H = 6, NV = 3, NL = 4;
-
-static float value(int v, int l, int x, int y, int c)
-{
-    return 0.2f + 0.1f * (float)v + 0.05f * (float)l * (float)(c + 1) +
-           0.01f * (float)(x * (c + 1)) - 0.015f * (float)y + 0.002f * (float)(x * y * l);
-}
-
-static btf_status small_image(void *user, int v, int l, btf_image *out, btf_error *err)
-{
-    (void)user;
-    btf_status rc = btf_image_alloc(out, W, H, 3, err);
-    for (int y = 0; rc == BTF_OK && y < H; y++)
-        for (int x = 0; x < W; x++)
-            for (int c = 0; c < 3; c++)
-                out->data[(y * W + x) * 3 + c] = value(v, l, x, y, c);
-    return rc;
-}
-
-static int setup(void **state)
-{
-    btf_dir vd[3] = {{0, 0}, {30, 90}, {60, 200}};
-    btf_dir ld[4] = {{0, 0}, {20, 10}, {45, 180}, {75, 300}};
-    if (btf_dirset_from_list(&views, vd, 3, NULL) || btf_dirset_from_list(&lights, ld, 4, NULL))
-        return -1;
-    return tu_setup_dir(state);
-}
-
-static int teardown(void **state)
-{
-    btf_dirset_free(&views);
-    btf_dirset_free(&lights);
-    return tu_teardown_dir(state);
-}
-
-static unsigned char *slurp(const char *path, size_t *n)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long len = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *d = malloc((size_t)len + 64);
-    assert_int_equal(fread(d, 1, (size_t)len, f), (size_t)len);
-    fclose(f);
-    *n = (size_t)len;
-    return d;
-}
+/* The small set of testutil.h: 3 views x 4 lights of 8 x 6 pixels. */
+static const int W = TU_SMALL_W, H = TU_SMALL_H, NV = TU_SMALL_NV, NL = TU_SMALL_NL;
 
 static btf_dataset *open_ok(const char *path)
 {
@@ -123,7 +75,7 @@ static double worst_error(btf_dataset *ds, expect_fn want, const void *user, dou
 static double small_want(const void *user, int v, int l, int x, int y, int c)
 {
     (void)user;
-    return value(v, l, x, y, c);
+    return tu_small_value(v, l, x, y, c);
 }
 
 /* ------------------------------------------------- written from images */
@@ -141,7 +93,8 @@ static void write_small(const char *p, const variant_case *vc, btf_ubo2014_write
     o.scalar_size = vc->scalar;
     o.components = vc->components;
     btf_error err = {0};
-    int rc = btf_ubo2014_write(p, &views, &lights, W, H, small_image, NULL, &o, st, &err);
+    int rc = btf_ubo2014_write(p, &tu_small_views, &tu_small_lights, W, H, tu_small_image, NULL, &o,
+                               st, &err);
     if (rc)
         print_error("%s\n", err.msg);
     assert_int_equal(rc, 0);
@@ -330,7 +283,7 @@ static void check_fmf(const char *name, const ubo_fmf *f, uint32_t use, int tran
 {
     const char *p = tu_fmt("%s/%s.btf", tu_dir, name);
     btf_error err = {0};
-    TU_OK(ubo_write_fmf(p, &views, &lights, W, H, f, &err), &err);
+    TU_OK(ubo_write_fmf(p, &tu_small_views, &tu_small_lights, W, H, f, &err), &err);
     btf_dataset *ds = open_ok(p);
     const btf_ubo2014_info *u = btf_dataset_ubo2014(ds);
     assert_string_equal(u->signature, f->signature);
@@ -421,7 +374,7 @@ static void check_pvf(const char *name, const ubo_pvf *p)
 {
     const char *path = tu_fmt("%s/%s.btf", tu_dir, name);
     btf_error err = {0};
-    TU_OK(ubo_write_pvf(path, &views, &lights, W, H, p, &err), &err);
+    TU_OK(ubo_write_pvf(path, &tu_small_views, &tu_small_lights, W, H, p, &err), &err);
     btf_dataset *ds = open_ok(path);
     const btf_ubo2014_info *u = btf_dataset_ubo2014(ds);
     assert_string_equal(u->signature, p->signature);
@@ -490,9 +443,9 @@ static void test_dfmf_transposed(void **state)
                              .u = {u[0], u[1], u[2]}, .sxv = {sxv[0], sxv[1], sxv[2]}};
     const char *p = tu_fmt("%s/dfmf_plain.btf", tu_dir);
     btf_error err = {0};
-    TU_OK(btf_ubo2014_write_factors(p, &views, &lights, W, H, &f, &err), &err);
+    TU_OK(btf_ubo2014_write_factors(p, &tu_small_views, &tu_small_lights, W, H, &f, &err), &err);
     size_t len;
-    unsigned char *d = slurp(p, &len), *t = malloc(len);
+    unsigned char *d = tu_slurp(p, &len), *t = malloc(len);
     /* rotations, num_components, color_model, color_mean, color_transform */
     size_t at = header_end(d, 10) + 4 + 4 + 4 + 12 + 36;
     memcpy(t, d, at);
@@ -568,7 +521,7 @@ static void test_signature_hazard(void **state)
         const char *p = tu_fmt("%s/hz_%zu.btf", tu_dir, i);
         write_small(p, &cases[i], NULL);
         size_t n, m;
-        unsigned char *d = slurp(p, &n);
+        unsigned char *d = tu_slurp(p, &n);
         size_t sl = strlen(cases[i].sig);
         uint32_t meta = ubo_rd32(d + sl);
         uint32_t len = (0x152u - meta % 256u) % 256u; /* meta_size's low byte becomes 0x52 */
@@ -587,27 +540,6 @@ static void test_signature_hazard(void **state)
 
 /* ---------------------------------------------------------- bad input */
 
-static void expect_open_fails(const unsigned char *d, size_t n, const char *what, int code)
-{
-    const char *p = tu_fmt("%s/bad.btf", tu_dir);
-    tu_write_file(p, d, n);
-    btf_error err = {0};
-    btf_dataset *ds = NULL;
-    int rc = btf_dataset_open(p, NULL, &ds, &err);
-    if (rc == 0)
-        print_error("opened although %s\n", what ? what : "bad");
-    assert_int_not_equal(rc, 0);
-    assert_null(ds);
-    if (code)
-        assert_int_equal(rc, code);
-    assert_non_null(strstr(err.msg, p));
-    assert_null(strchr(err.msg, '\n'));
-    if (what && !strstr(err.msg, what))
-        print_error("message \"%s\" lacks \"%s\"\n", err.msg, what);
-    if (what)
-        assert_non_null(strstr(err.msg, what));
-}
-
 /* Cut at every offset of the header and a stride through the data, one
  * byte short, one byte too many: one line naming the input each time. */
 static void expect_truncations_fail(const unsigned char *d, size_t n, size_t header)
@@ -623,11 +555,11 @@ static void expect_truncations_fail(const unsigned char *d, size_t n, size_t hea
         assert_null(strchr(err.msg, '\n'));
         ubo_free(&f);
     }
-    expect_open_fails(d, n - 1, "truncated", BTF_E_FORMAT);
+    tu_expect_open_fails(d, n - 1, "truncated", BTF_E_FORMAT);
     unsigned char *e = malloc(n + 1);
     memcpy(e, d, n);
     e[n] = 0;
-    expect_open_fails(e, n + 1, "after the end", BTF_E_FORMAT);
+    tu_expect_open_fails(e, n + 1, "after the end", BTF_E_FORMAT);
     free(e);
 }
 
@@ -651,7 +583,7 @@ static void expect_patch_fails(const unsigned char *d, size_t n, size_t at, uint
                                const char *what, int code)
 {
     unsigned char *e = patched(d, n, at, v);
-    expect_open_fails(e, n, what, code);
+    tu_expect_open_fails(e, n, what, code);
     free(e);
 }
 
@@ -660,9 +592,9 @@ static void expect_half_nan_fails(const unsigned char *d, size_t n, size_t at, c
     unsigned char *e = malloc(n);
     memcpy(e, d, n);
     e[at] = 0x00, e[at + 1] = 0x7e; /* a half NaN */
-    expect_open_fails(e, n, what, BTF_E_DATA);
+    tu_expect_open_fails(e, n, what, BTF_E_DATA);
     e[at + 1] = 0x7c; /* +Inf */
-    expect_open_fails(e, n, what, BTF_E_DATA);
+    tu_expect_open_fails(e, n, what, BTF_E_DATA);
     free(e);
 }
 
@@ -679,13 +611,13 @@ static void test_fmf_bad_input(void **state)
         const char *p = tu_fmt("%s/badfmf_%d.btf", tu_dir, i);
         write_small(p, &vc, NULL);
         size_t n, sl = strlen(sigs[i]);
-        unsigned char *d = slurp(p, &n);
+        unsigned char *d = tu_slurp(p, &n);
         size_t at = header_end(d, sl) + (i < 2 ? 4 : 0); /* past the rotations field */
         if (i == 0) { /* the extended header: version, DRR, the height map's sides */
             unsigned char *e = malloc(n);
             memcpy(e, d, n);
             e[at] = 3;
-            expect_open_fails(e, n, "FMF header version 3 is not supported", BTF_E_UNSUPPORTED);
+            tu_expect_open_fails(e, n, "FMF header version 3 is not supported", BTF_E_UNSUPPORTED);
             free(e);
             unsigned char *big = patched(d, n, at + 5, 0x10000); /* a 2^16 x 2^16 map */
             expect_patch_fails(big, n, at + 9, 0x10000, "the height map", BTF_E_FORMAT);
@@ -700,7 +632,7 @@ static void test_fmf_bad_input(void **state)
         unsigned char *e = malloc(n);
         memcpy(e, d, n);
         e[at + 4] = 3;
-        expect_open_fails(e, n, "scalar size 3", BTF_E_FORMAT);
+        tu_expect_open_fails(e, n, "scalar size 3", BTF_E_FORMAT);
         free(e);
         expect_patch_fails(d, n, at + 5, 0x7fffffff, "does not fit", BTF_E_FORMAT);
         expect_patch_fails(d, n, at + 5, 0, "0 components", BTF_E_FORMAT);
@@ -730,7 +662,7 @@ static void test_pvf_bad_input(void **state)
         if (i < 2) {
             variant_case vc = {i ? BTF_UBO2014_PVF06 : BTF_UBO2014_PVF, sig, 2, 2, 0};
             write_small(p, &vc, NULL);
-            d = slurp(p, &n);
+            d = tu_slurp(p, &n);
             at = header_end(d, sl) + (i == 0 ? 4 : 0); /* num_components */
         } else { /* the legacy header, from factors */
             uint32_t dim = 3 * NL, px = W * H, k = 2;
@@ -740,11 +672,11 @@ static void test_pvf_bad_input(void **state)
             ubo_pvf_view vv[3] = {v, v, v};
             ubo_pvf pv = {sig, 1, 2, k, vv};
             btf_error err = {0};
-            TU_OK(ubo_write_pvf(p, &views, &lights, W, H, &pv, &err), &err);
+            TU_OK(ubo_write_pvf(p, &tu_small_views, &tu_small_lights, W, H, &pv, &err), &err);
             free(mean);
             free(c);
             free(w);
-            d = slurp(p, &n);
+            d = tu_slurp(p, &n);
             assert_int_equal(ubo_rd32(d + sl), 301074);
             expect_patch_fails(d, n, sl + 12, 0, "image size", BTF_E_FORMAT);
             at = sl + 12; /* so that at + 4 is num_view_slots */
@@ -758,7 +690,7 @@ static void test_pvf_bad_input(void **state)
         unsigned char *e = malloc(n);
         memcpy(e, d, n);
         e[s0] = 5;
-        expect_open_fails(e, n, "scalar size 5", BTF_E_FORMAT);
+        tu_expect_open_fails(e, n, "scalar size 5", BTF_E_FORMAT);
         free(e);
         expect_patch_fails(d, n, s0 + 1, 0x40000000, "does not fit", BTF_E_FORMAT);
         expect_patch_fails(d, n, s0 + 5, W * H + 1, "PVF slot 0 has dim", BTF_E_FORMAT);
@@ -776,7 +708,7 @@ static void test_pvf_bad_input(void **state)
 
 static btf_status negative_image(void *user, int v, int l, btf_image *out, btf_error *err)
 {
-    btf_status rc = small_image(user, v, l, out, err);
+    btf_status rc = tu_small_image(user, v, l, out, err);
     if (rc == BTF_OK && v == 1 && l == 2)
         out->data[7] = -0.5f; /* below -1e-5: no logarithm */
     return rc;
@@ -794,7 +726,8 @@ static void expect_write_fails(int variant, int scalar, uint64_t max_bytes, btf_
     o.max_bytes = max_bytes;
     o.components = 3;
     btf_error err = {0};
-    int rc = btf_ubo2014_write(p, &views, &lights, W, H, fn, NULL, &o, NULL, &err);
+    int rc = btf_ubo2014_write(p, &tu_small_views, &tu_small_lights, W, H, fn, NULL, &o, NULL,
+                               &err);
     assert_int_equal(rc, code);
     assert_non_null(strstr(err.msg, p));
     assert_null(strchr(err.msg, '\n'));
@@ -807,14 +740,16 @@ static void expect_write_fails(int variant, int scalar, uint64_t max_bytes, btf_
 static void test_writer_refusals(void **state)
 {
     (void)state;
-    expect_write_fails(8, 2, 0, small_image, "variant 8", BTF_E_ARG);
-    expect_write_fails(-1, 2, 0, small_image, "variant -1", BTF_E_ARG);
-    expect_write_fails(BTF_UBO2014_FMF, 8, 0, small_image, "scalar size 8", BTF_E_ARG);
-    expect_write_fails(BTF_UBO2014_PVF06, 3, 0, small_image, "scalar size 3", BTF_E_ARG);
+    expect_write_fails(8, 2, 0, tu_small_image, "variant 8", BTF_E_ARG);
+    expect_write_fails(-1, 2, 0, tu_small_image, "variant -1", BTF_E_ARG);
+    expect_write_fails(BTF_UBO2014_FMF, 8, 0, tu_small_image, "scalar size 8", BTF_E_ARG);
+    expect_write_fails(BTF_UBO2014_PVF06, 3, 0, tu_small_image, "scalar size 3", BTF_E_ARG);
     expect_write_fails(BTF_UBO2014_FMF_LOG, 2, 0, negative_image,
                        "image (view 1, light 2) has the value -0.5", BTF_E_ARG);
-    expect_write_fails(BTF_UBO2014_FMF06, 2, 1000, small_image, "over the cap", BTF_E_UNSUPPORTED);
-    expect_write_fails(BTF_UBO2014_PVF, 2, 1000, small_image, "over the cap", BTF_E_UNSUPPORTED);
+    expect_write_fails(BTF_UBO2014_FMF06, 2, 1000, tu_small_image, "over the cap",
+                       BTF_E_UNSUPPORTED);
+    expect_write_fails(BTF_UBO2014_PVF, 2, 1000, tu_small_image, "over the cap",
+                       BTF_E_UNSUPPORTED);
     /* the linear FMF stores the negative value as it is */
     const char *p = tu_fmt("%s/negative.btf", tu_dir);
     btf_ubo2014_write_opts o = btf_ubo2014_write_defaults();
@@ -822,7 +757,8 @@ static void test_writer_refusals(void **state)
     o.scalar_size = 4;
     o.components = 36;
     btf_error err = {0};
-    TU_OK(btf_ubo2014_write(p, &views, &lights, W, H, negative_image, NULL, &o, NULL, &err), &err);
+    TU_OK(btf_ubo2014_write(p, &tu_small_views, &tu_small_lights, W, H, negative_image, NULL, &o,
+                            NULL, &err), &err);
     btf_dataset *ds = open_ok(p);
     btf_image img = {0};
     assert_int_equal(btf_dataset_read(ds, 1, 2, &img, NULL), 0);
@@ -874,7 +810,7 @@ static void test_fuzz_seeds(void **state)
         else
             TU_OK(ubo_write_pvf(p, &d2, &d2, w, h, &seeds[i].pvf, &err), &err);
         size_t len;
-        unsigned char *bytes = slurp(p, &len);
+        unsigned char *bytes = tu_slurp(p, &len);
         ubo_file f;
         TU_OK(ubo_parse(bytes, len, "seed", 0, &f, &err), &err);
         float img[3 * 6];
@@ -915,5 +851,5 @@ int main(void)
         cmocka_unit_test(test_writer_refusals),
         cmocka_unit_test(test_fuzz_seeds),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, tu_setup_small, tu_teardown_small);
 }

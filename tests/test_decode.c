@@ -15,21 +15,6 @@
 #include <sys/stat.h>
 #include <zlib.h>
 
-static unsigned char *slurp(const char *path, size_t *n)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long len = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *b = malloc((size_t)len + 1);
-    assert_non_null(b);
-    assert_int_equal(fread(b, 1, (size_t)len, f), (size_t)len);
-    fclose(f);
-    *n = (size_t)len;
-    return b;
-}
-
 static void put_be32(unsigned char *p, uint32_t v)
 {
     p[0] = (unsigned char)(v >> 24), p[1] = (unsigned char)(v >> 16);
@@ -144,7 +129,7 @@ static void pixel_cap(void **state)
     assert_non_null(strstr(e.msg, "256000000"));
     assert_non_null(strstr(e.msg, "67108864"));
     size_t n;
-    unsigned char *bytes = slurp(big, &n);
+    unsigned char *bytes = tu_slurp(big, &n);
     assert_int_equal(btf_image_decode(bytes, n, "mem", &ro, &img, &e), BTF_E_UNSUPPORTED);
     assert_true(strncmp(e.msg, "mem: ", 5) == 0);
     free(bytes);
@@ -394,7 +379,7 @@ static void corrupt_bodies(void **state)
     gradient_file(jpg, 1);
     gradient_file(png, 0);
     size_t n;
-    unsigned char *d = slurp(jpg, &n);
+    unsigned char *d = tu_slurp(jpg, &n);
     /* The scan data: after the SOS segment, up to the EOI marker. */
     size_t sos = 2;
     while (sos + 4 < n && !(d[sos] == 0xFF && d[sos + 1] == 0xDA))
@@ -416,7 +401,7 @@ static void corrupt_bodies(void **state)
     free(b);
     free(d);
 
-    d = slurp(png, &n);
+    d = tu_slurp(png, &n);
     size_t idat = 8;
     while (idat + 8 < n && memcmp(d + idat + 4, "IDAT", 4) != 0)
         idat += 12 + ((size_t)d[idat] << 24 | (size_t)d[idat + 1] << 16 |
@@ -451,7 +436,7 @@ static void corrupt_bodies(void **state)
     const char *victim = tu_fmt("%s/tv060_pv018/02387 tl045 pl200 tv060 pv018.jpg", ds);
     char vpath[4096];
     snprintf(vpath, sizeof vpath, "%s", victim);
-    d = slurp(vpath, &n);
+    d = tu_slurp(vpath, &n);
     sos = 2;
     while (sos + 4 < n && !(d[sos] == 0xFF && d[sos + 1] == 0xDA))
         sos += 2 + ((size_t)d[sos + 2] << 8 | d[sos + 3]);

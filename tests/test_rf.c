@@ -16,9 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#include <zlib.h>
 
-static char *dir;
 static btf_dataset *ds;
 static btf_rf_model ptm, lobes, laf;
 static btf_rf_fit_info ptm_info, lobes_info, laf_info;
@@ -36,16 +34,10 @@ static void fit(int kind, int threads, btf_rf_model *m, btf_rf_fit_info *info)
 
 static int setup(void **state)
 {
-    (void)state;
-    dir = tu_tmpdir();
-    btf_error e = {0};
-    btf_generate_opts g = {.size = 16, .seed = 3};
-    snprintf(dataset_path, sizeof dataset_path, "%s/leather", dir);
-    if (btf_generate("leather", dataset_path, &g, &e) != 0 ||
-        btf_dataset_open(dataset_path, NULL, &ds, &e) != 0) {
-        fprintf(stderr, "setup: %s\n", e.msg);
+    if (tu_setup_dir(state) ||
+        tu_generate_dataset("leather", 16, 3, dataset_path, sizeof dataset_path, &ds))
         return -1;
-    }
+    btf_error e = {0};
     btf_rf_opts o = btf_rf_defaults();
     o.threads = 2;
     o.info = &ptm_info;
@@ -62,14 +54,11 @@ static int setup(void **state)
 
 static int teardown(void **state)
 {
-    (void)state;
     btf_rf_model_free(&ptm);
     btf_rf_model_free(&lobes);
     btf_rf_model_free(&laf);
     btf_dataset_close(ds);
-    tu_rmtree(dir);
-    free(dir);
-    return 0;
+    return tu_teardown_dir(state);
 }
 
 /* The unit light vectors of ubo81. */
@@ -618,7 +607,7 @@ static void file_round_trip(void **state)
         TU_OK(btf_rf_encode(&back, &d2, &n2, &e), &e);
         assert_int_equal(n1, n2);
         assert_memory_equal(d1, d2, n1);
-        const char *path = tu_fmt("%s/m%d.btfcar", dir, k);
+        const char *path = tu_fmt("%s/m%d.btfcar", tu_dir, k);
         TU_OK(btf_rf_write(path, ms[k], &e), &e);
         btf_rf_model_free(&back);
         TU_OK(btf_rf_read(path, &back, &e), &e);
@@ -627,25 +616,6 @@ static void file_round_trip(void **state)
         free(d1);
         free(d2);
     }
-}
-
-/* A tiny model: 2 views, 1 light, 1 x 2 texels. */
-static void tiny_model(btf_rf_model *m)
-{
-    btf_error e = {0};
-    memset(m, 0, sizeof *m);
-    btf_dir v[2] = {{0, 0}, {30, 90}}, l[1] = {{45, 0}};
-    TU_OK(btf_dirset_from_list(&m->views, v, 2, &e), &e);
-    TU_OK(btf_dirset_from_list(&m->lights, l, 1, &e), &e);
-    m->fit = BTF_RF_PTM, m->params = 6, m->slots = 9, m->fields = 2;
-    m->width = 1, m->height = 2;
-    m->lo = calloc(18, sizeof(float));
-    m->hi = calloc(18, sizeof(float));
-    m->codes = calloc(36, sizeof(uint16_t));
-    for (int i = 0; i < 18; i++)
-        m->hi[i] = 1.0f;
-    for (int i = 0; i < 36; i++)
-        m->codes[i] = (uint16_t)(i * 1000);
 }
 
 /* btf_rf_report_write: the summary's numbers are the model file's bytes,
@@ -660,7 +630,7 @@ static void rf_report(void **state)
     o.sphere_size = 32, o.worst = 2, o.threads = 2;
     btf_report_summary sum;
     char d[4096];
-    snprintf(d, sizeof d, "%s/rf-report", dir);
+    snprintf(d, sizeof d, "%s/rf-report", tu_dir);
     TU_OK(btf_rf_report_write(ds, &lobes, d, &o, &sum, &e), &e);
     unsigned char *data;
     size_t size;
@@ -676,12 +646,12 @@ static void rf_report(void **state)
     assert_true(isfinite(sum.mean_combined) && sum.worst_combined >= sum.mean_combined);
     assert_int_equal(tu_count_files(d), 6 + 4); /* pairs, index, json, sphere, heat map */
     o.sweep = 1;
-    snprintf(d, sizeof d, "%s/rf-report-2", dir);
+    snprintf(d, sizeof d, "%s/rf-report-2", tu_dir);
     assert_int_equal(btf_rf_report_write(ds, &lobes, d, &o, &sum, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "sweep"));
     o.sweep = 0;
     btf_rf_model tiny;
-    tiny_model(&tiny);
+    tu_rf_tiny_model(&tiny, 1, 2);
     assert_int_equal(btf_rf_report_write(ds, &tiny, d, &o, &sum, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "does not describe"));
     btf_rf_model_free(&tiny);
@@ -690,51 +660,24 @@ static void rf_report(void **state)
     assert_int_equal(access(d, F_OK), -1);
 }
 
-/* Re-wraps a (modified) payload as a stored container with a valid CRC. */
-static unsigned char *rewrap(const unsigned char *payload, size_t n, size_t *size)
-{
-    unsigned char *out = malloc(26 + n + 4);
-    memcpy(out, "\x89" "BTFRFL\r\n\x1a\n", 11);
-    out[11] = 1, out[12] = 0, out[13] = 0, out[14] = 0, out[15] = 26, out[16] = 0, out[17] = 0;
-    for (int i = 0; i < 4; i++)
-        out[18 + i] = out[22 + i] = (unsigned char)(n >> (8 * i));
-    memcpy(out + 26, payload, n);
-    uint32_t crc = (uint32_t)crc32(0L, out, (uInt)(26 + n));
-    for (int i = 0; i < 4; i++)
-        out[26 + n + i] = (unsigned char)(crc >> (8 * i));
-    *size = 26 + n + 4;
-    return out;
-}
-
 static void expect_format_error(const unsigned char *d, size_t n, const char *what)
 {
     btf_rf_model m;
     btf_error e = {0};
-    int rc = btf_rf_decode(d, n, "bad.rf", &m, &e);
-    if (rc != BTF_E_FORMAT)
-        print_error("%s: rc %d, %s\n", what, rc, e.msg);
-    assert_int_equal(rc, BTF_E_FORMAT);
-    assert_true(strncmp(e.msg, "bad.rf: ", 8) == 0);
-    assert_null(m.codes);
+    tu_rf_expect_format_error(d, n, what, &m, &e);
 }
 
 static void corrupt_files_are_errors(void **state)
 {
     (void)state;
     btf_rf_model m;
-    tiny_model(&m);
+    tu_rf_tiny_model(&m, 1, 2);
     btf_error e = {0};
     unsigned char *d;
     size_t n;
     TU_OK(btf_rf_encode(&m, &d, &n, &e), &e);
     /* every truncation, every single flipped bit of the first bytes and the CRC */
-    for (size_t k = 0; k < n; k++)
-        expect_format_error(d, k, "truncated");
-    for (size_t k = 0; k < n; k++) {
-        d[k] ^= 0x10;
-        expect_format_error(d, n, "flipped");
-        d[k] ^= 0x10;
-    }
+    tu_rf_expect_damage_fails(d, n, expect_format_error);
     /* text-mode damage and a newer major version */
     unsigned char *t = malloc(n + 1);
     memcpy(t, d, 7);
@@ -743,27 +686,13 @@ static void corrupt_files_are_errors(void **state)
     expect_format_error(t, n - 1, "text mode");
     /* valid CRC, wrong content: the payload rewrapped after changes */
     unsigned char *payload = malloc(1 << 16);
-    uLongf plen = 1 << 16;
-    size_t hdr = 26;
-    uint32_t stored = d[22] | d[23] << 8 | d[24] << 16 | (uint32_t)d[25] << 24;
-    if (d[17] == 1)
-        assert_int_equal(uncompress(payload, &plen, d + hdr, stored), Z_OK);
-    else
-        memcpy(payload, d + hdr, stored), plen = stored;
+    size_t plen = tu_rf_payload(d, payload, 1 << 16);
     unsigned char *p2 = malloc(plen);
     size_t sz;
-    /* find RFHD and RFQR */
-    size_t at = 0, rfhd = 0, rfqr = 0;
-    while (at + 8 <= plen) {
-        size_t len = payload[at + 4] | payload[at + 5] << 8 | payload[at + 6] << 16;
-        if (!memcmp(payload + at, "RFHD", 4))
-            rfhd = at + 8;
-        if (!memcmp(payload + at, "RFQR", 4))
-            rfqr = at + 8;
-        at += 8 + len;
-    }
+    size_t rfhd = tu_rf_section(payload, plen, "RFHD");
+    size_t rfqr = tu_rf_section(payload, plen, "RFQR");
     assert_true(rfhd && rfqr);
-    unsigned char *w = rewrap(payload, plen, &sz); /* unchanged: still valid */
+    unsigned char *w = tu_rf_rewrap(payload, plen, 1, &sz); /* unchanged: still valid */
     btf_rf_model ok;
     TU_OK(btf_rf_decode(w, sz, "ok", &ok, &e), &e);
     assert_same_model(&m, &ok);
@@ -780,23 +709,23 @@ static void corrupt_files_are_errors(void **state)
         p2[bad[i].off] = bad[i].val;
         if (bad[i].off == rfqr + 3)
             p2[rfqr + 2] = 0xc0; /* 0x7fc0....: NaN; 0x4fc0....: 6.4e9 > hi */
-        w = rewrap(p2, plen, &sz);
+        w = tu_rf_rewrap(p2, plen, 1, &sz);
         expect_format_error(w, sz, bad[i].what);
         free(w);
     }
     /* a section missing; a section twice */
     memcpy(p2, payload, plen);
     memcpy(p2 + rfhd - 8, "XXXX", 4);
-    w = rewrap(p2, plen, &sz);
+    w = tu_rf_rewrap(p2, plen, 1, &sz);
     expect_format_error(w, sz, "no RFHD");
     free(w);
     memcpy(p2, payload, plen);
     memcpy(p2 + rfqr - 8, "RFHD", 4);
-    w = rewrap(p2, plen, &sz);
+    w = tu_rf_rewrap(p2, plen, 1, &sz);
     expect_format_error(w, sz, "RFHD twice");
     free(w);
     /* The CAR reader refuses an RF file and the RF reader a CAR file, by name. */
-    const char *rfpath = tu_fmt("%s/tiny.btfcar", dir);
+    const char *rfpath = tu_fmt("%s/tiny.btfcar", tu_dir);
     tu_write_file(rfpath, d, n);
     btf_model cm;
     assert_int_not_equal(btf_model_read(rfpath, &cm, &e), BTF_OK);
@@ -820,7 +749,7 @@ static void command_line(void **state)
     (void)state;
     const char *cli = tu_cli();
     char *errtext = NULL;
-    const char *model = tu_fmt("%s/cli-rf.btfcar", dir);
+    const char *model = tu_fmt("%s/cli-rf.btfcar", tu_dir);
     char m[4096];
     snprintf(m, sizeof m, "%s", model);
     assert_int_equal(tu_run(tu_fmt("%s analyse -q %s --family rf --fit lobes --lobes 1 "
@@ -841,7 +770,7 @@ static void command_line(void **state)
     assert_int_equal(status, 0);
     assert_non_null(strstr(out, "\"format\": \"btfcar-rf-model\""));
     free(out);
-    const char *png = tu_fmt("%s/rf.png", dir);
+    const char *png = tu_fmt("%s/rf.png", tu_dir);
     char p[4096];
     snprintf(p, sizeof p, "%s", png);
     assert_int_equal(tu_run(tu_fmt("%s render -q %s --view 30,60 --light 45,0 --size 32x24 "
@@ -853,7 +782,7 @@ static void command_line(void **state)
     btf_image_free(&img);
     /* usage errors: exit status 2 */
     /* a scene: the objects under its lights */
-    const char *scene = tu_fmt("%s/rf-scene.json", dir);
+    const char *scene = tu_fmt("%s/rf-scene.json", tu_dir);
     char sp[4096];
     snprintf(sp, sizeof sp, "%s", scene);
     const char *json = "{\"camera\": {\"position\": [0, 0, 4], \"target\": [0, 0, 0], "
@@ -871,7 +800,7 @@ static void command_line(void **state)
     assert_int_equal(img.width, 40);
     assert_int_equal(img.height, 30);
     btf_image_free(&img);
-    assert_int_equal(tu_run(tu_fmt("%s render %s --scene %s/missing.json -o %s", cli, m, dir,
+    assert_int_equal(tu_run(tu_fmt("%s render %s --scene %s/missing.json -o %s", cli, m, tu_dir,
                                    p), NULL), 1);
     /* the CAR model's texture options do not apply: usage errors, one
      * line naming the option, no output */
@@ -890,11 +819,11 @@ static void command_line(void **state)
                                    cli, m, p), NULL), 2);
     assert_int_equal(access(p, F_OK), -1);
     assert_int_equal(tu_run(tu_fmt("%s analyse %s --fit ptm -o %s/x.btfcar", cli,
-                                   dataset_path, dir), NULL), 2);
+                                   dataset_path, tu_dir), NULL), 2);
     assert_int_equal(tu_run(tu_fmt("%s analyse %s --family rf --subspaces 3 -o %s/x.btfcar",
-                                   cli, dataset_path, dir), NULL), 2);
+                                   cli, dataset_path, tu_dir), NULL), 2);
     assert_int_equal(tu_run(tu_fmt("%s analyse %s --family rf --fit cubic -o %s/x.btfcar",
-                                   cli, dataset_path, dir), NULL), 2);
+                                   cli, dataset_path, tu_dir), NULL), 2);
     /* a damaged file: one line naming it, exit 1, no crash */
     FILE *f = fopen(m, "r+b");
     assert_non_null(f);

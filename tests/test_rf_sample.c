@@ -20,11 +20,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#include <zlib.h>
 
 #define SIDE 16
 
-static char *dir;
 static btf_dataset *ds;
 static char dataset_path[4096];
 static btf_rf_model full, s8;          /* the whole PTM fit; an 8x8 sample on a 24x20 surface */
@@ -41,14 +39,10 @@ static btf_rf_sample_opts sample_opts(int n, int sw, int sh, uint64_t seed)
 
 static int setup(void **state)
 {
-    (void)state;
-    dir = tu_tmpdir();
+    if (tu_setup_dir(state) ||
+        tu_generate_dataset("fabric", SIDE, 5, dataset_path, sizeof dataset_path, &ds))
+        return -1;
     btf_error e = {0};
-    btf_generate_opts g = {.size = SIDE, .seed = 5};
-    snprintf(dataset_path, sizeof dataset_path, "%s/fabric", dir);
-    if (btf_generate("fabric", dataset_path, &g, &e) != 0 ||
-        btf_dataset_open(dataset_path, NULL, &ds, &e) != 0)
-        return fprintf(stderr, "setup: %s\n", e.msg), -1;
     btf_rf_opts o = btf_rf_defaults();
     o.threads = 2, o.info = &full_info;
     if (btf_rf_fit(ds, &o, &full, &e) != 0)
@@ -62,13 +56,10 @@ static int setup(void **state)
 
 static int teardown(void **state)
 {
-    (void)state;
     btf_rf_model_free(&full);
     btf_rf_model_free(&s8);
     btf_dataset_close(ds);
-    tu_rmtree(dir);
-    free(dir);
-    return 0;
+    return tu_teardown_dir(state);
 }
 
 static void assert_map_in_range(const btf_rf_model *m)
@@ -411,55 +402,20 @@ static void file_round_trip(void **state)
 /* A tiny sampled model: 2 views, 1 light, a 2 x 1 sample on a 3 x 2 surface. */
 static void tiny_sampled(btf_rf_model *m)
 {
-    btf_error e = {0};
-    memset(m, 0, sizeof *m);
-    btf_dir v[2] = {{0, 0}, {30, 90}}, l[1] = {{45, 0}};
-    TU_OK(btf_dirset_from_list(&m->views, v, 2, &e), &e);
-    TU_OK(btf_dirset_from_list(&m->lights, l, 1, &e), &e);
-    m->fit = BTF_RF_PTM, m->params = 6, m->slots = 9, m->fields = 2;
-    m->width = 2, m->height = 1;
-    m->lo = calloc(18, sizeof(float));
-    m->hi = calloc(18, sizeof(float));
-    m->codes = calloc(36, sizeof(uint16_t));
-    for (int i = 0; i < 18; i++)
-        m->hi[i] = 1.0f;
-    for (int i = 0; i < 36; i++)
-        m->codes[i] = (uint16_t)(i * 1000);
+    tu_rf_tiny_model(m, 2, 1);
     m->surface_width = 3, m->surface_height = 2, m->sample_x = 1, m->sample_y = 0;
     m->map = calloc(12, sizeof(uint16_t));
     for (int t = 0; t < 6; t++)
         m->map[2 * t] = (uint16_t)((t + 1) % 2);
 }
 
-/* Re-wraps a (modified) payload as a stored container of the given major
- * version with a valid CRC. */
-static unsigned char *rewrap(const unsigned char *payload, size_t n, int major, size_t *size)
-{
-    unsigned char *out = malloc(26 + n + 4);
-    memcpy(out, "\x89" "BTFRFL\r\n\x1a\n", 11);
-    out[11] = (unsigned char)major, out[12] = 0, out[13] = 0, out[14] = 0, out[15] = 26,
-    out[16] = 0, out[17] = 0;
-    for (int i = 0; i < 4; i++)
-        out[18 + i] = out[22 + i] = (unsigned char)(n >> (8 * i));
-    memcpy(out + 26, payload, n);
-    uint32_t crc = (uint32_t)crc32(0L, out, (uInt)(26 + n));
-    for (int i = 0; i < 4; i++)
-        out[26 + n + i] = (unsigned char)(crc >> (8 * i));
-    *size = 26 + n + 4;
-    return out;
-}
-
+/* A format error of one line that leaves no map either. */
 static void expect_format_error(const unsigned char *d, size_t n, const char *what)
 {
     btf_rf_model m;
     btf_error e = {0};
-    int rc = btf_rf_decode(d, n, "bad.rf", &m, &e);
-    if (rc != BTF_E_FORMAT)
-        print_error("%s: rc %d, %s\n", what, rc, e.msg);
-    assert_int_equal(rc, BTF_E_FORMAT);
-    assert_true(strncmp(e.msg, "bad.rf: ", 8) == 0);
+    tu_rf_expect_format_error(d, n, what, &m, &e);
     assert_null(strchr(e.msg, '\n'));
-    assert_null(m.codes);
     assert_null(m.map);
 }
 
@@ -476,37 +432,20 @@ static void corrupt_maps_are_errors(void **state)
     TU_OK(btf_rf_decode(d, n, "ok", &back, &e), &e);
     assert_same_sampled(&m, &back);
     btf_rf_model_free(&back);
-    for (size_t k = 0; k < n; k++)
-        expect_format_error(d, k, "truncated");
-    for (size_t k = 0; k < n; k++) {
-        d[k] ^= 0x10;
-        expect_format_error(d, n, "flipped");
-        d[k] ^= 0x10;
-    }
+    tu_rf_expect_damage_fails(d, n, expect_format_error);
     /* the payload, for changes with a valid CRC */
     unsigned char payload[4096];
-    uLongf plen = sizeof payload;
-    uint32_t stored = d[22] | d[23] << 8 | d[24] << 16 | (uint32_t)d[25] << 24;
-    if (d[17] == 1)
-        assert_int_equal(uncompress(payload, &plen, d + 26, stored), Z_OK);
-    else
-        memcpy(payload, d + 26, stored), plen = stored;
-    size_t at = 0, rfmp = 0;
-    while (at + 8 <= plen) {
-        size_t len = payload[at + 4] | payload[at + 5] << 8 | payload[at + 6] << 16;
-        if (!memcmp(payload + at, "RFMP", 4))
-            rfmp = at + 8;
-        at += 8 + len;
-    }
+    size_t plen = tu_rf_payload(d, payload, sizeof payload);
+    size_t rfmp = tu_rf_section(payload, plen, "RFMP");
     assert_true(rfmp > 0);
     unsigned char p2[4096];
     size_t sz;
-    unsigned char *w = rewrap(payload, plen, 2, &sz); /* unchanged: valid */
+    unsigned char *w = tu_rf_rewrap(payload, plen, 2, &sz); /* unchanged: valid */
     TU_OK(btf_rf_decode(w, sz, "ok", &back, &e), &e);
     assert_same_sampled(&m, &back);
     btf_rf_model_free(&back);
     free(w);
-    w = rewrap(payload, plen, 1, &sz); /* a map in a format 1 file */
+    w = tu_rf_rewrap(payload, plen, 1, &sz); /* a map in a format 1 file */
     expect_format_error(w, sz, "RFMP in format 1");
     free(w);
     struct { size_t off; unsigned char val; const char *what; } bad[] = {
@@ -518,19 +457,19 @@ static void corrupt_maps_are_errors(void **state)
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         memcpy(p2, payload, plen);
         p2[bad[i].off] = bad[i].val;
-        w = rewrap(p2, plen, 2, &sz);
+        w = tu_rf_rewrap(p2, plen, 2, &sz);
         expect_format_error(w, sz, bad[i].what);
         free(w);
     }
     /* a section of the wrong size; a format 2 file without a map */
     memcpy(p2, payload, plen);
     p2[rfmp - 4] ^= 1;
-    w = rewrap(p2, plen, 2, &sz);
+    w = tu_rf_rewrap(p2, plen, 2, &sz);
     expect_format_error(w, sz, "RFMP length");
     free(w);
     memcpy(p2, payload, plen);
     memcpy(p2 + rfmp - 8, "XXXX", 4);
-    w = rewrap(p2, plen, 2, &sz);
+    w = tu_rf_rewrap(p2, plen, 2, &sz);
     expect_format_error(w, sz, "format 2 without RFMP");
     free(w);
     /* the encoder refuses a map entry out of the sample */
@@ -560,7 +499,7 @@ static void report_of_a_sampled_model(void **state)
     ro.sphere_size = 32, ro.worst = 1, ro.threads = 2;
     btf_report_summary sum;
     char d[4096];
-    snprintf(d, sizeof d, "%s/sampled-report", dir);
+    snprintf(d, sizeof d, "%s/sampled-report", tu_dir);
     TU_OK(btf_rf_report_write(ds, &m, d, &ro, &sum, &e), &e);
     btf_rf_bytes b;
     TU_OK(btf_rf_model_bytes(&m, &b, &e), &e);
@@ -586,8 +525,8 @@ static void command_line(void **state)
     (void)state;
     const char *cli = tu_cli();
     char m[4096], out[4096];
-    snprintf(m, sizeof m, "%s/cli-s.btfcar", dir);
-    snprintf(out, sizeof out, "%s", tu_fmt("%s/x.btfcar", dir));
+    snprintf(m, sizeof m, "%s/cli-s.btfcar", tu_dir);
+    snprintf(out, sizeof out, "%s", tu_fmt("%s/x.btfcar", tu_dir));
     int status;
     char *text = tu_capture(tu_fmt("%s analyse %s --family rf --sample 8 --surface 20x12 "
                                    "--seed 4 --threads 2 -o %s", cli, dataset_path, m), &status);
@@ -612,7 +551,7 @@ static void command_line(void **state)
     assert_non_null(strstr(text, "\"sample\": {\"x\": "));
     assert_non_null(strstr(text, "\"map_bytes\": 960"));
     free(text);
-    const char *png = tu_fmt("%s/s.png", dir);
+    const char *png = tu_fmt("%s/s.png", tu_dir);
     char p[4096];
     snprintf(p, sizeof p, "%s", png);
     assert_int_equal(tu_run(tu_fmt("%s render -q %s --view 30,60 --light 45,0 --size 32x24 "

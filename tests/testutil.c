@@ -39,6 +39,7 @@ void tu_vk_keep_layer_loaded(void)
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
+#include <zlib.h>
 
 char *tu_dir;
 
@@ -325,4 +326,170 @@ void tu_gpu_no_validation_messages(btf_gpu *g)
         print_error("validation: %u message(s), first: %s\n", n,
                     btf_gpu_first_validation_message(g));
     assert_int_equal(n, 0);
+}
+
+unsigned char *tu_slurp(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long len = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *d = malloc((size_t)len + 1);
+    assert_non_null(d);
+    assert_int_equal(fread(d, 1, (size_t)len, f), (size_t)len);
+    fclose(f);
+    *n = (size_t)len;
+    return d;
+}
+
+btf_dirset tu_small_views, tu_small_lights;
+
+int tu_setup_small(void **state)
+{
+    btf_dir vd[TU_SMALL_NV] = {{0, 0}, {30, 90}, {60, 200}};
+    btf_dir ld[TU_SMALL_NL] = {{0, 0}, {20, 10}, {45, 180}, {75, 300}};
+    if (btf_dirset_from_list(&tu_small_views, vd, TU_SMALL_NV, NULL) ||
+        btf_dirset_from_list(&tu_small_lights, ld, TU_SMALL_NL, NULL))
+        return -1;
+    return tu_setup_dir(state);
+}
+
+int tu_teardown_small(void **state)
+{
+    btf_dirset_free(&tu_small_views);
+    btf_dirset_free(&tu_small_lights);
+    return tu_teardown_dir(state);
+}
+
+float tu_small_value(int v, int l, int x, int y, int c)
+{
+    return 0.2f + 0.1f * (float)v + 0.05f * (float)l * (float)(c + 1) +
+           0.01f * (float)(x * (c + 1)) - 0.015f * (float)y + 0.002f * (float)(x * y * l);
+}
+
+btf_status tu_small_image(void *user, int v, int l, btf_image *out, btf_error *err)
+{
+    (void)user;
+    const int w = TU_SMALL_W, h = TU_SMALL_H;
+    btf_status rc = btf_image_alloc(out, w, h, 3, err);
+    for (int y = 0; rc == BTF_OK && y < h; y++)
+        for (int x = 0; x < w; x++)
+            for (int c = 0; c < 3; c++)
+                out->data[(y * w + x) * 3 + c] = tu_small_value(v, l, x, y, c);
+    return rc;
+}
+
+void tu_expect_open_fails(const unsigned char *d, size_t n, const char *what, int code)
+{
+    const char *p = tu_fmt("%s/bad.btf", tu_dir);
+    tu_write_file(p, d, n);
+    btf_error err = {0};
+    btf_dataset *ds = NULL;
+    int rc = btf_dataset_open(p, NULL, &ds, &err);
+    if (rc == 0)
+        print_error("opened although %s\n", what ? what : "bad");
+    assert_int_not_equal(rc, 0);
+    assert_null(ds);
+    if (code)
+        assert_int_equal(rc, code);
+    assert_non_null(strstr(err.msg, p));
+    assert_null(strchr(err.msg, '\n'));
+    if (what && !strstr(err.msg, what))
+        print_error("message \"%s\" lacks \"%s\"\n", err.msg, what);
+    if (what)
+        assert_non_null(strstr(err.msg, what));
+}
+
+int tu_generate_dataset(const char *material, int size, uint64_t seed, char *path,
+                        size_t path_size, btf_dataset **ds)
+{
+    btf_error e = {0};
+    btf_generate_opts g = {.size = size, .seed = seed};
+    snprintf(path, path_size, "%s/%s", tu_dir, material);
+    if (btf_generate(material, path, &g, &e) != 0 || btf_dataset_open(path, NULL, ds, &e) != 0) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
+    return 0;
+}
+
+void tu_rf_tiny_model(btf_rf_model *m, int width, int height)
+{
+    btf_error e = {0};
+    memset(m, 0, sizeof *m);
+    btf_dir v[2] = {{0, 0}, {30, 90}}, l[1] = {{45, 0}};
+    TU_OK(btf_dirset_from_list(&m->views, v, 2, &e), &e);
+    TU_OK(btf_dirset_from_list(&m->lights, l, 1, &e), &e);
+    m->fit = BTF_RF_PTM, m->params = 6, m->slots = 9, m->fields = 2;
+    m->width = width, m->height = height;
+    int planes = m->fields * m->slots, codes = planes * width * height;
+    m->lo = calloc((size_t)planes, sizeof(float));
+    m->hi = calloc((size_t)planes, sizeof(float));
+    m->codes = calloc((size_t)codes, sizeof(uint16_t));
+    for (int i = 0; i < planes; i++)
+        m->hi[i] = 1.0f;
+    for (int i = 0; i < codes; i++)
+        m->codes[i] = (uint16_t)(i * 1000);
+}
+
+size_t tu_rf_payload(const unsigned char *d, unsigned char *payload, size_t cap)
+{
+    uLongf plen = cap;
+    uint32_t stored = d[22] | d[23] << 8 | d[24] << 16 | (uint32_t)d[25] << 24;
+    if (d[17] == 1)
+        assert_int_equal(uncompress(payload, &plen, d + 26, stored), Z_OK);
+    else
+        memcpy(payload, d + 26, stored), plen = stored;
+    return plen;
+}
+
+size_t tu_rf_section(const unsigned char *payload, size_t n, const char *tag)
+{
+    size_t at = 0, found = 0;
+    while (at + 8 <= n) {
+        size_t len = payload[at + 4] | payload[at + 5] << 8 | payload[at + 6] << 16;
+        if (!memcmp(payload + at, tag, 4))
+            found = at + 8;
+        at += 8 + len;
+    }
+    return found;
+}
+
+unsigned char *tu_rf_rewrap(const unsigned char *payload, size_t n, int major, size_t *size)
+{
+    unsigned char *out = malloc(26 + n + 4);
+    memcpy(out, "\x89" "BTFRFL\r\n\x1a\n", 11);
+    out[11] = (unsigned char)major, out[12] = 0, out[13] = 0, out[14] = 0, out[15] = 26,
+    out[16] = 0, out[17] = 0;
+    for (int i = 0; i < 4; i++)
+        out[18 + i] = out[22 + i] = (unsigned char)(n >> (8 * i));
+    memcpy(out + 26, payload, n);
+    uint32_t crc = (uint32_t)crc32(0L, out, (uInt)(26 + n));
+    for (int i = 0; i < 4; i++)
+        out[26 + n + i] = (unsigned char)(crc >> (8 * i));
+    *size = 26 + n + 4;
+    return out;
+}
+
+void tu_rf_expect_format_error(const unsigned char *d, size_t n, const char *what,
+                               btf_rf_model *m, btf_error *e)
+{
+    int rc = btf_rf_decode(d, n, "bad.rf", m, e);
+    if (rc != BTF_E_FORMAT)
+        print_error("%s: rc %d, %s\n", what, rc, e->msg);
+    assert_int_equal(rc, BTF_E_FORMAT);
+    assert_true(strncmp(e->msg, "bad.rf: ", 8) == 0);
+    assert_null(m->codes);
+}
+
+void tu_rf_expect_damage_fails(unsigned char *d, size_t n, tu_rf_expect_fn expect)
+{
+    for (size_t k = 0; k < n; k++)
+        expect(d, k, "truncated");
+    for (size_t k = 0; k < n; k++) {
+        d[k] ^= 0x10;
+        expect(d, n, "flipped");
+        d[k] ^= 0x10;
+    }
 }

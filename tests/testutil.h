@@ -80,6 +80,61 @@ void tu_material_image(const char *name, int size, unsigned seed, btf_dir view, 
                        btf_image *img);
 double tu_median(double *v, int n);
 
+/* Reads a whole file (asserts success) into a malloc'd buffer of its *n
+ * bytes and one more (an empty file gets a buffer too); no more than that,
+ * as tests hand the bytes to readers that ASan should catch running past
+ * their end. */
+unsigned char *tu_slurp(const char *path, size_t *n);
+
+/* The small UBO2014 set of the .btf tests (test_btf_file, test_btf_variants):
+ * TU_SMALL_NV views x TU_SMALL_NL lights of TU_SMALL_W x TU_SMALL_H pixels,
+ * smooth RGB images whose every value a test can compute (tu_small_value).
+ * tu_setup_small and tu_teardown_small are cmocka group fixtures that make
+ * and free the two direction sets, and tu_dir with them. */
+enum { TU_SMALL_W = 8, TU_SMALL_H = 6, TU_SMALL_NV = 3, TU_SMALL_NL = 4 };
+extern btf_dirset tu_small_views, tu_small_lights;
+int tu_setup_small(void **state);
+int tu_teardown_small(void **state);
+/* Channel c of pixel (x, y) of the image of view v, light l. */
+float tu_small_value(int v, int l, int x, int y, int c);
+/* The image of (v, l): a btf_pair_image_fn for btf_ubo2014_write (user unused). */
+btf_status tu_small_image(void *user, int v, int l, btf_image *out, btf_error *err);
+/* Opening the n bytes d, written to tu_dir/bad.btf, as a dataset fails: with
+ * code (unless 0) and one line that names the file and contains what
+ * (unless NULL). */
+void tu_expect_open_fails(const unsigned char *d, size_t n, const char *what, int code);
+
+/* A generated dataset for a group fixture: btf_generate of material at
+ * size x size texels and seed, written to tu_dir/material (path receives
+ * that; path_size bytes) and opened into *ds. 0, or -1 with the reason
+ * printed: a group fixture fails by its return value, not by asserting. */
+int tu_generate_dataset(const char *material, int size, uint64_t seed, char *path,
+                        size_t path_size, btf_dataset **ds);
+
+/* The RF model file's tests (test_rf, test_rf_sample). A tiny PTM model:
+ * 2 views, 1 light, 2 fields of width x height texels, every lo 0, every
+ * hi 1, the codes 0, 1000, 2000, ... */
+void tu_rf_tiny_model(btf_rf_model *m, int width, int height);
+/* The payload of an encoded model file (after its 26-byte container head,
+ * inflated when stored compressed) into payload, of cap bytes; its length. */
+size_t tu_rf_payload(const unsigned char *d, unsigned char *payload, size_t cap);
+/* Where the content of the payload's section tag ("RFHD", ...) starts, past
+ * its 8-byte head; 0 when there is none, the last when there are several. */
+size_t tu_rf_section(const unsigned char *payload, size_t n, const char *tag);
+/* Wraps a (modified) payload of n bytes as a stored container of the given
+ * major format version with a valid CRC, so that the decoder reaches the
+ * change: malloc'd, its size in *size. */
+unsigned char *tu_rf_rewrap(const unsigned char *payload, size_t n, int major, size_t *size);
+/* Decoding the n bytes d as "bad.rf" is BTF_E_FORMAT with a message naming
+ * it, and leaves m->codes NULL; what (the damage) is printed otherwise. m
+ * and e are the caller's, for checks of its own. */
+void tu_rf_expect_format_error(const unsigned char *d, size_t n, const char *what,
+                               btf_rf_model *m, btf_error *e);
+/* Every truncation of an encoded model file, and the file with any one byte
+ * changed (bit 4 flipped, then restored), is an error by expect. */
+typedef void (*tu_rf_expect_fn)(const unsigned char *d, size_t n, const char *what);
+void tu_rf_expect_damage_fails(unsigned char *d, size_t n, tu_rf_expect_fn expect);
+
 /* Asserts a btfcar call succeeded, printing the error message if not. */
 #define TU_OK(call, errp)                                                      \
     do {                                                                       \

@@ -285,7 +285,7 @@ int cmd_synthesise(int argc, char **argv)
                                         NULL}; /* btf_exr_compression's order */
     int size[2] = {0, 0}, preview = 0, half = 0, device = -1, backend_index = 2;
     int as_float = 0, comp = DEFAULT_COMPRESSION, verbose = 0, range = 0, tileable = 0;
-    int match = 0;
+    int match = 0, no_match = 0;
     uint64_t seed = 1;
     double t_start = cli_now();
     cli_opt opts[] = {
@@ -310,9 +310,14 @@ int cmd_synthesise(int argc, char **argv)
          .help = "a tileable image: right edge continues into left, bottom into top\n"
                  "(both sides multiples of 2^(levels-1); CPU or GPU, the same pixels)"},
         {.name = "--match-colours", .kind = CLI_FLAG, .dest = &match,
-         .help = "give each image the exemplar's CIE Lab histogram, whatever the\n"
-                 "realisation (docs/synthesis.md, \"Colour matching\"): holds each whole\n"
-                 "image in memory and costs a pass over it; models of format 1.3"},
+         .help = "require colour matching: each image gets the exemplar's CIE Lab\n"
+                 "histogram, whatever the realisation (docs/synthesis.md, \"Colour\n"
+                 "matching\"). The default where the model holds that histogram (format\n"
+                 "1.3 on); with this flag an older model is an error"},
+        {.name = "--no-match-colours", .kind = CLI_FLAG, .dest = &no_match,
+         .help = "skip colour matching: faster (a pass over each image less; images\n"
+                 "over 256 MiB are not synthesised twice), the model's histograms only\n"
+                 "in expectation"},
         {.name = "--preview", .kind = CLI_FLAG, .dest = &preview,
          .help = "also write subspace_NN.png (8-bit sRGB; up to 8192x8192)"},
         {.name = "--half", .kind = CLI_FLAG, .dest = &half,
@@ -339,6 +344,8 @@ int cmd_synthesise(int argc, char **argv)
         return cli_usage_error(&c, "--preview is limited to 8192x8192 pixels");
     if (half && as_float)
         return cli_usage_error(&c, "--half and --float exclude each other");
+    if (match && no_match)
+        return cli_usage_error(&c, "--match-colours and --no-match-colours exclude each other");
     if (cli_check_output(&c, outdir, BTF_OUTPUT_FOLDER))
         return 1;
     btf_error err = {0};
@@ -391,7 +398,7 @@ int cmd_synthesise(int argc, char **argv)
         done += pick[k];
     btf_synth_opts so = btf_synth_defaults();
     so.width = w, so.height = h, so.seed = seed, so.tileable = tileable;
-    so.match_colours = match;
+    so.match_colours = match ? 1 : no_match ? -1 : 0;
     env_cpu_switches(&so);
     output out = {.dir = btf_output_dir_path(od), .model_path = model, .preview = preview, .ph = &ph};
     out.exr = btf_exr_defaults();

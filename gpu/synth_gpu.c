@@ -693,8 +693,9 @@ static btf_status check_all(const btf_model *m, const int *subspaces, int n,
         rc = btf_synth_check_size(w[j], h[j], err);
         if (rc == 0 && o->tileable) /* the CPU's rule and message */
             rc = btf_synth_check_tileable(w[j], h[j], m->subspaces[subspaces[j]].levels, err);
-        if (rc == 0 && o->match_colours) /* the CPU's rule and message */
-            rc = btf_colour_match_check(m, subspaces[j], err);
+        int match; /* the CPU's rule and message */
+        if (rc == 0)
+            rc = btf_colour_match_wanted(m, subspaces[j], o->match_colours, &match, err);
     }
     return rc;
 }
@@ -755,13 +756,43 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
                      err);
     /* colour matching reads each whole image (its histogram): on the host,
      * by the CPU's code, so that equal images stay equal (docs/gpu.md) */
-    for (int j = 0; rc == BTF_OK && o.match_colours && j < n; j++)
-        rc = btf_colour_match(m, subspaces[j], &outs[j], err);
+    for (int j = 0; rc == BTF_OK && j < n; j++) {
+        int match;
+        rc = btf_colour_match_wanted(m, subspaces[j], o.match_colours, &match, err);
+        if (rc == BTF_OK && match)
+            rc = btf_colour_match(m, subspaces[j], &outs[j], err);
+    }
     if (rc)
         for (int j = 0; j < n; j++)
             btf_image_free(&outs[j]);
     free(margins);
     free(w);
+    return rc;
+}
+
+/* Colour matching of one image in a device buffer: read back, matched by
+ * the CPU's code (the bytes of btf_gpu_synthesise and the CPU), written
+ * again. It reads the whole image's histogram, which a shader pass would
+ * have to reduce first; a read-back of the render's few textures costs
+ * little beside the render (docs/gpu.md). */
+static btf_status match_on_host(btf_gpu *g, const btf_model *m, int subspace,
+                                const btf_synth_opts *o, btf_vk_buffer *buf, uint64_t offset,
+                                int width, int height, btf_error *err)
+{
+    int match;
+    btf_status rc = btf_colour_match_wanted(m, subspace, o->match_colours, &match, err);
+    if (rc || !match)
+        return rc;
+    btf_image img;
+    if ((rc = btf_image_alloc(&img, width, height, 3, err)))
+        return rc;
+    uint64_t bytes = (uint64_t)width * height * 3 * sizeof(float);
+    rc = btf_vk_buffer_download(g->vk, buf, 4 * offset, img.data, bytes, err);
+    if (rc == BTF_OK)
+        rc = btf_colour_match(m, subspace, &img, err);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_upload(g->vk, buf, 4 * offset, img.data, bytes, err);
+    btf_image_free(&img);
     return rc;
 }
 
@@ -774,9 +805,6 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
     if (!g || n < 1 || !offsets)
         return btf_fail(err, BTF_E_ARG, "GPU synthesis to the device: no GPU, no offsets or "
                         "%d images (at least 1)", n);
-    if (o.match_colours)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis to the device: colour matching "
-                        "(btf_synth_opts.match_colours) runs on the host only (btf_gpu_synthesise)");
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
     int *w = btf_calloc((size_t)n * 2, sizeof(int), err);
     btf_status rc = w ? check_all(m, subspaces, n, &o, w, w + n, &margins, err) : BTF_E_NOMEM;
@@ -799,6 +827,8 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
     if (rc == 0)
         rc = run_all(g, m, subspaces, n, &o, w, w + n, (const int (*)[3][BTF_MAX_LEVELS])margins,
                      &d, err);
+    for (int j = 0; rc == BTF_OK && j < n; j++)
+        rc = match_on_host(g, m, subspaces[j], &o, *out, offsets[j], w[j], w[n + j], err);
     if (rc) {
         btf_vk_buffer_destroy(*out);
         *out = NULL;

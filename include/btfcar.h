@@ -1045,13 +1045,18 @@ typedef struct btf_synth_opts {
      * size); the fields run row by row (no wavefront). The same seed gives
      * the same bytes on every CPU path and on the GPU (btf_gpu_synthesise). */
     int tileable;
-    /* 1: after synthesis, each CIE Lab channel of the whole image through
-     * the monotone map from its own histogram onto the exemplar's
-     * (btf_colour_match): the first-order statistics of the material
-     * whatever the realisation; costs a whole image in memory (the streaming
-     * btf_synthesise then keeps one) and a pass over it; the model must hold
-     * Lab quantiles (format 1.3), else BTF_E_ARG. CPU and btf_gpu_synthesise
-     * (on the host after the read-back: the same bytes); not the GPU render. */
+    /* Colour matching (btf_colour_match): after synthesis each CIE Lab
+     * channel of the image goes through the monotone map from its own
+     * histogram onto the exemplar's, so that the image has the material's
+     * first-order statistics whatever the realisation (docs/synthesis.md,
+     * "Colour matching"). 0 (the default): on where the subspace holds the
+     * exemplar's Lab quantiles (format 1.3 on), off for older files;
+     * 1: on, BTF_E_ARG for a subspace without; -1: off (faster: no pass
+     * over the image). The streaming btf_synthesise keeps the whole image
+     * up to 256 MiB, and beyond synthesises it twice (first for its
+     * histogram): memory by the width still, the same bytes. CPU,
+     * btf_gpu_synthesise and the GPU render run the same host code on the
+     * image (after a read-back on the GPU): the same bytes everywhere. */
     int match_colours;
 } btf_synth_opts;
 
@@ -1077,13 +1082,14 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
  * where the material's chroma depends on its lightness, and a small
  * synthesis' histogram strays from the model's with its realisation: both
  * show in the CIE Lab histograms (issue 17's first-order distance). This
- * pass measures img's own L*, a*, b* quantiles (every pixel up to 256 x
- * 256, a regular grid of as many beyond), sends each channel of every pixel
+ * pass measures img's own L*, a*, b* quantiles (every pixel up to 128 x
+ * 128, a regular grid of as many beyond), sends each channel of every pixel
  * through the piecewise-linear map from them onto the model's
- * lab_quantile, converts back and clamps into the exemplar's RGB box.
- * Monotone per channel, deterministic, finite; a tileable image stays
- * tileable. BTF_E_ARG when the subspace holds no Lab quantiles or img is
- * not RGB. */
+ * lab_quantile (resampled on 256 segments), converts back and clamps into
+ * the exemplar's RGB box. Monotone per channel, deterministic, finite; a
+ * tileable image stays tileable. BTF_E_ARG when the subspace holds no Lab
+ * quantiles or img is not RGB or holds Inf or NaN. The synthesis calls it
+ * by default (btf_synth_opts.match_colours). */
 btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, btf_error *err);
 /* The synthesis margin of one band (0..2) and pyramid level of a subspace in
  * pixels: its CAR field starts this many rows above the level's window and

@@ -9,8 +9,8 @@
  *                                        and last "median_s S"
  * Without arguments (make bench runs every bench program so) it says how to
  * call it and exits 0. Never fails on time. A model with marginal transfers
- * is also timed without them, in alternate runs, and its file size given
- * both ways.
+ * is also timed without them and without colour matching, in alternate
+ * runs, and its file size given with and without the transfers.
  */
 #include "btfcar.h"
 #include "testutil.h"
@@ -48,21 +48,27 @@ int main(int argc, char **argv)
            1e3 * tu_median(tr, runs), runs);
     btf_synth_opts so = btf_synth_defaults();
     so.width = w, so.height = h, so.seed = 1;
-    /* The marginal transfers (docs/synthesis.md, "Marginals") off and on in
-     * alternate runs: off is the synthesis of a model without them (format
-     * 1.1), the comparison of the same run. */
+    /* Three syntheses in alternate runs, so that they share the machine's
+     * state: 0, a model without marginal transfers (format 1.1, before
+     * issue 17); 1, with the transfers (docs/synthesis.md, "Marginals"),
+     * colour matching off; 2, the default: transfers and colour matching
+     * (docs/synthesis.md, "Colour matching"; format 1.3 models). */
     btf_marginal *keep = malloc(sizeof *keep * (size_t)m.n_subspaces);
     int with = 0;
     for (int k = 0; k < m.n_subspaces; k++)
         keep[k] = m.subspaces[k].marginal, with += keep[k].knots != 0;
-    double t[99], toff[99];
+    int lab = with;
+    for (int k = 0; k < m.n_subspaces; k++)
+        lab = lab && keep[k].lab_knots;
+    double t[3][99];
     for (int r = 0; r < runs; r++)
-        for (int on = with ? 0 : 1; on < 2; on++) {
+        for (int v = with ? 0 : 1; v < 2 + lab; v++) {
             for (int k = 0; k < m.n_subspaces; k++) {
                 m.subspaces[k].marginal = keep[k];
-                if (!on)
+                if (v == 0)
                     m.subspaces[k].marginal.knots = 0;
             }
+            so.match_colours = v == 2 ? 0 : -1;
             double t0 = tu_now();
             for (int k = 0; k < m.n_subspaces; k++) {
                 btf_image img;
@@ -72,11 +78,11 @@ int main(int argc, char **argv)
                 }
                 btf_image_free(&img);
             }
-            (on ? t : toff)[r] = tu_now() - t0;
+            t[v][r] = tu_now() - t0;
         }
-    double med = tu_median(t, runs);
+    double med1 = tu_median(t[1], runs), med = lab ? tu_median(t[2], runs) : med1;
     if (with) {
-        double moff = tu_median(toff, runs);
+        double moff = tu_median(t[0], runs);
         unsigned char *d = NULL;
         size_t n_on = 0, n_off = 0;
         if (btf_model_encode(&m, &d, &n_on, &e) == 0)
@@ -89,12 +95,17 @@ int main(int argc, char **argv)
             m.subspaces[k].marginal = keep[k];
         printf("marginal transfers (%d subspaces): synthesis without median %.1f ms, with %.1f ms "
                "(%+.1f%%); model file %zu bytes, %zu without (%+zd bytes)\n", with, 1e3 * moff,
-               1e3 * med, 100.0 * (med / moff - 1.0), n_on, n_off, (ssize_t)n_on - (ssize_t)n_off);
+               1e3 * med1, 100.0 * (med1 / moff - 1.0), n_on, n_off,
+               (ssize_t)n_on - (ssize_t)n_off);
+        if (lab)
+            printf("colour matching (the default; --no-match-colours skips it): median %.1f ms, "
+                   "%+.1f%% on the transfers alone, %+.1f%% on the synthesis without either\n",
+                   1e3 * med, 100.0 * (med / med1 - 1.0), 100.0 * (med / moff - 1.0));
     }
     free(keep);
-    printf("in-memory synthesis (cpu, btf_synthesise_image): %d subspace images of %dx%d: "
-           "median %.1f ms (%d runs), %.2f Mpixel/s\n", m.n_subspaces, w, h, 1e3 * med, runs,
-           (double)w * h * m.n_subspaces / med / 1e6);
+    printf("in-memory synthesis (cpu, btf_synthesise_image, default options): %d subspace images "
+           "of %dx%d: median %.1f ms (%d runs), %.2f Mpixel/s\n", m.n_subspaces, w, h, 1e3 * med,
+           runs, (double)w * h * m.n_subspaces / med / 1e6);
     printf("median_s %.6f\n", med);
     btf_model_free(&m);
     return 0;

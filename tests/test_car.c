@@ -74,10 +74,11 @@ static double *field(const btf_car_band *b, int w, int h, uint64_t seed)
 }
 
 /* Subspace 0 of m, w x h (0: the analysed size), into an image. */
+/* The CAR synthesis itself: colour matching (on by default) off. */
 static void synth_image(const btf_model *m, int w, int h, uint64_t seed, btf_image *out)
 {
     btf_error e = {0};
-    btf_synth_opts o = {.width = w, .height = h, .seed = seed};
+    btf_synth_opts o = {.width = w, .height = h, .seed = seed, .match_colours = -1};
     TU_OK(btf_synthesise_image(m, 0, &o, out, &e), &e);
 }
 
@@ -876,6 +877,24 @@ static void synthesis_sizes_and_seeds(void **state)
             differ |= a.data[i] != c.data[i];
         }
         assert_true(differ);
+        btf_image_free(&a);
+        btf_image_free(&b2);
+        btf_image_free(&c);
+        /* the default, colour-matched: finite, deterministic; a single
+         * pixel takes the exemplar's median colour whatever the seed, more
+         * differ with it */
+        btf_synth_opts o = {.width = w, .height = h, .seed = 42};
+        TU_OK(btf_synthesise_image(&m, 0, &o, &a, &e), &e);
+        TU_OK(btf_synthesise_image(&m, 0, &o, &b2, &e), &e);
+        o.seed = 43;
+        TU_OK(btf_synthesise_image(&m, 0, &o, &c, &e), &e);
+        assert_memory_equal(a.data, b2.data, n * sizeof(float));
+        differ = 0;
+        for (size_t i = 0; i < n; i++) {
+            assert_true(isfinite(a.data[i]));
+            differ |= a.data[i] != c.data[i];
+        }
+        assert_true(differ == (w * h > 1));
         btf_image_free(&a);
         btf_image_free(&b2);
         btf_image_free(&c);

@@ -71,14 +71,17 @@ static void compare_opts(const btf_model *m, int w, int h, uint64_t seed, int ma
     no_validation_messages();
 }
 
+/* The shaders' own output: colour matching (on by default) off. */
 static void compare(const btf_model *m, int w, int h, uint64_t seed)
 {
-    compare_opts(m, w, h, seed, 0);
+    compare_opts(m, w, h, seed, -1);
 }
 
 /* Colour matching reads the whole image: on the host after the read-back,
- * by the CPU's code, so the GPU's images stay the CPU's bytes; the device
- * path (the render's) refuses it. */
+ * by the CPU's code, so the GPU's images stay the CPU's bytes, asked for
+ * (1) and by default (0); the device path (the render's) reads its images
+ * back, matches them so and writes them again: the same bytes in its
+ * buffer. */
 static void parity_colour_match(void **state)
 {
     (void)state;
@@ -87,15 +90,28 @@ static void parity_colour_match(void **state)
     assert_int_equal(m.subspaces[0].marginal.lab_knots, BTF_MARGIN_KNOTS);
     compare_opts(&m, 1, 1, 1, 1);
     compare_opts(&m, 96, 70, 4, 1);
+    compare_opts(&m, 33, 17, 2, 0);
     btf_error e = {0};
-    btf_synth_opts so = {.width = 16, .height = 16, .seed = 1, .match_colours = 1};
+    btf_synth_opts so = {.width = 24, .height = 20, .seed = 1};
     int zero = 0;
-    uint64_t off = 0;
+    uint64_t off[2] = {0, 0};
     btf_vk_buffer *buf = NULL;
-    assert_int_equal(btf_gpu_synthesise_device(gpu, &m, &zero, 1, &so, &buf, &off, &e),
-                     BTF_E_UNSUPPORTED);
-    assert_non_null(strstr(e.msg, "colour matching"));
-    assert_null(buf);
+    btf_image host, back, plain;
+    TU_OK(btf_gpu_synthesise(gpu, &m, &zero, 1, &so, &host, &e), &e);
+    int twice[2] = {0, 0};
+    TU_OK(btf_gpu_synthesise_device(gpu, &m, twice, 2, &so, &buf, off, &e), &e);
+    size_t bytes = (size_t)24 * 20 * 3 * sizeof(float);
+    TU_OK(btf_image_alloc(&back, 24, 20, 3, &e), &e);
+    for (int j = 0; j < 2; j++) {
+        memset(back.data, 0, bytes);
+        TU_OK(btf_vk_buffer_download(btf_gpu_vk(gpu), buf, 4 * off[j], back.data, bytes, &e), &e);
+        assert_memory_equal(back.data, host.data, bytes);
+    }
+    btf_vk_buffer_destroy(buf);
+    so.match_colours = -1; /* and it did change them */
+    TU_OK(btf_gpu_synthesise(gpu, &m, &zero, 1, &so, &plain, &e), &e);
+    assert_memory_not_equal(plain.data, host.data, bytes);
+    btf_image_free(&host), btf_image_free(&back), btf_image_free(&plain);
     btf_model_free(&m);
     no_validation_messages();
 }

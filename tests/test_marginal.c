@@ -10,6 +10,7 @@
  */
 #include "testutil.h"
 #include "synth/synth.h"
+#include "synth/synth_testing.h"
 
 #include "btf_shared.h"
 
@@ -252,6 +253,7 @@ static void materials_keep_their_marginals(void **state)
             assert_int_equal(sm->marginal.knots, BTF_MARGIN_KNOTS);
             btf_synth_opts so = btf_synth_defaults();
             so.seed = 11;
+            so.match_colours = -1; /* the band transfer alone */
             btf_image on, off;
             TU_OK(btf_synthesise_image(&m, 0, &so, &on, &e), &e);
             btf_marginal keep = sm->marginal;
@@ -407,12 +409,70 @@ static int rows_to_image(void *user, int y, int nrows, const float *rows, btf_er
     return 0;
 }
 
+/* The float Lab conversion of colour matching (src/synth/colour_lab.c):
+ * a row (AVX2 blocks of 8 where the CPU has it) and the same pixels one at
+ * a time (the scalar code) give the same bits both ways; within 1e-3 of
+ * the CIE formulas in double (for colours of [0, 1.5]); finite at the extremes (0, negative light,
+ * 1e-30, the linear segment's edge, 1e30, FLT_MAX); the way back returns
+ * the colour (within 1e-5 + 1e-4 of it: float near black cancels in the
+ * XYZ-to-RGB matrix) and stays inside the box. */
+static double lab_f_ref(double t)
+{
+    return t > 0.008856 ? cbrt(t) : 7.787 * t + 16.0 / 116.0;
+}
+
+static void lab_conversion_paths_agree(void **state)
+{
+    (void)state;
+    enum { N = 203 }; /* 25 blocks of 8 and a tail of 3 */
+    static const double M[3][3] = {{0.412453, 0.357580, 0.180423},
+                                   {0.212671, 0.715160, 0.072169},
+                                   {0.019334, 0.119193, 0.950227}};
+    static const double W[3] = {0.950456, 1.0, 1.088754};
+    const float odd[] = {0.0f, -0.5f, 1e-30f, 0.008856f, 0.0088561f, 1.0f, 1e30f, FLT_MAX};
+    float rgb[3 * N], lab[3][N], one[3], back[3 * N], back1[3];
+    srand(5);
+    for (int i = 0; i < 3 * N; i++) {
+        double u = rand() / (double)RAND_MAX;
+        rgb[i] = i < 3 * 40 ? odd[(i * 7 + i / 3) % 8] : (float)(u * u * u * 1.5);
+    }
+    btf_lab_row(rgb, N, 1.0f, lab[0], lab[1], lab[2]);
+    const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.5f, 1.5f, 1.5f};
+    btf_rgb_row_from_lab(lab[0], lab[1], lab[2], N, 1.0f, lo, hi, back);
+    for (int x = 0; x < N; x++) {
+        btf_lab_row(rgb + 3 * x, 1, 1.0f, &one[0], &one[1], &one[2]);
+        double c[3], xyz[3], f[3];
+        for (int k = 0; k < 3; k++) {
+            assert_memory_equal(&one[k], &lab[k][x], sizeof(float));
+            assert_true(isfinite(lab[k][x]));
+            c[k] = rgb[3 * x + k] > 0.0f ? fmin(rgb[3 * x + k], 1e6) : 0.0;
+        }
+        for (int i = 0; i < 3; i++)
+            f[i] = lab_f_ref((M[i][0] * c[0] + M[i][1] * c[1] + M[i][2] * c[2]) / W[i]);
+        xyz[0] = 116.0 * f[1] - 16.0, xyz[1] = 500.0 * (f[0] - f[1]), xyz[2] = 200.0 * (f[1] - f[2]);
+        /* float's few roundings of f, times a*'s 500: 1e-3 in the colours
+         * of [0, 1.5], more for light far beyond (1e6: flat in every map) */
+        double tol = 1e-3 + 1e-6 * 500.0 * fmax(f[0], fmax(f[1], f[2]));
+        for (int k = 0; k < 3; k++)
+            assert_true(fabs(xyz[k] - lab[k][x]) <= tol);
+        btf_rgb_row_from_lab(&lab[0][x], &lab[1][x], &lab[2][x], 1, 1.0f, lo, hi, back1);
+        for (int k = 0; k < 3; k++) {
+            assert_memory_equal(&back1[k], &back[3 * x + k], sizeof(float));
+            assert_true(back[3 * x + k] >= lo[k] && back[3 * x + k] <= hi[k]);
+            float want = rgb[3 * x + k];
+            if (x >= 40 && want > 0.01f && c[0] <= 1.5 && c[1] <= 1.5 && c[2] <= 1.5)
+                assert_true(fabs(back[3 * x + k] - want) <= 1e-5 + 1e-4 * want);
+        }
+    }
+}
+
 /* Colour matching (btf_synth_opts.match_colours, btf_colour_match) on the
  * generated materials: the first-order texture distance (CIE Lab
  * histograms, issue 17) of a 64 x 64 synthesis comes within 1.2 of the
  * material's own (fabric: a tenth of the unmatched) and below the unmatched
- * synthesis'; pixels stay in the
- * exemplar's box; the streaming synthesis gives the image's bytes. */
+ * synthesis'; the default matches (the bytes of match_colours 1); pixels
+ * stay in the exemplar's box; the streaming synthesis gives the image's
+ * bytes, whole image kept or synthesised twice. */
 static void colour_match_keeps_lab_histograms(void **state)
 {
     (void)state;
@@ -427,10 +487,15 @@ static void colour_match_keeps_lab_histograms(void **state)
         assert_int_equal(mg->lab_knots, BTF_MARGIN_KNOTS);
         btf_synth_opts so = btf_synth_defaults();
         so.seed = 5;
-        btf_image plain, matched;
+        btf_image plain, matched, asked;
+        so.match_colours = -1;
         TU_OK(btf_synthesise_image(&m, 0, &so, &plain, &e), &e);
-        so.match_colours = 1;
+        so.match_colours = 0; /* the default matches */
         TU_OK(btf_synthesise_image(&m, 0, &so, &matched, &e), &e);
+        so.match_colours = 1;
+        TU_OK(btf_synthesise_image(&m, 0, &so, &asked, &e), &e);
+        assert_memory_equal(asked.data, matched.data, (size_t)img.width * img.height * 3 * 4);
+        btf_image_free(&asked);
         btf_texture_distances dp, dm;
         TU_OK(btf_texture_distance(&img, &plain, NULL, &dp, &e), &e);
         TU_OK(btf_texture_distance(&img, &matched, NULL, &dm, &e), &e);
@@ -449,9 +514,15 @@ static void colour_match_keeps_lab_histograms(void **state)
         size_t n = (size_t)img.width * img.height * 3;
         for (size_t i = 0; i < n; i++)
             assert_true(matched.data[i] >= mg->rgb_lo[i % 3] && matched.data[i] <= mg->rgb_hi[i % 3]);
-        /* the streaming API, whole image kept inside: the same bytes */
+        /* the streaming API, whole image kept inside, and synthesised twice
+         * (its threshold forced down): the same bytes */
         btf_image streamed;
         TU_OK(btf_image_alloc(&streamed, img.width, img.height, 3, &e), &e);
+        btf_synth_set_match_whole_bytes(1);
+        TU_OK(btf_synthesise(&m, 0, &so, rows_to_image, &streamed, &e), &e);
+        assert_memory_equal(streamed.data, matched.data, n * sizeof(float));
+        btf_synth_set_match_whole_bytes(0);
+        memset(streamed.data, 0, n * sizeof(float));
         TU_OK(btf_synthesise(&m, 0, &so, rows_to_image, &streamed, &e), &e);
         assert_memory_equal(streamed.data, matched.data, n * sizeof(float));
         /* matching twice changes little: the image has the histogram (but
@@ -552,6 +623,7 @@ int main(void)
         cmocka_unit_test(materials_keep_their_marginals),
         cmocka_unit_test(degenerate_images),
         cmocka_unit_test(file_keeps_the_transfer),
+        cmocka_unit_test(lab_conversion_paths_agree),
         cmocka_unit_test(colour_match_keeps_lab_histograms),
         cmocka_unit_test(colour_match_extremes),
     };

@@ -69,6 +69,7 @@ static btf_status measure_synthesis(const btf_model *m, int subspace, float mean
     btf_synth_opts so = btf_synth_defaults();
     so.width = so.height = MEASURE_SIDE;
     so.seed = MEASURE_SEED;
+    so.match_colours = -1; /* the field's own distribution, before any map */
     btf_image out = {0};
     btf_status rc = btf_synthesise_image(&tmp, 0, &so, &out, err);
     if (rc)
@@ -169,7 +170,7 @@ btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, b
         return BTF_OK;
     }
     /* the exemplar's Lab histogram, for colour matching (synth/colour_match.c) */
-    if ((rc = btf_lab_quantiles(img, btf_lab_scale(&mg), mg.lab_quantile, err)))
+    if ((rc = btf_lab_quantiles(img, btf_lab_scale(&mg), BTF_LAB_SAMPLE, mg.lab_quantile, err)))
         return rc;
     for (int c = 0; c < 3; c++) /* what the model file keeps (monotone: still nondecreasing) */
         for (int j = 0; j < BTF_MARGIN_KNOTS; j++)

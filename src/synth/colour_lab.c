@@ -8,7 +8,8 @@
  * The constants are OpenCV's for COLOR_RGB2Lab on floats (sRGB primaries,
  * D65 white, the CIE's linear segment below (6/29)^3), so that a map made
  * here is measured in the same space; the inverse matrix is OpenCV's
- * XYZ-to-RGB. Conversions run in double; the results are rounded to float.
+ * XYZ-to-RGB, folded with the white point into float matrices. The
+ * conversions run in float, a row at a time (GCC vectorises them).
  */
 #include "core/core.h"
 #include "synth/synth.h"
@@ -25,36 +26,318 @@ static const double XYZ_TO_RGB[3][3] = {{3.240479, -1.53715, -0.498535},
                                         {-0.969256, 1.875991, 0.041556},
                                         {0.055648, -0.204043, 1.057311}};
 static const double WHITE[3] = {0.950456, 1.0, 1.088754};
-#define LAB_T0 0.008856     /* (6/29)^3: below it the CIE's linear segment */
-#define LAB_SLOPE 7.787     /* (29/6)^2 / 3 */
-#define LAB_F0 (16.0 / 116.0)
+#define LAB_T0 0.008856f    /* (6/29)^3: below it the CIE's linear segment */
+#define LAB_SLOPE 7.787f    /* (29/6)^2 / 3 */
+#define LAB_F0 (16.0f / 116.0f)
+#define LAB_F_T0 0.206893f  /* f(LAB_T0): below it the inverse is linear */
+#define LAB_RCBRT_MAGIC 0x54a21000 /* t^(-1/3)'s exponent-bit estimate */
+/* Light above this (after the exposure) is taken as this: its L* is above
+ * 10,000 and its a*, b* far outside [-128, 128], where every map is flat,
+ * and the cube root's cubes stay far from the float limit. */
+#define LAB_LIGHT_MAX 1e6f
 
-/* The cube root of t > 0: an estimate from the exponent bits (within a few
- * per cent), then two Halley steps (cubic convergence: to about 1e-13);
- * libm's cbrt made colour matching cost three times the synthesis. Plain
- * arithmetic, the same on every machine. */
-static double cube_root(double t)
+/* The conversion's constants in float: the matrices with the white point
+ * folded in, made once from the double constants (so every caller rounds
+ * them the same way). */
+typedef struct lab_consts {
+    float to_xyz[3][3]; /* RGB_TO_XYZ[i][k] / WHITE[i] */
+    float to_rgb[3][3]; /* XYZ_TO_RGB[k][i] * WHITE[i] */
+} lab_consts;
+
+static lab_consts lab_consts_make(void)
 {
-    uint64_t u;
-    memcpy(&u, &t, sizeof u);
-    u = u / 3 + 0x2a9f7893782da1ceull;
-    double y;
-    memcpy(&y, &u, sizeof y);
-    for (int i = 0; i < 2; i++) {
-        double y3 = y * y * y;
-        y = y * (y3 + 2.0 * t) / (2.0 * y3 + t);
+    lab_consts c;
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) {
+            c.to_xyz[i][k] = (float)(RGB_TO_XYZ[i][k] / WHITE[i]);
+            c.to_rgb[k][i] = (float)(XYZ_TO_RGB[k][i] * WHITE[i]);
+        }
+    return c;
+}
+
+/* The cube root of t in [LAB_T0, LAB_LIGHT_MAX] as t r^2, r = t^(-1/3) by
+ * Newton's iteration r (4 - t r^3) / 3 from an estimate made of the
+ * exponent bits (within 7 per cent; each step squares the error: three
+ * leave 4.5e-7, a few float roundings). Multiplies only, no branch: the AVX2 loops
+ * below do the same operations in the same order, so both give the same
+ * bits (libm's cbrt made colour matching cost three times the synthesis,
+ * and two Halley steps' divisions a third of the conversion). */
+static inline float cube_root(float t)
+{
+    int32_t i;
+    memcpy(&i, &t, sizeof i);
+    i = LAB_RCBRT_MAGIC - (int32_t)((float)i * (1.0f / 3.0f));
+    float r;
+    memcpy(&r, &i, sizeof r);
+    for (int k = 0; k < 3; k++) {
+        float r3 = r * r * r;
+        r = r * (4.0f - t * r3) * (1.0f / 3.0f);
     }
-    return y;
+    return t * (r * r);
 }
 
-static double lab_f(double t)
+static inline float lab_f(float t)
 {
-    return t > LAB_T0 ? cube_root(t) : LAB_SLOPE * t + LAB_F0;
+    float linear = LAB_SLOPE * t + LAB_F0;
+    float root = cube_root(t > LAB_T0 ? t : LAB_T0);
+    return t > LAB_T0 ? root : linear;
 }
 
-static double lab_f_inv(double f)
+static inline float lab_f_inv(float f)
 {
-    return f > 0.206893 ? f * f * f : (f - LAB_F0) / LAB_SLOPE; /* 0.206893 = f(LAB_T0) */
+    float linear = (f - LAB_F0) * (1.0f / LAB_SLOPE);
+    return f > LAB_F_T0 ? f * f * f : linear;
+}
+
+/* Negative light is shown as none, as the distances do (measure/lab.c);
+ * values above 1 after the scale are not clipped (up to LAB_LIGHT_MAX):
+ * the scale puts the exemplar's brightest channel at 1 and colour matching
+ * clamps into its box. */
+static inline void lab_pixel(const lab_consts *c, const float rgb[3], float scale, float *l,
+                             float *a, float *b)
+{
+    float v[3], xyz[3];
+    for (int k = 0; k < 3; k++) {
+        float s = rgb[k] * scale;
+        s = s > 0.0f ? s : 0.0f;
+        v[k] = s < LAB_LIGHT_MAX ? s : LAB_LIGHT_MAX;
+    }
+    for (int i = 0; i < 3; i++)
+        xyz[i] = c->to_xyz[i][0] * v[0] + c->to_xyz[i][1] * v[1] + c->to_xyz[i][2] * v[2];
+    float fx = lab_f(xyz[0]), fy = lab_f(xyz[1]), fz = lab_f(xyz[2]);
+    *l = 116.0f * fy - 16.0f;
+    *a = 500.0f * (fx - fy);
+    *b = 200.0f * (fy - fz);
+}
+
+static inline void rgb_pixel(const lab_consts *c, float l, float a, float b, float inv,
+                             const float lo[3], const float hi[3], float rgb[3])
+{
+    float fy = (l + 16.0f) * (1.0f / 116.0f);
+    float fx = fy + a * (1.0f / 500.0f), fz = fy - b * (1.0f / 200.0f);
+    float xyz[3] = {lab_f_inv(fx), lab_f_inv(fy), lab_f_inv(fz)};
+    for (int k = 0; k < 3; k++) {
+        float v = (c->to_rgb[k][0] * xyz[0] + c->to_rgb[k][1] * xyz[1] +
+                   c->to_rgb[k][2] * xyz[2]) * inv;
+        v = v > lo[k] ? v : lo[k];
+        rgb[k] = v < hi[k] ? v : hi[k];
+    }
+}
+
+/* The map of one Lab channel (colour_match.c makes it): the segment of v
+ * by a multiply and a floor, linear inside it, flat beyond the ends. */
+static inline float lab_map_at(const btf_lab_map *m, float v)
+{
+    float t = (v - m->origin) * m->inv_h;
+    t = t > 0.0f ? t : 0.0f; /* also a NaN from 0 * a huge inv_h */
+    t = t < (float)BTF_LAB_MAP_SEGS ? t : (float)BTF_LAB_MAP_SEGS;
+    int i = (int)t;
+    i = i < BTF_LAB_MAP_SEGS - 1 ? i : BTF_LAB_MAP_SEGS - 1;
+    return m->q[i] + (t - (float)i) * m->dq[i];
+}
+
+#ifdef SYNTH_HAVE_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include <immintrin.h>
+
+/* The scalar functions above on 8 pixels at a time: their operations in
+ * their order (no FMA: the build forbids contraction and no intrinsic here
+ * asks for it); max/min are the scalar code's comparisons (the second
+ * operand on a tie or a NaN). Same bits. */
+static inline __m256 cube_root8(__m256 t)
+{
+    __m256i i = _mm256_cvttps_epi32(
+        _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_castps_si256(t)), _mm256_set1_ps(1.0f / 3.0f)));
+    __m256 r = _mm256_castsi256_ps(_mm256_sub_epi32(_mm256_set1_epi32(LAB_RCBRT_MAGIC), i));
+    const __m256 four = _mm256_set1_ps(4.0f), third = _mm256_set1_ps(1.0f / 3.0f);
+    for (int k = 0; k < 3; k++) {
+        __m256 r3 = _mm256_mul_ps(_mm256_mul_ps(r, r), r);
+        r = _mm256_mul_ps(_mm256_mul_ps(r, _mm256_sub_ps(four, _mm256_mul_ps(t, r3))), third);
+    }
+    return _mm256_mul_ps(t, _mm256_mul_ps(r, r));
+}
+
+static inline __m256 lab_f8(__m256 t)
+{
+    const __m256 t0 = _mm256_set1_ps(LAB_T0);
+    __m256 linear = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(LAB_SLOPE), t),
+                                  _mm256_set1_ps(LAB_F0));
+    __m256 root = cube_root8(_mm256_max_ps(t, t0));
+    return _mm256_blendv_ps(linear, root, _mm256_cmp_ps(t, t0, _CMP_GT_OQ));
+}
+
+static inline __m256 lab_f_inv8(__m256 f)
+{
+    __m256 linear = _mm256_mul_ps(_mm256_sub_ps(f, _mm256_set1_ps(LAB_F0)),
+                                  _mm256_set1_ps(1.0f / LAB_SLOPE));
+    __m256 cube = _mm256_mul_ps(_mm256_mul_ps(f, f), f);
+    return _mm256_blendv_ps(linear, cube, _mm256_cmp_ps(f, _mm256_set1_ps(LAB_F_T0), _CMP_GT_OQ));
+}
+
+/* 8 interleaved RGB pixels (24 floats) into three planes and back: three
+ * loads, two blends and a lane permutation per plane. */
+static inline void deinterleave8(const float *p, __m256 v[3])
+{
+    __m256 a = _mm256_loadu_ps(p), b = _mm256_loadu_ps(p + 8), c = _mm256_loadu_ps(p + 16);
+    /* a = r0 g0 b0 r1 g1 b1 r2 g2 | b = b2 r3 g3 b3 r4 g4 b4 r5 | c = g5 b5 r6 g6 b6 r7 g7 b7 */
+    __m256 r = _mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24); /* r0 r3 r6 r1 r4 r7 r2 r5 */
+    __m256 g = _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49); /* g5 g0 g3 g6 g1 g4 g7 g2 */
+    __m256 s = _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92); /* b2 b5 b0 b3 b6 b1 b4 b7 */
+    v[0] = _mm256_permutevar8x32_ps(r, _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+    v[1] = _mm256_permutevar8x32_ps(g, _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6));
+    v[2] = _mm256_permutevar8x32_ps(s, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
+}
+
+static inline void interleave8(const __m256 v[3], float *p)
+{
+    __m256 a = _mm256_permutevar8x32_ps(v[0], _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+    __m256 b = _mm256_permutevar8x32_ps(v[1], _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2));
+    __m256 c = _mm256_permutevar8x32_ps(v[2], _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
+    _mm256_storeu_ps(p, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24));
+    _mm256_storeu_ps(p + 8, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49));
+    _mm256_storeu_ps(p + 16, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92));
+}
+
+static inline void lab8(const lab_consts *c, const __m256 rgb[3], float scale, __m256 lab[3])
+{
+    __m256 v[3], f[3];
+    for (int k = 0; k < 3; k++) {
+        __m256 s = _mm256_mul_ps(rgb[k], _mm256_set1_ps(scale));
+        s = _mm256_max_ps(s, _mm256_setzero_ps());
+        v[k] = _mm256_min_ps(s, _mm256_set1_ps(LAB_LIGHT_MAX));
+    }
+    for (int i = 0; i < 3; i++) {
+        __m256 s = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(c->to_xyz[i][0]), v[0]),
+                                 _mm256_mul_ps(_mm256_set1_ps(c->to_xyz[i][1]), v[1]));
+        f[i] = lab_f8(_mm256_add_ps(s, _mm256_mul_ps(_mm256_set1_ps(c->to_xyz[i][2]), v[2])));
+    }
+    lab[0] = _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(116.0f), f[1]), _mm256_set1_ps(16.0f));
+    lab[1] = _mm256_mul_ps(_mm256_set1_ps(500.0f), _mm256_sub_ps(f[0], f[1]));
+    lab[2] = _mm256_mul_ps(_mm256_set1_ps(200.0f), _mm256_sub_ps(f[1], f[2]));
+}
+
+static inline void rgb8(const lab_consts *c, const __m256 lab[3], float inv, const float lo[3],
+                        const float hi[3], __m256 rgb[3])
+{
+    __m256 fy = _mm256_mul_ps(_mm256_add_ps(lab[0], _mm256_set1_ps(16.0f)),
+                              _mm256_set1_ps(1.0f / 116.0f));
+    __m256 fx = _mm256_add_ps(fy, _mm256_mul_ps(lab[1], _mm256_set1_ps(1.0f / 500.0f)));
+    __m256 fz = _mm256_sub_ps(fy, _mm256_mul_ps(lab[2], _mm256_set1_ps(1.0f / 200.0f)));
+    __m256 xyz[3] = {lab_f_inv8(fx), lab_f_inv8(fy), lab_f_inv8(fz)};
+    for (int k = 0; k < 3; k++) {
+        __m256 s = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(c->to_rgb[k][0]), xyz[0]),
+                                 _mm256_mul_ps(_mm256_set1_ps(c->to_rgb[k][1]), xyz[1]));
+        s = _mm256_add_ps(s, _mm256_mul_ps(_mm256_set1_ps(c->to_rgb[k][2]), xyz[2]));
+        s = _mm256_mul_ps(s, _mm256_set1_ps(inv));
+        s = _mm256_max_ps(s, _mm256_set1_ps(lo[k]));
+        rgb[k] = _mm256_min_ps(s, _mm256_set1_ps(hi[k]));
+    }
+}
+
+/* lab_map_at: the segment's numbers by two gathers from the map. */
+static inline __m256 map8(const btf_lab_map *m, __m256 v)
+{
+    __m256 t = _mm256_mul_ps(_mm256_sub_ps(v, _mm256_set1_ps(m->origin)), _mm256_set1_ps(m->inv_h));
+    t = _mm256_min_ps(_mm256_max_ps(t, _mm256_setzero_ps()), _mm256_set1_ps((float)BTF_LAB_MAP_SEGS));
+    __m256i i = _mm256_min_epi32(_mm256_cvttps_epi32(t), _mm256_set1_epi32(BTF_LAB_MAP_SEGS - 1));
+    __m256 f = _mm256_sub_ps(t, _mm256_cvtepi32_ps(i));
+    __m256 q = _mm256_i32gather_ps(m->q, i, 4), dq = _mm256_i32gather_ps(m->dq, i, 4);
+    return _mm256_add_ps(q, _mm256_mul_ps(f, dq));
+}
+
+static int lab_row_avx2(const lab_consts *c, const float *rgb, int n, float scale, float *l,
+                        float *a, float *b)
+{
+    int x = 0;
+    for (; x + 8 <= n; x += 8) {
+        __m256 v[3], lab[3];
+        deinterleave8(rgb + 3 * (size_t)x, v);
+        lab8(c, v, scale, lab);
+        _mm256_storeu_ps(l + x, lab[0]);
+        _mm256_storeu_ps(a + x, lab[1]);
+        _mm256_storeu_ps(b + x, lab[2]);
+    }
+    return x;
+}
+
+static int rgb_row_avx2(const lab_consts *c, const float *l, const float *a, const float *b,
+                        int n, float inv, const float lo[3], const float hi[3], float *rgb)
+{
+    int x = 0;
+    for (; x + 8 <= n; x += 8) {
+        __m256 lab[3] = {_mm256_loadu_ps(l + x), _mm256_loadu_ps(a + x), _mm256_loadu_ps(b + x)};
+        __m256 v[3];
+        rgb8(c, lab, inv, lo, hi, v);
+        interleave8(v, rgb + 3 * (size_t)x);
+    }
+    return x;
+}
+
+static int match_row_avx2(const lab_consts *c, const btf_lab_map map[3], float scale, float inv,
+                          const float lo[3], const float hi[3], float *rgb, int n)
+{
+    int x = 0;
+    for (; x + 8 <= n; x += 8) {
+        __m256 v[3], lab[3];
+        deinterleave8(rgb + 3 * (size_t)x, v);
+        lab8(c, v, scale, lab);
+        for (int k = 0; k < 3; k++)
+            lab[k] = map8(&map[k], lab[k]);
+        rgb8(c, lab, inv, lo, hi, v);
+        interleave8(v, rgb + 3 * (size_t)x);
+    }
+    return x;
+}
+#pragma GCC pop_options
+#define HAVE_AVX2() __builtin_cpu_supports("avx2")
+#else
+#define HAVE_AVX2() 0
+#endif
+
+void btf_lab_row(const float *rgb, int n, float scale, float *l, float *a, float *b)
+{
+    const lab_consts c = lab_consts_make();
+    int x = 0;
+#ifdef SYNTH_HAVE_AVX2
+    if (HAVE_AVX2())
+        x = lab_row_avx2(&c, rgb, n, scale, l, a, b);
+#endif
+    for (; x < n; x++)
+        lab_pixel(&c, rgb + 3 * (size_t)x, scale, l + x, a + x, b + x);
+}
+
+void btf_rgb_row_from_lab(const float *l, const float *a, const float *b, int n, float scale,
+                          const float lo[3], const float hi[3], float *rgb)
+{
+    const lab_consts c = lab_consts_make();
+    const float inv = 1.0f / scale;
+    int x = 0;
+#ifdef SYNTH_HAVE_AVX2
+    if (HAVE_AVX2())
+        x = rgb_row_avx2(&c, l, a, b, n, inv, lo, hi, rgb);
+#endif
+    for (; x < n; x++)
+        rgb_pixel(&c, l[x], a[x], b[x], inv, lo, hi, rgb + 3 * (size_t)x);
+}
+
+void btf_lab_match_row(const btf_lab_map map[3], float scale, const float lo[3],
+                       const float hi[3], float *rgb, int n)
+{
+    const lab_consts c = lab_consts_make();
+    const float inv = 1.0f / scale;
+    int x = 0;
+#ifdef SYNTH_HAVE_AVX2
+    if (HAVE_AVX2())
+        x = match_row_avx2(&c, map, scale, inv, lo, hi, rgb, n);
+#endif
+    for (; x < n; x++) {
+        float *p = rgb + 3 * (size_t)x, lab[3];
+        lab_pixel(&c, p, scale, &lab[0], &lab[1], &lab[2]);
+        for (int k = 0; k < 3; k++)
+            lab[k] = lab_map_at(&map[k], lab[k]);
+        rgb_pixel(&c, lab[0], lab[1], lab[2], inv, lo, hi, p);
+    }
 }
 
 /* The exposure of the texture distances (measure/lab.c): an exemplar within
@@ -69,37 +352,6 @@ float btf_lab_scale(const btf_marginal *mg)
     for (int k = 1; k < 3; k++)
         big = mg->rgb_hi[k] > big ? mg->rgb_hi[k] : big;
     return big > 1.0f ? 1.0f / big : 1.0f;
-}
-
-/* Negative light is shown as none, as the distances do (measure/lab.c);
- * values above 1 after the scale are not clipped: the scale puts the
- * exemplar's brightest channel at 1 and colour matching clamps into its box. */
-void btf_lab_from_rgb(const float rgb[3], float scale, float lab[3])
-{
-    double c[3], xyz[3];
-    for (int k = 0; k < 3; k++) {
-        double v = (double)rgb[k] * scale;
-        c[k] = v > 0.0 ? v : 0.0;
-    }
-    for (int i = 0; i < 3; i++)
-        xyz[i] = (RGB_TO_XYZ[i][0] * c[0] + RGB_TO_XYZ[i][1] * c[1] + RGB_TO_XYZ[i][2] * c[2]) /
-                 WHITE[i];
-    double fx = lab_f(xyz[0]), fy = lab_f(xyz[1]), fz = lab_f(xyz[2]);
-    lab[0] = (float)(116.0 * fy - 16.0);
-    lab[1] = (float)(500.0 * (fx - fy));
-    lab[2] = (float)(200.0 * (fy - fz));
-}
-
-void btf_rgb_from_lab(const float lab[3], float scale, float rgb[3])
-{
-    double fy = ((double)lab[0] + 16.0) / 116.0;
-    double f[3] = {fy + (double)lab[1] / 500.0, fy, fy - (double)lab[2] / 200.0};
-    double xyz[3];
-    for (int i = 0; i < 3; i++)
-        xyz[i] = lab_f_inv(f[i]) * WHITE[i];
-    for (int k = 0; k < 3; k++)
-        rgb[k] = (float)((XYZ_TO_RGB[k][0] * xyz[0] + XYZ_TO_RGB[k][1] * xyz[1] +
-                          XYZ_TO_RGB[k][2] * xyz[2]) / scale);
 }
 
 /* Sorts n floats (finite or not, no NaN: Lab of clamped light) by an LSD
@@ -132,13 +384,13 @@ static void radix_sort(float *v, float *tmp, size_t n)
         memcpy(v, src, n * sizeof *v);
 }
 
-/* The sample: every pixel up to BTF_LAB_SAMPLE of them, else the pixels of a
+/* The sample: every pixel up to `most` of them, else the pixels of a
  * regular grid of steps sx, sy (each the smallest that brings the count
  * within it): deterministic, spread over the whole image. */
-static void sample_steps(int w, int h, int *sx, int *sy)
+static void sample_steps(int w, int h, size_t most, int *sx, int *sy)
 {
     *sx = *sy = 1;
-    while ((size_t)((w + *sx - 1) / *sx) * (size_t)((h + *sy - 1) / *sy) > BTF_LAB_SAMPLE) {
+    while ((size_t)((w + *sx - 1) / *sx) * (size_t)((h + *sy - 1) / *sy) > most) {
         if ((w + *sx - 1) / *sx >= (h + *sy - 1) / *sy)
             (*sx)++;
         else
@@ -146,41 +398,110 @@ static void sample_steps(int w, int h, int *sx, int *sy)
     }
 }
 
-btf_status btf_lab_quantiles(const btf_image *img, float scale, float q[3][BTF_MARGIN_KNOTS],
-                             btf_error *err)
+btf_status btf_lab_sample_begin(btf_lab_sample *s, int width, int height, size_t most,
+                                float scale, btf_error *err)
 {
-    int sx, sy;
-    sample_steps(img->width, img->height, &sx, &sy);
-    size_t n = (size_t)((img->width + sx - 1) / sx) * (size_t)((img->height + sy - 1) / sy);
-    float *v = btf_alloc(n * 4, sizeof(float), err); /* 3 channels, then radix scratch */
-    if (!v)
-        return BTF_E_NOMEM;
-    size_t i = 0;
-    for (int y = 0; y < img->height; y += sy)
-        for (int x = 0; x < img->width; x += sx, i++) {
-            float lab[3];
-            btf_lab_from_rgb(img->data + 3 * ((size_t)y * img->width + x), scale, lab);
-            for (int c = 0; c < 3; c++)
-                v[c * n + i] = lab[c];
-        }
-    /* linear between order statistics at h = (n - 1) p, p = j / (knots - 1),
-     * as the band quantiles of the marginal transfer (analyse/marginal_fit.c) */
-    for (int c = 0; c < 3; c++) {
-        float *s = v + c * n;
-        radix_sort(s, v + 3 * n, n);
-        for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
-            double hpos = (double)(n - 1) * j / (BTF_MARGIN_KNOTS - 1);
-            size_t k = (size_t)hpos;
-            double f = hpos - (double)k;
-            double x = k + 1 < n ? s[k] + f * ((double)s[k + 1] - s[k]) : s[n - 1];
-            float lim = c == 0 ? 100.0f : 128.0f, low = c == 0 ? 0.0f : -128.0f;
-            float qv = (float)x;
-            qv = qv < low ? low : qv > lim ? lim : qv;
-            q[c][j] = j > 0 && qv < q[c][j - 1] ? q[c][j - 1] : qv;
-        }
+    memset(s, 0, sizeof *s);
+    sample_steps(width, height, most, &s->sx, &s->sy);
+    s->cols = (width + s->sx - 1) / s->sx, s->rows = (height + s->sy - 1) / s->sy;
+    s->n = (size_t)s->cols * s->rows;
+    s->scale = scale;
+    s->v = btf_alloc(s->n * 6, sizeof(float), err); /* 3 channels, then the sorts' scratch */
+    return s->v ? BTF_OK : BTF_E_NOMEM;
+}
+
+void btf_lab_sample_row(btf_lab_sample *s, int y, const float *row, float *scratch)
+{
+    if (y % s->sy)
+        return;
+    if (s->sx > 1) { /* the row's samples side by side */
+        for (int i = 0; i < s->cols; i++)
+            memcpy(scratch + 3 * i, row + (size_t)3 * i * s->sx, 3 * sizeof(float));
+        row = scratch;
     }
-    free(v);
+    size_t at = (size_t)(y / s->sy) * s->cols;
+    btf_lab_row(row, s->cols, s->scale, s->v + at, s->v + s->n + at, s->v + 2 * s->n + at);
+}
+
+void btf_lab_sample_free(btf_lab_sample *s)
+{
+    free(s->v);
+    s->v = NULL;
+}
+
+/* Channel c's quantiles: its samples sorted (in its own scratch), then
+ * linear between order statistics at h = (n - 1) p, p = j / (knots - 1),
+ * as the band quantiles of the marginal transfer (analyse/marginal_fit.c). */
+typedef struct quantile_job {
+    btf_lab_sample *s;
+    float (*q)[BTF_MARGIN_KNOTS];
+} quantile_job;
+
+static btf_status channel_quantiles(void *user, int c, int worker, btf_error *err)
+{
+    (void)worker, (void)err;
+    quantile_job *qj = user;
+    size_t n = qj->s->n;
+    float *s = qj->s->v + c * n;
+    radix_sort(s, qj->s->v + (3 + c) * n, n);
+    for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
+        double hpos = (double)(n - 1) * j / (BTF_MARGIN_KNOTS - 1);
+        size_t k = (size_t)hpos;
+        double f = hpos - (double)k;
+        double x = k + 1 < n ? s[k] + f * ((double)s[k + 1] - s[k]) : s[n - 1];
+        float lim = c == 0 ? 100.0f : 128.0f, low = c == 0 ? 0.0f : -128.0f;
+        float qv = (float)x;
+        qv = qv < low ? low : qv > lim ? lim : qv;
+        qj->q[c][j] = j > 0 && qv < qj->q[c][j - 1] ? qj->q[c][j - 1] : qv;
+    }
     return BTF_OK;
+}
+
+btf_status btf_lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNOTS],
+                                    btf_error *err)
+{
+    quantile_job qj = {s, q};
+    return btf_pool_run(3, 0, channel_quantiles, &qj, NULL, err);
+}
+
+#define SAMPLE_ROWS_PER_JOB 16
+
+typedef struct sample_job {
+    const btf_image *img;
+    btf_lab_sample *s;
+    float *scratch; /* per worker: a grid row's RGB samples */
+} sample_job;
+
+static btf_status sample_rows(void *user, int job, int worker, btf_error *err)
+{
+    (void)err;
+    sample_job *sj = user;
+    int rows = sj->s->rows, r1 = (job + 1) * SAMPLE_ROWS_PER_JOB;
+    r1 = r1 < rows ? r1 : rows;
+    for (int r = job * SAMPLE_ROWS_PER_JOB; r < r1; r++) {
+        int y = r * sj->s->sy;
+        btf_lab_sample_row(sj->s, y, sj->img->data + (size_t)y * sj->img->width * 3,
+                           sj->scratch + (size_t)worker * sj->s->cols * 3);
+    }
+    return BTF_OK;
+}
+
+btf_status btf_lab_quantiles(const btf_image *img, float scale, size_t most,
+                             float q[3][BTF_MARGIN_KNOTS], btf_error *err)
+{
+    btf_lab_sample s;
+    btf_status rc = btf_lab_sample_begin(&s, img->width, img->height, most, scale, err);
+    if (rc)
+        return rc;
+    int jobs = (s.rows + SAMPLE_ROWS_PER_JOB - 1) / SAMPLE_ROWS_PER_JOB;
+    int workers = btf_pool_workers(0, jobs);
+    sample_job sj = {img, &s, btf_alloc((size_t)workers * s.cols * 3, sizeof(float), err)};
+    rc = sj.scratch ? btf_pool_run(jobs, 0, sample_rows, &sj, NULL, err) : BTF_E_NOMEM;
+    if (rc == BTF_OK)
+        rc = btf_lab_sample_quantiles(&s, q, err);
+    free(sj.scratch);
+    btf_lab_sample_free(&s);
+    return rc;
 }
 
 /* The model file keeps each Lab quantile as a 16-bit code over its

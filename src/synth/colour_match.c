@@ -25,51 +25,63 @@
 #include "synth/synth.h"
 
 #include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define ROWS_PER_JOB 16
 
+/* Each channel's map is resampled on BTF_LAB_MAP_SEGS segments of equal
+ * width from its first source knot to its last: a value's segment is then
+ * a multiply and a floor, not a search among 32 knots (the search was half
+ * the cost of the pass). Resampling cuts the corners of the map at its
+ * knots by at most a segment's width (1/256 of the image's range); the
+ * map stays monotone, and flat beyond the ends. */
 typedef struct match_job {
     btf_image *img;
     const btf_marginal *mg;
     float scale;
-    float src[3][BTF_MARGIN_KNOTS]; /* the image's own quantiles */
-    double slope[3][BTF_MARGIN_KNOTS]; /* of the map from segment j to j + 1 */
+    btf_lab_map map[3];
 } match_job;
 
-/* The first knot of src (nondecreasing) not below v, or K when all are. */
-static int first_not_below(const float *src, float v)
-{
-    int lo = 0, hi = BTF_MARGIN_KNOTS; /* the answer is in [lo, hi] */
-    while (lo < hi) {
-        int mid = (lo + hi) / 2;
-        if (src[mid] < v)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
-/* The map of one channel: linear between (src[j], dst[j]), flat beyond the
+/* The map from the image's quantiles src (nondecreasing) onto the
+ * exemplar's dst at v: linear between (src[j], dst[j]), flat beyond the
  * ends. A value equal to a run of knots j0..j1 (a channel constant over
  * those probabilities: a constant or tiny image) maps to the target at the
  * run's middle probability, so that a constant image takes the exemplar's
  * median, not its minimum; monotone and finite either way. */
-static float map_channel(const float *src, const float *dst, const double *slope, float v)
+static double exact_map(const float *src, const float *dst, double v)
 {
+    const int last = BTF_MARGIN_KNOTS - 1;
     if (!(v >= src[0]))
         return dst[0];
-    if (v > src[BTF_MARGIN_KNOTS - 1])
-        return dst[BTF_MARGIN_KNOTS - 1];
-    int a = first_not_below(src, v);
+    if (v > src[last])
+        return dst[last];
+    int a = 0;
+    while (src[a] < v) /* ends by src[last] >= v */
+        a++;
     if (src[a] == v) { /* v on knots a..b */
         int b = a;
-        while (b + 1 < BTF_MARGIN_KNOTS && src[b + 1] == v)
+        while (b < last && src[b + 1] == v)
             b++;
-        return (float)(0.5 * ((double)dst[(a + b) / 2] + dst[(a + b + 1) / 2]));
+        return 0.5 * ((double)dst[(a + b) / 2] + dst[(a + b + 1) / 2]);
     }
-    return (float)(dst[a - 1] + ((double)v - src[a - 1]) * slope[a - 1]);
+    return dst[a - 1] + (v - src[a - 1]) * ((double)dst[a] - dst[a - 1]) /
+                            ((double)src[a] - src[a - 1]);
+}
+
+static void lab_map_make(const float *src, const float *dst, btf_lab_map *m)
+{
+    double lo = src[0], h = ((double)src[BTF_MARGIN_KNOTS - 1] - lo) / BTF_LAB_MAP_SEGS;
+    double inv = h > 0.0 ? 1.0 / h : 0.0;
+    m->origin = (float)lo;
+    m->inv_h = (float)(inv < 1e30 ? inv : 1e30); /* finite: a tiny range is all but a step */
+    for (int i = 0; i <= BTF_LAB_MAP_SEGS; i++) {
+        float q = (float)exact_map(src, dst, lo + i * h);
+        m->q[i] = i > 0 && q < m->q[i - 1] ? m->q[i - 1] : q; /* monotone after rounding */
+    }
+    for (int i = 0; i < BTF_LAB_MAP_SEGS; i++)
+        m->dq[i] = m->q[i + 1] - m->q[i];
 }
 
 static btf_status match_rows(void *user, int job, int worker, btf_error *err)
@@ -77,21 +89,11 @@ static btf_status match_rows(void *user, int job, int worker, btf_error *err)
     (void)worker, (void)err;
     match_job *mj = user;
     const btf_marginal *mg = mj->mg;
-    int y0 = job * ROWS_PER_JOB, y1 = y0 + ROWS_PER_JOB;
+    int w = mj->img->width, y0 = job * ROWS_PER_JOB, y1 = y0 + ROWS_PER_JOB;
     y1 = y1 < mj->img->height ? y1 : mj->img->height;
-    for (int y = y0; y < y1; y++) {
-        float *p = mj->img->data + (size_t)y * mj->img->width * 3;
-        for (int x = 0; x < mj->img->width; x++, p += 3) {
-            float lab[3], rgb[3];
-            btf_lab_from_rgb(p, mj->scale, lab);
-            for (int c = 0; c < 3; c++)
-                lab[c] = map_channel(mj->src[c], mg->lab_quantile[c], mj->slope[c], lab[c]);
-            btf_rgb_from_lab(lab, mj->scale, rgb);
-            for (int k = 0; k < 3; k++) /* the box also catches what float rounding left */
-                p[k] = rgb[k] >= mg->rgb_lo[k] ? (rgb[k] <= mg->rgb_hi[k] ? rgb[k] : mg->rgb_hi[k])
-                                               : mg->rgb_lo[k];
-        }
-    }
+    for (int y = y0; y < y1; y++)
+        btf_lab_match_row(mj->map, mj->scale, mg->rgb_lo, mg->rgb_hi,
+                          mj->img->data + (size_t)y * w * 3, w);
     return BTF_OK;
 }
 
@@ -108,6 +110,29 @@ btf_status btf_colour_match_check(const btf_model *m, int subspace, btf_error *e
     return BTF_OK;
 }
 
+btf_status btf_colour_match_wanted(const btf_model *m, int subspace, int opt, int *on,
+                                  btf_error *err)
+{
+    *on = 0;
+    if (opt < 0)
+        return BTF_OK;
+    if (opt > 0) {
+        btf_status rc = btf_colour_match_check(m, subspace, err);
+        *on = rc == BTF_OK;
+        return rc;
+    }
+    *on = m && m->subspaces && subspace >= 0 && subspace < m->n_subspaces &&
+          m->subspaces[subspace].marginal.knots && m->subspaces[subspace].marginal.lab_knots;
+    return BTF_OK;
+}
+
+void btf_colour_match_maps(const btf_model *m, int subspace, const float src[3][BTF_MARGIN_KNOTS],
+                           btf_lab_map map[3])
+{
+    for (int c = 0; c < 3; c++)
+        lab_map_make(src[c], m->subspaces[subspace].marginal.lab_quantile[c], &map[c]);
+}
+
 btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, btf_error *err)
 {
     btf_status rc = btf_colour_match_check(m, subspace, err);
@@ -117,20 +142,27 @@ btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, bt
     if (!img || !img->data || img->channels != 3 || img->width < 1 || img->height < 1)
         return btf_fail(err, BTF_E_ARG, "colour matching needs an RGB image");
     size_t n = (size_t)img->width * img->height * 3;
-    for (size_t i = 0; i < n; i++)
+    uint32_t bad = 0; /* Inf and NaN have every exponent bit: a test GCC vectorises */
+    for (size_t i = 0; i < n; i++) {
+        uint32_t u;
+        memcpy(&u, &img->data[i], sizeof u);
+        bad |= (u & 0x7F800000u) == 0x7F800000u;
+    }
+    for (size_t i = 0; bad && i < n; i++)
         if (!isfinite(img->data[i]))
             return btf_fail(err, BTF_E_ARG, "colour matching: pixel (%zu, %zu) is not finite",
                             i / 3 % (size_t)img->width, i / 3 / (size_t)img->width);
-    match_job mj = {img, mg, btf_lab_scale(mg), {{0}}, {{0}}};
+    match_job *mj = btf_alloc(1, sizeof *mj, err); /* 6 KB of maps: not on the stack */
+    if (!mj)
+        return BTF_E_NOMEM;
+    mj->img = img, mj->mg = mg, mj->scale = btf_lab_scale(mg);
+    float src[3][BTF_MARGIN_KNOTS]; /* the image's own quantiles */
+    rc = btf_lab_quantiles(img, mj->scale, BTF_LAB_MATCH_SAMPLE, src, err);
+    if (rc == BTF_OK)
+        btf_colour_match_maps(m, subspace, src, mj->map);
     int jobs = (img->height + ROWS_PER_JOB - 1) / ROWS_PER_JOB;
-    rc = btf_lab_quantiles(img, mj.scale, mj.src, err);
-    if (rc)
-        return rc;
-    for (int c = 0; c < 3; c++) /* a segment a value falls inside has src[j] < src[j + 1] */
-        for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++) {
-            double run = (double)mj.src[c][j + 1] - mj.src[c][j];
-            mj.slope[c][j] = run > 0.0 ? ((double)mg->lab_quantile[c][j + 1] -
-                                          mg->lab_quantile[c][j]) / run : 0.0;
-        }
-    return btf_pool_run(jobs, 0, match_rows, &mj, NULL, err);
+    if (rc == BTF_OK)
+        rc = btf_pool_run(jobs, 0, match_rows, mj, NULL, err);
+    free(mj);
+    return rc;
 }

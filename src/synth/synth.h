@@ -114,23 +114,69 @@ btf_status btf_synth_emit_row(btf_rows_fn fn, void *user, int y, const float *ro
  * when it is out of range or holds no Lab histogram (a file of format 1.2
  * or older) (colour_match.c; synthesis and the GPU check before work). */
 btf_status btf_colour_match_check(const btf_model *m, int subspace, btf_error *err);
+/* Whether colour matching runs on subspace `subspace` under the option's
+ * value opt (btf_synth_opts.match_colours): -1 off; 1 on, or
+ * btf_colour_match_check's error; 0 (the default) on where the subspace
+ * holds the exemplar's Lab quantiles (format 1.3 on), off for older files. */
+btf_status btf_colour_match_wanted(const btf_model *m, int subspace, int opt, int *on,
+                                  btf_error *err);
 
 /* ------------------------------------------------------------ colour_lab.c */
 
 /* CIE L*a*b* as OpenCV's float conversion (docs/synthesis.md, "Colour
- * matching"), of linear RGB times scale (negative light as none) and back
- * (divided by scale, unclamped). */
-#define BTF_LAB_SAMPLE ((size_t)256 * 256) /* pixels a quantile estimate reads at most */
+ * matching"), in float, a row at a time: n interleaved RGB pixels times
+ * scale (negative light as none) to planar L*, a*, b*, and back (divided by
+ * scale, each channel clamped into [lo[k], hi[k]]). */
+#define BTF_LAB_SAMPLE ((size_t)256 * 256) /* an exemplar's quantiles: pixels read at most */
+#define BTF_LAB_MATCH_SAMPLE ((size_t)128 * 128) /* an image colour matching maps */
 float btf_lab_scale(const btf_marginal *mg); /* 1 / the largest rgb_hi, or 1 */
-void btf_lab_from_rgb(const float rgb[3], float scale, float lab[3]);
-void btf_rgb_from_lab(const float lab[3], float scale, float rgb[3]);
+void btf_lab_row(const float *rgb, int n, float scale, float *l, float *a, float *b);
+void btf_rgb_row_from_lab(const float *l, const float *a, const float *b, int n, float scale,
+                          const float lo[3], const float hi[3], float *rgb);
 /* An RGB image's L*, a*, b* quantiles at j / (BTF_MARGIN_KNOTS - 1), from
- * every pixel up to BTF_LAB_SAMPLE (the standard error of a quantile of
- * 65,536 samples is far below the bench's self-distances), else a regular
- * grid of pixels; clamped to
- * L* in [0, 100], a*, b* in [-128, 128], nondecreasing. */
-btf_status btf_lab_quantiles(const btf_image *img, float scale, float q[3][BTF_MARGIN_KNOTS],
-                             btf_error *err);
+ * every pixel up to `most`, else a regular grid of pixels (the standard
+ * error of a quantile of 16,384 samples is far below the bench's
+ * self-distances); clamped to L* in [0, 100], a*, b* in [-128, 128],
+ * nondecreasing. Rows in parallel; the result does not depend on the
+ * thread count. */
+btf_status btf_lab_quantiles(const btf_image *img, float scale, size_t most,
+                             float q[3][BTF_MARGIN_KNOTS], btf_error *err);
+/* The same in steps, for an image that comes row by row (the streaming
+ * synthesis' first pass): begin (the grid for width x height, at most
+ * `most` samples), row y's samples (nothing unless y is a grid row;
+ * scratch: cols x 3 floats), then the quantiles; free in any case. */
+typedef struct btf_lab_sample {
+    int sx, sy, cols, rows; /* the grid's steps, its size in samples */
+    size_t n;               /* cols * rows */
+    float scale;
+    float *v;               /* L* of every sample, then a*, b*, then the sorts' scratch */
+} btf_lab_sample;
+btf_status btf_lab_sample_begin(btf_lab_sample *s, int width, int height, size_t most,
+                                float scale, btf_error *err);
+void btf_lab_sample_row(btf_lab_sample *s, int y, const float *row, float *scratch);
+btf_status btf_lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNOTS],
+                                    btf_error *err);
+void btf_lab_sample_free(btf_lab_sample *s);
+/* A map of one Lab channel, resampled on BTF_LAB_MAP_SEGS segments of
+ * equal width (colour_match.c makes it): t = (v - origin) inv_h clamped to
+ * [0, SEGS], q[i] + (t - i) dq[i] at its segment i. */
+#define BTF_LAB_MAP_SEGS 256
+typedef struct btf_lab_map {
+    float origin, inv_h;
+    float q[BTF_LAB_MAP_SEGS + 1], dq[BTF_LAB_MAP_SEGS];
+} btf_lab_map;
+/* n interleaved RGB pixels in place: to Lab, each channel through its map,
+ * back, clamped into [lo[k], hi[k]] (AVX2 where the CPU has it, the same
+ * bits as the scalar code). */
+void btf_lab_match_row(const btf_lab_map map[3], float scale, const float lo[3],
+                       const float hi[3], float *rgb, int n);
+/* The maps of subspace `subspace` from an image's own quantiles src onto
+ * the exemplar's (colour_match.c; the subspace checked). */
+void btf_colour_match_maps(const btf_model *m, int subspace, const float src[3][BTF_MARGIN_KNOTS],
+                           btf_lab_map map[3]);
+/* Streaming colour matching keeps the whole image when it takes at most
+ * this many bytes, else synthesises twice (synthesise.c). */
+#define BTF_MATCH_WHOLE_BYTES ((size_t)256 << 20)
 /* A Lab value of channel c as the model file's 16-bit code and back
  * (monotone; decode(code(v)) is what a file keeps of v). */
 unsigned btf_lab_code(int c, float v);

@@ -32,7 +32,7 @@ btf_synth_opts btf_synth_defaults(void)
         .portable_noise = 0,
         .row_by_row = 0,
         .tileable = 0, /* streaming, no wrap-around */
-        .match_colours = 0, /* opt-in: it holds the whole image */
+        .match_colours = 0, /* on where the model holds the exemplar's Lab quantiles */
     };
     return o;
 }
@@ -191,11 +191,12 @@ static btf_status matched_rows(const btf_model *m, int subspace,
                                const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *o,
                                int width, int height, btf_rows_fn fn, void *user, btf_error *err);
 
-/* Colour matching needs the model's Lab histogram: refused before any work. */
-static btf_status check_match(const btf_model *m, int subspace, const btf_synth_opts *o,
+/* Whether colour matching runs (btf_synth_opts.match_colours); asked for
+ * without the model's Lab histogram: refused before any work. */
+static btf_status check_match(const btf_model *m, int subspace, const btf_synth_opts *o, int *on,
                               btf_error *err)
 {
-    return o->match_colours ? btf_colour_match_check(m, subspace, err) : BTF_OK;
+    return btf_colour_match_wanted(m, subspace, o->match_colours, on, err);
 }
 
 btf_status btf_synthesise_margins(const btf_model *m, int subspace,
@@ -208,11 +209,12 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
     btf_status rc = check_subspace(m, subspace, err);
     if (rc == BTF_OK)
         rc = output_size(m, subspace, &o, &width, &height, err);
+    int match = 0;
     if (rc == BTF_OK)
-        rc = check_match(m, subspace, &o, err);
+        rc = check_match(m, subspace, &o, &match, err);
     if (rc)
         return rc;
-    if (o.match_colours)
+    if (match)
         return matched_rows(m, subspace, margins, &o, width, height, fn, user, err);
     if (o.tileable && (rc = btf_synth_check_tileable(width, height,
                                                      m->subspaces[subspace].levels, err)))
@@ -274,19 +276,91 @@ static int to_image(void *user, int y, int nrows, const float *rows, btf_error *
     return 0;
 }
 
-/* The streaming synthesis with colour matching: the whole image is made
- * first (the match reads all of it), matched, then handed over row by row. */
+/* The streaming synthesis with colour matching, the same bytes either way:
+ * up to BTF_MATCH_WHOLE_BYTES the whole image is made first (the match
+ * reads all of it), matched, then handed over row by row; beyond, the
+ * image is synthesised twice (the synthesis is deterministic): once for
+ * the Lab of its sampled pixels, once mapping each row as it comes, so
+ * that memory still grows with the width only. */
+typedef struct match_stream {
+    btf_lab_sample sample;
+    btf_lab_map map[3];
+    const btf_marginal *mg;
+    float *row; /* a row's copy, mapped; also the sample's scratch */
+    int width;
+    btf_rows_fn fn;
+    void *user;
+} match_stream;
+
+static int sample_rows_cb(void *user, int y, int nrows, const float *rows, btf_error *err)
+{
+    (void)err;
+    match_stream *ms = user;
+    for (int r = 0; r < nrows; r++)
+        btf_lab_sample_row(&ms->sample, y + r, rows + (size_t)r * ms->width * 3, ms->row);
+    return 0;
+}
+
+static int map_rows_cb(void *user, int y, int nrows, const float *rows, btf_error *err)
+{
+    match_stream *ms = user;
+    size_t n = (size_t)ms->width * 3;
+    for (int r = 0; r < nrows; r++) {
+        memcpy(ms->row, rows + r * n, n * sizeof(float));
+        btf_lab_match_row(ms->map, ms->sample.scale, ms->mg->rgb_lo, ms->mg->rgb_hi, ms->row,
+                          ms->width);
+        btf_status rc = btf_synth_emit_row(ms->fn, ms->user, y + r, ms->row, err);
+        if (rc)
+            return rc;
+    }
+    return 0;
+}
+
+static btf_status matched_twice(const btf_model *m, int subspace,
+                                const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *plain,
+                                btf_rows_fn fn, void *user, btf_error *err)
+{
+    match_stream ms = {.mg = &m->subspaces[subspace].marginal, .width = plain->width,
+                       .fn = fn, .user = user};
+    btf_status rc = btf_lab_sample_begin(&ms.sample, plain->width, plain->height,
+                                         BTF_LAB_MATCH_SAMPLE, btf_lab_scale(ms.mg), err);
+    if (rc)
+        return rc;
+    ms.row = btf_alloc((size_t)plain->width * 3, sizeof(float), err);
+    rc = ms.row ? btf_synthesise_margins(m, subspace, margins, plain, sample_rows_cb, &ms, err)
+                : BTF_E_NOMEM;
+    float src[3][BTF_MARGIN_KNOTS];
+    if (rc == BTF_OK)
+        rc = btf_lab_sample_quantiles(&ms.sample, src, err);
+    if (rc == BTF_OK) {
+        btf_colour_match_maps(m, subspace, src, ms.map);
+        rc = btf_synthesise_margins(m, subspace, margins, plain, map_rows_cb, &ms, err);
+    }
+    free(ms.row);
+    btf_lab_sample_free(&ms.sample);
+    return rc;
+}
+
+static size_t match_whole_bytes = BTF_MATCH_WHOLE_BYTES;
+
+void btf_synth_set_match_whole_bytes(size_t bytes)
+{
+    match_whole_bytes = bytes ? bytes : BTF_MATCH_WHOLE_BYTES;
+}
+
 static btf_status matched_rows(const btf_model *m, int subspace,
                                const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *o,
                                int width, int height, btf_rows_fn fn, void *user, btf_error *err)
 {
+    btf_synth_opts plain = *o;
+    plain.match_colours = -1;
+    plain.width = width, plain.height = height;
+    if ((size_t)width * height * 3 * sizeof(float) > match_whole_bytes)
+        return matched_twice(m, subspace, margins, &plain, fn, user, err);
     btf_image img;
     btf_status rc = btf_image_alloc(&img, width, height, 3, err);
     if (rc)
         return rc;
-    btf_synth_opts plain = *o;
-    plain.match_colours = 0;
-    plain.width = width, plain.height = height;
     rc = btf_synthesise_margins(m, subspace, margins, &plain, to_image, &img, err);
     if (rc == BTF_OK)
         rc = btf_colour_match(m, subspace, &img, err);
@@ -307,15 +381,15 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
         rc = output_size(m, subspace, &o, &w, &h, err);
     if (rc == BTF_OK && o.tileable) /* refused before its image is allocated */
         rc = btf_synth_check_tileable(w, h, m->subspaces[subspace].levels, err);
+    int match = 0;
     if (rc == BTF_OK)
-        rc = check_match(m, subspace, &o, err);
+        rc = check_match(m, subspace, &o, &match, err);
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, w, h, 3, err);
     if (rc)
         return rc;
     o.width = w, o.height = h;
-    int match = o.match_colours;
-    o.match_colours = 0; /* matched here, in the image itself */
+    o.match_colours = -1; /* matched here, in the image itself */
     rc = btf_synthesise(m, subspace, &o, to_image, out, err);
     if (rc == BTF_OK && match)
         rc = btf_colour_match(m, subspace, out, err);

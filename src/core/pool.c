@@ -143,7 +143,37 @@ struct btf_relay {
     int next, done, stop;   /* jobs handed out, jobs finished */
     btf_status status;      /* the batch's first failure */
     btf_error error;
+    atomic_int posted;      /* batches posted, and stop: what the idle helper spins on */
 };
+
+/* How long an idle relay helper polls for the next batch before it sleeps.
+ * A relay lives for one image, whose batches come every few hundred
+ * microseconds; waking a sleeping thread took longer than a batch's work
+ * on a 2-core VM (the colour step ran mostly on the caller: the marginal
+ * transfer cost +33 % of the synthesis where it costs a fifth of the
+ * fields' CPU time), so the helper stays awake that long. */
+#define RELAY_SPIN_S 2e-3
+
+static void cpu_relax(void)
+{
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+}
+
+/* With the lock held: polls r->posted (unlocked) until it moves from
+ * `seen` or RELAY_SPIN_S pass; returns with the lock held again. */
+static void relay_spin(btf_relay *r, int seen)
+{
+    pthread_mutex_unlock(&r->lock);
+    double t0 = btf_now();
+    for (int i = 0; atomic_load(&r->posted) == seen; i++) {
+        cpu_relax();
+        if ((i & 63) == 63 && btf_now() - t0 > RELAY_SPIN_S)
+            break;
+    }
+    pthread_mutex_lock(&r->lock);
+}
 
 /* Runs jobs of the batch until none is left; called and returns with the
  * lock held. A job runs unlocked; a failure stops the hand-out. */
@@ -170,6 +200,8 @@ static void *relay_main(void *arg)
     btf_relay *r = arg;
     pthread_mutex_lock(&r->lock);
     for (;;) {
+        if (r->next >= r->count && !r->stop)
+            relay_spin(r, atomic_load(&r->posted));
         while (r->next >= r->count && !r->stop)
             pthread_cond_wait(&r->cond, &r->lock);
         if (r->next >= r->count)
@@ -187,6 +219,7 @@ btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err)
         return NULL;
     r->job = job;
     r->user = user;
+    atomic_init(&r->posted, 0);
     pthread_mutex_init(&r->lock, NULL);
     pthread_cond_init(&r->cond, NULL);
     /* one CPU: a second thread would only take turns with the caller */
@@ -201,6 +234,7 @@ void btf_relay_post(btf_relay *r, int first, int count)
     r->count = count > 0 ? count : 0;
     r->next = r->done = 0;
     r->status = BTF_OK;
+    atomic_fetch_add(&r->posted, 1);
     if (r->threaded)
         pthread_cond_broadcast(&r->cond);
     pthread_mutex_unlock(&r->lock);
@@ -226,6 +260,7 @@ void btf_relay_stop(btf_relay *r)
     if (r->threaded) {
         pthread_mutex_lock(&r->lock);
         r->stop = 1;
+        atomic_fetch_add(&r->posted, 1);
         pthread_cond_broadcast(&r->cond);
         pthread_mutex_unlock(&r->lock);
         pthread_join(r->tid, NULL);

@@ -137,8 +137,7 @@ void btf_rgb_row_from_lab(const float *l, const float *a, const float *b, int n,
  * every pixel up to `most`, else a regular grid of pixels (the standard
  * error of a quantile of 16,384 samples is far below the bench's
  * self-distances); clamped to L* in [0, 100], a*, b* in [-128, 128],
- * nondecreasing. Rows in parallel; the result does not depend on the
- * thread count. */
+ * nondecreasing. On the calling thread. */
 btf_status btf_lab_quantiles(const btf_image *img, float scale, size_t most,
                              float q[3][BTF_MARGIN_KNOTS], btf_error *err);
 /* The same in steps, for an image that comes row by row (the streaming
@@ -149,7 +148,7 @@ typedef struct btf_lab_sample {
     int sx, sy, cols, rows; /* the grid's steps, its size in samples */
     size_t n;               /* cols * rows */
     float scale;
-    float *v;               /* L* of every sample, then a*, b*, then the sorts' scratch */
+    float *v;               /* L* of every sample, then a*, b*, then the sort's scratch */
 } btf_lab_sample;
 btf_status btf_lab_sample_begin(btf_lab_sample *s, int width, int height, size_t most,
                                 float scale, btf_error *err);

@@ -114,9 +114,11 @@ median5() {
          "$(du -sb "${MEDIAN5_OUTPUT:-$TMP/p}" | cut -f1) bytes"
 }
 SYN="$BTFCAR synthesise -q $P --backend cpu --size 512x512 -o $TMP/p"
-median5 "synthesise, default options (half, none, writer thread)" $SYN
+median5 "synthesise, default options (half, none, writer thread, colour matching)" $SYN
 def=$med
 [ -n "${mem:-}" ] && echo "   whole process / in-memory synthesis: $(echo "$def $mem" | awk '{printf "%.2f", $1/$2}') (target <= 4)"
+median5 "synthesise --no-match-colours" $SYN --no-match-colours
+echo "   colour matching costs the whole command $(echo "$def $med" | awk '{printf "%+.1f%%", 100 * ($1 / $2 - 1)}') (issue 17's bound: 10 %)"
 $SYN -v 2>&1 >/dev/null | sed 's/^/   --verbose: /'
 if command -v exrheader >/dev/null 2>&1; then
     exrheader "$TMP/p/subspace_00.exr" >"$TMP/hdr" 2>&1 &&

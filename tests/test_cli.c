@@ -238,7 +238,8 @@ static void synthesise_request_checks(void **state)
                             NULL), 0);
     const char *bad[] = {"--subspace ''", "--subspace ' 0'", "--subspace +0", "--subspace -0",
                          "--subspace 0,0", "--subspace 0,", "--subspace 1",
-                         "--size 70000x1", "--size 1x65537", "--backend cpu --device 0"};
+                         "--size 70000x1", "--size 1x65537", "--backend cpu --device 0",
+                         "--match-colours --no-match-colours"};
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
         char *err = NULL;
         int rc = tu_run(tu_fmt("%s synthesise %s --size 8x8 %s -o %s", tu_cli(), model, bad[i],
@@ -262,6 +263,18 @@ static void synthesise_request_checks(void **state)
     assert_non_null(strstr(err, "--backend cpu"));
     free(err);
     assert_int_not_equal(stat(tu_fmt("%s.big", out), &st), 0); /* no folder left */
+    /* colour matching, the default, needs the model's Lab histogram (format
+     * 1.3): an older model synthesises without it, and asking for it then
+     * is an error naming the subspace, before anything is written */
+    const char *old = "tests/data/model-v1.0.btfcar";
+    assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s --size 8x8 --backend cpu -o %s.old",
+                                   tu_cli(), old, out), NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s --size 8x8 --backend cpu --match-colours "
+                                   "-o %s.old2", tu_cli(), old, out), &err), 1);
+    assert_non_null(strstr(err, "Lab histogram"));
+    assert_non_null(strstr(err, "subspace 0"));
+    free(err);
+    assert_int_not_equal(stat(tu_fmt("%s.old2", out), &st), 0);
 }
 
 /* What every command takes from the one option table: --name=value, "--",

@@ -466,6 +466,61 @@ static void lab_conversion_paths_agree(void **state)
     }
 }
 
+/* The quantiles of a colour match's sample (btf_lab_sample_quantiles:
+ * order statistics from buckets, without a full sort) are exactly those of
+ * a sorted copy, linear between order statistics at (n - 1) j / 31, for
+ * spread values, heavy ties, two values, one value, and n of 1, 2, 9 and
+ * 16,384. */
+static int cmp_float_asc(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+static void sample_quantiles_are_exact(void **state)
+{
+    (void)state;
+    const size_t sizes[] = {1, 2, 9, 1000, 16384};
+    srand(11);
+    for (size_t si = 0; si < sizeof sizes / sizeof *sizes; si++)
+        for (int kind = 0; kind < 4; kind++) {
+            size_t n = sizes[si];
+            btf_error e = {0};
+            btf_lab_sample s;
+            TU_OK(btf_lab_sample_begin(&s, (int)n, 1, n, 1.0f, &e), &e);
+            assert_int_equal(s.n, n);
+            for (size_t i = 0; i < 3 * n; i++) {
+                double u = rand() / (double)RAND_MAX;
+                float v = kind == 0   ? (float)(100.0 * u * u * u)       /* skewed, spread */
+                          : kind == 1 ? (float)(int)(u * 5.0) * 10.0f   /* 5 values, ties */
+                          : kind == 2 ? (u < 0.7 ? 3.0f : 97.5f)        /* two values */
+                                      : 42.0f;                          /* one value */
+                s.v[i] = i >= 2 * n ? v - 50.0f : v;                     /* b* below 0 too */
+            }
+            float ref[3][BTF_MARGIN_KNOTS], got[3][BTF_MARGIN_KNOTS];
+            for (int c = 0; c < 3; c++) {
+                float *sorted = malloc(n * sizeof *sorted);
+                memcpy(sorted, s.v + c * n, n * sizeof *sorted);
+                qsort(sorted, n, sizeof *sorted, cmp_float_asc);
+                for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
+                    double h = (double)(n - 1) * j / (BTF_MARGIN_KNOTS - 1);
+                    size_t k = (size_t)h;
+                    double x = k + 1 < n ? sorted[k] + (h - (double)k) *
+                                                           ((double)sorted[k + 1] - sorted[k])
+                                         : sorted[n - 1];
+                    float lim = c == 0 ? 100.0f : 128.0f, low = c == 0 ? 0.0f : -128.0f;
+                    float q = (float)x;
+                    q = q < low ? low : q > lim ? lim : q;
+                    ref[c][j] = j > 0 && q < ref[c][j - 1] ? ref[c][j - 1] : q;
+                }
+                free(sorted);
+            }
+            TU_OK(btf_lab_sample_quantiles(&s, got, &e), &e);
+            assert_memory_equal(got, ref, sizeof ref);
+            btf_lab_sample_free(&s);
+        }
+}
+
 /* Colour matching (btf_synth_opts.match_colours, btf_colour_match) on the
  * generated materials: the first-order texture distance (CIE Lab
  * histograms, issue 17) of a 64 x 64 synthesis comes within 1.2 of the
@@ -624,6 +679,7 @@ int main(void)
         cmocka_unit_test(degenerate_images),
         cmocka_unit_test(file_keeps_the_transfer),
         cmocka_unit_test(lab_conversion_paths_agree),
+        cmocka_unit_test(sample_quantiles_are_exact),
         cmocka_unit_test(colour_match_keeps_lab_histograms),
         cmocka_unit_test(colour_match_extremes),
     };

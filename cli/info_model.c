@@ -136,8 +136,8 @@ static int model_text(const btf_model *m, const model_file *mf)
     for (int s = 0; s < m->n_subspaces; s++)
         lab += m->subspaces[s].marginal.knots && m->subspaces[s].marginal.lab_knots;
     printf("colours     %s (%d of %d subspaces)\n",
-           lab ? "the exemplar's CIE Lab histogram: synthesise --match-colours can keep it"
-               : "no Lab histogram (format 1.2 or older): no --match-colours",
+           lab ? "the exemplar's CIE Lab histogram: synthesis matches it (--no-match-colours skips)"
+               : "no Lab histogram (format 1.2 or older): synthesis without colour matching",
            lab, m->n_subspaces);
     if (m->range) {
         float lo, hi;

@@ -16,15 +16,6 @@
 #include <stdint.h>
 #include <string.h>
 
-/* Inf and NaN have all exponent bits set: a branch-free test that loops
- * over rows can OR together and the compiler vectorises. */
-static inline uint32_t nonfinite_bits(float v)
-{
-    uint32_t u;
-    memcpy(&u, &v, sizeof u);
-    return (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
-}
-
 #if defined(__GNUC__) && !defined(__clang__)
 typedef float v4f __attribute__((vector_size(16)));
 typedef int32_t v4i __attribute__((vector_size(16)));
@@ -74,7 +65,7 @@ static int unmix_planar(const btf_subspace_model *sm, const float *b0, const flo
         float c2 = sm->basis[6 + k];
         for (int x = 0; x < width; x++) {
             float v = btf_unmix(mean, c0, c1, c2, b0[x], b1[x], b2[x]);
-            bad |= nonfinite_bits(v);
+            bad |= btf_nonfinite_bits(v);
             p[x] = v;
         }
     }
@@ -87,11 +78,13 @@ static int unmix_planar(const btf_subspace_model *sm, const float *b0, const flo
 #pragma GCC target("avx2")
 #include <immintrin.h>
 
+#include "rgb8_avx2.h"
+
 /* unmix_planar in one pass with AVX2, 8 pixels at a time: btf_unmix's
  * multiplies and adds in its order (no FMA: the build forbids contraction
  * and no intrinsic here asks for it), the finite test, and the RGB
- * interleave by three lane permutations and six blends straight into the
- * row; the last width % 8 pixels go through unmix_planar. Same bits. */
+ * interleave (btf_rgb8_store, rgb8_avx2.h) straight into the row; the
+ * last width % 8 pixels go through unmix_planar. Same bits. */
 static int unmix_avx2(const btf_subspace_model *sm, const float *b0, const float *b1,
                       const float *b2, int width, float *plane, float *row)
 {
@@ -104,9 +97,6 @@ static int unmix_avx2(const btf_subspace_model *sm, const float *b0, const float
     }
     const __m256i expo = _mm256_set1_epi32(0x7F800000);
     /* lane i of out k takes its channel from the permuted a, b or c */
-    const __m256i pa = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
-    const __m256i pb = _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2);
-    const __m256i pc = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
     __m256i bad = _mm256_setzero_si256();
     int x = 0;
     for (; x + 8 <= width; x += 8) {
@@ -119,13 +109,7 @@ static int unmix_avx2(const btf_subspace_model *sm, const float *b0, const float
             __m256i e = _mm256_and_si256(_mm256_castps_si256(ch[k]), expo);
             bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(e, expo));
         }
-        __m256 a = _mm256_permutevar8x32_ps(ch[0], pa);
-        __m256 b = _mm256_permutevar8x32_ps(ch[1], pb);
-        __m256 c = _mm256_permutevar8x32_ps(ch[2], pc);
-        /* r g b r g b r g | b r g b r g b r | g b r g b r g b */
-        _mm256_storeu_ps(row + 3 * x, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24));
-        _mm256_storeu_ps(row + 3 * x + 8, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49));
-        _mm256_storeu_ps(row + 3 * x + 16, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92));
+        btf_rgb8_store(ch, row + 3 * x);
     }
     int tail = x < width ? unmix_planar(sm, b0 + x, b1 + x, b2 + x, width - x, plane,
                                         row + 3 * x) : 0;
@@ -157,12 +141,17 @@ int btf_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t, con
     return unmix_plain(sm, b0, b1, b2, width, scratch, row);
 }
 
-btf_status btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err)
+int btf_any_nonfinite(const float *v, size_t n)
 {
     uint32_t bad = 0;
     for (size_t i = 0; i < n; i++)
-        bad |= nonfinite_bits(v[i]);
-    if (bad)
+        bad |= btf_nonfinite_bits(v[i]);
+    return bad != 0;
+}
+
+btf_status btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err)
+{
+    if (btf_any_nonfinite(v, n))
         return btf_fail(err, BTF_E_NUMERIC,
                         "synthesis of subspace %d overflowed the float range at row %d "
                         "(the model's values are too large for float images)", subspace, y);

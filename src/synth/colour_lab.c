@@ -58,10 +58,10 @@ static lab_consts lab_consts_make(void)
 /* The cube root of t in [LAB_T0, LAB_LIGHT_MAX] as t r^2, r = t^(-1/3) by
  * Newton's iteration r (4 - t r^3) / 3 from an estimate made of the
  * exponent bits (within 7 per cent; each step squares the error: three
- * leave 4.5e-7, a few float roundings). Multiplies only, no branch: the AVX2 loops
- * below do the same operations in the same order, so both give the same
- * bits (libm's cbrt made colour matching cost three times the synthesis,
- * and two Halley steps' divisions a third of the conversion). */
+ * leave 4.5e-7, a few float roundings). Multiplies only, no branch: the
+ * AVX2 loops below do the same operations in the same order, so both give
+ * the same bits (libm's cbrt made colour matching cost three times the
+ * synthesis, and two Halley steps' divisions a third of the conversion). */
 static inline float cube_root(float t)
 {
     int32_t i;
@@ -141,6 +141,8 @@ static inline float lab_map_at(const btf_lab_map *m, float v)
 #pragma GCC target("avx2")
 #include <immintrin.h>
 
+#include "rgb8_avx2.h"
+
 /* The scalar functions above on 8 pixels at a time: their operations in
  * their order (no FMA: the build forbids contraction and no intrinsic here
  * asks for it); max/min are the scalar code's comparisons (the second
@@ -173,30 +175,6 @@ static inline __m256 lab_f_inv8(__m256 f)
                                   _mm256_set1_ps(1.0f / LAB_SLOPE));
     __m256 cube = _mm256_mul_ps(_mm256_mul_ps(f, f), f);
     return _mm256_blendv_ps(linear, cube, _mm256_cmp_ps(f, _mm256_set1_ps(LAB_F_T0), _CMP_GT_OQ));
-}
-
-/* 8 interleaved RGB pixels (24 floats) into three planes and back: three
- * loads, two blends and a lane permutation per plane. */
-static inline void deinterleave8(const float *p, __m256 v[3])
-{
-    __m256 a = _mm256_loadu_ps(p), b = _mm256_loadu_ps(p + 8), c = _mm256_loadu_ps(p + 16);
-    /* a = r0 g0 b0 r1 g1 b1 r2 g2 | b = b2 r3 g3 b3 r4 g4 b4 r5 | c = g5 b5 r6 g6 b6 r7 g7 b7 */
-    __m256 r = _mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24); /* r0 r3 r6 r1 r4 r7 r2 r5 */
-    __m256 g = _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49); /* g5 g0 g3 g6 g1 g4 g7 g2 */
-    __m256 s = _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92); /* b2 b5 b0 b3 b6 b1 b4 b7 */
-    v[0] = _mm256_permutevar8x32_ps(r, _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
-    v[1] = _mm256_permutevar8x32_ps(g, _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6));
-    v[2] = _mm256_permutevar8x32_ps(s, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
-}
-
-static inline void interleave8(const __m256 v[3], float *p)
-{
-    __m256 a = _mm256_permutevar8x32_ps(v[0], _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
-    __m256 b = _mm256_permutevar8x32_ps(v[1], _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2));
-    __m256 c = _mm256_permutevar8x32_ps(v[2], _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
-    _mm256_storeu_ps(p, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24));
-    _mm256_storeu_ps(p + 8, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49));
-    _mm256_storeu_ps(p + 16, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92));
 }
 
 static inline void lab8(const lab_consts *c, const __m256 rgb[3], float scale, __m256 lab[3])
@@ -252,7 +230,7 @@ static int lab_row_avx2(const lab_consts *c, const float *rgb, int n, float scal
     int x = 0;
     for (; x + 8 <= n; x += 8) {
         __m256 v[3], lab[3];
-        deinterleave8(rgb + 3 * (size_t)x, v);
+        btf_rgb8_load(rgb + 3 * (size_t)x, v);
         lab8(c, v, scale, lab);
         _mm256_storeu_ps(l + x, lab[0]);
         _mm256_storeu_ps(a + x, lab[1]);
@@ -269,7 +247,7 @@ static int rgb_row_avx2(const lab_consts *c, const float *l, const float *a, con
         __m256 lab[3] = {_mm256_loadu_ps(l + x), _mm256_loadu_ps(a + x), _mm256_loadu_ps(b + x)};
         __m256 v[3];
         rgb8(c, lab, inv, lo, hi, v);
-        interleave8(v, rgb + 3 * (size_t)x);
+        btf_rgb8_store(v, rgb + 3 * (size_t)x);
     }
     return x;
 }
@@ -280,12 +258,12 @@ static int match_row_avx2(const lab_consts *c, const btf_lab_map map[3], float s
     int x = 0;
     for (; x + 8 <= n; x += 8) {
         __m256 v[3], lab[3];
-        deinterleave8(rgb + 3 * (size_t)x, v);
+        btf_rgb8_load(rgb + 3 * (size_t)x, v);
         lab8(c, v, scale, lab);
         for (int k = 0; k < 3; k++)
             lab[k] = map8(&map[k], lab[k]);
         rgb8(c, lab, inv, lo, hi, v);
-        interleave8(v, rgb + 3 * (size_t)x);
+        btf_rgb8_store(v, rgb + 3 * (size_t)x);
     }
     return x;
 }
@@ -354,8 +332,8 @@ float btf_lab_scale(const btf_marginal *mg)
     return big > 1.0f ? 1.0f / big : 1.0f;
 }
 
-/* The order statistics of n finite floats at the given ranks (ascending,
- * each < n), exactly, without sorting them all: the values fall into
+/* The order statistics of n finite floats at the given ranks (each < n,
+ * in any order), exactly, without sorting them all: the values fall into
  * ORDER_BUCKETS buckets of equal width between their minimum and maximum
  * (a monotone map, so a bucket's values all sort after the previous
  * bucket's), only the values of the buckets that hold a wanted rank are

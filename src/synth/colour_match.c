@@ -25,9 +25,7 @@
 #include "synth/synth.h"
 
 #include <math.h>
-#include <stdint.h>
 #include <stdlib.h>
-#include <string.h>
 
 #define ROWS_PER_JOB 16
 
@@ -116,14 +114,10 @@ btf_status btf_colour_match_wanted(const btf_model *m, int subspace, int opt, in
     *on = 0;
     if (opt < 0)
         return BTF_OK;
-    if (opt > 0) {
-        btf_status rc = btf_colour_match_check(m, subspace, err);
-        *on = rc == BTF_OK;
-        return rc;
-    }
-    *on = m && m->subspaces && subspace >= 0 && subspace < m->n_subspaces &&
-          m->subspaces[subspace].marginal.knots && m->subspaces[subspace].marginal.lab_knots;
-    return BTF_OK;
+    btf_error quiet; /* the default: a subspace that cannot be matched is not, no error */
+    btf_status rc = btf_colour_match_check(m, subspace, opt > 0 ? err : &quiet);
+    *on = rc == BTF_OK;
+    return opt > 0 ? rc : BTF_OK;
 }
 
 void btf_colour_match_maps(const btf_model *m, int subspace, const float src[3][BTF_MARGIN_KNOTS],
@@ -142,12 +136,7 @@ btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, bt
     if (!img || !img->data || img->channels != 3 || img->width < 1 || img->height < 1)
         return btf_fail(err, BTF_E_ARG, "colour matching needs an RGB image");
     size_t n = (size_t)img->width * img->height * 3;
-    uint32_t bad = 0; /* Inf and NaN have every exponent bit: a test GCC vectorises */
-    for (size_t i = 0; i < n; i++) {
-        uint32_t u;
-        memcpy(&u, &img->data[i], sizeof u);
-        bad |= (u & 0x7F800000u) == 0x7F800000u;
-    }
+    int bad = btf_any_nonfinite(img->data, n); /* then the first such pixel, for the message */
     for (size_t i = 0; bad && i < n; i++)
         if (!isfinite(img->data[i]))
             return btf_fail(err, BTF_E_ARG, "colour matching: pixel (%zu, %zu) is not finite",

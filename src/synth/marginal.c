@@ -138,13 +138,6 @@ void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t
     }
 }
 
-static inline uint32_t nonfinite(float v)
-{
-    uint32_t u;
-    memcpy(&u, &v, sizeof u);
-    return (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
-}
-
 /* The transfer of band b at v (finite or not: the caller tests), written
  * without branches so that the compiler can keep a row's loop free of
  * mispredictions (a branchy version took 8 ns per value): floor(x) from a
@@ -166,7 +159,7 @@ int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int 
 {
     uint32_t bad = 0;
     for (int x = 0; x < width; x++) {
-        bad |= nonfinite(v[x]);
+        bad |= btf_nonfinite_bits(v[x]);
         out[x] = transfer1(t, band, v[x]);
     }
     return bad != 0;
@@ -202,7 +195,7 @@ static int unmix_row_portable(const btf_subspace_model *sm, const btf_marginal_t
         int n = width - c0 < 64 ? width - c0 : 64;
         for (int b = 0; b < 3; b++)
             for (int i = 0; i < n; i++) {
-                bad |= nonfinite(band[b][c0 + i]);
+                bad |= btf_nonfinite_bits(band[b][c0 + i]);
                 v[b][i] = transfer1(t, b, band[b][c0 + i]);
             }
         for (int i = 0; i < n; i++) {
@@ -222,6 +215,8 @@ static int unmix_row_portable(const btf_subspace_model *sm, const btf_marginal_t
 #pragma GCC push_options
 #pragma GCC target("avx2")
 #include <immintrin.h>
+
+#include "rgb8_avx2.h"
 
 /* table[i & 15] for 16-entry tables held in two vectors: two in-register
  * permutes (by the low 3 bits) and a blend (by bit 3, as sign bit m)
@@ -294,8 +289,8 @@ static inline void gamut8(const btf_marginal_table *t, __m256 c[3], __m256 out)
 /* The colour step, 8 pixels at a time, all in registers: the three
  * transfers, btf_unmix's multiplies and adds in its order, the box test
  * (gamut8 only for the vectors with a colour outside, a few percent of
- * them), and the RGB interleave by three lane permutations and six blends
- * straight into the row. Returns the pixels done (a multiple of 8). */
+ * them), and the RGB interleave (btf_rgb8_store, rgb8_avx2.h) straight
+ * into the row. Returns the pixels done (a multiple of 8). */
 static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table *t,
                           const float *const *band, int width, float *row, int *bad_out)
 {
@@ -324,9 +319,6 @@ static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table
     /* the finite test as the largest magnitude's bits (and, unsigned max):
      * Inf or NaN when they reach the exponent's all-ones */
     const __m256i magn = _mm256_set1_epi32(0x7FFFFFFF);
-    const __m256i pa = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
-    const __m256i pb = _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2);
-    const __m256i pc = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
     __m256i bad = _mm256_setzero_si256();
     int x = 0;
     for (; x + 8 <= width; x += 8) {
@@ -346,13 +338,7 @@ static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table
         }
         if (_mm256_movemask_ps(inside) != 0xFF)
             gamut8(t, ch, _mm256_xor_ps(inside, _mm256_castsi256_ps(_mm256_set1_epi32(-1))));
-        __m256 a = _mm256_permutevar8x32_ps(ch[0], pa);
-        __m256 b = _mm256_permutevar8x32_ps(ch[1], pb);
-        __m256 c = _mm256_permutevar8x32_ps(ch[2], pc);
-        /* r g b r g b r g | b r g b r g b r | g b r g b r g b */
-        _mm256_storeu_ps(row + 3 * x, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24));
-        _mm256_storeu_ps(row + 3 * x + 8, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49));
-        _mm256_storeu_ps(row + 3 * x + 16, _mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92));
+        btf_rgb8_store(ch, row + 3 * x);
     }
     bad = _mm256_cmpgt_epi32(bad, _mm256_set1_epi32(0x7F7FFFFF));
     *bad_out = !_mm256_testz_si256(bad, bad);

@@ -27,6 +27,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 /* Row loops compiled twice, for plain x86-64 and for AVX2 (twice the
  * lanes), the choice made once at load time; AVX2 brings no FMA here and
@@ -215,6 +216,17 @@ int btf_marginal_unmix_row(const btf_subspace_model *sm, const btf_marginal_tabl
                            float *row);
 
 /* ---------------------------------------------------------------- colour.c */
+
+/* 1 when v is Inf or NaN (all exponent bits set), else 0: a branch-free
+ * test that row loops OR together and the compiler vectorises. */
+static inline uint32_t btf_nonfinite_bits(float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, sizeof u);
+    return (uint32_t)((u & 0x7F800000u) == 0x7F800000u);
+}
+/* 1 when any of n values is Inf or NaN. */
+int btf_any_nonfinite(const float *v, size_t n);
 
 /* Scratch floats per pixel that btf_unmix_row needs. */
 #define BTF_UNMIX_SCRATCH 3

@@ -191,14 +191,6 @@ static btf_status matched_rows(const btf_model *m, int subspace,
                                const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *o,
                                int width, int height, btf_rows_fn fn, void *user, btf_error *err);
 
-/* Whether colour matching runs (btf_synth_opts.match_colours); asked for
- * without the model's Lab histogram: refused before any work. */
-static btf_status check_match(const btf_model *m, int subspace, const btf_synth_opts *o, int *on,
-                              btf_error *err)
-{
-    return btf_colour_match_wanted(m, subspace, o->match_colours, on, err);
-}
-
 btf_status btf_synthesise_margins(const btf_model *m, int subspace,
                                   const int (*margins)[BTF_MAX_LEVELS],
                                   const btf_synth_opts *opts, btf_rows_fn fn, void *user,
@@ -211,7 +203,7 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
         rc = output_size(m, subspace, &o, &width, &height, err);
     int match = 0;
     if (rc == BTF_OK)
-        rc = check_match(m, subspace, &o, &match, err);
+        rc = btf_colour_match_wanted(m, subspace, o.match_colours, &match, err);
     if (rc)
         return rc;
     if (match)
@@ -383,7 +375,7 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
         rc = btf_synth_check_tileable(w, h, m->subspaces[subspace].levels, err);
     int match = 0;
     if (rc == BTF_OK)
-        rc = check_match(m, subspace, &o, &match, err);
+        rc = btf_colour_match_wanted(m, subspace, o.match_colours, &match, err);
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, w, h, 3, err);
     if (rc)

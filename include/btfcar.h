@@ -1076,6 +1076,13 @@ btf_status btf_synthesise(const btf_model *m, int subspace, const btf_synth_opts
 /* The same into an image (linear RGB), allocated here. */
 btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synth_opts *opts,
                                 btf_image *out, btf_error *err);
+/* Subspace images subspaces[0 .. n-1] into outs[0 .. n-1] (allocated here;
+ * on failure none is left), each the bytes btf_synthesise_image gives with
+ * the same opts. Faster with colour matching: image i - 1 is matched on the
+ * CPU that image i's synthesis leaves idle (docs/synthesis.md, "Colour
+ * matching"), so the pass costs little more than its last image's. */
+btf_status btf_synthesise_images(const btf_model *m, const int *subspaces, int n,
+                                 const btf_synth_opts *opts, btf_image *outs, btf_error *err);
 /* Colour matching (src/synth/colour_match.c, docs/synthesis.md, "Colour
  * matching"): the per-band marginal transfer gives each decorrelated band
  * the exemplar's histogram, but the bands are synthesised independently

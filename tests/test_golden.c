@@ -224,6 +224,45 @@ static void matched_synthesis_is_unchanged(void **state)
     both_backends_give("match", "--seed 9", expect, 160, 120);
 }
 
+/* btf_synthesise_images (image i - 1 colour-matched beside image i's
+ * synthesis) gives the bytes of btf_synthesise_image, one call per image:
+ * subspaces out of order and repeated, default (matched), unmatched and
+ * tileable; a bad subspace in the batch fails it and leaves no image. */
+static void batch_synthesis_is_image_by_image(void **state)
+{
+    (void)state;
+    btf_model m;
+    btf_error err = {0};
+    TU_OK(btf_model_read(model_path, &m, &err), &err);
+    const int subs[5] = {3, 0, 5, 0, 2};
+    for (int v = 0; v < 3; v++) {
+        btf_synth_opts so = btf_synth_defaults();
+        so.width = 64, so.height = 48, so.seed = 7 + v;
+        so.match_colours = v == 1 ? -1 : 0;
+        so.tileable = v == 2;
+        btf_image batch[5], one;
+        TU_OK(btf_synthesise_images(&m, subs, 5, &so, batch, &err), &err);
+        for (int i = 0; i < 5; i++) {
+            TU_OK(btf_synthesise_image(&m, subs[i], &so, &one, &err), &err);
+            assert_int_equal(batch[i].width, 64);
+            assert_int_equal(batch[i].height, 48);
+            assert_memory_equal(batch[i].data, one.data, (size_t)64 * 48 * 3 * sizeof(float));
+            btf_image_free(&one);
+            btf_image_free(&batch[i]);
+        }
+    }
+    btf_synth_opts so = {.width = 16, .height = 16};
+    btf_image outs[3];
+    const int bad[3] = {1, 99, 2};
+    btf_error be = {0};
+    assert_int_equal(btf_synthesise_images(&m, bad, 3, &so, outs, &be), BTF_E_ARG);
+    assert_non_null(strstr(be.msg, "subspace 99"));
+    for (int i = 0; i < 3; i++)
+        assert_null(outs[i].data);
+    TU_OK(btf_synthesise_images(&m, NULL, 0, &so, NULL, &err), &err);
+    btf_model_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -233,6 +272,7 @@ int main(void)
         cmocka_unit_test(matched_synthesis_is_unchanged),
         cmocka_unit_test(tileable_synthesis_is_unchanged),
         cmocka_unit_test(synthesis_headers_carry_provenance),
+        cmocka_unit_test(batch_synthesis_is_image_by_image),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

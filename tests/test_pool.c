@@ -237,6 +237,79 @@ static void relay_first_failure(void **state)
     btf_relay_stop(NULL);
 }
 
+typedef struct bg_log {
+    atomic_int order[64]; /* the background jobs in the order they ran */
+    atomic_int ran, fail_at;
+    pthread_t caller;
+} bg_log;
+
+static btf_status bg_job(void *user, int j, int worker, btf_error *err)
+{
+    bg_log *l = user;
+    assert_int_equal(worker, 1); /* the helper's */
+    assert_false(pthread_equal(pthread_self(), l->caller));
+    int at = atomic_fetch_add(&l->ran, 1);
+    assert_true(at < 64);
+    atomic_store(&l->order[at], j);
+    if (j == atomic_load(&l->fail_at))
+        return btf_fail(err, BTF_E_IO, "background job %d failed", j);
+    return BTF_OK;
+}
+
+/* The helper runs background jobs in order between the pipeline's
+ * batches, which still run exactly once; a failure stops the background
+ * and is kept. With one CPU the helper runs none (the caller's to do). */
+static void relay_background_in_order(void **state)
+{
+    (void)state;
+    for (int fail = -1; fail <= 20; fail += 21) {
+        static relay_log l;
+        static bg_log b;
+        memset(&l, 0, sizeof l);
+        memset(&b, 0, sizeof b);
+        atomic_store(&l.fail_at, -1);
+        atomic_store(&b.fail_at, fail);
+        l.caller = b.caller = pthread_self();
+        btf_error e = {0};
+        btf_relay *r = btf_relay_start(relay_job, &l, &e);
+        assert_non_null(r);
+        btf_background bg = {.fn = bg_job, .user = &b, .count = 40};
+        btf_relay_background(r, &bg);
+        /* batches meanwhile, idle time between them: 30 batches, then more
+         * (each of its jobs again) until the background is through, or 5 s
+         * on a loaded machine */
+        int want = fail < 0 ? 40 : 21, posts = 0;
+        for (; posts < 30 || (btf_cpu_count() > 1 && atomic_load(&b.ran) < want &&
+                              posts < 30 + 5000); posts++) {
+            int k = posts % 30;
+            btf_relay_post(r, 10 * k, 10);
+            assert_int_equal(btf_relay_wait(r, &e), BTF_OK);
+            struct timespec ts = {0, posts < 30 ? 300000 : 1000000};
+            nanosleep(&ts, NULL);
+        }
+        btf_relay_stop(r);
+        for (int j = 0; j < 300; j++) /* once per post */
+            assert_int_equal(atomic_load(&l.runs[j]), posts / 30 + (j / 10 < posts % 30));
+        int ran = atomic_load(&b.ran);
+        for (int i = 0; i < ran; i++)
+            assert_int_equal(atomic_load(&b.order[i]), i);
+        if (btf_cpu_count() < 2) {
+            assert_int_equal(ran, 0);
+            continue;
+        }
+        if (fail < 0) {
+            assert_int_equal(bg.status, BTF_OK);
+            assert_int_equal(bg.done, ran);
+            assert_int_equal(ran, 40);
+        } else {
+            assert_int_equal(bg.status, BTF_E_IO);
+            assert_string_equal(bg.error.msg, "background job 20 failed");
+            assert_int_equal(bg.done, 20);
+            assert_int_equal(ran, 21); /* none after the failure */
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -246,6 +319,7 @@ int main(void)
         cmocka_unit_test(progress_from_caller),
         cmocka_unit_test(relay_runs_every_job_once),
         cmocka_unit_test(relay_first_failure),
+        cmocka_unit_test(relay_background_in_order),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -101,6 +101,25 @@ btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err);
 void btf_relay_post(btf_relay *r, int first, int count);
 btf_status btf_relay_wait(btf_relay *r, btf_error *err);
 void btf_relay_stop(btf_relay *r);
+/* Background work for a relay's helper: jobs 0 .. count - 1 of fn (worker
+ * 1), in this order, one at a time, whenever the helper has no batch of the
+ * pipeline to run; it looks for a batch after each job, so a job should be
+ * short (tens of microseconds: a batch posted meanwhile waits that long, or
+ * the caller's wait takes it over). `done` counts the jobs run; the first
+ * failure stops the background (status, error). The caller owns bg and,
+ * once btf_relay_stop has returned, runs what is left itself: the helper
+ * uses the CPU the pipeline leaves idle (synthesis.c colour-matches the
+ * previous image so, beside the next one's fields). With one CPU the helper
+ * runs nothing. */
+typedef struct btf_background {
+    btf_pool_job_fn fn;
+    void *user;
+    int count;
+    int done;
+    btf_status status;
+    btf_error error;
+} btf_background;
+void btf_relay_background(btf_relay *r, btf_background *bg);
 
 /* Directions named in whole degrees (file names) match a known set within
  * this many degrees (core/directions.c, io/dataset.c). */

@@ -143,7 +143,8 @@ struct btf_relay {
     int next, done, stop;   /* jobs handed out, jobs finished */
     btf_status status;      /* the batch's first failure */
     btf_error error;
-    atomic_int posted;      /* batches posted, and stop: what the idle helper spins on */
+    atomic_int posted;      /* batches posted, background, stop: what the idle helper spins on */
+    btf_background *bg;     /* work for the helper's idle time, or NULL */
 };
 
 /* How long an idle relay helper polls for the next batch before it sleeps.
@@ -195,21 +196,58 @@ static void relay_run(btf_relay *r, int worker)
     }
 }
 
+static int background_left(const btf_relay *r)
+{
+    return r->bg && r->bg->done < r->bg->count && r->bg->status == BTF_OK;
+}
+
+/* One background job; called and returns with the lock held. Only the
+ * helper touches bg while the relay runs, so the job itself runs unlocked. */
+static void background_step(btf_relay *r)
+{
+    btf_background *bg = r->bg;
+    int j = bg->done;
+    pthread_mutex_unlock(&r->lock);
+    btf_error e = {0};
+    btf_status rc = bg->fn(bg->user, j, 1, &e);
+    pthread_mutex_lock(&r->lock);
+    if (rc != BTF_OK)
+        bg->status = rc, bg->error = e;
+    else
+        bg->done++;
+}
+
 static void *relay_main(void *arg)
 {
     btf_relay *r = arg;
     pthread_mutex_lock(&r->lock);
     for (;;) {
-        if (r->next >= r->count && !r->stop)
-            relay_spin(r, atomic_load(&r->posted));
-        while (r->next >= r->count && !r->stop)
+        if (r->next < r->count) { /* the pipeline's batch first */
+            relay_run(r, 1);
+            continue;
+        }
+        if (r->stop)
+            break;
+        if (background_left(r)) {
+            background_step(r);
+            continue;
+        }
+        relay_spin(r, atomic_load(&r->posted));
+        while (r->next >= r->count && !r->stop && !background_left(r))
             pthread_cond_wait(&r->cond, &r->lock);
-        if (r->next >= r->count)
-            break; /* stopped */
-        relay_run(r, 1);
     }
     pthread_mutex_unlock(&r->lock);
     return NULL;
+}
+
+void btf_relay_background(btf_relay *r, btf_background *bg)
+{
+    pthread_mutex_lock(&r->lock);
+    r->bg = bg;
+    atomic_fetch_add(&r->posted, 1);
+    if (r->threaded)
+        pthread_cond_broadcast(&r->cond);
+    pthread_mutex_unlock(&r->lock);
 }
 
 btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err)

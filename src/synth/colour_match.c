@@ -27,20 +27,10 @@
 #include <math.h>
 #include <stdlib.h>
 
-#define ROWS_PER_JOB 16
-
-/* Each channel's map is resampled on BTF_LAB_MAP_SEGS segments of equal
- * width from its first source knot to its last: a value's segment is then
- * a multiply and a floor, not a search among 32 knots (the search was half
- * the cost of the pass). Resampling cuts the corners of the map at its
- * knots by at most a segment's width (1/256 of the image's range); the
- * map stays monotone, and flat beyond the ends. */
-typedef struct match_job {
-    btf_image *img;
-    const btf_marginal *mg;
-    float scale;
-    btf_lab_map map[3];
-} match_job;
+/* A job's pixels: about this many per job, so that a job of the relay's
+ * background (core/pool.c) takes some 20 microseconds and a batch of the
+ * pipeline posted meanwhile hardly waits. */
+#define PIXELS_PER_JOB 2048
 
 /* The map from the image's quantiles src (nondecreasing) onto the
  * exemplar's dst at v: linear between (src[j], dst[j]), flat beyond the
@@ -82,19 +72,6 @@ static void lab_map_make(const float *src, const float *dst, btf_lab_map *m)
         m->dq[i] = m->q[i + 1] - m->q[i];
 }
 
-static btf_status match_rows(void *user, int job, int worker, btf_error *err)
-{
-    (void)worker, (void)err;
-    match_job *mj = user;
-    const btf_marginal *mg = mj->mg;
-    int w = mj->img->width, y0 = job * ROWS_PER_JOB, y1 = y0 + ROWS_PER_JOB;
-    y1 = y1 < mj->img->height ? y1 : mj->img->height;
-    for (int y = y0; y < y1; y++)
-        btf_lab_match_row(mj->map, mj->scale, mg->rgb_lo, mg->rgb_hi,
-                          mj->img->data + (size_t)y * w * 3, w);
-    return BTF_OK;
-}
-
 btf_status btf_colour_match_check(const btf_model *m, int subspace, btf_error *err)
 {
     if (!m || !m->subspaces || subspace < 0 || subspace >= m->n_subspaces)
@@ -127,12 +104,118 @@ void btf_colour_match_maps(const btf_model *m, int subspace, const float src[3][
         lab_map_make(src[c], m->subspaces[subspace].marginal.lab_quantile[c], &map[c]);
 }
 
+/* The pass as jobs run in order (btf_match_task in synth.h): the sample's
+ * rows, the quantiles and maps, then the image's rows. Each job's output
+ * depends on its index alone, whoever runs it. */
+static int sample_jobs(const btf_match_task *t)
+{
+    return (t->sample.rows + t->sample_rows_per_job - 1) / t->sample_rows_per_job;
+}
+
+static btf_status task_job(void *user, int j, int worker, btf_error *err)
+{
+    btf_match_task *t = user;
+    const btf_marginal *mg = t->mg;
+    int w = t->img->width, s = sample_jobs(t);
+    if (j < s) { /* sample rows r0 .. r1 - 1 */
+        int r0 = j * t->sample_rows_per_job, r1 = r0 + t->sample_rows_per_job;
+        r1 = r1 < t->sample.rows ? r1 : t->sample.rows;
+        for (int r = r0; r < r1; r++) {
+            int y = r * t->sample.sy;
+            btf_lab_sample_row(&t->sample, y, t->img->data + (size_t)y * w * 3,
+                               t->scratch + (size_t)worker * t->sample.cols * 3);
+        }
+        return BTF_OK;
+    }
+    if (j == s) { /* the image's own quantiles, the maps onto the exemplar's */
+        float src[3][BTF_MARGIN_KNOTS];
+        btf_status rc = btf_lab_sample_quantiles(&t->sample, src, err);
+        if (rc == BTF_OK)
+            for (int c = 0; c < 3; c++)
+                lab_map_make(src[c], mg->lab_quantile[c], &t->map[c]);
+        return rc;
+    }
+    int y0 = (j - s - 1) * t->rows_per_job, y1 = y0 + t->rows_per_job;
+    y1 = y1 < t->img->height ? y1 : t->img->height;
+    for (int y = y0; y < y1; y++)
+        btf_lab_match_row(t->map, t->scale, mg->rgb_lo, mg->rgb_hi,
+                          t->img->data + (size_t)y * w * 3, w);
+    return BTF_OK;
+}
+
+btf_status btf_match_task_begin(btf_match_task **out, const btf_model *m, int subspace,
+                                btf_image *img, btf_error *err)
+{
+    *out = NULL;
+    btf_status rc = btf_colour_match_check(m, subspace, err);
+    if (rc)
+        return rc;
+    btf_match_task *t = btf_calloc(1, sizeof *t, err); /* 6 KB of maps: not on the stack */
+    if (!t)
+        return BTF_E_NOMEM;
+    t->img = img, t->mg = &m->subspaces[subspace].marginal, t->scale = btf_lab_scale(t->mg);
+    rc = btf_lab_sample_begin(&t->sample, img->width, img->height, BTF_LAB_MATCH_SAMPLE,
+                              t->scale, err);
+    t->scratch = rc ? NULL : btf_alloc((size_t)t->sample.cols * 3 * 2, sizeof(float), err);
+    if (!t->scratch) {
+        btf_match_task_free(t);
+        return rc ? rc : BTF_E_NOMEM;
+    }
+    t->sample_rows_per_job = PIXELS_PER_JOB / t->sample.cols;
+    t->sample_rows_per_job += t->sample_rows_per_job < 1;
+    t->rows_per_job = PIXELS_PER_JOB / img->width;
+    t->rows_per_job += t->rows_per_job < 1;
+    int s = sample_jobs(t), rows = (img->height + t->rows_per_job - 1) / t->rows_per_job;
+    t->bg = (btf_background){.fn = task_job, .user = t, .count = s + 1 + rows};
+    *out = t;
+    return BTF_OK;
+}
+
+typedef struct task_rest {
+    btf_match_task *t;
+    int first;
+} task_rest;
+
+static btf_status rest_job(void *user, int j, int worker, btf_error *err)
+{
+    task_rest *r = user;
+    return task_job(r->t, r->first + j, worker, err);
+}
+
+btf_status btf_match_task_finish(btf_match_task *t, btf_error *err)
+{
+    btf_background *bg = &t->bg;
+    if (bg->status) {
+        if (err)
+            *err = bg->error;
+        return bg->status;
+    }
+    int s = sample_jobs(t);
+    btf_status rc = BTF_OK;
+    for (; rc == BTF_OK && bg->done <= s; bg->done++) /* in order: the maps need the sample */
+        rc = task_job(t, bg->done, 0, err);
+    task_rest rest = {t, bg->done};
+    if (rc == BTF_OK)
+        rc = btf_pool_run(bg->count - bg->done, 0, rest_job, &rest, NULL, err);
+    if (rc == BTF_OK)
+        bg->done = bg->count;
+    return rc;
+}
+
+void btf_match_task_free(btf_match_task *t)
+{
+    if (!t)
+        return;
+    btf_lab_sample_free(&t->sample);
+    free(t->scratch);
+    free(t);
+}
+
 btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, btf_error *err)
 {
     btf_status rc = btf_colour_match_check(m, subspace, err);
     if (rc)
         return rc;
-    const btf_marginal *mg = &m->subspaces[subspace].marginal;
     if (!img || !img->data || img->channels != 3 || img->width < 1 || img->height < 1)
         return btf_fail(err, BTF_E_ARG, "colour matching needs an RGB image");
     size_t n = (size_t)img->width * img->height * 3;
@@ -141,17 +224,10 @@ btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, bt
         if (!isfinite(img->data[i]))
             return btf_fail(err, BTF_E_ARG, "colour matching: pixel (%zu, %zu) is not finite",
                             i / 3 % (size_t)img->width, i / 3 / (size_t)img->width);
-    match_job *mj = btf_alloc(1, sizeof *mj, err); /* 6 KB of maps: not on the stack */
-    if (!mj)
-        return BTF_E_NOMEM;
-    mj->img = img, mj->mg = mg, mj->scale = btf_lab_scale(mg);
-    float src[3][BTF_MARGIN_KNOTS]; /* the image's own quantiles */
-    rc = btf_lab_quantiles(img, mj->scale, BTF_LAB_MATCH_SAMPLE, src, err);
+    btf_match_task *t;
+    rc = btf_match_task_begin(&t, m, subspace, img, err);
     if (rc == BTF_OK)
-        btf_colour_match_maps(m, subspace, src, mj->map);
-    int jobs = (img->height + ROWS_PER_JOB - 1) / ROWS_PER_JOB;
-    if (rc == BTF_OK)
-        rc = btf_pool_run(jobs, 0, match_rows, mj, NULL, err);
-    free(mj);
+        rc = btf_match_task_finish(t, err);
+    btf_match_task_free(t);
     return rc;
 }

@@ -24,6 +24,7 @@
 #define BTF_SYNTH_H
 
 #include "btfcar.h"
+#include "core/core.h"
 
 #include <stddef.h>
 #include <stdint.h>
@@ -174,6 +175,27 @@ void btf_lab_match_row(const btf_lab_map map[3], float scale, const float lo[3],
  * the exemplar's (colour_match.c; the subspace checked). */
 void btf_colour_match_maps(const btf_model *m, int subspace, const float src[3][BTF_MARGIN_KNOTS],
                            btf_lab_map map[3]);
+/* Colour matching as a task (colour_match.c): its jobs, in order, sample
+ * the image's Lab, make the maps from the sample's quantiles, then map the
+ * image's rows, a few thousand pixels a job. btf_match_task_begin checks the
+ * subspace (not the pixels: a synthesis' are finite) and sets bg up, so
+ * that a relay's helper (core/pool.c) can run the task in its idle time;
+ * btf_match_task_finish runs what is left, the rows over the thread pool,
+ * and reports bg's failure if it had one. Same bytes whoever runs a job. */
+typedef struct btf_match_task {
+    btf_image *img;
+    const btf_marginal *mg;
+    float scale;
+    btf_lab_sample sample;
+    float *scratch;             /* the sample's, [worker 0..1][cols * 3] */
+    int sample_rows_per_job, rows_per_job;
+    btf_lab_map map[3];
+    btf_background bg;
+} btf_match_task;
+btf_status btf_match_task_begin(btf_match_task **out, const btf_model *m, int subspace,
+                                btf_image *img, btf_error *err);
+btf_status btf_match_task_finish(btf_match_task *t, btf_error *err);
+void btf_match_task_free(btf_match_task *t);
 /* Streaming colour matching keeps the whole image when it takes at most
  * this many bytes, else synthesises twice (synthesise.c). */
 #define BTF_MATCH_WHOLE_BYTES ((size_t)256 << 20)

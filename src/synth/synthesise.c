@@ -150,7 +150,7 @@ btf_status btf_synth_emit_row(btf_rows_fn fn, void *user, int y, const float *ro
 
 static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal_table *mt,
                                 synth_band *sb, int width, int height, int subspace,
-                                btf_rows_fn fn, void *user, btf_error *err)
+                                btf_rows_fn fn, void *user, btf_background *bg, btf_error *err)
 {
     size_t w = (size_t)width, block = w * 3 * COLOUR_BLOCK;
     colour_job c = {sm, mt, width, subspace, {NULL, NULL}, {NULL, NULL}, NULL};
@@ -162,6 +162,8 @@ static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal
     c.scratch = mem + 4 * block;
     btf_relay *relay = btf_relay_start(colour_row, &c, err);
     btf_status rc = relay ? BTF_OK : BTF_E_NOMEM;
+    if (relay && bg)
+        btf_relay_background(relay, bg);
     int blocks = (height + COLOUR_BLOCK - 1) / COLOUR_BLOCK;
     for (int k = 0; rc == BTF_OK && k <= blocks; k++) {
         int y0 = k * COLOUR_BLOCK, n = height - y0 < COLOUR_BLOCK ? height - y0 : COLOUR_BLOCK;
@@ -191,10 +193,12 @@ static btf_status matched_rows(const btf_model *m, int subspace,
                                const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *o,
                                int width, int height, btf_rows_fn fn, void *user, btf_error *err);
 
-btf_status btf_synthesise_margins(const btf_model *m, int subspace,
-                                  const int (*margins)[BTF_MAX_LEVELS],
-                                  const btf_synth_opts *opts, btf_rows_fn fn, void *user,
-                                  btf_error *err)
+/* btf_synthesise_margins, where bg (NULL: none) is work for the colour
+ * pipeline's relay helper to do in its idle time (the previous image's
+ * colour matching, btf_synthesise_images); the caller finishes it. */
+static btf_status synth_rows(const btf_model *m, int subspace,
+                             const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *opts,
+                             btf_rows_fn fn, void *user, btf_background *bg, btf_error *err)
 {
     btf_synth_opts o = btf_synth_resolve(opts);
     int width, height;
@@ -230,7 +234,7 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
     btf_marginal_table mt;
     btf_marginal_table_make(sm, &mt);
     if (rc == 0 && mt.on) {
-        rc = colour_blocks(sm, &mt, sb, width, height, subspace, fn, user, err);
+        rc = colour_blocks(sm, &mt, sb, width, height, subspace, fn, user, bg, err);
         for (int b = 0; b < made; b++)
             synth_band_free(&sb[b]);
         return rc;
@@ -251,6 +255,14 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
     for (int b = 0; b < made; b++)
         synth_band_free(&sb[b]);
     return rc;
+}
+
+btf_status btf_synthesise_margins(const btf_model *m, int subspace,
+                                  const int (*margins)[BTF_MAX_LEVELS],
+                                  const btf_synth_opts *opts, btf_rows_fn fn, void *user,
+                                  btf_error *err)
+{
+    return synth_rows(m, subspace, margins, opts, fn, user, NULL, err);
 }
 
 btf_status btf_synthesise(const btf_model *m, int subspace, const btf_synth_opts *opts,
@@ -362,10 +374,11 @@ static btf_status matched_rows(const btf_model *m, int subspace,
     return rc;
 }
 
-btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synth_opts *opts,
-                                btf_image *out, btf_error *err)
+/* Image i of a batch, raw (no colour matching), into out (allocated
+ * here); *match says whether it is to be matched. bg: as synth_rows. */
+static btf_status raw_image(const btf_model *m, int subspace, const btf_synth_opts *opts,
+                            btf_image *out, int *match, btf_background *bg, btf_error *err)
 {
-    memset(out, 0, sizeof *out);
     btf_synth_opts o = btf_synth_resolve(opts);
     int w, h;
     btf_status rc = check_subspace(m, subspace, err);
@@ -373,21 +386,61 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
         rc = output_size(m, subspace, &o, &w, &h, err);
     if (rc == BTF_OK && o.tileable) /* refused before its image is allocated */
         rc = btf_synth_check_tileable(w, h, m->subspaces[subspace].levels, err);
-    int match = 0;
     if (rc == BTF_OK)
-        rc = btf_colour_match_wanted(m, subspace, o.match_colours, &match, err);
+        rc = btf_colour_match_wanted(m, subspace, o.match_colours, match, err);
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, w, h, 3, err);
     if (rc)
         return rc;
     o.width = w, o.height = h;
-    o.match_colours = -1; /* matched here, in the image itself */
-    rc = btf_synthesise(m, subspace, &o, to_image, out, err);
-    if (rc == BTF_OK && match)
-        rc = btf_colour_match(m, subspace, out, err);
-    if (rc)
-        btf_image_free(out);
+    o.match_colours = -1; /* matched by the caller, in the image itself */
+    return synth_rows(m, subspace, NULL, &o, to_image, out, bg, err);
+}
+
+/* Colour matching reads a whole image and is a second pass over it, while
+ * the synthesis of one image leaves the relay helper of its colour step
+ * (and so one of two CPUs) idle most of the time: image i - 1 is matched
+ * by that helper in its idle time while image i is synthesised, and what
+ * it leaves, with the last image, runs on the pool when the synthesis
+ * returns. A pixel's bytes are those of btf_colour_match (the same jobs,
+ * whoever runs them). */
+btf_status btf_synthesise_images(const btf_model *m, const int *subspaces, int n,
+                                 const btf_synth_opts *opts, btf_image *outs, btf_error *err)
+{
+    if (n < 0 || (n > 0 && (!subspaces || !outs)))
+        return btf_fail(err, BTF_E_ARG, "synthesis of %d images: no subspaces or no outputs", n);
+    for (int i = 0; i < n; i++)
+        memset(&outs[i], 0, sizeof outs[i]);
+    btf_match_task *pending = NULL; /* image i - 1's matching */
+    btf_status rc = BTF_OK;
+    int i = 0;
+    for (; rc == BTF_OK && i < n; i++) {
+        int match = 0;
+        rc = raw_image(m, subspaces[i], opts, &outs[i], &match, pending ? &pending->bg : NULL,
+                       err);
+        if (pending) {
+            btf_status mrc = btf_match_task_finish(pending, rc ? NULL : err);
+            rc = rc ? rc : mrc;
+            btf_match_task_free(pending);
+            pending = NULL;
+        }
+        if (rc == BTF_OK && match)
+            rc = btf_match_task_begin(&pending, m, subspaces[i], &outs[i], err);
+    }
+    if (pending) {
+        if (rc == BTF_OK)
+            rc = btf_match_task_finish(pending, err);
+        btf_match_task_free(pending);
+    }
+    for (int j = 0; rc && j < i; j++)
+        btf_image_free(&outs[j]);
     return rc;
+}
+
+btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synth_opts *opts,
+                                btf_image *out, btf_error *err)
+{
+    return btf_synthesise_images(m, &subspace, 1, opts, out, err);
 }
 
 btf_status btf_synth_margin(const btf_model *m, int subspace, int band, int level, int *margin,

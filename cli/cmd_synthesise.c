@@ -33,6 +33,7 @@ static const char ABOUT[] =
 typedef struct phases {
     double read, synth, rows, close, preview, exr_open;
     btf_exr_times exr;
+    int behind; /* whole images, written by a thread of ours (synth_matched) */
 } phases;
 
 typedef struct sink {
@@ -204,6 +205,86 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick,
     return rc;
 }
 
+/* The CPU path with colour matching (docs/synthesis.md, "Colour
+ * matching"), which reads whole images anyway: btf_synthesise_each matches
+ * image i - 1 on the CPU that image i's fields leave idle, and a writer
+ * thread (cli/write_behind.c) writes each finished image beside the next
+ * one's synthesis: two images in memory at most. The bytes are those of
+ * the streaming path. */
+typedef struct matched_sink {
+    const btf_model *m;
+    const output *out;
+    uint64_t seed;
+    const int *subs;
+    int n;
+    cli_behind *behind;
+    btf_progress_fn progress;
+    double put_s;
+} matched_sink;
+
+static int write_behind(void *user, int k, const btf_image *img, btf_error *err)
+{
+    matched_sink *s = user;
+    return write_image(img, s->m, k, s->seed, s->out, err);
+}
+
+static int put_image(void *user, int i, btf_image *img, btf_error *err)
+{
+    matched_sink *s = user;
+    double t0 = cli_now();
+    int rc = cli_behind_put(s->behind, s->subs[i], img, err);
+    s->put_s += cli_now() - t0;
+    if (rc == 0 && s->progress)
+        s->progress(NULL, (double)(i + 1) / s->n, "synthesising");
+    return rc;
+}
+
+static int synth_matched(const cli_ctx *c, const btf_model *m, const unsigned char *pick,
+                         const btf_synth_opts *so, const output *out, btf_error *err)
+{
+    int *subs = calloc((size_t)m->n_subspaces + 1, sizeof(int)), n = 0;
+    if (!subs)
+        return cli_set_error(err, BTF_E_NOMEM, "out of memory");
+    for (int k = 0; k < m->n_subspaces; k++)
+        if (pick[k])
+            subs[n++] = k;
+    output wout = *out;
+    wout.exr.background = 0; /* the writer is a thread already */
+    matched_sink s = {m, &wout, so->seed, subs, n, NULL, cli_progress_fn(c), 0.0};
+    s.behind = cli_behind_start(write_behind, &s, err);
+    int rc = s.behind ? 0 : BTF_E_NOMEM;
+    double t0 = cli_now(), wait = 0;
+    if (rc == 0)
+        rc = name_model(btf_synthesise_each(m, subs, n, so, put_image, &s, err),
+                        out->model_path, err);
+    double t1 = cli_now();
+    btf_error werr = {0};
+    int wrc = cli_behind_finish(s.behind, &wait, &werr);
+    if (rc == 0 && wrc)
+        rc = wrc, *err = werr;
+    out->ph->synth += t1 - t0;
+    out->ph->rows += s.put_s;
+    out->ph->exr.wait_s += wait;
+    out->ph->behind = 1;
+    free(subs);
+    return rc;
+}
+
+/* Whether the CPU path takes synth_matched: colour matching on (by default
+ * where every chosen subspace holds the exemplar's Lab histogram) and whole
+ * images within the 256 MiB the library keeps for matching (larger ones
+ * stream, synthesised twice). */
+static int matched_whole(const btf_model *m, const unsigned char *pick,
+                         const btf_synth_opts *so)
+{
+    if (so->match_colours < 0 || (uint64_t)so->width * so->height * 12 > ((uint64_t)256 << 20))
+        return 0;
+    for (int k = 0; k < m->n_subspaces; k++)
+        if (pick[k] && !(m->subspaces[k].marginal.knots && m->subspaces[k].marginal.lab_knots))
+            return 0;
+    return 1;
+}
+
 /* Opens the Vulkan device the backend asks for; NULL (auto falls back to the CPU) or
  * an error (gpu) when there is none. */
 static btf_gpu *open_gpu(const char *backend, int device, uint64_t image_bytes, btf_error *err)
@@ -265,6 +346,16 @@ static void print_phases(const phases *p, int gpu, const char *comp, int half, i
 {
     const btf_exr_times *e = &p->exr;
     double synth = p->synth - p->rows;
+    if (p->behind) { /* synth_matched */
+        fprintf(stderr, "phases (s): model read %.4f; synthesis, colour matching beside it "
+                "%.4f; handing images to the writer %.4f; waiting for it after synthesis "
+                "%.4f\n", p->read, synth, p->rows, e->wait_s);
+        fprintf(stderr, "writer thread, whole images (s): EXR %.4f (convert %.4f, write %.4f); "
+                "previews %.4f; %d %s files, %.1f MB\n", p->close, e->convert_s, e->write_s,
+                p->preview, e->files, half ? "half" : "float", (double)e->bytes / 1e6);
+        fprintf(stderr, "total %.4f s from start to exit (process start not included)\n", total);
+        return;
+    }
     fprintf(stderr, "phases (s): model read %.4f; %s %.4f; rows staged %.4f; waiting for the "
             "writer %.4f, at close %.4f; EXR open %.4f; previews %.4f\n", p->read,
             gpu ? "GPU synthesis (+ EXR writes)" : "synthesis", gpu ? p->close : synth,
@@ -410,6 +501,8 @@ int cmd_synthesise(int argc, char **argv)
     out.exr.times = &ph.exr;
     if (rc == 0 && gpu) {
         rc = synth_gpu(gpu, &m, pick, &so, &out, &err);
+    } else if (rc == 0 && picked && matched_whole(&m, pick, &so)) {
+        rc = synth_matched(&c, &m, pick, &so, &out, &err);
     } else {
         for (int k = 0; rc == 0 && k < m.n_subspaces; k++)
             if (pick[k])

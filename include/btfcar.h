@@ -1083,6 +1083,17 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
  * matching"), so the pass costs little more than its last image's. */
 btf_status btf_synthesise_images(const btf_model *m, const int *subspaces, int n,
                                  const btf_synth_opts *opts, btf_image *outs, btf_error *err);
+/* Receives image i of btf_synthesise_each, finished (linear RGB): fn may
+ * keep it (take the struct and zero *img), else it is freed when fn
+ * returns. Non-zero stops the batch: a btf_status with err filled, or any
+ * other value (BTF_E_IO). */
+typedef int (*btf_image_fn)(void *user, int i, btf_image *img, btf_error *err);
+/* The same as btf_synthesise_images, each image handed to fn in order as
+ * soon as it is finished (image i - 1 while image i is being synthesised,
+ * when matched): at most two images in memory besides what fn keeps. */
+btf_status btf_synthesise_each(const btf_model *m, const int *subspaces, int n,
+                               const btf_synth_opts *opts, btf_image_fn fn, void *user,
+                               btf_error *err);
 /* Colour matching (src/synth/colour_match.c, docs/synthesis.md, "Colour
  * matching"): the per-band marginal transfer gives each decorrelated band
  * the exemplar's histogram, but the bands are synthesised independently

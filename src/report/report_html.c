@@ -363,7 +363,9 @@ static void trade(btf_buf *b, const btf_report_data *d)
                       "features and the range map were computed once (%.1f s) and shared; "
                       "settings ran in parallel, one thread each. Analysis: segmentation "
                       "and the CAR fits of that setting; synthesis: every subspace image at "
-                      "%d², one CPU thread; render: the sphere frame at %d², one thread; "
+                      "%d² on the CPU, in one batch as btfcar synthesise makes them "
+                      "(colour matching beside the fields); render: the sphere frame at "
+                      "%d², one thread; "
                       "quality: the mean and worst combined distance over the pairs above. "
                       "%d of %d points were read back from an earlier run.</p>\n",
                    s->n_points, s->shared_s, d->o->sweep_opts.synth_size,

@@ -404,36 +404,81 @@ static btf_status raw_image(const btf_model *m, int subspace, const btf_synth_op
  * it leaves, with the last image, runs on the pool when the synthesis
  * returns. A pixel's bytes are those of btf_colour_match (the same jobs,
  * whoever runs them). */
-btf_status btf_synthesise_images(const btf_model *m, const int *subspaces, int n,
-                                 const btf_synth_opts *opts, btf_image *outs, btf_error *err)
+/* Image i to fn; freed after unless fn kept it. */
+static btf_status deliver(btf_image_fn fn, void *user, int i, btf_image *img, btf_error *err)
 {
-    if (n < 0 || (n > 0 && (!subspaces || !outs)))
-        return btf_fail(err, BTF_E_ARG, "synthesis of %d images: no subspaces or no outputs", n);
-    for (int i = 0; i < n; i++)
-        memset(&outs[i], 0, sizeof outs[i]);
+    int got = fn(user, i, img, err);
+    btf_image_free(img);
+    btf_status rc = got > 0 ? BTF_E_IO : (btf_status)got;
+    if (rc && err && !err->msg[0])
+        btf_fail(err, rc, "synthesis stopped by its consumer");
+    return rc;
+}
+
+btf_status btf_synthesise_each(const btf_model *m, const int *subspaces, int n,
+                               const btf_synth_opts *opts, btf_image_fn fn, void *user,
+                               btf_error *err)
+{
+    if (n < 0 || (n > 0 && (!subspaces || !fn)))
+        return btf_fail(err, BTF_E_ARG, "synthesis of %d images: no subspaces or no consumer", n);
+    btf_image img[2] = {{0}, {0}}; /* image i in img[i & 1] */
     btf_match_task *pending = NULL; /* image i - 1's matching */
     btf_status rc = BTF_OK;
-    int i = 0;
-    for (; rc == BTF_OK && i < n; i++) {
+    for (int i = 0; rc == BTF_OK && i < n; i++) {
         int match = 0;
-        rc = raw_image(m, subspaces[i], opts, &outs[i], &match, pending ? &pending->bg : NULL,
-                       err);
+        btf_image *cur = &img[i & 1], *prev = &img[(i + 1) & 1];
+        rc = raw_image(m, subspaces[i], opts, cur, &match, pending ? &pending->bg : NULL, err);
         if (pending) {
             btf_status mrc = btf_match_task_finish(pending, rc ? NULL : err);
             rc = rc ? rc : mrc;
             btf_match_task_free(pending);
             pending = NULL;
+            if (rc == BTF_OK)
+                rc = deliver(fn, user, i - 1, prev, err);
         }
         if (rc == BTF_OK && match)
-            rc = btf_match_task_begin(&pending, m, subspaces[i], &outs[i], err);
+            rc = btf_match_task_begin(&pending, m, subspaces[i], cur, err);
+        else if (rc == BTF_OK)
+            rc = deliver(fn, user, i, cur, err);
     }
     if (pending) {
         if (rc == BTF_OK)
             rc = btf_match_task_finish(pending, err);
         btf_match_task_free(pending);
+        if (rc == BTF_OK)
+            rc = deliver(fn, user, n - 1, &img[(n - 1) & 1], err);
     }
-    for (int j = 0; rc && j < i; j++)
-        btf_image_free(&outs[j]);
+    btf_image_free(&img[0]);
+    btf_image_free(&img[1]);
+    return rc;
+}
+
+typedef struct outs_sink {
+    btf_image *outs;
+    int kept;
+} outs_sink;
+
+static int keep_image(void *user, int i, btf_image *img, btf_error *err)
+{
+    (void)err;
+    outs_sink *s = user;
+    s->outs[i] = *img;
+    memset(img, 0, sizeof *img);
+    s->kept = i + 1;
+    return 0;
+}
+
+btf_status btf_synthesise_images(const btf_model *m, const int *subspaces, int n,
+                                 const btf_synth_opts *opts, btf_image *outs, btf_error *err)
+{
+    if (n > 0 && !outs)
+        return btf_fail(err, BTF_E_ARG, "synthesis of %d images: no outputs", n);
+    for (int i = 0; i < n; i++)
+        memset(&outs[i], 0, sizeof outs[i]);
+    outs_sink s = {outs, 0};
+    btf_status rc = btf_synthesise_each(m, subspaces, n, opts, keep_image, &s, err);
+    for (int i = 0; rc && i < s.kept; i++)
+        btf_image_free(&outs[i]);
     return rc;
 }
 

@@ -319,6 +319,33 @@ static void interrupted_synthesis_leaves_nothing(void **state)
     assert_false(has_tmp_entry(tu_dir));
 }
 
+/* The same with several images (btfcar synthesise writes each on a thread
+ * of its own while the next is synthesised): the first image's failure
+ * stops the run, whatever image the synthesis was on; nothing is left. */
+static void failed_write_of_a_batch_leaves_nothing(void **state)
+{
+    (void)state;
+    char ds[4096], model[4096], out[4096];
+    snprintf(ds, sizeof ds, "%s/bds", tu_dir);
+    snprintf(model, sizeof model, "%s/b.btfcar", tu_dir);
+    assert_int_equal(tu_run(tu_fmt("%s generate -q --material fabric --size 32 --seed 2 %s",
+                                   tu_cli(), ds), NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("%s analyse -q %s -o %s --subspaces 4 --levels 1 --no-range",
+                                   tu_cli(), ds, model), NULL), 0);
+    for (int bad = 0; bad < 4; bad += 3) { /* the first image fails, or the last */
+        snprintf(out, sizeof out, "%s/bpv%d", tu_dir, bad);
+        assert_int_equal(mkdir(out, 0777), 0);
+        assert_int_equal(mkdir(tu_fmt("%s/subspace_%02d.png", out, bad), 0777), 0);
+        char *err = NULL;
+        assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s --size 64x48 --preview "
+                                       "--backend cpu -o %s", tu_cli(), model, out), &err), 1);
+        assert_non_null(strstr(err, tu_fmt("subspace_%02d.png", bad)));
+        free(err);
+        assert_int_equal(count_entries(out), 1);
+        assert_false(has_tmp_entry(tu_dir));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -327,6 +354,7 @@ int main(void)
         cmocka_unit_test(stale_temporaries),
         cmocka_unit_test(outputs_checked_first),
         cmocka_unit_test(interrupted_synthesis_leaves_nothing),
+        cmocka_unit_test(failed_write_of_a_batch_leaves_nothing),
     };
     return cmocka_run_group_tests_name("output", tests, tu_setup_dir, tu_teardown_dir);
 }

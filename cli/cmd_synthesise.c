@@ -17,7 +17,10 @@ static const char ABOUT[] =
     "Generates subspace images of the model at any size, seamless and stationary\n"
     "(paper section II.C), streaming rows to OUTDIR/subspace_NN.exr (linear RGB)\n"
     "as they are produced: memory grows with the width, not the height\n"
-    "(docs/synthesis.md); --tileable makes images that tile without a seam (the\n"
+    "(docs/synthesis.md). Colour matching, the default, reads whole images:\n"
+    "up to 256 MiB each is kept whole (three at a time: one written on a\n"
+    "thread while the next is colour-matched beside the synthesis of the one\n"
+    "after), larger ones are synthesised twice (memory by the width). --tileable makes images that tile without a seam (the\n"
     "same streaming with periodic noise, on either backend). The same model and\n"
     "seed give the same pixels on every backend. Environment: BTF_VK_DEVICE=N\n"
     "names the Vulkan device when --device is not given; BTF_SYNTH_WAVE=0 and\n"
@@ -209,8 +212,8 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick,
  * matching"), which reads whole images anyway: btf_synthesise_each matches
  * image i - 1 on the CPU that image i's fields leave idle, and a writer
  * thread (cli/write_behind.c) writes each finished image beside the next
- * one's synthesis: two images in memory at most. The bytes are those of
- * the streaming path. */
+ * one's synthesis: three images in memory at most (one written, one
+ * matched, one synthesised). The bytes are those of the streaming path. */
 typedef struct matched_sink {
     const btf_model *m;
     const output *out;

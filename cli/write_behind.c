@@ -3,8 +3,8 @@
  * on computing the next one (btfcar synthesise with colour matching: image
  * i is written while image i + 1 is synthesised and image i colour-matched
  * on the synthesis' idle CPU, btf_synthesise_each). One image waits at
- * most: cli_behind_put blocks while the thread is still busy with the
- * previous one, so memory stays at two images. The first write failure is
+ * most: cli_behind_put blocks until the thread has written the previous
+ * one, so the thread holds one image at a time. The first write failure is
  * kept and returned by the next put and by the finish; nothing is written
  * after it.
  */

@@ -445,10 +445,11 @@ void btf_lab_sample_free(btf_lab_sample *s)
 
 /* Each channel's quantiles: linear between its order statistics at
  * h = (n - 1) p, p = j / (knots - 1), as the band quantiles of the
- * marginal transfer (analyse/marginal_fit.c). On the calling
- * thread, as the sampling: both take a fraction of a millisecond for the
- * 16,384 samples of a match, less than starting a thread (about 0.1 ms on
- * a VM). */
+ * marginal transfer (analyse/marginal_fit.c). One thread, as each job of
+ * the sampling: both take a fraction of a millisecond for the 16,384
+ * samples of a match, less than starting a thread (about 0.1 ms on a VM);
+ * a batch runs them on the relay helper beside the next image's synthesis
+ * (colour_match.c's task). */
 btf_status btf_lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNOTS],
                                     btf_error *err)
 {

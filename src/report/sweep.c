@@ -248,6 +248,25 @@ static int drop_image(void *user, int i, btf_image *img, btf_error *err)
     return 0; /* freed by the synthesis */
 }
 
+/* Subspaces 0 .. n - 1, for a batch of every subspace image; NULL when out
+ * of memory. */
+static int *every_subspace(int n, btf_error *err)
+{
+    int *ks = btf_alloc((size_t)n, sizeof(int), err);
+    for (int k = 0; ks && k < n; k++)
+        ks[k] = k;
+    return ks;
+}
+
+/* The timed syntheses' options: synth_size^2, the quality's seed. */
+static btf_synth_opts timed_synth_opts(const btf_sweep_opts *o)
+{
+    btf_synth_opts so = btf_synth_defaults();
+    so.width = so.height = o->synth_size;
+    so.seed = o->quality.seed;
+    return so;
+}
+
 /* Every subspace image at synth_size^2 on the CPU (the reference), in one
  * batch as `btfcar synthesise` makes them (colour matching beside the
  * fields, btf_synthesise_each). */
@@ -255,14 +274,10 @@ static btf_status time_synthesis(const btf_model *m, const btf_sweep_opts *o, do
                                  btf_error *err)
 {
     int n = m->n_subspaces;
-    int *ks = btf_alloc((size_t)n, sizeof(int), err);
+    int *ks = every_subspace(n, err);
     if (!ks)
         return BTF_E_NOMEM;
-    for (int k = 0; k < n; k++)
-        ks[k] = k;
-    btf_synth_opts so = btf_synth_defaults();
-    so.width = so.height = o->synth_size;
-    so.seed = o->quality.seed;
+    btf_synth_opts so = timed_synth_opts(o);
     double t0 = btf_now();
     btf_status rc = btf_synthesise_each(m, ks, n, &so, drop_image, NULL, err);
     *seconds = btf_now() - t0;
@@ -279,18 +294,14 @@ static btf_status time_gpu_synthesis(const btf_model *m, const btf_sweep_opts *o
     if (!o->gpu)
         return BTF_OK;
     int n = m->n_subspaces;
-    int *ks = btf_alloc((size_t)n, sizeof(int), err);
+    int *ks = every_subspace(n, err);
     btf_image *imgs = btf_calloc((size_t)n, sizeof(btf_image), err);
     if (!ks || !imgs) {
         free(ks);
         free(imgs);
         return BTF_E_NOMEM;
     }
-    for (int k = 0; k < n; k++)
-        ks[k] = k;
-    btf_synth_opts so = btf_synth_defaults();
-    so.width = so.height = o->synth_size;
-    so.seed = o->quality.seed;
+    btf_synth_opts so = timed_synth_opts(o);
     pthread_mutex_lock(gpu_lock);
     double t0 = btf_now();
     btf_status rc = btf_gpu_synthesise(o->gpu, m, ks, n, &so, imgs, err);

@@ -397,13 +397,6 @@ static btf_status raw_image(const btf_model *m, int subspace, const btf_synth_op
     return synth_rows(m, subspace, NULL, &o, to_image, out, bg, err);
 }
 
-/* Colour matching reads a whole image and is a second pass over it, while
- * the synthesis of one image leaves the relay helper of its colour step
- * (and so one of two CPUs) idle most of the time: image i - 1 is matched
- * by that helper in its idle time while image i is synthesised, and what
- * it leaves, with the last image, runs on the pool when the synthesis
- * returns. A pixel's bytes are those of btf_colour_match (the same jobs,
- * whoever runs them). */
 /* Image i to fn; freed after unless fn kept it. */
 static btf_status deliver(btf_image_fn fn, void *user, int i, btf_image *img, btf_error *err)
 {
@@ -415,6 +408,13 @@ static btf_status deliver(btf_image_fn fn, void *user, int i, btf_image *img, bt
     return rc;
 }
 
+/* Colour matching reads a whole image and is a second pass over it, while
+ * the synthesis of one image leaves the relay helper of its colour step
+ * (and so one of two CPUs) idle most of the time: image i - 1 is matched
+ * by that helper in its idle time while image i is synthesised, and what
+ * it leaves, with the last image, runs on the pool when the synthesis
+ * returns. A pixel's bytes are those of btf_colour_match (the same jobs,
+ * whoever runs them). */
 btf_status btf_synthesise_each(const btf_model *m, const int *subspaces, int n,
                                const btf_synth_opts *opts, btf_image_fn fn, void *user,
                                btf_error *err)

@@ -119,7 +119,7 @@ int main(int argc, char **argv)
         }
     }
     free(keep);
-    printf("in-memory synthesis (cpu, btf_synthesise_image, default options): %d subspace images "
+    printf("in-memory synthesis (cpu, btf_synthesise_images, default options): %d subspace images "
            "of %dx%d: median %.1f ms (%d runs), %.2f Mpixel/s\n", m.n_subspaces, w, h, 1e3 * med,
            runs, (double)w * h * m.n_subspaces / med / 1e6);
     printf("median_s %.6f\n", med);

@@ -223,6 +223,7 @@ typedef struct matched_sink {
     cli_behind *behind;
     btf_progress_fn progress;
     double put_s;
+    int write_failed; /* the error is the output's, not the model's */
 } matched_sink;
 
 static int write_behind(void *user, int k, const btf_image *img, btf_error *err)
@@ -237,6 +238,7 @@ static int put_image(void *user, int i, btf_image *img, btf_error *err)
     double t0 = cli_now();
     int rc = cli_behind_put(s->behind, s->subs[i], img, err);
     s->put_s += cli_now() - t0;
+    s->write_failed = rc != 0;
     if (rc == 0 && s->progress)
         s->progress(NULL, (double)(i + 1) / s->n, "synthesising");
     return rc;
@@ -253,13 +255,14 @@ static int synth_matched(const cli_ctx *c, const btf_model *m, const unsigned ch
             subs[n++] = k;
     output wout = *out;
     wout.exr.background = 0; /* the writer is a thread already */
-    matched_sink s = {m, &wout, so->seed, subs, n, NULL, cli_progress_fn(c), 0.0};
+    matched_sink s = {m, &wout, so->seed, subs, n, NULL, cli_progress_fn(c), 0.0, 0};
     s.behind = cli_behind_start(write_behind, &s, err);
     int rc = s.behind ? 0 : BTF_E_NOMEM;
     double t0 = cli_now(), wait = 0;
     if (rc == 0)
-        rc = name_model(btf_synthesise_each(m, subs, n, so, put_image, &s, err),
-                        out->model_path, err);
+        rc = btf_synthesise_each(m, subs, n, so, put_image, &s, err);
+    if (!s.write_failed) /* a write's message names its file */
+        name_model(rc, out->model_path, err);
     double t1 = cli_now();
     btf_error werr = {0};
     int wrc = cli_behind_finish(s.behind, &wait, &werr);

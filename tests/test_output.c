@@ -344,6 +344,20 @@ static void failed_write_of_a_batch_leaves_nothing(void **state)
         assert_int_equal(count_entries(out), 1);
         assert_false(has_tmp_entry(tu_dir));
     }
+    /* a write that fails on the writer thread (files limited to 50 KiB:
+     * the first image's EXR already fails) while the next image is being
+     * synthesised: the run stops naming that file, nothing is left */
+    snprintf(out, sizeof out, "%s/bfs", tu_dir);
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("(ulimit -f 100; trap '' XFSZ; exec %s synthesise -q %s "
+                                   "--size 256x256 --backend cpu -o %s)", tu_cli(), model, out),
+                            &err), 1);
+    print_message("%s", err);
+    assert_non_null(strstr(err, "subspace_00.exr"));
+    assert_null(strstr(err, "b.btfcar:")); /* the output's error, not the model's */
+    free(err);
+    assert_int_equal(access(out, F_OK), -1);
+    assert_false(has_tmp_entry(tu_dir));
 }
 
 int main(void)

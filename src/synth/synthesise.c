@@ -428,9 +428,9 @@ btf_status btf_synthesise_each(const btf_model *m, const int *subspaces, int n,
         int match = 0;
         btf_image *cur = &img[i & 1], *prev = &img[(i + 1) & 1];
         rc = raw_image(m, subspaces[i], opts, cur, &match, pending ? &pending->bg : NULL, err);
-        if (pending) {
-            btf_status mrc = btf_match_task_finish(pending, rc ? NULL : err);
-            rc = rc ? rc : mrc;
+        if (pending) { /* after a failure its image is dropped: not finished */
+            if (rc == BTF_OK)
+                rc = btf_match_task_finish(pending, err);
             btf_match_task_free(pending);
             pending = NULL;
             if (rc == BTF_OK)

@@ -20,7 +20,8 @@ static const char ABOUT[] =
     "(docs/synthesis.md). Colour matching, the default, reads whole images:\n"
     "up to 256 MiB each is kept whole (three at a time: one written on a\n"
     "thread while the next is colour-matched beside the synthesis of the one\n"
-    "after), larger ones are synthesised twice (memory by the width). --tileable makes images that tile without a seam (the\n"
+    "after), larger ones are synthesised twice (memory by the width).\n"
+    "--tileable makes images that tile without a seam (the\n"
     "same streaming with periodic noise, on either backend). The same model and\n"
     "seed give the same pixels on every backend. Environment: BTF_VK_DEVICE=N\n"
     "names the Vulkan device when --device is not given; BTF_SYNTH_WAVE=0 and\n"
@@ -276,17 +277,14 @@ static int synth_matched(const cli_ctx *c, const btf_model *m, const unsigned ch
     return rc;
 }
 
-/* Whether the CPU path takes synth_matched: colour matching on (by default
- * where every chosen subspace holds the exemplar's Lab histogram) and whole
- * images within the 256 MiB the library keeps for matching (larger ones
- * stream, synthesised twice). */
+/* Whether the CPU path takes synth_matched: when the streaming synthesis
+ * would hold every chosen image whole anyway (colour matching on, images
+ * within 256 MiB: btf_synth_holds_whole); else it streams. */
 static int matched_whole(const btf_model *m, const unsigned char *pick,
                          const btf_synth_opts *so)
 {
-    if (so->match_colours < 0 || (uint64_t)so->width * so->height * 12 > ((uint64_t)256 << 20))
-        return 0;
     for (int k = 0; k < m->n_subspaces; k++)
-        if (pick[k] && !(m->subspaces[k].marginal.knots && m->subspaces[k].marginal.lab_knots))
+        if (pick[k] && !btf_synth_holds_whole(m, k, so))
             return 0;
     return 1;
 }

@@ -1083,6 +1083,11 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
  * matching"), so the pass costs little more than its last image's. */
 btf_status btf_synthesise_images(const btf_model *m, const int *subspaces, int n,
                                  const btf_synth_opts *opts, btf_image *outs, btf_error *err);
+/* 1 when btf_synthesise holds the subspace's whole image in memory anyway
+ * with these opts (colour matching on, the image within 256 MiB; 0 too for
+ * options the synthesis would refuse): a batch (btf_synthesise_each) then
+ * costs no more memory per image than streaming. */
+int btf_synth_holds_whole(const btf_model *m, int subspace, const btf_synth_opts *opts);
 /* Receives image i of btf_synthesise_each, finished (linear RGB): fn may
  * keep it (take the struct and zero *img), else it is freed when fn
  * returns. Non-zero stops the batch: a btf_status with err filled, or any

@@ -544,6 +544,8 @@ static void colour_match_keeps_lab_histograms(void **state)
         so.seed = 5;
         btf_image plain, matched, asked;
         so.match_colours = -1;
+        assert_int_equal(btf_synth_holds_whole(&m, 0, &so), 0); /* streams */
+        assert_int_equal(btf_synth_holds_whole(&m, 1, NULL), 0); /* no such subspace */
         TU_OK(btf_synthesise_image(&m, 0, &so, &plain, &e), &e);
         so.match_colours = 0; /* the default matches */
         TU_OK(btf_synthesise_image(&m, 0, &so, &matched, &e), &e);
@@ -573,7 +575,9 @@ static void colour_match_keeps_lab_histograms(void **state)
          * (its threshold forced down): the same bytes */
         btf_image streamed;
         TU_OK(btf_image_alloc(&streamed, img.width, img.height, 3, &e), &e);
+        assert_int_equal(btf_synth_holds_whole(&m, 0, &so), 1);
         btf_synth_set_match_whole_bytes(1);
+        assert_int_equal(btf_synth_holds_whole(&m, 0, &so), 0); /* synthesised twice */
         TU_OK(btf_synthesise(&m, 0, &so, rows_to_image, &streamed, &e), &e);
         assert_memory_equal(streamed.data, matched.data, n * sizeof(float));
         btf_synth_set_match_whole_bytes(0);

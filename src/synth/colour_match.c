@@ -97,11 +97,11 @@ btf_status btf_colour_match_wanted(const btf_model *m, int subspace, int opt, in
     return opt > 0 ? rc : BTF_OK;
 }
 
-void btf_colour_match_maps(const btf_model *m, int subspace, const float src[3][BTF_MARGIN_KNOTS],
+void btf_colour_match_maps(const btf_marginal *mg, const float src[3][BTF_MARGIN_KNOTS],
                            btf_lab_map map[3])
 {
     for (int c = 0; c < 3; c++)
-        lab_map_make(src[c], m->subspaces[subspace].marginal.lab_quantile[c], &map[c]);
+        lab_map_make(src[c], mg->lab_quantile[c], &map[c]);
 }
 
 /* The pass as jobs run in order (btf_match_task in synth.h): the sample's
@@ -131,8 +131,7 @@ static btf_status task_job(void *user, int j, int worker, btf_error *err)
         float src[3][BTF_MARGIN_KNOTS];
         btf_status rc = btf_lab_sample_quantiles(&t->sample, src, err);
         if (rc == BTF_OK)
-            for (int c = 0; c < 3; c++)
-                lab_map_make(src[c], mg->lab_quantile[c], &t->map[c]);
+            btf_colour_match_maps(mg, src, t->map);
         return rc;
     }
     int y0 = (j - s - 1) * t->rows_per_job, y1 = y0 + t->rows_per_job;
@@ -224,8 +223,14 @@ btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, bt
         if (!isfinite(img->data[i]))
             return btf_fail(err, BTF_E_ARG, "colour matching: pixel (%zu, %zu) is not finite",
                             i / 3 % (size_t)img->width, i / 3 / (size_t)img->width);
+    return btf_match_synthesised(m, subspace, img, err);
+}
+
+btf_status btf_match_synthesised(const btf_model *m, int subspace, btf_image *img,
+                                 btf_error *err)
+{
     btf_match_task *t;
-    rc = btf_match_task_begin(&t, m, subspace, img, err);
+    btf_status rc = btf_match_task_begin(&t, m, subspace, img, err);
     if (rc == BTF_OK)
         rc = btf_match_task_finish(t, err);
     btf_match_task_free(t);

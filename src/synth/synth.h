@@ -171,9 +171,9 @@ typedef struct btf_lab_map {
  * bits as the scalar code). */
 void btf_lab_match_row(const btf_lab_map map[3], float scale, const float lo[3],
                        const float hi[3], float *rgb, int n);
-/* The maps of subspace `subspace` from an image's own quantiles src onto
- * the exemplar's (colour_match.c; the subspace checked). */
-void btf_colour_match_maps(const btf_model *m, int subspace, const float src[3][BTF_MARGIN_KNOTS],
+/* The maps from an image's own quantiles src onto the exemplar's, mg's
+ * (colour_match.c; a marginal that holds them: btf_colour_match_check). */
+void btf_colour_match_maps(const btf_marginal *mg, const float src[3][BTF_MARGIN_KNOTS],
                            btf_lab_map map[3]);
 /* Colour matching as a task (colour_match.c): its jobs, in order, sample
  * the image's Lab, make the maps from the sample's quantiles, then map the
@@ -196,6 +196,10 @@ btf_status btf_match_task_begin(btf_match_task **out, const btf_model *m, int su
                                 btf_image *img, btf_error *err);
 btf_status btf_match_task_finish(btf_match_task *t, btf_error *err);
 void btf_match_task_free(btf_match_task *t);
+/* btf_colour_match of an image the synthesis made (RGB, finite: not
+ * checked again), on the calling thread and the pool. */
+btf_status btf_match_synthesised(const btf_model *m, int subspace, btf_image *img,
+                                 btf_error *err);
 /* Streaming colour matching keeps the whole image when it takes at most
  * this many bytes, else synthesises twice (synthesise.c). */
 #define BTF_MATCH_WHOLE_BYTES ((size_t)256 << 20)

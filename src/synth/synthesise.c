@@ -138,14 +138,20 @@ static btf_status colour_row(void *user, int y, int worker, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_synth_emit_row(btf_rows_fn fn, void *user, int y, const float *row,
-                              btf_error *err)
+/* A consumer's answer (btf_rows_fn, btf_image_fn) as a status: 0 goes on,
+ * a btf_status stops, any other non-zero value is BTF_E_IO. */
+static btf_status consumer_status(int got, btf_error *err)
 {
-    int got = fn(user, y, 1, row, err);
     btf_status rc = got > 0 ? BTF_E_IO : (btf_status)got;
     if (rc && err && !err->msg[0])
         btf_fail(err, rc, "synthesis stopped by its consumer");
     return rc;
+}
+
+btf_status btf_synth_emit_row(btf_rows_fn fn, void *user, int y, const float *row,
+                              btf_error *err)
+{
+    return consumer_status(fn(user, y, 1, row, err), err);
 }
 
 static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal_table *mt,
@@ -337,7 +343,7 @@ static btf_status matched_twice(const btf_model *m, int subspace,
     if (rc == BTF_OK)
         rc = btf_lab_sample_quantiles(&ms.sample, src, err);
     if (rc == BTF_OK) {
-        btf_colour_match_maps(m, subspace, src, ms.map);
+        btf_colour_match_maps(ms.mg, src, ms.map);
         rc = btf_synthesise_margins(m, subspace, margins, plain, map_rows_cb, &ms, err);
     }
     free(ms.row);
@@ -352,6 +358,23 @@ void btf_synth_set_match_whole_bytes(size_t bytes)
     match_whole_bytes = bytes ? bytes : BTF_MATCH_WHOLE_BYTES;
 }
 
+/* Whether colour matching keeps a width x height image whole. */
+static int match_keeps_whole(int width, int height)
+{
+    return (size_t)width * height * 3 * sizeof(float) <= match_whole_bytes;
+}
+
+int btf_synth_holds_whole(const btf_model *m, int subspace, const btf_synth_opts *opts)
+{
+    btf_synth_opts o = btf_synth_resolve(opts);
+    btf_error quiet;
+    int w, h, match = 0;
+    return check_subspace(m, subspace, &quiet) == BTF_OK &&
+           output_size(m, subspace, &o, &w, &h, &quiet) == BTF_OK &&
+           btf_colour_match_wanted(m, subspace, o.match_colours, &match, &quiet) == BTF_OK &&
+           match && match_keeps_whole(w, h);
+}
+
 static btf_status matched_rows(const btf_model *m, int subspace,
                                const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *o,
                                int width, int height, btf_rows_fn fn, void *user, btf_error *err)
@@ -359,7 +382,7 @@ static btf_status matched_rows(const btf_model *m, int subspace,
     btf_synth_opts plain = *o;
     plain.match_colours = -1;
     plain.width = width, plain.height = height;
-    if ((size_t)width * height * 3 * sizeof(float) > match_whole_bytes)
+    if (!match_keeps_whole(width, height))
         return matched_twice(m, subspace, margins, &plain, fn, user, err);
     btf_image img;
     btf_status rc = btf_image_alloc(&img, width, height, 3, err);
@@ -367,7 +390,7 @@ static btf_status matched_rows(const btf_model *m, int subspace,
         return rc;
     rc = btf_synthesise_margins(m, subspace, margins, &plain, to_image, &img, err);
     if (rc == BTF_OK)
-        rc = btf_colour_match(m, subspace, &img, err);
+        rc = btf_match_synthesised(m, subspace, &img, err);
     for (int y = 0; rc == BTF_OK && y < height; y++)
         rc = btf_synth_emit_row(fn, user, y, img.data + (size_t)y * width * 3, err);
     btf_image_free(&img);
@@ -402,10 +425,7 @@ static btf_status deliver(btf_image_fn fn, void *user, int i, btf_image *img, bt
 {
     int got = fn(user, i, img, err);
     btf_image_free(img);
-    btf_status rc = got > 0 ? BTF_E_IO : (btf_status)got;
-    if (rc && err && !err->msg[0])
-        btf_fail(err, rc, "synthesis stopped by its consumer");
-    return rc;
+    return consumer_status(got, err);
 }
 
 /* Colour matching reads a whole image and is a second pass over it, while

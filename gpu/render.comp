@@ -44,6 +44,7 @@ layout(std430, set = 0, binding = 5) writeonly buffer Out { float rgb[]; };
 #define BTF_SHADE_HEIGHT(ctx, i) maps[i]
 #define BTF_SHADE_NORMAL(ctx, i) maps[pi[BTF_RP_NORMAL] + (i)]
 #define BTF_SHADE_LIGHT_OUTER_Z(ctx) pf[BTF_RP_OUTER]
+#define BTF_SHADE_AMBIENT(ctx) pf[BTF_RP_AMBIENT]
 #define BTF_SHADE_N_LIGHTS(ctx) pi[BTF_RP_NLIGHTS]
 #define BTF_SHADE_LIGHT_KIND(ctx, j) pi[BTF_RP_KIND + (j)]
 #define BTF_SHADE_LIGHT_VEC(ctx, j, k) pf[BTF_RP_VEC + 3 * (j) + (k)]

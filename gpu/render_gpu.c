@@ -145,6 +145,7 @@ static btf_status build_params(const btf_model *m, const btf_render_plan *p,
     hi[BTF_RP_NORMAL] = p->side * p->side;
     hf[BTF_RP_OUTER] = btf_render_light_outer_z(m);
     hf[BTF_RP_RELIEF] = (float)p->o.relief;
+    hf[BTF_RP_AMBIENT] = m->albedo && isfinite(m->ambient) && m->ambient > 0.0f ? m->ambient : 0.0f;
     for (int c = 0; c < 3; c++)
         hf[BTF_RP_BG + c] = p->background[c];
     for (int j = 0; rc == BTF_OK && j < p->n_lights; j++) {
@@ -174,11 +175,11 @@ void btf_render_pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out)
 }
 
 /* The range and normal maps of the texture side, one buffer. */
-static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, btf_vk_buffer **out,
-                              btf_error *err)
+static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t seed,
+                              btf_vk_buffer **out, btf_error *err)
 {
     btf_image h = {0}, n = {0};
-    btf_status rc = btf_range_map(m, side, side, &h, &n, err);
+    btf_status rc = btf_structure_maps(m, side, side, seed, &h, &n, NULL, err);
     size_t px = (size_t)side * side;
     if (rc == BTF_OK)
         rc = btf_vk_buffer_create(vk, px * 4 * sizeof(float), out, err);
@@ -330,7 +331,7 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     if (rc == BTF_OK)
         rc = upload_params(&ps, err);
     if (rc == BTF_OK)
-        rc = upload_maps(ps.vk, m, p->side, &ps.bufs[2], err);
+        rc = upload_maps(ps.vk, m, p->side, p->o.seed, &ps.bufs[2], err);
     if (rc == BTF_OK)
         rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 6, 0, NULL, 0,
                                     &ps.pipe, err);

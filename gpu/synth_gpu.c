@@ -758,7 +758,9 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
      * by the CPU's code, so that equal images stay equal (docs/gpu.md) */
     for (int j = 0; rc == BTF_OK && j < n; j++) {
         int match;
-        rc = btf_colour_match_wanted(m, subspaces[j], o.match_colours, &match, err);
+        rc = btf_structure_apply(m, o.seed, &outs[j], err); /* the CPU's rows' multiply */
+        if (rc == BTF_OK)
+            rc = btf_colour_match_wanted(m, subspaces[j], o.match_colours, &match, err);
         if (rc == BTF_OK && match)
             rc = btf_colour_match(m, subspaces[j], &outs[j], err);
     }
@@ -781,7 +783,7 @@ static btf_status match_on_host(btf_gpu *g, const btf_model *m, int subspace,
 {
     int match;
     btf_status rc = btf_colour_match_wanted(m, subspace, o->match_colours, &match, err);
-    if (rc || !match)
+    if (rc || (!match && !m->albedo))
         return rc;
     btf_image img;
     if ((rc = btf_image_alloc(&img, width, height, 3, err)))
@@ -789,6 +791,8 @@ static btf_status match_on_host(btf_gpu *g, const btf_model *m, int subspace,
     uint64_t bytes = (uint64_t)width * height * 3 * sizeof(float);
     rc = btf_vk_buffer_download(g->vk, buf, 4 * offset, img.data, bytes, err);
     if (rc == BTF_OK)
+        rc = btf_structure_apply(m, o->seed, &img, err);
+    if (rc == BTF_OK && match)
         rc = btf_colour_match(m, subspace, &img, err);
     if (rc == BTF_OK)
         rc = btf_vk_buffer_upload(g->vk, buf, 4 * offset, img.data, bytes, err);

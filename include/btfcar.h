@@ -868,6 +868,16 @@ typedef struct btf_model {
     float range_texel;         /* analysed-image texels per range-tile texel,
                                   along both axes (the tile keeps the image's
                                   aspect ratio) */
+    /* The structure layer (docs/model.md, "Structure"): on the range map's
+     * grid (texel 1 only), the albedo's luminance pattern (mean 1) that the
+     * photometric stereo recovered. When present, every subspace's CAR
+     * fields model the remainder: the exemplar divided by this pattern and
+     * by the range map's relit shading (a + max(0, n.l)) / (a + l_z) under
+     * the subspace's light, a = ambient. Synthesis multiplies the pattern
+     * back, the renderer the shading; both through one quilting map of the
+     * range map and the pattern (btf_structure_maps). NULL: none. */
+    float *albedo;
+    float ambient;             /* a >= 0 of the shading above (0 without structure) */
     /* The library's own data about a model it read (the synthesis margins
      * computed then, docs/synthesis.md): opaque, freed by btf_model_free;
      * NULL in a model built by hand, which is fine. */
@@ -984,8 +994,11 @@ typedef struct btf_analyse_opts {
     btf_photostereo_opts photostereo; /* stage 2 (its own threads field: 0, all CPUs) */
     btf_fit_opts fit;                 /* stage 3 */
     int no_range;                     /* 1: no range map in the model */
-    int range_size;                   /* longer side of the range tile; 0: 64 (at most
-                                         the image's); docs/photostereo.md */
+    int range_size;                   /* longer side of the range tile; 0: the image's
+                                         (texel 1, with the structure layer); a smaller
+                                         tile has no structure layer; docs/photostereo.md */
+    int no_structure;                 /* 1: no structure layer (the CAR fields model
+                                         the whole exemplar, as before format 1.4) */
     btf_progress_fn progress;         /* stage progress (features, fits) */
     void *progress_user;
     btf_analyse_report *report;       /* NULL, or filled in when btf_analyse succeeds */
@@ -1247,6 +1260,17 @@ void btf_hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t);
  * gives a flat map (heights 0, normals (0, 0, 1)). */
 btf_status btf_range_map(const btf_model *m, int width, int height, btf_image *height_out,
                          btf_image *normal_out, btf_error *err);
+/* The same with the structure layer (docs/model.md, "Structure"): a model
+ * whose range map is at the analysed resolution gets its heights, normals
+ * and albedo pattern quilted onto the width x height torus by one
+ * coordinate map drawn from seed (the seed of the synthesis they go with:
+ * btf_synthesise multiplies the same pattern into its images), so the
+ * layers are registered with each other and the map tiles without a seam.
+ * A model with a small periodic tile gets btf_range_map's heights and an
+ * albedo of 1. Any output may be NULL. */
+btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_t seed,
+                              btf_image *height_out, btf_image *normal_out,
+                              btf_image *albedo_out, btf_error *err);
 /* The unit normals of the height map scale * h (1 channel) into normal
  * (allocated here, 3 channels, same size): n = normalize(-dh/dx, -dh/dy, 1)
  * with x right and y up the image (rows grow downwards), from wrap-around
@@ -1527,6 +1551,7 @@ typedef enum btf_model_part {
     BTF_MODEL_PART_BAND_MEANS,    /* per band: the sub-band mean */
     BTF_MODEL_PART_MARGINALS,     /* MARG: per subspace its knot count and transfer */
     BTF_MODEL_PART_RANGE,         /* RANG: the range/normal tile, all of its body */
+    BTF_MODEL_PART_STRUCTURE,     /* STRC: the albedo pattern and the shading's ambient */
     BTF_MODEL_PART_COUNT
 } btf_model_part;
 

@@ -11,10 +11,16 @@
 #include "car/car.h"
 #include "core/core.h"
 #include "model/model.h"
+#include "model/range_code.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Heights at the analysed resolution are kept to 1/RANGE_STEPS texel:
+ * finer steps are below what photometric stereo recovers and cost a byte
+ * a texel more in the model file (docs/model-format.md, "RANG"). */
+#define RANGE_STEPS 32.0
 
 /* The range tile's grid: one tile texel is p/q image pixels along both
  * axes (a rational, so that binning is exact integer arithmetic), and the
@@ -86,6 +92,15 @@ static btf_status range_tile(const btf_image *h, int n, btf_model *m, btf_error 
     m->range_texel = (float)((double)g.p / (double)g.q);
     free(acc);
     free(cnt);
+    if (g.p == g.q) {
+        /* At the analysed resolution the map is kept as measured (on the
+         * file's grid) and quilted onto any surface (model/structure_map.c):
+         * no cross-fade, whose half-shifted copy blurs the cells away. */
+        for (size_t i = 0; i < cells; i++) /* 1/32 texel: 8 bits a texel in the file */
+            m->range[i] = (float)(floor((double)m->range[i] * RANGE_STEPS + 0.5) / RANGE_STEPS);
+        btf_range_snap(m->range, cells);
+        return BTF_OK;
+    }
     /* The tile must tile: its periodic component (Moisan's periodic-plus-
      * smooth decomposition, docs/render.md) keeps the detail and drops the
      * jumps between opposite edges that the area average keeps. */
@@ -107,6 +122,12 @@ static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, 
         m->range_width = r->range_width;
         m->range_height = r->range_height;
         m->range_texel = r->range_texel;
+        if (r->albedo && !o->no_structure) {
+            if (!(m->albedo = btf_alloc(cells, sizeof(float), err)))
+                return BTF_E_NOMEM;
+            memcpy(m->albedo, r->albedo, cells * sizeof(float));
+            m->ambient = r->ambient;
+        }
         return BTF_OK;
     }
     btf_ps_result ps;
@@ -114,7 +135,64 @@ static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, 
     if (rc)
         return rc;
     rc = range_tile(&ps.height, o->range_size, m, err);
+    if (rc == BTF_OK && btf_structure_quilted(m) && !o->no_structure)
+        rc = btf_structure_albedo_from(&ps.albedo, m, err);
     btf_ps_result_free(&ps);
+    return rc;
+}
+
+/* The ambient term of the structure layer's shading from every
+ * subspace's exemplar (analyse/structure_fit.c). */
+static btf_status fit_ambient(const btf_dataset *ds, const btf_segmentation *seg, btf_model *m,
+                              const btf_image *normal, btf_error *err)
+{
+    btf_image *imgs = btf_calloc((size_t)seg->k, sizeof *imgs, err);
+    btf_dir *dirs = btf_calloc((size_t)seg->k, sizeof *dirs, err);
+    btf_status rc = imgs && dirs ? BTF_OK : BTF_E_NOMEM;
+    int n = 0;
+    for (int k = 0; rc == BTF_OK && k < seg->k; k++) {
+        rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &imgs[n], err);
+        if (rc == BTF_OK && (imgs[n].width != m->range_width ||
+                             imgs[n].height != m->range_height || imgs[n].channels != 3))
+            btf_image_free(&imgs[n]); /* not on the range map's grid: not used */
+        else if (rc == BTF_OK)
+            dirs[n++] = m->lights.dirs[seg->rep_light[k]];
+    }
+    if (rc == BTF_OK)
+        m->ambient = (float)btf_structure_fit_ambient(imgs, dirs, n, m, normal);
+    for (int k = 0; imgs && k < n; k++)
+        btf_image_free(&imgs[k]);
+    free(imgs);
+    free(dirs);
+    return rc;
+}
+
+/* Subspace k's exemplar: with a structure layer, divided by what the
+ * relief and the albedo explain (the CAR fields fit the rest), and the
+ * colour matching's histogram taken of it divided by the relief's
+ * shading only (what synthesis gives before matching). */
+static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *m, int k,
+                          const btf_image *normal, btf_dir light, btf_error *err)
+{
+    char what[64];
+    snprintf(what, sizeof what, "subspace %d", k);
+    btf_fit_opts fo = o->fit;
+    fo.car.what = what;
+    if (!normal->data) {
+        btf_status rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
+        return rc ? rc : btf_fit_marginals(img, m, k, err);
+    }
+    btf_image shaded;
+    btf_status rc = btf_image_alloc(&shaded, img->width, img->height, 3, err);
+    if (rc)
+        return rc;
+    memcpy(shaded.data, img->data, (size_t)img->width * img->height * 3 * sizeof(float));
+    btf_structure_divide(&shaded, m, normal, light, 0, NULL);
+    btf_structure_divide(img, m, normal, light, 1, NULL);
+    rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
+    if (rc == BTF_OK)
+        rc = btf_fit_marginals_lab(img, &shaded, m, k, err);
+    btf_image_free(&shaded);
     return rc;
 }
 
@@ -125,27 +203,41 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
     if (!m->subspaces)
         return BTF_E_NOMEM;
     m->n_subspaces = seg->k;
+    btf_image normal = {0};
+    btf_status rc = BTF_OK;
+    if (m->albedo && (rc = btf_structure_normals(m, &normal, err)))
+        return rc;
+    if (m->albedo && !o->range_from && (rc = fit_ambient(ds, seg, m, &normal, err))) {
+        btf_image_free(&normal);
+        return rc;
+    }
     for (int k = 0; k < seg->k; k++) {
         btf_image img;
-        btf_status rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &img, err);
+        rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &img, err);
         if (rc)
-            return rc;
-        char what[64];
-        snprintf(what, sizeof what, "subspace %d", k);
-        btf_fit_opts fo = o->fit;
-        fo.car.what = what;
-        rc = btf_fit_subspace(&img, &fo, &m->subspaces[k], err);
-        if (rc == BTF_OK) /* the histogram to keep (src/analyse/marginal_fit.c) */
-            rc = btf_fit_marginals(&img, m, k, err);
+            break;
+        int structured = normal.data && img.width == m->range_width &&
+                         img.height == m->range_height && img.channels == 3;
+        btf_image none = {0};
+        rc = fit_one(&img, o, m, k, structured ? &normal : &none,
+                     m->lights.dirs[seg->rep_light[k]], err);
         btf_image_free(&img);
+        if (rc == BTF_OK && !structured && m->albedo) {
+            free(m->albedo); /* an exemplar off the grid: the layer cannot hold */
+            m->albedo = NULL;
+            m->ambient = 0.0f;
+            rc = k ? btf_fail(err, BTF_E_DATA, "subspace %d: exemplar not on the range map's "
+                              "grid", k) : BTF_OK;
+        }
         if (rc)
-            return rc;
+            break;
         m->subspaces[k].view = seg->rep_view[k];
         m->subspaces[k].light = seg->rep_light[k];
         if (o->progress)
             o->progress(o->progress_user, (double)(k + 1) / seg->k, "fitting CAR models");
     }
-    return BTF_OK;
+    btf_image_free(&normal);
+    return rc;
 }
 
 btf_analyse_opts btf_analyse_defaults(void)
@@ -155,7 +247,7 @@ btf_analyse_opts btf_analyse_defaults(void)
         .photostereo = btf_photostereo_defaults(),
         .fit = btf_fit_defaults(),
         .no_range = 0,
-        .range_size = 64,
+        .range_size = 0,
     };
 }
 
@@ -165,7 +257,7 @@ static btf_analyse_opts resolve_opts(const btf_analyse_opts *opts)
 {
     btf_analyse_opts d = btf_analyse_defaults(), o = opts ? *opts : d;
     if (o.range_size <= 0)
-        o.range_size = d.range_size;
+        o.range_size = 1 << 30; /* the image's own size: texel 1 */
     return o;
 }
 

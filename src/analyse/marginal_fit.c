@@ -21,6 +21,7 @@
 #include "car/car.h"
 #include "core/core.h"
 #include "synth/synth.h"
+#include "model/model.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -66,6 +67,7 @@ static btf_status measure_synthesis(const btf_model *m, int subspace, float mean
     tmp.index = NULL;
     tmp.views.count = tmp.lights.count = 0;
     tmp.internal = NULL; /* kept margins are indexed by subspace: computed afresh */
+    tmp.albedo = NULL;   /* the fields' own bands, before the structure layer */
     btf_synth_opts so = btf_synth_defaults();
     so.width = so.height = MEASURE_SIDE;
     so.seed = MEASURE_SEED;
@@ -117,6 +119,12 @@ static int within_limits(const btf_marginal *mg)
 }
 
 btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, btf_error *err)
+{
+    return btf_fit_marginals_lab(img, img, m, subspace, err);
+}
+
+btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img, btf_model *m,
+                                 int subspace, btf_error *err)
 {
     if (!img || !img->data || img->channels != 3 || img->width < 1 || img->height < 1)
         return btf_fail(err, BTF_E_ARG, "marginal transfer needs an RGB image");
@@ -170,7 +178,7 @@ btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, b
         return BTF_OK;
     }
     /* the exemplar's Lab histogram, for colour matching (synth/colour_match.c) */
-    if ((rc = btf_lab_quantiles(img, btf_lab_scale(&mg), BTF_LAB_SAMPLE, mg.lab_quantile, err)))
+    if ((rc = btf_lab_quantiles(lab_img, btf_lab_scale(&mg), BTF_LAB_SAMPLE, mg.lab_quantile, err)))
         return rc;
     for (int c = 0; c < 3; c++) /* what the model file keeps (monotone: still nondecreasing) */
         for (int j = 0; j < BTF_MARGIN_KNOTS; j++)

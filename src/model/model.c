@@ -18,6 +18,7 @@ void btf_model_free(btf_model *m)
     free(m->index);
     free(m->subspaces);
     free(m->range);
+    free(m->albedo);
     btf_model_internal_free(m->internal);
     memset(m, 0, sizeof *m);
 }

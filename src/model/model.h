@@ -56,4 +56,50 @@ typedef struct btf_model_payload_parts {
 btf_status btf_model_encode_parts(const btf_model *m, unsigned char **data, size_t *size,
                                   btf_model_payload_parts *parts, btf_error *err);
 
+/* The structure layer on a surface (model/structure_map.c, docs/model.md
+ * "Structure"). Whether m's range map is at the analysed resolution
+ * (texel 1), the case that is quilted. */
+int btf_structure_quilted(const btf_model *m);
+/* The period a surface side of n texels repeats (n up to 2048, else its
+ * largest divisor in 512..2048, else n). */
+int btf_structure_period(int n);
+/* The quilting map of a pw x ph torus: map[2 i], map[2 i + 1] the column
+ * and row of the model's range grid at surface texel i (malloc'd). */
+btf_status btf_structure_coords(const btf_model *m, int pw, int ph, uint64_t seed,
+                                uint16_t **map, btf_error *err);
+/* The albedo pattern over width x height, as its period (periodic: read
+ * (x mod width, y mod height) of out). */
+btf_status btf_structure_albedo(const btf_model *m, int width, int height, uint64_t seed,
+                                btf_image *out, btf_error *err);
+/* RGB row y of an image times the pattern (a from btf_structure_albedo). */
+void btf_structure_apply_row(const btf_image *a, int y, float *rgb, int width);
+/* A whole synthesised image times the pattern; nothing without one. */
+btf_status btf_structure_apply(const btf_model *m, uint64_t seed, btf_image *img,
+                               btf_error *err);
+/* The quilted heights into out (allocated width x height x 1 by the caller). */
+btf_status btf_structure_heights(const btf_model *m, int width, int height, uint64_t seed,
+                                 btf_image *out, btf_error *err);
+
+/* The structure layer's analysis (analyse/structure_fit.c). The albedo
+ * pattern's one-byte code (log2 grid of 1/32 over [-4, 4]) and its value. */
+unsigned btf_albedo_code(float a);
+float btf_albedo_value(unsigned q);
+/* m->albedo from photometric stereo's albedo (range_width x range_height):
+ * its luminance over its mean, on the file's grid. */
+btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, btf_error *err);
+/* The normals of m's range map at its own size (as the renderer's). */
+btf_status btf_structure_normals(const btf_model *m, btf_image *normal, btf_error *err);
+/* The ambient term a of n exemplars under their lights (the median of each
+ * one's least-squares fit). */
+double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights, int n,
+                                 const btf_model *m, const btf_image *normal);
+/* The exemplar under light divided by the relit shading (a + max(0, n.l)) /
+ * (a + l_z) (held at 0.1 and above) and, with albedo, by the pattern. */
+void btf_structure_divide(btf_image *img, const btf_model *m, const btf_image *normal,
+                          btf_dir light, int albedo, double *mean_shade);
+/* btf_fit_marginals with the Lab histogram of lab_img (the exemplar as
+ * synthesis gives it before colour matching: with the albedo pattern). */
+btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img, btf_model *m,
+                                 int subspace, btf_error *err);
+
 #endif

@@ -280,6 +280,8 @@ static btf_status check_stability(const btf_model *m, const char *name, btf_stat
 
 static btf_status check_range(const btf_model *m, const char *name, btf_status code, btf_error *err)
 {
+    if (m->albedo && !m->range)
+        return failf(err, code, name, "structure layer without a range map");
     if (m->range_width == 0 && m->range_height == 0 && !m->range)
         return BTF_OK;
     if (m->range_width < 1 || m->range_width > BTF_MODEL_MAX_RANGE_SIDE || m->range_height < 1 ||
@@ -295,6 +297,16 @@ static btf_status check_range(const btf_model *m, const char *name, btf_status c
         return failf(err, code, name, "range map: texel %g (expected a finite number > 0)",
                      m->range_texel);
     size_t n = (size_t)m->range_width * m->range_height;
+    if (m->albedo && m->range_texel != 1.0f)
+        return failf(err, code, name, "structure layer on a range map of texel %g (expected "
+                     "texel 1: the analysed resolution)", m->range_texel);
+    if (m->albedo && !(m->ambient >= 0.0f && m->ambient <= 4.0f))
+        return failf(err, code, name, "structure layer: ambient %g (expected 0..4)",
+                     m->ambient);
+    for (size_t i = 0; m->albedo && i < n; i++)
+        if (!(m->albedo[i] > 0.0f && m->albedo[i] < 65536.0f))
+            return failf(err, code, name, "structure layer: albedo %zu is %g (expected 0 < a "
+                         "< 65536)", i, m->albedo[i]);
     for (size_t i = 0; i < n; i++)
         if (!isfinite(m->range[i]))
             return failf(err, code, name, "range map: height %zu is %g (expected a finite number)",

@@ -44,6 +44,10 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 /* 1.3 added the LABQ section (the exemplars' CIE Lab histograms, for
  * colour matching); a model without one is written as 1.2 or older. */
 #define FMT_MINOR_LAB 3
+/* 1.4 added the STRC section (the structure layer: the albedo pattern and
+ * the shading's ambient term; the CAR fields then model the remainder); a
+ * model without one is written as 1.3 or older. */
+#define FMT_MINOR_STRUCTURE 4
 #define HEADER_BYTES 26 /* signature .. stored size, version 1.0 */
 #define RANG_PERIODIC 0x01u /* RANG flags bit 0: the tile is periodic */
 #define CRC_BYTES 4
@@ -56,8 +60,9 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 #define MAX_FILE_BYTES ((size_t)64 << 20)
 #define MAX_PAYLOAD_BYTES ((size_t)64 << 20)
 
-enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_MARG, S_LABQ, S_COUNT };
-static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG", "MARG", "LABQ"};
+enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_MARG, S_LABQ, S_STRC, S_COUNT };
+static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG", "MARG", "LABQ",
+                                      "STRC"};
 
 /* ------------------------------------------------------------- messages */
 
@@ -422,6 +427,43 @@ static btf_status put_range(wbuf *b, const btf_model *m, const char *name, btf_e
     return BTF_OK;
 }
 
+/* The prediction of albedo code (x, y) from its left and upper neighbours
+ * (their mean; the left one on the first row, the upper on the first
+ * column): the pattern's flat cells leave residuals near 0. */
+static unsigned albedo_predict(const unsigned char *q, int w, int x, int y)
+{
+    if (y == 0)
+        return x == 0 ? 128u : q[x - 1];
+    const unsigned char *row = q + (size_t)y * w;
+    return x == 0 ? row[x - w] : (row[x - 1] + row[x - w] + 1u) / 2u;
+}
+
+/* STRC: width, height (the range map's), the ambient term, then one byte
+ * per texel: the albedo code minus its prediction, modulo 256. */
+static btf_status put_structure(wbuf *b, const btf_model *m, const char *name, btf_error *err)
+{
+    int w = m->range_width, h = m->range_height;
+    size_t n = (size_t)w * h;
+    unsigned char *q = alloc_named(n, 2, 0, name, err);
+    if (!q)
+        return BTF_E_NOMEM;
+    unsigned char *res = q + n;
+    for (size_t i = 0; i < n; i++)
+        q[i] = (unsigned char)btf_albedo_code(m->albedo[i]);
+    for (size_t i = 0; i < n; i++)
+        res[i] = (unsigned char)(q[i] - albedo_predict(q, w, (int)(i % (size_t)w),
+                                                       (int)(i / (size_t)w)));
+    size_t body = w_section_begin(b, S_STRC);
+    w_part(b, BTF_MODEL_PART_STRUCTURE);
+    w_u16(b, (unsigned)w);
+    w_u16(b, (unsigned)h);
+    w_f32(b, m->ambient);
+    w_bytes(b, res, n);
+    w_section_end(b, body);
+    free(q);
+    return BTF_OK;
+}
+
 static btf_status build_payload(const btf_model *m, wbuf *b, const char *name, btf_error *err)
 {
     if (m->views.count > 0) {
@@ -442,6 +484,11 @@ static btf_status build_payload(const btf_model *m, wbuf *b, const char *name, b
         put_marginals(b, m);
     if (has_lab(m))
         put_lab(b, m);
+    if (m->albedo) {
+        btf_status rc = put_structure(b, m, name, err);
+        if (rc)
+            return rc;
+    }
     if (b->failed)
         return failf(err, BTF_E_NOMEM, name, "out of memory encoding the model");
     return BTF_OK;
@@ -497,7 +544,8 @@ static btf_status encode_named(const btf_model *m, const char *name, unsigned ch
         rc = failf(err, BTF_E_DATA, name, "model of %zu bytes (expected at most %zu)", pl.n,
                    MAX_PAYLOAD_BYTES);
     if (rc == BTF_OK)
-        rc = wrap_payload(&pl, has_lab(m)         ? FMT_MINOR_LAB
+        rc = wrap_payload(&pl, m->albedo          ? FMT_MINOR_STRUCTURE
+                               : has_lab(m)       ? FMT_MINOR_LAB
                                : has_marginals(m) ? FMT_MINOR_MARGINALS
                                : m->range       ? FMT_MINOR_RANGE_FLAGS
                                                 : 0,
@@ -968,6 +1016,39 @@ static btf_status read_lab(const span *sp, btf_model *m, const char *name, btf_e
     return BTF_OK;
 }
 
+/* STRC: the albedo codes rebuilt from their residuals; the layer needs a
+ * range map of the same size at texel 1 (checked by btf_model_validate). */
+static btf_status read_structure(const span *sp, btf_model *m, const char *name, btf_error *err)
+{
+    rbuf r = {sp->p, sp->n, 0, 0};
+    int w = (int)r_u16(&r), h = (int)r_u16(&r);
+    float ambient = r_f32(&r);
+    if (r.short_read)
+        return short_section(S_STRC, name, err);
+    if (!m->range || w != m->range_width || h != m->range_height)
+        return failf(err, BTF_E_FORMAT, name,
+                     "section STRC: %d x %d (expected the range map's size, %d x %d)", w, h,
+                     m->range_width, m->range_height);
+    size_t n = (size_t)w * h;
+    const unsigned char *res = r_take(&r, n);
+    if (!res)
+        return short_section(S_STRC, name, err);
+    unsigned char *q = alloc_named(n, 1, 0, name, err);
+    m->albedo = q ? alloc_named(n, sizeof(float), 0, name, err) : NULL;
+    if (!m->albedo) {
+        free(q);
+        return BTF_E_NOMEM;
+    }
+    for (size_t i = 0; i < n; i++) {
+        q[i] = (unsigned char)(res[i] + albedo_predict(q, w, (int)(i % (size_t)w),
+                                                       (int)(i / (size_t)w)));
+        m->albedo[i] = btf_albedo_value(q[i]);
+    }
+    free(q);
+    m->ambient = ambient;
+    return BTF_OK;
+}
+
 static btf_status read_payload(const unsigned char *p, size_t n, btf_model *m, const char *name,
                                btf_error *err)
 {
@@ -996,6 +1077,8 @@ static btf_status read_payload(const unsigned char *p, size_t n, btf_model *m, c
     if (sec[S_MARG].present && (rc = read_marginals(&sec[S_MARG], m, name, err)))
         return rc;
     if (sec[S_LABQ].present && (rc = read_lab(&sec[S_LABQ], m, name, err)))
+        return rc;
+    if (sec[S_STRC].present && (rc = read_structure(&sec[S_STRC], m, name, err)))
         return rc;
     return btf_model_validate(m, name, BTF_E_FORMAT, err);
 }

@@ -22,6 +22,7 @@
  *   BTF_SHADE_HEIGHT(ctx, i)        float: range map height of pixel i
  *   BTF_SHADE_NORMAL(ctx, i)        float: normal map float i (pixel * 3 + c)
  *   BTF_SHADE_LIGHT_OUTER_Z(ctx)    float: cos of the largest measured light theta
+ *   BTF_SHADE_AMBIENT(ctx)          float: the model's ambient term a >= 0
  *   BTF_SHADE_N_LIGHTS(ctx)         int: the scene's lights
  *   BTF_SHADE_LIGHT_KIND(ctx, j)    int: 0 directional, 1 point (btf_light_kind)
  *   BTF_SHADE_LIGHT_VEC(ctx, j, k)  float: unit direction towards it, or position
@@ -244,10 +245,12 @@ BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_
     return BTF_RGB(r, g, b);
 }
 
-/* The bump factor of docs/render.md: max(0, n . l) / max(l_z,
- * BTF_FLAT_MIN_Z) with n the relief-scaled normal (nx, ny, nz), times the
- * horizon fade l_z / cos(theta_outer) beyond the outermost light ring; 0
- * for l_z <= 0. */
+/* The bump factor of docs/render.md: (a + max(0, n . l)) / (a + max(l_z,
+ * BTF_FLAT_MIN_Z)) with n the relief-scaled normal (nx, ny, nz) and a the
+ * model's ambient term (0 without a structure layer: the plain ratio),
+ * times the horizon fade l_z / cos(theta_outer) beyond the outermost light
+ * ring; 0 for l_z <= 0. The analysis divides each exemplar by the same
+ * factor under its own light (docs/model.md, "Structure"). */
 BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, float lx,
                             float ly, float lz)
 {
@@ -259,7 +262,11 @@ BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, flo
     BTF_PRECISE float ab = a + b;
     BTF_PRECISE float ndotl = ab + c;
     float flatz = lz > BTF_FLAT_MIN_Z ? lz : BTF_FLAT_MIN_Z;
-    BTF_PRECISE float factor = ndotl > 0.0f ? ndotl / flatz : 0.0f;
+    float amb = BTF_SHADE_AMBIENT(ctx);
+    float lit = ndotl > 0.0f ? ndotl : 0.0f;
+    BTF_PRECISE float num = amb + lit;
+    BTF_PRECISE float den = amb + flatz;
+    BTF_PRECISE float factor = num / den;
     float outer = BTF_SHADE_LIGHT_OUTER_Z(ctx);
     if (lz < outer) {
         BTF_PRECISE float fade = lz / outer;

@@ -41,6 +41,7 @@ void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_materia
     ctx->height = rm->height.data;
     ctx->normal = rm->normal.data;
     ctx->light_outer_z = rm->light_outer_z;
+    ctx->ambient = rm->ambient;
 }
 
 float btf_render_light_outer_z(const btf_model *m)

@@ -85,6 +85,7 @@ static btf_status build_tables(const btf_model *m, btf_render_material *rm, btf_
             return btf_fail(err, BTF_E_FORMAT, "index table entry %zu names subspace %d of %d",
                             i, rm->index[i], m->n_subspaces);
     rm->light_outer_z = btf_render_light_outer_z(m);
+    rm->ambient = m->albedo && isfinite(m->ambient) && m->ambient > 0.0f ? m->ambient : 0.0f;
     btf_status rc = btf_hemisphere_build(&m->views, &rm->views, err);
     return rc ? rc : btf_hemisphere_build(&m->lights, &rm->lights, err);
 }
@@ -111,7 +112,7 @@ btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,
     rm->size = side;
     int *which = NULL;
     if ((rc = build_tables(m, rm, err)) ||
-        (rc = btf_range_map(m, side, side, &rm->height, &rm->normal, err)))
+        (rc = btf_structure_maps(m, side, side, seed, &rm->height, &rm->normal, NULL, err)))
         goto fail;
     which = btf_alloc((size_t)m->n_subspaces, sizeof *which, err);
     if (!which) {

@@ -19,6 +19,7 @@ struct btf_render_material {
     btf_hemisphere *views;   /* triangulations of the two direction sets */
     btf_hemisphere *lights;
     float light_outer_z;     /* cos of the largest measured light theta */
+    float ambient;           /* the model's ambient term (btf_model.ambient) */
     int size;                /* side of every image below */
     btf_image height;        /* size x size x 1, heights in texels */
     btf_image normal;        /* size x size x 3, unit tangent-frame normals */
@@ -33,7 +34,7 @@ typedef struct btf_shade_ctx {
     const uint8_t *index;
     const float *tex[BTF_SHADE_CTX_MAX_SUBSPACES]; /* NULL: not synthesised */
     const float *height, *normal;
-    float light_outer_z;
+    float light_outer_z, ambient;
     int n_lights;
     int kind[16];
     float vec[16][3], rgb[16][3];
@@ -50,6 +51,7 @@ typedef struct btf_shade_ctx {
 #define BTF_SHADE_HEIGHT(ctx, i) ((ctx)->height[i])
 #define BTF_SHADE_NORMAL(ctx, i) ((ctx)->normal[i])
 #define BTF_SHADE_LIGHT_OUTER_Z(ctx) ((ctx)->light_outer_z)
+#define BTF_SHADE_AMBIENT(ctx) ((ctx)->ambient)
 #define BTF_SHADE_N_LIGHTS(ctx) ((ctx)->n_lights)
 #define BTF_SHADE_LIGHT_KIND(ctx, j) ((ctx)->kind[j])
 #define BTF_SHADE_LIGHT_VEC(ctx, j, k) ((ctx)->vec[j][k])

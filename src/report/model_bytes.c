@@ -19,7 +19,8 @@
 
 static const char *const PART_NAMES[BTF_MODEL_PART_COUNT] = {
     "container",  "deflate", "framing", "directions", "index",      "spectral", "levels",
-    "neighbourhoods", "gammas", "sigmas", "band means", "marginals", "range"};
+    "neighbourhoods", "gammas", "sigmas", "band means", "marginals", "range",
+    "structure"};
 
 const char *btf_model_part_name(int part)
 {

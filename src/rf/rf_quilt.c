@@ -143,17 +143,22 @@ static double dist2(const float *a, const float *b)
     return s;
 }
 
+/* The overlap error of candidate (u, v). */
+static double score_one(const quilt *Q, int u, int v)
+{
+    double s = 0.0;
+    for (int k = 0; k < Q->nk; k++)
+        s += dist2(sample_feat(Q, u + Q->kx[k], v + Q->ky[k]), Q->kf + RF_FEATURES * k);
+    return s;
+}
+
 /* The overlap error of every candidate in row v of the sample. */
 static btf_status score_job(void *user, int v, int worker, btf_error *err)
 {
     (void)worker, (void)err;
     quilt *Q = user;
-    for (int u = 0; u < Q->nu; u++) {
-        double s = 0.0;
-        for (int k = 0; k < Q->nk; k++)
-            s += dist2(sample_feat(Q, u + Q->kx[k], v + Q->ky[k]), Q->kf + RF_FEATURES * k);
-        Q->score[(size_t)v * Q->nu + u] = s;
-    }
+    for (int u = 0; u < Q->nu; u++)
+        Q->score[(size_t)v * Q->nu + u] = score_one(Q, u, v);
     return BTF_OK;
 }
 
@@ -172,6 +177,24 @@ static void gather_known(quilt *Q)
         }
 }
 
+/* q->candidates positions drawn, the best of them taken (ties: the first
+ * drawn), so the choice depends on the seed alone. */
+static btf_status choose_drawn(quilt *Q, btf_rng *rng, int *pick)
+{
+    size_t n = (size_t)Q->nu * Q->nv;
+    double best = DBL_MAX;
+    *pick = 0;
+    for (int c = 0; c < Q->q->candidates; c++) {
+        int i = (int)(btf_rng_next(rng) % n);
+        double s = score_one(Q, i % Q->nu, i / Q->nu);
+        if (s < best || c == 0) {
+            best = s;
+            *pick = i;
+        }
+    }
+    return BTF_OK;
+}
+
 /* The candidate drawn for the current block, as v * nu + u. */
 static btf_status choose(quilt *Q, btf_rng *rng, int *pick, btf_error *err)
 {
@@ -180,6 +203,8 @@ static btf_status choose(quilt *Q, btf_rng *rng, int *pick, btf_error *err)
         *pick = (int)(btf_rng_next(rng) % n);
         return BTF_OK;
     }
+    if (Q->q->candidates > 0 && (size_t)Q->q->candidates < n)
+        return choose_drawn(Q, rng, pick);
     /* thread start-up costs more than a small block's scores */
     int threads = (double)n * Q->nk < 65536.0 ? 1 : Q->q->threads;
     btf_status rc = btf_pool_run(Q->nv, threads, score_job, Q, NULL, err);

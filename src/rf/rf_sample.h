@@ -48,6 +48,10 @@ typedef struct rf_quilt_args {
     double tolerance;
     uint64_t seed;
     int threads;
+    /* 0: every position of the sample is a candidate; n > 0: n positions
+     * drawn (seeded) per block, which bounds the work on large surfaces
+     * (the structure map, render/structure_map.c) */
+    int candidates;
 } rf_quilt_args;
 btf_status rf_quilt(const rf_quilt_args *q, uint16_t *map, btf_error *err);
 

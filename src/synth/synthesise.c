@@ -199,6 +199,55 @@ static btf_status matched_rows(const btf_model *m, int subspace,
                                const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *o,
                                int width, int height, btf_rows_fn fn, void *user, btf_error *err);
 
+static btf_status plain_rows(const btf_model *m, int subspace,
+                             const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *opts,
+                             int width, int height, btf_rows_fn fn, void *user,
+                             btf_background *bg, btf_error *err);
+
+/* The structure layer (docs/model.md, "Structure"): the fields model the
+ * exemplar divided by the albedo pattern, so each row is multiplied by the
+ * pattern, placed by the quilting map of this seed and size, before it
+ * goes on (to colour matching, when on). */
+typedef struct structured {
+    btf_image albedo; /* one period of the pattern */
+    float *row;
+    int width;
+    btf_rows_fn fn;
+    void *user;
+} structured;
+
+static int structured_cb(void *user, int y, int nrows, const float *rows, btf_error *err)
+{
+    structured *s = user;
+    size_t n = (size_t)s->width * 3;
+    for (int r = 0; r < nrows; r++) {
+        memcpy(s->row, rows + (size_t)r * n, n * sizeof(float));
+        btf_structure_apply_row(&s->albedo, y + r, s->row, s->width);
+        int got = s->fn(s->user, y + r, 1, s->row, err);
+        if (got)
+            return got;
+    }
+    return 0;
+}
+
+static btf_status structured_rows(const btf_model *m, int subspace,
+                                  const int (*margins)[BTF_MAX_LEVELS],
+                                  const btf_synth_opts *o, int width, int height,
+                                  btf_rows_fn fn, void *user, btf_background *bg,
+                                  btf_error *err)
+{
+    structured s = {.width = width, .fn = fn, .user = user};
+    btf_status rc = btf_structure_albedo(m, width, height, o->seed, &s.albedo, err);
+    if (rc)
+        return rc;
+    s.row = btf_alloc((size_t)width * 3, sizeof(float), err);
+    rc = s.row ? plain_rows(m, subspace, margins, o, width, height, structured_cb, &s, bg, err)
+               : BTF_E_NOMEM;
+    free(s.row);
+    btf_image_free(&s.albedo);
+    return rc;
+}
+
 /* btf_synthesise_margins, where bg (NULL: none) is work for the colour
  * pipeline's relay helper to do in its idle time (the previous image's
  * colour matching, btf_synthesise_images); the caller finishes it. */
@@ -221,6 +270,19 @@ static btf_status synth_rows(const btf_model *m, int subspace,
     if (o.tileable && (rc = btf_synth_check_tileable(width, height,
                                                      m->subspaces[subspace].levels, err)))
         return rc;
+    if (m->albedo && btf_structure_quilted(m))
+        return structured_rows(m, subspace, margins, &o, width, height, fn, user, bg, err);
+    return plain_rows(m, subspace, margins, &o, width, height, fn, user, bg, err);
+}
+
+/* The CAR fields, the pyramid and the colour step: the synthesis proper. */
+static btf_status plain_rows(const btf_model *m, int subspace,
+                             const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *opts,
+                             int width, int height, btf_rows_fn fn, void *user,
+                             btf_background *bg, btf_error *err)
+{
+    btf_synth_opts o = *opts;
+    btf_status rc = BTF_OK;
     const btf_subspace_model *sm = &m->subspaces[subspace];
     int margin[3][BTF_MAX_LEVELS];
     for (int b = 0; b < 3; b++)

@@ -1,0 +1,207 @@
+/*
+ * structure_map.c — the model's measured structure (the range map and the
+ * albedo pattern at the analysed resolution, docs/model.md "Structure")
+ * placed on a surface of any size by image quilting (Efros & Freeman 2001;
+ * the paper's "image tiling" of the range map, Haindl & Filip 2007,
+ * section III). One coordinate map per (size, seed) places every layer, so
+ * the heights, the normals and the albedo pattern stay registered, and the
+ * map is on a torus (src/rf/rf_quilt.c: the last block of a row overlaps
+ * the first along a minimum-error cut), so the surface tiles without a
+ * seam. The sample keeps its own place: a surface of the sample's size is
+ * the measured structure itself, and a larger one holds it once, joined to
+ * drawn blocks around it.
+ */
+#include "model/model.h"
+#include "rf/rf_sample.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Blocks of at most this side (texels), overlapping by a sixth: large
+ * enough to carry several cells of a leather, a few threads of a weave. */
+#define STRUCT_BLOCK_MAX 48
+/* Candidate positions drawn per block: the work per block is bounded, so a
+ * 2048^2 surface quilts in well under a second. */
+#define STRUCT_CANDIDATES 96
+/* A surface side beyond this repeats a period of at most this many texels
+ * (a divisor of the side, so a tileable image still wraps). */
+#define STRUCT_PERIOD_MAX 2048
+#define STRUCT_PERIOD_MIN 512
+/* The quilting map's own seed stream, apart from the fields'. */
+#define STRUCT_SEED_SALT 0x5354524355435455ull
+
+/* The albedo pattern is kept on a log2 grid of 1/32 over [-4, 4]: 2.2 %
+ * steps, one byte a texel (docs/model-format.md, "STRC"). */
+#define ALBEDO_LOG_MIN (-4.0)
+#define ALBEDO_STEPS_PER_OCTAVE 32.0
+unsigned btf_albedo_code(float a)
+{
+    double l = log2(a > 0.0f && isfinite(a) ? (double)a : 1.0);
+    double q = floor((l - ALBEDO_LOG_MIN) * ALBEDO_STEPS_PER_OCTAVE + 0.5);
+    return q < 0.0 ? 0u : q > 255.0 ? 255u : (unsigned)q;
+}
+
+float btf_albedo_value(unsigned q)
+{
+    return (float)exp2((double)q / ALBEDO_STEPS_PER_OCTAVE + ALBEDO_LOG_MIN);
+}
+
+int btf_structure_quilted(const btf_model *m)
+{
+    return m && m->range && m->range_texel == 1.0f && m->range_width > 0 &&
+           m->range_height > 0;
+}
+
+int btf_structure_period(int n)
+{
+    if (n <= STRUCT_PERIOD_MAX)
+        return n;
+    for (int d = STRUCT_PERIOD_MAX; d >= STRUCT_PERIOD_MIN; d--)
+        if (n % d == 0)
+            return d;
+    return n;
+}
+
+/* Mean and standard deviation of n values (sd 1 when flat). */
+static void moments(const float *v, size_t n, size_t stride, double *mean, double *sd)
+{
+    double s = 0.0, ss = 0.0;
+    for (size_t i = 0; i < n; i++)
+        s += v[i * stride];
+    *mean = n ? s / (double)n : 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double d = v[i * stride] - *mean;
+        ss += d * d;
+    }
+    *sd = n && ss > 0.0 ? sqrt(ss / (double)n) : 1.0;
+    if (!(*sd > 1e-12) || !isfinite(*sd))
+        *sd = 1.0;
+}
+
+/* The quilting features: normalised height, normalised log albedo, and the
+ * height's local slope magnitude (the grooves' walls), each of unit
+ * spread so that none dominates the overlap error. */
+static btf_status features(const btf_model *m, float **out, btf_error *err)
+{
+    int w = m->range_width, h = m->range_height;
+    size_t n = (size_t)w * h;
+    float *f = btf_alloc(n, RF_FEATURES * sizeof(float), err);
+    if (!f)
+        return BTF_E_NOMEM;
+    for (size_t i = 0; i < n; i++) {
+        int x = (int)(i % (size_t)w), y = (int)(i / (size_t)w);
+        const float *row = m->range + (size_t)y * w;
+        float gx = row[x + 1 < w ? x + 1 : x] - row[x > 0 ? x - 1 : x];
+        float gy = m->range[(size_t)(y + 1 < h ? y + 1 : y) * w + x] -
+                   m->range[(size_t)(y > 0 ? y - 1 : y) * w + x];
+        f[RF_FEATURES * i] = m->range[i];
+        f[RF_FEATURES * i + 1] = m->albedo ? logf(m->albedo[i]) : 0.0f;
+        f[RF_FEATURES * i + 2] = sqrtf(gx * gx + gy * gy);
+    }
+    for (int c = 0; c < RF_FEATURES; c++) {
+        double mean, sd;
+        moments(f + c, n, RF_FEATURES, &mean, &sd);
+        for (size_t i = 0; i < n; i++)
+            f[RF_FEATURES * i + c] = (float)((f[RF_FEATURES * i + c] - mean) / sd);
+    }
+    *out = f;
+    return BTF_OK;
+}
+
+btf_status btf_structure_coords(const btf_model *m, int pw, int ph, uint64_t seed,
+                                uint16_t **map, btf_error *err)
+{
+    *map = NULL;
+    if (!btf_structure_quilted(m))
+        return btf_fail(err, BTF_E_ARG, "structure map: the model has no range map at the "
+                        "analysed resolution");
+    if (pw < 1 || ph < 1)
+        return btf_fail(err, BTF_E_ARG, "structure map: size %dx%d", pw, ph);
+    int sw = m->range_width, sh = m->range_height;
+    int side = sw < sh ? sw : sh;
+    int block = side < STRUCT_BLOCK_MAX ? side : STRUCT_BLOCK_MAX;
+    float *feat = NULL;
+    btf_status rc = features(m, &feat, err);
+    uint16_t *out = rc ? NULL : btf_alloc((size_t)pw * ph, 2 * sizeof(uint16_t), err);
+    if (!rc && !out)
+        rc = BTF_E_NOMEM;
+    if (rc == BTF_OK) {
+        rf_quilt_args q = {feat, sw, 0, 0, sw, sh, pw, ph, block, block / 6, 0.0,
+                           seed ^ STRUCT_SEED_SALT, 1, STRUCT_CANDIDATES};
+        rc = rf_quilt(&q, out, err);
+    }
+    free(feat);
+    if (rc) {
+        free(out);
+        return rc;
+    }
+    *map = out;
+    return BTF_OK;
+}
+
+btf_status btf_structure_albedo(const btf_model *m, int width, int height, uint64_t seed,
+                                btf_image *out, btf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    int pw = btf_structure_period(width), ph = btf_structure_period(height);
+    uint16_t *map;
+    btf_status rc = btf_structure_coords(m, pw, ph, seed, &map, err);
+    if (rc == BTF_OK)
+        rc = btf_image_alloc(out, pw, ph, 1, err);
+    if (rc == BTF_OK)
+        for (size_t i = 0; i < (size_t)pw * ph; i++)
+            out->data[i] = m->albedo ? m->albedo[(size_t)map[2 * i + 1] * m->range_width +
+                                                 map[2 * i]]
+                                     : 1.0f;
+    if (rc == BTF_OK)
+        free(map);
+    return rc;
+}
+
+/* Row y of the periodic albedo pattern a (pw x ph) over width texels times
+ * the RGB row, in place: one multiply per channel, the same on every
+ * path (the CPU's rows, the GPU's read-back). */
+void btf_structure_apply_row(const btf_image *a, int y, float *rgb, int width)
+{
+    const float *row = a->data + (size_t)(y % a->height) * a->width;
+    for (int x = 0, px = 0; x < width; x++, px = px + 1 == a->width ? 0 : px + 1) {
+        float f = row[px];
+        rgb[3 * x] = rgb[3 * x] * f;
+        rgb[3 * x + 1] = rgb[3 * x + 1] * f;
+        rgb[3 * x + 2] = rgb[3 * x + 2] * f;
+    }
+}
+
+btf_status btf_structure_apply(const btf_model *m, uint64_t seed, btf_image *img,
+                               btf_error *err)
+{
+    if (!m->albedo)
+        return BTF_OK;
+    btf_image a;
+    btf_status rc = btf_structure_albedo(m, img->width, img->height, seed, &a, err);
+    if (rc)
+        return rc;
+    for (int y = 0; y < img->height; y++)
+        btf_structure_apply_row(&a, y, img->data + (size_t)y * img->width * 3, img->width);
+    btf_image_free(&a);
+    return BTF_OK;
+}
+
+btf_status btf_structure_heights(const btf_model *m, int width, int height, uint64_t seed,
+                                 btf_image *out, btf_error *err)
+{
+    uint16_t *map;
+    int pw = btf_structure_period(width), ph = btf_structure_period(height);
+    btf_status rc = btf_structure_coords(m, pw, ph, seed, &map, err);
+    if (rc)
+        return rc;
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            size_t i = (size_t)(y % ph) * pw + (size_t)(x % pw);
+            out->data[(size_t)y * width + x] =
+                m->range[(size_t)map[2 * i + 1] * m->range_width + map[2 * i]];
+        }
+    free(map);
+    return BTF_OK;
+}

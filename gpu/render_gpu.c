@@ -145,7 +145,7 @@ static btf_status build_params(const btf_model *m, const btf_render_plan *p,
     hi[BTF_RP_NORMAL] = p->side * p->side;
     hf[BTF_RP_OUTER] = btf_render_light_outer_z(m);
     hf[BTF_RP_RELIEF] = (float)p->o.relief;
-    hf[BTF_RP_AMBIENT] = m->albedo && isfinite(m->ambient) && m->ambient > 0.0f ? m->ambient : 0.0f;
+    hf[BTF_RP_AMBIENT] = btf_render_ambient(m);
     for (int c = 0; c < 3; c++)
         hf[BTF_RP_BG + c] = p->background[c];
     for (int j = 0; rc == BTF_OK && j < p->n_lights; j++) {
@@ -172,6 +172,28 @@ void btf_render_pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out)
         memcpy(o + 12, g->position + 3 * p, 3 * sizeof(float));
         memcpy(o + 15, g->view + 3 * p, 3 * sizeof(float));
     }
+}
+
+/* A structure layer's textures hold reflectance (btf_render_reflectance):
+ * each is read back, scaled by the CPU's code and written again, so the
+ * two backends shade the same floats. */
+static btf_status scale_textures(btf_vk *vk, const btf_model *m, const int *subs, int n,
+                                 const uint64_t *offs, int side, btf_vk_buffer *tex,
+                                 btf_error *err)
+{
+    if (!m->albedo)
+        return BTF_OK;
+    size_t floats = (size_t)side * side * 3;
+    float *buf = btf_alloc(floats, sizeof(float), err);
+    btf_status rc = buf ? BTF_OK : BTF_E_NOMEM;
+    for (int j = 0; rc == BTF_OK && j < n; j++) {
+        rc = btf_vk_buffer_download(vk, tex, 4 * offs[j], buf, floats * sizeof(float), err);
+        btf_render_scale_texture(buf, floats, btf_render_reflectance(m, subs[j]));
+        if (rc == BTF_OK)
+            rc = btf_vk_buffer_upload(vk, tex, 4 * offs[j], buf, floats * sizeof(float), err);
+    }
+    free(buf);
+    return rc;
 }
 
 /* The range and normal maps of the texture side, one buffer. */
@@ -318,6 +340,8 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     so.tileable = 1;
     if (rc == BTF_OK && n > 0)
         rc = btf_gpu_synthesise_device(gpu, m, subs, n, &so, &tex, offs, err);
+    if (rc == BTF_OK && n > 0)
+        rc = scale_textures(ps.vk, m, subs, n, offs, p->side, tex, err);
     double t1 = btf_now();
     if (rc == BTF_OK && !tex) /* nothing needed: a buffer the shader may bind, never read */
         rc = btf_vk_buffer_create(ps.vk, 16, &tex, err);

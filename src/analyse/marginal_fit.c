@@ -143,6 +143,15 @@ btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img,
             lo = v < lo ? v : lo;
             hi = v > hi ? v : hi;
         }
+        /* with a structure layer, colour matching clamps the image with its
+         * albedo pattern (lab_img) to this box too: it spans both */
+        for (size_t i = 0; lab_img != img && i < n; i++) {
+            float v = lab_img->data[3 * i + k];
+            if (!isfinite(v))
+                return btf_fail(err, BTF_E_ARG, "image pixel %zu is not finite", i);
+            lo = v < lo ? v : lo;
+            hi = v > hi ? v : hi;
+        }
         mg.rgb_lo[k] = lo > 0.0f ? lo : 0.0f; /* no negative radiance, whatever the input */
         mg.rgb_hi[k] = hi > mg.rgb_lo[k] ? hi : mg.rgb_lo[k];
     }

@@ -249,8 +249,12 @@ BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_
  * BTF_FLAT_MIN_Z)) with n the relief-scaled normal (nx, ny, nz) and a the
  * model's ambient term (0 without a structure layer: the plain ratio),
  * times the horizon fade l_z / cos(theta_outer) beyond the outermost light
- * ring; 0 for l_z <= 0. The analysis divides each exemplar by the same
- * factor under its own light (docs/model.md, "Structure"). */
+ * ring; 0 for l_z <= 0. A model with a structure layer (a >= 0; -1
+ * without) has textures divided by (a + l_z) of their subspace's light
+ * (btf_render_reflectance), so the factor is a + max(0, n . l) itself and a
+ * pair's brightness follows its own light, not its subspace's; the
+ * analysis divides each exemplar by the relit shading under its own light
+ * (docs/model.md, "Structure"). */
 BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, float lx,
                             float ly, float lz)
 {
@@ -267,6 +271,8 @@ BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, flo
     BTF_PRECISE float num = amb + lit;
     BTF_PRECISE float den = amb + flatz;
     BTF_PRECISE float factor = num / den;
+    if (amb >= 0.0f)
+        factor = num; /* structure layer: textures hold reflectance, see above */
     float outer = BTF_SHADE_LIGHT_OUTER_Z(ctx);
     if (lz < outer) {
         BTF_PRECISE float fade = lz / outer;

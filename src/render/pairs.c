@@ -44,6 +44,29 @@ void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_materia
     ctx->ambient = rm->ambient;
 }
 
+float btf_render_ambient(const btf_model *m)
+{
+    return m->albedo ? (isfinite(m->ambient) && m->ambient > 0.0f ? m->ambient : 0.0f) : -1.0f;
+}
+
+float btf_render_reflectance(const btf_model *m, int k)
+{
+    float a = btf_render_ambient(m);
+    if (a < 0.0f || k < 0 || k >= m->n_subspaces || m->subspaces[k].light < 0 ||
+        m->subspaces[k].light >= m->lights.count)
+        return 1.0f;
+    double l[3];
+    btf_dir_to_vec(m->lights.dirs[m->subspaces[k].light], l);
+    double z = l[2] > 0.05 ? l[2] : 0.05;
+    return (float)(1.0 / (a + z));
+}
+
+void btf_render_scale_texture(float *data, size_t floats, float g)
+{
+    for (size_t i = 0; i < floats; i++)
+        data[i] = data[i] * g;
+}
+
 float btf_render_light_outer_z(const btf_model *m)
 {
     double outer = 0.0;

@@ -49,7 +49,12 @@ static btf_status synth_job(void *user, int j, int worker, btf_error *err)
     o.width = o.height = s->rm->size;
     o.seed = s->seed;
     o.tileable = 1;
-    return btf_synthesise_image(s->m, k, &o, &s->rm->tex[k], err);
+    btf_status rc = btf_synthesise_image(s->m, k, &o, &s->rm->tex[k], err);
+    btf_image *t = &s->rm->tex[k];
+    if (rc == BTF_OK && s->m->albedo)
+        btf_render_scale_texture(t->data, (size_t)t->width * t->height * 3,
+                                 btf_render_reflectance(s->m, k));
+    return rc;
 }
 
 void btf_render_material_free(btf_render_material *rm)
@@ -85,7 +90,7 @@ static btf_status build_tables(const btf_model *m, btf_render_material *rm, btf_
             return btf_fail(err, BTF_E_FORMAT, "index table entry %zu names subspace %d of %d",
                             i, rm->index[i], m->n_subspaces);
     rm->light_outer_z = btf_render_light_outer_z(m);
-    rm->ambient = m->albedo && isfinite(m->ambient) && m->ambient > 0.0f ? m->ambient : 0.0f;
+    rm->ambient = btf_render_ambient(m);
     btf_status rc = btf_hemisphere_build(&m->views, &rm->views, err);
     return rc ? rc : btf_hemisphere_build(&m->lights, &rm->lights, err);
 }

@@ -68,6 +68,14 @@ int btf_render_texture_side(const btf_model *m, int side);
 /* cos of the largest measured light theta: below it a light is beyond the
  * outermost ring (btf_shade_bump's horizon fade). */
 float btf_render_light_outer_z(const btf_model *m);
+/* The shading's ambient term of m (btf_render_shared.h): -1 without a
+ * structure layer (the plain bump factor). */
+float btf_render_ambient(const btf_model *m);
+/* The factor subspace k's texture is scaled by before shading: 1 / (a +
+ * l_z) of its representative light with a structure layer, else 1. */
+float btf_render_reflectance(const btf_model *m, int k);
+/* floats of a texture times g, in place (the same on both backends). */
+void btf_render_scale_texture(float *data, size_t floats, float g);
 
 /* The lights as the shared shading reads them (directions made unit);
  * BTF_E_ARG for more than BTF_RENDER_MAX_LIGHTS. */

@@ -116,9 +116,13 @@ static void check_tile(const char *manifest, int range_size, int want_w, int wan
         assert_true(cnt[i] > 0);
         want[i] = (float)(acc[i] / cnt[i]);
     }
-    TU_OK(btf_range_make_periodic(want, tw, th, &e), &e);
+    /* at texel 1 kept as measured, to 1/32 texel, and not made periodic
+     * (it is quilted: model/structure_map.c) */
+    double tol = s == 1.0 ? 0.5 / 32 + 1e-5 : 0.0;
+    if (s != 1.0)
+        TU_OK(btf_range_make_periodic(want, tw, th, &e), &e);
     for (int i = 0; i < cells; i++)
-        if (fabs(m.range[i] - want[i]) > 1e-5 * (1.0 + fabs(want[i])))
+        if (fabs(m.range[i] - want[i]) > tol + 1e-5 * (1.0 + fabs(want[i])))
             fail_msg("%s, size %d: tile texel %d is %g, expected %g", manifest, range_size, i,
                      m.range[i], want[i]);
     free(want);

@@ -68,7 +68,8 @@ static void documented_values(void **state)
     assert_int_equal(a.fit.levels, fit.levels);
     assert_memory_equal(&a.fit.car, &fit.car, sizeof fit.car);
     assert_int_equal(a.no_range, 0);
-    assert_int_equal(a.range_size, 64);
+    assert_int_equal(a.range_size, 0); /* the image's size: texel 1 */
+    assert_int_equal(a.no_structure, 0);
     assert_null(a.report);
 }
 

@@ -243,22 +243,35 @@ static void enlarged_map_wraps(void **state)
     free(t);
 }
 
-/* At texel 1 and a whole number of periods each map pixel is a tile texel
- * centre: the map is the tile repeated, exactly (Catmull-Rom reproduces its
- * samples). */
-static void whole_periods_repeat_the_tile(void **state)
+/* At texel 1 (the analysed resolution, format 1.4) the map is quilted, not
+ * stretched: every height is one of the measured ones (blocks are copies),
+ * a map of the tile's own size is the tile itself, and the map is the same
+ * for the same seed and another for another seed. */
+static void texel_one_is_quilted(void **state)
 {
     (void)state;
-    int tw = 9, th = 6;
+    int tw = 64, th = 56; /* blocks of 48: positions are drawn, by the seed */
     float *t = rough_tile(tw, th, 8);
     btf_model m = tile_model(t, tw, th, 1.0f);
-    btf_image hm;
+    btf_image hm, same, again, other;
     btf_error e = {0};
-    TU_OK(btf_range_map(&m, 3 * tw, 2 * th, &hm, NULL, &e), &e);
-    for (int y = 0; y < 2 * th; y++)
-        for (int x = 0; x < 3 * tw; x++)
-            assert_float_equal(hm.data[(size_t)y * 3 * tw + x], t[(y % th) * tw + x % tw], 1e-5);
+    TU_OK(btf_structure_maps(&m, 2 * tw, 2 * th, 5, &hm, NULL, NULL, &e), &e);
+    for (int i = 0; i < 2 * tw * 2 * th; i++) {
+        int found = 0;
+        for (int j = 0; j < tw * th && !found; j++)
+            found = hm.data[i] == t[j];
+        assert_true(found);
+    }
+    TU_OK(btf_structure_maps(&m, tw, th, 5, &same, NULL, NULL, &e), &e);
+    assert_memory_equal(same.data, t, (size_t)tw * th * sizeof(float));
+    TU_OK(btf_structure_maps(&m, 2 * tw, 2 * th, 5, &again, NULL, NULL, &e), &e);
+    assert_memory_equal(again.data, hm.data, (size_t)2 * tw * 2 * th * sizeof(float));
+    TU_OK(btf_structure_maps(&m, 2 * tw, 2 * th, 6, &other, NULL, NULL, &e), &e);
+    assert_true(memcmp(other.data, hm.data, (size_t)2 * tw * 2 * th * sizeof(float)) != 0);
     btf_image_free(&hm);
+    btf_image_free(&same);
+    btf_image_free(&again);
+    btf_image_free(&other);
     btf_model_free(&m);
     free(t);
 }
@@ -504,7 +517,7 @@ int main(void)
         cmocka_unit_test(periodic_tile_keeps_content),
         cmocka_unit_test(periodic_tile_extremes),
         cmocka_unit_test(enlarged_map_wraps),
-        cmocka_unit_test(whole_periods_repeat_the_tile),
+        cmocka_unit_test(texel_one_is_quilted),
         cmocka_unit_test(extreme_sizes),
         cmocka_unit_test(no_range_is_flat),
         cmocka_unit_test(bad_input),

@@ -125,8 +125,7 @@ static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, 
         if (r->albedo && !o->no_structure) {
             if (!(m->albedo = btf_alloc(cells, sizeof(float), err)))
                 return BTF_E_NOMEM;
-            memcpy(m->albedo, r->albedo, cells * sizeof(float));
-            m->ambient = r->ambient;
+            memcpy(m->albedo, r->albedo, cells * sizeof(float)); /* a: fitted per analysis */
         }
         return BTF_OK;
     }
@@ -207,7 +206,7 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
     btf_status rc = BTF_OK;
     if (m->albedo && (rc = btf_structure_normals(m, &normal, err)))
         return rc;
-    if (m->albedo && !o->range_from && (rc = fit_ambient(ds, seg, m, &normal, err))) {
+    if (m->albedo && (rc = fit_ambient(ds, seg, m, &normal, err))) {
         btf_image_free(&normal);
         return rc;
     }

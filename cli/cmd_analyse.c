@@ -14,14 +14,16 @@ static const char ABOUT[] =
     "  1. segment  k-means on CIE Lab cumulative histograms of the (view, light)\n"
     "              images gives K subspace images and the index table;\n"
     "  2. range    robust photometric stereo on the view closest to the normal\n"
-    "              gives the range map, kept as a small tile (--range-size);\n"
-    "  3. model    each subspace image: spectral PCA, Gaussian-Laplacian pyramid,\n"
-    "              one 2D CAR model per band and level (docs/model.md).\n"
+    "              gives the range map, kept at the analysed resolution, and the\n"
+    "              albedo's pattern (the structure layer, docs/model.md);\n"
+    "  3. model    each subspace image, divided by what the relief and albedo\n"
+    "              explain under its light: spectral PCA, Gaussian-Laplacian\n"
+    "              pyramid, one 2D CAR model per band and level (docs/model.md).\n"
     "With --stage segment it stops after stage 1 and writes to the folder OUT:\n"
     "index.png (x = view, y = light, one colour per subspace), index.tsv,\n"
     "subspaces.tsv, and each subspace image as subspace_NN.exr + .png preview;\n"
     "the options of the later stages (--levels, --neighbourhood, --max-neighbours,\n"
-    "--no-range, --range-size) are then a usage error.\n"
+    "--no-range, --range-size, --no-structure) are then a usage error.\n"
     "With --family rf it fits per-view reflectance fields instead (Meseth, Mueller\n"
     "& Klein 2003; docs/rf.md): per measured view and texel a PTM or K lobes over\n"
     "the lights, on luminance, with the view's average colour per texel; render\n"
@@ -40,7 +42,7 @@ enum { TAG_LATER = 1, TAG_RF = 2 };
 static const char *const CAR_ONLY[] = {"--preset", "--stage", "--subspaces", "--bins",
                                        "--restarts", "--levels", "--neighbourhood",
                                        "--neighborhood", "--max-neighbours", "--no-range",
-                                       "--range-size", NULL};
+                                       "--range-size", "--no-structure", NULL};
 
 /* Writes text that was built in memory (open_memstream) to path atomically:
  * the whole file appears or none does. Frees the text. */
@@ -400,9 +402,14 @@ int cmd_analyse(int argc, char **argv)
         {.name = "--no-range", .kind = CLI_FLAG, .dest = &ao.no_range,
          .help = "leave the range map out of the model", .tag = TAG_LATER},
         {.name = "--range-size", .kind = CLI_INT, .dest = &ao.range_size, .meta = "N",
-         .help = "longer side of the range tile kept in the model (at most the\n"
-                 "image's); the shorter side follows the image's aspect ratio",
-         .lo = 1, .hi = 4096, .tag = TAG_LATER},
+         .help = "longer side of the range map kept in the model; 0: the image's\n"
+                 "own (texel 1, with the structure layer); a smaller N keeps a\n"
+                 "small periodic tile and no structure layer (docs/model.md)",
+         .lo = 0, .hi = 4096, .zero_means = "the image's size", .tag = TAG_LATER},
+        {.name = "--no-structure", .kind = CLI_FLAG, .dest = &ao.no_structure,
+         .help = "no structure layer: the CAR fields model the whole exemplar\n"
+                 "(the relief and albedo are not divided out; format 1.3)",
+         .tag = TAG_LATER},
         CLI_MAX_PIXELS_OPTION(&ao.photostereo.read.max_pixels),
         {0}};
     cli_spec spec = {.cmd = "analyse", .args = "DATASET",

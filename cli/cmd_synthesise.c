@@ -155,10 +155,13 @@ static int name_model(int rc, const char *model, btf_error *err)
 /* --range: the seamless range map and its normal map at the output size
  * (btf_range_map; docs/render.md), as 32-bit float EXR whatever --half
  * says, since heights and normals are data, not colours. */
-static int write_range_maps(const btf_model *m, int w, int h, const output *out, btf_error *err)
+static int write_range_maps(const btf_model *m, int w, int h, uint64_t seed, const output *out,
+                            btf_error *err)
 {
     btf_image hm, nm;
-    int rc = btf_range_map(m, w, h, &hm, &nm, err);
+    /* the maps of the images' own seed: with a structure layer, one
+     * quilting map places them both (btf_structure_maps) */
+    int rc = btf_structure_maps(m, w, h, seed, &hm, &nm, NULL, err);
     if (rc)
         return name_model(rc, out->model_path, err);
     btf_exr_opts o = out->exr;
@@ -514,7 +517,7 @@ int cmd_synthesise(int argc, char **argv)
     }
     double range_s = cli_now();
     if (rc == 0 && range)
-        rc = write_range_maps(&m, w, h, &out, &err);
+        rc = write_range_maps(&m, w, h, seed, &out, &err);
     range_s = cli_now() - range_s; /* not in the synthesis rate */
     if (rc == 0)
         rc = btf_output_dir_commit(od, &err);

@@ -266,12 +266,13 @@ BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, flo
     BTF_PRECISE float ab = a + b;
     BTF_PRECISE float ndotl = ab + c;
     float flatz = lz > BTF_FLAT_MIN_Z ? lz : BTF_FLAT_MIN_Z;
-    float amb = BTF_SHADE_AMBIENT(ctx);
+    float given = BTF_SHADE_AMBIENT(ctx);
+    float amb = given > 0.0f ? given : 0.0f;
     float lit = ndotl > 0.0f ? ndotl : 0.0f;
     BTF_PRECISE float num = amb + lit;
     BTF_PRECISE float den = amb + flatz;
     BTF_PRECISE float factor = num / den;
-    if (amb >= 0.0f)
+    if (given >= 0.0f)
         factor = num; /* structure layer: textures hold reflectance, see above */
     float outer = BTF_SHADE_LIGHT_OUTER_Z(ctx);
     if (lz < outer) {

@@ -756,14 +756,16 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
                      err);
     /* colour matching reads each whole image (its histogram): on the host,
      * by the CPU's code, so that equal images stay equal (docs/gpu.md) */
+    btf_image pattern = {0}; /* the structure layer's, quilted once per size */
     for (int j = 0; rc == BTF_OK && j < n; j++) {
         int match;
-        rc = btf_structure_apply(m, o.seed, &outs[j], err); /* the CPU's rows' multiply */
+        rc = btf_structure_apply(m, o.seed, &outs[j], &pattern, err); /* the CPU's multiply */
         if (rc == BTF_OK)
             rc = btf_colour_match_wanted(m, subspaces[j], o.match_colours, &match, err);
         if (rc == BTF_OK && match)
             rc = btf_colour_match(m, subspaces[j], &outs[j], err);
     }
+    btf_image_free(&pattern);
     if (rc)
         for (int j = 0; j < n; j++)
             btf_image_free(&outs[j]);
@@ -779,7 +781,7 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
  * little beside the render (docs/gpu.md). */
 static btf_status match_on_host(btf_gpu *g, const btf_model *m, int subspace,
                                 const btf_synth_opts *o, btf_vk_buffer *buf, uint64_t offset,
-                                int width, int height, btf_error *err)
+                                int width, int height, btf_image *pattern, btf_error *err)
 {
     int match;
     btf_status rc = btf_colour_match_wanted(m, subspace, o->match_colours, &match, err);
@@ -791,7 +793,7 @@ static btf_status match_on_host(btf_gpu *g, const btf_model *m, int subspace,
     uint64_t bytes = (uint64_t)width * height * 3 * sizeof(float);
     rc = btf_vk_buffer_download(g->vk, buf, 4 * offset, img.data, bytes, err);
     if (rc == BTF_OK)
-        rc = btf_structure_apply(m, o->seed, &img, err);
+        rc = btf_structure_apply(m, o->seed, &img, pattern, err);
     if (rc == BTF_OK && match)
         rc = btf_colour_match(m, subspace, &img, err);
     if (rc == BTF_OK)
@@ -831,8 +833,11 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
     if (rc == 0)
         rc = run_all(g, m, subspaces, n, &o, w, w + n, (const int (*)[3][BTF_MAX_LEVELS])margins,
                      &d, err);
+    btf_image pattern = {0}; /* the structure layer's, quilted once per size */
     for (int j = 0; rc == BTF_OK && j < n; j++)
-        rc = match_on_host(g, m, subspaces[j], &o, *out, offsets[j], w[j], w[n + j], err);
+        rc = match_on_host(g, m, subspaces[j], &o, *out, offsets[j], w[j], w[n + j], &pattern,
+                           err);
+    btf_image_free(&pattern);
     if (rc) {
         btf_vk_buffer_destroy(*out);
         *out = NULL;

@@ -140,28 +140,43 @@ static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, 
     return rc;
 }
 
-/* The ambient term of the structure layer's shading from every
- * subspace's exemplar (analyse/structure_fit.c). */
-static btf_status fit_ambient(const btf_dataset *ds, const btf_segmentation *seg, btf_model *m,
-                              const btf_image *normal, btf_error *err)
+/* Whether an exemplar lies on the range map's grid (the structure layer
+ * divides it texel by texel). */
+static int on_grid(const btf_image *img, const btf_model *m)
+{
+    return img->width == m->range_width && img->height == m->range_height &&
+           img->channels == 3;
+}
+
+/* Every subspace's exemplar, read once: the ambient term of the structure
+ * layer's shading is fitted to all of them (analyse/structure_fit.c)
+ * before each is fitted on its own. */
+static btf_status read_exemplars(const btf_dataset *ds, const btf_segmentation *seg,
+                                 btf_image **out, btf_error *err)
 {
     btf_image *imgs = btf_calloc((size_t)seg->k, sizeof *imgs, err);
+    btf_status rc = imgs ? BTF_OK : BTF_E_NOMEM;
+    for (int k = 0; rc == BTF_OK && k < seg->k; k++)
+        rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &imgs[k], err);
+    *out = imgs;
+    return rc;
+}
+
+static btf_status fit_ambient(const btf_image *imgs, const btf_segmentation *seg, btf_model *m,
+                              const btf_image *normal, btf_error *err)
+{
+    btf_image *on = btf_calloc((size_t)seg->k, sizeof *on, err);
     btf_dir *dirs = btf_calloc((size_t)seg->k, sizeof *dirs, err);
-    btf_status rc = imgs && dirs ? BTF_OK : BTF_E_NOMEM;
+    btf_status rc = on && dirs ? BTF_OK : BTF_E_NOMEM;
     int n = 0;
-    for (int k = 0; rc == BTF_OK && k < seg->k; k++) {
-        rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &imgs[n], err);
-        if (rc == BTF_OK && (imgs[n].width != m->range_width ||
-                             imgs[n].height != m->range_height || imgs[n].channels != 3))
-            btf_image_free(&imgs[n]); /* not on the range map's grid: not used */
-        else if (rc == BTF_OK)
+    for (int k = 0; rc == BTF_OK && k < seg->k; k++)
+        if (on_grid(&imgs[k], m)) { /* the others are not used */
+            on[n] = imgs[k];
             dirs[n++] = m->lights.dirs[seg->rep_light[k]];
-    }
+        }
     if (rc == BTF_OK)
-        m->ambient = (float)btf_structure_fit_ambient(imgs, dirs, n, m, normal);
-    for (int k = 0; imgs && k < n; k++)
-        btf_image_free(&imgs[k]);
-    free(imgs);
+        m->ambient = (float)btf_structure_fit_ambient(on, dirs, n, m, normal);
+    free(on);
     free(dirs);
     return rc;
 }
@@ -203,20 +218,19 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         return BTF_E_NOMEM;
     m->n_subspaces = seg->k;
     btf_image normal = {0};
+    btf_image *imgs = NULL; /* with a structure layer: every exemplar, read once */
     btf_status rc = BTF_OK;
-    if (m->albedo && (rc = btf_structure_normals(m, &normal, err)))
-        return rc;
-    if (m->albedo && (rc = fit_ambient(ds, seg, m, &normal, err))) {
-        btf_image_free(&normal);
-        return rc;
-    }
+    if (m->albedo && ((rc = btf_structure_normals(m, &normal, err)) ||
+                      (rc = read_exemplars(ds, seg, &imgs, err)) ||
+                      (rc = fit_ambient(imgs, seg, m, &normal, err))))
+        goto done;
     for (int k = 0; k < seg->k; k++) {
-        btf_image img;
-        rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &img, err);
-        if (rc)
+        btf_image img = {0};
+        if (imgs) /* taken over: freed below */
+            img = imgs[k], imgs[k] = (btf_image){0};
+        else if ((rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &img, err)))
             break;
-        int structured = normal.data && img.width == m->range_width &&
-                         img.height == m->range_height && img.channels == 3;
+        int structured = normal.data && m->albedo && on_grid(&img, m);
         btf_image none = {0};
         rc = fit_one(&img, o, m, k, structured ? &normal : &none,
                      m->lights.dirs[seg->rep_light[k]], err);
@@ -235,6 +249,10 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         if (o->progress)
             o->progress(o->progress_user, (double)(k + 1) / seg->k, "fitting CAR models");
     }
+done:
+    for (int k = 0; imgs && k < seg->k; k++)
+        btf_image_free(&imgs[k]);
+    free(imgs);
     btf_image_free(&normal);
     return rc;
 }

@@ -29,7 +29,6 @@
 #define SHADE_DIVIDE_MIN 0.1
 /* The flat surface's l_z floor (BTF_FLAT_MIN_Z of the renderer). */
 #define FLAT_MIN_Z 0.05
-#define AMBIENT_MAX 4.0
 
 static double luminance(const float *p, int channels)
 {
@@ -97,7 +96,7 @@ static double ambient_of(const btf_image *img, const btf_model *m, const btf_ima
         return -1.0;
     double slope = cov / var, icpt = (sy - slope * sx) / dn;
     double a = icpt / slope;
-    return isfinite(a) ? (a < 0.0 ? 0.0 : a > AMBIENT_MAX ? AMBIENT_MAX : a) : -1.0;
+    return isfinite(a) ? (a < 0.0 ? 0.0 : a > BTF_STRUCTURE_AMBIENT_MAX ? BTF_STRUCTURE_AMBIENT_MAX : a) : -1.0;
 }
 
 static int cmp_double(const void *a, const void *b)

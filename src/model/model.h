@@ -71,14 +71,27 @@ btf_status btf_structure_coords(const btf_model *m, int pw, int ph, uint64_t see
  * (x mod width, y mod height) of out). */
 btf_status btf_structure_albedo(const btf_model *m, int width, int height, uint64_t seed,
                                 btf_image *out, btf_error *err);
+/* cache holds the pattern of width x height (btf_structure_albedo) when
+ * this returns BTF_OK: kept if it already did (one seed per cache),
+ * quilted again for another size; the caller frees it. */
+btf_status btf_structure_pattern(const btf_model *m, int width, int height, uint64_t seed,
+                                 btf_image *cache, btf_error *err);
 /* RGB row y of an image times the pattern (a from btf_structure_albedo). */
 void btf_structure_apply_row(const btf_image *a, int y, float *rgb, int width);
-/* A whole synthesised image times the pattern; nothing without one. */
+/* A whole synthesised image times the pattern; nothing without one. cache
+ * (NULL: none) keeps the pattern between calls of one seed: it is quilted
+ * again only for another size; the caller frees it. */
 btf_status btf_structure_apply(const btf_model *m, uint64_t seed, btf_image *img,
-                               btf_error *err);
-/* The quilted heights into out (allocated width x height x 1 by the caller). */
-btf_status btf_structure_heights(const btf_model *m, int width, int height, uint64_t seed,
-                                 btf_image *out, btf_error *err);
+                               btf_image *cache, btf_error *err);
+/* The quilted layers over width x height, placed by one quilting map:
+ * heights and albedo (each NULL or width x height floats of the caller's;
+ * albedo 1 without a pattern). */
+btf_status btf_structure_layers(const btf_model *m, int width, int height, uint64_t seed,
+                                float *heights, float *albedo, btf_error *err);
+
+/* The largest ambient term a model may hold (the analysis clamps its fit
+ * there; the validator refuses more). */
+#define BTF_STRUCTURE_AMBIENT_MAX 4.0f
 
 /* The structure layer's analysis (analyse/structure_fit.c). The albedo
  * pattern's one-byte code (log2 grid of 1/32 over [-4, 4]) and its value. */

@@ -300,9 +300,9 @@ static btf_status check_range(const btf_model *m, const char *name, btf_status c
     if (m->albedo && m->range_texel != 1.0f)
         return failf(err, code, name, "structure layer on a range map of texel %g (expected "
                      "texel 1: the analysed resolution)", m->range_texel);
-    if (m->albedo && !(m->ambient >= 0.0f && m->ambient <= 4.0f))
-        return failf(err, code, name, "structure layer: ambient %g (expected 0..4)",
-                     m->ambient);
+    if (m->albedo && !(m->ambient >= 0.0f && m->ambient <= BTF_STRUCTURE_AMBIENT_MAX))
+        return failf(err, code, name, "structure layer: ambient %g (expected 0..%g)",
+                     m->ambient, BTF_STRUCTURE_AMBIENT_MAX);
     for (size_t i = 0; m->albedo && i < n; i++)
         if (!(m->albedo[i] > 0.0f && m->albedo[i] < 65536.0f))
             return failf(err, code, name, "structure layer: albedo %zu is %g (expected 0 < a "

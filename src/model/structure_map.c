@@ -144,19 +144,24 @@ btf_status btf_structure_albedo(const btf_model *m, int width, int height, uint6
                                 btf_image *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
+    /* the period's own map is the whole surface's (its period is itself) */
     int pw = btf_structure_period(width), ph = btf_structure_period(height);
-    uint16_t *map;
-    btf_status rc = btf_structure_coords(m, pw, ph, seed, &map, err);
+    btf_status rc = btf_image_alloc(out, pw, ph, 1, err);
     if (rc == BTF_OK)
-        rc = btf_image_alloc(out, pw, ph, 1, err);
-    if (rc == BTF_OK)
-        for (size_t i = 0; i < (size_t)pw * ph; i++)
-            out->data[i] = m->albedo ? m->albedo[(size_t)map[2 * i + 1] * m->range_width +
-                                                 map[2 * i]]
-                                     : 1.0f;
-    if (rc == BTF_OK)
-        free(map);
+        rc = btf_structure_layers(m, pw, ph, seed, NULL, out->data, err);
+    if (rc)
+        btf_image_free(out);
     return rc;
+}
+
+btf_status btf_structure_pattern(const btf_model *m, int width, int height, uint64_t seed,
+                                 btf_image *cache, btf_error *err)
+{
+    if (cache->data && cache->width == btf_structure_period(width) &&
+        cache->height == btf_structure_period(height))
+        return BTF_OK;
+    btf_image_free(cache); /* another size: another map */
+    return btf_structure_albedo(m, width, height, seed, cache, err);
 }
 
 /* Row y of the periodic albedo pattern a (pw x ph) over width texels times
@@ -174,22 +179,22 @@ void btf_structure_apply_row(const btf_image *a, int y, float *rgb, int width)
 }
 
 btf_status btf_structure_apply(const btf_model *m, uint64_t seed, btf_image *img,
-                               btf_error *err)
+                               btf_image *cache, btf_error *err)
 {
-    if (!m->albedo)
+    if (!m->albedo || !btf_structure_quilted(m))
         return BTF_OK;
-    btf_image a;
-    btf_status rc = btf_structure_albedo(m, img->width, img->height, seed, &a, err);
+    btf_image own = {0}, *a = cache ? cache : &own;
+    btf_status rc = btf_structure_pattern(m, img->width, img->height, seed, a, err);
     if (rc)
         return rc;
     for (int y = 0; y < img->height; y++)
-        btf_structure_apply_row(&a, y, img->data + (size_t)y * img->width * 3, img->width);
-    btf_image_free(&a);
+        btf_structure_apply_row(a, y, img->data + (size_t)y * img->width * 3, img->width);
+    btf_image_free(&own);
     return BTF_OK;
 }
 
-btf_status btf_structure_heights(const btf_model *m, int width, int height, uint64_t seed,
-                                 btf_image *out, btf_error *err)
+btf_status btf_structure_layers(const btf_model *m, int width, int height, uint64_t seed,
+                                float *heights, float *albedo, btf_error *err)
 {
     uint16_t *map;
     int pw = btf_structure_period(width), ph = btf_structure_period(height);
@@ -198,9 +203,12 @@ btf_status btf_structure_heights(const btf_model *m, int width, int height, uint
         return rc;
     for (int y = 0; y < height; y++)
         for (int x = 0; x < width; x++) {
-            size_t i = (size_t)(y % ph) * pw + (size_t)(x % pw);
-            out->data[(size_t)y * width + x] =
-                m->range[(size_t)map[2 * i + 1] * m->range_width + map[2 * i]];
+            size_t i = (size_t)(y % ph) * pw + (size_t)(x % pw), o = (size_t)y * width + x;
+            size_t src = (size_t)map[2 * i + 1] * m->range_width + map[2 * i];
+            if (heights)
+                heights[o] = m->range[src];
+            if (albedo)
+                albedo[o] = m->albedo ? m->albedo[src] : 1.0f;
         }
     free(map);
     return BTF_OK;

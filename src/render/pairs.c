@@ -57,7 +57,7 @@ float btf_render_reflectance(const btf_model *m, int k)
         return 1.0f;
     double l[3];
     btf_dir_to_vec(m->lights.dirs[m->subspaces[k].light], l);
-    double z = l[2] > 0.05 ? l[2] : 0.05;
+    double z = l[2] > BTF_FLAT_MIN_Z ? l[2] : BTF_FLAT_MIN_Z; /* the shading's flat floor */
     return (float)(1.0 / (a + z));
 }
 

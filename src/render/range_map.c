@@ -189,9 +189,6 @@ static btf_status check_tile(const btf_model *m, btf_error *err)
     return BTF_OK;
 }
 
-static btf_status range_map_seeded(const btf_model *m, int width, int height, uint64_t seed,
-                                   btf_image *height_out, btf_image *normal_out, btf_error *err);
-
 btf_status btf_normal_map(const btf_image *height, double scale, btf_image *normal,
                           btf_error *err)
 {
@@ -244,49 +241,13 @@ btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_
                               btf_image *height_out, btf_image *normal_out,
                               btf_image *albedo_out, btf_error *err)
 {
-    if (albedo_out)
-        memset(albedo_out, 0, sizeof *albedo_out);
-    btf_status rc = range_map_seeded(m, width, height, seed, height_out, normal_out, err);
-    if (rc || !albedo_out)
-        return rc;
-    if (m->albedo && btf_structure_quilted(m)) {
-        btf_image a;
-        rc = btf_structure_albedo(m, width, height, seed, &a, err);
-        if (rc == BTF_OK)
-            rc = btf_image_alloc(albedo_out, width, height, 1, err);
-        for (int y = 0; rc == BTF_OK && y < height; y++)
-            for (int x = 0; x < width; x++)
-                albedo_out->data[(size_t)y * width + x] =
-                    a.data[(size_t)(y % a.height) * a.width + (size_t)(x % a.width)];
-        btf_image_free(&a);
-    } else {
-        rc = btf_image_alloc(albedo_out, width, height, 1, err);
-        for (size_t i = 0; rc == BTF_OK && i < (size_t)width * height; i++)
-            albedo_out->data[i] = 1.0f;
-    }
-    if (rc) {
-        if (height_out)
-            btf_image_free(height_out);
-        if (normal_out)
-            btf_image_free(normal_out);
-    }
-    return rc;
-}
-
-btf_status btf_range_map(const btf_model *m, int width, int height, btf_image *height_out,
-                         btf_image *normal_out, btf_error *err)
-{
-    return range_map_seeded(m, width, height, 0, height_out, normal_out, err);
-}
-
-static btf_status range_map_seeded(const btf_model *m, int width, int height, uint64_t seed,
-                                   btf_image *height_out, btf_image *normal_out, btf_error *err)
-{
     btf_image none = {0}, *hm = height_out ? height_out : &none;
     if (height_out)
         *height_out = none;
     if (normal_out)
         *normal_out = none;
+    if (albedo_out)
+        *albedo_out = none;
     if (!m)
         return btf_fail(err, BTF_E_ARG, "range map: no model");
     if (width < 1 || height < 1)
@@ -297,18 +258,33 @@ static btf_status range_map_seeded(const btf_model *m, int width, int height, ui
         if (rc)
             return rc;
     }
-    if (!height_out && !normal_out)
+    if (!height_out && !normal_out && !albedo_out)
         return BTF_OK;
     btf_status rc = btf_image_alloc(hm, width, height, 1, err); /* zeros: flat */
-    if (rc == BTF_OK && btf_structure_quilted(m))
-        rc = btf_structure_heights(m, width, height, seed, hm, err);
+    if (rc == BTF_OK && albedo_out)
+        rc = btf_image_alloc(albedo_out, width, height, 1, err);
+    int layers = btf_structure_quilted(m);
+    if (rc == BTF_OK && layers) /* one quilting map places both layers */
+        rc = btf_structure_layers(m, width, height, seed, hm->data,
+                                  albedo_out ? albedo_out->data : NULL, err);
     else if (rc == BTF_OK && m->range)
         rc = resample(m, width, height, hm, err);
+    for (size_t i = 0; rc == BTF_OK && albedo_out && !layers && i < (size_t)width * height; i++)
+        albedo_out->data[i] = 1.0f; /* a small tile: no structure layer */
     if (rc == BTF_OK && normal_out)
         rc = btf_normal_map(hm, 1.0, normal_out, err);
-    if (rc && height_out)
-        btf_image_free(height_out);
+    if (rc) {
+        btf_image_free(hm);
+        if (albedo_out)
+            btf_image_free(albedo_out);
+    }
     if (!height_out)
         btf_image_free(&none);
     return rc;
+}
+
+btf_status btf_range_map(const btf_model *m, int width, int height, btf_image *height_out,
+                         btf_image *normal_out, btf_error *err)
+{
+    return btf_structure_maps(m, width, height, 0, height_out, normal_out, NULL, err);
 }

@@ -7,6 +7,7 @@
  */
 #include "render/shade.h"
 #include "core/core.h"
+#include "synth/synth.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -38,6 +39,7 @@ typedef struct synth_jobs {
     const int *which;
     btf_render_material *rm;
     uint64_t seed;
+    const btf_image *albedo; /* the structure layer's, placed with the range map */
 } synth_jobs;
 
 static btf_status synth_job(void *user, int j, int worker, btf_error *err)
@@ -49,7 +51,7 @@ static btf_status synth_job(void *user, int j, int worker, btf_error *err)
     o.width = o.height = s->rm->size;
     o.seed = s->seed;
     o.tileable = 1;
-    btf_status rc = btf_synthesise_image(s->m, k, &o, &s->rm->tex[k], err);
+    btf_status rc = btf_synthesise_image_albedo(s->m, k, &o, s->albedo, &s->rm->tex[k], err);
     btf_image *t = &s->rm->tex[k];
     if (rc == BTF_OK && s->m->albedo)
         btf_render_scale_texture(t->data, (size_t)t->width * t->height * 3,
@@ -116,8 +118,10 @@ btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,
     memset(rm, 0, sizeof *rm);
     rm->size = side;
     int *which = NULL;
+    btf_image albedo = {0}; /* quilted once with the range map, for every texture */
     if ((rc = build_tables(m, rm, err)) ||
-        (rc = btf_structure_maps(m, side, side, seed, &rm->height, &rm->normal, NULL, err)))
+        (rc = btf_structure_maps(m, side, side, seed, &rm->height, &rm->normal,
+                                 m->albedo ? &albedo : NULL, err)))
         goto fail;
     which = btf_alloc((size_t)m->n_subspaces, sizeof *which, err);
     if (!which) {
@@ -128,14 +132,16 @@ btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,
     for (int k = 0; k < m->n_subspaces; k++)
         if (!needed || needed[k])
             which[n++] = k;
-    synth_jobs sj = {m, which, rm, seed};
+    synth_jobs sj = {m, which, rm, seed, albedo.data ? &albedo : NULL};
     if ((rc = btf_pool_run(n, threads, synth_job, &sj, NULL, err)))
         goto fail;
     free(which);
+    btf_image_free(&albedo);
     *out = rm;
     return BTF_OK;
 fail:
     free(which);
+    btf_image_free(&albedo);
     btf_render_material_free(rm);
     return rc;
 }

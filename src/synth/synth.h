@@ -417,4 +417,12 @@ void synth_gauss_rows(synth_band *sb, int nb, int l, int y, const float **out);
  * of the band's own row: a caller that keeps rows saves a copy. */
 void synth_gauss_rows_to(synth_band *sb, int nb, int y, float *const *dst);
 
+/* btf_synthesise_image with the structure layer's pattern given (albedo:
+ * the whole image's, or one period of it, as btf_structure_albedo makes it
+ * for this size and seed), so that a caller that quilted the layers already
+ * (the render) does not quilt them again; NULL quilts it here. */
+btf_status btf_synthesise_image_albedo(const btf_model *m, int subspace,
+                                       const btf_synth_opts *opts, const btf_image *albedo,
+                                       btf_image *out, btf_error *err);
+
 #endif

@@ -207,9 +207,12 @@ static btf_status plain_rows(const btf_model *m, int subspace,
 /* The structure layer (docs/model.md, "Structure"): the fields model the
  * exemplar divided by the albedo pattern, so each row is multiplied by the
  * pattern, placed by the quilting map of this seed and size, before it
- * goes on (to colour matching, when on). */
+ * goes on (to colour matching, when on). A caller that has the pattern
+ * already (the render, which places its range map by the same map) hands
+ * it over; otherwise it is quilted here. */
 typedef struct structured {
-    btf_image albedo; /* one period of the pattern */
+    btf_image own;           /* one period of the pattern, made here */
+    const btf_image *albedo; /* the pattern used: own, or the caller's */
     float *row;
     int width;
     btf_rows_fn fn;
@@ -222,7 +225,7 @@ static int structured_cb(void *user, int y, int nrows, const float *rows, btf_er
     size_t n = (size_t)s->width * 3;
     for (int r = 0; r < nrows; r++) {
         memcpy(s->row, rows + (size_t)r * n, n * sizeof(float));
-        btf_structure_apply_row(&s->albedo, y + r, s->row, s->width);
+        btf_structure_apply_row(s->albedo, y + r, s->row, s->width);
         int got = s->fn(s->user, y + r, 1, s->row, err);
         if (got)
             return got;
@@ -234,17 +237,19 @@ static btf_status structured_rows(const btf_model *m, int subspace,
                                   const int (*margins)[BTF_MAX_LEVELS],
                                   const btf_synth_opts *o, int width, int height,
                                   btf_rows_fn fn, void *user, btf_background *bg,
-                                  btf_error *err)
+                                  const btf_image *albedo, btf_error *err)
 {
-    structured s = {.width = width, .fn = fn, .user = user};
-    btf_status rc = btf_structure_albedo(m, width, height, o->seed, &s.albedo, err);
+    structured s = {.albedo = albedo, .width = width, .fn = fn, .user = user};
+    btf_status rc = albedo ? BTF_OK : btf_structure_albedo(m, width, height, o->seed, &s.own, err);
     if (rc)
         return rc;
+    if (!albedo)
+        s.albedo = &s.own;
     s.row = btf_alloc((size_t)width * 3, sizeof(float), err);
     rc = s.row ? plain_rows(m, subspace, margins, o, width, height, structured_cb, &s, bg, err)
                : BTF_E_NOMEM;
     free(s.row);
-    btf_image_free(&s.albedo);
+    btf_image_free(&s.own);
     return rc;
 }
 
@@ -253,7 +258,8 @@ static btf_status structured_rows(const btf_model *m, int subspace,
  * colour matching, btf_synthesise_images); the caller finishes it. */
 static btf_status synth_rows(const btf_model *m, int subspace,
                              const int (*margins)[BTF_MAX_LEVELS], const btf_synth_opts *opts,
-                             btf_rows_fn fn, void *user, btf_background *bg, btf_error *err)
+                             btf_rows_fn fn, void *user, btf_background *bg,
+                             const btf_image *albedo, btf_error *err)
 {
     btf_synth_opts o = btf_synth_resolve(opts);
     int width, height;
@@ -271,7 +277,8 @@ static btf_status synth_rows(const btf_model *m, int subspace,
                                                      m->subspaces[subspace].levels, err)))
         return rc;
     if (m->albedo && btf_structure_quilted(m))
-        return structured_rows(m, subspace, margins, &o, width, height, fn, user, bg, err);
+        return structured_rows(m, subspace, margins, &o, width, height, fn, user, bg, albedo,
+                               err);
     return plain_rows(m, subspace, margins, &o, width, height, fn, user, bg, err);
 }
 
@@ -330,7 +337,7 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
                                   const btf_synth_opts *opts, btf_rows_fn fn, void *user,
                                   btf_error *err)
 {
-    return synth_rows(m, subspace, margins, opts, fn, user, NULL, err);
+    return synth_rows(m, subspace, margins, opts, fn, user, NULL, NULL, err);
 }
 
 btf_status btf_synthesise(const btf_model *m, int subspace, const btf_synth_opts *opts,
@@ -459,10 +466,32 @@ static btf_status matched_rows(const btf_model *m, int subspace,
     return rc;
 }
 
+/* The structure layer's pattern for a w x h image of seed: the caller's
+ * (given), else the batch's (cache), quilted again only when the size
+ * changes, since every image of one size and seed has the same map. NULL
+ * for a model without the layer. */
+static btf_status batch_albedo(const btf_model *m, int w, int h, uint64_t seed,
+                               const btf_image *given, btf_image *cache,
+                               const btf_image **albedo, btf_error *err)
+{
+    *albedo = NULL;
+    if (!m->albedo || !btf_structure_quilted(m))
+        return BTF_OK;
+    if (given) {
+        *albedo = given;
+        return BTF_OK;
+    }
+    btf_status rc = btf_structure_pattern(m, w, h, seed, cache, err);
+    *albedo = rc ? NULL : cache;
+    return rc;
+}
+
 /* Image i of a batch, raw (no colour matching), into out (allocated
- * here); *match says whether it is to be matched. bg: as synth_rows. */
+ * here); *match says whether it is to be matched. bg: as synth_rows;
+ * given, cache: as batch_albedo. */
 static btf_status raw_image(const btf_model *m, int subspace, const btf_synth_opts *opts,
-                            btf_image *out, int *match, btf_background *bg, btf_error *err)
+                            btf_image *out, int *match, btf_background *bg,
+                            const btf_image *given, btf_image *cache, btf_error *err)
 {
     btf_synth_opts o = btf_synth_resolve(opts);
     int w, h;
@@ -473,13 +502,16 @@ static btf_status raw_image(const btf_model *m, int subspace, const btf_synth_op
         rc = btf_synth_check_tileable(w, h, m->subspaces[subspace].levels, err);
     if (rc == BTF_OK)
         rc = btf_colour_match_wanted(m, subspace, o.match_colours, match, err);
+    const btf_image *albedo = NULL;
+    if (rc == BTF_OK)
+        rc = batch_albedo(m, w, h, o.seed, given, cache, &albedo, err);
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, w, h, 3, err);
     if (rc)
         return rc;
     o.width = w, o.height = h;
     o.match_colours = -1; /* matched by the caller, in the image itself */
-    return synth_rows(m, subspace, NULL, &o, to_image, out, bg, err);
+    return synth_rows(m, subspace, NULL, &o, to_image, out, bg, albedo, err);
 }
 
 /* Image i to fn; freed after unless fn kept it. */
@@ -497,19 +529,21 @@ static btf_status deliver(btf_image_fn fn, void *user, int i, btf_image *img, bt
  * it leaves, with the last image, runs on the pool when the synthesis
  * returns. A pixel's bytes are those of btf_colour_match (the same jobs,
  * whoever runs them). */
-btf_status btf_synthesise_each(const btf_model *m, const int *subspaces, int n,
-                               const btf_synth_opts *opts, btf_image_fn fn, void *user,
-                               btf_error *err)
+static btf_status synthesise_each(const btf_model *m, const int *subspaces, int n,
+                                  const btf_synth_opts *opts, const btf_image *given,
+                                  btf_image_fn fn, void *user, btf_error *err)
 {
     if (n < 0 || (n > 0 && (!subspaces || !fn)))
         return btf_fail(err, BTF_E_ARG, "synthesis of %d images: no subspaces or no consumer", n);
+    btf_image cache = {0};          /* the structure layer's pattern (batch_albedo) */
     btf_image img[2] = {{0}, {0}}; /* image i in img[i & 1] */
     btf_match_task *pending = NULL; /* image i - 1's matching */
     btf_status rc = BTF_OK;
     for (int i = 0; rc == BTF_OK && i < n; i++) {
         int match = 0;
         btf_image *cur = &img[i & 1], *prev = &img[(i + 1) & 1];
-        rc = raw_image(m, subspaces[i], opts, cur, &match, pending ? &pending->bg : NULL, err);
+        rc = raw_image(m, subspaces[i], opts, cur, &match, pending ? &pending->bg : NULL, given,
+                       &cache, err);
         if (pending) { /* after a failure its image is dropped: not finished */
             if (rc == BTF_OK)
                 rc = btf_match_task_finish(pending, err);
@@ -532,7 +566,15 @@ btf_status btf_synthesise_each(const btf_model *m, const int *subspaces, int n,
     }
     btf_image_free(&img[0]);
     btf_image_free(&img[1]);
+    btf_image_free(&cache);
     return rc;
+}
+
+btf_status btf_synthesise_each(const btf_model *m, const int *subspaces, int n,
+                               const btf_synth_opts *opts, btf_image_fn fn, void *user,
+                               btf_error *err)
+{
+    return synthesise_each(m, subspaces, n, opts, NULL, fn, user, err);
 }
 
 typedef struct outs_sink {
@@ -568,6 +610,18 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
                                 btf_image *out, btf_error *err)
 {
     return btf_synthesise_images(m, &subspace, 1, opts, out, err);
+}
+
+btf_status btf_synthesise_image_albedo(const btf_model *m, int subspace,
+                                       const btf_synth_opts *opts, const btf_image *albedo,
+                                       btf_image *out, btf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    outs_sink s = {out, 0};
+    btf_status rc = synthesise_each(m, &subspace, 1, opts, albedo, keep_image, &s, err);
+    if (rc && s.kept)
+        btf_image_free(out);
+    return rc;
 }
 
 btf_status btf_synth_margin(const btf_model *m, int subspace, int band, int level, int *margin,

@@ -21,6 +21,7 @@ layout(std430, set = 0, binding = 2) readonly buffer Maps { float maps[]; };
 layout(std430, set = 0, binding = 3) readonly buffer Ints { int pi[]; };
 layout(std430, set = 0, binding = 4) readonly buffer Floats { float pf[]; };
 layout(std430, set = 0, binding = 5) writeonly buffer Out { float rgb[]; };
+layout(std430, set = 0, binding = 6) readonly buffer Hor { uint hz[]; };
 
 #define BTF_TAB_I(tab, f) pi[BTF_RP_TAB + (tab) * BTF_RP_TAB_STRIDE + (f)]
 #define BTF_HEMI_TABLE int
@@ -45,6 +46,9 @@ layout(std430, set = 0, binding = 5) writeonly buffer Out { float rgb[]; };
 #define BTF_SHADE_NORMAL(ctx, i) maps[pi[BTF_RP_NORMAL] + (i)]
 #define BTF_SHADE_LIGHT_OUTER_Z(ctx) pf[BTF_RP_OUTER]
 #define BTF_SHADE_AMBIENT(ctx) pf[BTF_RP_AMBIENT]
+#define BTF_SHADE_GAIN(ctx, i, c) pf[pi[BTF_RP_GAIN] + 3 * (i) + (c)]
+#define BTF_SHADE_HAS_HORIZON(ctx) pi[BTF_RP_HORIZON]
+#define BTF_SHADE_HORIZON(ctx, i) hz[i]
 #define BTF_SHADE_N_LIGHTS(ctx) pi[BTF_RP_NLIGHTS]
 #define BTF_SHADE_LIGHT_KIND(ctx, j) pi[BTF_RP_KIND + (j)]
 #define BTF_SHADE_LIGHT_VEC(ctx, j, k) pf[BTF_RP_VEC + 3 * (j) + (k)]

@@ -20,6 +20,7 @@
  */
 #include "render/shade.h"
 #include "core/core.h"
+#include "model/model.h"
 
 #include "render_gpu.h"
 #include "render_layout.h"
@@ -125,10 +126,15 @@ static btf_status build_params(const btf_model *m, const btf_render_plan *p,
     long have = put_ints(pr, tmp, (size_t)m->n_subspaces);
     long texoff = put_ints(pr, tmp + m->n_subspaces, (size_t)m->n_subspaces);
     free(tmp);
+    float *gains = btf_render_gains(m, err);
+    if (!gains)
+        return BTF_E_NOMEM;
+    long gain = put_floats(pr, gains, pairs * 3);
+    free(gains);
     btf_hemisphere_table tv, tl;
     btf_hemisphere_get_table(views, &tv);
     btf_hemisphere_get_table(lights, &tl);
-    if (idx < 0 || have < 0 || texoff < 0 || put_table(pr, 0, &tv) || put_table(pr, 1, &tl))
+    if (idx < 0 || have < 0 || texoff < 0 || gain < 0 || put_table(pr, 0, &tv) || put_table(pr, 1, &tl))
         return btf_fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
     btf_shade_ctx *ctx = btf_alloc(1, sizeof *ctx, err);
     if (!ctx)
@@ -143,6 +149,7 @@ static btf_status build_params(const btf_model *m, const btf_render_plan *p,
     hi[BTF_RP_HAVE] = (int32_t)have;
     hi[BTF_RP_TEXOFF] = (int32_t)texoff;
     hi[BTF_RP_NORMAL] = p->side * p->side;
+    hi[BTF_RP_GAIN] = (int32_t)gain;
     hf[BTF_RP_OUTER] = btf_render_light_outer_z(m);
     hf[BTF_RP_RELIEF] = (float)p->o.relief;
     hf[BTF_RP_AMBIENT] = btf_render_ambient(m);
@@ -196,13 +203,20 @@ static btf_status scale_textures(btf_vk *vk, const btf_model *m, const int *subs
     return rc;
 }
 
-/* The range and normal maps of the texture side, one buffer. */
+/* The range and normal maps of the texture side, one buffer, and the
+ * horizon map (the relief's shadows, the CPU's words) in another; a model
+ * without shadows binds a small unread buffer there. */
 static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t seed,
-                              btf_vk_buffer **out, btf_error *err)
+                              int threads, btf_vk_buffer **out, btf_vk_buffer **hor,
+                              int *shadows, btf_error *err)
 {
     btf_image h = {0}, n = {0};
+    uint32_t *hz = NULL;
     btf_status rc = btf_structure_maps(m, side, side, seed, &h, &n, NULL, err);
     size_t px = (size_t)side * side;
+    *shadows = m->shadows && m->albedo;
+    if (rc == BTF_OK && *shadows)
+        rc = btf_horizon_map(h.data, side, side, 1, threads, &hz, err);
     if (rc == BTF_OK)
         rc = btf_vk_buffer_create(vk, px * 4 * sizeof(float), out, err);
     if (rc == BTF_OK)
@@ -210,6 +224,11 @@ static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t
     if (rc == BTF_OK)
         rc = btf_vk_buffer_upload(vk, *out, px * sizeof(float), n.data, px * 3 * sizeof(float),
                                   err);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_create(vk, hz ? px * 2 * sizeof(uint32_t) : 16, hor, err);
+    if (rc == BTF_OK && hz)
+        rc = btf_vk_buffer_upload(vk, *hor, 0, hz, px * 2 * sizeof(uint32_t), err);
+    free(hz);
     btf_image_free(&h);
     btf_image_free(&n);
     return rc;
@@ -231,14 +250,14 @@ typedef struct pass {
     btf_gpu *gpu;
     btf_vk *vk;
     btf_vk_pipeline *pipe;
-    btf_vk_buffer *bufs[6]; /* gbuf, tex, maps, ints, floats, out */
+    btf_vk_buffer *bufs[7]; /* gbuf, tex, maps, ints, floats, out, horizon */
     params pr;
 } pass;
 
 static void pass_free(pass *ps)
 {
     btf_vk_pipeline_destroy(ps->pipe);
-    for (int i = 0; i < 6; i++)
+    for (int i = 0; i < 7; i++)
         if (i != 1) /* the images are the synthesis' buffer */
             btf_vk_buffer_destroy(ps->bufs[i]);
     free(ps->pr.ints);
@@ -264,7 +283,7 @@ static btf_status run_band(pass *ps, const btf_gbuffer *g, int y0, int y1, float
     if (rc == BTF_OK)
         rc = btf_vk_job_begin(ps->vk, &job, err);
     if (rc == BTF_OK)
-        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 6, NULL, 0, gx, gy, 1, err);
+        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 7, NULL, 0, gx, gy, 1, err);
     if (rc == BTF_OK) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
@@ -352,12 +371,16 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
         rc = btf_hemisphere_build(&m->lights, &lights, err);
     if (rc == BTF_OK)
         rc = build_params(m, p, views, lights, subs, n, offs, &ps.pr, err);
+    int shadows = 0;
     if (rc == BTF_OK)
+        rc = upload_maps(ps.vk, m, p->side, p->o.seed, p->o.threads, &ps.bufs[2], &ps.bufs[6],
+                         &shadows, err);
+    if (rc == BTF_OK) {
+        ps.pr.ints[BTF_RP_HORIZON] = shadows;
         rc = upload_params(&ps, err);
+    }
     if (rc == BTF_OK)
-        rc = upload_maps(ps.vk, m, p->side, p->o.seed, &ps.bufs[2], err);
-    if (rc == BTF_OK)
-        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 6, 0, NULL, 0,
+        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 7, 0, NULL, 0,
                                     &ps.pipe, err);
     if (rc == BTF_OK && (rc = btf_image_alloc(out, p->g.width, p->g.height, 3, err)) == BTF_OK) {
         rc = shade_frame(&ps, &p->g, out, err);

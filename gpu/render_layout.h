@@ -20,6 +20,8 @@
 #define BTF_RP_HAVE 6       /* int offset of the have flags, one per subspace */
 #define BTF_RP_TEXOFF 7     /* int offset of the float offsets of the subspace images */
 #define BTF_RP_NORMAL 8     /* float offset of the normal map in the maps buffer */
+#define BTF_RP_GAIN 9       /* float offset of the pair gains (3 per pair) */
+#define BTF_RP_HORIZON 10   /* 1: binding 6 holds the horizon map (shadows) */
 #define BTF_RP_KIND 16      /* [16]: light kinds */
 #define BTF_RP_TAB 32       /* two tables of BTF_RP_TAB_STRIDE ints: */
 #define BTF_RP_TAB_STRIDE 8

@@ -561,6 +561,10 @@ typedef struct btf_feature_opts {
     int threads;              /* 0: all CPUs */
     btf_progress_fn progress;
     void *progress_user;
+    /* NULL, or the caller's (views x lights) x 3 floats that get each
+     * image's mean linear RGB, read in the same pass (the pair gains of
+     * btf_analyse, docs/model.md "Pair gains") */
+    float *means;
 } btf_feature_opts;
 /* The defaults: 32 bins, threads 0 (all CPUs), no progress. */
 btf_feature_opts btf_feature_defaults(void);
@@ -577,6 +581,10 @@ btf_status btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_e
  * per thread): features[(view * n_lights + light) * dim + i], dim = 3 * bins. */
 btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
                                 float **features, int *dim, btf_error *err);
+/* Each image's mean linear RGB alone (what btf_feature_opts.means gives in
+ * the features' pass): means[(view * n_lights + light) * 3 + c], the
+ * caller frees it. */
+btf_status btf_dataset_means(const btf_dataset *ds, int threads, float **means, btf_error *err);
 
 typedef struct btf_kmeans_opts {
     int restarts;             /* 0: 5; the best run by distortion is kept */
@@ -622,6 +630,9 @@ typedef struct btf_segmentation {
     double *distortion_by_k;  /* [0..max_k]: distortions tried (0: not tried) */
     int max_k;
     char reason[256];         /* why this K (one line) */
+    float *means;             /* [(view * n_lights + light) * 3]: each image's mean
+                                 linear RGB (btf_segment; NULL from
+                                 btf_segment_features) */
 } btf_segmentation;
 
 btf_status btf_segment(const btf_dataset *ds, const btf_segment_opts *opts,
@@ -877,7 +888,24 @@ typedef struct btf_model {
      * back, the renderer the shading; both through one quilting map of the
      * range map and the pattern (btf_structure_maps). NULL: none. */
     float *albedo;
+    /* The colour of that pattern (docs/model.md, "Colour layer"): per texel
+     * of the range map's grid three factors (R, G, B; each of mean 1 over
+     * the grid) of the albedo's colour over its luminance, which multiply
+     * the pattern channel by channel. Kept only where the colour varies
+     * across the sample (a weave of two yarns); NULL: the pattern is grey. */
+    float *chroma;
     float ambient;             /* a >= 0 of the shading above (0 without structure) */
+    int shadows;               /* 1: that shading holds the relief's cast shadows,
+                                  a + vis max(0, n.l) with vis from the range
+                                  map's horizons (docs/model.md, "Shadows");
+                                  0 before format 1.5 */
+    /* The pair gains (docs/model.md, "Pair gains"): per measured pair
+     * [(view * lights.count + light) * 3 + c], the ratio of the measured
+     * image's mean colour to the render's of that pair from its subspace
+     * image, so that every pair keeps its own brightness and colour (the
+     * first-order statistics a subspace shares); the renderer interpolates
+     * them with the images' weights. NULL: 1 everywhere. */
+    float *gain;
     /* The library's own data about a model it read (the synthesis margins
      * computed then, docs/synthesis.md): opaque, freed by btf_model_free;
      * NULL in a model built by hand, which is fine. */
@@ -999,6 +1027,8 @@ typedef struct btf_analyse_opts {
                                          tile has no structure layer; docs/photostereo.md */
     int no_structure;                 /* 1: no structure layer (the CAR fields model
                                          the whole exemplar, as before format 1.4) */
+    int no_shadows;                   /* 1: the structure layer's shading casts no
+                                         shadows (as format 1.4) */
     btf_progress_fn progress;         /* stage progress (features, fits) */
     void *progress_user;
     btf_analyse_report *report;       /* NULL, or filled in when btf_analyse succeeds */
@@ -1009,7 +1039,10 @@ typedef struct btf_analyse_opts {
      * is a model of the same dataset whose range tile is copied. */
     const float *features;
     int feature_dim;
+    const float *means;               /* with features: the images' mean RGB (as
+                                         btf_segmentation.means); NULL: read again */
     const btf_model *range_from;
+    int no_gains;                     /* 1: no pair gains (before format 1.5) */
 } btf_analyse_opts;
 /* The defaults: those of each stage's options, a range map with a 64-texel
  * tile, no progress, no report. */
@@ -1267,7 +1300,8 @@ btf_status btf_range_map(const btf_model *m, int width, int height, btf_image *h
  * btf_synthesise multiplies the same pattern into its images), so the
  * layers are registered with each other and the map tiles without a seam.
  * A model with a small periodic tile gets btf_range_map's heights and an
- * albedo of 1. Any output may be NULL. */
+ * albedo of 1. The albedo has one channel, or three (RGB) when the model
+ * has a colour layer (btf_model.chroma). Any output may be NULL. */
 btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_t seed,
                               btf_image *height_out, btf_image *normal_out,
                               btf_image *albedo_out, btf_error *err);
@@ -1552,6 +1586,7 @@ typedef enum btf_model_part {
     BTF_MODEL_PART_MARGINALS,     /* MARG: per subspace its knot count and transfer */
     BTF_MODEL_PART_RANGE,         /* RANG: the range/normal tile, all of its body */
     BTF_MODEL_PART_STRUCTURE,     /* STRC: the albedo pattern and the shading's ambient */
+    BTF_MODEL_PART_GAINS,         /* GAIN: the pair gains */
     BTF_MODEL_PART_COUNT
 } btf_model_part;
 

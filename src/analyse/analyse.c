@@ -126,6 +126,11 @@ static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, 
             if (!(m->albedo = btf_alloc(cells, sizeof(float), err)))
                 return BTF_E_NOMEM;
             memcpy(m->albedo, r->albedo, cells * sizeof(float)); /* a: fitted per analysis */
+            if (r->chroma) {
+                if (!(m->chroma = btf_alloc(cells, 3 * sizeof(float), err)))
+                    return BTF_E_NOMEM;
+                memcpy(m->chroma, r->chroma, cells * 3 * sizeof(float));
+            }
         }
         return BTF_OK;
     }
@@ -163,22 +168,58 @@ static btf_status read_exemplars(const btf_dataset *ds, const btf_segmentation *
 }
 
 static btf_status fit_ambient(const btf_image *imgs, const btf_segmentation *seg, btf_model *m,
-                              const btf_image *normal, btf_error *err)
+                              const btf_structure_geom *geoms, btf_error *err)
 {
     btf_image *on = btf_calloc((size_t)seg->k, sizeof *on, err);
     btf_dir *dirs = btf_calloc((size_t)seg->k, sizeof *dirs, err);
-    btf_status rc = on && dirs ? BTF_OK : BTF_E_NOMEM;
+    btf_structure_geom *g = btf_calloc((size_t)seg->k, sizeof *g, err);
+    btf_status rc = on && dirs && g ? BTF_OK : BTF_E_NOMEM;
     int n = 0;
     for (int k = 0; rc == BTF_OK && k < seg->k; k++)
         if (on_grid(&imgs[k], m)) { /* the others are not used */
             on[n] = imgs[k];
+            g[n] = geoms[k];
             dirs[n++] = m->lights.dirs[seg->rep_light[k]];
         }
     if (rc == BTF_OK)
-        m->ambient = (float)btf_structure_fit_ambient(on, dirs, n, m, normal);
+        m->ambient = (float)btf_structure_fit_ambient(on, dirs, g, n, m);
     free(on);
     free(dirs);
+    free(g);
     return rc;
+}
+
+/* Per exemplar on the grid, the texels its pixels show (btf_structure_warp:
+ * the renderer's parallax under the exemplar's view), so that the layers
+ * divided out are registered with what the camera saw. */
+static btf_status exemplar_geoms(const btf_image *imgs, const btf_segmentation *seg,
+                                 const btf_model *m, const btf_image *normal,
+                                 const uint32_t *horizon, btf_structure_geom **out,
+                                 btf_error *err)
+{
+    btf_structure_geom *g = btf_calloc((size_t)seg->k, sizeof *g, err);
+    if (!g)
+        return BTF_E_NOMEM;
+    *out = g;
+    for (int k = 0; k < seg->k; k++) {
+        g[k].normal = normal;
+        g[k].horizon = horizon;
+        btf_structure_tap *taps = NULL;
+        if (on_grid(&imgs[k], m)) {
+            btf_status rc = btf_structure_warp(m, m->views.dirs[seg->rep_view[k]], &taps, err);
+            if (rc)
+                return rc;
+        }
+        g[k].taps = taps;
+    }
+    return BTF_OK;
+}
+
+static void free_geoms(btf_structure_geom *g, int k)
+{
+    for (int i = 0; g && i < k; i++)
+        free((void *)g[i].taps);
+    free(g);
 }
 
 /* Subspace k's exemplar: with a structure layer, divided by what the
@@ -186,13 +227,16 @@ static btf_status fit_ambient(const btf_image *imgs, const btf_segmentation *seg
  * colour matching's histogram taken of it divided by the relief's
  * shading only (what synthesis gives before matching). */
 static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *m, int k,
-                          const btf_image *normal, btf_dir light, btf_error *err)
+                          const btf_structure_geom *g, btf_dir light, double *pred,
+                          btf_error *err)
 {
     char what[64];
     snprintf(what, sizeof what, "subspace %d", k);
     btf_fit_opts fo = o->fit;
     fo.car.what = what;
-    if (!normal->data) {
+    if (!g) {
+        if (pred)
+            btf_pair_predict(img, NULL, m, light, pred);
         btf_status rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
         return rc ? rc : btf_fit_marginals(img, m, k, err);
     }
@@ -201,12 +245,33 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     if (rc)
         return rc;
     memcpy(shaded.data, img->data, (size_t)img->width * img->height * 3 * sizeof(float));
-    btf_structure_divide(&shaded, m, normal, light, 0, NULL);
-    btf_structure_divide(img, m, normal, light, 1, NULL);
+    btf_structure_divide(&shaded, m, g, light, 0, NULL);
+    if (pred) /* the texture is the shaded-out exemplar (colour matched to it) */
+        btf_pair_predict(&shaded, g, m, light, pred);
+    btf_structure_divide(img, m, g, light, 1, NULL);
     rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
     if (rc == BTF_OK)
         rc = btf_fit_marginals_lab(img, &shaded, m, k, err);
     btf_image_free(&shaded);
+    return rc;
+}
+
+/* The pair gains from the images' mean colours: those of the segmentation's
+ * pass, the caller's, or read now. */
+static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg,
+                              const btf_analyse_opts *o, const double *pred, btf_model *m,
+                              btf_error *err)
+{
+    float *own = NULL;
+    const float *means = seg->means ? seg->means : o->means;
+    if (!means) {
+        btf_status rc = btf_dataset_means(ds, o->segment.features.threads, &own, err);
+        if (rc)
+            return rc;
+        means = own;
+    }
+    btf_status rc = btf_pair_gains(m, means, pred, err);
+    free(own);
     return rc;
 }
 
@@ -220,9 +285,21 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
     btf_image normal = {0};
     btf_image *imgs = NULL; /* with a structure layer: every exemplar, read once */
     btf_status rc = BTF_OK;
+    int L = m->lights.count;
+    double *pred = NULL; /* [k][light][3]: the render's mean colour of each pair */
+    if (!o->no_gains && m->views.count > 0 &&
+        !(pred = btf_alloc((size_t)seg->k * L * 3, sizeof(double), err)))
+        return BTF_E_NOMEM;
+    uint32_t *horizon = NULL; /* the relief's shadows (btf_horizon.h), on the sample */
+    btf_structure_geom *geoms = NULL; /* per exemplar: what its shading reads */
+    m->shadows = m->albedo && !o->no_shadows;
     if (m->albedo && ((rc = btf_structure_normals(m, &normal, err)) ||
+                      (m->shadows &&
+                       (rc = btf_horizon_map(m->range, m->range_width, m->range_height, 0,
+                                             o->segment.features.threads, &horizon, err))) ||
                       (rc = read_exemplars(ds, seg, &imgs, err)) ||
-                      (rc = fit_ambient(imgs, seg, m, &normal, err))))
+                      (rc = exemplar_geoms(imgs, seg, m, &normal, horizon, &geoms, err)) ||
+                      (rc = fit_ambient(imgs, seg, m, geoms, err))))
         goto done;
     for (int k = 0; k < seg->k; k++) {
         btf_image img = {0};
@@ -231,14 +308,17 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         else if ((rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &img, err)))
             break;
         int structured = normal.data && m->albedo && on_grid(&img, m);
-        btf_image none = {0};
-        rc = fit_one(&img, o, m, k, structured ? &normal : &none,
-                     m->lights.dirs[seg->rep_light[k]], err);
+        rc = fit_one(&img, o, m, k, structured ? &geoms[k] : NULL,
+                     m->lights.dirs[seg->rep_light[k]], pred ? pred + (size_t)k * L * 3 : NULL,
+                     err);
         btf_image_free(&img);
         if (rc == BTF_OK && !structured && m->albedo) {
             free(m->albedo); /* an exemplar off the grid: the layer cannot hold */
             m->albedo = NULL;
+            free(m->chroma);
+            m->chroma = NULL;
             m->ambient = 0.0f;
+            m->shadows = 0;
             rc = k ? btf_fail(err, BTF_E_DATA, "subspace %d: exemplar not on the range map's "
                               "grid", k) : BTF_OK;
         }
@@ -249,7 +329,12 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         if (o->progress)
             o->progress(o->progress_user, (double)(k + 1) / seg->k, "fitting CAR models");
     }
+    if (rc == BTF_OK && pred)
+        rc = stage_gains(ds, seg, o, pred, m, err);
 done:
+    free(pred);
+    free(horizon);
+    free_geoms(geoms, seg->k);
     for (int k = 0; imgs && k < seg->k; k++)
         btf_image_free(&imgs[k]);
     free(imgs);

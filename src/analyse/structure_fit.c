@@ -10,15 +10,18 @@
  * subspace image, whose variance already holds that relief's shading: the
  * relief was counted twice and registered nowhere. Here each exemplar S_k
  * under light l_k is modelled as
- *     S_k(x) = R_k(x) * A(x) * (a + max(0, n(x) . l_k)) / (a + l_kz)
+ *     S_k(x) = R_k(x) * A(x) * (a + vis_k(x) max(0, n(x) . l_k)) / (a + l_kz)
  * with A the albedo's luminance pattern from photometric stereo (mean 1),
  * n the range map's normals (btf_normal_map, as the renderer derives
  * them), a the ambient term fitted below, and R_k what the CAR model
- * fits. The factor is the renderer's bump factor (btf_render_shared.h).
+ * fits, and vis_k the light's visibility over the range map's horizon
+ * (the relief's cast shadows, src/render/btf_horizon.h). The factor is the
+ * renderer's bump factor (btf_render_shared.h).
  */
 #include "core/core.h"
 #include "model/model.h"
 #include "model/range_code.h"
+#include "render/btf_horizon.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -29,10 +32,52 @@
 #define SHADE_DIVIDE_MIN 0.1
 /* The flat surface's l_z floor (BTF_FLAT_MIN_Z of the renderer). */
 #define FLAT_MIN_Z 0.05
+/* The parallax's v_z floor (BTF_PARALLAX_MIN_Z of the renderer). */
+#define PARALLAX_MIN_Z 0.25
 
 static double luminance(const float *p, int channels)
 {
     return channels == 3 ? 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2] : p[0];
+}
+
+/* The colour layer (docs/model.md, "Colour layer"): each texel's colour
+ * over its luminance, per channel over that ratio's mean, kept when some
+ * channel's log2 spread across the sample is at least CHROMA_MIN_SPREAD
+ * (the colours of a weave's two yarns; a brown leather's pebbles vary
+ * mostly in luminance, which the pattern already holds). */
+#define CHROMA_MIN_SPREAD 0.1
+static btf_status colour_layer(const btf_image *albedo, btf_model *m, btf_error *err)
+{
+    size_t n = (size_t)m->range_width * m->range_height;
+    float *c = btf_alloc(n, 3 * sizeof(float), err);
+    if (!c)
+        return BTF_E_NOMEM;
+    double sum[3] = {0, 0, 0}, spread = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const float *p = albedo->data + 3 * i;
+        double y = luminance(p, 3);
+        for (int k = 0; k < 3; k++) {
+            double r = y > 0.0 && isfinite(y) && p[k] > 0.0f && isfinite(p[k]) ? p[k] / y : 1.0;
+            c[3 * i + k] = (float)r;
+            sum[k] += r;
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        double mean = sum[k] > 0.0 ? sum[k] / (double)n : 1.0, s1 = 0.0, s2 = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            float v = btf_albedo_value(btf_albedo_code((float)(c[3 * i + k] / mean)));
+            c[3 * i + k] = v; /* as the file keeps it */
+            double l = log2(v);
+            s1 += l, s2 += l * l;
+        }
+        double var = s2 / (double)n - (s1 / (double)n) * (s1 / (double)n);
+        spread = var > spread * spread ? sqrt(var) : spread;
+    }
+    if (spread >= CHROMA_MIN_SPREAD)
+        m->chroma = c;
+    else
+        free(c);
+    return BTF_OK;
 }
 
 btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, btf_error *err)
@@ -57,15 +102,29 @@ btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, btf_
         float a = y > 0.0 && isfinite(y) ? (float)(y / mean) : 1.0f;
         m->albedo[i] = btf_albedo_value(btf_albedo_code(a)); /* as the file keeps it */
     }
-    return BTF_OK;
+    return albedo->channels == 3 ? colour_layer(albedo, m, err) : BTF_OK;
 }
 
-/* The shading factor of normal nv under light l (unit, frame of
- * btf_dir_to_vec) with ambient a. */
-static double shade_factor(const float *nv, const double l[3], double a)
+float btf_structure_vis(const uint32_t *horizon, size_t i, const double l[3])
 {
-    double ndotl = nv[0] * l[0] + nv[1] * l[1] + nv[2] * l[2];
-    double lit = ndotl > 0.0 ? ndotl : 0.0;
+    if (!horizon)
+        return 1.0f;
+    /* as btf_shade_shadow does it, with the flat sample's frame */
+    float lx = (float)l[0], ly = (float)l[1], lz = (float)l[2];
+    float t = btf_horizon_azimuth(lx, ly), fl = floorf(t);
+    int d0 = (int)fl;
+    d0 = d0 < 0 ? 0 : d0 > 7 ? 7 : d0;
+    int d1 = d0 == 7 ? 0 : d0 + 1;
+    float f = t - fl;
+    uint32_t w0 = horizon[2 * i], w1 = horizon[2 * i + 1];
+    float h = btf_horizon_decode(w0, w1, d0) * (1.0f - f) + btf_horizon_decode(w0, w1, d1) * f;
+    return btf_horizon_vis(h, lx, ly, lz, 1.0f);
+}
+
+/* The shading factor of the lit term lit = vis max(0, n . l) under light l
+ * (unit, frame of btf_dir_to_vec) with ambient a. */
+static double shade_factor(double lit, const double l[3], double a)
+{
     double flat = l[2] > FLAT_MIN_Z ? l[2] : FLAT_MIN_Z;
     return (a + lit) / (a + flat);
 }
@@ -76,58 +135,166 @@ btf_status btf_structure_normals(const btf_model *m, btf_image *normal, btf_erro
     return btf_normal_map(&h, 1.0, normal, err);
 }
 
-/* The ambient term of one exemplar: the least-squares line of
- * luminance / A against max(0, n . l); a = intercept / slope, -1 when the
- * line says nothing (no slope). */
-static double ambient_of(const btf_image *img, const btf_model *m, const btf_image *normal,
-                         const double l[3])
+static double lit_at(const btf_structure_geom *g, size_t t, const double l[3])
 {
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    size_t n = (size_t)img->width * img->height;
-    for (size_t i = 0; i < n; i++) {
-        const float *nv = normal->data + 3 * i;
-        double d = nv[0] * l[0] + nv[1] * l[1] + nv[2] * l[2];
-        double x = d > 0.0 ? d : 0.0;
-        double y = luminance(img->data + 3 * i, 3) / m->albedo[i];
-        sx += x, sy += y, sxx += x * x, sxy += x * y;
+    const float *nv = g->normal->data + 3 * t;
+    double d = nv[0] * l[0] + nv[1] * l[1] + nv[2] * l[2];
+    return d > 0.0 ? btf_structure_vis(g->horizon, t, l) * d : 0.0;
+}
+
+double btf_structure_lit(const btf_structure_geom *g, size_t i, const double l[3])
+{
+    if (!g->taps)
+        return lit_at(g, i, l);
+    const btf_structure_tap *t = &g->taps[i];
+    double s = 0.0;
+    for (int k = 0; k < 4; k++)
+        s += t->w[k] * lit_at(g, (size_t)t->i[k], l);
+    return s;
+}
+
+double btf_structure_albedo_at(const btf_structure_geom *g, const btf_model *m, size_t i, int c)
+{
+    const btf_structure_tap *t = g->taps ? &g->taps[i] : NULL;
+    double s = 0.0;
+    for (int k = 0; k < (t ? 4 : 1); k++) {
+        size_t j = t ? (size_t)t->i[k] : i;
+        double a = m->albedo[j] * (c >= 0 && m->chroma ? m->chroma[3 * j + c] : 1.0f);
+        s += (t ? t->w[k] : 1.0) * a;
     }
-    double dn = (double)n, var = sxx - sx * sx / dn, cov = sxy - sx * sy / dn;
-    if (!(var > 1e-9 * dn) || !(cov > 0.0))
-        return -1.0;
-    double slope = cov / var, icpt = (sy - slope * sx) / dn;
-    double a = icpt / slope;
-    return isfinite(a) ? (a < 0.0 ? 0.0 : a > BTF_STRUCTURE_AMBIENT_MAX ? BTF_STRUCTURE_AMBIENT_MAX : a) : -1.0;
+    return s;
 }
 
-static int cmp_double(const void *a, const void *b)
+btf_status btf_structure_warp(const btf_model *m, btf_dir view, btf_structure_tap **taps,
+                              btf_error *err)
 {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
+    int w = m->range_width, h = m->range_height;
+    btf_structure_tap *o = btf_alloc((size_t)w * h, sizeof *o, err);
+    if (!o)
+        return BTF_E_NOMEM;
+    double v[3];
+    btf_dir_to_vec(view, v);
+    double z = v[2] > PARALLAX_MIN_Z ? v[2] : PARALLAX_MIN_Z;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            double hh = m->range[(size_t)y * w + x];
+            /* as btf_shade_parallax: (u, v) += h (v_x, -v_y) / v_z, texel
+             * centres at i + 1/2; held inside the sample */
+            double u2 = x + hh * v[0] / z, v2 = y - hh * v[1] / z;
+            u2 = u2 < 0.0 ? 0.0 : u2 > w - 1 ? w - 1 : u2;
+            v2 = v2 < 0.0 ? 0.0 : v2 > h - 1 ? h - 1 : v2;
+            int x0 = (int)floor(u2), y0 = (int)floor(v2);
+            int x1 = x0 + 1 < w ? x0 + 1 : x0, y1 = y0 + 1 < h ? y0 + 1 : y0;
+            double fx = u2 - x0, fy = v2 - y0;
+            btf_structure_tap *t = &o[(size_t)y * w + x];
+            t->i[0] = y0 * w + x0, t->w[0] = (float)((1 - fx) * (1 - fy));
+            t->i[1] = y0 * w + x1, t->w[1] = (float)(fx * (1 - fy));
+            t->i[2] = y1 * w + x0, t->w[2] = (float)((1 - fx) * fy);
+            t->i[3] = y1 * w + x1, t->w[3] = (float)(fx * fy);
+        }
+    *taps = o;
+    return BTF_OK;
 }
 
-double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights, int n,
-                                 const btf_model *m, const btf_image *normal)
+/* The ambient term: the a that makes the remainder most uniform, i.e.
+ * that minimises the summed variance over the exemplars of
+ *     log(luminance / A) - log(a + vis max(0, n . l))
+ * (the CAR fields then carry the least of the relief's shading). A
+ * least-squares line of luminance / A against the lit term was tried
+ * first; with the exemplars registered (btf_structure_warp) its errors in
+ * the lit term drove a towards 0 and shadows far too dark. Searched on a
+ * log grid over [AMBIENT_MIN, BTF_STRUCTURE_AMBIENT_MAX], then refined by
+ * golden section. */
+#define AMBIENT_MIN 1e-3
+#define AMBIENT_GRID 48
+#define AMBIENT_REFINE 24
+
+typedef struct ambient_data {
+    size_t n;     /* texels over all exemplars */
+    float *y;     /* log(luminance / A) */
+    float *lit;   /* vis max(0, n . l) */
+    int *which;   /* exemplar of each texel */
+    int count;
+} ambient_data;
+
+static double ambient_cost(const ambient_data *d, double a)
 {
-    double *a = malloc((size_t)(n > 0 ? n : 1) * sizeof *a);
-    if (!a)
-        return 0.0;
-    int got = 0;
-    for (int k = 0; k < n; k++) {
-        double l[3];
-        btf_dir_to_vec(lights[k], l);
-        if (l[2] <= 0.0)
-            continue;
-        double v = ambient_of(&imgs[k], m, normal, l);
-        if (v >= 0.0)
-            a[got++] = v;
+    double cost = 0.0;
+    size_t i = 0;
+    for (int k = 0; k < d->count; k++) {
+        double s1 = 0.0, s2 = 0.0;
+        size_t n = 0;
+        for (; i < d->n && d->which[i] == k; i++, n++) {
+            double r = d->y[i] - log(a + d->lit[i]);
+            s1 += r, s2 += r * r;
+        }
+        if (n)
+            cost += s2 / (double)n - (s1 / (double)n) * (s1 / (double)n);
     }
-    qsort(a, (size_t)got, sizeof *a, cmp_double);
-    double r = got ? a[got / 2] : 0.0;
-    free(a);
-    return r;
+    return cost;
 }
 
-void btf_structure_divide(btf_image *img, const btf_model *m, const btf_image *normal,
+static double ambient_search(const ambient_data *d)
+{
+    double lo = log(AMBIENT_MIN), hi = log(BTF_STRUCTURE_AMBIENT_MAX), step = (hi - lo) / AMBIENT_GRID;
+    int best = 0;
+    double best_cost = ambient_cost(d, exp(lo));
+    for (int j = 1; j <= AMBIENT_GRID; j++) {
+        double c = ambient_cost(d, exp(lo + j * step));
+        if (c < best_cost)
+            best_cost = c, best = j;
+    }
+    double x0 = lo + (best > 0 ? best - 1 : 0) * step, x1 = lo + (best < AMBIENT_GRID ? best + 1 : best) * step;
+    const double g = 0.6180339887498949;
+    for (int it = 0; it < AMBIENT_REFINE; it++) {
+        double u = x1 - g * (x1 - x0), v = x0 + g * (x1 - x0);
+        if (ambient_cost(d, exp(u)) < ambient_cost(d, exp(v)))
+            x1 = v;
+        else
+            x0 = u;
+    }
+    double a = exp(0.5 * (x0 + x1));
+    return a < AMBIENT_MIN ? 0.0 : a > BTF_STRUCTURE_AMBIENT_MAX ? BTF_STRUCTURE_AMBIENT_MAX : a;
+}
+
+double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights,
+                                 const btf_structure_geom *geoms, int n, const btf_model *m)
+{
+    size_t total = 0;
+    for (int k = 0; k < n; k++)
+        total += (size_t)imgs[k].width * imgs[k].height;
+    ambient_data d = {0, malloc((total ? total : 1) * sizeof(float)),
+                      malloc((total ? total : 1) * sizeof(float)),
+                      malloc((total ? total : 1) * sizeof(int)), 0};
+    double a = 0.0;
+    if (d.y && d.lit && d.which) {
+        for (int k = 0; k < n; k++) {
+            double l[3];
+            btf_dir_to_vec(lights[k], l);
+            if (l[2] <= 0.0)
+                continue;
+            size_t px = (size_t)imgs[k].width * imgs[k].height;
+            for (size_t i = 0; i < px; i++) {
+                double y = luminance(imgs[k].data + 3 * i, 3) /
+                           btf_structure_albedo_at(&geoms[k], m, i, -1);
+                if (!(y > 0.0) || !isfinite(y))
+                    continue; /* black: says nothing about the ratio */
+                d.y[d.n] = (float)log(y);
+                d.lit[d.n] = (float)btf_structure_lit(&geoms[k], i, l);
+                d.which[d.n++] = d.count;
+            }
+            d.count++;
+        }
+        if (d.n)
+            a = ambient_search(&d);
+    }
+    free(d.y);
+    free(d.lit);
+    free(d.which);
+    return a;
+}
+
+void btf_structure_divide(btf_image *img, const btf_model *m, const btf_structure_geom *g,
                           btf_dir light, int albedo, double *mean_shade)
 {
     double l[3];
@@ -135,11 +302,12 @@ void btf_structure_divide(btf_image *img, const btf_model *m, const btf_image *n
     size_t n = (size_t)img->width * img->height;
     double s = 0.0;
     for (size_t i = 0; i < n; i++) {
-        double f = l[2] > 0.0 ? shade_factor(normal->data + 3 * i, l, m->ambient) : 1.0;
+        double f = l[2] > 0.0 ? shade_factor(btf_structure_lit(g, i, l), l, m->ambient) : 1.0;
         s += f;
-        double e = (f > SHADE_DIVIDE_MIN ? f : SHADE_DIVIDE_MIN) * (albedo ? m->albedo[i] : 1.0f);
+        double e = f > SHADE_DIVIDE_MIN ? f : SHADE_DIVIDE_MIN;
         for (int c = 0; c < 3; c++)
-            img->data[3 * i + c] = (float)(img->data[3 * i + c] / e);
+            img->data[3 * i + c] = (float)(img->data[3 * i + c] /
+                                           (albedo ? e * btf_structure_albedo_at(g, m, i, c) : e));
     }
     if (mean_shade)
         *mean_shade = n ? s / (double)n : 1.0;

@@ -125,4 +125,7 @@ void btf_relay_background(btf_relay *r, btf_background *bg);
  * this many degrees (core/directions.c, io/dataset.c). */
 #define BTF_DIR_NAME_TOLERANCE 0.75
 
+/* The mean linear RGB of an image (a grey image's value three times). */
+void btf_image_mean_rgb(const btf_image *img, float *rgb);
+
 #endif

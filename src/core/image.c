@@ -70,3 +70,15 @@ float btf_linear_to_srgb(float v)
         return 1.0f;
     return 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
 }
+
+void btf_image_mean_rgb(const btf_image *img, float *rgb)
+{
+    double s[3] = {0.0, 0.0, 0.0};
+    size_t n = (size_t)img->width * img->height;
+    int c3 = img->channels >= 3;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++)
+            s[c] += img->data[i * img->channels + (c3 ? c : 0)];
+    for (int c = 0; c < 3; c++)
+        rgb[c] = n ? (float)(s[c] / (double)n) : 0.0f;
+}

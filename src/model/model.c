@@ -19,6 +19,8 @@ void btf_model_free(btf_model *m)
     free(m->subspaces);
     free(m->range);
     free(m->albedo);
+    free(m->chroma);
+    free(m->gain);
     btf_model_internal_free(m->internal);
     memset(m, 0, sizeof *m);
 }

@@ -67,6 +67,8 @@ int btf_structure_period(int n);
  * and row of the model's range grid at surface texel i (malloc'd). */
 btf_status btf_structure_coords(const btf_model *m, int pw, int ph, uint64_t seed,
                                 uint16_t **map, btf_error *err);
+/* Channels of the albedo pattern: 3 with a colour layer, else 1. */
+int btf_structure_channels(const btf_model *m);
 /* The albedo pattern over width x height, as its period (periodic: read
  * (x mod width, y mod height) of out). */
 btf_status btf_structure_albedo(const btf_model *m, int width, int height, uint64_t seed,
@@ -104,15 +106,62 @@ btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, btf_
 btf_status btf_structure_normals(const btf_model *m, btf_image *normal, btf_error *err);
 /* The ambient term a of n exemplars under their lights (the median of each
  * one's least-squares fit). */
-double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights, int n,
-                                 const btf_model *m, const btf_image *normal);
-/* The exemplar under light divided by the relit shading (a + max(0, n.l)) /
+/* What the structure layer's shading of one exemplar reads: the range
+ * map's normals and horizons, and per exemplar pixel the texel it shows
+ * (the renderer's parallax under the exemplar's view, btf_structure_warp;
+ * NULL: the pixel itself). */
+typedef struct btf_structure_tap {
+    int i[4];                  /* the four texels of a bilinear lookup */
+    float w[4];                /* and their weights */
+} btf_structure_tap;
+typedef struct btf_structure_geom {
+    const btf_image *normal;
+    const uint32_t *horizon;   /* NULL: no shadows */
+    const btf_structure_tap *taps; /* per exemplar pixel; NULL: the pixel itself */
+} btf_structure_geom;
+/* taps[pixel] for an exemplar seen from view: where the renderer's
+ * parallax shift (btf_shade_parallax at relief 1) reads for that pixel,
+ * bilinear, held inside the sample. */
+btf_status btf_structure_warp(const btf_model *m, btf_dir view, btf_structure_tap **taps,
+                              btf_error *err);
+/* At exemplar pixel i under light l (unit): vis max(0, n . l), and the
+ * albedo pattern of channel c (with the colour layer), as the warp reads
+ * them. */
+double btf_structure_lit(const btf_structure_geom *g, size_t i, const double l[3]);
+double btf_structure_albedo_at(const btf_structure_geom *g, const btf_model *m, size_t i, int c);
+double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights,
+                                 const btf_structure_geom *geoms, int n, const btf_model *m);
+/* Light l's visibility (0..1) at texel i of a horizon map (NULL: 1), as
+ * the renderer's btf_shade_shadow gives it on a flat sample at relief 1. */
+float btf_structure_vis(const uint32_t *horizon, size_t i, const double l[3]);
+/* The exemplar under light divided by the relit shading (a + vis max(0, n.l)) /
  * (a + l_z) (held at 0.1 and above) and, with albedo, by the pattern. */
-void btf_structure_divide(btf_image *img, const btf_model *m, const btf_image *normal,
+void btf_structure_divide(btf_image *img, const btf_model *m, const btf_structure_geom *g,
                           btf_dir light, int albedo, double *mean_shade);
 /* btf_fit_marginals with the Lab histogram of lab_img (the exemplar as
  * synthesis gives it before colour matching: with the albedo pattern). */
 btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img, btf_model *m,
                                  int subspace, btf_error *err);
+
+/* The pair gains (analyse/pair_gain.c, docs/model.md "Pair gains"): the
+ * file's code of a gain (log2 on a grid of 1/64 octave, -128..127) and its
+ * value. */
+int btf_gain_code(float g);
+float btf_gain_value(int q);
+/* The mean colour the renderer gives each measured light (pred[l * 3 + c])
+ * from a subspace's texture tex (the exemplar over its shading) of the
+ * subspace whose own light is own_light; g NULL: no structure layer, the
+ * texture's mean for every light. */
+void btf_pair_predict(const btf_image *tex, const btf_structure_geom *g, const btf_model *m,
+                      btf_dir own_light, double *pred);
+/* m->gain from the images' mean colours (btf_segmentation.means) and each
+ * subspace's predictions (pred[(k * lights + l) * 3 + c]). */
+btf_status btf_pair_gains(btf_model *m, const float *means, const double *pred, btf_error *err);
+
+/* The horizon map of heights (w x hh, texel units; model/horizon.c,
+ * src/render/btf_horizon.h): two words per texel; wrap 1 marches round the
+ * torus (a quilted surface), 0 stops at the edges (the analysed sample). */
+btf_status btf_horizon_map(const float *h, int w, int hh, int wrap, int threads,
+                           uint32_t **out, btf_error *err);
 
 #endif

@@ -278,10 +278,30 @@ static btf_status check_stability(const btf_model *m, const char *name, btf_stat
     return rc;
 }
 
+/* The pair gains: one colour per measured pair, finite and positive. */
+static btf_status check_gains(const btf_model *m, const char *name, btf_status code,
+                              btf_error *err)
+{
+    if (!m->gain)
+        return BTF_OK;
+    if (m->views.count < 1 || m->lights.count < 1)
+        return failf(err, code, name, "pair gains without directions (expected none)");
+    size_t n = (size_t)m->views.count * m->lights.count * 3;
+    for (size_t i = 0; i < n; i++)
+        if (!(m->gain[i] > 0.0f && m->gain[i] < 65536.0f))
+            return failf(err, code, name, "pair gain (view %zu, light %zu) is %g (expected 0 < "
+                         "g < 65536)", i / 3 / (size_t)m->lights.count,
+                         i / 3 % (size_t)m->lights.count, m->gain[i]);
+    return BTF_OK;
+}
+
 static btf_status check_range(const btf_model *m, const char *name, btf_status code, btf_error *err)
 {
     if (m->albedo && !m->range)
         return failf(err, code, name, "structure layer without a range map");
+    if ((m->shadows || m->chroma) && !m->albedo)
+        return failf(err, code, name, "%s without a structure layer",
+                     m->chroma ? "a colour layer" : "shadows");
     if (m->range_width == 0 && m->range_height == 0 && !m->range)
         return BTF_OK;
     if (m->range_width < 1 || m->range_width > BTF_MODEL_MAX_RANGE_SIDE || m->range_height < 1 ||
@@ -307,6 +327,10 @@ static btf_status check_range(const btf_model *m, const char *name, btf_status c
         if (!(m->albedo[i] > 0.0f && m->albedo[i] < 65536.0f))
             return failf(err, code, name, "structure layer: albedo %zu is %g (expected 0 < a "
                          "< 65536)", i, m->albedo[i]);
+    for (size_t i = 0; m->chroma && i < 3 * n; i++)
+        if (!(m->chroma[i] > 0.0f && m->chroma[i] < 65536.0f))
+            return failf(err, code, name, "colour layer: factor %zu is %g (expected 0 < c "
+                         "< 65536)", i, m->chroma[i]);
     for (size_t i = 0; i < n; i++)
         if (!isfinite(m->range[i]))
             return failf(err, code, name, "range map: height %zu is %g (expected a finite number)",
@@ -347,7 +371,7 @@ btf_status btf_model_validate(const btf_model *m, const char *name, btf_status c
     for (int s = 0; s < m->n_subspaces; s++)
         if ((rc = check_subspace(m, s, name, code, err)))
             return rc;
-    if ((rc = check_range(m, name, code, err)))
+    if ((rc = check_range(m, name, code, err)) || (rc = check_gains(m, name, code, err)))
         return rc;
     return check_stability(m, name, code, err);
 }

@@ -48,8 +48,14 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
  * the shading's ambient term; the CAR fields then model the remainder); a
  * model without one is written as 1.3 or older. */
 #define FMT_MINOR_STRUCTURE 4
+/* 1.5 added the GAIN section (the pair gains) and STRC's flags byte (the
+ * shading casts shadows; the colour layer follows); a model without either is written as 1.4 or
+ * older. */
+#define FMT_MINOR_GAINS 5
 #define HEADER_BYTES 26 /* signature .. stored size, version 1.0 */
 #define RANG_PERIODIC 0x01u /* RANG flags bit 0: the tile is periodic */
+#define STRC_SHADOWS 0x01u  /* STRC flags bit 0 (1.5): the shading casts shadows */
+#define STRC_CHROMA 0x02u   /* STRC flags bit 1 (1.5): the colour layer follows */
 #define CRC_BYTES 4
 #define COMP_STORED 0
 #define COMP_ZLIB 1
@@ -60,9 +66,9 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
 #define MAX_FILE_BYTES ((size_t)64 << 20)
 #define MAX_PAYLOAD_BYTES ((size_t)64 << 20)
 
-enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_MARG, S_LABQ, S_STRC, S_COUNT };
+enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_MARG, S_LABQ, S_STRC, S_GAIN, S_COUNT };
 static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG", "MARG", "LABQ",
-                                      "STRC"};
+                                      "STRC", "GAIN"};
 
 /* ------------------------------------------------------------- messages */
 
@@ -459,8 +465,42 @@ static btf_status put_structure(wbuf *b, const btf_model *m, const char *name, b
     w_u16(b, (unsigned)h);
     w_f32(b, m->ambient);
     w_bytes(b, res, n);
+    if (m->shadows || m->chroma) /* 1.5: a flags byte after the codes */
+        w_u8(b, (m->shadows ? STRC_SHADOWS : 0u) | (m->chroma ? STRC_CHROMA : 0u));
+    for (int c = 0; m->chroma && c < 3; c++) { /* then each channel's codes, predicted */
+        for (size_t i = 0; i < n; i++)
+            q[i] = (unsigned char)btf_albedo_code(m->chroma[3 * i + c]);
+        for (size_t i = 0; i < n; i++)
+            res[i] = (unsigned char)(q[i] - albedo_predict(q, w, (int)(i % (size_t)w),
+                                                           (int)(i / (size_t)w)));
+        w_bytes(b, res, n);
+    }
     w_section_end(b, body);
     free(q);
+    return BTF_OK;
+}
+
+/* GAIN: per pair (views x lights, the index table's order) and channel
+ * the gain's code (a signed byte, btf_gain_code) minus the previous
+ * pair's code of that channel, modulo 256: neighbouring lights differ
+ * little, so the residuals are near 0. */
+static btf_status put_gains(wbuf *b, const btf_model *m, const char *name, btf_error *err)
+{
+    size_t n = (size_t)m->views.count * m->lights.count * 3;
+    unsigned char *res = alloc_named(n, 1, 0, name, err);
+    if (!res)
+        return BTF_E_NOMEM;
+    int prev[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; i++) {
+        int q = btf_gain_code(m->gain[i]);
+        res[i] = (unsigned char)((q - prev[i % 3]) & 0xff);
+        prev[i % 3] = q;
+    }
+    size_t body = w_section_begin(b, S_GAIN);
+    w_part(b, BTF_MODEL_PART_GAINS);
+    w_bytes(b, res, n);
+    w_section_end(b, body);
+    free(res);
     return BTF_OK;
 }
 
@@ -486,6 +526,11 @@ static btf_status build_payload(const btf_model *m, wbuf *b, const char *name, b
         put_lab(b, m);
     if (m->albedo) {
         btf_status rc = put_structure(b, m, name, err);
+        if (rc)
+            return rc;
+    }
+    if (m->gain) {
+        btf_status rc = put_gains(b, m, name, err);
         if (rc)
             return rc;
     }
@@ -544,7 +589,8 @@ static btf_status encode_named(const btf_model *m, const char *name, unsigned ch
         rc = failf(err, BTF_E_DATA, name, "model of %zu bytes (expected at most %zu)", pl.n,
                    MAX_PAYLOAD_BYTES);
     if (rc == BTF_OK)
-        rc = wrap_payload(&pl, m->albedo          ? FMT_MINOR_STRUCTURE
+        rc = wrap_payload(&pl, m->gain || m->shadows || m->chroma ? FMT_MINOR_GAINS
+                               : m->albedo        ? FMT_MINOR_STRUCTURE
                                : has_lab(m)       ? FMT_MINOR_LAB
                                : has_marginals(m) ? FMT_MINOR_MARGINALS
                                : m->range       ? FMT_MINOR_RANGE_FLAGS
@@ -1044,8 +1090,51 @@ static btf_status read_structure(const span *sp, btf_model *m, const char *name,
                                                        (int)(i / (size_t)w)));
         m->albedo[i] = btf_albedo_value(q[i]);
     }
-    free(q);
     m->ambient = ambient;
+    btf_status rc = BTF_OK;
+    if (r.pos < r.n) { /* 1.5: the flags byte, then the colour layer */
+        unsigned flags = r_u8(&r);
+        size_t want = flags & STRC_CHROMA ? 3 * n : 0;
+        if ((flags & ~(STRC_SHADOWS | STRC_CHROMA)) || r.n - r.pos != want)
+            rc = failf(err, BTF_E_FORMAT, name, "section STRC: flags 0x%02x and %zu more "
+                       "bytes (expected bits 0-1 and %zu)", flags, r.n - r.pos, want);
+        m->shadows = (flags & STRC_SHADOWS) != 0;
+        if (rc == BTF_OK && want &&
+            !(m->chroma = alloc_named(3 * n, sizeof(float), 0, name, err)))
+            rc = BTF_E_NOMEM;
+        for (int c = 0; rc == BTF_OK && want && c < 3; c++) {
+            const unsigned char *cr = r_take(&r, n);
+            for (size_t i = 0; i < n; i++) {
+                q[i] = (unsigned char)(cr[i] + albedo_predict(q, w, (int)(i % (size_t)w),
+                                                              (int)(i / (size_t)w)));
+                m->chroma[3 * i + c] = btf_albedo_value(q[i]);
+            }
+        }
+    }
+    free(q);
+    return rc;
+}
+
+/* GAIN: the codes rebuilt from their residuals (put_gains); the index
+ * table gives the pair count. */
+static btf_status read_gains(const span *sp, btf_model *m, const char *name, btf_error *err)
+{
+    if (m->views.count < 1)
+        return failf(err, BTF_E_FORMAT, name, "section GAIN without directions (expected VIEW, "
+                     "LGHT and INDX)");
+    size_t n = (size_t)m->views.count * m->lights.count * 3;
+    if (sp->n != n)
+        return failf(err, BTF_E_FORMAT, name, "section GAIN: %zu bytes (expected %zu: 3 per "
+                     "pair)", sp->n, n);
+    m->gain = alloc_named(n, sizeof(float), 0, name, err);
+    if (!m->gain)
+        return BTF_E_NOMEM;
+    int prev[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; i++) {
+        int q = (int)(signed char)(unsigned char)(sp->p[i] + prev[i % 3]);
+        prev[i % 3] = q;
+        m->gain[i] = btf_gain_value(q);
+    }
     return BTF_OK;
 }
 
@@ -1079,6 +1168,8 @@ static btf_status read_payload(const unsigned char *p, size_t n, btf_model *m, c
     if (sec[S_LABQ].present && (rc = read_lab(&sec[S_LABQ], m, name, err)))
         return rc;
     if (sec[S_STRC].present && (rc = read_structure(&sec[S_STRC], m, name, err)))
+        return rc;
+    if (sec[S_GAIN].present && (rc = read_gains(&sec[S_GAIN], m, name, err)))
         return rc;
     return btf_model_validate(m, name, BTF_E_FORMAT, err);
 }

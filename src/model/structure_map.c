@@ -140,13 +140,18 @@ btf_status btf_structure_coords(const btf_model *m, int pw, int ph, uint64_t see
     return BTF_OK;
 }
 
+int btf_structure_channels(const btf_model *m)
+{
+    return m && m->albedo && m->chroma ? 3 : 1;
+}
+
 btf_status btf_structure_albedo(const btf_model *m, int width, int height, uint64_t seed,
                                 btf_image *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
     /* the period's own map is the whole surface's (its period is itself) */
     int pw = btf_structure_period(width), ph = btf_structure_period(height);
-    btf_status rc = btf_image_alloc(out, pw, ph, 1, err);
+    btf_status rc = btf_image_alloc(out, pw, ph, btf_structure_channels(m), err);
     if (rc == BTF_OK)
         rc = btf_structure_layers(m, pw, ph, seed, NULL, out->data, err);
     if (rc)
@@ -164,17 +169,18 @@ btf_status btf_structure_pattern(const btf_model *m, int width, int height, uint
     return btf_structure_albedo(m, width, height, seed, cache, err);
 }
 
-/* Row y of the periodic albedo pattern a (pw x ph) over width texels times
- * the RGB row, in place: one multiply per channel, the same on every
+/* Row y of the periodic albedo pattern a (pw x ph, grey or RGB) over width
+ * texels times the RGB row, in place: one multiply per channel, the same on every
  * path (the CPU's rows, the GPU's read-back). */
 void btf_structure_apply_row(const btf_image *a, int y, float *rgb, int width)
 {
-    const float *row = a->data + (size_t)(y % a->height) * a->width;
+    int ch = a->channels == 3 ? 3 : 1;
+    const float *row = a->data + (size_t)(y % a->height) * a->width * ch;
     for (int x = 0, px = 0; x < width; x++, px = px + 1 == a->width ? 0 : px + 1) {
-        float f = row[px];
-        rgb[3 * x] = rgb[3 * x] * f;
-        rgb[3 * x + 1] = rgb[3 * x + 1] * f;
-        rgb[3 * x + 2] = rgb[3 * x + 2] * f;
+        const float *f = row + (size_t)px * ch;
+        rgb[3 * x] = rgb[3 * x] * f[0];
+        rgb[3 * x + 1] = rgb[3 * x + 1] * f[ch == 3 ? 1 : 0];
+        rgb[3 * x + 2] = rgb[3 * x + 2] * f[ch == 3 ? 2 : 0];
     }
 }
 
@@ -198,6 +204,7 @@ btf_status btf_structure_layers(const btf_model *m, int width, int height, uint6
 {
     uint16_t *map;
     int pw = btf_structure_period(width), ph = btf_structure_period(height);
+    int ch = btf_structure_channels(m);
     btf_status rc = btf_structure_coords(m, pw, ph, seed, &map, err);
     if (rc)
         return rc;
@@ -207,7 +214,10 @@ btf_status btf_structure_layers(const btf_model *m, int width, int height, uint6
             size_t src = (size_t)map[2 * i + 1] * m->range_width + map[2 * i];
             if (heights)
                 heights[o] = m->range[src];
-            if (albedo)
+            if (albedo && ch == 3)
+                for (int c = 0; c < 3; c++)
+                    albedo[3 * o + c] = m->albedo[src] * m->chroma[3 * src + c];
+            else if (albedo)
                 albedo[o] = m->albedo ? m->albedo[src] : 1.0f;
         }
     free(map);

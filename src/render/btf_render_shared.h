@@ -23,6 +23,9 @@
  *   BTF_SHADE_NORMAL(ctx, i)        float: normal map float i (pixel * 3 + c)
  *   BTF_SHADE_LIGHT_OUTER_Z(ctx)    float: cos of the largest measured light theta
  *   BTF_SHADE_AMBIENT(ctx)          float: the model's ambient term a >= 0
+ *   BTF_SHADE_GAIN(ctx, i, c)       float: pair i's gain of channel c (1 without)
+ *   BTF_SHADE_HAS_HORIZON(ctx)      int: 1 when the relief casts shadows
+ *   BTF_SHADE_HORIZON(ctx, i)       btf_uint: horizon map word i (texel * 2 + w)
  *   BTF_SHADE_N_LIGHTS(ctx)         int: the scene's lights
  *   BTF_SHADE_LIGHT_KIND(ctx, j)    int: 0 directional, 1 point (btf_light_kind)
  *   BTF_SHADE_LIGHT_VEC(ctx, j, k)  float: unit direction towards it, or position
@@ -38,6 +41,7 @@
 #define BTF_RENDER_SHARED_H
 
 #include "btf_hemisphere_lookup.h"
+#include "btf_horizon.h"
 
 /* Weights below this are rounding (a measured direction's own weight is 1
  * only to ~1e-6): they are dropped and the rest renormalised, so that a
@@ -196,6 +200,11 @@ BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_
     BTF_PRECISE float r = 0.0f;
     BTF_PRECISE float g = 0.0f;
     BTF_PRECISE float b = 0.0f;
+    /* The pair gains (docs/model.md, "Pair gains"), interpolated with the
+     * pairs' own weights: exactly the measured pair's at a measured pair. */
+    BTF_PRECISE float gr = 0.0f;
+    BTF_PRECISE float gg = 0.0f;
+    BTF_PRECISE float gb = 0.0f;
     if (!(sv > 0.0f) || !(sl > 0.0f))
         return BTF_RGB(0.0f, 0.0f, 0.0f);
     int n = BTF_SHADE_N_LIGHTS_SET(ctx);
@@ -211,10 +220,17 @@ BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_
             float wl = btf_shade_w(hl, j);
             if (!(wl >= BTF_RENDER_MIN_WEIGHT))
                 continue;
-            int k = BTF_SHADE_INDEX(ctx, btf_shade_i(hv, i) * n + btf_shade_i(hl, j));
+            int pair = btf_shade_i(hv, i) * n + btf_shade_i(hl, j);
             BTF_PRECISE float a = wv / sv;
             BTF_PRECISE float c = wl / sl;
             BTF_PRECISE float w = a * c;
+            BTF_PRECISE float hr = w * BTF_SHADE_GAIN(ctx, pair, 0);
+            BTF_PRECISE float hg = w * BTF_SHADE_GAIN(ctx, pair, 1);
+            BTF_PRECISE float hb = w * BTF_SHADE_GAIN(ctx, pair, 2);
+            int k = BTF_SHADE_INDEX(ctx, pair);
+            gr = gr + hr;
+            gg = gg + hg;
+            gb = gb + hb;
             if (k0 < 0 || k0 == k) { k0 = k; w0 = w0 + w; }
             else if (k1 < 0 || k1 == k) { k1 = k; w1 = w1 + w; }
             else if (k2 < 0 || k2 == k) { k2 = k; w2 = w2 + w; }
@@ -242,10 +258,13 @@ BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_
         g = g + tg;
         b = b + tb;
     }
-    return BTF_RGB(r, g, b);
+    BTF_PRECISE float pr = r * gr;
+    BTF_PRECISE float pg = g * gg;
+    BTF_PRECISE float pb = b * gb;
+    return BTF_RGB(pr, pg, pb);
 }
 
-/* The bump factor of docs/render.md: (a + max(0, n . l)) / (a + max(l_z,
+/* The bump factor of docs/render.md: (a + vis max(0, n . l)) / (a + max(l_z,
  * BTF_FLAT_MIN_Z)) with n the relief-scaled normal (nx, ny, nz) and a the
  * model's ambient term (0 without a structure layer: the plain ratio),
  * times the horizon fade l_z / cos(theta_outer) beyond the outermost light
@@ -256,7 +275,7 @@ BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_
  * analysis divides each exemplar by the relit shading under its own light
  * (docs/model.md, "Structure"). */
 BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, float lx,
-                            float ly, float lz)
+                            float ly, float lz, float vis)
 {
     if (!(lz > 0.0f))
         return 0.0f;
@@ -268,7 +287,8 @@ BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, flo
     float flatz = lz > BTF_FLAT_MIN_Z ? lz : BTF_FLAT_MIN_Z;
     float given = BTF_SHADE_AMBIENT(ctx);
     float amb = given > 0.0f ? given : 0.0f;
-    float lit = ndotl > 0.0f ? ndotl : 0.0f;
+    float lit0 = ndotl > 0.0f ? ndotl : 0.0f;
+    BTF_PRECISE float lit = lit0 * vis;
     BTF_PRECISE float num = amb + lit;
     BTF_PRECISE float den = amb + flatz;
     BTF_PRECISE float factor = num / den;
@@ -280,6 +300,40 @@ BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, flo
         factor = factor * fade;
     }
     return factor;
+}
+
+/* The horizon tangent of map direction d, bilinear at taps (tx, ty). */
+BTF_FN float btf_shade_horizon_dir(BTF_SHADE_CTX ctx, btf_tap1 tx, btf_tap1 ty, int d)
+{
+    int s = BTF_SHADE_SIZE(ctx);
+    int i00 = 2 * (ty.i0 * s + tx.i0);
+    int i01 = 2 * (ty.i0 * s + tx.i1);
+    int i10 = 2 * (ty.i1 * s + tx.i0);
+    int i11 = 2 * (ty.i1 * s + tx.i1);
+    float a = btf_horizon_decode(BTF_SHADE_HORIZON(ctx, i00), BTF_SHADE_HORIZON(ctx, i00 + 1), d);
+    float b = btf_horizon_decode(BTF_SHADE_HORIZON(ctx, i01), BTF_SHADE_HORIZON(ctx, i01 + 1), d);
+    float c = btf_horizon_decode(BTF_SHADE_HORIZON(ctx, i10), BTF_SHADE_HORIZON(ctx, i10 + 1), d);
+    float e = btf_horizon_decode(BTF_SHADE_HORIZON(ctx, i11), BTF_SHADE_HORIZON(ctx, i11 + 1), d);
+    return btf_shade_lerp(btf_shade_lerp(a, b, tx.f), btf_shade_lerp(c, e, tx.f), ty.f);
+}
+
+/* The light's visibility at taps (tx, ty) (btf_horizon.h): the horizon in
+ * its azimuth, between the two nearest mapped directions, against its
+ * elevation; 1 without a horizon map or relief. */
+BTF_FN float btf_shade_shadow(BTF_SHADE_CTX ctx, btf_tap1 tx, btf_tap1 ty, float lx, float ly,
+                              float lz, float r)
+{
+    if (!(r > 0.0f) || BTF_SHADE_HAS_HORIZON(ctx) == 0)
+        return 1.0f;
+    float t = btf_horizon_azimuth(lx, ly);
+    float fl = BTF_FLOOR(t);
+    int d0 = BTF_HEMI_F2I(fl);
+    d0 = d0 < 0 ? 0 : d0 > 7 ? 7 : d0;
+    int d1 = d0 == 7 ? 0 : d0 + 1;
+    BTF_PRECISE float f = t - fl;
+    float h = btf_shade_lerp(btf_shade_horizon_dir(ctx, tx, ty, d0),
+                             btf_shade_horizon_dir(ctx, tx, ty, d1), f);
+    return btf_horizon_vis(h, lx, ly, lz, r);
 }
 
 /* The relief-scaled unit normal at taps (tx, ty): the map's normal is
@@ -411,7 +465,8 @@ BTF_FN btf_rgb btf_shade_pixel(BTF_SHADE_CTX ctx, float f0, float f1, float f2, 
         btf_rgb c = btf_shade_blend(ctx, hv, hl, tx, ty);
         if (c.r < -0.5f)
             return c;
-        float factor = btf_shade_bump(ctx, n.r, n.g, n.b, lx, ly, lz);
+        float vis = btf_shade_shadow(ctx, tx, ty, lx, ly, lz, relief);
+        float factor = btf_shade_bump(ctx, n.r, n.g, n.b, lx, ly, lz, vis);
         BTF_PRECISE float ir = BTF_SHADE_LIGHT_RGB(ctx, j, 0) * scale;
         BTF_PRECISE float ig = BTF_SHADE_LIGHT_RGB(ctx, j, 1) * scale;
         BTF_PRECISE float ib = BTF_SHADE_LIGHT_RGB(ctx, j, 2) * scale;

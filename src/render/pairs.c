@@ -40,6 +40,8 @@ void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_materia
         ctx->tex[k] = rm->tex[k].data;
     ctx->height = rm->height.data;
     ctx->normal = rm->normal.data;
+    ctx->gain = rm->gain;
+    ctx->horizon = rm->horizon;
     ctx->light_outer_z = rm->light_outer_z;
     ctx->ambient = rm->ambient;
 }
@@ -47,6 +49,17 @@ void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_materia
 float btf_render_ambient(const btf_model *m)
 {
     return m->albedo ? (isfinite(m->ambient) && m->ambient > 0.0f ? m->ambient : 0.0f) : -1.0f;
+}
+
+float *btf_render_gains(const btf_model *m, btf_error *err)
+{
+    size_t n = (size_t)m->views.count * (size_t)m->lights.count * 3;
+    float *g = btf_alloc(n ? n : 1, sizeof(float), err);
+    if (!g)
+        return NULL;
+    for (size_t i = 0; i < n; i++)
+        g[i] = m->gain ? m->gain[i] : 1.0f;
+    return g;
 }
 
 float btf_render_reflectance(const btf_model *m, int k)

@@ -262,14 +262,15 @@ btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_
         return BTF_OK;
     btf_status rc = btf_image_alloc(hm, width, height, 1, err); /* zeros: flat */
     if (rc == BTF_OK && albedo_out)
-        rc = btf_image_alloc(albedo_out, width, height, 1, err);
+        rc = btf_image_alloc(albedo_out, width, height, btf_structure_channels(m), err);
     int layers = btf_structure_quilted(m);
     if (rc == BTF_OK && layers) /* one quilting map places both layers */
         rc = btf_structure_layers(m, width, height, seed, hm->data,
                                   albedo_out ? albedo_out->data : NULL, err);
     else if (rc == BTF_OK && m->range)
         rc = resample(m, width, height, hm, err);
-    for (size_t i = 0; rc == BTF_OK && albedo_out && !layers && i < (size_t)width * height; i++)
+    for (size_t i = 0; rc == BTF_OK && albedo_out && !layers &&
+                       i < (size_t)width * height * albedo_out->channels; i++)
         albedo_out->data[i] = 1.0f; /* a small tile: no structure layer */
     if (rc == BTF_OK && normal_out)
         rc = btf_normal_map(hm, 1.0, normal_out, err);

@@ -8,6 +8,7 @@
 #include "render/shade.h"
 #include "core/core.h"
 #include "synth/synth.h"
+#include "model/model.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -72,6 +73,8 @@ void btf_render_material_free(btf_render_material *rm)
             btf_image_free(&rm->tex[k]);
     free(rm->tex);
     free(rm->index);
+    free(rm->gain);
+    free(rm->horizon);
     free(rm);
 }
 
@@ -83,7 +86,8 @@ static btf_status build_tables(const btf_model *m, btf_render_material *rm, btf_
     rm->n_subspaces = m->n_subspaces;
     rm->index = btf_alloc(pairs, 1, err);
     rm->tex = btf_alloc((size_t)m->n_subspaces, sizeof *rm->tex, err);
-    if (!rm->index || !rm->tex)
+    rm->gain = btf_render_gains(m, err);
+    if (!rm->index || !rm->tex || !rm->gain)
         return BTF_E_NOMEM;
     memcpy(rm->index, m->index, pairs);
     memset(rm->tex, 0, (size_t)m->n_subspaces * sizeof *rm->tex);
@@ -122,6 +126,9 @@ btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,
     if ((rc = build_tables(m, rm, err)) ||
         (rc = btf_structure_maps(m, side, side, seed, &rm->height, &rm->normal,
                                  m->albedo ? &albedo : NULL, err)))
+        goto fail;
+    if (m->shadows && m->albedo &&
+        (rc = btf_horizon_map(rm->height.data, side, side, 1, threads, &rm->horizon, err)))
         goto fail;
     which = btf_alloc((size_t)m->n_subspaces, sizeof *which, err);
     if (!which) {

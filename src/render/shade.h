@@ -24,6 +24,8 @@ struct btf_render_material {
     btf_image height;        /* size x size x 1, heights in texels */
     btf_image normal;        /* size x size x 3, unit tangent-frame normals */
     btf_image *tex;          /* [n_subspaces]; data NULL where not built */
+    float *gain;             /* [pair * 3 + c]: the pair gains (1 without) */
+    uint32_t *horizon;       /* size x size x 2 words (btf_horizon.h); NULL: no shadows */
 };
 
 /* What the shared shading reads on the CPU. */
@@ -34,6 +36,8 @@ typedef struct btf_shade_ctx {
     const uint8_t *index;
     const float *tex[BTF_SHADE_CTX_MAX_SUBSPACES]; /* NULL: not synthesised */
     const float *height, *normal;
+    const float *gain;
+    const uint32_t *horizon;
     float light_outer_z, ambient;
     int n_lights;
     int kind[16];
@@ -52,6 +56,9 @@ typedef struct btf_shade_ctx {
 #define BTF_SHADE_NORMAL(ctx, i) ((ctx)->normal[i])
 #define BTF_SHADE_LIGHT_OUTER_Z(ctx) ((ctx)->light_outer_z)
 #define BTF_SHADE_AMBIENT(ctx) ((ctx)->ambient)
+#define BTF_SHADE_GAIN(ctx, i, c) ((ctx)->gain[3 * (i) + (c)])
+#define BTF_SHADE_HAS_HORIZON(ctx) ((ctx)->horizon != NULL)
+#define BTF_SHADE_HORIZON(ctx, i) ((ctx)->horizon[i])
 #define BTF_SHADE_N_LIGHTS(ctx) ((ctx)->n_lights)
 #define BTF_SHADE_LIGHT_KIND(ctx, j) ((ctx)->kind[j])
 #define BTF_SHADE_LIGHT_VEC(ctx, j, k) ((ctx)->vec[j][k])
@@ -71,6 +78,9 @@ float btf_render_light_outer_z(const btf_model *m);
 /* The shading's ambient term of m (btf_render_shared.h): -1 without a
  * structure layer (the plain bump factor). */
 float btf_render_ambient(const btf_model *m);
+/* The pair gains the shading multiplies (views x lights x 3 floats, the
+ * caller frees them): the model's, or 1 for a model without. */
+float *btf_render_gains(const btf_model *m, btf_error *err);
 /* The factor subspace k's texture is scaled by before shading: 1 / (a +
  * l_z) of its representative light with a structure layer, else 1. */
 float btf_render_reflectance(const btf_model *m, int k);

@@ -72,6 +72,7 @@ typedef struct feature_batch {
     const btf_dataset *ds;
     int n_lights, bins, dim;
     float *features;      /* (views x lights) x dim */
+    float *means;         /* NULL or (views x lights) x 3 */
     btf_image *buffers;   /* one per worker, kept from image to image */
 } feature_batch;
 
@@ -83,6 +84,8 @@ static btf_status feature_job(void *user, int image, int worker, btf_error *err)
                                           err);
     if (rc == BTF_OK)
         rc = btf_lab_cumhist(img, b->bins, b->features + (size_t)image * b->dim, err);
+    if (rc == BTF_OK && b->means)
+        btf_image_mean_rgb(img, b->means + 3 * (size_t)image);
     return rc;
 }
 
@@ -99,7 +102,8 @@ btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *o
     if (bins < 2 || bins > 4096)
         return btf_fail(err, BTF_E_ARG, "histogram bins %d: expected 2..4096", bins);
     const btf_dataset_info *in = btf_dataset_get_info(ds);
-    feature_batch b = {.ds = ds, .n_lights = in->n_lights, .bins = bins, .dim = 3 * bins};
+    feature_batch b = {.ds = ds, .n_lights = in->n_lights, .bins = bins, .dim = 3 * bins,
+                       .means = o.means};
     int total = in->n_views * in->n_lights;
     b.features = btf_alloc((size_t)total * b.dim, sizeof(float), err);
     if (!b.features)
@@ -121,5 +125,45 @@ btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *o
     }
     *features = b.features;
     *dim = b.dim;
+    return BTF_OK;
+}
+
+/* One job per image: its mean colour alone. */
+typedef struct mean_batch {
+    const btf_dataset *ds;
+    int n_lights;
+    float *means;
+    btf_image *buffers;
+} mean_batch;
+
+static btf_status mean_job(void *user, int image, int worker, btf_error *err)
+{
+    const mean_batch *b = user;
+    btf_image *img = &b->buffers[worker];
+    btf_status rc = btf_dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
+                                          err);
+    if (rc == BTF_OK)
+        btf_image_mean_rgb(img, b->means + 3 * (size_t)image);
+    return rc;
+}
+
+btf_status btf_dataset_means(const btf_dataset *ds, int threads, float **means, btf_error *err)
+{
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    int total = in->n_views * in->n_lights;
+    mean_batch b = {ds, in->n_lights, NULL, NULL};
+    int workers = btf_pool_workers(threads, total);
+    b.means = btf_alloc((size_t)total * 3, sizeof(float), err);
+    b.buffers = btf_calloc((size_t)(workers > 0 ? workers : 1), sizeof *b.buffers, err);
+    btf_status rc = b.means && b.buffers ? btf_pool_run(total, threads, mean_job, &b, NULL, err)
+                                         : BTF_E_NOMEM;
+    for (int w = 0; b.buffers && w < workers; w++)
+        btf_image_free(&b.buffers[w]);
+    free(b.buffers);
+    if (rc) {
+        free(b.means);
+        return rc;
+    }
+    *means = b.means;
     return BTF_OK;
 }

@@ -31,6 +31,7 @@ void btf_segmentation_free(btf_segmentation *s)
     free(s->rep_light);
     free(s->members);
     free(s->distortion_by_k);
+    free(s->means);
     memset(s, 0, sizeof *s);
 }
 
@@ -201,12 +202,22 @@ btf_status btf_segment(const btf_dataset *ds, const btf_segment_opts *opts,
     btf_segment_opts o = opts ? *opts : btf_segment_defaults();
     float *f;
     int dim;
-    btf_status rc = btf_dataset_features(ds, &o.features, &f, &dim, err);
-    if (rc)
-        return rc;
     const btf_dataset_info *in = btf_dataset_get_info(ds);
+    float *means = btf_alloc((size_t)in->n_views * in->n_lights * 3, sizeof(float), err);
+    if (!means)
+        return BTF_E_NOMEM;
+    o.features.means = means;
+    btf_status rc = btf_dataset_features(ds, &o.features, &f, &dim, err);
+    if (rc) {
+        free(means);
+        return rc;
+    }
     rc = btf_segment_features(f, in->n_views, in->n_lights, dim, &o, out, err);
     free(f);
+    if (rc == BTF_OK)
+        out->means = means; /* the pair gains' measured colours */
+    else
+        free(means);
     return rc;
 }
 

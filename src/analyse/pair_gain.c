@@ -1,0 +1,92 @@
+/*
+ * pair_gain.c — the pair gains (docs/model.md, "Pair gains"): every
+ * measured (view, light) pair keeps its own mean colour.
+ *
+ * The paper renders a pair from the image of its subspace (Haindl & Filip
+ * 2007, sections II.A and III): all pairs of one cluster share that
+ * image's colour histogram, and the relit shading only moves their
+ * brightness as the relief's cosine does. The first-order statistics are
+ * what an observer notices first (docs/measure.md: a 1 % brightness shift
+ * is several times the material's distance to itself), and they cost one
+ * colour per pair: the ratio of the measured image's mean colour to the
+ * mean colour the renderer gives that pair, which the renderer multiplies
+ * back (interpolated with the images' own weights, btf_render_shared.h).
+ */
+#include "core/core.h"
+#include "model/model.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Gains are kept as log2 on a grid of 1/64 octave over [-2, 2): 1.1 %
+ * steps, one signed byte a channel (docs/model-format.md, "GAIN"). A
+ * pair more than four times off its subspace is held there. */
+#define GAIN_STEPS_PER_OCTAVE 64.0
+int btf_gain_code(float g)
+{
+    double l = log2(g > 0.0f && isfinite(g) ? (double)g : 1.0);
+    double q = floor(l * GAIN_STEPS_PER_OCTAVE + 0.5);
+    return q < -128.0 ? -128 : q > 127.0 ? 127 : (int)q;
+}
+
+float btf_gain_value(int q)
+{
+    return (float)exp2((double)q / GAIN_STEPS_PER_OCTAVE);
+}
+
+/* The flat surface's l_z floor (BTF_FLAT_MIN_Z of the renderer). */
+#define FLAT_MIN_Z 0.05
+
+void btf_pair_predict(const btf_image *tex, const btf_structure_geom *g, const btf_model *m,
+                      btf_dir own_light, double *pred)
+{
+    size_t n = (size_t)tex->width * tex->height;
+    int L = m->lights.count;
+    if (!g) { /* no structure: the image's own mean for every light */
+        float mean[3];
+        btf_image_mean_rgb(tex, mean);
+        for (int l = 0; l < L; l++)
+            for (int c = 0; c < 3; c++)
+                pred[3 * l + c] = mean[c];
+        return;
+    }
+    /* The renderer's value at a measured pair: the texture (the exemplar
+     * over its shading) times (a + vis max(0, n.l)) / (a + max(l_kz, floor)),
+     * l_k the subspace's own light (btf_render_reflectance). */
+    double a = m->ambient > 0.0f ? m->ambient : 0.0, lk[3];
+    btf_dir_to_vec(own_light, lk);
+    double refl = 1.0 / (a + (lk[2] > FLAT_MIN_Z ? lk[2] : FLAT_MIN_Z));
+    for (int l = 0; l < L; l++) {
+        double v[3], s[3] = {0.0, 0.0, 0.0};
+        btf_dir_to_vec(m->lights.dirs[l], v);
+        for (size_t i = 0; i < n; i++) {
+            double f = a + btf_structure_lit(g, i, v);
+            for (int c = 0; c < 3; c++)
+                s[c] += tex->data[3 * i + c] * f;
+        }
+        for (int c = 0; c < 3; c++)
+            pred[3 * l + c] = n ? s[c] * refl / (double)n : 0.0;
+    }
+}
+
+btf_status btf_pair_gains(btf_model *m, const float *means, const double *pred, btf_error *err)
+{
+    int V = m->views.count, L = m->lights.count;
+    size_t pairs = (size_t)V * L;
+    float *g = btf_alloc(pairs * 3, sizeof(float), err);
+    if (!g)
+        return BTF_E_NOMEM;
+    for (size_t i = 0; i < pairs; i++) {
+        int k = m->index[i], l = (int)(i % (size_t)L);
+        for (int c = 0; c < 3; c++) {
+            double p = pred[((size_t)k * L + l) * 3 + c], meas = means[3 * i + c];
+            /* a black channel (or a prediction of nothing) keeps gain 1 */
+            double r = p > 1e-12 && meas > 1e-12 && isfinite(p) && isfinite(meas) ? meas / p : 1.0;
+            g[3 * i + c] = btf_gain_value(btf_gain_code((float)r)); /* as the file keeps it */
+        }
+    }
+    free(m->gain);
+    m->gain = g;
+    return BTF_OK;
+}

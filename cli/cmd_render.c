@@ -23,6 +23,9 @@ static const char ABOUT[] =
     "phi; its texels repeat across the surface (--texture-size, --all-subspaces,\n"
     "--seed and --relief do not apply; the first two are errors).\n";
 
+/* The frame's side without --size (and without --beside). */
+#define DEFAULT_SIDE 512
+
 /* --beside DATASET: the measured image of the (view, light) pair, read at
  * the measured directions nearest those asked for (within 0.5 degree). */
 static btf_status read_measured(const char *dataset, btf_dir view, btf_dir light,
@@ -152,6 +155,8 @@ static int render_rf(cli_ctx *c, const char *model, const char *scene_path, btf_
     t_read = cli_now() - t_read;
     btf_image img = {0}, measured = {0};
     btf_status rc = beside ? read_measured(beside, view, light, &measured, &err) : BTF_OK;
+    if (rc == BTF_OK && width == 0) /* no --size: the measured image's, else the default */
+        width = beside ? measured.width : DEFAULT_SIDE, height = beside ? measured.height : DEFAULT_SIDE;
     btf_gpu *gpu = rc == BTF_OK ? cli_open_gpu(backend, device, &err) : NULL;
     if (rc == BTF_OK && !gpu && (!strcmp(backend, "gpu") || device >= 0))
         rc = err.code ? err.code : BTF_E_UNSUPPORTED;
@@ -205,7 +210,7 @@ int cmd_render(int argc, char **argv)
     const char *model = NULL, *scene_path = NULL, *out_path = NULL, *beside = NULL;
     cli_dir_arg view = {{0, 0}, 0}, light = {{0, 0}, 0};
     btf_render_opts ro = btf_render_defaults();
-    int size[2] = {512, 512}, backend = 2, all = 0, device = -1;
+    int size[2] = {0, 0}, backend = 2, all = 0, device = -1; /* size 0: not given */
     double t_start = cli_now();
     cli_opt opts[] = {
         {.name = "--scene", .kind = CLI_STRING, .dest = &scene_path, .meta = "FILE",
@@ -218,7 +223,8 @@ int cmd_render(int argc, char **argv)
          .help = "flat render: write the measured image of the pair (from DATASET) on\n"
                  "the left and the render on the right"},
         {.name = "--size", .kind = CLI_SIZE, .dest = size, .meta = "WxH",
-         .help = "frame size in pixels", .lo = 1, .hi = BTF_RENDER_MAX_SIDE},
+         .help = "frame size in pixels (default: 512x512; with --beside, the measured\n"
+                 "image's size)", .lo = 1, .hi = BTF_RENDER_MAX_SIDE},
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out_path,
          .meta = "IMAGE", .help = "the image to write: .png (8-bit sRGB) or .exr (linear)",
          .required = 1},
@@ -294,6 +300,10 @@ int cmd_render(int argc, char **argv)
     if (beside && read_measured(beside, view.dir, light.dir, &measured, &err) != 0) {
         btf_model_free(&m);
         return cli_lib_error(&c, &err);
+    }
+    if (size[0] == 0) { /* no --size: the measured image's, else the default */
+        ro.width = beside ? measured.width : DEFAULT_SIDE;
+        ro.height = beside ? measured.height : DEFAULT_SIDE;
     }
     btf_render_info info;
     memset(&info, 0, sizeof info);

@@ -139,7 +139,13 @@ static int model_text(const btf_model *m, const model_file *mf)
            lab ? "the exemplar's CIE Lab histogram: synthesis matches it (--no-match-colours skips)"
                : "no Lab histogram (format 1.2 or older): synthesis without colour matching",
            lab, m->n_subspaces);
-    if (m->range) {
+    if (m->range && m->range_texel == 1.0f) {
+        float lo, hi;
+        range_bounds(m, &lo, &hi);
+        /* at the analysed resolution: the measured map, quilted onto a surface */
+        printf("range map   %d x %d at the analysed resolution (texel 1), quilted onto any "
+               "surface, heights %.6g..%.6g\n", m->range_width, m->range_height, lo, hi);
+    } else if (m->range) {
         float lo, hi;
         range_bounds(m, &lo, &hi);
         /* the tile in memory is periodic: a 1.0 file's is made so on reading */
@@ -151,6 +157,19 @@ static int model_text(const btf_model *m, const model_file *mf)
     } else {
         printf("range map   none\n");
     }
+    if (m->albedo)
+        printf("structure   albedo pattern (grey%s), shading a + %smax(0, n.l) with "
+               "ambient a = %.4g: the CAR fields model the remainder (docs/model.md)\n",
+               m->chroma ? " and a colour layer: the colours vary across the sample" : ": one "
+               "colour across the sample", m->shadows ? "vis " : "", m->ambient);
+    else
+        printf("structure   none: the CAR fields model the whole exemplars%s\n",
+               m->range && m->range_texel != 1.0f ? " (a range tile below the analysed "
+               "resolution holds no albedo)" : "");
+    if (m->shadows)
+        printf("shadows     the relief casts them (horizon map of the range map)\n");
+    printf("pair gains  %s\n", m->gain ? "one colour per measured pair: each keeps its mean "
+           "colour" : "none (format 1.4 or older, or analysed without them)");
     for (int s = 0; s < m->n_subspaces; s++)
         text_subspace(m, s);
     return 0;

@@ -49,6 +49,8 @@ layout(std430, set = 0, binding = 6) readonly buffer Hor { uint hz[]; };
 #define BTF_SHADE_GAIN(ctx, i, c) pf[pi[BTF_RP_GAIN] + 3 * (i) + (c)]
 #define BTF_SHADE_HAS_HORIZON(ctx) pi[BTF_RP_HORIZON]
 #define BTF_SHADE_HORIZON(ctx, i) hz[i]
+#define BTF_SHADE_HMIN(ctx) pf[BTF_RP_HMIN]
+#define BTF_SHADE_HMAX(ctx) pf[BTF_RP_HMAX]
 #define BTF_SHADE_N_LIGHTS(ctx) pi[BTF_RP_NLIGHTS]
 #define BTF_SHADE_LIGHT_KIND(ctx, j) pi[BTF_RP_KIND + (j)]
 #define BTF_SHADE_LIGHT_VEC(ctx, j, k) pf[BTF_RP_VEC + 3 * (j) + (k)]

@@ -208,7 +208,7 @@ static btf_status scale_textures(btf_vk *vk, const btf_model *m, const int *subs
  * without shadows binds a small unread buffer there. */
 static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t seed,
                               int threads, btf_vk_buffer **out, btf_vk_buffer **hor,
-                              int *shadows, btf_error *err)
+                              int *shadows, float *bounds, btf_error *err)
 {
     btf_image h = {0}, n = {0};
     uint32_t *hz = NULL;
@@ -217,6 +217,8 @@ static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t
     *shadows = m->shadows && m->albedo;
     if (rc == BTF_OK && *shadows)
         rc = btf_horizon_map(h.data, side, side, 1, threads, &hz, err);
+    if (rc == BTF_OK)
+        btf_render_height_bounds(h.data, px, &bounds[0], &bounds[1]);
     if (rc == BTF_OK)
         rc = btf_vk_buffer_create(vk, px * 4 * sizeof(float), out, err);
     if (rc == BTF_OK)
@@ -372,11 +374,14 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     if (rc == BTF_OK)
         rc = build_params(m, p, views, lights, subs, n, offs, &ps.pr, err);
     int shadows = 0;
+    float bounds[2] = {0.0f, 0.0f};
     if (rc == BTF_OK)
         rc = upload_maps(ps.vk, m, p->side, p->o.seed, p->o.threads, &ps.bufs[2], &ps.bufs[6],
-                         &shadows, err);
+                         &shadows, bounds, err);
     if (rc == BTF_OK) {
         ps.pr.ints[BTF_RP_HORIZON] = shadows;
+        ps.pr.floats[BTF_RP_HMIN] = bounds[0];
+        ps.pr.floats[BTF_RP_HMAX] = bounds[1];
         rc = upload_params(&ps, err);
     }
     if (rc == BTF_OK)

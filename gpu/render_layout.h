@@ -40,6 +40,8 @@
 #define BTF_RP_RELIEF 1
 #define BTF_RP_BG 2         /* [3] */
 #define BTF_RP_AMBIENT 5    /* the model's ambient term */
+#define BTF_RP_HMIN 6       /* the height map's extremes */
+#define BTF_RP_HMAX 7
 #define BTF_RP_VEC 8        /* [16][3] light directions or positions */
 #define BTF_RP_RGB 56       /* [16][3] intensities */
 #define BTF_RP_FLOATS 112

@@ -128,7 +128,11 @@ static void check_breakdown(const btf_model *m, const btf_model_bytes *b)
     int has_lab = 0;
     for (int s = 0; s < m->n_subspaces; s++)
         has_lab |= m->subspaces[s].marginal.knots && m->subspaces[s].marginal.lab_knots;
-    int sections = 1 + (m->views.count ? 3 : 0) + (m->range ? 1 : 0) + has_marg + has_lab;
+    int sections = 1 + (m->views.count ? 3 : 0) + (m->range ? 1 : 0) + has_marg + has_lab +
+                   (m->albedo ? 1 : 0) + (m->gain ? 1 : 0);
+    /* the pair gains: one byte per pair and channel */
+    assert_int_equal(b->raw[BTF_MODEL_PART_GAINS],
+                     m->gain ? 3 * (uint64_t)m->views.count * (uint64_t)m->lights.count : 0);
     assert_int_equal(b->raw[BTF_MODEL_PART_FRAMING],
                      8 * sections + 2 + (has_marg ? 2 : 0) + (has_lab ? 2 : 0) +
                          12 * m->n_subspaces);

@@ -175,12 +175,19 @@ btf_status btf_structure_warp(const btf_model *m, btf_dir view, btf_structure_ta
     double v[3];
     btf_dir_to_vec(view, v);
     double z = v[2] > PARALLAX_MIN_Z ? v[2] : PARALLAX_MIN_Z;
+    double dx = v[0] / z, dy = -v[1] / z;
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
+            /* the one-step parallax shift (u, v) += h (v_x, -v_y) / v_z of
+             * the texel's own height h, texel centres at integers, held
+             * inside. The renderer marches the view ray for a relief that
+             * casts shadows (btf_shade_march); registering the exemplars
+             * with that march was measured worse (the generated fabric's
+             * report distance 10.4 against 8.3: photometric stereo's
+             * heights of deep gaps are too shallow for a march to find
+             * what hides them), so the analysis keeps the one step. */
             double hh = m->range[(size_t)y * w + x];
-            /* as btf_shade_parallax: (u, v) += h (v_x, -v_y) / v_z, texel
-             * centres at i + 1/2; held inside the sample */
-            double u2 = x + hh * v[0] / z, v2 = y - hh * v[1] / z;
+            double u2 = x + hh * dx, v2 = y + hh * dy;
             u2 = u2 < 0.0 ? 0.0 : u2 > w - 1 ? w - 1 : u2;
             v2 = v2 < 0.0 ? 0.0 : v2 > h - 1 ? h - 1 : v2;
             int x0 = (int)floor(u2), y0 = (int)floor(v2);

@@ -31,6 +31,11 @@
 #define BTF_HORIZON_PER_UNIT 64.0f /* codes per unit of tangent: 255 is 3.98 (76 degrees) */
 #define BTF_HORIZON_REACH 24       /* texels marched from each texel */
 #define BTF_SHADOW_SOFT 0.04f      /* half-width of a shadow's edge, in tangent */
+/* The view march of a relief that casts shadows (btf_shade_march in
+ * btf_render_shared.h, btf_structure_warp in the analysis): steps of at
+ * most this many texels, at most this many steps. */
+#define BTF_MARCH_STEP 0.5f
+#define BTF_MARCH_MAX 96
 
 /* The horizon tangent of direction d (0..7) from a texel's two words. */
 BTF_FN float btf_horizon_decode(btf_uint w0, btf_uint w1, int d)

@@ -24,7 +24,9 @@
  *   BTF_SHADE_LIGHT_OUTER_Z(ctx)    float: cos of the largest measured light theta
  *   BTF_SHADE_AMBIENT(ctx)          float: the model's ambient term a >= 0
  *   BTF_SHADE_GAIN(ctx, i, c)       float: pair i's gain of channel c (1 without)
- *   BTF_SHADE_HAS_HORIZON(ctx)      int: 1 when the relief casts shadows
+ *   BTF_SHADE_HAS_HORIZON(ctx)      int: 1 when the relief casts shadows and hides
+ *                                   what lies behind it (the view is marched)
+ *   BTF_SHADE_HMIN(ctx), _HMAX(ctx) float: the height map's extremes
  *   BTF_SHADE_HORIZON(ctx, i)       btf_uint: horizon map word i (texel * 2 + w)
  *   BTF_SHADE_N_LIGHTS(ctx)         int: the scene's lights
  *   BTF_SHADE_LIGHT_KIND(ctx, j)    int: 0 directional, 1 point (btf_light_kind)
@@ -371,15 +373,85 @@ BTF_FN float btf_shade_dot3(float a0, float a1, float a2, float b0, float b1, fl
     return t;
 }
 
+/* Parallax occlusion (docs/render.md, "Masking"): the view ray through
+ * the reference plane's point (u, v) is at (u, v) + H (v_x, -v_y) / v_z at
+ * height H; it is marched down from the relief's top in steps of at most
+ * BTF_MARCH_STEP texels until it meets the relief-scaled height field,
+ * and the crossing refined linearly between the last two steps. So a
+ * groove behind a ridge is hidden at grazing views, as in a measured
+ * image, where the one-step shift below lets it through. */
+/* (BTF_MARCH_STEP and BTF_MARCH_MAX: btf_horizon.h, which the analysis
+ * shares.) */
+BTF_FN btf_rgb btf_shade_march(BTF_SHADE_CTX ctx, float u, float v, float dx, float dy,
+                               float relief)
+{
+    int s = BTF_SHADE_SIZE(ctx);
+    BTF_PRECISE float top = relief * BTF_SHADE_HMAX(ctx);
+    BTF_PRECISE float bot = relief * BTF_SHADE_HMIN(ctx);
+    BTF_PRECISE float depth = top - bot;
+    BTF_PRECISE float ddx = dx * dx;
+    BTF_PRECISE float ddy = dy * dy;
+    BTF_PRECISE float dd = ddx + ddy;
+    BTF_PRECISE float reach = BTF_HEMI_SQRT(dd);
+    BTF_PRECISE float span = depth * reach;
+    BTF_PRECISE float q = span / BTF_MARCH_STEP;
+    float qc = q < BTF_HEMI_I2F(BTF_MARCH_MAX) ? q : BTF_HEMI_I2F(BTF_MARCH_MAX);
+    float cq = BTF_FLOOR(qc);
+    int steps = BTF_HEMI_F2I(cq) + 1;
+    BTF_PRECISE float dh = depth / BTF_HEMI_I2F(steps);
+    BTF_PRECISE float prev_h = top;
+    BTF_PRECISE float prev_d = 0.0f;
+    for (int i = 0; i <= steps; i++) {
+        BTF_PRECISE float ih = BTF_HEMI_I2F(i) * dh;
+        BTF_PRECISE float h = top - ih;
+        BTF_PRECISE float ox = h * dx;
+        BTF_PRECISE float oy = h * dy;
+        BTF_PRECISE float pu = u + ox;
+        BTF_PRECISE float pv = v + oy;
+        btf_tap1 tx = btf_shade_tap1(pu, s);
+        btf_tap1 ty = btf_shade_tap1(pv, s);
+        BTF_PRECISE float hs = relief * btf_shade_height(ctx, tx, ty);
+        BTF_PRECISE float d = h - hs;
+        if (d <= 0.0f) {
+            if (i == 0)
+                return BTF_RGB(pu, pv, 0.0f);
+            BTF_PRECISE float den = prev_d - d;
+            BTF_PRECISE float t = prev_d / den;
+            BTF_PRECISE float tdh = t * dh;
+            BTF_PRECISE float hh = prev_h - tdh;
+            BTF_PRECISE float hx = hh * dx;
+            BTF_PRECISE float hy = hh * dy;
+            BTF_PRECISE float ru = u + hx;
+            BTF_PRECISE float rv = v + hy;
+            return BTF_RGB(ru, rv, 0.0f);
+        }
+        prev_h = h;
+        prev_d = d;
+    }
+    BTF_PRECISE float bx = bot * dx;
+    BTF_PRECISE float by = bot * dy;
+    BTF_PRECISE float bu = u + bx;
+    BTF_PRECISE float bv = v + by;
+    return BTF_RGB(bu, bv, 0.0f);
+}
+
 /* The parallax-shifted texture coordinate (u, v): (u, v) += h (v_x, -v_y) /
- * max(v_z, BTF_PARALLAX_MIN_Z), h the relief-scaled height at (u, v). The
- * result's r and g are u' and v'. */
+ * max(v_z, BTF_PARALLAX_MIN_Z), h the relief-scaled height at (u, v), or,
+ * for a relief that casts shadows (BTF_SHADE_HAS_HORIZON), where the
+ * marched view ray meets it (btf_shade_march). The result's r and g are
+ * u' and v'. */
 BTF_FN btf_rgb btf_shade_parallax(BTF_SHADE_CTX ctx, float u, float v, float vx, float vy,
                                   float vz, float relief)
 {
     if (relief == 0.0f)
         return BTF_RGB(u, v, 0.0f);
     int s = BTF_SHADE_SIZE(ctx);
+    if (relief > 0.0f && BTF_SHADE_HAS_HORIZON(ctx) != 0) {
+        float zm = vz > BTF_PARALLAX_MIN_Z ? vz : BTF_PARALLAX_MIN_Z;
+        BTF_PRECISE float mx = vx / zm;
+        BTF_PRECISE float my = vy / zm;
+        return btf_shade_march(ctx, u, v, mx, -my, relief);
+    }
     btf_tap1 tx = btf_shade_tap1(u, s);
     btf_tap1 ty = btf_shade_tap1(v, s);
     BTF_PRECISE float h = relief * btf_shade_height(ctx, tx, ty);

@@ -42,6 +42,8 @@ void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_materia
     ctx->normal = rm->normal.data;
     ctx->gain = rm->gain;
     ctx->horizon = rm->horizon;
+    ctx->hmin = rm->hmin;
+    ctx->hmax = rm->hmax;
     ctx->light_outer_z = rm->light_outer_z;
     ctx->ambient = rm->ambient;
 }
@@ -86,4 +88,14 @@ float btf_render_light_outer_z(const btf_model *m)
     for (int i = 0; i < m->lights.count; i++)
         outer = m->lights.dirs[i].theta > outer ? m->lights.dirs[i].theta : outer;
     return (float)cos(outer * (3.14159265358979323846 / 180.0));
+}
+
+void btf_render_height_bounds(const float *h, size_t n, float *lo, float *hi)
+{
+    float a = n ? h[0] : 0.0f, b = a;
+    for (size_t i = 1; i < n; i++) {
+        a = h[i] < a ? h[i] : a;
+        b = h[i] > b ? h[i] : b;
+    }
+    *lo = a, *hi = b;
 }

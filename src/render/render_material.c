@@ -130,6 +130,7 @@ btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,
     if (m->shadows && m->albedo &&
         (rc = btf_horizon_map(rm->height.data, side, side, 1, threads, &rm->horizon, err)))
         goto fail;
+    btf_render_height_bounds(rm->height.data, (size_t)side * side, &rm->hmin, &rm->hmax);
     which = btf_alloc((size_t)m->n_subspaces, sizeof *which, err);
     if (!which) {
         rc = BTF_E_NOMEM;

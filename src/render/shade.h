@@ -26,6 +26,7 @@ struct btf_render_material {
     btf_image *tex;          /* [n_subspaces]; data NULL where not built */
     float *gain;             /* [pair * 3 + c]: the pair gains (1 without) */
     uint32_t *horizon;       /* size x size x 2 words (btf_horizon.h); NULL: no shadows */
+    float hmin, hmax;        /* the height map's extremes */
 };
 
 /* What the shared shading reads on the CPU. */
@@ -38,6 +39,7 @@ typedef struct btf_shade_ctx {
     const float *height, *normal;
     const float *gain;
     const uint32_t *horizon;
+    float hmin, hmax;
     float light_outer_z, ambient;
     int n_lights;
     int kind[16];
@@ -59,11 +61,16 @@ typedef struct btf_shade_ctx {
 #define BTF_SHADE_GAIN(ctx, i, c) ((ctx)->gain[3 * (i) + (c)])
 #define BTF_SHADE_HAS_HORIZON(ctx) ((ctx)->horizon != NULL)
 #define BTF_SHADE_HORIZON(ctx, i) ((ctx)->horizon[i])
+#define BTF_SHADE_HMIN(ctx) ((ctx)->hmin)
+#define BTF_SHADE_HMAX(ctx) ((ctx)->hmax)
 #define BTF_SHADE_N_LIGHTS(ctx) ((ctx)->n_lights)
 #define BTF_SHADE_LIGHT_KIND(ctx, j) ((ctx)->kind[j])
 #define BTF_SHADE_LIGHT_VEC(ctx, j, k) ((ctx)->vec[j][k])
 #define BTF_SHADE_LIGHT_RGB(ctx, j, k) ((ctx)->rgb[j][k])
 #include "render/btf_render_shared.h"
+
+/* The extremes of n heights (0, 0 for none). */
+void btf_render_height_bounds(const float *h, size_t n, float *lo, float *hi);
 
 /* A model that can be rendered: subspaces, an index table, directions. */
 btf_status btf_render_check_model(const btf_model *m, btf_error *err);

@@ -84,13 +84,24 @@ static int models_equal(const btf_model *a, const btf_model *b)
         memcmp(&a->range_texel, &b->range_texel, sizeof a->range_texel) || !a->range != !b->range)
         return 0;
     size_t nr = (size_t)a->range_width * a->range_height;
-    return !a->range || !memcmp(a->range, b->range, sizeof *a->range * nr);
+    if (a->range && memcmp(a->range, b->range, sizeof *a->range * nr))
+        return 0;
+    /* the structure layer (STRC, its flags and colour layer) and the pair
+     * gains (GAIN) of format 1.4 and 1.5 */
+    if (!a->albedo != !b->albedo || !a->chroma != !b->chroma || !a->gain != !b->gain ||
+        a->shadows != b->shadows || memcmp(&a->ambient, &b->ambient, sizeof a->ambient))
+        return 0;
+    if (a->albedo && memcmp(a->albedo, b->albedo, sizeof *a->albedo * nr))
+        return 0;
+    if (a->chroma && memcmp(a->chroma, b->chroma, sizeof *a->chroma * 3 * nr))
+        return 0;
+    return !a->gain || !memcmp(a->gain, b->gain, sizeof *a->gain * 3 * ni);
 }
 
 static int model_empty(const btf_model *m)
 {
     return !m->views.dirs && !m->lights.dirs && !m->index && !m->subspaces && !m->range &&
-           m->n_subspaces == 0 && m->views.count == 0 && m->lights.count == 0;
+           !m->albedo && !m->chroma && !m->gain && m->n_subspaces == 0 && m->views.count == 0 && m->lights.count == 0;
 }
 
 /* Failures are BTF_E_FORMAT (or out of memory), one line naming the input. */

@@ -246,8 +246,12 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
         return rc;
     memcpy(shaded.data, img->data, (size_t)img->width * img->height * 3 * sizeof(float));
     btf_structure_divide(&shaded, m, g, light, 0, NULL);
-    if (pred) /* the texture is the shaded-out exemplar (colour matched to it) */
-        btf_pair_predict(&shaded, g, m, light, pred);
+    if (pred) { /* the texture is the shaded-out exemplar (colour matched to it) */
+        float mean[3];
+        btf_image_mean_rgb(&shaded, mean);
+        for (int c = 0; c < 3; c++)
+            pred[c] = mean[c]; /* its mean: btf_pair_predict_views does the rest */
+    }
     btf_structure_divide(img, m, g, light, 1, NULL);
     rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
     if (rc == BTF_OK)
@@ -256,22 +260,43 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     return rc;
 }
 
-/* The pair gains from the images' mean colours: those of the segmentation's
- * pass, the caller's, or read now. */
+/* The pair gains from the images' mean colours (those of the
+ * segmentation's pass, the caller's, or read now) against the renderer's:
+ * pred holds per subspace and light what it gives (no structure layer), or
+ * in its first three values per subspace the texture's mean, from which
+ * btf_pair_predict_views makes each pair's. */
 static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg,
-                              const btf_analyse_opts *o, const double *pred, btf_model *m,
+                              const btf_analyse_opts *o, const double *pred,
+                              const btf_image *normal, const uint32_t *horizon, btf_model *m,
                               btf_error *err)
 {
+    int L = m->lights.count;
+    size_t pairs = (size_t)m->views.count * L;
     float *own = NULL;
-    const float *means = seg->means ? seg->means : o->means;
-    if (!means) {
-        btf_status rc = btf_dataset_means(ds, o->segment.features.threads, &own, err);
-        if (rc)
-            return rc;
-        means = own;
+    double *pp = btf_alloc(pairs * 3, sizeof(double), err), *tex_mean = NULL;
+    btf_status rc = pp ? BTF_OK : BTF_E_NOMEM;
+    if (rc == BTF_OK && m->albedo && normal->data) {
+        if (!(tex_mean = btf_alloc((size_t)seg->k * 3, sizeof(double), err)))
+            rc = BTF_E_NOMEM;
+        for (int k = 0; rc == BTF_OK && k < seg->k; k++)
+            for (int c = 0; c < 3; c++)
+                tex_mean[3 * k + c] = pred[(size_t)k * L * 3 + c];
+        if (rc == BTF_OK)
+            rc = btf_pair_predict_views(m, tex_mean, normal, horizon, pp, err);
+    } else {
+        for (size_t i = 0; rc == BTF_OK && i < pairs; i++)
+            for (int c = 0; c < 3; c++)
+                pp[3 * i + c] = pred[((size_t)m->index[i] * L + i % (size_t)L) * 3 + c];
     }
-    btf_status rc = btf_pair_gains(m, means, pred, err);
+    const float *means = seg->means ? seg->means : o->means;
+    if (rc == BTF_OK && !means && (rc = btf_dataset_means(ds, o->segment.features.threads,
+                                                          &own, err)) == BTF_OK)
+        means = own;
+    if (rc == BTF_OK)
+        rc = btf_pair_gains(m, means, pp, err);
     free(own);
+    free(pp);
+    free(tex_mean);
     return rc;
 }
 
@@ -330,7 +355,7 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
             o->progress(o->progress_user, (double)(k + 1) / seg->k, "fitting CAR models");
     }
     if (rc == BTF_OK && pred)
-        rc = stage_gains(ds, seg, o, pred, m, err);
+        rc = stage_gains(ds, seg, o, pred, &normal, horizon, m, err);
 done:
     free(pred);
     free(horizon);

@@ -165,6 +165,64 @@ double btf_structure_albedo_at(const btf_structure_geom *g, const btf_model *m, 
     return s;
 }
 
+/* The sample's height at (u, v), bilinear, round the torus (the sample on
+ * a surface of its own size is quilted as itself, which the renderer
+ * wraps). */
+static double height_wrapped(const btf_model *m, double u, double v)
+{
+    int w = m->range_width, h = m->range_height;
+    double fu = floor(u), fv = floor(v), fx = u - fu, fy = v - fv;
+    long x0 = ((long)fu % w + w) % w, y0 = ((long)fv % h + h) % h;
+    long x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
+    const float *r = m->range;
+    return (r[y0 * w + x0] * (1 - fx) + r[y0 * w + x1] * fx) * (1 - fy) +
+           (r[y1 * w + x0] * (1 - fx) + r[y1 * w + x1] * fx) * fy;
+}
+
+btf_status btf_structure_march_taps(const btf_model *m, btf_dir view, btf_structure_tap **taps,
+                                    btf_error *err)
+{
+    int w = m->range_width, h = m->range_height;
+    btf_structure_tap *o = btf_alloc((size_t)w * h, sizeof *o, err);
+    if (!o)
+        return BTF_E_NOMEM;
+    double v[3], lo = 0.0, hi = 0.0;
+    btf_dir_to_vec(view, v);
+    double z = v[2] > PARALLAX_MIN_Z ? v[2] : PARALLAX_MIN_Z;
+    double dx = v[0] / z, dy = -v[1] / z;
+    for (size_t i = 0; i < (size_t)w * h; i++) {
+        lo = i == 0 || m->range[i] < lo ? m->range[i] : lo;
+        hi = i == 0 || m->range[i] > hi ? m->range[i] : hi;
+    }
+    /* btf_shade_march's rule at relief 1 */
+    double span = (hi - lo) * sqrt(dx * dx + dy * dy) / BTF_MARCH_STEP;
+    int steps = (int)floor(span < BTF_MARCH_MAX ? span : BTF_MARCH_MAX) + 1;
+    double dh = (hi - lo) / steps;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            double hit = lo, prev_h = hi, prev_d = 0.0;
+            for (int i = 0; i <= steps; i++) {
+                double hr = hi - i * dh, d = hr - height_wrapped(m, x + hr * dx, y + hr * dy);
+                if (d <= 0.0) {
+                    hit = i == 0 ? hr : prev_h - prev_d / (prev_d - d) * dh;
+                    break;
+                }
+                prev_h = hr, prev_d = d;
+            }
+            double u2 = x + hit * dx, v2 = y + hit * dy, fu = floor(u2), fv = floor(v2);
+            double fx = u2 - fu, fy = v2 - fv;
+            long x0 = ((long)fu % w + w) % w, y0 = ((long)fv % h + h) % h;
+            long x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
+            btf_structure_tap *t = &o[(size_t)y * w + x];
+            t->i[0] = (int)(y0 * w + x0), t->w[0] = (float)((1 - fx) * (1 - fy));
+            t->i[1] = (int)(y0 * w + x1), t->w[1] = (float)(fx * (1 - fy));
+            t->i[2] = (int)(y1 * w + x0), t->w[2] = (float)((1 - fx) * fy);
+            t->i[3] = (int)(y1 * w + x1), t->w[3] = (float)(fx * fy);
+        }
+    *taps = o;
+    return BTF_OK;
+}
+
 btf_status btf_structure_warp(const btf_model *m, btf_dir view, btf_structure_tap **taps,
                               btf_error *err)
 {

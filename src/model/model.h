@@ -128,6 +128,20 @@ btf_status btf_structure_warp(const btf_model *m, btf_dir view, btf_structure_ta
  * albedo pattern of channel c (with the colour layer), as the warp reads
  * them. */
 double btf_structure_lit(const btf_structure_geom *g, size_t i, const double l[3]);
+/* taps[pixel] of a flat render of the sample at its own size from view, by
+ * the renderer's view march of a relief that casts shadows
+ * (btf_shade_march at relief 1, round the torus as the renderer wraps). */
+btf_status btf_structure_march_taps(const btf_model *m, btf_dir view, btf_structure_tap **taps,
+                                    btf_error *err);
+/* pred[pair * 3 + c]: the mean colour the renderer gives each measured pair
+ * of a model with a structure layer (m->subspaces[k].light set), from each
+ * subspace's texture mean tex_mean[k * 3 + c] (the exemplar over its
+ * shading): the albedo pattern where the pair's view sees it (its march,
+ * or the one-step shift without shadows) times the shading under the
+ * pair's light. */
+btf_status btf_pair_predict_views(const btf_model *m, const double *tex_mean,
+                                  const btf_image *normal, const uint32_t *horizon,
+                                  double *pred, btf_error *err);
 double btf_structure_albedo_at(const btf_structure_geom *g, const btf_model *m, size_t i, int c);
 double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights,
                                  const btf_structure_geom *geoms, int n, const btf_model *m);
@@ -154,8 +168,8 @@ float btf_gain_value(int q);
  * texture's mean for every light. */
 void btf_pair_predict(const btf_image *tex, const btf_structure_geom *g, const btf_model *m,
                       btf_dir own_light, double *pred);
-/* m->gain from the images' mean colours (btf_segmentation.means) and each
- * subspace's predictions (pred[(k * lights + l) * 3 + c]). */
+/* m->gain from the images' mean colours (btf_segmentation.means) and the
+ * renderer's predicted ones (pred[pair * 3 + c]). */
 btf_status btf_pair_gains(btf_model *m, const float *means, const double *pred, btf_error *err);
 
 /* The horizon map of heights (w x hh, texel units; model/horizon.c,

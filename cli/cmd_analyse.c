@@ -42,7 +42,8 @@ enum { TAG_LATER = 1, TAG_RF = 2 };
 static const char *const CAR_ONLY[] = {"--preset", "--stage", "--subspaces", "--bins",
                                        "--restarts", "--levels", "--neighbourhood",
                                        "--neighborhood", "--max-neighbours", "--no-range",
-                                       "--range-size", "--no-structure", NULL};
+                                       "--range-size", "--no-structure", "--no-shadows",
+                                       "--no-gains", NULL};
 
 /* Writes text that was built in memory (open_memstream) to path atomically:
  * the whole file appears or none does. Frees the text. */
@@ -150,7 +151,8 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_ana
     ao.fit.car.warn_user = c;
     ao.photostereo.progress = cli_progress_fn(c);
     ao.photostereo.threads = ao.segment.features.threads;
-    btf_analyse_report report = {{0}};
+    btf_analyse_report report;
+    memset(&report, 0, sizeof report);
     ao.report = &report;
     btf_model m;
     int rc = btf_analyse(ds, &ao, &m, &err);
@@ -168,6 +170,7 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_ana
     free(bytes);
     if (rc == 0 && !c->quiet) {
         printf("segmentation: %s\n", report.segment_reason);
+        printf("structure: %s\n", report.structure_reason);
         printf("model         %s: %zu bytes, %d subspace%s, range tile %dx%d\n", out, size,
                m.n_subspaces, m.n_subspaces == 1 ? "" : "s", m.range_width, m.range_height);
         printf("compression   1 : %.0f against the raw 8-bit images (%.0f bytes)\n",
@@ -409,6 +412,14 @@ int cmd_analyse(int argc, char **argv)
         {.name = "--no-structure", .kind = CLI_FLAG, .dest = &ao.no_structure,
          .help = "no structure layer: the CAR fields model the whole exemplar\n"
                  "(the relief and albedo are not divided out; format 1.3)",
+         .tag = TAG_LATER},
+        {.name = "--no-shadows", .kind = CLI_FLAG, .dest = &ao.no_shadows,
+         .help = "the structure layer's shading without the relief's cast shadows\n"
+                 "(nor the renderer's view march; as format 1.4)",
+         .tag = TAG_LATER},
+        {.name = "--no-gains", .kind = CLI_FLAG, .dest = &ao.no_gains,
+         .help = "no pair gains: every pair of a subspace shares its image's mean\n"
+                 "colour (as format 1.4)",
          .tag = TAG_LATER},
         CLI_MAX_PIXELS_OPTION(&ao.photostereo.read.max_pixels),
         {0}};

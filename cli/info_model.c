@@ -289,10 +289,20 @@ static int model_json(const btf_model *m, const model_file *mf)
         cli_json_f32(f, lo);
         fputs(", \"max\": ", f);
         cli_json_f32(f, hi);
-        fputs(", \"periodic\": true}", f);
+        fprintf(f, ", \"periodic\": %s}", m->range_texel == 1.0f ? "false" : "true");
     } else {
         fputs("null", f);
     }
+    fputs(",\n \"structure\": ", f);
+    if (m->albedo) {
+        fprintf(f, "{\"albedo\": true, \"colour_layer\": %s, \"shadows\": %s, \"ambient\": ",
+                m->chroma ? "true" : "false", m->shadows ? "true" : "false");
+        cli_json_f32(f, m->ambient);
+        fputs("}", f);
+    } else {
+        fputs("null", f);
+    }
+    fprintf(f, ",\n \"pair_gains\": %s", m->gain ? "true" : "false");
     fputs("}\n", f);
     return 0;
 }

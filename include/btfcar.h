@@ -1015,6 +1015,8 @@ int btf_auto_levels(const double *band, int w, int h);
 typedef struct btf_analyse_report {
     char segment_reason[256]; /* why this number of subspaces (one line, as
                                  btf_segmentation.reason) */
+    char structure_reason[384]; /* which structure layers were kept and why
+                                   (one line, docs/model.md "Structure") */
 } btf_analyse_report;
 
 typedef struct btf_analyse_opts {

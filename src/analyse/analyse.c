@@ -108,7 +108,7 @@ static btf_status range_tile(const btf_image *h, int n, btf_model *m, btf_error 
 }
 
 static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_model *m,
-                              btf_error *err)
+                              double *spread, btf_error *err)
 {
     if (o->range_from) { /* shared by a sweep: the range does not depend on its settings */
         const btf_model *r = o->range_from;
@@ -140,7 +140,7 @@ static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, 
         return rc;
     rc = range_tile(&ps.height, o->range_size, m, err);
     if (rc == BTF_OK && btf_structure_quilted(m) && !o->no_structure)
-        rc = btf_structure_albedo_from(&ps.albedo, m, err);
+        rc = btf_structure_albedo_from(&ps.albedo, m, spread, err);
     btf_ps_result_free(&ps);
     return rc;
 }
@@ -367,6 +367,35 @@ done:
     return rc;
 }
 
+/* One line: which structure layers the model keeps, and why. */
+static void structure_reason(const btf_model *m, const btf_analyse_opts *o, double spread,
+                             char *buf, size_t n)
+{
+    if (!m->range) {
+        snprintf(buf, n, "none: no range map (--no-range)");
+        return;
+    }
+    if (!m->albedo) {
+        snprintf(buf, n, "none: %s", o->no_structure ? "--no-structure"
+                 : m->range_texel != 1.0f ? "a range tile below the analysed resolution holds "
+                                            "no albedo (--range-size)"
+                                          : "an exemplar is not on the range map's grid");
+        return;
+    }
+    char colour[128];
+    if (m->chroma)
+        snprintf(colour, sizeof colour, "a colour layer (the colour's log2 spread %.3f >= %.2f)",
+                 spread, BTF_CHROMA_MIN_SPREAD);
+    else
+        snprintf(colour, sizeof colour, "no colour layer (the colour's log2 spread %.3f < %.2f: "
+                 "the luminance pattern holds it)", spread < 0.0 ? 0.0 : spread,
+                 BTF_CHROMA_MIN_SPREAD);
+    snprintf(buf, n, "range map %d x %d at texel 1, albedo pattern, %s, %s, ambient %.4f%s",
+             m->range_width, m->range_height, colour,
+             m->shadows ? "cast shadows" : "no shadows (--no-shadows)", m->ambient,
+             m->gain ? "; pair gains" : "; no pair gains");
+}
+
 btf_analyse_opts btf_analyse_defaults(void)
 {
     return (btf_analyse_opts){
@@ -415,8 +444,9 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
         else
             rc = BTF_E_NOMEM;
     }
+    double spread = -1.0; /* the colour layer's measure; -1: not measured */
     if (rc == 0 && !o.no_range)
-        rc = stage_range(ds, &o, out, err);
+        rc = stage_range(ds, &o, out, &spread, err);
     if (rc == 0)
         rc = stage_fit(ds, &seg, &o, out, err);
     if (rc == 0 && btf_model_keep_margins(out, -1.0) != BTF_OK) /* for synthesis */
@@ -424,6 +454,8 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
     if (rc == 0 && o.report) {
         memset(o.report, 0, sizeof *o.report);
         snprintf(o.report->segment_reason, sizeof o.report->segment_reason, "%s", seg.reason);
+        structure_reason(out, &o, spread, o.report->structure_reason,
+                         sizeof o.report->structure_reason);
     }
     btf_segmentation_free(&seg);
     if (rc)
@@ -439,5 +471,5 @@ btf_status btf_analyse_range(const btf_dataset *ds, const btf_analyse_opts *opts
     btf_analyse_opts o = resolve_opts(opts);
     o.range_from = NULL;
     out->range = NULL;
-    return stage_range(ds, &o, out, err);
+    return stage_range(ds, &o, out, NULL, err);
 }

@@ -43,10 +43,11 @@ static double luminance(const float *p, int channels)
 /* The colour layer (docs/model.md, "Colour layer"): each texel's colour
  * over its luminance, per channel over that ratio's mean, kept when some
  * channel's log2 spread across the sample is at least CHROMA_MIN_SPREAD
- * (the colours of a weave's two yarns; a brown leather's pebbles vary
- * mostly in luminance, which the pattern already holds). */
-#define CHROMA_MIN_SPREAD 0.1
-static btf_status colour_layer(const btf_image *albedo, btf_model *m, btf_error *err)
+ * (BTF_CHROMA_MIN_SPREAD: the colours of a weave's two yarns; a brown
+ * leather's pebbles vary mostly in luminance, which the pattern already
+ * holds). */
+static btf_status colour_layer(const btf_image *albedo, btf_model *m, double *spread_out,
+                               btf_error *err)
 {
     size_t n = (size_t)m->range_width * m->range_height;
     float *c = btf_alloc(n, 3 * sizeof(float), err);
@@ -73,15 +74,20 @@ static btf_status colour_layer(const btf_image *albedo, btf_model *m, btf_error 
         double var = s2 / (double)n - (s1 / (double)n) * (s1 / (double)n);
         spread = var > spread * spread ? sqrt(var) : spread;
     }
-    if (spread >= CHROMA_MIN_SPREAD)
+    if (spread_out)
+        *spread_out = spread;
+    if (spread >= BTF_CHROMA_MIN_SPREAD)
         m->chroma = c;
     else
         free(c);
     return BTF_OK;
 }
 
-btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, btf_error *err)
+btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, double *spread,
+                                     btf_error *err)
 {
+    if (spread)
+        *spread = 0.0;
     size_t n = (size_t)m->range_width * m->range_height;
     if (albedo->width != m->range_width || albedo->height != m->range_height)
         return btf_fail(err, BTF_E_ARG, "structure layer: albedo %dx%d, range map %dx%d",
@@ -102,7 +108,7 @@ btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, btf_
         float a = y > 0.0 && isfinite(y) ? (float)(y / mean) : 1.0f;
         m->albedo[i] = btf_albedo_value(btf_albedo_code(a)); /* as the file keeps it */
     }
-    return albedo->channels == 3 ? colour_layer(albedo, m, err) : BTF_OK;
+    return albedo->channels == 3 ? colour_layer(albedo, m, spread, err) : BTF_OK;
 }
 
 float btf_structure_vis(const uint32_t *horizon, size_t i, const double l[3])

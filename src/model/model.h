@@ -101,7 +101,11 @@ unsigned btf_albedo_code(float a);
 float btf_albedo_value(unsigned q);
 /* m->albedo from photometric stereo's albedo (range_width x range_height):
  * its luminance over its mean, on the file's grid. */
-btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, btf_error *err);
+btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, double *spread,
+                                     btf_error *err);
+/* A colour layer is kept when some channel's log2 spread across the sample
+ * reaches this (analyse/structure_fit.c). */
+#define BTF_CHROMA_MIN_SPREAD 0.1
 /* The normals of m's range map at its own size (as the renderer's). */
 btf_status btf_structure_normals(const btf_model *m, btf_image *normal, btf_error *err);
 /* The ambient term a of n exemplars under their lights (the median of each

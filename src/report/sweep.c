@@ -91,6 +91,7 @@ typedef struct sweep_ctx {
     const btf_dataset_info *in;
     const btf_sweep_opts *o;
     const float *features;
+    const float *means;     /* each image's mean colour (the pair gains) */
     int dim;
     const btf_model *range;
     btf_sweep *s;
@@ -238,6 +239,7 @@ static btf_analyse_opts setting_opts(const sweep_ctx *c, const btf_sweep_setting
     a.report = NULL;
     a.features = c->features;
     a.feature_dim = c->dim;
+    a.means = c->means;
     a.range_from = c->range;
     return a;
 }
@@ -475,7 +477,7 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
     for (int i = 0; i < out->n_points; i++)
         if (!read_point(&c, &out->points[i]))
             missing++;
-    float *features = NULL;
+    float *features = NULL, *means = NULL;
     btf_model range;
     memset(&range, 0, sizeof range);
     if (missing) {
@@ -484,7 +486,11 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
         btf_feature_opts fo = o.analyse.segment.features;
         fo.threads = o.threads;
         fo.progress = NULL;
-        rc = btf_dataset_features(ds, &fo, &features, &c.dim, err);
+        const btf_dataset_info *in = btf_dataset_get_info(ds);
+        means = btf_alloc((size_t)in->n_views * in->n_lights * 3, sizeof(float), err);
+        fo.means = means; /* read in the same pass, shared by every setting */
+        rc = means ? btf_dataset_features(ds, &fo, &features, &c.dim, err) : BTF_E_NOMEM;
+        c.means = means;
         if (rc == BTF_OK && !o.analyse.no_range) {
             btf_analyse_opts a = o.analyse;
             a.photostereo.threads = o.threads;
@@ -500,6 +506,7 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
     }
     pthread_mutex_destroy(&c.gpu_lock);
     free(features);
+    free(means);
     btf_model_free(&range);
     if (rc) {
         btf_sweep_free(out);

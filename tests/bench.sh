@@ -212,6 +212,34 @@ echo "report --sweep, 8 settings: $sw s, peak RSS $(($(cut -d' ' -f2 "$TMP/time"
     --sweep --sweep-subspaces auto,4 --sweep-levels auto,2 --sweep-neighbours auto,8
 echo "   the same again, every point resumed: $(cat "$TMP/time") s"
 
+echo "== structure layers (issue 28; docs/model.md): before and after on the three 81 x 81 x 128^2 materials"
+# Three model formats' worth of analysis, each the whole command: 1.3
+# (--no-structure --range-size 64 --no-gains: the CAR fields model every
+# exemplar whole), 1.4 (--no-shadows --no-gains: the structure layer alone)
+# and 1.5 (the default: shadows, masking, registered exemplars, pair gains).
+# Per row: analysis and 512^2 flat render times (medians of 3, whole
+# process), model bytes, the report's mean combined distance.
+for mat in leather fabric wood; do
+    D=$TMP/s$mat
+    [ -d "$D" ] || "$BTFCAR" generate -q --material $mat --size 128 --seed 1 "$D" ||
+        { echo "bench: generate $mat failed"; continue; }
+    for fmt in 1.3 1.4 1.5; do
+        case $fmt in
+        1.3) opts="--no-structure --range-size 64 --no-gains" ;;
+        1.4) opts="--no-shadows --no-gains" ;;
+        1.5) opts="" ;;
+        esac
+        timed "   $mat $fmt: analyse" "$BTFCAR" analyse -q "$D" -o "$D-$fmt.btfcar" $opts >/dev/null || continue
+        an=$med
+        timed "   $mat $fmt: flat render 512^2" "$BTFCAR" render "$D-$fmt.btfcar" --view 30,60 --light 45,0 \
+            --size 512x512 -o "$TMP/flat.png" >/dev/null || continue
+        rn=$med
+        "$BTFCAR" report -q "$D" "$D-$fmt.btfcar" -o "$TMP/rep-s" || continue
+        q=$(sed -n 's/^[[:space:]]*"mean_combined":[[:space:]]*\(.*\),$/\1/p' "$TMP/rep-s/report.json" | head -1)
+        echo "$mat format $fmt: analyse $an s, model $(stat -c %s "$D-$fmt.btfcar") bytes, flat render 512^2 $rn s, mean combined distance $q"
+    done
+done
+
 echo "== presets (btfcar analyse --preset): cost and quality on the 128^2 leather"
 for p in fast balanced accurate; do
     /usr/bin/time -f "%e" -o "$TMP/time" "$BTFCAR" analyse -q "$R" -o "$TMP/$p.btfcar" --preset $p ||

@@ -157,7 +157,8 @@ static void same_seed_same_model(void **state)
     TU_OK(rf_feature_image(ds, 2, &feat, &view, &e), &e);
     assert_int_equal(view, 0);
     uint16_t *a = malloc((size_t)24 * 20 * 4), *b = malloc((size_t)24 * 20 * 4);
-    rf_quilt_args q = {feat, SIDE, s8.sample_x, s8.sample_y, 8, 8, 24, 20, 4, 1, 0.1, 7, 2, 0};
+    rf_quilt_args q = {feat, SIDE, s8.sample_x, s8.sample_y, 8, 8, 24, 20, 4, 1, 0.1, 7, 2, 0,
+                       {0, 0, 0, 0}};
     TU_OK(rf_quilt(&q, a, &e), &e);
     assert_memory_equal(a, s8.map, (size_t)24 * 20 * 4);
     q.seed = 8, q.threads = 1;

@@ -231,6 +231,56 @@ static void file_round_trip(void **state)
     btf_model_free(&m);
 }
 
+/* A periodic relief of repeat (6, 6), (6, -6) (64 x 64 texels, texel 1)
+ * with an albedo pattern; noise 1: random heights instead (no lattice). */
+static void lattice_model(btf_model *m, int noise)
+{
+    memset(m, 0, sizeof *m);
+    int n = 64;
+    m->range_width = m->range_height = n;
+    m->range_texel = 1.0f;
+    m->range = malloc((size_t)n * n * sizeof(float));
+    m->albedo = malloc((size_t)n * n * sizeof(float));
+    btf_rng r;
+    btf_rng_seed(&r, 5);
+    for (int i = 0; i < n * n; i++) {
+        double x = i % n, y = i / n, pi2 = 2.0 * 3.14159265358979 / 12.0;
+        double c = cos(pi2 * x) * cos(pi2 * y);
+        m->range[i] = noise ? (float)btf_rng_uniform(&r) : (float)(2.0 * c);
+        m->albedo[i] = (float)(1.0 + 0.3 * (noise ? btf_rng_uniform(&r) : c));
+    }
+}
+
+static void lattice_keeps_the_repeat(void **state)
+{
+    (void)state;
+    btf_model m;
+    lattice_model(&m, 1);
+    int L[4];
+    assert_int_equal(btf_structure_lattice(&m, L), 0); /* noise: no repeat */
+    btf_model_free(&m);
+    lattice_model(&m, 0);
+    assert_int_equal(btf_structure_lattice(&m, L), 1);
+    print_message("lattice (%d, %d) (%d, %d)\n", L[0], L[1], L[2], L[3]);
+    assert_int_equal(abs(L[0] * L[3] - L[1] * L[2]), 72); /* the cell of (6,6), (6,-6) */
+    for (int k = 0; k < 4; k += 2)
+        assert_true((L[k] + L[k + 1]) % 12 == 0 && (L[k] - L[k + 1]) % 12 == 0);
+    /* every texel of a quilted surface (a whole number of repeats) comes
+     * from a block whose offset is a lattice vector */
+    uint16_t *map = NULL;
+    btf_error e = {0};
+    TU_OK(btf_structure_coords(&m, 192, 144, 3, &map, &e), &e);
+    int off = 0;
+    for (int y = 0; y < 144; y++)
+        for (int x = 0; x < 192; x++) {
+            int dx = map[2 * (y * 192 + x)] - x, dy = map[2 * (y * 192 + x) + 1] - y;
+            off += (dx + dy) % 12 != 0 || (dx - dy) % 12 != 0;
+        }
+    assert_int_equal(off, 0);
+    free(map);
+    btf_model_free(&m);
+}
+
 /* The relative error of the render's mean colour at measured pairs against
  * the measured images' (flat renders at the sample's size), summed over
  * the pairs and channels. */
@@ -313,6 +363,7 @@ int main(void)
         cmocka_unit_test(horizon_of_a_wall),
         cmocka_unit_test(visibility),
         cmocka_unit_test(file_round_trip),
+        cmocka_unit_test(lattice_keeps_the_repeat),
         cmocka_unit_test(analysed_layers),
     };
     return cmocka_run_group_tests(tests, tu_setup_dir, tu_teardown_dir);

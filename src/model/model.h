@@ -182,4 +182,9 @@ btf_status btf_pair_gains(btf_model *m, const float *means, const double *pred, 
 btf_status btf_horizon_map(const float *h, int w, int hh, int wrap, int threads,
                            uint32_t **out, btf_error *err);
 
+/* The lattice of a periodic range map (model/structure_lattice.c): two
+ * shortest independent offsets (x0, y0, x1, y1) at which its
+ * autocorrelation peaks; 1 when found, else 0 and zeros. */
+int btf_structure_lattice(const btf_model *m, int lattice[4]);
+
 #endif

@@ -128,7 +128,8 @@ btf_status btf_structure_coords(const btf_model *m, int pw, int ph, uint64_t see
         rc = BTF_E_NOMEM;
     if (rc == BTF_OK) {
         rf_quilt_args q = {feat, sw, 0, 0, sw, sh, pw, ph, block, block / 6, 0.0,
-                           seed ^ STRUCT_SEED_SALT, 1, STRUCT_CANDIDATES};
+                           seed ^ STRUCT_SEED_SALT, 1, STRUCT_CANDIDATES, {0, 0, 0, 0}};
+        btf_structure_lattice(m, q.lattice); /* a weave's repeat, kept in step */
         rc = rf_quilt(&q, out, err);
     }
     free(feat);

@@ -36,6 +36,7 @@
 #include "rf/rf_sample.h"
 
 #include <float.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -177,19 +178,58 @@ static void gather_known(quilt *Q)
         }
 }
 
-/* q->candidates positions drawn, the best of them taken (ties: the first
- * drawn), so the choice depends on the seed alone. */
+static int has_lattice(const quilt *Q)
+{
+    const int *L = Q->q->lattice;
+    return (long)L[0] * L[3] - (long)L[1] * L[2] != 0;
+}
+
+/* Moves candidate i (v * nu + u) to the nearest position in the sample
+ * whose offset from the current block's own place (its position relative
+ * to the sample's place) is a lattice vector; 0 when none is near. */
+static int snap(const quilt *Q, int *i)
+{
+    const int *L = Q->q->lattice;
+    int u = *i % Q->nu, v = *i / Q->nu;
+    long px = Q->bx - Q->ax.origin, py = Q->by - Q->ay.origin;
+    double det = (double)L[0] * L[3] - (double)L[1] * L[2];
+    double ox = (double)(u - px), oy = (double)(v - py);
+    long s = lround((ox * L[3] - oy * L[2]) / det), t = lround((L[0] * oy - L[1] * ox) / det);
+    long best = -1, best_d = 0;
+    for (int ds = -2; ds <= 2; ds++)
+        for (int dt = -2; dt <= 2; dt++) {
+            long cu = px + (s + ds) * L[0] + (t + dt) * L[2];
+            long cv = py + (s + ds) * L[1] + (t + dt) * L[3];
+            if (cu < 0 || cv < 0 || cu >= Q->nu || cv >= Q->nv)
+                continue;
+            long d = (cu - u) * (cu - u) + (cv - v) * (cv - v);
+            if (best < 0 || d < best_d)
+                best = cv * Q->nu + cu, best_d = d;
+        }
+    if (best < 0)
+        return 0;
+    *i = (int)best;
+    return 1;
+}
+
+/* q->candidates positions drawn (each moved onto the lattice, when there
+ * is one), the best of them taken (ties: the first drawn), so the choice
+ * depends on the seed alone. */
 static btf_status choose_drawn(quilt *Q, btf_rng *rng, int *pick)
 {
     size_t n = (size_t)Q->nu * Q->nv;
     double best = DBL_MAX;
+    int lattice = has_lattice(Q), any = 0;
     *pick = 0;
     for (int c = 0; c < Q->q->candidates; c++) {
         int i = (int)(btf_rng_next(rng) % n);
+        if (lattice && !snap(Q, &i))
+            continue;
         double s = score_one(Q, i % Q->nu, i / Q->nu);
-        if (s < best || c == 0) {
+        if (s < best || !any) {
             best = s;
             *pick = i;
+            any = 1;
         }
     }
     return BTF_OK;
@@ -199,8 +239,10 @@ static btf_status choose_drawn(quilt *Q, btf_rng *rng, int *pick)
 static btf_status choose(quilt *Q, btf_rng *rng, int *pick, btf_error *err)
 {
     size_t n = (size_t)Q->nu * Q->nv;
-    if (Q->nk == 0) { /* nothing to match: any position */
+    if (Q->nk == 0) { /* nothing to match: any position (on the lattice) */
         *pick = (int)(btf_rng_next(rng) % n);
+        if (Q->q->candidates > 0 && has_lattice(Q))
+            snap(Q, pick);
         return BTF_OK;
     }
     if (Q->q->candidates > 0 && (size_t)Q->q->candidates < n)

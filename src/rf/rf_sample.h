@@ -52,6 +52,12 @@ typedef struct rf_quilt_args {
      * drawn (seeded) per block, which bounds the work on large surfaces
      * (the structure map, render/structure_map.c) */
     int candidates;
+    /* With drawn candidates: two lattice vectors (x0, y0, x1, y1; all 0:
+     * none). Each drawn position is moved to the nearest one whose offset
+     * from the block's own place in the sample is a lattice vector, so a
+     * periodic structure stays in step across the joints
+     * (model/structure_lattice.c). */
+    int lattice[4];
 } rf_quilt_args;
 btf_status rf_quilt(const rf_quilt_args *q, uint16_t *map, btf_error *err);
 

@@ -82,7 +82,7 @@ static btf_status synthesise(const btf_dataset *ds, const btf_rf_sample_opts *r,
     if (rc == BTF_OK) {
         rf_quilt_args q = {feat, in->width, *sx, *sy, r->width, r->height, r->surface_width,
                            r->surface_height, r->block, r->overlap, r->tolerance, r->seed,
-                           threads, 0};
+                           threads, 0, {0, 0, 0, 0}};
         rc = rf_quilt(&q, *map, err);
     }
     free(feat);

@@ -17,7 +17,8 @@ BIG=$((SIZE * 2))
 
 EXAMPLES=$(dirname "$0")
 rm -rf "$OUT/$MATERIAL" "$OUT/$MATERIAL.btfcar" "$OUT/$MATERIAL-segments" "$OUT/$MATERIAL-synth" \
-    "$OUT/$MATERIAL-scene.png" "$OUT/$MATERIAL-flat.png" "$OUT/$MATERIAL-report"
+    "$OUT/$MATERIAL-scene.png" "$OUT/$MATERIAL-flat.png" "$OUT/$MATERIAL-model.png" \
+    "$OUT/$MATERIAL-report"
 mkdir -p "$OUT"
 echo "== 1. btfcar generate --material $MATERIAL --size $SIZE $OUT/$MATERIAL"
 "$BTFCAR" generate --material "$MATERIAL" --size "$SIZE" --seed 1 "$OUT/$MATERIAL"
@@ -40,8 +41,12 @@ echo "== 5a. btfcar render --scene $EXAMPLES/demo.json (a sphere and a cylinder,
     -o "$OUT/$MATERIAL-scene.png"
 echo
 echo "== 5b. btfcar render --view 30,60 --light 45,0 --beside the dataset (measured | model)"
-"$BTFCAR" render "$OUT/$MATERIAL.btfcar" --view 30,60 --light 45,0 --size "${SIZE}x${SIZE}" \
+"$BTFCAR" render "$OUT/$MATERIAL.btfcar" --view 30,60 --light 45,0 \
     --beside "$OUT/$MATERIAL" -o "$OUT/$MATERIAL-flat.png"
+echo
+echo "== 5c. the same pair on a surface twice the sample's size (the measured structure quilted)"
+"$BTFCAR" render "$OUT/$MATERIAL.btfcar" --view 30,60 --light 45,0 \
+    --size "${BIG}x${BIG}" -o "$OUT/$MATERIAL-model.png"
 echo
 echo "== 6. btfcar report (compression, quality per direction, the preview)"
 "$BTFCAR" report "$OUT/$MATERIAL" "$OUT/$MATERIAL.btfcar" -o "$OUT/$MATERIAL-report"
@@ -50,5 +55,6 @@ echo "demo: dataset in $OUT/$MATERIAL/ (ground truth in truth/), index table pic
 echo "      $OUT/$MATERIAL-segments/index.png, model $OUT/$MATERIAL.btfcar, synthesised"
 echo "      subspace images in $OUT/$MATERIAL-synth/subspace_NN.{exr,png}, the rendered"
 echo "      scene $OUT/$MATERIAL-scene.png, and the measured image of (view 30,60; light"
-echo "      45,0) beside the model's flat render of it in $OUT/$MATERIAL-flat.png"
+echo "      45,0) beside the model's flat render of it in $OUT/$MATERIAL-flat.png, and"
+echo "      the model's render of that pair at twice the size in $OUT/$MATERIAL-model.png"
 echo "report: open $OUT/$MATERIAL-report/index.html in a browser (numbers in report.json)"

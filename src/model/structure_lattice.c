@@ -102,7 +102,8 @@ static int find_peaks(const double *r, int w, int h, peak *out, int max)
 int btf_structure_lattice(const btf_model *m, int lattice[4])
 {
     memset(lattice, 0, 4 * sizeof *lattice);
-    if (!btf_structure_quilted(m))
+    /* (btf_structure_quilted's test, written out: that file calls this one) */
+    if (!m || !m->range || m->range_texel != 1.0f || m->range_width < 1 || m->range_height < 1)
         return 0;
     int w = m->range_width, h = m->range_height;
     size_t n = (size_t)w * h;

@@ -92,6 +92,38 @@ static void show_grid(const void *dest, char *buf, size_t n)
     }
 }
 
+/* --sweep-structure on|off|on,off: the structure layers (btf_sweep_setting
+ * .plain 0) and format 1.3's plain model (1). */
+typedef struct plain_arg {
+    int *n, *values;
+} plain_arg;
+
+static int parse_plain(const char *s, void *dest, char *why, size_t n)
+{
+    const plain_arg *g = dest;
+    int count = 0, v[2];
+    if (!strcmp(s, "on"))
+        v[count++] = 0;
+    else if (!strcmp(s, "off"))
+        v[count++] = 1;
+    else if (!strcmp(s, "on,off") || !strcmp(s, "off,on"))
+        v[0] = s[1] == 'n' ? 0 : 1, v[1] = 1 - v[0], count = 2;
+    else {
+        snprintf(why, n, "expected on, off or on,off");
+        return -1;
+    }
+    *g->n = count;
+    memcpy(g->values, v, (size_t)count * sizeof *v);
+    return 0;
+}
+
+static void show_plain(const void *dest, char *buf, size_t n)
+{
+    const plain_arg *g = dest;
+    snprintf(buf, n, "%s", *g->n == 2 ? (g->values[0] ? "off,on" : "on,off")
+                           : *g->n == 1 && g->values[0] ? "off" : "on");
+}
+
 static int parse_light(const char *s, void *dest, char *why, size_t n)
 {
     return cli_parse_dir(s, dest, why, n);
@@ -113,6 +145,7 @@ int cmd_report(int argc, char **argv)
     grid_arg gk = {&so->n_subspaces, so->subspaces, 255, 0};
     grid_arg gl = {&so->n_levels, so->levels, BTF_MAX_LEVELS, 0};
     grid_arg gn = {&so->n_neighbours, so->neighbours, BTF_CAR_MAX_NEIGHBOURS, 0};
+    plain_arg gp = {&so->n_plain, so->plain};
     uint64_t max_pixels = BTF_DEFAULT_MAX_PIXELS;
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
@@ -151,6 +184,10 @@ int cmd_report(int argc, char **argv)
         {.name = "--sweep-neighbours", .kind = CLI_CUSTOM, .dest = &gn, .meta = "LIST",
          .help = "--sweep: fixed neighbourhoods of the first N candidate offsets\n"
                  "(auto: the Bayesian choice)", .parse = parse_grid, .show = show_grid},
+        {.name = "--sweep-structure", .kind = CLI_CUSTOM, .dest = &gp, .meta = "on|off|on,off",
+         .help = "--sweep: with the structure layers and pair gains (on, the default),\n"
+                 "without them (off: a 64-texel range tile, format 1.3's model), or both",
+         .parse = parse_plain, .show = show_plain},
         {.name = "--threads", .kind = CLI_INT, .dest = &ro.threads, .meta = "T",
          .help = "threads (the sweep: settings run in parallel)", .lo = 1, .hi = 64,
          .zero_means = "all CPUs"},
@@ -165,7 +202,7 @@ int cmd_report(int argc, char **argv)
     if (cli_check_output(&c, out, BTF_OUTPUT_FOLDER))
         return 1;
     int rf = is_rf_model(args[1]);
-    if (rf && (ro.sweep || gk.given || gl.given || gn.given))
+    if (rf && (ro.sweep || gk.given || gl.given || gn.given || so->n_plain))
         return cli_usage_error(&c, "%s is a reflectance-field model: --sweep varies the CAR "
                                "analysis and does not apply", args[1]);
     btf_error err = {0};

@@ -1756,6 +1756,9 @@ typedef struct btf_sweep_setting {
     int neighbours;           /* a fixed neighbourhood of the first n candidate
                                  offsets (btf_car_candidate_offsets); 0: the
                                  Bayesian choice */
+    int plain;                /* 1: no structure layer and no pair gains (a
+                                 64-texel range tile: format 1.3's model,
+                                 docs/model.md); 0: the analysis's layers */
 } btf_sweep_setting;
 
 typedef struct btf_sweep_point {
@@ -1783,6 +1786,8 @@ typedef struct btf_sweep_opts {
                                                           n 0: {0, 2, 4, 8} */
     int n_levels, levels[BTF_SWEEP_MAX_VALUES];        /* n 0: {0, 1, 2, 3} */
     int n_neighbours, neighbours[BTF_SWEEP_MAX_VALUES];/* n 0: {0, 4, 8, 12} */
+    int n_plain, plain[2];                             /* btf_sweep_setting.plain;
+                                                          n 0: {0} */
     btf_analyse_opts analyse;  /* the base settings the grid varies */
     btf_quality_opts quality;  /* the pairs measured per point (threads ignored) */
     int synth_size;            /* 0: 512 */

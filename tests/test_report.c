@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <sys/stat.h>
 
 static char dataset[4096];
@@ -260,6 +261,47 @@ static void test_sweep_resume(void **state)
     assert_non_null(strstr(e.msg, "levels 99"));
 }
 
+/* The structure axis: each setting with the layers and as format 1.3's
+ * plain model; the plain points have no structure, their own state files
+ * (the layered ones keep their names), and only a layered point is the
+ * default. */
+static void test_sweep_structure(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_sweep_opts o = btf_sweep_defaults();
+    o.analyse = quick();
+    o.analyse.segment.subspaces = 0;
+    o.n_subspaces = 1, o.subspaces[0] = 0;
+    o.n_levels = 1, o.levels[0] = 1;
+    o.n_neighbours = 1, o.neighbours[0] = 0;
+    o.n_plain = 2, o.plain[0] = 0, o.plain[1] = 1;
+    o.quality.views = 2, o.quality.lights = 2;
+    o.synth_size = 64, o.render_size = 32;
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s/sweep-structure", tu_dir);
+    o.state_dir = dir;
+    btf_sweep s;
+    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    assert_int_equal(s.n_points, 2);
+    assert_int_equal(s.points[0].setting.plain, 0);
+    assert_int_equal(s.points[1].setting.plain, 1);
+    assert_true(s.points[0].is_default && !s.points[1].is_default);
+    for (int i = 0; i < 2; i++)
+        assert_true(isfinite(s.points[i].mean_combined) && s.points[i].bytes > 100);
+    assert_int_equal(access(tu_fmt("%s/point-K0-L1-N0.json", dir), F_OK), 0);
+    assert_int_equal(access(tu_fmt("%s/point-K0-L1-N0-plain.json", dir), F_OK), 0);
+    btf_sweep again;
+    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
+    assert_int_equal(again.resumed, 2);
+    btf_sweep_free(&again);
+    btf_sweep_free(&s);
+    o.n_plain = 2, o.plain[0] = o.plain[1] = 1;
+    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    o.n_plain = 1, o.plain[0] = 7;
+    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+}
+
 static void test_presets(void **state)
 {
     (void)state;
@@ -333,7 +375,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_spread),        cmocka_unit_test(test_quality),
         cmocka_unit_test(test_quality_errors), cmocka_unit_test(test_analyse_shared),
-        cmocka_unit_test(test_sweep_resume),  cmocka_unit_test(test_presets),
+        cmocka_unit_test(test_sweep_resume),  cmocka_unit_test(test_sweep_structure),
+        cmocka_unit_test(test_presets),
         cmocka_unit_test(test_sphere_scene),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -299,7 +299,7 @@ static void setting_text(const btf_sweep_setting *s, char *buf, size_t n)
     snprintf(k, sizeof k, s->subspaces ? "%d" : "auto", s->subspaces);
     snprintf(l, sizeof l, s->levels ? "%d" : "auto", s->levels);
     snprintf(nb, sizeof nb, s->neighbours ? "%d" : "auto", s->neighbours);
-    snprintf(buf, n, "K %s, L %s, N %s", k, l, nb);
+    snprintf(buf, n, "K %s, L %s, N %s%s", k, l, nb, s->plain ? ", plain" : "");
 }
 
 static btf_status pareto_plots(const btf_report_data *d, const char *dir, btf_error *err)

@@ -57,6 +57,15 @@ static btf_status resolve(const btf_sweep_opts *in, btf_sweep_opts *o, btf_error
         o->n_neighbours = d.n_neighbours;
         memcpy(o->neighbours, d.neighbours, sizeof d.neighbours);
     }
+    if (o->n_plain == 0)
+        o->n_plain = 1, o->plain[0] = 0;
+    if (o->n_plain < 0 || o->n_plain > 2 || (o->n_plain == 2 && o->plain[0] == o->plain[1]))
+        return btf_fail(err, BTF_E_ARG, "sweep: %d structure values (expected on, off or both)",
+                        o->n_plain);
+    for (int i = 0; i < o->n_plain; i++)
+        if (o->plain[i] != 0 && o->plain[i] != 1)
+            return btf_fail(err, BTF_E_ARG, "sweep: structure value %d (expected 0: on, 1: off)",
+                            o->plain[i]);
     if (o->synth_size == 0)
         o->synth_size = d.synth_size;
     if (o->render_size == 0)
@@ -117,7 +126,9 @@ static void make_fingerprint(sweep_ctx *c)
 
 static void point_name(const btf_sweep_setting *s, char *buf, size_t n)
 {
-    snprintf(buf, n, "point-K%d-L%d-N%d.json", s->subspaces, s->levels, s->neighbours);
+    /* the structure layers' own points keep the names of format 1.4's */
+    snprintf(buf, n, "point-K%d-L%d-N%d%s.json", s->subspaces, s->levels, s->neighbours,
+             s->plain ? "-plain" : "");
 }
 
 static btf_status state_path(const sweep_ctx *c, const btf_sweep_setting *s, char *path,
@@ -150,6 +161,10 @@ int btf_sweep_point_parse(const char *text, size_t n, const char *fingerprint,
     ok = ok && num(j, "subspaces", &ok) == p->setting.subspaces &&
          num(j, "levels", &ok) == p->setting.levels &&
          num(j, "neighbours", &ok) == p->setting.neighbours;
+    /* "plain" is new: a point written without it has the layers */
+    const cJSON *pl = cJSON_GetObjectItemCaseSensitive(j, "plain");
+    ok = ok && (pl ? cJSON_IsNumber(pl) && pl->valuedouble == p->setting.plain
+                   : p->setting.plain == 0);
     double k = num(j, "k", &ok), bytes = num(j, "bytes", &ok);
     q.analyse_s = num(j, "analyse_s", &ok);
     q.synth_s = num(j, "synth_s", &ok);
@@ -202,6 +217,7 @@ static btf_status write_point(const sweep_ctx *c, const btf_sweep_point *p, btf_
     cJSON_AddNumberToObject(j, "subspaces", p->setting.subspaces);
     cJSON_AddNumberToObject(j, "levels", p->setting.levels);
     cJSON_AddNumberToObject(j, "neighbours", p->setting.neighbours);
+    cJSON_AddNumberToObject(j, "plain", p->setting.plain);
     cJSON_AddNumberToObject(j, "k", p->k);
     cJSON_AddNumberToObject(j, "analyse_s", p->analyse_s);
     cJSON_AddNumberToObject(j, "synth_s", p->synth_s);
@@ -241,6 +257,12 @@ static btf_analyse_opts setting_opts(const sweep_ctx *c, const btf_sweep_setting
     a.feature_dim = c->dim;
     a.means = c->means;
     a.range_from = c->range;
+    if (s->plain) { /* format 1.3's model: its own small tile, no layers */
+        a.no_structure = 1;
+        a.no_gains = 1;
+        a.range_size = 64;
+        a.range_from = NULL;
+    }
     return a;
 }
 
@@ -420,24 +442,26 @@ static void mark_front(btf_sweep *s, int by_bytes)
 
 static btf_status make_grid(const btf_sweep_opts *o, btf_sweep *s, btf_error *err)
 {
-    int n = o->n_subspaces * o->n_levels * o->n_neighbours;
+    int n = o->n_subspaces * o->n_levels * o->n_neighbours * o->n_plain;
     if (n < 1)
         return btf_fail(err, BTF_E_ARG, "sweep: an empty grid");
     s->points = btf_calloc((size_t)n, sizeof *s->points, err);
     if (!s->points)
         return BTF_E_NOMEM;
     int def_n = o->analyse.fit.car.n_fixed;
-    for (int a = 0; a < o->n_subspaces; a++)
-        for (int b = 0; b < o->n_levels; b++)
-            for (int c = 0; c < o->n_neighbours; c++) {
-                btf_sweep_point *p = &s->points[s->n_points++];
-                p->setting.subspaces = o->subspaces[a];
-                p->setting.levels = o->levels[b];
-                p->setting.neighbours = o->neighbours[c];
-                p->is_default = p->setting.subspaces == o->analyse.segment.subspaces &&
-                                p->setting.levels == o->analyse.fit.levels &&
-                                p->setting.neighbours == def_n;
-            }
+    for (int d = 0; d < o->n_plain; d++)
+        for (int a = 0; a < o->n_subspaces; a++)
+            for (int b = 0; b < o->n_levels; b++)
+                for (int c = 0; c < o->n_neighbours; c++) {
+                    btf_sweep_point *p = &s->points[s->n_points++];
+                    p->setting.subspaces = o->subspaces[a];
+                    p->setting.levels = o->levels[b];
+                    p->setting.neighbours = o->neighbours[c];
+                    p->setting.plain = o->plain[d];
+                    p->is_default = p->setting.subspaces == o->analyse.segment.subspaces &&
+                                    p->setting.levels == o->analyse.fit.levels &&
+                                    p->setting.neighbours == def_n && !p->setting.plain;
+                }
     return BTF_OK;
 }
 

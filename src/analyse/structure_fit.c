@@ -171,18 +171,32 @@ double btf_structure_albedo_at(const btf_structure_geom *g, const btf_model *m, 
     return s;
 }
 
-/* The sample's height at (u, v), bilinear, round the torus (the sample on
- * a surface of its own size is quilted as itself, which the renderer
- * wraps). */
-static double height_wrapped(const btf_model *m, double u, double v)
+/* The bilinear tap of (u, v) (texel centres at integers) on the w x h
+ * sample: round the torus (wrap: the sample on a surface of its own size
+ * is quilted as itself, which the renderer wraps) or held inside. */
+static void bilinear_tap(double u, double v, int w, int h, int wrap, btf_structure_tap *t)
 {
-    int w = m->range_width, h = m->range_height;
+    if (!wrap) {
+        u = u < 0.0 ? 0.0 : u > w - 1 ? w - 1 : u;
+        v = v < 0.0 ? 0.0 : v > h - 1 ? h - 1 : v;
+    }
     double fu = floor(u), fv = floor(v), fx = u - fu, fy = v - fv;
     long x0 = ((long)fu % w + w) % w, y0 = ((long)fv % h + h) % h;
-    long x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
-    const float *r = m->range;
-    return (r[y0 * w + x0] * (1 - fx) + r[y0 * w + x1] * fx) * (1 - fy) +
-           (r[y1 * w + x0] * (1 - fx) + r[y1 * w + x1] * fx) * fy;
+    long x1 = x0 + 1 < w ? x0 + 1 : wrap ? 0 : x0, y1 = y0 + 1 < h ? y0 + 1 : wrap ? 0 : y0;
+    t->i[0] = (int)(y0 * w + x0), t->w[0] = (float)((1 - fx) * (1 - fy));
+    t->i[1] = (int)(y0 * w + x1), t->w[1] = (float)(fx * (1 - fy));
+    t->i[2] = (int)(y1 * w + x0), t->w[2] = (float)((1 - fx) * fy);
+    t->i[3] = (int)(y1 * w + x1), t->w[3] = (float)(fx * fy);
+}
+
+static double height_wrapped(const btf_model *m, double u, double v)
+{
+    btf_structure_tap t;
+    bilinear_tap(u, v, m->range_width, m->range_height, 1, &t);
+    double s = 0.0;
+    for (int k = 0; k < 4; k++)
+        s += t.w[k] * m->range[t.i[k]];
+    return s;
 }
 
 btf_status btf_structure_march_taps(const btf_model *m, btf_dir view, btf_structure_tap **taps,
@@ -215,15 +229,7 @@ btf_status btf_structure_march_taps(const btf_model *m, btf_dir view, btf_struct
                 }
                 prev_h = hr, prev_d = d;
             }
-            double u2 = x + hit * dx, v2 = y + hit * dy, fu = floor(u2), fv = floor(v2);
-            double fx = u2 - fu, fy = v2 - fv;
-            long x0 = ((long)fu % w + w) % w, y0 = ((long)fv % h + h) % h;
-            long x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
-            btf_structure_tap *t = &o[(size_t)y * w + x];
-            t->i[0] = (int)(y0 * w + x0), t->w[0] = (float)((1 - fx) * (1 - fy));
-            t->i[1] = (int)(y0 * w + x1), t->w[1] = (float)(fx * (1 - fy));
-            t->i[2] = (int)(y1 * w + x0), t->w[2] = (float)((1 - fx) * fy);
-            t->i[3] = (int)(y1 * w + x1), t->w[3] = (float)(fx * fy);
+            bilinear_tap(x + hit * dx, y + hit * dy, w, h, 1, &o[(size_t)y * w + x]);
         }
     *taps = o;
     return BTF_OK;
@@ -251,17 +257,7 @@ btf_status btf_structure_warp(const btf_model *m, btf_dir view, btf_structure_ta
              * heights of deep gaps are too shallow for a march to find
              * what hides them), so the analysis keeps the one step. */
             double hh = m->range[(size_t)y * w + x];
-            double u2 = x + hh * dx, v2 = y + hh * dy;
-            u2 = u2 < 0.0 ? 0.0 : u2 > w - 1 ? w - 1 : u2;
-            v2 = v2 < 0.0 ? 0.0 : v2 > h - 1 ? h - 1 : v2;
-            int x0 = (int)floor(u2), y0 = (int)floor(v2);
-            int x1 = x0 + 1 < w ? x0 + 1 : x0, y1 = y0 + 1 < h ? y0 + 1 : y0;
-            double fx = u2 - x0, fy = v2 - y0;
-            btf_structure_tap *t = &o[(size_t)y * w + x];
-            t->i[0] = y0 * w + x0, t->w[0] = (float)((1 - fx) * (1 - fy));
-            t->i[1] = y0 * w + x1, t->w[1] = (float)(fx * (1 - fy));
-            t->i[2] = y1 * w + x0, t->w[2] = (float)((1 - fx) * fy);
-            t->i[3] = y1 * w + x1, t->w[3] = (float)(fx * fy);
+            bilinear_tap(x + hh * dx, y + hh * dy, w, h, 0, &o[(size_t)y * w + x]);
         }
     *taps = o;
     return BTF_OK;

@@ -109,7 +109,7 @@ static int parse_plain(const char *s, void *dest, char *why, size_t n)
     else if (!strcmp(s, "on,off") || !strcmp(s, "off,on"))
         v[0] = s[1] == 'n' ? 0 : 1, v[1] = 1 - v[0], count = 2;
     else {
-        snprintf(why, n, "expected on, off or on,off");
+        snprintf(why, n, "on, off or on,off");
         return -1;
     }
     *g->n = count;

@@ -159,23 +159,6 @@ static unsigned char *payload_of(const unsigned char *f, size_t *n)
     return p;
 }
 
-static unsigned char *rewrap(const unsigned char *p, size_t n, size_t *size)
-{
-    unsigned char *f = malloc(26 + n + 4);
-    static const unsigned char sig[11] = {0x89, 'B', 'T', 'F', 'C', 'A', 'R', '\r', '\n', 0x1a,
-                                          '\n'};
-    memcpy(f, sig, 11);
-    f[11] = 1, f[12] = 0, f[13] = 5, f[14] = 0, f[15] = 26, f[16] = 0, f[17] = 0;
-    for (int i = 0; i < 4; i++)
-        f[18 + i] = f[22 + i] = (unsigned char)(n >> (8 * i));
-    memcpy(f + 26, p, n);
-    uint32_t crc = (uint32_t)crc32(0L, f, (uInt)(26 + n));
-    for (int i = 0; i < 4; i++)
-        f[26 + n + i] = (unsigned char)(crc >> (8 * i));
-    *size = 26 + n + 4;
-    return f;
-}
-
 static void file_round_trip(void **state)
 {
     (void)state;
@@ -207,13 +190,13 @@ static void file_round_trip(void **state)
     assert_int_equal(*flags, 3);
     *flags = 0x83;
     size_t bad_n;
-    unsigned char *bad = rewrap(p, pn, &bad_n);
+    unsigned char *bad = tu_model_rewrap(p, pn, 5, &bad_n);
     assert_int_equal(btf_model_decode(bad, bad_n, "flags", &back, &e), BTF_E_FORMAT);
     assert_non_null(strstr(e.msg, "STRC"));
     assert_null(strchr(e.msg, '\n'));
     free(bad);
     *flags = 1; /* shadows only, yet the colour planes follow */
-    bad = rewrap(p, pn, &bad_n);
+    bad = tu_model_rewrap(p, pn, 5, &bad_n);
     assert_int_equal(btf_model_decode(bad, bad_n, "planes", &back, &e), BTF_E_FORMAT);
     free(bad);
     free(p);

@@ -456,12 +456,15 @@ size_t tu_rf_section(const unsigned char *payload, size_t n, const char *tag)
     return found;
 }
 
-unsigned char *tu_rf_rewrap(const unsigned char *payload, size_t n, int major, size_t *size)
+/* A stored (not deflated) container of signature sig around a payload,
+ * with a correct CRC-32. */
+static unsigned char *rewrap(const char *sig, const unsigned char *payload, size_t n, int major,
+                             int minor, size_t *size)
 {
     unsigned char *out = malloc(26 + n + 4);
-    memcpy(out, "\x89" "BTFRFL\r\n\x1a\n", 11);
-    out[11] = (unsigned char)major, out[12] = 0, out[13] = 0, out[14] = 0, out[15] = 26,
-    out[16] = 0, out[17] = 0;
+    memcpy(out, sig, 11);
+    out[11] = (unsigned char)major, out[12] = 0, out[13] = (unsigned char)minor, out[14] = 0,
+    out[15] = 26, out[16] = 0, out[17] = 0;
     for (int i = 0; i < 4; i++)
         out[18 + i] = out[22 + i] = (unsigned char)(n >> (8 * i));
     memcpy(out + 26, payload, n);
@@ -470,6 +473,16 @@ unsigned char *tu_rf_rewrap(const unsigned char *payload, size_t n, int major, s
         out[26 + n + i] = (unsigned char)(crc >> (8 * i));
     *size = 26 + n + 4;
     return out;
+}
+
+unsigned char *tu_rf_rewrap(const unsigned char *payload, size_t n, int major, size_t *size)
+{
+    return rewrap("\x89" "BTFRFL\r\n\x1a\n", payload, n, major, 0, size);
+}
+
+unsigned char *tu_model_rewrap(const unsigned char *payload, size_t n, int minor, size_t *size)
+{
+    return rewrap("\x89" "BTFCAR\r\n\x1a\n", payload, n, 1, minor, size);
 }
 
 void tu_rf_expect_format_error(const unsigned char *d, size_t n, const char *what,

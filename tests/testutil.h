@@ -125,6 +125,8 @@ size_t tu_rf_section(const unsigned char *payload, size_t n, const char *tag);
  * major format version with a valid CRC, so that the decoder reaches the
  * change: malloc'd, its size in *size. */
 unsigned char *tu_rf_rewrap(const unsigned char *payload, size_t n, int major, size_t *size);
+/* The same for a CAR model file (docs/model-format.md): version 1.minor. */
+unsigned char *tu_model_rewrap(const unsigned char *payload, size_t n, int minor, size_t *size);
 /* Decoding the n bytes d as "bad.rf" is BTF_E_FORMAT with a message naming
  * it, and leaves m->codes NULL; what (the damage) is printed otherwise. m
  * and e are the caller's, for checks of its own. */

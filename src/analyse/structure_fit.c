@@ -189,6 +189,19 @@ static void bilinear_tap(double u, double v, int w, int h, int wrap, btf_structu
     t->i[3] = (int)(y1 * w + x1), t->w[3] = (float)(fx * fy);
 }
 
+/* The taps of every pixel of the sample (the caller's to fill), and the
+ * texture step of one unit of height seen from view: (v_x, -v_y) / v_z,
+ * v_z held at the renderer's BTF_PARALLAX_MIN_Z. */
+static btf_structure_tap *view_taps(const btf_model *m, btf_dir view, double *dx, double *dy,
+                                    btf_error *err)
+{
+    double v[3];
+    btf_dir_to_vec(view, v);
+    double z = v[2] > PARALLAX_MIN_Z ? v[2] : PARALLAX_MIN_Z;
+    *dx = v[0] / z, *dy = -v[1] / z;
+    return btf_alloc((size_t)m->range_width * m->range_height, sizeof(btf_structure_tap), err);
+}
+
 static double height_wrapped(const btf_model *m, double u, double v)
 {
     btf_structure_tap t;
@@ -203,13 +216,10 @@ btf_status btf_structure_march_taps(const btf_model *m, btf_dir view, btf_struct
                                     btf_error *err)
 {
     int w = m->range_width, h = m->range_height;
-    btf_structure_tap *o = btf_alloc((size_t)w * h, sizeof *o, err);
+    double dx, dy, lo = 0.0, hi = 0.0;
+    btf_structure_tap *o = view_taps(m, view, &dx, &dy, err);
     if (!o)
         return BTF_E_NOMEM;
-    double v[3], lo = 0.0, hi = 0.0;
-    btf_dir_to_vec(view, v);
-    double z = v[2] > PARALLAX_MIN_Z ? v[2] : PARALLAX_MIN_Z;
-    double dx = v[0] / z, dy = -v[1] / z;
     for (size_t i = 0; i < (size_t)w * h; i++) {
         lo = i == 0 || m->range[i] < lo ? m->range[i] : lo;
         hi = i == 0 || m->range[i] > hi ? m->range[i] : hi;
@@ -239,13 +249,10 @@ btf_status btf_structure_warp(const btf_model *m, btf_dir view, btf_structure_ta
                               btf_error *err)
 {
     int w = m->range_width, h = m->range_height;
-    btf_structure_tap *o = btf_alloc((size_t)w * h, sizeof *o, err);
+    double dx, dy;
+    btf_structure_tap *o = view_taps(m, view, &dx, &dy, err);
     if (!o)
         return BTF_E_NOMEM;
-    double v[3];
-    btf_dir_to_vec(view, v);
-    double z = v[2] > PARALLAX_MIN_Z ? v[2] : PARALLAX_MIN_Z;
-    double dx = v[0] / z, dy = -v[1] / z;
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             /* the one-step parallax shift (u, v) += h (v_x, -v_y) / v_z of

@@ -20,7 +20,6 @@
  */
 #include "render/shade.h"
 #include "core/core.h"
-#include "model/model.h"
 
 #include "render_gpu.h"
 #include "render_layout.h"
@@ -214,11 +213,9 @@ static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t
     uint32_t *hz = NULL;
     btf_status rc = btf_structure_maps(m, side, side, seed, &h, &n, NULL, err);
     size_t px = (size_t)side * side;
-    *shadows = m->shadows && m->albedo;
-    if (rc == BTF_OK && *shadows)
-        rc = btf_horizon_map(h.data, side, side, 1, threads, &hz, err);
     if (rc == BTF_OK)
-        btf_render_height_bounds(h.data, px, &bounds[0], &bounds[1]);
+        rc = btf_render_relief(m, &h, threads, &hz, bounds, err);
+    *shadows = hz != NULL;
     if (rc == BTF_OK)
         rc = btf_vk_buffer_create(vk, px * 4 * sizeof(float), out, err);
     if (rc == BTF_OK)

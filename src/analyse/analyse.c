@@ -222,12 +222,21 @@ static void free_geoms(btf_structure_geom *g, int k)
     free(g);
 }
 
+/* An image's mean colour, in double (the pair gains' texture means). */
+static void image_mean(const btf_image *img, double *mean)
+{
+    float f[3];
+    btf_image_mean_rgb(img, f);
+    for (int c = 0; c < 3; c++)
+        mean[c] = f[c];
+}
+
 /* Subspace k's exemplar: with a structure layer, divided by what the
  * relief and the albedo explain (the CAR fields fit the rest), and the
  * colour matching's histogram taken of it divided by the relief's
  * shading only (what synthesis gives before matching). */
 static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *m, int k,
-                          const btf_structure_geom *g, btf_dir light, double *pred,
+                          const btf_structure_geom *g, btf_dir light, double *tex_mean,
                           btf_error *err)
 {
     char what[64];
@@ -235,8 +244,8 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     btf_fit_opts fo = o->fit;
     fo.car.what = what;
     if (!g) {
-        if (pred)
-            btf_pair_predict(img, NULL, m, light, pred);
+        if (tex_mean) /* the texture is the exemplar itself */
+            image_mean(img, tex_mean);
         btf_status rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
         return rc ? rc : btf_fit_marginals(img, m, k, err);
     }
@@ -246,12 +255,8 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
         return rc;
     memcpy(shaded.data, img->data, (size_t)img->width * img->height * 3 * sizeof(float));
     btf_structure_divide(&shaded, m, g, light, 0, NULL);
-    if (pred) { /* the texture is the shaded-out exemplar (colour matched to it) */
-        float mean[3];
-        btf_image_mean_rgb(&shaded, mean);
-        for (int c = 0; c < 3; c++)
-            pred[c] = mean[c]; /* its mean: btf_pair_predict_views does the rest */
-    }
+    if (tex_mean) /* the texture is the shaded-out exemplar (colour matched to it) */
+        image_mean(&shaded, tex_mean);
     btf_structure_divide(img, m, g, light, 1, NULL);
     rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
     if (rc == BTF_OK)
@@ -261,33 +266,25 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
 }
 
 /* The pair gains from the images' mean colours (those of the
- * segmentation's pass, the caller's, or read now) against the renderer's:
- * pred holds per subspace and light what it gives (no structure layer), or
- * in its first three values per subspace the texture's mean, from which
- * btf_pair_predict_views makes each pair's. */
+ * segmentation's pass, the caller's, or read now) against the renderer's,
+ * made from each subspace texture's mean tex_mean[k * 3 + c]: with a
+ * structure layer by btf_pair_predict_views (what each pair's view sees
+ * under its light), without one the texture's mean itself. */
 static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg,
-                              const btf_analyse_opts *o, const double *pred,
+                              const btf_analyse_opts *o, const double *tex_mean,
                               const btf_image *normal, const uint32_t *horizon, btf_model *m,
                               btf_error *err)
 {
-    int L = m->lights.count;
-    size_t pairs = (size_t)m->views.count * L;
+    size_t pairs = (size_t)m->views.count * m->lights.count;
     float *own = NULL;
-    double *pp = btf_alloc(pairs * 3, sizeof(double), err), *tex_mean = NULL;
+    double *pp = btf_alloc(pairs * 3, sizeof(double), err);
     btf_status rc = pp ? BTF_OK : BTF_E_NOMEM;
-    if (rc == BTF_OK && m->albedo && normal->data) {
-        if (!(tex_mean = btf_alloc((size_t)seg->k * 3, sizeof(double), err)))
-            rc = BTF_E_NOMEM;
-        for (int k = 0; rc == BTF_OK && k < seg->k; k++)
-            for (int c = 0; c < 3; c++)
-                tex_mean[3 * k + c] = pred[(size_t)k * L * 3 + c];
-        if (rc == BTF_OK)
-            rc = btf_pair_predict_views(m, tex_mean, normal, horizon, pp, err);
-    } else {
+    if (rc == BTF_OK && m->albedo && normal->data)
+        rc = btf_pair_predict_views(m, tex_mean, normal, horizon, pp, err);
+    else
         for (size_t i = 0; rc == BTF_OK && i < pairs; i++)
             for (int c = 0; c < 3; c++)
-                pp[3 * i + c] = pred[((size_t)m->index[i] * L + i % (size_t)L) * 3 + c];
-    }
+                pp[3 * i + c] = tex_mean[3 * (size_t)m->index[i] + c];
     const float *means = seg->means ? seg->means : o->means;
     if (rc == BTF_OK && !means && (rc = btf_dataset_means(ds, o->segment.features.threads,
                                                           &own, err)) == BTF_OK)
@@ -296,7 +293,6 @@ static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg
         rc = btf_pair_gains(m, means, pp, err);
     free(own);
     free(pp);
-    free(tex_mean);
     return rc;
 }
 
@@ -310,10 +306,9 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
     btf_image normal = {0};
     btf_image *imgs = NULL; /* with a structure layer: every exemplar, read once */
     btf_status rc = BTF_OK;
-    int L = m->lights.count;
-    double *pred = NULL; /* [k][light][3]: the render's mean colour of each pair */
+    double *tex_mean = NULL; /* [k][3]: each subspace texture's mean (the pair gains) */
     if (!o->no_gains && m->views.count > 0 &&
-        !(pred = btf_alloc((size_t)seg->k * L * 3, sizeof(double), err)))
+        !(tex_mean = btf_alloc((size_t)seg->k * 3, sizeof(double), err)))
         return BTF_E_NOMEM;
     uint32_t *horizon = NULL; /* the relief's shadows (btf_horizon.h), on the sample */
     btf_structure_geom *geoms = NULL; /* per exemplar: what its shading reads */
@@ -334,7 +329,7 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
             break;
         int structured = normal.data && m->albedo && on_grid(&img, m);
         rc = fit_one(&img, o, m, k, structured ? &geoms[k] : NULL,
-                     m->lights.dirs[seg->rep_light[k]], pred ? pred + (size_t)k * L * 3 : NULL,
+                     m->lights.dirs[seg->rep_light[k]], tex_mean ? tex_mean + 3 * k : NULL,
                      err);
         btf_image_free(&img);
         if (rc == BTF_OK && !structured && m->albedo) {
@@ -354,10 +349,10 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         if (o->progress)
             o->progress(o->progress_user, (double)(k + 1) / seg->k, "fitting CAR models");
     }
-    if (rc == BTF_OK && pred)
-        rc = stage_gains(ds, seg, o, pred, &normal, horizon, m, err);
+    if (rc == BTF_OK && tex_mean)
+        rc = stage_gains(ds, seg, o, tex_mean, &normal, horizon, m, err);
 done:
-    free(pred);
+    free(tex_mean);
     free(horizon);
     free_geoms(geoms, seg->k);
     for (int k = 0; imgs && k < seg->k; k++)

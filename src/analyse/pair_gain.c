@@ -38,38 +38,6 @@ float btf_gain_value(int q)
 /* The flat surface's l_z floor (BTF_FLAT_MIN_Z of the renderer). */
 #define FLAT_MIN_Z 0.05
 
-void btf_pair_predict(const btf_image *tex, const btf_structure_geom *g, const btf_model *m,
-                      btf_dir own_light, double *pred)
-{
-    size_t n = (size_t)tex->width * tex->height;
-    int L = m->lights.count;
-    if (!g) { /* no structure: the image's own mean for every light */
-        float mean[3];
-        btf_image_mean_rgb(tex, mean);
-        for (int l = 0; l < L; l++)
-            for (int c = 0; c < 3; c++)
-                pred[3 * l + c] = mean[c];
-        return;
-    }
-    /* The renderer's value at a measured pair: the texture (the exemplar
-     * over its shading) times (a + vis max(0, n.l)) / (a + max(l_kz, floor)),
-     * l_k the subspace's own light (btf_render_reflectance). */
-    double a = m->ambient > 0.0f ? m->ambient : 0.0, lk[3];
-    btf_dir_to_vec(own_light, lk);
-    double refl = 1.0 / (a + (lk[2] > FLAT_MIN_Z ? lk[2] : FLAT_MIN_Z));
-    for (int l = 0; l < L; l++) {
-        double v[3], s[3] = {0.0, 0.0, 0.0};
-        btf_dir_to_vec(m->lights.dirs[l], v);
-        for (size_t i = 0; i < n; i++) {
-            double f = a + btf_structure_lit(g, i, v);
-            for (int c = 0; c < 3; c++)
-                s[c] += tex->data[3 * i + c] * f;
-        }
-        for (int c = 0; c < 3; c++)
-            pred[3 * l + c] = n ? s[c] * refl / (double)n : 0.0;
-    }
-}
-
 btf_status btf_pair_gains(btf_model *m, const float *means, const double *pred, btf_error *err)
 {
     int V = m->views.count, L = m->lights.count;

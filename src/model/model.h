@@ -166,12 +166,6 @@ btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img,
  * value. */
 int btf_gain_code(float g);
 float btf_gain_value(int q);
-/* The mean colour the renderer gives each measured light (pred[l * 3 + c])
- * from a subspace's texture tex (the exemplar over its shading) of the
- * subspace whose own light is own_light; g NULL: no structure layer, the
- * texture's mean for every light. */
-void btf_pair_predict(const btf_image *tex, const btf_structure_geom *g, const btf_model *m,
-                      btf_dir own_light, double *pred);
 /* m->gain from the images' mean colours (btf_segmentation.means) and the
  * renderer's predicted ones (pred[pair * 3 + c]). */
 btf_status btf_pair_gains(btf_model *m, const float *means, const double *pred, btf_error *err);

@@ -4,6 +4,7 @@
  */
 #include "render/shade.h"
 #include "core/core.h"
+#include "model/model.h"
 
 #include <string.h>
 
@@ -90,12 +91,19 @@ float btf_render_light_outer_z(const btf_model *m)
     return (float)cos(outer * (3.14159265358979323846 / 180.0));
 }
 
-void btf_render_height_bounds(const float *h, size_t n, float *lo, float *hi)
+btf_status btf_render_relief(const btf_model *m, const btf_image *height, int threads,
+                             uint32_t **horizon, float bounds[2], btf_error *err)
 {
+    size_t n = (size_t)height->width * height->height;
+    const float *h = height->data;
     float a = n ? h[0] : 0.0f, b = a;
     for (size_t i = 1; i < n; i++) {
         a = h[i] < a ? h[i] : a;
         b = h[i] > b ? h[i] : b;
     }
-    *lo = a, *hi = b;
+    bounds[0] = a, bounds[1] = b;
+    *horizon = NULL;
+    if (!(m->shadows && m->albedo))
+        return BTF_OK;
+    return btf_horizon_map(h, height->width, height->height, 1, threads, horizon, err);
 }

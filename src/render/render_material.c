@@ -8,7 +8,6 @@
 #include "render/shade.h"
 #include "core/core.h"
 #include "synth/synth.h"
-#include "model/model.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -127,10 +126,10 @@ btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,
         (rc = btf_structure_maps(m, side, side, seed, &rm->height, &rm->normal,
                                  m->albedo ? &albedo : NULL, err)))
         goto fail;
-    if (m->shadows && m->albedo &&
-        (rc = btf_horizon_map(rm->height.data, side, side, 1, threads, &rm->horizon, err)))
+    float bounds[2];
+    if ((rc = btf_render_relief(m, &rm->height, threads, &rm->horizon, bounds, err)))
         goto fail;
-    btf_render_height_bounds(rm->height.data, (size_t)side * side, &rm->hmin, &rm->hmax);
+    rm->hmin = bounds[0], rm->hmax = bounds[1];
     which = btf_alloc((size_t)m->n_subspaces, sizeof *which, err);
     if (!which) {
         rc = BTF_E_NOMEM;

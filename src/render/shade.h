@@ -69,8 +69,13 @@ typedef struct btf_shade_ctx {
 #define BTF_SHADE_LIGHT_RGB(ctx, j, k) ((ctx)->rgb[j][k])
 #include "render/btf_render_shared.h"
 
-/* The extremes of n heights (0, 0 for none). */
-void btf_render_height_bounds(const float *h, size_t n, float *lo, float *hi);
+/* What the shading reads of the relief besides its heights and normals,
+ * the same for both backends: the height map's extremes (bounds: lowest,
+ * highest; the view march's span) and, for a model whose relief casts
+ * shadows, its horizon map round the torus (*horizon, the caller frees it;
+ * NULL without shadows). */
+btf_status btf_render_relief(const btf_model *m, const btf_image *height, int threads,
+                             uint32_t **horizon, float bounds[2], btf_error *err);
 
 /* A model that can be rendered: subspaces, an index table, directions. */
 btf_status btf_render_check_model(const btf_model *m, btf_error *err);

@@ -380,16 +380,17 @@ int cmd_analyse(int argc, char **argv)
         {.name = "--preset", .kind = CLI_CHOICE, .dest = &preset,
          .meta = "fast|balanced|accurate",
          .help = "a measured point of the speed/accuracy trade: fast (K 2, 1 level,\n"
-                 "8 neighbours), balanced (K 4, 2 levels, 8 neighbours) or accurate\n"
-                 "(K 8, 3 levels, 12 neighbours) sets --subspaces, --levels and\n"
+                 "4 neighbours), balanced (K 4, 1 level, 4 neighbours) or accurate\n"
+                 "(K 8, levels and neighbourhood auto) sets --subspaces, --levels and\n"
                  "--neighbourhood (each given explicitly wins; docs/report.md, \"Presets\")",
          .choices = btf_analyse_preset_names()},
         {.name = "--stage", .kind = CLI_CHOICE, .dest = &stage, .meta = "STAGE",
          .help = "stop after this stage", .choices = stages},
         {.name = "--subspaces", .kind = CLI_INT, .dest = &so->subspaces, .meta = "K|auto",
          .help = "number of subspace images; auto takes the smallest K whose k-means\n"
-                 "distortion is at most 10% of the K = 1 distortion, at most 20\n"
-                 "(docs/segmentation.md)",
+                 "distortion is at most 10% of the K = 1 distortion, then splits on\n"
+                 "while one more removes 12% of what is left (up to twice that K, at\n"
+                 "most 20; docs/segmentation.md)",
          .lo = 1, .hi = 255, .word = "auto", .word_value = 0},
         {.name = "--bins", .kind = CLI_INT, .dest = &so->features.bins, .meta = "B",
          .help = "histogram bins per Lab channel", .lo = 2, .hi = 4096},

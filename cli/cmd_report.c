@@ -38,19 +38,23 @@ static int is_rf_model(const char *path)
     return btf_rf_sniff(head, n);
 }
 
-/* "auto,2,4" into a sweep grid: 0 for auto. */
+/* "auto,2,4" into a sweep grid: 0 for auto (or for the grid's own word). */
 typedef struct grid_arg {
     int *n;
     int *values;
     int hi;
     int given;  /* set when the option was parsed */
+    const char *word; /* the name of 0; NULL: auto */
+    int lo;           /* the smallest number; 0: 1 */
 } grid_arg;
 
 static int parse_grid(const char *s, void *dest, char *why, size_t n)
 {
     grid_arg *g = dest;
-    snprintf(why, n, "a comma-separated list of at most %d values, each auto or 1..%d",
-             BTF_SWEEP_MAX_VALUES, g->hi);
+    const char *word = g->word ? g->word : "auto";
+    int lo = g->lo ? g->lo : 1;
+    snprintf(why, n, "a comma-separated list of at most %d values, each %s or %d..%d",
+             BTF_SWEEP_MAX_VALUES, word, lo, g->hi);
     int count = 0;
     const char *p = s;
     while (*p) {
@@ -62,9 +66,9 @@ static int parse_grid(const char *s, void *dest, char *why, size_t n)
         memcpy(item, p, len);
         item[len] = '\0';
         long v;
-        if (!strcmp(item, "auto"))
+        if (!strcmp(item, word))
             v = 0;
-        else if (cli_parse_int(item, 1, g->hi, &v) != 0)
+        else if (cli_parse_int(item, lo, g->hi, &v) != 0)
             return -1;
         g->values[count++] = (int)v;
         p = end ? end + 1 : p + len;
@@ -85,7 +89,8 @@ static void show_grid(const void *dest, char *buf, size_t n)
     buf[0] = '\0';
     for (int i = 0; i < *g->n && k < n; i++) {
         int w = g->values[i] ? snprintf(buf + k, n - k, "%s%d", i ? "," : "", g->values[i])
-                             : snprintf(buf + k, n - k, "%sauto", i ? "," : "");
+                             : snprintf(buf + k, n - k, "%s%s", i ? "," : "",
+                                        g->word ? g->word : "auto");
         if (w < 0)
             break;
         k += (size_t)w;
@@ -142,10 +147,11 @@ int cmd_report(int argc, char **argv)
     btf_report_opts ro = btf_report_defaults();
     btf_sweep_opts *so = &ro.sweep_opts;
     so->analyse.segment.kmeans.seed = 1; /* analyse's seed: the sweep's default is the command's */
-    grid_arg gk = {&so->n_subspaces, so->subspaces, 255, 0};
-    grid_arg gl = {&so->n_levels, so->levels, BTF_MAX_LEVELS, 0};
-    grid_arg gn = {&so->n_neighbours, so->neighbours, BTF_CAR_MAX_NEIGHBOURS, 0};
+    grid_arg gk = {&so->n_subspaces, so->subspaces, 255, 0, NULL, 0};
+    grid_arg gl = {&so->n_levels, so->levels, BTF_MAX_LEVELS, 0, NULL, 0};
+    grid_arg gn = {&so->n_neighbours, so->neighbours, BTF_CAR_MAX_NEIGHBOURS, 0, NULL, 0};
     plain_arg gp = {&so->n_plain, so->plain};
+    grid_arg gr = {&so->n_range_sizes, so->range_sizes, 4096, 0, "full", 4};
     uint64_t max_pixels = BTF_DEFAULT_MAX_PIXELS;
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
@@ -188,6 +194,11 @@ int cmd_report(int argc, char **argv)
          .help = "--sweep: with the structure layers and pair gains (on, the default),\n"
                  "without them (off: a 64-texel range tile, format 1.3's model), or both",
          .parse = parse_plain, .show = show_plain},
+        {.name = "--sweep-range-size", .kind = CLI_CUSTOM, .dest = &gr, .meta = "LIST",
+         .help = "--sweep, with the layers: the range map's longer side, full (the\n"
+                 "analysed resolution, with the structure layer; the default) or N (a\n"
+                 "small periodic tile, no structure layer; analyse --range-size N)",
+         .parse = parse_grid, .show = show_grid},
         {.name = "--threads", .kind = CLI_INT, .dest = &ro.threads, .meta = "T",
          .help = "threads (the sweep: settings run in parallel)", .lo = 1, .hi = 64,
          .zero_means = "all CPUs"},
@@ -202,7 +213,7 @@ int cmd_report(int argc, char **argv)
     if (cli_check_output(&c, out, BTF_OUTPUT_FOLDER))
         return 1;
     int rf = is_rf_model(args[1]);
-    if (rf && (ro.sweep || gk.given || gl.given || gn.given || so->n_plain))
+    if (rf && (ro.sweep || gk.given || gl.given || gn.given || gr.given || so->n_plain))
         return cli_usage_error(&c, "%s is a reflectance-field model: --sweep varies the CAR "
                                "analysis and does not apply", args[1]);
     btf_error err = {0};

@@ -613,11 +613,14 @@ typedef struct btf_segment_opts {
     int max_subspaces;        /* cap for auto; 0: 20 (the paper's bound) */
     double auto_threshold;    /* auto: smallest K whose distortion is at most
                                  this fraction of the K = 1 distortion; 0: 0.10 */
+    double split_gain;        /* auto, past the threshold: K grows while one
+                                 more subspace removes at least this fraction
+                                 of the distortion left; 0: 0.12, < 0: off */
     btf_feature_opts features;
     btf_kmeans_opts kmeans;
 } btf_segment_opts;
-/* The defaults: K auto, at most 20, threshold 0.10, and the defaults of
- * features and k-means. */
+/* The defaults: K auto, at most 20, threshold 0.10, split gain 0.12, and
+ * the defaults of features and k-means. */
 btf_segment_opts btf_segment_defaults(void);
 
 typedef struct btf_segmentation {
@@ -938,12 +941,15 @@ typedef struct btf_car_fit_opts {
     int n_fixed;                          /* 0: choose by the Bayesian rule */
     btf_offset fixed[BTF_CAR_MAX_NEIGHBOURS];
     int max_neighbours;                   /* auto: largest candidate; 0: 24 */
+    double coefficient_bits;              /* auto: prior odds 2^-bits per
+                                             coefficient (what the file pays
+                                             for it); 0: equal odds */
     btf_warning_fn warn;
     void *warn_user;
     const char *what;                     /* names the sub-band in warnings */
 } btf_car_fit_opts;
 /* The defaults: the Bayesian choice among candidates of at most 24
- * neighbours, no warnings callback. */
+ * neighbours at equal prior odds, no warnings callback. */
 btf_car_fit_opts btf_car_fit_defaults(void);
 
 #define BTF_CAR_MAX_CANDIDATES 16
@@ -984,9 +990,10 @@ btf_status btf_model_decode(const unsigned char *data, size_t size, const char *
 
 typedef struct btf_fit_opts {
     int levels;               /* pyramid levels 1..BTF_MAX_LEVELS; 0: auto (docs/model.md) */
+    int max_auto_levels;      /* auto: at most this many; 0: 3 (the paper's bound) */
     btf_car_fit_opts car;     /* neighbourhood (fixed or auto), warnings */
 } btf_fit_opts;
-/* The defaults: levels 0 (auto), car = btf_car_fit_defaults(). */
+/* The defaults: levels 0 (auto, at most 3), car = btf_car_fit_defaults(). */
 btf_fit_opts btf_fit_defaults(void);
 
 /* Models one subspace image (linear RGB): decorrelation, pyramid, one CAR
@@ -1759,6 +1766,9 @@ typedef struct btf_sweep_setting {
     int plain;                /* 1: no structure layer and no pair gains (a
                                  64-texel range tile: format 1.3's model,
                                  docs/model.md); 0: the analysis's layers */
+    int range_size;           /* the range map's longer side (analyse
+                                 --range-size); 0: the analysed resolution
+                                 (with the structure layer). Plain points: 0 */
 } btf_sweep_setting;
 
 typedef struct btf_sweep_point {
@@ -1788,6 +1798,9 @@ typedef struct btf_sweep_opts {
     int n_neighbours, neighbours[BTF_SWEEP_MAX_VALUES];/* n 0: {0, 4, 8, 12} */
     int n_plain, plain[2];                             /* btf_sweep_setting.plain;
                                                           n 0: {0} */
+    int n_range_sizes, range_sizes[BTF_SWEEP_MAX_VALUES]; /* btf_sweep_setting
+                                                          .range_size (0, or
+                                                          4..4096); n 0: {0} */
     btf_analyse_opts analyse;  /* the base settings the grid varies */
     btf_quality_opts quality;  /* the pairs measured per point (threads ignored) */
     int synth_size;            /* 0: 512 */
@@ -1805,7 +1818,8 @@ btf_sweep_opts btf_sweep_defaults(void);
 
 typedef struct btf_sweep {
     int n_points;
-    btf_sweep_point *points;   /* K-major, then levels, then neighbours */
+    btf_sweep_point *points;   /* by structure (on, off), range size, K, levels,
+                                  neighbours */
     double shared_s;           /* features and photometric stereo, once */
     double seconds;            /* the whole sweep */
     int resumed;               /* points read back from state_dir */

@@ -27,6 +27,7 @@ static void documented_values(void **state)
     assert_int_equal(s.subspaces, 0);
     assert_int_equal(s.max_subspaces, 20);
     assert_true(s.auto_threshold == 0.10);
+    assert_true(s.split_gain == 0.12);
     assert_memory_equal(&s.features, &f, sizeof f);
     assert_memory_equal(&s.kmeans, &k, sizeof k);
 
@@ -38,6 +39,7 @@ static void documented_values(void **state)
 
     btf_fit_opts fit = btf_fit_defaults();
     assert_int_equal(fit.levels, 0);
+    assert_int_equal(fit.max_auto_levels, 0);
     assert_memory_equal(&fit.car, &c, sizeof c);
 
     btf_generate_opts g = btf_generate_defaults();

@@ -302,6 +302,52 @@ static void test_sweep_structure(void **state)
     assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
 }
 
+/* The range-size axis: a layered setting at the analysed resolution and
+ * with a small tile (no structure layer: fewer bytes), the plain point once
+ * (its own tile whatever the axis); state files named by the size; sizes
+ * out of range refused. */
+static void test_sweep_range_size(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_sweep_opts o = btf_sweep_defaults();
+    o.analyse = quick();
+    o.analyse.segment.subspaces = 0;
+    o.n_subspaces = 1, o.subspaces[0] = 2;
+    o.n_levels = 1, o.levels[0] = 1;
+    o.n_neighbours = 1, o.neighbours[0] = 4;
+    o.n_plain = 2, o.plain[0] = 0, o.plain[1] = 1;
+    o.n_range_sizes = 2, o.range_sizes[0] = 0, o.range_sizes[1] = 8;
+    o.quality.views = 2, o.quality.lights = 2;
+    o.synth_size = 64, o.render_size = 32;
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s/sweep-range", tu_dir);
+    o.state_dir = dir;
+    btf_sweep s;
+    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    assert_int_equal(s.n_points, 3);
+    assert_int_equal(s.points[0].setting.range_size, 0);
+    assert_int_equal(s.points[1].setting.range_size, 8);
+    assert_int_equal(s.points[2].setting.range_size, 0);
+    assert_int_equal(s.points[2].setting.plain, 1);
+    assert_true(s.points[1].bytes < s.points[0].bytes);
+    for (int i = 0; i < 3; i++)
+        assert_true(isfinite(s.points[i].mean_combined) && !s.points[i].is_default);
+    assert_int_equal(access(tu_fmt("%s/point-K2-L1-N4.json", dir), F_OK), 0);
+    assert_int_equal(access(tu_fmt("%s/point-K2-L1-N4-R8.json", dir), F_OK), 0);
+    assert_int_equal(access(tu_fmt("%s/point-K2-L1-N4-plain.json", dir), F_OK), 0);
+    btf_sweep again;
+    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
+    assert_int_equal(again.resumed, 3);
+    btf_sweep_free(&again);
+    btf_sweep_free(&s);
+    o.range_sizes[1] = 3;
+    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "range size 3"));
+    o.range_sizes[1] = 5000;
+    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+}
+
 static void test_presets(void **state)
 {
     (void)state;
@@ -317,7 +363,7 @@ static void test_presets(void **state)
     assert_int_equal(n, 3);
     /* The documented settings (docs/report.md, "Presets"). */
     static const struct { const char *name; int k, l, n; } want[] = {
-        {"fast", 2, 1, 8}, {"balanced", 4, 2, 8}, {"accurate", 8, 3, 12}};
+        {"fast", 2, 1, 4}, {"balanced", 4, 1, 4}, {"accurate", 8, 0, 0}};
     btf_analyse_opts o = btf_analyse_defaults();
     for (int i = 0; i < 3; i++) {
         o = btf_analyse_defaults();
@@ -376,6 +422,7 @@ int main(void)
         cmocka_unit_test(test_spread),        cmocka_unit_test(test_quality),
         cmocka_unit_test(test_quality_errors), cmocka_unit_test(test_analyse_shared),
         cmocka_unit_test(test_sweep_resume),  cmocka_unit_test(test_sweep_structure),
+        cmocka_unit_test(test_sweep_range_size),
         cmocka_unit_test(test_presets),
         cmocka_unit_test(test_sphere_scene),
     };

@@ -255,6 +255,48 @@ static void constant_dataset_gives_one_subspace(void **state)
     btf_segmentation_free(&s);
 }
 
+/* Three groups on a line: the threshold holds at K = 2 (the two close
+ * groups together), the split gain then separates them; off, it does not. */
+static void split_gain_separates_close_groups(void **state)
+{
+    (void)state;
+    float f[40];
+    for (int i = 0; i < 40; i++)
+        f[i] = i < 20 ? 0.0f : i < 30 ? 10.0f : 14.0f;
+    btf_segmentation s;
+    btf_error e = {0};
+    btf_segment_opts o = btf_segment_defaults();
+    TU_OK(btf_segment_features(f, 5, 8, 1, &o, &s, &e), &e);
+    print_message("%s\n", s.reason);
+    assert_int_equal(s.k, 3);
+    assert_non_null(strstr(s.reason, "split"));
+    assert_int_equal(s.index[0], s.index[19]);
+    assert_int_not_equal(s.index[20], s.index[30]);
+    btf_segmentation_free(&s);
+    o.split_gain = -1.0;
+    TU_OK(btf_segment_features(f, 5, 8, 1, &o, &s, &e), &e);
+    assert_int_equal(s.k, 2);
+    assert_int_equal(s.index[20], s.index[30]);
+    btf_segmentation_free(&s);
+    /* a continuum splits with a slowly falling gain: at most twice the
+     * threshold's K */
+    float ramp[200];
+    for (int i = 0; i < 200; i++)
+        ramp[i] = (float)i;
+    o.split_gain = 0.0; /* the default */
+    TU_OK(btf_segment_features(ramp, 10, 20, 1, &o, &s, &e), &e);
+    print_message("ramp: %s\n", s.reason);
+    int k_tau = 0;
+    while (k_tau < s.k && !(s.distortion_by_k[k_tau + 1] > 0.0 &&
+                            s.distortion_by_k[k_tau + 1] <= 0.10 * s.distortion_by_k[1]))
+        k_tau++;
+    assert_true(s.k > k_tau + 1 && s.k <= 2 * (k_tau + 1));
+    btf_segmentation_free(&s);
+    o.split_gain = 1.0;
+    assert_int_equal(btf_segment_features(f, 5, 8, 1, &o, &s, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "split gain"));
+}
+
 static void index_png_and_cli(void **state)
 {
     (void)state;
@@ -307,6 +349,7 @@ int main(void)
         cmocka_unit_test(kmeans_recovers_blobs_deterministically),
         cmocka_unit_test(kmeans_degenerate_inputs),
         cmocka_unit_test(constant_dataset_gives_one_subspace),
+        cmocka_unit_test(split_gain_separates_close_groups),
     };
     const struct CMUnitTest on_dataset[] = {
         cmocka_unit_test(segmentation_is_consistent),

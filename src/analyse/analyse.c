@@ -231,6 +231,9 @@ static void image_mean(const btf_image *img, double *mean)
         mean[c] = f[c];
 }
 
+#define STRUCTURED_AUTO_LEVELS 2
+#define STRUCTURED_COEFFICIENT_BITS 32.0 /* a float gamma in the file */
+
 /* Subspace k's exemplar: with a structure layer, divided by what the
  * relief and the albedo explain (the CAR fields fit the rest), and the
  * colour matching's histogram taken of it divided by the relief's
@@ -243,6 +246,16 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     snprintf(what, sizeof what, "subspace %d", k);
     btf_fit_opts fo = o->fit;
     fo.car.what = what;
+    /* The structure layer holds the coarse pattern: a third pyramid level
+     * measured no closer on the rendered material and cost 1-2 KB
+     * (docs/model.md, "Choosing the levels"). */
+    if (g && !fo.max_auto_levels)
+        fo.max_auto_levels = STRUCTURED_AUTO_LEVELS;
+    /* Beside a structure layer the remainder's extra neighbours bought
+     * likelihood the render did not show: each must pay for its 32 bits
+     * in the file (docs/model.md, "Choosing the neighbourhood"). */
+    if (g && !fo.car.coefficient_bits)
+        fo.car.coefficient_bits = STRUCTURED_COEFFICIENT_BITS;
     if (!g) {
         if (tex_mean) /* the texture is the exemplar itself */
             image_mean(img, tex_mean);

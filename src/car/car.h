@@ -55,10 +55,11 @@ btf_status btf_fit_band_levels(const double *band, int w, int h, int levels,
 /* The measured choice of the pyramid depth (car/levels.c, docs/model.md
  * "Choosing the levels"): for 1 .. btf_levels_cap(w, h) levels, the band's
  * models are fitted and synthesised, and the depth whose synthesis' octave
- * energies come closest to the band's wins. distance[L - 1] (when not NULL,
- * BTF_MAX_LEVELS entries, -1 where not tried) gets each depth's distance. */
+ * energies come closest to the band's wins, at most max_levels of them (0:
+ * the paper's 3). distance[L - 1] (when not NULL, BTF_MAX_LEVELS entries,
+ * -1 where not tried) gets each depth's distance. */
 btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit_opts *car,
-                             int *levels, double *distance, btf_error *err);
+                             int max_levels, int *levels, double *distance, btf_error *err);
 /* The most levels the choice considers for a w x h band. */
 int btf_levels_cap(int w, int h);
 

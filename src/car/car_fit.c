@@ -318,6 +318,9 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
         return btf_fail(err, BTF_E_ARG, "CAR fit of a %d x %d band", w, h);
     if (o.n_fixed < 0 || o.n_fixed > BTF_CAR_MAX_NEIGHBOURS)
         return btf_fail(err, BTF_E_ARG, "neighbourhood of %d offsets", o.n_fixed);
+    if (!(o.coefficient_bits >= 0.0 && o.coefficient_bits <= 1e6))
+        return btf_fail(err, BTF_E_ARG, "CAR fit: %g bits per coefficient (expected 0..1e6)",
+                        o.coefficient_bits);
     for (int i = 0; i < o.n_fixed; i++)
         if (!btf_offset_is_causal(o.fixed[i]))
             return btf_fail(err, BTF_E_ARG, "offset %d:%d is not causal", o.fixed[i].row,
@@ -403,8 +406,11 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
             continue;
         inf.size[inf.candidates] = sizes[c];
         inf.log_evidence[inf.candidates] = ev;
-        if (ev > best) {
-            best = ev;
+        /* The prior odds of a candidate: 2^-bits per coefficient it stores
+         * (o.coefficient_bits; 0: equal odds, the paper's rule). */
+        double score = ev - o.coefficient_bits * M_LN2 * sizes[c];
+        if (score > best) {
+            best = score;
             best_eta = sizes[c];
             best_lambda = lam;
             inf.chosen = inf.candidates;

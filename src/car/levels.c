@@ -145,12 +145,14 @@ static btf_status choose(const double *band, int w, int h, const btf_car_fit_opt
                          int *levels, double *distance, btf_error *err);
 
 btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit_opts *car,
-                             int *levels, double *distance, btf_error *err)
+                             int max_levels, int *levels, double *distance, btf_error *err)
 {
     *levels = 1;
     for (int l = 0; distance && l < BTF_MAX_LEVELS; l++)
         distance[l] = -1.0;
     int cap = btf_levels_cap(w, h);
+    if (max_levels > 0 && cap > max_levels)
+        cap = max_levels;
     if (cap == 1)
         return BTF_OK;
     /* The distances are ratios: measured on the band scaled to its largest
@@ -218,7 +220,7 @@ int btf_auto_levels(const double *band, int w, int h)
     if (!band || w < 1 || h < 1)
         return 1;
     btf_car_fit_opts car = btf_car_fit_defaults();
-    if (btf_choose_levels(band, w, h, &car, &levels, NULL, &e) != BTF_OK)
+    if (btf_choose_levels(band, w, h, &car, 0, &levels, NULL, &e) != BTF_OK)
         return 1;
     return levels;
 }

@@ -27,6 +27,9 @@ btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
     memset(out, 0, sizeof *out);
     if (o.levels < 0 || o.levels > BTF_MAX_LEVELS)
         return btf_fail(err, BTF_E_ARG, "levels %d: expected 1..%d or auto", o.levels, BTF_MAX_LEVELS);
+    if (o.max_auto_levels < 0 || o.max_auto_levels > BTF_MAX_LEVELS)
+        return btf_fail(err, BTF_E_ARG, "auto levels cap %d: expected 1..%d or 0 (the default)",
+                        o.max_auto_levels, BTF_MAX_LEVELS);
     size_t n = (size_t)img->width * img->height;
     for (size_t i = 0; i < n * 3 && img->channels == 3; i++)
         if (!isfinite(img->data[i]))
@@ -46,8 +49,8 @@ btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
         }
     btf_decorrelate(img, out->mean, out->basis, bands);
     int levels = o.levels;
-    if (!levels && (rc = btf_choose_levels(bands[0], img->width, img->height, &o.car, &levels,
-                                           NULL, err))) {
+    if (!levels && (rc = btf_choose_levels(bands[0], img->width, img->height, &o.car,
+                                           o.max_auto_levels, &levels, NULL, err))) {
         for (int b = 0; b < 3; b++)
             free(bands[b]);
         return rc;

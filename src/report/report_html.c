@@ -299,7 +299,10 @@ static void setting_text(const btf_sweep_setting *s, char *buf, size_t n)
     snprintf(k, sizeof k, s->subspaces ? "%d" : "auto", s->subspaces);
     snprintf(l, sizeof l, s->levels ? "%d" : "auto", s->levels);
     snprintf(nb, sizeof nb, s->neighbours ? "%d" : "auto", s->neighbours);
-    snprintf(buf, n, "K %s, L %s, N %s%s", k, l, nb, s->plain ? ", plain" : "");
+    char r[24] = "";
+    if (s->range_size)
+        snprintf(r, sizeof r, ", R %d", s->range_size);
+    snprintf(buf, n, "K %s, L %s, N %s%s%s", k, l, nb, r, s->plain ? ", plain" : "");
 }
 
 static btf_status pareto_plots(const btf_report_data *d, const char *dir, btf_error *err)

@@ -125,6 +125,7 @@ static void add_sweep(cJSON *root, const btf_report_data *d)
         cJSON_AddNumberToObject(j, "levels", p->setting.levels);
         cJSON_AddNumberToObject(j, "neighbours", p->setting.neighbours);
         cJSON_AddBoolToObject(j, "structure", !p->setting.plain);
+        cJSON_AddNumberToObject(j, "range_size", p->setting.range_size);
         cJSON_AddNumberToObject(j, "k", p->k);
         cJSON_AddNumberToObject(j, "analyse_seconds", p->analyse_s);
         cJSON_AddNumberToObject(j, "synth_seconds", p->synth_s);

@@ -59,6 +59,15 @@ static btf_status resolve(const btf_sweep_opts *in, btf_sweep_opts *o, btf_error
     }
     if (o->n_plain == 0)
         o->n_plain = 1, o->plain[0] = 0;
+    if (o->n_range_sizes == 0)
+        o->n_range_sizes = 1, o->range_sizes[0] = 0;
+    if (o->n_range_sizes < 0 || o->n_range_sizes > BTF_SWEEP_MAX_VALUES)
+        return btf_fail(err, BTF_E_ARG, "sweep: at most %d range sizes", BTF_SWEEP_MAX_VALUES);
+    for (int i = 0; i < o->n_range_sizes; i++)
+        if (o->range_sizes[i] != 0 && (o->range_sizes[i] < 4 || o->range_sizes[i] > 4096))
+            return btf_fail(err, BTF_E_ARG,
+                            "sweep: range size %d: expected 0 (the analysed resolution) or "
+                            "4..4096", o->range_sizes[i]);
     if (o->n_plain < 0 || o->n_plain > 2 || (o->n_plain == 2 && o->plain[0] == o->plain[1]))
         return btf_fail(err, BTF_E_ARG, "sweep: %d structure values (expected on, off or both)",
                         o->n_plain);
@@ -127,8 +136,11 @@ static void make_fingerprint(sweep_ctx *c)
 static void point_name(const btf_sweep_setting *s, char *buf, size_t n)
 {
     /* the structure layers' own points keep the names of format 1.4's */
-    snprintf(buf, n, "point-K%d-L%d-N%d%s.json", s->subspaces, s->levels, s->neighbours,
-             s->plain ? "-plain" : "");
+    char range[24] = "";
+    if (s->range_size)
+        snprintf(range, sizeof range, "-R%d", s->range_size);
+    snprintf(buf, n, "point-K%d-L%d-N%d%s%s.json", s->subspaces, s->levels, s->neighbours,
+             range, s->plain ? "-plain" : "");
 }
 
 static btf_status state_path(const sweep_ctx *c, const btf_sweep_setting *s, char *path,
@@ -165,6 +177,10 @@ int btf_sweep_point_parse(const char *text, size_t n, const char *fingerprint,
     const cJSON *pl = cJSON_GetObjectItemCaseSensitive(j, "plain");
     ok = ok && (pl ? cJSON_IsNumber(pl) && pl->valuedouble == p->setting.plain
                    : p->setting.plain == 0);
+    /* "range_size" likewise: a point written without it has the full map */
+    const cJSON *rs = cJSON_GetObjectItemCaseSensitive(j, "range_size");
+    ok = ok && (rs ? cJSON_IsNumber(rs) && rs->valuedouble == p->setting.range_size
+                   : p->setting.range_size == 0);
     double k = num(j, "k", &ok), bytes = num(j, "bytes", &ok);
     q.analyse_s = num(j, "analyse_s", &ok);
     q.synth_s = num(j, "synth_s", &ok);
@@ -218,6 +234,7 @@ static btf_status write_point(const sweep_ctx *c, const btf_sweep_point *p, btf_
     cJSON_AddNumberToObject(j, "levels", p->setting.levels);
     cJSON_AddNumberToObject(j, "neighbours", p->setting.neighbours);
     cJSON_AddNumberToObject(j, "plain", p->setting.plain);
+    cJSON_AddNumberToObject(j, "range_size", p->setting.range_size);
     cJSON_AddNumberToObject(j, "k", p->k);
     cJSON_AddNumberToObject(j, "analyse_s", p->analyse_s);
     cJSON_AddNumberToObject(j, "synth_s", p->synth_s);
@@ -261,6 +278,9 @@ static btf_analyse_opts setting_opts(const sweep_ctx *c, const btf_sweep_setting
         a.no_structure = 1;
         a.no_gains = 1;
         a.range_size = 64;
+        a.range_from = NULL;
+    } else if (s->range_size) { /* its own tile: photometric stereo again, timed */
+        a.range_size = s->range_size;
         a.range_from = NULL;
     }
     return a;
@@ -442,7 +462,11 @@ static void mark_front(btf_sweep *s, int by_bytes)
 
 static btf_status make_grid(const btf_sweep_opts *o, btf_sweep *s, btf_error *err)
 {
-    int n = o->n_subspaces * o->n_levels * o->n_neighbours * o->n_plain;
+    /* a plain model has its own 64-texel tile: one range size */
+    int per_setting = 0;
+    for (int d = 0; d < o->n_plain; d++)
+        per_setting += o->plain[d] ? 1 : o->n_range_sizes;
+    int n = o->n_subspaces * o->n_levels * o->n_neighbours * per_setting;
     if (n < 1)
         return btf_fail(err, BTF_E_ARG, "sweep: an empty grid");
     s->points = btf_calloc((size_t)n, sizeof *s->points, err);
@@ -450,18 +474,22 @@ static btf_status make_grid(const btf_sweep_opts *o, btf_sweep *s, btf_error *er
         return BTF_E_NOMEM;
     int def_n = o->analyse.fit.car.n_fixed;
     for (int d = 0; d < o->n_plain; d++)
-        for (int a = 0; a < o->n_subspaces; a++)
-            for (int b = 0; b < o->n_levels; b++)
-                for (int c = 0; c < o->n_neighbours; c++) {
-                    btf_sweep_point *p = &s->points[s->n_points++];
-                    p->setting.subspaces = o->subspaces[a];
-                    p->setting.levels = o->levels[b];
-                    p->setting.neighbours = o->neighbours[c];
-                    p->setting.plain = o->plain[d];
-                    p->is_default = p->setting.subspaces == o->analyse.segment.subspaces &&
-                                    p->setting.levels == o->analyse.fit.levels &&
-                                    p->setting.neighbours == def_n && !p->setting.plain;
-                }
+        for (int r = 0; r < (o->plain[d] ? 1 : o->n_range_sizes); r++)
+            for (int a = 0; a < o->n_subspaces; a++)
+                for (int b = 0; b < o->n_levels; b++)
+                    for (int c = 0; c < o->n_neighbours; c++) {
+                        btf_sweep_point *p = &s->points[s->n_points++];
+                        btf_sweep_setting *t = &p->setting;
+                        t->subspaces = o->subspaces[a];
+                        t->levels = o->levels[b];
+                        t->neighbours = o->neighbours[c];
+                        t->plain = o->plain[d];
+                        t->range_size = o->plain[d] ? 0 : o->range_sizes[r];
+                        p->is_default = t->subspaces == o->analyse.segment.subspaces &&
+                                        t->levels == o->analyse.fit.levels &&
+                                        t->neighbours == def_n && !t->plain &&
+                                        t->range_size == o->analyse.range_size;
+                    }
     return BTF_OK;
 }
 

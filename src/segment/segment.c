@@ -10,6 +10,12 @@
  * distances to the centres) falls as K grows; D(1) is the total scatter of the
  * features. btfcar takes the smallest K with D(K) <= tau * D(1), tau = 0.10
  * by default: the subspaces explain at least 90 % of the feature scatter.
+ * Past it, K grows while one more subspace still removes at least a fraction
+ * g of the distortion left, D(K + 1) <= (1 - g) D(K), g = 0.12 by default:
+ * a split that clear is a group of images the model would otherwise render
+ * from a stranger's exemplar (measured: docs/model.md, "Choosing K"). It
+ * grows to at most twice the threshold's K: a continuum of images (one
+ * brightness ramp) splits with a gain that falls only slowly.
  * K is capped at 20 (the paper's bound) and at the number of distinct
  * features. If every feature is the same, K = 1.
  */
@@ -80,15 +86,45 @@ static btf_status fill_result(const float *f, int n, int dim, int n_lights,
     return pick_representatives(f, n, dim, km, n_lights, s, err);
 }
 
+/* Whether the K-means result next (K + 1 clusters asked) splits clearly
+ * enough to be kept over km (the split gain of the file comment). */
+static int clear_split(const btf_kmeans_result *km, const btf_kmeans_result *next, int k,
+                       double gain)
+{
+    return gain > 0.0 && next->k == k + 1 && next->distortion <= (1.0 - gain) * km->distortion;
+}
+
+/* The reason of a K grown past the threshold's k_tau by clear splits. */
+static void split_reason(btf_segmentation *s, int k, int k_tau, double tau, double gain,
+                         int max_k)
+{
+    const double *d = s->distortion_by_k;
+    char stop[96];
+    if (k >= 2 * k_tau || k >= max_k)
+        snprintf(stop, sizeof stop, "at most %d", k);
+    else if (d[k] > 0.0 && d[k + 1] > 0.0)
+        snprintf(stop, sizeof stop, "D(%d)/D(%d) = %.3f", k + 1, k, d[k + 1] / d[k]);
+    else
+        snprintf(stop, sizeof stop, "no further split");
+    snprintf(s->reason, sizeof s->reason,
+             "K = %d: D(K)/D(1) <= %.3f from K = %d (%.4f), then split while one more "
+             "removes >= %.0f%% of the distortion left (D(%d)/D(%d) = %.3f; stop: %s)",
+             k, tau, k_tau, d[k_tau] / d[1], 100.0 * gain, k, k - 1,
+             d[k - 1] > 0.0 ? d[k] / d[k - 1] : 0.0, stop);
+}
+
 /* Runs k-means for K = 1, 2, ... until the rule of the file comment holds. */
 static btf_status choose_k(const float *f, int n, int dim, const btf_segment_opts *o, int max_k,
                            double tau, btf_segmentation *s, btf_kmeans_result *chosen,
                            btf_error *err)
 {
     double d1 = 0.0;
+    int have = 0;    /* km already holds this K's result (a kept split) */
+    int k_tau = 0;   /* the smallest K the threshold held at */
+    btf_kmeans_result km = {0}, next = {0};
     for (int k = 1; k <= max_k; k++) {
-        btf_kmeans_result km;
-        btf_status rc = btf_kmeans(f, n, dim, k, &o->kmeans, &km, err);
+        btf_status rc = have ? BTF_OK : btf_kmeans(f, n, dim, k, &o->kmeans, &km, err);
+        have = 0;
         if (rc)
             return rc;
         s->distortion_by_k[k] = km.distortion;
@@ -96,6 +132,23 @@ static btf_status choose_k(const float *f, int n, int dim, const btf_segment_opt
             d1 = km.distortion;
         int fewer = km.k < k; /* ran out of distinct features */
         int pass = !(d1 > 0.0) || km.distortion <= tau * d1;
+        if (pass && !k_tau)
+            k_tau = k;
+        if (pass && !fewer && k < max_k && k < 2 * k_tau && d1 > 0.0 && o->split_gain > 0.0) {
+            if ((rc = btf_kmeans(f, n, dim, k + 1, &o->kmeans, &next, err))) {
+                btf_kmeans_free(&km);
+                return rc;
+            }
+            if (clear_split(&km, &next, k, o->split_gain)) {
+                btf_kmeans_free(&km);
+                km = next; /* K + 1's result, taken up by the next round */
+                memset(&next, 0, sizeof next);
+                have = 1;
+                continue;
+            }
+            s->distortion_by_k[k + 1] = next.distortion;
+            btf_kmeans_free(&next);
+        }
         if (pass || fewer || k == max_k) {
             if (!(d1 > 0.0))
                 snprintf(s->reason, sizeof s->reason,
@@ -106,6 +159,8 @@ static btf_status choose_k(const float *f, int n, int dim, const btf_segment_opt
                          km.distortion / d1);
             else if (pass && k == 1)
                 snprintf(s->reason, sizeof s->reason, "K = 1: D(1) is already within %.3f", tau);
+            else if (pass && k > k_tau)
+                split_reason(s, k, k_tau, tau, o->split_gain, max_k);
             else if (pass)
                 snprintf(s->reason, sizeof s->reason,
                          "K = %d: smallest K with D(K)/D(1) <= %.3f (D(%d)/D(1) = %.4f, "
@@ -128,6 +183,7 @@ btf_segment_opts btf_segment_defaults(void)
     return (btf_segment_opts){.subspaces = 0,
                               .max_subspaces = 20,
                               .auto_threshold = 0.10,
+                              .split_gain = 0.12,
                               .features = btf_feature_defaults(),
                               .kmeans = btf_kmeans_defaults()};
 }
@@ -142,6 +198,8 @@ static btf_segment_opts resolve_opts(const btf_segment_opts *opts)
         o.max_subspaces = d.max_subspaces;
     if (!(o.auto_threshold > 0.0))
         o.auto_threshold = d.auto_threshold;
+    if (o.split_gain == 0.0 || isnan(o.split_gain))
+        o.split_gain = d.split_gain;
     return o;
 }
 
@@ -160,6 +218,9 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
     double tau = o.auto_threshold;
     if (!(tau < 1.0))
         return btf_fail(err, BTF_E_ARG, "auto threshold %g: expected in (0, 1)", tau);
+    if (!(o.split_gain < 1.0))
+        return btf_fail(err, BTF_E_ARG, "split gain %g: expected below 1 (negative: off)",
+                        o.split_gain);
     int max_k = o.max_subspaces;
     if (max_k > SEGMENT_MAX_K)
         max_k = SEGMENT_MAX_K;

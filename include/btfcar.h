@@ -991,6 +991,10 @@ btf_status btf_model_decode(const unsigned char *data, size_t size, const char *
 typedef struct btf_fit_opts {
     int levels;               /* pyramid levels 1..BTF_MAX_LEVELS; 0: auto (docs/model.md) */
     int max_auto_levels;      /* auto: at most this many; 0: 3 (the paper's bound) */
+    const float *masking;     /* auto: NULL, or (the image's size) the factor the
+                                 render multiplies this image's luminance by
+                                 (its structure layer); the levels are then
+                                 chosen for the product (docs/model.md) */
     btf_car_fit_opts car;     /* neighbourhood (fixed or auto), warnings */
 } btf_fit_opts;
 /* The defaults: levels 0 (auto, at most 3), car = btf_car_fit_defaults(). */

@@ -320,7 +320,7 @@ static void test_choose_levels_extremes(void **state)
     double d[BTF_MAX_LEVELS];
     int levels = 0;
     btf_car_fit_opts o = btf_car_fit_defaults();
-    TU_OK(btf_choose_levels(flat, 64, 64, &o, 0, &levels, d, &e), &e);
+    TU_OK(btf_choose_levels(flat, 64, 64, &o, 0, NULL, &levels, d, &e), &e);
     assert_int_equal(levels, 1);
     /* wood's grain: structure at coarse scales */
     btf_image img;
@@ -329,14 +329,14 @@ static void test_choose_levels_extremes(void **state)
     assert_non_null(band);
     for (int i = 0; i < 128 * 128; i++)
         band[i] = img.data[3 * i] + img.data[3 * i + 1] + img.data[3 * i + 2];
-    TU_OK(btf_choose_levels(band, 128, 128, &o, 0, &levels, d, &e), &e);
+    TU_OK(btf_choose_levels(band, 128, 128, &o, 0, NULL, &levels, d, &e), &e);
     printf("wood: distances by depth %.3f %.3f %.3f, chose %d\n", d[0], d[1], d[2], levels);
     assert_true(levels >= 2);
     for (int l = 0; l < 3; l++)
         assert_true(isfinite(d[l]) && d[l] >= 0.0);
     assert_true(d[levels - 1] <= d[0]);
     /* a cap of 2 (the analysis' for a structured model) tries no third */
-    TU_OK(btf_choose_levels(band, 128, 128, &o, 2, &levels, d, &e), &e);
+    TU_OK(btf_choose_levels(band, 128, 128, &o, 2, NULL, &levels, d, &e), &e);
     assert_true(levels >= 1 && levels <= 2);
     assert_true(d[1] >= 0.0 && d[2] == -1.0);
     free(band);

@@ -232,6 +232,19 @@ static void image_mean(const btf_image *img, double *mean)
 }
 
 #define STRUCTURED_AUTO_LEVELS 2
+
+/* What the render multiplies the remainder img by: the exemplar's
+ * luminance (in factor, before the structure was divided out) over the
+ * remainder's, into factor (1 where either is black). */
+static void masking_factor(const btf_image *img, float *factor)
+{
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; i++) {
+        double after = (double)img->data[3 * i] + img->data[3 * i + 1] + img->data[3 * i + 2];
+        double r = after > 1e-12 && factor[i] > 0.0f ? factor[i] / after : 1.0;
+        factor[i] = isfinite(r) && r < 1e6 ? (float)r : 1.0f;
+    }
+}
 #define STRUCTURED_COEFFICIENT_BITS 32.0 /* a float gamma in the file */
 
 /* Subspace k's exemplar: with a structure layer, divided by what the
@@ -266,12 +279,24 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     btf_status rc = btf_image_alloc(&shaded, img->width, img->height, 3, err);
     if (rc)
         return rc;
-    memcpy(shaded.data, img->data, (size_t)img->width * img->height * 3 * sizeof(float));
+    size_t n = (size_t)img->width * img->height;
+    float *factor = btf_alloc(n, sizeof(float), err);
+    if (!factor) {
+        btf_image_free(&shaded);
+        return BTF_E_NOMEM;
+    }
+    memcpy(shaded.data, img->data, n * 3 * sizeof(float));
     btf_structure_divide(&shaded, m, g, light, 0, NULL);
     if (tex_mean) /* the texture is the shaded-out exemplar (colour matched to it) */
         image_mean(&shaded, tex_mean);
+    for (size_t i = 0; i < n; i++) /* the exemplar's luminance, before division */
+        factor[i] = img->data[3 * i] + img->data[3 * i + 1] + img->data[3 * i + 2];
     btf_structure_divide(img, m, g, light, 1, NULL);
+    masking_factor(img, factor);
+    if (!fo.levels && !fo.masking)
+        fo.masking = factor;
     rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
+    free(factor);
     if (rc == BTF_OK)
         rc = btf_fit_marginals_lab(img, &shaded, m, k, err);
     btf_image_free(&shaded);

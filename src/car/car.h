@@ -57,9 +57,18 @@ btf_status btf_fit_band_levels(const double *band, int w, int h, int levels,
  * models are fitted and synthesised, and the depth whose synthesis' octave
  * energies come closest to the band's wins, at most max_levels of them (0:
  * the paper's 3). distance[L - 1] (when not NULL, BTF_MAX_LEVELS entries,
- * -1 where not tried) gets each depth's distance. */
+ * -1 where not tried) gets each depth's distance. mask (NULL: none) is a
+ * factor the render multiplies the band's image by: its relative octave
+ * energies are added to the band's relative ones (band / level, level the
+ * image's mean along the band) on both sides, so that the depth is chosen
+ * for the product, where the mask hides what it outweighs. */
+typedef struct btf_levels_mask {
+    const float *factor; /* w x h, positive */
+    double level;        /* the band's image's mean level (> 0) */
+} btf_levels_mask;
 btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit_opts *car,
-                             int max_levels, int *levels, double *distance, btf_error *err);
+                             int max_levels, const btf_levels_mask *mask, int *levels,
+                             double *distance, btf_error *err);
 /* The most levels the choice considers for a w x h band. */
 int btf_levels_cap(int w, int h);
 

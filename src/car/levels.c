@@ -20,7 +20,13 @@
  *
  * The cap: at most 3 levels (the paper's bound), and no more than keep the
  * coarsest level 16 pixels wide (a CAR model of 24 neighbours needs rows
- * and columns to fit on).
+ * and columns to fit on); the caller may lower it (2 beside a structure
+ * layer, analyse/analyse.c).
+ *
+ * With a mask (the structure layer's factor the render multiplies the band's
+ * image by), the octaves are those of the rendered product: the mask's
+ * relative octave energies, in the band's units, are added to the band's
+ * and the synthesis' on both sides (docs/model.md, "Choosing the levels").
  */
 #include <stdio.h>
 #include "core/core.h"
@@ -114,10 +120,11 @@ static btf_status synthesise_band(const btf_car_band *models, int levels, int w,
     return rc;
 }
 
-/* The octave distance of a depth's models from the band's energies. */
+/* The octave distance of a depth's models from the band's energies, each
+ * octave's energy raised by floor_e[octave] on both sides. */
 static btf_status depth_distance(const btf_car_band *models, int levels, int w, int h,
-                                 const double *e_band, int octaves, double floor_e, double *d,
-                                 btf_error *err)
+                                 const double *e_band, int octaves, const double *floor_e,
+                                 double *d, btf_error *err)
 {
     double e_syn[MAX_OCTAVES] = {0};
     for (int s = 0; s < SEEDS; s++) {
@@ -134,7 +141,7 @@ static btf_status depth_distance(const btf_car_band *models, int levels, int w, 
     }
     double sum = 0.0;
     for (int i = 0; i < octaves; i++) {
-        double r = log((e_syn[i] + floor_e) / (e_band[i] + floor_e));
+        double r = log((e_syn[i] + floor_e[i]) / (e_band[i] + floor_e[i]));
         sum += r * r;
     }
     *d = sqrt(sum / octaves);
@@ -142,10 +149,41 @@ static btf_status depth_distance(const btf_car_band *models, int levels, int w, 
 }
 
 static btf_status choose(const double *band, int w, int h, const btf_car_fit_opts *car, int cap,
-                         int *levels, double *distance, btf_error *err);
+                         const double *mask_e, int *levels, double *distance, btf_error *err);
+
+/* The mask's octave energies relative to its mean squared, times the
+ * band's level squared: what the mask adds to each octave of the product,
+ * in the band's units (log-domain energies add: log(T S) = log T + log S,
+ * and a fluctuation small against its level has var(log T) ~ var(T) / T^2).
+ * Returns the octave count, 0 without a usable mask, -1 out of memory. */
+static int mask_energies(const btf_levels_mask *mask, int w, int h, double big, double *e,
+                         btf_error *err)
+{
+    if (!mask || !mask->factor || !(mask->level > 0.0) || !isfinite(mask->level))
+        return 0;
+    size_t n = (size_t)w * h;
+    double *f = btf_alloc(n, sizeof(double), err), mean = 0.0;
+    if (!f)
+        return -1;
+    for (size_t i = 0; i < n; i++)
+        mean += (f[i] = isfinite(mask->factor[i]) ? mask->factor[i] : 0.0);
+    mean /= (double)n;
+    int k = 0;
+    if (mean > 0.0) {
+        for (size_t i = 0; i < n; i++)
+            f[i] /= mean;
+        k = octave_energies(f, w, h, e, err);
+        double s = (mask->level / big) * (mask->level / big);
+        for (int i = 0; i < k; i++)
+            e[i] *= s;
+    }
+    free(f);
+    return k;
+}
 
 btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit_opts *car,
-                             int max_levels, int *levels, double *distance, btf_error *err)
+                             int max_levels, const btf_levels_mask *mask, int *levels,
+                             double *distance, btf_error *err)
 {
     *levels = 1;
     for (int l = 0; distance && l < BTF_MAX_LEVELS; l++)
@@ -165,18 +203,21 @@ btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit
             big = fabs(band[i]);
     if (!(big > 0.0) || !isfinite(big))
         return BTF_OK; /* zero (or not finite: the fit refuses it) */
+    double mask_e[MAX_OCTAVES] = {0};
+    if (mask_energies(mask, w, h, big, mask_e, err) < 0)
+        return BTF_E_NOMEM;
     double *z = btf_alloc(n, sizeof(double), err);
     if (!z)
         return BTF_E_NOMEM;
     for (size_t i = 0; i < n; i++)
         z[i] = band[i] / big;
-    btf_status rc = choose(z, w, h, car, cap, levels, distance, err);
+    btf_status rc = choose(z, w, h, car, cap, mask_e, levels, distance, err);
     free(z);
     return rc;
 }
 
 static btf_status choose(const double *band, int w, int h, const btf_car_fit_opts *car, int cap,
-                         int *levels, double *distance, btf_error *err)
+                         const double *mask_e, int *levels, double *distance, btf_error *err)
 {
     double e_band[MAX_OCTAVES], total = 0.0;
     int octaves = octave_energies(band, w, h, e_band, err);
@@ -187,7 +228,9 @@ static btf_status choose(const double *band, int w, int h, const btf_car_fit_opt
     if (!(total > 1e-24) || !isfinite(total))
         return BTF_OK; /* a constant band: nothing to place at any scale */
     /* Octaves a million times weaker than the band count as empty alike. */
-    double floor_e = 1e-6 * total, best = INFINITY;
+    double floor_e[MAX_OCTAVES], best = INFINITY;
+    for (int i = 0; i < octaves; i++) /* the mask's octaves outweigh the band's alike */
+        floor_e[i] = 1e-6 * total + mask_e[i];
     btf_car_fit_opts quiet = car ? *car : btf_car_fit_defaults();
     quiet.warn = NULL; /* the chosen depth is fitted again, with warnings */
     for (int L = 1; L <= cap; L++) {
@@ -220,7 +263,7 @@ int btf_auto_levels(const double *band, int w, int h)
     if (!band || w < 1 || h < 1)
         return 1;
     btf_car_fit_opts car = btf_car_fit_defaults();
-    if (btf_choose_levels(band, w, h, &car, 0, &levels, NULL, &e) != BTF_OK)
+    if (btf_choose_levels(band, w, h, &car, 0, NULL, &levels, NULL, &e) != BTF_OK)
         return 1;
     return levels;
 }

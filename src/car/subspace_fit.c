@@ -49,8 +49,13 @@ btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
         }
     btf_decorrelate(img, out->mean, out->basis, bands);
     int levels = o.levels;
+    /* band 0's image level: the mean colour along its basis vector */
+    btf_levels_mask mask = {o.masking, fabs((double)out->basis[0] * out->mean[0] +
+                                            (double)out->basis[1] * out->mean[1] +
+                                            (double)out->basis[2] * out->mean[2])};
     if (!levels && (rc = btf_choose_levels(bands[0], img->width, img->height, &o.car,
-                                           o.max_auto_levels, &levels, NULL, err))) {
+                                           o.max_auto_levels, o.masking ? &mask : NULL,
+                                           &levels, NULL, err))) {
         for (int b = 0; b < 3; b++)
             free(bands[b]);
         return rc;

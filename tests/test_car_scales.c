@@ -339,6 +339,26 @@ static void test_choose_levels_extremes(void **state)
     TU_OK(btf_choose_levels(band, 128, 128, &o, 2, NULL, &levels, d, &e), &e);
     assert_true(levels >= 1 && levels <= 2);
     assert_true(d[1] >= 0.0 && d[2] == -1.0);
+    /* masked by a factor carrying the same pattern far stronger, no deeper
+     * pyramid is worth it (the render shows the mask's octaves); a faint
+     * mask leaves the choice as it was */
+    float *factor = malloc(sizeof(float) * 128 * 128);
+    assert_non_null(factor);
+    double big = 0.0;
+    for (int i = 0; i < 128 * 128; i++)
+        big = fabs(band[i]) > big ? fabs(band[i]) : big;
+    for (int i = 0; i < 128 * 128; i++)
+        factor[i] = (float)(1.0 + 0.5 * band[i] / big);
+    int unmasked;
+    TU_OK(btf_choose_levels(band, 128, 128, &o, 0, NULL, &unmasked, d, &e), &e);
+    btf_levels_mask strong = {factor, 100.0 * big}, faint = {factor, 1e-6 * big};
+    TU_OK(btf_choose_levels(band, 128, 128, &o, 0, &strong, &levels, d, &e), &e);
+    printf("wood masked: distances %.4f %.4f %.4f, chose %d\n", d[0], d[1], d[2], levels);
+    assert_int_equal(levels, 1);
+    assert_true(d[0] < 0.05 && d[1] < 0.05);
+    TU_OK(btf_choose_levels(band, 128, 128, &o, 0, &faint, &levels, d, &e), &e);
+    assert_int_equal(levels, unmasked);
+    free(factor);
     free(band);
     btf_image_free(&img);
 }

@@ -261,6 +261,25 @@ static void test_sweep_resume(void **state)
     assert_non_null(strstr(e.msg, "levels 99"));
 }
 
+/* A sweep of one setting (K, L, N), with and without the layers, tiny
+ * quality and sizes, its state in tu_dir/name (the path into dir). */
+static btf_sweep_opts one_setting_sweep(int k, int l, int n, const char *name, char *dir,
+                                        size_t dir_size)
+{
+    btf_sweep_opts o = btf_sweep_defaults();
+    o.analyse = quick();
+    o.analyse.segment.subspaces = 0;
+    o.n_subspaces = 1, o.subspaces[0] = k;
+    o.n_levels = 1, o.levels[0] = l;
+    o.n_neighbours = 1, o.neighbours[0] = n;
+    o.n_plain = 2, o.plain[0] = 0, o.plain[1] = 1;
+    o.quality.views = 2, o.quality.lights = 2;
+    o.synth_size = 64, o.render_size = 32;
+    snprintf(dir, dir_size, "%s/%s", tu_dir, name);
+    o.state_dir = dir;
+    return o;
+}
+
 /* The structure axis: each setting with the layers and as format 1.3's
  * plain model; the plain points have no structure, their own state files
  * (the layered ones keep their names), and only a layered point is the
@@ -269,18 +288,8 @@ static void test_sweep_structure(void **state)
 {
     (void)state;
     btf_error e = {0};
-    btf_sweep_opts o = btf_sweep_defaults();
-    o.analyse = quick();
-    o.analyse.segment.subspaces = 0;
-    o.n_subspaces = 1, o.subspaces[0] = 0;
-    o.n_levels = 1, o.levels[0] = 1;
-    o.n_neighbours = 1, o.neighbours[0] = 0;
-    o.n_plain = 2, o.plain[0] = 0, o.plain[1] = 1;
-    o.quality.views = 2, o.quality.lights = 2;
-    o.synth_size = 64, o.render_size = 32;
     char dir[4096];
-    snprintf(dir, sizeof dir, "%s/sweep-structure", tu_dir);
-    o.state_dir = dir;
+    btf_sweep_opts o = one_setting_sweep(0, 1, 0, "sweep-structure", dir, sizeof dir);
     btf_sweep s;
     TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
     assert_int_equal(s.n_points, 2);
@@ -310,19 +319,9 @@ static void test_sweep_range_size(void **state)
 {
     (void)state;
     btf_error e = {0};
-    btf_sweep_opts o = btf_sweep_defaults();
-    o.analyse = quick();
-    o.analyse.segment.subspaces = 0;
-    o.n_subspaces = 1, o.subspaces[0] = 2;
-    o.n_levels = 1, o.levels[0] = 1;
-    o.n_neighbours = 1, o.neighbours[0] = 4;
-    o.n_plain = 2, o.plain[0] = 0, o.plain[1] = 1;
-    o.n_range_sizes = 2, o.range_sizes[0] = 0, o.range_sizes[1] = 8;
-    o.quality.views = 2, o.quality.lights = 2;
-    o.synth_size = 64, o.render_size = 32;
     char dir[4096];
-    snprintf(dir, sizeof dir, "%s/sweep-range", tu_dir);
-    o.state_dir = dir;
+    btf_sweep_opts o = one_setting_sweep(2, 1, 4, "sweep-range", dir, sizeof dir);
+    o.n_range_sizes = 2, o.range_sizes[0] = 0, o.range_sizes[1] = 8;
     btf_sweep s;
     TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
     assert_int_equal(s.n_points, 3);

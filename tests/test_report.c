@@ -198,6 +198,16 @@ static void test_analyse_shared(void **state)
     btf_model_free(&range);
 }
 
+/* The sweep o run again resumes n of its points from its state folder. */
+static void assert_sweep_resumes(const btf_sweep_opts *o, int n)
+{
+    btf_error e = {0};
+    btf_sweep again;
+    TU_OK(btf_sweep_run(ds, o, &again, &e), &e);
+    assert_int_equal(again.resumed, n);
+    btf_sweep_free(&again);
+}
+
 /* A 2 x 1 x 2 grid: every point measured, finite; the fronts marked; a
  * second run resumes every point from the state folder, and a point file
  * of other options is measured again. */
@@ -247,13 +257,9 @@ static void test_sweep_resume(void **state)
     btf_sweep_free(&again);
     /* Other quality options: nothing resumed. A damaged file: measured again. */
     tu_write_file(tu_fmt("%s/point-K0-L1-N0.json", dir), "{\"format\":", 10);
-    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
-    assert_int_equal(again.resumed, 3);
-    btf_sweep_free(&again);
+    assert_sweep_resumes(&o, 3);
     o.quality.views = 3;
-    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
-    assert_int_equal(again.resumed, 0);
-    btf_sweep_free(&again);
+    assert_sweep_resumes(&o, 0);
     btf_sweep_free(&s);
     /* Bad grids. */
     o.n_levels = 1, o.levels[0] = 99;
@@ -300,10 +306,7 @@ static void test_sweep_structure(void **state)
         assert_true(isfinite(s.points[i].mean_combined) && s.points[i].bytes > 100);
     assert_int_equal(access(tu_fmt("%s/point-K0-L1-N0.json", dir), F_OK), 0);
     assert_int_equal(access(tu_fmt("%s/point-K0-L1-N0-plain.json", dir), F_OK), 0);
-    btf_sweep again;
-    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
-    assert_int_equal(again.resumed, 2);
-    btf_sweep_free(&again);
+    assert_sweep_resumes(&o, 2);
     btf_sweep_free(&s);
     o.n_plain = 2, o.plain[0] = o.plain[1] = 1;
     assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
@@ -335,10 +338,7 @@ static void test_sweep_range_size(void **state)
     assert_int_equal(access(tu_fmt("%s/point-K2-L1-N4.json", dir), F_OK), 0);
     assert_int_equal(access(tu_fmt("%s/point-K2-L1-N4-R8.json", dir), F_OK), 0);
     assert_int_equal(access(tu_fmt("%s/point-K2-L1-N4-plain.json", dir), F_OK), 0);
-    btf_sweep again;
-    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
-    assert_int_equal(again.resumed, 3);
-    btf_sweep_free(&again);
+    assert_sweep_resumes(&o, 3);
     btf_sweep_free(&s);
     o.range_sizes[1] = 3;
     assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);

@@ -232,20 +232,26 @@ static void image_mean(const btf_image *img, double *mean)
 }
 
 #define STRUCTURED_AUTO_LEVELS 2
+#define STRUCTURED_COEFFICIENT_BITS 32.0 /* a float gamma in the file */
+
+/* Pixel i's luminance, as the masking factor compares it: R + G + B. */
+static double pixel_luminance(const btf_image *img, size_t i)
+{
+    return (double)img->data[3 * i] + img->data[3 * i + 1] + img->data[3 * i + 2];
+}
 
 /* What the render multiplies the remainder img by: the exemplar's
- * luminance (in factor, before the structure was divided out) over the
- * remainder's, into factor (1 where either is black). */
+ * luminance (in factor, stored before the structure was divided out) over
+ * the remainder's, into factor (1 where either is black). */
 static void masking_factor(const btf_image *img, float *factor)
 {
     size_t n = (size_t)img->width * img->height;
     for (size_t i = 0; i < n; i++) {
-        double after = (double)img->data[3 * i] + img->data[3 * i + 1] + img->data[3 * i + 2];
+        double after = pixel_luminance(img, i);
         double r = after > 1e-12 && factor[i] > 0.0f ? factor[i] / after : 1.0;
         factor[i] = isfinite(r) && r < 1e6 ? (float)r : 1.0f;
     }
 }
-#define STRUCTURED_COEFFICIENT_BITS 32.0 /* a float gamma in the file */
 
 /* Subspace k's exemplar: with a structure layer, divided by what the
  * relief and the albedo explain (the CAR fields fit the rest), and the
@@ -280,8 +286,9 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     if (rc)
         return rc;
     size_t n = (size_t)img->width * img->height;
-    float *factor = btf_alloc(n, sizeof(float), err);
-    if (!factor) {
+    /* the levels' mask: only where they are chosen and none was given */
+    float *factor = NULL;
+    if (!fo.levels && !fo.masking && !(factor = btf_alloc(n, sizeof(float), err))) {
         btf_image_free(&shaded);
         return BTF_E_NOMEM;
     }
@@ -289,12 +296,13 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     btf_structure_divide(&shaded, m, g, light, 0, NULL);
     if (tex_mean) /* the texture is the shaded-out exemplar (colour matched to it) */
         image_mean(&shaded, tex_mean);
-    for (size_t i = 0; i < n; i++) /* the exemplar's luminance, before division */
-        factor[i] = img->data[3 * i] + img->data[3 * i + 1] + img->data[3 * i + 2];
+    for (size_t i = 0; factor && i < n; i++) /* the exemplar's luminance, before division */
+        factor[i] = (float)pixel_luminance(img, i);
     btf_structure_divide(img, m, g, light, 1, NULL);
-    masking_factor(img, factor);
-    if (!fo.levels && !fo.masking)
+    if (factor) {
+        masking_factor(img, factor);
         fo.masking = factor;
+    }
     rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
     free(factor);
     if (rc == BTF_OK)

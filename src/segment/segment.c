@@ -13,7 +13,7 @@
  * Past it, K grows while one more subspace still removes at least a fraction
  * g of the distortion left, D(K + 1) <= (1 - g) D(K), g = 0.12 by default:
  * a split that clear is a group of images the model would otherwise render
- * from a stranger's exemplar (measured: docs/model.md, "Choosing K"). It
+ * from a stranger's exemplar (measured: docs/segmentation.md, "Choosing K"). It
  * grows to at most twice the threshold's K: a continuum of images (one
  * brightness ramp) splits with a gain that falls only slowly.
  * K is capped at 20 (the paper's bound) and at the number of distinct
@@ -87,11 +87,12 @@ static btf_status fill_result(const float *f, int n, int dim, int n_lights,
 }
 
 /* Whether the K-means result next (K + 1 clusters asked) splits clearly
- * enough to be kept over km (the split gain of the file comment). */
+ * enough to be kept over km (the split gain of the file comment; the
+ * caller tries no split when it is off). */
 static int clear_split(const btf_kmeans_result *km, const btf_kmeans_result *next, int k,
                        double gain)
 {
-    return gain > 0.0 && next->k == k + 1 && next->distortion <= (1.0 - gain) * km->distortion;
+    return next->k == k + 1 && next->distortion <= (1.0 - gain) * km->distortion;
 }
 
 /* The reason of a K grown past the threshold's k_tau by clear splits. */

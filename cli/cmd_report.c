@@ -199,6 +199,10 @@ int cmd_report(int argc, char **argv)
                  "analysed resolution, with the structure layer; the default) or N (a\n"
                  "small periodic tile, no structure layer; analyse --range-size N)",
          .parse = parse_grid, .show = show_grid},
+        {.name = "--sweep-seeds", .kind = CLI_INT, .dest = &so->seeds, .meta = "N",
+         .help = "--sweep: each point's quality is the mean over N synthesis seeds\n"
+                 "(--seed, --seed + 1, ...)", .lo = 1, .hi = BTF_SWEEP_MAX_SEEDS,
+         .zero_means = "3"},
         {.name = "--threads", .kind = CLI_INT, .dest = &ro.threads, .meta = "T",
          .help = "threads (the sweep: settings run in parallel)", .lo = 1, .hi = 64,
          .zero_means = "all CPUs"},

@@ -1787,7 +1787,10 @@ typedef struct btf_sweep_point {
     double render_s;          /* the sphere frame (btf_scene_sphere) at
                                  render_size^2, one thread, CPU */
     uint64_t bytes;           /* the model file */
-    double mean_combined, worst_combined; /* btf_quality_measure over the spread */
+    double mean_combined, worst_combined; /* btf_quality_measure over the spread,
+                                             the mean over the seeds */
+    double seed_spread;       /* the standard deviation of mean_combined between the
+                                 seeds (0 with one) */
     int is_default;           /* the setting equals the analysis defaults */
     int pareto_bytes;         /* on the front of (bytes, mean_combined) */
     int pareto_time;          /* on the front of (synth_s, mean_combined) */
@@ -1795,6 +1798,7 @@ typedef struct btf_sweep_point {
 } btf_sweep_point;
 
 #define BTF_SWEEP_MAX_VALUES 8
+#define BTF_SWEEP_MAX_SEEDS 16
 typedef struct btf_sweep_opts {
     int n_subspaces, subspaces[BTF_SWEEP_MAX_VALUES];  /* values of K (0: auto);
                                                           n 0: {0, 2, 4, 8} */
@@ -1807,6 +1811,10 @@ typedef struct btf_sweep_opts {
                                                           4..4096); n 0: {0} */
     btf_analyse_opts analyse;  /* the base settings the grid varies */
     btf_quality_opts quality;  /* the pairs measured per point (threads ignored) */
+    int seeds;                 /* each point's quality measured with synthesis seeds
+                                  quality.seed .. + seeds - 1 and averaged (one seed's
+                                  figure moves by about 1 %: more than many of the
+                                  grid's steps); 0: 3; 1..16 */
     int synth_size;            /* 0: 512 */
     int render_size;           /* 0: 256 */
     btf_gpu *gpu;              /* NULL: no GPU times */
@@ -1817,7 +1825,8 @@ typedef struct btf_sweep_opts {
     void *progress_user;
 } btf_sweep_opts;
 /* The defaults: the grids above (4 x 4 x 4 = 64 settings), the analysis and
- * quality defaults, sizes 512 and 256, no GPU, no state folder, all CPUs. */
+ * quality defaults, 3 seeds, sizes 512 and 256, no GPU, no state folder, all
+ * CPUs. */
 btf_sweep_opts btf_sweep_defaults(void);
 
 typedef struct btf_sweep {
@@ -1827,6 +1836,7 @@ typedef struct btf_sweep {
     double shared_s;           /* features and photometric stereo, once */
     double seconds;            /* the whole sweep */
     int resumed;               /* points read back from state_dir */
+    int seeds;                 /* the seeds each point was measured with */
 } btf_sweep;
 
 /* The speed/accuracy trade (docs/report.md, "The sweep"): the dataset

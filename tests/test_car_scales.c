@@ -363,6 +363,40 @@ static void test_choose_levels_extremes(void **state)
     btf_image_free(&img);
 }
 
+/* The rule as docs/model.md states it, on bands of the three materials at
+ * several lights: the chosen depth beats every shallower one by 0.02 and by
+ * 17 % of its distance, and no deeper one beats the chosen so (a step of
+ * less is a tie, and ties go to the smaller model). */
+static void test_choose_levels_margins(void **state)
+{
+    (void)state;
+    const char *mats[] = {"wood", "leather", "fabric"};
+    const double lights[] = {0.0, 45.0, 75.0};
+    btf_error e = {0};
+    btf_car_fit_opts o = btf_car_fit_defaults();
+    int deeper = 0;
+    for (int m = 0; m < 3; m++)
+        for (int li = 0; li < 3; li++) {
+            btf_image img;
+            tu_material_image(mats[m], 64, 3, (btf_dir){0, 0}, (btf_dir){lights[li], 30},
+                              &img);
+            double band[64 * 64], d[BTF_MAX_LEVELS];
+            for (int i = 0; i < 64 * 64; i++)
+                band[i] = img.data[3 * i] + img.data[3 * i + 1] + img.data[3 * i + 2];
+            btf_image_free(&img);
+            int levels = 0;
+            TU_OK(btf_choose_levels(band, 64, 64, &o, 0, NULL, &levels, d, &e), &e);
+            double best = d[0];
+            int want = 1;
+            for (int l = 2; l <= 3; l++)
+                if (d[l - 1] >= 0.0 && d[l - 1] < best - 0.02 && d[l - 1] < best * 0.83)
+                    best = d[l - 1], want = l;
+            assert_int_equal(levels, want);
+            deeper += levels > 1;
+        }
+    assert_true(deeper >= 1); /* the deeper pyramid still wins where it pays */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -370,6 +404,7 @@ int main(void)
         cmocka_unit_test(test_neighbourhood_choice_is_interior),
         cmocka_unit_test(test_complement_fit),
         cmocka_unit_test(test_choose_levels_extremes),
+        cmocka_unit_test(test_choose_levels_margins),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -347,6 +347,57 @@ static void test_sweep_range_size(void **state)
     assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
 }
 
+/* The point's quality over seeds: the mean of btf_quality_measure with
+ * seeds S and S + 1 on the setting's model, and their standard deviation;
+ * another seed count measures again; a count out of range is refused. */
+static void test_sweep_seeds(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char dir[4096];
+    btf_sweep_opts o = one_setting_sweep(2, 1, 4, "sweep-seeds", dir, sizeof dir);
+    o.n_plain = 1, o.plain[0] = 0;
+    o.seeds = 2;
+    btf_sweep s;
+    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    assert_int_equal(s.n_points, 1);
+    assert_int_equal(s.seeds, 2);
+    btf_analyse_opts a = quick();
+    a.segment.subspaces = 2;
+    btf_offset fam[BTF_CAR_MAX_NEIGHBOURS];
+    btf_car_candidate_offsets(fam);
+    memcpy(a.fit.car.fixed, fam, 4 * sizeof fam[0]);
+    a.fit.car.n_fixed = 4;
+    btf_model m;
+    TU_OK(btf_analyse(ds, &a, &m, &e), &e);
+    double d[2];
+    for (int i = 0; i < 2; i++) {
+        btf_quality_opts q = o.quality;
+        q.seed = o.quality.seed + (uint64_t)i;
+        q.threads = 1;
+        btf_quality r;
+        TU_OK(btf_quality_measure(ds, &m, &q, &r, &e), &e);
+        d[i] = r.mean_combined;
+        btf_quality_free(&r);
+    }
+    btf_model_free(&m);
+    assert_true(d[0] != d[1]); /* the seeds do move the figure */
+    const btf_sweep_point *p = &s.points[0];
+    assert_true(fabs(p->mean_combined - 0.5 * (d[0] + d[1])) <= 1e-12 * p->mean_combined);
+    assert_true(fabs(p->seed_spread - fabs(d[0] - d[1]) / sqrt(2.0)) <= 1e-9 * p->seed_spread);
+    assert_sweep_resumes(&o, 1);
+    btf_sweep_free(&s);
+    o.seeds = 1;
+    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    assert_int_equal(s.resumed, 0);
+    assert_true(s.points[0].seed_spread == 0.0);
+    assert_true(fabs(s.points[0].mean_combined - d[0]) <= 1e-12 * d[0]);
+    btf_sweep_free(&s);
+    o.seeds = BTF_SWEEP_MAX_SEEDS + 1;
+    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "seeds"));
+}
+
 static void test_presets(void **state)
 {
     (void)state;
@@ -421,7 +472,7 @@ int main(void)
         cmocka_unit_test(test_spread),        cmocka_unit_test(test_quality),
         cmocka_unit_test(test_quality_errors), cmocka_unit_test(test_analyse_shared),
         cmocka_unit_test(test_sweep_resume),  cmocka_unit_test(test_sweep_structure),
-        cmocka_unit_test(test_sweep_range_size),
+        cmocka_unit_test(test_sweep_range_size), cmocka_unit_test(test_sweep_seeds),
         cmocka_unit_test(test_presets),
         cmocka_unit_test(test_sphere_scene),
     };

@@ -16,7 +16,9 @@
  * an octave-binned log power spectrum distance, coarse structure up to the
  * band's own size included (the last octave is the low-pass remainder). A
  * deeper pyramid is chosen only when it beats every shallower one by
- * MARGIN: ties go to the smaller model.
+ * MARGIN and by REL_MARGIN of its distance: ties go to the smaller model
+ * (a 14 % step bought nothing on the rendered material, 21 % did: docs/
+ * model.md, "Choosing the levels").
  *
  * The cap: at most 3 levels (the paper's bound), and no more than keep the
  * coarsest level 16 pixels wide (a CAR model of 24 neighbours needs rows
@@ -42,6 +44,7 @@
 #define OCTAVE_MIN 4
 #define SEEDS 2
 #define MARGIN 0.02
+#define REL_MARGIN 0.17
 #define MAX_OCTAVES 24
 
 int btf_levels_cap(int w, int h)
@@ -248,7 +251,7 @@ static btf_status choose(const double *band, int w, int h, const btf_car_fit_opt
         }
         if (distance)
             distance[L - 1] = d;
-        if (d < best - MARGIN) {
+        if (d < best - MARGIN && d < best * (1.0 - REL_MARGIN)) {
             best = d;
             *levels = L;
         }

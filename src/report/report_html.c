@@ -369,10 +369,12 @@ static void trade(btf_buf *b, const btf_report_data *d)
                       "%d² on the CPU, in one batch as btfcar synthesise makes them "
                       "(colour matching beside the fields); render: the sphere frame at "
                       "%d², one thread; "
-                      "quality: the mean and worst combined distance over the pairs above. "
+                      "quality: the mean and worst combined distance over the pairs above, "
+                      "each the mean over %d synthesis seeds (± : the standard deviation "
+                      "of the mean between the seeds). "
                       "%d of %d points were read back from an earlier run.</p>\n",
                    s->n_points, s->shared_s, d->o->sweep_opts.synth_size,
-                   d->o->sweep_opts.render_size, s->resumed, s->n_points);
+                   d->o->sweep_opts.render_size, s->seeds, s->resumed, s->n_points);
     btf_buf_puts(b, "<figure><img class=\"plot\" src=\"pareto-bytes.svg\" alt=\"quality "
                     "against model bytes\"></figure>\n<figure><img class=\"plot\" "
                     "src=\"pareto-time.svg\" alt=\"quality against synthesis time\"></figure>"
@@ -391,7 +393,8 @@ static void trade(btf_buf *b, const btf_report_data *d)
         }
     btf_buf_puts(b, ".</p>\n<table>\n<tr><th class=\"l\">setting</th><th>K made</th>"
                     "<th>analysis s</th><th>synthesis s</th><th>GPU s</th><th>render s</th>"
-                    "<th>bytes</th><th>mean</th><th>worst</th><th class=\"l\">front</th></tr>\n");
+                    "<th>bytes</th><th>mean</th><th>±</th><th>worst</th>"
+                    "<th class=\"l\">front</th></tr>\n");
     for (int i = 0; i < s->n_points; i++) {
         const btf_sweep_point *p = &s->points[i];
         char t[64], g[32];
@@ -401,13 +404,13 @@ static void trade(btf_buf *b, const btf_report_data *d)
         else
             snprintf(g, sizeof g, "–");
         btf_buf_printf(b, "<tr class=\"%s%s\"><td class=\"l\">%s%s</td><td>%d</td><td>%.2f</td>"
-                          "<td>%.3f</td><td>%s</td><td>%.3f</td><td>%llu</td><td>%.2f</td>"
-                          "<td>%.2f</td><td class=\"l\">%s%s</td></tr>\n",
+                          "<td>%.3f</td><td>%s</td><td>%.3f</td><td>%llu</td><td>%.3f</td>"
+                          "<td>%.3f</td><td>%.2f</td><td class=\"l\">%s%s</td></tr>\n",
                        p->is_default ? "def " : "",
                        p->pareto_bytes || p->pareto_time ? "front" : "", t,
                        p->is_default ? " (default)" : "", p->k, p->analyse_s, p->synth_s, g,
                        p->render_s, (unsigned long long)p->bytes, p->mean_combined,
-                       p->worst_combined, p->pareto_bytes ? "bytes " : "",
+                       p->seed_spread, p->worst_combined, p->pareto_bytes ? "bytes " : "",
                        p->pareto_time ? "time" : "");
     }
     btf_buf_puts(b, "</table>\n<p class=\"note\">No GPU time where no GPU was present (a CPU "

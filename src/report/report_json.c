@@ -116,6 +116,7 @@ static void add_sweep(cJSON *root, const btf_report_data *d)
     cJSON_AddNumberToObject(o, "resumed", s->resumed);
     cJSON_AddNumberToObject(o, "synth_size", d->o->sweep_opts.synth_size);
     cJSON_AddNumberToObject(o, "render_size", d->o->sweep_opts.render_size);
+    cJSON_AddNumberToObject(o, "seeds", s->seeds);
     cJSON *arr = cJSON_AddArrayToObject(o, "points");
     for (int i = 0; i < s->n_points; i++) {
         const btf_sweep_point *p = &s->points[i];
@@ -137,6 +138,7 @@ static void add_sweep(cJSON *root, const btf_report_data *d)
         cJSON_AddNumberToObject(j, "bytes", (double)p->bytes);
         cJSON_AddNumberToObject(j, "mean_combined", p->mean_combined);
         cJSON_AddNumberToObject(j, "worst_combined", p->worst_combined);
+        cJSON_AddNumberToObject(j, "seed_spread", p->seed_spread);
         cJSON_AddBoolToObject(j, "default", p->is_default);
         cJSON_AddBoolToObject(j, "pareto_bytes", p->pareto_bytes);
         cJSON_AddBoolToObject(j, "pareto_time", p->pareto_time);

@@ -36,6 +36,7 @@ btf_sweep_opts btf_sweep_defaults(void)
     memcpy(o.neighbours, n, sizeof n);
     o.analyse = btf_analyse_defaults();
     o.quality = btf_quality_defaults();
+    o.seeds = 3;
     o.synth_size = 512;
     o.render_size = 256;
     return o;
@@ -75,6 +76,11 @@ static btf_status resolve(const btf_sweep_opts *in, btf_sweep_opts *o, btf_error
         if (o->plain[i] != 0 && o->plain[i] != 1)
             return btf_fail(err, BTF_E_ARG, "sweep: structure value %d (expected 0: on, 1: off)",
                             o->plain[i]);
+    if (o->seeds == 0)
+        o->seeds = d.seeds;
+    if (o->seeds < 1 || o->seeds > BTF_SWEEP_MAX_SEEDS)
+        return btf_fail(err, BTF_E_ARG, "sweep: %d seeds (expected 1..%d)", o->seeds,
+                        BTF_SWEEP_MAX_SEEDS);
     if (o->synth_size == 0)
         o->synth_size = d.synth_size;
     if (o->render_size == 0)
@@ -125,11 +131,11 @@ static void make_fingerprint(sweep_ctx *c)
     const btf_sweep_opts *o = c->o;
     snprintf(c->fingerprint, sizeof c->fingerprint,
              "btfcar %s; dataset %s %dx%d views x lights %dx%d, %llu bytes; seed %llu; "
-             "quality %s %dx%d relief %g; synth %d; render %d; range %s",
+             "quality %s %dx%d relief %g, %d seeds; synth %d; render %d; range %s",
              BTF_VERSION_STRING, in->root, in->width, in->height, in->n_views, in->n_lights,
              (unsigned long long)in->bytes_on_disk, (unsigned long long)o->quality.seed,
              o->quality.all ? "all" : "spread", o->quality.views, o->quality.lights,
-             o->quality.relief, o->synth_size, o->render_size,
+             o->quality.relief, o->seeds, o->synth_size, o->render_size,
              o->analyse.no_range ? "none" : "yes");
 }
 
@@ -188,11 +194,12 @@ int btf_sweep_point_parse(const char *text, size_t n, const char *fingerprint,
     q.render_s = num(j, "render_s", &ok);
     q.mean_combined = num(j, "mean_combined", &ok);
     q.worst_combined = num(j, "worst_combined", &ok);
+    q.seed_spread = num(j, "seed_spread", &ok);
     cJSON_Delete(j);
     /* Numbers a measurement can give, and nothing a cast would mangle. */
     if (!ok || !(k >= 1 && k <= 255) || !(bytes >= 1 && bytes <= 1e15) || q.analyse_s < 0 ||
         q.synth_s < 0 || q.render_s < 0 || q.mean_combined < 0 ||
-        q.worst_combined < q.mean_combined)
+        q.worst_combined < q.mean_combined || q.seed_spread < 0)
         return 0;
     q.k = (int)k;
     q.bytes = (uint64_t)bytes;
@@ -243,6 +250,7 @@ static btf_status write_point(const sweep_ctx *c, const btf_sweep_point *p, btf_
     cJSON_AddNumberToObject(j, "bytes", (double)p->bytes);
     cJSON_AddNumberToObject(j, "mean_combined", p->mean_combined);
     cJSON_AddNumberToObject(j, "worst_combined", p->worst_combined);
+    cJSON_AddNumberToObject(j, "seed_spread", p->seed_spread);
     char *text = cJSON_Print(j);
     cJSON_Delete(j);
     if (!text)
@@ -381,6 +389,42 @@ static btf_status time_render(const btf_model *m, const btf_sweep_opts *o, doubl
     return rc;
 }
 
+/* The point's quality over the sweep's seeds: one synthesis seed's figure
+ * moves by about as much as many of the grid's steps (docs/report.md, "The
+ * sweep"), so the fronts are drawn through the mean; the spread between the
+ * seeds is kept beside it. */
+static btf_status measure_quality(const sweep_ctx *c, const btf_model *m, btf_sweep_point *p,
+                                  btf_error *err)
+{
+    double sum = 0.0, sum2 = 0.0, worst = 0.0;
+    int n = c->o->seeds;
+    for (int i = 0; i < n; i++) {
+        btf_quality_opts q = c->o->quality;
+        q.seed = c->o->quality.seed + (uint64_t)i;
+        q.threads = 1;
+        q.progress = NULL;
+        q.on_pair = NULL;
+        btf_quality r;
+        btf_status rc = btf_quality_measure(c->ds, m, &q, &r, err);
+        if (rc == BTF_OK) {
+            sum += r.mean_combined;
+            sum2 += r.mean_combined * r.mean_combined;
+            worst += r.worst_combined;
+        }
+        btf_quality_free(&r);
+        if (rc)
+            return rc;
+    }
+    p->mean_combined = sum / n;
+    p->worst_combined = worst / n;
+    double var = n > 1 ? (sum2 - sum * sum / n) / (n - 1) : 0.0;
+    p->seed_spread = var > 0.0 ? sqrt(var) : 0.0;
+    /* the mean of the worsts is at least the mean of the means, rounding aside */
+    if (p->worst_combined < p->mean_combined)
+        p->worst_combined = p->mean_combined;
+    return BTF_OK;
+}
+
 static btf_status measure_point(sweep_ctx *c, btf_sweep_point *p, btf_error *err)
 {
     btf_analyse_opts a = setting_opts(c, &p->setting);
@@ -402,19 +446,8 @@ static btf_status measure_point(sweep_ctx *c, btf_sweep_point *p, btf_error *err
         rc = time_gpu_synthesis(&m, c->o, &c->gpu_lock, &p->gpu_synth_s, err);
     if (rc == BTF_OK)
         rc = time_render(&m, c->o, &p->render_s, err);
-    if (rc == BTF_OK) {
-        btf_quality_opts q = c->o->quality;
-        q.threads = 1;
-        q.progress = NULL;
-        q.on_pair = NULL;
-        btf_quality r;
-        rc = btf_quality_measure(c->ds, &m, &q, &r, err);
-        if (rc == BTF_OK) {
-            p->mean_combined = r.mean_combined;
-            p->worst_combined = r.worst_combined;
-        }
-        btf_quality_free(&r);
-    }
+    if (rc == BTF_OK)
+        rc = measure_quality(c, &m, p, err);
     btf_model_free(&m);
     return rc;
 }
@@ -568,6 +601,7 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
         out->resumed += out->points[i].resumed;
     mark_front(out, 1);
     mark_front(out, 0);
+    out->seeds = o.seeds;
     out->seconds = btf_now() - t0;
     return BTF_OK;
 }

@@ -22,6 +22,9 @@ layout(std430, set = 0, binding = 3) readonly buffer Ints { int pi[]; };
 layout(std430, set = 0, binding = 4) readonly buffer Floats { float pf[]; };
 layout(std430, set = 0, binding = 5) writeonly buffer Out { float rgb[]; };
 layout(std430, set = 0, binding = 6) readonly buffer Hor { uint hz[]; };
+// Nonzero when a pixel selected a subspace the first pass did not
+// synthesise: beside the colours, which may take any value (issue 29).
+layout(std430, set = 0, binding = 7) buffer Missing { uint missing[]; };
 
 #define BTF_TAB_I(tab, f) pi[BTF_RP_TAB + (tab) * BTF_RP_TAB_STRIDE + (f)]
 #define BTF_HEMI_TABLE int
@@ -70,14 +73,17 @@ void main()
         rgb[3u * p + 2u] = pf[BTF_RP_BG + 2];
         return;
     }
-    btf_rgb c = btf_shade_pixel(0, gb[g + 3u], gb[g + 4u], gb[g + 5u], gb[g + 6u], gb[g + 7u],
-                                gb[g + 8u], gb[g + 9u], gb[g + 10u], gb[g + 11u], gb[g + 12u],
-                                gb[g + 13u], gb[g + 14u], gb[g + 15u], gb[g + 16u],
-                                gb[g + 17u], gb[g + 1u], gb[g + 2u], pf[BTF_RP_RELIEF]);
-    // A pixel that selects a subspace the first pass did not synthesise: NaN
-    // in red tells the host (which never lets that happen: the needed set is
-    // the shading's own rule).
-    rgb[3u * p] = c.r < -0.5 ? uintBitsToFloat(0x7fc00000u) : c.r;
+    btf_pixel c = btf_shade_pixel(0, gb[g + 3u], gb[g + 4u], gb[g + 5u], gb[g + 6u], gb[g + 7u],
+                                  gb[g + 8u], gb[g + 9u], gb[g + 10u], gb[g + 11u],
+                                  gb[g + 12u], gb[g + 13u], gb[g + 14u], gb[g + 15u],
+                                  gb[g + 16u], gb[g + 17u], gb[g + 1u], gb[g + 2u],
+                                  pf[BTF_RP_RELIEF]);
+    // A pixel that selects a subspace the first pass did not synthesise
+    // tells the host through the flag (it never lets that happen: the
+    // needed set is the shading's own rule).
+    if (c.missing != 0)
+        atomicOr(missing[0], 1u);
+    rgb[3u * p] = c.r;
     rgb[3u * p + 1u] = c.g;
     rgb[3u * p + 2u] = c.b;
 }

@@ -28,7 +28,6 @@
 
 #include "render_spv.h"
 
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -249,14 +248,14 @@ typedef struct pass {
     btf_gpu *gpu;
     btf_vk *vk;
     btf_vk_pipeline *pipe;
-    btf_vk_buffer *bufs[7]; /* gbuf, tex, maps, ints, floats, out, horizon */
+    btf_vk_buffer *bufs[8]; /* gbuf, tex, maps, ints, floats, out, horizon, missing */
     params pr;
 } pass;
 
 static void pass_free(pass *ps)
 {
     btf_vk_pipeline_destroy(ps->pipe);
-    for (int i = 0; i < 7; i++)
+    for (int i = 0; i < 8; i++)
         if (i != 1) /* the images are the synthesis' buffer */
             btf_vk_buffer_destroy(ps->bufs[i]);
     free(ps->pr.ints);
@@ -281,8 +280,10 @@ static btf_status run_band(pass *ps, const btf_gbuffer *g, int y0, int y1, float
     btf_vk_job *job = NULL;
     if (rc == BTF_OK)
         rc = btf_vk_job_begin(ps->vk, &job, err);
+    if (rc == BTF_OK) /* the flag of a band's missing subspaces starts clear */
+        rc = btf_vk_job_fill(job, ps->bufs[7], 0, sizeof(uint32_t), 0, err);
     if (rc == BTF_OK)
-        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 7, NULL, 0, gx, gy, 1, err);
+        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 8, NULL, 0, gx, gy, 1, err);
     if (rc == BTF_OK) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
@@ -292,10 +293,12 @@ static btf_status run_band(pass *ps, const btf_gbuffer *g, int y0, int y1, float
         rc = btf_vk_buffer_download(ps->vk, ps->bufs[5], 0,
                                     out->data + (size_t)y0 * g->width * 3,
                                     npix * 3 * sizeof(float), err);
-    for (size_t i = 0; rc == BTF_OK && i < npix; i++)
-        if (isnan(out->data[((size_t)y0 * g->width + i) * 3]))
-            rc = btf_fail(err, BTF_E_ARG, "GPU render: a pixel selects a subspace the first "
-                          "pass did not synthesise");
+    uint32_t missing = 0;
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_download(ps->vk, ps->bufs[7], 0, &missing, sizeof missing, err);
+    if (rc == BTF_OK && missing != 0)
+        rc = btf_fail(err, BTF_E_ARG, "GPU render: a pixel selects a subspace the first "
+                      "pass did not synthesise");
     return rc;
 }
 
@@ -314,6 +317,8 @@ static btf_status shade_frame(pass *ps, const btf_gbuffer *g, btf_image *out, bt
                                          &ps->bufs[0], err);
     if (rc == BTF_OK)
         rc = btf_vk_buffer_create(ps->vk, band_px * 3 * sizeof(float), &ps->bufs[5], err);
+    if (rc == BTF_OK)
+        rc = btf_vk_buffer_create(ps->vk, 16, &ps->bufs[7], err);
     for (int y0 = 0; rc == BTF_OK && y0 < g->height; y0 += rows)
         rc = run_band(ps, g, y0, y0 + rows < g->height ? y0 + rows : g->height, scratch, out,
                       err);
@@ -382,7 +387,7 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
         rc = upload_params(&ps, err);
     }
     if (rc == BTF_OK)
-        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 7, 0, NULL, 0,
+        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 8, 0, NULL, 0,
                                     &ps.pipe, err);
     if (rc == BTF_OK && (rc = btf_image_alloc(out, p->g.width, p->g.height, 3, err)) == BTF_OK) {
         rc = shade_frame(&ps, &p->g, out, err);

@@ -258,6 +258,63 @@ static void test_sphere_parity(void **state)
     btf_model_free(&m);
 }
 
+/* A format 1.1 model (a range map, no marginal transfer: unclamped
+ * Gaussian synthesis) whose colours reach far below -0.5, the value that
+ * once doubled as the shading's "subspace not synthesised" marker (issue
+ * 29): both backends render it, the same bits, a pair at a measured
+ * direction and the sphere's blends of many pairs under two lights. */
+static void test_deep_tails_parity(void **state)
+{
+    (void)state;
+    btf_model m;
+    test_model(&m);
+    for (int k = 0; k < m.n_subspaces; k++)
+        for (int b = 0; b < 3; b++)
+            for (int l = 0; l < 2; l++)
+                m.subspaces[k].bands[b][l].sigma = 0.5f;
+    btf_error e = {0};
+    unsigned char *bytes = NULL;
+    size_t nbytes = 0;
+    TU_OK(btf_model_encode(&m, &bytes, &nbytes, &e), &e);
+    assert_int_equal(bytes[11], 1); /* a valid model of format 1.1 */
+    assert_int_equal(bytes[13], 1);
+    free(bytes);
+    btf_synth_opts so = btf_synth_defaults();
+    so.width = so.height = 64;
+    so.seed = 9;
+    so.tileable = 1;
+    btf_image sub = {0};
+    TU_OK(btf_synthesise_image(&m, 0, &so, &sub, &e), &e);
+    size_t deep = 0;
+    for (size_t i = 0; i < (size_t)64 * 64 * 3; i += 3)
+        deep += sub.data[i] < -0.5f;
+    assert_true(deep > 64 * 64 / 10); /* the case at hand: many red texels below -0.5 */
+    btf_image_free(&sub);
+    btf_render_opts o = btf_render_defaults();
+    o.width = 96;
+    o.height = 64;
+    o.seed = 9;
+    btf_dir view = {30, 60}, light = {45, 0};
+    btf_image c = {0}, g = {0};
+    TU_OK(btf_render_flat(&m, view, light, &o, &c, NULL, &e), &e);
+    TU_OK(btf_gpu_render_flat(gpu, &m, view, light, &o, &g, NULL, &e), &e);
+    compare("deep tails, flat", &c, &g);
+    btf_image_free(&c);
+    btf_image_free(&g);
+    btf_scene s;
+    sphere_scene(&s);
+    o.width = 160;
+    o.height = 120;
+    TU_OK(btf_render_scene(&m, &s, &o, &c, NULL, &e), &e);
+    TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &g, NULL, &e), &e);
+    compare("deep tails, sphere", &c, &g);
+    btf_image_free(&c);
+    btf_image_free(&g);
+    no_validation_messages();
+    btf_scene_free(&s);
+    btf_model_free(&m);
+}
+
 /* A frame larger than the device's storage-buffer limit goes in bands
  * (the limit lowered for the test): the same pixels as in one band. */
 static void test_bands(void **state)
@@ -397,6 +454,7 @@ int main(void)
         cmocka_unit_test(test_flat_parity),
         cmocka_unit_test(test_structured_parity),
         cmocka_unit_test(test_sphere_parity),
+        cmocka_unit_test(test_deep_tails_parity),
         cmocka_unit_test(test_bands),
         cmocka_unit_test(test_limits),
         cmocka_unit_test(test_big_mesh),

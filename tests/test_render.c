@@ -95,6 +95,47 @@ static void test_flat_equals_subspace(void **state)
     btf_model_free(&m);
 }
 
+/* A format 1.0 model (no marginal transfer: the synthesis is the plain,
+ * unclamped Gaussian) whose colours reach far below -0.5: real values,
+ * which once read as the shading's "subspace not synthesised" marker and
+ * failed the render (issue 29). The render succeeds and is the selected
+ * subspace image with its negative radiance set to 0, as for any model. */
+static void test_deep_gaussian_tails(void **state)
+{
+    (void)state;
+    btf_model m;
+    ring_model(&m, 1.0f);
+    btf_error e = {0};
+    unsigned char *bytes = NULL;
+    size_t nbytes = 0;
+    TU_OK(btf_model_encode(&m, &bytes, &nbytes, &e), &e);
+    assert_int_equal(bytes[11], 1); /* a valid model of format 1.0 */
+    assert_int_equal(bytes[13], 0);
+    free(bytes);
+    btf_dir view = {30, 60}, light = {45, 0};
+    btf_render_opts o = opts_of(64, 64, 0.0);
+    btf_synth_opts so = btf_synth_defaults();
+    so.width = so.height = 64;
+    so.seed = 7;
+    so.tileable = 1;
+    btf_image img = {0}, ref = {0};
+    TU_OK(btf_synthesise_image(&m, 2, &so, &ref, &e), &e);
+    size_t deep = 0;
+    for (size_t i = 0; i < (size_t)64 * 64 * 3; i += 3)
+        deep += ref.data[i] < -0.5f;
+    assert_true(deep > 64 * 64 / 10); /* the case at hand: many red texels below -0.5 */
+    TU_OK(btf_render_flat(&m, view, light, &o, &img, NULL, &e), &e);
+    double worst = 0.0;
+    for (size_t i = 0; i < (size_t)64 * 64 * 3; i++) {
+        assert_true(isfinite(img.data[i]) && img.data[i] >= 0.0f);
+        worst = fmax(worst, fabs(img.data[i] - fmax(ref.data[i], 0.0)));
+    }
+    assert_true(worst < 1e-5);
+    btf_image_free(&img);
+    btf_image_free(&ref);
+    btf_model_free(&m);
+}
+
 /* A flat range map (none in the model) multiplies by exactly 1: relief 0
  * and relief 5 give the same bytes. With a sloped range map and relief,
  * the shading follows the light: the side facing it is brighter. */
@@ -489,6 +530,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_flat_equals_subspace),
+        cmocka_unit_test(test_deep_gaussian_tails),
         cmocka_unit_test(test_flat_range_multiplies_by_one),
         cmocka_unit_test(test_relief_follows_light),
         cmocka_unit_test(test_seed),

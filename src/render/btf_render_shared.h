@@ -72,8 +72,13 @@ struct btf_tap1 {
 struct btf_rgb {
     float r, g, b;
 };
+struct btf_pixel {
+    float r, g, b;
+    int missing;
+};
 #define BTF_TAP1(a, b, c) btf_tap1(a, b, c)
 #define BTF_RGB(a, b, c) btf_rgb(a, b, c)
+#define BTF_PIXEL(a, b, c, m) btf_pixel(a, b, c, m)
 #define BTF_FLOOR(x) floor(x)
 #define BTF_ABS(x) abs(x)
 #else
@@ -85,6 +90,13 @@ typedef struct btf_tap1 {
 typedef struct btf_rgb {
     float r, g, b;
 } btf_rgb;
+/* A shaded pixel: its colour, and beside it (never in it: any float may be
+ * a real colour of an unclamped model) whether a pair it selects has a
+ * subspace that was not synthesised. */
+typedef struct btf_pixel {
+    float r, g, b;
+    int missing;
+} btf_pixel;
 static inline btf_tap1 btf_make_tap1(int a, int b, float c)
 {
     btf_tap1 t = {a, b, c};
@@ -95,8 +107,14 @@ static inline btf_rgb btf_make_rgb(float a, float b, float c)
     btf_rgb t = {a, b, c};
     return t;
 }
+static inline btf_pixel btf_make_pixel(float a, float b, float c, int m)
+{
+    btf_pixel t = {a, b, c, m};
+    return t;
+}
 #define BTF_TAP1(a, b, c) btf_make_tap1(a, b, c)
 #define BTF_RGB(a, b, c) btf_make_rgb(a, b, c)
+#define BTF_PIXEL(a, b, c, m) btf_make_pixel(a, b, c, m)
 #define BTF_FLOOR(x) floorf(x)
 #define BTF_ABS(x) fabsf(x)
 #endif
@@ -190,10 +208,36 @@ BTF_FN int btf_shade_i(btf_hemi_weights h, int j)
     return j == 0 ? h.i0 : j == 1 ? h.i1 : h.i2;
 }
 
+/* 1 when every pair btf_shade_blend counts (both weights kept) selects a
+ * subspace that was synthesised: the flag is looked up by subspace index
+ * (BTF_SHADE_HAVE), so no colour value can be mistaken for a missing
+ * subspace (issue 29: unclamped Gaussian colours of format 1.0/1.1 models
+ * reach any negative value). */
+BTF_FN int btf_shade_pairs_have(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_weights hl)
+{
+    if (!(btf_shade_kept(hv.w0, hv.w1, hv.w2) > 0.0f) ||
+        !(btf_shade_kept(hl.w0, hl.w1, hl.w2) > 0.0f))
+        return 1; /* the blend is 0 and reads no image */
+    int n = BTF_SHADE_N_LIGHTS_SET(ctx);
+    for (int i = 0; i < 3; i++) {
+        if (!(btf_shade_w(hv, i) >= BTF_RENDER_MIN_WEIGHT))
+            continue;
+        for (int j = 0; j < 3; j++) {
+            if (!(btf_shade_w(hl, j) >= BTF_RENDER_MIN_WEIGHT))
+                continue;
+            int k = BTF_SHADE_INDEX(ctx, btf_shade_i(hv, i) * n + btf_shade_i(hl, j));
+            if (BTF_SHADE_HAVE(ctx, k) == 0)
+                return 0;
+        }
+    }
+    return 1;
+}
+
 /* The nine pairs' blend of the subspace images at taps (tx, ty): pairs whose
  * two weights count, renormalised. Pairs of the same subspace are summed
- * into one weight and sampled once. A pair of a subspace that was not
- * synthesised makes the result negative in r (-1: the caller reports it). */
+ * into one weight and sampled once. Every subspace it reads must have been
+ * synthesised (btf_shade_pairs_have, which the caller asks first); the
+ * result is any real colour, negative ones included. */
 BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_weights hl,
                                btf_tap1 tx, btf_tap1 ty)
 {
@@ -251,8 +295,6 @@ BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_
                 : d == 5 ? w5 : d == 6 ? w6 : d == 7 ? w7 : w8;
         if (k < 0)
             break;
-        if (BTF_SHADE_HAVE(ctx, k) == 0)
-            return BTF_RGB(-1.0f, 0.0f, 0.0f);
         BTF_PRECISE float tr = w * btf_shade_tex(ctx, k, tx, ty, 0);
         BTF_PRECISE float tg = w * btf_shade_tex(ctx, k, tx, ty, 1);
         BTF_PRECISE float tb = w * btf_shade_tex(ctx, k, tx, ty, 2);
@@ -504,12 +546,13 @@ BTF_FN float btf_shade_light_scale(BTF_SHADE_CTX ctx, int j, float px, float py,
 
 /* One pixel (docs/render.md, "Shading"): frame rows T (f0..f2), B (f3..f5),
  * N (f6..f8), world hit (px, py, pz), world unit vector to the eye (ex, ey,
- * ez), texture coordinate (u, v). Returns the linear RGB, >= 0 and finite;
- * r = -1 when a pair selects a subspace that was not synthesised. */
-BTF_FN btf_rgb btf_shade_pixel(BTF_SHADE_CTX ctx, float f0, float f1, float f2, float f3,
-                               float f4, float f5, float f6, float f7, float f8, float px,
-                               float py, float pz, float ex, float ey, float ez, float u,
-                               float v, float relief)
+ * ez), texture coordinate (u, v). Returns the linear RGB, >= 0 and finite,
+ * with missing 0; missing 1 (and black) when a pair selects a subspace
+ * that was not synthesised. */
+BTF_FN btf_pixel btf_shade_pixel(BTF_SHADE_CTX ctx, float f0, float f1, float f2, float f3,
+                                 float f4, float f5, float f6, float f7, float f8, float px,
+                                 float py, float pz, float ex, float ey, float ez, float u,
+                                 float v, float relief)
 {
     float vx = btf_shade_dot3(f0, f1, f2, ex, ey, ez);
     float vy = btf_shade_dot3(f3, f4, f5, ex, ey, ez);
@@ -534,9 +577,9 @@ BTF_FN btf_rgb btf_shade_pixel(BTF_SHADE_CTX ctx, float f0, float f1, float f2, 
         if (!(lz > 0.0f))
             continue; /* below the surface's horizon: no light */
         btf_hemi_weights hl = btf_hemi_lookup(BTF_SHADE_LIGHTS(ctx), lx, ly, lz);
+        if (btf_shade_pairs_have(ctx, hv, hl) == 0)
+            return BTF_PIXEL(0.0f, 0.0f, 0.0f, 1);
         btf_rgb c = btf_shade_blend(ctx, hv, hl, tx, ty);
-        if (c.r < -0.5f)
-            return c;
         float vis = btf_shade_shadow(ctx, tx, ty, lx, ly, lz, relief);
         float factor = btf_shade_bump(ctx, n.r, n.g, n.b, lx, ly, lz, vis);
         BTF_PRECISE float ir = BTF_SHADE_LIGHT_RGB(ctx, j, 0) * scale;
@@ -557,7 +600,7 @@ BTF_FN btf_rgb btf_shade_pixel(BTF_SHADE_CTX ctx, float f0, float f1, float f2, 
     r = r > 0.0f && r < BTF_RENDER_COORD_MAX ? r : 0.0f;
     g = g > 0.0f && g < BTF_RENDER_COORD_MAX ? g : 0.0f;
     b = b > 0.0f && b < BTF_RENDER_COORD_MAX ? b : 0.0f;
-    return BTF_RGB(r, g, b);
+    return BTF_PIXEL(r, g, b, 0);
 }
 
 #endif /* BTF_RENDER_SHARED_H */

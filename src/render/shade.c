@@ -39,15 +39,16 @@ typedef struct shade_job {
 } shade_job;
 
 /* The shared per-pixel shading (btf_render_shared.h) on G-buffer pixel p;
- * -1 when the pixel selects a subspace the material lacks. */
+ * -1 when the pixel selects a subspace the material lacks (its flag, not
+ * its colour, says so). */
 static int shade_pixel(const shade_job *j, size_t p, float out[3])
 {
     const btf_gbuffer *g = j->g;
     const float *f = g->frame + 9 * p, *pos = g->position + 3 * p, *e = g->view + 3 * p;
-    btf_rgb c = btf_shade_pixel(&j->ctx, f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8],
-                                pos[0], pos[1], pos[2], e[0], e[1], e[2], g->uv[2 * p],
-                                g->uv[2 * p + 1], j->relief);
-    if (c.r < -0.5f)
+    btf_pixel c = btf_shade_pixel(&j->ctx, f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7],
+                                  f[8], pos[0], pos[1], pos[2], e[0], e[1], e[2],
+                                  g->uv[2 * p], g->uv[2 * p + 1], j->relief);
+    if (c.missing)
         return -1;
     out[0] = c.r;
     out[1] = c.g;

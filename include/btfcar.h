@@ -167,7 +167,7 @@ btf_status btf_write_file_atomic(const char *path, const void *data, size_t n,
                                  btf_error *err);
 
 /* Output folders written as a whole (docs/design.md, "Writes are atomic"):
- * begin creates a temporary sibling folder DIR.btfcar-tmp-PID-N (and any
+ * begin creates a temporary sibling folder DIR.btfcar-tmp-ID-PID-N (and any
  * missing folders above DIR); the caller writes every file into
  * btf_output_dir_path(d); commit moves the set into place: a missing or
  * empty DIR is replaced by one rename, an existing DIR gets the new files by
@@ -197,9 +197,11 @@ btf_status btf_output_check(const char *path, btf_output_kind kind, btf_error *e
  * the thread that created the temporary (a temporary beyond 64 live ones is
  * left out of the list, not refused). */
 void btf_remove_temporaries(void);
-/* Removes the stale temporaries in folder: entries named *.btfcar-tmp-PID-N
- * owned by this user whose process PID no longer exists (never this
- * process's, never another user's). Returns how many it removed. */
+/* Removes the stale temporaries in folder: entries named
+ * *.btfcar-tmp-ID-PID-N owned by this user, whose ID is this process's (the
+ * same host, boot and PID namespace) and whose process PID no longer exists
+ * (never this process's, never another user's, never another namespace's
+ * or host's, never a name without an ID). Returns how many it removed. */
 int btf_remove_stale_temporaries(const char *folder);
 
 /* sRGB transfer function (IEC 61966-2-1), per value. */

@@ -3,6 +3,7 @@
  * whole, stale temporaries, output paths checked before work, and SIGINT /
  * SIGTERM in the middle of `btfcar synthesise`. */
 #include "testutil.h"
+#include "core/core.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -56,16 +57,20 @@ static void read_back(const char *path, char *buf, size_t n)
  * at target. */
 static void plant(const char *path, const char *target)
 {
+    char id[BTF_TMP_IDENTITY_SIZE];
+    btf_tmp_identity(id);
     for (int k = 1; k <= 400; k++) {
-        const char *name = tu_fmt("%s.btfcar-tmp-%ld-%d", path, (long)getpid(), k);
+        const char *name = tu_fmt("%s.btfcar-tmp-%s-%ld-%d", path, id, (long)getpid(), k);
         assert_int_equal(symlink(target, name), 0);
     }
 }
 
 static void unplant(const char *path)
 {
+    char id[BTF_TMP_IDENTITY_SIZE];
+    btf_tmp_identity(id);
     for (int k = 1; k <= 400; k++)
-        unlink(tu_fmt("%s.btfcar-tmp-%ld-%d", path, (long)getpid(), k));
+        unlink(tu_fmt("%s.btfcar-tmp-%s-%ld-%d", path, id, (long)getpid(), k));
 }
 
 static void planted_symlinks_are_skipped(void **state)
@@ -167,26 +172,33 @@ static void stale_temporaries(void **state)
     assert_true(child > 0);
     waitpid(child, NULL, 0); /* a pid that no longer runs */
     long dead = (long)child;
-    tu_write_file(tu_fmt("%s/a.exr.btfcar-tmp-%ld-1", root, dead), "x", 1);
-    assert_int_equal(mkdir(tu_fmt("%s/set.btfcar-tmp-%ld-2", root, dead), 0777), 0);
-    tu_write_file(tu_fmt("%s/set.btfcar-tmp-%ld-2/in.exr", root, dead), "x", 1);
-    /* Kept: this live process's, pid 1's (alive), names not of the pattern. */
-    tu_write_file(tu_fmt("%s/b.btfcar-tmp-%ld-1", root, (long)getpid()), "x", 1);
-    tu_write_file(tu_fmt("%s/c.btfcar-tmp-1-1", root), "x", 1);
-    tu_write_file(tu_fmt("%s/d.btfcar-tmp-%ld-x", root, dead), "x", 1);
-    tu_write_file(tu_fmt("%s/e.btfcar-tmp-%ld", root, dead), "x", 1);
+    char id[BTF_TMP_IDENTITY_SIZE];
+    btf_tmp_identity(id);
+    tu_write_file(tu_fmt("%s/a.exr.btfcar-tmp-%s-%ld-1", root, id, dead), "x", 1);
+    assert_int_equal(mkdir(tu_fmt("%s/set.btfcar-tmp-%s-%ld-2", root, id, dead), 0777), 0);
+    tu_write_file(tu_fmt("%s/set.btfcar-tmp-%s-%ld-2/in.exr", root, id, dead), "x", 1);
+    /* Kept: this live process's, pid 1's (alive), names not of the pattern,
+     * the dead pid under another host's or namespace's identity and under
+     * none (a name from before the identity): not proven dead. */
+    tu_write_file(tu_fmt("%s/b.btfcar-tmp-%s-%ld-1", root, id, (long)getpid()), "x", 1);
+    tu_write_file(tu_fmt("%s/c.btfcar-tmp-%s-1-1", root, id), "x", 1);
+    tu_write_file(tu_fmt("%s/d.btfcar-tmp-%s-%ld-x", root, id, dead), "x", 1);
+    tu_write_file(tu_fmt("%s/e.btfcar-tmp-%s-%ld", root, id, dead), "x", 1);
+    tu_write_file(tu_fmt("%s/f.btfcar-tmp-0123456789abcdef-%ld-1", root, dead), "x", 1);
+    tu_write_file(tu_fmt("%s/g.btfcar-tmp-%ld-1", root, dead), "x", 1);
     tu_write_file(tu_fmt("%s/plain.txt", root), "x", 1);
     assert_int_equal(btf_remove_stale_temporaries(root), 2);
-    assert_int_equal(count_entries(root), 5);
-    assert_int_equal(access(tu_fmt("%s/a.exr.btfcar-tmp-%ld-1", root, dead), F_OK), -1);
+    assert_int_equal(count_entries(root), 7);
+    assert_int_equal(access(tu_fmt("%s/a.exr.btfcar-tmp-%s-%ld-1", root, id, dead), F_OK), -1);
     /* A btfcar run removes the stale ones beside its output. */
-    tu_write_file(tu_fmt("%s/m.btfcar.btfcar-tmp-%ld-7", root, dead), "x", 1);
+    tu_write_file(tu_fmt("%s/m.btfcar.btfcar-tmp-%s-%ld-7", root, id, dead), "x", 1);
     char *err = NULL;
     assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s/nothing.png -o %s/m.btfcar", tu_cli(),
                                    root, root), &err), 1);
     free(err);
-    assert_int_equal(access(tu_fmt("%s/m.btfcar.btfcar-tmp-%ld-7", root, dead), F_OK), -1);
-    assert_int_equal(count_entries(root), 5);
+    assert_int_equal(access(tu_fmt("%s/m.btfcar.btfcar-tmp-%s-%ld-7", root, id, dead), F_OK),
+                     -1);
+    assert_int_equal(count_entries(root), 7);
     tu_rmtree(root);
     free(root);
 }
@@ -360,9 +372,85 @@ static void failed_write_of_a_batch_leaves_nothing(void **state)
     assert_false(has_tmp_entry(tu_dir));
 }
 
-int main(void)
+/* Holder mode, run by other_namespace_temporaries_are_kept inside a new PID
+ * namespace: a temporary beside DIR/held, its name written to DIR/ready,
+ * kept until DIR/stop appears (at most 60 s), then removed. */
+static int hold_temporary(const char *dir)
 {
+    char path[4096], tmp[4096], ready[4096], stop[4096];
+    int fd;
+    btf_error e = {0};
+    snprintf(path, sizeof path, "%s/held", dir);
+    snprintf(ready, sizeof ready, "%s/ready", dir);
+    snprintf(stop, sizeof stop, "%s/stop", dir);
+    if (btf_tmp_create(path, tmp, sizeof tmp, &fd, &e) != 0)
+        return 1;
+    close(fd);
+    if (btf_write_file_atomic(ready, tmp, strlen(tmp), &e) != 0)
+        return 1;
+    for (int i = 0; i < 6000 && access(stop, F_OK) != 0; i++)
+        usleep(10000);
+    btf_abort_file(tmp);
+    return 0;
+}
+
+/* A temporary of a live process in another PID namespace (a container
+ * sharing the folder), whose PID no process of ours has: kept, although
+ * kill(PID, 0) says ESRCH here (issue 29, 1). Needs root and unshare(1). */
+static void other_namespace_temporaries_are_kept(void **state)
+{
+    (void)state;
+    if (geteuid() != 0 ||
+        system("unshare --pid --fork --mount-proc true >/dev/null 2>&1") != 0) {
+        print_message("skipped: a PID namespace needs root and unshare(1)\n");
+        skip();
+    }
+    char *root = tu_tmpdir();
+    char self[4096];
+    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    assert_true(n > 0);
+    self[n] = '\0';
+    long pid = 0; /* a PID no process of this namespace has */
+    for (long p = 31001; p < 90000 && !pid; p += 97)
+        if (kill((pid_t)p, 0) != 0 && errno == ESRCH)
+            pid = p;
+    assert_true(pid > 0);
+    pid_t child = fork();
+    if (child == 0) {
+        char cmd[8192];
+        snprintf(cmd, sizeof cmd,
+                 /* not exec: the shell is PID 1 there; its child gets the PID */
+                 "echo %ld > /proc/sys/kernel/ns_last_pid && '%s' --hold-temporary '%s'; "
+                 "exit $?",
+                 pid - 1, self, root);
+        execlp("unshare", "unshare", "--pid", "--fork", "--mount-proc", "sh", "-c", cmd,
+               (char *)NULL);
+        _exit(127);
+    }
+    char ready[4096], tmp[4096] = "";
+    snprintf(ready, sizeof ready, "%s/ready", root);
+    for (int i = 0; i < 2000 && access(ready, F_OK) != 0; i++)
+        usleep(10000);
+    read_back(ready, tmp, sizeof tmp);
+    assert_non_null(strstr(tmp, tu_fmt("-%ld-", pid))); /* the PID it was given */
+    assert_true(kill((pid_t)pid, 0) != 0 && errno == ESRCH); /* "dead" seen from here */
+    assert_int_equal(btf_remove_stale_temporaries(root), 0);
+    assert_int_equal(access(tmp, F_OK), 0);
+    tu_write_file(tu_fmt("%s/stop", root), "", 0);
+    int status = 0;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    assert_int_equal(access(tmp, F_OK), -1); /* its owner removed it */
+    tu_rmtree(root);
+    free(root);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc == 3 && !strcmp(argv[1], "--hold-temporary"))
+        return hold_temporary(argv[2]);
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(other_namespace_temporaries_are_kept),
         cmocka_unit_test(planted_symlinks_are_skipped),
         cmocka_unit_test(output_folders_are_whole),
         cmocka_unit_test(stale_temporaries),

@@ -21,7 +21,7 @@ tools/cli-doc.sh.
 
 Outputs are checked before any work (the folder exists and takes files; no
 folder where a file is wanted) and written atomically: temporary names
-beside the target (`*.btfcar-tmp-PID-N`), a set of files in a temporary
+beside the target (`*.btfcar-tmp-ID-PID-N`), a set of files in a temporary
 folder moved into place as a whole. SIGINT and SIGTERM remove the run's
 temporaries and exit with 128 + the signal; stale temporaries of dead runs
 are removed (docs/design.md, "Writes are atomic").

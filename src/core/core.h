@@ -36,13 +36,18 @@ void *btf_alloc(size_t count, size_t size, btf_error *err);
 void *btf_calloc(size_t count, size_t size, btf_error *err);
 
 /* Atomic file writing: btf_tmp_create makes a new temporary file beside
- * `path` (same folder, so rename() is atomic), PATH.btfcar-tmp-PID-N, with
+ * `path` (same folder, so rename() is atomic), PATH.btfcar-tmp-IDENTITY-PID-N, with
  * O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC (a taken name, a planted symlink
  * too, is skipped for the next N), and records it for
  * btf_remove_temporaries; *fd is open for writing. btf_commit_file renames
  * it over path (the caller has written, fsync'd and closed it),
  * btf_abort_file removes it. */
 int btf_tmp_create(const char *path, char *tmp, size_t n, int *fd, btf_error *err);
+/* The IDENTITY of temporary names (PATH.btfcar-tmp-IDENTITY-PID-N): 16 hex
+ * digits naming this host's boot and the calling process's PID namespace,
+ * into out. */
+#define BTF_TMP_IDENTITY_SIZE 17
+void btf_tmp_identity(char out[BTF_TMP_IDENTITY_SIZE]);
 int btf_commit_file(const char *tmp, const char *path, btf_error *err);
 void btf_abort_file(const char *tmp);
 /* btf_write_file_atomic (a whole buffer) is public: include/btfcar.h. */

@@ -19,6 +19,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <stdatomic.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,8 +28,11 @@
 #include <time.h>
 #include <unistd.h>
 
-/* Every temporary name ends in TMP_TAG PID-N. */
+/* Every temporary name ends in TMP_TAG IDENTITY-PID-N: IDENTITY names the
+ * PID namespace on this boot of this host (tmp_identity), so that only a
+ * process of the same namespace judges whether PID is dead. */
 #define TMP_TAG ".btfcar-tmp-"
+#define IDENTITY_LEN (BTF_TMP_IDENTITY_SIZE - 1)
 #define TMP_SLOTS 64
 #define TMP_TRIES 1000
 
@@ -127,12 +131,53 @@ void btf_remove_temporaries(void)
     }
 }
 
-/* PATH.btfcar-tmp-PID-N, N from a counter shared by all threads. */
+/* FNV-1a: a short stable digest, not a secret. */
+static uint64_t fnv1a(uint64_t h, const char *s, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        h = (h ^ (unsigned char)s[i]) * 1099511628211ull;
+    return h;
+}
+
+/* Appends the first line of a small system file to the digest (nothing when
+ * it cannot be read: the identity then rests on the rest). */
+static uint64_t digest_file(uint64_t h, const char *path)
+{
+    char buf[256];
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    if (fd < 0)
+        return fnv1a(h, "-", 1);
+    ssize_t r = read(fd, buf, sizeof buf);
+    close(fd);
+    return fnv1a(h, buf, r > 0 ? (size_t)r : 0);
+}
+
+/* A PID means a process only within one PID namespace of one boot of one
+ * host: two hosts sharing a folder over NFS, or a container sharing it by a
+ * bind mount, see other processes under the same numbers (issue 29). The
+ * identity digests the host name, the boot id and the PID namespace. It is
+ * read again each time, not cached: a child forked into a new namespace
+ * must not inherit its parent's. */
+void btf_tmp_identity(char out[BTF_TMP_IDENTITY_SIZE])
+{
+    uint64_t h = 14695981039346656037ull;
+    char buf[256] = "";
+    if (gethostname(buf, sizeof buf - 1) == 0)
+        h = fnv1a(h, buf, strlen(buf));
+    h = digest_file(h, "/proc/sys/kernel/random/boot_id");
+    ssize_t r = readlink("/proc/self/ns/pid", buf, sizeof buf - 1);
+    h = fnv1a(h, buf, r > 0 ? (size_t)r : 0);
+    snprintf(out, BTF_TMP_IDENTITY_SIZE, "%016llx", (unsigned long long)h);
+}
+
+/* PATH.btfcar-tmp-IDENTITY-PID-N, N from a counter shared by all threads. */
 static int tmp_name(const char *path, char *tmp, size_t n, btf_error *err)
 {
     static _Atomic unsigned long counter;
     unsigned long c = ++counter;
-    int k = snprintf(tmp, n, "%s" TMP_TAG "%ld-%lu", path, (long)getpid(), c);
+    char id[BTF_TMP_IDENTITY_SIZE];
+    btf_tmp_identity(id);
+    int k = snprintf(tmp, n, "%s" TMP_TAG "%s-%ld-%lu", path, id, (long)getpid(), c);
     if (k < 0 || (size_t)k >= n)
         return btf_fail(err, BTF_E_ARG, "%s: path too long", path);
     return BTF_OK;
@@ -312,7 +357,7 @@ void btf_remove_tree(const char *path)
 
 struct btf_output_dir {
     char dir[4096];     /* the final folder, no trailing slash */
-    char tmp[4096];     /* DIR.btfcar-tmp-PID-N beside it */
+    char tmp[4096];     /* DIR.btfcar-tmp-ID-PID-N beside it */
     char created[4096]; /* the topmost missing ancestor begin created, or "" */
 };
 
@@ -549,6 +594,8 @@ int btf_remove_stale_temporaries(const char *folder)
     if (!dh)
         return 0;
     int removed = 0;
+    char ours[BTF_TMP_IDENTITY_SIZE];
+    btf_tmp_identity(ours);
     struct dirent *e;
     while ((e = readdir(dh))) {
         const char *t = strstr(e->d_name, TMP_TAG), *next;
@@ -557,7 +604,12 @@ int btf_remove_stale_temporaries(const char *folder)
         if (!t)
             continue;
         char *end;
-        const char *num = t + strlen(TMP_TAG);
+        const char *id = t + strlen(TMP_TAG), *num = id + IDENTITY_LEN + 1;
+        /* Another namespace's or host's (or a name without an identity):
+         * its PID says nothing here, so it is never judged dead. */
+        if (strlen(id) <= IDENTITY_LEN || strncmp(id, ours, IDENTITY_LEN) ||
+            id[IDENTITY_LEN] != '-')
+            continue;
         if (*num < '0' || *num > '9')
             continue;
         long pid = strtol(num, &end, 10);

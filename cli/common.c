@@ -59,6 +59,10 @@ void cli_install_signal_cleanup(void)
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGHUP, &sa, NULL);
+    /* Past `ulimit -f` a write fails with EFBIG instead of killing the
+     * process: the writer then reports it in one line and removes its
+     * temporary, as for a full disk (issue 29, 4). */
+    signal(SIGXFSZ, SIG_IGN);
 }
 
 int cli_set_error(btf_error *err, int code, const char *fmt, ...)

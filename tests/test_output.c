@@ -43,6 +43,14 @@ static int has_tmp_entry(const char *path)
     return found;
 }
 
+static int count_lines(const char *s)
+{
+    int n = 0;
+    for (; *s; s++)
+        n += *s == '\n';
+    return n;
+}
+
 static void read_back(const char *path, char *buf, size_t n)
 {
     FILE *f = fopen(path, "rb");
@@ -260,11 +268,14 @@ static void outputs_checked_first(void **state)
 
 /* btfcar synthesise of a large image, interrupted once its temporary file
  * exists: exit 128 + signal, nothing of the run left. */
-static void interrupt_one(const char *model, int sig)
+/* sub: "" or folders (ending in '/') that do not exist yet, created by the
+ * run above its output: the signal removes them too (issue 29, 9). */
+static void interrupt_one(const char *model, int sig, const char *sub)
 {
     char *root = tu_tmpdir();
-    char out[4096];
-    snprintf(out, sizeof out, "%s/out", root);
+    char out[4096], where[4096];
+    snprintf(out, sizeof out, "%s/%sout", root, sub);
+    snprintf(where, sizeof where, "%s/%s", root, sub);
     pid_t pid = fork();
     assert_true(pid >= 0);
     if (pid == 0) {
@@ -277,13 +288,13 @@ static void interrupt_one(const char *model, int sig)
     /* Until the EXR's temporary file has bytes in it (at most 60 s). */
     int seen = 0;
     for (int i = 0; i < 6000 && !seen; i++) {
-        DIR *d = opendir(root);
+        DIR *d = opendir(where);
         struct dirent *e;
         while (d && (e = readdir(d)))
             if (strstr(e->d_name, ".btfcar-tmp-")) {
-                char sub[8192];
-                snprintf(sub, sizeof sub, "%s/%s", root, e->d_name);
-                seen = has_tmp_entry(sub);
+                char tmp[8192];
+                snprintf(tmp, sizeof tmp, "%s/%s", where, e->d_name);
+                seen = has_tmp_entry(tmp);
             }
         if (d)
             closedir(d);
@@ -314,8 +325,9 @@ static void interrupted_synthesis_leaves_nothing(void **state)
     btf_image_free(&img);
     assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s -o %s --levels 1", tu_cli(), png, model),
                             NULL), 0);
-    interrupt_one(model, SIGINT);
-    interrupt_one(model, SIGTERM);
+    interrupt_one(model, SIGINT, "");
+    interrupt_one(model, SIGTERM, "");
+    interrupt_one(model, SIGINT, "new1/new2/");
     /* A failing --preview (its name taken by a folder in OUTDIR) leaves no
      * EXR either, and no temporary. */
     char out[4096];
@@ -361,7 +373,8 @@ static void failed_write_of_a_batch_leaves_nothing(void **state)
      * synthesised: the run stops naming that file, nothing is left */
     snprintf(out, sizeof out, "%s/bfs", tu_dir);
     char *err = NULL;
-    assert_int_equal(tu_run(tu_fmt("(ulimit -f 100; trap '' XFSZ; exec %s synthesise -q %s "
+    /* (no `trap '' XFSZ`: btfcar ignores SIGXFSZ itself, issue 29, 4) */
+    assert_int_equal(tu_run(tu_fmt("(ulimit -f 100; exec %s synthesise -q %s "
                                    "--size 256x256 --backend cpu -o %s)", tu_cli(), model, out),
                             &err), 1);
     print_message("%s", err);
@@ -370,6 +383,68 @@ static void failed_write_of_a_batch_leaves_nothing(void **state)
     free(err);
     assert_int_equal(access(out, F_OK), -1);
     assert_false(has_tmp_entry(tu_dir));
+    /* one file past the limit: a model (its temporary file) */
+    char m2[4096];
+    snprintf(m2, sizeof m2, "%s/big.btfcar", tu_dir);
+    err = NULL;
+    assert_int_equal(tu_run(tu_fmt("(ulimit -f 8; exec %s analyse -q %s -o %s --subspaces 4 "
+                                   "--levels 1)", tu_cli(), ds, m2), &err), 1);
+    print_message("%s", err);
+    assert_non_null(strstr(err, "big.btfcar"));
+    assert_non_null(strstr(err, "too large"));
+    assert_int_equal(count_lines(err), 1);
+    free(err);
+    assert_int_equal(access(m2, F_OK), -1);
+    assert_false(has_tmp_entry(tu_dir));
+}
+
+/* An output folder given as a symlink to a folder: every command that
+ * writes a set fills the folder it names and leaves the link a link
+ * (issue 29, 8: before, the work was done and the final rename failed with
+ * "Not a directory"). */
+static void symlinked_output_folders(void **state)
+{
+    (void)state;
+    char *root = tu_tmpdir();
+    const char *ds = tu_fmt("%s/ds", root);
+    const char *model = tu_fmt("%s/m.btfcar", root);
+    const char *cmds[] = {
+        "%s generate -q --material leather --size 32 --seed 3 %s",
+        "%s synthesise -q " /* the model, made below */ "%s --size 16x16 --backend cpu -o %s",
+        "%s photostereo -q %s -o %s",
+        "%s analyse -q %s --stage segment --subspaces 2 -o %s",
+        "%s report -q %s %s -o %s --views 2 --lights 2",
+    };
+    for (int i = 0; i < 5; i++) {
+        char real[4096], link[4096];
+        snprintf(real, sizeof real, "%s/real%d", root, i);
+        snprintf(link, sizeof link, "%s/link%d", root, i);
+        assert_int_equal(mkdir(real, 0777), 0);
+        assert_int_equal(symlink(real, link), 0);
+        const char *cmd = i == 0   ? tu_fmt(cmds[0], tu_cli(), link)
+                          : i == 1 ? tu_fmt(cmds[1], tu_cli(), model, link)
+                          : i == 4 ? tu_fmt(cmds[4], tu_cli(), ds, model, link)
+                                   : tu_fmt(cmds[i], tu_cli(), ds, link);
+        char *err = NULL;
+        int rc = tu_run(cmd, &err);
+        if (rc)
+            print_message("%s: %s", cmd, err ? err : "");
+        free(err);
+        assert_int_equal(rc, 0);
+        struct stat st;
+        assert_int_equal(lstat(link, &st), 0);
+        assert_true(S_ISLNK(st.st_mode));
+        assert_true(count_entries(real) > 0);
+        assert_false(has_tmp_entry(root));
+        if (i == 0) { /* the generated dataset and its model serve the others */
+            assert_int_equal(rename(real, ds), 0);
+            assert_int_equal(mkdir(real, 0777), 0);
+            assert_int_equal(tu_run(tu_fmt("%s analyse -q %s -o %s --subspaces 2 --levels 1",
+                                           tu_cli(), ds, model), NULL), 0);
+        }
+    }
+    tu_rmtree(root);
+    free(root);
 }
 
 /* Holder mode, run by other_namespace_temporaries_are_kept inside a new PID
@@ -457,6 +532,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(outputs_checked_first),
         cmocka_unit_test(interrupted_synthesis_leaves_nothing),
         cmocka_unit_test(failed_write_of_a_batch_leaves_nothing),
+        cmocka_unit_test(symlinked_output_folders),
     };
     return cmocka_run_group_tests_name("output", tests, tu_setup_dir, tu_teardown_dir);
 }

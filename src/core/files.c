@@ -23,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <time.h>
@@ -43,11 +44,13 @@ enum { SLOT_FREE, SLOT_BUSY, SLOT_FILE, SLOT_DIR, SLOT_COMMIT };
 static struct {
     _Atomic int state;
     char path[4096];
+    size_t top; /* a folder's: the length of the topmost folder its writer
+                   created above it (removed again when empty), or 0 */
 } tmp_live[TMP_SLOTS];
 
 /* Records a temporary just created; -1 when the table is full (then only
  * the signal cleanup misses it). */
-static int live_add(const char *path, int kind)
+static int live_add(const char *path, int kind, size_t top)
 {
     if (strlen(path) >= sizeof tmp_live[0].path)
         return -1;
@@ -55,6 +58,7 @@ static int live_add(const char *path, int kind)
         int expect = SLOT_FREE;
         if (atomic_compare_exchange_strong(&tmp_live[i].state, &expect, SLOT_BUSY)) {
             strcpy(tmp_live[i].path, path);
+            tmp_live[i].top = top;
             atomic_store(&tmp_live[i].state, kind);
             return i;
         }
@@ -117,14 +121,36 @@ static void sig_rmtree_at(int parent, const char *name, int depth)
     unlinkat(parent, name, AT_REMOVEDIR);
 }
 
+/* rmdir of the folders above a temporary folder, innermost first, down to
+ * length top, while they are empty (async-signal-safe: a local copy, rmdir). */
+static void sig_rmdir_up(const char *path, size_t top)
+{
+    char p[4096];
+    size_t n = strlen(path);
+    if (!top || n >= sizeof p)
+        return;
+    memcpy(p, path, n + 1);
+    for (;;) {
+        while (n > 0 && p[n - 1] != '/') /* drop the last component */
+            n--;
+        while (n > 1 && p[n - 1] == '/')
+            n--;
+        p[n] = '\0';
+        if (n < top || n == 0 || rmdir(p) != 0)
+            return;
+    }
+}
+
 void btf_remove_temporaries(void)
 {
     for (int i = 0; i < TMP_SLOTS; i++) {
         int s = atomic_load(&tmp_live[i].state);
         if (s == SLOT_FILE)
             unlink(tmp_live[i].path);
-        else if (s == SLOT_DIR)
+        else if (s == SLOT_DIR) {
             sig_rmtree_at(AT_FDCWD, tmp_live[i].path, 0);
+            sig_rmdir_up(tmp_live[i].path, tmp_live[i].top);
+        }
         /* A set being moved into place: wait (at most 10 s) for the move. */
         for (int t = 0; t < 10000 && atomic_load(&tmp_live[i].state) == SLOT_COMMIT; t++)
             nanosleep(&(struct timespec){0, 1000000}, NULL);
@@ -193,7 +219,7 @@ int btf_tmp_create(const char *path, char *tmp, size_t n, int *fd, btf_error *er
         /* O_EXCL: an existing name, a symlink too, is never opened. */
         int f = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
         if (f >= 0) {
-            live_add(tmp, SLOT_FILE);
+            live_add(tmp, SLOT_FILE, 0);
             *fd = f;
             return BTF_OK;
         }
@@ -403,6 +429,27 @@ static void undo_ancestors(const btf_output_dir *d)
     }
 }
 
+/* An output folder given as a symlink to a folder is written into the
+ * folder it names (issue 29, 8): the set is assembled beside the real
+ * folder, so that the final renames stay within one file system and never
+ * replace the link. A link to anything else is left for the checks. */
+static btf_status follow_folder_link(char *dir, size_t n, btf_error *err)
+{
+    struct stat st;
+    if (lstat(dir, &st) != 0 || !S_ISLNK(st.st_mode) || stat(dir, &st) != 0 ||
+        !S_ISDIR(st.st_mode))
+        return BTF_OK;
+    char *real = realpath(dir, NULL);
+    if (!real)
+        return btf_fail(err, BTF_E_IO, "%s: cannot follow the link: %s", dir, strerror(errno));
+    int fits = strlen(real) < n;
+    if (fits)
+        strcpy(dir, real);
+    free(real);
+    return fits ? BTF_OK : btf_fail(err, BTF_E_ARG, "%s: the folder it links to has too long a "
+                                    "path", dir);
+}
+
 btf_status btf_output_dir_begin(const char *dir, btf_output_dir **out, btf_error *err)
 {
     if (!out)
@@ -414,6 +461,8 @@ btf_status btf_output_dir_begin(const char *dir, btf_output_dir **out, btf_error
     if (!d)
         return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", dir);
     btf_status rc = strip_slashes(dir, d->dir, sizeof d->dir, err);
+    if (!rc)
+        rc = follow_folder_link(d->dir, sizeof d->dir, err);
     char parent[4096];
     parent_of(d->dir, parent, sizeof parent);
     struct stat st;
@@ -433,7 +482,7 @@ btf_status btf_output_dir_begin(const char *dir, btf_output_dir **out, btf_error
         if ((rc = tmp_name(d->dir, d->tmp, sizeof d->tmp, err)))
             break;
         if (mkdir(d->tmp, 0777) == 0) {
-            live_add(d->tmp, SLOT_DIR);
+            live_add(d->tmp, SLOT_DIR, strlen(d->created));
             *out = d;
             return BTF_OK;
         }
@@ -482,10 +531,39 @@ static btf_status move_entries(const btf_output_dir *d, btf_error *err)
     return rc;
 }
 
+/* Writers into one existing folder take turns (issue 29, 2): an exclusive
+ * flock on the folder itself, held while a set moves in, so that two runs
+ * never interleave their files (the later set lands whole over the
+ * earlier). The lock is taken on the folder the path names now: a folder
+ * replaced while we waited (an empty one renamed over) is locked afresh.
+ * Returns the locked descriptor, or -1 when the folder does not exist (a
+ * missing folder is created by one atomic rename, no lock needed). */
+static int lock_folder(const char *dir)
+{
+    for (int tries = 0; tries < 100; tries++) {
+        int fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC | O_NOFOLLOW);
+        if (fd < 0)
+            return -1;
+        int r;
+        while ((r = flock(fd, LOCK_EX)) != 0 && errno == EINTR)
+            ;
+        struct stat a, b;
+        if (r == 0 && fstat(fd, &a) == 0 && stat(dir, &b) == 0 && a.st_dev == b.st_dev &&
+            a.st_ino == b.st_ino)
+            return fd;
+        close(fd);
+        if (r != 0)
+            return -1; /* no locks here (e.g. a file system without them) */
+    }
+    return -1;
+}
+
 btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err)
 {
     if (!d)
         return btf_fail(err, BTF_E_ARG, "btf_output_dir_commit: NULL");
+    /* Wait for another writer of the folder first, interruptibly. */
+    int lock = lock_folder(d->dir);
     /* No interrupt between the renames: the set moves as a whole. */
     sigset_t block, old;
     sigemptyset(&block);
@@ -499,9 +577,11 @@ btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err)
     if (rename(d->tmp, d->dir) != 0) {
         struct stat st;
         if ((errno == ENOTEMPTY || errno == EEXIST) && stat(d->dir, &st) == 0 &&
-            S_ISDIR(st.st_mode))
+            S_ISDIR(st.st_mode)) {
+            if (lock < 0) /* made meanwhile by another writer */
+                lock = lock_folder(d->dir);
             rc = move_entries(d, err);
-        else
+        } else
             rc = btf_fail(err, BTF_E_IO, "%s: cannot move the output into place: %s", d->dir,
                           strerror(errno));
         btf_remove_tree(d->tmp);
@@ -509,6 +589,8 @@ btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err)
     live_drop(d->tmp);
     if (rc)
         undo_ancestors(d);
+    if (lock >= 0)
+        close(lock); /* the turn passes on */
     pthread_sigmask(SIG_SETMASK, &old, NULL);
     free(d);
     return rc;

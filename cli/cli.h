@@ -136,7 +136,8 @@ void cli_show_neighbourhood(const void *dest, char *buf, size_t n);
 /* A btf_warning_fn printing "btfcar CMD: warning: ..." (user: the cli_ctx). */
 void cli_warning(void *user, const char *message);
 /* The same for the warnings --quiet still shows: a model that misses much
- * of a band's variance (BTF_CAR_MISSED_TEXT). */
+ * of a band's variance (BTF_CAR_MISSED_TEXT), a flat range map
+ * (BTF_RANGE_FLAT_TEXT). */
 void cli_loud_warning(void *user, const char *message);
 /* The CAR parameters of one subspace, as text. */
 void cli_print_subspace(const btf_subspace_model *s, int index);

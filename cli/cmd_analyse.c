@@ -43,7 +43,7 @@ static const char *const CAR_ONLY[] = {"--preset", "--stage", "--subspaces", "--
                                        "--restarts", "--levels", "--neighbourhood",
                                        "--neighborhood", "--max-neighbours", "--no-range",
                                        "--range-size", "--no-structure", "--no-shadows",
-                                       "--no-gains", NULL};
+                                       "--no-gains", "--saturation", NULL};
 
 /* Writes text that was built in memory (open_memstream) to path atomically:
  * the whole file appears or none does. Frees the text. */
@@ -410,6 +410,13 @@ int cmd_analyse(int argc, char **argv)
                  "own (texel 1, with the structure layer); a smaller N keeps a\n"
                  "small periodic tile and no structure layer (docs/model.md)",
          .lo = 0, .hi = 4096, .zero_means = "the image's size", .tag = TAG_LATER},
+        {.name = "--saturation", .kind = CLI_DOUBLE, .dest = &ao.photostereo.saturation,
+         .meta = "S",
+         .help = "photometric stereo leaves out samples with a raw value >= S x full\n"
+                 "scale as clipped; full scale is 1 (8/16-bit files), or the images'\n"
+                 "peak for data beyond 1 (HDR, scaled linear EXR); 0: no such rule\n"
+                 "(docs/photostereo.md)",
+         .lo = 0.0, .hi = 1.0, .tag = TAG_LATER},
         {.name = "--no-structure", .kind = CLI_FLAG, .dest = &ao.no_structure,
          .help = "no structure layer: the CAR fields model the whole exemplar\n"
                  "(the relief and albedo are not divided out; format 1.3)",
@@ -452,6 +459,10 @@ int cmd_analyse(int argc, char **argv)
         return cli_usage_error(&c, "%s goes with --family rf", cli_first_seen(&spec, TAG_RF));
     if (preset >= 0)
         apply_preset(btf_analyse_preset_names()[preset], opts, &ao);
+    if (ao.no_range && seen(opts, "--saturation"))
+        return cli_usage_error(&c, "--saturation is not used with --no-range");
+    if (ao.photostereo.saturation == 0.0)
+        ao.photostereo.saturation = -1.0; /* the library's "no such rule" */
     if (cli_check_output(&c, out, stage < 0 ? BTF_OUTPUT_FILE : BTF_OUTPUT_FOLDER))
         return 1;
     if (stage < 0)

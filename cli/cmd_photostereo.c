@@ -116,7 +116,10 @@ static int parse_args(cli_ctx *c, int argc, char **argv, ps_args *p)
          .meta = "DEG", .help = "highlight cone around the mirror direction (0: no such rule)",
          .lo = 0.0, .hi = 89.0},
         {.name = "--saturation", .kind = CLI_DOUBLE, .dest = &o->saturation, .meta = "S",
-         .help = "raw values >= S are clipped (0: no such rule, HDR)", .lo = 0.0, .hi = 1e30},
+         .help = "raw values >= S x full scale are clipped; full scale is 1 (8/16-bit\n"
+                 "files), or the images' peak for data beyond 1 (HDR, scaled linear\n"
+                 "EXR); 0: no such rule",
+         .lo = 0.0, .hi = 1.0},
         {.name = "--plain", .kind = CLI_FLAG, .dest = &o->plain,
          .help = "plain least squares, no robust rule (for comparison)"},
         {.name = "--threads", .kind = CLI_INT, .dest = &o->threads, .meta = "T",
@@ -156,6 +159,21 @@ static int run(const cli_ctx *c, const ps_args *p, btf_ps_result *r, btf_error *
     return rc;
 }
 
+/* Most pixels without a fit give a flat height map: worth a warning even
+ * when the results are written (as analyse warns, BTF_RANGE_FLAT_TEXT). */
+static void warn_if_flat(cli_ctx *c, const ps_args *p, const btf_ps_result *r)
+{
+    if (!(2 * (long long)r->fallback > r->pixels))
+        return;
+    char msg[1024];
+    snprintf(msg, sizeof msg, "%s: fewer than 3 usable samples at %d of %d pixels (%.0f %%), "
+             "so %s: most samples are clipped (a raw value >= --saturation x full scale), "
+             "shadowed or black; if the images are not clipped there, raise --saturation or "
+             "turn the rule off with --saturation 0", p->manifest ? p->manifest : p->dataset,
+             r->fallback, r->pixels, 100.0 * r->fallback / r->pixels, BTF_RANGE_FLAT_TEXT);
+    (c->quiet ? cli_loud_warning : cli_warning)(c, msg);
+}
+
 int cmd_photostereo(int argc, char **argv)
 {
     cli_ctx c = {"photostereo", 0};
@@ -186,6 +204,7 @@ int cmd_photostereo(int argc, char **argv)
         return cli_lib_error(&c, &err);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     cli_progress_done();
+    warn_if_flat(&c, &p, &r);
     if (!c.quiet) {
         char view[64] = "";
         if (r.view >= 0)

@@ -39,7 +39,7 @@ void cli_warning(void *user, const char *message)
 
 void cli_loud_warning(void *user, const char *message)
 {
-    if (strstr(message, BTF_CAR_MISSED_TEXT))
+    if (strstr(message, BTF_CAR_MISSED_TEXT) || strstr(message, BTF_RANGE_FLAT_TEXT))
         cli_warning(user, message);
 }
 

@@ -708,9 +708,14 @@ typedef struct btf_photostereo_opts {
     double outlier;       /* default 2; samples more than this many robust
                              standard deviations below the fit (twice as
                              many above it) are excluded */
-    double saturation;    /* default 0.99; a sample with any raw channel at or
-                             above it is excluded (clipped); < 0: no such rule
-                             (HDR) */
+    double saturation;    /* default 0.99, at most 1: a fraction of full scale;
+                             a sample with any raw channel at or above
+                             saturation x full scale is excluded (clipped).
+                             Full scale is 1 (the white of 8- and 16-bit
+                             files) for data within it, else the images'
+                             largest value (HDR or scaled linear data are
+                             clipped, if at all, at their peak); < 0: no such
+                             rule */
     double max_condition; /* default 1e4; largest condition number of sum l l^T
                              accepted, for the whole light set (else an error)
                              and per pixel (else the fallback) */
@@ -1035,7 +1040,9 @@ typedef struct btf_analyse_report {
 typedef struct btf_analyse_opts {
     btf_segment_opts segment;         /* stage 1 */
     btf_photostereo_opts photostereo; /* stage 2 (its own threads field: 0, all CPUs) */
-    btf_fit_opts fit;                 /* stage 3 */
+    btf_fit_opts fit;                 /* stage 3; fit.car.warn also gets stage 2's
+                                         warning when most pixels fall back to the
+                                         flat normal (BTF_RANGE_FLAT_TEXT) */
     int no_range;                     /* 1: no range map in the model */
     int range_size;                   /* longer side of the range tile; 0: the image's
                                          (texel 1, with the structure layer); a smaller
@@ -1062,6 +1069,10 @@ typedef struct btf_analyse_opts {
 /* The defaults: those of each stage's options, a range map with a 64-texel
  * tile, no progress, no report. */
 btf_analyse_opts btf_analyse_defaults(void);
+/* In the warning of an analysis whose photometric stereo left most pixels
+ * without a fit (docs/photostereo.md, "Fallback"): a flat range map is a
+ * loss worth showing even to a quiet caller. */
+#define BTF_RANGE_FLAT_TEXT "the range map is nearly flat"
 
 /* All analysis stages on a dataset (paper section II): segmentation into
  * subspace images, the range map by photometric stereo (view closest to

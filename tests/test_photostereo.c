@@ -9,7 +9,8 @@
  *  - an analytic Lambertian sphere (attached shadows, grazing lights, a
  *    non-square image, a mask);
  *  - the numerical extremes: coplanar and nearly coplanar lights, all-dark,
- *    saturated and NaN pixels, grazing lights, an empty mask;
+ *    saturated and NaN pixels, the clip level of data beyond 1 (HDR),
+ *    grazing lights, an empty mask;
  *  - the integrators on known surfaces (periodic, non-periodic, odd sizes,
  *    masks);
  *  - manifests (theta/phi and lx/ly/lz with r g b intensities; 8- and 16-bit
@@ -719,6 +720,46 @@ static void dark_saturated_nan(void **state)
     assert_true(r.valid.data[0] == 0.0f);
     free_images(imgs, n);
     btf_ps_result_free(&r);
+}
+
+/* Data beyond 1 (HDR, linear data in other units) are clipped, if at all,
+ * at their peak: the plane x 1000 with pixel 1 at the peak in every image
+ * and pixel 2 in 5 of them. The clip level is 0.99 x the peak, so pixel 1
+ * falls back, pixel 2 loses those 5 samples and every other pixel keeps
+ * all of its samples (at 0.99 every sample was clipped: all fell back). */
+static void hdr_clip_level_is_relative(void **state)
+{
+    (void)state;
+    double L[20 * 3];
+    const double theta[] = {20, 40, 60};
+    const int count[] = {6, 7, 7};
+    int n = ring_lights(L, theta, count, 3);
+    double nrm[3] = {0.0, 0.3, sqrt(1.0 - 0.09)};
+    btf_image imgs[20];
+    plane_images(nrm, L, n, 4, 4, imgs);
+    for (int i = 0; i < n; i++) {
+        for (int k = 0; k < 16; k++)
+            imgs[i].data[k] *= 1000.0f;
+        imgs[i].data[1] = 1000.0f;
+        if (i < 5)
+            imgs[i].data[2] = 1000.0f;
+    }
+    btf_ps_result r;
+    btf_error err = {0};
+    TU_OK(btf_photostereo(&(btf_ps_input){imgs, n, L, NULL}, NULL, &r, &err), &err);
+    result_finite(&r);
+    float t[3] = {(float)nrm[0], (float)nrm[1], (float)nrm[2]}, up[3] = {0, 0, 1};
+    assert_true(angle_deg(r.normal.data + 3, up) == 0.0 && r.valid.data[1] == 0.0f);
+    assert_int_equal(r.fallback, 1);
+    assert_true(r.lights_used.data[2] <= n - 5);
+    for (int k = 2; k < 16; k++) {
+        assert_true(angle_deg(r.normal.data + 3 * k, t) < 1e-3);
+        assert_true(fabsf(r.albedo.data[k] - 600.0f) < 0.1f);
+    }
+    for (int k = 3; k < 16; k++)
+        assert_true(r.lights_used.data[k] == (float)n);
+    btf_ps_result_free(&r);
+    free_images(imgs, n);
 }
 
 /* A mask with no pixel: nothing to do, zeros out, no error. */
@@ -1566,6 +1607,7 @@ int main(void)
         cmocka_unit_test(coplanar_lights),
         cmocka_unit_test(grazing_lights),
         cmocka_unit_test(dark_saturated_nan),
+        cmocka_unit_test(hdr_clip_level_is_relative),
         cmocka_unit_test(empty_mask),
         cmocka_unit_test(bad_arguments),
         cmocka_unit_test(integrate_periodic),

@@ -107,6 +107,26 @@ static btf_status range_tile(const btf_image *h, int n, btf_model *m, btf_error 
     return btf_range_make_periodic(m->range, g.tw, g.th, err);
 }
 
+/* A pixel without enough usable samples gets the flat normal, so when most
+ * do the range map is flat and the structure layer holds no relief: said
+ * through the analysis' warnings (the fit's callback, which the command
+ * prints), since the model is written all the same. */
+static void warn_if_flat(const btf_dataset *ds, const btf_ps_result *ps,
+                         const btf_car_fit_opts *car)
+{
+    if (!car->warn || !(2 * (long long)ps->fallback > ps->pixels))
+        return;
+    char msg[1024];
+    snprintf(msg, sizeof msg, "%s: photometric stereo found fewer than 3 usable samples at %d "
+             "of %d pixels (%.0f %%) of view theta %g phi %g, so %s: most samples are clipped "
+             "(a raw value >= --saturation x full scale, default 0.99), shadowed or black; if "
+             "the images are not clipped there, raise --saturation or turn the rule off with "
+             "--saturation 0", btf_dataset_get_info(ds)->root, ps->fallback, ps->pixels,
+             100.0 * ps->fallback / ps->pixels, ps->view_dir.theta, ps->view_dir.phi,
+             BTF_RANGE_FLAT_TEXT);
+    car->warn(car->warn_user, msg);
+}
+
 static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_model *m,
                               double *spread, btf_error *err)
 {
@@ -138,6 +158,7 @@ static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, 
     btf_status rc = btf_photostereo_dataset(ds, &o->photostereo, &ps, err);
     if (rc)
         return rc;
+    warn_if_flat(ds, &ps, &o->fit.car);
     rc = range_tile(&ps.height, o->range_size, m, err);
     if (rc == BTF_OK && btf_structure_quilted(m) && !o->no_structure)
         rc = btf_structure_albedo_from(&ps.albedo, m, spread, err);

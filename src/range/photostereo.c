@@ -65,8 +65,9 @@ static btf_status resolve_opts(const btf_photostereo_opts *o, btf_ps_params *p, 
         return btf_fail(err, BTF_E_ARG, "photostereo: outlier %g: expected a finite value >= 0",
                         o->outlier);
     p->outlier = o->outlier == 0.0 ? def.outlier : o->outlier;
-    if (isnan(o->saturation))
-        return btf_fail(err, BTF_E_ARG, "photostereo: saturation is NaN");
+    if (!(o->saturation <= 1.0))
+        return btf_fail(err, BTF_E_ARG, "photostereo: saturation %g: expected a fraction of "
+                        "full scale, at most 1 (< 0: no saturation rule)", o->saturation);
     p->saturation = o->saturation == 0.0 ? def.saturation
                     : o->saturation < 0.0 ? INFINITY : o->saturation;
     if (!(o->max_condition == 0.0 || (o->max_condition >= 1.0 && isfinite(o->max_condition))))
@@ -174,6 +175,23 @@ static btf_status alloc_result(btf_ps_result *r, int w, int h, int channels, btf
 
 /* ------------------------------------------------------------------- run */
 
+/* Pass 1 with the clip level at saturation x full scale. Full scale is 1
+ * unless the data exceed it, which only the pass itself finds out: data
+ * beyond 1 (HDR, or linear data in other units) are read again with the
+ * clip level at saturation x their peak, so that a dataset x 1000 loses
+ * the samples it loses at x 1, not all of them (flat range maps). */
+static btf_status grey_samples(const btf_ps_source *src, const double *intensity,
+                               double saturation, const unsigned char *inside, float *grey,
+                               const btf_photostereo_opts *o, btf_error *err)
+{
+    double peak;
+    btf_status rc = btf_ps_pass_grey(src, intensity, saturation, inside, grey, &peak, o, err);
+    if (rc || !isfinite(saturation) || btf_ps_full_scale(peak) == 1.0)
+        return rc;
+    return btf_ps_pass_grey(src, intensity, saturation * btf_ps_full_scale(peak), inside, grey,
+                            NULL, o, err);
+}
+
 btf_status btf_ps_run(btf_ps_source *src, const double *lights, const double *intensity,
                       const btf_photostereo_opts *o, btf_ps_result *out, btf_error *err)
 {
@@ -224,7 +242,7 @@ btf_status btf_ps_run(btf_ps_source *src, const double *lights, const double *in
         rc = BTF_E_NOMEM;
         goto done;
     }
-    if ((rc = btf_ps_pass_grey(src, intensity, params.saturation, inside, grey, o, err)) ||
+    if ((rc = grey_samples(src, intensity, params.saturation, inside, grey, o, err)) ||
         (rc = btf_ps_solve_all(&job, o->threads, o->progress, o->progress_user, 0.4, 0.5, err)))
         goto done;
     free(grey); /* the largest buffer: gone before pass 2 decodes again */

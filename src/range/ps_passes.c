@@ -39,14 +39,16 @@ static double clean(float v)
 }
 
 /* The grey sample of image i at every pixel: mean over channels of
- * value / intensity. A saturated sample is stored negated, so that the fit
- * knows it without a second array (and a saturated 0 as -FLT_MIN). */
-static void grey_of(const btf_image *img, int i, const double *intensity, double saturation,
-                    const unsigned char *inside, float *out)
+ * value / intensity. A sample with a raw channel >= clip is saturated and
+ * stored negated, so that the fit knows it without a second array (and a
+ * saturated 0 as -FLT_MIN). Returns the largest finite raw value inside the
+ * mask, which sets the clip level of data beyond 1 (btf_ps_full_scale). */
+static double grey_of(const btf_image *img, int i, const double *intensity, double clip,
+                      const unsigned char *inside, float *out)
 {
     size_t count = (size_t)img->width * img->height;
     int channels = img->channels;
-    double scale[3];
+    double scale[3], peak = 0.0;
     for (int c = 0; c < channels; c++)
         scale[c] = 1.0 / channel_intensity(intensity, i, c, channels) / channels;
     for (size_t k = 0; k < count; k++) {
@@ -58,7 +60,9 @@ static void grey_of(const btf_image *img, int i, const double *intensity, double
         double grey = 0.0;
         int saturated = 0;
         for (int c = 0; c < channels; c++) {
-            saturated |= p[c] >= saturation; /* NaN compares false */
+            saturated |= p[c] >= clip; /* NaN compares false */
+            if (isfinite(p[c]) && p[c] > peak)
+                peak = p[c];
             grey += clean(p[c]) * scale[c];
         }
         float f = (float)grey;
@@ -68,6 +72,12 @@ static void grey_of(const btf_image *img, int i, const double *intensity, double
             f = -(f > FLT_MIN ? f : FLT_MIN);
         out[k] = f;
     }
+    return peak;
+}
+
+double btf_ps_full_scale(double peak)
+{
+    return peak > 1.0 ? peak : 1.0;
 }
 
 /* Image i's share of the albedo sums: for each pixel whose fit used sample
@@ -98,22 +108,27 @@ static void albedo_add(const btf_image *img, int i, const double *intensity,
 
 /* Files take the first two fifths of the progress bar, memory none to
  * speak of. */
-btf_status btf_ps_pass_grey(const btf_ps_source *src, const double *intensity, double saturation,
-                            const unsigned char *inside, float *grey,
+btf_status btf_ps_pass_grey(const btf_ps_source *src, const double *intensity, double clip,
+                            const unsigned char *inside, float *grey, double *peak,
                             const btf_photostereo_opts *o, btf_error *err)
 {
     size_t wh = (size_t)src->width * src->height;
     btf_image tmp = {0}; /* one buffer for every image (btf_ps_source_get) */
+    double most = 0.0;
     for (int i = 0; i < src->count; i++) {
         const btf_image *img;
         btf_status rc = btf_ps_source_get(src, i, &tmp, &img, err);
         if (rc)
             return rc;
-        grey_of(img, i, intensity, saturation, inside, grey + (size_t)i * wh);
+        double p = grey_of(img, i, intensity, clip, inside, grey + (size_t)i * wh);
+        most = p > most ? p : most;
         if (!src->images)
-            btf_ps_report(o, 0.4 * (i + 1) / src->count, "reading images");
+            btf_ps_report(o, 0.4 * (i + 1) / src->count,
+                          peak ? "reading images" : "reading images (clip level of HDR data)");
     }
     btf_image_free(&tmp);
+    if (peak)
+        *peak = most;
     return BTF_OK;
 }
 

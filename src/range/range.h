@@ -76,7 +76,8 @@ typedef struct btf_ps_params {
     double dark;          /* shadow threshold, fraction of the reference level; 0: none */
     double trim_low, trim_high;
     double outlier;
-    double saturation;    /* INFINITY: no saturation rule */
+    double saturation;    /* fraction of full scale (btf_ps_full_scale); INFINITY: no
+                             saturation rule */
     double max_condition;
     double specular_cos;  /* cos of the specular cone; > 1: no highlight rule */
     int iterations;
@@ -166,10 +167,17 @@ btf_status btf_ps_pick_view(const btf_dir *dirs, int n, const btf_dir *want, con
 /* -------------------------------------- passes over images: ps_passes.c */
 
 /* Pass 1: every image's grey samples into grey (count x width x height),
- * progress 0 .. 0.4 for files. */
-btf_status btf_ps_pass_grey(const btf_ps_source *src, const double *intensity, double saturation,
-                            const unsigned char *inside, float *grey,
+ * a sample with a raw channel >= clip marked saturated; progress 0 .. 0.4
+ * for files. peak: NULL, or gets the largest finite raw value inside the
+ * mask (0 when there is none). */
+btf_status btf_ps_pass_grey(const btf_ps_source *src, const double *intensity, double clip,
+                            const unsigned char *inside, float *grey, double *peak,
                             const btf_photostereo_opts *o, btf_error *err);
+/* Full scale of images whose largest raw value is peak: 1, the white of
+ * 8- and 16-bit files, for data within it; the peak itself for data beyond
+ * it (HDR, linear data in other units), which cannot have been clipped
+ * below their own maximum (docs/photostereo.md, "The robust rule"). */
+double btf_ps_full_scale(double peak);
 /* Pass 2: the colour albedo of every pixel with its normal fixed, over the
  * samples of its fit; progress 0.5 .. 0.9 for files. */
 btf_status btf_ps_pass_albedo(const btf_ps_source *src, const double *intensity,

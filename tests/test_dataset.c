@@ -418,6 +418,62 @@ static void tsv_from_memory(void **state)
     assert_null(b.text);
 }
 
+/* Manifest numbers are decimals: "0x1e" is not thirty, "inf" and "nan" are
+ * not numbers; a subnormal such as 1e-320 (strtod's ERANGE) is a value. */
+static void tsv_numbers_are_decimal(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const char text[] = "v\n0x1e\n0X1E\ninf\nnan\n1e400\n 1\n1e-320\n-2.5e1\n+.5\n";
+    btf_tsv t;
+    TU_OK(btf_tsv_parse(text, sizeof text - 1, "n.tsv", &t, &e), &e);
+    assert_int_equal(t.nrows, 9);
+    double v;
+    for (int r = 0; r < 5; r++) {
+        assert_int_equal(btf_tsv_number(&t, "n.tsv", r, 0, &v, &e), BTF_E_FORMAT);
+        assert_non_null(strstr(e.msg, tu_fmt("n.tsv:%d: v '", r + 2)));
+        assert_non_null(strstr(e.msg, "not a finite decimal number"));
+    }
+    const double want[] = {1, 1e-320, -25, 0.5}; /* " 1": cells are trimmed */
+    for (int r = 5; r < 9; r++) {
+        TU_OK(btf_tsv_number(&t, "n.tsv", r, 0, &v, &e), &e);
+        assert_true(v == want[r - 5]);
+    }
+    btf_tsv_free(&t);
+}
+
+/* A manifest saved with a UTF-8 byte order mark (Excel, Notepad) reads as
+ * one without: the mark is not part of the first column's name. */
+static void tsv_byte_order_mark(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    const char text[] = "\xEF\xBB\xBFpath\ttheta_l\nx.png\t1\n";
+    btf_tsv t;
+    TU_OK(btf_tsv_parse(text, sizeof text - 1, "bom.tsv", &t, &e), &e);
+    assert_string_equal(t.names[0], "path");
+    assert_int_equal(btf_tsv_column(&t, "path"), 0);
+    assert_int_equal(t.line_no[0], 2);
+    btf_tsv_free(&t);
+    /* The whole dataset path: the BOM manifest opens as the plain one. */
+    char *dir = make_ubo(1, -1, -1);
+    FILE *f = fopen(tu_fmt("%s/bom.tsv", dir), "w");
+    assert_non_null(f);
+    fprintf(f, "\xEF\xBB\xBFpath\ttheta_l\tphi_l\ttheta_v\tphi_v\n");
+    for (int v = 0; v < 3; v++)
+        for (int l = 0; l < 2; l++)
+            fprintf(f, "tv%03d_pv%03d/%s\t%d\t%d\t%d\t%d\n", VIEWS[v][0], VIEWS[v][1],
+                    ubo_name(l * 3 + v, l, v), LIGHTS[l][0], LIGHTS[l][1], VIEWS[v][0],
+                    VIEWS[v][1]);
+    fclose(f);
+    btf_dataset *ds;
+    TU_OK(btf_dataset_open(tu_fmt("%s/bom.tsv", dir), NULL, &ds, &e), &e);
+    check_small_set(ds, BTF_LAYOUT_MANIFEST);
+    btf_dataset_close(ds);
+    tu_rmtree(dir);
+    free(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -431,6 +487,8 @@ int main(void)
         cmocka_unit_test(nan_in_exr),
         cmocka_unit_test(unknown_and_mixed_layouts),
         cmocka_unit_test(tsv_from_memory),
+        cmocka_unit_test(tsv_numbers_are_decimal),
+        cmocka_unit_test(tsv_byte_order_mark),
     };
     return cmocka_run_group_tests_name("dataset", tests, NULL, NULL);
 }

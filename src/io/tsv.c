@@ -81,8 +81,10 @@ static btf_status parse_owned(char *text, size_t n, const char *name, btf_tsv *t
     for (size_t i = 0; i < n; i++)
         lines += text[i] == '\n';
     int have_header = 0, line = 0;
-    char *save = text;
-    for (char *l = text; l; l = save) {
+    /* A UTF-8 byte order mark, as some editors (Excel's "UTF-8 CSV") begin a
+     * file with, is no part of the first column's name. */
+    char *save = n >= 3 && !memcmp(text, "\xEF\xBB\xBF", 3) ? text + 3 : text;
+    for (char *l = save; l; l = save) {
         char *nl = strchr(l, '\n');
         save = nl ? nl + 1 : NULL;
         if (nl)
@@ -178,14 +180,28 @@ const char *btf_tsv_cell(const btf_tsv *t, int row, int col)
     return t->cells[(size_t)row * t->ncols + col];
 }
 
+/* A sign at most, then a digit, or '.' and a digit: what a decimal number
+ * starts with (not "inf", "nan" or a space). */
+static int is_decimal_start(const char *s)
+{
+    if (*s == '-' || *s == '+')
+        s++;
+    return (*s >= '0' && *s <= '9') || (*s == '.' && s[1] >= '0' && s[1] <= '9');
+}
+
 btf_status btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
                           btf_error *err)
 {
     const char *s = btf_tsv_cell(t, row, col);
     char *end;
-    double v = strtod(s, &end);
-    if (end == s || *end != '\0' || !isfinite(v))
-        return btf_fail(err, BTF_E_FORMAT, "%s:%d: %s '%s' is not a finite number", path,
+    double v = 0.0;
+    /* Decimal only: strtod would also read "0x1e" as thirty and "inf" or
+     * "nan"; a subnormal ("1e-320", ERANGE) is a finite value and kept. */
+    int decimal = is_decimal_start(s) && !strpbrk(s, "xX");
+    if (decimal)
+        v = strtod(s, &end);
+    if (!decimal || end == s || *end != '\0' || !isfinite(v))
+        return btf_fail(err, BTF_E_FORMAT, "%s:%d: %s '%s' is not a finite decimal number", path,
                         t->line_no[row], t->names[col], s);
     *out = v;
     return BTF_OK;

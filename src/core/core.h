@@ -34,6 +34,11 @@ int btf_fail(btf_error *err, int code, const char *fmt, ...) BTF_PRINTF(3, 4);
 /* malloc/calloc that report BTF_E_NOMEM through err; size overflow checked. */
 void *btf_alloc(size_t count, size_t size, btf_error *err);
 void *btf_calloc(size_t count, size_t size, btf_error *err);
+/* Bytes this process can still allocate, as far as the system says: the
+ * kernel's MemAvailable plus free swap (the physical memory without /proc),
+ * at most a cgroup's remaining limit and the address-space limit
+ * (RLIMIT_AS). UINT64_MAX when nothing is known. */
+uint64_t btf_memory_available(void);
 
 /* Atomic file writing: btf_tmp_create makes a new temporary file beside
  * `path` (same folder, so rename() is atomic), PATH.btfcar-tmp-IDENTITY-PID-N, with

@@ -48,6 +48,32 @@ static btf_status resolve_opts(const btf_render_opts *in, btf_render_opts *o, bt
     return BTF_OK;
 }
 
+/* Host bytes per pixel every render holds: the G-buffer (object id 4, uv 8,
+ * tangent frame 36, position 12, view 12) and the frame (RGB float, 12). */
+#define RENDER_PIXEL_BYTES 84.0
+/* Host bytes per texel of the texture side: the range map's height (4) and
+ * normals (12), which both backends build on the host. */
+#define RENDER_TEXEL_BYTES 16.0
+
+/* Refuses a render whose memory cannot fit, before any of it is allocated
+ * or traced: a 16384-pixel square frame would otherwise run for minutes
+ * and then fail or be killed. The estimate is a lower bound (the subspace
+ * images and synthesis' work come on top: 12 bytes a texel for each needed
+ * subspace on the CPU), so nothing that fits is refused; a flat 16384^2
+ * frame, about 30 GB at its measured peak, is refused at 26.8 GB. */
+static btf_status check_memory(const btf_render_opts *o, int side, btf_error *err)
+{
+    double need = RENDER_PIXEL_BYTES * (double)o->width * (double)o->height +
+                  RENDER_TEXEL_BYTES * (double)side * (double)side;
+    uint64_t avail = btf_memory_available();
+    if (avail == UINT64_MAX || need <= (double)avail)
+        return BTF_OK;
+    return btf_fail(err, BTF_E_NOMEM, "render %dx%d: needs at least %.1f GB of memory (%.0f "
+                    "bytes a pixel, %.0f a texel of the %d-texel texture side), more than the "
+                    "%.1f GB available", o->width, o->height, need * 1e-9, RENDER_PIXEL_BYTES,
+                    RENDER_TEXEL_BYTES, side, (double)avail * 1e-9);
+}
+
 /* The texels the visible surface spans: the largest extent of the hit
  * pixels' texture coordinates along u or v, per object, over all objects
  * (at most AUTO_TEXTURE_MAX; 0 when nothing is hit). */
@@ -127,7 +153,9 @@ btf_status btf_render_plan_scene(const btf_model *m, const btf_scene *s,
 {
     memset(p, 0, sizeof *p);
     btf_status rc = resolve_opts(opts, &p->o, err);
-    if (rc || (rc = btf_render_check_model(m, err)))
+    /* the auto texture side is known only after tracing; at most 1024 */
+    if (rc || (rc = btf_render_check_model(m, err)) ||
+        (rc = check_memory(&p->o, p->o.texture_size, err)))
         return rc;
     if (!s)
         return btf_fail(err, BTF_E_ARG, "render: no scene given");
@@ -244,6 +272,13 @@ btf_status btf_render_plan_flat(const btf_model *m, btf_dir view, btf_dir light,
     if (rc || (rc = btf_render_check_model(m, err)) ||
         (rc = check_flat_dir("view", view, err)) || (rc = check_flat_dir("light", light, err)))
         return rc;
+    /* without a texture size, a frame-sized texture: one texel per pixel,
+     * no repeat */
+    int side = p->o.texture_size ? p->o.texture_size
+                                 : btf_render_texture_side(m, p->o.width > p->o.height
+                                                                  ? p->o.width : p->o.height);
+    if ((rc = check_memory(&p->o, side, err)))
+        return rc;
     double v[3], l[3];
     btf_dir_to_vec(view, v);
     btf_dir_to_vec(light, l);
@@ -257,9 +292,7 @@ btf_status btf_render_plan_flat(const btf_model *m, btf_dir view, btf_dir light,
     p->n_lights = 1;
     if ((rc = btf_render_flat_gbuffer(p->o.width, p->o.height, vf, &p->g, err)))
         return rc;
-    if (p->o.texture_size == 0) /* a frame-sized texture: one texel per pixel, no repeat */
-        p->o.texture_size =
-            btf_render_texture_side(m, p->o.width > p->o.height ? p->o.width : p->o.height);
+    p->o.texture_size = side;
     if ((rc = plan_needs(m, p, err)))
         btf_render_plan_free(p);
     return rc;

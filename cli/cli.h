@@ -35,6 +35,17 @@ int cli_usage_error(const cli_ctx *c, const char *fmt, ...)
 int cli_plain_number(const char *s, int allow_minus);
 int cli_parse_int(const char *s, long lo, long hi, long *out);
 int cli_parse_u64(const char *s, uint64_t *out);
+/* A plain decimal number (cli_plain_number; no hexadecimal, no inf or
+ * nan), any finite value, subnormals included: 0, or -1. */
+int cli_parse_decimal(const char *s, int allow_minus, double *out);
+/* The length of the well-formed UTF-8 sequence s starts with (1 for ASCII,
+ * 1 for the terminating NUL), or 0 when its first byte starts none: file
+ * names are bytes, JSON text is UTF-8. */
+int cli_utf8_length(const char *s);
+/* A malloc'd copy of s with each byte that starts no well-formed UTF-8
+ * sequence replaced by U+FFFD, for JSON writers (cJSON copies bytes as they
+ * are); NULL when out of memory. */
+char *cli_utf8_copy(const char *s);
 /* Whether s ends in suffix, ignoring case (".png", ".exr"). */
 int cli_has_suffix(const char *s, const char *suffix);
 /* An output image by its name: .exr as linear 32-bit float, anything else
@@ -133,12 +144,9 @@ void cli_show_neighbourhood(const void *dest, char *buf, size_t n);
                           "have fewer than 4)",                                            \
      .lo = 1, .hi = BTF_CAR_MAX_NEIGHBOURS, .tag = (tag_)}
 
-/* A btf_warning_fn printing "btfcar CMD: warning: ..." (user: the cli_ctx). */
+/* A btf_warning_fn printing "btfcar CMD: warning: ..." (user: the cli_ctx);
+ * --quiet passes no callback: it prints nothing but errors. */
 void cli_warning(void *user, const char *message);
-/* The same for the warnings --quiet still shows: a model that misses much
- * of a band's variance (BTF_CAR_MISSED_TEXT), a flat range map
- * (BTF_RANGE_FLAT_TEXT). */
-void cli_loud_warning(void *user, const char *message);
 /* The CAR parameters of one subspace, as text. */
 void cli_print_subspace(const btf_subspace_model *s, int index);
 

@@ -147,7 +147,7 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_ana
     if (btf_dataset_open(dataset, &dopts, &ds, &err) != 0)
         return cli_lib_error(c, &err);
     ao.progress = cli_progress_fn(c);
-    ao.fit.car.warn = c->quiet ? cli_loud_warning : cli_warning;
+    ao.fit.car.warn = c->quiet ? NULL : cli_warning;
     ao.fit.car.warn_user = c;
     ao.photostereo.progress = cli_progress_fn(c);
     ao.photostereo.threads = ao.segment.features.threads;

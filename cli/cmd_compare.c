@@ -35,7 +35,9 @@ static void add_component(cJSON *o, const char *key, const btf_distance_componen
 static void add_image(cJSON *o, const char *key, const char *path, const btf_image *img)
 {
     cJSON *j = cJSON_AddObjectToObject(o, key);
-    cJSON_AddStringToObject(j, "path", path);
+    char *utf8 = cli_utf8_copy(path); /* JSON is UTF-8; a file name any bytes */
+    cJSON_AddStringToObject(j, "path", utf8 ? utf8 : "");
+    free(utf8);
     cJSON_AddNumberToObject(j, "width", img->width);
     cJSON_AddNumberToObject(j, "height", img->height);
 }

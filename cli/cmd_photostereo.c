@@ -171,7 +171,8 @@ static void warn_if_flat(cli_ctx *c, const ps_args *p, const btf_ps_result *r)
              "shadowed or black; if the images are not clipped there, raise --saturation or "
              "turn the rule off with --saturation 0", p->manifest ? p->manifest : p->dataset,
              r->fallback, r->pixels, 100.0 * r->fallback / r->pixels, BTF_RANGE_FLAT_TEXT);
-    (c->quiet ? cli_loud_warning : cli_warning)(c, msg);
+    if (!c->quiet) /* --quiet prints nothing but errors */
+        cli_warning(c, msg);
 }
 
 int cmd_photostereo(int argc, char **argv)

@@ -296,6 +296,15 @@ int cmd_render(int argc, char **argv)
         return cli_lib_error(&c, &err);
     }
     t_read = cli_now() - t_read;
+    if (!m.index || m.views.count < 1 || m.lights.count < 1) {
+        /* checked here, not left to the renderer, whose message cannot name
+         * the file it has not seen */
+        btf_model_free(&m);
+        btf_scene_free(&scene);
+        cli_set_error(&err, BTF_E_ARG, "%s: the model is a single texture: it has no view and "
+                      "light directions to render with (analyse a BTF dataset)", model);
+        return cli_lib_error(&c, &err);
+    }
     btf_image img = {0}, measured = {0};
     if (beside && read_measured(beside, view.dir, light.dir, &measured, &err) != 0) {
         btf_model_free(&m);

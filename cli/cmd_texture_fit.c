@@ -37,7 +37,7 @@ int cmd_texture_fit(int argc, char **argv)
     btf_image img;
     if (btf_image_read(image, &ro, &img, &err) != 0)
         return cli_lib_error(&c, &err);
-    fo.car.warn = c.quiet ? cli_loud_warning : cli_warning;
+    fo.car.warn = c.quiet ? NULL : cli_warning;
     fo.car.warn_user = &c;
     btf_model m;
     int rc = btf_texture_fit(&img, &fo, &m, &err);

@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <inttypes.h>
+#include <math.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
@@ -191,22 +192,91 @@ double cli_now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* The bytes a well-formed UTF-8 sequence continues with after lead byte b:
+ * the range of the first continuation byte (narrower after E0, ED, F0, F4:
+ * no overlong forms, no surrogates, nothing past U+10FFFF) and the count. */
+static int utf8_expect(unsigned b, unsigned *lo, unsigned *hi)
+{
+    *lo = 0x80;
+    *hi = 0xBF;
+    if (b >= 0xC2 && b <= 0xDF)
+        return 1;
+    if (b >= 0xE0 && b <= 0xEF) {
+        *lo = b == 0xE0 ? 0xA0 : 0x80;
+        *hi = b == 0xED ? 0x9F : 0xBF;
+        return 2;
+    }
+    if (b >= 0xF0 && b <= 0xF4) {
+        *lo = b == 0xF0 ? 0x90 : 0x80;
+        *hi = b == 0xF4 ? 0x8F : 0xBF;
+        return 3;
+    }
+    return -1;
+}
+
+int cli_utf8_length(const char *s)
+{
+    const unsigned char *p = (const unsigned char *)s;
+    if (*p < 0x80)
+        return 1;
+    unsigned lo, hi;
+    int more = utf8_expect(*p, &lo, &hi);
+    if (more < 0 || p[1] < lo || p[1] > hi)
+        return 0;
+    for (int i = 2; i <= more; i++)
+        if (p[i] < 0x80 || p[i] > 0xBF)
+            return 0;
+    return more + 1;
+}
+
+char *cli_utf8_copy(const char *s)
+{
+    /* Each bad byte becomes the 3 bytes of U+FFFD at most. */
+    char *out = malloc(3 * strlen(s) + 1), *o = out;
+    if (!out)
+        return NULL;
+    while (*s) {
+        int n = cli_utf8_length(s);
+        if (n == 0) {
+            memcpy(o, "\xEF\xBF\xBD", 3);
+            o += 3;
+            s++;
+        } else {
+            memcpy(o, s, (size_t)n);
+            o += n;
+            s += n;
+        }
+    }
+    *o = '\0';
+    return out;
+}
+
+int cli_parse_decimal(const char *s, int allow_minus, double *out)
+{
+    char *end;
+    /* The plain start rules out spaces, signs, "inf" and "nan"; an 'x'
+     * after it would make strtod read "0x10" as hexadecimal. */
+    if (!cli_plain_number(s, allow_minus) || strpbrk(s, "xX"))
+        return -1;
+    errno = 0;
+    double v = strtod(s, &end);
+    /* strtod flags ERANGE for subnormal results too ("1e-320"): a finite
+     * value is kept, only an overflow to infinity is refused. */
+    if (end == s || *end || !isfinite(v))
+        return -1;
+    *out = v;
+    return 0;
+}
+
 int cli_parse_pair(const char *s, double *a, double *b)
 {
-    char buf[64], *end;
+    char buf[64];
     const char *comma = strchr(s, ',');
     if (!comma || (size_t)(comma - s) >= sizeof buf)
         return -1;
     memcpy(buf, s, (size_t)(comma - s));
     buf[comma - s] = '\0';
-    errno = 0;
-    if (!cli_plain_number(buf, 0) || !cli_plain_number(comma + 1, 0))
-        return -1;
-    *a = strtod(buf, &end);
-    if (end == buf || *end || errno)
-        return -1;
-    *b = strtod(comma + 1, &end);
-    if (end == comma + 1 || *end || errno)
+    if (cli_parse_decimal(buf, 0, a) != 0 || cli_parse_decimal(comma + 1, 0, b) != 0)
         return -1;
     return 0;
 }

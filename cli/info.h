@@ -25,7 +25,8 @@ int cli_info_rf(cli_ctx *c, const model_file *mf, int json);
 /* info_format.c */
 /* "ubo81: 81 directions, theta 0..75 in 6 rings" */
 void cli_describe_set(const btf_dirset *s, char *buf, size_t n);
-/* A JSON string literal: quotes, backslashes and control bytes escaped. */
+/* A JSON string literal: quotes, backslashes and control bytes escaped,
+ * bytes that are not UTF-8 written as U+FFFD. */
 void cli_json_string(FILE *f, const char *s);
 /* float32 values with 9 significant digits (enough to round-trip). */
 void cli_json_f32(FILE *f, float v);

@@ -23,17 +23,23 @@ void cli_describe_set(const btf_dirset *s, char *buf, size_t n)
              rings);
 }
 
-/* A JSON string literal: quotes, backslashes and control bytes escaped. */
+/* A JSON string literal: quotes, backslashes and control bytes escaped, and
+ * each byte that is not UTF-8 (a file name is any bytes) U+FFFD, since JSON
+ * text must be UTF-8. */
 void cli_json_string(FILE *f, const char *s)
 {
     fputc('"', f);
-    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-        if (*p == '"' || *p == '\\')
+    for (const unsigned char *p = (const unsigned char *)s; *p;) {
+        int n = cli_utf8_length((const char *)p);
+        if (n == 0)
+            fputs("\\ufffd", f);
+        else if (*p == '"' || *p == '\\')
             fprintf(f, "\\%c", *p);
         else if (*p < 0x20 || *p == 0x7f)
             fprintf(f, "\\u%04x", *p);
         else
-            fputc(*p, f);
+            fwrite(p, 1, (size_t)n, f);
+        p += n ? n : 1;
     }
     fputc('"', f);
 }

@@ -37,12 +37,6 @@ void cli_warning(void *user, const char *message)
     fprintf(stderr, "btfcar %s: warning: %s\n", c->cmd, message);
 }
 
-void cli_loud_warning(void *user, const char *message)
-{
-    if (strstr(message, BTF_CAR_MISSED_TEXT) || strstr(message, BTF_RANGE_FLAT_TEXT))
-        cli_warning(user, message);
-}
-
 void cli_print_subspace(const btf_subspace_model *s, int index)
 {
     printf("subspace %d: %dx%d, %d level%s, mean RGB (%.4g, %.4g, %.4g)\n", index, s->width,

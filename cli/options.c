@@ -28,15 +28,7 @@ static cli_opt *find_option(cli_spec *s, const char *name, size_t len)
 
 static int parse_double(const char *s, double *out)
 {
-    char *end;
-    errno = 0;
-    if (!cli_plain_number(s, 1) || strpbrk(s, "xX")) /* decimal only, no hex floats */
-        return -1;
-    double v = strtod(s, &end);
-    if (end == s || *end || errno || !isfinite(v))
-        return -1;
-    *out = v;
-    return 0;
+    return cli_parse_decimal(s, 1, out);
 }
 
 /* "a, b or c" */

@@ -418,6 +418,11 @@ static void levels_cap_is_printed(void **state)
                             &err), 0);
     assert_non_null(strstr(err, "8 pyramid levels asked for, 5 used"));
     free(err);
+    /* --quiet: nothing but errors, so not this warning either. */
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s -o %s.btfcar --levels 8", tu_cli(), p, p),
+                            &err), 0);
+    assert_string_equal(err, "");
+    free(err);
     btf_model m;
     TU_OK(btf_model_read(tu_fmt("%s.btfcar", p), &m, &e), &e);
     assert_int_equal(m.subspaces[0].levels, 5);
@@ -425,7 +430,8 @@ static void levels_cap_is_printed(void **state)
 }
 
 /* A 1-pixel checkerboard: the fit says how much of the variance the model
- * misses, even with --quiet, and info says it again. */
+ * misses (a warning, which --quiet silences as it does all but errors), and
+ * info says it again. */
 static void periodic_pattern_reported(void **state)
 {
     (void)state;
@@ -441,10 +447,15 @@ static void periodic_pattern_reported(void **state)
     TU_OK(btf_image_write_png(png, &img, &e), &e);
     btf_image_free(&img);
     char *err = NULL;
-    assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s -o %s.btfcar --levels 1", tu_cli(), png,
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit %s -o %s.btfcar --levels 1", tu_cli(), png,
                                    png), &err), 0);
+    assert_non_null(strstr(err, "btfcar texture-fit: warning: "));
     assert_non_null(strstr(err, "the model misses"));
     assert_non_null(strstr(err, "of the band's variance"));
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s -o %s.btfcar --levels 1", tu_cli(), png,
+                                   png), &err), 0);
+    assert_string_equal(err, "");
     free(err);
     int st;
     char *out = tu_capture(tu_fmt("%s info %s.btfcar", tu_cli(), png), &st);

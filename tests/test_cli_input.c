@@ -1,0 +1,157 @@
+/* test_cli_input.c — the command's edges of issue 29: direction numbers are
+ * decimals, JSON stays UTF-8 whatever the file names, errors name the model,
+ * and a frame that cannot fit in memory is refused before the work. */
+#include "testutil.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* Whether the n bytes at s are well-formed UTF-8 (RFC 3629: no overlong
+ * forms, no surrogates, nothing past U+10FFFF). */
+static int is_utf8(const unsigned char *s, size_t n)
+{
+    size_t i = 0;
+    while (i < n) {
+        unsigned b = s[i];
+        int more = b < 0x80 ? 0 : b >= 0xC2 && b <= 0xDF ? 1 : b >= 0xE0 && b <= 0xEF ? 2
+                 : b >= 0xF0 && b <= 0xF4 ? 3 : -1;
+        if (more < 0 || i + (size_t)more >= n)
+            return 0;
+        unsigned lo = b == 0xE0 ? 0xA0 : b == 0xF0 ? 0x90 : 0x80;
+        unsigned hi = b == 0xED ? 0x9F : b == 0xF4 ? 0x8F : 0xBF;
+        for (int k = 1; k <= more; k++) {
+            unsigned c = s[i + (size_t)k];
+            if (c < (k == 1 ? lo : 0x80) || c > (k == 1 ? hi : 0xBF))
+                return 0;
+        }
+        i += (size_t)more + 1;
+    }
+    return 1;
+}
+
+/* The validator itself: what it must refuse and accept. */
+static void utf8_validator(void **state)
+{
+    (void)state;
+    const char *good = "plain \xC3\xA9 \xE2\x82\xAC \xF0\x9F\x98\x80";
+    assert_true(is_utf8((const unsigned char *)good, strlen(good)));
+    assert_false(is_utf8((const unsigned char *)"\xff", 1));
+    assert_false(is_utf8((const unsigned char *)"\xC3", 1));         /* cut short */
+    assert_false(is_utf8((const unsigned char *)"\xC0\xAF", 2));     /* overlong */
+    assert_false(is_utf8((const unsigned char *)"\xED\xA0\x80", 3)); /* a surrogate */
+}
+
+/* --view and --light take decimals only: "0x10" is a usage error as
+ * docs/cli.md says (strtod would read it as 16), so are inf and nan; a
+ * tiny value such as 1e-320 (subnormal: strtod's ERANGE) is a number. */
+static void directions_are_decimal(void **state)
+{
+    (void)state;
+    char ds[4096];
+    snprintf(ds, sizeof ds, "%s/ds", tu_dir);
+    assert_int_equal(tu_run(tu_fmt("%s generate -q --material wood --size 4 %s", tu_cli(), ds),
+                            NULL), 0);
+    const char *bad[] = {"0x10,0", "0X10,0", "16,0x0", "inf,0", "nan,0", "1e400,0"};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        char *err = NULL;
+        int rc = tu_run(tu_fmt("%s export %s --view %s --light 0,0 -o %s/x.png", tu_cli(), ds,
+                               bad[i], tu_dir), &err);
+        if (rc != 2)
+            print_error("--view %s: exit %d, %s\n", bad[i], rc, err);
+        assert_int_equal(rc, 2);
+        assert_non_null(strstr(err, "--view"));
+        free(err);
+    }
+    char *err = NULL;
+    int rc = tu_run(tu_fmt("%s export -q %s --view 1e-320,0 --light 0,1e-320 -o %s/tiny.png",
+                           tu_cli(), ds, tu_dir), &err);
+    if (rc)
+        print_error("%s", err);
+    assert_int_equal(rc, 0);
+    free(err);
+    struct stat st;
+    assert_int_equal(stat(tu_fmt("%s/tiny.png", tu_dir), &st), 0);
+}
+
+/* info --json of a model whose file name is not UTF-8 (byte 0xff): the
+ * document is UTF-8 all the same, the byte written as U+FFFD. */
+static void info_json_is_utf8(void **state)
+{
+    (void)state;
+    size_t n;
+    unsigned char *model = tu_slurp("tests/data/model-v1.0.btfcar", &n);
+    const char *path = tu_fmt("%s/model-\xff.btfcar", tu_dir);
+    tu_write_file(path, model, n);
+    free(model);
+    int st;
+    char *out = tu_capture(tu_fmt("%s info --json '%s'", tu_cli(), path), &st);
+    assert_int_equal(st, 0);
+    assert_true(is_utf8((const unsigned char *)out, strlen(out)));
+    assert_non_null(strstr(out, "model-\\ufffd.btfcar"));
+    free(out);
+}
+
+/* A single-texture model (texture-fit) cannot be rendered: the one-line
+ * error names the model file, not only what is wrong with it. */
+static void single_texture_render_names_model(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_image img;
+    tu_material_image("leather", 32, 2, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
+    char png[4096], model[4096];
+    snprintf(png, sizeof png, "%s/tex.png", tu_dir);
+    snprintf(model, sizeof model, "%s/tex.btfcar", tu_dir);
+    TU_OK(btf_image_write_png(png, &img, &e), &e);
+    btf_image_free(&img);
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s -o %s --levels 1", tu_cli(), png,
+                                   model), NULL), 0);
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s render %s --view 0,0 --light 30,0 --size 8x8 "
+                                   "--backend cpu -o %s/flat.png", tu_cli(), model, tu_dir),
+                            &err), 1);
+    assert_non_null(strstr(err, tu_fmt("%s: the model is a single texture", model)));
+    assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    free(err);
+}
+
+/* A frame whose G-buffer alone exceeds the memory this process may use is
+ * refused at once with the estimate: ulimit -v bounds the address space
+ * (RLIMIT_AS, which btf_memory_available honours) to 2 GB on any machine,
+ * and 8192^2 pixels need 6.7 GB at least. Without the check the trace
+ * would run and then fail an allocation. */
+static void render_beyond_memory_refused(void **state)
+{
+    (void)state;
+    char *err = NULL;
+    double t = tu_now();
+    int rc = tu_run(tu_fmt("ulimit -v 2000000 && %s render tests/data/model-v1.0.btfcar --view "
+                           "30,0 --light 30,90 --size 8192x8192 --backend cpu -o %s/big.png",
+                           tu_cli(), tu_dir), &err);
+    t = tu_now() - t;
+    if (rc != 1)
+        print_error("exit %d: %s\n", rc, err);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(err, "render 8192x8192: needs at least 6.7 GB of memory"));
+    assert_non_null(strstr(err, "more than the 2.0 GB available"));
+    assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    assert_true(t < 5.0);
+    free(err);
+    struct stat st;
+    assert_int_not_equal(stat(tu_fmt("%s/big.png", tu_dir), &st), 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(utf8_validator),
+        cmocka_unit_test(directions_are_decimal),
+        cmocka_unit_test(info_json_is_utf8),
+        cmocka_unit_test(single_texture_render_names_model),
+        cmocka_unit_test(render_beyond_memory_refused),
+    };
+    return cmocka_run_group_tests_name("cli_input", tests, tu_setup_dir, tu_teardown_dir);
+}

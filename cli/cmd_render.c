@@ -132,6 +132,28 @@ static void rf_report_times(const btf_rf_model *m, int flat, btf_dir view, const
     printf("write %.3f s; total %.3f s\n", t_write, cli_now() - t_start);
 }
 
+/* Whether the model has what the renderer interpolates over: view and
+ * light direction sets it can triangulate (at least 3 directions, at most
+ * BTF_HEMISPHERE_MAX_POINTS, no two the same). Checked here, not left to
+ * the renderer, whose messages cannot name the file they have not seen. */
+static btf_status model_renders(const char *path, const btf_model *m, btf_error *err)
+{
+    if (!m->index || m->views.count < 1 || m->lights.count < 1)
+        return cli_set_error(err, BTF_E_ARG, "%s: the model is a single texture: it has no "
+                             "view and light directions to render with (analyse a BTF "
+                             "dataset)", path);
+    const btf_dirset *sets[2] = {&m->views, &m->lights};
+    for (int i = 0; i < 2; i++) {
+        btf_hemisphere *h = NULL;
+        btf_error why = {0};
+        if (btf_hemisphere_build(sets[i], &h, &why) != BTF_OK)
+            return cli_set_error(err, why.code, "%s: its %s cannot be rendered: %s", path,
+                                 i ? "lights" : "views", why.msg);
+        btf_hemisphere_free(h);
+    }
+    return BTF_OK;
+}
+
 /* The render of a reflectance-field model (Meseth et al. 2003, section
  * 5.4: the four closest measured views at the exact light), flat (with
  * --beside as for a CAR model) or a scene (scene_path), on the CPU or on
@@ -296,13 +318,9 @@ int cmd_render(int argc, char **argv)
         return cli_lib_error(&c, &err);
     }
     t_read = cli_now() - t_read;
-    if (!m.index || m.views.count < 1 || m.lights.count < 1) {
-        /* checked here, not left to the renderer, whose message cannot name
-         * the file it has not seen */
+    if (model_renders(model, &m, &err) != BTF_OK) {
         btf_model_free(&m);
         btf_scene_free(&scene);
-        cli_set_error(&err, BTF_E_ARG, "%s: the model is a single texture: it has no view and "
-                      "light directions to render with (analyse a BTF dataset)", model);
         return cli_lib_error(&c, &err);
     }
     btf_image img = {0}, measured = {0};

@@ -118,6 +118,51 @@ static void single_texture_render_names_model(void **state)
     free(err);
 }
 
+/* A model whose view set the renderer cannot triangulate (2 directions: a
+ * valid model, whose subspaces synthesise, but nothing to interpolate
+ * over) is refused by render with an error naming the model and the set. */
+static void render_names_model_of_bad_set(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_model m;
+    TU_OK(btf_model_read("tests/data/model-v1.0.btfcar", &m, &e), &e);
+    m.views.count = 2; /* the index is view-major: its first 2 x 81 entries */
+    for (int k = 0; k < m.n_subspaces; k++)
+        m.subspaces[k].view = m.subspaces[k].view % 2;
+    char model[4096];
+    snprintf(model, sizeof model, "%s/two-views.btfcar", tu_dir);
+    TU_OK(btf_model_write(model, &m, &e), &e);
+    btf_model_free(&m);
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s render %s --view 0,0 --light 30,0 --size 8x8 "
+                                   "--backend cpu -o %s/two.png", tu_cli(), model, tu_dir),
+                            &err), 1);
+    assert_non_null(strstr(err, tu_fmt("%s: its views cannot be rendered: ", model)));
+    assert_non_null(strstr(err, "2 directions"));
+    assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    free(err);
+}
+
+/* A direction set with the same direction twice (theta -0 and 0) is not a
+ * model: writing it fails naming the file and the set; the renderer could
+ * not triangulate it either. */
+static void duplicate_direction_refused(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_model m;
+    TU_OK(btf_model_read("tests/data/model-v1.0.btfcar", &m, &e), &e);
+    m.lights.dirs[1] = (btf_dir){-0.0, m.lights.dirs[0].phi};
+    m.lights.dirs[0].theta = 0.0;
+    const char *path = tu_fmt("%s/dup.btfcar", tu_dir);
+    assert_int_equal(btf_model_write(path, &m, &e), BTF_E_DATA);
+    assert_non_null(strstr(e.msg, path));
+    assert_non_null(strstr(e.msg, "lights"));
+    assert_non_null(strstr(e.msg, "directions 0 and 1 are both (theta 0, phi 0)"));
+    btf_model_free(&m);
+}
+
 /* A frame whose G-buffer alone exceeds the memory this process may use is
  * refused at once with the estimate: ulimit -v bounds the address space
  * (RLIMIT_AS, which btf_memory_available honours) to 2 GB on any machine,
@@ -151,6 +196,8 @@ int main(void)
         cmocka_unit_test(directions_are_decimal),
         cmocka_unit_test(info_json_is_utf8),
         cmocka_unit_test(single_texture_render_names_model),
+        cmocka_unit_test(render_names_model_of_bad_set),
+        cmocka_unit_test(duplicate_direction_refused),
         cmocka_unit_test(render_beyond_memory_refused),
     };
     return cmocka_run_group_tests_name("cli_input", tests, tu_setup_dir, tu_teardown_dir);

@@ -59,6 +59,16 @@ static btf_status check_dirset(const btf_dirset *s, const char *what, const char
                          "%s: direction %d is (theta %g, phi %g) (expected theta in [0, 90], "
                          "phi in [0, 360))", what, i, d.theta, d.phi);
     }
+    /* The same direction twice (theta -0 is 0) would give one direction two
+     * rows of the index table; the renderer cannot triangulate it either.
+     * The pole at several phi is left to the renderer, which refuses it: a
+     * set of such images is a measurement, if not one it interpolates. */
+    for (int i = 0; i < s->count; i++)
+        for (int j = i + 1; j < s->count; j++)
+            if (s->dirs[i].theta == s->dirs[j].theta && s->dirs[i].phi == s->dirs[j].phi)
+                return failf(err, code, name, "%s: directions %d and %d are both (theta %g, phi "
+                             "%g) (expected distinct directions)", what, i, j,
+                             s->dirs[i].theta, s->dirs[i].phi);
     return BTF_OK;
 }
 

@@ -48,6 +48,13 @@ int cli_utf8_length(const char *s);
 char *cli_utf8_copy(const char *s);
 /* Whether s ends in suffix, ignoring case (".png", ".exr"). */
 int cli_has_suffix(const char *s, const char *suffix);
+/* The first bytes of a file, to tell what it is: at most n into buf, their
+ * number; 0 when path is no regular file or cannot be read. A FIFO is never
+ * opened blocking (it would wait for a writer); the reader that follows
+ * names what is wrong with the file. */
+size_t cli_read_head(const char *path, unsigned char *buf, size_t n);
+/* 1 when path starts like a reflectance-field model (docs/rf.md). */
+int cli_is_rf_model(const char *path);
 /* An output image by its name: .exr as linear 32-bit float, anything else
  * as 8-bit sRGB PNG (the commands check the suffix first). */
 btf_status cli_write_image(const char *path, const btf_image *img, btf_error *err);

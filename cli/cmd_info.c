@@ -150,12 +150,8 @@ static const unsigned char MODEL_STEM[7] = {0x89, 'B', 'T', 'F', 'C', 'A', 'R'};
 /* 1 when path is a file that starts like a model; its version and size. */
 static int sniff_model(const char *path, model_file *mf, int *rf)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return 0;
     unsigned char head[15] = {0};
-    size_t n = fread(head, 1, sizeof head, f);
-    fclose(f);
+    size_t n = cli_read_head(path, head, sizeof head);
     *rf = btf_rf_sniff(head, n); /* a reflectance-field model (docs/rf.md) */
     if (!*rf && (n < sizeof MODEL_STEM || memcmp(head, MODEL_STEM, sizeof MODEL_STEM) != 0))
         return 0;

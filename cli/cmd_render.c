@@ -69,18 +69,6 @@ static btf_status side_by_side(const btf_image *a, const btf_image *b, btf_image
     return BTF_OK;
 }
 
-/* 1 when path starts like a reflectance-field model (docs/rf.md). */
-static int is_rf_model(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return 0;
-    unsigned char head[16];
-    size_t n = fread(head, 1, sizeof head, f);
-    fclose(f);
-    return btf_rf_sniff(head, n);
-}
-
 /* The reflectance-field render on the chosen backend: flat, or a scene. */
 static btf_status rf_render_on(btf_gpu *gpu, const btf_rf_model *m, const btf_scene *scene,
                                btf_dir view, btf_dir light, int width, int height, int threads,
@@ -293,7 +281,7 @@ int cmd_render(int argc, char **argv)
         return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
     if (cli_check_output(&c, out_path, BTF_OUTPUT_FILE))
         return 1;
-    if (is_rf_model(model)) {
+    if (cli_is_rf_model(model)) {
         /* the CAR model's texture and synthesis options have nothing to act
          * on: an RF model keeps its texels, which repeat across the surface */
         if (ro.texture_size || all)

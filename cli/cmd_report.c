@@ -26,18 +26,6 @@ static const char ABOUT[] =
     "over every image, the worst pairs by |dY|, the preview; no --sweep, and\n"
     "--seed, --relief, --pca-error and --jpeg-quality do not apply.\n";
 
-/* 1 when path starts like a reflectance-field model (docs/rf.md). */
-static int is_rf_model(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return 0;
-    unsigned char head[16];
-    size_t n = fread(head, 1, sizeof head, f);
-    fclose(f);
-    return btf_rf_sniff(head, n);
-}
-
 /* "auto,2,4" into a sweep grid: 0 for auto (or for the grid's own word). */
 typedef struct grid_arg {
     int *n;
@@ -216,7 +204,7 @@ int cmd_report(int argc, char **argv)
         return prc;
     if (cli_check_output(&c, out, BTF_OUTPUT_FOLDER))
         return 1;
-    int rf = is_rf_model(args[1]);
+    int rf = cli_is_rf_model(args[1]);
     if (rf && (ro.sweep || gk.given || gl.given || gn.given || gr.given || so->n_plain))
         return cli_usage_error(&c, "%s is a reflectance-field model: --sweep varies the CAR "
                                "analysis and does not apply", args[1]);

@@ -3,6 +3,7 @@
 #include "cli.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
 #include <signal.h>
@@ -10,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -350,6 +352,23 @@ int cli_has_suffix(const char *s, const char *suffix)
 {
     size_t a = strlen(s), b = strlen(suffix);
     return a >= b && !strcasecmp(s + a - b, suffix);
+}
+
+size_t cli_read_head(const char *path, unsigned char *buf, size_t n)
+{
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+    if (fd < 0)
+        return 0;
+    struct stat st;
+    ssize_t r = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) ? read(fd, buf, n) : 0;
+    close(fd);
+    return r > 0 ? (size_t)r : 0;
+}
+
+int cli_is_rf_model(const char *path)
+{
+    unsigned char head[16];
+    return btf_rf_sniff(head, cli_read_head(path, head, sizeof head));
 }
 
 btf_status cli_write_image(const char *path, const btf_image *img, btf_error *err)

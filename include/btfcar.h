@@ -80,7 +80,8 @@ typedef enum btf_file_format {
     BTF_FILE_EXR
 } btf_file_format;
 
-/* Format from the file's signature bytes (never from its name). */
+/* Format from the file's signature bytes (never from its name);
+ * BTF_FILE_UNKNOWN for anything but a readable regular file. */
 btf_file_format btf_file_format_of(const char *path);
 
 typedef struct btf_image_header {
@@ -1404,7 +1405,8 @@ typedef struct btf_scene {
 
 /* Reads a JSON scene file (docs/scene.md; meshes through assimp): any bad
  * key, type, value, missing or UV-less mesh is one error naming the file
- * and the key. */
+ * and the key. Every file read is a regular file, and the files a mesh
+ * names (mtllib, glTF buffers) lie in the mesh's folder or below. */
 btf_status btf_scene_load(const char *path, btf_scene *out, btf_error *err);
 /* Checks a scene built in memory (degenerate camera, zero radius, ...). */
 btf_status btf_scene_check(const btf_scene *s, btf_error *err);

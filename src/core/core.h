@@ -56,7 +56,15 @@ void btf_tmp_identity(char out[BTF_TMP_IDENTITY_SIZE]);
 int btf_commit_file(const char *tmp, const char *path, btf_error *err);
 void btf_abort_file(const char *tmp);
 /* btf_write_file_atomic (a whole buffer) is public: include/btfcar.h. */
-/* Reads a whole file (at most max_bytes) into a malloc'd buffer. */
+/* Opens an input file for reading if it is a regular file, else refuses it
+ * before a byte is read: open with O_NONBLOCK (a FIFO without a writer
+ * would block the open itself), fstat, then O_NONBLOCK cleared. Returns the
+ * descriptor (close-on-exec) and, when size is non-NULL, the file's size;
+ * or -1 with errno set (EINVAL: not a regular file) and err (may be NULL)
+ * holding BTF_E_IO and "PATH: cannot open: REASON" or "PATH: not a regular
+ * file". Every input opened by path goes through here (issue 29). */
+int btf_open_regular(const char *path, uint64_t *size, btf_error *err);
+/* Reads a whole regular file (at most max_bytes) into a malloc'd buffer. */
 int btf_read_file(const char *path, size_t max_bytes, unsigned char **data,
                   size_t *n, btf_error *err);
 

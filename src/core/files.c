@@ -279,14 +279,58 @@ btf_status btf_write_file_atomic(const char *path, const void *data, size_t n, b
     return btf_commit_file(tmp, path, err);
 }
 
+/* -1 with the message of what failed on fd (closed here), errno kept. */
+static int open_failed(int fd, btf_error *err, const char *fmt, const char *path)
+{
+    int e = errno;
+    if (fd >= 0)
+        close(fd);
+    btf_fail(err, BTF_E_IO, fmt, path, strerror(e));
+    errno = e;
+    return -1;
+}
+
+int btf_open_regular(const char *path, uint64_t *size, btf_error *err)
+{
+    /* O_NONBLOCK: opening a FIFO for reading otherwise waits for a writer,
+     * forever; O_NOCTTY: a terminal never becomes the controlling one. */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+    if (fd < 0)
+        return open_failed(-1, err, "%s: cannot open: %s", path);
+    struct stat st;
+    if (fstat(fd, &st) != 0)
+        return open_failed(fd, err, "%s: cannot stat: %s", path);
+    /* A FIFO, a socket or a device has no end to read to (/dev/zero) or
+     * none at all yet (a FIFO without a writer); a folder no bytes. */
+    if (!S_ISREG(st.st_mode)) {
+        close(fd);
+        btf_fail(err, BTF_E_IO, "%s: not a regular file", path);
+        errno = EINVAL;
+        return -1;
+    }
+    /* Blocking again, as readers expect (for a regular file the flag means
+     * nothing on most systems, but a network file system may honour it). */
+    int fl = fcntl(fd, F_GETFL);
+    if (fl < 0 || fcntl(fd, F_SETFL, fl & ~O_NONBLOCK) != 0)
+        return open_failed(fd, err, "%s: cannot clear O_NONBLOCK: %s", path);
+    if (size)
+        *size = (uint64_t)st.st_size;
+    return fd;
+}
+
 int btf_read_file(const char *path, size_t max_bytes, unsigned char **data,
                   size_t *n, btf_error *err)
 {
     *data = NULL;
     *n = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return btf_fail(err, BTF_E_IO, "%s: cannot open: %s", path, strerror(errno));
+    int fd = btf_open_regular(path, NULL, err);
+    if (fd < 0)
+        return BTF_E_IO;
+    FILE *f = fdopen(fd, "rb");
+    if (!f) {
+        close(fd);
+        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+    }
     size_t cap = 1 << 16, len = 0;
     unsigned char *buf = malloc(cap);
     if (!buf) {

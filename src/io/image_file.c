@@ -17,6 +17,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 btf_read_opts btf_read_defaults(void)
 {
@@ -45,12 +46,12 @@ static btf_file_format format_of_source(btf_source *src)
 btf_file_format btf_file_format_of(const char *path)
 {
     unsigned char sig[4] = {0};
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    int fd = btf_open_regular(path, NULL, NULL); /* a FIFO would block */
+    if (fd < 0)
         return BTF_FILE_UNKNOWN;
-    size_t n = fread(sig, 1, 4, f);
-    fclose(f);
-    return format_of_signature(sig, n);
+    ssize_t n = read(fd, sig, 4);
+    close(fd);
+    return format_of_signature(sig, n > 0 ? (size_t)n : 0);
 }
 
 static uint32_t be32(const unsigned char *p)

@@ -9,10 +9,8 @@
 #include "io/io.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 void btf_source_memory(btf_source *s, const void *data, size_t n, const char *name)
@@ -29,18 +27,10 @@ btf_status btf_source_open(btf_source *s, const char *path, btf_error *err)
     memset(s, 0, sizeof *s);
     s->name = path;
     s->fd = -1;
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-        return btf_fail(err, BTF_E_IO, "%s: cannot open: %s", path, strerror(errno));
-    s->fd = fd;
-    struct stat st;
-    if (fstat(fd, &st) != 0)
-        return btf_fail(err, BTF_E_IO, "%s: cannot stat: %s", path, strerror(errno));
-    /* A folder or a device has no size to check chunk offsets against. */
-    if (!S_ISREG(st.st_mode))
-        return btf_fail(err, BTF_E_IO, "%s: not a regular file", path);
-    s->size = (uint64_t)st.st_size;
-    return BTF_OK;
+    /* A folder or a device has no size to check chunk offsets against, and
+     * a FIFO would block the open itself: regular files only. */
+    s->fd = btf_open_regular(path, &s->size, err);
+    return s->fd < 0 ? BTF_E_IO : BTF_OK;
 }
 
 void btf_source_close(btf_source *s)

@@ -12,22 +12,19 @@
 #include "io/ubo2014.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 int ubo_sniff(const char *path)
 {
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    int fd = btf_open_regular(path, NULL, NULL); /* no FIFO, device or folder */
     if (fd < 0)
         return 0;
-    struct stat st;
     unsigned char head[8] = {0};
-    int ok = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && read(fd, head, 8) == 8;
+    int ok = read(fd, head, 8) == 8;
     close(fd);
     if (!ok || head[0] != '!')
         return 0;
@@ -92,26 +89,22 @@ btf_status ubo_open(const char *path, ubo_open_file **out, btf_error *err)
     ubo_open_file *o = btf_calloc(1, sizeof *o, err);
     if (!o)
         return BTF_E_NOMEM;
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    uint64_t size;
+    int fd = btf_open_regular(path, &size, err);
     if (fd < 0) {
         free(o);
-        return btf_fail(err, BTF_E_IO, "%s: cannot open: %s", path, strerror(errno));
+        return BTF_E_IO;
     }
-    struct stat st;
     btf_status rc = BTF_OK;
-    if (fstat(fd, &st) != 0)
-        rc = btf_fail(err, BTF_E_IO, "%s: cannot stat: %s", path, strerror(errno));
-    else if (!S_ISREG(st.st_mode))
-        rc = btf_fail(err, BTF_E_IO, "%s: not a regular file", path);
-    else if (st.st_size == 0)
+    if (size == 0)
         rc = btf_fail(err, BTF_E_FORMAT, "%s: empty file", path);
     if (rc == BTF_OK) {
-        o->map_size = (size_t)st.st_size;
+        o->map_size = (size_t)size;
         o->map = mmap(NULL, o->map_size, PROT_READ, MAP_SHARED, fd, 0);
         if (o->map == MAP_FAILED) {
             o->map = NULL;
             rc = btf_fail(err, BTF_E_IO, "%s: cannot map %llu bytes: %s", path,
-                          (unsigned long long)st.st_size, strerror(errno));
+                          (unsigned long long)size, strerror(errno));
         }
     }
     close(fd);

@@ -25,6 +25,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 /* S: the norms of S x V's columns (the readers ignore it, §3). */
 static btf_status store_norms(unsigned char **p, const float *sxv, uint64_t rows, uint32_t k,
@@ -369,12 +370,9 @@ btf_status btf_ubo2014_write(const char *path, const btf_dirset *views, const bt
     else
         rc = ubo_write_pvf_images(&src, sig, o.components, o.scalar_size, o.max_bytes, stats, err);
     if (rc == BTF_OK && stats) {
-        FILE *fp = fopen(path, "rb");
-        if (fp) {
-            fseek(fp, 0, SEEK_END);
-            stats->bytes = (uint64_t)ftell(fp);
-            fclose(fp);
-        }
+        struct stat st; /* the size only: nothing to open */
+        if (stat(path, &st) == 0)
+            stats->bytes = (uint64_t)st.st_size;
     }
     if (rc == BTF_OK)
         ubo_report(&src, 1.0, "written");

@@ -5,19 +5,20 @@
  * UV channel 0 is required; aiProcess_FlipUVs turns assimp's bottom-left
  * origin (OBJ's vt as written; glTF's top-left origin is flipped to it by
  * the importer) into this project's top-left origin, v down the rows.
- * assimp logs nothing unless a log stream is attached, and none is.
+ * assimp logs nothing unless a log stream is attached, and none is. It
+ * opens files only through mesh_io.c: regular files, in the mesh's folder.
  */
 #include "scene/scene.h"
+#include "scene/mesh_io.h"
 #include "core/core.h"
 
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
+#include <unistd.h>
 
 void scene_mesh_free(btf_mesh *m)
 {
@@ -94,22 +95,40 @@ static void copy_meshes(const struct aiScene *sc, btf_mesh *m)
     }
 }
 
+/* Prefixes err's message (which names the file) with the scene's name and
+ * key, as every message of a mesh starts. */
+static btf_status name_key(btf_error *err, const char *name, const char *key)
+{
+    char m[sizeof err->msg];
+    memcpy(m, err->msg, sizeof m);
+    return btf_fail(err, err->code, "%s: %s: %s", name, key, m);
+}
+
 btf_status scene_mesh_load(const char *path, const char *name, const char *key, btf_mesh *out,
                            btf_error *err)
 {
     memset(out, 0, sizeof *out);
-    struct stat st;
-    if (stat(path, &st) != 0)
-        return btf_fail(err, BTF_E_IO, "%s: %s: %s: %s", name, key, path, strerror(errno));
-    if (!S_ISREG(st.st_mode))
-        return btf_fail(err, BTF_E_IO, "%s: %s: %s: not a regular file", name, key, path);
-    if ((long long)st.st_size > SCENE_MAX_MESH_BYTES)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: %s: %s: %lld bytes (at most %lld)", name,
-                        key, path, (long long)st.st_size, SCENE_MAX_MESH_BYTES);
-    const struct aiScene *sc = aiImportFile(
+    uint64_t size;
+    int fd = btf_open_regular(path, &size, err);
+    if (fd < 0)
+        return name_key(err, name, key);
+    close(fd);
+    if (size > (uint64_t)SCENE_MAX_MESH_BYTES)
+        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: %s: %s: %llu bytes (at most %lld)", name,
+                        key, path, (unsigned long long)size, SCENE_MAX_MESH_BYTES);
+    scene_mesh_io io;
+    if (scene_mesh_io_init(&io, path, err))
+        return name_key(err, name, key);
+    const struct aiScene *sc = aiImportFileEx(
         path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
                   aiProcess_PreTransformVertices | aiProcess_FlipUVs |
-                  aiProcess_ValidateDataStructure);
+                  aiProcess_ValidateDataStructure, &io.fs);
+    if (io.refused.code) { /* a file refused fails the mesh, whatever assimp made of it */
+        if (sc)
+            aiReleaseImport(sc);
+        *err = io.refused;
+        return name_key(err, name, key);
+    }
     if (!sc) {
         const char *why = aiGetErrorString();
         return btf_fail(err, BTF_E_FORMAT, "%s: %s: %s: not a mesh assimp reads (%s)", name,

@@ -935,7 +935,8 @@ btf_exr_meta btf_model_exr_meta(const btf_model *m, const char *model_path, int 
 typedef void (*btf_warning_fn)(void *user, const char *message);
 /* A CAR fit warns "... the model misses N% of the band's variance ..." when
  * synthesis would give at least this fraction less than the band's variance
- * (a periodic pattern): a loss worth showing even to a quiet caller. */
+ * (a periodic pattern; `btfcar info` reports it too, so a quiet caller that
+ * drops warnings still finds it there). */
 #define BTF_CAR_MISSED_LOUD 0.2
 #define BTF_CAR_MISSED_TEXT "the model misses"
 
@@ -1071,8 +1072,7 @@ typedef struct btf_analyse_opts {
  * tile, no progress, no report. */
 btf_analyse_opts btf_analyse_defaults(void);
 /* In the warning of an analysis whose photometric stereo left most pixels
- * without a fit (docs/photostereo.md, "Fallback"): a flat range map is a
- * loss worth showing even to a quiet caller. */
+ * without a fit (docs/photostereo.md, "Fallback"): a flat range map. */
 #define BTF_RANGE_FLAT_TEXT "the range map is nearly flat"
 
 /* All analysis stages on a dataset (paper section II): segmentation into

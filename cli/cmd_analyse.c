@@ -502,7 +502,7 @@ int cmd_analyse(int argc, char **argv)
     if (rc == 0)
         rc = write_subspace_images(&seg, ds, dir, &err);
     if (rc)
-        btf_output_dir_abort(od);
+        btf_output_dir_fail(od, &err);
     else
         rc = btf_output_dir_commit(od, &err);
     if (rc) {

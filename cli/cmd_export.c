@@ -82,7 +82,7 @@ static int export_all(cli_ctx *c, btf_dataset *ds, const char *dir)
         return 0;
     }
     if (rc != 0)
-        btf_output_dir_abort(od);
+        btf_output_dir_fail(od, &err);
     cli_progress_done();
     return cli_lib_error(c, &err);
 }

@@ -522,7 +522,7 @@ int cmd_synthesise(int argc, char **argv)
     if (rc == 0)
         rc = btf_output_dir_commit(od, &err);
     else
-        btf_output_dir_abort(od);
+        btf_output_dir_fail(od, &err);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     int gpu_used = gpu != NULL;
     char devname[300];

@@ -180,6 +180,10 @@ btf_status btf_output_dir_begin(const char *dir, btf_output_dir **out, btf_error
 const char *btf_output_dir_path(const btf_output_dir *d);
 btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err);
 void btf_output_dir_abort(btf_output_dir *d);
+/* abort after a failure: err's message, which names files under the
+ * temporary folder (the writers' paths), then names them under DIR as the
+ * caller gave it (issue 29: "full disk" named the temporary). */
+void btf_output_dir_fail(btf_output_dir *d, btf_error *err);
 
 /* Checks, before any work, that path can be written: a file (BTF_OUTPUT_FILE:
  * its folder exists, takes files, and path is not a folder or other

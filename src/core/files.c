@@ -426,7 +426,8 @@ void btf_remove_tree(const char *path)
 /* ---- Output folders written as a whole ---- */
 
 struct btf_output_dir {
-    char dir[4096];     /* the final folder, no trailing slash */
+    char given[4096];   /* the folder as the caller named it, no trailing slash */
+    char dir[4096];     /* the final folder (a link followed), no trailing slash */
     char tmp[4096];     /* DIR.btfcar-tmp-ID-PID-N beside it */
     char created[4096]; /* the topmost missing ancestor begin created, or "" */
 };
@@ -505,6 +506,7 @@ btf_status btf_output_dir_begin(const char *dir, btf_output_dir **out, btf_error
     if (!d)
         return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", dir);
     btf_status rc = strip_slashes(dir, d->dir, sizeof d->dir, err);
+    memcpy(d->given, d->dir, sizeof d->given);
     if (!rc)
         rc = follow_folder_link(d->dir, sizeof d->dir, err);
     char parent[4096];
@@ -638,6 +640,37 @@ btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err)
     pthread_sigmask(SIG_SETMASK, &old, NULL);
     free(d);
     return rc;
+}
+
+/* The message of an error met while the set was written names the
+ * temporary folder (the writers were given its path): the user named the
+ * output, so every occurrence of the one becomes the other. */
+static void name_output(const btf_output_dir *d, btf_error *err)
+{
+    if (!err)
+        return;
+    char out[sizeof err->msg];
+    size_t n = 0, lt = strlen(d->tmp), lg = strlen(d->given);
+    const char *s = err->msg;
+    while (*s && n + 1 < sizeof out) {
+        if (lt && !strncmp(s, d->tmp, lt) && n + lg < sizeof out) {
+            memcpy(out + n, d->given, lg);
+            n += lg;
+            s += lt;
+        } else {
+            out[n++] = *s++;
+        }
+    }
+    out[n] = '\0';
+    memcpy(err->msg, out, n + 1);
+}
+
+void btf_output_dir_fail(btf_output_dir *d, btf_error *err)
+{
+    if (!d)
+        return;
+    name_output(d, err);
+    btf_output_dir_abort(d);
 }
 
 void btf_output_dir_abort(btf_output_dir *d)

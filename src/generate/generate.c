@@ -203,7 +203,7 @@ btf_status btf_generate(const char *material, const char *outdir, const btf_gene
     if (rc == 0)
         rc = btf_output_dir_commit(od, err);
     else
-        btf_output_dir_abort(od);
+        btf_output_dir_fail(od, err);
     btf_dirset_free(&dirs);
     btf_material_free(&m);
     return rc;

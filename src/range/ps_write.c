@@ -48,7 +48,7 @@ btf_status btf_ps_write(const btf_ps_result *r, const btf_image *mask, const cha
         rc = write_pair(dir, "height", &r->height, &prev, err);
     btf_image_free(&prev);
     if (rc) {
-        btf_output_dir_abort(od);
+        btf_output_dir_fail(od, err);
         return rc;
     }
     return btf_output_dir_commit(od, err);

@@ -335,7 +335,7 @@ btf_status btf_report_write(const btf_dataset *ds, const btf_model *m, const cha
     if (rc == BTF_OK)
         rc = btf_output_dir_commit(od, err);
     else
-        btf_output_dir_abort(od);
+        btf_output_dir_fail(od, err);
     if (rc == BTF_OK && summary) {
         summary->model_bytes = d.bytes.total;
         summary->raw_bytes = d.raw.raw;

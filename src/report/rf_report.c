@@ -297,7 +297,7 @@ btf_status btf_rf_report_write(const btf_dataset *ds, const btf_rf_model *m, con
     if (rc == BTF_OK)
         rc = btf_output_dir_commit(od, err);
     else
-        btf_output_dir_abort(od);
+        btf_output_dir_fail(od, err);
     if (rc == BTF_OK && summary) {
         summary->model_bytes = d.file_bytes;
         summary->raw_bytes = d.raw.raw;

@@ -3,6 +3,7 @@
  * src/car/subspace_fit.c). */
 #include "cli.h"
 
+#include <math.h>
 #include <string.h>
 
 static const char ABOUT[] =
@@ -10,7 +11,25 @@ static const char ABOUT[] =
     "colour 2D CAR model: spectral decorrelation, a Gaussian-Laplacian pyramid and\n"
     "one causal auto-regressive model per band and level (docs/model.md). The\n"
     "model has one subspace, no directions and no range map; 'btfcar synthesise'\n"
-    "regenerates the texture at any size.\n";
+    "regenerates the texture at any size. The image's values must be at most\n"
+    "1e28 in magnitude (what synthesis keeps within float).\n";
+
+/* Every magnitude of the exemplar at most BTF_EXEMPLAR_MAX_VALUE, checked
+ * before any fitting: beyond it the model's bands could overflow synthesis'
+ * float arithmetic, and the model file refuses them (src/model/
+ * model_check.c). 0, or 1 after the one-line error naming the file. */
+static int check_magnitude(const cli_ctx *c, const char *image, const btf_image *img)
+{
+    size_t n = (size_t)img->width * img->height * img->channels;
+    float big = 0.0f;
+    for (size_t i = 0; i < n; i++)
+        big = fabsf(img->data[i]) > big ? fabsf(img->data[i]) : big;
+    if (big > BTF_EXEMPLAR_MAX_VALUE)
+        return cli_error(c, "%s: values of magnitude up to %g are too large to model (expected "
+                         "at most %g, which keeps synthesis within float)", image, big,
+                         BTF_EXEMPLAR_MAX_VALUE);
+    return 0;
+}
 
 int cmd_texture_fit(int argc, char **argv)
 {
@@ -37,6 +56,10 @@ int cmd_texture_fit(int argc, char **argv)
     btf_image img;
     if (btf_image_read(image, &ro, &img, &err) != 0)
         return cli_lib_error(&c, &err);
+    if (check_magnitude(&c, image, &img)) {
+        btf_image_free(&img);
+        return 1;
+    }
     fo.car.warn = c.quiet ? NULL : cli_warning;
     fo.car.warn_user = &c;
     btf_model m;

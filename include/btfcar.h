@@ -1013,6 +1013,16 @@ typedef struct btf_fit_opts {
 /* The defaults: levels 0 (auto, at most 3), car = btf_car_fit_defaults(). */
 btf_fit_opts btf_fit_defaults(void);
 
+/* The largest magnitude of a band's sigma and mean and of a subspace's
+ * colour mean that a model holds: within it, synthesis stays inside the
+ * float range (src/model/model_check.c derives it); the model validator
+ * refuses more. */
+#define BTF_MODEL_MAX_VALUE 1e30f
+/* The largest pixel magnitude `btfcar texture-fit` models: the bands of
+ * such an exemplar (differences of colours, projected on a unit basis,
+ * split into pyramid levels) stay far inside BTF_MODEL_MAX_VALUE. */
+#define BTF_EXEMPLAR_MAX_VALUE 1e28f
+
 /* Models one subspace image (linear RGB): decorrelation, pyramid, one CAR
  * model per band and level. view and light are left -1. */
 btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,

@@ -164,6 +164,54 @@ static void duplicate_direction_refused(void **state)
     btf_model_free(&m);
 }
 
+/* A float EXR exemplar name in tu_dir: a 32 x 32 rendered leather texture
+ * (values about 0..1) times scale plus offset. Its path (static, tu_fmt). */
+static const char *scaled_exemplar(const char *name, float scale, float offset)
+{
+    btf_error e = {0};
+    btf_image img;
+    tu_material_image("leather", 32, 2, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
+    for (size_t i = 0; i < (size_t)32 * 32 * 3; i++)
+        img.data[i] = img.data[i] * scale + offset;
+    const char *path = tu_fmt("%s/%s", tu_dir, name);
+    TU_OK(btf_image_write_exr(path, &img, 0, &e), &e);
+    btf_image_free(&img);
+    return path;
+}
+
+/* texture-fit of exr: exit status, its stderr in *err (malloc'd); the model
+ * goes to tu_dir/model-of-NAME, its path in model (4096 bytes). */
+static int fit_exemplar(const char *exr, const char *name, char *model, char **err)
+{
+    snprintf(model, 4096, "%s/model-of-%s.btfcar", tu_dir, name);
+    return tu_run(tu_fmt("%s texture-fit %s -o %s --levels 1 >/dev/null", tu_cli(), exr, model),
+                  err);
+}
+
+/* An exemplar of values near the float limit (up to 3e38, finite in float
+ * EXR) is refused before fitting: one line naming the file and the bound,
+ * exit 1, no model written (its bands would overflow synthesis). Values of
+ * 1e27, inside the bound, are a model that synthesises (synthesis refuses
+ * any row that is not finite). */
+static void exemplar_too_large_refused(void **state)
+{
+    (void)state;
+    char model[4096], *err = NULL;
+    const char *exr = scaled_exemplar("huge.exr", 3e38f, 0.0f);
+    assert_int_equal(fit_exemplar(exr, "huge", model, &err), 1);
+    assert_non_null(strstr(err, tu_fmt("%s: values of magnitude up to ", exr)));
+    assert_non_null(strstr(err, "are too large to model (expected at most 1e+28"));
+    assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    free(err);
+    struct stat st;
+    assert_int_not_equal(stat(model, &st), 0);
+    exr = scaled_exemplar("large.exr", 1e27f, 0.0f);
+    assert_int_equal(fit_exemplar(exr, "large", model, NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s --size 96x64 --backend cpu -o %s/large",
+                                   tu_cli(), model, tu_dir), NULL), 0); /* finite rows */
+    assert_int_equal(stat(tu_fmt("%s/large/subspace_00.exr", tu_dir), &st), 0);
+}
+
 /* A frame whose G-buffer alone exceeds the memory this process may use is
  * refused at once with the estimate: ulimit -v bounds the address space
  * (RLIMIT_AS, which btf_memory_available honours) to 2 GB on any machine,
@@ -215,6 +263,7 @@ int main(void)
         cmocka_unit_test(render_names_model_of_bad_set),
         cmocka_unit_test(duplicate_direction_refused),
         cmocka_unit_test(render_beyond_memory_refused),
+        cmocka_unit_test(exemplar_too_large_refused),
     };
     return cmocka_run_group_tests_name("cli_input", tests, tu_setup_dir, tu_teardown_dir);
 }

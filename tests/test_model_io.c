@@ -861,6 +861,31 @@ static void m_nan_band_mean(btf_model *m) { m->subspaces[1].bands[0][0].mean = N
 static void m_nan_mean(btf_model *m) { m->subspaces[0].mean[2] = NAN; }
 static void m_inf_basis(btf_model *m) { m->subspaces[0].basis[4] = -INFINITY; }
 static void m_skew_basis(btf_model *m) { m->subspaces[1].basis[0] += 0.1f; }
+/* Finite, but beyond BTF_MODEL_MAX_VALUE: synthesis would overflow float. */
+static void m_huge_sigma(btf_model *m) { m->subspaces[0].bands[2][0].sigma = 1e37f; }
+static void m_huge_band_mean(btf_model *m) { m->subspaces[1].bands[0][1].mean = -3e38f; }
+static void m_huge_mean(btf_model *m) { m->subspaces[1].mean[1] = 2e30f; }
+
+/* The bound itself is a model: sigma, band mean and colour mean of 1e30
+ * encode and decode to the same values. */
+static void values_at_the_bound_accepted(void)
+{
+    model_spec spec = {2, 2, 2, 4, 2, 0, 0, 21};
+    btf_model m, back;
+    make_model(&m, &spec);
+    m.subspaces[0].bands[2][0].sigma = BTF_MODEL_MAX_VALUE;
+    m.subspaces[1].bands[0][1].mean = -BTF_MODEL_MAX_VALUE;
+    m.subspaces[1].mean[1] = BTF_MODEL_MAX_VALUE;
+    size_t n;
+    unsigned char *b = encode_ok(&m, &n);
+    decode_ok(b, n, &back);
+    assert_true(back.subspaces[0].bands[2][0].sigma == BTF_MODEL_MAX_VALUE);
+    assert_true(back.subspaces[1].bands[0][1].mean == -BTF_MODEL_MAX_VALUE);
+    assert_true(back.subspaces[1].mean[1] == BTF_MODEL_MAX_VALUE);
+    free(b);
+    btf_model_free(&back);
+    free_model(&m);
+}
 
 static void floats(void **state)
 {
@@ -872,6 +897,12 @@ static void floats(void **state)
     expect_rejected(m_nan_mean, "mean[2] is nan");
     expect_rejected(m_inf_basis, "basis[4] is -inf");
     expect_rejected(m_skew_basis, "orthonormal");
+    expect_rejected(m_huge_sigma, "subspace 0, band 2, level 0: sigma is 1e+37 (expected a "
+                                  "number in 0..1e+30");
+    expect_rejected(m_huge_band_mean, "subspace 1, band 0, level 1: mean is -3e+38 (expected a "
+                                      "number of magnitude at most 1e+30");
+    expect_rejected(m_huge_mean, "subspace 1: mean[1] is 2e+30");
+    values_at_the_bound_accepted();
 }
 
 static void m_levels0(btf_model *m) { m->subspaces[1].levels = 0; }

@@ -72,6 +72,28 @@ static btf_status check_dirset(const btf_dirset *s, const char *what, const char
     return BTF_OK;
 }
 
+/* BTF_MODEL_MAX_VALUE (1e30) bounds what synthesis adds or multiplies per
+ * band: sigma, the band's mean, the subspace's colour mean. The worst case
+ * of the arithmetic it then does (src/synth/) in float, whose limit is
+ * 3.4e38:
+ *  - noise: |e| <= 5.77 (btf_noise.h), so |sigma e| <= 5.8e30;
+ *  - the recursion Y = sum gamma Y' + sigma e multiplies that by its gain
+ *    G, the sum of |h| over its impulse response: 1 / (1 - sum |gamma|)
+ *    when sum |gamma| < 1; for other bands the stability check
+ *    (car/stability.c) keeps |A(w)|^2 above 1e-6, a spectral gain below
+ *    1000;
+ *  - the collapse G_l = mean + Y_l + pyrUp(G_{l+1}) adds at most 8 levels,
+ *    and pyrUp's a + c + 6 b holds 8 times a coarse value before its / 8:
+ *    at most 64 (1e30 + 5.8e30 G);
+ *  - the colour transform, mean + 3 basis entries (each |b| <= 1) times a
+ *    band, adds 1e30 and 3 times that (a marginal transfer replaces the
+ *    bands by quantiles of at most 1e37 first: 3e37 + 1e30).
+ * Together at most 1.9e32 + 1.1e33 G: finite for every G up to 3e5, about
+ * 50 times the largest gain measured on fitted bands (tens to some
+ * thousands; generated leather, wood and fabric textures). A larger G still
+ * meets synthesis' own check, BTF_E_NUMERIC naming the row, never Inf or
+ * NaN. The exemplars texture-fit accepts
+ * (|value| <= BTF_EXEMPLAR_MAX_VALUE, 1e28) give bands well inside it. */
 static btf_status check_band(const btf_car_band *b, const char *where, const char *name,
                              btf_status code, btf_error *err)
 {
@@ -99,11 +121,13 @@ static btf_status check_band(const btf_car_band *b, const char *where, const cha
             return failf(err, code, name, "%s: gamma[%d] is %g (expected a finite number)", where,
                          i, b->gamma[i]);
     }
-    if (!(isfinite(b->sigma) && b->sigma >= 0.0f))
-        return failf(err, code, name, "%s: sigma is %g (expected a finite number >= 0)", where,
-                     b->sigma);
-    if (!isfinite(b->mean))
-        return failf(err, code, name, "%s: mean is %g (expected a finite number)", where, b->mean);
+    if (!(b->sigma >= 0.0f && b->sigma <= BTF_MODEL_MAX_VALUE))
+        return failf(err, code, name, "%s: sigma is %g (expected a number in 0..%g, what "
+                     "synthesis keeps within float)", where, b->sigma, BTF_MODEL_MAX_VALUE);
+    if (!(fabsf(b->mean) <= BTF_MODEL_MAX_VALUE))
+        return failf(err, code, name, "%s: mean is %g (expected a number of magnitude at most "
+                     "%g, what synthesis keeps within float)", where, b->mean,
+                     BTF_MODEL_MAX_VALUE);
     return BTF_OK;
 }
 
@@ -216,9 +240,10 @@ static btf_status check_subspace(const btf_model *m, int s, const char *name, bt
         return failf(err, code, name, "subspace %d: size %d x %d (expected 1..%d on each side)", s,
                      sm->width, sm->height, BTF_MODEL_MAX_IMAGE_SIDE);
     for (int c = 0; c < 3; c++)
-        if (!isfinite(sm->mean[c]))
-            return failf(err, code, name, "subspace %d: mean[%d] is %g (expected a finite number)",
-                         s, c, sm->mean[c]);
+        if (!(fabsf(sm->mean[c]) <= BTF_MODEL_MAX_VALUE))
+            return failf(err, code, name, "subspace %d: mean[%d] is %g (expected a number of "
+                         "magnitude at most %g, what synthesis keeps within float)", s, c,
+                         sm->mean[c], BTF_MODEL_MAX_VALUE);
     btf_status rc = check_basis(sm->basis, s, name, code, err);
     if (rc)
         return rc;

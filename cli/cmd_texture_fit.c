@@ -12,7 +12,9 @@ static const char ABOUT[] =
     "one causal auto-regressive model per band and level (docs/model.md). The\n"
     "model has one subspace, no directions and no range map; 'btfcar synthesise'\n"
     "regenerates the texture at any size. The image's values must be at most\n"
-    "1e28 in magnitude (what synthesis keeps within float).\n";
+    "1e28 in magnitude (what synthesis keeps within float), and some must be\n"
+    "positive when any is negative (radiance is not negative; synthesis keeps\n"
+    "colours >= 0): more than a quarter negative is a warning.\n";
 
 /* Every magnitude of the exemplar at most BTF_EXEMPLAR_MAX_VALUE, checked
  * before any fitting: beyond it the model's bands could overflow synthesis'
@@ -28,6 +30,37 @@ static int check_magnitude(const cli_ctx *c, const char *image, const btf_image 
         return cli_error(c, "%s: values of magnitude up to %g are too large to model (expected "
                          "at most %g, which keeps synthesis within float)", image, big,
                          BTF_EXEMPLAR_MAX_VALUE);
+    return 0;
+}
+
+/* Share of negative values above which the exemplar gets a warning: the
+ * model's RGB box starts at 0 (no negative radiance, src/analyse/
+ * marginal_fit.c), so synthesis clamps those parts to black. A few negative
+ * values (noise in the dark parts of an HDR capture) pass silently. */
+#define NEGATIVE_WARN_SHARE 0.25
+
+/* The exemplar's signs: an image with negative values and none positive is
+ * refused (negative radiance is not a physical texture, and clamped to the
+ * non-negative box its synthesis would be all black); an all-zero image is
+ * a black texture and stays valid; more than NEGATIVE_WARN_SHARE negative
+ * is a warning. 0, or 1 after the one-line error naming the file. */
+static int check_signs(const cli_ctx *c, const char *image, const btf_image *img)
+{
+    size_t n = (size_t)img->width * img->height * img->channels, negative = 0, positive = 0;
+    for (size_t i = 0; i < n; i++) {
+        negative += img->data[i] < 0.0f;
+        positive += img->data[i] > 0.0f;
+    }
+    if (negative > 0 && positive == 0)
+        return cli_error(c, "%s: no value is positive and %zu of %zu are negative (expected a "
+                         "texture of non-negative radiance)", image, negative, n);
+    if (!c->quiet && (double)negative > NEGATIVE_WARN_SHARE * (double)n) {
+        char msg[4352];
+        snprintf(msg, sizeof msg, "%s: %.0f%% of the values are negative; synthesis keeps "
+                 "colours >= 0, so those parts come out black", image,
+                 100.0 * (double)negative / (double)n);
+        cli_warning((void *)c, msg);
+    }
     return 0;
 }
 
@@ -56,7 +89,7 @@ int cmd_texture_fit(int argc, char **argv)
     btf_image img;
     if (btf_image_read(image, &ro, &img, &err) != 0)
         return cli_lib_error(&c, &err);
-    if (check_magnitude(&c, image, &img)) {
+    if (check_magnitude(&c, image, &img) || check_signs(&c, image, &img)) {
         btf_image_free(&img);
         return 1;
     }

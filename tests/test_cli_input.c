@@ -164,6 +164,12 @@ static void duplicate_direction_refused(void **state)
     btf_model_free(&m);
 }
 
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
 /* A float EXR exemplar name in tu_dir: a 32 x 32 rendered leather texture
  * (values about 0..1) times scale plus offset. Its path (static, tu_fmt). */
 static const char *scaled_exemplar(const char *name, float scale, float offset)
@@ -210,6 +216,46 @@ static void exemplar_too_large_refused(void **state)
     assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s --size 96x64 --backend cpu -o %s/large",
                                    tu_cli(), model, tu_dir), NULL), 0); /* finite rows */
     assert_int_equal(stat(tu_fmt("%s/large/subspace_00.exr", tu_dir), &st), 0);
+}
+
+/* An exemplar of only negative values (all -0.5) is refused naming the
+ * file, exit 1, no model (its synthesis was all zeros, silently); one of
+ * about half negative values fits with a warning naming the file (--quiet:
+ * none); an all-zero image is a black texture and fits silently. */
+static void negative_exemplar(void **state)
+{
+    (void)state;
+    char model[4096], *err = NULL;
+    const char *exr = scaled_exemplar("negative.exr", 0.0f, -0.5f);
+    assert_int_equal(fit_exemplar(exr, "negative", model, &err), 1);
+    assert_non_null(strstr(err, tu_fmt("%s: no value is positive and 3072 of 3072 are negative",
+                                       exr)));
+    assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    free(err);
+    struct stat st;
+    assert_int_not_equal(stat(model, &st), 0);
+    /* leather's values lie about 0..1: shifted by its median, half negative */
+    btf_image img;
+    tu_material_image("leather", 32, 2, (btf_dir){0, 0}, (btf_dir){30, 0}, &img);
+    float *v = malloc(sizeof(float) * 32 * 32 * 3);
+    memcpy(v, img.data, sizeof(float) * 32 * 32 * 3);
+    qsort(v, 32 * 32 * 3, sizeof(float), cmp_float);
+    float median = v[32 * 32 * 3 / 2];
+    free(v);
+    btf_image_free(&img);
+    exr = scaled_exemplar("half-negative.exr", 1.0f, -median);
+    assert_int_equal(fit_exemplar(exr, "half-negative", model, &err), 0);
+    assert_non_null(strstr(err, tu_fmt("warning: %s: ", exr)));
+    assert_non_null(strstr(err, "% of the values are negative; synthesis keeps colours >= 0"));
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s texture-fit -q %s -o %s --levels 1", tu_cli(), exr, model),
+                            &err), 0);
+    assert_string_equal(err, "");
+    free(err);
+    exr = scaled_exemplar("black.exr", 0.0f, 0.0f);
+    assert_int_equal(fit_exemplar(exr, "black", model, &err), 0);
+    assert_string_equal(err, "");
+    free(err);
 }
 
 /* A frame whose G-buffer alone exceeds the memory this process may use is
@@ -264,6 +310,7 @@ int main(void)
         cmocka_unit_test(duplicate_direction_refused),
         cmocka_unit_test(render_beyond_memory_refused),
         cmocka_unit_test(exemplar_too_large_refused),
+        cmocka_unit_test(negative_exemplar),
     };
     return cmocka_run_group_tests_name("cli_input", tests, tu_setup_dir, tu_teardown_dir);
 }

@@ -21,6 +21,12 @@
 #include <stddef.h>
 #include <stdio.h>
 
+/* A figure of the page that differs run to run (the date, a time taken),
+ * as a literal format piece: marked with the class "time" so that a reader
+ * or a test comparing two runs can tell it from the numbers that must not
+ * differ (docs/report.md, "What differs run to run"). */
+#define BTF_HTML_TIME(fmt) "<span class=\"time\">" fmt "</span>"
+
 /* ------------------------------------------------------------ text buffer */
 
 /* A growable NUL-terminated text; zero-initialise it. An allocation failure

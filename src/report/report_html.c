@@ -78,7 +78,7 @@ static void head(btf_buf *b, const btf_report_data *d)
     btf_buf_puts(b, "</h1>\n<p class=\"meta\">model ");
     btf_buf_html(b, d->model_name);
     btf_buf_printf(b, " · %d views × %d lights of %d×%d pixels · %d subspace images · "
-                      "btfcar %s · %s · measured in %.1f s</p>\n",
+                      "btfcar %s · " BTF_HTML_TIME("%s") " · measured in " BTF_HTML_TIME("%.1f s") "</p>\n",
                    d->in->n_views, d->in->n_lights, d->in->width, d->in->height,
                    d->m->n_subspaces, BTF_VERSION_STRING, d->date, d->seconds);
 }
@@ -90,7 +90,7 @@ static void top(btf_buf *b, const btf_report_data *d)
     btf_buf_printf(b, "<div class=\"top\">\n<figure><img src=\"sphere.png\" width=\"%d\" "
                       "height=\"%d\" alt=\"the material on a sphere\">\n<figcaption>The "
                       "model on a sphere, one directional light from %s (camera frame), "
-                      "%d of %d subspace images needed, rendered in %.2f s.</figcaption>"
+                      "%d of %d subspace images needed, rendered in " BTF_HTML_TIME("%.2f s") ".</figcaption>"
                       "</figure>\n<div class=\"cards\">\n",
                    d->o->sphere_size, d->o->sphere_size, l, d->sphere_info.needed,
                    d->sphere_info.total, d->sphere_s);
@@ -260,7 +260,7 @@ static void quality(btf_buf *b, const btf_report_data *d)
                       "distances, each divided by the same distance between disjoint crops of "
                       "the measured image — 1.0 is as close as the material is to itself — and "
                       "their mean, the combined distance (docs/measure.md). %s: %d pairs, "
-                      "measured in %.1f s.</p>\n",
+                      "measured in " BTF_HTML_TIME("%.1f s") ".</p>\n",
                    d->o->quality.all ? "Every pair" : "A spread of views × lights over every "
                                                       "ring of the hemisphere",
                    q->n_pairs, q->seconds);
@@ -363,7 +363,7 @@ static void trade(btf_buf *b, const btf_report_data *d)
     btf_buf_printf(b, "<p class=\"note\">The dataset analysed under %d settings: K subspace "
                       "images, L pyramid levels, N neighbours (a fixed neighbourhood of the "
                       "first N candidate offsets; auto: the Bayesian choice per band). The "
-                      "features and the range map were computed once (%.1f s) and shared; "
+                      "features and the range map were computed once (" BTF_HTML_TIME("%.1f s") ") and shared; "
                       "settings ran in parallel, one thread each. Analysis: segmentation "
                       "and the CAR fits of that setting; synthesis: every subspace image at "
                       "%d² on the CPU, in one batch as btfcar synthesise makes them "
@@ -403,8 +403,9 @@ static void trade(btf_buf *b, const btf_report_data *d)
             snprintf(g, sizeof g, "%.3f", p->gpu_synth_s);
         else
             snprintf(g, sizeof g, "–");
-        btf_buf_printf(b, "<tr class=\"%s%s\"><td class=\"l\">%s%s</td><td>%d</td><td>%.2f</td>"
-                          "<td>%.3f</td><td>%s</td><td>%.3f</td><td>%llu</td><td>%.3f</td>"
+        btf_buf_printf(b, "<tr class=\"%s%s\"><td class=\"l\">%s%s</td><td>%d</td><td class=\"time\">%.2f</td>"
+                          "<td class=\"time\">%.3f</td><td class=\"time\">%s</td><td class=\"time\">%.3f</td>"
+                          "<td>%llu</td><td>%.3f</td>"
                           "<td>%.3f</td><td>%.2f</td><td class=\"l\">%s%s</td></tr>\n",
                        p->is_default ? "def " : "",
                        p->pareto_bytes || p->pareto_time ? "front" : "", t,

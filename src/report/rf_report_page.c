@@ -176,13 +176,13 @@ static void page(btf_buf *b, const btf_rf_report_data *d)
     if (m->fit != BTF_RF_PTM)
         btf_buf_printf(b, ", %d lobe%s", m->lobes, m->lobes == 1 ? "" : "s");
     btf_buf_printf(b, "; Meseth, Müller &amp; Klein 2003) · %d views × %d lights of %d×%d "
-                      "pixels · %s · %.1f s</p>\n", in->n_views, in->n_lights, in->width,
+                      "pixels · " BTF_HTML_TIME("%s") " · " BTF_HTML_TIME("%.1f s") "</p>\n", in->n_views, in->n_lights, in->width,
                    in->height, d->date, d->seconds);
     dir_text(d->o->sphere_light, l, sizeof l);
     btf_buf_printf(b, "<div class=\"top\">\n<figure><img src=\"sphere.png\" width=\"%d\" "
                       "height=\"%d\" alt=\"the material on a sphere\">\n<figcaption>The "
                       "model on a sphere, one directional light from %s (camera frame), "
-                      "rendered in %.2f s.</figcaption></figure>\n<div class=\"cards\">\n",
+                      "rendered in " BTF_HTML_TIME("%.2f s") ".</figcaption></figure>\n<div class=\"cards\">\n",
                    d->o->sphere_size, d->o->sphere_size, l, d->sphere_s);
     btf_buf_printf(b, "<div class=\"card\"><b>%s</b><span>the model file</span></div>\n",
                    hr_bytes(d->file_bytes, t, sizeof t));

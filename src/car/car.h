@@ -93,11 +93,29 @@ int btf_car_margin_within(const btf_car_band *b, double *budget);
 double btf_car_margin_shortfall(const btf_car_band *b, int m);
 /* A model keeps its bands' margins: model/model.h, btf_model_margin. */
 
-/* Stability of a band's recursion (car/stability.c): btf_car_is_stable's
- * answer, and UNKNOWN when the check ran out of memory, so that a fit under
- * memory pressure fails instead of shrinking a model for no reason. */
-typedef enum btf_stability { BTF_UNSTABLE = 0, BTF_STABLE = 1, BTF_STABILITY_UNKNOWN = -1 } btf_stability;
-btf_stability btf_car_stability(const btf_car_band *b);
+/* Stability of a band's recursion (car/stability.c, docs/model.md
+ * "Stability"): the exact test of the causal (non-symmetric half-plane)
+ * recursion synthesis runs, with a margin: every root of the recursion
+ * along a row, and of the row-to-row recursion at every column frequency,
+ * of modulus below 1 - BTF_CAR_STABILITY_MARGIN. The margin keeps rounding
+ * harmless: a root the check misplaces by rounding, or that float
+ * synthesis' own rounding (about 1e-6 relative for 24 neighbours, in the
+ * worst alignment) pushes outward, still grows by less than e^0.07 over
+ * the largest synthesis (65536 pixels plus two 256-pixel margins). It
+ * rejects no stable estimate farther than 1e-6 from the unit circle: a
+ * 1-pixel checkerboard's fit (roots of modulus 0.99999) stays, and is
+ * reported as a periodic pattern that synthesis misses (car_fit.c). 1 when
+ * stable; 0 when not, with why (n bytes; NULL: none) a phrase that says
+ * which recursion grows. */
+#define BTF_CAR_STABILITY_MARGIN 1e-6
+int btf_car_stability_why(const btf_car_band *b, char *why, size_t n);
+
+/* The fit's settling rule on top of stability (car/settle.c): 1 when a
+ * field of the band's recursion from zeros stops growing within a 160 x
+ * 192 test field (or sum |gamma| < 1), 0 when it does not (roots close to
+ * the unit circle, from about 0.98: correlation beyond the synthesis
+ * margins), -1 when out of memory. */
+int btf_car_fit_settles(const btf_car_band *b);
 
 /* The variance synthesis gives a band in its first rows and columns: the
  * sample variance of the 64 x 64 window of a field started `margin` rows

@@ -31,9 +31,12 @@
  * (mean 0, variance 1), so v0 = 1, a0 = 1, b0 = 0.01 are weak and scale-free.
  *
  * Stability. Least-squares and Bayesian estimates are not guaranteed stable
- * (car/stability.c tests them). An unstable estimate is shrunk (gamma <- 0.95
- * gamma, repeatedly) until stable, sigma is re-estimated for the shrunk
- * gamma, and a warning says so.
+ * (a ramp 1.002^x along the rows gives gamma = 1.002 on 0:-1). Every
+ * estimate passes the exact test of car/stability.c (the validator's) and
+ * the settling rule of car/settle.c (roots near the unit circle correlate
+ * beyond the synthesis margins): one that fails is shrunk (gamma <- 0.95
+ * gamma, repeatedly) until it passes, sigma is re-estimated for the shrunk
+ * gamma, and a warning names the band and what failed.
  */
 #include <stdio.h>
 #include "core/core.h"
@@ -221,7 +224,7 @@ static void warn(const btf_car_fit_opts *o, const char *text)
 {
     if (!o->warn)
         return;
-    char msg[320];
+    char msg[512];
     snprintf(msg, sizeof msg, "%s%s%s", o->what ? o->what : "", o->what ? ": " : "", text);
     o->warn(o->warn_user, msg);
 }
@@ -263,25 +266,50 @@ static void moments(const double *band, size_t n, double *mean, double *sd)
     *sd = sqrt(v / (double)n) * big;
 }
 
-/* Shrinks gamma until the model is stable; *factor gets the factor
- * applied. -1 when out of memory (the model's stability is unknown, and
- * shrinking it anyway would make the result depend on free memory). */
-static int stabilise(btf_car_band *b, double *factor)
+/* Whether the fit keeps b: stable by the exact test of car/stability.c (the
+ * validator's), and settling (car/settle.c). 1 or 0, with why (why_n
+ * bytes) saying what failed; -1 when out of memory. */
+static int keeps(const btf_car_band *b, char *why, size_t why_n)
+{
+    char reason[200];
+    if (!btf_car_stability_why(b, reason, sizeof reason)) {
+        snprintf(why, why_n, "unstable estimate (%s)", reason);
+        return 0;
+    }
+    int settles = btf_car_fit_settles(b);
+    if (settles == 0)
+        snprintf(why, why_n, "estimate too near the unit circle to settle (a field of it from "
+                 "zeros still grows over 160 rows: its correlation outreaches the synthesis "
+                 "margins)");
+    return settles;
+}
+
+/* Shrinks gamma (gamma <- 0.95^k gamma, the least k) until the fit keeps
+ * it; *factor gets 0.95^k, why the estimate's failure (why_n bytes). A
+ * whole step of 5 % rather than the largest factor kept: a band pushed
+ * onto the margin would correlate over 1e6 pixels, far beyond any
+ * synthesis margin (car/margin.c). Small enough a factor always passes
+ * (both tests' sufficient sum f sum |gamma| < 0.99 holds from k = 60 on
+ * for sum |gamma| <= 20); past 200 steps (sum |gamma| above 28000, which
+ * the prior keeps estimates from) the band is dropped to white noise. -1
+ * when out of memory (shrinking anyway would make the result depend on
+ * free memory). */
+static int stabilise(btf_car_band *b, double *factor, char *why, size_t why_n)
 {
     double f = 1.0;
     float g0[BTF_CAR_MAX_NEIGHBOURS];
     memcpy(g0, b->gamma, sizeof g0);
-    btf_stability st = BTF_UNSTABLE;
-    for (int k = 0; k < 200 && (st = btf_car_stability(b)) == BTF_UNSTABLE; k++) {
+    int kept = keeps(b, why, why_n);
+    for (int k = 0; k < 200 && kept == 0; k++) {
         f *= 0.95;
         for (int i = 0; i < b->n; i++)
             b->gamma[i] = (float)(g0[i] * f);
+        char later[8]; /* the first failure is the one reported */
+        kept = keeps(b, later, sizeof later);
     }
-    if (st == BTF_UNSTABLE)
-        st = btf_car_stability(b);
-    if (st == BTF_STABILITY_UNKNOWN)
+    if (kept < 0)
         return -1;
-    if (st == BTF_UNSTABLE) { /* cannot happen for f -> 0; be safe */
+    if (!kept) {
         b->n = 0;
         f = 0.0;
     }
@@ -438,7 +466,8 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
     for (int i = 0; i < best_eta; i++)
         out->gamma[i] = (float)g[i];
     double s2 = (2.0 * PRIOR_B0 + best_lambda) / (2.0 * PRIOR_A0 + (double)t - 2.0);
-    if (stabilise(out, &inf.shrink) < 0) {
+    char why[300];
+    if (stabilise(out, &inf.shrink, why, sizeof why) < 0) {
         free(z);
         return btf_fail(err, BTF_E_NOMEM, "out of memory checking the model's stability");
     }
@@ -447,9 +476,8 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
         for (int i = 0; i < out->n; i++)
             gs[i] = out->gamma[i];
         s2 = (2.0 * PRIOR_B0 + residual(v, m, gs, out->n)) / (2.0 * PRIOR_A0 + (double)t - 2.0);
-        char text[160];
-        snprintf(text, sizeof text, "unstable estimate: coefficients scaled by %.3f to make the "
-                 "recursion stable", inf.shrink);
+        char text[400];
+        snprintf(text, sizeof text, "%s: coefficients scaled by %.3f", why, inf.shrink);
         warn(&o, text);
     }
     out->sigma = to_float(sqrt(s2) * sd);

@@ -260,14 +260,18 @@ static btf_status check_subspace(const btf_model *m, int s, const char *name, bt
     return check_marginal(&sm->marginal, s, name, code, err);
 }
 
-/* Every band's stability, by the criterion fitting stabilises to
- * (car/stability.c): an unstable recursion would make synthesis overflow or
- * return huge values. Its test recursion is most of the cost of reading a
- * model (about 0.5 ms a band), so the bands are checked on every CPU; the
- * first unstable band in file order is the one named. */
+/* Every band's stability, by the test fitting stabilises to
+ * (car/stability.c, docs/model.md "Stability"): an unstable recursion
+ * makes synthesis grow exponentially along or down the rows, whatever the
+ * size. Most bands pass its sufficient test at once; the rest take up to a
+ * few milliseconds, so the distinct bands are checked on every CPU, each
+ * once (a crafted file of a few KB can repeat one band thousands of
+ * times); the first unstable band in file order is the one named, with the
+ * recursion that grows. */
 typedef struct stability_jobs {
     const btf_model *m;
-    signed char *result; /* per band: a btf_stability */
+    const int *unique;   /* the job of each distinct band */
+    signed char *stable; /* per job: 1 stable, 0 not */
 } stability_jobs;
 
 static void band_of_job(int job, int *s, int *b, int *l)
@@ -277,39 +281,94 @@ static void band_of_job(int job, int *s, int *b, int *l)
     *l = job % BTF_MAX_LEVELS;
 }
 
-static btf_status stability_job(void *user, int job, int worker, btf_error *err)
+static const btf_car_band *band_of(const btf_model *m, int job)
+{
+    int s, b, l;
+    band_of_job(job, &s, &b, &l);
+    return l < m->subspaces[s].levels ? &m->subspaces[s].bands[b][l] : NULL;
+}
+
+static btf_status stability_job(void *user, int k, int worker, btf_error *err)
 {
     (void)worker, (void)err;
     stability_jobs *sj = user;
-    int s, b, l;
-    band_of_job(job, &s, &b, &l);
-    const btf_subspace_model *sm = &sj->m->subspaces[s];
-    sj->result[job] = l < sm->levels ? (signed char)btf_car_stability(&sm->bands[b][l])
-                                     : (signed char)BTF_STABLE;
+    sj->stable[sj->unique[k]] = (signed char)btf_car_is_stable(band_of(sj->m, sj->unique[k]));
     return BTF_OK;
+}
+
+/* A band as the test sees it: its neighbour count, offsets and gammas as
+ * bytes (unused entries zero), with its job. */
+typedef struct band_key {
+    unsigned char bytes[sizeof(int) + sizeof(((btf_car_band *)0)->offsets) +
+                        sizeof(((btf_car_band *)0)->gamma)];
+    int job;
+} band_key;
+
+static void key_of(const btf_car_band *b, int job, band_key *k)
+{
+    memset(k, 0, sizeof *k);
+    int n = b->n;
+    memcpy(k->bytes, &n, sizeof n);
+    memcpy(k->bytes + sizeof n, b->offsets, (size_t)n * sizeof *b->offsets);
+    memcpy(k->bytes + sizeof n + sizeof b->offsets, b->gamma, (size_t)n * sizeof *b->gamma);
+    k->job = job;
+}
+
+static int key_order(const void *a, const void *b)
+{
+    const band_key *x = a, *y = b;
+    int c = memcmp(x->bytes, y->bytes, sizeof x->bytes);
+    return c ? c : (x->job > y->job) - (x->job < y->job);
+}
+
+/* same[job] gets the first job of an identical band (itself if none), and
+ * unique the first job of every distinct band; returns their count. */
+static int distinct_bands(const btf_model *m, int jobs, band_key *keys, int *same, int *unique)
+{
+    int n = 0, count = 0;
+    for (int j = 0; j < jobs; j++)
+        if (band_of(m, j))
+            key_of(band_of(m, j), j, &keys[n++]);
+    qsort(keys, (size_t)n, sizeof *keys, key_order);
+    for (int i = 0; i < n; i++) {
+        int first = i > 0 && !memcmp(keys[i].bytes, keys[i - 1].bytes, sizeof keys[i].bytes);
+        same[keys[i].job] = first ? same[keys[i - 1].job] : keys[i].job;
+        if (!first)
+            unique[count++] = keys[i].job;
+    }
+    return count;
 }
 
 static btf_status check_stability(const btf_model *m, const char *name, btf_status code,
                                   btf_error *err)
 {
     int jobs = m->n_subspaces * 3 * BTF_MAX_LEVELS;
-    stability_jobs sj = {m, calloc((size_t)jobs, 1)};
-    if (!sj.result)
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory checking the CAR stability", name);
-    btf_status rc = btf_pool_run(jobs, 0, stability_job, &sj, NULL, err);
+    band_key *keys = malloc((size_t)jobs * sizeof *keys);
+    int *same = malloc((size_t)jobs * sizeof *same);
+    int *unique = malloc((size_t)jobs * sizeof *unique);
+    stability_jobs sj = {m, unique, calloc((size_t)jobs, 1)};
+    btf_status rc = BTF_OK;
+    if (!keys || !same || !unique || !sj.stable)
+        rc = btf_fail(err, BTF_E_NOMEM, "%s: out of memory checking the CAR stability", name);
+    if (rc == BTF_OK)
+        rc = btf_pool_run(distinct_bands(m, jobs, keys, same, unique), 0, stability_job, &sj,
+                          NULL, err);
     for (int j = 0; rc == BTF_OK && j < jobs; j++) {
+        if (!band_of(m, j) || sj.stable[same[j]])
+            continue;
         int s, b, l;
         band_of_job(j, &s, &b, &l);
-        if (sj.result[j] == BTF_STABILITY_UNKNOWN)
-            rc = btf_fail(err, BTF_E_NOMEM, "%s: subspace %d, band %d, level %d: out of memory "
-                          "checking the CAR stability", name, s, b, l);
-        else if (sj.result[j] == BTF_UNSTABLE)
-            rc = failf(err, code, name,
-                       "subspace %d, band %d, level %d: the CAR coefficients are unstable "
-                       "(expected a stable recursion, as fitting makes; this one grows)", s, b,
-                       l);
+        char why[200];
+        btf_car_stability_why(band_of(m, j), why, sizeof why);
+        rc = failf(err, code, name,
+                   "subspace %d, band %d, level %d: the CAR coefficients are unstable: %s "
+                   "(expected every root of the recursion below 1 - %g in modulus, as fitting "
+                   "makes)", s, b, l, why, BTF_CAR_STABILITY_MARGIN);
     }
-    free(sj.result);
+    free(keys);
+    free(same);
+    free(unique);
+    free(sj.stable);
     return rc;
 }
 

@@ -23,9 +23,9 @@ static uint32_t get_u32le(const unsigned char *p)
     return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 }
 
-/* A fitted texture model with band 1, level 1 of subspace 0 set to one
- * neighbour 0:-1 of gamma `marker` (stable), encoded. */
-static void marked_model(float marker, unsigned char **data, size_t *size)
+/* A fitted texture model with band 1, level 1 of subspace 0 set to n (1 or
+ * 2) neighbours 0:-1 and -1:0 of gammas `markers` (stable), encoded. */
+static void marked_model(const float *markers, int n, unsigned char **data, size_t *size)
 {
     btf_error e = {0};
     btf_image img;
@@ -36,9 +36,11 @@ static void marked_model(float marker, unsigned char **data, size_t *size)
     TU_OK(btf_texture_fit(&img, &fo, &m, &e), &e);
     btf_image_free(&img);
     btf_car_band *b = &m.subspaces[0].bands[1][1];
-    b->n = 1;
+    b->n = n;
     b->offsets[0] = (btf_offset){0, -1};
-    b->gamma[0] = marker;
+    b->offsets[1] = (btf_offset){-1, 0};
+    b->gamma[0] = markers[0];
+    b->gamma[1] = n > 1 ? markers[1] : 0.0f;
     b->sigma = 0.0123457f; /* a second marker */
     TU_OK(btf_model_encode(&m, data, size, &e), &e);
     btf_model_free(&m);
@@ -87,7 +89,7 @@ static void unstable_model_rejected(void **state)
     const float marker = 0.3141592f, unstable = 1.5f;
     unsigned char *data, *bad;
     size_t size, bad_size;
-    marked_model(marker, &data, &size);
+    marked_model(&marker, 1, &data, &size);
     bad = patch_model(data, size, marker, unstable, &bad_size);
     char path[4096];
     snprintf(path, sizeof path, "%s/unstable.btfcar", tu_dir);
@@ -121,7 +123,7 @@ static void unstable_model_rejected(void **state)
     assert_int_not_equal(stat(tu_fmt("%s.out/subspace_00.exr", path), &st), 0);
     /* A valid model whose synthesis overflows (sigma near FLT_MAX): the
      * library's error comes prefixed with the model file. */
-    marked_model(marker, &data, &size);
+    marked_model(&marker, 1, &data, &size);
     bad = patch_model(data, size, marker, 0.25f, &bad_size);
     free(data);
     unsigned char *huge = patch_model(bad, bad_size, 0.0123457f, 3e38f, &size);
@@ -137,6 +139,53 @@ static void unstable_model_rejected(void **state)
     assert_true(strncmp(err, tu_fmt("btfcar synthesise: %s: ", path), strlen(path) + 21) == 0);
     assert_true(strchr(err, '\n') == err + strlen(err) - 1);
     free(err);
+}
+
+/* Slow growth (issue 29): 0:-1 of gamma 1.002, and 0.501, 0.501 on
+ * 0:-1,-1:0, grow too slowly for a 160 x 192 test field to see, but
+ * without bound in synthesis (1.002^2000 along a row). The reader refuses
+ * both, naming the file, the band and the recursion that grows; info says
+ * so in one line. */
+static void slowly_growing_model_rejected(void **state)
+{
+    (void)state;
+    static const struct {
+        int n;
+        float markers[2], bad[2];
+        const char *why;
+    } CASES[2] = {
+        {1, {0.3141592f}, {1.002f}, "its recursion along a row has a root"},
+        {2, {0.2718281f, 0.1414213f}, {0.501f, 0.501f}, "its rows do not decay"},
+    };
+    for (int k = 0; k < 2; k++) {
+        unsigned char *data, *bad, *bad2 = NULL;
+        size_t size, bad_size;
+        marked_model(CASES[k].markers, CASES[k].n, &data, &size);
+        bad = patch_model(data, size, CASES[k].markers[0], CASES[k].bad[0], &bad_size);
+        if (CASES[k].n > 1) {
+            bad2 = patch_model(bad, bad_size, CASES[k].markers[1], CASES[k].bad[1], &bad_size);
+            free(bad);
+            bad = bad2;
+        }
+        btf_error e = {0};
+        btf_model m;
+        assert_int_equal(btf_model_decode(bad, bad_size, "slow.btfcar", &m, &e), BTF_E_FORMAT);
+        print_message("%s\n", e.msg);
+        assert_non_null(strstr(e.msg, "slow.btfcar: subspace 0, band 1, level 1: the CAR "
+                                      "coefficients are unstable: "));
+        assert_non_null(strstr(e.msg, CASES[k].why));
+        char path[4096];
+        snprintf(path, sizeof path, "%s/slow%d.btfcar", tu_dir, k);
+        tu_write_file(path, bad, bad_size);
+        char *err = NULL;
+        assert_int_equal(tu_run(tu_fmt("%s info %s", tu_cli(), path), &err), 1);
+        assert_non_null(strstr(err, "subspace 0, band 1, level 1"));
+        assert_non_null(strstr(err, CASES[k].why));
+        assert_true(strchr(err, '\n') == err + strlen(err) - 1); /* one line */
+        free(err);
+        free(data);
+        free(bad);
+    }
 }
 
 /* Reading a model stays fast with the stability checks: a 20-subspace model
@@ -485,6 +534,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(unstable_model_rejected),
+        cmocka_unit_test(slowly_growing_model_rejected),
         cmocka_unit_test(stability_check_is_cheap),
         cmocka_unit_test(photostereo_multiview_manifest),
         cmocka_unit_test(numbers_are_strict),

@@ -223,9 +223,9 @@ static btf_status manifest_keep_view(manifest *m, const char *path, const btf_di
         if (k == nd)
             distinct[nd++] = m->views[i];
     }
-    int v;
+    int v = -1; /* left unset when no view is near want */
     btf_status rc = btf_ps_pick_view(distinct, nd, want, path, &v, err);
-    btf_dir d = distinct[v < 0 ? 0 : v];
+    btf_dir d = distinct[rc || v < 0 ? 0 : v];
     free(distinct);
     if (rc)
         return rc;

@@ -461,17 +461,7 @@ static void parent_of(const char *path, char *out, size_t n)
  * first, as long as they are empty. */
 static void undo_ancestors(const btf_output_dir *d)
 {
-    if (!d->created[0])
-        return;
-    char p[4096];
-    parent_of(d->dir, p, sizeof p);
-    size_t top = strlen(d->created);
-    while (strlen(p) >= top && rmdir(p) == 0) {
-        char *s = strrchr(p, '/');
-        if (!s || s == p)
-            break;
-        *s = '\0';
-    }
+    sig_rmdir_up(d->dir, strlen(d->created)); /* the signal handler's walk too */
 }
 
 /* An output folder given as a symlink to a folder is written into the

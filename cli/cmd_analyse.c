@@ -78,6 +78,7 @@ static int write_index_tsv(const btf_segmentation *s, const btf_dataset_info *in
     fprintf(f, "view\tlight\ttheta_v\tphi_v\ttheta_l\tphi_l\tsubspace\n");
     for (int v = 0; v < s->n_views; v++)
         for (int l = 0; l < s->n_lights; l++)
+            if (s->index[v * s->n_lights + l] != BTF_PAIR_NONE) /* a sparse set's pairs only */
             fprintf(f, "%d\t%d\t%g\t%g\t%g\t%g\t%d\n", v, l, in->views->dirs[v].theta,
                     in->views->dirs[v].phi, in->lights->dirs[l].theta, in->lights->dirs[l].phi,
                     s->index[v * s->n_lights + l]);
@@ -157,7 +158,7 @@ static int analyse_all(cli_ctx *c, const char *dataset, const char *out, btf_ana
     btf_model m;
     int rc = btf_analyse(ds, &ao, &m, &err);
     const btf_dataset_info *in = btf_dataset_get_info(ds);
-    double raw = (double)in->n_views * in->n_lights * in->width * in->height * 3.0;
+    double raw = (double)in->n_pairs * in->width * in->height * 3.0;
     btf_dataset_close(ds);
     if (rc)
         return cli_lib_error(c, &err);
@@ -256,7 +257,7 @@ static int analyse_rf(cli_ctx *c, const char *dataset, const char *out, btf_rf_o
                                so->width, so->height, w, h);
     }
     int rc = so->width ? btf_rf_fit_sampled(ds, &ro, so, &m, &err) : btf_rf_fit(ds, &ro, &m, &err);
-    double raw = (double)in->n_views * in->n_lights * in->width * in->height * 3.0;
+    double raw = (double)in->n_pairs * in->width * in->height * 3.0;
     btf_dataset_info shown = *in;
     btf_dataset_close(ds);
     if (rc)
@@ -511,7 +512,7 @@ int cmd_analyse(int argc, char **argv)
         return cli_lib_error(&c, &err);
     }
     if (!c.quiet) {
-        int n = in->n_views * in->n_lights;
+        int n = in->n_pairs;
         printf("segmentation: %s\n", seg.reason);
         printf("images        %d (%d views x %d lights), %.2f ms per image, %.1f s in all\n", n,
                in->n_views, in->n_lights, 1e3 * (t2 - t1) / n, t2 - t0);

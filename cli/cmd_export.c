@@ -39,7 +39,7 @@ static int export_all(cli_ctx *c, btf_dataset *ds, const char *dir)
         return cli_lib_error(c, &err);
     const char *tmp = btf_output_dir_path(od);
     btf_progress_fn progress = cli_progress_fn(c);
-    int n = in->n_views * in->n_lights, done = 0;
+    int n = in->n_pairs, done = 0;
     btf_dataset_iter it;
     btf_dataset_iter_begin(&it, ds);
     int rc;

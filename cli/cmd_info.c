@@ -74,8 +74,12 @@ static int dataset_text(const btf_dataset_info *in, int verify, const btf_ubo201
     cli_format_bytes(in->bytes_on_disk, bytes, sizeof bytes);
     printf("dataset     %s\n", in->root);
     printf("layout      %s\n", btf_layout_name(in->layout));
-    printf("images      %d (%d views x %d lights)\n", in->n_views * in->n_lights, in->n_views,
-           in->n_lights);
+    if (in->n_pairs < in->n_views * in->n_lights)
+        printf("images      %d: a sparse set of %d of the %d (%d views x %d lights) pairs\n",
+               in->n_pairs, in->n_pairs, in->n_views * in->n_lights, in->n_views, in->n_lights);
+    else
+        printf("images      %d (%d views x %d lights)\n", in->n_pairs, in->n_views,
+               in->n_lights);
     if (u)
         printf("image size  %d x %d, %d channels, reconstructed from the file\n", in->width,
                in->height, in->channels);
@@ -85,6 +89,9 @@ static int dataset_text(const btf_dataset_info *in, int verify, const btf_ubo201
     printf("views       %s\n", views);
     printf("lights      %s\n", lights);
     printf("on disk     %s\n", bytes);
+    if (in->near_field)
+        printf("near field  camera and light positions: each image is read with the light's "
+               "fall-off made its centre's, at its centre's directions\n");
     if (u)
         ubo_text(u);
     if (verify)
@@ -100,10 +107,12 @@ static int dataset_json(const btf_dataset_info *in, int verify, const btf_ubo201
     fputs(", \"layout\": ", f);
     cli_json_string(f, btf_layout_name(in->layout));
     fprintf(f, ",\n \"images\": %d, \"width\": %d, \"height\": %d, \"channels\": %d, "
-               "\"file_format\": \"%s\", \"bytes_on_disk\": %llu, \"verified\": %s,\n \"views\": ",
-            in->n_views * in->n_lights, in->width, in->height, in->channels,
+               "\"file_format\": \"%s\", \"bytes_on_disk\": %llu, \"verified\": %s,\n "
+               "\"sparse\": %s, \"near_field\": %s, \"views\": ",
+            in->n_pairs, in->width, in->height, in->channels,
             u ? "btf" : format_name(in->format), (unsigned long long)in->bytes_on_disk,
-            verify ? "true" : "false");
+            verify ? "true" : "false", in->n_pairs < in->n_views * in->n_lights ? "true" : "false",
+            in->near_field ? "true" : "false");
     cli_json_dirset(f, in->views);
     fputs(",\n \"lights\": ", f);
     cli_json_dirset(f, in->lights);

@@ -247,7 +247,11 @@ int cmd_report(int argc, char **argv)
         printf("compression   1 : %.0f (model %llu bytes, raw %llu bytes)\n", sum.ratio,
                (unsigned long long)sum.model_bytes, (unsigned long long)sum.raw_bytes);
         printf("quality       mean combined distance %.2f, worst %.2f over %d pairs\n",
-               sum.mean_combined, sum.worst_combined, sum.pairs);
+               sum.mean_combined, sum.worst_combined, sum.pairs - sum.held_out);
+        if (sum.held_out)
+            printf("held out      mean combined distance %.2f over %d pair%s the model did "
+                   "not measure\n", sum.mean_held_out, sum.held_out,
+                   sum.held_out == 1 ? "" : "s");
         if (rf)
             printf("pixel-wise    mean |dY| %.5f over every image (%.1f %% of the mean "
                    "luminance %.4f)\n", sum.mean_abs_error,

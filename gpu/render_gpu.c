@@ -110,10 +110,14 @@ static btf_status build_params(const btf_model *m, const btf_render_plan *p,
         return btf_fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
     size_t pairs = (size_t)m->views.count * (size_t)m->lights.count;
     int32_t *tmp = btf_alloc(pairs + 2 * (size_t)m->n_subspaces + 1, sizeof *tmp, err);
-    if (!tmp)
+    uint8_t *index = tmp ? btf_render_pair_index(m, err) : NULL; /* sparse sets filled */
+    if (!tmp || !index) {
+        free(tmp);
         return BTF_E_NOMEM;
+    }
     for (size_t i = 0; i < pairs; i++)
-        tmp[i] = m->index[i];
+        tmp[i] = index[i];
+    free(index);
     long idx = put_ints(pr, tmp, pairs);
     for (int k = 0; k < m->n_subspaces; k++)
         tmp[k] = 0, tmp[m->n_subspaces + k] = 0;

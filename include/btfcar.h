@@ -349,6 +349,14 @@ typedef struct btf_dataset_info {
     const btf_dirset *views;    /* view directions, in index order */
     const btf_dirset *lights;   /* light directions, in index order */
     uint64_t bytes_on_disk;     /* sum of all image file sizes */
+    int n_pairs;                /* the measured pairs: n_views * n_lights for a
+                                   full grid, fewer for a sparse set (a
+                                   manifest of any pairs; docs/datasets.md) */
+    int near_field;             /* 1: a manifest of camera and light positions
+                                   (docs/datasets.md, "Near-field captures"):
+                                   each image is read with the light's fall-off
+                                   made the centre's, and stands for the
+                                   directions from its centre */
 } btf_dataset_info;
 
 typedef struct btf_dataset_opts {
@@ -364,19 +372,25 @@ typedef struct btf_dataset_opts {
 btf_dataset_opts btf_dataset_defaults(void);
 
 /* Detects the layout of `path` (a folder, or a manifest .tsv file), collects
- * the (light, view) pairs and checks that the set is complete (every light
- * with every view, each pair once) and that every image has one size. */
+ * the (light, view) pairs and checks that each pair is there once and that
+ * every image has one size. A folder layout must hold the full grid (every
+ * light with every view); a manifest may list any set of pairs (a sparse
+ * set: info->n_pairs < n_views * n_lights, btf_dataset_has). */
 btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts,
                             btf_dataset **out, btf_error *err);
 void btf_dataset_close(btf_dataset *ds);
 const btf_dataset_info *btf_dataset_get_info(const btf_dataset *ds);
-/* The file holding (view, light); NULL when out of range. */
+/* 1 when the dataset holds an image of (view, light); 0 for a pair a sparse
+ * set does not hold, or one out of range. */
+int btf_dataset_has(const btf_dataset *ds, int view, int light);
+/* The file holding (view, light); NULL when out of range or not held. */
 const char *btf_dataset_path(const btf_dataset *ds, int view, int light);
 /* Decodes one image to linear float RGB (3 channels). */
 btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_image *out,
                             btf_error *err);
 
-/* Streaming: hands out one (light, view) image at a time, view-major. */
+/* Streaming: hands out one (light, view) image at a time, view-major; the
+ * pairs a sparse set does not hold are skipped. */
 typedef struct btf_sample {
     int view, light;       /* indices into info->views / info->lights */
     btf_dir view_dir, light_dir;
@@ -625,15 +639,24 @@ typedef struct btf_segment_opts {
                                  of the distortion left; 0: 0.12, < 0: off */
     btf_feature_opts features;
     btf_kmeans_opts kmeans;
+    /* btf_segment_features only: NULL (every pair measured), or
+     * [view * n_lights + light] non-zero for the pairs a sparse set holds;
+     * the others' feature rows are ignored and their index is
+     * BTF_PAIR_NONE. btf_segment sets it from the dataset. */
+    const unsigned char *present;
 } btf_segment_opts;
 /* The defaults: K auto, at most 20, threshold 0.10, split gain 0.12, and
  * the defaults of features and k-means. */
 btf_segment_opts btf_segment_defaults(void);
 
+/* The index table's entry of a pair that was not measured (a sparse set). */
+#define BTF_PAIR_NONE 255
+
 typedef struct btf_segmentation {
     int n_views, n_lights;
     int k;                    /* subspaces */
-    uint8_t *index;           /* [view * n_lights + light] -> subspace id */
+    uint8_t *index;           /* [view * n_lights + light] -> subspace id;
+                                 BTF_PAIR_NONE: a pair the set does not hold */
     int *rep_view, *rep_light;/* per subspace: its representative image */
     int *members;             /* per subspace: number of images */
     double distortion;        /* of the chosen clustering */
@@ -777,7 +800,9 @@ typedef struct btf_ps_result {
 btf_status btf_photostereo(const btf_ps_input *in, const btf_photostereo_opts *opts,
                            btf_ps_result *out, btf_error *err);
 /* The same on a BTF dataset: the images of the view closest to theta_v = 0
- * under all its lights (btf_dir_to_vec), read one at a time. */
+ * under all its lights (btf_dir_to_vec), read one at a time. In a sparse
+ * set only views with at least 3 lights count, and only the lights the set
+ * holds there are used; with no such view, BTF_E_DATA saying so. */
 btf_status btf_photostereo_dataset(const btf_dataset *ds, const btf_photostereo_opts *opts,
                                    btf_ps_result *out, btf_error *err);
 /* The same from a manifest: a TSV file with a header line naming its columns:
@@ -795,6 +820,9 @@ btf_status btf_photostereo_manifest(const char *path, const btf_photostereo_opts
  * theta_v, as btf_photostereo_dataset and btf_photostereo_manifest do).
  * out->view and out->view_dir say which (view: its index in the dataset, or
  * among the manifest's distinct views in the order of first appearance). */
+/* The most lights the dataset holds at any one view (photometric stereo
+ * needs 3). */
+int btf_photostereo_best_lights(const btf_dataset *ds);
 btf_status btf_photostereo_dataset_view(const btf_dataset *ds, const btf_dir *view,
                                         const btf_photostereo_opts *opts, btf_ps_result *out,
                                         btf_error *err);
@@ -1751,16 +1779,22 @@ btf_quality_opts btf_quality_defaults(void);
 
 typedef struct btf_pair_quality {
     int view, light;          /* dataset indices */
-    int subspace;             /* the model's index-table entry for the pair */
+    int subspace;             /* the model's index-table entry for the pair; -1
+                                 for a pair the model did not measure */
+    int held_out;             /* 1: the model did not measure the pair (left out
+                                 of its analysis): its render interpolates */
     btf_texture_distances d;  /* measured image (reference) against the flat render */
 } btf_pair_quality;
 
 typedef struct btf_quality {
     int n_pairs;
     btf_pair_quality *pairs;  /* view-major: by view index, then light index */
-    double mean_combined, median_combined, worst_combined;
+    double mean_combined, median_combined, worst_combined; /* over the pairs the
+                                 model measured (all, unless some are held out) */
     int worst;                /* index into pairs of the largest combined distance */
     double mean_spectrum, mean_first_order, mean_structure; /* normalised, over pairs */
+    int n_held_out;           /* pairs the model did not measure, measured apart */
+    double mean_held_out;     /* their mean combined distance (0 without) */
     int texture_size;         /* side of the synthesised tileable subspace images */
     double seconds;           /* the whole measurement */
 } btf_quality;
@@ -1919,6 +1953,8 @@ typedef struct btf_report_summary {
     double ratio;                /* raw_bytes / model_bytes */
     int pairs;                   /* measured */
     double mean_combined, worst_combined;
+    int held_out;                /* pairs the model did not measure */
+    double mean_held_out;        /* their mean combined distance */
     int sweep_points, sweep_resumed;
     double seconds;
     double mean_abs_error;       /* btf_rf_report_write only: mean |Y data - Y model| over
@@ -2058,6 +2094,9 @@ int btf_rf_param_count(int fit, int lobes);
  * opts->memory), converted to luminance Y = 0.2126 R + 0.7152 G + 0.0722 B,
  * and every texel fitted in parallel (the result does not depend on the
  * thread count). Dark, saturated and constant texels give finite fits. */
+/* BTF_E_DATA with the message when ds is a sparse set (the family fits
+ * every light at each view); BTF_OK for a full grid. */
+btf_status btf_rf_refuse_sparse(const btf_dataset *ds, btf_error *err);
 btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_model *out,
                       btf_error *err);
 

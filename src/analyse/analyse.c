@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include "car/car.h"
 #include "core/core.h"
+#include "io/io.h"
 #include "model/model.h"
 #include "model/range_code.h"
 
@@ -350,8 +351,9 @@ static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg
         rc = btf_pair_predict_views(m, tex_mean, normal, horizon, pp, err);
     else
         for (size_t i = 0; rc == BTF_OK && i < pairs; i++)
-            for (int c = 0; c < 3; c++)
-                pp[3 * i + c] = tex_mean[3 * (size_t)m->index[i] + c];
+            for (int c = 0; c < 3; c++) /* a pair not measured: 0, gain 1 */
+                pp[3 * i + c] = m->index[i] == BTF_PAIR_NONE ? 0.0
+                                                             : tex_mean[3 * (size_t)m->index[i] + c];
     const float *means = seg->means ? seg->means : o->means;
     if (rc == BTF_OK && !means && (rc = btf_dataset_means(ds, o->segment.features.threads,
                                                           &own, err)) == BTF_OK)
@@ -489,10 +491,18 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
         o.segment.features.progress = o.progress;
         o.segment.features.progress_user = o.progress_user;
     }
+    unsigned char *present = NULL; /* a sparse set's pairs (precomputed features) */
+    if (o.features && in->n_pairs < in->n_views * in->n_lights) {
+        if (btf_dataset_present(ds, &present, err))
+            return BTF_E_NOMEM;
+        o.segment.present = present;
+    }
     btf_segmentation seg;
     btf_status rc = o.features ? btf_segment_features(o.features, in->n_views, in->n_lights,
                                                       o.feature_dim, &o.segment, &seg, err)
                                : btf_segment(ds, &o.segment, &seg, err);
+    free(present);
+    o.segment.present = NULL;
     if (rc)
         return rc;
     rc = btf_dirset_copy(&out->views, in->views, err);
@@ -507,7 +517,11 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
             rc = BTF_E_NOMEM;
     }
     double spread = -1.0; /* the colour layer's measure; -1: not measured */
-    if (rc == 0 && !o.no_range)
+    /* A sparse set may hold no view with the 3 lights photometric stereo
+     * needs (a flash capture: one light per view): the model then has no
+     * range map, and says why (docs/datasets.md, "Sparse pair sets"). */
+    int no_ps = !o.no_range && !o.range_from && btf_photostereo_best_lights(ds) < 3;
+    if (rc == 0 && !o.no_range && !no_ps)
         rc = stage_range(ds, &o, out, &spread, err);
     if (rc == 0)
         rc = stage_fit(ds, &seg, &o, out, err);
@@ -518,6 +532,10 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
         snprintf(o.report->segment_reason, sizeof o.report->segment_reason, "%s", seg.reason);
         structure_reason(out, &o, spread, o.report->structure_reason,
                          sizeof o.report->structure_reason);
+        if (no_ps)
+            snprintf(o.report->structure_reason, sizeof o.report->structure_reason,
+                     "no range map: photometric stereo needs one view with at least 3 lights, "
+                     "and the set holds at most %d at any view", btf_photostereo_best_lights(ds));
     }
     btf_segmentation_free(&seg);
     if (rc)

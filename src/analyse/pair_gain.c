@@ -112,6 +112,11 @@ btf_status btf_pair_predict_views(const btf_model *m, const double *tex_mean,
                 total[c] += w[3 * t + c];
         for (int l = 0; l < L; l++) {
             size_t pair = (size_t)v * L + l;
+            if (m->index[pair] == BTF_PAIR_NONE) { /* not measured: gain 1 */
+                for (int c = 0; c < 3; c++)
+                    pred[3 * pair + c] = 0.0;
+                continue;
+            }
             int k = m->index[pair], own = m->subspaces[k].light;
             double lk[3] = {0, 0, 1}, dot[3] = {0, 0, 0};
             if (own >= 0 && own < L)

@@ -27,7 +27,9 @@ struct btf_dataset {
     btf_dirset views, lights;
     char root[BTF_DATASET_PATH_MAX];
     btf_dataset_entries files; /* owns the path strings */
-    char **paths;     /* [view * n_lights + light], pointers into files */
+    char **paths;     /* [view * n_lights + light], pointers into files; NULL
+                         where a sparse set has no image of the pair */
+    const btf_near_field **near; /* [pair]: a near-field image's geometry, or NULL */
     uint64_t max_pixels; /* btf_dataset_opts.max_pixels */
     ubo_open_file *ubo;  /* layout UBO2014: the mapped file */
 };
@@ -91,14 +93,29 @@ static btf_status build_table(btf_dataset *ds, const btf_dataset_entries *l, btf
                             pair, *slot);
         }
         *slot = e->path;
+        if (e->near.on) {
+            if (!ds->near && !(ds->near = btf_calloc((size_t)nv * nl, sizeof *ds->near, err)))
+                return BTF_E_NOMEM;
+            ds->near[(size_t)vi * nl + li] = &e->near;
+            ds->info.near_field = 1;
+        }
     }
+    ds->info.n_pairs = l->count;
+    if (l->count == nv * nl)
+        return BTF_OK;
+    /* A manifest may list any set of pairs (docs/datasets.md, "Sparse pair
+     * sets"); the folder layouts name a full grid, where a missing file is
+     * a broken copy. */
+    if (ds->files.layout == BTF_LAYOUT_MANIFEST)
+        return BTF_OK;
     for (int vi = 0; vi < nv; vi++)
         for (int li = 0; li < nl; li++)
             if (!ds->paths[(size_t)vi * nl + li]) {
                 char name[BTF_DATASET_PATH_MAX], pair[160];
                 expected_name(ds, vi, li, name, sizeof name);
                 describe_pair(pair, sizeof pair, ds->lights.dirs[li], ds->views.dirs[vi]);
-                return btf_fail(err, BTF_E_DATA, "%s: missing image for %s (%d of %d pairs present)",
+                return btf_fail(err, BTF_E_DATA, "%s: missing image for %s (%d of %d pairs present; "
+                                "a manifest may list any set of pairs)",
                                 name, pair, l->count, nv * nl);
             }
     return BTF_OK;
@@ -109,20 +126,24 @@ static btf_status probe_files(btf_dataset *ds, const btf_dataset_opts *o, btf_er
 {
     int n = ds->info.n_views * ds->info.n_lights;
     btf_image_header first = {0};
+    const char *first_path = NULL;
     for (int i = 0; i < n; i++) {
         btf_image_header h;
         const char *p = ds->paths[i];
-        if (i == 0 || !o->skip_verify) {
+        if (!p)
+            continue; /* a pair a sparse set does not hold */
+        if (!first_path || !o->skip_verify) {
             btf_status rc = btf_image_probe(p, &h, err);
             if (!rc)
                 rc = btf_check_pixels(p, h.width, h.height, o->max_pixels, err);
             if (rc)
                 return rc;
-            if (i == 0) {
+            if (!first_path) {
                 first = h;
+                first_path = p;
             } else if (h.width != first.width || h.height != first.height) {
                 return btf_fail(err, BTF_E_DATA, "%s: size %dx%d differs from %dx%d of %s", p,
-                                h.width, h.height, first.width, first.height, ds->paths[0]);
+                                h.width, h.height, first.width, first.height, first_path);
             }
             ds->info.bytes_on_disk += h.file_bytes;
         } else {
@@ -149,6 +170,7 @@ void btf_dataset_close(btf_dataset *ds)
     btf_dirset_free(&ds->views);
     btf_dirset_free(&ds->lights);
     free(ds->paths);
+    free(ds->near);
     ubo_close(ds->ubo);
     free(ds);
 }
@@ -177,6 +199,7 @@ static btf_status open_ubo(btf_dataset *ds, const btf_dataset_opts *o, btf_error
     ds->info.channels = 3;
     ds->info.format = BTF_FILE_UNKNOWN;
     ds->info.bytes_on_disk = ds->ubo->f.size;
+    ds->info.n_pairs = ds->views.count * ds->lights.count;
     return BTF_OK;
 }
 
@@ -242,6 +265,23 @@ const btf_dataset_info *btf_dataset_get_info(const btf_dataset *ds)
     return &ds->info;
 }
 
+btf_status btf_dataset_present(const btf_dataset *ds, unsigned char **present, btf_error *err)
+{
+    int nv = ds->info.n_views, nl = ds->info.n_lights;
+    *present = btf_alloc((size_t)(nv * nl > 0 ? nv * nl : 1), 1, err);
+    if (!*present)
+        return BTF_E_NOMEM;
+    for (int v = 0; v < nv; v++)
+        for (int l = 0; l < nl; l++)
+            (*present)[(size_t)v * nl + l] = (unsigned char)btf_dataset_has(ds, v, l);
+    return BTF_OK;
+}
+
+int btf_dataset_has(const btf_dataset *ds, int view, int light)
+{
+    return btf_dataset_path(ds, view, light) != NULL;
+}
+
 const char *btf_dataset_path(const btf_dataset *ds, int view, int light)
 {
     if (view < 0 || light < 0 || view >= ds->info.n_views || light >= ds->info.n_lights)
@@ -255,6 +295,10 @@ btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_imag
                             btf_error *err)
 {
     const char *p = btf_dataset_path(ds, view, light);
+    if (!p && view >= 0 && light >= 0 && view < ds->info.n_views && light < ds->info.n_lights)
+        return btf_fail(err, BTF_E_ARG, "%s: no image of (view %d, light %d): the set holds %d "
+                        "of its %d x %d pairs", ds->root, view, light, ds->info.n_pairs,
+                        ds->info.n_views, ds->info.n_lights);
     if (!p)
         return btf_fail(err, BTF_E_ARG, "%s: no (view %d, light %d) in a %d x %d dataset", ds->root,
                         view, light, ds->info.n_views, ds->info.n_lights);
@@ -274,6 +318,8 @@ btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_imag
                       out->width, out->height, ds->info.width, ds->info.height);
         btf_image_free(out);
     }
+    if (rc == BTF_OK && ds->near && ds->near[(size_t)view * ds->info.n_lights + light])
+        btf_near_field_correct(ds->near[(size_t)view * ds->info.n_lights + light], out);
     return rc;
 }
 
@@ -307,6 +353,9 @@ int btf_dataset_iter_next(btf_dataset_iter *it, btf_error *err)
 {
     const btf_dataset *ds = it->ds;
     int n = ds->info.n_views * ds->info.n_lights;
+    while (it->next < n && !btf_dataset_has(ds, it->next / ds->info.n_lights,
+                                            it->next % ds->info.n_lights))
+        it->next++; /* a pair a sparse set does not hold */
     if (it->next >= n) {
         btf_image_free(&it->sample.image);
         return 0;
@@ -334,10 +383,11 @@ btf_status btf_dataset_verify_pixels(const btf_dataset *ds, btf_progress_fn prog
 {
     btf_dataset_iter it;
     btf_dataset_iter_begin(&it, ds);
-    int n = ds->info.n_views * ds->info.n_lights, rc;
+    int n = ds->info.n_pairs, rc, done = 0;
     while ((rc = btf_dataset_iter_next(&it, err)) == 1) {
-        if (progress && (it.next % 64 == 0 || it.next == n))
-            progress(user, (double)it.next / n, "decoding images");
+        done++;
+        if (progress && (done % 64 == 0 || done == n))
+            progress(user, (double)done / n, "decoding images");
     }
     btf_dataset_iter_end(&it);
     return rc < 0 ? (btf_status)rc : BTF_OK;

@@ -57,7 +57,7 @@ static btf_status entries_add(btf_dataset_entries *l, const char *path, btf_dir 
     char *p = strdup(path);
     if (!p)
         return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
-    l->items[l->count++] = (btf_dataset_entry){p, light, view};
+    l->items[l->count++] = (btf_dataset_entry){p, light, view, {0}};
     return BTF_OK;
 }
 
@@ -179,6 +179,42 @@ static btf_status no_duplicate_paths(const btf_dataset_entries *l, const btf_tsv
     return rc;
 }
 
+/* The columns of a near-field manifest (docs/datasets.md). */
+static const char *const NEAR_COLS[9] = {"path",    "cam_x",   "cam_y",  "cam_z", "light_x",
+                                         "light_y", "light_z", "size_x", "size_y"};
+
+/* Row r of a near-field manifest: positions and size, checked, into *nf. */
+static btf_status near_row(const btf_tsv *t, const char *path, int r, const int *c,
+                           btf_near_field *nf, btf_error *err)
+{
+    double v[8];
+    for (int i = 0; i < 8; i++) {
+        btf_status rc = btf_tsv_number(t, path, r, c[i + 1], &v[i], err);
+        if (rc)
+            return rc;
+    }
+    int line = t->line_no[r];
+    if (!(v[2] > 0.0))
+        return btf_fail(err, BTF_E_DATA, "%s:%d: camera below the surface (cam_z %g; expected > 0, "
+                        "z along the surface normal towards the camera)", path, line, v[2]);
+    if (!(v[5] > 0.0))
+        return btf_fail(err, BTF_E_DATA, "%s:%d: light below the surface (light_z %g; expected > 0)",
+                        path, line, v[5]);
+    if (!(v[6] > 0.0) || !(v[7] > 0.0))
+        return btf_fail(err, BTF_E_DATA, "%s:%d: image size %g x %g (expected both > 0: the "
+                        "sample's width and height the image covers, in the positions' unit)",
+                        path, line, v[6], v[7]);
+    *nf = (btf_near_field){.on = 1, .camera = {v[0], v[1], v[2]}, .light = {v[3], v[4], v[5]},
+                           .size_x = v[6], .size_y = v[7]};
+    double spread = btf_near_field_spread(nf);
+    if (!(spread <= BTF_NEAR_FIELD_MAX_SPREAD))
+        return btf_fail(err, BTF_E_DATA, "%s:%d: the directions change by %.1f degrees across the "
+                        "image (at most %g: one image is one (view, light) pair after the "
+                        "fall-off correction); crop it to a smaller patch", path, line, spread,
+                        BTF_NEAR_FIELD_MAX_SPREAD);
+    return BTF_OK;
+}
+
 static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_error *err)
 {
     btf_tsv t;
@@ -186,14 +222,28 @@ static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_er
     if (rc)
         return rc;
     static const char *cols[5] = {"path", "theta_l", "phi_l", "theta_v", "phi_v"};
-    int c[5];
-    for (int i = 0; i < 5; i++)
-        if ((c[i] = btf_tsv_column(&t, cols[i])) < 0) {
+    /* Positions (a near-field capture) when the header names cam_x. */
+    int near = btf_tsv_column(&t, "cam_x") >= 0;
+    int c[9];
+    for (int i = 0; i < (near ? 9 : 5); i++)
+        if ((c[i] = btf_tsv_column(&t, near ? NEAR_COLS[i] : cols[i])) < 0) {
             btf_tsv_free(&t);
+            if (near)
+                return btf_fail(err, BTF_E_FORMAT,
+                                "%s: near-field manifest header lacks the column '%s' (expected: "
+                                "path cam_x cam_y cam_z light_x light_y light_z size_x size_y, "
+                                "tab-separated)", path, NEAR_COLS[i]);
             return btf_fail(err, BTF_E_FORMAT,
                             "%s: manifest header lacks the column '%s' (expected: path theta_l "
-                            "phi_l theta_v phi_v, tab-separated)", path, cols[i]);
+                            "phi_l theta_v phi_v, tab-separated; or, for a near-field capture, "
+                            "path cam_x cam_y cam_z light_x light_y light_z size_x size_y)",
+                            path, cols[i]);
         }
+    if (near && btf_tsv_column(&t, "theta_l") >= 0) {
+        btf_tsv_free(&t);
+        return btf_fail(err, BTF_E_FORMAT, "%s: manifest gives both directions (theta_l ...) and "
+                        "positions (cam_x ...); give one of the two", path);
+    }
     char base[BTF_DATASET_PATH_MAX];
     snprintf(base, sizeof base, "%s", path);
     char *slash = strrchr(base, '/');
@@ -204,7 +254,15 @@ static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_er
     l->layout = BTF_LAYOUT_MANIFEST;
     for (int r = 0; rc == BTF_OK && r < t.nrows; r++) {
         double v[4];
-        for (int i = 0; rc == BTF_OK && i < 4; i++)
+        btf_near_field nf = {0};
+        if (near) {
+            rc = near_row(&t, path, r, c, &nf, err);
+            if (rc == BTF_OK) {
+                btf_dir L = btf_near_field_dir(nf.light), V = btf_near_field_dir(nf.camera);
+                v[0] = L.theta, v[1] = L.phi, v[2] = V.theta, v[3] = V.phi;
+            }
+        }
+        for (int i = 0; !near && rc == BTF_OK && i < 4; i++)
             rc = btf_tsv_number(&t, path, r, c[i + 1], &v[i], err);
         if (rc)
             break;
@@ -218,6 +276,8 @@ static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_er
             rc = btf_fail(err, BTF_E_DATA, "%s:%d: theta outside [0, 90]", path, t.line_no[r]);
         if (rc == BTF_OK)
             rc = entries_add(l, full, (btf_dir){v[0], v[1]}, (btf_dir){v[2], v[3]}, err);
+        if (rc == BTF_OK)
+            l->items[l->count - 1].near = nf;
     }
     if (rc == BTF_OK && t.nrows == 0)
         rc = btf_fail(err, BTF_E_DATA, "%s: manifest lists no images", path);

@@ -81,13 +81,31 @@ btf_status btf_exr_read(const char *path, int channels, btf_image *out, btf_erro
 btf_status btf_dataset_read_into(const btf_dataset *ds, int view, int light, btf_image *img,
                                  btf_error *err);
 
+/* The measured pairs of a dataset as *present: [view * n_lights + light]
+ * 1 when the set holds the pair (io/dataset.c); freed by the caller. */
+btf_status btf_dataset_present(const btf_dataset *ds, unsigned char **present, btf_error *err);
+
 /* Dataset layouts (io/dataset_scan.c): the image files of a dataset folder
  * (UBO2003 or UTIA names) or manifest as entries, from the names alone;
  * io/dataset.c makes the (view, light) table of them. */
 #define BTF_DATASET_PATH_MAX 4096
+/* The most a near-field image's view or light direction may change across
+ * it (degrees; docs/datasets.md, "Near-field captures"). */
+#define BTF_NEAR_FIELD_MAX_SPREAD 15.0
+/* A near-field capture (docs/datasets.md, "Near-field captures"): the
+ * camera and the point light at known positions above the sample, the
+ * image covering size_x x size_y around the origin of their frame (x to
+ * the image's right, y to its top, z the surface normal; one unit, e.g.
+ * cm). The entry's directions are those from the image's centre. */
+typedef struct btf_near_field {
+    int on;
+    double camera[3], light[3];
+    double size_x, size_y;
+} btf_near_field;
 typedef struct btf_dataset_entry {
     char *path;
     btf_dir light, view;
+    btf_near_field near; /* on 0: directions hold for every pixel */
 } btf_dataset_entry;
 typedef struct btf_dataset_entries {
     btf_dataset_entry *items;
@@ -96,6 +114,18 @@ typedef struct btf_dataset_entries {
     int flat;        /* UBO2003 files in one folder (no tvCCC_pvDDD/) */
     char ext[8];     /* the first file's extension, for messages */
 } btf_dataset_entries;
+
+/* A near-field image's per-pixel correction (io/near_field.c): every pixel
+ * multiplied by the light's irradiance at the image centre over its own,
+ * (|L - P| / |L|)^3 for a point light L over the surface point P (inverse
+ * square and cosine), so that the image is lit as its centre is. */
+void btf_near_field_correct(const btf_near_field *nf, btf_image *img);
+/* The largest angle (degrees) between the centre's view or light direction
+ * and a corner's. */
+double btf_near_field_spread(const btf_near_field *nf);
+/* Directions from the image centre to a position (x, y, z > 0). */
+btf_dir btf_near_field_dir(const double *pos);
+
 /* Every entry of the dataset at path: a folder is scanned, a file is read as
  * a manifest. A folder without any image of a known layout is BTF_E_FORMAT.
  * Free l (also on failure) with btf_dataset_entries_free. */

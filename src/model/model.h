@@ -12,7 +12,8 @@
 
 /* Limits (docs/model-format.md, "Validation"). */
 #define BTF_MODEL_MAX_DIRS 4096
-#define BTF_MODEL_MAX_SUBSPACES 256 /* the index table stores uint8 ids */
+#define BTF_MODEL_MAX_SUBSPACES 255 /* the index table stores uint8 ids; 255 is
+                                       BTF_PAIR_NONE (a pair not measured) */
 #define BTF_MODEL_MAX_IMAGE_SIDE (1 << 20)
 #define BTF_MODEL_MAX_RANGE_SIDE 65535
 #define BTF_MODEL_MAX_RANGE_SAMPLES (1L << 24)

@@ -452,13 +452,21 @@ btf_status btf_model_validate(const btf_model *m, const char *name, btf_status c
         if (!m->index)
             return failf(err, code, name, "no index table (expected %d x %d entries)",
                          m->views.count, m->lights.count);
-        size_t n = (size_t)m->views.count * m->lights.count;
-        for (size_t i = 0; i < n; i++)
+        size_t n = (size_t)m->views.count * m->lights.count, measured = 0;
+        for (size_t i = 0; i < n; i++) {
+            if (m->index[i] == BTF_PAIR_NONE)
+                continue; /* a pair a sparse set did not measure */
+            measured++;
             if (m->index[i] >= m->n_subspaces)
                 return failf(err, code, name,
-                             "index table: (view %zu, light %zu) -> subspace %u (expected < %d)",
+                             "index table: (view %zu, light %zu) -> subspace %u (expected < %d, "
+                             "or %d: not measured)",
                              i / (size_t)m->lights.count, i % (size_t)m->lights.count,
-                             m->index[i], m->n_subspaces);
+                             m->index[i], m->n_subspaces, BTF_PAIR_NONE);
+        }
+        if (measured == 0)
+            return failf(err, code, name, "index table: no measured pair (every entry is %d)",
+                         BTF_PAIR_NONE);
     } else if (m->index) {
         return failf(err, code, name, "an index table without directions (expected none)");
     }

@@ -52,6 +52,10 @@ static const unsigned char SIGNATURE[SIG_LEN] = {0x89, 'B', 'T', 'F', 'C', 'A',
  * shading casts shadows; the colour layer follows); a model without either is written as 1.4 or
  * older. */
 #define FMT_MINOR_GAINS 5
+/* 1.6 lets INDX hold 255 (BTF_PAIR_NONE): a pair a sparse set did not
+ * measure. Only such a model is written as 1.6; an older reader refuses
+ * it (an index beyond the subspaces), never misreads it. */
+#define FMT_MINOR_SPARSE 6
 #define HEADER_BYTES 26 /* signature .. stored size, version 1.0 */
 #define RANG_PERIODIC 0x01u /* RANG flags bit 0: the tile is periodic */
 #define STRC_SHADOWS 0x01u  /* STRC flags bit 0 (1.5): the shading casts shadows */
@@ -356,6 +360,16 @@ static void put_marginals(wbuf *b, const btf_model *m)
     w_section_end(b, body);
 }
 
+/* Whether the index table marks a pair not measured (format 1.6). */
+static int has_unmeasured(const btf_model *m)
+{
+    size_t n = m->index ? (size_t)m->views.count * (size_t)m->lights.count : 0;
+    for (size_t i = 0; i < n; i++)
+        if (m->index[i] == BTF_PAIR_NONE)
+            return 1;
+    return 0;
+}
+
 static int has_lab(const btf_model *m)
 {
     for (int s = 0; s < m->n_subspaces; s++)
@@ -589,7 +603,8 @@ static btf_status encode_named(const btf_model *m, const char *name, unsigned ch
         rc = failf(err, BTF_E_DATA, name, "model of %zu bytes (expected at most %zu)", pl.n,
                    MAX_PAYLOAD_BYTES);
     if (rc == BTF_OK)
-        rc = wrap_payload(&pl, m->gain || m->shadows || m->chroma ? FMT_MINOR_GAINS
+        rc = wrap_payload(&pl, has_unmeasured(m)                  ? FMT_MINOR_SPARSE
+                               : m->gain || m->shadows || m->chroma ? FMT_MINOR_GAINS
                                : m->albedo        ? FMT_MINOR_STRUCTURE
                                : has_lab(m)       ? FMT_MINOR_LAB
                                : has_marginals(m) ? FMT_MINOR_MARGINALS

@@ -298,6 +298,52 @@ btf_status btf_photostereo(const btf_ps_input *in, const btf_photostereo_opts *o
     return rc;
 }
 
+int btf_photostereo_best_lights(const btf_dataset *ds)
+{
+    const btf_dataset_info *info = btf_dataset_get_info(ds);
+    int best = 0;
+    for (int v = 0; v < info->n_views; v++) {
+        int n = 0;
+        for (int l = 0; l < info->n_lights; l++)
+            n += btf_dataset_has(ds, v, l);
+        best = n > best ? n : best;
+    }
+    return best;
+}
+
+/* The view photometric stereo works on: the one asked for, else the one
+ * closest to the normal (its images are then nearly orthographic and
+ * unshifted by parallax), among the views at which the set holds at least
+ * 3 lights (all of them in a full grid). */
+static btf_status ps_usable_view(const btf_dataset *ds, const btf_dir *want, int *view,
+                                 btf_error *err)
+{
+    const btf_dataset_info *info = btf_dataset_get_info(ds);
+    btf_dir *dirs = btf_alloc((size_t)info->n_views, sizeof *dirs, err);
+    int *which = btf_alloc((size_t)info->n_views, sizeof *which, err);
+    btf_status rc = dirs && which ? BTF_OK : BTF_E_NOMEM;
+    int n = 0;
+    for (int v = 0; rc == BTF_OK && v < info->n_views; v++) {
+        int lights = 0;
+        for (int l = 0; l < info->n_lights; l++)
+            lights += btf_dataset_has(ds, v, l);
+        if (lights >= 3) {
+            dirs[n] = info->views->dirs[v];
+            which[n++] = v;
+        }
+    }
+    if (rc == BTF_OK && n == 0)
+        rc = btf_fail(err, BTF_E_DATA, "%s: photometric stereo needs one view with at least 3 "
+                      "lights; the set holds at most %d at any view", info->root,
+                      btf_photostereo_best_lights(ds));
+    int pick = 0;
+    if (rc == BTF_OK && (rc = btf_ps_pick_view(dirs, n, want, info->root, &pick, err)) == BTF_OK)
+        *view = which[pick];
+    free(dirs);
+    free(which);
+    return rc;
+}
+
 btf_status btf_photostereo_dataset(const btf_dataset *ds, const btf_photostereo_opts *opts,
                                    btf_ps_result *out, btf_error *err)
 {
@@ -317,31 +363,35 @@ btf_status btf_photostereo_dataset_view(const btf_dataset *ds, const btf_dir *wa
     if (opts)
         o = *opts;
     const btf_dataset_info *info = btf_dataset_get_info(ds);
-    /* The view asked for, else the one closest to the normal: the images
-     * are then (nearly) orthographic and unshifted by parallax. */
-    int view = 0;
-    if ((rc = btf_ps_pick_view(info->views->dirs, info->n_views, want, info->root, &view, err)))
+    int view = 0, nl = info->n_lights;
+    if ((rc = ps_usable_view(ds, want, &view, err)))
         return rc;
-    int n = info->n_lights;
-    double *lights = btf_alloc((size_t)n * 3, sizeof(double), err);
-    const char **paths = btf_alloc((size_t)n, sizeof(char *), err);
-    if (!lights || !paths) {
+    double *lights = btf_alloc((size_t)nl * 3, sizeof(double), err);
+    const char **paths = btf_alloc((size_t)nl, sizeof(char *), err);
+    int *light_of = btf_alloc((size_t)nl, sizeof(int), err);
+    if (!lights || !paths || !light_of) {
         free(lights);
         free(paths);
+        free(light_of);
         return BTF_E_NOMEM;
     }
-    for (int i = 0; i < n; i++) {
-        btf_dir_to_vec(info->lights->dirs[i], lights + 3 * i);
-        paths[i] = btf_dataset_path(ds, view, i);
+    int n = 0; /* the lights the set holds at this view (all of a full grid) */
+    for (int i = 0; i < nl; i++) {
+        if (!btf_dataset_has(ds, view, i))
+            continue;
+        btf_dir_to_vec(info->lights->dirs[i], lights + 3 * n);
+        paths[n] = btf_dataset_path(ds, view, i);
+        light_of[n++] = i;
     }
     btf_ps_source src = {.name = info->root, .count = n, .paths = paths, .read = o.read,
                          .width = info->width, .height = info->height, .channels = 3,
-                         .ds = ds, .view = view};
+                         .ds = ds, .view = view, .light_of = light_of};
     rc = btf_ps_run(&src, lights, NULL, &o, out, err);
     out->view = view;
     out->view_dir = info->views->dirs[view];
     free(lights);
     free(paths);
+    free(light_of);
     if (rc)
         btf_ps_result_free(out);
     return rc;

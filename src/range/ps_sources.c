@@ -34,7 +34,8 @@ btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
     ro.channels = 3; /* the fit's grey value and the albedo need the colour */
     btf_status rc;
     if (src->ds) { /* a .btf file's image goes into tmp's buffer when it has one */
-        rc = btf_dataset_read_into(src->ds, src->view, i, tmp, err);
+        rc = btf_dataset_read_into(src->ds, src->view, src->light_of ? src->light_of[i] : i,
+                                   tmp, err);
     } else {
         btf_image_free(tmp);
         rc = btf_image_read(src->paths[i], &ro, tmp, err);

@@ -140,6 +140,8 @@ typedef struct btf_ps_source {
     const btf_dataset *ds;     /* or a dataset's images of one view (a .btf file
                                   has no file per image): read with btf_dataset_read */
     int view;
+    const int *light_of;       /* with ds: image i is light light_of[i] (a sparse
+                                  set's lights at that view); NULL: light i */
     btf_read_opts read;
     int width, height, channels; /* 0 x 0 for files until btf_ps_source_probe */
 } btf_ps_source;

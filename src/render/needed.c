@@ -90,6 +90,7 @@ btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf
         return btf_fail(err, BTF_E_ARG, "needed subspaces: missing G-buffer or lights");
     needed_walk w = {m, g, NULL, NULL};
     btf_hemisphere *views = NULL, *lts = NULL;
+    uint8_t *pair_index = NULL;
     w.ctx = btf_alloc(1, sizeof *w.ctx, err);
     if (!w.ctx)
         return BTF_E_NOMEM;
@@ -100,7 +101,11 @@ btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf
         goto done;
     btf_hemisphere_get_table(views, &w.ctx->views);
     btf_hemisphere_get_table(lts, &w.ctx->lights);
-    w.ctx->index = m->index;
+    if (!(pair_index = btf_render_pair_index(m, err))) {
+        rc = BTF_E_NOMEM;
+        goto done;
+    }
+    w.ctx->index = pair_index;
     w.ctx->n_lights_set = m->lights.count;
     w.rows_needed = btf_alloc((size_t)(g->height > 0 ? g->height : 1),
                               (size_t)m->n_subspaces, err);
@@ -121,6 +126,7 @@ btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf
     if (count)
         *count = n;
 done:
+    free(pair_index);
     free(w.rows_needed);
     free(w.ctx);
     btf_hemisphere_free(views);

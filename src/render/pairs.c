@@ -6,6 +6,8 @@
 #include "core/core.h"
 #include "model/model.h"
 
+#include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 btf_status btf_render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, int n_lights,
@@ -54,14 +56,80 @@ float btf_render_ambient(const btf_model *m)
     return m->albedo ? (isfinite(m->ambient) && m->ambient > 0.0f ? m->ambient : 0.0f) : -1.0f;
 }
 
+/* The measured pair nearest to pair p in the space of pairs (Haindl &
+ * Filip 2007, section III: the Euclidean distance of the unit direction
+ * vectors, here of views and lights together); ties: the lowest pair. */
+static size_t nearest_measured(const btf_model *m, const double *vv, const double *lv, size_t p)
+{
+    size_t L = (size_t)m->lights.count, n = (size_t)m->views.count * L, best = p;
+    double best_d = INFINITY;
+    const double *a = vv + 3 * (p / L), *b = lv + 3 * (p % L);
+    for (size_t q = 0; q < n; q++) {
+        if (m->index[q] == BTF_PAIR_NONE)
+            continue;
+        const double *c = vv + 3 * (q / L), *e = lv + 3 * (q % L);
+        double d = 0.0;
+        for (int k = 0; k < 3; k++)
+            d += (a[k] - c[k]) * (a[k] - c[k]) + (b[k] - e[k]) * (b[k] - e[k]);
+        if (d < best_d) {
+            best_d = d;
+            best = q;
+        }
+    }
+    return best;
+}
+
+/* For every pair of the grid the pair whose image and gain stand for it:
+ * itself when measured; in a sparse set (docs/render.md, "Sparse pair
+ * sets") the nearest measured pair. */
+static btf_status pair_sources(const btf_model *m, size_t **out, btf_error *err)
+{
+    size_t n = (size_t)m->views.count * (size_t)m->lights.count;
+    size_t *src = btf_alloc(n ? n : 1, sizeof *src, err);
+    double *vv = btf_alloc((size_t)m->views.count + m->lights.count + 1, 3 * sizeof(double), err);
+    if (!src || !vv) {
+        free(src);
+        free(vv);
+        return BTF_E_NOMEM;
+    }
+    double *lv = vv + 3 * (size_t)m->views.count;
+    for (int i = 0; i < m->views.count; i++)
+        btf_dir_to_vec(m->views.dirs[i], vv + 3 * i);
+    for (int i = 0; i < m->lights.count; i++)
+        btf_dir_to_vec(m->lights.dirs[i], lv + 3 * i);
+    for (size_t p = 0; p < n; p++)
+        src[p] = m->index && m->index[p] == BTF_PAIR_NONE ? nearest_measured(m, vv, lv, p) : p;
+    free(vv);
+    *out = src;
+    return BTF_OK;
+}
+
+uint8_t *btf_render_pair_index(const btf_model *m, btf_error *err)
+{
+    size_t n = (size_t)m->views.count * (size_t)m->lights.count, *src = NULL;
+    uint8_t *idx = btf_alloc(n ? n : 1, 1, err);
+    if (!idx || pair_sources(m, &src, err)) {
+        free(idx);
+        return NULL;
+    }
+    for (size_t p = 0; p < n; p++)
+        idx[p] = m->index ? m->index[src[p]] : 0;
+    free(src);
+    return idx;
+}
+
 float *btf_render_gains(const btf_model *m, btf_error *err)
 {
-    size_t n = (size_t)m->views.count * (size_t)m->lights.count * 3;
-    float *g = btf_alloc(n ? n : 1, sizeof(float), err);
-    if (!g)
+    size_t n = (size_t)m->views.count * (size_t)m->lights.count, *src = NULL;
+    float *g = btf_alloc(n ? 3 * n : 1, sizeof(float), err);
+    if (!g || pair_sources(m, &src, err)) {
+        free(g);
         return NULL;
-    for (size_t i = 0; i < n; i++)
-        g[i] = m->gain ? m->gain[i] : 1.0f;
+    }
+    for (size_t p = 0; p < n; p++)
+        for (int c = 0; c < 3; c++)
+            g[3 * p + c] = m->gain ? m->gain[3 * src[p] + c] : 1.0f;
+    free(src);
     return g;
 }
 

@@ -83,12 +83,11 @@ static btf_status build_tables(const btf_model *m, btf_render_material *rm, btf_
     rm->n_views = m->views.count;
     rm->n_lights = m->lights.count;
     rm->n_subspaces = m->n_subspaces;
-    rm->index = btf_alloc(pairs, 1, err);
+    rm->index = btf_render_pair_index(m, err);
     rm->tex = btf_alloc((size_t)m->n_subspaces, sizeof *rm->tex, err);
     rm->gain = btf_render_gains(m, err);
     if (!rm->index || !rm->tex || !rm->gain)
         return BTF_E_NOMEM;
-    memcpy(rm->index, m->index, pairs);
     memset(rm->tex, 0, (size_t)m->n_subspaces * sizeof *rm->tex);
     for (size_t i = 0; i < pairs; i++)
         if (rm->index[i] >= m->n_subspaces)

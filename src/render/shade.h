@@ -90,8 +90,14 @@ float btf_render_light_outer_z(const btf_model *m);
 /* The shading's ambient term of m (btf_render_shared.h): -1 without a
  * structure layer (the plain bump factor). */
 float btf_render_ambient(const btf_model *m);
+/* The index table the shading reads (views x lights, the caller frees it):
+ * the model's, where a sparse model (BTF_PAIR_NONE entries) lets each pair
+ * it did not measure stand for the measured pair nearest in the space of
+ * pairs (docs/render.md, "Sparse pair sets"). */
+uint8_t *btf_render_pair_index(const btf_model *m, btf_error *err);
 /* The pair gains the shading multiplies (views x lights x 3 floats, the
- * caller frees them): the model's, or 1 for a model without. */
+ * caller frees them): the model's, or 1 for a model without; a pair not
+ * measured takes its stand-in's (btf_render_pair_index). */
 float *btf_render_gains(const btf_model *m, btf_error *err);
 /* The factor subspace k's texture is scaled by before shading: 1 / (a +
  * l_z) of its representative light with a structure layer, else 1. */

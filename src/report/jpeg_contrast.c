@@ -89,38 +89,49 @@ btf_status btf_jpeg_subspace_contrast(const btf_dataset *ds, const btf_model *m,
     if (quality < 1 || quality > 100)
         return btf_fail(err, BTF_E_ARG, "%s: JPEG quality %d (expected 1..100)", info->root,
                         quality);
-    if (!m->index || m->views.count != info->n_views || m->lights.count != info->n_lights)
-        return btf_fail(err, BTF_E_DATA,
-                        "%s: the model has %d views x %d lights%s (expected the dataset's %d x %d)",
-                        info->root, m->views.count, m->lights.count,
-                        m->index ? "" : " and no index table", info->n_views, info->n_lights);
+    if (!m->index)
+        return btf_fail(err, BTF_E_DATA, "%s: the model has no index table", info->root);
     if (m->n_subspaces < 1 || !m->subspaces)
         return btf_fail(err, BTF_E_DATA, "%s: the model has no subspaces", info->root);
+    /* Each representative pair in the dataset's own indices: the same sets,
+     * or (a model of some of its pairs) the same directions. */
+    int *at = btf_alloc((size_t)m->n_subspaces, 2 * sizeof(int), err);
+    if (!at)
+        return BTF_E_NOMEM;
     for (int k = 0; k < m->n_subspaces; k++) {
         const btf_subspace_model *s = &m->subspaces[k];
-        if (s->view < 0 || s->view >= info->n_views || s->light < 0 || s->light >= info->n_lights)
+        int v = -1, l = -1;
+        if (s->view >= 0 && s->view < m->views.count && s->light >= 0 &&
+            s->light < m->lights.count) {
+            v = btf_dirset_find(info->views, m->views.dirs[s->view], BTF_DIR_NAME_TOLERANCE);
+            l = btf_dirset_find(info->lights, m->lights.dirs[s->light], BTF_DIR_NAME_TOLERANCE);
+        }
+        if (v < 0 || l < 0 || !btf_dataset_has(ds, v, l)) {
+            free(at);
             return btf_fail(err, BTF_E_DATA,
-                            "%s: subspace %d's representative pair (view %d, light %d) is not "
-                            "in the dataset (expected 0..%d, 0..%d)", info->root, k, s->view,
-                            s->light, info->n_views - 1, info->n_lights - 1);
+                            "%s: subspace %d's representative pair (view %d, light %d of the "
+                            "model) is not in the dataset", info->root, k, s->view, s->light);
+        }
+        at[2 * k] = v, at[2 * k + 1] = l;
     }
     btf_srgb_levels_table t;
     btf_srgb_levels_init(&t);
     uint64_t bytes = 0;
     double sq = 0;
     for (int k = 0; k < m->n_subspaces; k++) {
-        btf_status rc = one_image(ds, m->subspaces[k].view, m->subspaces[k].light, quality, &t,
-                                  &bytes, &sq, err);
+        btf_status rc = one_image(ds, at[2 * k], at[2 * k + 1], quality, &t, &bytes, &sq, err);
         if (rc) {
+            free(at);
             memset(out, 0, sizeof *out);
             return rc;
         }
     }
+    free(at);
     btf_raw_bytes_of(info, &out->raw);
     out->images = m->n_subspaces;
     out->quality = quality;
     out->jpeg_bytes = bytes;
-    out->index_bytes = (uint64_t)info->n_views * info->n_lights;
+    out->index_bytes = (uint64_t)m->views.count * m->lights.count;
     out->bytes = out->jpeg_bytes + out->index_bytes;
     out->rms = sqrt(sq / ((double)m->n_subspaces * info->width * info->height * 3));
     out->ratio = (double)out->raw.raw / (double)out->bytes;

@@ -46,28 +46,58 @@ int btf_spread_directions(const btf_dirset *set, int n, int *idx)
     return n;
 }
 
-/* The model must describe this dataset: the same direction sets (within
- * the file-name tolerance) and its index table. */
-static btf_status check_match(const btf_dataset_info *in, const btf_model *m, btf_error *err)
+/* Whether the model's direction sets are the dataset's (within the
+ * file-name tolerance). */
+static int same_sets(const btf_dataset_info *in, const btf_model *m)
 {
-    if (m->views.count != in->n_views || m->lights.count != in->n_lights || !m->index)
-        return btf_fail(err, BTF_E_ARG,
-                        "model of %d views x %d lights does not describe dataset %s "
-                        "(%d views x %d lights)", m->views.count, m->lights.count, in->root,
-                        in->n_views, in->n_lights);
+    if (m->views.count != in->n_views || m->lights.count != in->n_lights)
+        return 0;
     for (int i = 0; i < in->n_views; i++)
         if (btf_dir_angle(m->views.dirs[i], in->views->dirs[i]) > BTF_DIR_NAME_TOLERANCE)
-            return btf_fail(err, BTF_E_ARG, "model's view %d (theta %g, phi %g) is not dataset "
-                            "%s's (theta %g, phi %g)", i, m->views.dirs[i].theta,
-                            m->views.dirs[i].phi, in->root, in->views->dirs[i].theta,
-                            in->views->dirs[i].phi);
+            return 0;
     for (int i = 0; i < in->n_lights; i++)
         if (btf_dir_angle(m->lights.dirs[i], in->lights->dirs[i]) > BTF_DIR_NAME_TOLERANCE)
-            return btf_fail(err, BTF_E_ARG, "model's light %d (theta %g, phi %g) is not dataset "
-                            "%s's (theta %g, phi %g)", i, m->lights.dirs[i].theta,
-                            m->lights.dirs[i].phi, in->root, in->lights->dirs[i].theta,
-                            in->lights->dirs[i].phi);
-    return BTF_OK;
+            return 0;
+    return 1;
+}
+
+/* The model's subspace for the dataset's pair (view, light): its index
+ * entry where the model measured the pair (the same directions within the
+ * file-name tolerance), else -1: a pair the model did not measure (held
+ * out of its analysis, or of a sparse set), which its render interpolates. */
+static int model_subspace(const btf_dataset_info *in, const btf_model *m, int same, int view,
+                          int light)
+{
+    int mv = view, ml = light;
+    if (!same) {
+        mv = btf_dirset_find(&m->views, in->views->dirs[view], BTF_DIR_NAME_TOLERANCE);
+        ml = btf_dirset_find(&m->lights, in->lights->dirs[light], BTF_DIR_NAME_TOLERANCE);
+        if (mv < 0 || ml < 0)
+            return -1;
+    }
+    int k = m->index[(size_t)mv * m->lights.count + ml];
+    return k == BTF_PAIR_NONE ? -1 : k;
+}
+
+/* The model must describe this dataset: the same direction sets, or
+ * (a model of some of its pairs: leave-one-out) at least one pair the
+ * dataset holds measured by the model. */
+static btf_status check_match(const btf_dataset *ds, const btf_dataset_info *in,
+                              const btf_model *m, btf_error *err)
+{
+    if (!m->index)
+        return btf_fail(err, BTF_E_ARG, "the model has no index table: it does not describe "
+                        "dataset %s", in->root);
+    int same = same_sets(in, m);
+    for (int v = 0; v < in->n_views; v++)
+        for (int l = 0; l < in->n_lights; l++)
+            if (btf_dataset_has(ds, v, l) && model_subspace(in, m, same, v, l) >= 0)
+                return BTF_OK;
+    return btf_fail(err, BTF_E_ARG,
+                    "model of %d views x %d lights does not describe dataset %s "
+                    "(%d views x %d lights): none of the dataset's pairs is one the model "
+                    "measured", m->views.count, m->lights.count, in->root, in->n_views,
+                    in->n_lights);
 }
 
 typedef struct measure_job {
@@ -126,22 +156,37 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* The summary over the pairs the model measured (every pair, unless some
+ * were held out of its analysis); the held-out pairs' mean apart. */
 static void summarise(btf_quality *q)
 {
-    int n = q->n_pairs;
-    double *c = malloc((size_t)n * sizeof *c);
-    double s = 0, sp = 0, fo = 0, st = 0;
-    q->worst = 0;
-    for (int i = 0; i < n; i++) {
+    int n = 0, worst = -1;
+    double *c = malloc((size_t)(q->n_pairs > 0 ? q->n_pairs : 1) * sizeof *c);
+    double s = 0, sp = 0, fo = 0, st = 0, held = 0;
+    q->n_held_out = 0;
+    for (int i = 0; i < q->n_pairs; i++) {
         const btf_texture_distances *d = &q->pairs[i].d;
+        if (q->pairs[i].held_out) {
+            q->n_held_out++;
+            held += d->combined;
+            continue;
+        }
         s += d->combined;
         sp += d->spectrum.normalised;
         fo += d->first_order.normalised;
         st += d->structure.normalised;
-        if (d->combined > q->pairs[q->worst].d.combined)
-            q->worst = i;
+        if (worst < 0 || d->combined > q->pairs[worst].d.combined)
+            worst = i;
         if (c)
-            c[i] = d->combined;
+            c[n] = d->combined;
+        n++;
+    }
+    q->mean_held_out = q->n_held_out ? held / q->n_held_out : 0.0;
+    q->worst = worst < 0 ? 0 : worst;
+    if (n == 0) { /* only held-out pairs were sampled */
+        free(c);
+        q->mean_combined = q->median_combined = q->worst_combined = q->mean_held_out;
+        return;
     }
     q->mean_combined = s / n;
     q->mean_spectrum = sp / n;
@@ -157,10 +202,44 @@ static void summarise(btf_quality *q)
     free(c);
 }
 
-/* The pairs to measure: all, or the spread of views x the spread of lights. */
-static btf_status choose_pairs(const btf_dataset_info *in, const btf_model *m,
-                               const btf_quality_opts *o, btf_quality *q, btf_error *err)
+/* A sparse set's pairs to measure: every pair it holds, or (more than
+ * views x lights of them, without all) that many spread evenly over them. */
+static btf_status choose_sparse(const btf_dataset *ds, const btf_dataset_info *in,
+                                const btf_model *m, const btf_quality_opts *o, btf_quality *q,
+                                btf_error *err)
 {
+    int want = o->all ? in->n_pairs : o->views * o->lights;
+    want = want < in->n_pairs ? want : in->n_pairs;
+    q->pairs = btf_calloc((size_t)(want > 0 ? want : 1), sizeof *q->pairs, err);
+    if (!q->pairs)
+        return BTF_E_NOMEM;
+    int same = same_sets(in, m), seen = 0;
+    for (int v = 0; v < in->n_views; v++)
+        for (int l = 0; l < in->n_lights; l++) {
+            if (!btf_dataset_has(ds, v, l))
+                continue;
+            /* the i-th of want picks held pair floor(i * n_pairs / want) */
+            int i = seen++;
+            if (q->n_pairs < want && (long long)q->n_pairs * in->n_pairs / want == i) {
+                btf_pair_quality *p = &q->pairs[q->n_pairs++];
+                p->view = v;
+                p->light = l;
+                p->subspace = model_subspace(in, m, same, v, l);
+                p->held_out = p->subspace < 0;
+            }
+        }
+    return BTF_OK;
+}
+
+/* The pairs to measure: all, or the spread of views x the spread of lights
+ * (a sparse set: choose_sparse). */
+static btf_status choose_pairs(const btf_dataset *ds, const btf_dataset_info *in,
+                               const btf_model *m, const btf_quality_opts *o, btf_quality *q,
+                               btf_error *err)
+{
+    if (in->n_pairs < in->n_views * in->n_lights)
+        return choose_sparse(ds, in, m, o, q, err);
+    int same = same_sets(in, m);
     int *vi = btf_alloc((size_t)in->n_views, sizeof(int), err);
     int *li = btf_alloc((size_t)in->n_lights, sizeof(int), err);
     if (!vi || !li) {
@@ -189,7 +268,8 @@ static btf_status choose_pairs(const btf_dataset_info *in, const btf_model *m,
             btf_pair_quality *p = &q->pairs[q->n_pairs++];
             p->view = vi[a];
             p->light = li[b];
-            p->subspace = m->index[(size_t)vi[a] * in->n_lights + li[b]];
+            p->subspace = model_subspace(in, m, same, vi[a], li[b]);
+            p->held_out = p->subspace < 0;
         }
     free(vi);
     free(li);
@@ -216,7 +296,8 @@ btf_status btf_quality_measure(const btf_dataset *ds, const btf_model *m,
     double t0 = btf_now();
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     btf_status rc = btf_render_check_model(m, err);
-    if (rc || (rc = check_match(in, m, err)) || (rc = choose_pairs(in, m, &o, out, err))) {
+    if (rc || (rc = check_match(ds, in, m, err)) ||
+        (rc = choose_pairs(ds, in, m, &o, out, err))) {
         btf_quality_free(out);
         return rc;
     }

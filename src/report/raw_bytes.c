@@ -1,6 +1,7 @@
 /*
  * raw_bytes.c — the raw BTF a dataset holds, the denominator of the
- * report's compression ratios: views x lights images of width x height RGB
+ * report's compression ratios: the measured images (views x lights of a
+ * full grid, a sparse set's pairs) of width x height RGB
  * at 8 bits per value, and the bytes its files take on disk
  * (docs/report-compression.md).
  */
@@ -15,8 +16,8 @@ void btf_raw_bytes_of(const btf_dataset_info *info, btf_raw_bytes *out)
     out->lights = info->n_lights;
     out->width = info->width;
     out->height = info->height;
-    out->raw = (uint64_t)info->n_views * (uint64_t)info->n_lights * (uint64_t)info->width *
-               (uint64_t)info->height * 3u;
+    /* the images measured: every pair of a full grid, a sparse set's own */
+    out->raw = (uint64_t)info->n_pairs * (uint64_t)info->width * (uint64_t)info->height * 3u;
     out->on_disk = info->bytes_on_disk;
 }
 

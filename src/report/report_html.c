@@ -102,7 +102,12 @@ static void top(btf_buf *b, const btf_report_data *d)
                    hr_bytes(d->raw.raw, t, sizeof t));
     btf_buf_printf(b, "<div class=\"card\"><b>%.2f</b><span>mean combined distance over %d "
                       "pairs (1.0: as close as the material is to itself)</span></div>\n",
-                   d->q.mean_combined, d->q.n_pairs);
+                   d->q.mean_combined, d->q.n_pairs - d->q.n_held_out);
+    if (d->q.n_held_out)
+        btf_buf_printf(b, "<div class=\"card\"><b>%.2f</b><span>mean combined distance over "
+                          "%d pair%s held out of the analysis (rendered by interpolation)"
+                          "</span></div>\n", d->q.mean_held_out, d->q.n_held_out,
+                       d->q.n_held_out == 1 ? "" : "s");
     const btf_pair_quality *w = &d->q.pairs[d->q.worst];
     char vd[48], ld[48];
     dir_text(d->in->views->dirs[w->view], vd, sizeof vd);
@@ -136,6 +141,11 @@ static void compression(btf_buf *b, const btf_report_data *d)
     btf_buf_printf(b, "<tr><td class=\"l\">the paper's claim</td><td>–</td><td>%s</td>"
                       "<td class=\"l\">Haindl &amp; Filip 2007: about 1 : 10<sup>5</sup></td>"
                       "</tr>\n", ratio_text(BTF_REPORT_PAPER_RATIO, y, sizeof y));
+    if (d->pca.views == 0)
+        btf_buf_puts(b, "<tr><td class=\"l\">per-view PCA</td><td>–</td><td>–</td><td "
+                        "class=\"l\">not measured: a sparse set holds no view under every "
+                        "light</td></tr>\n");
+    else
     btf_buf_printf(b, "<tr><td class=\"l\">per-view PCA</td><td>%s</td><td>%s</td><td "
                       "class=\"l\">%.1f components per view on average (%d–%d) for an RMS "
                       "error ≤ %.1f 8-bit levels (reached: %.2f), %d-bit values</td></tr>\n",
@@ -173,9 +183,14 @@ static void pair_row(btf_buf *b, const btf_report_data *d, int i)
     char vd[48], ld[48];
     dir_text(d->in->views->dirs[p->view], vd, sizeof vd);
     dir_text(d->in->lights->dirs[p->light], ld, sizeof ld);
-    btf_buf_printf(b, "<tr><td class=\"l\">%s</td><td class=\"l\">%s</td><td>%d</td>"
+    char sub[32];
+    if (p->held_out)
+        snprintf(sub, sizeof sub, "held out");
+    else
+        snprintf(sub, sizeof sub, "%d", p->subspace);
+    btf_buf_printf(b, "<tr><td class=\"l\">%s</td><td class=\"l\">%s</td><td>%s</td>"
                       "<td>%.2f</td><td>%.2f</td><td>%.2f</td><td><b>%.2f</b></td></tr>\n",
-                   vd, ld, p->subspace, p->d.spectrum.normalised, p->d.first_order.normalised,
+                   vd, ld, sub, p->d.spectrum.normalised, p->d.first_order.normalised,
                    p->d.structure.normalised, p->d.combined);
 }
 
@@ -272,6 +287,12 @@ static void quality(btf_buf *b, const btf_report_data *d)
                       "%.2f</td></tr>\n</table>\n",
                    q->mean_spectrum, q->mean_first_order, q->mean_structure, q->mean_combined,
                    q->median_combined, q->worst_combined);
+    if (q->n_held_out)
+        btf_buf_printf(b, "<p>%d of these pairs were held out of the analysis (the table's "
+                          "\"held out\"): the model renders them by interpolating the pairs "
+                          "it measured (docs/render.md, \"Sparse pair sets\"); their mean "
+                          "combined distance is <b>%.2f</b>, not counted in the mean, median "
+                          "and worst above.</p>\n", q->n_held_out, q->mean_held_out);
     btf_buf_puts(b, "<figure><img class=\"plot\" src=\"heatmap.svg\" alt=\"heat map of the "
                     "combined distance over views and lights\"><figcaption>Rows: views; "
                     "columns: lights; empty cells were not measured; outlined: the worst "

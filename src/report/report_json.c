@@ -33,6 +33,8 @@ static void add_compression(cJSON *root, const btf_report_data *d)
         cJSON_AddNumberToObject(raw, btf_model_part_name(p), (double)d->bytes.raw[p]);
     }
     cJSON *pca = cJSON_AddObjectToObject(c, "pca");
+    if (d->pca.views == 0)
+        cJSON_AddStringToObject(pca, "skipped", "a sparse set: no view under every light");
     cJSON_AddNumberToObject(pca, "bytes", (double)d->pca.bytes);
     cJSON_AddNumberToObject(pca, "ratio", d->pca.ratio);
     cJSON_AddNumberToObject(pca, "max_rms", d->o->pca.max_rms > 0 ? d->o->pca.max_rms : 2.0);
@@ -67,6 +69,8 @@ static void add_quality(cJSON *root, const btf_report_data *d)
     cJSON_AddStringToObject(o, "sample", d->o->quality.all ? "all" : "spread");
     cJSON_AddNumberToObject(o, "pairs", q->n_pairs);
     cJSON_AddNumberToObject(o, "mean_combined", q->mean_combined);
+    cJSON_AddNumberToObject(o, "held_out", q->n_held_out);
+    cJSON_AddNumberToObject(o, "mean_held_out", q->mean_held_out);
     cJSON_AddNumberToObject(o, "median_combined", q->median_combined);
     cJSON_AddNumberToObject(o, "worst_combined", q->worst_combined);
     cJSON_AddNumberToObject(o, "mean_spectrum", q->mean_spectrum);
@@ -89,6 +93,7 @@ static void add_quality(cJSON *root, const btf_report_data *d)
         add_dir(j, "view_dir", d->in->views->dirs[p->view]);
         add_dir(j, "light_dir", d->in->lights->dirs[p->light]);
         cJSON_AddNumberToObject(j, "subspace", p->subspace);
+        cJSON_AddBoolToObject(j, "held_out", p->held_out);
         add_component(j, "spectrum", &p->d.spectrum);
         add_component(j, "first_order", &p->d.first_order);
         add_component(j, "structure", &p->d.structure);

@@ -266,7 +266,9 @@ static btf_status measure_all(btf_report_data *d, const btf_dataset *ds, const c
     btf_pca_opts pca = o->pca;
     pca.progress = step_report;
     pca.progress_user = &sp;
-    if (rc == BTF_OK)
+    /* Per-view PCA compresses every light of a view: a sparse set has no
+     * such images (the page says so; d->pca stays zero). */
+    if (rc == BTF_OK && d->in->n_pairs == d->in->n_views * d->in->n_lights)
         rc = btf_pca_contrast(ds, &pca, &d->pca, err);
     unsigned char *want = NULL;
     if (rc == BTF_OK)
@@ -342,6 +344,8 @@ btf_status btf_report_write(const btf_dataset *ds, const btf_model *m, const cha
         summary->ratio = d.bytes.total ? (double)d.raw.raw / (double)d.bytes.total : 0.0;
         summary->pairs = d.q.n_pairs;
         summary->mean_combined = d.q.mean_combined;
+        summary->held_out = d.q.n_held_out;
+        summary->mean_held_out = d.q.mean_held_out;
         summary->worst_combined = d.q.worst_combined;
         summary->sweep_points = d.sweep.n_points;
         summary->sweep_resumed = d.sweep.resumed;

@@ -282,6 +282,17 @@ static btf_status fit_lafortune(fit_ctx *c, btf_rf_opts *o, btf_error *err)
     return rc;
 }
 
+btf_status btf_rf_refuse_sparse(const btf_dataset *ds, btf_error *err)
+{
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    if (in->n_pairs == in->n_views * in->n_lights)
+        return BTF_OK;
+    return btf_fail(err, BTF_E_DATA, "%s: the reflectance-field family fits every light at each "
+                    "view, and this sparse set holds %d of the %d x %d pairs (the CAR family, "
+                    "the default, takes any set)", in->root, in->n_pairs,
+                    in->n_views, in->n_lights);
+}
+
 btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_model *out,
                       btf_error *err)
 {
@@ -290,6 +301,8 @@ btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_mod
     memset(out, 0, sizeof *out);
     if (!ds)
         return btf_fail(err, BTF_E_ARG, "btf_rf_fit: no dataset");
+    if (btf_rf_refuse_sparse(ds, err))
+        return BTF_E_DATA;
     btf_rf_opts d = btf_rf_defaults(), o = opts ? *opts : d;
     if (o.lobes == 0)
         o.lobes = d.lobes;

@@ -104,6 +104,8 @@ btf_status btf_rf_fit_sampled(const btf_dataset *ds, const btf_rf_opts *opts,
     memset(out, 0, sizeof *out);
     if (!ds || !so)
         return btf_fail(err, BTF_E_ARG, "btf_rf_fit_sampled: no dataset or no sample options");
+    if (btf_rf_refuse_sparse(ds, err))
+        return BTF_E_DATA;
     double t0 = btf_now();
     btf_rf_opts o = opts ? *opts : btf_rf_defaults();
     if (o.threads < 0)

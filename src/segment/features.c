@@ -111,8 +111,12 @@ typedef struct white_batch {
 static btf_status white_job(void *user, int j, int worker, btf_error *err)
 {
     const white_batch *b = user;
-    /* image j of `images` spread evenly over the (view, light) order */
+    /* image j of `images` spread evenly over the (view, light) order; in a
+     * sparse set the next pair it holds */
     int image = (int)((long long)j * b->total / b->images);
+    for (int step = 0; step < b->total && !btf_dataset_has(b->ds, image / b->n_lights,
+                                                          image % b->n_lights); step++)
+        image = (image + 1) % b->total;
     btf_image *img = &b->buffers[worker];
     btf_status rc = btf_dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
                                           err);
@@ -143,7 +147,7 @@ static btf_status feature_white(const btf_dataset *ds, int threads, float *white
     if (in->format != BTF_FILE_EXR && in->layout != BTF_LAYOUT_UBO2014)
         return BTF_OK;
     white_batch b = {.ds = ds, .n_lights = in->n_lights, .total = in->n_views * in->n_lights};
-    b.images = b.total < WHITE_IMAGES ? b.total : WHITE_IMAGES;
+    b.images = in->n_pairs < WHITE_IMAGES ? in->n_pairs : WHITE_IMAGES;
     size_t wh = (size_t)in->width * in->height;
     size_t want = WHITE_PIXELS / (size_t)b.images; /* pixels per image, about */
     b.stride = want >= wh ? 1 : (wh + want - 1) / want;
@@ -182,6 +186,8 @@ typedef struct feature_batch {
 static btf_status feature_job(void *user, int image, int worker, btf_error *err)
 {
     const feature_batch *b = user;
+    if (!btf_dataset_has(b->ds, image / b->n_lights, image % b->n_lights))
+        return BTF_OK; /* a sparse set: its row stays 0 and is not clustered */
     btf_image *img = &b->buffers[worker];
     btf_status rc = btf_dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
                                           err);
@@ -212,7 +218,7 @@ btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *o
     if (rc)
         return rc;
     int total = in->n_views * in->n_lights;
-    b.features = btf_alloc((size_t)total * b.dim, sizeof(float), err);
+    b.features = btf_calloc((size_t)total * b.dim, sizeof(float), err);
     if (!b.features)
         return BTF_E_NOMEM;
     int workers = btf_pool_workers(o.threads, total);
@@ -246,6 +252,8 @@ typedef struct mean_batch {
 static btf_status mean_job(void *user, int image, int worker, btf_error *err)
 {
     const mean_batch *b = user;
+    if (!btf_dataset_has(b->ds, image / b->n_lights, image % b->n_lights))
+        return BTF_OK; /* a sparse set: the pair's mean stays 0 */
     btf_image *img = &b->buffers[worker];
     btf_status rc = btf_dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
                                           err);
@@ -260,7 +268,7 @@ btf_status btf_dataset_means(const btf_dataset *ds, int threads, float **means, 
     int total = in->n_views * in->n_lights;
     mean_batch b = {ds, in->n_lights, NULL, NULL};
     int workers = btf_pool_workers(threads, total);
-    b.means = btf_alloc((size_t)total * 3, sizeof(float), err);
+    b.means = btf_calloc((size_t)total * 3, sizeof(float), err);
     b.buffers = btf_calloc((size_t)(workers > 0 ? workers : 1), sizeof *b.buffers, err);
     btf_status rc = b.means && b.buffers ? btf_pool_run(total, threads, mean_job, &b, NULL, err)
                                          : BTF_E_NOMEM;

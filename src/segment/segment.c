@@ -21,6 +21,7 @@
  */
 #include <stdio.h>
 #include "core/core.h"
+#include "io/io.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -43,7 +44,8 @@ void btf_segmentation_free(btf_segmentation *s)
 
 /* The member closest to each centre (ties: lowest index). */
 static btf_status pick_representatives(const float *f, int n, int dim, const btf_kmeans_result *km,
-                                       int n_lights, btf_segmentation *s, btf_error *err)
+                                       const int *pair_of, int n_lights, btf_segmentation *s,
+                                       btf_error *err)
 {
     double *best = btf_alloc((size_t)km->k, sizeof(double), err);
     if (!best)
@@ -62,28 +64,33 @@ static btf_status pick_representatives(const float *f, int n, int dim, const btf
         }
         if (best[c] < 0.0 || d < best[c]) {
             best[c] = d;
-            s->rep_view[c] = i / n_lights;
-            s->rep_light[c] = i % n_lights;
+            int pair = pair_of ? pair_of[i] : i;
+            s->rep_view[c] = pair / n_lights;
+            s->rep_light[c] = pair % n_lights;
         }
     }
     free(best);
     return BTF_OK;
 }
 
-static btf_status fill_result(const float *f, int n, int dim, int n_lights,
-                              const btf_kmeans_result *km, btf_segmentation *s, btf_error *err)
+/* The result of the rows' clustering on the pair grid: row i is pair
+ * pair_of[i] (NULL: pair i), every other pair BTF_PAIR_NONE. */
+static btf_status fill_result(const float *f, int n, int dim, const int *pair_of, int n_pairs,
+                              int n_lights, const btf_kmeans_result *km, btf_segmentation *s,
+                              btf_error *err)
 {
     s->k = km->k;
     s->distortion = km->distortion;
-    s->index = btf_alloc((size_t)n, 1, err);
+    s->index = btf_alloc((size_t)n_pairs, 1, err);
     s->rep_view = btf_alloc((size_t)km->k, sizeof(int), err);
     s->rep_light = btf_alloc((size_t)km->k, sizeof(int), err);
     s->members = btf_alloc((size_t)km->k, sizeof(int), err);
     if (!s->index || !s->rep_view || !s->rep_light || !s->members)
         return BTF_E_NOMEM;
+    memset(s->index, BTF_PAIR_NONE, (size_t)n_pairs);
     for (int i = 0; i < n; i++)
-        s->index[i] = (uint8_t)km->labels[i];
-    return pick_representatives(f, n, dim, km, n_lights, s, err);
+        s->index[pair_of ? pair_of[i] : i] = (uint8_t)km->labels[i];
+    return pick_representatives(f, n, dim, km, pair_of, n_lights, s, err);
 }
 
 /* Whether the K-means result next (K + 1 clusters asked) splits clearly
@@ -210,18 +217,50 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
 {
     memset(out, 0, sizeof *out);
     btf_segment_opts o = resolve_opts(opts);
-    int n = n_views * n_lights;
     if (n_views < 1 || n_lights < 1 || dim < 1)
         return btf_fail(err, BTF_E_ARG, "segmentation of %d x %d images", n_views, n_lights);
-    if (o.subspaces < 0 || o.subspaces > SEGMENT_MAX_K)
-        return btf_fail(err, BTF_E_ARG, "subspaces %d: expected 1..%d or auto", o.subspaces,
-                        SEGMENT_MAX_K);
+    int n_pairs = n_views * n_lights;
+    int n = n_pairs;
+    int *pair_of = NULL;         /* a sparse set: row i of rows is pair pair_of[i] */
+    float *rows = NULL;
+    if (o.present) {
+        n = 0;
+        for (int i = 0; i < n_pairs; i++)
+            n += o.present[i] != 0;
+        if (n == 0)
+            return btf_fail(err, BTF_E_ARG, "segmentation of a set without images");
+    }
+    if (o.present && n < n_pairs) {
+        pair_of = btf_alloc((size_t)n, sizeof(int), err);
+        rows = btf_alloc((size_t)n * dim, sizeof(float), err);
+        if (!pair_of || !rows) {
+            free(pair_of);
+            free(rows);
+            return BTF_E_NOMEM;
+        }
+        for (int i = 0, r = 0; i < n_pairs; i++)
+            if (o.present[i]) {
+                pair_of[r] = i;
+                memcpy(rows + (size_t)r * dim, features + (size_t)i * dim, (size_t)dim * sizeof(float));
+                r++;
+            }
+        features = rows;
+    }
+    btf_status rc = BTF_OK;
     double tau = o.auto_threshold;
-    if (!(tau < 1.0))
-        return btf_fail(err, BTF_E_ARG, "auto threshold %g: expected in (0, 1)", tau);
-    if (!(o.split_gain < 1.0))
-        return btf_fail(err, BTF_E_ARG, "split gain %g: expected below 1 (negative: off)",
-                        o.split_gain);
+    if (o.subspaces < 0 || o.subspaces > SEGMENT_MAX_K)
+        rc = btf_fail(err, BTF_E_ARG, "subspaces %d: expected 1..%d or auto", o.subspaces,
+                      SEGMENT_MAX_K);
+    else if (!(tau < 1.0))
+        rc = btf_fail(err, BTF_E_ARG, "auto threshold %g: expected in (0, 1)", tau);
+    else if (!(o.split_gain < 1.0))
+        rc = btf_fail(err, BTF_E_ARG, "split gain %g: expected below 1 (negative: off)",
+                      o.split_gain);
+    if (rc) {
+        free(pair_of);
+        free(rows);
+        return rc;
+    }
     int max_k = o.max_subspaces;
     if (max_k > SEGMENT_MAX_K)
         max_k = SEGMENT_MAX_K;
@@ -231,10 +270,12 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
     out->n_lights = n_lights;
     out->max_k = max_k;
     out->distortion_by_k = btf_calloc((size_t)max_k + 1, sizeof(double), err);
-    if (!out->distortion_by_k)
+    if (!out->distortion_by_k) {
+        free(pair_of);
+        free(rows);
         return BTF_E_NOMEM;
+    }
     btf_kmeans_result km;
-    btf_status rc;
     if (o.subspaces > 0) {
         rc = btf_kmeans(features, n, dim, o.subspaces, &o.kmeans, &km, err);
         if (rc == 0) {
@@ -249,9 +290,11 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
         rc = choose_k(features, n, dim, &o, max_k, tau, out, &km, err);
     }
     if (rc == 0) {
-        rc = fill_result(features, n, dim, n_lights, &km, out, err);
+        rc = fill_result(features, n, dim, pair_of, n_pairs, n_lights, &km, out, err);
         btf_kmeans_free(&km);
     }
+    free(pair_of);
+    free(rows);
     if (rc)
         btf_segmentation_free(out);
     return rc;
@@ -265,17 +308,23 @@ btf_status btf_segment(const btf_dataset *ds, const btf_segment_opts *opts,
     float *f;
     int dim;
     const btf_dataset_info *in = btf_dataset_get_info(ds);
-    float *means = btf_alloc((size_t)in->n_views * in->n_lights * 3, sizeof(float), err);
+    float *means = btf_calloc((size_t)in->n_views * in->n_lights * 3, sizeof(float), err);
     if (!means)
         return BTF_E_NOMEM;
     o.features.means = means;
-    btf_status rc = btf_dataset_features(ds, &o.features, &f, &dim, err);
+    unsigned char *present = NULL; /* a sparse set's measured pairs */
+    btf_status rc = btf_dataset_present(ds, &present, err);
+    if (rc == BTF_OK)
+        rc = btf_dataset_features(ds, &o.features, &f, &dim, err);
     if (rc) {
+        free(present);
         free(means);
         return rc;
     }
+    o.present = present;
     rc = btf_segment_features(f, in->n_views, in->n_lights, dim, &o, out, err);
     free(f);
+    free(present);
     if (rc == BTF_OK)
         out->means = means; /* the pair gains' measured colours */
     else
@@ -304,7 +353,9 @@ btf_status btf_segmentation_write_png(const btf_segmentation *s, int cell, const
     for (int y = 0; y < img.height; y++)
         for (int x = 0; x < img.width; x++) {
             int v = x / cell, l = y / cell;
-            const unsigned char *c = PALETTE[s->index[v * s->n_lights + l] % 20];
+            int k = s->index[v * s->n_lights + l];
+            static const unsigned char NONE[3] = {0, 0, 0}; /* a pair not measured */
+            const unsigned char *c = k == BTF_PAIR_NONE ? NONE : PALETTE[k % 20];
             for (int k = 0; k < 3; k++)
                 img.data[(y * img.width + x) * 3 + k] = btf_srgb_to_linear(c[k] / 255.0f);
         }

@@ -124,6 +124,13 @@ static void compression(btf_buf *b, const btf_report_data *d)
                     "data (definitions: docs/report.md).</p>\n<table>\n<tr><th class=\"l\">"
                     "what</th><th>bytes</th><th>ratio to raw</th><th class=\"l\">note</th>"
                     "</tr>\n");
+    if (d->in->n_pairs < d->raw.views * d->raw.lights)
+        btf_buf_printf(b, "<tr><td class=\"l\">raw BTF, 8 bits per value</td><td>%s</td><td>1 : "
+                          "1</td><td class=\"l\">%d images (a sparse set of the %d × %d pairs) "
+                          "× %d × %d × 3</td></tr>\n",
+                       hr_bytes(d->raw.raw, x, sizeof x), d->in->n_pairs, d->raw.views,
+                       d->raw.lights, d->raw.width, d->raw.height);
+    else
     btf_buf_printf(b, "<tr><td class=\"l\">raw BTF, 8 bits per value</td><td>%s</td><td>1 : 1"
                       "</td><td class=\"l\">%d × %d images × %d × %d × 3</td></tr>\n",
                    hr_bytes(d->raw.raw, x, sizeof x), d->raw.views, d->raw.lights, d->raw.width,

@@ -118,8 +118,16 @@ static int model_text(const btf_model *m, const model_file *mf)
         cli_describe_set(&m->lights, lights, sizeof lights);
         printf("views       %s\n", views);
         printf("lights      %s\n", lights);
-        printf("index       %d views x %d lights -> %d subspaces\n", m->views.count,
-               m->lights.count, m->n_subspaces);
+        int pairs = m->views.count * m->lights.count, measured = 0;
+        for (int i = 0; i < pairs; i++)
+            measured += m->index[i] != BTF_PAIR_NONE;
+        if (measured < pairs)
+            printf("index       %d views x %d lights -> %d subspaces; %d of the %d pairs "
+                   "measured (a sparse set: the others stand for their nearest measured "
+                   "pair)\n", m->views.count, m->lights.count, m->n_subspaces, measured, pairs);
+        else
+            printf("index       %d views x %d lights -> %d subspaces\n", m->views.count,
+                   m->lights.count, m->n_subspaces);
     } else {
         printf("views       none (a single texture)\n");
         printf("lights      none (a single texture)\n");

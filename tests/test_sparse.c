@@ -97,7 +97,8 @@ static void full_grid_manifest_same_bytes(void **state)
 static void sparse_set_analyses_and_renders(void **state)
 {
     (void)state;
-    const char *man = tu_fmt("%s/ninth.tsv", tu_dir);
+    char man[4200];
+    snprintf(man, sizeof man, "%s/ninth.tsv", tu_dir);
     write_manifest(man, keep_ninth);
     btf_dataset *ds = NULL;
     btf_error err = {0};
@@ -206,8 +207,8 @@ static void bath_tile_end_to_end(void **state)
         "08.png\t3.7573\t-0.2013\t10.8171"};
     char cwd[4096];
     assert_non_null(getcwd(cwd, sizeof cwd));
-    const char *full = tu_fmt("%s/bath.tsv", tu_dir);
-    char eight[4200];
+    char full[4200], eight[4200];
+    snprintf(full, sizeof full, "%s/bath.tsv", tu_dir);
     snprintf(eight, sizeof eight, "%s/bath8.tsv", tu_dir);
     FILE *f = fopen(full, "w"), *g = fopen(eight, "w");
     assert_non_null(f);
@@ -237,9 +238,53 @@ static void bath_tile_end_to_end(void **state)
     out = tu_capture(tu_fmt("%s analyse %s -o %s 2>&1", tu_cli(), eight, model), &st);
     assert_int_equal(st, 0);
     assert_non_null(out);
-    assert_non_null(strstr(out, "no range map: photometric stereo needs one view with at "
+    assert_non_null(strstr(out, "a flat range map: photometric stereo needs one view with at "
                                 "least 3 lights"));
+    assert_non_null(strstr(out, "the albedo pattern is the mean of the registered images"));
     free(out);
+    /* the layer holds the photos' layout: the model's albedo pattern is
+     * their mean luminance over its mean, texel for texel */
+    {
+        btf_model bm;
+        btf_error e = {0};
+        TU_OK(btf_model_read(model, &bm, &e), &e);
+        assert_non_null(bm.albedo);
+        assert_int_equal(bm.range_width, 256);
+        for (int i = 0; i < 256 * 256; i++) /* flat (the file's grid snaps 0 to a tiny step) */
+            assert_true(bm.range[i] == bm.range[0] && fabsf(bm.range[0]) < 1e-30f);
+        btf_dataset *d8 = NULL;
+        TU_OK(btf_dataset_open(eight, NULL, &d8, &e), &e);
+        const btf_dataset_info *i8 = btf_dataset_get_info(d8);
+        double *lum = calloc(256 * 256, sizeof *lum), total = 0.0;
+        assert_non_null(lum);
+        for (int v = 0; v < i8->n_views; v++)
+            for (int l = 0; l < i8->n_lights; l++) {
+                if (!btf_dataset_has(d8, v, l))
+                    continue;
+                btf_image im = {0};
+                TU_OK(btf_dataset_read(d8, v, l, &im, &e), &e);
+                for (int k = 0; k < 256 * 256; k++)
+                    lum[k] += 0.2126 * im.data[3 * k] + 0.7152 * im.data[3 * k + 1] +
+                              0.0722 * im.data[3 * k + 2];
+                btf_image_free(&im);
+            }
+        for (int k = 0; k < 256 * 256; k++)
+            total += lum[k];
+        double sxy = 0, sxx = 0, syy = 0, ma = 0, mb = 0;
+        for (int k = 0; k < 256 * 256; k++)
+            ma += bm.albedo[k], mb += lum[k] / total * 65536.0;
+        ma /= 65536.0, mb /= 65536.0;
+        for (int k = 0; k < 256 * 256; k++) {
+            double a = bm.albedo[k] - ma, b = lum[k] / total * 65536.0 - mb;
+            sxy += a * b, sxx += a * a, syy += b * b;
+        }
+        double corr = sxy / sqrt(sxx * syy);
+        print_message("albedo pattern vs the photos' mean luminance: correlation %.4f\n", corr);
+        assert_true(corr > 0.95);
+        free(lum);
+        btf_dataset_close(d8);
+        btf_model_free(&bm);
+    }
     /* the held-out pair beside its measured image, and a measured one */
     assert_int_equal(tu_run(tu_fmt("%s render -q %s --view 2.148,180.235 --light 2.148,180.235 "
                                    "--beside %s -o %s/held.png", tu_cli(), model, full, tu_dir),
@@ -247,8 +292,20 @@ static void bath_tile_end_to_end(void **state)
     assert_int_equal(tu_run(tu_fmt("%s render -q %s --view 9.398,2.873 --light 9.398,2.873 "
                                    "--beside %s -o %s/measured.png", tu_cli(), model, full,
                                    tu_dir), NULL), 0);
-    assert_int_equal(tu_run(tu_fmt("%s report -q %s %s -o %s/rep-bath", tu_cli(), full, model,
-                                   tu_dir), NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("%s synthesise -q %s --size 64x48 -o %s/bath-synth",
+                                   tu_cli(), model, tu_dir), NULL), 0);
+    assert_int_equal(tu_count_files(tu_fmt("%s/bath-synth", tu_dir)), 8);
+    out = tu_capture(tu_fmt("%s info %s", tu_cli(), model), &st);
+    assert_non_null(out);
+    assert_non_null(strstr(out, "8 of the 64 pairs measured"));
+    assert_non_null(strstr(out, "btfcar model 1.6"));
+    free(out);
+    char *rmsg = NULL;
+    int rrc = tu_run(tu_fmt("%s report -q %s %s -o %s/rep-bath", tu_cli(), full, model, tu_dir),
+                     &rmsg);
+    if (rrc != 0)
+        fail_msg("report: %d: %s", rrc, rmsg ? rmsg : "");
+    free(rmsg);
     char *json = read_text(tu_fmt("%s/rep-bath/report.json", tu_dir));
     cJSON *root = cJSON_Parse(json);
     assert_non_null(root);

@@ -128,6 +128,52 @@ static void warn_if_flat(const btf_dataset *ds, const btf_ps_result *ps,
     car->warn(car->warn_user, msg);
 }
 
+/* A set without a view under 3 lights (a flash capture: one light per
+ * view) gives photometric stereo nothing to solve; its images are still
+ * registered — every layout is rectified onto the sample plane, so a pixel
+ * is one surface point in every image. The mean of the images it holds is
+ * then the albedo's estimate over a flat range map (docs/model.md,
+ * "Structure without photometric stereo"): the layout of the sample (a
+ * mosaic's tiles and grout) is kept as the structure layer, and the CAR
+ * fields model what varies around it. */
+static btf_status registered_mean(const btf_dataset *ds, const btf_analyse_opts *o,
+                                  btf_model *m, double *spread, btf_error *err)
+{
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    btf_image height = {0}, mean = {0}, img = {0};
+    btf_status rc = btf_image_alloc(&height, in->width, in->height, 1, err);
+    if (rc == BTF_OK)
+        rc = btf_image_alloc(&mean, in->width, in->height, 3, err);
+    size_t n = (size_t)in->width * in->height * 3;
+    double *acc = rc == BTF_OK ? btf_calloc(n, sizeof(double), err) : NULL;
+    if (rc == BTF_OK && !acc)
+        rc = BTF_E_NOMEM;
+    int count = 0;
+    for (int v = 0; rc == BTF_OK && v < in->n_views; v++)
+        for (int l = 0; rc == BTF_OK && l < in->n_lights; l++) {
+            if (!btf_dataset_has(ds, v, l))
+                continue;
+            if ((rc = btf_dataset_read(ds, v, l, &img, err)) == BTF_OK) {
+                for (size_t i = 0; i < n; i++)
+                    acc[i] += isfinite(img.data[i]) ? img.data[i] : 0.0;
+                count++;
+            }
+            btf_image_free(&img);
+        }
+    if (rc == BTF_OK) {
+        memset(height.data, 0, (size_t)in->width * in->height * sizeof(float));
+        for (size_t i = 0; i < n; i++)
+            mean.data[i] = (float)(acc[i] / (count > 0 ? count : 1));
+        rc = range_tile(&height, o->range_size, m, err);
+    }
+    if (rc == BTF_OK && btf_structure_quilted(m) && !o->no_structure)
+        rc = btf_structure_albedo_from(&mean, m, spread, err);
+    free(acc);
+    btf_image_free(&height);
+    btf_image_free(&mean);
+    return rc;
+}
+
 static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, btf_model *m,
                               double *spread, btf_error *err)
 {
@@ -523,6 +569,8 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
     int no_ps = !o.no_range && !o.range_from && btf_photostereo_best_lights(ds) < 3;
     if (rc == 0 && !o.no_range && !no_ps)
         rc = stage_range(ds, &o, out, &spread, err);
+    else if (rc == 0 && no_ps && !o.no_structure) /* a flat map holds nothing else */
+        rc = registered_mean(ds, &o, out, &spread, err);
     if (rc == 0)
         rc = stage_fit(ds, &seg, &o, out, err);
     if (rc == 0 && btf_model_keep_margins(out, -1.0) != BTF_OK) /* for synthesis */
@@ -532,10 +580,20 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
         snprintf(o.report->segment_reason, sizeof o.report->segment_reason, "%s", seg.reason);
         structure_reason(out, &o, spread, o.report->structure_reason,
                          sizeof o.report->structure_reason);
-        if (no_ps)
+        if (no_ps && o.no_structure)
             snprintf(o.report->structure_reason, sizeof o.report->structure_reason,
-                     "no range map: photometric stereo needs one view with at least 3 lights, "
-                     "and the set holds at most %d at any view", btf_photostereo_best_lights(ds));
+                     "none: no range map (photometric stereo needs one view with at least 3 "
+                     "lights, and the set holds at most %d at any view) and --no-structure",
+                     btf_photostereo_best_lights(ds));
+        else if (no_ps) {
+            char kept[200];
+            snprintf(kept, sizeof kept, "%s", o.report->structure_reason);
+            snprintf(o.report->structure_reason, sizeof o.report->structure_reason,
+                     "a flat range map: photometric stereo needs one view with at least 3 "
+                     "lights, and the set holds at most %d at any view; the albedo pattern is "
+                     "the mean of the registered images (%s)", btf_photostereo_best_lights(ds),
+                     kept);
+        }
     }
     btf_segmentation_free(&seg);
     if (rc)

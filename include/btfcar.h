@@ -331,8 +331,10 @@ typedef enum btf_layout {
     BTF_LAYOUT_UBO2003,  /* "NNNNN tlAAA plBBB tvCCC pvDDD.jpg", per-view folders or flat */
     BTF_LAYOUT_UTIA,     /* tvCCC_pvDDD/tlAAA_plBBB_tvCCC_pvDDD.(png|exr) */
     BTF_LAYOUT_MANIFEST, /* TSV: path theta_l phi_l theta_v phi_v */
-    BTF_LAYOUT_UBO2014   /* one Bonn BTFDBB .btf file: DFMF, FMF, PVF or BDIF
+    BTF_LAYOUT_UBO2014,  /* one Bonn BTFDBB .btf file: DFMF, FMF, PVF or BDIF
                             (docs/datasets.md, "UBO2014 .btf files") */
+    BTF_LAYOUT_RTI       /* an RTI light file *.lp: "N", then "PATH X Y Z" per
+                            image; 1 view (theta 0) x N lights */
 } btf_layout;
 
 const char *btf_layout_name(btf_layout layout);
@@ -371,11 +373,12 @@ typedef struct btf_dataset_opts {
  * BTF_DEFAULT_MAX_PIXELS. */
 btf_dataset_opts btf_dataset_defaults(void);
 
-/* Detects the layout of `path` (a folder, or a manifest .tsv file), collects
- * the (light, view) pairs and checks that each pair is there once and that
- * every image has one size. A folder layout must hold the full grid (every
- * light with every view); a manifest may list any set of pairs (a sparse
- * set: info->n_pairs < n_views * n_lights, btf_dataset_has). */
+/* Detects the layout of `path` (a folder, a manifest .tsv file, an RTI light
+ * file *.lp or a Bonn .btf file), collects the (light, view) pairs and checks
+ * that each pair is there once and that every image has one size. A folder
+ * layout must hold the full grid (every light with every view); a manifest
+ * may list any set of pairs (a sparse set: info->n_pairs < n_views *
+ * n_lights, btf_dataset_has). */
 btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts,
                             btf_dataset **out, btf_error *err);
 void btf_dataset_close(btf_dataset *ds);

@@ -11,7 +11,8 @@
  *  - a manifest: a TSV file with the columns path, theta_l, phi_l, theta_v,
  *    phi_v (degrees; paths relative to the manifest's folder).
  * A folder is scanned by name patterns (one level of view folders); a file
- * is read as a manifest. Names in one dataset must follow one layout.
+ * is read as a manifest, or, named *.lp, as an RTI light file (io/rti_lp.c).
+ * Names in one dataset must follow one layout.
  */
 #include <stdio.h>
 #include "core/core.h"
@@ -31,6 +32,7 @@ const char *btf_layout_name(btf_layout layout)
     case BTF_LAYOUT_UTIA: return "UTIA";
     case BTF_LAYOUT_MANIFEST: return "manifest";
     case BTF_LAYOUT_UBO2014: return "UBO2014";
+    case BTF_LAYOUT_RTI: return "RTI";
     default: return "unknown";
     }
 }
@@ -292,6 +294,8 @@ btf_status btf_dataset_list_entries(const char *path, btf_dataset_entries *l, bt
     struct stat st;
     if (stat(path, &st) != 0)
         return btf_fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
+    if (S_ISREG(st.st_mode) && btf_rti_lp_name(path))
+        return btf_rti_lp_read(path, l, err); /* an RTI light file (io/rti_lp.c) */
     if (!S_ISDIR(st.st_mode))
         return read_manifest(l, path, err);
     btf_status rc = scan_folder(l, path, NULL, err);

@@ -131,6 +131,17 @@ btf_dir btf_near_field_dir(const double *pos);
  * Free l (also on failure) with btf_dataset_entries_free. */
 btf_status btf_dataset_list_entries(const char *path, btf_dataset_entries *l, btf_error *err);
 void btf_dataset_entries_free(btf_dataset_entries *l);
+/* RTI light files (io/rti_lp.c, layout BTF_LAYOUT_RTI): "N", then N lines
+ * "PATH X Y Z" (the unit vector towards the light; PATH relative to base,
+ * or absolute) as entries of view (0, 0). btf_rti_lp_name: 1 when path ends
+ * in ".lp". btf_rti_lp_parse reads n bytes of text named name (messages
+ * "NAME:LINE: ..."), checking that every image is a regular file when
+ * check_files; btf_rti_lp_read reads the file at path, images beside it.
+ * Free l (also on failure) with btf_dataset_entries_free. */
+int btf_rti_lp_name(const char *path);
+btf_status btf_rti_lp_parse(const char *text, size_t n, const char *name, const char *base,
+                            int check_files, btf_dataset_entries *l, btf_error *err);
+btf_status btf_rti_lp_read(const char *path, btf_dataset_entries *l, btf_error *err);
 
 /* PNG and JPEG decoding (io/png_jpeg.c) with libpng and libjpeg, silently:
  * errors and data-corruption warnings become BTF_E_FORMAT naming `name`.

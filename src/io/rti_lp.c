@@ -58,7 +58,7 @@ static btf_status add_entry(btf_dataset_entries *l, const char *path, btf_dir li
     char *p = strdup(path);
     if (!p)
         return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
-    l->items[l->count++] = (btf_dataset_entry){p, light, (btf_dir){0.0, 0.0}};
+    l->items[l->count++] = (btf_dataset_entry){p, light, (btf_dir){0.0, 0.0}, {0}};
     return BTF_OK;
 }
 

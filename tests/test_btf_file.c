@@ -3,16 +3,21 @@
  * "UBO2014 .btf files"): DFMF and BDIF written and read back through the
  * dataset interface, the colour models, every bad input (signature,
  * truncation at many offsets, counts that do not fit, NaN factors, an
- * unsupported colour model), bounded memory, and the CLI (info, export).
+ * unsupported colour model), bounded memory, the CLI (info, export), and
+ * a file of the database's published shape and length (400^2, 151 x 151,
+ * 78 + 76 + 74 half components: 83,542,344 bytes, written sparse).
  */
 #include "testutil.h"
 #include "io/ubo2014.h"
 
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <fcntl.h>
+#include <unistd.h>
 
 /* The small set of testutil.h: 3 views x 4 lights of 8 x 6 pixels. */
 static const int W = TU_SMALL_W, H = TU_SMALL_H;
@@ -490,6 +495,123 @@ static void test_generate_twin(void **state)
     btf_dataset_close(b);
 }
 
+/* Opening path fails with BTF_E_FORMAT and one line naming the file that
+ * contains each of the strings given (NULL-terminated). */
+static void expect_refused(const char *path, ...)
+{
+    btf_error err = {0};
+    btf_dataset *ds = NULL;
+    int rc = btf_dataset_open(path, NULL, &ds, &err);
+    assert_int_equal(rc, BTF_E_FORMAT);
+    assert_null(ds);
+    print_message("%s\n", err.msg);
+    assert_non_null(strstr(err.msg, path));
+    assert_null(strchr(err.msg, '\n'));
+    va_list ap;
+    va_start(ap, path);
+    for (const char *w; (w = va_arg(ap, const char *)) != NULL;) {
+        if (!strstr(err.msg, w))
+            print_error("message \"%s\" lacks \"%s\"\n", err.msg, w);
+        assert_non_null(strstr(err.msg, w));
+    }
+    va_end(ap);
+}
+
+/* A file of the Bonn database's published shape (docs/datasets.md,
+ * "UBO2014 .btf files"): 400 x 400 texels, the 151 x 151 directions, DFMF
+ * half floats with 78, 76 and 74 components per channel (228 in all, what
+ * the published sizes of 82.9 to 84.3 MB imply), colour model 11. Its
+ * length is exactly header 184,593 + 3 x 13 + 2 x 228 x (1 + 22,801 +
+ * 160,000) = 83,542,344 bytes. Only the header and the channels' 13-byte
+ * headers are written; the factors are a hole (zeros, finite) of a sparse
+ * file, which the reader maps. It opens and decodes; one byte shorter or
+ * longer it is refused with one line naming the file and the length its
+ * header implies. */
+static void test_bonn_shape_length(void **state)
+{
+    (void)state;
+    btf_dirset d;
+    assert_int_equal(btf_dirset_ubo151(&d, NULL), 0);
+    assert_int_equal(d.count, 151);
+    const int side = 400, k[3] = {78, 76, 74};
+    const uint32_t pairs = 151 * 151, px = 400 * 400;
+    ubo_bytes h = {0};
+    ubo_common_header(&h, "!DFMF08FCR", &d, &d, side, side, 0);
+    ubo_put_u32(&h, 0);  /* num_rotations */
+    ubo_put_u32(&h, 78); /* num_components: the largest */
+    ubo_put_u32(&h, 11); /* colour model 11, Ylog_UdivY_VdivY */
+    for (int i = 0; i < 3; i++)
+        ubo_put_f32(&h, 0.0f);
+    for (int i = 0; i < 9; i++)
+        ubo_put_f32(&h, i % 4 == 0 ? 1.0f : 0.0f);
+    btf_dirset_free(&d);
+    assert_int_equal(ubo_bytes_check(&h, "header", NULL), 0);
+    /* signature 10, meta block 291, sampling 4 + 151 x (12 + 151 x 8),
+     * width and height 8, rotations 4, DFMF fields 56 */
+    assert_int_equal(h.n, 184593);
+    char p[4096];
+    snprintf(p, sizeof p, "%s/bonn_400_151.btf", tu_dir);
+    int fd = open(p, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    assert_true(fd >= 0);
+    assert_int_equal(pwrite(fd, h.p, h.n, 0), (ssize_t)h.n);
+    uint64_t at = h.n;
+    for (int c = 0; c < 3; c++) {
+        unsigned char ch[13];
+        ch[0] = 2; /* half floats */
+        ubo_wr32(ch + 1, (uint32_t)k[c]);
+        ubo_wr32(ch + 5, pairs);
+        ubo_wr32(ch + 9, px);
+        assert_int_equal(pwrite(fd, ch, 13, (off_t)at), 13);
+        at += 13 + 2 * (uint64_t)k[c] * (1 + pairs + px);
+    }
+    free(h.p);
+    const uint64_t expected = 83542344;
+    assert_int_equal(at, expected);
+    assert_int_equal(ftruncate(fd, (off_t)expected), 0);
+    assert_int_equal(close(fd), 0);
+
+    btf_error err = {0};
+    btf_dataset *ds = NULL;
+    int rc = btf_dataset_open(p, NULL, &ds, &err);
+    if (rc)
+        print_error("%s\n", err.msg);
+    assert_int_equal(rc, 0);
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    assert_int_equal(in->layout, BTF_LAYOUT_UBO2014);
+    assert_int_equal(in->n_views, 151);
+    assert_int_equal(in->n_lights, 151);
+    assert_int_equal(in->width, side);
+    assert_int_equal(in->height, side);
+    const btf_ubo2014_info *u = btf_dataset_ubo2014(ds);
+    assert_string_equal(u->variant, "DFMF");
+    assert_int_equal(u->scalar_size, 2);
+    assert_int_equal(u->colour_model, 11);
+    for (int c = 0; c < 3; c++)
+        assert_int_equal(u->components[c], k[c]);
+    assert_int_equal(u->file_bytes, expected);
+    assert_int_equal(u->data_bytes, 2 * 228 * (uint64_t)(pairs + px));
+    btf_image img = {0};
+    assert_int_equal(btf_dataset_read(ds, 75, 75, &img, &err), 0);
+    assert_int_equal(img.width, side);
+    assert_true(isfinite(img.data[0]) && isfinite(img.data[3 * (px - 1) + 2]));
+    btf_image_free(&img);
+    btf_dataset_close(ds);
+
+    assert_int_equal(truncate(p, (off_t)(expected - 1)), 0);
+    expect_refused(p, "truncated", "DFMF channel 2", "expected a file of 83542344 bytes",
+                   "the file has 83542343", (const char *)NULL);
+    assert_int_equal(truncate(p, (off_t)(expected + 1)), 0);
+    expect_refused(p, "1 byte after the end", "expected a file of 83542344 bytes",
+                   "the file has 83542345", (const char *)NULL);
+    /* cut inside channel 0: the later channels' sizes are not known yet */
+    uint64_t ch1 = 184593 + 13 + 2 * 78 * (uint64_t)(1 + pairs + px);
+    assert_int_equal(truncate(p, (off_t)(ch1 - 1)), 0);
+    expect_refused(p, "truncated", "DFMF channel 0",
+                   tu_fmt("expected a file of at least %llu bytes", (unsigned long long)ch1),
+                   (const char *)NULL);
+    unlink(p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -501,6 +623,7 @@ int main(void)
         cmocka_unit_test(test_memory_bounded),
         cmocka_unit_test(test_cli_info_export),
         cmocka_unit_test(test_generate_twin),
+        cmocka_unit_test(test_bonn_shape_length),
     };
     return cmocka_run_group_tests(tests, tu_setup_small, tu_teardown_small);
 }

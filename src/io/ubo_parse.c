@@ -262,6 +262,34 @@ static btf_status check_scalar(cursor *c, uint32_t s)
     return BTF_OK;
 }
 
+/* The S, U and SxV of k components of `scalar` bytes that follow at the
+ * cursor (U of rows, SxV of cols rows: DFMF's channel, FMF's matrix),
+ * checked against the bytes left as one block, so that a short file is
+ * told the length its header implies: exactly when the block ends the
+ * file (last), else at least. */
+static btf_status factors_fit(cursor *c, const char *what, uint32_t k, uint32_t scalar,
+                              uint32_t rows, uint32_t cols, int last)
+{
+    uint64_t per = (uint64_t)scalar * (1 + (uint64_t)rows + cols); /* < 2^37 */
+    uint64_t pos = c->pos, size = c->f->size, left = size - pos;
+    if (k <= left / per)
+        return BTF_OK;
+    if (k > (UINT64_MAX - pos) / per) /* beyond 2^64 bytes */
+        return btf_fail(c->err, BTF_E_FORMAT,
+                        "%s: truncated: %s (%u components of %u bytes: S, U of %u rows, SxV of "
+                        "%u rows) does not fit the %llu bytes left at byte %llu (the file has "
+                        "%llu)", c->f->name, what, k, scalar, rows, cols,
+                        (unsigned long long)left, (unsigned long long)pos,
+                        (unsigned long long)size);
+    uint64_t bytes = k * per;
+    return btf_fail(c->err, BTF_E_FORMAT,
+                    "%s: truncated: %s (%u components of %u bytes: S, U of %u rows, SxV of %u "
+                    "rows; %llu bytes from byte %llu) does not fit: expected a file of %s%llu "
+                    "bytes, the file has %llu", c->f->name, what, k, scalar, rows, cols,
+                    (unsigned long long)bytes, (unsigned long long)pos, last ? "" : "at least ",
+                    (unsigned long long)(pos + bytes), (unsigned long long)size);
+}
+
 /* §3: DFMF, one U and one SxV per channel. */
 static btf_status parse_dfmf(cursor *c, ubo_file *f)
 {
@@ -310,6 +338,11 @@ static btf_status parse_dfmf(cursor *c, ubo_file *f)
         f->info.components[ch] = (int)k;
         if (ch == 0 || (int)s > f->info.scalar_size)
             f->info.scalar_size = (int)s;
+        char what[24];
+        snprintf(what, sizeof what, "DFMF channel %d", ch);
+        rc = factors_fit(c, what, k, s, rows, cols, ch == 2);
+        if (rc)
+            return rc;
         ubo_matrix sv;
         rc = take_matrix(c, &sv, 1, k, (int)s, "the singular values");
         if (!rc)
@@ -372,6 +405,9 @@ static btf_status parse_fmf(cursor *c, ubo_file *f, int extended)
         return btf_fail(c->err, BTF_E_FORMAT, "%s: FMF matrix has 0 components", f->name);
     f->transposed = tr;
     f->info.scalar_size = (int)s;
+    rc = factors_fit(c, "the FMF matrix", k, s, rows, cols, 1);
+    if (rc)
+        return rc;
     ubo_matrix sv;
     rc = take_matrix(c, &sv, 1, k, (int)s, "the singular values");
     if (!rc)
@@ -653,9 +689,12 @@ static btf_status check_parsed(cursor *c, ubo_file *f, int skip_finite, uint64_t
     btf_status rc = BTF_OK;
     if (c->pos != f->size)
         rc = btf_fail(err, BTF_E_FORMAT,
-                      "%s: %llu bytes after the end of the %s data at byte %llu (the file must "
-                      "end there)", f->name, (unsigned long long)(f->size - c->pos),
-                      f->info.variant, (unsigned long long)c->pos);
+                      "%s: %llu byte%s after the end of the %s data at byte %llu: expected a "
+                      "file of %llu bytes, the file has %llu", f->name,
+                      (unsigned long long)(f->size - c->pos), f->size - c->pos == 1 ? "" : "s",
+                      f->info.variant,
+                      (unsigned long long)c->pos, (unsigned long long)c->pos,
+                      (unsigned long long)f->size);
     if (!rc && f->variant == UBO_DFMF && !model_supported(f->info.colour_model))
         rc = btf_fail(err, BTF_E_UNSUPPORTED,
                       "%s: colour model %d not supported (0, 1, 3, 4, 9, 10, 11 and 12 are)",

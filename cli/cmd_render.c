@@ -121,8 +121,10 @@ static void rf_report_times(const btf_rf_model *m, int flat, btf_dir view, const
 }
 
 /* Whether the model has what the renderer interpolates over: view and
- * light direction sets it can triangulate (at least 3 directions, at most
- * BTF_HEMISPHERE_MAX_POINTS, no two the same). Checked here, not left to
+ * light direction sets it can triangulate (at most BTF_HEMISPHERE_MAX_POINTS,
+ * no two the same, not all on one line; a set of 1 or 2 directions, one
+ * camera over a dome, is made a triangle by the renderer's ghost
+ * directions, docs/render.md "Sparse pair sets"). Checked here, not left to
  * the renderer, whose messages cannot name the file they have not seen. */
 static btf_status model_renders(const char *path, const btf_model *m, btf_error *err)
 {
@@ -134,6 +136,8 @@ static btf_status model_renders(const char *path, const btf_model *m, btf_error 
     for (int i = 0; i < 2; i++) {
         btf_hemisphere *h = NULL;
         btf_error why = {0};
+        if (sets[i]->count < 3)
+            continue;
         if (btf_hemisphere_build(sets[i], &h, &why) != BTF_OK)
             return cli_set_error(err, why.code, "%s: its %s cannot be rendered: %s", path,
                                  i ? "lights" : "views", why.msg);

@@ -99,18 +99,18 @@ static int put_table(params *pr, int tab, const btf_hemisphere_table *t)
 }
 
 /* Everything the pass reads but the G-buffer and the images. */
-static btf_status build_params(const btf_model *m, const btf_render_plan *p,
-                               const btf_hemisphere *views, const btf_hemisphere *lights,
-                               const int *subs, int n, const uint64_t *offsets, params *pr,
-                               btf_error *err)
+static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
+                               const btf_render_plan *p, const btf_hemisphere *views,
+                               const btf_hemisphere *lights, const int *subs, int n,
+                               const uint64_t *offsets, params *pr, btf_error *err)
 {
     int32_t zero[BTF_RP_INTS] = {0};
     float fzero[BTF_RP_FLOATS] = {0};
     if (put_ints(pr, zero, BTF_RP_INTS) < 0 || put_floats(pr, fzero, BTF_RP_FLOATS) < 0)
         return btf_fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
-    size_t pairs = (size_t)m->views.count * (size_t)m->lights.count;
+    size_t pairs = (size_t)sets->views.count * (size_t)sets->lights.count;
     int32_t *tmp = btf_alloc(pairs + 2 * (size_t)m->n_subspaces + 1, sizeof *tmp, err);
-    uint8_t *index = tmp ? btf_render_pair_index(m, err) : NULL; /* sparse sets filled */
+    uint8_t *index = tmp ? btf_render_pair_index(m, sets, err) : NULL; /* sparse sets filled */
     if (!tmp || !index) {
         free(tmp);
         return BTF_E_NOMEM;
@@ -128,7 +128,7 @@ static btf_status build_params(const btf_model *m, const btf_render_plan *p,
     long have = put_ints(pr, tmp, (size_t)m->n_subspaces);
     long texoff = put_ints(pr, tmp + m->n_subspaces, (size_t)m->n_subspaces);
     free(tmp);
-    float *gains = btf_render_gains(m, err);
+    float *gains = btf_render_gains(m, sets, err);
     if (!gains)
         return BTF_E_NOMEM;
     long gain = put_floats(pr, gains, pairs * 3);
@@ -145,7 +145,7 @@ static btf_status build_params(const btf_model *m, const btf_render_plan *p,
     int32_t *hi = pr->ints;
     float *hf = pr->floats;
     hi[BTF_RP_SIZE] = p->side;
-    hi[BTF_RP_NSET] = m->lights.count;
+    hi[BTF_RP_NSET] = sets->lights.count;
     hi[BTF_RP_NLIGHTS] = p->n_lights;
     hi[BTF_RP_INDEX] = (int32_t)idx;
     hi[BTF_RP_HAVE] = (int32_t)have;
@@ -373,12 +373,17 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     if (rc == BTF_OK && !tex) /* nothing needed: a buffer the shader may bind, never read */
         rc = btf_vk_buffer_create(ps.vk, 16, &tex, err);
     ps.bufs[1] = tex;
+    btf_render_sets sets;
+    memset(&sets, 0, sizeof sets);
     if (rc == BTF_OK)
-        rc = btf_hemisphere_build(&m->views, &views, err);
+        rc = btf_render_sets_make(m, &sets, err);
     if (rc == BTF_OK)
-        rc = btf_hemisphere_build(&m->lights, &lights, err);
+        rc = btf_hemisphere_build(&sets.views, &views, err);
     if (rc == BTF_OK)
-        rc = build_params(m, p, views, lights, subs, n, offs, &ps.pr, err);
+        rc = btf_hemisphere_build(&sets.lights, &lights, err);
+    if (rc == BTF_OK)
+        rc = build_params(m, &sets, p, views, lights, subs, n, offs, &ps.pr, err);
+    btf_render_sets_free(&sets);
     int shadows = 0;
     float bounds[2] = {0.0f, 0.0f};
     if (rc == BTF_OK)

@@ -55,6 +55,34 @@ static void write_manifest(const char *path, int (*keep)(int v, int l))
 static int keep_all(int v, int l) { (void)v, (void)l; return 1; }
 static int keep_ninth(int v, int l) { return (v + l) % 9 == 0; } /* every view and light */
 static int keep_one_view(int v, int l) { (void)l; return v == 0; }
+static int keep_two_views(int v, int l) { (void)l; return v == 0 || v == 1; }
+
+/* The model renders on both backends alike, at its measured view and at
+ * one it does not hold (the renderer's ghost directions, docs/render.md). */
+static void renders_alike(const char *model, const char *tag)
+{
+    for (int k = 0; k < 2; k++) {
+        const char *view = k ? "40,200" : "0,0";
+        for (int gpu = 0; gpu < 2; gpu++) {
+            char *msg = NULL;
+            int rc = tu_run(tu_fmt("%s render -q %s --view %s --light 30,45 --size 24x16 "
+                                   "--backend %s -o %s/%s-%d-%d.png", tu_cli(), model, view,
+                                   gpu ? "gpu" : "cpu", tu_dir, tag, k, gpu), &msg);
+            if (rc != 0)
+                fail_msg("%s render at view %s: %s", tag, view, msg ? msg : "");
+            free(msg);
+        }
+        size_t n0 = 0, n1 = 0;
+        unsigned char *a = tu_slurp(tu_fmt("%s/%s-%d-0.png", tu_dir, tag, k), &n0);
+        unsigned char *b = tu_slurp(tu_fmt("%s/%s-%d-1.png", tu_dir, tag, k), &n1);
+        assert_non_null(a);
+        assert_non_null(b);
+        assert_int_equal(n0, n1);
+        assert_memory_equal(a, b, n0);
+        free(a);
+        free(b);
+    }
+}
 
 static char *read_text(const char *path)
 {
@@ -173,8 +201,8 @@ static void sparse_set_analyses_and_renders(void **state)
     free(json);
 }
 
-/* One view under every light: photometric stereo and the analysis work,
- * the model keeps one view. */
+/* One view under every light (a dome): photometric stereo and the
+ * analysis work, the model keeps one view and renders; two views too. */
 static void one_view_set(void **state)
 {
     (void)state;
@@ -190,6 +218,14 @@ static void one_view_set(void **state)
     assert_int_equal(m.lights.count, 81);
     assert_non_null(m.range); /* photometric stereo ran on the one view */
     btf_model_free(&m);
+    renders_alike(model, "oneview");
+    /* two views: one ghost */
+    char two[4200], model2[4200];
+    snprintf(two, sizeof two, "%s/twoviews.tsv", tu_dir);
+    write_manifest(two, keep_two_views);
+    snprintf(model2, sizeof model2, "%s/twoviews.btfcar", tu_dir);
+    assert_int_equal(tu_run(tu_fmt("%s analyse -q %s -o %s", tu_cli(), two, model2), NULL), 0);
+    renders_alike(model2, "twoviews");
 }
 
 /* The real capture: bath-tile's nine flash photos. The model is analysed

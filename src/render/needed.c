@@ -95,18 +95,22 @@ btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf
     if (!w.ctx)
         return BTF_E_NOMEM;
     memset(w.ctx, 0, sizeof *w.ctx);
-    if ((rc = btf_render_ctx_lights(w.ctx, lights, n_lights, err)) ||
-        (rc = btf_hemisphere_build(&m->views, &views, err)) ||
-        (rc = btf_hemisphere_build(&m->lights, &lts, err)))
+    btf_render_sets sets;
+    if ((rc = btf_render_sets_make(m, &sets, err)))
         goto done;
-    btf_hemisphere_get_table(views, &w.ctx->views);
-    btf_hemisphere_get_table(lts, &w.ctx->lights);
-    if (!(pair_index = btf_render_pair_index(m, err))) {
-        rc = BTF_E_NOMEM;
+    if ((rc = btf_render_ctx_lights(w.ctx, lights, n_lights, err)) ||
+        (rc = btf_hemisphere_build(&sets.views, &views, err)) ||
+        (rc = btf_hemisphere_build(&sets.lights, &lts, err)) ||
+        !(pair_index = btf_render_pair_index(m, &sets, err))) {
+        btf_render_sets_free(&sets);
+        rc = rc ? rc : BTF_E_NOMEM;
         goto done;
     }
+    w.ctx->n_lights_set = sets.lights.count;
+    btf_render_sets_free(&sets);
+    btf_hemisphere_get_table(views, &w.ctx->views);
+    btf_hemisphere_get_table(lts, &w.ctx->lights);
     w.ctx->index = pair_index;
-    w.ctx->n_lights_set = m->lights.count;
     w.rows_needed = btf_alloc((size_t)(g->height > 0 ? g->height : 1),
                               (size_t)m->n_subspaces, err);
     if (!w.rows_needed) {

@@ -7,6 +7,7 @@
 #include "model/model.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -56,6 +57,90 @@ float btf_render_ambient(const btf_model *m)
     return m->albedo ? (isfinite(m->ambient) && m->ambient > 0.0f ? m->ambient : 0.0f) : -1.0f;
 }
 
+/* The direction nearest to d among set's (ties: the lowest index). */
+static int nearest_dir(const btf_dirset *set, btf_dir d)
+{
+    int best = 0;
+    for (int i = 1; i < set->count; i++)
+        if (btf_dir_angle(set->dirs[i], d) < btf_dir_angle(set->dirs[best], d))
+            best = i;
+    return best;
+}
+
+/* Ghost directions that make a set of 1 or 2 directions a triangle: for one
+ * direction two at theta 80 degrees, 120 degrees of azimuth either side of
+ * it; for two, the one of eight at theta 80 whose triangle with them is
+ * widest (on the disk of sin theta (cos phi, sin phi)). */
+static int ghosts(const btf_dirset *set, btf_dir *g)
+{
+    if (set->count == 1) {
+        g[0] = (btf_dir){80.0, fmod(set->dirs[0].phi + 120.0, 360.0)};
+        g[1] = (btf_dir){80.0, fmod(set->dirs[0].phi + 240.0, 360.0)};
+        return 2;
+    }
+    double a[3], b[3], best = -1.0;
+    btf_dir_to_vec(set->dirs[0], a);
+    btf_dir_to_vec(set->dirs[1], b);
+    for (int k = 0; k < 8; k++) {
+        btf_dir c = {80.0, 45.0 * k};
+        double v[3];
+        btf_dir_to_vec(c, v);
+        double area = fabs((b[0] - a[0]) * (v[1] - a[1]) - (b[1] - a[1]) * (v[0] - a[0]));
+        if (area > best) {
+            best = area;
+            g[0] = c;
+        }
+    }
+    return 1;
+}
+
+/* One set the renderer triangulates and, per direction, the model's. */
+static btf_status render_set(const btf_dirset *set, btf_dirset *out, int **of, btf_error *err)
+{
+    btf_dir list[2 + 2];
+    btf_status rc;
+    if (set->count >= 3 || set->count < 1) {
+        rc = btf_dirset_copy(out, set, err);
+    } else {
+        for (int i = 0; i < set->count; i++)
+            list[i] = set->dirs[i];
+        int n = set->count + ghosts(set, list + set->count);
+        rc = btf_dirset_from_list(out, list, n, err);
+        if (rc == BTF_OK)
+            snprintf(out->name, sizeof out->name, "%s", set->name);
+    }
+    if (rc)
+        return rc;
+    *of = btf_alloc((size_t)(out->count > 0 ? out->count : 1), sizeof(int), err);
+    if (!*of) {
+        btf_dirset_free(out);
+        return BTF_E_NOMEM;
+    }
+    for (int i = 0; i < out->count; i++)
+        (*of)[i] = set->count >= 3 ? i : nearest_dir(set, out->dirs[i]);
+    return BTF_OK;
+}
+
+btf_status btf_render_sets_make(const btf_model *m, btf_render_sets *s, btf_error *err)
+{
+    memset(s, 0, sizeof *s);
+    btf_status rc = render_set(&m->views, &s->views, &s->view_of, err);
+    if (rc == BTF_OK)
+        rc = render_set(&m->lights, &s->lights, &s->light_of, err);
+    if (rc)
+        btf_render_sets_free(s);
+    return rc;
+}
+
+void btf_render_sets_free(btf_render_sets *s)
+{
+    btf_dirset_free(&s->views);
+    btf_dirset_free(&s->lights);
+    free(s->view_of);
+    free(s->light_of);
+    memset(s, 0, sizeof *s);
+}
+
 /* The measured pair nearest to pair p in the space of pairs (Haindl &
  * Filip 2007, section III: the Euclidean distance of the unit direction
  * vectors, here of views and lights together); ties: the lowest pair. */
@@ -79,9 +164,9 @@ static size_t nearest_measured(const btf_model *m, const double *vv, const doubl
     return best;
 }
 
-/* For every pair of the grid the pair whose image and gain stand for it:
- * itself when measured; in a sparse set (docs/render.md, "Sparse pair
- * sets") the nearest measured pair. */
+/* For every pair of the model's grid the pair whose image and gain stand
+ * for it: itself when measured; in a sparse set (docs/render.md, "Sparse
+ * pair sets") the nearest measured pair. */
 static btf_status pair_sources(const btf_model *m, size_t **out, btf_error *err)
 {
     size_t n = (size_t)m->views.count * (size_t)m->lights.count;
@@ -104,31 +189,41 @@ static btf_status pair_sources(const btf_model *m, size_t **out, btf_error *err)
     return BTF_OK;
 }
 
-uint8_t *btf_render_pair_index(const btf_model *m, btf_error *err)
+/* The model's pair standing for pair p of the renderer's grid. */
+static size_t model_pair(const btf_model *m, const btf_render_sets *s, const size_t *src,
+                         size_t p)
 {
-    size_t n = (size_t)m->views.count * (size_t)m->lights.count, *src = NULL;
+    size_t L = (size_t)s->lights.count;
+    return src[(size_t)s->view_of[p / L] * (size_t)m->lights.count + (size_t)s->light_of[p % L]];
+}
+
+uint8_t *btf_render_pair_index(const btf_model *m, const btf_render_sets *s, btf_error *err)
+{
+    size_t n = (size_t)s->views.count * (size_t)s->lights.count, *src = NULL;
     uint8_t *idx = btf_alloc(n ? n : 1, 1, err);
     if (!idx || pair_sources(m, &src, err)) {
         free(idx);
         return NULL;
     }
     for (size_t p = 0; p < n; p++)
-        idx[p] = m->index ? m->index[src[p]] : 0;
+        idx[p] = m->index ? m->index[model_pair(m, s, src, p)] : 0;
     free(src);
     return idx;
 }
 
-float *btf_render_gains(const btf_model *m, btf_error *err)
+float *btf_render_gains(const btf_model *m, const btf_render_sets *s, btf_error *err)
 {
-    size_t n = (size_t)m->views.count * (size_t)m->lights.count, *src = NULL;
+    size_t n = (size_t)s->views.count * (size_t)s->lights.count, *src = NULL;
     float *g = btf_alloc(n ? 3 * n : 1, sizeof(float), err);
     if (!g || pair_sources(m, &src, err)) {
         free(g);
         return NULL;
     }
-    for (size_t p = 0; p < n; p++)
+    for (size_t p = 0; p < n; p++) {
+        size_t q = model_pair(m, s, src, p);
         for (int c = 0; c < 3; c++)
-            g[3 * p + c] = m->gain ? m->gain[3 * src[p] + c] : 1.0f;
+            g[3 * p + c] = m->gain ? m->gain[3 * q + c] : 1.0f;
+    }
     free(src);
     return g;
 }

@@ -79,24 +79,35 @@ void btf_render_material_free(btf_render_material *rm)
 
 static btf_status build_tables(const btf_model *m, btf_render_material *rm, btf_error *err)
 {
-    size_t pairs = (size_t)m->views.count * (size_t)m->lights.count;
-    rm->n_views = m->views.count;
-    rm->n_lights = m->lights.count;
+    btf_render_sets sets;
+    btf_status rc = btf_render_sets_make(m, &sets, err);
+    if (rc)
+        return rc;
+    size_t pairs = (size_t)sets.views.count * (size_t)sets.lights.count;
+    rm->n_views = sets.views.count;
+    rm->n_lights = sets.lights.count;
     rm->n_subspaces = m->n_subspaces;
-    rm->index = btf_render_pair_index(m, err);
+    rm->index = btf_render_pair_index(m, &sets, err);
     rm->tex = btf_alloc((size_t)m->n_subspaces, sizeof *rm->tex, err);
-    rm->gain = btf_render_gains(m, err);
-    if (!rm->index || !rm->tex || !rm->gain)
+    rm->gain = btf_render_gains(m, &sets, err);
+    if (!rm->index || !rm->tex || !rm->gain) {
+        btf_render_sets_free(&sets);
         return BTF_E_NOMEM;
+    }
     memset(rm->tex, 0, (size_t)m->n_subspaces * sizeof *rm->tex);
     for (size_t i = 0; i < pairs; i++)
-        if (rm->index[i] >= m->n_subspaces)
+        if (rm->index[i] >= m->n_subspaces) {
+            btf_render_sets_free(&sets);
             return btf_fail(err, BTF_E_FORMAT, "index table entry %zu names subspace %d of %d",
                             i, rm->index[i], m->n_subspaces);
+        }
     rm->light_outer_z = btf_render_light_outer_z(m);
     rm->ambient = btf_render_ambient(m);
-    btf_status rc = btf_hemisphere_build(&m->views, &rm->views, err);
-    return rc ? rc : btf_hemisphere_build(&m->lights, &rm->lights, err);
+    rc = btf_hemisphere_build(&sets.views, &rm->views, err);
+    if (rc == BTF_OK)
+        rc = btf_hemisphere_build(&sets.lights, &rm->lights, err);
+    btf_render_sets_free(&sets);
+    return rc;
 }
 
 btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,

@@ -90,15 +90,26 @@ float btf_render_light_outer_z(const btf_model *m);
 /* The shading's ambient term of m (btf_render_shared.h): -1 without a
  * structure layer (the plain bump factor). */
 float btf_render_ambient(const btf_model *m);
-/* The index table the shading reads (views x lights, the caller frees it):
- * the model's, where a sparse model (BTF_PAIR_NONE entries) lets each pair
- * it did not measure stand for the measured pair nearest in the space of
- * pairs (docs/render.md, "Sparse pair sets"). */
-uint8_t *btf_render_pair_index(const btf_model *m, btf_error *err);
+/* The direction sets the renderer triangulates (docs/render.md, "Sparse
+ * pair sets"): the model's; a set of 1 or 2 directions (one camera over a
+ * light dome) gains ghost directions to make a triangle, each standing for
+ * the set's direction nearest to it. view_of[i], light_of[j]: the model's
+ * direction that the renderer's direction i, j stands for. */
+typedef struct btf_render_sets {
+    btf_dirset views, lights;
+    int *view_of, *light_of;
+} btf_render_sets;
+btf_status btf_render_sets_make(const btf_model *m, btf_render_sets *s, btf_error *err);
+void btf_render_sets_free(btf_render_sets *s);
+/* The index table the shading reads (the renderer's views x lights, the
+ * caller frees it): the model's, where a sparse model (BTF_PAIR_NONE
+ * entries) lets each pair it did not measure stand for the measured pair
+ * nearest in the space of pairs (docs/render.md, "Sparse pair sets"). */
+uint8_t *btf_render_pair_index(const btf_model *m, const btf_render_sets *s, btf_error *err);
 /* The pair gains the shading multiplies (views x lights x 3 floats, the
  * caller frees them): the model's, or 1 for a model without; a pair not
  * measured takes its stand-in's (btf_render_pair_index). */
-float *btf_render_gains(const btf_model *m, btf_error *err);
+float *btf_render_gains(const btf_model *m, const btf_render_sets *s, btf_error *err);
 /* The factor subspace k's texture is scaled by before shading: 1 / (a +
  * l_z) of its representative light with a structure layer, else 1. */
 float btf_render_reflectance(const btf_model *m, int k);

@@ -512,11 +512,11 @@ static int record_carry(btf_vk_job *job, const batch *bt, const batch_buffers *b
     return rc;
 }
 
-/* Where a batch's images go: host images, or a device buffer at float
- * offsets dev_off[j] (btf_gpu_synthesise_device). */
+/* Where a batch's images go: host images, or device buffers dev[j] at
+ * float offsets dev_off[j] (btf_gpu_synthesise_device). */
 typedef struct batch_dest {
     btf_image *images;
-    btf_vk_buffer *dev;
+    btf_vk_buffer *const *dev;
     const uint64_t *dev_off;
 } batch_dest;
 
@@ -571,7 +571,7 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
                             chunks((uint64_t)bt->width * (y1 - y0)), err);
     uint64_t strip_bytes = 4ull * bt->width * (y1 - y0) * 3;
     for (int j = 0; rc == 0 && dst->dev && j < bt->n_images; j++) /* on the device */
-        rc = btf_vk_job_copy(job, b->out, 4ull * bt->unmix[j].out_off, dst->dev,
+        rc = btf_vk_job_copy(job, b->out, 4ull * bt->unmix[j].out_off, dst->dev[j],
                              4ull * (dst->dev_off[j] + (uint64_t)y0 * bt->width * 3), strip_bytes,
                              err);
     if (rc == 0) {
@@ -721,7 +721,8 @@ static btf_status run_all(btf_gpu *g, const btf_model *m, const int *subspaces, 
                         o->tileable != 0, limit, &bt, err);
         if (rc)
             break;
-        batch_dest d = {dst->images ? dst->images + start : NULL, dst->dev,
+        batch_dest d = {dst->images ? dst->images + start : NULL,
+                        dst->dev ? dst->dev + start : NULL,
                         dst->dev_off ? dst->dev_off + start : NULL};
         rc = run_batch(g, &bt, o->seed, &d, err);
         for (int j = 0; rc == 0 && dst->images && j < bt.n_images; j++)
@@ -802,47 +803,75 @@ static btf_status match_on_host(btf_gpu *g, const btf_model *m, int subspace,
     return rc;
 }
 
+/* Images in order into buffers of at most limit bytes: buffer[j] and the
+ * float offset within it; bytes[b] each buffer's size. */
+static btf_status pack_images(int n, const int *w, const int *h, uint64_t limit, int *buffer,
+                              uint64_t *offsets, uint64_t *bytes, btf_error *err)
+{
+    int b = 0;
+    memset(bytes, 0, BTF_GPU_DEVICE_BUFFERS * sizeof *bytes);
+    uint64_t total = 0;
+    for (int j = 0; j < n; j++)
+        total += 4ull * w[j] * h[j] * 3;
+    for (int j = 0; j < n; j++) {
+        uint64_t need = 4ull * w[j] * h[j] * 3;
+        if (need > limit)
+            return btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis to the device: one image of "
+                            "%dx%d needs %.1f MiB, more than the device's largest storage "
+                            "buffer of %.1f MiB; use the CPU backend", w[j], h[j],
+                            need / 1048576.0, limit / 1048576.0);
+        if (bytes[b] + need > limit)
+            b++;
+        if (b >= BTF_GPU_DEVICE_BUFFERS)
+            return btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis to the device: %d images need "
+                            "%.1f MiB, more than %d storage buffers of the device's limit of "
+                            "%.1f MiB hold; synthesise fewer or smaller images at once", n,
+                            total / 1048576.0, BTF_GPU_DEVICE_BUFFERS, limit / 1048576.0);
+        buffer[j] = b;
+        offsets[j] = bytes[b] / 4;
+        bytes[b] += need;
+    }
+    return BTF_OK;
+}
+
 btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
                                      const btf_synth_opts *opts, btf_vk_buffer **out,
-                                     uint64_t *offsets, btf_error *err)
+                                     int *buffer, uint64_t *offsets, btf_error *err)
 {
     btf_synth_opts o = btf_synth_resolve(opts);
-    *out = NULL;
-    if (!g || n < 1 || !offsets)
-        return btf_fail(err, BTF_E_ARG, "GPU synthesis to the device: no GPU, no offsets or "
+    for (int b = 0; out && b < BTF_GPU_DEVICE_BUFFERS; b++)
+        out[b] = NULL;
+    if (!g || n < 1 || !offsets || !out || !buffer)
+        return btf_fail(err, BTF_E_ARG, "GPU synthesis to the device: no GPU, no outputs or "
                         "%d images (at least 1)", n);
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
     int *w = btf_calloc((size_t)n * 2, sizeof(int), err);
-    btf_status rc = w ? check_all(m, subspaces, n, &o, w, w + n, &margins, err) : BTF_E_NOMEM;
-    uint64_t floats = 0;
-    for (int j = 0; rc == 0 && j < n; j++) {
-        offsets[j] = floats;
-        floats += (uint64_t)w[j] * w[n + j] * 3;
-    }
-    uint64_t limit = btf_vk_info(g->vk)->max_storage_buffer_range;
-    if (g->max_buffer_bytes && g->max_buffer_bytes < limit)
-        limit = g->max_buffer_bytes;
-    if (rc == 0 && 4 * floats > limit)
-        rc = btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis to the device: %d images need "
-                      "%.1f MiB in one storage buffer, more than the device's limit of %.1f MiB; "
-                      "synthesise fewer or smaller images at once", n, 4 * floats / 1048576.0,
-                      limit / 1048576.0);
+    btf_vk_buffer **dev = btf_calloc((size_t)n, sizeof *dev, err);
+    btf_status rc = w && dev ? check_all(m, subspaces, n, &o, w, w + n, &margins, err)
+                             : BTF_E_NOMEM;
+    uint64_t bytes[BTF_GPU_DEVICE_BUFFERS];
     if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, 4 * floats, out, err);
-    batch_dest d = {NULL, *out, offsets};
+        rc = pack_images(n, w, w + n, btf_gpu_max_buffer_bytes(g), buffer, offsets, bytes, err);
+    for (int b = 0; rc == 0 && b < BTF_GPU_DEVICE_BUFFERS && bytes[b] > 0; b++)
+        rc = btf_vk_buffer_create(g->vk, bytes[b], &out[b], err);
+    for (int j = 0; rc == 0 && j < n; j++)
+        dev[j] = out[buffer[j]];
+    batch_dest d = {NULL, dev, offsets};
     if (rc == 0)
         rc = run_all(g, m, subspaces, n, &o, w, w + n, (const int (*)[3][BTF_MAX_LEVELS])margins,
                      &d, err);
     btf_image pattern = {0}; /* the structure layer's, quilted once per size */
     for (int j = 0; rc == BTF_OK && j < n; j++)
-        rc = match_on_host(g, m, subspaces[j], &o, *out, offsets[j], w[j], w[n + j], &pattern,
-                           err);
+        rc = match_on_host(g, m, subspaces[j], &o, out[buffer[j]], offsets[j], w[j], w[n + j],
+                           &pattern, err);
     btf_image_free(&pattern);
-    if (rc) {
-        btf_vk_buffer_destroy(*out);
-        *out = NULL;
-    }
+    if (rc)
+        for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++) {
+            btf_vk_buffer_destroy(out[b]);
+            out[b] = NULL;
+        }
     free(margins);
+    free(dev);
     free(w);
     return rc;
 }

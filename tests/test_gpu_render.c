@@ -343,6 +343,52 @@ static void test_bands(void **state)
     btf_model_free(&m);
 }
 
+/* The subspace images over several storage buffers (issue 31): with a
+ * limit that holds one image per buffer, the sphere (every subspace
+ * needed) renders to the same bits as without the limit and as the CPU. */
+static void test_split_textures(void **state)
+{
+    (void)state;
+    btf_model m;
+    test_model(&m);
+    btf_error e = {0};
+    btf_scene s;
+    sphere_scene(&s);
+    btf_render_opts o = btf_render_defaults();
+    o.width = 160;
+    o.height = 120;
+    o.seed = 9;
+    o.texture_size = 128; /* 192 KiB an image */
+    btf_image c = {0}, one = {0}, split = {0};
+    btf_render_info ic, ig;
+    TU_OK(btf_render_scene(&m, &s, &o, &c, &ic, &e), &e);
+    TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &one, NULL, &e), &e);
+    assert_int_equal(ic.needed, 4);
+    /* 250 KB: one image per buffer, four buffers; the G-buffer in bands */
+    btf_gpu_set_max_buffer_bytes(gpu, 250000);
+    TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &split, &ig, &e), &e);
+    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    assert_int_equal(ig.needed, 4);
+    size_t bytes = (size_t)160 * 120 * 3 * sizeof(float);
+    assert_memory_equal(one.data, split.data, bytes);
+    compare("sphere, images over four buffers", &c, &split);
+    if (btf_gpu_is_cpu(gpu))
+        assert_memory_equal(c.data, split.data, bytes);
+    /* 150 KB: not even one image fits a buffer: one clear error */
+    btf_image none = {0};
+    btf_gpu_set_max_buffer_bytes(gpu, 150000);
+    assert_int_equal(btf_gpu_render_scene(gpu, &m, &s, &o, &none, NULL, &e), BTF_E_UNSUPPORTED);
+    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    assert_non_null(strstr(e.msg, "one image of 128x128"));
+    assert_null(none.data);
+    btf_image_free(&c);
+    btf_image_free(&one);
+    btf_image_free(&split);
+    no_validation_messages();
+    btf_scene_free(&s);
+    btf_model_free(&m);
+}
+
 /* Limits: a device buffer too small for even the images is one clear
  * error, not a crash; the GPU stays usable after it. */
 static void test_limits(void **state)
@@ -456,6 +502,7 @@ int main(void)
         cmocka_unit_test(test_sphere_parity),
         cmocka_unit_test(test_deep_tails_parity),
         cmocka_unit_test(test_bands),
+        cmocka_unit_test(test_split_textures),
         cmocka_unit_test(test_limits),
         cmocka_unit_test(test_big_mesh),
         cmocka_unit_test(test_cli_backends),

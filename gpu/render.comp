@@ -25,15 +25,30 @@ layout(std430, set = 0, binding = 6) readonly buffer Hor { uint hz[]; };
 // Nonzero when a pixel selected a subspace the first pass did not
 // synthesise: beside the colours, which may take any value (issue 29).
 layout(std430, set = 0, binding = 7) buffer Missing { uint missing[]; };
-// The subspace images beyond binding 1's buffer (gpu/synth_gpu.h: as many
-// buffers as the device's largest storage buffer needs; unused ones bind a
-// small placeholder that is never read).
+// The subspace images are one array of floats over binding 1 and these
+// (gpu/synth_gpu.h: as many buffers as the device's largest storage buffer
+// needs; unused ones bind a small placeholder that is never read).
 layout(std430, set = 0, binding = 8) readonly buffer Tex1 { float tex1[]; };
 layout(std430, set = 0, binding = 9) readonly buffer Tex2 { float tex2[]; };
 layout(std430, set = 0, binding = 10) readonly buffer Tex3 { float tex3[]; };
+// The range and normal maps likewise over binding 2 and these.
+layout(std430, set = 0, binding = 11) readonly buffer Maps1 { float maps1[]; };
+layout(std430, set = 0, binding = 12) readonly buffer Maps2 { float maps2[]; };
+layout(std430, set = 0, binding = 13) readonly buffer Maps3 { float maps3[]; };
 
-float btf_tex_read(int b, int i)
+float btf_map_read(int f)
 {
+    int cap = pi[BTF_RP_TEXCAP];
+    int b = f / cap;
+    int i = f - b * cap;
+    return b == 0 ? maps[i] : b == 1 ? maps1[i] : b == 2 ? maps2[i] : maps3[i];
+}
+
+float btf_tex_read(int f)
+{
+    int cap = pi[BTF_RP_TEXCAP];
+    int b = f / cap;
+    int i = f - b * cap;
     return b == 0 ? tex[i] : b == 1 ? tex1[i] : b == 2 ? tex2[i] : tex3[i];
 }
 
@@ -55,9 +70,9 @@ float btf_tex_read(int b, int i)
 #define BTF_SHADE_N_LIGHTS_SET(ctx) pi[BTF_RP_NSET]
 #define BTF_SHADE_INDEX(ctx, i) pi[pi[BTF_RP_INDEX] + (i)]
 #define BTF_SHADE_HAVE(ctx, k) pi[pi[BTF_RP_HAVE] + (k)]
-#define BTF_SHADE_TEX(ctx, k, i) btf_tex_read(pi[pi[BTF_RP_TEXBUF] + (k)], pi[pi[BTF_RP_TEXOFF] + (k)] + (i))
-#define BTF_SHADE_HEIGHT(ctx, i) maps[i]
-#define BTF_SHADE_NORMAL(ctx, i) maps[pi[BTF_RP_NORMAL] + (i)]
+#define BTF_SHADE_TEX(ctx, k, i) btf_tex_read(pi[pi[BTF_RP_TEXOFF] + (k)] + (i))
+#define BTF_SHADE_HEIGHT(ctx, i) btf_map_read(i)
+#define BTF_SHADE_NORMAL(ctx, i) btf_map_read(pi[BTF_RP_NORMAL] + (i))
 #define BTF_SHADE_LIGHT_OUTER_Z(ctx) pf[BTF_RP_OUTER]
 #define BTF_SHADE_AMBIENT(ctx) pf[BTF_RP_AMBIENT]
 #define BTF_SHADE_GAIN(ctx, i, c) pf[pi[BTF_RP_GAIN] + 3 * (i) + (c)]

@@ -102,7 +102,7 @@ static int put_table(params *pr, int tab, const btf_hemisphere_table *t)
 static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
                                const btf_render_plan *p, const btf_hemisphere *views,
                                const btf_hemisphere *lights, const int *subs, int n,
-                               const int *buffers, const uint64_t *offsets, params *pr,
+                               uint64_t cap, const uint64_t *offsets, params *pr,
                                btf_error *err)
 {
     int32_t zero[BTF_RP_INTS] = {0};
@@ -110,7 +110,7 @@ static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
     if (put_ints(pr, zero, BTF_RP_INTS) < 0 || put_floats(pr, fzero, BTF_RP_FLOATS) < 0)
         return btf_fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
     size_t pairs = (size_t)sets->views.count * (size_t)sets->lights.count;
-    int32_t *tmp = btf_alloc(pairs + 3 * (size_t)m->n_subspaces + 1, sizeof *tmp, err);
+    int32_t *tmp = btf_alloc(pairs + 2 * (size_t)m->n_subspaces + 1, sizeof *tmp, err);
     uint8_t *index = tmp ? btf_render_pair_index(m, sets, err) : NULL; /* sparse sets filled */
     if (!tmp || !index) {
         free(tmp);
@@ -122,15 +122,13 @@ static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
     long idx = put_ints(pr, tmp, pairs);
     int K = m->n_subspaces;
     for (int k = 0; k < K; k++)
-        tmp[k] = 0, tmp[K + k] = 0, tmp[2 * K + k] = 0;
+        tmp[k] = 0, tmp[K + k] = 0;
     for (int i = 0; i < n; i++) {
         tmp[subs[i]] = 1;
         tmp[K + subs[i]] = (int32_t)offsets[i];
-        tmp[2 * K + subs[i]] = buffers[i];
     }
     long have = put_ints(pr, tmp, (size_t)K);
     long texoff = put_ints(pr, tmp + K, (size_t)K);
-    long texbuf = put_ints(pr, tmp + 2 * K, (size_t)K);
     free(tmp);
     float *gains = btf_render_gains(m, sets, err);
     if (!gains)
@@ -140,7 +138,7 @@ static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
     btf_hemisphere_table tv, tl;
     btf_hemisphere_get_table(views, &tv);
     btf_hemisphere_get_table(lights, &tl);
-    if (idx < 0 || have < 0 || texoff < 0 || texbuf < 0 || gain < 0 || put_table(pr, 0, &tv) || put_table(pr, 1, &tl))
+    if (idx < 0 || have < 0 || texoff < 0 || gain < 0 || put_table(pr, 0, &tv) || put_table(pr, 1, &tl))
         return btf_fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
     btf_shade_ctx *ctx = btf_alloc(1, sizeof *ctx, err);
     if (!ctx)
@@ -154,7 +152,7 @@ static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
     hi[BTF_RP_INDEX] = (int32_t)idx;
     hi[BTF_RP_HAVE] = (int32_t)have;
     hi[BTF_RP_TEXOFF] = (int32_t)texoff;
-    hi[BTF_RP_TEXBUF] = (int32_t)texbuf;
+    hi[BTF_RP_TEXCAP] = (int32_t)(cap > 0 ? cap : 1);
     hi[BTF_RP_NORMAL] = p->side * p->side;
     hi[BTF_RP_GAIN] = (int32_t)gain;
     hf[BTF_RP_OUTER] = btf_render_light_outer_z(m);
@@ -192,8 +190,8 @@ void btf_render_pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out)
  * each is read back, scaled by the CPU's code and written again, so the
  * two backends shade the same floats. */
 static btf_status scale_textures(btf_vk *vk, const btf_model *m, const int *subs, int n,
-                                 const int *bufof, const uint64_t *offs, int side,
-                                 btf_vk_buffer *const *tex, btf_error *err)
+                                 const uint64_t *offs, int side, const btf_gpu_images *tex,
+                                 btf_error *err)
 {
     if (!m->albedo)
         return BTF_OK;
@@ -201,11 +199,10 @@ static btf_status scale_textures(btf_vk *vk, const btf_model *m, const int *subs
     float *buf = btf_alloc(floats, sizeof(float), err);
     btf_status rc = buf ? BTF_OK : BTF_E_NOMEM;
     for (int j = 0; rc == BTF_OK && j < n; j++) {
-        btf_vk_buffer *t = tex[bufof[j]];
-        rc = btf_vk_buffer_download(vk, t, 4 * offs[j], buf, floats * sizeof(float), err);
+        rc = btf_gpu_images_download(vk, tex, offs[j], buf, floats, err);
         btf_render_scale_texture(buf, floats, btf_render_reflectance(m, subs[j]));
         if (rc == BTF_OK)
-            rc = btf_vk_buffer_upload(vk, t, 4 * offs[j], buf, floats * sizeof(float), err);
+            rc = btf_gpu_images_upload(vk, tex, offs[j], buf, floats, err);
     }
     free(buf);
     return rc;
@@ -215,8 +212,8 @@ static btf_status scale_textures(btf_vk *vk, const btf_model *m, const int *subs
  * horizon map (the relief's shadows, the CPU's words) in another; a model
  * without shadows binds a small unread buffer there. */
 static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t seed,
-                              int threads, btf_vk_buffer **out, btf_vk_buffer **hor,
-                              int *shadows, float *bounds, btf_error *err)
+                              int threads, uint64_t cap, btf_gpu_images *out,
+                              btf_vk_buffer **hor, int *shadows, float *bounds, btf_error *err)
 {
     btf_image h = {0}, n = {0};
     uint32_t *hz = NULL;
@@ -226,12 +223,12 @@ static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t
         rc = btf_render_relief(m, &h, threads, &hz, bounds, err);
     *shadows = hz != NULL;
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(vk, px * 4 * sizeof(float), out, err);
+        rc = btf_gpu_images_create(vk, px * 4, cap, "GPU render: the range and normal maps",
+                                   out, err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(vk, *out, 0, h.data, px * sizeof(float), err);
+        rc = btf_gpu_images_upload(vk, out, 0, h.data, px, err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(vk, *out, px * sizeof(float), n.data, px * 3 * sizeof(float),
-                                  err);
+        rc = btf_gpu_images_upload(vk, out, px, n.data, px * 3, err);
     if (rc == BTF_OK)
         rc = btf_vk_buffer_create(vk, hz ? px * 2 * sizeof(uint32_t) : 16, hor, err);
     if (rc == BTF_OK && hz)
@@ -258,8 +255,9 @@ typedef struct pass {
     btf_gpu *gpu;
     btf_vk *vk;
     btf_vk_pipeline *pipe;
-    btf_vk_buffer *bufs[11]; /* gbuf, tex, maps, ints, floats, out, horizon, missing,
-                                tex1..tex3 (render.comp's bindings) */
+    btf_vk_buffer *bufs[14]; /* gbuf, tex, maps, ints, floats, out, horizon, missing,
+                                tex1..tex3, maps1..maps3 (render.comp's bindings) */
+    btf_gpu_images maps;     /* the range and normal maps (bindings 2, 11..13) */
     btf_vk_buffer *placeholder; /* bound where a texture buffer is unused */
     params pr;
 } pass;
@@ -268,8 +266,9 @@ static void pass_free(pass *ps)
 {
     btf_vk_pipeline_destroy(ps->pipe);
     for (int i = 0; i < 8; i++)
-        if (i != 1) /* the images are the synthesis' buffers */
+        if (i != 1 && i != 2) /* the images' and maps' arrays own theirs */
             btf_vk_buffer_destroy(ps->bufs[i]);
+    btf_gpu_images_free(&ps->maps);
     btf_vk_buffer_destroy(ps->placeholder);
     free(ps->pr.ints);
     free(ps->pr.floats);
@@ -296,7 +295,7 @@ static btf_status run_band(pass *ps, const btf_gbuffer *g, int y0, int y1, float
     if (rc == BTF_OK) /* the flag of a band's missing subspaces starts clear */
         rc = btf_vk_job_fill(job, ps->bufs[7], 0, sizeof(uint32_t), 0, err);
     if (rc == BTF_OK)
-        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 11, NULL, 0, gx, gy, 1, err);
+        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 14, NULL, 0, gx, gy, 1, err);
     if (rc == BTF_OK) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
@@ -360,11 +359,11 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     memset(&ps, 0, sizeof ps);
     ps.gpu = gpu;
     ps.vk = btf_gpu_vk(gpu);
-    int *subs = btf_alloc((size_t)m->n_subspaces, 2 * sizeof *subs, err);
-    int *bufof = subs ? subs + m->n_subspaces : NULL; /* each image's buffer */
+    int *subs = btf_alloc((size_t)m->n_subspaces, sizeof *subs, err);
     uint64_t *offs = btf_alloc((size_t)m->n_subspaces, sizeof *offs, err);
     btf_hemisphere *views = NULL, *lights = NULL;
-    btf_vk_buffer *tex[BTF_GPU_DEVICE_BUFFERS] = {NULL};
+    btf_gpu_images tex;
+    memset(&tex, 0, sizeof tex);
     btf_status rc = subs && offs ? BTF_OK : BTF_E_NOMEM;
     int n = 0;
     for (int k = 0; rc == BTF_OK && k < m->n_subspaces; k++)
@@ -376,16 +375,16 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     so.seed = p->o.seed;
     so.tileable = 1;
     if (rc == BTF_OK && n > 0)
-        rc = btf_gpu_synthesise_device(gpu, m, subs, n, &so, tex, bufof, offs, err);
+        rc = btf_gpu_synthesise_device(gpu, m, subs, n, &so, &tex, offs, err);
     if (rc == BTF_OK && n > 0)
-        rc = scale_textures(ps.vk, m, subs, n, bufof, offs, p->side, tex, err);
+        rc = scale_textures(ps.vk, m, subs, n, offs, p->side, &tex, err);
     double t1 = btf_now();
     /* unused texture bindings: a buffer the shader may bind, never read */
     if (rc == BTF_OK)
         rc = btf_vk_buffer_create(ps.vk, 16, &ps.placeholder, err);
     static const int slot[BTF_GPU_DEVICE_BUFFERS] = {1, 8, 9, 10}; /* render.comp */
     for (int b = 0; rc == BTF_OK && b < BTF_GPU_DEVICE_BUFFERS; b++)
-        ps.bufs[slot[b]] = tex[b] ? tex[b] : ps.placeholder;
+        ps.bufs[slot[b]] = tex.buf[b] ? tex.buf[b] : ps.placeholder;
     btf_render_sets sets;
     memset(&sets, 0, sizeof sets);
     if (rc == BTF_OK)
@@ -395,13 +394,18 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     if (rc == BTF_OK)
         rc = btf_hemisphere_build(&sets.lights, &lights, err);
     if (rc == BTF_OK)
-        rc = build_params(m, &sets, p, views, lights, subs, n, bufof, offs, &ps.pr, err);
+        rc = build_params(m, &sets, p, views, lights, subs, n, btf_gpu_images_cap(ps.gpu), offs,
+                          &ps.pr, err);
     btf_render_sets_free(&sets);
     int shadows = 0;
     float bounds[2] = {0.0f, 0.0f};
     if (rc == BTF_OK)
-        rc = upload_maps(ps.vk, m, p->side, p->o.seed, p->o.threads, &ps.bufs[2], &ps.bufs[6],
-                         &shadows, bounds, err);
+        rc = upload_maps(ps.vk, m, p->side, p->o.seed, p->o.threads,
+                         btf_gpu_images_cap(ps.gpu), &ps.maps, &ps.bufs[6], &shadows, bounds,
+                         err);
+    static const int mslot[BTF_GPU_DEVICE_BUFFERS] = {2, 11, 12, 13}; /* render.comp */
+    for (int b = 0; rc == BTF_OK && b < BTF_GPU_DEVICE_BUFFERS; b++)
+        ps.bufs[mslot[b]] = ps.maps.buf[b] ? ps.maps.buf[b] : ps.placeholder;
     if (rc == BTF_OK) {
         ps.pr.ints[BTF_RP_HORIZON] = shadows;
         ps.pr.floats[BTF_RP_HMIN] = bounds[0];
@@ -409,7 +413,7 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
         rc = upload_params(&ps, err);
     }
     if (rc == BTF_OK)
-        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 11, 0, NULL, 0,
+        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 14, 0, NULL, 0,
                                     &ps.pipe, err);
     if (rc == BTF_OK && (rc = btf_image_alloc(out, p->g.width, p->g.height, 3, err)) == BTF_OK) {
         rc = shade_frame(&ps, &p->g, out, err);
@@ -423,8 +427,7 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
         info->shade_s = t2 - t1;
     }
     pass_free(&ps);
-    for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
-        btf_vk_buffer_destroy(tex[b]);
+    btf_gpu_images_free(&tex);
     btf_hemisphere_free(views);
     btf_hemisphere_free(lights);
     free(subs);

@@ -22,9 +22,10 @@
 #define BTF_RP_NORMAL 8     /* float offset of the normal map in the maps buffer */
 #define BTF_RP_GAIN 9       /* float offset of the pair gains (3 per pair) */
 #define BTF_RP_HORIZON 10   /* 1: binding 6 holds the horizon map (shadows) */
-#define BTF_RP_TEXBUF 11    /* int offset of each subspace image's buffer: 0 binding 1,
-                               1..3 bindings 8..10 (the device's largest storage
-                               buffer may not hold them all) */
+#define BTF_RP_TEXCAP 11    /* floats per buffer: the subspace images are one array
+                               over bindings 1, 8, 9, 10, the range and normal maps
+                               one over 2, 11, 12, 13; float f in buffer f / cap at
+                               f % cap (gpu/synth_gpu.h) */
 #define BTF_RP_KIND 16      /* [16]: light kinds */
 #define BTF_RP_TAB 32       /* two tables of BTF_RP_TAB_STRIDE ints: */
 #define BTF_RP_TAB_STRIDE 8

@@ -33,6 +33,7 @@
 #include "synth_field_spv.h"
 #include "synth_unmix_spv.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -512,13 +513,92 @@ static int record_carry(btf_vk_job *job, const batch *bt, const batch_buffers *b
     return rc;
 }
 
-/* Where a batch's images go: host images, or device buffers dev[j] at
+/* Where a batch's images go: host images, or the device array dev at
  * float offsets dev_off[j] (btf_gpu_synthesise_device). */
 typedef struct batch_dest {
     btf_image *images;
-    btf_vk_buffer *const *dev;
+    const btf_gpu_images *dev;
     const uint64_t *dev_off;
 } batch_dest;
+
+/* A device-side copy into the array, split where it crosses a buffer. */
+static btf_status copy_to_images(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_bytes,
+                                 const btf_gpu_images *im, uint64_t off, uint64_t floats,
+                                 btf_error *err)
+{
+    while (floats > 0) {
+        uint64_t b = off / im->cap, at = off % im->cap;
+        uint64_t n = im->cap - at < floats ? im->cap - at : floats;
+        btf_status rc = btf_vk_job_copy(job, src, src_bytes, im->buf[b], 4 * at, 4 * n, err);
+        if (rc)
+            return rc;
+        src_bytes += 4 * n, off += n, floats -= n;
+    }
+    return BTF_OK;
+}
+
+btf_status btf_gpu_images_download(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
+                                   float *data, uint64_t floats, btf_error *err)
+{
+    while (floats > 0) {
+        uint64_t b = off / im->cap, at = off % im->cap;
+        uint64_t n = im->cap - at < floats ? im->cap - at : floats;
+        btf_status rc = btf_vk_buffer_download(vk, im->buf[b], 4 * at, data, 4 * n, err);
+        if (rc)
+            return rc;
+        data += n, off += n, floats -= n;
+    }
+    return BTF_OK;
+}
+
+btf_status btf_gpu_images_upload(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
+                                 const float *data, uint64_t floats, btf_error *err)
+{
+    while (floats > 0) {
+        uint64_t b = off / im->cap, at = off % im->cap;
+        uint64_t n = im->cap - at < floats ? im->cap - at : floats;
+        btf_status rc = btf_vk_buffer_upload(vk, im->buf[b], 4 * at, data, 4 * n, err);
+        if (rc)
+            return rc;
+        data += n, off += n, floats -= n;
+    }
+    return BTF_OK;
+}
+
+uint64_t btf_gpu_images_cap(const btf_gpu *g)
+{
+    uint64_t cap = btf_gpu_max_buffer_bytes(g) / 4;
+    if (cap > (1ull << 28))
+        cap = 1ull << 28; /* four of them: 2^30 floats, int32 indices */
+    return cap > 0 ? cap : 1;
+}
+
+btf_status btf_gpu_images_create(btf_vk *vk, uint64_t floats, uint64_t cap, const char *what,
+                                 btf_gpu_images *out, btf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    out->cap = cap > 0 ? cap : 1;
+    if (floats > (uint64_t)BTF_GPU_DEVICE_BUFFERS * out->cap)
+        return btf_fail(err, BTF_E_UNSUPPORTED, "%s need %.1f MiB, more than %d storage buffers "
+                        "of the device's limit of %.1f MiB hold; use the CPU backend", what,
+                        4 * floats / 1048576.0, BTF_GPU_DEVICE_BUFFERS, 4 * out->cap / 1048576.0);
+    btf_status rc = BTF_OK;
+    for (uint64_t b = 0; rc == BTF_OK && b * out->cap < floats; b++) {
+        uint64_t part = floats - b * out->cap < out->cap ? floats - b * out->cap : out->cap;
+        rc = btf_vk_buffer_create(vk, 4 * part, &out->buf[b], err);
+    }
+    if (rc)
+        btf_gpu_images_free(out);
+    return rc;
+}
+
+void btf_gpu_images_free(btf_gpu_images *im)
+{
+    for (int b = 0; im && b < BTF_GPU_DEVICE_BUFFERS; b++) {
+        btf_vk_buffer_destroy(im->buf[b]);
+        im->buf[b] = NULL;
+    }
+}
 
 /* One strip of every image of the batch: one job. */
 static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, uint64_t seed,
@@ -571,9 +651,8 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
                             chunks((uint64_t)bt->width * (y1 - y0)), err);
     uint64_t strip_bytes = 4ull * bt->width * (y1 - y0) * 3;
     for (int j = 0; rc == 0 && dst->dev && j < bt->n_images; j++) /* on the device */
-        rc = btf_vk_job_copy(job, b->out, 4ull * bt->unmix[j].out_off, dst->dev[j],
-                             4ull * (dst->dev_off[j] + (uint64_t)y0 * bt->width * 3), strip_bytes,
-                             err);
+        rc = copy_to_images(job, b->out, 4ull * bt->unmix[j].out_off, dst->dev,
+                            dst->dev_off[j] + (uint64_t)y0 * bt->width * 3, strip_bytes / 4, err);
     if (rc == 0) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
@@ -721,8 +800,7 @@ static btf_status run_all(btf_gpu *g, const btf_model *m, const int *subspaces, 
                         o->tileable != 0, limit, &bt, err);
         if (rc)
             break;
-        batch_dest d = {dst->images ? dst->images + start : NULL,
-                        dst->dev ? dst->dev + start : NULL,
+        batch_dest d = {dst->images ? dst->images + start : NULL, dst->dev,
                         dst->dev_off ? dst->dev_off + start : NULL};
         rc = run_batch(g, &bt, o->seed, &d, err);
         for (int j = 0; rc == 0 && dst->images && j < bt.n_images; j++)
@@ -781,8 +859,9 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
  * have to reduce first; a read-back of the render's few textures costs
  * little beside the render (docs/gpu.md). */
 static btf_status match_on_host(btf_gpu *g, const btf_model *m, int subspace,
-                                const btf_synth_opts *o, btf_vk_buffer *buf, uint64_t offset,
-                                int width, int height, btf_image *pattern, btf_error *err)
+                                const btf_synth_opts *o, const btf_gpu_images *im,
+                                uint64_t offset, int width, int height, btf_image *pattern,
+                                btf_error *err)
 {
     int match;
     btf_status rc = btf_colour_match_wanted(m, subspace, o->match_colours, &match, err);
@@ -791,87 +870,52 @@ static btf_status match_on_host(btf_gpu *g, const btf_model *m, int subspace,
     btf_image img;
     if ((rc = btf_image_alloc(&img, width, height, 3, err)))
         return rc;
-    uint64_t bytes = (uint64_t)width * height * 3 * sizeof(float);
-    rc = btf_vk_buffer_download(g->vk, buf, 4 * offset, img.data, bytes, err);
+    uint64_t floats = (uint64_t)width * height * 3;
+    rc = btf_gpu_images_download(g->vk, im, offset, img.data, floats, err);
     if (rc == BTF_OK)
         rc = btf_structure_apply(m, o->seed, &img, pattern, err);
     if (rc == BTF_OK && match)
         rc = btf_colour_match(m, subspace, &img, err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(g->vk, buf, 4 * offset, img.data, bytes, err);
+        rc = btf_gpu_images_upload(g->vk, im, offset, img.data, floats, err);
     btf_image_free(&img);
     return rc;
 }
 
-/* Images in order into buffers of at most limit bytes: buffer[j] and the
- * float offset within it; bytes[b] each buffer's size. */
-static btf_status pack_images(int n, const int *w, const int *h, uint64_t limit, int *buffer,
-                              uint64_t *offsets, uint64_t *bytes, btf_error *err)
-{
-    int b = 0;
-    memset(bytes, 0, BTF_GPU_DEVICE_BUFFERS * sizeof *bytes);
-    uint64_t total = 0;
-    for (int j = 0; j < n; j++)
-        total += 4ull * w[j] * h[j] * 3;
-    for (int j = 0; j < n; j++) {
-        uint64_t need = 4ull * w[j] * h[j] * 3;
-        if (need > limit)
-            return btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis to the device: one image of "
-                            "%dx%d needs %.1f MiB, more than the device's largest storage "
-                            "buffer of %.1f MiB; use the CPU backend", w[j], h[j],
-                            need / 1048576.0, limit / 1048576.0);
-        if (bytes[b] + need > limit)
-            b++;
-        if (b >= BTF_GPU_DEVICE_BUFFERS)
-            return btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis to the device: %d images need "
-                            "%.1f MiB, more than %d storage buffers of the device's limit of "
-                            "%.1f MiB hold; synthesise fewer or smaller images at once", n,
-                            total / 1048576.0, BTF_GPU_DEVICE_BUFFERS, limit / 1048576.0);
-        buffer[j] = b;
-        offsets[j] = bytes[b] / 4;
-        bytes[b] += need;
-    }
-    return BTF_OK;
-}
-
 btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
-                                     const btf_synth_opts *opts, btf_vk_buffer **out,
-                                     int *buffer, uint64_t *offsets, btf_error *err)
+                                     const btf_synth_opts *opts, btf_gpu_images *out,
+                                     uint64_t *offsets, btf_error *err)
 {
     btf_synth_opts o = btf_synth_resolve(opts);
-    for (int b = 0; out && b < BTF_GPU_DEVICE_BUFFERS; b++)
-        out[b] = NULL;
-    if (!g || n < 1 || !offsets || !out || !buffer)
-        return btf_fail(err, BTF_E_ARG, "GPU synthesis to the device: no GPU, no outputs or "
+    if (out)
+        memset(out, 0, sizeof *out);
+    if (!g || n < 1 || !offsets || !out)
+        return btf_fail(err, BTF_E_ARG, "GPU synthesis to the device: no GPU, no output or "
                         "%d images (at least 1)", n);
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
     int *w = btf_calloc((size_t)n * 2, sizeof(int), err);
-    btf_vk_buffer **dev = btf_calloc((size_t)n, sizeof *dev, err);
-    btf_status rc = w && dev ? check_all(m, subspaces, n, &o, w, w + n, &margins, err)
-                             : BTF_E_NOMEM;
-    uint64_t bytes[BTF_GPU_DEVICE_BUFFERS];
+    btf_status rc = w ? check_all(m, subspaces, n, &o, w, w + n, &margins, err) : BTF_E_NOMEM;
+    uint64_t floats = 0;
+    for (int j = 0; rc == 0 && j < n; j++) {
+        offsets[j] = floats;
+        floats += (uint64_t)w[j] * w[n + j] * 3;
+    }
+    char what[96];
+    snprintf(what, sizeof what, "GPU synthesis to the device: %d images", n);
     if (rc == 0)
-        rc = pack_images(n, w, w + n, btf_gpu_max_buffer_bytes(g), buffer, offsets, bytes, err);
-    for (int b = 0; rc == 0 && b < BTF_GPU_DEVICE_BUFFERS && bytes[b] > 0; b++)
-        rc = btf_vk_buffer_create(g->vk, bytes[b], &out[b], err);
-    for (int j = 0; rc == 0 && j < n; j++)
-        dev[j] = out[buffer[j]];
-    batch_dest d = {NULL, dev, offsets};
+        rc = btf_gpu_images_create(g->vk, floats, btf_gpu_images_cap(g), what, out, err);
+    batch_dest d = {NULL, out, offsets};
     if (rc == 0)
         rc = run_all(g, m, subspaces, n, &o, w, w + n, (const int (*)[3][BTF_MAX_LEVELS])margins,
                      &d, err);
     btf_image pattern = {0}; /* the structure layer's, quilted once per size */
     for (int j = 0; rc == BTF_OK && j < n; j++)
-        rc = match_on_host(g, m, subspaces[j], &o, out[buffer[j]], offsets[j], w[j], w[n + j],
-                           &pattern, err);
+        rc = match_on_host(g, m, subspaces[j], &o, out, offsets[j], w[j], w[n + j], &pattern,
+                           err);
     btf_image_free(&pattern);
     if (rc)
-        for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++) {
-            btf_vk_buffer_destroy(out[b]);
-            out[b] = NULL;
-        }
+        btf_gpu_images_free(out);
     free(margins);
-    free(dev);
     free(w);
     return rc;
 }

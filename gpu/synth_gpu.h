@@ -25,24 +25,45 @@ uint64_t btf_gpu_max_buffer_bytes(const btf_gpu *g);
  * over (the render pass binds as many: gpu/render.comp). */
 #define BTF_GPU_DEVICE_BUFFERS 4
 
+/* Images on the device: one array of floats laid over up to
+ * BTF_GPU_DEVICE_BUFFERS storage buffers of `cap` floats each (the last
+ * may be shorter): float index f lies in buf[f / cap] at f % cap. So no
+ * device limit on one storage buffer bounds an image, only four of them
+ * together (docs/gpu.md, "Images left on the device"). */
+typedef struct btf_gpu_images {
+    btf_vk_buffer *buf[BTF_GPU_DEVICE_BUFFERS]; /* NULL where unused */
+    uint64_t cap;                               /* floats per buffer */
+} btf_gpu_images;
+/* Copies bytes between the host and the array at float offset off. */
+btf_status btf_gpu_images_download(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
+                                   float *data, uint64_t floats, btf_error *err);
+btf_status btf_gpu_images_upload(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
+                                 const float *data, uint64_t floats, btf_error *err);
+void btf_gpu_images_free(btf_gpu_images *im);
+/* The floats per buffer of g's arrays: its largest storage buffer, at most
+ * 2^28 (so that four of them index with 32-bit ints). */
+uint64_t btf_gpu_images_cap(const btf_gpu *g);
+/* An array of `floats` floats over buffers of cap floats; BTF_E_UNSUPPORTED
+ * (naming `what` and the sizes) when more than BTF_GPU_DEVICE_BUFFERS. */
+btf_status btf_gpu_images_create(btf_vk *vk, uint64_t floats, uint64_t cap, const char *what,
+                                 btf_gpu_images *out, btf_error *err);
+
 /* Synthesises subspace images subspaces[0 .. n - 1] (1 <= n) with opts as
- * btf_gpu_synthesise does (the same bits, tileable included) into device
- * buffers it creates, out[0 .. BTF_GPU_DEVICE_BUFFERS - 1] (NULL where
- * unused; the caller destroys them with btf_vk_buffer_destroy): image i,
- * linear RGB floats interleaved, row-major, width x height x 3 (opts'
- * size, 0: the analysed one), lies in out[buffer[i]] from float index
- * offsets[i] (n entries each, filled here). Images fill a buffer in order
- * up to the device's largest storage buffer (maxStorageBufferRange, or the
- * testing limit of btf_gpu_set_max_buffer_bytes), then the next: no
- * device limit turns into a refusal while the images fit
- * BTF_GPU_DEVICE_BUFFERS buffers. Nothing passes through the host but
+ * btf_gpu_synthesise does (the same bits, tileable included) into the
+ * device array *out it creates (the caller frees it with
+ * btf_gpu_images_free): image i, linear RGB floats interleaved,
+ * row-major, width x height x 3 (opts' size, 0: the analysed one), starts
+ * at float offsets[i] (n entries, filled here); the images follow one
+ * another, and the buffers are as large as the device's largest storage
+ * buffer allows (maxStorageBufferRange, or the testing limit of
+ * btf_gpu_set_max_buffer_bytes). Nothing passes through the host but
  * colour matching; the images are not checked for Inf or NaN here (the
  * formulas are btf_gpu_synthesise's, which checks them on download).
- * BTF_E_UNSUPPORTED when one image alone exceeds a buffer or all need more
- * than BTF_GPU_DEVICE_BUFFERS, the message naming the sizes; BTF_E_ARG for
- * bad requests as btf_gpu_synthesise. On error every out[] is NULL. */
+ * BTF_E_UNSUPPORTED when all n images need more than
+ * BTF_GPU_DEVICE_BUFFERS buffers, the message naming the sizes; BTF_E_ARG
+ * for bad requests as btf_gpu_synthesise. On error *out holds nothing. */
 btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
-                                     const btf_synth_opts *opts, btf_vk_buffer **out,
-                                     int *buffer, uint64_t *offsets, btf_error *err);
+                                     const btf_synth_opts *opts, btf_gpu_images *out,
+                                     uint64_t *offsets, btf_error *err);
 
 #endif

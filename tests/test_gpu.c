@@ -95,22 +95,20 @@ static void parity_colour_match(void **state)
     btf_synth_opts so = {.width = 24, .height = 20, .seed = 1};
     int zero = 0;
     uint64_t off[2] = {0, 0};
-    btf_vk_buffer *buf[BTF_GPU_DEVICE_BUFFERS];
-    int bi[2];
+    btf_gpu_images dev;
     btf_image host, back, plain;
     TU_OK(btf_gpu_synthesise(gpu, &m, &zero, 1, &so, &host, &e), &e);
     int twice[2] = {0, 0};
-    TU_OK(btf_gpu_synthesise_device(gpu, &m, twice, 2, &so, buf, bi, off, &e), &e);
+    TU_OK(btf_gpu_synthesise_device(gpu, &m, twice, 2, &so, &dev, off, &e), &e);
     size_t bytes = (size_t)24 * 20 * 3 * sizeof(float);
     TU_OK(btf_image_alloc(&back, 24, 20, 3, &e), &e);
     for (int j = 0; j < 2; j++) {
         memset(back.data, 0, bytes);
-        TU_OK(btf_vk_buffer_download(btf_gpu_vk(gpu), buf[bi[j]], 4 * off[j], back.data, bytes,
-                                     &e), &e);
+        TU_OK(btf_gpu_images_download(btf_gpu_vk(gpu), &dev, off[j], back.data, bytes / 4, &e),
+              &e);
         assert_memory_equal(back.data, host.data, bytes);
     }
-    for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
-        btf_vk_buffer_destroy(buf[b]);
+    btf_gpu_images_free(&dev);
     so.match_colours = -1; /* and it did change them */
     TU_OK(btf_gpu_synthesise(gpu, &m, &zero, 1, &so, &plain, &e), &e);
     assert_memory_not_equal(plain.data, host.data, bytes);

@@ -157,15 +157,13 @@ static void tileable_bad_sizes(void **state)
     assert_int_equal(btf_synthesise_image(&m, 0, &o, &cpu, &ce), BTF_E_ARG);
     assert_string_equal(e.msg, ce.msg);
     assert_null(out[0].data);
-    btf_vk_buffer *buf[BTF_GPU_DEVICE_BUFFERS];
+    btf_gpu_images dev;
     for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
-        buf[b] = (btf_vk_buffer *)&e; /* must be reset to NULL */
+        dev.buf[b] = (btf_vk_buffer *)&e; /* must be reset to NULL */
     uint64_t off[1];
-    int bi[1];
-    assert_int_equal(btf_gpu_synthesise_device(gpu, &m, &zero, 1, &o, buf, bi, off, &e),
-                     BTF_E_ARG);
+    assert_int_equal(btf_gpu_synthesise_device(gpu, &m, &zero, 1, &o, &dev, off, &e), BTF_E_ARG);
     for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
-        assert_null(buf[b]);
+        assert_null(dev.buf[b]);
     assert_string_equal(e.msg, ce.msg);
     btf_model_free(&m);
 }
@@ -201,19 +199,18 @@ static void device_images(void **state)
             if (gi) /* strips of rows; the device buffer itself still fits */
                 btf_gpu_set_max_buffer_bytes(g, 4000000);
             btf_synth_opts o = {.width = w, .height = h, .seed = 9, .tileable = tileable};
-            btf_vk_buffer *buf[BTF_GPU_DEVICE_BUFFERS];
+            btf_gpu_images dev;
             uint64_t off[3];
-            int bi[3];
-            TU_OK(btf_gpu_synthesise_device(g, &m, subs, 3, &o, buf, bi, off, &e), &e);
+            TU_OK(btf_gpu_synthesise_device(g, &m, subs, 3, &o, &dev, off, &e), &e);
             size_t floats = (size_t)w * h * 3;
-            assert_int_equal(btf_vk_buffer_size(buf[0]), 4 * 3 * floats);
-            assert_null(buf[1]);
+            assert_int_equal(btf_vk_buffer_size(dev.buf[0]), 4 * 3 * floats);
+            assert_null(dev.buf[1]);
             float *host = malloc(4 * 3 * floats);
-            TU_OK(btf_vk_buffer_download(btf_gpu_vk(g), buf[0], 0, host, 4 * 3 * floats, &e), &e);
+            TU_OK(btf_vk_buffer_download(btf_gpu_vk(g), dev.buf[0], 0, host, 4 * 3 * floats, &e),
+                  &e);
             btf_image out[3];
             TU_OK(btf_gpu_synthesise(g, &m, subs, 3, &o, out, &e), &e);
             for (int k = 0; k < 3; k++) {
-                assert_int_equal(bi[k], 0);
                 assert_int_equal(off[k], k * floats);
                 assert_memory_equal(host + off[k], out[k].data, floats * sizeof(float));
                 btf_image_free(&out[k]);
@@ -223,47 +220,46 @@ static void device_images(void **state)
                           tileable ? "tileable" : "streaming", w, h,
                           gi ? "4 MB buffers: strips" : "one job");
             free(host);
-            btf_vk_buffer_destroy(buf[0]);
+            btf_gpu_images_free(&dev);
             no_validation_messages(g);
         }
-    /* 3 x 300 x 512 x 3 floats = 5.3 MiB: more than a 3.2 MB limit, so the
-     * images (1.8 MiB each) go one to a buffer, each image the downloaded
-     * one bit for bit */
+    /* 3 x 300 x 512 x 3 floats = 5.3 MiB over 3.2 MB buffers: the images
+     * straddle two buffers (each 1.8 MiB: buffer 0 holds the first and
+     * part of the second), each downloaded across them bit for bit */
     btf_gpu_set_max_buffer_bytes(small, 3200000); /* the strips' working set: 3.0 MiB */
     btf_synth_opts o = {.width = 300, .height = 512, .seed = 9, .tileable = 1};
-    btf_vk_buffer *buf[BTF_GPU_DEVICE_BUFFERS];
+    btf_gpu_images dev;
     uint64_t off[3];
-    int bi[3];
-    TU_OK(btf_gpu_synthesise_device(small, &m, subs, 3, &o, buf, bi, off, &e), &e);
+    TU_OK(btf_gpu_synthesise_device(small, &m, subs, 3, &o, &dev, off, &e), &e);
     size_t floats = (size_t)300 * 512 * 3;
-    for (int k = 0; k < 3; k++) {
-        assert_int_equal(bi[k], k);
-        assert_int_equal(off[k], 0);
-    }
-    assert_null(buf[3]);
+    assert_int_equal(dev.cap, 800000);
+    assert_non_null(dev.buf[1]);
+    assert_null(dev.buf[2]);
     btf_image out[3];
     TU_OK(btf_gpu_synthesise(small, &m, subs, 3, &o, out, &e), &e);
     float *host = malloc(4 * floats);
     for (int k = 0; k < 3; k++) {
-        TU_OK(btf_vk_buffer_download(btf_gpu_vk(small), buf[bi[k]], 4 * off[k], host,
-                                     4 * floats, &e), &e);
+        assert_int_equal(off[k], k * floats);
+        TU_OK(btf_gpu_images_download(btf_gpu_vk(small), &dev, off[k], host, floats, &e), &e);
         assert_memory_equal(host, out[k].data, floats * sizeof(float));
         btf_image_free(&out[k]);
     }
     free(host);
-    for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
-        btf_vk_buffer_destroy(buf[b]);
+    btf_gpu_images_free(&dev);
     no_validation_messages(small);
-    /* one image beyond a buffer: BTF_E_UNSUPPORTED naming the sizes */
-    btf_gpu_set_max_buffer_bytes(small, 800000);
-    assert_int_equal(btf_gpu_synthesise_device(small, &m, subs, 3, &o, buf, bi, off, &e),
+    /* more than four buffers hold: BTF_E_UNSUPPORTED naming the sizes */
+    btf_gpu_set_max_buffer_bytes(small, 1000000);
+    o.tileable = 0;
+    o.height = 64;
+    o.width = 2000;
+    int many[8] = {0, 1, 2, 0, 1, 2, 0, 1};
+    assert_int_equal(btf_gpu_synthesise_device(small, &m, many, 8, &o, &dev, off, &e),
                      BTF_E_UNSUPPORTED);
     print_message("%s\n", e.msg);
     for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
-        assert_null(buf[b]);
-    assert_non_null(strstr(e.msg, "one image of 300x512 needs 1.8 MiB"));
-    assert_int_equal(btf_gpu_synthesise_device(small, &m, subs, 0, &o, buf, bi, off, &e),
-                     BTF_E_ARG);
+        assert_null(dev.buf[b]);
+    assert_non_null(strstr(e.msg, "more than 4 storage buffers"));
+    assert_int_equal(btf_gpu_synthesise_device(small, &m, subs, 0, &o, &dev, off, &e), BTF_E_ARG);
     btf_gpu_close(small);
     btf_model_free(&a);
     btf_model_free(&b);

@@ -74,6 +74,7 @@ struct btf_gpu {
     uint64_t max_buffer_bytes; /* 0: the device's limit */
     int jobs, batches;         /* of the last btf_gpu_synthesise */
     btf_vk_pipeline *field, *collapse, *unmix;
+    btf_gpu_matcher *matcher; /* colour matching on the device */
 };
 
 btf_gpu_opts btf_gpu_defaults(void)
@@ -110,6 +111,8 @@ btf_status btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err)
     if (rc == 0)
         rc = btf_vk_pipeline_create(g->vk, synth_unmix_spv, sizeof synth_unmix_spv, 3, 4, NULL, 0,
                                     &g->unmix, err);
+    if (rc == 0)
+        rc = btf_gpu_matcher_create(g->vk, &g->matcher, err);
     if (rc) {
         btf_gpu_close(g);
         return rc;
@@ -125,6 +128,7 @@ void btf_gpu_close(btf_gpu *g)
     btf_vk_pipeline_destroy(g->field);
     btf_vk_pipeline_destroy(g->collapse);
     btf_vk_pipeline_destroy(g->unmix);
+    btf_gpu_matcher_free(g->matcher);
     btf_vk_destroy(g->vk);
     free(g);
 }
@@ -750,6 +754,11 @@ uint64_t btf_gpu_max_buffer_bytes(const btf_gpu *g)
     return g->max_buffer_bytes && g->max_buffer_bytes < dev ? g->max_buffer_bytes : dev;
 }
 
+const btf_gpu_matcher *btf_gpu_match_pipes(const btf_gpu *g)
+{
+    return g->matcher;
+}
+
 btf_vk *btf_gpu_vk(btf_gpu *g)
 {
     return g->vk;
@@ -853,20 +862,26 @@ btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspac
     return rc;
 }
 
-/* Colour matching of one image in a device buffer: read back, matched by
- * the CPU's code (the bytes of btf_gpu_synthesise and the CPU), written
- * again. It reads the whole image's histogram, which a shader pass would
- * have to reduce first; a read-back of the render's few textures costs
- * little beside the render (docs/gpu.md). */
-static btf_status match_on_host(btf_gpu *g, const btf_model *m, int subspace,
-                                const btf_synth_opts *o, const btf_gpu_images *im,
-                                uint64_t offset, int width, int height, btf_image *pattern,
-                                btf_error *err)
+/* The structure layer's multiply and colour matching of one image in the
+ * device array: on the device (gpu/match_gpu.c, the CPU's bits); on the
+ * host by the CPU's code only where the pattern does not fit one storage
+ * buffer (a side past 2,048 texels with no period: docs/gpu.md). */
+static btf_status match_image(btf_gpu *g, const btf_model *m, int subspace,
+                              const btf_synth_opts *o, const btf_gpu_images *im,
+                              uint64_t offset, int width, int height, btf_image *pattern,
+                              btf_error *err)
 {
     int match;
     btf_status rc = btf_colour_match_wanted(m, subspace, o->match_colours, &match, err);
-    if (rc || (!match && !m->albedo))
+    int layer = m->albedo && btf_structure_quilted(m);
+    if (rc || (!match && !layer))
         return rc;
+    if (layer && (rc = btf_structure_pattern(m, width, height, o->seed, pattern, err)))
+        return rc;
+    uint64_t pat_bytes = layer ? 4ull * pattern->width * pattern->height * pattern->channels : 0;
+    if (pat_bytes <= btf_gpu_max_buffer_bytes(g))
+        return btf_gpu_match_images(g->vk, g->matcher, m, subspace, match, im, offset, width,
+                                    height, layer ? pattern : NULL, err);
     btf_image img;
     if ((rc = btf_image_alloc(&img, width, height, 3, err)))
         return rc;
@@ -910,8 +925,8 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
                      &d, err);
     btf_image pattern = {0}; /* the structure layer's, quilted once per size */
     for (int j = 0; rc == BTF_OK && j < n; j++)
-        rc = match_on_host(g, m, subspaces[j], &o, out, offsets[j], w[j], w[n + j], &pattern,
-                           err);
+        rc = match_image(g, m, subspaces[j], &o, out, offsets[j], w[j], w[n + j], &pattern,
+                         err);
     btf_image_free(&pattern);
     if (rc)
         btf_gpu_images_free(out);

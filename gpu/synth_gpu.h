@@ -66,4 +66,21 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
                                      const btf_synth_opts *opts, btf_gpu_images *out,
                                      uint64_t *offsets, btf_error *err);
 
+/* Colour matching on the device (gpu/match_gpu.c, docs/gpu.md "Colour
+ * matching on the device"): the pipelines, made once per btf_gpu. */
+typedef struct btf_gpu_matcher btf_gpu_matcher;
+btf_status btf_gpu_matcher_create(btf_vk *vk, btf_gpu_matcher **out, btf_error *err);
+void btf_gpu_matcher_free(btf_gpu_matcher *mt); /* NULL is fine */
+/* The image of `subspace` at float offset off of *im (w x h RGB) in place:
+ * times the structure layer's pattern (NULL or empty: none; from
+ * btf_structure_pattern, at most the device's largest buffer), then, when
+ * match, colour matched: the bits btf_structure_apply and btf_colour_match
+ * give on the host. The image is not read back. */
+btf_status btf_gpu_match_images(btf_vk *vk, const btf_gpu_matcher *mt, const btf_model *m,
+                                int subspace, int match, const btf_gpu_images *im,
+                                uint64_t off, int w, int h, const btf_image *pattern,
+                                btf_error *err);
+/* g's matcher (made by btf_gpu_open). */
+const btf_gpu_matcher *btf_gpu_match_pipes(const btf_gpu *g);
+
 #endif

@@ -55,6 +55,17 @@ static lab_consts lab_consts_make(void)
     return c;
 }
 
+void btf_lab_constants(float to_xyz[9], float to_rgb[9], float k[10], int32_t *magic)
+{
+    const lab_consts c = lab_consts_make();
+    memcpy(to_xyz, c.to_xyz, 9 * sizeof(float));
+    memcpy(to_rgb, c.to_rgb, 9 * sizeof(float));
+    const float v[10] = {LAB_T0, LAB_SLOPE, LAB_F0, LAB_F_T0, 1.0f / 3.0f, LAB_LIGHT_MAX,
+                         1.0f / 116.0f, 1.0f / 500.0f, 1.0f / 200.0f, 1.0f / LAB_SLOPE};
+    memcpy(k, v, sizeof v);
+    *magic = LAB_RCBRT_MAGIC;
+}
+
 /* The cube root of t in [LAB_T0, LAB_LIGHT_MAX] as t r^2, r = t^(-1/3) by
  * Newton's iteration r (4 - t r^3) / 3 from an estimate made of the
  * exponent bits (within 7 per cent; each step squares the error: three
@@ -450,11 +461,9 @@ void btf_lab_sample_free(btf_lab_sample *s)
  * samples of a match, less than starting a thread (about 0.1 ms on a VM);
  * a batch runs them on the relay helper beside the next image's synthesis
  * (colour_match.c's task). */
-btf_status btf_lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNOTS],
-                                    btf_error *err)
+int btf_lab_quantile_ranks(size_t n, size_t ranks[2 * BTF_MARGIN_KNOTS],
+                           double frac[BTF_MARGIN_KNOTS])
 {
-    size_t n = s->n, ranks[2 * BTF_MARGIN_KNOTS];
-    double frac[BTF_MARGIN_KNOTS];
     int nr = 0;
     for (int j = 0; j < BTF_MARGIN_KNOTS; j++) { /* the two order statistics around h_j */
         double hpos = (double)(n - 1) * j / (BTF_MARGIN_KNOTS - 1);
@@ -463,19 +472,34 @@ btf_status btf_lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNO
         ranks[nr++] = k;
         ranks[nr++] = k + 1 < n ? k + 1 : k;
     }
+    return nr;
+}
+
+void btf_lab_quantiles_at(int c, const float at[2 * BTF_MARGIN_KNOTS],
+                          const double frac[BTF_MARGIN_KNOTS], float q[BTF_MARGIN_KNOTS])
+{
+    for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
+        float a = at[2 * j], b = at[2 * j + 1];
+        double x = a + frac[j] * ((double)b - a);
+        float lim = c == 0 ? 100.0f : 128.0f, low = c == 0 ? 0.0f : -128.0f;
+        float qv = (float)x;
+        qv = qv < low ? low : qv > lim ? lim : qv;
+        q[j] = j > 0 && qv < q[j - 1] ? q[j - 1] : qv;
+    }
+}
+
+btf_status btf_lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNOTS],
+                                    btf_error *err)
+{
+    size_t n = s->n, ranks[2 * BTF_MARGIN_KNOTS];
+    double frac[BTF_MARGIN_KNOTS];
+    int nr = btf_lab_quantile_ranks(n, ranks, frac);
     for (int c = 0; c < 3; c++) {
         float at[2 * BTF_MARGIN_KNOTS];
         btf_status rc = order_stats(s->v + c * n, s->v + 3 * n, n, ranks, nr, at, err);
         if (rc)
             return rc;
-        for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
-            float a = at[2 * j], b = at[2 * j + 1];
-            double x = a + frac[j] * ((double)b - a);
-            float lim = c == 0 ? 100.0f : 128.0f, low = c == 0 ? 0.0f : -128.0f;
-            float qv = (float)x;
-            qv = qv < low ? low : qv > lim ? lim : qv;
-            q[c][j] = j > 0 && qv < q[c][j - 1] ? q[c][j - 1] : qv;
-        }
+        btf_lab_quantiles_at(c, at, frac, q[c]);
     }
     return BTF_OK;
 }

@@ -158,6 +158,19 @@ void btf_lab_sample_row(btf_lab_sample *s, int y, const float *row, float *scrat
 btf_status btf_lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNOTS],
                                     btf_error *err);
 void btf_lab_sample_free(btf_lab_sample *s);
+/* btf_lab_sample_quantiles in two halves, for a sample sorted elsewhere
+ * (the GPU: gpu/match_gpu.c): the ranks of the order statistics the
+ * quantiles interpolate (2 per knot, returns their count) and the weights,
+ * then channel c's quantiles from the statistics at those ranks. */
+int btf_lab_quantile_ranks(size_t n, size_t ranks[2 * BTF_MARGIN_KNOTS],
+                           double frac[BTF_MARGIN_KNOTS]);
+void btf_lab_quantiles_at(int c, const float at[2 * BTF_MARGIN_KNOTS],
+                          const double frac[BTF_MARGIN_KNOTS], float q[BTF_MARGIN_KNOTS]);
+/* The conversion's constants as this file rounds them, for a shader that
+ * must give the same bits (gpu/match_layout.h): the two matrices
+ * row-major, T0, SLOPE, F0, F_T0, 1/3, LIGHT_MAX, 1/116, 1/500, 1/200,
+ * 1/SLOPE, and the cube root's magic number. */
+void btf_lab_constants(float to_xyz[9], float to_rgb[9], float k[10], int32_t *magic);
 /* A map of one Lab channel, resampled on BTF_LAB_MAP_SEGS segments of
  * equal width (colour_match.c makes it): t = (v - origin) inv_h clamped to
  * [0, SEGS], q[i] + (t - i) dq[i] at its segment i. */

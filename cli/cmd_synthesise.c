@@ -134,12 +134,6 @@ static void env_cpu_switches(btf_synth_opts *o)
     o->row_by_row = w && !strcmp(w, "0");
 }
 
-/* BTF_VK_DEVICE=N (a device index; unset or empty: none, *index -1) and
- * BTF_VK_VALIDATION=0|1 into the GPU options. */
-/* The GPU path returns whole images; at most this many bytes of them are
- * held at once (the CPU path streams rows instead). */
-#define GPU_IMAGE_BUDGET (1ull << 30)
-
 /* A library synthesis error names the model it came from (unless it does
  * already): "MODEL: message". Returns rc. */
 static int name_model(int rc, const char *model, btf_error *err)
@@ -177,38 +171,39 @@ static int write_range_maps(const btf_model *m, int w, int h, uint64_t seed, con
     return rc;
 }
 
-/* The GPU path: the chosen subspaces in groups that fit the memory budget,
- * each group in as few jobs as the device allows. */
+/* The GPU path: btf_gpu_synthesise_each groups the chosen subspaces by the
+ * device's memory budget (the library's policy) and hands each finished
+ * image here to be written. */
+typedef struct gpu_sink {
+    const btf_model *m;
+    const output *out;
+    uint64_t seed;
+    const int *subs;
+    int write_failed; /* the error is the output's, not the model's */
+} gpu_sink;
+
+static int gpu_write(void *user, int i, btf_image *img, btf_error *err)
+{
+    gpu_sink *s = user;
+    int rc = write_image(img, s->m, s->subs[i], s->seed, s->out, err);
+    s->write_failed = rc != 0;
+    return rc;
+}
+
 static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick,
                      const btf_synth_opts *so, const output *out, btf_error *err)
 {
-    size_t count = m->n_subspaces > 0 ? (size_t)m->n_subspaces : 1;
-    int n = 0, *subs = calloc(count, sizeof(int));
-    btf_image *imgs = calloc(count, sizeof(btf_image));
-    if (!subs || !imgs) {
-        free(subs);
-        free(imgs);
+    int n = 0, *subs = calloc((size_t)m->n_subspaces + 1, sizeof(int));
+    if (!subs)
         return cli_set_error(err, BTF_E_NOMEM, "out of memory");
-    }
     for (int k = 0; k < m->n_subspaces; k++)
         if (pick[k])
             subs[n++] = k;
-    uint64_t one = (uint64_t)so->width * so->height * 12;
-    int group = (int)(GPU_IMAGE_BUDGET / one);
-    if (group < 1)
-        group = 1;
-    int rc = 0;
-    for (int start = 0; rc == 0 && start < n; start += group) {
-        int k = n - start < group ? n - start : group;
-        rc = name_model(btf_gpu_synthesise(g, m, subs + start, k, so, imgs, err),
-                        out->model_path, err);
-        for (int j = 0; rc == 0 && j < k; j++)
-            rc = write_image(&imgs[j], m, subs[start + j], so->seed, out, err);
-        for (int j = 0; j < k; j++)
-            btf_image_free(&imgs[j]);
-    }
+    gpu_sink s = {m, out, so->seed, subs, 0};
+    int rc = btf_gpu_synthesise_each(g, m, subs, n, so, gpu_write, &s, err);
+    if (!s.write_failed) /* a write's message names its file */
+        name_model(rc, out->model_path, err);
     free(subs);
-    free(imgs);
     return rc;
 }
 
@@ -293,19 +288,21 @@ static int matched_whole(const btf_model *m, const unsigned char *pick,
 }
 
 /* Opens the Vulkan device the backend asks for; NULL (auto falls back to the CPU) or
- * an error (gpu) when there is none. */
+ * an error (gpu) when there is none, or when one image is larger than the
+ * device's memory budget (docs/gpu.md, "Choosing a backend": the GPU would
+ * hold it whole on the host, where the CPU path streams it row by row). */
 static btf_gpu *open_gpu(const char *backend, int device, uint64_t image_bytes, btf_error *err)
 {
-    if (!strcmp(backend, "cpu"))
-        return NULL;
-    if (image_bytes > GPU_IMAGE_BUDGET) {
-        cli_set_error(err, BTF_E_UNSUPPORTED, "the GPU backend holds whole images in memory and one "
-                 "image needs %.1f GiB, more than its %.0f GiB budget; --backend cpu streams",
-                 image_bytes / 1073741824.0, GPU_IMAGE_BUDGET / 1073741824.0);
+    btf_gpu *g = cli_open_gpu(backend, device, err);
+    if (g && !btf_gpu_auto_fits(g, image_bytes)) {
+        cli_set_error(err, BTF_E_UNSUPPORTED, "the GPU backend holds whole images and one needs "
+                      "%.2f GiB, more than the device's memory budget of %.2f GiB; --backend cpu "
+                      "streams", image_bytes / 1073741824.0,
+                      btf_gpu_memory_budget(g) / 1073741824.0);
+        btf_gpu_close(g);
         return NULL;
     }
-    /* auto without a GPU is no failure: the CPU runs and the summary says so. */
-    return cli_open_gpu(backend, device, err);
+    return g;
 }
 
 static int synth_one(const cli_ctx *c, const btf_model *m, int k, const btf_synth_opts *so,

@@ -795,7 +795,6 @@ static btf_status run_all(btf_gpu *g, const btf_model *m, const int *subspaces, 
                           const int (*margins)[3][BTF_MAX_LEVELS], const batch_dest *dst,
                           btf_error *err)
 {
-    g->jobs = g->batches = 0;
     uint64_t limit = btf_vk_info(g->vk)->max_storage_buffer_range;
     if (g->max_buffer_bytes && g->max_buffer_bytes < limit)
         limit = g->max_buffer_bytes;
@@ -822,43 +821,148 @@ static btf_status run_all(btf_gpu *g, const btf_model *m, const int *subspaces, 
     return rc;
 }
 
-btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
-                              const btf_synth_opts *opts, btf_image *outs, btf_error *err)
+uint64_t btf_gpu_budget_bytes(uint64_t max_buffer_bytes, uint64_t heap_bytes)
+{
+    uint64_t cap = max_buffer_bytes / 4; /* floats per buffer, as btf_gpu_images_cap */
+    cap = cap > (1ull << 28) ? 1ull << 28 : cap > 0 ? cap : 1;
+    uint64_t most = 4ull * BTF_GPU_DEVICE_BUFFERS * cap, heap = heap_bytes / 4;
+    return heap > 0 && heap < most ? heap : most;
+}
+
+uint64_t btf_gpu_memory_budget(const btf_gpu *g)
+{
+    return btf_gpu_budget_bytes(btf_gpu_max_buffer_bytes(g),
+                                btf_vk_info(g->vk)->device_local_bytes);
+}
+
+int btf_gpu_auto_fits(const btf_gpu *g, uint64_t image_bytes)
+{
+    return g && image_bytes <= btf_gpu_memory_budget(g);
+}
+
+/* One image too large for the budget: synthesised in strips straight to the
+ * host (no whole image on the device), finished there by the CPU's code
+ * (the same bits as on the device), handed to fn as image i. */
+static btf_status one_in_strips(btf_gpu *g, const btf_model *m, const int *sub,
+                                const btf_synth_opts *o, const int *w, const int *h,
+                                const int (*margins)[3][BTF_MAX_LEVELS], int i, btf_image_fn fn,
+                                void *user, btf_error *err)
+{
+    btf_image img = {0}, pattern = {0};
+    btf_status rc = btf_image_alloc(&img, *w, *h, 3, err);
+    batch_dest d = {&img, NULL, NULL};
+    if (rc == BTF_OK)
+        rc = run_all(g, m, sub, 1, o, w, h, margins, &d, err);
+    int match = 0;
+    if (rc == BTF_OK)
+        rc = btf_structure_apply(m, o->seed, &img, &pattern, err);
+    if (rc == BTF_OK)
+        rc = btf_colour_match_wanted(m, *sub, o->match_colours, &match, err);
+    if (rc == BTF_OK && match)
+        rc = btf_colour_match(m, *sub, &img, err);
+    if (rc == BTF_OK)
+        rc = fn(user, i, &img, err);
+    btf_image_free(&pattern);
+    btf_image_free(&img);
+    return rc;
+}
+
+static btf_status synth_to_device(btf_gpu *g, const btf_model *m, const int *subs, int n,
+                                  const btf_synth_opts *o, const int *w, const int *h,
+                                  const int (*margins)[3][BTF_MAX_LEVELS], btf_gpu_images *out,
+                                  uint64_t *offsets, btf_error *err);
+
+/* Images [first, first + k) synthesised and finished on the device, then
+ * read back one by one (checked for Inf and NaN) and handed to fn. */
+static btf_status group_on_device(btf_gpu *g, const btf_model *m, const int *subs, int first,
+                                  int k, const btf_synth_opts *o, const int *w, const int *h,
+                                  const int (*margins)[3][BTF_MAX_LEVELS], btf_image_fn fn,
+                                  void *user, btf_error *err)
+{
+    btf_gpu_images dev;
+    uint64_t *off = btf_calloc((size_t)k, sizeof *off, err);
+    btf_status rc = off ? synth_to_device(g, m, subs + first, k, o, w + first, h + first,
+                                          margins + first, &dev, off, err)
+                        : BTF_E_NOMEM;
+    if (!off || rc) {
+        free(off);
+        return rc;
+    }
+    for (int j = 0; rc == BTF_OK && j < k; j++) {
+        int wj = w[first + j], hj = h[first + j];
+        btf_image img;
+        if ((rc = btf_image_alloc(&img, wj, hj, 3, err)))
+            break;
+        rc = btf_gpu_images_download(g->vk, &dev, off[j], img.data, (uint64_t)wj * hj * 3, err);
+        for (int y = 0; rc == BTF_OK && y < hj; y++)
+            rc = btf_check_finite_row(img.data + (size_t)y * wj * 3, (size_t)wj * 3,
+                                      subs[first + j], y, err);
+        if (rc == BTF_OK)
+            rc = fn(user, first + j, &img, err);
+        btf_image_free(&img);
+    }
+    btf_gpu_images_free(&dev);
+    free(off);
+    return rc;
+}
+
+btf_status btf_gpu_synthesise_each(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
+                                   const btf_synth_opts *opts, btf_image_fn fn, void *user,
+                                   btf_error *err)
 {
     btf_synth_opts o = btf_synth_resolve(opts);
-    for (int j = 0; j < n; j++)
-        memset(&outs[j], 0, sizeof outs[j]);
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
     int *w = n > 0 ? btf_calloc((size_t)n * 2, sizeof(int), err) : NULL;
     int *h = w ? w + n : NULL; /* widths, heights */
     btf_status rc = n > 0 && !w ? BTF_E_NOMEM : BTF_OK;
     if (rc == BTF_OK)
         rc = check_all(m, subspaces, n, &o, w, h, &margins, err);
-    if (rc == BTF_OK && !g)
-        rc = btf_fail(err, BTF_E_ARG, "GPU synthesis: no GPU (btf_gpu_open)");
-    for (int j = 0; rc == 0 && j < n; j++)
-        rc = btf_image_alloc(&outs[j], w[j], h[j], 3, err);
-    batch_dest d = {outs, NULL, NULL};
-    if (rc == BTF_OK)
-        rc = run_all(g, m, subspaces, n, &o, w, h, (const int (*)[3][BTF_MAX_LEVELS])margins, &d,
-                     err);
-    /* colour matching reads each whole image (its histogram): on the host,
-     * by the CPU's code, so that equal images stay equal (docs/gpu.md) */
-    btf_image pattern = {0}; /* the structure layer's, quilted once per size */
-    for (int j = 0; rc == BTF_OK && j < n; j++) {
-        int match;
-        rc = btf_structure_apply(m, o.seed, &outs[j], &pattern, err); /* the CPU's multiply */
-        if (rc == BTF_OK)
-            rc = btf_colour_match_wanted(m, subspaces[j], o.match_colours, &match, err);
-        if (rc == BTF_OK && match)
-            rc = btf_colour_match(m, subspaces[j], &outs[j], err);
+    if (rc == BTF_OK && (!g || !fn))
+        rc = btf_fail(err, BTF_E_ARG, "GPU synthesis: no GPU (btf_gpu_open) or no receiver");
+    const int (*mg)[3][BTF_MAX_LEVELS] = (const int (*)[3][BTF_MAX_LEVELS])margins;
+    uint64_t budget = rc == BTF_OK ? btf_gpu_memory_budget(g) / 4 : 0; /* floats */
+    if (g)
+        g->jobs = g->batches = 0;
+    for (int start = 0, k; rc == BTF_OK && start < n; start += k) {
+        uint64_t total = 0; /* the next images that fit the budget together */
+        for (k = 0; start + k < n; k++) {
+            uint64_t f = 3ull * w[start + k] * h[start + k];
+            if (total + f > budget)
+                break;
+            total += f;
+        }
+        if (k == 0) {
+            k = 1;
+            rc = one_in_strips(g, m, subspaces + start, &o, w + start, h + start, mg + start,
+                               start, fn, user, err);
+        } else {
+            rc = group_on_device(g, m, subspaces, start, k, &o, w, h, mg, fn, user, err);
+        }
     }
-    btf_image_free(&pattern);
+    free(margins);
+    free(w);
+    return rc;
+}
+
+/* btf_gpu_synthesise's receiver: image i kept in outs[i]. */
+static int keep_image(void *user, int i, btf_image *img, btf_error *err)
+{
+    (void)err;
+    btf_image *outs = user;
+    outs[i] = *img;
+    memset(img, 0, sizeof *img);
+    return 0;
+}
+
+btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
+                              const btf_synth_opts *opts, btf_image *outs, btf_error *err)
+{
+    for (int j = 0; j < n; j++)
+        memset(&outs[j], 0, sizeof outs[j]);
+    btf_status rc = btf_gpu_synthesise_each(g, m, subspaces, n, opts, keep_image, outs, err);
     if (rc)
         for (int j = 0; j < n; j++)
             btf_image_free(&outs[j]);
-    free(margins);
-    free(w);
     return rc;
 }
 
@@ -897,6 +1001,34 @@ static btf_status match_image(btf_gpu *g, const btf_model *m, int subspace,
     return rc;
 }
 
+/* Images subs[0 .. n) of the checked request into the device array *out
+ * (created here), synthesised, then finished (the structure layer,
+ * colour matching) there. */
+static btf_status synth_to_device(btf_gpu *g, const btf_model *m, const int *subs, int n,
+                                  const btf_synth_opts *o, const int *w, const int *h,
+                                  const int (*margins)[3][BTF_MAX_LEVELS], btf_gpu_images *out,
+                                  uint64_t *offsets, btf_error *err)
+{
+    uint64_t floats = 0;
+    for (int j = 0; j < n; j++) {
+        offsets[j] = floats;
+        floats += (uint64_t)w[j] * h[j] * 3;
+    }
+    char what[96];
+    snprintf(what, sizeof what, "GPU synthesis to the device: %d images", n);
+    btf_status rc = btf_gpu_images_create(g->vk, floats, btf_gpu_images_cap(g), what, out, err);
+    batch_dest d = {NULL, out, offsets};
+    if (rc == BTF_OK)
+        rc = run_all(g, m, subs, n, o, w, h, margins, &d, err);
+    btf_image pattern = {0}; /* the structure layer's, quilted once per size */
+    for (int j = 0; rc == BTF_OK && j < n; j++)
+        rc = match_image(g, m, subs[j], o, out, offsets[j], w[j], h[j], &pattern, err);
+    btf_image_free(&pattern);
+    if (rc)
+        btf_gpu_images_free(out);
+    return rc;
+}
+
 btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
                                      const btf_synth_opts *opts, btf_gpu_images *out,
                                      uint64_t *offsets, btf_error *err)
@@ -910,26 +1042,10 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
     int *w = btf_calloc((size_t)n * 2, sizeof(int), err);
     btf_status rc = w ? check_all(m, subspaces, n, &o, w, w + n, &margins, err) : BTF_E_NOMEM;
-    uint64_t floats = 0;
-    for (int j = 0; rc == 0 && j < n; j++) {
-        offsets[j] = floats;
-        floats += (uint64_t)w[j] * w[n + j] * 3;
-    }
-    char what[96];
-    snprintf(what, sizeof what, "GPU synthesis to the device: %d images", n);
-    if (rc == 0)
-        rc = btf_gpu_images_create(g->vk, floats, btf_gpu_images_cap(g), what, out, err);
-    batch_dest d = {NULL, out, offsets};
-    if (rc == 0)
-        rc = run_all(g, m, subspaces, n, &o, w, w + n, (const int (*)[3][BTF_MAX_LEVELS])margins,
-                     &d, err);
-    btf_image pattern = {0}; /* the structure layer's, quilted once per size */
-    for (int j = 0; rc == BTF_OK && j < n; j++)
-        rc = match_image(g, m, subspaces[j], &o, out, offsets[j], w[j], w[n + j], &pattern,
-                         err);
-    btf_image_free(&pattern);
-    if (rc)
-        btf_gpu_images_free(out);
+    g->jobs = g->batches = 0;
+    if (rc == BTF_OK)
+        rc = synth_to_device(g, m, subspaces, n, &o, w, w + n,
+                             (const int (*)[3][BTF_MAX_LEVELS])margins, out, offsets, err);
     free(margins);
     free(w);
     return rc;

@@ -66,6 +66,10 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
                                      const btf_synth_opts *opts, btf_gpu_images *out,
                                      uint64_t *offsets, btf_error *err);
 
+/* btf_gpu_memory_budget of a device whose largest storage buffer and
+ * device-local heap are these (0: not reported). */
+uint64_t btf_gpu_budget_bytes(uint64_t max_buffer_bytes, uint64_t heap_bytes);
+
 /* Colour matching on the device (gpu/match_gpu.c, docs/gpu.md "Colour
  * matching on the device"): the pipelines, made once per btf_gpu. */
 typedef struct btf_gpu_matcher btf_gpu_matcher;

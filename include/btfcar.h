@@ -1172,9 +1172,9 @@ typedef struct btf_synth_opts {
      * 1: on, BTF_E_ARG for a subspace without; -1: off (faster: no pass
      * over the image). The streaming btf_synthesise keeps the whole image
      * up to 256 MiB, and beyond synthesises it twice (first for its
-     * histogram): memory by the width still, the same bytes. CPU,
-     * btf_gpu_synthesise and the GPU render run the same host code on the
-     * image (after a read-back on the GPU): the same bytes everywhere. */
+     * histogram): memory by the width still, the same bytes. The GPU
+     * (btf_gpu_synthesise, the GPU render) matches on the device with the
+     * CPU's operations: the same bytes everywhere. */
     int match_colours;
 } btf_synth_opts;
 
@@ -1300,9 +1300,30 @@ const char *btf_gpu_first_validation_message(const btf_gpu *g);
  * apply). Images are grouped in batches and cut into strips of rows so that
  * every GPU buffer fits the device's limit; the causal fields carry their
  * last rows from strip to strip, so the result is the same whatever the
- * tiling. */
+ * tiling. The structure layer and colour matching run on the device
+ * (docs/gpu.md, "Colour matching on the device"), the CPU's bits. */
 btf_status btf_gpu_synthesise(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
                               const btf_synth_opts *opts, btf_image *outs, btf_error *err);
+/* The bytes of images btf_gpu_synthesise_each keeps on the device at once:
+ * a quarter of the device's largest device-local heap (the rest for the
+ * synthesis' own buffers and other programs), at most the 4 storage
+ * buffers of the device's limit that one group of images may span. */
+uint64_t btf_gpu_memory_budget(const btf_gpu *g);
+/* Whether the CLI's synthesis runs a work whose largest image takes
+ * image_bytes on g (docs/gpu.md, "Choosing a backend": auto opens only a
+ * real GPU, btf_gpu_opts.allow_cpu 0, or the device named): the image fits
+ * g's memory budget; else auto takes the CPU, which streams, and --backend
+ * gpu is refused. */
+int btf_gpu_auto_fits(const btf_gpu *g, uint64_t image_bytes);
+/* The same images handed to fn in order (btf_image_fn: fn may keep each),
+ * synthesised in groups that fit btf_gpu_memory_budget, each group
+ * finished on the device and read back one image at a time: at most one
+ * image on the host besides what fn keeps, whatever n. An image larger
+ * than the budget alone is synthesised in strips straight to the host and
+ * finished there by the CPU's code (the same bits). */
+btf_status btf_gpu_synthesise_each(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
+                                   const btf_synth_opts *opts, btf_image_fn fn, void *user,
+                                   btf_error *err);
 
 /* ------------------------------------------ hemisphere interpolation (render) */
 

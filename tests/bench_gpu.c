@@ -6,10 +6,13 @@
  * the loader offers; without a GPU that is lavapipe (set LP_NUM_THREADS to
  * choose its threads). The first job (pipeline creation and shader
  * compilation included) is reported apart from the medians. Never fails on
- * time.
+ * time. Then colour matching alone, on the device (gpu/match_gpu.c) and on
+ * the host (btf_colour_match, the thread pool), on the same 15 images.
  */
 #include "btfcar.h"
 #include "model/model.h"
+#include "synth/synth.h"
+#include "synth_gpu.h"
 #include "testutil.h"
 
 #include <stdio.h>
@@ -21,6 +24,59 @@ static int drop(void *user, int y, int nrows, const float *rows, btf_error *err)
 {
     (void)user, (void)y, (void)nrows, (void)rows, (void)err;
     return 0;
+}
+
+/* Colour matching of 15 images of 512^2 already synthesised: on the device
+ * (sample, sort, apply: the images never read back) against the host's
+ * btf_colour_match on the same images, each the median of 3 runs. */
+static void bench_matching(btf_gpu *g, const btf_model *m)
+{
+    btf_error e = {0};
+    btf_image img[15];
+    int subs[15];
+    for (int k = 0; k < 15; k++)
+        subs[k] = k;
+    btf_synth_opts so = {.width = 512, .height = 512, .seed = 1, .match_colours = -1};
+    if (btf_gpu_synthesise(g, m, subs, 15, &so, img, &e)) {
+        fprintf(stderr, "bench_gpu: %s\n", e.msg);
+        return;
+    }
+    uint64_t floats = 512ull * 512 * 3, cap = btf_gpu_images_cap(g);
+    btf_gpu_images dev;
+    if (btf_gpu_images_create(btf_gpu_vk(g), 15 * floats, cap, "bench", &dev, &e)) {
+        fprintf(stderr, "bench_gpu: %s\n", e.msg);
+        return;
+    }
+    double td[3], th[3];
+    for (int r = 0; r < 3; r++) {
+        for (int k = 0; k < 15; k++)
+            btf_gpu_images_upload(btf_gpu_vk(g), &dev, k * floats, img[k].data, floats, &e);
+        double t0 = tu_now();
+        for (int k = 0; k < 15; k++)
+            if (btf_gpu_match_images(btf_gpu_vk(g), btf_gpu_match_pipes(g), m, k, 1, &dev,
+                                     k * floats, 512, 512, NULL, &e))
+                fprintf(stderr, "bench_gpu: %s\n", e.msg);
+        td[r] = tu_now() - t0;
+    }
+    btf_image copy;
+    for (int r = 0; r < 3; r++) {
+        th[r] = 0;
+        for (int k = 0; k < 15; k++) {
+            if (btf_image_alloc(&copy, 512, 512, 3, &e))
+                return;
+            memcpy(copy.data, img[k].data, floats * sizeof(float));
+            double t0 = tu_now();
+            btf_colour_match(m, k, &copy, &e);
+            th[r] += tu_now() - t0;
+            btf_image_free(&copy);
+        }
+    }
+    printf("colour matching alone, 15 x 512^2: on the device median %.0f ms, on the host (CPU "
+           "code, thread pool) median %.0f ms: device/host time ratio %.2f\n",
+           1e3 * tu_median(td, 3), 1e3 * tu_median(th, 3), tu_median(td, 3) / tu_median(th, 3));
+    btf_gpu_images_free(&dev);
+    for (int k = 0; k < 15; k++)
+        btf_image_free(&img[k]);
 }
 
 int main(void)
@@ -87,6 +143,7 @@ int main(void)
     printf("gpu vs cpu, 15 x 512^2, 4 neighbours, 3 levels: vulkan median %.0f ms, cpu (1 core) "
            "median %.0f ms: vulkan/cpu time ratio %.2f\n", 1e3 * tu_median(tg + 1, 3), 1e3 * tu_median(tc, 3),
            tu_median(tg + 1, 3) / tu_median(tc, 3));
+    bench_matching(g, &m);
     btf_gpu_close(g);
     btf_model_internal_free(m.internal);
     free(m.subspaces);

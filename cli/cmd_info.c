@@ -182,22 +182,41 @@ static void devices_json(const btf_gpu_device *list, int n)
         cli_json_string(stdout, list[i].type_name);
         printf(", \"vulkan\": ");
         cli_json_string(stdout, list[i].vulkan_version);
-        printf(", \"max_storage_buffer_bytes\": %llu, \"usable\": %s, \"name\": ",
-               (unsigned long long)list[i].max_buffer_bytes, list[i].usable ? "true" : "false");
+        printf(", \"max_storage_buffer_bytes\": %llu, \"device_local_bytes\": %llu, "
+               "\"storage_16bit\": %s, \"usable\": %s, \"name\": ",
+               (unsigned long long)list[i].max_buffer_bytes,
+               (unsigned long long)list[i].device_local_bytes,
+               list[i].storage_16bit ? "true" : "false", list[i].usable ? "true" : "false");
         cli_json_string(stdout, list[i].name);
         printf("}");
     }
     printf("%s]}\n", n ? "\n" : "");
 }
 
+/* Device sizes are powers of two or near them (4 GiB - 1 on many GPUs), so
+ * binary units read as the drivers state them: "128.0 MiB", "4.0 GiB". */
+static void format_mib(uint64_t bytes, char *buf, size_t n)
+{
+    double mib = (double)bytes / (1024.0 * 1024.0);
+    if (mib >= 1024.0)
+        snprintf(buf, n, "%.1f GiB", mib / 1024.0);
+    else
+        snprintf(buf, n, "%.1f MiB", mib);
+}
+
 static void devices_text(const btf_gpu_device *list, int n)
 {
-    printf("%-5s  %-14s  %-7s  %-26s  %s\n", "index", "type", "Vulkan",
-           "max storage buffer (bytes)", "name");
-    for (int i = 0; i < n; i++)
-        printf("%-5d  %-14s  %-7s  %-26llu  %s%s\n", list[i].index, list[i].type_name,
-               list[i].vulkan_version, (unsigned long long)list[i].max_buffer_bytes, list[i].name,
+    printf("%-5s  %-14s  %-7s  %-18s  %-17s  %-14s  %s\n", "index", "type", "Vulkan",
+           "max storage buffer", "device-local heap", "16-bit storage", "name");
+    for (int i = 0; i < n; i++) {
+        char buf[32], heap[32];
+        format_mib(list[i].max_buffer_bytes, buf, sizeof buf);
+        format_mib(list[i].device_local_bytes, heap, sizeof heap);
+        printf("%-5d  %-14s  %-7s  %-18s  %-17s  %-14s  %s%s\n", list[i].index,
+               list[i].type_name, list[i].vulkan_version, buf, heap,
+               list[i].storage_16bit ? "yes" : "no", list[i].name,
                list[i].usable ? "" : " (unusable: needs Vulkan 1.1 and a compute queue)");
+    }
 }
 
 /* --devices: one line per Vulkan device, or one JSON document. Without any
@@ -239,7 +258,7 @@ int cmd_info(int argc, char **argv)
         {.name = "--devices", .kind = CLI_FLAG, .dest = &devices,
          .help = "list the Vulkan devices GPU synthesis can use: index (for\n"
                  "--device and BTF_VK_DEVICE), type, Vulkan version, largest storage\n"
-                 "buffer, name"},
+                 "buffer, largest device-local memory heap, 16-bit storage, name"},
         CLI_MAX_PIXELS_OPTION(&max_px),
         {0}};
     cli_spec spec = {.cmd = "info", .args = "DATASET|MODEL",

@@ -41,6 +41,8 @@ btf_status btf_gpu_list_devices(btf_gpu_device **list, int *count, btf_error *er
         btf_vk_version_text(in[i].api_version, d->vulkan_version, sizeof d->vulkan_version);
         d->usable = in[i].usable;
         d->max_buffer_bytes = in[i].max_storage_buffer_range;
+        d->device_local_bytes = in[i].device_local_bytes;
+        d->storage_16bit = in[i].storage_16bit;
     }
     free(in);
     *list = out;

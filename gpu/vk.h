@@ -68,6 +68,8 @@ typedef struct btf_vk_device_info {
     uint32_t max_push_constants_bytes;
     uint32_t max_storage_buffers;   /* per shader stage (maxPerStageDescriptorStorageBuffers) */
     uint32_t subgroup_size;         /* 0 if the device does not say */
+    int storage_16bit;              /* storageBuffer16BitAccess (Vulkan 1.1 16-bit storage):
+                                       16-bit values in storage buffers */
     /* Filled by btf_vk_create only (0 in btf_vk_list_devices): */
     int mapped_buffers;             /* 1: buffers are host-visible and coherent, upload and
                                        download are memcpy; 0: staging copies */

@@ -356,6 +356,13 @@ static void fill_info(VkPhysicalDevice p, int index, btf_vk_device_info *di)
         vkGetPhysicalDeviceProperties2(p, &p2);
         di->subgroup_size = sg.subgroupSize;
         di->max_allocation_bytes = m3.maxMemoryAllocationSize;
+        /* 16-bit storage is optional in 1.1: half-float buffers need it */
+        VkPhysicalDevice16BitStorageFeatures s16 = {
+            .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_16BIT_STORAGE_FEATURES};
+        VkPhysicalDeviceFeatures2 f2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2,
+                                        .pNext = &s16};
+        vkGetPhysicalDeviceFeatures2(p, &f2);
+        di->storage_16bit = s16.storageBuffer16BitAccess == VK_TRUE;
     }
     VkPhysicalDeviceMemoryProperties mp;
     vkGetPhysicalDeviceMemoryProperties(p, &mp);

@@ -1268,6 +1268,9 @@ typedef struct btf_gpu_device {
     char vulkan_version[32];   /* "1.3.230" */
     int usable;                /* Vulkan >= 1.1 and a compute queue */
     uint64_t max_buffer_bytes; /* largest storage buffer (maxStorageBufferRange) */
+    uint64_t device_local_bytes; /* size of the largest device-local memory heap */
+    int storage_16bit;         /* 1: 16-bit values in storage buffers
+                                  (storageBuffer16BitAccess, Vulkan 1.1) */
 } btf_gpu_device;
 
 /* Every Vulkan device, in the driver's order (the indices of

@@ -345,6 +345,12 @@ static void devices_json(void **state)
     assert_int_equal(st, 0);
     assert_true(strncmp(out, "{\"devices\": [", 13) == 0);
     assert_non_null(strstr(out, "]}"));
+    if (strstr(out, "\"index\"")) { /* a device: its limits are stated */
+        assert_non_null(strstr(out, "\"max_storage_buffer_bytes\": "));
+        assert_non_null(strstr(out, "\"device_local_bytes\": "));
+        assert_true(strstr(out, "\"storage_16bit\": true") ||
+                    strstr(out, "\"storage_16bit\": false"));
+    }
     free(out);
 }
 

@@ -268,6 +268,28 @@ static void bad_requests(void **state)
     btf_model_free(&m);
 }
 
+/* info --devices --json states each device's limits as the library lists
+ * them (the command prints, the library measures). */
+static void json_matches_list(const btf_gpu_device *list, int n)
+{
+    int st;
+    char *out = tu_capture(tu_fmt("%s info --devices --json", tu_cli()), &st);
+    assert_int_equal(st, 0);
+    for (int i = 0; i < n; i++) {
+        const char *want = tu_fmt("{\"index\": %d, \"type\": \"%s\", \"vulkan\": \"%s\", "
+                                  "\"max_storage_buffer_bytes\": %llu, \"device_local_bytes\": "
+                                  "%llu, \"storage_16bit\": %s, ",
+                                  i, list[i].type_name, list[i].vulkan_version,
+                                  (unsigned long long)list[i].max_buffer_bytes,
+                                  (unsigned long long)list[i].device_local_bytes,
+                                  list[i].storage_16bit ? "true" : "false");
+        if (!strstr(out, want))
+            print_error("info --devices --json lacks %s in:\n%s\n", want, out);
+        assert_non_null(strstr(out, want));
+    }
+    free(out);
+}
+
 /* The public device list, the defaults, and images of different analysed
  * sizes in one call (no size given: each its own, in batches of one size). */
 static void devices_defaults_and_sizes(void **state)
@@ -282,10 +304,14 @@ static void devices_defaults_and_sizes(void **state)
     for (int i = 0; i < n; i++) {
         assert_int_equal(list[i].index, i);
         assert_true(list[i].name[0] && list[i].type_name && list[i].vulkan_version[0] == '1');
+        assert_true(list[i].storage_16bit == 0 || list[i].storage_16bit == 1);
+        if (list[i].usable) /* a usable device has memory to put buffers in */
+            assert_true(list[i].max_buffer_bytes > 0 && list[i].device_local_bytes > 0);
         cpu |= list[i].type == BTF_GPU_CPU && !strcmp(list[i].type_name, "CPU") &&
                list[i].usable && list[i].max_buffer_bytes > 0;
     }
     assert_true(cpu || getenv("VK_DRIVER_FILES") == NULL); /* lavapipe is set up */
+    json_matches_list(list, n);
     free(list);
     btf_gpu_opts d = btf_gpu_defaults();
     assert_true(!d.use_device && !d.allow_cpu && !d.validation);

@@ -94,6 +94,10 @@ void cli_install_signal_cleanup(void);
  * auto when no real GPU is present (err says why; not a failure); for gpu
  * or a named device NULL is a failure, with err set. */
 btf_gpu *cli_open_gpu(const char *backend, int device, btf_error *err);
+/* The same for a work whose largest image takes image_bytes: auto without
+ * a named device takes the device btf_gpu_auto_device picks, else none. */
+btf_gpu *cli_open_gpu_for(const char *backend, int device, uint64_t image_bytes,
+                          btf_error *err);
 
 /* A writer thread for whole images (cli/write_behind.c): put hands img
  * over (taking it; it blocks while the previous one is still being written)

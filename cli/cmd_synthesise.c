@@ -293,8 +293,8 @@ static int matched_whole(const btf_model *m, const unsigned char *pick,
  * hold it whole on the host, where the CPU path streams it row by row). */
 static btf_gpu *open_gpu(const char *backend, int device, uint64_t image_bytes, btf_error *err)
 {
-    btf_gpu *g = cli_open_gpu(backend, device, err);
-    if (g && !btf_gpu_auto_fits(g, image_bytes)) {
+    btf_gpu *g = cli_open_gpu_for(backend, device, image_bytes, err);
+    if (g && !btf_gpu_auto_fits(g, image_bytes)) { /* a device named, or --backend gpu */
         cli_set_error(err, BTF_E_UNSUPPORTED, "the GPU backend holds whole images and one needs "
                       "%.2f GiB, more than the device's memory budget of %.2f GiB; --backend cpu "
                       "streams", image_bytes / 1073741824.0,

@@ -327,6 +327,27 @@ static int env_gpu_opts(btf_gpu_opts *o, int *index, btf_error *err)
 
 btf_gpu *cli_open_gpu(const char *backend, int device, btf_error *err)
 {
+    return cli_open_gpu_for(backend, device, 0, err);
+}
+
+/* auto without a named device: the library's rule over the device list
+ * (btf_gpu_auto_device); -1 (the CPU) with the reason in err. */
+static int auto_device(uint64_t image_bytes, btf_error *err)
+{
+    btf_gpu_device *list;
+    int n;
+    if (btf_gpu_list_devices(&list, &n, err))
+        return -1;
+    int pick = btf_gpu_auto_device(list, n, image_bytes);
+    free(list);
+    if (pick < 0)
+        cli_set_error(err, BTF_E_UNSUPPORTED, "no real GPU whose memory budget holds %.1f MiB "
+                      "images (btfcar info --devices)", image_bytes / 1048576.0);
+    return pick;
+}
+
+btf_gpu *cli_open_gpu_for(const char *backend, int device, uint64_t image_bytes, btf_error *err)
+{
     if (!strcmp(backend, "cpu"))
         return NULL;
     /* A named device is as explicit as --backend gpu: its errors are errors. */
@@ -337,6 +358,8 @@ btf_gpu *cli_open_gpu(const char *backend, int device, btf_error *err)
     int rc = env_gpu_opts(&o, &env_device, err), from_env = device < 0 && env_device >= 0;
     if (from_env)
         device = env_device;
+    if (rc == 0 && !explicit_gpu && !from_env && (device = auto_device(image_bytes, err)) < 0)
+        return NULL;
     o.use_device = device >= 0;
     o.device = device < 0 ? 0 : device;
     o.allow_cpu = explicit_gpu;

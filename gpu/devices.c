@@ -5,6 +5,7 @@
  * caller chooses a device by.
  */
 #include "core/core.h"
+#include "synth_gpu.h"
 #include "vk.h"
 
 #include <stdio.h>
@@ -48,4 +49,31 @@ btf_status btf_gpu_list_devices(btf_gpu_device **list, int *count, btf_error *er
     *list = out;
     *count = n;
     return BTF_OK;
+}
+
+/* The automatic choice's order (as btf_vk_create's best device):
+ * discrete, integrated, virtual, other; a CPU device never. */
+static int auto_rank(btf_gpu_device_type t)
+{
+    switch (t) {
+    case BTF_GPU_DISCRETE: return 4;
+    case BTF_GPU_INTEGRATED: return 3;
+    case BTF_GPU_VIRTUAL: return 2;
+    case BTF_GPU_CPU: return 0;
+    default: return 1;
+    }
+}
+
+int btf_gpu_auto_device(const btf_gpu_device *list, int n, uint64_t image_bytes)
+{
+    int best = -1;
+    for (int i = 0; list && i < n; i++) {
+        const btf_gpu_device *d = &list[i];
+        if (!d->usable || auto_rank(d->type) == 0 ||
+            image_bytes > btf_gpu_budget_bytes(d->max_buffer_bytes, d->device_local_bytes))
+            continue;
+        if (best < 0 || auto_rank(d->type) > auto_rank(list[best].type))
+            best = i;
+    }
+    return best < 0 ? -1 : list[best].index;
 }

@@ -1318,6 +1318,13 @@ uint64_t btf_gpu_memory_budget(const btf_gpu *g);
  * g's memory budget; else auto takes the CPU, which streams, and --backend
  * gpu is refused. */
 int btf_gpu_auto_fits(const btf_gpu *g, uint64_t image_bytes);
+/* The rule of --backend auto over a device list (btf_gpu_list_devices;
+ * docs/gpu.md, "Choosing a backend"): the index (btf_gpu_device.index) of
+ * the device a work whose largest image takes image_bytes (0: any) runs
+ * on — the best usable real GPU (discrete, then integrated, then virtual;
+ * never a CPU device such as lavapipe) whose memory budget holds the
+ * image — or -1 for the CPU. */
+int btf_gpu_auto_device(const btf_gpu_device *list, int n, uint64_t image_bytes);
 /* The same images handed to fn in order (btf_image_fn: fn may keep each),
  * synthesised in groups that fit btf_gpu_memory_budget, each group
  * finished on the device and read back one image at a time: at most one

@@ -387,6 +387,60 @@ static void cli_backends_agree(void **state)
     free(dir);
 }
 
+/* --backend auto's rule (docs/gpu.md, "Choosing a backend") on device
+ * lists: never a CPU device, the best real GPU whose memory budget holds
+ * the image; and on this machine's devices; and the budget of an open
+ * device follows its buffer limit (btf_gpu_auto_fits). */
+static btf_gpu_device dev_of(int index, btf_gpu_device_type type, int usable, uint64_t buffer,
+                             uint64_t heap)
+{
+    btf_gpu_device d = {.index = index, .type = type, .usable = usable,
+                        .max_buffer_bytes = buffer, .device_local_bytes = heap};
+    return d;
+}
+
+static void backend_auto_rule(void **state)
+{
+    (void)state;
+    const uint64_t MiB = 1ull << 20, GiB = 1ull << 30;
+    btf_gpu_device lp = dev_of(0, BTF_GPU_CPU, 1, 128 * MiB, 24 * GiB);
+    btf_gpu_device disc = dev_of(1, BTF_GPU_DISCRETE, 1, 4 * GiB, 16 * GiB);
+    btf_gpu_device integ = dev_of(2, BTF_GPU_INTEGRATED, 1, 2 * GiB, 8 * GiB);
+    btf_gpu_device small = dev_of(3, BTF_GPU_DISCRETE, 1, 4 * GiB, 1 * GiB); /* budget 256 MiB */
+    btf_gpu_device broken = dev_of(4, BTF_GPU_DISCRETE, 0, 4 * GiB, 16 * GiB);
+    btf_gpu_device a[] = {lp};
+    assert_int_equal(btf_gpu_auto_device(a, 1, 0), -1); /* lavapipe alone: the CPU */
+    btf_gpu_device b[] = {lp, integ, disc};
+    assert_int_equal(btf_gpu_auto_device(b, 3, 12 * MiB), 1); /* discrete first */
+    btf_gpu_device c[] = {lp, small};
+    assert_int_equal(btf_gpu_auto_device(c, 2, 200 * MiB), 3);
+    assert_int_equal(btf_gpu_auto_device(c, 2, 300 * MiB), -1); /* past its budget: the CPU */
+    btf_gpu_device d[] = {small, integ};
+    assert_int_equal(btf_gpu_auto_device(d, 2, 300 * MiB), 2); /* the one that holds it */
+    btf_gpu_device e[] = {broken, lp};
+    assert_int_equal(btf_gpu_auto_device(e, 2, 0), -1); /* unusable: skipped */
+    assert_int_equal(btf_gpu_auto_device(NULL, 0, 0), -1);
+    /* this machine: a real GPU is chosen exactly when the list has one */
+    btf_gpu_device *list;
+    int n, real = 0;
+    btf_error err = {0};
+    TU_OK(btf_gpu_list_devices(&list, &n, &err), &err);
+    for (int i = 0; i < n; i++)
+        real |= list[i].usable && list[i].type != BTF_GPU_CPU;
+    int pick = btf_gpu_auto_device(list, n, 0);
+    print_message("this machine: %d device(s), auto picks %d (%s)\n", n, pick,
+                  pick < 0 ? "the CPU" : "a GPU");
+    assert_int_equal(pick >= 0, real);
+    free(list);
+    /* the budget of an open device: 4 buffers of its (here lowered) limit */
+    btf_gpu_set_max_buffer_bytes(gpu, 1 * MiB);
+    assert_true(btf_gpu_memory_budget(gpu) <= 4 * MiB);
+    assert_true(btf_gpu_auto_fits(gpu, 3 * MiB));
+    assert_false(btf_gpu_auto_fits(gpu, 5 * MiB));
+    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    assert_true(btf_gpu_memory_budget(gpu) >= 128 * MiB);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -399,6 +453,7 @@ int main(void)
         cmocka_unit_test(bad_requests),
         cmocka_unit_test(devices_defaults_and_sizes),
         cmocka_unit_test(cli_backends_agree),
+        cmocka_unit_test(backend_auto_rule),
     };
     return cmocka_run_group_tests_name("gpu", tests, setup, teardown);
 }

@@ -184,6 +184,49 @@ static void synthesis_on_device(void **state)
                   "CPU's synthesis, bit for bit\n");
 }
 
+/* btf_gpu_synthesise_each past the memory budget (lowered with the buffer
+ * limit: 4 buffers of 250,000 bytes, a 1 MB budget): 200 x 150 images go
+ * to the device two at a time, 300 x 300 images (1.08 MB) alone in strips
+ * to the host and are finished there; every image the CPU's bits, in
+ * order. */
+typedef struct seen {
+    const btf_synth_opts *o;
+    int count;
+} seen;
+
+static int check_image(void *user, int i, btf_image *img, btf_error *err)
+{
+    seen *s = user;
+    assert_int_equal(i, s->count);
+    s->count++;
+    btf_image cpu;
+    TU_OK(btf_synthesise_image(&model, 0, s->o, &cpu, err), err);
+    assert_memory_equal(img->data, cpu.data, (size_t)img->width * img->height * 3 * sizeof(float));
+    btf_image_free(&cpu);
+    return 0;
+}
+
+static void synthesis_past_budget(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    int subs[3] = {0, 0, 0};
+    btf_gpu_set_max_buffer_bytes(gpu, 250000);
+    assert_int_equal(btf_gpu_memory_budget(gpu), 1000000);
+    const int sizes[2][2] = {{200, 150}, {300, 300}};
+    for (int i = 0; i < 2; i++) {
+        btf_synth_opts o = {.width = sizes[i][0], .height = sizes[i][1], .seed = 7,
+                            .match_colours = 1};
+        seen s = {&o, 0};
+        TU_OK(btf_gpu_synthesise_each(gpu, &model, subs, 3, &o, check_image, &s, &e), &e);
+        assert_int_equal(s.count, 3);
+    }
+    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    tu_gpu_no_validation_messages(gpu);
+    print_message("a 1 MB budget: 3 x 200x150 in groups on the device, 3 x 300x300 in strips "
+                  "to the host: the CPU's bits, in order\n");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -191,6 +234,7 @@ int main(void)
         cmocka_unit_test(straddles_buffers),
         cmocka_unit_test(pattern_multiply),
         cmocka_unit_test(synthesis_on_device),
+        cmocka_unit_test(synthesis_past_budget),
     };
     return cmocka_run_group_tests_name("gpu_match", tests, setup, teardown);
 }

@@ -17,9 +17,13 @@ layout(std430, set = 0, binding = 0) buffer Img0 { float img0[]; };
 layout(std430, set = 0, binding = 1) buffer Img1 { float img1[]; };
 layout(std430, set = 0, binding = 2) buffer Img2 { float img2[]; };
 layout(std430, set = 0, binding = 3) buffer Img3 { float img3[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Ints { int pi[]; };
-layout(std430, set = 0, binding = 5) readonly buffer Floats { float pf[]; };
-layout(std430, set = 0, binding = 6) readonly buffer Pattern { float pat[]; };
+layout(std430, set = 0, binding = 4) buffer Img4 { float img4[]; };
+layout(std430, set = 0, binding = 5) buffer Img5 { float img5[]; };
+layout(std430, set = 0, binding = 6) buffer Img6 { float img6[]; };
+layout(std430, set = 0, binding = 7) buffer Img7 { float img7[]; };
+layout(std430, set = 0, binding = 8) readonly buffer Ints { int pi[]; };
+layout(std430, set = 0, binding = 9) readonly buffer Floats { float pf[]; };
+layout(std430, set = 0, binding = 10) readonly buffer Pattern { float pat[]; };
 
 #include "match_lab.glsl"
 
@@ -28,14 +32,16 @@ void img_write(int f, float v)
     int cap = pi[BTF_MP_CAP];
     int b = f / cap;
     int i = f - b * cap;
-    if (b == 0)
-        img0[i] = v;
-    else if (b == 1)
-        img1[i] = v;
-    else if (b == 2)
-        img2[i] = v;
-    else
-        img3[i] = v;
+    switch (b) {
+    case 0: img0[i] = v; break;
+    case 1: img1[i] = v; break;
+    case 2: img2[i] = v; break;
+    case 3: img3[i] = v; break;
+    case 4: img4[i] = v; break;
+    case 5: img5[i] = v; break;
+    case 6: img6[i] = v; break;
+    default: img7[i] = v; break;
+    }
 }
 
 void main()

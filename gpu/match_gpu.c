@@ -34,6 +34,10 @@
 _Static_assert(BTF_MATCH_SEGS == BTF_LAB_MAP_SEGS, "match_layout.h's segments are the CPU's");
 _Static_assert(sizeof(btf_lab_map) == 4 * BTF_MF_MAP_FLOATS, "a map is BTF_MF_MAP_FLOATS floats");
 
+/* The shaders' bindings after the image array's 0-7. */
+enum { INTS = BTF_GPU_DEVICE_BUFFERS, FLOATS, PATTERN, KEYS };
+_Static_assert(KEYS == 11, "match_sample.comp binds the keys at 11");
+
 struct btf_gpu_matcher {
     btf_vk *vk;
     btf_vk_pipeline *sample, *sort, *apply;
@@ -47,13 +51,13 @@ btf_status btf_gpu_matcher_create(btf_vk *vk, btf_gpu_matcher **out, btf_error *
     if (!mt)
         return BTF_E_NOMEM;
     mt->vk = vk;
-    btf_status rc = btf_vk_pipeline_create(vk, match_sample_spv, sizeof match_sample_spv, 8, 0,
+    btf_status rc = btf_vk_pipeline_create(vk, match_sample_spv, sizeof match_sample_spv, 12, 0,
                                            NULL, 0, &mt->sample, err);
     if (rc == BTF_OK)
         rc = btf_vk_pipeline_create(vk, match_sort_spv, sizeof match_sort_spv, 1, 16, NULL, 0,
                                     &mt->sort, err);
     if (rc == BTF_OK)
-        rc = btf_vk_pipeline_create(vk, match_apply_spv, sizeof match_apply_spv, 7, 0, NULL, 0,
+        rc = btf_vk_pipeline_create(vk, match_apply_spv, sizeof match_apply_spv, 11, 0, NULL, 0,
                                     &mt->apply, err);
     if (rc == BTF_OK)
         rc = btf_vk_buffer_create(vk, 16, &mt->placeholder, err);
@@ -161,9 +165,9 @@ static btf_status device_maps(btf_vk *vk, const btf_gpu_matcher *mt, btf_vk_buff
     btf_vk_job *job = NULL;
     btf_status rc = btf_vk_job_begin(vk, &job, err);
     if (rc == BTF_OK)
-        rc = dispatch_rows(job, mt->sample, bufs, 8, NULL, 0, p->npad, max_x, err);
+        rc = dispatch_rows(job, mt->sample, bufs, 12, NULL, 0, p->npad, max_x, err);
     if (rc == BTF_OK)
-        rc = record_sort(job, mt, bufs[7], p->npad, max_x, err);
+        rc = record_sort(job, mt, bufs[KEYS], p->npad, max_x, err);
     if (rc == BTF_OK) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
@@ -176,7 +180,7 @@ static btf_status device_maps(btf_vk *vk, const btf_gpu_matcher *mt, btf_vk_buff
     if (rc == BTF_OK && !(sorted = btf_alloc(3 * p->npad, sizeof(float), err)))
         rc = BTF_E_NOMEM;
     if (rc == BTF_OK) /* one read: a few round trips cost more than 192 KiB on a real GPU */
-        rc = btf_vk_buffer_download(vk, bufs[7], 0, sorted, 4 * 3 * (uint64_t)p->npad, err);
+        rc = btf_vk_buffer_download(vk, bufs[KEYS], 0, sorted, 4 * 3 * (uint64_t)p->npad, err);
     for (int c = 0; rc == BTF_OK && c < 3; c++) {
         float at[2 * BTF_MARGIN_KNOTS];
         for (int r = 0; r < nr; r++)
@@ -197,11 +201,11 @@ static btf_status apply_maps(btf_vk *vk, const btf_gpu_matcher *mt, btf_vk_buffe
 {
     uint32_t max_x = btf_vk_info(vk)->max_workgroup_count[0];
     btf_vk_job *job = NULL;
-    btf_status rc = btf_vk_buffer_upload(vk, bufs[5], 0, p->floats, sizeof p->floats, err);
+    btf_status rc = btf_vk_buffer_upload(vk, bufs[FLOATS], 0, p->floats, sizeof p->floats, err);
     if (rc == BTF_OK)
         rc = btf_vk_job_begin(vk, &job, err);
     if (rc == BTF_OK)
-        rc = dispatch_rows(job, mt->apply, bufs, 7, NULL, 0, pixels, max_x, err);
+        rc = dispatch_rows(job, mt->apply, bufs, 11, NULL, 0, pixels, max_x, err);
     if (rc == BTF_OK) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
@@ -230,30 +234,30 @@ btf_status btf_gpu_match_images(btf_vk *vk, const btf_gpu_matcher *mt, const btf
     btf_lab_sample_free(&p->grid); /* only its grid is used: the device holds the values */
     p->npad = pow2_at_least(p->grid.n);
     params_fill(p, mg, im, off, w, h, pattern, match, btf_vk_info(vk)->max_workgroup_count[0]);
-    /* bindings: the image array 0-3, ints, floats, the pattern, the keys */
-    btf_vk_buffer *bufs[8] = {0};
+    /* bindings: the image array 0-7, ints, floats, the pattern, the keys */
+    btf_vk_buffer *bufs[12] = {0};
     for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
         bufs[b] = im->buf[b] ? im->buf[b] : mt->placeholder;
     uint64_t pat_floats = pattern && pattern->data
                               ? (uint64_t)pattern->width * pattern->height * pattern->channels
                               : 0;
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(vk, sizeof p->ints, &bufs[4], err);
+        rc = btf_vk_buffer_create(vk, sizeof p->ints, &bufs[INTS], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(vk, sizeof p->floats, &bufs[5], err);
+        rc = btf_vk_buffer_create(vk, sizeof p->floats, &bufs[FLOATS], err);
     if (rc == BTF_OK && pat_floats)
-        rc = btf_vk_buffer_create(vk, 4 * pat_floats, &bufs[6], err);
+        rc = btf_vk_buffer_create(vk, 4 * pat_floats, &bufs[PATTERN], err);
     if (rc == BTF_OK && match)
-        rc = btf_vk_buffer_create(vk, 4 * 3 * (uint64_t)p->npad, &bufs[7], err);
+        rc = btf_vk_buffer_create(vk, 4 * 3 * (uint64_t)p->npad, &bufs[KEYS], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(vk, bufs[4], 0, p->ints, sizeof p->ints, err);
+        rc = btf_vk_buffer_upload(vk, bufs[INTS], 0, p->ints, sizeof p->ints, err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(vk, bufs[5], 0, p->floats, sizeof p->floats, err);
+        rc = btf_vk_buffer_upload(vk, bufs[FLOATS], 0, p->floats, sizeof p->floats, err);
     if (rc == BTF_OK && pat_floats)
-        rc = btf_vk_buffer_upload(vk, bufs[6], 0, pattern->data, 4 * pat_floats, err);
-    btf_vk_buffer *owned[4] = {bufs[4], bufs[5], bufs[6], bufs[7]};
-    bufs[6] = bufs[6] ? bufs[6] : mt->placeholder;
-    bufs[7] = bufs[7] ? bufs[7] : mt->placeholder;
+        rc = btf_vk_buffer_upload(vk, bufs[PATTERN], 0, pattern->data, 4 * pat_floats, err);
+    btf_vk_buffer *owned[4] = {bufs[INTS], bufs[FLOATS], bufs[PATTERN], bufs[KEYS]};
+    bufs[PATTERN] = bufs[PATTERN] ? bufs[PATTERN] : mt->placeholder;
+    bufs[KEYS] = bufs[KEYS] ? bufs[KEYS] : mt->placeholder;
     if (rc == BTF_OK && match)
         rc = device_maps(vk, mt, bufs, mg, p, err);
     if (rc == BTF_OK)

@@ -4,8 +4,8 @@
 // order, every result `precise` (no contraction into FMA, no reassociation),
 // comparisons written as the C code's ternaries (a NaN takes the second
 // operand): so lavapipe gives the CPU's bits. The image is one float array
-// over bindings 0-3 (gpu/synth_gpu.h: float f in buffer f / cap at f % cap).
-// The including shader declares Ints pi[], Floats pf[], Img0..Img3 and
+// over bindings 0-7 (gpu/synth_gpu.h: float f in buffer f / cap at f % cap).
+// The including shader declares Ints pi[], Floats pf[], Img0..Img7 and
 // Pattern pat[].
 
 float img_read(int f)
@@ -13,7 +13,9 @@ float img_read(int f)
     int cap = pi[BTF_MP_CAP];
     int b = f / cap;
     int i = f - b * cap;
-    return b == 0 ? img0[i] : b == 1 ? img1[i] : b == 2 ? img2[i] : img3[i];
+    if (b < 4)
+        return b == 0 ? img0[i] : b == 1 ? img1[i] : b == 2 ? img2[i] : img3[i];
+    return b == 4 ? img4[i] : b == 5 ? img5[i] : b == 6 ? img6[i] : img7[i];
 }
 
 // Pixel p of the image, multiplied by the structure layer's pattern as

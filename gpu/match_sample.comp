@@ -16,10 +16,14 @@ layout(std430, set = 0, binding = 0) readonly buffer Img0 { float img0[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Img1 { float img1[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Img2 { float img2[]; };
 layout(std430, set = 0, binding = 3) readonly buffer Img3 { float img3[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Ints { int pi[]; };
-layout(std430, set = 0, binding = 5) readonly buffer Floats { float pf[]; };
-layout(std430, set = 0, binding = 6) readonly buffer Pattern { float pat[]; };
-layout(std430, set = 0, binding = 7) writeonly buffer Keys { float keys[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Img4 { float img4[]; };
+layout(std430, set = 0, binding = 5) readonly buffer Img5 { float img5[]; };
+layout(std430, set = 0, binding = 6) readonly buffer Img6 { float img6[]; };
+layout(std430, set = 0, binding = 7) readonly buffer Img7 { float img7[]; };
+layout(std430, set = 0, binding = 8) readonly buffer Ints { int pi[]; };
+layout(std430, set = 0, binding = 9) readonly buffer Floats { float pf[]; };
+layout(std430, set = 0, binding = 10) readonly buffer Pattern { float pat[]; };
+layout(std430, set = 0, binding = 11) writeonly buffer Keys { float keys[]; };
 
 #include "match_lab.glsl"
 

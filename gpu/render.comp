@@ -35,6 +35,11 @@ layout(std430, set = 0, binding = 10) readonly buffer Tex3 { float tex3[]; };
 layout(std430, set = 0, binding = 11) readonly buffer Maps1 { float maps1[]; };
 layout(std430, set = 0, binding = 12) readonly buffer Maps2 { float maps2[]; };
 layout(std430, set = 0, binding = 13) readonly buffer Maps3 { float maps3[]; };
+// The subspace images' buffers 4-7 (gpu/synth_gpu.h, BTF_GPU_DEVICE_BUFFERS).
+layout(std430, set = 0, binding = 14) readonly buffer Tex4 { float tex4[]; };
+layout(std430, set = 0, binding = 15) readonly buffer Tex5 { float tex5[]; };
+layout(std430, set = 0, binding = 16) readonly buffer Tex6 { float tex6[]; };
+layout(std430, set = 0, binding = 17) readonly buffer Tex7 { float tex7[]; };
 
 float btf_map_read(int f)
 {
@@ -49,7 +54,9 @@ float btf_tex_read(int f)
     int cap = pi[BTF_RP_TEXCAP];
     int b = f / cap;
     int i = f - b * cap;
-    return b == 0 ? tex[i] : b == 1 ? tex1[i] : b == 2 ? tex2[i] : tex3[i];
+    if (b < 4)
+        return b == 0 ? tex[i] : b == 1 ? tex1[i] : b == 2 ? tex2[i] : tex3[i];
+    return b == 4 ? tex4[i] : b == 5 ? tex5[i] : b == 6 ? tex6[i] : tex7[i];
 }
 
 #define BTF_TAB_I(tab, f) pi[BTF_RP_TAB + (tab) * BTF_RP_TAB_STRIDE + (f)]

@@ -572,20 +572,30 @@ btf_status btf_gpu_images_upload(btf_vk *vk, const btf_gpu_images *im, uint64_t 
 uint64_t btf_gpu_images_cap(const btf_gpu *g)
 {
     uint64_t cap = btf_gpu_max_buffer_bytes(g) / 4;
-    if (cap > (1ull << 28))
-        cap = 1ull << 28; /* four of them: 2^30 floats, int32 indices */
+    if (cap > (1ull << 27))
+        cap = 1ull << 27; /* eight of them: 2^30 floats, int32 indices */
     return cap > 0 ? cap : 1;
 }
 
-btf_status btf_gpu_images_create(btf_vk *vk, uint64_t floats, uint64_t cap, const char *what,
-                                 btf_gpu_images *out, btf_error *err)
+/* Bindings of the render pass besides its image array (gpu/render.comp). */
+#define RENDER_OTHER_BINDINGS 10
+
+int btf_gpu_images_buffers(const btf_gpu *g)
+{
+    int64_t n = (int64_t)btf_vk_info(g->vk)->max_storage_buffers - RENDER_OTHER_BINDINGS;
+    return n >= BTF_GPU_DEVICE_BUFFERS ? BTF_GPU_DEVICE_BUFFERS : n >= 1 ? (int)n : 1;
+}
+
+btf_status btf_gpu_images_create(btf_vk *vk, uint64_t floats, uint64_t cap, int most,
+                                 const char *what, btf_gpu_images *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
     out->cap = cap > 0 ? cap : 1;
-    if (floats > (uint64_t)BTF_GPU_DEVICE_BUFFERS * out->cap)
+    most = most < 1 ? 1 : most > BTF_GPU_DEVICE_BUFFERS ? BTF_GPU_DEVICE_BUFFERS : most;
+    if (floats > (uint64_t)most * out->cap)
         return btf_fail(err, BTF_E_UNSUPPORTED, "%s need %.1f MiB, more than %d storage buffers "
-                        "of the device's limit of %.1f MiB hold; use the CPU backend", what,
-                        4 * floats / 1048576.0, BTF_GPU_DEVICE_BUFFERS, 4 * out->cap / 1048576.0);
+                        "of %.1f MiB (the device's limits) hold; use the CPU backend", what,
+                        4 * floats / 1048576.0, most, 4 * out->cap / 1048576.0);
     btf_status rc = BTF_OK;
     for (uint64_t b = 0; rc == BTF_OK && b * out->cap < floats; b++) {
         uint64_t part = floats - b * out->cap < out->cap ? floats - b * out->cap : out->cap;
@@ -824,15 +834,17 @@ static btf_status run_all(btf_gpu *g, const btf_model *m, const int *subspaces, 
 uint64_t btf_gpu_budget_bytes(uint64_t max_buffer_bytes, uint64_t heap_bytes)
 {
     uint64_t cap = max_buffer_bytes / 4; /* floats per buffer, as btf_gpu_images_cap */
-    cap = cap > (1ull << 28) ? 1ull << 28 : cap > 0 ? cap : 1;
+    cap = cap > (1ull << 27) ? 1ull << 27 : cap > 0 ? cap : 1;
     uint64_t most = 4ull * BTF_GPU_DEVICE_BUFFERS * cap, heap = heap_bytes / 4;
     return heap > 0 && heap < most ? heap : most;
 }
 
 uint64_t btf_gpu_memory_budget(const btf_gpu *g)
 {
-    return btf_gpu_budget_bytes(btf_gpu_max_buffer_bytes(g),
-                                btf_vk_info(g->vk)->device_local_bytes);
+    uint64_t b = btf_gpu_budget_bytes(btf_gpu_max_buffer_bytes(g),
+                                      btf_vk_info(g->vk)->device_local_bytes);
+    uint64_t spans = 4ull * btf_gpu_images_buffers(g) * btf_gpu_images_cap(g);
+    return b < spans ? b : spans;
 }
 
 int btf_gpu_auto_fits(const btf_gpu *g, uint64_t image_bytes)
@@ -1016,7 +1028,8 @@ static btf_status synth_to_device(btf_gpu *g, const btf_model *m, const int *sub
     }
     char what[96];
     snprintf(what, sizeof what, "GPU synthesis to the device: %d images", n);
-    btf_status rc = btf_gpu_images_create(g->vk, floats, btf_gpu_images_cap(g), what, out, err);
+    btf_status rc = btf_gpu_images_create(g->vk, floats, btf_gpu_images_cap(g),
+                                          btf_gpu_images_buffers(g), what, out, err);
     batch_dest d = {NULL, out, offsets};
     if (rc == BTF_OK)
         rc = run_all(g, m, subs, n, o, w, h, margins, &d, err);

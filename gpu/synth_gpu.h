@@ -21,14 +21,15 @@ btf_vk *btf_gpu_vk(btf_gpu *g);
  * less where btf_gpu_set_max_buffer_bytes lowered it (tests). */
 uint64_t btf_gpu_max_buffer_bytes(const btf_gpu *g);
 
-/* The most device buffers btf_gpu_synthesise_device spreads its images
- * over (the render pass binds as many: gpu/render.comp). */
-#define BTF_GPU_DEVICE_BUFFERS 4
+/* The most device buffers an image array spreads over: the shaders that
+ * read one (gpu/render.comp, gpu/match_*.comp) declare as many bindings;
+ * how many a device takes comes from its limits (btf_gpu_images_buffers). */
+#define BTF_GPU_DEVICE_BUFFERS 8
 
 /* Images on the device: one array of floats laid over up to
  * BTF_GPU_DEVICE_BUFFERS storage buffers of `cap` floats each (the last
  * may be shorter): float index f lies in buf[f / cap] at f % cap. So no
- * device limit on one storage buffer bounds an image, only four of them
+ * device limit on one storage buffer bounds an image, only all of them
  * together (docs/gpu.md, "Images left on the device"). */
 typedef struct btf_gpu_images {
     btf_vk_buffer *buf[BTF_GPU_DEVICE_BUFFERS]; /* NULL where unused */
@@ -41,12 +42,17 @@ btf_status btf_gpu_images_upload(btf_vk *vk, const btf_gpu_images *im, uint64_t 
                                  const float *data, uint64_t floats, btf_error *err);
 void btf_gpu_images_free(btf_gpu_images *im);
 /* The floats per buffer of g's arrays: its largest storage buffer, at most
- * 2^28 (so that four of them index with 32-bit ints). */
+ * 2^27 (so that eight of them index with 32-bit ints). */
 uint64_t btf_gpu_images_cap(const btf_gpu *g);
-/* An array of `floats` floats over buffers of cap floats; BTF_E_UNSUPPORTED
- * (naming `what` and the sizes) when more than BTF_GPU_DEVICE_BUFFERS. */
-btf_status btf_gpu_images_create(btf_vk *vk, uint64_t floats, uint64_t cap, const char *what,
-                                 btf_gpu_images *out, btf_error *err);
+/* The buffers one array of g's may span: BTF_GPU_DEVICE_BUFFERS, fewer
+ * where the device binds fewer storage buffers per shader stage than the
+ * render pass needs with them (maxPerStageDescriptorStorageBuffers). */
+int btf_gpu_images_buffers(const btf_gpu *g);
+/* An array of `floats` floats over at most `most` (<= BTF_GPU_DEVICE_BUFFERS)
+ * buffers of cap floats; BTF_E_UNSUPPORTED (naming `what` and the sizes)
+ * when they do not hold it. */
+btf_status btf_gpu_images_create(btf_vk *vk, uint64_t floats, uint64_t cap, int most,
+                                 const char *what, btf_gpu_images *out, btf_error *err);
 
 /* Synthesises subspace images subspaces[0 .. n - 1] (1 <= n) with opts as
  * btf_gpu_synthesise does (the same bits, tileable included) into the
@@ -67,7 +73,8 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
                                      uint64_t *offsets, btf_error *err);
 
 /* btf_gpu_memory_budget of a device whose largest storage buffer and
- * device-local heap are these (0: not reported). */
+ * device-local heap are these (0: not reported), binding all
+ * BTF_GPU_DEVICE_BUFFERS. */
 uint64_t btf_gpu_budget_bytes(uint64_t max_buffer_bytes, uint64_t heap_bytes);
 
 /* Colour matching on the device (gpu/match_gpu.c, docs/gpu.md "Colour

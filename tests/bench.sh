@@ -187,6 +187,15 @@ needed=$med
 median5 "render the sphere, whole process, --all-subspaces" $REN --all-subspaces
 echo "   the needed-only rule saves $(echo "$needed $med" | awk '{printf "%.0f%%", 100 * (1 - $1 / $2)}') of the whole process"
 
+echo "== GPU render past one storage buffer (docs/gpu.md, \"Images left on the device\"): a 4096^2 flat render, a 192 MiB image and 256 MiB of maps over lavapipe's 128 MiB buffers"
+FLAT="$BTFCAR render -q $TMP/m.btfcar --view 30,60 --light 45,0 --size 4096x4096"
+timed "render 4096x4096 flat, --backend cpu" $FLAT --backend cpu -o "$TMP/flat-cpu.png"
+cpu_s=$med
+timed "the same, --backend gpu (lavapipe: split over 2-4 buffers)" $FLAT --backend gpu -o "$TMP/flat-gpu.png"
+echo "   lavapipe/cpu time ratio $(echo "$med $cpu_s" | awk '{printf "%.2f", $1 / $2}');"\
+     "bytes $(cmp -s "$TMP/flat-cpu.png" "$TMP/flat-gpu.png" && echo equal || echo DIFFER)"
+rm -f "$TMP/flat-cpu.png" "$TMP/flat-gpu.png"
+
 echo "== fidelity (docs/fidelity.md): texture distances of btfcar's syntheses and the phase-randomisation baseline"
 if [ -n "$FIDELITY_BENCH" ]; then
     set --

@@ -43,7 +43,7 @@ static void bench_matching(btf_gpu *g, const btf_model *m)
     }
     uint64_t floats = 512ull * 512 * 3, cap = btf_gpu_images_cap(g);
     btf_gpu_images dev;
-    if (btf_gpu_images_create(btf_gpu_vk(g), 15 * floats, cap, "bench", &dev, &e)) {
+    if (btf_gpu_images_create(btf_gpu_vk(g), 15 * floats, cap, btf_gpu_images_buffers(g), "bench", &dev, &e)) {
         fprintf(stderr, "bench_gpu: %s\n", e.msg);
         return;
     }

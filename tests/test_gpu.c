@@ -432,11 +432,11 @@ static void backend_auto_rule(void **state)
                   pick < 0 ? "the CPU" : "a GPU");
     assert_int_equal(pick >= 0, real);
     free(list);
-    /* the budget of an open device: 4 buffers of its (here lowered) limit */
+    /* the budget of an open device: 8 buffers of its (here lowered) limit */
     btf_gpu_set_max_buffer_bytes(gpu, 1 * MiB);
-    assert_true(btf_gpu_memory_budget(gpu) <= 4 * MiB);
-    assert_true(btf_gpu_auto_fits(gpu, 3 * MiB));
-    assert_false(btf_gpu_auto_fits(gpu, 5 * MiB));
+    assert_true(btf_gpu_memory_budget(gpu) <= 8 * MiB);
+    assert_true(btf_gpu_auto_fits(gpu, 7 * MiB));
+    assert_false(btf_gpu_auto_fits(gpu, 9 * MiB));
     btf_gpu_set_max_buffer_bytes(gpu, 0);
     assert_true(btf_gpu_memory_budget(gpu) >= 128 * MiB);
 }

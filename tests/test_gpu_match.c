@@ -73,7 +73,7 @@ static void compare(int w, int h, int kind, uint64_t off, uint64_t cap, const bt
     for (size_t i = 0; i < floats; i++)
         cpu.data[i] = value(kind, i, &s);
     btf_gpu_images dev;
-    TU_OK(btf_gpu_images_create(btf_gpu_vk(gpu), off + floats, cap, "test", &dev, &e), &e);
+    TU_OK(btf_gpu_images_create(btf_gpu_vk(gpu), off + floats, cap, BTF_GPU_DEVICE_BUFFERS, "test", &dev, &e), &e);
     TU_OK(btf_gpu_images_upload(btf_gpu_vk(gpu), &dev, off, cpu.data, floats, &e), &e);
     TU_OK(btf_gpu_match_images(btf_gpu_vk(gpu), btf_gpu_match_pipes(gpu), &model, 0, match, &dev,
                                off, w, h, pattern, &e),
@@ -185,10 +185,10 @@ static void synthesis_on_device(void **state)
 }
 
 /* btf_gpu_synthesise_each past the memory budget (lowered with the buffer
- * limit: 4 buffers of 250,000 bytes, a 1 MB budget): 200 x 150 images go
- * to the device two at a time, 300 x 300 images (1.08 MB) alone in strips
- * to the host and are finished there; every image the CPU's bits, in
- * order. */
+ * limit: 8 buffers of 250,000 bytes, a 2 MB budget): 200 x 150 images
+ * (0.36 MB) go to the device together, 300 x 400 (1.44 MB) one at a time,
+ * 300 x 600 images (2.16 MB) alone in strips to the host and are finished
+ * there; every image the CPU's bits, in order. */
 typedef struct seen {
     const btf_synth_opts *o;
     int count;
@@ -212,9 +212,9 @@ static void synthesis_past_budget(void **state)
     btf_error e = {0};
     int subs[3] = {0, 0, 0};
     btf_gpu_set_max_buffer_bytes(gpu, 250000);
-    assert_int_equal(btf_gpu_memory_budget(gpu), 1000000);
-    const int sizes[2][2] = {{200, 150}, {300, 300}};
-    for (int i = 0; i < 2; i++) {
+    assert_int_equal(btf_gpu_memory_budget(gpu), 2000000);
+    const int sizes[3][2] = {{200, 150}, {300, 400}, {300, 600}};
+    for (int i = 0; i < 3; i++) {
         btf_synth_opts o = {.width = sizes[i][0], .height = sizes[i][1], .seed = 7,
                             .match_colours = 1};
         seen s = {&o, 0};
@@ -223,8 +223,8 @@ static void synthesis_past_budget(void **state)
     }
     btf_gpu_set_max_buffer_bytes(gpu, 0);
     tu_gpu_no_validation_messages(gpu);
-    print_message("a 1 MB budget: 3 x 200x150 in groups on the device, 3 x 300x300 in strips "
-                  "to the host: the CPU's bits, in order\n");
+    print_message("a 2 MB budget: 3 x 200x150 in one group, 3 x 300x400 one by one on the "
+                  "device, 3 x 300x600 in strips to the host: the CPU's bits, in order\n");
 }
 
 int main(void)

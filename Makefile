@@ -62,7 +62,7 @@ $(LIB_OBJ): CXXFLAGS += -fvisibility=hidden
 # Keep generated SPIR-V headers and objects between builds.
 .SECONDARY:
 
-.PHONY: all deps test test-run asan bench demo install uninstall fuzz fuzz-build clean help check-shaders noise-stream check-exports check-install check-layering
+.PHONY: all deps test test-run asan bench demo gpu-check install uninstall fuzz fuzz-build clean help check-shaders noise-stream check-exports check-install check-layering
 
 all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN) $(BUILD)/noise_stream $(CHECK_PAGE)
 
@@ -73,6 +73,7 @@ help:
 	@echo "make asan     the whole test suite under ASan + UBSan (build-asan/)"
 	@echo "make demo     deps + build + generate a material and analyse it end to end"
 	@echo "make bench    benchmarks (figures; never fails on time)"
+	@echo "make gpu-check  on a real Vulkan GPU: parity tests, CPU vs GPU timings, one table (GPU_CHECK_FLAGS=--allow-cpu: lavapipe)"
 	@echo "build/check-page PAGE.html [SHOT.png]  a page in headless Chromium: no console errors, every image shown"
 	@echo "make noise-stream  build/noise_stream: raw noise words for dieharder"
 	@echo "make fuzz     libFuzzer targets with clang (FUZZ_SECONDS=30 each)"
@@ -156,6 +157,15 @@ asan: deps
 bench: deps
 	@$(MAKE) --no-print-directory all
 	@BTF_CLI=$(abspath $(CLI)) sh tests/bench.sh $(BENCH_BIN)
+
+# The real-GPU check (tools/gpu-check.sh, docs/gpu.md): the GPU parity tests
+# on the best Vulkan device, then CPU against GPU timings of four workloads
+# in one table. Without a real GPU it says so and passes;
+# GPU_CHECK_FLAGS=--allow-cpu runs it on lavapipe.
+GPU_CHECK_FLAGS ?=
+gpu-check: all
+	@BTF_CLI=$(abspath $(CLI)) BTF_CHECK_PAGE=$(abspath $(CHECK_PAGE)) \
+	  sh tools/gpu-check.sh $(GPU_CHECK_FLAGS)
 
 demo: deps
 	@$(MAKE) --no-print-directory all

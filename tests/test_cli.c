@@ -369,6 +369,35 @@ static void cli_doc_is_current(void **state)
     assert_int_equal(st, 0);
 }
 
+/* tools/gpu-check.sh --dry-run: the parity test programs and the four timed
+ * workloads, each on both backends, without running any (the real run needs
+ * minutes: docs/gpu.md, "Checking on a real GPU"). Run from the source tree. */
+static void gpu_check_dry_run(void **state)
+{
+    (void)state;
+    if (access("tools/gpu-check.sh", R_OK) != 0) {
+        print_message("not in the source tree: tools/gpu-check.sh not run\n");
+        return;
+    }
+    int st;
+    char *out = tu_capture(tu_fmt("BTF_CLI=%s sh tools/gpu-check.sh --dry-run", tu_cli()), &st);
+    assert_int_equal(st, 0);
+    const char *want[] = {"tests/test_gpu\n", "tests/test_gpu_render\n", "tests/test_gpu_tileable\n",
+                          "tests/test_gpu_rf\n", "--family rf",
+                          "synthesise -q WORK/car.btfcar --size 512x512 -o WORK/gpu-synth --backend gpu",
+                          "--scene tools/../examples/sphere-one-light.json --size 1024x1024 -o "
+                          "WORK/cpu-sphere.png --backend cpu",
+                          "--size 4096x4096 --texture-size 256 -o WORK/gpu-flat.png --backend gpu",
+                          "render -q WORK/rf.btfcar --scene", NULL};
+    for (int i = 0; want[i]; i++) {
+        if (!strstr(out, want[i]))
+            print_error("gpu-check.sh --dry-run lacks '%s':\n%s\n", want[i], out);
+        assert_non_null(strstr(out, want[i]));
+    }
+    free(out);
+    assert_int_equal(tu_run("sh tools/gpu-check.sh --no-such-option 2>/dev/null", NULL), 2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -376,6 +405,7 @@ int main(void)
         cmocka_unit_test(option_conventions),
         cmocka_unit_test(devices_json),
         cmocka_unit_test(cli_doc_is_current),
+        cmocka_unit_test(gpu_check_dry_run),
         cmocka_unit_test(generate_then_info),
         cmocka_unit_test(generate_is_deterministic),
         cmocka_unit_test(generate_errors),

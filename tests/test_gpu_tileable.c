@@ -229,7 +229,7 @@ static void device_images(void **state)
     btf_gpu_set_max_buffer_bytes(small, 3200000); /* the strips' working set: 3.0 MiB */
     btf_synth_opts o = {.width = 300, .height = 512, .seed = 9, .tileable = 1};
     btf_gpu_images dev;
-    uint64_t off[3];
+    uint64_t off[8]; /* offsets[j] for each of up to 8 images below */
     TU_OK(btf_gpu_synthesise_device(small, &m, subs, 3, &o, &dev, off, &e), &e);
     size_t floats = (size_t)300 * 512 * 3;
     assert_int_equal(dev.cap, 800000);

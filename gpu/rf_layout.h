@@ -58,6 +58,6 @@
 /* The code buffers bound at once (bindings 4 ..): a model whose codes
  * need more than this many of the device's largest storage buffers is
  * refused. */
-#define RFP_CODE_BUFS 4
+#define RFP_CODE_BUFS 8
 
 #endif

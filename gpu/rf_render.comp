@@ -31,6 +31,10 @@ layout(std430, set = 0, binding = 4) readonly buffer Codes0 { uint c0[]; };
 layout(std430, set = 0, binding = 5) readonly buffer Codes1 { uint c1[]; };
 layout(std430, set = 0, binding = 6) readonly buffer Codes2 { uint c2[]; };
 layout(std430, set = 0, binding = 7) readonly buffer Codes3 { uint c3[]; };
+layout(std430, set = 0, binding = 8) readonly buffer Codes4 { uint c4[]; };
+layout(std430, set = 0, binding = 9) readonly buffer Codes5 { uint c5[]; };
+layout(std430, set = 0, binding = 10) readonly buffer Codes6 { uint c6[]; };
+layout(std430, set = 0, binding = 11) readonly buffer Codes7 { uint c7[]; };
 
 #define BTF_RF_CTX int
 #define BTF_RF_FIT(c) pi[RFP_FIT]
@@ -76,13 +80,9 @@ uint rf_surface_texel(int x, int y)
 
 uint rf_word(int b, uint i)
 {
-    if (b == 0)
-        return c0[i];
-    if (b == 1)
-        return c1[i];
-    if (b == 2)
-        return c2[i];
-    return c3[i];
+    if (b < 4)
+        return b == 0 ? c0[i] : b == 1 ? c1[i] : b == 2 ? c2[i] : c3[i];
+    return b == 4 ? c4[i] : b == 5 ? c5[i] : b == 6 ? c6[i] : c7[i];
 }
 
 // Where texel t of field f starts: (code buffer, index of its first

@@ -22,8 +22,9 @@
  *    packs it (gpu/render_gpu.h); every field is uploaded, since every
  *    pixel picks its own four views.
  *
- * Device limits: the codes go in up to RFP_CODE_BUFS storage buffers of
- * at most the device's largest (whole fields in each); a model that needs
+ * Device limits: the codes go in up to RFP_CODE_BUFS (8) storage buffers
+ * of at most the device's largest (whole fields in each), as many as the
+ * device binds per stage beside the pass's 4 others; a model that needs
  * more is refused (BTF_E_UNSUPPORTED, pointing to the CPU backend). A
  * G-buffer or output larger than one buffer goes in bands.
  */
@@ -105,6 +106,8 @@ static btf_status plan_codes(const rf_pass *ps, const btf_rf_model *m, const uin
                              btf_error *err)
 {
     uint64_t fw = field_words(m), cap = ps->limit / 4;
+    int64_t most = (int64_t)btf_vk_info(ps->vk)->max_storage_buffers - 4;
+    most = most > RFP_CODE_BUFS ? RFP_CODE_BUFS : most < 1 ? 1 : most;
     if (fw > cap)
         return btf_fail(err, BTF_E_UNSUPPORTED, "GPU RF render: one field's codes (%llu bytes) "
                         "exceed the device's largest storage buffer (%llu bytes); use "
@@ -121,10 +124,10 @@ static btf_status plan_codes(const rf_pass *ps, const btf_rf_model *m, const uin
         total += fw;
         if (words[b] + fw > cap)
             b++;
-        if (b >= RFP_CODE_BUFS)
+        if (b >= most)
             return btf_fail(err, BTF_E_UNSUPPORTED, "GPU RF render: the model's codes (%llu "
                             "bytes and more) exceed %d storage buffers of %llu bytes; use "
-                            "--backend cpu", (unsigned long long)total * 4, RFP_CODE_BUFS,
+                            "--backend cpu", (unsigned long long)total * 4, (int)most,
                             (unsigned long long)ps->limit);
         buf[f] = b, base[f] = (int32_t)words[b];
         words[b] += fw;

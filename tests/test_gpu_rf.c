@@ -315,6 +315,12 @@ static void buffers_and_bands(void **state)
      * 34 rows */
     btf_gpu_set_max_buffer_bytes(gpu, 200000);
     TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 80, 60, 2, &banded, NULL, &e), &e);
+    /* 70 KB: 12 fields a buffer, the 81 fields over 7 buffers (bindings 8 on) */
+    btf_image seven = {0};
+    btf_gpu_set_max_buffer_bytes(gpu, 70000);
+    TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 80, 60, 2, &seven, NULL, &e), &e);
+    assert_memory_equal(one.data, seven.data, (size_t)80 * 60 * 3 * sizeof(float));
+    btf_image_free(&seven);
     btf_gpu_set_max_buffer_bytes(gpu, 1200);
     btf_rf_model small;
     make_model(&small, BTF_RF_PTM, 0, 16, 16, 5u, 0); /* a field: 16 x 16 x 9 x 2 = 4.6 KB */
@@ -328,7 +334,7 @@ static void buffers_and_bands(void **state)
     TU_OK(btf_gpu_rf_render_flat(gpu, &m, (btf_dir){40, 10}, (btf_dir){30, 250}, 0, 0, &t2,
                                  NULL, &e), &e);
     btf_image img = {0};
-    rc = btf_gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e); /* 81 > 4 buffers */
+    rc = btf_gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e); /* 81 > 8 buffers */
     assert_int_equal(rc, BTF_E_UNSUPPORTED);
     assert_null(strchr(e.msg, '\n'));
     assert_null(img.data);

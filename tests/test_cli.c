@@ -383,7 +383,7 @@ static void gpu_check_dry_run(void **state)
     char *out = tu_capture(tu_fmt("BTF_CLI=%s sh tools/gpu-check.sh --dry-run", tu_cli()), &st);
     assert_int_equal(st, 0);
     const char *want[] = {"tests/test_gpu\n", "tests/test_gpu_render\n", "tests/test_gpu_tileable\n",
-                          "tests/test_gpu_rf\n", "--family rf",
+                          "tests/test_gpu_rf\n", "tests/test_gpu_match\n", "--family rf",
                           "synthesise -q WORK/car.btfcar --size 512x512 -o WORK/gpu-synth --backend gpu",
                           "--scene tools/../examples/sphere-one-light.json --size 1024x1024 -o "
                           "WORK/cpu-sphere.png --backend cpu",

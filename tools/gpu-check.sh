@@ -29,7 +29,7 @@ set -u
 BTFCAR=${BTF_CLI:-build/btfcar}
 TESTS=$(dirname "$BTFCAR")/tests
 SCENE=$(dirname "$0")/../examples/sphere-one-light.json
-PARITY="test_gpu test_gpu_render test_gpu_tileable test_gpu_rf"
+PARITY="test_gpu test_gpu_render test_gpu_tileable test_gpu_rf test_gpu_match"
 RUNS=3
 allow_cpu=0
 dry=0

@@ -40,13 +40,20 @@ layout(std430, set = 0, binding = 14) readonly buffer Tex4 { float tex4[]; };
 layout(std430, set = 0, binding = 15) readonly buffer Tex5 { float tex5[]; };
 layout(std430, set = 0, binding = 16) readonly buffer Tex6 { float tex6[]; };
 layout(std430, set = 0, binding = 17) readonly buffer Tex7 { float tex7[]; };
+// The maps' buffers 4-7.
+layout(std430, set = 0, binding = 18) readonly buffer Maps4 { float maps4[]; };
+layout(std430, set = 0, binding = 19) readonly buffer Maps5 { float maps5[]; };
+layout(std430, set = 0, binding = 20) readonly buffer Maps6 { float maps6[]; };
+layout(std430, set = 0, binding = 21) readonly buffer Maps7 { float maps7[]; };
 
 float btf_map_read(int f)
 {
     int cap = pi[BTF_RP_TEXCAP];
     int b = f / cap;
     int i = f - b * cap;
-    return b == 0 ? maps[i] : b == 1 ? maps1[i] : b == 2 ? maps2[i] : maps3[i];
+    if (b < 4)
+        return b == 0 ? maps[i] : b == 1 ? maps1[i] : b == 2 ? maps2[i] : maps3[i];
+    return b == 4 ? maps4[i] : b == 5 ? maps5[i] : b == 6 ? maps6[i] : maps7[i];
 }
 
 float btf_tex_read(int f)

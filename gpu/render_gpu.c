@@ -31,10 +31,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The buffers the range and normal maps' array may span (render.comp's
- * bindings 2, 11-13). */
-#define MAP_BUFFERS 4
-
 /* The host copies of the parameter buffers (gpu/render_layout.h). */
 typedef struct params {
     int32_t *ints;
@@ -216,7 +212,7 @@ static btf_status scale_textures(btf_vk *vk, const btf_model *m, const int *subs
  * horizon map (the relief's shadows, the CPU's words) in another; a model
  * without shadows binds a small unread buffer there. */
 static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t seed,
-                              int threads, uint64_t cap, btf_gpu_images *out,
+                              int threads, uint64_t cap, int most, btf_gpu_images *out,
                               btf_vk_buffer **hor, int *shadows, float *bounds, btf_error *err)
 {
     btf_image h = {0}, n = {0};
@@ -227,7 +223,7 @@ static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t
         rc = btf_render_relief(m, &h, threads, &hz, bounds, err);
     *shadows = hz != NULL;
     if (rc == BTF_OK)
-        rc = btf_gpu_images_create(vk, px * 4, cap, MAP_BUFFERS,
+        rc = btf_gpu_images_create(vk, px * 4, cap, most,
                                    "GPU render: the range and normal maps", out, err);
     if (rc == BTF_OK)
         rc = btf_gpu_images_upload(vk, out, 0, h.data, px, err);
@@ -259,9 +255,9 @@ typedef struct pass {
     btf_gpu *gpu;
     btf_vk *vk;
     btf_vk_pipeline *pipe;
-    btf_vk_buffer *bufs[18]; /* gbuf, tex, maps, ints, floats, out, horizon, missing,
-                                tex1..tex3, maps1..maps3, tex4..tex7 (render.comp's
-                                bindings) */
+    btf_vk_buffer *bufs[22]; /* gbuf, tex, maps, ints, floats, out, horizon, missing,
+                                tex1..tex3, maps1..maps3, tex4..tex7, maps4..maps7
+                                (render.comp's bindings) */
     btf_gpu_images maps;     /* the range and normal maps (bindings 2, 11..13) */
     btf_vk_buffer *placeholder; /* bound where a texture buffer is unused */
     params pr;
@@ -300,7 +296,7 @@ static btf_status run_band(pass *ps, const btf_gbuffer *g, int y0, int y1, float
     if (rc == BTF_OK) /* the flag of a band's missing subspaces starts clear */
         rc = btf_vk_job_fill(job, ps->bufs[7], 0, sizeof(uint32_t), 0, err);
     if (rc == BTF_OK)
-        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 18, NULL, 0, gx, gy, 1, err);
+        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 22, NULL, 0, gx, gy, 1, err);
     if (rc == BTF_OK) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
@@ -406,10 +402,10 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     float bounds[2] = {0.0f, 0.0f};
     if (rc == BTF_OK)
         rc = upload_maps(ps.vk, m, p->side, p->o.seed, p->o.threads,
-                         btf_gpu_images_cap(ps.gpu), &ps.maps, &ps.bufs[6], &shadows, bounds,
-                         err);
-    static const int mslot[MAP_BUFFERS] = {2, 11, 12, 13}; /* render.comp */
-    for (int b = 0; rc == BTF_OK && b < MAP_BUFFERS; b++)
+                         btf_gpu_images_cap(ps.gpu), btf_gpu_images_buffers(ps.gpu), &ps.maps,
+                         &ps.bufs[6], &shadows, bounds, err);
+    static const int mslot[BTF_GPU_DEVICE_BUFFERS] = {2, 11, 12, 13, 18, 19, 20, 21};
+    for (int b = 0; rc == BTF_OK && b < BTF_GPU_DEVICE_BUFFERS; b++) /* render.comp */
         ps.bufs[mslot[b]] = ps.maps.buf[b] ? ps.maps.buf[b] : ps.placeholder;
     if (rc == BTF_OK) {
         ps.pr.ints[BTF_RP_HORIZON] = shadows;
@@ -418,7 +414,7 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
         rc = upload_params(&ps, err);
     }
     if (rc == BTF_OK)
-        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 18, 0, NULL, 0,
+        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 22, 0, NULL, 0,
                                     &ps.pipe, err);
     if (rc == BTF_OK && (rc = btf_image_alloc(out, p->g.width, p->g.height, 3, err)) == BTF_OK) {
         rc = shade_frame(&ps, &p->g, out, err);

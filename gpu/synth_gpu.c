@@ -577,12 +577,13 @@ uint64_t btf_gpu_images_cap(const btf_gpu *g)
     return cap > 0 ? cap : 1;
 }
 
-/* Bindings of the render pass besides its image array (gpu/render.comp). */
-#define RENDER_OTHER_BINDINGS 10
+/* Bindings of the render pass besides its two arrays, the images and the
+ * range and normal maps (gpu/render.comp). */
+#define RENDER_OTHER_BINDINGS 6
 
 int btf_gpu_images_buffers(const btf_gpu *g)
 {
-    int64_t n = (int64_t)btf_vk_info(g->vk)->max_storage_buffers - RENDER_OTHER_BINDINGS;
+    int64_t n = ((int64_t)btf_vk_info(g->vk)->max_storage_buffers - RENDER_OTHER_BINDINGS) / 2;
     return n >= BTF_GPU_DEVICE_BUFFERS ? BTF_GPU_DEVICE_BUFFERS : n >= 1 ? (int)n : 1;
 }
 

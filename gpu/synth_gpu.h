@@ -46,7 +46,8 @@ void btf_gpu_images_free(btf_gpu_images *im);
 uint64_t btf_gpu_images_cap(const btf_gpu *g);
 /* The buffers one array of g's may span: BTF_GPU_DEVICE_BUFFERS, fewer
  * where the device binds fewer storage buffers per shader stage than the
- * render pass needs with them (maxPerStageDescriptorStorageBuffers). */
+ * render pass needs for two such arrays and its 6 other buffers
+ * (maxPerStageDescriptorStorageBuffers). */
 int btf_gpu_images_buffers(const btf_gpu *g);
 /* An array of `floats` floats over at most `most` (<= BTF_GPU_DEVICE_BUFFERS)
  * buffers of cap floats; BTF_E_UNSUPPORTED (naming `what` and the sizes)

@@ -346,6 +346,42 @@ static void test_bands(void **state)
 /* The subspace images over several storage buffers (issue 31): with a
  * limit that holds one image per buffer, the sphere (every subspace
  * needed) renders to the same bits as without the limit and as the CPU. */
+/* The range and normal maps past four buffers: a flat render that needs one
+ * subspace image (view and light far from the test model's boundaries) at
+ * 256^2 texels, buffers of 160,000 bytes: the maps (1 MiB) over seven
+ * buffers (bindings 18 on), the image (768 KiB) over five; the bits of the
+ * one-buffer render and, on lavapipe, the CPU's. */
+static void test_split_maps(void **state)
+{
+    (void)state;
+    btf_model m;
+    test_model(&m);
+    btf_error e = {0};
+    btf_render_opts o = btf_render_defaults();
+    o.width = o.height = 128;
+    o.seed = 3;
+    o.texture_size = 256;
+    btf_dir view = {0, 0}, light = {45, 90};
+    btf_image c = {0}, one = {0}, split = {0};
+    btf_render_info ic, ig;
+    TU_OK(btf_render_flat(&m, view, light, &o, &c, &ic, &e), &e);
+    assert_int_equal(ic.needed, 1);
+    TU_OK(btf_gpu_render_flat(gpu, &m, view, light, &o, &one, NULL, &e), &e);
+    btf_gpu_set_max_buffer_bytes(gpu, 160000);
+    TU_OK(btf_gpu_render_flat(gpu, &m, view, light, &o, &split, &ig, &e), &e);
+    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    size_t bytes = (size_t)128 * 128 * 3 * sizeof(float);
+    assert_memory_equal(one.data, split.data, bytes);
+    if (btf_gpu_is_cpu(gpu))
+        assert_memory_equal(c.data, split.data, bytes);
+    print_message("maps over 7 buffers, the image over 5: the one-buffer render's bits\n");
+    btf_image_free(&c);
+    btf_image_free(&one);
+    btf_image_free(&split);
+    btf_model_free(&m);
+    no_validation_messages();
+}
+
 static void test_split_textures(void **state)
 {
     (void)state;
@@ -518,6 +554,7 @@ int main(void)
         cmocka_unit_test(test_deep_tails_parity),
         cmocka_unit_test(test_bands),
         cmocka_unit_test(test_split_textures),
+        cmocka_unit_test(test_split_maps),
         cmocka_unit_test(test_limits),
         cmocka_unit_test(test_big_mesh),
         cmocka_unit_test(test_cli_backends),

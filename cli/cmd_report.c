@@ -117,6 +117,29 @@ static void show_plain(const void *dest, char *buf, size_t n)
                            : *g->n == 1 && g->values[0] ? "off" : "on");
 }
 
+/* --points I/N: this task's share of the sweep's grid. */
+static int parse_points(const char *s, void *dest, char *why, size_t n)
+{
+    btf_sweep_opts *so = dest;
+    int i, k, used = 0;
+    if (sscanf(s, "%d/%d%n", &i, &k, &used) != 2 || s[used] || k < 1 || k > 100000 || i < 0 ||
+        i >= k) {
+        snprintf(why, n, "expected I/N with 0 <= I < N (this task's share of N), e.g. 0/4");
+        return -1;
+    }
+    so->share_index = i, so->share_count = k;
+    return 0;
+}
+
+static void show_points(const void *dest, char *buf, size_t n)
+{
+    const btf_sweep_opts *so = dest;
+    if (so->share_count)
+        snprintf(buf, n, "%d/%d", so->share_index, so->share_count);
+    else
+        snprintf(buf, n, "all");
+}
+
 static int parse_light(const char *s, void *dest, char *why, size_t n)
 {
     return cli_parse_dir(s, dest, why, n);
@@ -126,6 +149,29 @@ static void show_light(const void *dest, char *buf, size_t n)
 {
     const btf_dir *d = dest;
     snprintf(buf, n, "%g,%g", d->theta, d->phi);
+}
+
+/* --points I/N: one share of the sweep into OUT/sweep/, nothing else. */
+static int sweep_share(cli_ctx *c, const btf_dataset *ds, const char *out,
+                       const btf_report_opts *ro, btf_error *err, double t0)
+{
+    btf_sweep s;
+    int rc = btf_report_sweep_points(ds, out, ro, &s, err);
+    cli_progress_done();
+    if (rc)
+        return cli_lib_error(c, err);
+    int mine = 0;
+    for (int i = 0; i < s.n_points; i++)
+        mine += i % ro->sweep_opts.share_count == ro->sweep_opts.share_index;
+    if (!c->quiet)
+        printf("sweep share   %d/%d: %d of the %d points (%d measured now, %d already in "
+               "%s/sweep/), %d of other shares still missing\n"
+               "time          %.1f s\n",
+               ro->sweep_opts.share_index, ro->sweep_opts.share_count, mine, s.n_points,
+               s.n_points - s.resumed - s.n_missing, s.resumed - (s.n_points - mine -
+               s.n_missing), out, s.n_missing, cli_now() - t0);
+    btf_sweep_free(&s);
+    return 0;
 }
 
 int cmd_report(int argc, char **argv)
@@ -187,6 +233,14 @@ int cmd_report(int argc, char **argv)
                  "analysed resolution, with the structure layer; the default) or N (a\n"
                  "small periodic tile, no structure layer; analyse --range-size N)",
          .parse = parse_grid, .show = show_grid},
+        {.name = "--points", .kind = CLI_CUSTOM, .dest = so, .meta = "I/N",
+         .help = "--sweep beyond one machine: measure only share I of N of the grid\n"
+                 "(point i when i mod N = I) into DIR/sweep/ and write nothing else;\n"
+                 "a Slurm array task runs one share (docs/cluster.md)",
+         .parse = parse_points, .show = show_points},
+        {.name = "--merge", .kind = CLI_FLAG, .dest = &so->resume_only,
+         .help = "--sweep: build the report from the points in DIR/sweep/ only,\n"
+                 "measuring none; missing points are an error naming them"},
         {.name = "--sweep-seeds", .kind = CLI_INT, .dest = &so->seeds, .meta = "N",
          .help = "--sweep: each point's quality is the mean over N synthesis seeds\n"
                  "(--seed, --seed + 1, ...)", .lo = 1, .hi = BTF_SWEEP_MAX_SEEDS,
@@ -208,6 +262,11 @@ int cmd_report(int argc, char **argv)
     if (rf && (ro.sweep || gk.given || gl.given || gn.given || gr.given || so->n_plain))
         return cli_usage_error(&c, "%s is a reflectance-field model: --sweep varies the CAR "
                                "analysis and does not apply", args[1]);
+    if ((so->share_count || so->resume_only) && !ro.sweep)
+        return cli_usage_error(&c, "--points and --merge go with --sweep");
+    if (so->share_count && so->resume_only)
+        return cli_usage_error(&c, "--points measures a share, --merge measures nothing: "
+                               "one or the other");
     btf_error err = {0};
     double t0 = cli_now();
     btf_model m;
@@ -232,6 +291,13 @@ int cmd_report(int argc, char **argv)
     btf_error gerr = {0};
     btf_gpu *gpu = ro.sweep ? cli_open_gpu("auto", -1, &gerr) : NULL;
     so->gpu = gpu;
+    if (so->share_count) {
+        int rc = sweep_share(&c, ds, out, &ro, &err, t0);
+        btf_gpu_close(gpu);
+        btf_dataset_close(ds);
+        btf_model_free(&m);
+        return rc;
+    }
     btf_report_summary sum;
     int rc = rf ? btf_rf_report_write(ds, &rm, out, &ro, &sum, &err)
                 : btf_report_write(ds, &m, out, &ro, &sum, &err);

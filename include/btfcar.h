@@ -1892,6 +1892,9 @@ typedef struct btf_sweep_point {
     int pareto_bytes;         /* on the front of (bytes, mean_combined) */
     int pareto_time;          /* on the front of (synth_s, mean_combined) */
     int resumed;              /* read back from the state folder, not measured now */
+    int missing;              /* not measured: another share's point
+                                 (btf_sweep_opts.share_count), not in the state
+                                 folder; its figures are 0 and it is on no front */
 } btf_sweep_point;
 
 #define BTF_SWEEP_MAX_VALUES 8
@@ -1918,6 +1921,15 @@ typedef struct btf_sweep_opts {
     const char *state_dir;     /* finished points are kept here, one JSON file each,
                                   and read back by a later run (resume); NULL: none */
     int threads;               /* settings run in parallel; 0: all CPUs */
+    /* Beyond one process (docs/cluster.md): with share_count N > 0 this run
+     * measures only the points i with i % N == share_index (0 <= I < N; the
+     * grid's order, deterministic: the N shares do not overlap and together
+     * are the grid); the others are read back from state_dir where there,
+     * else marked missing. resume_only 1 measures nothing: every point must
+     * be in state_dir, else BTF_E_DATA naming the missing settings (the
+     * merge of the shares' points). */
+    int share_index, share_count;
+    int resume_only;
     btf_progress_fn progress;
     void *progress_user;
 } btf_sweep_opts;
@@ -1933,6 +1945,7 @@ typedef struct btf_sweep {
     double shared_s;           /* features and photometric stereo, once */
     double seconds;            /* the whole sweep */
     int resumed;               /* points read back from state_dir */
+    int n_missing;             /* points of other shares, not there yet */
     int seeds;                 /* the seeds each point was measured with */
 } btf_sweep;
 
@@ -1980,6 +1993,15 @@ typedef struct btf_report_opts {
  * 384 px, the 6 worst pairs, the PCA and sweep defaults, JPEG quality 90,
  * no sweep, all CPUs. */
 btf_report_opts btf_report_defaults(void);
+/* The sweep of btf_report_write alone, its points written to DIR/sweep/ and
+ * nothing else (no page, no report.json): what one task of a sweep split
+ * over machines runs (opts->sweep_opts.share_index, share_count:
+ * docs/cluster.md); the same options give the points btf_report_write's
+ * sweep would, so a later btf_report_write with sweep_opts.resume_only
+ * (the merge) reads them back. *out as btf_sweep_run's (free it). */
+btf_status btf_report_sweep_points(const btf_dataset *ds, const char *dir,
+                                   const btf_report_opts *opts, btf_sweep *out,
+                                   btf_error *err);
 
 /* What a report found, for the command's summary. */
 typedef struct btf_report_summary {

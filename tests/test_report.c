@@ -267,6 +267,135 @@ static void test_sweep_resume(void **state)
     assert_non_null(strstr(e.msg, "levels 99"));
 }
 
+/* A sweep split over 3 shares (docs/cluster.md): each share measures its
+ * points alone (point i in share i mod 3: no overlap, the union the grid),
+ * the others are missing, not measured; the merge (resume_only) reads all
+ * four back with the one-process sweep's figures; a missing point makes
+ * the merge an error naming it; bad shares are refused; the report refuses
+ * a share (its page comes from the merge). */
+static void test_sweep_shares(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_sweep_opts o = btf_sweep_defaults();
+    o.analyse = quick();
+    o.analyse.segment.subspaces = 0;
+    o.n_subspaces = 2, o.subspaces[0] = 0, o.subspaces[1] = 2;
+    o.n_levels = 1, o.levels[0] = 1;
+    o.n_neighbours = 2, o.neighbours[0] = 0, o.neighbours[1] = 4;
+    o.quality.views = 2, o.quality.lights = 2;
+    o.synth_size = 64, o.render_size = 32;
+    o.seeds = 1;
+    char whole[4096], shared[4096];
+    snprintf(whole, sizeof whole, "%s/sweep-whole", tu_dir);
+    snprintf(shared, sizeof shared, "%s/sweep-shared", tu_dir);
+    o.state_dir = whole;
+    btf_sweep one;
+    TU_OK(btf_sweep_run(ds, &o, &one, &e), &e);
+    o.state_dir = shared;
+    o.share_count = 3;
+    int measured[4] = {0};
+    for (int share = 0; share < 3; share++) {
+        o.share_index = share;
+        btf_sweep s;
+        TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+        int missing = 0;
+        for (int i = 0; i < 4; i++) {
+            const btf_sweep_point *p = &s.points[i];
+            int mine = i % 3 == share;
+            if (mine) { /* measured now: not read back, not missing */
+                assert_false(p->resumed);
+                assert_false(p->missing);
+                measured[i]++;
+            } else {
+                assert_true(p->missing || p->resumed);
+                assert_false(p->missing && (p->pareto_bytes || p->pareto_time));
+            }
+            missing += p->missing;
+        }
+        assert_int_equal(s.n_missing, missing);
+        btf_sweep_free(&s);
+    }
+    for (int i = 0; i < 4; i++)
+        assert_int_equal(measured[i], 1); /* no overlap, none left out */
+    o.share_count = o.share_index = 0;
+    o.resume_only = 1;
+    btf_sweep merged;
+    TU_OK(btf_sweep_run(ds, &o, &merged, &e), &e);
+    assert_int_equal(merged.resumed, 4);
+    assert_int_equal(merged.n_missing, 0);
+    for (int i = 0; i < 4; i++) {
+        const btf_sweep_point *a = &merged.points[i], *b = &one.points[i];
+        assert_int_equal(a->k, b->k);
+        assert_true(a->bytes == b->bytes);
+        assert_true(fabs(a->mean_combined - b->mean_combined) <= 1e-12 * b->mean_combined);
+        assert_int_equal(a->pareto_bytes, b->pareto_bytes);
+    }
+    btf_sweep_free(&merged);
+    btf_sweep_free(&one);
+    /* a point gone: the merge names it and measures nothing */
+    assert_int_equal(remove(tu_fmt("%s/point-K2-L1-N4.json", shared)), 0);
+    assert_int_equal(btf_sweep_run(ds, &o, &merged, &e), BTF_E_DATA);
+    assert_non_null(strstr(e.msg, "1 of the sweep's 4 points are missing"));
+    assert_non_null(strstr(e.msg, "K 2, levels 1, neighbours 4"));
+    assert_int_equal(tu_count_files(shared), 3);
+    /* bad shares */
+    o.resume_only = 0;
+    o.share_count = 2, o.share_index = 2;
+    assert_int_equal(btf_sweep_run(ds, &o, &merged, &e), BTF_E_ARG);
+    o.share_count = -1, o.share_index = 0;
+    assert_int_equal(btf_sweep_run(ds, &o, &merged, &e), BTF_E_ARG);
+    btf_report_opts ro = btf_report_defaults();
+    ro.sweep = 1;
+    ro.sweep_opts.share_count = 2;
+    assert_int_equal(btf_report_write(ds, &model, tu_fmt("%s/share-report", tu_dir), &ro, NULL,
+                                      &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "merge"));
+}
+
+/* The commands of a split sweep: --points writes the share's points and
+ * nothing else; --merge builds the page from them; misuse is one line. */
+static void test_sweep_share_commands(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char mpath[4096], out[4096];
+    snprintf(mpath, sizeof mpath, "%s/share-model.btfcar", tu_dir);
+    snprintf(out, sizeof out, "%s/share-cli", tu_dir);
+    TU_OK(btf_model_write(mpath, &model, &e), &e);
+    const char *grid = "--sweep --sweep-subspaces auto --sweep-levels 1 --sweep-neighbours "
+                       "auto,4 --sweep-seeds 1 --views 2 --lights 2";
+    char *cmd = strdup(tu_fmt("%s report %s %s %s", tu_cli(), dataset, mpath, grid));
+    int st;
+    char *o = tu_capture(tu_fmt("%s --points 1/2 -o %s", cmd, out), &st);
+    assert_int_equal(st, 0);
+    assert_non_null(strstr(o, "sweep share   1/2: 1 of the 2 points"));
+    free(o);
+    assert_int_equal(tu_count_files(out), 1); /* sweep/ only: no page */
+    char *err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s --merge -o %s", cmd, out), &err), 1);
+    assert_non_null(strstr(err, "1 of the sweep's 2 points are missing"));
+    free(err);
+    assert_int_equal(tu_run(tu_fmt("%s -q --points 0/2 -o %s", cmd, out), NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("%s -q --merge -o %s", cmd, out), NULL), 0);
+    struct stat sb;
+    assert_int_equal(stat(tu_fmt("%s/index.html", out), &sb), 0);
+    const char *bad[] = {"--points 2/2", "--points 1/2 --merge", "--points x"};
+    for (int i = 0; i < 3; i++) {
+        err = NULL;
+        assert_int_not_equal(tu_run(tu_fmt("%s %s -o %s.bad", cmd, bad[i], out), &err), 0);
+        assert_non_null(err);
+        assert_true(strchr(err, '\n') == err + strlen(err) - 1); /* one line */
+        free(err);
+    }
+    err = NULL;
+    assert_int_not_equal(tu_run(tu_fmt("%s report %s %s --points 0/2 -o %s.bad", tu_cli(),
+                                       dataset, mpath, out), &err), 0);
+    assert_non_null(strstr(err, "--sweep"));
+    free(err);
+    free(cmd);
+}
+
 /* A sweep of one setting (K, L, N), with and without the layers, tiny
  * quality and sizes, its state in tu_dir/name (the path into dir). */
 static btf_sweep_opts one_setting_sweep(int k, int l, int n, const char *name, char *dir,
@@ -471,7 +600,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_spread),        cmocka_unit_test(test_quality),
         cmocka_unit_test(test_quality_errors), cmocka_unit_test(test_analyse_shared),
-        cmocka_unit_test(test_sweep_resume),  cmocka_unit_test(test_sweep_structure),
+        cmocka_unit_test(test_sweep_resume),  cmocka_unit_test(test_sweep_shares),
+        cmocka_unit_test(test_sweep_share_commands),  cmocka_unit_test(test_sweep_structure),
         cmocka_unit_test(test_sweep_range_size), cmocka_unit_test(test_sweep_seeds),
         cmocka_unit_test(test_presets),
         cmocka_unit_test(test_sphere_scene),

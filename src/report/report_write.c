@@ -312,6 +312,10 @@ btf_status btf_report_write(const btf_dataset *ds, const btf_model *m, const cha
     btf_status rc = resolve(opts, &o, err);
     if (rc)
         return rc;
+    if (o.sweep && o.sweep_opts.share_count > 0)
+        return btf_fail(err, BTF_E_ARG, "report: a share of the sweep (%d of %d) writes its "
+                        "points only (btf_report_sweep_points); the page comes from the merge",
+                        o.sweep_opts.share_index, o.sweep_opts.share_count);
     double t0 = btf_now();
     btf_report_data d;
     memset(&d, 0, sizeof d);
@@ -354,5 +358,30 @@ btf_status btf_report_write(const btf_dataset *ds, const btf_model *m, const cha
     if (o.progress)
         o.progress(o.progress_user, 1.0, "done");
     free_data(&d);
+    return rc;
+}
+
+btf_status btf_report_sweep_points(const btf_dataset *ds, const char *dir,
+                                   const btf_report_opts *opts, btf_sweep *out,
+                                   btf_error *err)
+{
+    if (out)
+        memset(out, 0, sizeof *out);
+    if (!ds || !dir || !out)
+        return btf_fail(err, BTF_E_ARG, "report: no dataset, folder or output given");
+    btf_report_opts o;
+    btf_status rc = resolve(opts, &o, err);
+    if (rc)
+        return rc;
+    /* the options exactly as btf_report_write's sweep sets them (run_sweep),
+     * so that the points carry the same fingerprint and the merge resumes
+     * them */
+    btf_report_data d;
+    memset(&d, 0, sizeof d);
+    step_progress sp;
+    step(&sp, &o, 0.0, 1.0);
+    rc = run_sweep(&d, ds, dir, &o, &sp, err);
+    if (rc == BTF_OK)
+        *out = d.sweep;
     return rc;
 }

@@ -76,6 +76,13 @@ static btf_status resolve(const btf_sweep_opts *in, btf_sweep_opts *o, btf_error
         if (o->plain[i] != 0 && o->plain[i] != 1)
             return btf_fail(err, BTF_E_ARG, "sweep: structure value %d (expected 0: on, 1: off)",
                             o->plain[i]);
+    if (o->share_count < 0 || o->share_count > 100000 ||
+        (o->share_count > 0 && (o->share_index < 0 || o->share_index >= o->share_count)) ||
+        (o->share_count == 0 && o->share_index != 0))
+        return btf_fail(err, BTF_E_ARG, "sweep: share %d of %d (expected 0 <= I < N)",
+                        o->share_index, o->share_count);
+    if (o->resume_only && !o->state_dir)
+        return btf_fail(err, BTF_E_ARG, "sweep: a merge (resume_only) needs the state folder");
     if (o->seeds == 0)
         o->seeds = d.seeds;
     if (o->seeds < 1 || o->seeds > BTF_SWEEP_MAX_SEEDS)
@@ -457,7 +464,7 @@ static btf_status sweep_job(void *user, int job, int worker, btf_error *err)
     (void)worker;
     sweep_ctx *c = user;
     btf_sweep_point *p = &c->s->points[job];
-    if (p->resumed) /* read back before the run (btf_sweep_run) */
+    if (p->resumed || p->missing) /* read back before the run, or another share's */
         return BTF_OK;
     btf_status rc = measure_point(c, p, err);
     if (rc == BTF_OK)
@@ -479,9 +486,11 @@ static void mark_front(btf_sweep *s, int by_bytes)
     for (int i = 0; i < s->n_points; i++) {
         const btf_sweep_point *a = &s->points[i];
         double ax = by_bytes ? (double)a->bytes : a->synth_s;
-        int dominated = 0;
+        int dominated = a->missing; /* a missing point is on no front */
         for (int j = 0; j < s->n_points && !dominated; j++) {
             const btf_sweep_point *b = &s->points[j];
+            if (b->missing)
+                continue;
             double bx = by_bytes ? (double)b->bytes : b->synth_s;
             dominated = j != i && bx <= ax && b->mean_combined <= a->mean_combined &&
                         (bx < ax || b->mean_combined < a->mean_combined);
@@ -526,6 +535,30 @@ static btf_status make_grid(const btf_sweep_opts *o, btf_sweep *s, btf_error *er
     return BTF_OK;
 }
 
+/* The merge's refusal: how many points are missing and the first few
+ * settings, so that the user reruns the shares that hold them. */
+static btf_status missing_error(const btf_sweep *s, const char *dir, btf_error *err)
+{
+    char list[256] = "";
+    size_t at = 0;
+    int shown = 0;
+    for (int i = 0; i < s->n_points && shown < 4; i++) {
+        const btf_sweep_setting *t = &s->points[i].setting;
+        if (!s->points[i].missing)
+            continue;
+        int w = snprintf(list + at, sizeof list - at, "%s#%d (K %d, levels %d, neighbours %d%s)",
+                         shown ? ", " : "", i, t->subspaces, t->levels, t->neighbours,
+                         t->plain ? ", no layers" : "");
+        if (w < 0 || (size_t)w >= sizeof list - at)
+            break;
+        at += (size_t)w;
+        shown++;
+    }
+    return btf_fail(err, BTF_E_DATA, "%s: %d of the sweep's %d points are missing: %s%s; run "
+                    "their shares (--points I/N: point i is in share i mod N)", dir,
+                    s->n_missing, s->n_points, list, s->n_missing > shown ? ", ..." : "");
+}
+
 static btf_status make_state_dir(const char *dir, btf_error *err)
 {
     struct stat st;
@@ -557,11 +590,23 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
     sweep_ctx c = {.ds = ds, .in = btf_dataset_get_info(ds), .o = &o, .s = out};
     pthread_mutex_init(&c.gpu_lock, NULL);
     make_fingerprint(&c);
-    /* Resumed points first: when all are there, nothing shared is computed. */
+    /* Resumed points first: when all are there, nothing shared is computed.
+     * A point of another share that is not there is missing, not measured. */
     int missing = 0;
-    for (int i = 0; i < out->n_points; i++)
-        if (!read_point(&c, &out->points[i]))
-            missing++;
+    for (int i = 0; i < out->n_points; i++) {
+        btf_sweep_point *p = &out->points[i];
+        if (read_point(&c, p))
+            continue;
+        p->missing = o.resume_only || (o.share_count > 0 && i % o.share_count != o.share_index);
+        out->n_missing += p->missing;
+        missing += !p->missing;
+    }
+    if (o.resume_only && out->n_missing) {
+        rc = missing_error(out, o.state_dir, err);
+        pthread_mutex_destroy(&c.gpu_lock);
+        btf_sweep_free(out);
+        return rc;
+    }
     float *features = NULL, *means = NULL;
     btf_model range;
     memset(&range, 0, sizeof range);

@@ -62,14 +62,15 @@ $(LIB_OBJ): CXXFLAGS += -fvisibility=hidden
 # Keep generated SPIR-V headers and objects between builds.
 .SECONDARY:
 
-.PHONY: all deps test test-run asan bench demo gpu-check install uninstall fuzz fuzz-build clean help check-shaders noise-stream check-exports check-install check-layering
+.PHONY: all deps test test-run test-cluster asan bench demo gpu-check install uninstall fuzz fuzz-build clean help check-shaders noise-stream check-exports check-install check-layering
 
 all: $(STATIC) $(SHARED) $(CLI) $(TEST_BIN) $(BENCH_BIN) $(BUILD)/noise_stream $(CHECK_PAGE)
 
 help:
 	@echo "make deps     install missing Debian packages (apt-get; needs root)"
 	@echo "make          build the libraries, the btfcar command and the tests"
-	@echo "make test     deps + build + run the whole test suite"
+	@echo "make test     deps + build + run the whole test suite (and test-cluster)"
+	@echo "make test-cluster  the Slurm test: a split sweep on a one-node cluster"
 	@echo "make asan     the whole test suite under ASan + UBSan (build-asan/)"
 	@echo "make demo     deps + build + generate a material and analyse it end to end"
 	@echo "make bench    benchmarks (figures; never fails on time)"
@@ -145,6 +146,12 @@ test-run: $(TEST_BIN) $(CLI) $(CHECK_PAGE) check-exports check-layering
 test: deps
 	@$(MAKE) --no-print-directory all
 	@$(MAKE) --no-print-directory test-run
+	@$(MAKE) --no-print-directory test-cluster
+
+# A one-node Slurm cluster started and stopped by the test itself: a split
+# sweep as a job array, merged (docs/cluster.md).
+test-cluster: $(CLI)
+	@BTF_CLI=$(abspath $(CLI)) sh tests/test_slurm.sh
 
 asan: deps
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \

@@ -4,6 +4,7 @@
 set -eu
 
 # chromium: the browser test of `btfcar report` (build/check-page, tools/check-page.c).
+# slurm-wlm, munge: the cluster test (tests/test_slurm.sh, docs/cluster.md).
 PKGS="build-essential g++ pkg-config clang
 libopencv-core-dev libopencv-imgproc-dev
 libopenexr-dev libpng-dev libjpeg62-turbo-dev
@@ -11,7 +12,8 @@ libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
 glslang-tools spirv-tools
 libcmocka-dev zlib1g-dev time openexr
 libcjson-dev libassimp-dev
-chromium"
+chromium
+slurm-wlm munge"
 
 missing=""
 for p in $PKGS; do

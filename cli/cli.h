@@ -125,6 +125,7 @@ int cmd_synthesise(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_compare(int argc, char **argv);
 int cmd_report(int argc, char **argv);
+int cmd_library(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 
 /* The model options shared by analyse and texture-fit, as option-table

@@ -21,6 +21,7 @@ static const struct {
     {"compare", cmd_compare, "distances between two textures, normalised by the reference's own"},
     {"export", cmd_export, "write a dataset's images (a Bonn .btf file's, reconstructed) as files"},
     {"report", cmd_report, "a page of what a model costs, how close it comes, and the trade"},
+    {"library", cmd_library, "one page of many materials' reports (a cluster run's last step)"},
 };
 
 static void usage(FILE *f)

@@ -1961,6 +1961,16 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
                          btf_error *err);
 void btf_sweep_free(btf_sweep *s);
 
+/* The library report (docs/cluster.md, "A material library"): DIR/index.html
+ * and DIR/library.json with one row per material — model bytes, ratio,
+ * mean and worst combined distance, pairs, the report's time, the preview
+ * and a link to the material's report — read from the n report folders
+ * btf_report_write made (their report.json), measuring nothing. All
+ * folders are read first: missing or unreadable ones are named together
+ * (BTF_E_IO or BTF_E_DATA) and nothing is written. *rows: n on success. */
+btf_status btf_library_write(const char *const *reports, int n, const char *dir, int *rows,
+                             btf_error *err);
+
 /* Named points of the trade for btfcar analyse --preset (docs/report.md,
  * "Presets"): "fast", "balanced" (the defaults) or "accurate" set the
  * subspaces, levels and neighbourhood of o; BTF_E_ARG for another name. */

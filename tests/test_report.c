@@ -396,6 +396,63 @@ static void test_sweep_share_commands(void **state)
     free(cmd);
 }
 
+/* The library report (btf_library_write): rows read from report folders,
+ * the figures of each report.json, relative links; missing or foreign
+ * folders named together and nothing written. */
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    static char buf[1 << 16];
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    buf[n] = '\0';
+    return strdup(buf);
+}
+
+static void test_library(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    char a[4096], lib[4096];
+    snprintf(a, sizeof a, "%s/lib-report", tu_dir);
+    snprintf(lib, sizeof lib, "%s/lib-page", tu_dir);
+    btf_report_opts ro = btf_report_defaults();
+    ro.quality.views = 2, ro.quality.lights = 2;
+    btf_report_summary sum;
+    TU_OK(btf_report_write(ds, &model, a, &ro, &sum, &e), &e);
+    const char *two[2] = {a, a};
+    int rows = 0;
+    TU_OK(btf_library_write(two, 2, lib, &rows, &e), &e);
+    assert_int_equal(rows, 2);
+    char *json = slurp(tu_fmt("%s/library.json", lib));
+    char want[64];
+    snprintf(want, sizeof want, "\"model_bytes\":\t%llu", (unsigned long long)sum.model_bytes);
+    assert_non_null(strstr(json, want));
+    assert_non_null(strstr(json, "\"report\":\t\"../lib-report\""));
+    assert_non_null(strstr(json, "\"format\":\t\"btfcar-library\""));
+    free(json);
+    json = slurp(tu_fmt("%s/index.html", lib));
+    assert_non_null(strstr(json, "href=\"../lib-report/index.html\""));
+    assert_non_null(strstr(json, "src=\"../lib-report/sphere.png\""));
+    free(json);
+    /* two folders missing: both named, nothing written */
+    const char *bad[3] = {a, tu_fmt("%s/no-such", tu_dir), tu_fmt("%s/leather", tu_dir)};
+    char other[4096];
+    snprintf(other, sizeof other, "%s/lib-bad", tu_dir);
+    assert_int_not_equal(btf_library_write(bad, 3, other, &rows, &e), BTF_OK);
+    assert_non_null(strstr(e.msg, "2 of 3 material reports"));
+    assert_non_null(strstr(e.msg, "no-such"));
+    struct stat sb;
+    assert_int_not_equal(stat(other, &sb), 0);
+    /* a JSON that is not a report */
+    mkdir(tu_fmt("%s/fake", tu_dir), 0777);
+    tu_write_file(tu_fmt("%s/fake/report.json", tu_dir), "{\"format\": \"x\"}", 15);
+    const char *fake[1] = {tu_fmt("%s/fake", tu_dir)};
+    assert_int_equal(btf_library_write(fake, 1, other, &rows, &e), BTF_E_DATA);
+    assert_non_null(strstr(e.msg, "not a btfcar report"));
+}
+
 /* A sweep of one setting (K, L, N), with and without the layers, tiny
  * quality and sizes, its state in tu_dir/name (the path into dir). */
 static btf_sweep_opts one_setting_sweep(int k, int l, int n, const char *name, char *dir,
@@ -601,7 +658,8 @@ int main(void)
         cmocka_unit_test(test_spread),        cmocka_unit_test(test_quality),
         cmocka_unit_test(test_quality_errors), cmocka_unit_test(test_analyse_shared),
         cmocka_unit_test(test_sweep_resume),  cmocka_unit_test(test_sweep_shares),
-        cmocka_unit_test(test_sweep_share_commands),  cmocka_unit_test(test_sweep_structure),
+        cmocka_unit_test(test_sweep_share_commands),
+        cmocka_unit_test(test_library),  cmocka_unit_test(test_sweep_structure),
         cmocka_unit_test(test_sweep_range_size), cmocka_unit_test(test_sweep_seeds),
         cmocka_unit_test(test_presets),
         cmocka_unit_test(test_sphere_scene),

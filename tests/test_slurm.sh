@@ -8,7 +8,9 @@
 # merged report.json equals a one-process report point for point (all but
 # the times), a share cancelled mid-run (scancel) leaves its point missing,
 # the merge names it, resubmitting that one array index completes the sweep;
-# nothing is left running. Skipped, saying so, only where slurm-wlm or munge
+# nothing is left running; a library run of three generated materials
+# (examples/slurm/library-task.sbatch, library-merge.sbatch) gives one
+# library page with their figures. Skipped, saying so, only where slurm-wlm or munge
 # is not installed (make deps installs them). Needs root (the daemons).
 # Usage: BTF_CLI=build/btfcar sh tests/test_slurm.sh
 set -u
@@ -155,6 +157,24 @@ if [ -f cancelled/report.json ] && points cancelled/report.json >c.txt && cmp -s
     ok "resubmitting array index 2 alone completes the sweep: the one-process points"
 else
     bad "the resubmitted share did not complete the sweep: $(tail -2 "btfcar-merge-$M.out")"
+fi
+
+# the library run: three generated materials, one array task each, then the page
+for mat in leather fabric wood; do
+    "$CLI" generate -q --material $mat --size 32 --seed 3 "lib-$mat" || bad "generate $mat"
+    echo "$T/lib-$mat" >>materials.txt
+done
+export LIST="$T/materials.txt" OUT="$T/library" REPORT_OPTS="--views 2 --lights 2"
+J=$(sbatch --parsable --array=0-2 --cpus-per-task=1 --mem=1G -D "$T" "$HERE/examples/slurm/library-task.sbatch")
+M=$(sbatch --parsable --mem=500M --dependency=afterok:"$J" -D "$T" "$HERE/examples/slurm/library-merge.sbatch")
+wait_job "$J" 300 && wait_job "$M" 120
+rows=$(grep -c '"mean_combined"' library/library/library.json 2>/dev/null)
+if [ "$rows" = 3 ] && grep -q 'lib-fabric/report/index.html' library/library/index.html &&
+    grep -q "$(sed -n 's/.*"mean_combined":\t*\([0-9.]*\).*/\1/p' library/lib-wood/report/report.json | head -1)" \
+        library/library/library.json; then
+    ok "the library run: 3 materials as 3 array tasks, one library page with their reports' figures"
+else
+    bad "the library run: $rows rows; $(tail -2 btfcar-library-$M.out 2>/dev/null)"
 fi
 
 [ -z "$(squeue -h 2>/dev/null)" ] && ok "no job left in the queue" || bad "jobs left: $(squeue -h)"

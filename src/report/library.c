@@ -21,23 +21,49 @@
  * 151 x 151 material is a few MB). */
 #define REPORT_JSON_MAX ((size_t)64 << 20)
 
-typedef struct library_row {
-    char dir[PATH_MAX];     /* the report folder, absolute */
-    char dataset[512], model[512], preview[256];
-    double model_bytes, raw_bytes, ratio, mean, worst, seconds;
-    int pairs;
-} library_row;
+typedef btf_library_row library_row;
 
+/* A number of the report, finite and >= 0 (every figure the row shows is),
+ * else 0: a damaged or foreign file cannot put NaN on the page. */
 static double number(const cJSON *o, const char *key)
 {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
-    return cJSON_IsNumber(v) ? v->valuedouble : 0.0;
+    double d = cJSON_IsNumber(v) ? v->valuedouble : 0.0;
+    return d >= 0.0 && d <= 1e300 ? d : 0.0;
 }
 
 static void text(const cJSON *o, const char *key, char *out, size_t n)
 {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
     snprintf(out, n, "%s", cJSON_IsString(v) ? v->valuestring : "");
+}
+
+int btf_library_row_parse(const char *data, size_t n, btf_library_row *r)
+{
+    cJSON *j = cJSON_ParseWithLength(data, n);
+    const cJSON *f = cJSON_GetObjectItemCaseSensitive(j, "format");
+    if (!j || !cJSON_IsString(f) || strcmp(f->valuestring, "btfcar-report")) {
+        cJSON_Delete(j);
+        return 0;
+    }
+    text(j, "dataset", r->dataset, sizeof r->dataset);
+    text(j, "model", r->model, sizeof r->model);
+    const cJSON *c = cJSON_GetObjectItemCaseSensitive(j, "compression");
+    const cJSON *q = cJSON_GetObjectItemCaseSensitive(j, "quality");
+    const cJSON *p = cJSON_GetObjectItemCaseSensitive(j, "preview");
+    r->model_bytes = number(c, "model_bytes");
+    r->raw_bytes = number(c, "raw_bytes");
+    r->ratio = number(c, "ratio");
+    r->mean = number(q, "mean_combined");
+    r->worst = number(q, "worst_combined");
+    double pairs = number(q, "pairs");
+    r->pairs = pairs < 1e9 ? (int)pairs : 0;
+    r->seconds = number(j, "seconds");
+    text(p, "picture", r->preview, sizeof r->preview);
+    if (strchr(r->preview, '/') || strstr(r->preview, "..")) /* a name in the folder only */
+        r->preview[0] = '\0';
+    cJSON_Delete(j);
+    return 1;
 }
 
 /* One report folder's row; BTF_E_IO / BTF_E_DATA naming its report.json. */
@@ -52,30 +78,13 @@ static btf_status read_row(const char *dir, library_row *r, btf_error *err)
         rc = BTF_E_IO;
     if (rc)
         return rc;
-    cJSON *j = cJSON_ParseWithLength((const char *)data, n);
+    int ok = btf_library_row_parse((const char *)data, n, r);
     free(data);
-    const cJSON *f = cJSON_GetObjectItemCaseSensitive(j, "format");
-    if (!j || !cJSON_IsString(f) || strcmp(f->valuestring, "btfcar-report")) {
-        cJSON_Delete(j);
+    if (!ok)
         return btf_fail(err, BTF_E_DATA, "%s: not a btfcar report (no \"format\": "
                         "\"btfcar-report\")", path);
-    }
     if (!realpath(dir, r->dir))
         snprintf(r->dir, sizeof r->dir, "%s", dir);
-    text(j, "dataset", r->dataset, sizeof r->dataset);
-    text(j, "model", r->model, sizeof r->model);
-    const cJSON *c = cJSON_GetObjectItemCaseSensitive(j, "compression");
-    const cJSON *q = cJSON_GetObjectItemCaseSensitive(j, "quality");
-    const cJSON *p = cJSON_GetObjectItemCaseSensitive(j, "preview");
-    r->model_bytes = number(c, "model_bytes");
-    r->raw_bytes = number(c, "raw_bytes");
-    r->ratio = number(c, "ratio");
-    r->mean = number(q, "mean_combined");
-    r->worst = number(q, "worst_combined");
-    r->pairs = (int)number(q, "pairs");
-    r->seconds = number(j, "seconds");
-    text(p, "picture", r->preview, sizeof r->preview);
-    cJSON_Delete(j);
     return BTF_OK;
 }
 

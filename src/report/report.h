@@ -59,6 +59,20 @@ void btf_buf_free(btf_buf *b);
 /* The same escaping as btf_buf_html, written to f: 0, or -1 on a write error. */
 int btf_html_fputs(FILE *f, const char *text);
 
+/* ------------------------------------------------------------ library.c */
+
+/* One material's row of the library report, from its report.json. */
+typedef struct btf_library_row {
+    char dir[4096];          /* the report folder, absolute */
+    char dataset[512], model[512], preview[256];
+    double model_bytes, raw_bytes, ratio, mean, worst, seconds; /* finite, >= 0 */
+    int pairs;
+} btf_library_row;
+/* report.json's text into *r (whose dir is left alone): 1, or 0 when it is
+ * not a btfcar report. Missing or bad figures read as 0; the preview is a
+ * plain file name or empty. */
+int btf_library_row_parse(const char *data, size_t n, btf_library_row *r);
+
 /* ------------------------------------------------------------ Pareto front */
 
 /* The Pareto-optimal points among n points (x[i], y[i]): those that no

@@ -3,8 +3,11 @@
  * docs/report.md). */
 #include "cli.h"
 
+#include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const char ABOUT[] =
     "Writes the report of MODEL, analysed from DATASET, into the folder DIR:\n"
@@ -140,6 +143,30 @@ static void show_points(const void *dest, char *buf, size_t n)
         snprintf(buf, n, "all");
 }
 
+/* --merge-from DIR, any number of times: the folders a split sweep's shares
+ * wrote to. */
+typedef struct merge_from {
+    const char *dirs[1024];
+    int n;
+} merge_from;
+
+static int parse_merge_from(const char *s, void *dest, char *why, size_t n)
+{
+    merge_from *m = dest;
+    if (m->n >= 1024) {
+        snprintf(why, n, "at most 1024 folders");
+        return -1;
+    }
+    m->dirs[m->n++] = s;
+    return 0;
+}
+
+static void show_merge_from(const void *dest, char *buf, size_t n)
+{
+    const merge_from *m = dest;
+    snprintf(buf, n, "%d folder%s", m->n, m->n == 1 ? "" : "s");
+}
+
 static int parse_light(const char *s, void *dest, char *why, size_t n)
 {
     return cli_parse_dir(s, dest, why, n);
@@ -149,6 +176,25 @@ static void show_light(const void *dest, char *buf, size_t n)
 {
     const btf_dir *d = dest;
     snprintf(buf, n, "%g,%g", d->theta, d->phi);
+}
+
+/* --merge-from: the shares' points into OUT/sweep/ (the report's state folder). */
+static int gather(cli_ctx *c, const merge_from *mf, const char *out, btf_error *err)
+{
+    char state[4096];
+    snprintf(state, sizeof state, "%s/sweep", out);
+    int copied = 0;
+    if (mkdir(out, 0777) != 0 && errno != EEXIST) {
+        cli_set_error(err, BTF_E_IO, "%s: cannot create the report folder: %s", out,
+                      strerror(errno));
+        return cli_lib_error(c, err);
+    }
+    if (btf_sweep_gather(mf->dirs, mf->n, state, &copied, err))
+        return cli_lib_error(c, err);
+    if (!c->quiet)
+        printf("merge         %d point files gathered from %d folder%s into %s\n", copied,
+               mf->n, mf->n == 1 ? "" : "s", state);
+    return 0;
 }
 
 /* --points I/N: one share of the sweep into OUT/sweep/, nothing else. */
@@ -187,6 +233,7 @@ int cmd_report(int argc, char **argv)
     plain_arg gp = {&so->n_plain, so->plain};
     grid_arg gr = {&so->n_range_sizes, so->range_sizes, 4096, 0, "full", 4};
     uint64_t max_pixels = BTF_DEFAULT_MAX_PIXELS;
+    static merge_from mf; /* 8 KB of pointers: not on the stack */
     cli_opt opts[] = {
         {.name = "--output", .short_name = "-o", .kind = CLI_STRING, .dest = &out,
          .meta = "DIR", .help = "the report's folder (index.html, report.json, pictures)",
@@ -241,6 +288,10 @@ int cmd_report(int argc, char **argv)
         {.name = "--merge", .kind = CLI_FLAG, .dest = &so->resume_only,
          .help = "--sweep: build the report from the points in DIR/sweep/ only,\n"
                  "measuring none; missing points are an error naming them"},
+        {.name = "--merge-from", .kind = CLI_CUSTOM, .dest = &mf, .meta = "DIR",
+         .help = "--merge, the points first copied from DIR/sweep/ (a share's report\n"
+                 "folder) into DIR/sweep/ of -o; give it once per folder",
+         .parse = parse_merge_from, .show = show_merge_from},
         {.name = "--sweep-seeds", .kind = CLI_INT, .dest = &so->seeds, .meta = "N",
          .help = "--sweep: each point's quality is the mean over N synthesis seeds\n"
                  "(--seed, --seed + 1, ...)", .lo = 1, .hi = BTF_SWEEP_MAX_SEEDS,
@@ -262,6 +313,7 @@ int cmd_report(int argc, char **argv)
     if (rf && (ro.sweep || gk.given || gl.given || gn.given || gr.given || so->n_plain))
         return cli_usage_error(&c, "%s is a reflectance-field model: --sweep varies the CAR "
                                "analysis and does not apply", args[1]);
+    so->resume_only |= mf.n > 0;
     if ((so->share_count || so->resume_only) && !ro.sweep)
         return cli_usage_error(&c, "--points and --merge go with --sweep");
     if (so->share_count && so->resume_only)
@@ -291,6 +343,12 @@ int cmd_report(int argc, char **argv)
     btf_error gerr = {0};
     btf_gpu *gpu = ro.sweep ? cli_open_gpu("auto", -1, &gerr) : NULL;
     so->gpu = gpu;
+    if (mf.n > 0 && gather(&c, &mf, out, &err)) {
+        btf_gpu_close(gpu);
+        btf_dataset_close(ds);
+        btf_model_free(&m);
+        return 1;
+    }
     if (so->share_count) {
         int rc = sweep_share(&c, ds, out, &ro, &err, t0);
         btf_gpu_close(gpu);

@@ -1961,6 +1961,16 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
                          btf_error *err);
 void btf_sweep_free(btf_sweep *s);
 
+/* The points of a sweep whose shares wrote to separate folders, copied
+ * into one state folder (created; its parent must exist) before the merge
+ * (docs/cluster.md): each DIR/sweep/point-*.json (DIR a report folder) or
+ * DIR/point-*.json (DIR a state folder). Files are copied as they are
+ * (each carries its options' fingerprint: the merge reads back only its
+ * own); a later folder's file replaces an earlier one of the same name.
+ * *copied: the files copied. BTF_E_IO naming a folder that cannot be read. */
+btf_status btf_sweep_gather(const char *const *dirs, int n, const char *state_dir, int *copied,
+                            btf_error *err);
+
 /* The library report (docs/cluster.md, "A material library"): DIR/index.html
  * and DIR/library.json with one row per material — model bytes, ratio,
  * mean and worst combined distance, pairs, the report's time, the preview

@@ -380,6 +380,20 @@ static void test_sweep_share_commands(void **state)
     assert_int_equal(tu_run(tu_fmt("%s -q --merge -o %s", cmd, out), NULL), 0);
     struct stat sb;
     assert_int_equal(stat(tu_fmt("%s/index.html", out), &sb), 0);
+    /* shares in separate folders, gathered by the merge */
+    assert_int_equal(tu_run(tu_fmt("%s -q --points 0/2 -o %s.a", cmd, out), NULL), 0);
+    assert_int_equal(tu_run(tu_fmt("%s -q --points 1/2 -o %s.b", cmd, out), NULL), 0);
+    o = tu_capture(tu_fmt("%s --merge-from %s.a --merge-from %s.b -o %s.c", cmd, out, out, out),
+                   &st);
+    assert_int_equal(st, 0);
+    assert_non_null(strstr(o, "2 point files gathered from 2 folders"));
+    assert_non_null(strstr(o, "2 resumed"));
+    free(o);
+    assert_int_equal(stat(tu_fmt("%s.c/index.html", out), &sb), 0);
+    err = NULL;
+    assert_int_equal(tu_run(tu_fmt("%s --merge-from %s.nope -o %s.d", cmd, out, out), &err), 1);
+    assert_non_null(strstr(err, ".nope"));
+    free(err);
     const char *bad[] = {"--points 2/2", "--points 1/2 --merge", "--points x"};
     for (int i = 0; i < 3; i++) {
         err = NULL;

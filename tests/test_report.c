@@ -208,13 +208,10 @@ static void assert_sweep_resumes(const btf_sweep_opts *o, int n)
     btf_sweep_free(&again);
 }
 
-/* A 2 x 1 x 2 grid: every point measured, finite; the fronts marked; a
- * second run resumes every point from the state folder, and a point file
- * of other options is measured again. */
-static void test_sweep_resume(void **state)
+/* A 2 x 1 x 2 grid (K auto and 2, levels 1, neighbours auto and 4) of
+ * small images and a 2 x 2 spread: four points in seconds. */
+static btf_sweep_opts small_grid(void)
 {
-    (void)state;
-    btf_error e = {0};
     btf_sweep_opts o = btf_sweep_defaults();
     o.analyse = quick();
     o.analyse.segment.subspaces = 0;
@@ -223,6 +220,17 @@ static void test_sweep_resume(void **state)
     o.n_neighbours = 2, o.neighbours[0] = 0, o.neighbours[1] = 4;
     o.quality.views = 2, o.quality.lights = 2;
     o.synth_size = 64, o.render_size = 32;
+    return o;
+}
+
+/* A 2 x 1 x 2 grid: every point measured, finite; the fronts marked; a
+ * second run resumes every point from the state folder, and a point file
+ * of other options is measured again. */
+static void test_sweep_resume(void **state)
+{
+    (void)state;
+    btf_error e = {0};
+    btf_sweep_opts o = small_grid();
     char dir[4096];
     snprintf(dir, sizeof dir, "%s/sweep", tu_dir);
     o.state_dir = dir;
@@ -277,14 +285,7 @@ static void test_sweep_shares(void **state)
 {
     (void)state;
     btf_error e = {0};
-    btf_sweep_opts o = btf_sweep_defaults();
-    o.analyse = quick();
-    o.analyse.segment.subspaces = 0;
-    o.n_subspaces = 2, o.subspaces[0] = 0, o.subspaces[1] = 2;
-    o.n_levels = 1, o.levels[0] = 1;
-    o.n_neighbours = 2, o.neighbours[0] = 0, o.neighbours[1] = 4;
-    o.quality.views = 2, o.quality.lights = 2;
-    o.synth_size = 64, o.render_size = 32;
+    btf_sweep_opts o = small_grid();
     o.seeds = 1;
     char whole[4096], shared[4096];
     snprintf(whole, sizeof whole, "%s/sweep-whole", tu_dir);

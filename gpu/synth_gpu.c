@@ -525,48 +525,75 @@ typedef struct batch_dest {
     const uint64_t *dev_off;
 } batch_dest;
 
+/* The pieces of `floats` floats of an array from float offset off, one
+ * per buffer they touch: fn(user, buffer, its byte offset, floats before
+ * this piece, the piece's floats) in order, stopping at the first error.
+ * Every transfer to or from an array walks it so. */
+typedef btf_status (*piece_fn)(void *user, btf_vk_buffer *buf, uint64_t at_bytes,
+                               uint64_t done, uint64_t n, btf_error *err);
+
+static btf_status each_piece(const btf_gpu_images *im, uint64_t off, uint64_t floats,
+                             piece_fn fn, void *user, btf_error *err)
+{
+    for (uint64_t done = 0; done < floats;) {
+        uint64_t b = (off + done) / im->cap, at = (off + done) % im->cap;
+        uint64_t n = im->cap - at < floats - done ? im->cap - at : floats - done;
+        btf_status rc = fn(user, im->buf[b], 4 * at, done, n, err);
+        if (rc)
+            return rc;
+        done += n;
+    }
+    return BTF_OK;
+}
+
+typedef struct piece_copy {
+    btf_vk_job *job;
+    const btf_vk_buffer *src;
+    uint64_t src_bytes;
+} piece_copy;
+
+static btf_status copy_piece(void *user, btf_vk_buffer *buf, uint64_t at_bytes, uint64_t done,
+                             uint64_t n, btf_error *err)
+{
+    piece_copy *c = user;
+    return btf_vk_job_copy(c->job, c->src, c->src_bytes + 4 * done, buf, at_bytes, 4 * n, err);
+}
+
 /* A device-side copy into the array, split where it crosses a buffer. */
 static btf_status copy_to_images(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_bytes,
                                  const btf_gpu_images *im, uint64_t off, uint64_t floats,
                                  btf_error *err)
 {
-    while (floats > 0) {
-        uint64_t b = off / im->cap, at = off % im->cap;
-        uint64_t n = im->cap - at < floats ? im->cap - at : floats;
-        btf_status rc = btf_vk_job_copy(job, src, src_bytes, im->buf[b], 4 * at, 4 * n, err);
-        if (rc)
-            return rc;
-        src_bytes += 4 * n, off += n, floats -= n;
-    }
-    return BTF_OK;
+    piece_copy c = {job, src, src_bytes};
+    return each_piece(im, off, floats, copy_piece, &c, err);
+}
+
+typedef struct piece_host {
+    btf_vk *vk;
+    float *down;      /* download into, or */
+    const float *up;  /* upload from */
+} piece_host;
+
+static btf_status host_piece(void *user, btf_vk_buffer *buf, uint64_t at_bytes, uint64_t done,
+                             uint64_t n, btf_error *err)
+{
+    piece_host *h = user;
+    return h->down ? btf_vk_buffer_download(h->vk, buf, at_bytes, h->down + done, 4 * n, err)
+                   : btf_vk_buffer_upload(h->vk, buf, at_bytes, h->up + done, 4 * n, err);
 }
 
 btf_status btf_gpu_images_download(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
                                    float *data, uint64_t floats, btf_error *err)
 {
-    while (floats > 0) {
-        uint64_t b = off / im->cap, at = off % im->cap;
-        uint64_t n = im->cap - at < floats ? im->cap - at : floats;
-        btf_status rc = btf_vk_buffer_download(vk, im->buf[b], 4 * at, data, 4 * n, err);
-        if (rc)
-            return rc;
-        data += n, off += n, floats -= n;
-    }
-    return BTF_OK;
+    piece_host h = {vk, data, NULL};
+    return each_piece(im, off, floats, host_piece, &h, err);
 }
 
 btf_status btf_gpu_images_upload(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
                                  const float *data, uint64_t floats, btf_error *err)
 {
-    while (floats > 0) {
-        uint64_t b = off / im->cap, at = off % im->cap;
-        uint64_t n = im->cap - at < floats ? im->cap - at : floats;
-        btf_status rc = btf_vk_buffer_upload(vk, im->buf[b], 4 * at, data, 4 * n, err);
-        if (rc)
-            return rc;
-        data += n, off += n, floats -= n;
-    }
-    return BTF_OK;
+    piece_host h = {vk, NULL, data};
+    return each_piece(im, off, floats, host_piece, &h, err);
 }
 
 uint64_t btf_gpu_images_cap(const btf_gpu *g)

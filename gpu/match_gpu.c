@@ -230,8 +230,8 @@ btf_status btf_gpu_match_images(btf_vk *vk, const btf_gpu_matcher *mt, const btf
     match_params *p = btf_calloc(1, sizeof *p, err); /* 6 KB of maps: not on the stack */
     if (!p)
         return BTF_E_NOMEM;
-    btf_status rc = btf_lab_sample_begin(&p->grid, w, h, BTF_LAB_MATCH_SAMPLE, 1.0f, err);
-    btf_lab_sample_free(&p->grid); /* only its grid is used: the device holds the values */
+    btf_status rc = BTF_OK;
+    btf_lab_sample_grid(&p->grid, w, h, BTF_LAB_MATCH_SAMPLE); /* the device holds the values */
     p->npad = pow2_at_least(p->grid.n);
     params_fill(p, mg, im, off, w, h, pattern, match, btf_vk_info(vk)->max_workgroup_count[0]);
     /* bindings: the image array 0-7, ints, floats, the pattern, the keys */

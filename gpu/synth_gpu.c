@@ -880,6 +880,21 @@ int btf_gpu_auto_fits(const btf_gpu *g, uint64_t image_bytes)
     return g && image_bytes <= btf_gpu_memory_budget(g);
 }
 
+/* An image synthesised on the GPU and read back, finished by the CPU's code
+ * (the bits the device's finishing gives): times the structure layer's
+ * pattern (cached per size in *pattern), then colour matched when wanted. */
+static btf_status finish_on_host(const btf_model *m, int subspace, const btf_synth_opts *o,
+                                 btf_image *img, btf_image *pattern, btf_error *err)
+{
+    int match = 0;
+    btf_status rc = btf_structure_apply(m, o->seed, img, pattern, err);
+    if (rc == BTF_OK)
+        rc = btf_colour_match_wanted(m, subspace, o->match_colours, &match, err);
+    if (rc == BTF_OK && match)
+        rc = btf_colour_match(m, subspace, img, err);
+    return rc;
+}
+
 /* One image too large for the budget: synthesised in strips straight to the
  * host (no whole image on the device), finished there by the CPU's code
  * (the same bits as on the device), handed to fn as image i. */
@@ -893,13 +908,8 @@ static btf_status one_in_strips(btf_gpu *g, const btf_model *m, const int *sub,
     batch_dest d = {&img, NULL, NULL};
     if (rc == BTF_OK)
         rc = run_all(g, m, sub, 1, o, w, h, margins, &d, err);
-    int match = 0;
     if (rc == BTF_OK)
-        rc = btf_structure_apply(m, o->seed, &img, &pattern, err);
-    if (rc == BTF_OK)
-        rc = btf_colour_match_wanted(m, *sub, o->match_colours, &match, err);
-    if (rc == BTF_OK && match)
-        rc = btf_colour_match(m, *sub, &img, err);
+        rc = finish_on_host(m, *sub, o, &img, &pattern, err);
     if (rc == BTF_OK)
         rc = fn(user, i, &img, err);
     btf_image_free(&pattern);
@@ -1032,9 +1042,7 @@ static btf_status match_image(btf_gpu *g, const btf_model *m, int subspace,
     uint64_t floats = (uint64_t)width * height * 3;
     rc = btf_gpu_images_download(g->vk, im, offset, img.data, floats, err);
     if (rc == BTF_OK)
-        rc = btf_structure_apply(m, o->seed, &img, pattern, err);
-    if (rc == BTF_OK && match)
-        rc = btf_colour_match(m, subspace, &img, err);
+        rc = finish_on_host(m, subspace, o, &img, pattern, err);
     if (rc == BTF_OK)
         rc = btf_gpu_images_upload(g->vk, im, offset, img.data, floats, err);
     btf_image_free(&img);

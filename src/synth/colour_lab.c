@@ -423,13 +423,18 @@ static void sample_steps(int w, int h, size_t most, int *sx, int *sy)
     }
 }
 
-btf_status btf_lab_sample_begin(btf_lab_sample *s, int width, int height, size_t most,
-                                float scale, btf_error *err)
+void btf_lab_sample_grid(btf_lab_sample *s, int width, int height, size_t most)
 {
     memset(s, 0, sizeof *s);
     sample_steps(width, height, most, &s->sx, &s->sy);
     s->cols = (width + s->sx - 1) / s->sx, s->rows = (height + s->sy - 1) / s->sy;
     s->n = (size_t)s->cols * s->rows;
+}
+
+btf_status btf_lab_sample_begin(btf_lab_sample *s, int width, int height, size_t most,
+                                float scale, btf_error *err)
+{
+    btf_lab_sample_grid(s, width, height, most);
     s->scale = scale;
     s->v = btf_alloc(s->n * 4, sizeof(float), err); /* 3 channels, then the sort's scratch */
     return s->v ? BTF_OK : BTF_E_NOMEM;

@@ -155,6 +155,9 @@ typedef struct btf_lab_sample {
 btf_status btf_lab_sample_begin(btf_lab_sample *s, int width, int height, size_t most,
                                 float scale, btf_error *err);
 void btf_lab_sample_row(btf_lab_sample *s, int y, const float *row, float *scratch);
+/* The grid alone (steps and size; no values held), for a sample taken
+ * elsewhere (the GPU: gpu/match_gpu.c). */
+void btf_lab_sample_grid(btf_lab_sample *s, int width, int height, size_t most);
 btf_status btf_lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNOTS],
                                     btf_error *err);
 void btf_lab_sample_free(btf_lab_sample *s);

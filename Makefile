@@ -30,7 +30,6 @@ PC_LIBS_PRIVATE     := -lopencv_imgproc -lopencv_core -lstdc++ -lm -pthread
 
 LIB_C     := $(sort $(wildcard src/*/*.c) $(wildcard gpu/*.c))
 LIB_CXX   := $(sort $(wildcard src/*/*.cpp))
-LIB_H     := $(wildcard include/*.h src/*/*.h gpu/*.h)
 LIB_OBJ   := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
 CLI_OBJ   := $(patsubst %.c,$(BUILD)/%.o,$(sort $(wildcard cli/*.c)))
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
@@ -86,13 +85,18 @@ help:
 deps:
 	@sh tools/install-deps.sh
 
-$(BUILD)/%.o: %.c $(LIB_H) $(wildcard tests/*.h) $(SPIRV_H)
+# Header dependencies come from the compiler (-MMD: a .d file beside each
+# object), so a header edit rebuilds only what includes it. The shaders'
+# SPIR-V headers are built first (order-only): a first build has no .d file
+# yet to say which objects include them.
+DEPFLAGS  := -MMD -MP
+$(BUILD)/%.o: %.c | $(SPIRV_H)
 	@mkdir -p $(dir $@)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) -c $< -o $@
 
-$(BUILD)/%.o: %.cpp $(LIB_H)
+$(BUILD)/%.o: %.cpp
 	@mkdir -p $(dir $@)
-	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c $< -o $@
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) $(DEPFLAGS) -c $< -o $@
 
 # Shaders: GLSL -> SPIR-V as a C array, validated by spirv-val.
 $(BUILD)/gen/%_spv.h: gpu/%.comp $(wildcard gpu/*.glsl gpu/*.h src/synth/btf_*.h src/render/btf_*.h src/rf/btf_*.h)
@@ -195,13 +199,13 @@ FUZZ_SAN     := -fsanitize=address,undefined -fno-sanitize-recover=undefined
 FUZZ_FLAGS   := -g -O1 -fno-omit-frame-pointer -ffp-contract=off -pthread -Wall -Wextra \
                 -DBTF_EXR_MAX_CHUNK_BYTES='(64u << 20)'
 
-$(FUZZ_BUILD)/%.o: %.c $(LIB_H) $(SPIRV_H)
+$(FUZZ_BUILD)/%.o: %.c | $(SPIRV_H)
 	@mkdir -p $(dir $@)
-	clang $(CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link $(FUZZ_SAN) -c $< -o $@
+	clang $(CPPFLAGS) -std=c11 $(FUZZ_FLAGS) $(DEPFLAGS) -fsanitize=fuzzer-no-link $(FUZZ_SAN) -c $< -o $@
 
-$(FUZZ_BUILD)/%.o: %.cpp $(LIB_H)
+$(FUZZ_BUILD)/%.o: %.cpp
 	@mkdir -p $(dir $@)
-	clang++ $(CPPFLAGS) -std=c++17 -I/usr/include/opencv4 $(FUZZ_FLAGS) \
+	clang++ $(CPPFLAGS) -std=c++17 -I/usr/include/opencv4 $(FUZZ_FLAGS) $(DEPFLAGS) \
 	  -fsanitize=fuzzer-no-link $(FUZZ_SAN) -c $< -o $@
 
 $(FUZZ_BUILD)/fuzz_%: tests/fuzz_%.c $(FUZZ_OBJ)
@@ -273,3 +277,6 @@ noise-stream: $(BUILD)/noise_stream
 $(BUILD)/noise_stream: tools/noise_stream.c src/synth/btf_noise.h src/synth/btf_shared.h
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $<
+
+# The compiler's header dependencies (see DEPFLAGS above).
+-include $(shell find $(BUILD) $(FUZZ_BUILD) -name '*.d' 2>/dev/null)

@@ -110,7 +110,7 @@ $(STATIC): $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
-$(EXPORT_MAP): include/btfcar.h tools/public-symbols.sh
+$(EXPORT_MAP): include/btfcar.h $(wildcard include/btfcar/*.h) tools/public-symbols.sh
 	@mkdir -p $(dir $@)
 	CC="$(CC)" sh tools/public-symbols.sh include/btfcar.h --map > $@.tmp
 	mv $@.tmp $@
@@ -230,6 +230,8 @@ install: $(STATIC) $(SHARED) $(CLI)
 	install -m 755 $(SHARED) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
 	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libbtfcar.so
 	install -m 644 include/btfcar.h $(DESTDIR)$(PREFIX)/include/
+	install -d $(DESTDIR)$(PREFIX)/include/btfcar
+	install -m 644 include/btfcar/*.h $(DESTDIR)$(PREFIX)/include/btfcar/
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@REQUIRES_PRIVATE@|$(PC_REQUIRES_PRIVATE)|' \
 	  -e 's|@LIBS_PRIVATE@|$(PC_LIBS_PRIVATE)|' -e 's|@VERSION@|$(shell sed -n 's/.*BTF_VERSION_STRING "\(.*\)"/\1/p' include/btfcar.h)|' \
@@ -245,6 +247,7 @@ check-install: $(STATIC) $(SHARED) $(CLI)
 uninstall:
 	rm -f $(DESTDIR)$(PREFIX)/lib/libbtfcar.a $(DESTDIR)$(PREFIX)/lib/libbtfcar.so* \
 	  $(DESTDIR)$(PREFIX)/include/btfcar.h $(DESTDIR)$(PREFIX)/bin/btfcar \
+	  $(DESTDIR)$(PREFIX)/include/btfcar/*.h \
 	  $(DESTDIR)$(PREFIX)/lib/pkgconfig/btfcar.pc
 
 clean:

@@ -53,8 +53,6 @@ int cli_has_suffix(const char *s, const char *suffix);
  * opened blocking (it would wait for a writer); the reader that follows
  * names what is wrong with the file. */
 size_t cli_read_head(const char *path, unsigned char *buf, size_t n);
-/* 1 when path starts like a reflectance-field model (docs/rf.md). */
-int cli_is_rf_model(const char *path);
 /* An output image by its name: .exr as linear 32-bit float, anything else
  * as 8-bit sRGB PNG (the commands check the suffix first). */
 btf_status cli_write_image(const char *path, const btf_image *img, btf_error *err);

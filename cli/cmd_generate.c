@@ -27,14 +27,14 @@ static const char *const VARIANT_NAMES[] = {"DFMF", "BDIF", "FMF", "FMF", "FMF",
                                             "PVF"};
 
 typedef struct gen_btf {
-    btf_material m;
+    btf_procedural m;
     btf_dirset dirs;
 } gen_btf;
 
 static btf_status render_pair(void *user, int view, int light, btf_image *out, btf_error *err)
 {
     gen_btf *g = user;
-    return btf_material_render(&g->m, g->dirs.dirs[view], g->dirs.dirs[light], out, err);
+    return btf_procedural_render(&g->m, g->dirs.dirs[view], g->dirs.dirs[light], out, err);
 }
 
 /* The material's 81 x 81 images as one .btf file (src/io/ubo_write.c). */
@@ -43,10 +43,10 @@ static int generate_btf(cli_ctx *c, const char *name, const char *path,
 {
     btf_error err = {0};
     gen_btf g;
-    if (btf_material_make(name, o->size, o->seed, &g.m, &err) != 0)
+    if (btf_procedural_make(name, o->size, o->seed, &g.m, &err) != 0)
         return cli_lib_error(c, &err);
     if (btf_dirset_ubo81(&g.dirs, &err) != 0) {
-        btf_material_free(&g.m);
+        btf_procedural_free(&g.m);
         return cli_lib_error(c, &err);
     }
     btf_ubo2014_write_opts wo = btf_ubo2014_write_defaults();
@@ -59,7 +59,7 @@ static int generate_btf(cli_ctx *c, const char *name, const char *path,
     int rc = btf_ubo2014_write(path, &g.dirs, &g.dirs, o->size, o->size, render_pair, &g, &wo,
                                &st, &err);
     btf_dirset_free(&g.dirs);
-    btf_material_free(&g.m);
+    btf_procedural_free(&g.m);
     if (rc != 0)
         return cli_lib_error(c, &err);
     cli_progress_done();
@@ -89,7 +89,7 @@ int cmd_generate(int argc, char **argv)
     int material = -1, format = 0, components = 0;
     cli_opt opts[] = {
         {.name = "--material", .kind = CLI_CHOICE, .dest = &material, .meta = "NAME",
-         .help = "the material", .choices = btf_material_names(), .required = 1},
+         .help = "the material", .choices = btf_procedural_names(), .required = 1},
         {.name = "--size", .kind = CLI_INT, .dest = &o.size, .meta = "N",
          .help = "image side in pixels", .lo = 1, .hi = 8192},
         {.name = "--seed", .kind = CLI_U64, .dest = &o.seed, .meta = "S",
@@ -117,7 +117,7 @@ int cmd_generate(int argc, char **argv)
         return cli_usage_error(&c, "--components needs --format btf, btf-fmf or btf-pvf");
     if (cli_check_output(&c, outdir, format ? BTF_OUTPUT_FILE : BTF_OUTPUT_FOLDER))
         return 1;
-    const char *name = btf_material_names()[material];
+    const char *name = btf_procedural_names()[material];
     o.progress = cli_progress_fn(&c);
     if (format)
         return generate_btf(&c, name, outdir, &o, VARIANTS[format - 1], components);

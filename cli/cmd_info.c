@@ -5,7 +5,8 @@
  * Here: the options, telling a model file from a dataset, the dataset
  * report and the Vulkan device list; the model report is info_model.c's.
  */
-#include "info.h"
+#include "cli.h"
+#include "core/describe.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -69,8 +70,8 @@ static void ubo_text(const btf_ubo2014_info *u)
 static int dataset_text(const btf_dataset_info *in, int verify, const btf_ubo2014_info *u)
 {
     char views[128], lights[128], bytes[64];
-    cli_describe_set(in->views, views, sizeof views);
-    cli_describe_set(in->lights, lights, sizeof lights);
+    txt_describe_set(in->views, views, sizeof views);
+    txt_describe_set(in->lights, lights, sizeof lights);
     cli_format_bytes(in->bytes_on_disk, bytes, sizeof bytes);
     printf("dataset     %s\n", in->root);
     printf("layout      %s\n", btf_layout_name(in->layout));
@@ -103,9 +104,9 @@ static int dataset_json(const btf_dataset_info *in, int verify, const btf_ubo201
 {
     FILE *f = stdout;
     fputs("{\"format\": \"btfcar-dataset\", \"path\": ", f);
-    cli_json_string(f, in->root);
+    txt_json_string(f, in->root);
     fputs(", \"layout\": ", f);
-    cli_json_string(f, btf_layout_name(in->layout));
+    txt_json_string(f, btf_layout_name(in->layout));
     fprintf(f, ",\n \"images\": %d, \"width\": %d, \"height\": %d, \"channels\": %d, "
                "\"file_format\": \"%s\", \"bytes_on_disk\": %llu, \"verified\": %s,\n "
                "\"sparse\": %s, \"near_field\": %s, \"views\": ",
@@ -113,14 +114,14 @@ static int dataset_json(const btf_dataset_info *in, int verify, const btf_ubo201
             u ? "btf" : format_name(in->format), (unsigned long long)in->bytes_on_disk,
             verify ? "true" : "false", in->n_pairs < in->n_views * in->n_lights ? "true" : "false",
             in->near_field ? "true" : "false");
-    cli_json_dirset(f, in->views);
+    txt_json_dirset(f, in->views);
     fputs(",\n \"lights\": ", f);
-    cli_json_dirset(f, in->lights);
+    txt_json_dirset(f, in->lights);
     if (u) {
         fputs(",\n \"btf\": {\"variant\": ", f);
-        cli_json_string(f, u->variant);
+        txt_json_string(f, u->variant);
         fputs(", \"signature\": ", f);
-        cli_json_string(f, u->signature);
+        txt_json_string(f, u->signature);
         fprintf(f, ", \"components\": [%d, %d, %d], \"colour_model\": %d, \"scalar_size\": %d, "
                    "\"cosine_flag\": %d, \"data_bytes\": %llu}",
                 u->components[0], u->components[1], u->components[2], u->colour_model,
@@ -151,25 +152,23 @@ static int info_dataset(cli_ctx *c, const char *path, int verify, int json, uint
 
 /* --------------------------------------------------------------- models */
 
-/* The model signature's first bytes (docs/model-format.md). Only these are
- * compared, so that a file whose line endings a text-mode transfer mangled
- * still goes to the model reader, which says so. */
-static const unsigned char MODEL_STEM[7] = {0x89, 'B', 'T', 'F', 'C', 'A', 'R'};
-
-/* 1 when path is a file that starts like a model; its version and size. */
-static int sniff_model(const char *path, model_file *mf, int *rf)
+/* 1 when path is a file that starts like a model of any family. */
+static int looks_like_model(const char *path)
 {
-    unsigned char head[15] = {0};
-    size_t n = cli_read_head(path, head, sizeof head);
-    *rf = btf_rf_sniff(head, n); /* a reflectance-field model (docs/rf.md) */
-    if (!*rf && (n < sizeof MODEL_STEM || memcmp(head, MODEL_STEM, sizeof MODEL_STEM) != 0))
-        return 0;
-    struct stat st;
-    mf->path = path;
-    mf->major = head[11] | head[12] << 8;
-    mf->minor = head[13] | head[14] << 8;
-    mf->bytes = stat(path, &st) == 0 ? (long long)st.st_size : -1;
-    return 1;
+    unsigned char head[16] = {0};
+    return btf_material_sniff(head, cli_read_head(path, head, sizeof head)) != BTF_FAMILY_NONE;
+}
+
+/* A model of either family: read whole and checked, then described. */
+static int info_model(cli_ctx *c, const char *path, int json)
+{
+    btf_error err = {0};
+    btf_material *m;
+    if (btf_material_read(path, &m, &err) != 0)
+        return cli_lib_error(c, &err);
+    btf_status rc = btf_material_describe(m, stdout, json, &err);
+    btf_material_free(m);
+    return rc ? cli_lib_error(c, &err) : 0;
 }
 
 /* ------------------------------------------------------------ devices */
@@ -179,15 +178,15 @@ static void devices_json(const btf_gpu_device *list, int n)
     printf("{\"devices\": [");
     for (int i = 0; i < n; i++) {
         printf("%s\n  {\"index\": %d, \"type\": ", i ? "," : "", list[i].index);
-        cli_json_string(stdout, list[i].type_name);
+        txt_json_string(stdout, list[i].type_name);
         printf(", \"vulkan\": ");
-        cli_json_string(stdout, list[i].vulkan_version);
+        txt_json_string(stdout, list[i].vulkan_version);
         printf(", \"max_storage_buffer_bytes\": %llu, \"device_local_bytes\": %llu, "
                "\"storage_16bit\": %s, \"usable\": %s, \"name\": ",
                (unsigned long long)list[i].max_buffer_bytes,
                (unsigned long long)list[i].device_local_bytes,
                list[i].storage_16bit ? "true" : "false", list[i].usable ? "true" : "false");
-        cli_json_string(stdout, list[i].name);
+        txt_json_string(stdout, list[i].name);
         printf("}");
     }
     printf("%s]}\n", n ? "\n" : "");
@@ -272,10 +271,8 @@ int cmd_info(int argc, char **argv)
                     : info_devices(&c, json);
     if (!path)
         return cli_usage_error(&c, "DATASET or MODEL is required");
-    model_file mf;
-    int rf = 0;
-    if (sniff_model(path, &mf, &rf))
-        return rf ? cli_info_rf(&c, &mf, json) : cli_info_model(&c, &mf, json);
+    if (looks_like_model(path))
+        return info_model(&c, path, json);
     /* A file named like a model that does not start like one: say what the
      * model reader finds, rather than trying it as a manifest. */
     size_t len = strlen(path);

@@ -69,143 +69,128 @@ static btf_status side_by_side(const btf_image *a, const btf_image *b, btf_image
     return BTF_OK;
 }
 
-/* The reflectance-field render on the chosen backend: flat, or a scene. */
-static btf_status rf_render_on(btf_gpu *gpu, const btf_rf_model *m, const btf_scene *scene,
-                               btf_dir view, btf_dir light, int width, int height, int threads,
-                               btf_image *img, btf_render_info *info, btf_error *err)
+/* The backend --backend and --device ask for (auto: a real GPU if there is
+ * one, else the CPU, NULL); NULL with *rc set when the GPU asked for is not
+ * there. */
+static btf_gpu *open_backend(const char *backend, int device, btf_status *rc, btf_error *err)
 {
-    if (gpu && scene)
-        return btf_gpu_rf_render_scene(gpu, m, scene, width, height, threads, img, info, err);
-    if (gpu)
-        return btf_gpu_rf_render_flat(gpu, m, view, light, width, height, img, info, err);
-    if (scene)
-        return btf_rf_render_scene(m, scene, width, height, threads, img, info, err);
-    double t = cli_now();
-    btf_status rc = btf_rf_render_flat(m, view, light, width, height, threads, img, err);
-    info->shade_s = cli_now() - t;
+    btf_gpu *gpu = cli_open_gpu(backend, device, err);
+    if (!gpu && (!strcmp(backend, "gpu") || device >= 0))
+        *rc = err->code ? err->code : BTF_E_UNSUPPORTED;
+    else if (!gpu)
+        *err = (btf_error){0}; /* auto: the CPU runs, the GPU's reason is spent */
+    return gpu;
+}
+
+/* What the render did and how long each step took. A material that
+ * synthesises its textures times that step; one that does not (a
+ * reflectance field) has only an upload on the GPU, and traces only for a
+ * scene. */
+static void print_times(const btf_material *m, int flat, const char *gpu_name,
+                        const btf_render_info *info, double t_read, double t_write,
+                        double t_start)
+{
+    btf_material_info mi;
+    btf_material_get_info(m, &mi);
+    int synthesises = (mi.caps & BTF_MATERIAL_SYNTHESISES) != 0;
+    printf("backend %s (%s): model read %.3f s, ", gpu_name ? "gpu" : "cpu",
+           gpu_name ? gpu_name : "cpu", t_read);
+    if (synthesises || !flat)
+        printf("trace %.3f s, ", info->trace_s);
+    if (synthesises || gpu_name)
+        printf("%s %.3f s, ", !synthesises ? "upload" : gpu_name ? "synthesis pass" : "synthesis",
+               info->synth_s);
+    printf("%s %.3f s, write %.3f s; total %.3f s\n", gpu_name ? "render pass" : "shade",
+           info->shade_s, t_write, cli_now() - t_start);
+}
+
+/* --beside: [measured | model] into *img; the measured image is freed. */
+static btf_status lay_beside(btf_image *measured, btf_image *img, btf_error *err)
+{
+    btf_image both = {0};
+    btf_status rc = side_by_side(measured, img, &both, err);
+    btf_image_free(img);
+    btf_image_free(measured);
+    *img = both;
     return rc;
 }
 
-/* What an RF render prints: the views blended (flat) and the passes. */
-static void rf_report_times(const btf_rf_model *m, int flat, btf_dir view, const char *gpu_name,
-                            const btf_render_info *info, double t_read, double t_write,
-                            double t_start)
+/* The material's own options: a model that does not synthesise its textures
+ * (a reflectance field keeps its texels, which repeat across the surface)
+ * has nothing for --texture-size and --all-subspaces to act on. */
+static int check_material_options(cli_ctx *c, const char *path, const btf_material *m,
+                                  const btf_render_opts *ro)
 {
-    if (flat && m->fit == BTF_RF_LAFORTUNE) {
-        printf("reflectance-field model (lafortune): evaluated at the view itself\n");
-    } else if (flat) {
-        int idx[4];
-        double w[4];
-        btf_rf_view_weights(&m->views, view, idx, w);
-        printf("reflectance-field model (%s): views", btf_rf_fit_name(m->fit));
-        for (int i = 0; i < 4; i++)
-            if (w[i] != 0.0)
-                printf(" %d (%g, %g) x %.4f", idx[i], m->views.dirs[idx[i]].theta,
-                       m->views.dirs[idx[i]].phi, w[i]);
-        printf("\n");
-    } else {
-        printf("reflectance-field model (%s): per pixel the four closest measured views at "
-               "the exact light\n", btf_rf_fit_name(m->fit));
-    }
-    if (gpu_name)
-        printf("backend gpu (%s): model read %.3f s, ", gpu_name, t_read);
-    else
-        printf("backend cpu: model read %.3f s, ", t_read);
-    if (!flat)
-        printf("trace %.3f s, ", info->trace_s);
-    if (gpu_name)
-        printf("upload %.3f s, render pass %.3f s, ", info->synth_s, info->shade_s);
-    else
-        printf("shade %.3f s, ", info->shade_s);
-    printf("write %.3f s; total %.3f s\n", t_write, cli_now() - t_start);
+    btf_material_info mi;
+    btf_material_get_info(m, &mi);
+    if (!(mi.caps & BTF_MATERIAL_SYNTHESISES) && (ro->texture_size || ro->all_subspaces))
+        return cli_usage_error(c, "%s is a reflectance-field model: %s applies to the CAR "
+                               "model's synthesised textures only", path,
+                               ro->texture_size ? "--texture-size" : "--all-subspaces");
+    return -1;
 }
 
-/* Whether the model has what the renderer interpolates over: view and
- * light direction sets it can triangulate (at most BTF_HEMISPHERE_MAX_POINTS,
- * no two the same, not all on one line; a set of 1 or 2 directions, one
- * camera over a dome, is made a triangle by the renderer's ghost
- * directions, docs/render.md "Sparse pair sets"). Checked here, not left to
- * the renderer, whose messages cannot name the file they have not seen. */
-static btf_status model_renders(const char *path, const btf_model *m, btf_error *err)
-{
-    if (!m->index || m->views.count < 1 || m->lights.count < 1)
-        return cli_set_error(err, BTF_E_ARG, "%s: the model is a single texture: it has no "
-                             "view and light directions to render with (analyse a BTF "
-                             "dataset)", path);
-    const btf_dirset *sets[2] = {&m->views, &m->lights};
-    for (int i = 0; i < 2; i++) {
-        btf_hemisphere *h = NULL;
-        btf_error why = {0};
-        if (sets[i]->count < 3)
-            continue;
-        if (btf_hemisphere_build(sets[i], &h, &why) != BTF_OK)
-            return cli_set_error(err, why.code, "%s: its %s cannot be rendered: %s", path,
-                                 i ? "lights" : "views", why.msg);
-        btf_hemisphere_free(h);
-    }
-    return BTF_OK;
-}
-
-/* The render of a reflectance-field model (Meseth et al. 2003, section
- * 5.4: the four closest measured views at the exact light), flat (with
- * --beside as for a CAR model) or a scene (scene_path), on the CPU or on
- * a Vulkan device as the CAR model's render chooses it (--backend,
- * --device, BTF_VK_DEVICE; auto: a real GPU only). */
-static int render_rf(cli_ctx *c, const char *model, const char *scene_path, btf_dir view,
-                     btf_dir light, const char *beside, const char *out_path, int width,
-                     int height, int threads, const char *backend, int device, double t_start)
+/* Reads the model and the scene, renders on the chosen backend, lays the
+ * measured image beside, writes: one sequence for every model family
+ * (btfcar/material.h). */
+static int render_material(cli_ctx *c, const char *model, const char *scene_path,
+                           btf_dir view, btf_dir light, const char *beside, const char *out_path,
+                           btf_render_opts *ro, const char *backend, int device, double t_start)
 {
     btf_error err = {0};
     btf_scene scene;
     memset(&scene, 0, sizeof scene);
     if (scene_path && btf_scene_load(scene_path, &scene, &err) != 0)
         return cli_lib_error(c, &err);
-    btf_rf_model m;
+    btf_material *m;
     double t_read = cli_now();
-    if (btf_rf_read(model, &m, &err) != 0) {
+    if (btf_material_read(model, &m, &err) != 0) {
         btf_scene_free(&scene);
         return cli_lib_error(c, &err);
     }
     t_read = cli_now() - t_read;
+    int urc = check_material_options(c, model, m, ro);
+    if (urc >= 0) {
+        btf_material_free(m);
+        btf_scene_free(&scene);
+        return urc;
+    }
     btf_image img = {0}, measured = {0};
     btf_status rc = beside ? read_measured(beside, view, light, &measured, &err) : BTF_OK;
-    if (rc == BTF_OK && width == 0) /* no --size: the measured image's, else the default */
-        width = beside ? measured.width : DEFAULT_SIDE, height = beside ? measured.height : DEFAULT_SIDE;
-    btf_gpu *gpu = rc == BTF_OK ? cli_open_gpu(backend, device, &err) : NULL;
-    if (rc == BTF_OK && !gpu && (!strcmp(backend, "gpu") || device >= 0))
-        rc = err.code ? err.code : BTF_E_UNSUPPORTED;
-    else if (rc == BTF_OK && !gpu)
-        err = (btf_error){0}; /* auto: the CPU runs, the GPU's reason is spent */
+    if (rc == BTF_OK && ro->width == 0) { /* no --size: the measured image's, else the default */
+        ro->width = beside ? measured.width : DEFAULT_SIDE;
+        ro->height = beside ? measured.height : DEFAULT_SIDE;
+    }
+    btf_gpu *gpu = rc == BTF_OK ? open_backend(backend, device, &rc, &err) : NULL;
     char devname[300];
     snprintf(devname, sizeof devname, "%s", gpu ? btf_gpu_device_name(gpu) : "cpu");
     int used_gpu = gpu != NULL;
-    btf_render_info info = {0};
+    btf_render_info info;
+    memset(&info, 0, sizeof info);
     if (rc == BTF_OK)
-        rc = rf_render_on(gpu, &m, scene_path ? &scene : NULL, view, light, width, height,
-                          threads, &img, &info, &err);
+        rc = scene_path ? btf_material_render_scene(m, gpu, &scene, ro, &img, &info, &err)
+                        : btf_material_render_flat(m, gpu, view, light, ro, &img, &info, &err);
     if (rc == BTF_OK && gpu && btf_gpu_validation_errors(gpu))
         rc = cli_set_error(&err, BTF_E_UNSUPPORTED, "Vulkan validation: %s",
                            btf_gpu_first_validation_message(gpu));
     btf_gpu_close(gpu);
-    btf_scene_free(&scene);
-    if (rc == BTF_OK && beside) {
-        btf_image both = {0};
-        rc = side_by_side(&measured, &img, &both, &err);
-        btf_image_free(&img);
-        img = both;
-    }
+    if (rc == BTF_OK && beside)
+        rc = lay_beside(&measured, &img, &err);
     btf_image_free(&measured);
     double t_write = cli_now();
     if (rc == BTF_OK)
         rc = cli_write_image(out_path, &img, &err);
     t_write = cli_now() - t_write;
     if (rc == BTF_OK && !c->quiet) {
-        rf_report_times(&m, !scene_path, view, used_gpu ? devname : NULL, &info, t_read, t_write,
-                        t_start);
+        char note[512];
+        btf_material_render_note(m, scene_path ? &scene : NULL, view, &info, note, sizeof note);
+        printf("%s\n", note);
+        print_times(m, !scene_path, used_gpu ? devname : NULL, &info, t_read, t_write, t_start);
         printf("rendered %dx%d into %s\n", img.width, img.height, out_path);
     }
     btf_image_free(&img);
-    btf_rf_model_free(&m);
+    btf_material_free(m);
+    btf_scene_free(&scene);
     if (rc) {
         if (!strchr(err.msg, ':')) { /* name the model when the library could not */
             char why[sizeof err.msg];
@@ -285,96 +270,9 @@ int cmd_render(int argc, char **argv)
         return cli_usage_error(&c, "--device names a Vulkan device; it does not go with --backend cpu");
     if (cli_check_output(&c, out_path, BTF_OUTPUT_FILE))
         return 1;
-    if (cli_is_rf_model(model)) {
-        /* the CAR model's texture and synthesis options have nothing to act
-         * on: an RF model keeps its texels, which repeat across the surface */
-        if (ro.texture_size || all)
-            return cli_usage_error(&c, "%s is a reflectance-field model: %s applies to the CAR "
-                                   "model's synthesised textures only", model,
-                                   ro.texture_size ? "--texture-size" : "--all-subspaces");
-        return render_rf(&c, model, scene_path, view.dir, light.dir, beside, out_path, size[0],
-                         size[1], ro.threads, backends[backend], device, t_start);
-    }
     ro.width = size[0];
     ro.height = size[1];
     ro.all_subspaces = all;
-    btf_error err = {0};
-    btf_scene scene;
-    memset(&scene, 0, sizeof scene);
-    if (scene_path && btf_scene_load(scene_path, &scene, &err) != 0)
-        return cli_lib_error(&c, &err);
-    btf_model m;
-    double t_read = cli_now();
-    if (btf_model_read(model, &m, &err) != 0) {
-        btf_scene_free(&scene);
-        return cli_lib_error(&c, &err);
-    }
-    t_read = cli_now() - t_read;
-    if (model_renders(model, &m, &err) != BTF_OK) {
-        btf_model_free(&m);
-        btf_scene_free(&scene);
-        return cli_lib_error(&c, &err);
-    }
-    btf_image img = {0}, measured = {0};
-    if (beside && read_measured(beside, view.dir, light.dir, &measured, &err) != 0) {
-        btf_model_free(&m);
-        return cli_lib_error(&c, &err);
-    }
-    if (size[0] == 0) { /* no --size: the measured image's, else the default */
-        ro.width = beside ? measured.width : DEFAULT_SIDE;
-        ro.height = beside ? measured.height : DEFAULT_SIDE;
-    }
-    btf_render_info info;
-    memset(&info, 0, sizeof info);
-    btf_gpu *gpu = cli_open_gpu(backends[backend], device, &err);
-    btf_status rc = BTF_OK;
-    if (!gpu && (backend == 1 || device >= 0))
-        rc = err.code ? err.code : BTF_E_UNSUPPORTED;
-    else if (!gpu)
-        err = (btf_error){0}; /* auto: the CPU runs, the GPU's reason is spent */
-    char devname[300];
-    snprintf(devname, sizeof devname, "%s", gpu ? btf_gpu_device_name(gpu) : "cpu");
-    if (rc == BTF_OK && gpu)
-        rc = flat ? btf_gpu_render_flat(gpu, &m, view.dir, light.dir, &ro, &img, &info, &err)
-                  : btf_gpu_render_scene(gpu, &m, &scene, &ro, &img, &info, &err);
-    else if (rc == BTF_OK)
-        rc = flat ? btf_render_flat(&m, view.dir, light.dir, &ro, &img, &info, &err)
-                  : btf_render_scene(&m, &scene, &ro, &img, &info, &err);
-    if (rc == BTF_OK && gpu && btf_gpu_validation_errors(gpu))
-        rc = cli_set_error(&err, BTF_E_UNSUPPORTED, "Vulkan validation: %s",
-                           btf_gpu_first_validation_message(gpu));
-    int used_gpu = gpu != NULL;
-    btf_gpu_close(gpu);
-    if (rc == BTF_OK && beside) {
-        btf_image both = {0};
-        rc = side_by_side(&measured, &img, &both, &err);
-        btf_image_free(&img);
-        img = both;
-    }
-    btf_image_free(&measured);
-    double t_write = cli_now();
-    if (rc == BTF_OK)
-        rc = cli_write_image(out_path, &img, &err);
-    t_write = cli_now() - t_write;
-    btf_image_free(&img);
-    btf_model_free(&m);
-    btf_scene_free(&scene);
-    if (rc) {
-        if (!strchr(err.msg, ':')) { /* name the model when the library could not */
-            char why[sizeof err.msg];
-            snprintf(why, sizeof why, "%s", err.msg);
-            cli_set_error(&err, rc, "%s: %s", model, why);
-        }
-        return cli_lib_error(&c, &err);
-    }
-    if (!c.quiet) {
-        printf("subspaces: %d needed of %d (tileable, %dx%d texels)\n", info.needed, info.total,
-               info.texture_size, info.texture_size);
-        printf("backend %s (%s): model read %.3f s, trace %.3f s, %s %.3f s, %s %.3f s, "
-               "write %.3f s; total %.3f s\n", used_gpu ? "gpu" : "cpu", devname, t_read,
-               info.trace_s, used_gpu ? "synthesis pass" : "synthesis", info.synth_s,
-               used_gpu ? "render pass" : "shade", info.shade_s, t_write, cli_now() - t_start);
-        printf("rendered %dx%d into %s\n", ro.width, ro.height, out_path);
-    }
-    return 0;
+    return render_material(&c, model, scene_path, view.dir, light.dir, beside, out_path, &ro,
+                           backends[backend], device, t_start);
 }

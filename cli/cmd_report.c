@@ -309,10 +309,6 @@ int cmd_report(int argc, char **argv)
         return prc;
     if (cli_check_output(&c, out, BTF_OUTPUT_FOLDER))
         return 1;
-    int rf = cli_is_rf_model(args[1]);
-    if (rf && (ro.sweep || gk.given || gl.given || gn.given || gr.given || so->n_plain))
-        return cli_usage_error(&c, "%s is a reflectance-field model: --sweep varies the CAR "
-                               "analysis and does not apply", args[1]);
     so->resume_only |= mf.n > 0;
     if ((so->share_count || so->resume_only) && !ro.sweep)
         return cli_usage_error(&c, "--points and --merge go with --sweep");
@@ -321,17 +317,22 @@ int cmd_report(int argc, char **argv)
                                "one or the other");
     btf_error err = {0};
     double t0 = cli_now();
-    btf_model m;
-    btf_rf_model rm;
-    memset(&m, 0, sizeof m);
-    memset(&rm, 0, sizeof rm);
-    if ((rf ? btf_rf_read(args[1], &rm, &err) : btf_model_read(args[1], &m, &err)) != 0)
+    btf_material *m;
+    if (btf_material_read(args[1], &m, &err) != 0)
         return cli_lib_error(&c, &err);
+    btf_material_info mi;
+    btf_material_get_info(m, &mi);
+    /* the sweep varies the analysis of a model that synthesises its textures */
+    if (!(mi.caps & BTF_MATERIAL_SYNTHESISES) &&
+        (ro.sweep || gk.given || gl.given || gn.given || gr.given || so->n_plain)) {
+        btf_material_free(m);
+        return cli_usage_error(&c, "%s is a reflectance-field model: --sweep varies the CAR "
+                               "analysis and does not apply", args[1]);
+    }
     btf_dataset_opts dopts = {.progress = cli_progress_fn(&c), .max_pixels = max_pixels};
     btf_dataset *ds;
     if (btf_dataset_open(args[0], &dopts, &ds, &err) != 0) {
-        btf_model_free(&m);
-        btf_rf_model_free(&rm);
+        btf_material_free(m);
         return cli_lib_error(&c, &err);
     }
     ro.dataset_name = args[0];
@@ -346,24 +347,22 @@ int cmd_report(int argc, char **argv)
     if (mf.n > 0 && gather(&c, &mf, out, &err)) {
         btf_gpu_close(gpu);
         btf_dataset_close(ds);
-        btf_model_free(&m);
+        btf_material_free(m);
         return 1;
     }
     if (so->share_count) {
         int rc = sweep_share(&c, ds, out, &ro, &err, t0);
         btf_gpu_close(gpu);
         btf_dataset_close(ds);
-        btf_model_free(&m);
+        btf_material_free(m);
         return rc;
     }
     btf_report_summary sum;
-    int rc = rf ? btf_rf_report_write(ds, &rm, out, &ro, &sum, &err)
-                : btf_report_write(ds, &m, out, &ro, &sum, &err);
+    int rc = btf_material_report_write(ds, m, out, &ro, &sum, &err);
     cli_progress_done();
     btf_gpu_close(gpu);
     btf_dataset_close(ds);
-    btf_model_free(&m);
-    btf_rf_model_free(&rm);
+    btf_material_free(m);
     if (rc)
         return cli_lib_error(&c, &err);
     if (!c.quiet) {
@@ -376,7 +375,7 @@ int cmd_report(int argc, char **argv)
             printf("held out      mean combined distance %.2f over %d pair%s the model did "
                    "not measure\n", sum.mean_held_out, sum.held_out,
                    sum.held_out == 1 ? "" : "s");
-        if (rf)
+        if (sum.mean_luminance > 0) /* a pixel-wise family's figure */
             printf("pixel-wise    mean |dY| %.5f over every image (%.1f %% of the mean "
                    "luminance %.4f)\n", sum.mean_abs_error,
                    sum.mean_luminance > 0 ? 100.0 * sum.mean_abs_error / sum.mean_luminance

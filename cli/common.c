@@ -1,6 +1,7 @@
 /* common.c — what every command shares (declared in cli.h): error and usage
  * messages, number and size parsing, the progress bar, byte counts as text. */
 #include "cli.h"
+#include "core/describe.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -194,41 +195,9 @@ double cli_now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* The bytes a well-formed UTF-8 sequence continues with after lead byte b:
- * the range of the first continuation byte (narrower after E0, ED, F0, F4:
- * no overlong forms, no surrogates, nothing past U+10FFFF) and the count. */
-static int utf8_expect(unsigned b, unsigned *lo, unsigned *hi)
-{
-    *lo = 0x80;
-    *hi = 0xBF;
-    if (b >= 0xC2 && b <= 0xDF)
-        return 1;
-    if (b >= 0xE0 && b <= 0xEF) {
-        *lo = b == 0xE0 ? 0xA0 : 0x80;
-        *hi = b == 0xED ? 0x9F : 0xBF;
-        return 2;
-    }
-    if (b >= 0xF0 && b <= 0xF4) {
-        *lo = b == 0xF0 ? 0x90 : 0x80;
-        *hi = b == 0xF4 ? 0x8F : 0xBF;
-        return 3;
-    }
-    return -1;
-}
-
 int cli_utf8_length(const char *s)
 {
-    const unsigned char *p = (const unsigned char *)s;
-    if (*p < 0x80)
-        return 1;
-    unsigned lo, hi;
-    int more = utf8_expect(*p, &lo, &hi);
-    if (more < 0 || p[1] < lo || p[1] > hi)
-        return 0;
-    for (int i = 2; i <= more; i++)
-        if (p[i] < 0x80 || p[i] > 0xBF)
-            return 0;
-    return more + 1;
+    return txt_utf8_length(s);
 }
 
 char *cli_utf8_copy(const char *s)
@@ -386,12 +355,6 @@ size_t cli_read_head(const char *path, unsigned char *buf, size_t n)
     ssize_t r = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) ? read(fd, buf, n) : 0;
     close(fd);
     return r > 0 ? (size_t)r : 0;
-}
-
-int cli_is_rf_model(const char *path)
-{
-    unsigned char head[16];
-    return btf_rf_sniff(head, cli_read_head(path, head, sizeof head));
 }
 
 btf_status cli_write_image(const char *path, const btf_image *img, btf_error *err)

@@ -448,7 +448,7 @@ const btf_ubo2014_info *btf_dataset_ubo2014(const btf_dataset *ds);
 
 /* A material: a periodic height field (in texel units) with an albedo and the
  * parameters of its reflectance (Lambertian + one specular lobe). */
-typedef struct btf_material {
+typedef struct btf_procedural {
     char name[32];
     int size;               /* width = height = size texels */
     float *height;          /* size*size, texel units, periodic */
@@ -458,19 +458,19 @@ typedef struct btf_material {
     float shininess;        /* Blinn-Phong exponent of the lobe */
     float fresnel0;         /* reflectance of the coat at normal incidence (0: none) */
     float ambient;          /* fraction of light reaching shadowed points */
-} btf_material;
+} btf_procedural;
 
 /* Names of the built-in materials, NULL-terminated: leather, fabric, wood. */
-const char *const *btf_material_names(void);
-btf_status btf_material_make(const char *name, int size, uint64_t seed, btf_material *m,
+const char *const *btf_procedural_names(void);
+btf_status btf_procedural_make(const char *name, int size, uint64_t seed, btf_procedural *m,
                              btf_error *err);
-void btf_material_free(btf_material *m);
+void btf_procedural_free(btf_procedural *m);
 
 /* Renders the rectified image the BTF measures for one (view, light) pair:
  * for every texel of the reference plane, the view ray finds the visible
  * surface point (masking, parallax), which is lit by the light unless the
  * height field casts a shadow on it. Output: linear RGB, size x size. */
-btf_status btf_material_render(const btf_material *m, btf_dir view, btf_dir light,
+btf_status btf_procedural_render(const btf_procedural *m, btf_dir view, btf_dir light,
                                btf_image *out, btf_error *err);
 
 typedef struct btf_generate_opts {
@@ -2329,4 +2329,8 @@ int btf_rf_sniff(const unsigned char *data, size_t size);
 #endif
 
 #pragma GCC visibility pop
+
+/* One interface over the model families. */
+#include "btfcar/material.h"
+
 #endif /* BTFCAR_H */

@@ -81,7 +81,7 @@ static int parse_k(const char *s, int k[3])
 }
 
 typedef struct src_material {
-    btf_material m;
+    btf_procedural m;
     const btf_dirset *d;
 } src_material;
 
@@ -91,7 +91,7 @@ typedef struct src_material {
 static btf_status render_model11(void *user, int view, int light, btf_image *out, btf_error *err)
 {
     src_material *s = user;
-    btf_status rc = btf_material_render(&s->m, s->d->dirs[view], s->d->dirs[light], out, err);
+    btf_status rc = btf_procedural_render(&s->m, s->d->dirs[view], s->d->dirs[light], out, err);
     if (rc)
         return rc;
     long n = (long)out->width * out->height;
@@ -128,7 +128,7 @@ static int write_file(const char *path, int size, const int kreq[3], int src)
 
     /* 1. The small material, factorised by the writer. */
     src_material sm = {.d = &d};
-    if (btf_material_make("leather", src, 1, &sm.m, &err)) {
+    if (btf_procedural_make("leather", src, 1, &sm.m, &err)) {
         fprintf(stderr, "bench_btf: %s\n", err.msg);
         return 1;
     }
@@ -141,7 +141,7 @@ static int write_file(const char *path, int size, const int kreq[3], int src)
         return 1;
     }
     double tf = tu_now() - t0;
-    btf_material_free(&sm.m);
+    btf_procedural_free(&sm.m);
 
     /* 2. Its factors: channel c's first k[c] columns, S x V tiled to size^2. */
     ubo_open_file *o;

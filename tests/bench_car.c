@@ -22,12 +22,12 @@
 /* A rough 256^2 texture: a procedural material rendered frontally. */
 static int texture(btf_image *img, btf_error *e)
 {
-    btf_material m;
-    if (btf_material_make("leather", 256, 3, &m, e))
+    btf_procedural m;
+    if (btf_procedural_make("leather", 256, 3, &m, e))
         return -1;
     btf_dir v = {0, 0}, l = {30, 45};
-    int rc = btf_material_render(&m, v, l, img, e);
-    btf_material_free(&m);
+    int rc = btf_procedural_render(&m, v, l, img, e);
+    btf_procedural_free(&m);
     return rc;
 }
 

@@ -85,13 +85,13 @@ int main(void)
     if (!getenv("VK_DRIVER_FILES"))
         setenv("VK_DRIVER_FILES", icd, 1);
     btf_error e = {0};
-    btf_material mat;
+    btf_procedural mat;
     btf_image img;
     btf_model tex;
     btf_fit_opts fo = {.levels = 3};
     btf_neighbourhood_parse("0:-1,-1:0,-1:-1,-1:1", fo.car.fixed, &fo.car.n_fixed, &e);
-    if (btf_material_make("leather", 256, 3, &mat, &e) ||
-        btf_material_render(&mat, (btf_dir){0, 0}, (btf_dir){30, 45}, &img, &e) ||
+    if (btf_procedural_make("leather", 256, 3, &mat, &e) ||
+        btf_procedural_render(&mat, (btf_dir){0, 0}, (btf_dir){30, 45}, &img, &e) ||
         btf_texture_fit(&img, &fo, &tex, &e)) {
         fprintf(stderr, "bench_gpu: %s\n", e.msg);
         return 1;
@@ -149,6 +149,6 @@ int main(void)
     free(m.subspaces);
     btf_model_free(&tex);
     btf_image_free(&img);
-    btf_material_free(&mat);
+    btf_procedural_free(&mat);
     return 0;
 }

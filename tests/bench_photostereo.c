@@ -37,11 +37,11 @@ static double median(double *t, int n)
 
 static int render(btf_image *imgs, double *L, int *n, btf_error *err)
 {
-    btf_material m;
+    btf_procedural m;
     btf_dirset set;
     btf_view_map *vm = NULL;
     btf_dir v = {0, 0};
-    int rc = btf_material_make("leather", SIZE, 1, &m, err);
+    int rc = btf_procedural_make("leather", SIZE, 1, &m, err);
     if (rc)
         return rc;
     if ((rc = btf_dirset_ubo81(&set, err)) == 0) {
@@ -57,7 +57,7 @@ static int render(btf_image *imgs, double *L, int *n, btf_error *err)
         btf_dirset_free(&set);
     }
     btf_view_map_free(vm);
-    btf_material_free(&m);
+    btf_procedural_free(&m);
     return rc;
 }
 

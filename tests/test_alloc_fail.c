@@ -533,8 +533,8 @@ static size_t analysed_size;
 static void make_dataset(const char *dir)
 {
     btf_error e = {0};
-    btf_material mat;
-    TU_OK(btf_material_make("leather", DS_SIZE, 3, &mat, &e), &e);
+    btf_procedural mat;
+    TU_OK(btf_procedural_make("leather", DS_SIZE, 3, &mat, &e), &e);
     snprintf(manifest, sizeof manifest, "%s/list.tsv", dir);
     FILE *f = fopen(manifest, "w");
     assert_non_null(f);
@@ -542,13 +542,13 @@ static void make_dataset(const char *dir)
     for (int l = 0; l < DS_LIGHTS; l++) {
         btf_dir light = {l < 3 ? 30 : 60, 120.0 * (l % 3) + (l < 3 ? 0 : 60)};
         btf_image img;
-        TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, light, &img, &e), &e);
+        TU_OK(btf_procedural_render(&mat, (btf_dir){0, 0}, light, &img, &e), &e);
         TU_OK(btf_image_write_exr(tu_fmt("%s/l%d.exr", dir, l), &img, 0, &e), &e);
         fprintf(f, "l%d.exr\t%g\t%g\t0\t0\n", l, light.theta, light.phi);
         btf_image_free(&img);
     }
     assert_int_equal(fclose(f), 0);
-    btf_material_free(&mat);
+    btf_procedural_free(&mat);
 }
 
 static btf_fit_opts texture_fit_opts(void)

@@ -27,9 +27,9 @@ static void make_dataset(const char *where, int width, int height, char *manifes
     char dir[4096];
     snprintf(dir, sizeof dir, "%s", where); /* tu_fmt's slots get reused */
     btf_error e = {0};
-    btf_material mat;
+    btf_procedural mat;
     int side = width > height ? width : height;
-    TU_OK(btf_material_make("leather", side, 5, &mat, &e), &e);
+    TU_OK(btf_procedural_make("leather", side, 5, &mat, &e), &e);
     mkdir(dir, 0777);
     snprintf(manifest, n, "%s/list.tsv", dir);
     FILE *f = fopen(manifest, "w");
@@ -38,7 +38,7 @@ static void make_dataset(const char *where, int width, int height, char *manifes
     for (int l = 0; l < N_LIGHTS; l++) {
         btf_dir light = {LIGHT_THETA[l / 4], 90.0 * (l % 4) + 20.0 * (l / 4)};
         btf_image full, img;
-        TU_OK(btf_material_render(&mat, (btf_dir){0, 0}, light, &full, &e), &e);
+        TU_OK(btf_procedural_render(&mat, (btf_dir){0, 0}, light, &full, &e), &e);
         TU_OK(btf_image_alloc(&img, width, height, 3, &e), &e);
         for (int y = 0; y < height; y++)
             memcpy(img.data + (size_t)y * width * 3, full.data + (size_t)y * side * 3,
@@ -49,7 +49,7 @@ static void make_dataset(const char *where, int width, int height, char *manifes
         btf_image_free(&img);
     }
     assert_int_equal(fclose(f), 0);
-    btf_material_free(&mat);
+    btf_procedural_free(&mat);
 }
 
 static char wide[4096], tall[4096]; /* manifests: 48 x 20 and 20 x 48 */

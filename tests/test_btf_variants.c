@@ -145,14 +145,14 @@ static void test_round_trip_from_images(void **state)
 /* ------------------------------------ a generated material, twin of UBO2003 */
 
 typedef struct material_src {
-    btf_material m;
+    btf_procedural m;
     btf_dirset d;
 } material_src;
 
 static btf_status render_pair(void *user, int v, int l, btf_image *out, btf_error *err)
 {
     material_src *s = user;
-    return btf_material_render(&s->m, s->d.dirs[v], s->d.dirs[l], out, err);
+    return btf_procedural_render(&s->m, s->d.dirs[v], s->d.dirs[l], out, err);
 }
 
 /* The fabric at 8^2 written in every FMF and PVF signature (and with the
@@ -170,7 +170,7 @@ static void test_generated_twins(void **state)
     snprintf(twin_path, sizeof twin_path, "%s", twin);
     btf_dataset *b = open_ok(twin_path);
     material_src src;
-    assert_int_equal(btf_material_make("fabric", 8, 3, &src.m, NULL), 0);
+    assert_int_equal(btf_procedural_make("fabric", 8, 3, &src.m, NULL), 0);
     assert_int_equal(btf_dirset_ubo81(&src.d, NULL), 0);
     static const variant_case cases[] = {
         {BTF_UBO2014_FMF, "!FMF12FCER", 2, 64, 0}, {BTF_UBO2014_FMF_LOG, "!FMF12FCER", 2, 64, 1},
@@ -223,7 +223,7 @@ static void test_generated_twins(void **state)
     }
     btf_dataset_close(b);
     btf_dirset_free(&src.d);
-    btf_material_free(&src.m);
+    btf_procedural_free(&src.m);
     /* the command line writes the same variants */
     for (int f = 0; f < 2; f++) {
         const char *fmt = f ? "btf-pvf" : "btf-fmf";

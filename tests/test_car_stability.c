@@ -303,7 +303,7 @@ static void reasons_name_the_recursion(void **state)
 static void generated_materials_bands(void **state)
 {
     (void)state;
-    const char *const *names = btf_material_names();
+    const char *const *names = btf_procedural_names();
     int materials = 0;
     for (int k = 0; names[k]; k++, materials++) {
         char path[512];

@@ -64,8 +64,8 @@ static int setup(void **state)
 {
     tu_setup_dir(state);
     btf_error e = {0};
-    btf_material mat;
-    TU_OK(btf_material_make("leather", SIDE, 5, &mat, &e), &e);
+    btf_procedural mat;
+    TU_OK(btf_procedural_make("leather", SIDE, 5, &mat, &e), &e);
     FILE *f1 = open_manifest(x1, sizeof x1, "x1");
     FILE *f1000 = open_manifest(x1000, sizeof x1000, "x1000");
     FILE *fo = open_manifest(over, sizeof over, "over");
@@ -73,7 +73,7 @@ static int setup(void **state)
         for (int l = 0; l < N_LIGHTS; l++) {
             btf_dir light = light_dir(l);
             btf_image img, half;
-            TU_OK(btf_material_render(&mat, VIEWS[v], light, &img, &e), &e);
+            TU_OK(btf_procedural_render(&mat, VIEWS[v], light, &img, &e), &e);
             char name[64], path[4096], scaled[80];
             snprintf(name, sizeof name, "v%d_l%02d", v, l);
             snprintf(path, sizeof path, "%s/%s.exr", tu_dir, name);
@@ -97,7 +97,7 @@ static int setup(void **state)
     assert_int_equal(fclose(f1), 0);
     assert_int_equal(fclose(f1000), 0);
     assert_int_equal(fclose(fo), 0);
-    btf_material_free(&mat);
+    btf_procedural_free(&mat);
     return 0;
 }
 

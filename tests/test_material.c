@@ -43,22 +43,22 @@ static double image_mean(const btf_image *img)
     return s / (double)n;
 }
 
-static void make(const char *name, int size, uint64_t seed, btf_material *m)
+static void make(const char *name, int size, uint64_t seed, btf_procedural *m)
 {
     btf_error err = {0};
-    TU_OK(btf_material_make(name, size, seed, m, &err), &err);
+    TU_OK(btf_procedural_make(name, size, seed, m, &err), &err);
 }
 
-static void render(const btf_material *m, btf_dir v, btf_dir l, btf_image *img)
+static void render(const btf_procedural *m, btf_dir v, btf_dir l, btf_image *img)
 {
     btf_error err = {0};
-    TU_OK(btf_material_render(m, v, l, img, &err), &err);
+    TU_OK(btf_procedural_render(m, v, l, img, &err), &err);
 }
 
 static void test_names(void **state)
 {
     (void)state;
-    const char *const *n = btf_material_names();
+    const char *const *n = btf_procedural_names();
     assert_non_null(n);
     int count = 0;
     while (n[count])
@@ -80,7 +80,7 @@ static void test_sizes(void **state)
                                        {{75, 345}, {75, 165}}, {{90, 10}, {90, 190}}};
     for (int i = 0; i < N_NAMES; i++) {
         for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
-            btf_material m;
+            btf_procedural m;
             make(names[i], sizes[s], 7, &m);
             size_t n = (size_t)sizes[s] * sizes[s];
             assert_int_equal(m.size, sizes[s]);
@@ -98,7 +98,7 @@ static void test_sizes(void **state)
                     assert_true(img.data[k] >= 0.0f && img.data[k] < 4.0f);
                 btf_image_free(&img);
             }
-            btf_material_free(&m);
+            btf_procedural_free(&m);
             assert_null(m.height);
         }
     }
@@ -108,7 +108,7 @@ static void test_deterministic(void **state)
 {
     (void)state;
     for (int i = 0; i < N_NAMES; i++) {
-        btf_material a, b, c;
+        btf_procedural a, b, c;
         make(names[i], 33, 42, &a);
         make(names[i], 33, 42, &b);
         make(names[i], 33, 43, &c);
@@ -126,9 +126,9 @@ static void test_deterministic(void **state)
         btf_image_free(&ia);
         btf_image_free(&ib);
         btf_image_free(&ic);
-        btf_material_free(&a);
-        btf_material_free(&b);
-        btf_material_free(&c);
+        btf_procedural_free(&a);
+        btf_procedural_free(&b);
+        btf_procedural_free(&c);
     }
 }
 
@@ -140,7 +140,7 @@ static void test_periodic(void **state)
     static const int sizes[] = {64, 50};
     for (int i = 0; i < N_NAMES; i++) {
         for (int s = 0; s < 2; s++) {
-            btf_material m;
+            btf_procedural m;
             int n = sizes[s];
             make(names[i], n, 3, &m);
             const float *h = m.height;
@@ -162,7 +162,7 @@ static void test_periodic(void **state)
             }
             assert_true(seam <= inner + 1e-6);
             assert_true(fabs(sum / (n * n)) < 1e-4); /* zero mean: z = 0 is the reference */
-            btf_material_free(&m);
+            btf_procedural_free(&m);
         }
     }
 }
@@ -171,7 +171,7 @@ static void test_unit_normals(void **state)
 {
     (void)state;
     for (int i = 0; i < N_NAMES; i++) {
-        btf_material m;
+        btf_procedural m;
         make(names[i], 37, 1, &m);
         for (int k = 0; k < 37 * 37; k++) {
             const float *p = m.normal + 3 * k;
@@ -179,12 +179,12 @@ static void test_unit_normals(void **state)
             assert_true(fabs(len - 1.0) < 1e-5);
             assert_true(p[2] > 0.0f);
         }
-        btf_material_free(&m);
+        btf_procedural_free(&m);
     }
 }
 
 /* Every one of the 81 x 81 pairs at size 8 is finite, and the map path gives
- * exactly what btf_material_render gives. */
+ * exactly what btf_procedural_render gives. */
 static void test_all_pairs_finite(void **state)
 {
     (void)state;
@@ -193,7 +193,7 @@ static void test_all_pairs_finite(void **state)
     TU_OK(btf_dirset_ubo81(&set, &err), &err);
     assert_int_equal(set.count, 81);
     for (int i = 0; i < N_NAMES; i++) {
-        btf_material m;
+        btf_procedural m;
         make(names[i], 8, 11, &m);
         btf_view_map *vm[81];
         btf_light_map *lm[81];
@@ -221,7 +221,7 @@ static void test_all_pairs_finite(void **state)
             btf_view_map_free(vm[d]);
             btf_light_map_free(lm[d]);
         }
-        btf_material_free(&m);
+        btf_procedural_free(&m);
     }
     btf_dirset_free(&set);
 }
@@ -230,7 +230,7 @@ static void test_lambert_falloff(void **state)
 {
     (void)state;
     for (int i = 0; i < N_NAMES; i++) {
-        btf_material m;
+        btf_procedural m;
         make(names[i], 64, 5, &m);
         btf_image front = {0};
         render(&m, dir(0, 0), dir(0, 0), &front);
@@ -241,11 +241,11 @@ static void test_lambert_falloff(void **state)
             btf_image_free(&graze);
         }
         btf_image_free(&front);
-        btf_material_free(&m);
+        btf_procedural_free(&m);
     }
 }
 
-static double shadow_fraction(const btf_material *m, btf_dir light)
+static double shadow_fraction(const btf_procedural *m, btf_dir light)
 {
     btf_error err = {0};
     btf_light_map *lm = NULL;
@@ -262,7 +262,7 @@ static double shadow_fraction(const btf_material *m, btf_dir light)
 static void test_fabric_shadows(void **state)
 {
     (void)state;
-    btf_material m;
+    btf_procedural m;
     make("fabric", 64, 9, &m);
     double top = shadow_fraction(&m, dir(0, 0));
     double graze = shadow_fraction(&m, dir(75, 30));
@@ -285,13 +285,13 @@ static void test_fabric_shadows(void **state)
     assert_true(dark_lo > dark_hi + 64 * 64 / 20);
     btf_image_free(&lo);
     btf_image_free(&hi);
-    btf_material_free(&m);
+    btf_procedural_free(&m);
 }
 
 static void test_wood_specular(void **state)
 {
     (void)state;
-    btf_material m;
+    btf_procedural m;
     make("wood", 64, 2, &m);
     btf_image mirror = {0}, retro = {0}, side = {0}, graze = {0};
     render(&m, dir(30, 0), dir(30, 180), &mirror);
@@ -309,12 +309,12 @@ static void test_wood_specular(void **state)
     btf_image_free(&retro);
     btf_image_free(&side);
     btf_image_free(&graze);
-    btf_material_free(&m);
+    btf_procedural_free(&m);
 }
 
 /* A hand-made material: a Gaussian bump of height 4 at (16, 16) on flat
  * ground z = 0, albedo 1 on the bump's top and 0.1 elsewhere. */
-static void bump_material(btf_material *m, float *store)
+static void bump_material(btf_procedural *m, float *store)
 {
     const int n = 32;
     memset(m, 0, sizeof *m);
@@ -355,7 +355,7 @@ static void test_axis_convention(void **state)
     (void)state;
     float *store = malloc(32 * 32 * 7 * sizeof(float));
     assert_non_null(store);
-    btf_material m;
+    btf_procedural m;
     bump_material(&m, store);
     /* Normals: y up in the image, so above the bump's centre n.y > 0. */
     assert_true(m.normal[3 * (12 * 32 + 16) + 1] > 0.1f);
@@ -397,32 +397,32 @@ static void test_errors(void **state)
 {
     (void)state;
     btf_error err = {0};
-    btf_material m;
-    assert_int_equal(btf_material_make("velvet", 16, 0, &m, &err), BTF_E_ARG);
+    btf_procedural m;
+    assert_int_equal(btf_procedural_make("velvet", 16, 0, &m, &err), BTF_E_ARG);
     assert_int_equal(err.code, BTF_E_ARG);
     assert_non_null(strstr(err.msg, "velvet"));
     assert_null(m.height);
-    assert_int_equal(btf_material_make(NULL, 16, 0, &m, &err), BTF_E_ARG);
-    assert_int_equal(btf_material_make("wood", 0, 0, &m, &err), BTF_E_ARG);
+    assert_int_equal(btf_procedural_make(NULL, 16, 0, &m, &err), BTF_E_ARG);
+    assert_int_equal(btf_procedural_make("wood", 0, 0, &m, &err), BTF_E_ARG);
     assert_non_null(strstr(err.msg, "0"));
-    assert_int_equal(btf_material_make("wood", -5, 0, &m, &err), BTF_E_ARG);
-    assert_int_equal(btf_material_make("wood", 16, 0, NULL, &err), BTF_E_ARG);
-    btf_material_free(NULL);
+    assert_int_equal(btf_procedural_make("wood", -5, 0, &m, &err), BTF_E_ARG);
+    assert_int_equal(btf_procedural_make("wood", 16, 0, NULL, &err), BTF_E_ARG);
+    btf_procedural_free(NULL);
 
     make("wood", 8, 0, &m);
     btf_image img = {0};
-    assert_int_equal(btf_material_render(&m, dir(95, 0), dir(0, 0), &img, &err), BTF_E_ARG);
+    assert_int_equal(btf_procedural_render(&m, dir(95, 0), dir(0, 0), &img, &err), BTF_E_ARG);
     assert_non_null(strstr(err.msg, "view"));
-    assert_int_equal(btf_material_render(&m, dir(0, 0), dir(NAN, 0), &img, &err), BTF_E_ARG);
+    assert_int_equal(btf_procedural_render(&m, dir(0, 0), dir(NAN, 0), &img, &err), BTF_E_ARG);
     assert_non_null(strstr(err.msg, "light"));
-    assert_int_equal(btf_material_render(&m, dir(0, 0), dir(-1, 0), &img, &err), BTF_E_ARG);
-    assert_int_equal(btf_material_render(&m, dir(0, INFINITY), dir(0, 0), &img, &err),
+    assert_int_equal(btf_procedural_render(&m, dir(0, 0), dir(-1, 0), &img, &err), BTF_E_ARG);
+    assert_int_equal(btf_procedural_render(&m, dir(0, INFINITY), dir(0, 0), &img, &err),
                      BTF_E_ARG);
     assert_null(img.data);
-    assert_int_equal(btf_material_render(NULL, dir(0, 0), dir(0, 0), &img, &err), BTF_E_ARG);
+    assert_int_equal(btf_procedural_render(NULL, dir(0, 0), dir(0, 0), &img, &err), BTF_E_ARG);
 
     /* Maps of another size are refused. */
-    btf_material big;
+    btf_procedural big;
     make("wood", 9, 0, &big);
     btf_view_map *vm = NULL;
     btf_light_map *lm = NULL;
@@ -432,13 +432,13 @@ static void test_errors(void **state)
                      BTF_E_ARG);
     btf_view_map_free(vm);
     btf_light_map_free(lm);
-    btf_material_free(&big);
+    btf_procedural_free(&big);
 
     /* A non-finite height is reported, not marched. */
     m.height[3] = NAN;
     assert_int_equal(btf_view_map_make(&m, dir(30, 0), &vm, &err), BTF_E_DATA);
     assert_null(vm);
-    btf_material_free(&m);
+    btf_procedural_free(&m);
 }
 
 static double now(void)
@@ -448,7 +448,7 @@ static double now(void)
     return ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-/* Timing at 128^2 (printed, not asserted): btf_material_render over the 81
+/* Timing at 128^2 (printed, not asserted): btf_procedural_render over the 81
  * view rings x a few lights, and the per-pair cost once maps exist. */
 static void test_timing(void **state)
 {
@@ -457,7 +457,7 @@ static void test_timing(void **state)
     btf_dirset set;
     TU_OK(btf_dirset_ubo81(&set, &err), &err);
     for (int i = 0; i < N_NAMES; i++) {
-        btf_material m;
+        btf_procedural m;
         double t0 = now();
         make(names[i], 128, 1, &m);
         double t_make = now() - t0;
@@ -491,7 +491,7 @@ static void test_timing(void **state)
                       names[i], 1e3 * t_make, 1e3 * t_render, 1e3 * t_worst, 1e3 * t_maps);
         btf_view_map_free(vm);
         btf_light_map_free(lm);
-        btf_material_free(&m);
+        btf_procedural_free(&m);
     }
     btf_dirset_free(&set);
 }

@@ -115,7 +115,7 @@ static btf_dir dir(double theta, double phi)
  * pixels that no light shadows (cast shadow where the light faces the
  * surface) marked: the "unshadowed" pixels of the error statistics. */
 typedef struct scene {
-    btf_material m;
+    btf_procedural m;
     int n;
     btf_image *img;
     double *L;
@@ -126,7 +126,7 @@ static void scene_make(scene *s, const char *name, int size, int stride)
 {
     btf_error err = {0};
     memset(s, 0, sizeof *s);
-    TU_OK(btf_material_make(name, size, 1, &s->m, &err), &err);
+    TU_OK(btf_procedural_make(name, size, 1, &s->m, &err), &err);
     btf_dirset set;
     TU_OK(btf_dirset_ubo81(&set, &err), &err);
     btf_view_map *vm;
@@ -162,7 +162,7 @@ static void scene_free(scene *s)
     free(s->img);
     free(s->L);
     free(s->unshadowed);
-    btf_material_free(&s->m);
+    btf_procedural_free(&s->m);
 }
 
 static void run_ps(const scene *s, const btf_photostereo_opts *o, btf_ps_result *r)

@@ -252,8 +252,8 @@ static void lp_frame_matches_truth(void **state)
     (void)state;
     const int n = 32;
     btf_error e = {0};
-    btf_material m;
-    TU_OK(btf_material_make("leather", n, 5, &m, &e), &e);
+    btf_procedural m;
+    TU_OK(btf_procedural_make("leather", n, 5, &m, &e), &e);
     btf_dirset lights;
     TU_OK(btf_dirset_ubo81(&lights, &e), &e);
     const char *d0 = tu_fmt("%s/truth", tu_dir);
@@ -268,7 +268,7 @@ static void lp_frame_matches_truth(void **state)
     for (int i = 0; i < lights.count; i++) {
         btf_image img;
         btf_dir view = {0, 0};
-        TU_OK(btf_material_render(&m, view, lights.dirs[i], &img, &e), &e);
+        TU_OK(btf_procedural_render(&m, view, lights.dirs[i], &img, &e), &e);
         TU_OK(btf_image_write_png(tu_fmt("%s/images/light %02d.png", dir, i), &img, &e), &e);
         btf_image_free(&img);
         double v[3];
@@ -303,7 +303,7 @@ static void lp_frame_matches_truth(void **state)
     assert_true(err[0] < 3.0);
     assert_true(err[1] > 10.0);
     btf_dirset_free(&lights);
-    btf_material_free(&m);
+    btf_procedural_free(&m);
 }
 
 /* ------------------------------------------------- the real lion head */

@@ -286,10 +286,10 @@ void tu_material_image(const char *name, int size, unsigned seed, btf_dir view, 
                        btf_image *img)
 {
     btf_error e = {0};
-    btf_material mat;
-    TU_OK(btf_material_make(name, size, seed, &mat, &e), &e);
-    TU_OK(btf_material_render(&mat, view, light, img, &e), &e);
-    btf_material_free(&mat);
+    btf_procedural mat;
+    TU_OK(btf_procedural_make(name, size, seed, &mat, &e), &e);
+    TU_OK(btf_procedural_render(&mat, view, light, img, &e), &e);
+    btf_procedural_free(&mat);
 }
 
 const char *tu_exr_string(exr_const_context_t ctx, const char *name)

@@ -74,7 +74,7 @@ double tu_now(void);
 /* Runs a command line and returns its stdout (malloc'd, up to 64 KiB), its
  * exit status in *status. */
 char *tu_capture(const char *cmd, int *status);
-/* One rendered image of a procedural material (btf_material_make/render):
+/* One rendered image of a procedural material (btf_procedural_make/render):
  * the test textures of several programs. */
 void tu_material_image(const char *name, int size, unsigned seed, btf_dir view, btf_dir light,
                        btf_image *img);

@@ -18,12 +18,14 @@ set -eu
 hdr=${1:?usage: public-symbols.sh HEADER [--map]}
 mode=${2:-}
 
-names=$(${CC:-cc} -E -x c "$hdr" | awk -v want="$hdr" '
+# The topical headers the umbrella includes (include/btfcar/*.h) count too.
+topics="$(dirname "$hdr")/btfcar/"
+names=$(${CC:-cc} -E -x c "$hdr" | awk -v want="$hdr" -v topics="$topics" '
     # Line markers: # LINE "FILE" FLAGS
     /^# [0-9]+ "/ {
         f = $3
         gsub(/"/, "", f)
-        keep = (f == want)
+        keep = (f == want || index(f, topics) == 1)
         next
     }
     /^#/ { next }

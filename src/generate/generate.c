@@ -28,7 +28,7 @@
 /* The batch both phases share: the material, its directions and the maps
  * phase 1 makes for phase 2. */
 typedef struct gen_job {
-    const btf_material *m;
+    const btf_procedural *m;
     const btf_dirset *dirs;
     btf_view_map **views;
     btf_light_map **lights;
@@ -80,7 +80,7 @@ static btf_status image_job(void *user, int t, int worker, btf_error *err)
     return render_one(j, t / n, t % n, err);
 }
 
-static btf_status write_truth(const btf_material *m, const char *dir, btf_error *err)
+static btf_status write_truth(const btf_procedural *m, const char *dir, btf_error *err)
 {
     char tdir[4096], path[4096];
     btf_status rc = btf_path_join(tdir, sizeof tdir, dir, "truth", err);
@@ -135,7 +135,7 @@ static btf_status check_outdir(const char *outdir, btf_error *err)
     return BTF_OK;
 }
 
-static int generate_into(const btf_material *m, const btf_dirset *dirs, const char *tmp,
+static int generate_into(const btf_procedural *m, const btf_dirset *dirs, const char *tmp,
                          const btf_generate_opts *o, btf_error *err)
 {
     int n = dirs->count;
@@ -176,7 +176,7 @@ btf_status btf_generate(const char *material, const char *outdir, const btf_gene
     if (o.jpeg_quality < 0 || o.jpeg_quality > 100)
         return btf_fail(err, BTF_E_ARG, "JPEG quality %d: expected 1..100", o.jpeg_quality);
     /* Zero means the default; seed 0 and threads 0 (all CPUs) are taken as
-     * they are. A negative size is refused by btf_material_make. */
+     * they are. A negative size is refused by btf_procedural_make. */
     if (o.size == 0)
         o.size = d.size;
     if (o.jpeg_quality == 0)
@@ -185,14 +185,14 @@ btf_status btf_generate(const char *material, const char *outdir, const btf_gene
     btf_status rc = check_outdir(outdir, err);
     if (rc)
         return rc;
-    btf_material m;
-    rc = btf_material_make(material, size, o.seed, &m, err);
+    btf_procedural m;
+    rc = btf_procedural_make(material, size, o.seed, &m, err);
     if (rc)
         return rc;
     btf_dirset dirs;
     rc = btf_dirset_ubo81(&dirs, err);
     if (rc) {
-        btf_material_free(&m);
+        btf_procedural_free(&m);
         return rc;
     }
     /* Into a temporary sibling folder, renamed into place as a whole. */
@@ -205,6 +205,6 @@ btf_status btf_generate(const char *material, const char *outdir, const btf_gene
     else
         btf_output_dir_fail(od, err);
     btf_dirset_free(&dirs);
-    btf_material_free(&m);
+    btf_procedural_free(&m);
     return rc;
 }

@@ -158,7 +158,7 @@ static int cells_across(int n, double texels)
 
 /* ---------------------------------------------------------------- materials */
 
-typedef void (*material_fn)(btf_material *m, const noise *ns);
+typedef void (*material_fn)(btf_procedural *m, const noise *ns);
 
 static void set_rgb(float *p, double r, double g, double b)
 {
@@ -170,7 +170,7 @@ static void set_rgb(float *p, double r, double g, double b)
 /* Leather: pebbles (Worley F2 - F1 is 0 on the border between two cells, so a
  * smoothstep of it raises the cell interiors and leaves creases between
  * them), domed a little, plus fractal micro-relief and a broad undulation. */
-static void make_leather(btf_material *m, const noise *ns)
+static void make_leather(btf_procedural *m, const noise *ns)
 {
     int n = m->size, q = cells_across(n, 12.0);
     int pm = cells_across(n, 4.0), pb = cells_across(n, 48.0);
@@ -218,7 +218,7 @@ static double thread_height(double c, double t, int over_phase, double half, dou
 /* Fabric: plain weave. Warp thread i (a column of the image) passes over weft
  * thread j (a row) where i + j is even. The tile holds an even number of
  * threads each way so the over-under pattern is periodic. */
-static void make_fabric(btf_material *m, const noise *ns)
+static void make_fabric(btf_procedural *m, const noise *ns)
 {
     int n = m->size, k2 = 2 * cells_across(n, 16.0); /* threads across */
     double pitch = (double)n / k2;
@@ -270,7 +270,7 @@ static void make_fabric(btf_material *m, const noise *ns)
  * the latewood, resetting sharply at the ring boundary. Fibre streaks are
  * noise stretched along x; pores are sparse short dashes, more in earlywood.
  * The lacquer levels the relief almost flat. */
-static void make_wood(btf_material *m, const noise *ns)
+static void make_wood(btf_procedural *m, const noise *ns)
 {
     int n = m->size, rings = cells_across(n, 16.0);
     int streak_y = cells_across(n, 1.5), pore_x = cells_across(n, 9.0);
@@ -322,12 +322,12 @@ static const material_entry materials[] = {
 
 static const char *const material_names[N_MATERIALS + 1] = {"leather", "fabric", "wood", NULL};
 
-const char *const *btf_material_names(void)
+const char *const *btf_procedural_names(void)
 {
     return material_names;
 }
 
-void btf_material_normals_from_height(btf_material *m)
+void btf_material_normals_from_height(btf_procedural *m)
 {
     int n = m->size;
     for (int row = 0; row < n; row++) {
@@ -348,7 +348,7 @@ void btf_material_normals_from_height(btf_material *m)
 
 /* Zero mean height: the reference plane z = 0 then sits in the middle of the
  * relief, so parallax shifts the image as much one way as the other. */
-static void centre_height(btf_material *m)
+static void centre_height(btf_procedural *m)
 {
     size_t count = (size_t)m->size * m->size;
     double sum = 0;
@@ -359,7 +359,7 @@ static void centre_height(btf_material *m)
         m->height[k] -= mean;
 }
 
-btf_status btf_material_make(const char *name, int size, uint64_t seed, btf_material *m,
+btf_status btf_procedural_make(const char *name, int size, uint64_t seed, btf_procedural *m,
                              btf_error *err)
 {
     if (!m)
@@ -393,7 +393,7 @@ btf_status btf_material_make(const char *name, int size, uint64_t seed, btf_mate
     return BTF_OK;
 }
 
-void btf_material_free(btf_material *m)
+void btf_procedural_free(btf_procedural *m)
 {
     if (!m)
         return;

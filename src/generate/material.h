@@ -26,7 +26,7 @@ static inline int btf_wrap_int(int64_t i, int n)
  * view and one light map per light and combines them per pair with
  * btf_material_render_maps (cheap: one shading per texel). All coordinates are
  * texture coordinates: u = column, w = row (row 0 at the top); the reference
- * plane is z = 0 (btf_material_make's heights have zero mean). Directions and
+ * plane is z = 0 (btf_procedural_make's heights have zero mean). Directions and
  * stored normals use the frame x right, y UP in the image (row index grows
  * towards -y), z towards the camera. The maps are read-only once made, so any
  * number of threads may share them. */
@@ -38,7 +38,7 @@ typedef struct btf_view_map {
     float *normal; /* size*size*3: unit normal at the hit */
     float *albedo; /* size*size*3: albedo at the hit */
 } btf_view_map;
-btf_status btf_view_map_make(const btf_material *m, btf_dir view, btf_view_map **out,
+btf_status btf_view_map_make(const btf_procedural *m, btf_dir view, btf_view_map **out,
                              btf_error *err);
 void btf_view_map_free(btf_view_map *vm);
 
@@ -47,17 +47,17 @@ typedef struct btf_light_map {
     float *vis;    /* size*size: visibility of the light from the surface point
                       above texel (x, y): 0 in cast shadow .. 1 lit (soft edge) */
 } btf_light_map;
-btf_status btf_light_map_make(const btf_material *m, btf_dir light, btf_light_map **out,
+btf_status btf_light_map_make(const btf_procedural *m, btf_dir light, btf_light_map **out,
                               btf_error *err);
 void btf_light_map_free(btf_light_map *lm);
 
 /* Shades one (view, light) pair from its maps into out (allocated here, size x
  * size x 3; the caller frees it). view and light must be the directions the
  * maps were made for. */
-btf_status btf_material_render_maps(const btf_material *m, const btf_view_map *vm,
+btf_status btf_material_render_maps(const btf_procedural *m, const btf_view_map *vm,
                                     const btf_light_map *lm, btf_dir view, btf_dir light,
                                     btf_image *out, btf_error *err);
 /* Recomputes m->normal from m->height (central differences, wrapping). */
-void btf_material_normals_from_height(btf_material *m); /* generate/material.c */
+void btf_material_normals_from_height(btf_procedural *m); /* generate/material.c */
 
 #endif

@@ -22,7 +22,7 @@
  * n.l < 0.1, so light at grazing incidence brings no highlight.
  * The view march depends only on the view and the shadow march only on the
  * light, so both are precomputed maps (generate/material.h) that a generator builds
- * once per direction; btf_material_render just builds both and combines them.
+ * once per direction; btf_procedural_render just builds both and combines them.
  * A view map holds 32 bytes per texel (hit point, normal, albedo), a light
  * map 4.
  */
@@ -43,7 +43,7 @@
 
 /* ------------------------------------------------------------ checking input */
 
-static btf_status check_material(const btf_material *m, btf_error *err)
+static btf_status check_material(const btf_procedural *m, btf_error *err)
 {
     if (!m || !m->height || !m->normal || !m->albedo)
         return btf_fail(err, BTF_E_ARG, "material: not made (NULL arrays)");
@@ -86,7 +86,7 @@ typedef struct field {
     float lo, hi;
 } field;
 
-static btf_status field_init(field *f, const btf_material *m, double reach, btf_error *err)
+static btf_status field_init(field *f, const btf_procedural *m, double reach, btf_error *err)
 {
     size_t count = (size_t)m->size * m->size;
     f->h = m->height;
@@ -195,7 +195,7 @@ static float view_hit_z(const field *f, float x, float y, float a, float b, int 
     return f->lo;
 }
 
-btf_status btf_view_map_make(const btf_material *m, btf_dir view, btf_view_map **out,
+btf_status btf_view_map_make(const btf_procedural *m, btf_dir view, btf_view_map **out,
                              btf_error *err)
 {
     if (!out)
@@ -290,7 +290,7 @@ static float light_vis(const field *f, float x, float y, float h0, float cu, flo
     return v > 1.0f ? 1.0f : v < 0.0f ? 0.0f : v;
 }
 
-btf_status btf_light_map_make(const btf_material *m, btf_dir light, btf_light_map **out,
+btf_status btf_light_map_make(const btf_procedural *m, btf_dir light, btf_light_map **out,
                               btf_error *err)
 {
     if (!out)
@@ -349,7 +349,7 @@ typedef struct shade_consts {
     float cut; /* n.h below which the lobe is negligible (< 1e-7) */
 } shade_consts;
 
-static shade_consts shade_setup(const btf_material *m, btf_dir view, btf_dir light)
+static shade_consts shade_setup(const btf_procedural *m, btf_dir view, btf_dir light)
 {
     shade_consts s;
     float v[3];
@@ -380,7 +380,7 @@ static shade_consts shade_setup(const btf_material *m, btf_dir view, btf_dir lig
     return s;
 }
 
-btf_status btf_material_render_maps(const btf_material *m, const btf_view_map *vm,
+btf_status btf_material_render_maps(const btf_procedural *m, const btf_view_map *vm,
                                     const btf_light_map *lm, btf_dir view, btf_dir light,
                                     btf_image *out, btf_error *err)
 {
@@ -419,7 +419,7 @@ btf_status btf_material_render_maps(const btf_material *m, const btf_view_map *v
     return BTF_OK;
 }
 
-btf_status btf_material_render(const btf_material *m, btf_dir view, btf_dir light, btf_image *out,
+btf_status btf_procedural_render(const btf_procedural *m, btf_dir view, btf_dir light, btf_image *out,
                                btf_error *err)
 {
     btf_view_map *vm = NULL;

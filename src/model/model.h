@@ -9,6 +9,7 @@
 #define BTF_MODEL_H
 
 #include "core/core.h"
+#include "core/describe.h"
 
 /* Limits (docs/model-format.md, "Validation"). */
 #define BTF_MODEL_MAX_DIRS 4096
@@ -181,5 +182,9 @@ btf_status btf_horizon_map(const float *h, int w, int hh, int wrap, int threads,
  * shortest independent offsets (x0, y0, x1, y1) at which its
  * autocorrelation peaks; 1 when found, else 0 and zeros. */
 int btf_structure_lattice(const btf_model *m, int lattice[4]);
+
+/* btfcar info on a CAR model (model_describe.c): text, or the JSON document
+ * of docs/model-format.md. */
+void model_describe(const btf_model *m, const describe_file *file, FILE *f, int json);
 
 #endif

@@ -16,7 +16,7 @@
  *        Z = (-i su P - i sv Q) / (su^2 + sv^2),   Z(0, 0) = 0.
  *    The derivative is taken as the central difference, su = sin(2 pi u / W)
  *    rather than the continuous 2 pi u / W: a normal estimated per pixel is
- *    the slope across its neighbours, and btf_material's normals are exactly
+ *    the slope across its neighbours, and btf_procedural's normals are exactly
  *    central differences of its heights, which FC then inverts without
  *    loss (the continuous symbol damps fine relief by sin(w)/w: 5x the height
  *    error on the built-in materials). Bins where su = sv = 0 (the mean and,

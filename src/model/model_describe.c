@@ -1,12 +1,13 @@
 /*
- * info_model.c — btfcar info on a model file (MODEL.btfcar): its direction
+ * model_describe.c — btfcar info on a CAR model file (MODEL.btfcar): its direction
  * sets, index table, range map (Haindl & Filip 2007, section II.B) and every
  * subspace's spectral basis and CAR parameters per band and level (section
  * II.C) with each band's synthesis margin, as text or (--json) as the JSON
- * document of docs/model-format.md ("btfcar info --json"). cmd_info.c
- * recognises the file and calls cli_info_model (info.h).
+ * document of docs/model-format.md ("btfcar info --json"). The CAR
+ * family's describe (src/material/: btf_material_describe).
  */
-#include "info.h"
+#include "core/describe.h"
+#include "model/model.h"
 
 #include <math.h>
 
@@ -59,17 +60,17 @@ static int members(const btf_model *m, int s)
     return n;
 }
 
-static void text_subspace(const btf_model *m, int s)
+static void text_subspace(FILE *f, const btf_model *m, int s)
 {
     const btf_subspace_model *sm = &m->subspaces[s];
-    printf("subspace %d  ", s);
+    fprintf(f, "subspace %d  ", s);
     if (sm->view >= 0)
-        printf("view %d (theta %g, phi %g), light %d (theta %g, phi %g), %d images; ", sm->view,
+        fprintf(f, "view %d (theta %g, phi %g), light %d (theta %g, phi %g), %d images; ", sm->view,
                m->views.dirs[sm->view].theta, m->views.dirs[sm->view].phi, sm->light,
                m->lights.dirs[sm->light].theta, m->lights.dirs[sm->light].phi, members(m, s));
-    printf("%d x %d, %d level%s\n", sm->width, sm->height, sm->levels, sm->levels == 1 ? "" : "s");
-    printf("  mean      %.6g %.6g %.6g\n", sm->mean[0], sm->mean[1], sm->mean[2]);
-    printf("  basis     [%.6g %.6g %.6g] [%.6g %.6g %.6g] [%.6g %.6g %.6g]\n", sm->basis[0],
+    fprintf(f, "%d x %d, %d level%s\n", sm->width, sm->height, sm->levels, sm->levels == 1 ? "" : "s");
+    fprintf(f, "  mean      %.6g %.6g %.6g\n", sm->mean[0], sm->mean[1], sm->mean[2]);
+    fprintf(f, "  basis     [%.6g %.6g %.6g] [%.6g %.6g %.6g] [%.6g %.6g %.6g]\n", sm->basis[0],
            sm->basis[1], sm->basis[2], sm->basis[3], sm->basis[4], sm->basis[5], sm->basis[6],
            sm->basis[7], sm->basis[8]);
     for (int b = 0; b < 3; b++)
@@ -77,73 +78,73 @@ static void text_subspace(const btf_model *m, int s)
             const btf_car_band *cb = &sm->bands[b][l];
             char nb[BTF_CAR_MAX_NEIGHBOURS * 10 + 1];
             format_neighbourhood(cb, nb, sizeof nb);
-            printf("  band %d level %d: %s  gamma", b, l, cb->n ? nb : "(none)");
+            fprintf(f, "  band %d level %d: %s  gamma", b, l, cb->n ? nb : "(none)");
             for (int i = 0; i < cb->n; i++)
-                printf(" %.6g", cb->gamma[i]);
-            printf("  sigma %.6g  mean %.6g  margin %d", cb->sigma, cb->mean,
+                fprintf(f, " %.6g", cb->gamma[i]);
+            fprintf(f, "  sigma %.6g  mean %.6g  margin %d", cb->sigma, cb->mean,
                    band_margin(m, s, b, l));
             double missed = band_missed(m, s, b, l);
             if (missed >= 0.01)
-                printf("  misses %.0f%% of its variance in synthesis%s", 100.0 * missed,
+                fprintf(f, "  misses %.0f%% of its variance in synthesis%s", 100.0 * missed,
                        missed >= BTF_CAR_MISSED_LOUD ? " (a periodic pattern?)" : "");
-            printf("\n");
+            fprintf(f, "\n");
         }
     const btf_marginal *mg = &sm->marginal;
     if (!mg->knots) {
-        printf("  marginals none (Gaussian bands: no transfer, no clamp)\n");
+        fprintf(f, "  marginals none (Gaussian bands: no transfer, no clamp)\n");
         return;
     }
-    printf("  marginals %d-knot transfer per band; exemplar range", mg->knots);
+    fprintf(f, "  marginals %d-knot transfer per band; exemplar range", mg->knots);
     for (int b = 0; b < 3; b++)
-        printf(" [%.6g, %.6g]", mg->quantile[b][0], mg->quantile[b][mg->knots - 1]);
-    printf("; synthesised sd %.6g %.6g %.6g; RGB box [%.6g %.6g %.6g]..[%.6g %.6g %.6g]\n",
+        fprintf(f, " [%.6g, %.6g]", mg->quantile[b][0], mg->quantile[b][mg->knots - 1]);
+    fprintf(f, "; synthesised sd %.6g %.6g %.6g; RGB box [%.6g %.6g %.6g]..[%.6g %.6g %.6g]\n",
            mg->synth_sd[0], mg->synth_sd[1], mg->synth_sd[2], mg->rgb_lo[0], mg->rgb_lo[1],
            mg->rgb_lo[2], mg->rgb_hi[0], mg->rgb_hi[1], mg->rgb_hi[2]);
     if (mg->lab_knots)
-        printf("  colours   Lab histogram: L* %.4g..%.4g (median %.4g), a* %.4g..%.4g, b* "
+        fprintf(f, "  colours   Lab histogram: L* %.4g..%.4g (median %.4g), a* %.4g..%.4g, b* "
                "%.4g..%.4g\n", mg->lab_quantile[0][0], mg->lab_quantile[0][mg->lab_knots - 1],
                mg->lab_quantile[0][mg->lab_knots / 2], mg->lab_quantile[1][0],
                mg->lab_quantile[1][mg->lab_knots - 1], mg->lab_quantile[2][0],
                mg->lab_quantile[2][mg->lab_knots - 1]);
 }
 
-static int model_text(const btf_model *m, const model_file *mf)
+static void model_text(FILE *f, const btf_model *m, const describe_file *mf)
 {
     char views[128], lights[128];
-    printf("model       %s\n", mf->path);
+    fprintf(f, "model       %s\n", mf->path);
     /* Exact bytes: models are a few kilobytes, the figure users compare. */
-    printf("format      btfcar model %u.%u, %lld bytes\n", mf->major, mf->minor, mf->bytes);
+    fprintf(f, "format      btfcar model %u.%u, %lld bytes\n", mf->major, mf->minor, mf->bytes);
     if (m->views.count) {
-        cli_describe_set(&m->views, views, sizeof views);
-        cli_describe_set(&m->lights, lights, sizeof lights);
-        printf("views       %s\n", views);
-        printf("lights      %s\n", lights);
+        txt_describe_set(&m->views, views, sizeof views);
+        txt_describe_set(&m->lights, lights, sizeof lights);
+        fprintf(f, "views       %s\n", views);
+        fprintf(f, "lights      %s\n", lights);
         int pairs = m->views.count * m->lights.count, measured = 0;
         for (int i = 0; i < pairs; i++)
             measured += m->index[i] != BTF_PAIR_NONE;
         if (measured < pairs)
-            printf("index       %d views x %d lights -> %d subspaces; %d of the %d pairs "
+            fprintf(f, "index       %d views x %d lights -> %d subspaces; %d of the %d pairs "
                    "measured (a sparse set: the others stand for their nearest measured "
                    "pair)\n", m->views.count, m->lights.count, m->n_subspaces, measured, pairs);
         else
-            printf("index       %d views x %d lights -> %d subspaces\n", m->views.count,
+            fprintf(f, "index       %d views x %d lights -> %d subspaces\n", m->views.count,
                    m->lights.count, m->n_subspaces);
     } else {
-        printf("views       none (a single texture)\n");
-        printf("lights      none (a single texture)\n");
+        fprintf(f, "views       none (a single texture)\n");
+        fprintf(f, "lights      none (a single texture)\n");
     }
-    printf("subspaces   %d\n", m->n_subspaces);
+    fprintf(f, "subspaces   %d\n", m->n_subspaces);
     int with = 0;
     for (int s = 0; s < m->n_subspaces; s++)
         with += m->subspaces[s].marginal.knots != 0;
-    printf("marginals   %s (%d of %d subspaces)\n",
+    fprintf(f, "marginals   %s (%d of %d subspaces)\n",
            with ? "transfers onto the exemplar's histogram, RGB clamped to its range"
                 : "none (Gaussian bands; format 1.0/1.1 or fitted without them)",
            with, m->n_subspaces);
     int lab = 0;
     for (int s = 0; s < m->n_subspaces; s++)
         lab += m->subspaces[s].marginal.knots && m->subspaces[s].marginal.lab_knots;
-    printf("colours     %s (%d of %d subspaces)\n",
+    fprintf(f, "colours     %s (%d of %d subspaces)\n",
            lab ? "the exemplar's CIE Lab histogram: synthesis matches it (--no-match-colours skips)"
                : "no Lab histogram (format 1.2 or older): synthesis without colour matching",
            lab, m->n_subspaces);
@@ -151,36 +152,35 @@ static int model_text(const btf_model *m, const model_file *mf)
         float lo, hi;
         range_bounds(m, &lo, &hi);
         /* at the analysed resolution: the measured map, quilted onto a surface */
-        printf("range map   %d x %d at the analysed resolution (texel 1), quilted onto any "
+        fprintf(f, "range map   %d x %d at the analysed resolution (texel 1), quilted onto any "
                "surface, heights %.6g..%.6g\n", m->range_width, m->range_height, lo, hi);
     } else if (m->range) {
         float lo, hi;
         range_bounds(m, &lo, &hi);
         /* the tile in memory is periodic: a 1.0 file's is made so on reading */
-        printf("range map   %d x %d periodic tile%s, texel %g (a period of %g x %g analysed "
+        fprintf(f, "range map   %d x %d periodic tile%s, texel %g (a period of %g x %g analysed "
                "texels), heights %.6g..%.6g\n", m->range_width, m->range_height,
                mf->major == 1 && mf->minor == 0 ? " (made periodic on reading: format 1.0)" : "",
                m->range_texel, m->range_width * (double)m->range_texel,
                m->range_height * (double)m->range_texel, lo, hi);
     } else {
-        printf("range map   none\n");
+        fprintf(f, "range map   none\n");
     }
     if (m->albedo)
-        printf("structure   albedo pattern (grey%s), shading a + %smax(0, n.l) with "
+        fprintf(f, "structure   albedo pattern (grey%s), shading a + %smax(0, n.l) with "
                "ambient a = %.4g: the CAR fields model the remainder (docs/model.md)\n",
                m->chroma ? " and a colour layer: the colours vary across the sample" : ": one "
                "colour across the sample", m->shadows ? "vis " : "", m->ambient);
     else
-        printf("structure   none: the CAR fields model the whole exemplars%s\n",
+        fprintf(f, "structure   none: the CAR fields model the whole exemplars%s\n",
                m->range && m->range_texel != 1.0f ? " (a range tile below the analysed "
                "resolution holds no albedo)" : "");
     if (m->shadows)
-        printf("shadows     the relief casts them (horizon map of the range map)\n");
-    printf("pair gains  %s\n", m->gain ? "one colour per measured pair: each keeps its mean "
+        fprintf(f, "shadows     the relief casts them (horizon map of the range map)\n");
+    fprintf(f, "pair gains  %s\n", m->gain ? "one colour per measured pair: each keeps its mean "
            "colour" : "none (format 1.4 or older, or analysed without them)");
     for (int s = 0; s < m->n_subspaces; s++)
-        text_subspace(m, s);
-    return 0;
+        text_subspace(f, m, s);
 }
 
 static void json_band(FILE *f, const btf_car_band *b, int margin, double missed)
@@ -188,16 +188,16 @@ static void json_band(FILE *f, const btf_car_band *b, int margin, double missed)
     char nb[BTF_CAR_MAX_NEIGHBOURS * 10 + 1];
     format_neighbourhood(b, nb, sizeof nb);
     fputs("{\"neighbourhood\": ", f);
-    cli_json_string(f, nb);
+    txt_json_string(f, nb);
     fputs(", \"offsets\": [", f);
     for (int i = 0; i < b->n; i++)
         fprintf(f, "%s[%d, %d]", i ? ", " : "", b->offsets[i].row, b->offsets[i].col);
     fputs("], \"gamma\": ", f);
-    cli_json_f32s(f, b->gamma, b->n);
+    txt_json_f32s(f, b->gamma, b->n);
     fputs(", \"sigma\": ", f);
-    cli_json_f32(f, b->sigma);
+    txt_json_f32(f, b->sigma);
     fputs(", \"mean\": ", f);
-    cli_json_f32(f, b->mean);
+    txt_json_f32(f, b->mean);
     fprintf(f, ", \"margin\": %d, \"missed_variance\": %.3g", margin, missed);
     fputc('}', f);
 }
@@ -207,11 +207,11 @@ static void json_subspace(FILE *f, const btf_model *m, int s)
     const btf_subspace_model *sm = &m->subspaces[s];
     fprintf(f, "{\"view\": %d, \"light\": %d, \"width\": %d, \"height\": %d, \"mean\": ",
             sm->view, sm->light, sm->width, sm->height);
-    cli_json_f32s(f, sm->mean, 3);
+    txt_json_f32s(f, sm->mean, 3);
     fputs(", \"basis\": [", f);
     for (int r = 0; r < 3; r++) {
         fputs(r ? ", " : "", f);
-        cli_json_f32s(f, sm->basis + 3 * r, 3);
+        txt_json_f32s(f, sm->basis + 3 * r, 3);
     }
     fprintf(f, "], \"levels\": %d,\n   \"bands\": [", sm->levels);
     for (int b = 0; b < 3; b++) {
@@ -229,18 +229,18 @@ static void json_subspace(FILE *f, const btf_model *m, int s)
         return;
     }
     fprintf(f, "{\"knots\": %d, \"synth_mean\": ", mg->knots);
-    cli_json_f32s(f, mg->synth_mean, 3);
+    txt_json_f32s(f, mg->synth_mean, 3);
     fputs(", \"synth_sd\": ", f);
-    cli_json_f32s(f, mg->synth_sd, 3);
+    txt_json_f32s(f, mg->synth_sd, 3);
     fputs(", \"quantiles\": [", f);
     for (int b = 0; b < 3; b++) {
         fputs(b ? ", " : "", f);
-        cli_json_f32s(f, mg->quantile[b], mg->knots);
+        txt_json_f32s(f, mg->quantile[b], mg->knots);
     }
     fputs("], \"rgb_lo\": ", f);
-    cli_json_f32s(f, mg->rgb_lo, 3);
+    txt_json_f32s(f, mg->rgb_lo, 3);
     fputs(", \"rgb_hi\": ", f);
-    cli_json_f32s(f, mg->rgb_hi, 3);
+    txt_json_f32s(f, mg->rgb_hi, 3);
     fputs(", \"lab_quantiles\": ", f);
     if (!mg->lab_knots) {
         fputs("null}}", f);
@@ -248,7 +248,7 @@ static void json_subspace(FILE *f, const btf_model *m, int s)
     }
     for (int c = 0; c < 3; c++) {
         fputs(c ? ", " : "[", f);
-        cli_json_f32s(f, mg->lab_quantile[c], mg->lab_knots);
+        txt_json_f32s(f, mg->lab_quantile[c], mg->lab_knots);
     }
     fputs("]}}", f);
 }
@@ -269,16 +269,15 @@ static void json_index(FILE *f, const btf_model *m)
     fputc(']', f);
 }
 
-static int model_json(const btf_model *m, const model_file *mf)
+static void model_json(FILE *f, const btf_model *m, const describe_file *mf)
 {
-    FILE *f = stdout;
     fprintf(f, "{\"format\": \"btfcar-model\", \"version\": [%u, %u], \"file\": ", mf->major,
             mf->minor);
-    cli_json_string(f, mf->path);
+    txt_json_string(f, mf->path);
     fprintf(f, ", \"file_bytes\": %lld,\n \"views\": ", mf->bytes);
-    cli_json_dirset(f, &m->views);
+    txt_json_dirset(f, &m->views);
     fputs(",\n \"lights\": ", f);
-    cli_json_dirset(f, &m->lights);
+    txt_json_dirset(f, &m->lights);
     fputs(",\n \"index\": ", f);
     json_index(f, m);
     fprintf(f, ",\n \"subspaces\": [");
@@ -292,11 +291,11 @@ static int model_json(const btf_model *m, const model_file *mf)
         range_bounds(m, &lo, &hi);
         fprintf(f, "{\"width\": %d, \"height\": %d, \"texel\": ", m->range_width,
                 m->range_height);
-        cli_json_f32(f, m->range_texel);
+        txt_json_f32(f, m->range_texel);
         fputs(", \"min\": ", f);
-        cli_json_f32(f, lo);
+        txt_json_f32(f, lo);
         fputs(", \"max\": ", f);
-        cli_json_f32(f, hi);
+        txt_json_f32(f, hi);
         fprintf(f, ", \"periodic\": %s}", m->range_texel == 1.0f ? "false" : "true");
     } else {
         fputs("null", f);
@@ -305,25 +304,19 @@ static int model_json(const btf_model *m, const model_file *mf)
     if (m->albedo) {
         fprintf(f, "{\"albedo\": true, \"colour_layer\": %s, \"shadows\": %s, \"ambient\": ",
                 m->chroma ? "true" : "false", m->shadows ? "true" : "false");
-        cli_json_f32(f, m->ambient);
+        txt_json_f32(f, m->ambient);
         fputs("}", f);
     } else {
         fputs("null", f);
     }
     fprintf(f, ",\n \"pair_gains\": %s", m->gain ? "true" : "false");
     fputs("}\n", f);
-    return 0;
 }
 
-int cli_info_model(cli_ctx *c, const model_file *mf, int json)
+void model_describe(const btf_model *m, const describe_file *file, FILE *f, int json)
 {
-    btf_error err = {0};
-    btf_model m;
-    if (btf_model_read(mf->path, &m, &err) != 0)
-        return cli_lib_error(c, &err);
-    int rc = json ? model_json(&m, mf) : model_text(&m, mf);
-    btf_model_free(&m);
-    if (fflush(stdout) != 0)
-        return cli_error(c, "cannot write the output");
-    return rc;
+    if (json)
+        model_json(f, m, file);
+    else
+        model_text(f, m, file);
 }

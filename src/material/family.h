@@ -1,0 +1,49 @@
+/*
+ * family.h — what a model family gives the material interface
+ * (btfcar/material.h): its signature test, its reader, its description, its
+ * renders and its report, as one table of operations a family defines in
+ * its own folder (src/model/model_family.c, src/rf/rf_family.c) and
+ * material.c lists. The table holds what differs between families; what
+ * they share (reading the file's head, naming the file in messages, the
+ * caller's options) stays in material.c. Private to the library.
+ */
+#ifndef BTF_MATERIAL_FAMILY_H
+#define BTF_MATERIAL_FAMILY_H
+
+#include "btfcar.h"
+#include "btfcar/material.h"
+#include "core/core.h"
+#include "core/describe.h"
+
+typedef struct btf_family_ops {
+    btf_family family;
+    const char *name;            /* "car", "rf" */
+    unsigned caps;               /* BTF_MATERIAL_* */
+    size_t model_size;           /* sizeof the family's model struct */
+    /* 1 when the bytes start like the family's file */
+    int (*sniff)(const unsigned char *data, size_t size);
+    btf_status (*read)(const char *path, void *model, btf_error *err);
+    void (*free)(void *model);
+    void (*dirsets)(const void *model, const btf_dirset **views, const btf_dirset **lights);
+    btf_status (*describe)(const void *model, const describe_file *file, FILE *out, int json,
+                           btf_error *err);
+    /* BTF_OK when the model can be rendered, else BTF_E_ARG naming path */
+    btf_status (*renders)(const void *model, const char *path, btf_error *err);
+    btf_status (*render_flat)(const void *model, btf_gpu *g, btf_dir view, btf_dir light,
+                              const btf_render_opts *opts, btf_image *out,
+                              btf_render_info *info, btf_error *err);
+    btf_status (*render_scene)(const void *model, btf_gpu *g, const btf_scene *s,
+                               const btf_render_opts *opts, btf_image *out,
+                               btf_render_info *info, btf_error *err);
+    void (*render_note)(const void *model, const btf_scene *s, btf_dir view,
+                        const btf_render_info *info, char *buf, size_t n);
+    btf_status (*report)(const btf_dataset *ds, const void *model, const char *dir,
+                         const btf_report_opts *opts, btf_report_summary *summary,
+                         btf_error *err);
+} btf_family_ops;
+
+/* The families (src/model/model_family.c, src/rf/rf_family.c). */
+extern const btf_family_ops btf_car_family;
+extern const btf_family_ops btf_rf_family;
+
+#endif

@@ -80,6 +80,7 @@ help:
 	@echo "make install  PREFIX=/usr/local: library, header, btfcar, pkg-config file"
 	@echo "make check-exports  libbtfcar.so exports exactly the functions of include/btfcar.h"
 	@echo "make check-install  install into build/check-install; link a program by pkg-config"
+	@echo "make check-shaders  compile every GLSL shader to SPIR-V afresh and validate it (spirv-val)"
 	@echo "make check-layering  no two object files of the library call each other"
 
 deps:
@@ -98,7 +99,13 @@ $(BUILD)/%.o: %.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) $(DEPFLAGS) -c $< -o $@
 
-# Shaders: GLSL -> SPIR-V as a C array, validated by spirv-val.
+# Shaders: GLSL -> SPIR-V as a C array, validated by spirv-val. `make
+# check-shaders` compiles and validates every one of them afresh.
+check-shaders:
+	@rm -f $(SPIRV_H)
+	@$(MAKE) --no-print-directory $(SPIRV_H) >/dev/null
+	@echo "check-shaders: $(words $(SHADERS)) shaders compiled by glslangValidator and valid (spirv-val)"
+
 $(BUILD)/gen/%_spv.h: gpu/%.comp $(wildcard gpu/*.glsl gpu/*.h src/synth/btf_*.h src/render/btf_*.h src/rf/btf_*.h)
 	@mkdir -p $(dir $@)
 	glslangValidator -V --target-env vulkan1.1 -Igpu -Isrc/synth -Isrc/render -Isrc/rf --vn $*_spv -o $@.spv.h $<

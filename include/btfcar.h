@@ -1176,6 +1176,12 @@ typedef struct btf_synth_opts {
      * (btf_gpu_synthesise, the GPU render) matches on the device with the
      * CPU's operations: the same bytes everywhere. */
     int match_colours;
+    /* The largest image (width x height x 3 floats, in bytes) the streaming
+     * btf_synthesise keeps whole to colour-match; a larger one is
+     * synthesised twice. 0: 256 MiB. The bytes are the same either way, so
+     * this trades memory for time only (and lets tests reach the two-pass
+     * path with small images). */
+    size_t match_whole_bytes;
 } btf_synth_opts;
 
 /* The defaults that a zero field of btf_synth_opts stands for. */

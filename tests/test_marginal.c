@@ -576,11 +576,11 @@ static void colour_match_keeps_lab_histograms(void **state)
         btf_image streamed;
         TU_OK(btf_image_alloc(&streamed, img.width, img.height, 3, &e), &e);
         assert_int_equal(btf_synth_holds_whole(&m, 0, &so), 1);
-        btf_synth_set_match_whole_bytes(1);
-        assert_int_equal(btf_synth_holds_whole(&m, 0, &so), 0); /* synthesised twice */
-        TU_OK(btf_synthesise(&m, 0, &so, rows_to_image, &streamed, &e), &e);
+        btf_synth_opts twice = so;
+        twice.match_whole_bytes = 1;
+        assert_int_equal(btf_synth_holds_whole(&m, 0, &twice), 0); /* synthesised twice */
+        TU_OK(btf_synthesise(&m, 0, &twice, rows_to_image, &streamed, &e), &e);
         assert_memory_equal(streamed.data, matched.data, n * sizeof(float));
-        btf_synth_set_match_whole_bytes(0);
         memset(streamed.data, 0, n * sizeof(float));
         TU_OK(btf_synthesise(&m, 0, &so, rows_to_image, &streamed, &e), &e);
         assert_memory_equal(streamed.data, matched.data, n * sizeof(float));

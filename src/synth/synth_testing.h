@@ -1,7 +1,7 @@
 /*
  * synth_testing.h — hooks into synthesis for tests and benchmarks only
  * (CAR synthesis, Haindl & Filip 2007, section II.C): a single CAR field,
- * forced margins, colour matching's two-pass threshold, the GPU's buffer
+ * forced margins, the GPU's buffer
  * limit and tiling. Not part of the public
  * API; the definitions live beside the code they reach into
  * (src/synth/synthesise.c, src/synth/torus.c, gpu/synth_gpu.c).
@@ -43,12 +43,6 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
                                   const int (*margins)[BTF_MAX_LEVELS],
                                   const btf_synth_opts *opts, btf_rows_fn fn, void *user,
                                   btf_error *err);
-
-/* Streaming colour matching keeps a whole image of at most `bytes` (0: the
- * default, BTF_MATCH_WHOLE_BYTES) and synthesises a larger one twice, so
- * that tests can reach the two-pass path with small images. Process-wide:
- * set it before synthesising, not during. */
-void btf_synth_set_match_whole_bytes(size_t bytes);
 
 /* GPU buffers of at most `bytes` (0: the device's maxStorageBufferRange),
  * so that tests can force the tiling of btf_gpu_synthesise. */

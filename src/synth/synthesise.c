@@ -420,17 +420,12 @@ static btf_status matched_twice(const btf_model *m, int subspace,
     return rc;
 }
 
-static size_t match_whole_bytes = BTF_MATCH_WHOLE_BYTES;
-
-void btf_synth_set_match_whole_bytes(size_t bytes)
+/* Whether colour matching keeps a width x height image whole (o's limit,
+ * btf_synth_opts.match_whole_bytes; 0: BTF_MATCH_WHOLE_BYTES). */
+static int match_keeps_whole(const btf_synth_opts *o, int width, int height)
 {
-    match_whole_bytes = bytes ? bytes : BTF_MATCH_WHOLE_BYTES;
-}
-
-/* Whether colour matching keeps a width x height image whole. */
-static int match_keeps_whole(int width, int height)
-{
-    return (size_t)width * height * 3 * sizeof(float) <= match_whole_bytes;
+    size_t limit = o->match_whole_bytes ? o->match_whole_bytes : BTF_MATCH_WHOLE_BYTES;
+    return (size_t)width * height * 3 * sizeof(float) <= limit;
 }
 
 int btf_synth_holds_whole(const btf_model *m, int subspace, const btf_synth_opts *opts)
@@ -441,7 +436,7 @@ int btf_synth_holds_whole(const btf_model *m, int subspace, const btf_synth_opts
     return check_subspace(m, subspace, &quiet) == BTF_OK &&
            output_size(m, subspace, &o, &w, &h, &quiet) == BTF_OK &&
            btf_colour_match_wanted(m, subspace, o.match_colours, &match, &quiet) == BTF_OK &&
-           match && match_keeps_whole(w, h);
+           match && match_keeps_whole(&o, w, h);
 }
 
 static btf_status matched_rows(const btf_model *m, int subspace,
@@ -451,7 +446,7 @@ static btf_status matched_rows(const btf_model *m, int subspace,
     btf_synth_opts plain = *o;
     plain.match_colours = -1;
     plain.width = width, plain.height = height;
-    if (!match_keeps_whole(width, height))
+    if (!match_keeps_whole(o, width, height))
         return matched_twice(m, subspace, margins, &plain, fn, user, err);
     btf_image img;
     btf_status rc = btf_image_alloc(&img, width, height, 3, err);

@@ -5,8 +5,8 @@
  * `analyse --family rf`), read by one call that sniffs its signature, and
  * then described, rendered (CPU or GPU) and reported without the caller
  * naming its family. src/material/ dispatches to each family's table of
- * operations (src/material/family.h); a new family is one folder and one
- * line there. docs/design.md, "Materials".
+ * operations (src/material/family.h); a new family is one folder, its
+ * table there and one line in the list. docs/design.md, "Materials".
  */
 #ifndef BTFCAR_MATERIAL_H
 #define BTFCAR_MATERIAL_H

@@ -1,9 +1,9 @@
 /*
  * family.h — what a model family gives the material interface
  * (btfcar/material.h): its signature test, its reader, its description, its
- * renders and its report, as one table of operations a family defines in
- * its own folder (src/model/model_family.c, src/rf/rf_family.c) and
- * material.c lists. The table holds what differs between families; what
+ * renders and its report, as one table of operations per family
+ * (src/material/car.c, src/material/rf.c: the top layer, over the family's
+ * own folder, the renderers, gpu/ and the report) that material.c lists. The table holds what differs between families; what
  * they share (reading the file's head, naming the file in messages, the
  * caller's options) stays in material.c. Private to the library.
  */
@@ -42,7 +42,7 @@ typedef struct btf_family_ops {
                          btf_error *err);
 } btf_family_ops;
 
-/* The families (src/model/model_family.c, src/rf/rf_family.c). */
+/* The families (src/material/car.c, src/material/rf.c). */
 extern const btf_family_ops btf_car_family;
 extern const btf_family_ops btf_rf_family;
 

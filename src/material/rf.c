@@ -1,5 +1,5 @@
 /*
- * rf_family.c — the reflectance-field model (Meseth, Müller & Klein 2003;
+ * rf.c — the reflectance-field model (Meseth, Müller & Klein 2003;
  * docs/rf.md) as a family of the material interface
  * (src/material/family.h): its file, its description (rf_describe.c), its
  * renders on the CPU (rf_render.c) or the GPU (gpu/rf_render_gpu.c) and its

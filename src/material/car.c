@@ -1,5 +1,5 @@
 /*
- * model_family.c — the CAR model (Haindl & Filip 2007) as a family of the
+ * car.c — the CAR model (Haindl & Filip 2007) as a family of the
  * material interface (src/material/family.h): its file, its description
  * (model_describe.c), its renders on the CPU (src/render/) or the GPU
  * (gpu/render_gpu.c) and its report (src/report/).

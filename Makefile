@@ -81,7 +81,7 @@ help:
 	@echo "make check-exports  libbtfcar.so exports exactly the functions of include/btfcar.h"
 	@echo "make check-install  install into build/check-install; link a program by pkg-config"
 	@echo "make check-shaders  compile every GLSL shader to SPIR-V afresh and validate it (spirv-val)"
-	@echo "make check-layering  no two object files of the library call each other"
+	@echo "make check-layering  no call cycle between object files, no call up the layers of docs/design.md"
 
 deps:
 	@sh tools/install-deps.sh

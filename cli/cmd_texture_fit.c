@@ -1,6 +1,6 @@
 /* cmd_texture_fit.c — btfcar texture-fit: the multi-scale colour CAR model of
  * one ordinary texture (Haindl & Filip 2007, section II.C; library:
- * src/car/subspace_fit.c). */
+ * src/analyse/subspace_fit.c). */
 #include "cli.h"
 
 #include <math.h>

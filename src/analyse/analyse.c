@@ -5,7 +5,7 @@
  * photometric stereo on the view closest to the normal (II.B,
  * range/photostereo.c) and keeps it as a small tile, averaged here; stage 3
  * models each subspace image with the multi-scale colour CAR model (II.C,
- * car/subspace_fit.c).
+ * analyse/subspace_fit.c).
  */
 #include <stdio.h>
 #include "car/car.h"

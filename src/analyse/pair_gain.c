@@ -19,22 +19,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Gains are kept as log2 on a grid of 1/64 octave over [-2, 2): 1.1 %
- * steps, one signed byte a channel (docs/model-format.md, "GAIN"). A
- * pair more than four times off its subspace is held there. */
-#define GAIN_STEPS_PER_OCTAVE 64.0
-int btf_gain_code(float g)
-{
-    double l = log2(g > 0.0f && isfinite(g) ? (double)g : 1.0);
-    double q = floor(l * GAIN_STEPS_PER_OCTAVE + 0.5);
-    return q < -128.0 ? -128 : q > 127.0 ? 127 : (int)q;
-}
-
-float btf_gain_value(int q)
-{
-    return (float)exp2((double)q / GAIN_STEPS_PER_OCTAVE);
-}
-
 /* The flat surface's l_z floor (BTF_FLAT_MIN_Z of the renderer). */
 #define FLAT_MIN_Z 0.05
 

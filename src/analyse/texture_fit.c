@@ -1,7 +1,7 @@
 /*
  * texture_fit.c — the model of one ordinary colour texture (Haindl & Filip
  * 2007, section II.C without II.A and II.B): a model of one subspace, fitted
- * by car/subspace_fit.c, with no direction sets, no index table and no
+ * by analyse/subspace_fit.c, with no direction sets, no index table and no
  * range map, and the margins synthesis will use kept with it, and the
  * marginal transfer that keeps the texture's histogram.
  */

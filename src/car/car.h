@@ -46,13 +46,13 @@ btf_status btf_car_fit_complement(const double *band, const double *sub, int w, 
                                   btf_car_fit_info *info, btf_error *err);
 
 /* The CAR models of one band's pyramid of `levels` levels, out[0] the
- * finest (car/subspace_fit.c): the coarsest is fitted to the low-pass, every
+ * finest (analyse/subspace_fit.c): the coarsest is fitted to the low-pass, every
  * finer one by btf_car_fit_complement. what names the band in warnings. */
 btf_status btf_fit_band_levels(const double *band, int w, int h, int levels,
                                const btf_car_fit_opts *car, const char *what, btf_car_band *out,
                                btf_error *err);
 
-/* The measured choice of the pyramid depth (car/levels.c, docs/model.md
+/* The measured choice of the pyramid depth (analyse/levels.c, docs/model.md
  * "Choosing the levels"): for 1 .. btf_levels_cap(w, h) levels, the band's
  * models are fitted and synthesised, and the depth whose synthesis' octave
  * energies come closest to the band's wins, at most max_levels of them (0:

@@ -7,7 +7,7 @@
  * roots close to the unit circle (from about 0.98): its correlation
  * outreaches the synthesis margins (car/margin.c), so that synthesis misses
  * part of its variance, and the measured choice of the pyramid depth
- * (car/levels.c) judges the depths by syntheses. This was the fit's
+ * (analyse/levels.c) judges the depths by syntheses. This was the fit's
  * stability criterion until issue 29, which found that it misses slow
  * growth (a root of 1.002 grows by 1.5 over 192 columns); as a rule of
  * quality on top of the exact test it keeps fits as they were, but where

@@ -1,7 +1,7 @@
 /*
  * car.c — the CAR model (Haindl & Filip 2007) as a family of the
  * material interface (src/material/family.h): its file, its description
- * (model_describe.c), its renders on the CPU (src/render/) or the GPU
+ * (car_describe.c), its renders on the CPU (src/render/) or the GPU
  * (gpu/render_gpu.c) and its report (src/report/).
  */
 #include "material/family.h"
@@ -36,11 +36,11 @@ static void car_dirsets(const void *model, const btf_dirset **views, const btf_d
     *lights = &m->lights;
 }
 
-static btf_status car_describe(const void *model, const describe_file *file, FILE *out,
-                               int json, btf_error *err)
+static btf_status car_describe_ops(const void *model, const describe_file *file, FILE *out,
+                                   int json, btf_error *err)
 {
     (void)err;
-    model_describe(model, file, out, json);
+    car_describe(model, file, out, json);
     return BTF_OK;
 }
 
@@ -111,7 +111,7 @@ const btf_family_ops btf_car_family = {
     .read = car_read,
     .free = car_free,
     .dirsets = car_dirsets,
-    .describe = car_describe,
+    .describe = car_describe_ops,
     .renders = car_renders,
     .render_flat = car_render_flat,
     .render_scene = car_render_scene,

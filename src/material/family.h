@@ -42,6 +42,14 @@ typedef struct btf_family_ops {
                          btf_error *err);
 } btf_family_ops;
 
+/* btfcar info on a CAR model (car_describe.c): text, or the JSON document
+ * of docs/model-format.md. */
+void car_describe(const btf_model *m, const describe_file *file, FILE *f, int json);
+/* The same for a reflectance-field model (rf_describe.c; "format":
+ * "btfcar-rf-model"). */
+btf_status rf_describe(const btf_rf_model *m, const describe_file *file, FILE *f, int json,
+                       btf_error *err);
+
 /* The families (src/material/car.c, src/material/rf.c). */
 extern const btf_family_ops btf_car_family;
 extern const btf_family_ops btf_rf_family;

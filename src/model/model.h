@@ -9,7 +9,6 @@
 #define BTF_MODEL_H
 
 #include "core/core.h"
-#include "core/describe.h"
 
 /* Limits (docs/model-format.md, "Validation"). */
 #define BTF_MODEL_MAX_DIRS 4096
@@ -163,9 +162,12 @@ void btf_structure_divide(btf_image *img, const btf_model *m, const btf_structur
 btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img, btf_model *m,
                                  int subspace, btf_error *err);
 
-/* The pair gains (analyse/pair_gain.c, docs/model.md "Pair gains"): the
- * file's code of a gain (log2 on a grid of 1/64 octave, -128..127) and its
- * value. */
+/* The file's codes (model_codes.c): a Lab value of channel c as a 16-bit
+ * code and back (monotone; decode(code(v)) is what a file keeps of v); a
+ * pair gain (docs/model.md "Pair gains") as log2 on a grid of 1/64 octave,
+ * -128..127, and its value. */
+unsigned btf_lab_code(int c, float v);
+float btf_lab_decode(int c, unsigned code);
 int btf_gain_code(float g);
 float btf_gain_value(int q);
 /* m->gain from the images' mean colours (btf_segmentation.means) and the
@@ -182,9 +184,5 @@ btf_status btf_horizon_map(const float *h, int w, int hh, int wrap, int threads,
  * shortest independent offsets (x0, y0, x1, y1) at which its
  * autocorrelation peaks; 1 when found, else 0 and zeros. */
 int btf_structure_lattice(const btf_model *m, int lattice[4]);
-
-/* btfcar info on a CAR model (model_describe.c): text, or the JSON document
- * of docs/model-format.md. */
-void model_describe(const btf_model *m, const describe_file *file, FILE *f, int json);
 
 #endif

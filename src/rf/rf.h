@@ -17,7 +17,6 @@
 #include "btfcar.h"
 #include "rf/rf_map.h"
 #include "core/core.h"
-#include "core/describe.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -241,10 +240,5 @@ void rf_quantise_field(const float *vals, size_t texels, int slots, float *lo, f
 /* The chromaticity factors (sum of rgb / sum of Y, 1 1 1 for a dark texel),
  * clamped to [0, 64]. */
 void rf_chroma(double r, double g, double b, float out[3]);
-
-/* btfcar info on a reflectance-field model (rf_describe.c): text, or one
- * JSON document ("format": "btfcar-rf-model"). */
-btf_status rf_describe(const btf_rf_model *m, const describe_file *file, FILE *f, int json,
-                       btf_error *err);
 
 #endif

@@ -526,27 +526,3 @@ btf_status btf_lab_quantiles(const btf_image *img, float scale, size_t most,
     btf_lab_sample_free(&s);
     return rc;
 }
-
-/* The model file keeps each Lab quantile as a 16-bit code over its
- * channel's range (docs/model-format.md, "LABQ"): steps of 0.0015 in L*
- * and 0.0039 in a*, b*, far below a just noticeable difference (about 1). */
-static double lab_low(int c)
-{
-    return c == 0 ? 0.0 : -128.0;
-}
-
-static double lab_span(int c)
-{
-    return c == 0 ? 100.0 : 256.0;
-}
-
-unsigned btf_lab_code(int c, float v)
-{
-    double t = ((double)v - lab_low(c)) / lab_span(c) * 65535.0;
-    return t <= 0.0 ? 0u : t >= 65535.0 ? 65535u : (unsigned)lround(t);
-}
-
-float btf_lab_decode(int c, unsigned code)
-{
-    return (float)(lab_low(c) + lab_span(c) * (double)(code > 65535u ? 65535u : code) / 65535.0);
-}

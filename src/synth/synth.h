@@ -219,10 +219,6 @@ btf_status btf_match_synthesised(const btf_model *m, int subspace, btf_image *im
 /* Streaming colour matching keeps the whole image when it takes at most
  * this many bytes, else synthesises twice (synthesise.c). */
 #define BTF_MATCH_WHOLE_BYTES ((size_t)256 << 20)
-/* A Lab value of channel c as the model file's 16-bit code and back
- * (monotone; decode(code(v)) is what a file keeps of v). */
-unsigned btf_lab_code(int c, float v);
-float btf_lab_decode(int c, unsigned code);
 
 /* -------------------------------------------------------------- marginal.c */
 

@@ -3,7 +3,7 @@
  * spectral decorrelation into 3 bands (car/decorrelate.c), a
  * Gaussian-Laplacian pyramid per band (car/pyramid.c) and a CAR model per
  * sub-band (car/car_fit.c), the pyramid's depth measured where not given
- * (car/levels.c).
+ * (analyse/levels.c).
  */
 #include <stdio.h>
 #include "core/core.h"

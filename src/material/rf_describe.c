@@ -7,7 +7,7 @@
  * sample, the surface its coordinate map covers and what each costs.
  * The family's describe (src/material/: btf_material_describe).
  */
-#include "core/describe.h"
+#include "material/family.h"
 #include "rf/rf.h"
 
 #include <stdlib.h>

@@ -1,12 +1,12 @@
 /*
- * model_describe.c — btfcar info on a CAR model file (MODEL.btfcar): its direction
- * sets, index table, range map (Haindl & Filip 2007, section II.B) and every
+ * car_describe.c — btfcar info on a CAR model file (MODEL.btfcar): its
+ * direction sets, index table, range map (Haindl & Filip 2007, section II.B) and every
  * subspace's spectral basis and CAR parameters per band and level (section
  * II.C) with each band's synthesis margin, as text or (--json) as the JSON
  * document of docs/model-format.md ("btfcar info --json"). The CAR
  * family's describe (src/material/: btf_material_describe).
  */
-#include "core/describe.h"
+#include "material/family.h"
 #include "model/model.h"
 
 #include <math.h>
@@ -313,7 +313,7 @@ static void model_json(FILE *f, const btf_model *m, const describe_file *mf)
     fputs("}\n", f);
 }
 
-void model_describe(const btf_model *m, const describe_file *file, FILE *f, int json)
+void car_describe(const btf_model *m, const describe_file *file, FILE *f, int json)
 {
     if (json)
         model_json(f, m, file);

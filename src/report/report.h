@@ -106,6 +106,10 @@ void btf_colour_scale(double t, unsigned char rgb[3]);
  * font; then a white background. */
 void btf_svg_begin(btf_buf *b, double width, double height);
 void btf_svg_end(btf_buf *b);
+/* Writes b, which a plot function filled and answered made for, to path
+ * (atomically) when made is BTF_OK, else names path in err's message; frees
+ * b and returns the status: the *_write of every plot. */
+btf_status btf_svg_save(const char *path, btf_buf *b, btf_status made, btf_error *err);
 /* v with at most 2 decimals, trailing zeros dropped, into out (32 bytes). */
 const char *btf_svg_num(char out[32], double v);
 /* A value for a label: 4 significant digits, no exponent between 1e-4 and

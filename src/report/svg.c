@@ -4,6 +4,7 @@
  * axes with "nice" 1-2-5 ticks (linear or log10). The plots themselves are
  * svg_heatmap.c and svg_scatter.c.
  */
+#include "core/core.h"
 #include "report/report.h"
 
 #include <math.h>
@@ -26,6 +27,16 @@ void btf_svg_begin(btf_buf *b, double width, double height)
 void btf_svg_end(btf_buf *b)
 {
     btf_buf_puts(b, "</svg>\n");
+}
+
+btf_status btf_svg_save(const char *path, btf_buf *b, btf_status made, btf_error *err)
+{
+    if (made == BTF_OK)
+        made = btf_buf_write(b, path, err);
+    else
+        btf_error_name(err, path);
+    btf_buf_free(b);
+    return made;
 }
 
 const char *btf_svg_num(char out[32], double v)

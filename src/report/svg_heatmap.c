@@ -297,11 +297,5 @@ btf_status btf_svg_heatmap(const btf_heatmap *h, btf_buf *out, btf_error *err)
 btf_status btf_svg_heatmap_write(const char *path, const btf_heatmap *h, btf_error *err)
 {
     btf_buf b = {0};
-    btf_status st = btf_svg_heatmap(h, &b, err);
-    if (st == BTF_OK)
-        st = btf_buf_write(&b, path, err);
-    else
-        btf_error_name(err, path);
-    btf_buf_free(&b);
-    return st;
+    return btf_svg_save(path, &b, btf_svg_heatmap(h, &b, err), err);
 }

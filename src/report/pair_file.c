@@ -1,21 +1,19 @@
 /*
  * pair_file.c — a measured pair's picture in a report folder: its name,
- * shared by the orchestration (which writes it) and the page and JSON
+ * shared by the measurement (which writes it) and the page and JSON
  * writers (which name it), so that the three agree; and the picture itself
- * (measured | model), the same for the CAR and the reflectance-field
- * reports.
+ * (measured | model), the same for every family's report.
  */
 #include "core/core.h"
 #include "report/report.h"
-#include "report/report_data.h"
+#include "report/report_base.h"
 
 #include <stdio.h>
 #include <string.h>
 
-void btf_report_pair_file(const btf_report_data *d, int pair, char *buf, size_t n)
+void btf_report_pair_file(int view, int light, char *buf, size_t n)
 {
-    const btf_pair_quality *p = &d->q.pairs[pair];
-    snprintf(buf, n, "pair-v%02d-l%02d.png", p->view, p->light);
+    snprintf(buf, n, "pair-v%02d-l%02d.png", view, light);
 }
 
 /* measured | model, side by side with a 4-pixel dark gap. */
@@ -39,8 +37,8 @@ static btf_status side_by_side(const btf_image *a, const btf_image *b, btf_image
     return BTF_OK;
 }
 
-btf_status btf_report_write_pair(const char *dir, const char *name, const btf_image *meas,
-                                 const btf_image *model, btf_error *err)
+static btf_status write_pair(const char *dir, const char *name, const btf_image *meas,
+                             const btf_image *model, btf_error *err)
 {
     char path[4096];
     btf_image both = {0};
@@ -50,5 +48,15 @@ btf_status btf_report_write_pair(const char *dir, const char *name, const btf_im
     if (rc == BTF_OK)
         rc = btf_image_write_png(path, &both, err);
     btf_image_free(&both);
+    return rc;
+}
+
+btf_status btf_report_picture(btf_report_base *r, const char *dir, int pair, int view, int light,
+                              const btf_image *measured, const btf_image *model, btf_error *err)
+{
+    char name[64];
+    btf_report_pair_file(view, light, name, sizeof name);
+    btf_status rc = write_pair(dir, name, measured, model, err);
+    r->pictured[pair] = rc == BTF_OK;
     return rc;
 }

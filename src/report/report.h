@@ -260,12 +260,4 @@ void btf_raw_bytes_of(const btf_dataset_info *info, btf_raw_bytes *out);
 int btf_sweep_point_parse(const char *text, size_t n, const char *fingerprint,
                           btf_sweep_point *p);
 
-/* ------------------------------------------------------ pair pictures */
-
-/* measured | model side by side, a 4-pixel dark gap between, written as
- * the PNG dir/name (report/pair_file.c): the picture of one measured pair
- * in every report. */
-btf_status btf_report_write_pair(const char *dir, const char *name, const btf_image *measured,
-                                 const btf_image *model, btf_error *err);
-
 #endif

@@ -19,11 +19,6 @@
 #define BTF_MODEL_MAX_RANGE_SAMPLES (1L << 24)
 #define BTF_MODEL_MAX_NAME 31       /* bytes of a direction set's name */
 
-/* "NAME: message" with the given code (every model message names its file
- * or buffer). */
-btf_status btf_model_fail(btf_error *err, btf_status code, const char *name, const char *fmt,
-                          ...) BTF_PRINTF(4, 5);
-
 /* Every rule of docs/model-format.md that a model in memory must meet. code
  * is BTF_E_DATA when writing (the caller's model is wrong) and BTF_E_FORMAT
  * when reading (the file is). One validator serves both directions, so

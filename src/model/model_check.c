@@ -6,12 +6,12 @@
  * before writing and the decoder after reading, so the two agree on what a
  * model is, and the decoder trusts nothing it has not checked.
  */
-#include <stdio.h>
 #include "car/car.h"
+#include "container/container.h"
 #include "model/model.h"
 
 #include <math.h>
-#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -19,20 +19,11 @@
  * basis by transposition. */
 #define BASIS_TOL 1e-3
 
+#define failf btf_box_fail
 
-btf_status btf_model_fail(btf_error *err, btf_status code, const char *name, const char *fmt,
-                          ...)
-{
-    char msg[768];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    return btf_fail(err, code, "%s: %s", name, msg);
-}
-
-#define failf btf_model_fail
-
+/* A set of no directions is a model of a single texture; the pole at
+ * several phi is left to the renderer, which refuses it: a set of such
+ * images is a measurement, if not one it interpolates. */
 static btf_status check_dirset(const btf_dirset *s, const char *what, const char *name,
                                btf_status code, btf_error *err)
 {
@@ -48,27 +39,20 @@ static btf_status check_dirset(const btf_dirset *s, const char *what, const char
     if (len > BTF_MODEL_MAX_NAME)
         return failf(err, code, name, "%s: set name is not terminated (expected at most %d characters)",
                      what, BTF_MODEL_MAX_NAME);
-    for (size_t i = 0; i < len; i++)
-        if (s->name[i] < 0x20 || s->name[i] > 0x7e)
-            return failf(err, code, name, "%s: set name has byte 0x%02x (expected printable ASCII)",
-                         what, (unsigned char)s->name[i]);
-    for (int i = 0; i < s->count; i++) {
-        btf_dir d = s->dirs[i];
-        if (!(d.theta >= 0.0 && d.theta <= 90.0) || !(d.phi >= 0.0 && d.phi < 360.0))
+    size_t bad = btf_box_name_unprintable(s->name, len);
+    if (bad < len)
+        return failf(err, code, name, "%s: set name has byte 0x%02x (expected printable ASCII)",
+                     what, (unsigned char)s->name[bad]);
+    for (int i = 0; i < s->count; i++)
+        if (!btf_box_dir_in_range(s->dirs[i]))
             return failf(err, code, name,
                          "%s: direction %d is (theta %g, phi %g) (expected theta in [0, 90], "
-                         "phi in [0, 360))", what, i, d.theta, d.phi);
-    }
-    /* The same direction twice (theta -0 is 0) would give one direction two
-     * rows of the index table; the renderer cannot triangulate it either.
-     * The pole at several phi is left to the renderer, which refuses it: a
-     * set of such images is a measurement, if not one it interpolates. */
-    for (int i = 0; i < s->count; i++)
-        for (int j = i + 1; j < s->count; j++)
-            if (s->dirs[i].theta == s->dirs[j].theta && s->dirs[i].phi == s->dirs[j].phi)
-                return failf(err, code, name, "%s: directions %d and %d are both (theta %g, phi "
-                             "%g) (expected distinct directions)", what, i, j,
-                             s->dirs[i].theta, s->dirs[i].phi);
+                         "phi in [0, 360))", what, i, s->dirs[i].theta, s->dirs[i].phi);
+    int j, i = btf_box_dirs_repeat(s, &j);
+    if (i >= 0)
+        return failf(err, code, name, "%s: directions %d and %d are both (theta %g, phi %g) "
+                     "(expected distinct directions)", what, i, j, s->dirs[i].theta,
+                     s->dirs[i].phi);
     return BTF_OK;
 }
 

@@ -4,7 +4,7 @@
  * RANG section (docs/model-format.md, "RANG: the range-map tile"): the
  * canonical quantisation grid of the heights and the prediction coding of
  * the quantised samples (a plane predictor from three neighbours, residuals
- * zigzag-mapped). model/model_file.c writes and reads the section with
+ * zigzag-mapped). model/model_maps.c writes and reads the section with
  * these; declarations in model/range_code.h.
  */
 #include "model/range_code.h"

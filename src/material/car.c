@@ -7,16 +7,10 @@
 #include "material/family.h"
 #include "model/model.h"
 
-#include <string.h>
-
-/* The signature's first bytes (docs/model-format.md). Only these are
- * compared, so that a file whose line endings a text-mode transfer mangled
- * still goes to the model reader, which says so. */
-static const unsigned char CAR_STEM[7] = {0x89, 'B', 'T', 'F', 'C', 'A', 'R'};
 
 static int car_sniff(const unsigned char *data, size_t size)
 {
-    return size >= sizeof CAR_STEM && memcmp(data, CAR_STEM, sizeof CAR_STEM) == 0;
+    return btf_model_sniff(data, size);
 }
 
 static btf_status car_read(const char *path, void *model, btf_error *err)

@@ -180,4 +180,8 @@ btf_status btf_horizon_map(const float *h, int w, int hh, int wrap, int threads,
  * autocorrelation peaks; 1 when found, else 0 and zeros. */
 int btf_structure_lattice(const btf_model *m, int lattice[4]);
 
+/* 1 when the bytes start like a CAR model file (the signature's stem, as
+ * btf_rf_sniff for the reflectance field's; model_file.c). */
+int btf_model_sniff(const unsigned char *data, size_t size);
+
 #endif

@@ -175,6 +175,11 @@ btf_status btf_model_write(const char *path, const btf_model *m, btf_error *err)
 
 /* -------------------------------------------------------------- decoding */
 
+int btf_model_sniff(const unsigned char *data, size_t size)
+{
+    return btf_box_stem(SIGNATURE, data, size);
+}
+
 /* The signature comes first: a foreign file, a truncated one and one mangled
  * by a text-mode transfer each get their own message. */
 static btf_status check_signature(const unsigned char *data, size_t size, const char *name,

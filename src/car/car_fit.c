@@ -41,6 +41,7 @@
 #include <stdio.h>
 #include "core/core.h"
 #include "car/car.h"
+#include "core/linalg.h"
 
 #include <float.h>
 #include <math.h>
@@ -69,46 +70,6 @@ int btf_car_candidate_offsets(btf_offset offsets[BTF_CAR_MAX_NEIGHBOURS])
 {
     memcpy(offsets, FAMILY, sizeof FAMILY);
     return BTF_CAR_MAX_NEIGHBOURS;
-}
-
-/* ---------------------------------------------------------------- algebra */
-
-/* Cholesky factor of the leading m x m block of a (stride lda) into l; 0 on
- * success, -1 if not positive definite. */
-static int cholesky(const double *a, int lda, int m, double *l)
-{
-    for (int i = 0; i < m; i++)
-        for (int j = 0; j <= i; j++) {
-            double s = a[i * lda + j];
-            for (int k = 0; k < j; k++)
-                s -= l[i * m + k] * l[j * m + k];
-            if (i == j) {
-                if (!(s > 0.0))
-                    return -1;
-                l[i * m + i] = sqrt(s);
-            } else {
-                l[i * m + j] = s / l[j * m + j];
-            }
-        }
-    return 0;
-}
-
-/* Solves (L L^T) x = b. */
-static void chol_solve(const double *l, int m, const double *b, double *x)
-{
-    double y[BTF_CAR_MAX_NEIGHBOURS];
-    for (int i = 0; i < m; i++) {
-        double s = b[i];
-        for (int k = 0; k < i; k++)
-            s -= l[i * m + k] * y[k];
-        y[i] = s / l[i * m + i];
-    }
-    for (int i = m - 1; i >= 0; i--) {
-        double s = y[i];
-        for (int k = i + 1; k < m; k++)
-            s -= l[k * m + i] * x[k];
-        x[i] = s / l[i * m + i];
-    }
 }
 
 /* ----------------------------------------------------------- accumulation */
@@ -185,9 +146,10 @@ static int fit_prefix(const double *v, int m, int eta, long t, double *gamma, do
             a[i * eta + j] = v[(i + 1) * m + (j + 1)] + (i == j ? PRIOR_V0 : 0.0);
         vxy[i] = v[(i + 1) * m];
     }
-    if (cholesky(a, eta, eta, l) != 0)
+    if (btf_linalg_cholesky(a, eta, 0, eta, l) != 0)
         return -1;
-    chol_solve(l, eta, vxy, gamma);
+    memcpy(gamma, vxy, (size_t)eta * sizeof *gamma);
+    btf_linalg_cholesky_solve(l, eta, gamma);
     double fit = 0.0, logdet = 0.0;
     for (int i = 0; i < eta; i++) {
         fit += vxy[i] * gamma[i];

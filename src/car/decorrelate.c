@@ -9,52 +9,19 @@
  */
 #include "core/core.h"
 #include "car/car.h"
+#include "core/linalg.h"
 
 #include <math.h>
 #include <string.h>
 
-/* Eigen-decomposition of a symmetric 3 x 3 matrix by cyclic Jacobi
- * rotations: plain, robust and deterministic. a is destroyed; vectors come
- * out as the columns of v. */
-static void jacobi3(double a[3][3], double v[3][3], double ev[3])
-{
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            v[i][j] = i == j;
-    for (int sweep = 0; sweep < 64; sweep++) {
-        double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
-        double scale = fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
-        if (off <= 1e-300 || off <= 1e-17 * scale)
-            break;
-        for (int p = 0; p < 2; p++)
-            for (int q = p + 1; q < 3; q++) {
-                if (a[p][q] == 0.0)
-                    continue;
-                double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-                double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
-                if (!isfinite(t))
-                    t = 0.0; /* theta overflowed: the rotation is negligible */
-                double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
-                for (int k = 0; k < 3; k++) { /* A <- J^T A J */
-                    double akp = a[k][p], akq = a[k][q];
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for (int k = 0; k < 3; k++) {
-                    double apk = a[p][k], aqk = a[q][k];
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for (int k = 0; k < 3; k++) {
-                    double vkp = v[k][p], vkq = v[k][q];
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
-            }
-    }
-    for (int i = 0; i < 3; i++)
-        ev[i] = a[i][i];
-}
+/* The eigenvectors of the colour covariance by cyclic Jacobi rotations
+ * (core/linalg.c): plain, robust and deterministic. This rule measures the
+ * off-diagonal part by absolute values, stops at 1e-17 of the diagonal and
+ * takes a rotation whose tangent overflowed as negligible (tangent 0); the
+ * models analysed so far were made with it, and another rule could change
+ * their bits. */
+static const btf_linalg_jacobi_rule COLOUR_RULE = {
+    .max_sweeps = 64, .abs_sums = 1, .tiny = 1e-300, .relative = 1e-17, .finite_tangent = 1};
 
 btf_status btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
                     btf_error *err)
@@ -86,7 +53,7 @@ btf_status btf_pca3(const btf_image *img, float mean[3], float basis[9], double 
                 return btf_fail(err, BTF_E_NUMERIC, "colour covariance is not finite "
                                 "(pixel values too large)");
     double v[3][3], ev[3];
-    jacobi3(c, v, ev);
+    btf_linalg_jacobi(&c[0][0], 3, &COLOUR_RULE, ev, &v[0][0]);
     /* Order bands by decreasing variance; fix each vector's sign so that its
      * largest component is positive (one basis per image, run to run). */
     int order[3] = {0, 1, 2};

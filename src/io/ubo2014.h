@@ -10,7 +10,8 @@
  *   ubo_decode.c   one (view, light) image from the factors or the values,
  *                  colour models, the cosine rule
  *   ubo_open.c     a file mapped with mmap, its direction sets
- *   ubo_svd.c      the writers' linear algebra (eigenpairs, Cholesky)
+ *   ubo_svd.c      the writers' eigenpairs (the Jacobi and Cholesky of
+ *                  core/linalg.c beneath)
  *   ubo_out.c      what the writers share: header bytes, the output file,
  *                  stored scalars, the images of the callback
  *   ubo_factor.c   the truncated SVD of images for DFMF and FMF
@@ -103,10 +104,6 @@ void ubo_close(ubo_open_file *o);
  * descending into val[k], eigenvectors as the columns of vec (n x k,
  * row-major). Deterministic. BTF_E_NUMERIC if it does not converge. */
 btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_error *err);
-/* Cholesky of the k x k h (its lower triangle, in place); 0 if it is not
- * positive definite. ubo_chol_solve solves (L L') x = b in place. */
-int ubo_cholesky(double *h, int k);
-void ubo_chol_solve(const double *l, int k, double *b);
 
 /* ---- writing (ubo_out.c) ---- */
 

@@ -22,6 +22,7 @@
  */
 #include <stdio.h>
 #include "core/core.h"
+#include "core/linalg.h"
 #include "io/ubo2014.h"
 
 #include <math.h>
@@ -99,7 +100,7 @@ static btf_status finish_channel(chan *ch, int s, uint64_t px, btf_error *err)
         for (int i = 0; i < kc; i++)
             for (int j = 0; j <= i; j++)
                 ch->chol[i * kc + j] += (double)ch->sxv[r * kc + i] * ch->sxv[r * kc + j];
-    if (!ubo_cholesky(ch->chol, kc))
+    if (btf_linalg_cholesky(ch->chol, kc, 0, kc, ch->chol) != 0)
         return btf_fail(err, BTF_E_NUMERIC, "the rounded S x V's columns are dependent; use fewer "
                         "components");
     return BTF_OK;
@@ -129,7 +130,7 @@ static void fit_row(const fact *f, const chan *ch, const float *x, float *urow, 
         for (int j = 0; j < kc; j++)
             work[j] += xv * sr[j];
     }
-    ubo_chol_solve(ch->chol, kc, work);
+    btf_linalg_cholesky_solve(ch->chol, kc, work);
     for (int j = 0; j < kc; j++)
         urow[j] = ubo_stored((float)work[j], f->s);
     for (uint64_t r = 0; r < f->px; r++) {

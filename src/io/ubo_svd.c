@@ -7,67 +7,27 @@
  * eigenvectors (the factorisation the notes' §3 stores as U and S x V).
  *
  * Small matrices (n <= 256) are diagonalised whole by cyclic Jacobi
- * rotations (Golub & Van Loan, section 8.5); larger ones by subspace
+ * rotations (core/linalg.c); larger ones by subspace
  * iteration with a block of k + 8 vectors from a fixed start, and a
  * Rayleigh-Ritz step (Jacobi on the block) at the end. Both are
  * deterministic: the same matrix gives the same bits. Each eigenvector's
  * sign is fixed so that its largest component is positive.
- *
- * And the Cholesky factorisation that fits the stored factors to each
- * other once one side is rounded (a K x K least-squares solve per row).
  */
 #include <stdio.h>
 #include "core/core.h"
+#include "core/linalg.h"
 #include "io/ubo2014.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Eigenvalues of the symmetric n x n a (destroyed) into val, eigenvectors
- * as the columns of vec (n x n), unsorted. */
+/* The writers' Jacobi rule: sums of squares, at most 60 sweeps; another
+ * rule could change the bits of the files written. */
 static void jacobi(double *a, int n, double *val, double *vec)
 {
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++)
-            vec[(size_t)i * n + j] = i == j;
-    for (int sweep = 0; sweep < 60; sweep++) {
-        double off = 0, diag = 0;
-        for (int i = 0; i < n; i++) {
-            diag += a[(size_t)i * n + i] * a[(size_t)i * n + i];
-            for (int j = i + 1; j < n; j++)
-                off += a[(size_t)i * n + j] * a[(size_t)i * n + j];
-        }
-        if (off == 0 || off <= 1e-30 * diag)
-            break;
-        for (int p = 0; p < n; p++)
-            for (int q = p + 1; q < n; q++) {
-                double apq = a[(size_t)p * n + q];
-                if (apq == 0)
-                    continue;
-                double app = a[(size_t)p * n + p], aqq = a[(size_t)q * n + q];
-                double theta = (aqq - app) / (2 * apq);
-                double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1));
-                double c = 1 / sqrt(t * t + 1), s = t * c;
-                for (int r = 0; r < n; r++) {
-                    double arp = a[(size_t)r * n + p], arq = a[(size_t)r * n + q];
-                    a[(size_t)r * n + p] = c * arp - s * arq;
-                    a[(size_t)r * n + q] = s * arp + c * arq;
-                }
-                for (int r = 0; r < n; r++) {
-                    double apr = a[(size_t)p * n + r], aqr = a[(size_t)q * n + r];
-                    a[(size_t)p * n + r] = c * apr - s * aqr;
-                    a[(size_t)q * n + r] = s * apr + c * aqr;
-                }
-                for (int r = 0; r < n; r++) {
-                    double vrp = vec[(size_t)r * n + p], vrq = vec[(size_t)r * n + q];
-                    vec[(size_t)r * n + p] = c * vrp - s * vrq;
-                    vec[(size_t)r * n + q] = s * vrp + c * vrq;
-                }
-            }
-    }
-    for (int i = 0; i < n; i++)
-        val[i] = a[(size_t)i * n + i];
+    static const btf_linalg_jacobi_rule rule = {.max_sweeps = 60, .relative = 1e-30};
+    btf_linalg_jacobi(a, n, &rule, val, vec);
 }
 
 /* Orthonormalises the b columns of q (n x b) by modified Gram-Schmidt,
@@ -252,38 +212,3 @@ btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_
     return rc;
 }
 
-int ubo_cholesky(double *h, int k)
-{
-    for (int j = 0; j < k; j++) {
-        double d = h[j * k + j];
-        for (int i = 0; i < j; i++)
-            d -= h[j * k + i] * h[j * k + i];
-        if (!(d > 0))
-            return 0;
-        d = sqrt(d);
-        h[j * k + j] = d;
-        for (int r = j + 1; r < k; r++) {
-            double x = h[r * k + j];
-            for (int i = 0; i < j; i++)
-                x -= h[r * k + i] * h[j * k + i];
-            h[r * k + j] = x / d;
-        }
-    }
-    return 1;
-}
-
-void ubo_chol_solve(const double *l, int k, double *b)
-{
-    for (int i = 0; i < k; i++) {
-        double x = b[i];
-        for (int j = 0; j < i; j++)
-            x -= l[i * k + j] * b[j];
-        b[i] = x / l[i * k + i];
-    }
-    for (int i = k - 1; i >= 0; i--) {
-        double x = b[i];
-        for (int j = i + 1; j < k; j++)
-            x -= l[j * k + i] * b[j];
-        b[i] = x / l[i * k + i];
-    }
-}

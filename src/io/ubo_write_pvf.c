@@ -22,6 +22,7 @@
  */
 #include <stdio.h>
 #include "core/core.h"
+#include "core/linalg.h"
 #include "io/ubo2014.h"
 
 #include <math.h>
@@ -224,7 +225,7 @@ static btf_status fit_weights(const float *x, const double *mu, uint64_t px, uin
         for (uint32_t i = 0; i < k; i++)
             for (uint32_t j = 0; j <= i; j++)
                 l[i * k + j] += (double)c[d * k + i] * c[d * k + j];
-    if (!ubo_cholesky(l, (int)k)) {
+    if (btf_linalg_cholesky(l, (int)k, 0, (int)k, l) != 0) {
         free(l);
         return btf_fail(err, BTF_E_NUMERIC, "a PVF view's rounded components are dependent; use "
                         "fewer components");
@@ -237,7 +238,7 @@ static btf_status fit_weights(const float *x, const double *mu, uint64_t px, uin
         for (uint64_t d = 0; d < dim; d++)
             for (uint32_t j = 0; j < k; j++)
                 b[j] += ((double)row[d] + mu[d] - mean[d]) * c[d * k + j];
-        ubo_chol_solve(l, (int)k, b);
+        btf_linalg_cholesky_solve(l, (int)k, b);
         for (uint32_t j = 0; j < k; j++)
             wr[j] = ubo_stored((float)b[j], s);
         for (uint64_t d = 0; d < dim; d++) {

@@ -11,8 +11,8 @@
  *          -> ps_sources.c
  *     -> ps_solve.c    every pixel's fit, rows spread over the thread pool
  *          -> ps_fit.c     the robust fit of one pixel
- *               -> linalg3.c, order.c   3x3 algebra, order statistics
- *     -> linalg3.c     the conditioning of the whole light set
+ *               -> order.c   order statistics (3x3 algebra: core/linalg.c)
+ *     -> core/linalg.c the conditioning of the whole light set
  *     -> integrate.c   normals to heights (public: btf_integrate)
  *   ps_manifest.c  manifest files -> photostereo.c
  *   ps_write.c     the result on disk -> ps_preview.c (previews) -> ps_sources.c
@@ -21,45 +21,9 @@
 #define BTF_RANGE_H
 
 #include "btfcar.h"
+#include "core/linalg.h" /* btf_sym3: the normal equations of every fit */
 
 #include <stdint.h>
-
-/* ------------------------------------------------ 3x3 algebra: linalg3.c */
-
-/* A symmetric 3x3 matrix, such as the Gram matrix sum l l^T of a pixel's
- * light directions, by its six distinct entries. */
-typedef struct btf_sym3 {
-    double xx, yy, zz, xy, xz, yz;
-} btf_sym3;
-
-/* m += v v^T. Inline: it runs once per sample of every fit. */
-static inline void btf_sym3_add_outer(btf_sym3 *m, const double v[3])
-{
-    m->xx += v[0] * v[0];
-    m->yy += v[1] * v[1];
-    m->zz += v[2] * v[2];
-    m->xy += v[0] * v[1];
-    m->xz += v[0] * v[2];
-    m->yz += v[1] * v[2];
-}
-
-/* v^T m v: with m the inverse Gram matrix, a sample's leverage. */
-static inline double btf_sym3_quadratic(const btf_sym3 *m, const double v[3])
-{
-    return m->xx * v[0] * v[0] + m->yy * v[1] * v[1] + m->zz * v[2] * v[2] +
-           2.0 * (m->xy * v[0] * v[1] + m->xz * v[0] * v[2] + m->yz * v[1] * v[2]);
-}
-
-/* Condition number lambda_max / lambda_min; infinity when singular. */
-double btf_sym3_condition(const btf_sym3 *m);
-/* The unit eigenvector of the smallest eigenvalue: the direction a set of
- * lights resolves worst. */
-void btf_sym3_weakest_axis(const btf_sym3 *m, double axis[3]);
-/* Solves m x = rhs when m is positive definite with a condition number of
- * at most max_condition; 0 when rejected. inverse (may be NULL) receives
- * m^-1. */
-int btf_sym3_solve(const btf_sym3 *m, const double rhs[3], double max_condition, double x[3],
-                   btf_sym3 *inverse);
 
 /* -------------------------------------------- order statistics: order.c */
 

@@ -209,8 +209,8 @@ typedef void (*rf_lm_fn)(void *user, const double *p, double *cost, double *jtj,
 int rf_lm(rf_lm_fn fn, void *user, int np, double *p, const double *lo, const double *hi,
           int iterations, double *cost);
 /* Solves the symmetric positive definite system a x = b (n <= RF_LM_MAX, a
- * full row-major, only the upper triangle read) by Cholesky; -1 when not
- * positive definite. */
+ * full row-major, only the upper triangle read) by Cholesky (core/linalg.c);
+ * -1 when not positive definite, or when the factor or x is not finite. */
 int rf_cholesky_solve(const double *a, const double *b, int n, double *x);
 
 /* rf_ptm.c: the PTM least-squares operator of one light set: pinv (6 x n)

@@ -12,39 +12,28 @@
  * point, at worst the initial one.
  */
 #include "rf/rf.h"
+#include "core/linalg.h"
 
 #include <math.h>
 #include <string.h>
 
+/* The fits' contract on top of core/linalg.c: a factor with an infinite
+ * pivot, or a solution that is not finite, is refused (-1), so that the
+ * callers never step to or store a non-finite value. Checking the pivots
+ * after the factorisation refuses exactly the matrices a check at each
+ * pivot would: the factor's entries up to the first infinite pivot are the
+ * same, and that pivot stays on l's diagonal. */
 int rf_cholesky_solve(const double *a, const double *b, int n, double *x)
 {
     double l[RF_LM_MAX * RF_LM_MAX];
+    if (btf_linalg_cholesky(a, n, 1, n, l) != 0)
+        return -1;
     for (int i = 0; i < n; i++)
-        for (int j = 0; j <= i; j++) {
-            double s = a[j * n + i]; /* upper triangle: row j <= column i */
-            for (int k = 0; k < j; k++)
-                s -= l[i * n + k] * l[j * n + k];
-            if (i == j) {
-                if (!(s > 0.0) || !isfinite(s))
-                    return -1;
-                l[i * n + i] = sqrt(s);
-            } else {
-                l[i * n + j] = s / l[j * n + j];
-            }
-        }
-    double y[RF_LM_MAX];
-    for (int i = 0; i < n; i++) {
-        double s = b[i];
-        for (int k = 0; k < i; k++)
-            s -= l[i * n + k] * y[k];
-        y[i] = s / l[i * n + i];
-    }
-    for (int i = n - 1; i >= 0; i--) {
-        double s = y[i];
-        for (int k = i + 1; k < n; k++)
-            s -= l[k * n + i] * x[k];
-        x[i] = s / l[i * n + i];
-    }
+        if (!isfinite(l[i * n + i]))
+            return -1;
+    for (int i = 0; i < n; i++)
+        x[i] = b[i];
+    btf_linalg_cholesky_solve(l, n, x);
     for (int i = 0; i < n; i++)
         if (!isfinite(x[i]))
             return -1;

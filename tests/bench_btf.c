@@ -1,5 +1,5 @@
 /*
- * bench_btf.c — a Bonn DFMF .btf file of UBO2014's shape (src/io/ubo_*.c):
+ * bench_btf.c — a Bonn DFMF .btf file of UBO2014's shape (src/dataset/ubo_*.c):
  * its bytes against the layout, the reader's open time, the reconstruction
  * of every image through the dataset iterator (images per second, peak
  * memory), and btf_analyse on it.
@@ -42,7 +42,7 @@
  *       (docs/datasets.md, "UBO2014 .btf files").
  */
 #include "testutil.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,7 +1,7 @@
 /*
  * fuzz_btf.c — libFuzzer target for the Bonn .btf header parser and the
- * image reconstruction (src/io/ubo_parse.c, src/io/ubo_decode.c; notes
- * /work/shared/formats/ubo2014-btf.md). Any input must be refused with one
+ * image reconstruction (src/dataset/ubo_parse.c, src/dataset/ubo_decode.c;
+ * docs/datasets.md, "UBO2014 .btf files"). Any input must be refused with one
  * line naming it (no newline) or parse into sizes that fit the input; then
  * the first and the last (view, light) images are reconstructed, which must
  * read nothing outside the input (ASan sees a copy of exactly size bytes).
@@ -17,7 +17,7 @@
  *   make fuzz-build && build-fuzz/fuzz_btf -max_total_time=60 \
  *       build-fuzz/corpus/fuzz_btf tests/fuzz-corpus/fuzz_btf
  */
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <stdint.h>
 #include <stdlib.h>

@@ -2,7 +2,7 @@
  * fuzz_manifest.c — libFuzzer target for the tab-separated manifests btfcar
  * reads: the parser itself on the input in memory (src/io/tsv.c: fields,
  * numbers), then, from a temporary file because they resolve paths beside
- * the manifest, the dataset reader (src/io/dataset_scan.c: columns, directions)
+ * the manifest, the dataset reader (src/dataset/dataset_scan.c: columns, directions)
  * and the photometric-stereo manifest reader (src/range/ps_manifest.c:
  * theta/phi or lx/ly/lz, r g b). Paths in a fuzzed manifest name files that
  * do not exist, so both must fail cleanly: one line, no crash, no leak.

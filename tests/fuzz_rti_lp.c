@@ -1,6 +1,6 @@
 /*
  * fuzz_rti_lp.c — libFuzzer target for RTI light files (.lp, layout
- * BTF_LAYOUT_RTI, src/io/rti_lp.c): the parser on the input in memory with
+ * BTF_LAYOUT_RTI, src/dataset/rti_lp.c): the parser on the input in memory with
  * the images not looked up (so that the numbers, counts and paths are
  * reached), every light it returns a unit direction above the surface; then,
  * from a temporary file named *.lp, the dataset reader, whose images do not
@@ -8,7 +8,7 @@
  * `make fuzz` builds and runs it (seeds in tests/fuzz-corpus/fuzz_rti_lp/).
  */
 #include "core/core.h"
-#include "io/io.h"
+#include "dataset/dataset.h"
 #include "fuzzutil.h"
 
 #include <math.h>

@@ -1,5 +1,5 @@
 /*
- * test_btf_file.c — Bonn .btf files (src/io/ubo_*.c; docs/datasets.md,
+ * test_btf_file.c — Bonn .btf files (src/dataset/ubo_*.c; docs/datasets.md,
  * "UBO2014 .btf files"): DFMF and BDIF written and read back through the
  * dataset interface, the colour models, every bad input (signature,
  * truncation at many offsets, counts that do not fit, NaN factors, an
@@ -8,7 +8,7 @@
  * 78 + 76 + 74 half components: 83,542,344 bytes, written sparse).
  */
 #include "testutil.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <math.h>
 #include <stdarg.h>

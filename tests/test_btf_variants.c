@@ -1,10 +1,10 @@
 /*
  * test_btf_variants.c — the FMF and PVF variants of the Bonn .btf files
- * (src/io/ubo_parse.c, ubo_decode.c, ubo_write.c, ubo_write_pvf.c; notes
- * /work/shared/formats/ubo2014-btf.md §4, §5; docs/datasets.md, "UBO2014
- * .btf files"): each signature written from images and read back within
- * the writer's stated error; a generated material in each variant against
- * its exact renders and its UBO2003 twin; every layout the reader accepts
+ * (src/dataset/ubo_parse.c, ubo_decode.c, ubo_write.c, ubo_write_pvf.c;
+ * docs/datasets.md, "UBO2014 .btf files", §4, §5): each signature
+ * written from images and read back within the writer's stated error; a
+ * generated material in each variant against its exact renders and its
+ * UBO2003 twin; every layout the reader accepts
  * (transposed FMF, K_file < K, FMF header versions 0-2 with a non-square
  * height map, the dynamic-range reduction, PVF in both orientations, the
  * legacy PVF header, scalars of 4 and 8 bytes; and the transposed DFMF)
@@ -14,7 +14,7 @@
  * NaN factors). Also writes the fuzz seeds (BTF_FUZZ_SEEDS=DIR).
  */
 #include "testutil.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,5 +1,5 @@
 /* test_real_rti.c — RTI light files (.lp, layout BTF_LAYOUT_RTI,
- * src/io/rti_lp.c) and the real light-dome capture tests/data/real/rti-lion
+ * src/dataset/rti_lp.c) and the real light-dome capture tests/data/real/rti-lion
  * (issue 30): the parser's directions and every refused input; the frame of
  * the light vectors against a procedural material's truth; the lion head
  * through `btfcar info`, `photostereo`, `analyse` and `synthesise`.
@@ -9,7 +9,7 @@
  * in CI does). */
 #include "testutil.h"
 
-#include "io/io.h"
+#include "dataset/dataset.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -193,7 +193,7 @@ static void lp_errors(void **state)
         assert_int_equal(btf_dataset_open(p, NULL, &ds, &e), BTF_E_FORMAT);
         assert_non_null(strstr(e.msg, "bad.lp:3: a NUL byte"));
     }
-    /* Two lights in one direction: two images of one pair (io/dataset.c). */
+    /* Two lights in one direction: two images of one pair (dataset/dataset.c). */
     {
         const char *p = tu_fmt("%s/bad.lp", d);
         write_text(p, "2\na.png 0 0 1\nb.png 0 0 1\n");
@@ -202,7 +202,7 @@ static void lp_errors(void **state)
         assert_int_equal(btf_dataset_open(p, NULL, &ds, &e), BTF_E_DATA);
         assert_non_null(strstr(e.msg, "second file"));
     }
-    /* Images of two sizes (io/dataset.c's check, as for every layout). */
+    /* Images of two sizes (dataset/dataset.c's check, as for every layout). */
     write_png(tu_fmt("%s/big.png", d), 5, 4, 0.5f);
     {
         const char *p = tu_fmt("%s/bad.lp", d);

@@ -10,7 +10,7 @@
 #include <stdio.h>
 #include "car/car.h"
 #include "core/core.h"
-#include "io/io.h"
+#include "dataset/dataset.h"
 #include "model/model.h"
 #include "model/range_code.h"
 

@@ -140,7 +140,7 @@ typedef struct btf_background {
 void btf_relay_background(btf_relay *r, btf_background *bg);
 
 /* Directions named in whole degrees (file names) match a known set within
- * this many degrees (core/directions.c, io/dataset.c). */
+ * this many degrees (core/directions.c, dataset/dataset.c). */
 #define BTF_DIR_NAME_TOLERANCE 0.75
 
 /* The mean linear RGB of an image (a grey image's value three times). */

@@ -7,7 +7,7 @@
  */
 #include "range/range.h"
 #include "core/core.h"
-#include "io/io.h"
+#include "dataset/dataset.h"
 
 #include <math.h>
 

@@ -20,6 +20,7 @@
  * that the features do not depend on their units (docs/segmentation.md,
  * "Scale").
  */
+#include "dataset/dataset.h"
 #include "io/io.h"
 #include "core/core.h"
 

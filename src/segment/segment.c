@@ -21,7 +21,7 @@
  */
 #include <stdio.h>
 #include "core/core.h"
-#include "io/io.h"
+#include "dataset/dataset.h"
 
 #include <math.h>
 #include <stdlib.h>

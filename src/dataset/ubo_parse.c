@@ -1,6 +1,6 @@
 /*
  * ubo_parse.c — the header of a Bonn BTF database .btf file (UBO2014 and its
- * kin; notes /work/shared/formats/ubo2014-btf.md): the signature, chosen as
+ * kin; docs/datasets.md, "UBO2014 .btf files"): the signature, chosen as
  * the longest one the file starts with (§1); the meta block and its size
  * self-check (§2a); the bidirectional sampling (§2b); width, height and
  * rotations (§2c); then the body of the variant: DFMF (§3), FMF (§4), PVF
@@ -12,7 +12,7 @@
  */
 #include <stdio.h>
 #include "core/core.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <math.h>
 #include <stdlib.h>

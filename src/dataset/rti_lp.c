@@ -19,11 +19,12 @@
  * light below the surface); an image that is missing or not a regular file;
  * the same image listed twice. docs/datasets.md, "Layouts".
  *
- * io/dataset_scan.c hands a regular file named *.lp here; this file calls
- * nothing of dataset_scan.c (docs/design.md, no call cycles), so it grows
- * the entry list itself.
+ * dataset/dataset_scan.c hands a regular file named *.lp here; both grow
+ * the entry list through dataset/dataset_entries.c, so that neither calls
+ * the other back (docs/design.md, no call cycles).
  */
 #include "core/core.h"
+#include "dataset/dataset.h"
 #include "io/io.h"
 
 #include <ctype.h>
@@ -42,24 +43,6 @@ int btf_rti_lp_name(const char *path)
 {
     size_t n = strlen(path);
     return n > 3 && strcasecmp(path + n - 3, ".lp") == 0 && path[n - 4] != '/';
-}
-
-static btf_status add_entry(btf_dataset_entries *l, const char *path, btf_dir light,
-                            btf_error *err)
-{
-    if (l->count == l->cap) {
-        int ncap = l->cap ? l->cap * 2 : 256;
-        btf_dataset_entry *n = realloc(l->items, (size_t)ncap * sizeof *n);
-        if (!n)
-            return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
-        l->items = n;
-        l->cap = ncap;
-    }
-    char *p = strdup(path);
-    if (!p)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
-    l->items[l->count++] = (btf_dataset_entry){p, light, (btf_dir){0.0, 0.0}, {0}};
-    return BTF_OK;
 }
 
 /* A decimal number and nothing else (as io/tsv.c reads numbers: no "inf",
@@ -199,7 +182,8 @@ static btf_status parse_owned(char *text, size_t n, const char *name, const char
         char full[BTF_DATASET_PATH_MAX];
         rc = image_path(name, line_no, base, p, check_files, full, sizeof full, err);
         if (rc == BTF_OK)
-            rc = add_entry(l, full, btf_vec_to_dir(v), err);
+            rc = btf_dataset_entries_add(l, full, btf_vec_to_dir(v), (btf_dir){0.0, 0.0},
+                                         err); /* one view: the camera looks straight down */
         if (rc)
             return rc;
         int *grown = realloc(*line_of, (size_t)l->cap * sizeof **line_of);

@@ -1,6 +1,6 @@
 /*
  * ubo_factor.c — the truncated SVD that the DFMF and FMF writers store
- * (notes /work/shared/formats/ubo2014-btf.md, §3 and §4), computed from the
+ * (docs/datasets.md, "UBO2014 .btf files", §3 and §4), computed from the
  * images of a callback:
  *
  *   DFMF  three matrices, one per channel c: row i = image i's channel c
@@ -23,7 +23,7 @@
 #include <stdio.h>
 #include "core/core.h"
 #include "core/linalg.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -106,7 +106,7 @@ static btf_status finish_channel(chan *ch, int s, uint64_t px, btf_error *err)
     return BTF_OK;
 }
 
-/* The reader's sum (io/ubo_decode.c): 8 lanes, added in one fixed order. */
+/* The reader's sum (dataset/ubo_decode.c): 8 lanes, added in one fixed order. */
 static float dot8(const float *a, const float *b, int k)
 {
     float acc[8] = {0};

@@ -1,22 +1,23 @@
 /*
- * ubo_svd.c — the writers' linear algebra. The k largest eigenpairs of a
- * symmetric matrix, for the truncated SVD of DFMF and FMF (io/ubo_factor.c)
- * and the per-view PCA of PVF (io/ubo_write_pvf.c): the Gram matrix of the smaller
- * side of a channel's (view, light) x pixel matrix has the squared singular
- * values as eigenvalues and the singular vectors of that side as
- * eigenvectors (the factorisation the notes' §3 stores as U and S x V).
+ * ubo_svd.c — the writers' eigenpairs. The k largest eigenpairs of a
+ * symmetric matrix, for the truncated SVD of DFMF and FMF
+ * (dataset/ubo_factor.c) and the per-view PCA of PVF
+ * (dataset/ubo_write_pvf.c): the Gram matrix of the smaller side of a
+ * channel's (view, light) x pixel matrix has the squared singular values
+ * as eigenvalues and the singular vectors of that side as eigenvectors
+ * (the factorisation the notes' §3 stores as U and S x V).
  *
  * Small matrices (n <= 256) are diagonalised whole by cyclic Jacobi
- * rotations (core/linalg.c); larger ones by subspace
- * iteration with a block of k + 8 vectors from a fixed start, and a
- * Rayleigh-Ritz step (Jacobi on the block) at the end. Both are
- * deterministic: the same matrix gives the same bits. Each eigenvector's
- * sign is fixed so that its largest component is positive.
+ * rotations (core/linalg.c); larger ones by subspace iteration with a
+ * block of k + 8 vectors from a fixed start, and a Rayleigh-Ritz step
+ * (Jacobi on the block) at the end. Both are deterministic: the same
+ * matrix gives the same bits. Each eigenvector's sign is fixed so that
+ * its largest component is positive.
  */
 #include <stdio.h>
 #include "core/core.h"
 #include "core/linalg.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,7 +1,7 @@
 /*
  * ubo_decode.c — one (view, light) image of a Bonn .btf file, reconstructed
- * from the mapped bytes without expanding the rest (notes
- * /work/shared/formats/ubo2014-btf.md): DFMF d_c = sum_k U_c[lv][k] SxV_c[xy][k]
+ * from the mapped bytes without expanding the rest (docs/datasets.md,
+ * "UBO2014 .btf files"): DFMF d_c = sum_k U_c[lv][k] SxV_c[xy][k]
  * then the colour model (§3a, §3b); FMF value_c = sum_k U[lv*3+c][k] SxV[xy][k]
  * and the dynamic-range restore (§4); PVF's per-view PCA (§5); BDIF's stored
  * halves (§6); then the cosine rule (§3c). Row y = 0 is the file's first row
@@ -14,7 +14,7 @@
  */
 #include <stdio.h>
 #include "core/core.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <math.h>
 #include <stdlib.h>

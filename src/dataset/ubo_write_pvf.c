@@ -1,7 +1,7 @@
 /*
  * ubo_write_pvf.c — the PVF variant of the Bonn .btf files (per-view
- * factorisation; notes /work/shared/formats/ubo2014-btf.md §5, which has it
- * from btflib alone): after the header (the common one of §2 with the
+ * factorisation; docs/datasets.md, "UBO2014 .btf files", §5, known from
+ * btflib alone): after the header (the common one of §2 with the
  * rotations field for "!PVF06FCR", without for "!PVF06FC"; or the legacy
  * one: the magic 301074, K, width, height, the slot count and the sampling)
  * come num_components and num_view_slots, then per view slot: the scalar
@@ -23,7 +23,7 @@
 #include <stdio.h>
 #include "core/core.h"
 #include "core/linalg.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -203,7 +203,7 @@ static void components(const float *x, uint64_t px, uint64_t dim, const double *
         }
 }
 
-/* The reader's sum (io/ubo_decode.c): 8 lanes, added in one fixed order. */
+/* The reader's sum (dataset/ubo_decode.c): 8 lanes, added in one fixed order. */
 static float dot8(const float *a, const float *b, uint32_t k)
 {
     float acc[8] = {0};

@@ -11,7 +11,7 @@
  * moves with the camera) stays in the image; the manifest reader refuses
  * images whose directions spread more than BTF_NEAR_FIELD_MAX_SPREAD.
  */
-#include "io/io.h"
+#include "dataset/dataset.h"
 #include "core/core.h"
 
 #include <math.h>

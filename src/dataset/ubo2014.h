@@ -1,9 +1,11 @@
 /*
  * ubo2014.h — the Bonn BTF database's binary .btf files (DFMF, FMF, PVF,
- * BDIF), private to src/io/. The format notes are
- * /work/shared/formats/ubo2014-btf.md ("the notes" below, section numbers
- * §N); docs/datasets.md ("UBO2014 .btf files") states the rules btfcar
- * follows where the notes leave a doubt.
+ * BDIF), private to src/dataset/. The format is the one of its public
+ * readers and writer (btflib, the University of Bonn's MATLAB library;
+ * Velinov's C++ btf.hh; pysmtb's btf.py): docs/datasets.md ("UBO2014 .btf
+ * files") describes it as "the notes" with the section numbers §N used
+ * here, and states the rules btfcar follows where the sources leave a
+ * doubt.
  *
  *   ubo_parse.c    signature, meta block, sampling, size, rotations and the
  *                  variant's body: offsets into the bytes, every size checked

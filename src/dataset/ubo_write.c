@@ -1,7 +1,7 @@
 /*
- * ubo_write.c — writing Bonn .btf files (notes
- * /work/shared/formats/ubo2014-btf.md): the common header as btflib's
- * writer emits it (io/ubo_out.c), then the body of the variant:
+ * ubo_write.c — writing Bonn .btf files (docs/datasets.md, "UBO2014 .btf
+ * files"): the common header as btflib's writer emits it
+ * (dataset/ubo_out.c), then the body of the variant:
  *
  *   DFMF  (§3) no rotations, the colour model as given, per channel S, U
  *         and S x V;
@@ -13,14 +13,14 @@
  *         FMF) as a value of its own;
  *   BDIF  (§6) 4 scan lines per chunk, compression 0, an all-ones mask, no
  *         rotations, chunks of halves per texel;
- *   PVF   (§5) in io/ubo_write_pvf.c.
+ *   PVF   (§5) in dataset/ubo_write_pvf.c.
  *
- * From images, btf_ubo2014_write factorises with io/ubo_factor.c (DFMF,
- * FMF) or io/ubo_write_pvf.c (PVF), or stores the halves (BDIF).
+ * From images, btf_ubo2014_write factorises with dataset/ubo_factor.c (DFMF,
+ * FMF) or dataset/ubo_write_pvf.c (PVF), or stores the halves (BDIF).
  */
 #include <stdio.h>
 #include "core/core.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <math.h>
 #include <stdlib.h>

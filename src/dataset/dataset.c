@@ -4,18 +4,18 @@
  * interface.
  *
  * Opening lists the files of a UBO2003, UTIA or manifest layout
- * (io/dataset_scan.c), makes every (view, light) pair's table from the
+ * (dataset/dataset_scan.c), makes every (view, light) pair's table from the
  * entries, checks that the set is complete and unique, and (unless asked
  * not to) probes every file's header and structure. Pixels are decoded one
  * image at a time, on demand: read by pair, iterate, or verify them all.
  * A Bonn .btf file (layout UBO2014, recognised by its signature) is opened
- * by io/ubo_open.c instead, and each image is reconstructed from it by
- * io/ubo_decode.c.
+ * by dataset/ubo_open.c instead, and each image is reconstructed from it by
+ * dataset/ubo_decode.c.
  */
 #include <stdio.h>
 #include "core/core.h"
-#include "io/io.h"
-#include "io/ubo2014.h"
+#include "dataset/dataset.h"
+#include "dataset/ubo2014.h"
 
 #include <errno.h>
 #include <stdlib.h>

@@ -2,7 +2,7 @@
  * dataset_scan.c — the image files of a BTF dataset on disk (the measured
  * (view, light) images that the analysis of paper section II starts from)
  * as a list of (path, light, view) entries, from the names alone (io/io.h;
- * io/dataset.c makes the dataset of them).
+ * dataset/dataset.c makes the dataset of them).
  *
  * Three layouts are recognised automatically:
  *  - Bonn UBO2003: "NNNNN tlAAA plBBB tvCCC pvDDD.jpg" (3-digit whole degrees,
@@ -11,11 +11,12 @@
  *  - a manifest: a TSV file with the columns path, theta_l, phi_l, theta_v,
  *    phi_v (degrees; paths relative to the manifest's folder).
  * A folder is scanned by name patterns (one level of view folders); a file
- * is read as a manifest, or, named *.lp, as an RTI light file (io/rti_lp.c).
+ * is read as a manifest, or, named *.lp, as an RTI light file (dataset/rti_lp.c).
  * Names in one dataset must follow one layout.
  */
 #include <stdio.h>
 #include "core/core.h"
+#include "dataset/dataset.h"
 #include "io/io.h"
 
 #include <ctype.h>
@@ -35,32 +36,6 @@ const char *btf_layout_name(btf_layout layout)
     case BTF_LAYOUT_RTI: return "RTI";
     default: return "unknown";
     }
-}
-
-void btf_dataset_entries_free(btf_dataset_entries *l)
-{
-    for (int i = 0; i < l->count; i++)
-        free(l->items[i].path);
-    free(l->items);
-    memset(l, 0, sizeof *l);
-}
-
-static btf_status entries_add(btf_dataset_entries *l, const char *path, btf_dir light,
-                              btf_dir view, btf_error *err)
-{
-    if (l->count == l->cap) {
-        int ncap = l->cap ? l->cap * 2 : 256;
-        btf_dataset_entry *n = realloc(l->items, (size_t)ncap * sizeof *n);
-        if (!n)
-            return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
-        l->items = n;
-        l->cap = ncap;
-    }
-    char *p = strdup(path);
-    if (!p)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
-    l->items[l->count++] = (btf_dataset_entry){p, light, view, {0}};
-    return BTF_OK;
 }
 
 /* Matches name against a pattern where '#' is one decimal digit and any other
@@ -132,7 +107,7 @@ static btf_status add_file(btf_dataset_entries *l, const char *dir, const char *
     if (folder_view && (folder_view[0] != n[2] || folder_view[1] != n[3]))
         return btf_fail(err, BTF_E_DATA, "%s: view tv%03d pv%03d differs from its folder's", path,
                         n[2], n[3]);
-    return entries_add(l, path, dir_of(n[0], n[1]), dir_of(n[2], n[3]), err);
+    return btf_dataset_entries_add(l, path, dir_of(n[0], n[1]), dir_of(n[2], n[3]), err);
 }
 
 static btf_status scan_folder(btf_dataset_entries *l, const char *dir, const int *folder_view,
@@ -277,7 +252,8 @@ static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_er
         if (rc == BTF_OK && (v[0] < 0 || v[0] > 90 || v[2] < 0 || v[2] > 90))
             rc = btf_fail(err, BTF_E_DATA, "%s:%d: theta outside [0, 90]", path, t.line_no[r]);
         if (rc == BTF_OK)
-            rc = entries_add(l, full, (btf_dir){v[0], v[1]}, (btf_dir){v[2], v[3]}, err);
+            rc = btf_dataset_entries_add(l, full, (btf_dir){v[0], v[1]}, (btf_dir){v[2], v[3]},
+                                         err);
         if (rc == BTF_OK)
             l->items[l->count - 1].near = nf;
     }
@@ -295,7 +271,7 @@ btf_status btf_dataset_list_entries(const char *path, btf_dataset_entries *l, bt
     if (stat(path, &st) != 0)
         return btf_fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
     if (S_ISREG(st.st_mode) && btf_rti_lp_name(path))
-        return btf_rti_lp_read(path, l, err); /* an RTI light file (io/rti_lp.c) */
+        return btf_rti_lp_read(path, l, err); /* an RTI light file (dataset/rti_lp.c) */
     if (!S_ISDIR(st.st_mode))
         return read_manifest(l, path, err);
     btf_status rc = scan_folder(l, path, NULL, err);

@@ -2,14 +2,14 @@
  * ubo_open.c — a Bonn .btf file opened for the dataset interface: the file
  * is memory-mapped (read-only, shared), never read into the heap, so memory
  * stays bounded by the factor matrices the kernel pages in; the parse
- * (io/ubo_parse.c) points into the mapping. The file's view and light lists
+ * (dataset/ubo_parse.c) points into the mapping. The file's view and light lists
  * (radians, notes §2b) become btfcar direction sets (degrees, ring by ring),
  * with the file's index of each direction; a list with a direction twice is
  * refused, since a (view, light) pair would then be ambiguous.
  */
 #include <stdio.h>
 #include "core/core.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <errno.h>
 #include <math.h>

@@ -1,19 +1,19 @@
 /*
- * ubo_out.c — what every Bonn .btf writer shares (notes
- * /work/shared/formats/ubo2014-btf.md): the header bytes as btflib's writer
+ * ubo_out.c — what every Bonn .btf writer shares (docs/datasets.md,
+ * "UBO2014 .btf files"): the header bytes as btflib's writer
  * emits them (the signature, the meta block of version 4 with channel names
  * R, G, B, §2a; the sampling with every view listing every light, §2b;
  * width and height, §2c), the output file (a temporary beside the target,
  * sized in advance, filled through a shared mapping, fsync'd and renamed
  * into place) and the stored scalars (half, float or double, §0).
  *
- * The writers of the variants (io/ubo_write.c: DFMF, FMF, BDIF;
- * io/ubo_write_pvf.c: PVF) sit above this file and call nothing else of
+ * The writers of the variants (dataset/ubo_write.c: DFMF, FMF, BDIF;
+ * dataset/ubo_write_pvf.c: PVF) sit above this file and call nothing else of
  * each other's, so the layering has no cycle.
  */
 #include <stdio.h>
 #include "core/core.h"
-#include "io/ubo2014.h"
+#include "dataset/ubo2014.h"
 
 #include <errno.h>
 #include <fcntl.h>

@@ -1,7 +1,7 @@
 /*
  * range.h — the range-map stage's internals (src/range/; Haindl & Filip
- * 2007, section II.B): robust Lambertian photometric stereo and its parts.
- * Private to the library.
+ * 2007, section II.B): robust Lambertian photometric stereo and its parts,
+ * and the range map a model keeps. Private to the library.
  *
  * The files and who calls whom (no file calls back into one that calls it):
  *
@@ -16,6 +16,17 @@
  *     -> integrate.c   normals to heights (public: btf_integrate)
  *   ps_manifest.c  manifest files -> photostereo.c
  *   ps_write.c     the result on disk -> ps_preview.c (previews) -> ps_sources.c
+ *
+ * The range map the model keeps (public calls in include/btfcar.h; none of
+ * these calls the photometric stereo above):
+ *
+ *   range_code.c      its grid and prediction coding in the model file
+ *                     (range/range_code.h; model/model_file.c's RANG
+ *                     section and the analysis call it)
+ *   range_periodic.c  the tile made periodic -> range_code.c
+ *   range_map.c       the tile enlarged to a seamless height and normal map
+ *                     of any size; a quilted model's maps come from its
+ *                     structure layer (model/structure_map.c)
  */
 #ifndef BTF_RANGE_H
 #define BTF_RANGE_H

@@ -1,7 +1,7 @@
 /*
  * range_periodic.c — the range tile made periodic (paper section III: the
- * range map "further enlarged by image-tiling"; issue 15: a seamless range
- * map at any size), by a variance-preserving cross-fade with its own copy
+ * range map "further enlarged by image-tiling": a seamless range map at
+ * any size), by a variance-preserving cross-fade with its own copy
  * shifted by half a period, along x and then along y.
  *
  * Why this one (docs/render.md, "Range and normal map"): the photometric-
@@ -29,8 +29,8 @@
  * sample's mounting or integration bias), and any blend of a ramp with its
  * shifted copy keeps a fold.
  */
-#include "model/model.h"
-#include "model/range_code.h"
+#include "core/core.h"
+#include "range/range_code.h"
 
 #include <float.h>
 #include <math.h>

@@ -1,13 +1,13 @@
 /*
- * model_range.c — the coding of the range-map tile (Haindl & Filip 2007,
+ * range_code.c — the coding of the range-map tile (Haindl & Filip 2007,
  * section II.B: the range map of the material's surface) in the model file's
  * RANG section (docs/model-format.md, "RANG: the range-map tile"): the
  * canonical quantisation grid of the heights and the prediction coding of
  * the quantised samples (a plane predictor from three neighbours, residuals
  * zigzag-mapped). model/model_maps.c writes and reads the section with
- * these; declarations in model/range_code.h.
+ * these; declarations in range/range_code.h.
  */
-#include "model/range_code.h"
+#include "range/range_code.h"
 
 #include <math.h>
 #include <stddef.h>

@@ -1,6 +1,6 @@
 /*
  * test_range_map.c — the range tile made periodic (btf_range_make_periodic,
- * src/range/range_periodic.c) and enlarged to a seamless height and normal
+ * src/model/range_periodic.c) and enlarged to a seamless height and normal
  * map of any size (btf_range_map, btf_normal_map, src/range/range_map.c;
  * docs/render.md, "Range and normal map"): wrap-around differences no
  * larger than inside ones, the tile's content kept, exact samples at whole

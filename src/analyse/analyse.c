@@ -12,7 +12,7 @@
 #include "core/core.h"
 #include "dataset/dataset.h"
 #include "model/model.h"
-#include "range/range_code.h"
+#include "model/range_code.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -20,7 +20,7 @@
  */
 #include "core/core.h"
 #include "model/model.h"
-#include "range/range_code.h"
+#include "model/range_code.h"
 #include "render/btf_horizon.h"
 
 #include <math.h>

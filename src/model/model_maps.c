@@ -2,14 +2,14 @@
  * model_maps.c — the sections of MODEL.btfcar that hold a value per texel
  * (docs/model-format.md): the range map of paper section II.B (RANG:
  * heights on a canonical 16-bit grid, predicted and zigzag-coded, as two
- * byte planes; the grid and the prediction are range/range_code.c's) and
+ * byte planes; the grid and the prediction are model/range_code.c's) and
  * the structure layer (STRC, version 1.4; flags and colour layer 1.5:
  * albedo and colour codes on a log2 grid, predicted from their left and
  * upper neighbours). Both are lossless on what the analysis keeps, so a
  * decoded model re-encodes to the same bytes.
  */
 #include "model/model_file.h"
-#include "range/range_code.h"
+#include "model/range_code.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -21,7 +21,7 @@
  * these calls the photometric stereo above):
  *
  *   range_code.c      its grid and prediction coding in the model file
- *                     (range/range_code.h; model/model_file.c's RANG
+ *                     (model/range_code.h; model/model_file.c's RANG
  *                     section and the analysis call it)
  *   range_periodic.c  the tile made periodic -> range_code.c
  *   range_map.c       the tile enlarged to a seamless height and normal map

@@ -30,7 +30,7 @@
  * shifted copy keeps a fold.
  */
 #include "core/core.h"
-#include "range/range_code.h"
+#include "model/range_code.h"
 
 #include <float.h>
 #include <math.h>

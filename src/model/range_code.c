@@ -5,9 +5,9 @@
  * canonical quantisation grid of the heights and the prediction coding of
  * the quantised samples (a plane predictor from three neighbours, residuals
  * zigzag-mapped). model/model_maps.c writes and reads the section with
- * these; declarations in range/range_code.h.
+ * these; declarations in model/range_code.h.
  */
-#include "range/range_code.h"
+#include "model/range_code.h"
 
 #include <math.h>
 #include <stddef.h>

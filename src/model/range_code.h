@@ -1,8 +1,8 @@
 /*
  * range_code.h — the range-map tile's quantisation and prediction coding
- * (range/range_code.c; Haindl & Filip 2007, section II.B; the layout is
+ * (model/range_code.c; Haindl & Filip 2007, section II.B; the layout is
  * docs/model-format.md, "RANG: the range-map tile"), used by the model file
- * (model/model_maps.c), the analysis and range/range_periodic.c. Private
+ * (model/model_maps.c), the analysis and model/range_periodic.c. Private
  * to the library.
  */
 #ifndef BTF_RANGE_CODE_H

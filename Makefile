@@ -48,12 +48,16 @@ CHECK_PAGE := $(BUILD)/check-page
 
 # The shared library's major version (docs/install.md, "Shared library and
 # soname"): raised on every ABI break.
-SOVERSION := 2
+SOVERSION := 3
 SONAME    := libbtfcar.so.$(SOVERSION)
-# It exports exactly the functions include/btfcar.h declares: the objects
-# are compiled with hidden visibility (the header's declarations are under
-# #pragma GCC visibility push(default)), and the version script, made from
-# the header, makes everything else local. `make check-exports` checks it.
+# The public headers: the umbrella include/btfcar.h and the topical headers
+# it includes, include/btfcar/*.h.
+PUBLIC_H  := include/btfcar.h $(sort $(wildcard include/btfcar/*.h))
+# The library exports exactly the functions the public headers declare: the
+# objects are compiled with hidden visibility (each topical header's
+# declarations are under #pragma GCC visibility push(default)), and the
+# version script, made from the headers, makes everything else local.
+# `make check-exports` checks it.
 EXPORT_MAP := $(BUILD)/gen/btfcar.map
 $(LIB_OBJ): CFLAGS += -fvisibility=hidden
 $(LIB_OBJ): CXXFLAGS += -fvisibility=hidden
@@ -77,8 +81,8 @@ help:
 	@echo "build/check-page PAGE.html [SHOT.png]  a page in headless Chromium: no console errors, every image shown"
 	@echo "make noise-stream  build/noise_stream: raw noise words for dieharder"
 	@echo "make fuzz     libFuzzer targets with clang (FUZZ_SECONDS=30 each)"
-	@echo "make install  PREFIX=/usr/local: library, header, btfcar, pkg-config file"
-	@echo "make check-exports  libbtfcar.so exports exactly the functions of include/btfcar.h"
+	@echo "make install  PREFIX=/usr/local: library, headers, btfcar, pkg-config file"
+	@echo "make check-exports  libbtfcar.so exports exactly the functions of the public headers"
 	@echo "make check-install  install into build/check-install; link a program by pkg-config"
 	@echo "make check-shaders  compile every GLSL shader to SPIR-V afresh and validate it (spirv-val)"
 	@echo "make check-layering  no call cycle between object files, no call up the layers of docs/design.md"
@@ -117,7 +121,7 @@ $(STATIC): $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
-$(EXPORT_MAP): include/btfcar.h $(wildcard include/btfcar/*.h) tools/public-symbols.sh
+$(EXPORT_MAP): $(PUBLIC_H) tools/public-symbols.sh
 	@mkdir -p $(dir $@)
 	CC="$(CC)" sh tools/public-symbols.sh include/btfcar.h --map > $@.tmp
 	mv $@.tmp $@
@@ -128,7 +132,7 @@ $(SHARED): $(LIB_OBJ) $(EXPORT_MAP)
 
 # The dynamic symbols of libbtfcar.so against the header's declarations,
 # both ways: no internal symbol exported, no public function missing.
-check-exports: $(SHARED)
+check-exports: $(SHARED) $(PUBLIC_H)
 	@CC="$(CC)" sh tools/check-exports.sh $(SHARED) include/btfcar.h
 
 $(CLI): $(CLI_OBJ) $(STATIC)
@@ -230,18 +234,18 @@ fuzz: deps
 	@$(MAKE) --no-print-directory fuzz-build
 	@sh tests/fuzz.sh $(FUZZ_SECONDS) $(FUZZ_BIN)
 
+# The headers: PREFIX/include/btfcar.h and PREFIX/include/btfcar/*.h.
 install: $(STATIC) $(SHARED) $(CLI)
-	install -d $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include $(DESTDIR)$(PREFIX)/bin \
+	install -d $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include/btfcar $(DESTDIR)$(PREFIX)/bin \
 	  $(DESTDIR)$(PREFIX)/lib/pkgconfig
 	install -m 644 $(STATIC) $(DESTDIR)$(PREFIX)/lib/
 	install -m 755 $(SHARED) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
 	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libbtfcar.so
 	install -m 644 include/btfcar.h $(DESTDIR)$(PREFIX)/include/
-	install -d $(DESTDIR)$(PREFIX)/include/btfcar
-	install -m 644 include/btfcar/*.h $(DESTDIR)$(PREFIX)/include/btfcar/
+	install -m 644 $(filter include/btfcar/%,$(PUBLIC_H)) $(DESTDIR)$(PREFIX)/include/btfcar/
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@REQUIRES_PRIVATE@|$(PC_REQUIRES_PRIVATE)|' \
-	  -e 's|@LIBS_PRIVATE@|$(PC_LIBS_PRIVATE)|' -e 's|@VERSION@|$(shell sed -n 's/.*BTF_VERSION_STRING "\(.*\)"/\1/p' include/btfcar.h)|' \
+	  -e 's|@LIBS_PRIVATE@|$(PC_LIBS_PRIVATE)|' -e 's|@VERSION@|$(shell sed -n 's/.*BTF_VERSION_STRING "\(.*\)"/\1/p' include/btfcar/base.h)|' \
 	  btfcar.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/btfcar.pc
 
 # Installs into $(BUILD)/check-install and builds a small program with
@@ -254,8 +258,9 @@ check-install: $(STATIC) $(SHARED) $(CLI)
 uninstall:
 	rm -f $(DESTDIR)$(PREFIX)/lib/libbtfcar.a $(DESTDIR)$(PREFIX)/lib/libbtfcar.so* \
 	  $(DESTDIR)$(PREFIX)/include/btfcar.h $(DESTDIR)$(PREFIX)/bin/btfcar \
-	  $(DESTDIR)$(PREFIX)/include/btfcar/*.h \
-	  $(DESTDIR)$(PREFIX)/lib/pkgconfig/btfcar.pc
+	  $(DESTDIR)$(PREFIX)/lib/pkgconfig/btfcar.pc \
+	  $(addprefix $(DESTDIR)$(PREFIX)/,$(filter include/btfcar/%,$(PUBLIC_H)))
+	rmdir $(DESTDIR)$(PREFIX)/include/btfcar 2>/dev/null || true
 
 clean:
 	rm -rf build build-asan build-fuzz

@@ -126,7 +126,7 @@ static int write_subspace_images(const btf_segmentation *s, const btf_dataset *d
         if (rc)
             return rc;
         snprintf(path, sizeof path, "%s/subspace_%02d.exr", out, c);
-        rc = btf_image_write_exr(path, &img, 0, err);
+        rc = btf_image_write_exr_opts(path, &img, NULL, NULL, err);
         snprintf(path, sizeof path, "%s/subspace_%02d.png", out, c);
         if (rc == 0)
             rc = btf_image_write_png(path, &img, err);

@@ -360,6 +360,6 @@ size_t cli_read_head(const char *path, unsigned char *buf, size_t n)
 btf_status cli_write_image(const char *path, const btf_image *img, btf_error *err)
 {
     if (cli_has_suffix(path, ".exr"))
-        return btf_image_write_exr(path, img, 0, err);
+        return btf_image_write_exr_opts(path, img, NULL, NULL, err);
     return btf_image_write_png(path, img, err);
 }

@@ -8,6 +8,7 @@
 #define BTF_RENDER_GPU_H
 
 #include "btfcar.h"
+#include "scene/gbuffer.h"
 
 /* Rows [y0, y1) of the G-buffer into out, BTF_RP_GB floats per pixel:
  * hit flag (1, or -1 for the background), u, v, frame[9], position[3],

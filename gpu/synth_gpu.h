@@ -95,4 +95,7 @@ btf_status btf_gpu_match_images(btf_vk *vk, const btf_gpu_matcher *mt, const btf
 /* g's matcher (made by btf_gpu_open). */
 const btf_gpu_matcher *btf_gpu_match_pipes(const btf_gpu *g);
 
+/* 1 when g is a CPU device (lavapipe). */
+int btf_gpu_is_cpu(const btf_gpu *g);
+
 #endif

@@ -23,6 +23,7 @@
  */
 #include "btfcar.h"
 #include "testutil.h"
+#include "core/core.h"
 
 #include <stdint.h>
 #include <stdio.h>

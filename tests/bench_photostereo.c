@@ -7,6 +7,7 @@
  */
 #include "generate/material.h"
 #include "core/core.h"
+#include "range/range.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -14,6 +14,8 @@
  */
 #include "btfcar.h"
 #include "testutil.h"
+#include "render/render.h"
+#include "scene/gbuffer.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -10,6 +10,7 @@
  */
 #include "core/core.h"
 #include "io/io.h"
+#include "range/range.h"
 #include "fuzzutil.h"
 
 #include <string.h>

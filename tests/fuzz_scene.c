@@ -10,6 +10,7 @@
  * tests/fuzz-corpus/fuzz_scene/).
  */
 #include "btfcar.h"
+#include "scene/gbuffer.h"
 #include "fuzzutil.h"
 
 #include <math.h>

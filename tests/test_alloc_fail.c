@@ -543,7 +543,7 @@ static void make_dataset(const char *dir)
         btf_dir light = {l < 3 ? 30 : 60, 120.0 * (l % 3) + (l < 3 ? 0 : 60)};
         btf_image img;
         TU_OK(btf_procedural_render(&mat, (btf_dir){0, 0}, light, &img, &e), &e);
-        TU_OK(btf_image_write_exr(tu_fmt("%s/l%d.exr", dir, l), &img, 0, &e), &e);
+        TU_OK(btf_image_write_exr_opts(tu_fmt("%s/l%d.exr", dir, l), &img, NULL, NULL, &e), &e);
         fprintf(f, "l%d.exr\t%g\t%g\t0\t0\n", l, light.theta, light.phi);
         btf_image_free(&img);
     }

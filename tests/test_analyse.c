@@ -5,6 +5,8 @@
  * writes (atomically, errors naming the file).
  */
 #include "testutil.h"
+#include "model/model.h"
+#include "range/range.h"
 
 #include <dirent.h>
 #include <math.h>
@@ -43,7 +45,7 @@ static void make_dataset(const char *where, int width, int height, char *manifes
         for (int y = 0; y < height; y++)
             memcpy(img.data + (size_t)y * width * 3, full.data + (size_t)y * side * 3,
                    (size_t)width * 3 * sizeof(float));
-        TU_OK(btf_image_write_exr(tu_fmt("%s/l%02d.exr", dir, l), &img, 0, &e), &e);
+        TU_OK(btf_image_write_exr_opts(tu_fmt("%s/l%02d.exr", dir, l), &img, NULL, NULL, &e), &e);
         fprintf(f, "l%02d.exr\t%g\t%g\t0\t0\n", l, light.theta, light.phi);
         btf_image_free(&full);
         btf_image_free(&img);

@@ -9,6 +9,7 @@
  */
 #include "testutil.h"
 #include "dataset/ubo2014.h"
+#include "core/core.h"
 
 #include <math.h>
 #include <stdarg.h>

@@ -15,6 +15,7 @@
  */
 #include "testutil.h"
 #include "dataset/ubo2014.h"
+#include "core/core.h"
 
 #include <math.h>
 #include <stdio.h>

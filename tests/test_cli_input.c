@@ -192,7 +192,7 @@ static const char *scaled_exemplar(const char *name, float scale, float offset)
     for (size_t i = 0; i < (size_t)32 * 32 * 3; i++)
         img.data[i] = img.data[i] * scale + offset;
     const char *path = tu_fmt("%s/%s", tu_dir, name);
-    TU_OK(btf_image_write_exr(path, &img, 0, &e), &e);
+    TU_OK(btf_image_write_exr_opts(path, &img, NULL, NULL, &e), &e);
     btf_image_free(&img);
     return path;
 }

@@ -3,6 +3,7 @@
 #include "testutil.h"
 
 #include "io/io.h"
+#include "core/core.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -130,7 +131,7 @@ static char *make_utia(const char *ext)
                 /* EXR holds the linear value; make it equal to what 8 bits give. */
                 for (int i = 0; i < 12 * 10 * 3; i++)
                     img.data[i] = btf_srgb_to_linear(btf_linear_to_srgb(img.data[i]));
-                TU_OK(btf_image_write_exr(p, &img, 1, &e), &e);
+                TU_OK(btf_image_write_exr_opts(p, &img, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
             }
             btf_image_free(&img);
         }

@@ -4,6 +4,7 @@
  * on decoded pixels (btf_read_opts.max_pixels, --max-pixels) checked from
  * the header before decoding. */
 #include "testutil.h"
+#include "core/core.h"
 
 #include <math.h>
 #include <stdio.h> /* before jpeglib.h */
@@ -149,7 +150,7 @@ static void pixel_cap(void **state)
     char exr[4096];
     snprintf(exr, sizeof exr, "%s/small.exr", tu_dir);
     TU_OK(btf_image_alloc(&img, 30, 20, 3, &e), &e);
-    TU_OK(btf_image_write_exr(exr, &img, 1, &e), &e);
+    TU_OK(btf_image_write_exr_opts(exr, &img, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
     btf_image_free(&img);
     assert_int_equal(btf_image_read(exr, &ro, &img, &e), BTF_E_UNSUPPORTED);
     assert_non_null(strstr(e.msg, "30x20"));

@@ -5,6 +5,9 @@
  * test_analyse.c, where a dataset is at hand).
  */
 #include "testutil.h"
+#include "car/car.h"
+#include "core/core.h"
+#include "segment/segment.h"
 
 #include <math.h>
 #include <stdlib.h>

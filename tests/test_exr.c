@@ -152,7 +152,7 @@ static void round_trip_sizes(void **state)
                     half_exact_image(&a, w, h, c, (uint32_t)(s * 7 + c));
                 else
                     random_image(&a, w, h, c, (uint32_t)(s * 7 + c), -1000.0f, 1000.0f);
-                TU_OK(btf_image_write_exr(p, &a, half, &e), &e);
+                TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = half}, NULL, &e), &e);
                 btf_image_header hd;
                 TU_OK(btf_exr_probe(p, &hd, &e), &e);
                 assert_int_equal(hd.format, BTF_FILE_EXR);
@@ -179,7 +179,7 @@ static void half_rounds_to_nearest(void **state)
     btf_image a, b;
     random_image(&a, 31, 9, 3, 5, 0.0f, 8.0f);
     const char *p = tu_fmt("%s/h.exr", tu_dir);
-    TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     for (size_t i = 0; i < (size_t)31 * 9 * 3; i++)
         assert_true(fabsf(a.data[i] - b.data[i]) <= a.data[i] * (1.0f / 2048.0f) + 1e-7f);
@@ -200,14 +200,14 @@ static void extreme_values(void **state)
     const char *p = tu_fmt("%s/x.exr", tu_dir);
 
     /* Float keeps every value bit for bit, subnormals and -0 included. */
-    TU_OK(btf_image_write_exr(p, &a, 0, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &a, NULL, NULL, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     assert_memory_equal(a.data, b.data, sizeof in);
     btf_image_free(&b);
 
     /* Half clamps to +-65504 (never Inf); tiny values go to 0 or a half
      * subnormal, keeping their sign. */
-    TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     for (int i = 0; i < n; i++) {
         float v = b.data[i];
@@ -233,7 +233,7 @@ static void channel_conversion(void **state)
     btf_image rgb, grey, b;
     random_image(&rgb, 9, 4, 3, 11, 0.0f, 10.0f);
     const char *p = tu_fmt("%s/c.exr", tu_dir);
-    TU_OK(btf_image_write_exr(p, &rgb, 0, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &rgb, NULL, NULL, &e), &e);
     TU_OK(btf_exr_read(p, 1, &b, &e), &e);
     assert_int_equal(b.channels, 1);
     for (int i = 0; i < 36; i++) {
@@ -247,7 +247,7 @@ static void channel_conversion(void **state)
     btf_image_free(&b);
 
     random_image(&grey, 5, 6, 1, 12, -5.0f, 5.0f);
-    TU_OK(btf_image_write_exr(p, &grey, 1, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &grey, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
     TU_OK(btf_exr_read(p, 3, &b, &e), &e);
     assert_int_equal(b.channels, 3);
     for (int i = 0; i < 30; i++) {
@@ -258,7 +258,7 @@ static void channel_conversion(void **state)
     /* An RGB image of FLT_MAX has a luminance of FLT_MAX, not Inf. */
     for (int i = 0; i < 36 * 3; i++)
         rgb.data[i] = FLT_MAX;
-    TU_OK(btf_image_write_exr(p, &rgb, 0, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &rgb, NULL, NULL, &e), &e);
     TU_OK(btf_exr_read(p, 1, &b, &e), &e);
     for (int i = 0; i < 36; i++)
         assert_true(isfinite(b.data[i]) && b.data[i] > 3e38f);
@@ -282,10 +282,11 @@ static void streaming_equals_one_shot(void **state)
         int w = 37, h = 101, c = 3;
         random_image(&a, w, h, c, 99 + half, -3.0f, 3.0f);
         const char *p1 = tu_fmt("%s/one.exr", d), *p2 = tu_fmt("%s/stream.exr", d);
-        TU_OK(btf_image_write_exr(p1, &a, half, &e), &e);
+        TU_OK(btf_image_write_exr_opts(p1, &a, &(btf_exr_opts){.half = half}, NULL, &e), &e);
 
         btf_exr_writer *wr = NULL;
-        TU_OK(btf_exr_writer_open(p2, w, h, c, half, &wr, &e), &e);
+        TU_OK(btf_exr_writer_open_opts(p2, w, h, c, &(btf_exr_opts){.half = half}, NULL, &wr, &e),
+              &e);
         /* Batches that straddle the 16-row chunks, and empty ones. */
         const int batches[] = {1, 0, 2, 15, 16, 17, 3, 33, 0, 14};
         int row = 0;
@@ -332,7 +333,7 @@ static void writer_options(void **state)
     random_image(&a, w, h, c, 7, -2.0f, 2.0f);
     for (int half = 0; half <= 1; half++) {
         const char *p = tu_fmt("%s/ref.exr", d);
-        TU_OK(btf_image_write_exr(p, &a, half, &e), &e);
+        TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = half}, NULL, &e), &e);
         TU_OK(btf_exr_read(p, 0, &ref[half], &e), &e);
         remove(p);
     }
@@ -485,7 +486,7 @@ static void writer_closed_early(void **state)
     const char *p = tu_fmt("%s/early.exr", d);
     float row[20 * 3] = {0};
     btf_exr_writer *w = NULL;
-    TU_OK(btf_exr_writer_open(p, 20, 40, 3, 1, &w, &e), &e);
+    TU_OK(btf_exr_writer_open_opts(p, 20, 40, 3, &(btf_exr_opts){.half = 1}, NULL, &w, &e), &e);
     for (int i = 0; i < 17; i++)
         TU_OK(btf_exr_writer_put_rows(w, row, 1, &e), &e);
     assert_int_equal(btf_exr_writer_close(w, &e), BTF_E_ARG);
@@ -494,7 +495,7 @@ static void writer_closed_early(void **state)
     assert_int_equal(stray_files(d, NULL), 0);
 
     /* Abort removes the temporary file too, at any point. */
-    TU_OK(btf_exr_writer_open(p, 20, 40, 1, 0, &w, &e), &e);
+    TU_OK(btf_exr_writer_open_opts(p, 20, 40, 1, NULL, NULL, &w, &e), &e);
     assert_int_equal(stray_files(d, NULL), 1);
     TU_OK(btf_exr_writer_put_rows(w, row, 3, &e), &e);
     btf_exr_writer_abort(w);
@@ -511,21 +512,22 @@ static void writer_misuse(void **state)
     const char *p = tu_fmt("%s/m.exr", d);
     float rows[4 * 10] = {0};
     btf_exr_writer *w = (btf_exr_writer *)&e;
-    assert_int_equal(btf_exr_writer_open(p, 0, 5, 1, 0, &w, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_open_opts(p, 0, 5, 1, NULL, NULL, &w, &e), BTF_E_ARG);
     assert_null(w);
-    assert_int_equal(btf_exr_writer_open(p, 5, 65537, 1, 0, &w, &e), BTF_E_ARG);
-    assert_int_equal(btf_exr_writer_open(p, 5, 5, 2, 0, &w, &e), BTF_E_ARG);
-    assert_int_equal(btf_exr_writer_open(NULL, 5, 5, 1, 0, &w, &e), BTF_E_ARG);
-    assert_int_equal(btf_exr_writer_open(p, 5, 5, 1, 0, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_open_opts(p, 5, 65537, 1, NULL, NULL, &w, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_open_opts(p, 5, 5, 2, NULL, NULL, &w, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_open_opts(NULL, 5, 5, 1, NULL, NULL, &w, &e), BTF_E_ARG);
+    assert_int_equal(btf_exr_writer_open_opts(p, 5, 5, 1, NULL, NULL, NULL, &e), BTF_E_ARG);
     assert_int_equal(btf_exr_writer_put_rows(NULL, rows, 1, &e), BTF_E_ARG);
     assert_int_equal(btf_exr_writer_close(NULL, &e), BTF_E_ARG);
     /* A folder that does not exist. */
-    assert_int_equal(btf_exr_writer_open(tu_fmt("%s/no/such/x.exr", d), 4, 4, 1, 0, &w, &e),
+    assert_int_equal(btf_exr_writer_open_opts(tu_fmt("%s/no/such/x.exr", d), 4, 4, 1, NULL, NULL,
+                                              &w, &e),
                      BTF_E_IO);
     assert_non_null(strstr(e.msg, "no/such/x.exr"));
 
     /* Too many rows: an error, final for the writer. */
-    TU_OK(btf_exr_writer_open(p, 4, 3, 1, 0, &w, &e), &e);
+    TU_OK(btf_exr_writer_open_opts(p, 4, 3, 1, NULL, NULL, &w, &e), &e);
     assert_int_equal(btf_exr_writer_put_rows(w, rows, 4, &e), BTF_E_ARG);
     assert_int_equal(btf_exr_writer_put_rows(w, rows, 3, &e), BTF_E_ARG);
     assert_int_equal(btf_exr_writer_close(w, &e), BTF_E_ARG);
@@ -534,8 +536,8 @@ static void writer_misuse(void **state)
 
     /* No image. */
     btf_image none = {0};
-    assert_int_equal(btf_image_write_exr(p, &none, 0, &e), BTF_E_ARG);
-    assert_int_equal(btf_image_write_exr(p, NULL, 0, &e), BTF_E_ARG);
+    assert_int_equal(btf_image_write_exr_opts(p, &none, NULL, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf_image_write_exr_opts(p, NULL, NULL, NULL, &e), BTF_E_ARG);
 }
 
 static void non_finite_input_refused(void **state)
@@ -551,7 +553,9 @@ static void non_finite_input_refused(void **state)
             random_image(&a, 6, 40, 3, 3, 0.0f, 1.0f);
             /* Pixel (4, 35), past the first chunks, so some were written. */
             a.data[(35 * 6 + 4) * 3 + 1] = kind == 0 ? NAN : kind == 1 ? INFINITY : -INFINITY;
-            assert_int_equal(btf_image_write_exr(p, &a, half, &e), BTF_E_ARG);
+            assert_int_equal(
+                btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = half}, NULL, &e),
+                BTF_E_ARG);
             assert_non_null(strstr(e.msg, "(4, 35)"));
             assert_non_null(strstr(e.msg, kind == 0 ? "NaN" : "Inf"));
             assert_false(file_exists(p));
@@ -569,19 +573,19 @@ static void writes_are_atomic(void **state)
     const char *p = tu_fmt("%s/atomic.exr", d);
     btf_image a, b, bad;
     half_exact_image(&a, 12, 12, 3, 1);
-    TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
     /* A failed rewrite leaves the old file as it was. */
     random_image(&bad, 12, 12, 3, 2, 0.0f, 1.0f);
     bad.data[100] = NAN;
-    assert_int_equal(btf_image_write_exr(p, &bad, 0, &e), BTF_E_ARG);
+    assert_int_equal(btf_image_write_exr_opts(p, &bad, NULL, NULL, &e), BTF_E_ARG);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     assert_same_image(&a, &b);
     btf_image_free(&b);
     /* A successful rewrite replaces it. */
     bad.data[100] = 0.5f;
-    TU_OK(btf_image_write_exr(p, &bad, 0, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &bad, NULL, NULL, &e), &e);
     TU_OK(btf_exr_read(p, 0, &b, &e), &e);
     assert_same_image(&bad, &b);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
@@ -879,7 +883,7 @@ static void truncated_files(void **state)
     btf_image a;
     random_image(&a, 64, 50, 3, 7, 0.0f, 1.0f);
     const char *full = tu_fmt("%s/full.exr", tu_dir);
-    TU_OK(btf_image_write_exr(full, &a, 0, &e), &e);
+    TU_OK(btf_image_write_exr_opts(full, &a, NULL, NULL, &e), &e);
     btf_image_free(&a);
     size_t n;
     unsigned char *d = slurp(full, &n);
@@ -901,7 +905,7 @@ static void corrupt_bytes(void **state)
     btf_image a, b;
     random_image(&a, 40, 40, 3, 8, 0.0f, 1.0f);
     const char *full = tu_fmt("%s/good.exr", tu_dir), *bad = tu_fmt("%s/bad.exr", tu_dir);
-    TU_OK(btf_image_write_exr(full, &a, 1, &e), &e);
+    TU_OK(btf_image_write_exr_opts(full, &a, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
     btf_image_free(&a);
     size_t n;
     unsigned char *d = slurp(full, &n);
@@ -995,7 +999,7 @@ static void absurd_sizes(void **state)
     };
     for (int i = 0; i < 5; i++) {
         half_exact_image(&a, 16, 16, 1, 3);
-        TU_OK(btf_image_write_exr(p, &a, 1, &e), &e);
+        TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
         btf_image_free(&a);
         patch_data_window(p, windows[i][0], windows[i][1], windows[i][2], windows[i][3]);
         assert_rejected(p);
@@ -1019,7 +1023,7 @@ static void library_is_silent(void **state)
     btf_error e = {0};
     btf_image a, b;
     random_image(&a, 30, 30, 3, 4, 0.0f, 1.0f);
-    int rc1 = btf_image_write_exr(p, &a, 0, &e);
+    int rc1 = btf_image_write_exr_opts(p, &a, NULL, NULL, &e);
     size_t n = 0;
     unsigned char *d = rc1 ? NULL : slurp(p, &n);
     int rc2 = BTF_OK, rc3 = BTF_OK, rc4 = BTF_OK, rc5 = BTF_OK;
@@ -1031,7 +1035,8 @@ static void library_is_silent(void **state)
         tu_write_file(p, d, n);
         rc4 = btf_exr_read(p, 0, &b, &e);
     }
-    rc5 = btf_image_write_exr(tu_fmt("%s/no/such/folder.exr", tu_dir), &a, 1, &e);
+    rc5 = btf_image_write_exr_opts(tu_fmt("%s/no/such/folder.exr", tu_dir), &a,
+                                   &(btf_exr_opts){.half = 1}, NULL, &e);
     fflush(stderr);
     dup2(saved, 2);
     close(saved);
@@ -1086,10 +1091,11 @@ static void provenance_attributes(void **state)
             random_image(&a, 21, 35, c, 5 + half + c, -2.0f, 2.0f);
             const char *plain = tu_fmt("%s/plain.exr", d), *with = tu_fmt("%s/meta.exr", d);
             const char *stream = tu_fmt("%s/stream.exr", d);
-            TU_OK(btf_image_write_exr(plain, &a, half, &e), &e);
-            TU_OK(btf_image_write_exr_meta(with, &a, half, &meta, &e), &e);
+            TU_OK(btf_image_write_exr_opts(plain, &a, &(btf_exr_opts){.half = half}, NULL, &e), &e);
+            TU_OK(btf_image_write_exr_opts(with, &a, &(btf_exr_opts){.half = half}, &meta, &e), &e);
             btf_exr_writer *w = NULL;
-            TU_OK(btf_exr_writer_open_meta(stream, a.width, a.height, c, half, &meta, &w, &e),
+            TU_OK(btf_exr_writer_open_opts(stream, a.width, a.height, c,
+                                           &(btf_exr_opts){.half = half}, &meta, &w, &e),
                   &e);
             TU_OK(btf_exr_writer_put_rows(w, a.data, a.height, &e), &e);
             TU_OK(btf_exr_writer_close(w, &e), &e);
@@ -1135,7 +1141,7 @@ static void provenance_attributes(void **state)
     random_image(&a, 4, 4, 3, 11, 0.0f, 1.0f);
     const char *p = tu_fmt("%s/partial.exr", d);
     btf_exr_meta some = {.model = "m.btfcar", .seed = 0, .subspace = 0};
-    TU_OK(btf_image_write_exr_meta(p, &a, 1, &some, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = 1}, &some, &e), &e);
     exr_context_t ctx = open_exr(p);
     assert_string_equal(tu_exr_string(ctx, "btfcarSeed"), "0");
     assert_string_equal(tu_exr_string(ctx, "btfcarSubspace"), "0");
@@ -1143,7 +1149,7 @@ static void provenance_attributes(void **state)
     assert_null(tu_exr_string(ctx, "btfcarLight"));
     exr_finish(&ctx);
     btf_exr_meta none = {0};
-    TU_OK(btf_image_write_exr_meta(p, &a, 1, &none, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = 1}, &none, &e), &e);
     ctx = open_exr(p);
     assert_string_equal(tu_exr_string(ctx, "btfcarVersion"), BTF_VERSION_STRING);
     assert_null(tu_exr_string(ctx, "btfcarModel"));
@@ -1164,7 +1170,7 @@ static void decode_from_memory(void **state)
     btf_image a, b, c;
     random_image(&a, 19, 40, 3, 21, -1.0f, 4.0f);
     const char *p = tu_fmt("%s/m.exr", d);
-    TU_OK(btf_image_write_exr(p, &a, 0, &e), &e);
+    TU_OK(btf_image_write_exr_opts(p, &a, NULL, NULL, &e), &e);
     size_t n;
     unsigned char *bytes = slurp(p, &n);
     for (int ch = 0; ch <= 3; ch += ch ? 2 : 1) {

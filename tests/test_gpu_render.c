@@ -16,6 +16,8 @@
 #include "synth/synth_testing.h" /* btf_gpu_set_max_buffer_bytes */
 
 #include "scene_sphere_obj.h"
+#include "model/model.h"
+#include "synth_gpu.h"
 
 #include <math.h>
 #include <stdio.h>

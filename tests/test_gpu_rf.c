@@ -20,6 +20,8 @@
  */
 #include "testutil.h"
 #include "synth/synth_testing.h" /* btf_gpu_set_max_buffer_bytes */
+#include "rf/rf.h"
+#include "synth_gpu.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -8,6 +8,7 @@
  * --saturation; bad --saturation values are usage errors.
  */
 #include "testutil.h"
+#include "analyse/analyse.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -56,7 +57,7 @@ static void write_scaled(const btf_image *img, float scale, int clip, const char
         float v = img->data[i] * scale;
         s.data[i] = clip && v > 1.0f ? 1.0f : v;
     }
-    TU_OK(btf_image_write_exr(tu_fmt("%s/%s", tu_dir, name), &s, 0, &e), &e);
+    TU_OK(btf_image_write_exr_opts(tu_fmt("%s/%s", tu_dir, name), &s, NULL, NULL, &e), &e);
     btf_image_free(&s);
 }
 
@@ -77,7 +78,7 @@ static int setup(void **state)
             char name[64], path[4096], scaled[80];
             snprintf(name, sizeof name, "v%d_l%02d", v, l);
             snprintf(path, sizeof path, "%s/%s.exr", tu_dir, name);
-            TU_OK(btf_image_write_exr(path, &img, 1, &e), &e);
+            TU_OK(btf_image_write_exr_opts(path, &img, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
             TU_OK(btf_image_read(path, NULL, &half, &e), &e); /* the values x1 holds */
             snprintf(scaled, sizeof scaled, "%s_k.exr", name);
             write_scaled(&half, 1000.0f, 0, scaled);

@@ -8,6 +8,7 @@
 #include "render/render.h"
 #include "render/btf_hemisphere_lookup.h"
 #include "hemisphere_check_spv.h" /* gpu/hemisphere_check.comp: the lookup as GLSL */
+#include "core/core.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,6 +1,8 @@
 /* test_image.c — float images, sRGB, PNG/JPEG files and buffers, the
  * structural probe, the read options' defaults. */
 #include "testutil.h"
+#include "core/core.h"
+#include "io/io.h"
 
 #include <float.h>
 #include <math.h>

@@ -7,6 +7,8 @@
  * provenance of a model's subspace, and `btfcar info MODEL [--json]`.
  */
 #include "testutil.h"
+#include "core/core.h"
+#include "model/model.h"
 
 #include <math.h>
 #include <stdio.h>

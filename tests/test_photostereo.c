@@ -22,6 +22,7 @@
 #include "generate/material.h"
 #include "testutil.h"
 #include "core/core.h"
+#include "range/range.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -1174,7 +1175,7 @@ static const char *write_any(const char *dir, int i, const btf_image *img)
     case 0: TU_OK(btf_image_write_png(path, img, &err), &err); break;
     case 1: write_png16(path, img); break;
     case 2: TU_OK(btf_image_write_jpeg(path, img, 100, &err), &err); break;
-    default: TU_OK(btf_image_write_exr(path, img, 0, &err), &err); break;
+    default: TU_OK(btf_image_write_exr_opts(path, img, NULL, NULL, &err), &err); break;
     }
     return tu_fmt("%s", name);
 }
@@ -1260,7 +1261,7 @@ static void manifest_formats(void **state)
     char *plain = calloc(1, 1 << 16);
     strcat(plain, "path\tlx\tly\tlz\n");
     for (int i = 0; i < n; i++) {
-        btf_image_write_exr(tu_fmt("%s/p%02d.exr", dir, i), &imgs[i], 0, &err);
+        btf_image_write_exr_opts(tu_fmt("%s/p%02d.exr", dir, i), &imgs[i], NULL, NULL, &err);
         double f[3] = {1, 1, 1};
         if (i == 4)
             f[0] = f[1] = f[2] = 0.5;
@@ -1270,7 +1271,8 @@ static void manifest_formats(void **state)
         TU_OK(btf_image_alloc(&scaled, imgs[i].width, imgs[i].height, 3, &err), &err);
         for (size_t k = 0; k < (size_t)72 * 56 * 3; k++)
             scaled.data[k] = (float)(imgs[i].data[k] * f[k % 3]);
-        TU_OK(btf_image_write_exr(tu_fmt("%s/s%02d.exr", dir, i), &scaled, 0, &err), &err);
+        TU_OK(btf_image_write_exr_opts(tu_fmt("%s/s%02d.exr", dir, i), &scaled, NULL, NULL, &err),
+              &err);
         btf_image_free(&scaled);
         char line[512];
         snprintf(line, sizeof line, "%.17g\t%.17g\t%.17g\ts%02d.exr\t%g\t%g\t%g\n", L[3 * i + 2],

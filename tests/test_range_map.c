@@ -9,6 +9,9 @@
  * input.
  */
 #include "testutil.h"
+#include "core/core.h"
+#include "model/model.h"
+#include "render/render.h"
 
 #include <float.h>
 #include <math.h>

@@ -10,6 +10,8 @@
 #include "testutil.h"
 
 #include "dataset/dataset.h"
+#include "io/io.h"
+#include "range/range.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -10,6 +10,8 @@
  * blended.
  */
 #include "testutil.h"
+#include "render/render.h"
+#include "scene/gbuffer.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -7,6 +7,10 @@
  * once for the group.
  */
 #include "testutil.h"
+#include "analyse/analyse.h"
+#include "car/car.h"
+#include "report/measures.h"
+#include "segment/segment.h"
 
 #include <math.h>
 #include <stdio.h>

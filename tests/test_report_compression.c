@@ -320,7 +320,8 @@ static const char *make_manifest(const char *name, int views, int lights, int w,
                 }
             const char *file = tu_fmt("v%d_l%d.%s", v, l, exr ? "exr" : "png");
             if (exr)
-                TU_OK(btf_image_write_exr(tu_fmt("%s/%s", sub, file), &img, 0, &e), &e);
+                TU_OK(btf_image_write_exr_opts(tu_fmt("%s/%s", sub, file), &img, NULL, NULL, &e),
+                      &e);
             else
                 TU_OK(btf_image_write_png(tu_fmt("%s/%s", sub, file), &img, &e), &e);
             btf_image_free(&img);

@@ -1,5 +1,7 @@
 /* test_segment.c — Lab cumulative histograms, k-means and BTF segmentation. */
 #include "testutil.h"
+#include "core/core.h"
+#include "segment/segment.h"
 
 #include <math.h>
 #include <stdio.h>

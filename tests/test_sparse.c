@@ -8,6 +8,7 @@
  * manifests refused in one line naming the file and line.
  */
 #include "testutil.h"
+#include "range/range.h"
 
 #include <cjson/cJSON.h>
 #include <stdio.h>

@@ -4,6 +4,8 @@
  * fit's relative variance floor; periodic patterns reported; strict numbers;
  * duplicate manifest paths; info on an image. */
 #include "testutil.h"
+#include "car/car.h"
+#include "range/range.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -38,7 +38,7 @@ void tu_write_file(const char *path, const void *data, size_t n);
 /* Number of regular files under a folder, recursively. */
 int tu_count_files(const char *path);
 /* Writes an EXR file directly with the core API (tu_exr_write_raw), for
- * layouts and values btf_image_write_exr never produces (NaN, Inf, UINT, tiles). Channel c of pixel (x, y) (data-window relative) is
+ * layouts and values btf_image_write_exr_opts never produces (NaN, Inf, UINT, tiles). Channel c of pixel (x, y) (data-window relative) is
  * value(c, x, y); UINT channels store it truncated. */
 typedef struct tu_exr_spec {
     exr_storage_t storage;         /* SCANLINE or TILED */

@@ -6,26 +6,43 @@
 # --map, prints them as a linker version script that exports those names and
 # makes every other symbol local (the Makefile's $(BUILD)/gen/btfcar.map).
 #
+# HEADER is the umbrella header: its topical headers are the files of the
+# folder beside it named like it (include/btfcar/*.h), and what they declare
+# counts as HEADER's own.
+#
 # The names come from the header's declarations, not from a prefix (the
 # library's internal helpers start with btf_ too): the header is run through
 # the C preprocessor ($CC, default cc), only the lines that come from HEADER
-# itself are kept (not those of the system headers it includes), and every
-# identifier directly followed by "(" outside all parentheses and braces, in
-# a statement that is not a typedef, is a declared function.
+# itself and from its topical headers are kept (not those of the system
+# headers they include), and every identifier directly followed by "("
+# outside all parentheses and braces, in a statement that is not a typedef,
+# is a declared function.
 #
 # POSIX sh and awk only.
 set -eu
 hdr=${1:?usage: public-symbols.sh HEADER [--map]}
 mode=${2:-}
 
-# The topical headers the umbrella includes (include/btfcar/*.h) count too.
-topics="$(dirname "$hdr")/btfcar/"
-names=$(${CC:-cc} -E -x c "$hdr" | awk -v want="$hdr" -v topics="$topics" '
+# The topical headers' folder: include/btfcar.h -> include/btfcar/
+topical="${hdr%.h}/"
+pp=$(${CC:-cc} -E -x c "$hdr")
+
+# A topical header the umbrella does not include would declare functions
+# that are neither exported nor checked: refuse it.
+for t in "$topical"*.h; do
+    [ -e "$t" ] || continue
+    if ! printf '%s\n' "$pp" | grep -q "^# [0-9]* \"$t\""; then
+        echo "public-symbols.sh: $hdr does not include $t" >&2
+        exit 1
+    fi
+done
+
+names=$(printf '%s\n' "$pp" | awk -v want="$hdr" -v topical="$topical" '
     # Line markers: # LINE "FILE" FLAGS
     /^# [0-9]+ "/ {
         f = $3
         gsub(/"/, "", f)
-        keep = (f == want || index(f, topics) == 1)
+        keep = (f == want || substr(f, 1, length(topical)) == topical)
         next
     }
     /^#/ { next }

@@ -11,7 +11,13 @@
 #ifndef BTFCAR_MATERIAL_H
 #define BTFCAR_MATERIAL_H
 
-#include "../btfcar.h"
+#include "base.h"
+#include "dataset.h"
+#include "image.h"
+#include "model.h"
+#include "render.h"
+#include "report.h"
+#include "gpu.h"
 
 #include <stdio.h>
 

@@ -8,11 +8,14 @@
  * analyse/subspace_fit.c).
  */
 #include <stdio.h>
+#include "analyse/analyse.h"
 #include "car/car.h"
 #include "core/core.h"
 #include "dataset/dataset.h"
 #include "model/model.h"
 #include "model/range_code.h"
+#include "range/range.h"
+#include "segment/segment.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -18,6 +18,7 @@
  *   - the exemplar's CIE L*, a*, b* quantiles at the same probabilities,
  *     for colour matching (synth/colour_match.c, format 1.3).
  */
+#include "analyse/analyse.h"
 #include "car/car.h"
 #include "core/core.h"
 #include "synth/synth.h"

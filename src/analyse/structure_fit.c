@@ -22,6 +22,7 @@
 #include "model/model.h"
 #include "model/range_code.h"
 #include "render/btf_horizon.h"
+#include "render/render.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -5,6 +5,8 @@
  * range map, and the margins synthesis will use kept with it, and the
  * marginal transfer that keeps the texture's histogram.
  */
+#include "analyse/analyse.h"
+#include "car/car.h"
 #include "core/core.h"
 #include "model/model.h"
 

@@ -8,6 +8,42 @@
 
 #include "btfcar.h"
 
+/* The CAR fit of one sub-band (car/car_fit.c) and its parts; the public
+ * entry is btf_texture_fit (btfcar/analyse.h). */
+#define BTF_CAR_MAX_CANDIDATES 16
+typedef struct btf_car_fit_info {
+    int candidates;                       /* evaluated */
+    int size[BTF_CAR_MAX_CANDIDATES];     /* their neighbour counts */
+    double log_evidence[BTF_CAR_MAX_CANDIDATES];
+    int chosen;                           /* index into the above; -1: none fitted */
+    double shrink;                        /* 1: as estimated; < 1: gamma scaled for stability */
+    long pixels;                          /* equations used (t) */
+} btf_car_fit_info;
+
+/* Fits the CAR model to one sub-band (w x h doubles): Bayesian estimates
+ * gamma = V_xx^-1 V_xy, sigma^2 from lambda, with the neighbourhood chosen by
+ * its posterior probability among a nested family of candidates (or fixed).
+ * Constant, tiny or ill-conditioned bands degrade to smaller models; an
+ * unstable estimate is shrunk until stable (a warning). Output always finite. */
+btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
+                       btf_car_band *out, btf_car_fit_info *info, btf_error *err);
+/* 1 when the recursion 1/A(z1, z2) of the band's model is stable. */
+int btf_car_is_stable(const btf_car_band *b);
+/* sigma^2 times the mean of 1/|A|^2 over the frequency torus: the variance of
+ * the stationary field (without its mean). */
+double btf_car_stationary_variance(const btf_car_band *b);
+
+/* Models one subspace image (linear RGB): decorrelation, pyramid, one CAR
+ * model per band and level. view and light are left -1. */
+btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
+                            btf_subspace_model *out, btf_error *err);
+/* The candidate neighbourhood family of the Bayesian choice (docs/model.md):
+ * its BTF_CAR_MAX_NEIGHBOURS causal offsets in order, nearest first; a
+ * "fixed order n" neighbourhood is its first n. Returns the count. */
+int btf_car_candidate_offsets(btf_offset offsets[BTF_CAR_MAX_NEIGHBOURS]);
+/* The automatic number of pyramid levels for a band (docs/model.md). */
+int btf_auto_levels(const double *band, int w, int h);
+
 /* 1 when the offset is causal: row < 0, or row 0 and col < 0
  * (car/neighbourhood.c). */
 int btf_offset_is_causal(btf_offset o);

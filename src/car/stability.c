@@ -348,8 +348,8 @@ static int sum_within(const btf_car_band *b)
 
 /* A recursion at all: at most BTF_CAR_MAX_NEIGHBOURS causal offsets within
  * REACH pixels, finite coefficients (the validator says which rule a file
- * breaks before it asks for stability; the public btf_car_is_stable may
- * get anything). */
+ * breaks before it asks for stability; btf_car_is_stable, which the tests
+ * call directly, may get anything). */
 static int band_valid(const btf_car_band *b, char *why, size_t n)
 {
     if (b->n < 0 || b->n > BTF_CAR_MAX_NEIGHBOURS) {

@@ -146,4 +146,19 @@ void btf_relay_background(btf_relay *r, btf_background *bg);
 /* The mean linear RGB of an image (a grey image's value three times). */
 void btf_image_mean_rgb(const btf_image *img, float *rgb);
 
+/* A deterministic random stream (splitmix64) for seeded choices. */
+typedef struct btf_rng {
+    uint64_t state;
+} btf_rng;
+void btf_rng_seed(btf_rng *r, uint64_t seed);
+uint64_t btf_rng_next(btf_rng *r);
+double btf_rng_uniform(btf_rng *r); /* [0, 1), 53 bits */
+
+/* sRGB transfer function (IEC 61966-2-1), per value. */
+float btf_srgb_to_linear(float v);
+float btf_linear_to_srgb(float v);
+
+/* A copy of src into dst (dst's old content is not freed). */
+btf_status btf_dirset_copy(btf_dirset *dst, const btf_dirset *src, btf_error *err);
+
 #endif

@@ -314,4 +314,19 @@ static inline float ubo_scalar(const unsigned char *p, int size)
     return (float)d;
 }
 
+/* Given factors, written as a DFMF file as they are: per channel c,
+ * u[c] is (n_views * n_lights) x components[c] (row view * n_lights +
+ * light) and sxv[c] is (width * height) x components[c] (row y * width + x),
+ * both row-major. */
+typedef struct btf_ubo2014_factors {
+    int colour_model;     /* stored as is (0: RGB; 11: Ylog_UdivY_VdivY, ...) */
+    int cosine_flag;      /* stored as is */
+    int scalar_size;      /* 2 (half; 0 means this), 4 (float) or 8 (double) */
+    int components[3];
+    const float *u[3], *sxv[3];
+} btf_ubo2014_factors;
+btf_status btf_ubo2014_write_factors(const char *path, const btf_dirset *views,
+                                     const btf_dirset *lights, int width, int height,
+                                     const btf_ubo2014_factors *f, btf_error *err);
+
 #endif

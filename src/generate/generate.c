@@ -92,7 +92,7 @@ static btf_status write_truth(const btf_procedural *m, const char *dir, btf_erro
         btf_image img = {m->size, m->size, maps[i].channels, maps[i].data};
         rc = btf_path_join(path, sizeof path, tdir, maps[i].name, err);
         if (rc == 0)
-            rc = btf_image_write_exr(path, &img, 0, err);
+            rc = btf_image_write_exr_opts(path, &img, NULL, NULL, err);
     }
     return rc;
 }

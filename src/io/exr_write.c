@@ -391,21 +391,6 @@ btf_status btf_exr_writer_open_opts(const char *path, int width, int height, int
     return BTF_OK;
 }
 
-btf_status btf_exr_writer_open_meta(const char *path, int width, int height, int channels,
-                                    int half, const btf_exr_meta *meta, btf_exr_writer **out,
-                                    btf_error *err)
-{
-    btf_exr_opts o = btf_exr_defaults();
-    o.half = half;
-    return btf_exr_writer_open_opts(path, width, height, channels, &o, meta, out, err);
-}
-
-btf_status btf_exr_writer_open(const char *path, int width, int height, int channels, int half,
-                               btf_exr_writer **out, btf_error *err)
-{
-    return btf_exr_writer_open_meta(path, width, height, channels, half, NULL, out, err);
-}
-
 /* The copy loops of stage_row, written to be vectorised (GCC does at -O3;
  * -O2 leaves them scalar, a third of the caller's output work). */
 #if defined(__GNUC__) && !defined(__clang__)
@@ -844,14 +829,6 @@ void btf_exr_writer_abort(btf_exr_writer *w)
     free(w);
 }
 
-btf_status btf_image_write_exr_meta(const char *path, const btf_image *img, int half,
-                                    const btf_exr_meta *meta, btf_error *err)
-{
-    btf_exr_opts o = btf_exr_defaults();
-    o.half = half;
-    return btf_image_write_exr_opts(path, img, &o, meta, err);
-}
-
 btf_status btf_image_write_exr_opts(const char *path, const btf_image *img,
                                     const btf_exr_opts *opts, const btf_exr_meta *meta,
                                     btf_error *err)
@@ -869,9 +846,4 @@ btf_status btf_image_write_exr_opts(const char *path, const btf_image *img,
         return rc;
     }
     return btf_exr_writer_close(w, err);
-}
-
-btf_status btf_image_write_exr(const char *path, const btf_image *img, int half, btf_error *err)
-{
-    return btf_image_write_exr_meta(path, img, half, NULL, err);
 }

@@ -63,8 +63,8 @@ btf_status btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, 
 /* EXR reading (io/exr_read.c) from any source: the header probe and the
  * decoder (channels 0: as in the file; 1 or 3 converts; max_pixels as in
  * btf_read_opts, checked from the header). The path forms open
- * the file and call these. The writers are public (btf_image_write_exr,
- * btf_exr_writer_open; io/exr_write.c). */
+ * the file and call these. The writers are public (btf_image_write_exr_opts,
+ * btf_exr_writer_open_opts; io/exr_write.c). */
 btf_status btf_exr_probe_source(btf_source *src, btf_image_header *hdr, btf_error *err);
 btf_status btf_exr_read_source(btf_source *src, int channels, uint64_t max_pixels, btf_image *out,
                                btf_error *err);
@@ -97,5 +97,9 @@ int btfcv_dct2(double *a, int w, int h, int inverse, char *errbuf, size_t errlen
 /* Testing (tests/test_exr.c): 1 makes the EXR writer pack chunks with
  * OpenEXRCore's own packer instead of its F16C one (the same bytes). */
 extern int btf_exr_library_pack;
+
+/* Format from the file's signature bytes (never from its name);
+ * BTF_FILE_UNKNOWN for anything but a readable regular file. */
+btf_file_format btf_file_format_of(const char *path);
 
 #endif

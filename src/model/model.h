@@ -10,6 +10,30 @@
 
 #include "core/core.h"
 
+/* The parts of an encoded model file (docs/report-compression.md). */
+typedef enum btf_model_part {
+    BTF_MODEL_PART_CONTAINER = 0, /* the 26-byte file header and the CRC-32 */
+    BTF_MODEL_PART_DEFLATE,       /* zlib's header and Adler-32, deflate's block
+                                     headers, code tables, end-of-block codes
+                                     and final padding (0 when stored) */
+    BTF_MODEL_PART_FRAMING,       /* section tags and lengths, the subspace and
+                                     marginal counts, each subspace's
+                                     representative pair and analysed size */
+    BTF_MODEL_PART_DIRECTIONS,    /* VIEW and LGHT: names, counts, directions */
+    BTF_MODEL_PART_INDEX,         /* INDX: the index table */
+    BTF_MODEL_PART_SPECTRAL,      /* per subspace: the mean colour and the 3 x 3 basis */
+    BTF_MODEL_PART_LEVELS,        /* per subspace: the pyramid level count */
+    BTF_MODEL_PART_NEIGHBOURHOODS,/* per band: neighbour count and offsets */
+    BTF_MODEL_PART_GAMMAS,        /* per band: the CAR coefficients */
+    BTF_MODEL_PART_SIGMAS,        /* per band: the noise deviation */
+    BTF_MODEL_PART_BAND_MEANS,    /* per band: the sub-band mean */
+    BTF_MODEL_PART_MARGINALS,     /* MARG: per subspace its knot count and transfer */
+    BTF_MODEL_PART_RANGE,         /* RANG: the range/normal tile, all of its body */
+    BTF_MODEL_PART_STRUCTURE,     /* STRC: the albedo pattern and the shading's ambient */
+    BTF_MODEL_PART_GAINS,         /* GAIN: the pair gains */
+    BTF_MODEL_PART_COUNT
+} btf_model_part;
+
 /* Limits (docs/model-format.md, "Validation"). */
 #define BTF_MODEL_MAX_DIRS 4096
 #define BTF_MODEL_MAX_SUBSPACES 255 /* the index table stores uint8 ids; 255 is
@@ -183,5 +207,13 @@ int btf_structure_lattice(const btf_model *m, int lattice[4]);
 /* 1 when the bytes start like a CAR model file (the signature's stem, as
  * btf_rf_sniff for the reflectance field's; model_file.c). */
 int btf_model_sniff(const unsigned char *data, size_t size);
+/* Makes a range tile periodic in place (analysis does, and reading a model
+ * file of format 1.0 does): its mean slope removed, then a variance-
+ * preserving cross-fade with itself shifted by half a period along each
+ * axis (docs/render.md), which keeps the tile's mean and variance and
+ * removes the jumps between opposite edges; the result lies on the model
+ * file's 16-bit height grid, so writing it loses nothing. Heights must be
+ * finite (BTF_E_DATA). */
+btf_status btf_range_make_periodic(float *heights, int width, int height, btf_error *err);
 
 #endif

@@ -50,6 +50,7 @@
  */
 #include "io/io.h"
 #include "core/core.h"
+#include "range/range.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -18,7 +18,7 @@ static btf_status write_pair(const char *outdir, const char *name, const btf_ima
     btf_status rc;
     snprintf(file, sizeof file, "%s.exr", name);
     if ((rc = btf_path_join(path, sizeof path, outdir, file, err)) ||
-        (rc = btf_image_write_exr(path, exr, 0, err)))
+        (rc = btf_image_write_exr_opts(path, exr, NULL, NULL, err)))
         return rc;
     snprintf(file, sizeof file, "%s.png", name);
     if ((rc = btf_path_join(path, sizeof path, outdir, file, err)) ||

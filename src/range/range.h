@@ -173,4 +173,34 @@ btf_status btf_ps_run(btf_ps_source *src, const double *lights, const double *in
 /* Clears out for a call (view -1); BTF_E_ARG when out is NULL. */
 btf_status btf_ps_result_start(btf_ps_result *out, btf_error *err);
 
+/* --------------------------- the stage's parts the library and tests share */
+
+/* Integrates a normal map (3 channels x, y, z in the frame of
+ * btfcar/analyse.h) into a height field in pixel units: dz/dcolumn =
+ * -n_x/n_z, dz/drow = +n_y/n_z.
+ * mask: NULL (every pixel) or an image of the same size whose non-zero
+ * pixels are valid. opts: NULL for the defaults. Output: 1 channel, zero
+ * mean over the valid pixels, 0 elsewhere; never NaN. A zero normal
+ * (0, 0, 0) counts as flat. */
+btf_status btf_integrate(const btf_image *normals, const btf_image *mask,
+                         const btf_integrate_opts *opts, btf_image *height, btf_error *err);
+
+/* btf_photostereo_dataset_view and btf_photostereo_manifest_view with view
+ * NULL: the images of the view nearest the normal (smallest theta_v). */
+btf_status btf_photostereo_dataset(const btf_dataset *ds, const btf_photostereo_opts *opts,
+                                   btf_ps_result *out, btf_error *err);
+btf_status btf_photostereo_manifest(const char *path, const btf_photostereo_opts *opts,
+                                    btf_ps_result *out, btf_error *err);
+/* The most lights the dataset holds at any one view (photometric stereo
+ * needs 3). */
+int btf_photostereo_best_lights(const btf_dataset *ds);
+/* Previews for people: normals as RGB (n + 1) / 2 (the usual normal-map
+ * colours once 8-bit encoded), and the range map as a shaded relief (lit
+ * from the top left, exaggerated to a fixed mean slope, tinted by height;
+ * mask: NULL or the mask of the run, outside which it is black). Both are
+ * linear RGB for btf_image_write_png. */
+btf_status btf_normals_preview(const btf_image *normals, btf_image *out, btf_error *err);
+btf_status btf_height_relief(const btf_image *height, const btf_image *mask, btf_image *out,
+                             btf_error *err);
+
 #endif

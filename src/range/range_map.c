@@ -18,6 +18,7 @@
  */
 #include "core/core.h"
 #include "model/model.h"
+#include "render/render.h"
 
 #include <float.h>
 #include <math.h>

@@ -5,7 +5,7 @@
  * direction and their barycentric weights; angles as in Fig. 1). ONE text
  * shared by the C library (src/render/hemisphere.c, btf_hemisphere_lookup)
  * and the GPU render pass (GLSL 4.50), reading the flat arrays of
- * btf_hemisphere_table (include/btfcar.h). The rules are in docs/render.md,
+ * btf_hemisphere_table (render/render.h). The rules are in docs/render.md,
  * "Interpolation over the hemisphere".
  *
  * The arithmetic is float, each result BTF_PRECISE, in one written order.
@@ -62,6 +62,7 @@ struct btf_hemi_weights {
 /* --------------------------------------------------------------------- C */
 #include <math.h>
 #include "btfcar.h"
+#include "render/render.h" /* btf_hemisphere_table */
 
 #define BTF_HEMI_SQRT(x) sqrtf(x)
 #define BTF_HEMI_F2I(f) ((int)(f))

@@ -9,6 +9,7 @@
 #define BTF_RENDER_SHADE_H
 
 #include "btfcar.h"
+#include "render/render.h"
 
 #include <math.h>
 #include <stdint.h>

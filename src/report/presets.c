@@ -6,6 +6,7 @@
  * in docs/report.md.
  */
 #include "core/core.h"
+#include "car/car.h"
 
 #include <string.h>
 

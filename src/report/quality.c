@@ -11,6 +11,7 @@
  */
 #include "core/core.h"
 #include "render/shade.h"
+#include "report/measures.h"
 
 #include <math.h>
 #include <stdlib.h>

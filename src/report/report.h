@@ -17,6 +17,7 @@
 
 #include "btfcar.h"
 #include "core/core.h"
+#include "report/measures.h"
 
 #include <stddef.h>
 #include <stdio.h>

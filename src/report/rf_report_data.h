@@ -9,6 +9,7 @@
 
 #include "btfcar.h"
 #include "report/report_base.h"
+#include "report/measures.h"
 
 /* A measured pair's figures; its view and light are the base's pair's. */
 typedef struct btf_rf_pair {

@@ -10,8 +10,11 @@
  * times compare; every finished point is written to the state folder at
  * once and read back by a later run, so an interrupted sweep resumes.
  */
+#include "analyse/analyse.h"
+#include "car/car.h"
 #include "core/core.h"
 #include "report/report.h"
+#include "segment/segment.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>

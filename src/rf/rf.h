@@ -15,6 +15,8 @@
 #define BTF_RF_H
 
 #include "btfcar.h"
+#include "scene/gbuffer.h"
+#include "rf/rf_error.h"
 #include "rf/rf_map.h"
 #include "core/core.h"
 
@@ -240,5 +242,17 @@ void rf_quantise_field(const float *vals, size_t texels, int slots, float *lo, f
 /* The chromaticity factors (sum of rgb / sum of Y, 1 1 1 for a dark texel),
  * clamped to [0, 64]. */
 void rf_chroma(double r, double g, double b, float out[3]);
+
+/* Luminance parameters per texel and field of a fit with k lobes. */
+int btf_rf_param_count(int fit, int lobes);
+/* BTF_E_DATA with the message when ds is a sparse set (the family fits
+ * every light at each view); BTF_OK for a full grid. */
+btf_status btf_rf_refuse_sparse(const btf_dataset *ds, btf_error *err);
+/* Linear RGB of texel (x, y) (wrapped into the surface, btf_rf_surface_size;
+ * a sampled model's through its coordinate map) of field `field` (a view
+ * index; 0 for lafortune) lit from `light` (view: the view direction, used
+ * by lafortune only); btf_rf_eval weights four of them. */
+void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
+                       int y, float rgb[3]);
 
 #endif

@@ -1,7 +1,7 @@
 /*
  * scene.h — private to src/scene/: vector helpers, the per-hit record the
  * intersectors fill, and the stages of loading and ray casting a scene
- * (docs/scene.md). Conventions of the G-buffer frame (include/btfcar.h):
+ * (docs/scene.md). Conventions of the G-buffer frame (scene/gbuffer.h):
  * T along increasing u, B along decreasing v ("up" the texture image),
  * N = T x B towards the eye.
  */
@@ -9,6 +9,7 @@
 #define BTF_SCENE_H
 
 #include "btfcar.h"
+#include "scene/gbuffer.h"
 
 #include <math.h>
 #include <stddef.h>

@@ -23,6 +23,7 @@
 #include "dataset/dataset.h"
 #include "io/io.h"
 #include "core/core.h"
+#include "segment/segment.h"
 
 #include <math.h>
 #include <stdlib.h>

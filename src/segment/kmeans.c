@@ -11,6 +11,7 @@
  * ties go to the lowest index, so a seed gives one result.
  */
 #include "core/core.h"
+#include "segment/segment.h"
 
 #include <float.h>
 #include <stdlib.h>

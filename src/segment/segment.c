@@ -21,7 +21,9 @@
  */
 #include <stdio.h>
 #include "core/core.h"
+#include "segment/segment.h"
 #include "dataset/dataset.h"
+#include "io/io.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -437,4 +437,20 @@ btf_status btf_synthesise_image_albedo(const btf_model *m, int subspace,
                                        const btf_synth_opts *opts, const btf_image *albedo,
                                        btf_image *out, btf_error *err);
 
+/* Colour matching (src/synth/colour_match.c, docs/synthesis.md, "Colour
+ * matching"): the per-band marginal transfer gives each decorrelated band
+ * the exemplar's histogram, but the bands are synthesised independently
+ * where the material's chroma depends on its lightness, and a small
+ * synthesis' histogram strays from the model's with its realisation: both
+ * show in the CIE Lab histograms (the texture distances' first-order
+ * component, btfcar/report.h). This pass measures img's own L*, a*, b*
+ * quantiles (every pixel up to 128 x 128, a regular grid of as many
+ * beyond), sends each channel of every pixel through the piecewise-linear
+ * map from them onto the model's lab_quantile (resampled on 256 segments),
+ * converts back and clamps into the exemplar's RGB box. Monotone per channel, deterministic, finite; a
+ * tileable image stays tileable. BTF_E_ARG when the subspace holds no Lab
+ * quantiles or img is not RGB or holds Inf or NaN. The synthesis calls it
+ * by default (btf_synth_opts.match_colours). */
+btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, btf_error *err);
+
 #endif

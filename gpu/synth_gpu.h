@@ -98,4 +98,27 @@ const btf_gpu_matcher *btf_gpu_match_pipes(const btf_gpu *g);
 /* 1 when g is a CPU device (lavapipe). */
 int btf_gpu_is_cpu(const btf_gpu *g);
 
+/* Reached through the material interface (btfcar/material.h) by users;
+ * declared here for the library and its tests. */
+/* ------------------------------------- reflectance-field renders (GPU) */
+
+/* btf_rf_render_flat and btf_rf_render_scene on g's Vulkan device
+ * (gpu/rf_render_gpu.c,
+ * gpu/rf_render.comp; docs/rf.md, "Rendering on the GPU"), with the
+ * formulas of the CPU renders (one text, src/rf/btf_rf_shared.h): on
+ * lavapipe the pixels are the CPU's bit for bit, on other devices within
+ * the rounding of sqrt and division. The flat render uploads only the (at
+ * most four) fields of the view and shades each distinct texel once; the
+ * scene render traces on the host (threads: 0 all CPUs) and uploads every
+ * field. A model whose codes exceed 4 of the device's largest storage
+ * buffers is BTF_E_UNSUPPORTED. info (NULL: not wanted): trace_s (scene),
+ * synth_s the upload of the model's fields and parameters, shade_s the
+ * render pass with its download. */
+btf_status btf_gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir view,
+                                  btf_dir light, int width, int height, btf_image *out,
+                                  btf_render_info *info, btf_error *err);
+btf_status btf_gpu_rf_render_scene(btf_gpu *g, const btf_rf_model *m, const btf_scene *s,
+                                   int width, int height, int threads, btf_image *out,
+                                   btf_render_info *info, btf_error *err);
+
 #endif

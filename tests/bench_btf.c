@@ -42,6 +42,7 @@
  *       (docs/datasets.md, "UBO2014 .btf files").
  */
 #include "testutil.h"
+#include "core/core.h"
 #include "dataset/ubo2014.h"
 
 #include <math.h>

@@ -7,6 +7,7 @@
  * is 21 million a second over its threads. Median of 5 runs; figures only.
  */
 #include "testutil.h"
+#include "core/core.h"
 #include "render/render.h"
 
 #include <math.h>

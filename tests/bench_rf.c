@@ -14,6 +14,8 @@
  * 1 for the two Levenberg-Marquardt fits, which take minutes at 128^2).
  */
 #include "testutil.h"
+#include "rf/rf_render.h"
+#include "synth_gpu.h"
 
 #include <stdio.h>
 #include <stdlib.h>

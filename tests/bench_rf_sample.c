@@ -14,6 +14,7 @@
  *        (default 64 32 ptm, every material; FIT ptm|lobes|lafortune)
  */
 #include "testutil.h"
+#include "rf/rf_render.h"
 #include "rf/rf_error.h"
 
 #include <stdio.h>

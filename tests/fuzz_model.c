@@ -51,6 +51,7 @@
  *   /tmp/seeds tests/fuzz-corpus/fuzz_model
  */
 #include "btfcar.h"
+#include "rf/rf_render.h"
 
 #include <math.h>
 #include <stdint.h>

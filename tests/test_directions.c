@@ -1,5 +1,6 @@
 /* test_directions.c — direction sets and (theta, phi) <-> vector conversions. */
 #include "testutil.h"
+#include "core/core.h" /* btf_dirset_ubo151 */
 
 #include <math.h>
 #include <stdlib.h>

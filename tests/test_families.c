@@ -7,6 +7,7 @@
  * arguments, a model that cannot be rendered.
  */
 #include "testutil.h"
+#include "rf/rf_render.h" /* the family's own render, to compare with */
 
 #include <cjson/cJSON.h>
 #include <stdio.h>

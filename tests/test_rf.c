@@ -10,6 +10,7 @@
 #include "testutil.h"
 
 #include "rf/rf.h"
+#include "report/report.h" /* btf_rf_report_write */
 
 #include <math.h>
 #include <stdio.h>

@@ -12,6 +12,7 @@
 #include "testutil.h"
 
 #include "rf/rf.h"
+#include "report/report.h" /* btf_rf_report_write */
 #include "rf/rf_map.h"
 #include "rf/rf_sample.h"
 

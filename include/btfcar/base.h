@@ -122,8 +122,6 @@ typedef struct btf_dirset {
 /* The Bonn/UTIA 81-direction sampling: theta 0,15,...,75 with 1,6,12,18,20,24
  * azimuths evenly spaced from phi = 0. */
 btf_status btf_dirset_ubo81(btf_dirset *set, btf_error *err);
-/* The UBO2014 151-direction dome (per-ring azimuth offsets). */
-btf_status btf_dirset_ubo151(btf_dirset *set, btf_error *err);
 /* A custom set from a list; sorted ring by ring, phi ascending, duplicates
  * (within 1e-6 degree) merged. If the list equals a known set it is named so. */
 btf_status btf_dirset_from_list(btf_dirset *set, const btf_dir *dirs, int count,

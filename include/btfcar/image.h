@@ -125,9 +125,6 @@ typedef enum btf_exr_compression {
     BTF_EXR_PXR24
 } btf_exr_compression;
 
-/* The name ("zip", "none", ...) of a compression; NULL if out of range. */
-const char *btf_exr_compression_name(int compression);
-
 /* Seconds an EXR writer spent, added to at close (abort adds nothing): on
  * checking and staging rows (stage_s, the caller's thread), converting and
  * packing them (convert_s), compressing (compress_s), writing the header,

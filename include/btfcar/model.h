@@ -264,9 +264,6 @@ btf_status btf_rf_decode(const unsigned char *data, size_t size, const char *nam
                          btf_rf_model *out, btf_error *err);
 btf_status btf_rf_write(const char *path, const btf_rf_model *m, btf_error *err);
 btf_status btf_rf_read(const char *path, btf_rf_model *out, btf_error *err);
-/* 1 when the bytes start like a reflectance-field file (the signature's
- * first 7 bytes), else 0. */
-int btf_rf_sniff(const unsigned char *data, size_t size);
 
 #ifdef __cplusplus
 }

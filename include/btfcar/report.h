@@ -337,23 +337,6 @@ btf_status btf_report_write(const btf_dataset *ds, const btf_model *m, const cha
                             const btf_report_opts *opts, btf_report_summary *summary,
                             btf_error *err);
 
-/* ----------------------------------------- reflectance-field reports */
-
-/* The report of an RF model (docs/report.md, "Reflectance-field models"),
- * the counterpart of btf_report_write in the same folder layout: the model
- * file's bytes against the raw BTF; per sampled pair (opts->quality: the
- * spread or all) the measured image against btf_rf_render_flat of that
- * pair by btf_texture_distance and the pixel-wise mean |dY|; the mean |dY|
- * over every texel and image (the paper's Table 1); pictures of the sampled
- * pairs and of the
- * opts->worst pairs by |dY|; the preview sphere (btf_rf_render_scene);
- * DIR/index.html and DIR/report.json. The model must be of ds (size and
- * direction sets; BTF_E_ARG). opts->sweep is BTF_E_ARG (no CAR settings to
- * trade); the PCA, JPEG and relief options do not apply. */
-btf_status btf_rf_report_write(const btf_dataset *ds, const btf_rf_model *m, const char *dir,
-                               const btf_report_opts *opts, btf_report_summary *summary,
-                               btf_error *err);
-
 #ifdef __cplusplus
 }
 #endif

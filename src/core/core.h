@@ -161,4 +161,7 @@ float btf_linear_to_srgb(float v);
 /* A copy of src into dst (dst's old content is not freed). */
 btf_status btf_dirset_copy(btf_dirset *dst, const btf_dirset *src, btf_error *err);
 
+/* The UBO2014 151-direction dome (per-ring azimuth offsets). */
+btf_status btf_dirset_ubo151(btf_dirset *set, btf_error *err);
+
 #endif

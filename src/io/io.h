@@ -102,4 +102,7 @@ extern int btf_exr_library_pack;
  * BTF_FILE_UNKNOWN for anything but a readable regular file. */
 btf_file_format btf_file_format_of(const char *path);
 
+/* The name ("zip", "none", ...) of a compression; NULL if out of range. */
+const char *btf_exr_compression_name(int compression);
+
 #endif

@@ -9,6 +9,8 @@
  */
 #include "material/family.h"
 #include "rf/rf.h"
+#include "report/report.h"
+#include "synth_gpu.h"
 
 /* The material interface's frame without a size (btfcar/material.h). */
 #define DEFAULT_SIDE 512

@@ -18,6 +18,7 @@
  */
 #include "core/core.h"
 #include "report/rf_report_data.h"
+#include "rf/rf_render.h"
 #include "rf/rf_error.h"
 
 #include <math.h>

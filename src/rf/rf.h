@@ -255,4 +255,6 @@ btf_status btf_rf_refuse_sparse(const btf_dataset *ds, btf_error *err);
 void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
                        int y, float rgb[3]);
 
+#include "rf/rf_render.h"
+
 #endif

@@ -5,7 +5,6 @@
  * writes (atomically, errors naming the file).
  */
 #include "testutil.h"
-#include "model/model.h"
 #include "range/range.h"
 
 #include <dirent.h>

@@ -16,7 +16,6 @@
 #include "synth/synth_testing.h" /* btf_gpu_set_max_buffer_bytes */
 
 #include "scene_sphere_obj.h"
-#include "model/model.h"
 #include "synth_gpu.h"
 
 #include <math.h>

@@ -8,7 +8,6 @@
  */
 #include "testutil.h"
 #include "core/core.h"
-#include "model/model.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -10,7 +10,6 @@
  */
 #include "testutil.h"
 #include "core/core.h"
-#include "model/model.h"
 #include "render/render.h"
 
 #include <float.h>

@@ -159,6 +159,15 @@ btf_status btf_model_encode(const btf_model *m, unsigned char **data, size_t *si
 btf_status btf_model_decode(const unsigned char *data, size_t size, const char *name,
                             btf_model *m, btf_error *err);
 
+/* Makes a range tile periodic in place (analysis does, reading a model file
+ * of format 1.0 does, and a program that builds a model by hand should):
+ * its mean slope removed, then a variance-preserving cross-fade with itself
+ * shifted by half a period along each axis (docs/render.md), which keeps
+ * the tile's mean and variance and removes the jumps between opposite
+ * edges; the result lies on the model file's 16-bit height grid, so
+ * writing it loses nothing. Heights must be finite (BTF_E_DATA). */
+btf_status btf_range_make_periodic(float *heights, int width, int height, btf_error *err);
+
 /* The largest magnitude of a band's sigma and mean and of a subspace's
  * colour mean that a model holds: within it, synthesis stays inside the
  * float range (src/model/model_check.c derives it); the model validator

@@ -207,13 +207,5 @@ int btf_structure_lattice(const btf_model *m, int lattice[4]);
 /* 1 when the bytes start like a CAR model file (the signature's stem, as
  * btf_rf_sniff for the reflectance field's; model_file.c). */
 int btf_model_sniff(const unsigned char *data, size_t size);
-/* Makes a range tile periodic in place (analysis does, and reading a model
- * file of format 1.0 does): its mean slope removed, then a variance-
- * preserving cross-fade with itself shifted by half a period along each
- * axis (docs/render.md), which keeps the tile's mean and variance and
- * removes the jumps between opposite edges; the result lies on the model
- * file's 16-bit height grid, so writing it loses nothing. Heights must be
- * finite (BTF_E_DATA). */
-btf_status btf_range_make_periodic(float *heights, int width, int height, btf_error *err);
 
 #endif

@@ -272,7 +272,7 @@ btf_status btf_rf_encode(const btf_rf_model *m, unsigned char **data, size_t *si
 btf_status btf_rf_decode(const unsigned char *data, size_t size, const char *name,
                          btf_rf_model *out, btf_error *err);
 btf_status btf_rf_write(const char *path, const btf_rf_model *m, btf_error *err);
-btf_status btf_rf_read(const char *path, btf_rf_model *out, btf_error *err);
+/* (A file of either family is read with btf_material_read, btfcar/material.h.) */
 
 #ifdef __cplusplus
 }

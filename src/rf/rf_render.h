@@ -53,4 +53,8 @@ btf_status btf_rf_render_scene(const btf_rf_model *m, const btf_scene *s, int wi
                                int height, int threads, btf_image *out, btf_render_info *info,
                                btf_error *err);
 
+/* The file's reader (rf_file.c); users read a model of either family with
+ * btf_material_read (btfcar/material.h). */
+btf_status btf_rf_read(const char *path, btf_rf_model *out, btf_error *err);
+
 #endif

@@ -1,5 +1,5 @@
 /* cmd_compare.c — btfcar compare: how far an image is from a reference
- * texture, without pixel correspondence (issue 17; library: src/measure/,
+ * texture, without pixel correspondence (library: src/measure/,
  * docs/measure.md), and the phase-randomisation baseline to beat. */
 #include "cli.h"
 

@@ -1,5 +1,5 @@
 /* cmd_report.c — btfcar report: what a model costs and how close it comes,
- * as a page people can look at (issue 18; library: src/report/,
+ * as a page people can look at (library: src/report/,
  * docs/report.md). */
 #include "cli.h"
 

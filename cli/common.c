@@ -65,7 +65,7 @@ void cli_install_signal_cleanup(void)
     sigaction(SIGHUP, &sa, NULL);
     /* Past `ulimit -f` a write fails with EFBIG instead of killing the
      * process: the writer then reports it in one line and removes its
-     * temporary, as for a full disk (issue 29, 4). */
+     * temporary, as for a full disk. */
     signal(SIGXFSZ, SIG_IGN);
 }
 

@@ -1,7 +1,7 @@
 // hemisphere_check.comp -- compiles src/render/btf_hemisphere_lookup.h as GLSL
 // (the accessors a render shader defines over storage buffers; docs/render.md,
 // "Interpolation over the hemisphere"), so the build proves the shared text
-// stays valid GLSL. Not dispatched by the library; the render pass of issue 16
+// stays valid GLSL. Not dispatched by the library; the render pass (render.comp)
 // is its user.
 #version 450
 #extension GL_GOOGLE_include_directive : require

@@ -23,7 +23,7 @@ layout(std430, set = 0, binding = 4) readonly buffer Floats { float pf[]; };
 layout(std430, set = 0, binding = 5) writeonly buffer Out { float rgb[]; };
 layout(std430, set = 0, binding = 6) readonly buffer Hor { uint hz[]; };
 // Nonzero when a pixel selected a subspace the first pass did not
-// synthesise: beside the colours, which may take any value (issue 29).
+// synthesise: beside the colours, which may take any value.
 layout(std430, set = 0, binding = 7) buffer Missing { uint missing[]; };
 // The subspace images are one array of floats over binding 1 and these
 // (gpu/synth_gpu.h: as many buffers as the device's largest storage buffer

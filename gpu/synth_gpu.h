@@ -1,6 +1,6 @@
 /*
  * synth_gpu.h — private GPU synthesis calls for other GPU passes of the
- * library (the render pass of issue 16), not part of the public API
+ * library (the render pass, render_gpu.c), not part of the public API
  * (include/btfcar.h): subspace images synthesised into one device buffer
  * that stays on the device, and the Vulkan layer of a btf_gpu so that
  * another file can create pipelines and dispatch on the same device

@@ -1,7 +1,7 @@
 /*
  * check-page.c — opens an HTML page in headless Chromium (Debian's
  * /usr/bin/chromium) and fails when the page does not load cleanly; takes a
- * screenshot. The browser test of `btfcar report` (issue 18) and anyone who
+ * screenshot. The browser test of `btfcar report` and anyone who
  * wants to see a page as a reader would.
  *
  *   build/check-page [--size WxH] [--timeout S] PAGE.html [SCREENSHOT.png]

@@ -1,7 +1,7 @@
 #!/bin/sh
 # gpu-check.sh [--allow-cpu] [--dry-run]   (make gpu-check builds first)
 #
-# The real-GPU check (docs/gpu.md, "Checking on a real GPU"; issue 31): on a
+# The real-GPU check (docs/gpu.md, "Checking on a real GPU"): on a
 # machine with a Vulkan GPU,
 #   1. runs the GPU parity test programs against it (each test turns the
 #      Khronos validation layer on itself; bit parity on a CPU device, the

@@ -1,6 +1,6 @@
 /*
  * marginal_fit.c — the marginal transfer of a subspace (docs/synthesis.md,
- * "Marginals"; issue 17). The CAR model of paper section II.C reproduces a
+ * "Marginals"). The CAR model of paper section II.C reproduces a
  * band's second-order statistics, and its fields, linear filters of
  * Gaussian noise, have Gaussian marginals; the material's decorrelated
  * channels are skewed. This stage keeps what synthesis needs to give each

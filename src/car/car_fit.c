@@ -17,7 +17,7 @@
  *
  * Neighbourhood choice ("model only what the data requires"). Candidates are
  * a nested family (the first 1, 2, 3, 4, 6, ..., 22, 24 offsets of FAMILY
- * below; until issue 17 it stopped at 14, and 14 won on every band of
+ * below; before the texture distances measured it, it stopped at 14, and 14 won on every band of
  * every photograph tried: the family, not the data, limited the choice). Each is scored by its log marginal
  * likelihood in closed form
  *     ln p(Y | I) = (eta/2) ln v0 - (1/2) ln |V_xx + V0| + a0 ln b0 - a_t ln b_t

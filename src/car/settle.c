@@ -8,7 +8,7 @@
  * outreaches the synthesis margins (car/margin.c), so that synthesis misses
  * part of its variance, and the measured choice of the pyramid depth
  * (analyse/levels.c) judges the depths by syntheses. This was the fit's
- * stability criterion until issue 29, which found that it misses slow
+ * stability criterion until the numerics review of 2026-12, which found that it misses slow
  * growth (a root of 1.002 grows by 1.5 over 192 columns); as a rule of
  * quality on top of the exact test it keeps fits as they were, but where
  * it let an unstable estimate through.

@@ -62,7 +62,7 @@ void btf_abort_file(const char *tmp);
  * descriptor (close-on-exec) and, when size is non-NULL, the file's size;
  * or -1 with errno set (EINVAL: not a regular file) and err (may be NULL)
  * holding BTF_E_IO and "PATH: cannot open: REASON" or "PATH: not a regular
- * file". Every input opened by path goes through here (issue 29). */
+ * file". Every input opened by path goes through here. */
 int btf_open_regular(const char *path, uint64_t *size, btf_error *err);
 /* Reads a whole regular file (at most max_bytes) into a malloc'd buffer. */
 int btf_read_file(const char *path, size_t max_bytes, unsigned char **data,

@@ -180,7 +180,7 @@ static uint64_t digest_file(uint64_t h, const char *path)
 
 /* A PID means a process only within one PID namespace of one boot of one
  * host: two hosts sharing a folder over NFS, or a container sharing it by a
- * bind mount, see other processes under the same numbers (issue 29). The
+ * bind mount, see other processes under the same numbers. The
  * identity digests the host name, the boot id and the PID namespace. It is
  * read again each time, not cached: a child forked into a new namespace
  * must not inherit its parent's. */
@@ -465,7 +465,7 @@ static void undo_ancestors(const btf_output_dir *d)
 }
 
 /* An output folder given as a symlink to a folder is written into the
- * folder it names (issue 29, 8): the set is assembled beside the real
+ * folder it names: the set is assembled beside the real
  * folder, so that the final renames stay within one file system and never
  * replace the link. A link to anything else is left for the checks. */
 static btf_status follow_folder_link(char *dir, size_t n, btf_error *err)
@@ -567,7 +567,7 @@ static btf_status move_entries(const btf_output_dir *d, btf_error *err)
     return rc;
 }
 
-/* Writers into one existing folder take turns (issue 29, 2): an exclusive
+/* Writers into one existing folder take turns: an exclusive
  * flock on the folder itself, held while a set moves in, so that two runs
  * never interleave their files (the later set lands whole over the
  * earlier). The lock is taken on the folder the path names now: a folder

@@ -5,7 +5,7 @@
  * Why not OpenCV's imencode: libopencv_imgcodecs links GDAL, GDCM, HDF5,
  * Poppler and about 125 other libraries, and loading them took ~50 ms of
  * every btfcar process — more than synthesising the paper's whole workload
- * (issue 14). Decoding already went through these two libraries
+ * (docs/design.md, "The map"). Decoding already went through these two libraries
  * (png_jpeg.c); with encoding here too, imgcodecs is no longer linked.
  */
 #include <stdio.h> /* before jpeglib.h, which uses FILE */

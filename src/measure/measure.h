@@ -1,6 +1,6 @@
 /*
- * measure.h — texture distances without pixel correspondence (issue 17;
- * docs/measure.md) and the phase-randomisation baseline. Private to the
+ * measure.h — texture distances without pixel correspondence 
+ * (docs/measure.md) and the phase-randomisation baseline. Private to the
  * library. Every descriptor is computed on a view: a rectangle of an image
  * already converted to CIE Lab (measure/lab.c), so that the reference, its
  * quadrants (the normalisation) and the compared image share one code path.

@@ -1,6 +1,6 @@
 /*
- * phase_randomise.c — the baseline a texture model must beat (issue 17;
- * docs/measure.md, "Phase-randomisation baseline"): random phase noise
+ * phase_randomise.c — the baseline a texture model must beat 
+ * (docs/measure.md, "Phase-randomisation baseline"): random phase noise
  * (van Wijk 1991; Galerne, Gousseau & Morel, "Random phase textures",
  * IEEE TIP 2011), a Gaussian texture with exactly the exemplar's power
  * spectrum and nothing else. It is what a stationary Gaussian model such as

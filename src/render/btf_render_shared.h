@@ -211,7 +211,7 @@ BTF_FN int btf_shade_i(btf_hemi_weights h, int j)
 /* 1 when every pair btf_shade_blend counts (both weights kept) selects a
  * subspace that was synthesised: the flag is looked up by subspace index
  * (BTF_SHADE_HAVE), so no colour value can be mistaken for a missing
- * subspace (issue 29: unclamped Gaussian colours of format 1.0/1.1 models
+ * subspace (unclamped Gaussian colours of format 1.0/1.1 models
  * reach any negative value). */
 BTF_FN int btf_shade_pairs_have(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_weights hl)
 {

@@ -1,5 +1,5 @@
 /*
- * needed.c — model only what the scene requires (issue 15, point 7): walk
+ * needed.c — model only what the scene requires (docs/render.md): walk
  * the G-buffer's pixels, find each one's three views and, per light, three
  * lights (Haindl & Filip 2007, section III), and collect the subspaces the
  * pairs with non-zero weight select. Only those are synthesised; a scene

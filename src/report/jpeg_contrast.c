@@ -1,6 +1,6 @@
 /*
  * jpeg_contrast.c — the subspace-image contrast of the report's compression
- * accounting (issue 18): what plain image coding of the model's own
+ * accounting (docs/report-compression.md): what plain image coding of the model's own
  * reduction would store. The model keeps one representative measured image
  * per subspace (m->subspaces[k].view, .light) and the index table that maps
  * every (view, light) pair to a subspace; here those images are read from

@@ -1,6 +1,6 @@
 /*
  * library.c — the library report (docs/cluster.md, "A material library";
- * issue 33): one page and one JSON with a row per material, built from the
+ * docs/cluster.md): one page and one JSON with a row per material, built from the
  * report folders that `btfcar report` wrote for each (one cluster task
  * each), never re-measuring anything: bytes, ratio, distances and times
  * are read from each folder's report.json (docs/report.md), the preview

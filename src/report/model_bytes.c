@@ -1,5 +1,5 @@
 /*
- * model_bytes.c — what the bytes of a model file hold (issue 18's
+ * model_bytes.c — what the bytes of a model file hold (the report's
  * compression accounting): the file is encoded by the real encoder
  * (src/model/model_file.c, which labels every payload byte with the part of
  * the model it stores), and the deflated payload's bits are given back to

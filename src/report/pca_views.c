@@ -1,6 +1,6 @@
 /*
  * pca_views.c — the pixel-wise contrast of the report's compression
- * accounting (issue 18): per view, a principal component analysis of its
+ * accounting (docs/report-compression.md): per view, a principal component analysis of its
  * n_lights images, each image one vector of width x height x 3 values in
  * 8-bit sRGB levels (report/srgb_levels.c). The eigen-images come from the
  * n_lights x n_lights Gram matrix of the centred images (the "snapshot"

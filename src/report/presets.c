@@ -1,6 +1,6 @@
 /*
  * presets.c — named points of the speed/accuracy trade for
- * `btfcar analyse --preset` (issue 18, docs/report.md, "Presets"), chosen
+ * `btfcar analyse --preset` (docs/report.md, "Presets"), chosen
  * from the Pareto fronts that the sweep (src/report/sweep.c) measured on
  * the three generated materials; the measurements behind each choice are
  * in docs/report.md.

@@ -1,6 +1,6 @@
 /*
  * quality.c — how close a model comes to the measurement it was analysed
- * from, (view, light) pair by pair (issue 18, docs/report.md, "Quality per
+ * from, (view, light) pair by pair (docs/report.md, "Quality per
  * direction"). The paper judges its results by eye (Haindl & Filip 2007,
  * section IV); here each measured image is compared with the model's flat
  * render of the same pair (paper section III: the nine-image interpolation,

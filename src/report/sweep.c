@@ -1,5 +1,5 @@
 /*
- * sweep.c — the speed/accuracy trade, measured (issue 18, docs/report.md,
+ * sweep.c — the speed/accuracy trade, measured (docs/report.md,
  * "The sweep"): the dataset analysed under a grid of settings — the number
  * of subspace images K (paper section II.A), the pyramid levels and the CAR
  * neighbourhood (section II.C) — and each model timed, sized and measured,

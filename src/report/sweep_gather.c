@@ -1,7 +1,7 @@
 /*
  * sweep_gather.c — the points of a sweep split over tasks that wrote to
  * separate folders, gathered into one state folder before the merge
- * (docs/cluster.md; issue 33): every DIR/sweep/point-*.json (DIR a report
+ * (docs/cluster.md): every DIR/sweep/point-*.json (DIR a report
  * folder) or DIR/point-*.json (DIR a state folder itself) copied as it is.
  * The files are self-describing (their options' fingerprint inside), so a
  * copy never mixes sweeps: the merge reads back only those of its options.

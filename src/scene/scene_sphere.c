@@ -1,7 +1,7 @@
 /*
  * scene_sphere.c — the material preview: one textured sphere filling the
  * frame under one directional light, the picture at the top of a report
- * (issue 18) and the frame the sweep times (docs/report.md). A fixed scene
+ * (docs/report.md, "Preview") and the frame the sweep times (docs/report.md). A fixed scene
  * in code, so that every report and every sweep point renders the same.
  */
 #include "scene/scene.h"

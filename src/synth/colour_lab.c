@@ -1,6 +1,6 @@
 /*
  * colour_lab.c — CIE L*a*b* for colour matching (docs/synthesis.md,
- * "Colour matching"; issue 17): the space the texture distances measure
+ * "Colour matching"): the space the texture distances measure
  * first-order statistics in (measure/lab.c, through OpenCV), here in
  * plain C so that the analysis (the exemplar's quantiles) and the
  * synthesis (the output's, and the map back) convert identically on every

@@ -1,6 +1,6 @@
 /*
  * colour_match.c — colour matching after synthesis (docs/synthesis.md,
- * "Colour matching"; issue 17, "keep the material's marginals"). The
+ * "Colour matching": keep the material's marginals). The
  * marginal transfer (marginal.c) gives each decorrelated band the
  * exemplar's histogram, yet the fidelity bench measured the CIE Lab
  * histograms of small syntheses 1.5-19 times further from the exemplar's

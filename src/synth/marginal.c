@@ -1,6 +1,6 @@
 /*
  * marginal.c — the marginal transfer of synthesis (docs/synthesis.md,
- * "Marginals"; issue 17): the CAR fields of paper section II.C are linear
+ * "Marginals"): the CAR fields of paper section II.C are linear
  * filters of Gaussian noise, so each collapsed band is Gaussian, where the
  * material's decorrelated channels are skewed. Before the decorrelation is
  * undone each band v goes through a monotone piecewise-linear map from the

@@ -66,13 +66,14 @@ static void text_subspace(FILE *f, const btf_model *m, int s)
     fprintf(f, "subspace %d  ", s);
     if (sm->view >= 0)
         fprintf(f, "view %d (theta %g, phi %g), light %d (theta %g, phi %g), %d images; ", sm->view,
-               m->views.dirs[sm->view].theta, m->views.dirs[sm->view].phi, sm->light,
-               m->lights.dirs[sm->light].theta, m->lights.dirs[sm->light].phi, members(m, s));
-    fprintf(f, "%d x %d, %d level%s\n", sm->width, sm->height, sm->levels, sm->levels == 1 ? "" : "s");
+                m->views.dirs[sm->view].theta, m->views.dirs[sm->view].phi, sm->light,
+                m->lights.dirs[sm->light].theta, m->lights.dirs[sm->light].phi, members(m, s));
+    fprintf(f, "%d x %d, %d level%s\n", sm->width, sm->height, sm->levels,
+            sm->levels == 1 ? "" : "s");
     fprintf(f, "  mean      %.6g %.6g %.6g\n", sm->mean[0], sm->mean[1], sm->mean[2]);
     fprintf(f, "  basis     [%.6g %.6g %.6g] [%.6g %.6g %.6g] [%.6g %.6g %.6g]\n", sm->basis[0],
-           sm->basis[1], sm->basis[2], sm->basis[3], sm->basis[4], sm->basis[5], sm->basis[6],
-           sm->basis[7], sm->basis[8]);
+            sm->basis[1], sm->basis[2], sm->basis[3], sm->basis[4], sm->basis[5], sm->basis[6],
+            sm->basis[7], sm->basis[8]);
     for (int b = 0; b < 3; b++)
         for (int l = 0; l < sm->levels; l++) {
             const btf_car_band *cb = &sm->bands[b][l];
@@ -82,11 +83,11 @@ static void text_subspace(FILE *f, const btf_model *m, int s)
             for (int i = 0; i < cb->n; i++)
                 fprintf(f, " %.6g", cb->gamma[i]);
             fprintf(f, "  sigma %.6g  mean %.6g  margin %d", cb->sigma, cb->mean,
-                   band_margin(m, s, b, l));
+                    band_margin(m, s, b, l));
             double missed = band_missed(m, s, b, l);
             if (missed >= 0.01)
                 fprintf(f, "  misses %.0f%% of its variance in synthesis%s", 100.0 * missed,
-                       missed >= BTF_CAR_MISSED_LOUD ? " (a periodic pattern?)" : "");
+                        missed >= BTF_CAR_MISSED_LOUD ? " (a periodic pattern?)" : "");
             fprintf(f, "\n");
         }
     const btf_marginal *mg = &sm->marginal;
@@ -98,14 +99,14 @@ static void text_subspace(FILE *f, const btf_model *m, int s)
     for (int b = 0; b < 3; b++)
         fprintf(f, " [%.6g, %.6g]", mg->quantile[b][0], mg->quantile[b][mg->knots - 1]);
     fprintf(f, "; synthesised sd %.6g %.6g %.6g; RGB box [%.6g %.6g %.6g]..[%.6g %.6g %.6g]\n",
-           mg->synth_sd[0], mg->synth_sd[1], mg->synth_sd[2], mg->rgb_lo[0], mg->rgb_lo[1],
-           mg->rgb_lo[2], mg->rgb_hi[0], mg->rgb_hi[1], mg->rgb_hi[2]);
+            mg->synth_sd[0], mg->synth_sd[1], mg->synth_sd[2], mg->rgb_lo[0], mg->rgb_lo[1],
+            mg->rgb_lo[2], mg->rgb_hi[0], mg->rgb_hi[1], mg->rgb_hi[2]);
     if (mg->lab_knots)
         fprintf(f, "  colours   Lab histogram: L* %.4g..%.4g (median %.4g), a* %.4g..%.4g, b* "
-               "%.4g..%.4g\n", mg->lab_quantile[0][0], mg->lab_quantile[0][mg->lab_knots - 1],
-               mg->lab_quantile[0][mg->lab_knots / 2], mg->lab_quantile[1][0],
-               mg->lab_quantile[1][mg->lab_knots - 1], mg->lab_quantile[2][0],
-               mg->lab_quantile[2][mg->lab_knots - 1]);
+                "%.4g..%.4g\n", mg->lab_quantile[0][0], mg->lab_quantile[0][mg->lab_knots - 1],
+                mg->lab_quantile[0][mg->lab_knots / 2], mg->lab_quantile[1][0],
+                mg->lab_quantile[1][mg->lab_knots - 1], mg->lab_quantile[2][0],
+                mg->lab_quantile[2][mg->lab_knots - 1]);
 }
 
 static void model_text(FILE *f, const btf_model *m, const describe_file *mf)
@@ -124,11 +125,11 @@ static void model_text(FILE *f, const btf_model *m, const describe_file *mf)
             measured += m->index[i] != BTF_PAIR_NONE;
         if (measured < pairs)
             fprintf(f, "index       %d views x %d lights -> %d subspaces; %d of the %d pairs "
-                   "measured (a sparse set: the others stand for their nearest measured "
-                   "pair)\n", m->views.count, m->lights.count, m->n_subspaces, measured, pairs);
+                    "measured (a sparse set: the others stand for their nearest measured "
+                    "pair)\n", m->views.count, m->lights.count, m->n_subspaces, measured, pairs);
         else
             fprintf(f, "index       %d views x %d lights -> %d subspaces\n", m->views.count,
-                   m->lights.count, m->n_subspaces);
+                    m->lights.count, m->n_subspaces);
     } else {
         fprintf(f, "views       none (a single texture)\n");
         fprintf(f, "lights      none (a single texture)\n");
@@ -138,47 +139,48 @@ static void model_text(FILE *f, const btf_model *m, const describe_file *mf)
     for (int s = 0; s < m->n_subspaces; s++)
         with += m->subspaces[s].marginal.knots != 0;
     fprintf(f, "marginals   %s (%d of %d subspaces)\n",
-           with ? "transfers onto the exemplar's histogram, RGB clamped to its range"
+            with ? "transfers onto the exemplar's histogram, RGB clamped to its range"
                 : "none (Gaussian bands; format 1.0/1.1 or fitted without them)",
-           with, m->n_subspaces);
+            with, m->n_subspaces);
     int lab = 0;
     for (int s = 0; s < m->n_subspaces; s++)
         lab += m->subspaces[s].marginal.knots && m->subspaces[s].marginal.lab_knots;
     fprintf(f, "colours     %s (%d of %d subspaces)\n",
-           lab ? "the exemplar's CIE Lab histogram: synthesis matches it (--no-match-colours skips)"
+            lab ? "the exemplar's CIE Lab histogram: synthesis matches it "
+                  "(--no-match-colours skips)"
                : "no Lab histogram (format 1.2 or older): synthesis without colour matching",
-           lab, m->n_subspaces);
+            lab, m->n_subspaces);
     if (m->range && m->range_texel == 1.0f) {
         float lo, hi;
         range_bounds(m, &lo, &hi);
         /* at the analysed resolution: the measured map, quilted onto a surface */
         fprintf(f, "range map   %d x %d at the analysed resolution (texel 1), quilted onto any "
-               "surface, heights %.6g..%.6g\n", m->range_width, m->range_height, lo, hi);
+                "surface, heights %.6g..%.6g\n", m->range_width, m->range_height, lo, hi);
     } else if (m->range) {
         float lo, hi;
         range_bounds(m, &lo, &hi);
         /* the tile in memory is periodic: a 1.0 file's is made so on reading */
         fprintf(f, "range map   %d x %d periodic tile%s, texel %g (a period of %g x %g analysed "
-               "texels), heights %.6g..%.6g\n", m->range_width, m->range_height,
-               mf->major == 1 && mf->minor == 0 ? " (made periodic on reading: format 1.0)" : "",
-               m->range_texel, m->range_width * (double)m->range_texel,
-               m->range_height * (double)m->range_texel, lo, hi);
+                "texels), heights %.6g..%.6g\n", m->range_width, m->range_height,
+                mf->major == 1 && mf->minor == 0 ? " (made periodic on reading: format 1.0)" : "",
+                m->range_texel, m->range_width * (double)m->range_texel,
+                m->range_height * (double)m->range_texel, lo, hi);
     } else {
         fprintf(f, "range map   none\n");
     }
     if (m->albedo)
         fprintf(f, "structure   albedo pattern (grey%s), shading a + %smax(0, n.l) with "
-               "ambient a = %.4g: the CAR fields model the remainder (docs/model.md)\n",
-               m->chroma ? " and a colour layer: the colours vary across the sample" : ": one "
-               "colour across the sample", m->shadows ? "vis " : "", m->ambient);
+                "ambient a = %.4g: the CAR fields model the remainder (docs/model.md)\n",
+                m->chroma ? " and a colour layer: the colours vary across the sample" : ": one "
+                "colour across the sample", m->shadows ? "vis " : "", m->ambient);
     else
         fprintf(f, "structure   none: the CAR fields model the whole exemplars%s\n",
-               m->range && m->range_texel != 1.0f ? " (a range tile below the analysed "
-               "resolution holds no albedo)" : "");
+                m->range && m->range_texel != 1.0f ? " (a range tile below the analysed "
+                "resolution holds no albedo)" : "");
     if (m->shadows)
         fprintf(f, "shadows     the relief casts them (horizon map of the range map)\n");
     fprintf(f, "pair gains  %s\n", m->gain ? "one colour per measured pair: each keeps its mean "
-           "colour" : "none (format 1.4 or older, or analysed without them)");
+            "colour" : "none (format 1.4 or older, or analysed without them)");
     for (int s = 0; s < m->n_subspaces; s++)
         text_subspace(f, m, s);
 }

@@ -32,6 +32,16 @@ static const char *slot_name(const btf_rf_model *m, int s, char *buf, size_t n)
     return buf;
 }
 
+/* A parameter slot's quantisation range over every field. */
+static void slot_range(const btf_rf_model *m, int s, float *lo, float *hi)
+{
+    *lo = m->lo[s], *hi = m->hi[s];
+    for (int k = 1; k < m->fields; k++) {
+        *lo = m->lo[k * m->slots + s] < *lo ? m->lo[k * m->slots + s] : *lo;
+        *hi = m->hi[k * m->slots + s] > *hi ? m->hi[k * m->slots + s] : *hi;
+    }
+}
+
 btf_status rf_describe(const btf_rf_model *m, const describe_file *mf, FILE *f, int json,
                        btf_error *err)
 {
@@ -45,33 +55,30 @@ btf_status rf_describe(const btf_rf_model *m, const describe_file *mf, FILE *f, 
     btf_rf_surface_size(m, &sw, &sh);
     if (json) {
         fprintf(f, "{\"format\": \"btfcar-rf-model\", \"version\": [%u, %u], \"file\": ", mf->major,
-               mf->minor);
+                mf->minor);
         txt_json_string(f, mf->path);
         fprintf(f, ", \"file_bytes\": %lld, \"fit\": \"%s\", \"lobes\": %d, \"width\": %d, "
-               "\"height\": %d,\n \"params\": %d, \"slots\": %d, \"fields\": %d, "
-               "\"bytes_per_texel\": %.6g, \"code_bytes_per_texel\": %.6g,\n \"views\": ",
-               mf->bytes, btf_rf_fit_name(m->fit), m->lobes, m->width, m->height, m->params,
-               m->slots, m->fields, mf->bytes / texels, code_bytes);
+                "\"height\": %d,\n \"params\": %d, \"slots\": %d, \"fields\": %d, "
+                "\"bytes_per_texel\": %.6g, \"code_bytes_per_texel\": %.6g,\n \"views\": ",
+                mf->bytes, btf_rf_fit_name(m->fit), m->lobes, m->width, m->height, m->params,
+                m->slots, m->fields, mf->bytes / texels, code_bytes);
         txt_json_dirset(f, &m->views);
         fprintf(f, ",\n \"lights\": ");
         txt_json_dirset(f, &m->lights);
         fprintf(f, ",\n \"surface_width\": %d, \"surface_height\": %d, \"coefficient_bytes\": "
-               "%llu, \"map_bytes\": %llu, \"file_map_bytes\": %llu, \"sample\": ", sw, sh,
-               (unsigned long long)b.coefficients, (unsigned long long)b.map,
-               (unsigned long long)b.file_map);
+                "%llu, \"map_bytes\": %llu, \"file_map_bytes\": %llu, \"sample\": ", sw, sh,
+                (unsigned long long)b.coefficients, (unsigned long long)b.map,
+                (unsigned long long)b.file_map);
         if (m->map)
             fprintf(f, "{\"x\": %d, \"y\": %d, \"width\": %d, \"height\": %d}", m->sample_x,
-                   m->sample_y, m->width, m->height);
+                    m->sample_y, m->width, m->height);
         else
             fprintf(f, "null");
         fprintf(f, ",\n \"slot_ranges\": [");
         for (int s = 0; s < m->slots; s++) {
             char name[32];
-            float lo = m->lo[s], hi = m->hi[s];
-            for (int f = 1; f < m->fields; f++) {
-                lo = m->lo[f * m->slots + s] < lo ? m->lo[f * m->slots + s] : lo;
-                hi = m->hi[f * m->slots + s] > hi ? m->hi[f * m->slots + s] : hi;
-            }
+            float lo, hi;
+            slot_range(m, s, &lo, &hi);
             fprintf(f, "%s\n  {\"slot\": ", s ? "," : "");
             txt_json_string(f, slot_name(m, s, name, sizeof name));
             fprintf(f, ", \"min\": ");
@@ -86,41 +93,40 @@ btf_status rf_describe(const btf_rf_model *m, const describe_file *mf, FILE *f, 
         txt_describe_set(&m->views, vs, sizeof vs);
         txt_describe_set(&m->lights, ls, sizeof ls);
         fprintf(f, "reflectance-field model %s (format %u.%u, %lld bytes)\n", mf->path, mf->major,
-               mf->minor, mf->bytes);
+                mf->minor, mf->bytes);
         if (m->fit == BTF_RF_PTM)
             fprintf(f, "fit         ptm: a biquadratic polynomial in the light's (lu, lv) per view "
-                   "and texel\n");
+                    "and texel\n");
         else if (m->fit == BTF_RF_LOBES)
             fprintf(f, "fit         lobes: %d non-linear lobe%s rho <d, l>^n per view and texel\n",
-                   m->lobes, m->lobes == 1 ? "" : "s");
+                    m->lobes, m->lobes == 1 ? "" : "s");
         else
             fprintf(f, "fit         lafortune: rho_d l_z + %d Lafortune lobe%s per texel over all "
-                   "views\n", m->lobes, m->lobes == 1 ? "" : "s");
+                    "views\n", m->lobes, m->lobes == 1 ? "" : "s");
         fprintf(f, "texels      %d x %d\n", m->width, m->height);
         if (m->map) {
-            fprintf(f, "sample      the texels above are a sample at (%d, %d) of the data; a %d x %d "
-                   "coordinate map into it (image quilting, paper section 6) is the surface\n",
-                   m->sample_x, m->sample_y, sw, sh);
+            fprintf(f, "sample      the texels above are a sample at (%d, %d) of the data; "
+                       "a %d x %d "
+                    "coordinate map into it (image quilting, paper section 6) is the surface\n",
+                    m->sample_x, m->sample_y, sw, sh);
             fprintf(f, "memory      %llu bytes of coefficients + %llu bytes of coordinate map "
-                   "(%llu in all; in the file %lld, of which the map %llu)\n",
-                   (unsigned long long)b.coefficients, (unsigned long long)b.map,
-                   (unsigned long long)(b.coefficients + b.map), mf->bytes,
-                   (unsigned long long)b.file_map);
+                    "(%llu in all; in the file %lld, of which the map %llu)\n",
+                    (unsigned long long)b.coefficients, (unsigned long long)b.map,
+                    (unsigned long long)(b.coefficients + b.map), mf->bytes,
+                    (unsigned long long)b.file_map);
         }
         fprintf(f, "views       %s\n", vs);
         fprintf(f, "lights      %s\n", ls);
-        fprintf(f, "fields      %d, each %d luminance parameters + 3 chromaticity factors per texel, "
-               "16-bit codes\n", m->fields, m->params);
+        fprintf(f, "fields      %d, each %d luminance parameters + 3 chromaticity factors "
+                   "per texel, "
+                "16-bit codes\n", m->fields, m->params);
         fprintf(f, "per texel   %.1f bytes of codes, %.1f bytes in the file\n", code_bytes,
-               mf->bytes / texels);
+                mf->bytes / texels);
         fprintf(f, "slot ranges (over every field):\n");
         for (int s = 0; s < m->slots; s++) {
             char name[32];
-            float lo = m->lo[s], hi = m->hi[s];
-            for (int f = 1; f < m->fields; f++) {
-                lo = m->lo[f * m->slots + s] < lo ? m->lo[f * m->slots + s] : lo;
-                hi = m->hi[f * m->slots + s] > hi ? m->hi[f * m->slots + s] : hi;
-            }
+            float lo, hi;
+            slot_range(m, s, &lo, &hi);
             fprintf(f, "  %-16s %12.6g .. %-12.6g\n", slot_name(m, s, name, sizeof name), lo, hi);
         }
     }

@@ -1,5 +1,5 @@
 /*
- * test_material.c — the procedural materials (src/generate/material.c): every material
+ * test_procedural.c — the procedural materials (src/generate/material.c): every material
  * makes and renders at any size, deterministically, with periodic heights,
  * unit normals and finite images for every (view, light) pair; the images
  * behave like the physics they model (Lambertian falloff, cast shadows on the

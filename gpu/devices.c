@@ -2,7 +2,9 @@
  * devices.c — the Vulkan devices GPU synthesis (Haindl & Filip 2007,
  * section II.C, as compute shaders: docs/gpu.md) can run on, for the public
  * API: the internal layer's device records (gpu/vk.h) cut down to what a
- * caller chooses a device by.
+ * caller chooses a device by. The automatic choice among them
+ * (btf_gpu_auto_device) is in gpu/gpu_handle.c, beside the memory budget
+ * it applies.
  */
 #include "core/core.h"
 #include "synth_gpu.h"
@@ -49,31 +51,4 @@ btf_status btf_gpu_list_devices(btf_gpu_device **list, int *count, btf_error *er
     *list = out;
     *count = n;
     return BTF_OK;
-}
-
-/* The automatic choice's order (as btf_vk_create's best device):
- * discrete, integrated, virtual, other; a CPU device never. */
-static int auto_rank(btf_gpu_device_type t)
-{
-    switch (t) {
-    case BTF_GPU_DISCRETE: return 4;
-    case BTF_GPU_INTEGRATED: return 3;
-    case BTF_GPU_VIRTUAL: return 2;
-    case BTF_GPU_CPU: return 0;
-    default: return 1;
-    }
-}
-
-int btf_gpu_auto_device(const btf_gpu_device *list, int n, uint64_t image_bytes)
-{
-    int best = -1;
-    for (int i = 0; list && i < n; i++) {
-        const btf_gpu_device *d = &list[i];
-        if (!d->usable || auto_rank(d->type) == 0 ||
-            image_bytes > btf_gpu_budget_bytes(d->max_buffer_bytes, d->device_local_bytes))
-            continue;
-        if (best < 0 || auto_rank(d->type) > auto_rank(list[best].type))
-            best = i;
-    }
-    return best < 0 ? -1 : list[best].index;
 }

@@ -18,6 +18,10 @@
  * docs/synthesis.md, "Tileable synthesis"). The images go to host memory
  * (btf_gpu_synthesise) or stay in one device buffer
  * (btf_gpu_synthesise_device, gpu/synth_gpu.h).
+ * The btf_gpu handle that holds the pipelines, its limits and memory budget
+ * are gpu/gpu_handle.c's, the image arrays on the device gpu/gpu_images.c's
+ * (docs/gpu.md, "Images left on the device"); both are called from here,
+ * never the other way.
  */
 #include "synth/synth.h"
 #include "core/core.h"
@@ -25,13 +29,8 @@
 
 #include "btf_shared.h"
 #include "geometry.h"
-#include "synth/synth_testing.h"
 #include "synth_gpu.h"
 #include "vk.h"
-
-#include "synth_collapse_spv.h"
-#include "synth_field_spv.h"
-#include "synth_unmix_spv.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,101 +67,6 @@ _Static_assert(sizeof(gpu_task) == 368, "gpu_task must match synth_task.glsl");
 _Static_assert(sizeof(gpu_unmix) == 76 + 72 + 6 * 4 * BTF_MARGIN_TABLE + 48, "gpu_unmix must match synth_task.glsl");
 _Static_assert(BTF_CAR_MAX_NEIGHBOURS == 24, "synth_task.glsl holds 24 offsets");
 _Static_assert(BTF_MARGIN_TABLE == 16, "synth_task.glsl holds 16 entries per band");
-
-struct btf_gpu {
-    btf_vk *vk;
-    uint64_t max_buffer_bytes; /* 0: the device's limit */
-    int jobs, batches;         /* of the last btf_gpu_synthesise */
-    btf_vk_pipeline *field, *collapse, *unmix;
-    btf_gpu_matcher *matcher; /* colour matching on the device */
-};
-
-btf_gpu_opts btf_gpu_defaults(void)
-{
-    btf_gpu_opts o = {
-        .use_device = 0, /* the best device */
-        .device = 0,
-        .allow_cpu = 0,
-        .validation = 0,
-    };
-    return o;
-}
-
-btf_status btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err)
-{
-    *out = NULL;
-    btf_gpu_opts d = btf_gpu_defaults(), o = opts ? *opts : d;
-    o.use_device = o.use_device ? o.use_device : d.use_device;
-    o.device = o.device ? o.device : d.device;
-    o.allow_cpu = o.allow_cpu ? o.allow_cpu : d.allow_cpu;
-    o.validation = o.validation ? o.validation : d.validation;
-    btf_gpu *g = btf_calloc(1, sizeof *g, err);
-    if (!g)
-        return BTF_E_NOMEM;
-    btf_vk_opts vo = {.use_device = o.use_device, .device = o.device, .allow_cpu = o.allow_cpu,
-                      .validation = o.validation};
-    btf_status rc = btf_vk_create(&vo, &g->vk, err);
-    if (rc == 0)
-        rc = btf_vk_pipeline_create(g->vk, synth_field_spv, sizeof synth_field_spv, 2, 20, NULL, 0,
-                                    &g->field, err); /* push: seed, s0, s1, task_base */
-    if (rc == 0)
-        rc = btf_vk_pipeline_create(g->vk, synth_collapse_spv, sizeof synth_collapse_spv, 3, 4,
-                                    NULL, 0, &g->collapse, err);
-    if (rc == 0)
-        rc = btf_vk_pipeline_create(g->vk, synth_unmix_spv, sizeof synth_unmix_spv, 3, 4, NULL, 0,
-                                    &g->unmix, err);
-    if (rc == 0)
-        rc = btf_gpu_matcher_create(g->vk, &g->matcher, err);
-    if (rc) {
-        btf_gpu_close(g);
-        return rc;
-    }
-    *out = g;
-    return BTF_OK;
-}
-
-void btf_gpu_close(btf_gpu *g)
-{
-    if (!g)
-        return;
-    btf_vk_pipeline_destroy(g->field);
-    btf_vk_pipeline_destroy(g->collapse);
-    btf_vk_pipeline_destroy(g->unmix);
-    btf_gpu_matcher_free(g->matcher);
-    btf_vk_destroy(g->vk);
-    free(g);
-}
-
-const char *btf_gpu_device_name(const btf_gpu *g)
-{
-    return btf_vk_info(g->vk)->name;
-}
-
-int btf_gpu_is_cpu(const btf_gpu *g)
-{
-    return btf_vk_info(g->vk)->is_cpu;
-}
-
-unsigned btf_gpu_validation_errors(const btf_gpu *g)
-{
-    return btf_vk_validation_errors(g->vk);
-}
-
-void btf_gpu_last_tiling(const btf_gpu *g, int *batches, int *jobs)
-{
-    *batches = g->batches;
-    *jobs = g->jobs;
-}
-
-void btf_gpu_set_max_buffer_bytes(btf_gpu *g, uint64_t bytes)
-{
-    g->max_buffer_bytes = bytes;
-}
-
-const char *btf_gpu_first_validation_message(const btf_gpu *g)
-{
-    return btf_vk_first_validation_message(g->vk);
-}
 
 /* The wavefront slope: pixel (r, c) must come after (r + dr, c + dc) for
  * every offset, i.e. a |dr| > dc for offsets of earlier rows. */
@@ -298,6 +202,23 @@ static void strip_rows(batch *bt, int y0, int y1, int first, int *keep, int *kee
     }
 }
 
+/* The members of the marginal table (src/synth/marginal.c) that an unmix
+ * record mirrors, by name: the same in both structs. */
+#define UNMIX_TABLE_MEMBERS(X)                                                                 \
+    X(origin) X(inv_h) X(tlo) X(thi) X(qmin) X(qmax) X(q) X(dq) X(lo) X(hi) X(nlo) X(nhi)
+
+/* An image's marginal transfer into its unmix record: the CPU's very table,
+ * member by member (each the same size on both sides). */
+static void unmix_take_table(gpu_unmix *u, const btf_marginal_table *mt)
+{
+    u->transfer = mt->on;
+#define TAKE(f)                                                                                \
+    _Static_assert(sizeof u->f == sizeof mt->f, "gpu_unmix." #f " mirrors the table's");      \
+    memcpy(u->f, mt->f, sizeof mt->f);
+    UNMIX_TABLE_MEMBERS(TAKE)
+#undef TAKE
+}
+
 /* Builds the batch and sizes its buffers for strips of `strip` rows;
  * margins[j][b][l] of image j. */
 static int build_batch(const btf_model *m, const int *subs, const int (*margins)[3][BTF_MAX_LEVELS],
@@ -352,19 +273,7 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
         bt->unmix[j].width = w;
         btf_marginal_table mt; /* the CPU's very table (src/synth/marginal.c) */
         btf_marginal_table_make(sm, &mt);
-        bt->unmix[j].transfer = mt.on;
-        memcpy(bt->unmix[j].origin, mt.origin, sizeof mt.origin);
-        memcpy(bt->unmix[j].inv_h, mt.inv_h, sizeof mt.inv_h);
-        memcpy(bt->unmix[j].tlo, mt.tlo, sizeof mt.tlo);
-        memcpy(bt->unmix[j].thi, mt.thi, sizeof mt.thi);
-        memcpy(bt->unmix[j].qmin, mt.qmin, sizeof mt.qmin);
-        memcpy(bt->unmix[j].qmax, mt.qmax, sizeof mt.qmax);
-        memcpy(bt->unmix[j].q, mt.q, sizeof mt.q);
-        memcpy(bt->unmix[j].dq, mt.dq, sizeof mt.dq);
-        memcpy(bt->unmix[j].lo, mt.lo, sizeof mt.lo);
-        memcpy(bt->unmix[j].hi, mt.hi, sizeof mt.hi);
-        memcpy(bt->unmix[j].nlo, mt.nlo, sizeof mt.nlo);
-        memcpy(bt->unmix[j].nhi, mt.nhi, sizeof mt.nhi);
+        unmix_take_table(&bt->unmix[j], &mt);
     }
     /* Walk the strips once to size every field's buffer rows. */
     for (int y = 0; y < h; y += strip)
@@ -525,123 +434,6 @@ typedef struct batch_dest {
     const uint64_t *dev_off;
 } batch_dest;
 
-/* The pieces of `floats` floats of an array from float offset off, one
- * per buffer they touch: fn(user, buffer, its byte offset, floats before
- * this piece, the piece's floats) in order, stopping at the first error.
- * Every transfer to or from an array walks it so. */
-typedef btf_status (*piece_fn)(void *user, btf_vk_buffer *buf, uint64_t at_bytes,
-                               uint64_t done, uint64_t n, btf_error *err);
-
-static btf_status each_piece(const btf_gpu_images *im, uint64_t off, uint64_t floats,
-                             piece_fn fn, void *user, btf_error *err)
-{
-    for (uint64_t done = 0; done < floats;) {
-        uint64_t b = (off + done) / im->cap, at = (off + done) % im->cap;
-        uint64_t n = im->cap - at < floats - done ? im->cap - at : floats - done;
-        btf_status rc = fn(user, im->buf[b], 4 * at, done, n, err);
-        if (rc)
-            return rc;
-        done += n;
-    }
-    return BTF_OK;
-}
-
-typedef struct piece_copy {
-    btf_vk_job *job;
-    const btf_vk_buffer *src;
-    uint64_t src_bytes;
-} piece_copy;
-
-static btf_status copy_piece(void *user, btf_vk_buffer *buf, uint64_t at_bytes, uint64_t done,
-                             uint64_t n, btf_error *err)
-{
-    piece_copy *c = user;
-    return btf_vk_job_copy(c->job, c->src, c->src_bytes + 4 * done, buf, at_bytes, 4 * n, err);
-}
-
-/* A device-side copy into the array, split where it crosses a buffer. */
-static btf_status copy_to_images(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_bytes,
-                                 const btf_gpu_images *im, uint64_t off, uint64_t floats,
-                                 btf_error *err)
-{
-    piece_copy c = {job, src, src_bytes};
-    return each_piece(im, off, floats, copy_piece, &c, err);
-}
-
-typedef struct piece_host {
-    btf_vk *vk;
-    float *down;      /* download into, or */
-    const float *up;  /* upload from */
-} piece_host;
-
-static btf_status host_piece(void *user, btf_vk_buffer *buf, uint64_t at_bytes, uint64_t done,
-                             uint64_t n, btf_error *err)
-{
-    piece_host *h = user;
-    return h->down ? btf_vk_buffer_download(h->vk, buf, at_bytes, h->down + done, 4 * n, err)
-                   : btf_vk_buffer_upload(h->vk, buf, at_bytes, h->up + done, 4 * n, err);
-}
-
-btf_status btf_gpu_images_download(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
-                                   float *data, uint64_t floats, btf_error *err)
-{
-    piece_host h = {vk, data, NULL};
-    return each_piece(im, off, floats, host_piece, &h, err);
-}
-
-btf_status btf_gpu_images_upload(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
-                                 const float *data, uint64_t floats, btf_error *err)
-{
-    piece_host h = {vk, NULL, data};
-    return each_piece(im, off, floats, host_piece, &h, err);
-}
-
-uint64_t btf_gpu_images_cap(const btf_gpu *g)
-{
-    uint64_t cap = btf_gpu_max_buffer_bytes(g) / 4;
-    if (cap > (1ull << 27))
-        cap = 1ull << 27; /* eight of them: 2^30 floats, int32 indices */
-    return cap > 0 ? cap : 1;
-}
-
-/* Bindings of the render pass besides its two arrays, the images and the
- * range and normal maps (gpu/render.comp). */
-#define RENDER_OTHER_BINDINGS 6
-
-int btf_gpu_images_buffers(const btf_gpu *g)
-{
-    int64_t n = ((int64_t)btf_vk_info(g->vk)->max_storage_buffers - RENDER_OTHER_BINDINGS) / 2;
-    return n >= BTF_GPU_DEVICE_BUFFERS ? BTF_GPU_DEVICE_BUFFERS : n >= 1 ? (int)n : 1;
-}
-
-btf_status btf_gpu_images_create(btf_vk *vk, uint64_t floats, uint64_t cap, int most,
-                                 const char *what, btf_gpu_images *out, btf_error *err)
-{
-    memset(out, 0, sizeof *out);
-    out->cap = cap > 0 ? cap : 1;
-    most = most < 1 ? 1 : most > BTF_GPU_DEVICE_BUFFERS ? BTF_GPU_DEVICE_BUFFERS : most;
-    if (floats > (uint64_t)most * out->cap)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s need %.1f MiB, more than %d storage buffers "
-                        "of %.1f MiB (the device's limits) hold; use the CPU backend", what,
-                        4 * floats / 1048576.0, most, 4 * out->cap / 1048576.0);
-    btf_status rc = BTF_OK;
-    for (uint64_t b = 0; rc == BTF_OK && b * out->cap < floats; b++) {
-        uint64_t part = floats - b * out->cap < out->cap ? floats - b * out->cap : out->cap;
-        rc = btf_vk_buffer_create(vk, 4 * part, &out->buf[b], err);
-    }
-    if (rc)
-        btf_gpu_images_free(out);
-    return rc;
-}
-
-void btf_gpu_images_free(btf_gpu_images *im)
-{
-    for (int b = 0; im && b < BTF_GPU_DEVICE_BUFFERS; b++) {
-        btf_vk_buffer_destroy(im->buf[b]);
-        im->buf[b] = NULL;
-    }
-}
-
 /* One strip of every image of the batch: one job. */
 static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, uint64_t seed,
                      const batch_dest *dst, int *keep, btf_error *err)
@@ -693,8 +485,9 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
                             chunks((uint64_t)bt->width * (y1 - y0)), err);
     uint64_t strip_bytes = 4ull * bt->width * (y1 - y0) * 3;
     for (int j = 0; rc == 0 && dst->dev && j < bt->n_images; j++) /* on the device */
-        rc = copy_to_images(job, b->out, 4ull * bt->unmix[j].out_off, dst->dev,
-                            dst->dev_off[j] + (uint64_t)y0 * bt->width * 3, strip_bytes / 4, err);
+        rc = btf_gpu_images_copy_in(job, b->out, 4ull * bt->unmix[j].out_off, dst->dev,
+                                    dst->dev_off[j] + (uint64_t)y0 * bt->width * 3,
+                                    strip_bytes / 4, err);
     if (rc == 0) {
         rc = btf_vk_job_submit_wait(job, err);
         job = NULL;
@@ -785,23 +578,6 @@ static void image_size(const btf_model *m, int sub, const btf_synth_opts *o, int
     *w = o->width ? o->width : m->subspaces[sub].width;
     *h = o->height ? o->height : m->subspaces[sub].height;
 }
-
-uint64_t btf_gpu_max_buffer_bytes(const btf_gpu *g)
-{
-    uint64_t dev = btf_vk_info(g->vk)->max_storage_buffer_range;
-    return g->max_buffer_bytes && g->max_buffer_bytes < dev ? g->max_buffer_bytes : dev;
-}
-
-const btf_gpu_matcher *btf_gpu_match_pipes(const btf_gpu *g)
-{
-    return g->matcher;
-}
-
-btf_vk *btf_gpu_vk(btf_gpu *g)
-{
-    return g->vk;
-}
-
 /* The checks of a request (before g is used) and the images' sizes and
  * margins (margins[j], n entries, allocated here). */
 static btf_status check_all(const btf_model *m, const int *subspaces, int n,
@@ -858,28 +634,6 @@ static btf_status run_all(btf_gpu *g, const btf_model *m, const int *subspaces, 
     }
     return rc;
 }
-
-uint64_t btf_gpu_budget_bytes(uint64_t max_buffer_bytes, uint64_t heap_bytes)
-{
-    uint64_t cap = max_buffer_bytes / 4; /* floats per buffer, as btf_gpu_images_cap */
-    cap = cap > (1ull << 27) ? 1ull << 27 : cap > 0 ? cap : 1;
-    uint64_t most = 4ull * BTF_GPU_DEVICE_BUFFERS * cap, heap = heap_bytes / 4;
-    return heap > 0 && heap < most ? heap : most;
-}
-
-uint64_t btf_gpu_memory_budget(const btf_gpu *g)
-{
-    uint64_t b = btf_gpu_budget_bytes(btf_gpu_max_buffer_bytes(g),
-                                      btf_vk_info(g->vk)->device_local_bytes);
-    uint64_t spans = 4ull * btf_gpu_images_buffers(g) * btf_gpu_images_cap(g);
-    return b < spans ? b : spans;
-}
-
-int btf_gpu_auto_fits(const btf_gpu *g, uint64_t image_bytes)
-{
-    return g && image_bytes <= btf_gpu_memory_budget(g);
-}
-
 /* An image synthesised on the GPU and read back, finished by the CPU's code
  * (the bits the device's finishing gives): times the structure layer's
  * pattern (cached per size in *pattern), then colour matched when wanted. */

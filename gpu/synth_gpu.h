@@ -4,7 +4,14 @@
  * (include/btfcar.h): subspace images synthesised into one device buffer
  * that stays on the device, and the Vulkan layer of a btf_gpu so that
  * another file can create pipelines and dispatch on the same device
- * (gpu/vk.h). Defined in gpu/synth_gpu.c.
+ * (gpu/vk.h). Defined in three files, each calling only those after it
+ * (make check-layering):
+ *   gpu/synth_gpu.c   the synthesis (btf_gpu_synthesise_device);
+ *   gpu/gpu_handle.c  the btf_gpu handle, its accessors, the limits of an
+ *                     image array on its device, the memory budget;
+ *   gpu/gpu_images.c  image arrays: create, free, copy, download, upload.
+ * Colour matching on the device is gpu/match_gpu.c's, the reflectance-field
+ * renders gpu/rf_render_gpu.c's.
  */
 #ifndef BTF_SYNTH_GPU_H
 #define BTF_SYNTH_GPU_H
@@ -13,6 +20,20 @@
 #include "vk.h"
 
 #include <stdint.h>
+
+typedef struct btf_gpu_matcher btf_gpu_matcher;
+
+/* The handle's fields, for the two files that make it up: gpu/gpu_handle.c
+ * (open, close, the accessors) and gpu/synth_gpu.c (which runs the
+ * synthesis pipelines and counts its jobs). Every other file goes through
+ * the accessors. */
+struct btf_gpu {
+    btf_vk *vk;
+    uint64_t max_buffer_bytes; /* 0: the device's limit */
+    int jobs, batches;         /* of the last btf_gpu_synthesise */
+    btf_vk_pipeline *field, *collapse, *unmix;
+    btf_gpu_matcher *matcher; /* colour matching on the device */
+};
 
 /* The Vulkan device, queue and allocator of g (owned by g: valid until
  * btf_gpu_close; never destroy it). */
@@ -41,6 +62,12 @@ btf_status btf_gpu_images_download(btf_vk *vk, const btf_gpu_images *im, uint64_
 btf_status btf_gpu_images_upload(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
                                  const float *data, uint64_t floats, btf_error *err);
 void btf_gpu_images_free(btf_gpu_images *im);
+/* Records into job a device-side copy of `floats` floats from src at byte
+ * src_bytes into the array at float offset off, split where it crosses a
+ * buffer (the synthesis' strips put in place). */
+btf_status btf_gpu_images_copy_in(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_bytes,
+                                  const btf_gpu_images *im, uint64_t off, uint64_t floats,
+                                  btf_error *err);
 /* The floats per buffer of g's arrays: its largest storage buffer, at most
  * 2^27 (so that eight of them index with 32-bit ints). */
 uint64_t btf_gpu_images_cap(const btf_gpu *g);
@@ -73,14 +100,8 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
                                      const btf_synth_opts *opts, btf_gpu_images *out,
                                      uint64_t *offsets, btf_error *err);
 
-/* btf_gpu_memory_budget of a device whose largest storage buffer and
- * device-local heap are these (0: not reported), binding all
- * BTF_GPU_DEVICE_BUFFERS. */
-uint64_t btf_gpu_budget_bytes(uint64_t max_buffer_bytes, uint64_t heap_bytes);
-
 /* Colour matching on the device (gpu/match_gpu.c, docs/gpu.md "Colour
  * matching on the device"): the pipelines, made once per btf_gpu. */
-typedef struct btf_gpu_matcher btf_gpu_matcher;
 btf_status btf_gpu_matcher_create(btf_vk *vk, btf_gpu_matcher **out, btf_error *err);
 void btf_gpu_matcher_free(btf_gpu_matcher *mt); /* NULL is fine */
 /* The image of `subspace` at float offset off of *im (w x h RGB) in place:

@@ -25,7 +25,7 @@
 #ifndef BTF_HORIZON_H
 #define BTF_HORIZON_H
 
-#include "btf_hemisphere_lookup.h"
+#include "btf_shade_common.h" /* btf_noise.h's BTF_FN, BTF_PRECISE, BTF_U2F; btf_shade_len_xy */
 
 #define BTF_HORIZON_DIRS 8
 #define BTF_HORIZON_PER_UNIT 64.0f /* codes per unit of tangent: 255 is 3.98 (76 degrees) */
@@ -76,10 +76,7 @@ BTF_FN float btf_horizon_vis(float h, float lx, float ly, float lz, float r)
 {
     if (!(r > 0.0f))
         return 1.0f;
-    BTF_PRECISE float xx = lx * lx;
-    BTF_PRECISE float yy = ly * ly;
-    BTF_PRECISE float s = xx + yy;
-    BTF_PRECISE float lxy = BTF_HEMI_SQRT(s);
+    BTF_PRECISE float lxy = btf_shade_len_xy(lx, ly);
     if (!(lxy > 1e-6f))
         return 1.0f;
     BTF_PRECISE float rh = r * h;

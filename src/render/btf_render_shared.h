@@ -5,7 +5,10 @@
  * -ffp-contract=off) and the GPU render pass (gpu/render.comp, GLSL 4.50),
  * so that the two cannot drift: the constants, the wrapped bilinear taps,
  * the parallax shift, the relief normal, the pair weights, the bump factor
- * and the horizon fade. The direction lookup is btf_hemisphere_lookup.h's.
+ * and the horizon fade. The direction lookup is btf_hemisphere_lookup.h's;
+ * the tangent frame, the lights' directions and falloff, the per-light sum
+ * and the radiance clamp are btf_shade_common.h's, which the reflectance
+ * field's renders (src/rf/btf_rf_shared.h) share.
  *
  * Data access goes through accessor macros that the includer defines
  * BEFORE including this file (the C side's are below); every function
@@ -44,22 +47,20 @@
 
 #include "btf_hemisphere_lookup.h"
 #include "btf_horizon.h"
+#include "btf_shade_common.h"
 
 /* Weights below this are rounding (a measured direction's own weight is 1
  * only to ~1e-6): they are dropped and the rest renormalised, so that a
  * pixel at a measured pair selects that pair's subspace alone. */
 #define BTF_RENDER_MIN_WEIGHT 1e-5f
-/* A view below the horizon (an interpolated mesh normal turned slightly
- * away from the eye) is held at this height. */
-#define BTF_RENDER_MIN_Z 1e-3f
+/* A view below the horizon is held at this height (btf_shade_local_view). */
+#define BTF_RENDER_MIN_Z BTF_SHADE_MIN_Z
 /* Parallax shifts grow as 1 / v_z towards grazing views; past 75.5 degrees
  * they are held at 4 h (offset limiting), which keeps them bounded. */
 #define BTF_PARALLAX_MIN_Z 0.25f
 /* The flat surface's n . l below which the normalisation is held: lights
  * within 3 degrees of the horizon fade out instead of dividing by ~0. */
 #define BTF_FLAT_MIN_Z 0.05f
-/* Texture coordinates beyond this are taken as 0 (and NaN fails it). */
-#define BTF_RENDER_COORD_MAX 1.0e30f
 /* At most this many lights per scene (the GPU pass's uniform block). */
 #define BTF_RENDER_MAX_LIGHTS 16
 
@@ -69,27 +70,18 @@ struct btf_tap1 {
     int i0, i1;
     float f;
 };
-struct btf_rgb {
-    float r, g, b;
-};
 struct btf_pixel {
     float r, g, b;
     int missing;
 };
 #define BTF_TAP1(a, b, c) btf_tap1(a, b, c)
-#define BTF_RGB(a, b, c) btf_rgb(a, b, c)
 #define BTF_PIXEL(a, b, c, m) btf_pixel(a, b, c, m)
-#define BTF_FLOOR(x) floor(x)
-#define BTF_ABS(x) abs(x)
 #else
 /* --------------------------------------------------------------------- C */
 typedef struct btf_tap1 {
     int i0, i1;
     float f;
 } btf_tap1;
-typedef struct btf_rgb {
-    float r, g, b;
-} btf_rgb;
 /* A shaded pixel: its colour, and beside it (never in it: any float may be
  * a real colour of an unclamped model) whether a pair it selects has a
  * subspace that was not synthesised. */
@@ -102,21 +94,13 @@ static inline btf_tap1 btf_make_tap1(int a, int b, float c)
     btf_tap1 t = {a, b, c};
     return t;
 }
-static inline btf_rgb btf_make_rgb(float a, float b, float c)
-{
-    btf_rgb t = {a, b, c};
-    return t;
-}
 static inline btf_pixel btf_make_pixel(float a, float b, float c, int m)
 {
     btf_pixel t = {a, b, c, m};
     return t;
 }
 #define BTF_TAP1(a, b, c) btf_make_tap1(a, b, c)
-#define BTF_RGB(a, b, c) btf_make_rgb(a, b, c)
 #define BTF_PIXEL(a, b, c, m) btf_make_pixel(a, b, c, m)
-#define BTF_FLOOR(x) floorf(x)
-#define BTF_ABS(x) fabsf(x)
 #endif
 
 /* ============================================== shared part: C and GLSL */
@@ -128,18 +112,16 @@ static inline btf_pixel btf_make_pixel(float a, float b, float c, int m)
  * an integer. */
 BTF_FN btf_tap1 btf_shade_tap1(float x, int s)
 {
-    BTF_PRECISE float t = x - 0.5f;
-    if (!(BTF_ABS(t) < BTF_RENDER_COORD_MAX))
-        t = 0.0f;
-    float sf = BTF_HEMI_I2F(s);
+    BTF_PRECISE float x0 = x - 0.5f;
+    float t = btf_shade_coord(x0);
+    float sf = BTF_I2F(s);
     BTF_PRECISE float q = t / sf;
     float k = BTF_FLOOR(q);
     BTF_PRECISE float sk = sf * k;
     BTF_PRECISE float r = t - sk;
     float fl = BTF_FLOOR(r);
     BTF_PRECISE float f = r - fl;
-    int i = BTF_HEMI_F2I(fl);
-    i = i < 0 ? s - 1 - ((-i - 1) % s) : i % s;
+    int i = btf_shade_wrap(BTF_F2I(fl), s);
     int i1 = i + 1 == s ? 0 : i + 1;
     return BTF_TAP1(i, i1, f);
 }
@@ -323,11 +305,7 @@ BTF_FN float btf_shade_bump(BTF_SHADE_CTX ctx, float nx, float ny, float nz, flo
 {
     if (!(lz > 0.0f))
         return 0.0f;
-    BTF_PRECISE float a = nx * lx;
-    BTF_PRECISE float b = ny * ly;
-    BTF_PRECISE float c = nz * lz;
-    BTF_PRECISE float ab = a + b;
-    BTF_PRECISE float ndotl = ab + c;
+    float ndotl = btf_shade_dot3(nx, ny, nz, lx, ly, lz);
     float flatz = lz > BTF_FLAT_MIN_Z ? lz : BTF_FLAT_MIN_Z;
     float given = BTF_SHADE_AMBIENT(ctx);
     float amb = given > 0.0f ? given : 0.0f;
@@ -371,7 +349,7 @@ BTF_FN float btf_shade_shadow(BTF_SHADE_CTX ctx, btf_tap1 tx, btf_tap1 ty, float
         return 1.0f;
     float t = btf_horizon_azimuth(lx, ly);
     float fl = BTF_FLOOR(t);
-    int d0 = BTF_HEMI_F2I(fl);
+    int d0 = BTF_F2I(fl);
     d0 = d0 < 0 ? 0 : d0 > 7 ? 7 : d0;
     int d1 = d0 == 7 ? 0 : d0 + 1;
     BTF_PRECISE float f = t - fl;
@@ -390,29 +368,7 @@ BTF_FN btf_rgb btf_shade_relief_normal(BTF_SHADE_CTX ctx, btf_tap1 tx, btf_tap1 
     BTF_PRECISE float x = r * btf_shade_normal(ctx, tx, ty, 0);
     BTF_PRECISE float y = r * btf_shade_normal(ctx, tx, ty, 1);
     float z = btf_shade_normal(ctx, tx, ty, 2);
-    BTF_PRECISE float xx = x * x;
-    BTF_PRECISE float yy = y * y;
-    BTF_PRECISE float zz = z * z;
-    BTF_PRECISE float s1 = xx + yy;
-    BTF_PRECISE float s2 = s1 + zz;
-    BTF_PRECISE float len = BTF_HEMI_SQRT(s2);
-    if (!(len > 1e-20f) || !(len < BTF_RENDER_COORD_MAX))
-        return BTF_RGB(0.0f, 0.0f, 1.0f);
-    BTF_PRECISE float a = x / len;
-    BTF_PRECISE float b = y / len;
-    BTF_PRECISE float c = z / len;
-    return BTF_RGB(a, b, c);
-}
-
-/* A world vector w in the frame (rows T, B, N) given as nine floats. */
-BTF_FN float btf_shade_dot3(float a0, float a1, float a2, float b0, float b1, float b2)
-{
-    BTF_PRECISE float p = a0 * b0;
-    BTF_PRECISE float q = a1 * b1;
-    BTF_PRECISE float r = a2 * b2;
-    BTF_PRECISE float s = p + q;
-    BTF_PRECISE float t = s + r;
-    return t;
+    return btf_shade_unit(x, y, z, 1e-20f);
 }
 
 /* Parallax occlusion (docs/render.md, "Masking"): the view ray through
@@ -431,20 +387,17 @@ BTF_FN btf_rgb btf_shade_march(BTF_SHADE_CTX ctx, float u, float v, float dx, fl
     BTF_PRECISE float top = relief * BTF_SHADE_HMAX(ctx);
     BTF_PRECISE float bot = relief * BTF_SHADE_HMIN(ctx);
     BTF_PRECISE float depth = top - bot;
-    BTF_PRECISE float ddx = dx * dx;
-    BTF_PRECISE float ddy = dy * dy;
-    BTF_PRECISE float dd = ddx + ddy;
-    BTF_PRECISE float reach = BTF_HEMI_SQRT(dd);
+    BTF_PRECISE float reach = btf_shade_len_xy(dx, dy);
     BTF_PRECISE float span = depth * reach;
     BTF_PRECISE float q = span / BTF_MARCH_STEP;
-    float qc = q < BTF_HEMI_I2F(BTF_MARCH_MAX) ? q : BTF_HEMI_I2F(BTF_MARCH_MAX);
+    float qc = q < BTF_I2F(BTF_MARCH_MAX) ? q : BTF_I2F(BTF_MARCH_MAX);
     float cq = BTF_FLOOR(qc);
-    int steps = BTF_HEMI_F2I(cq) + 1;
-    BTF_PRECISE float dh = depth / BTF_HEMI_I2F(steps);
+    int steps = BTF_F2I(cq) + 1;
+    BTF_PRECISE float dh = depth / BTF_I2F(steps);
     BTF_PRECISE float prev_h = top;
     BTF_PRECISE float prev_d = 0.0f;
     for (int i = 0; i <= steps; i++) {
-        BTF_PRECISE float ih = BTF_HEMI_I2F(i) * dh;
+        BTF_PRECISE float ih = BTF_I2F(i) * dh;
         BTF_PRECISE float h = top - ih;
         BTF_PRECISE float ox = h * dx;
         BTF_PRECISE float oy = h * dy;
@@ -507,41 +460,28 @@ BTF_FN btf_rgb btf_shade_parallax(BTF_SHADE_CTX ctx, float u, float v, float vx,
     return BTF_RGB(u2, v2, 0.0f);
 }
 
-/* The unit world direction from (px, py, pz) towards light j; (0, 0, 0)
- * for a point light at the point itself. */
-BTF_FN btf_rgb btf_shade_light_dir(BTF_SHADE_CTX ctx, int j, float px, float py, float pz)
+/* Light j seen from the world point (px, py, pz): the unit world direction
+ * towards it (x, y, z) and its intensity scale (w), btf_shade_light's. A
+ * directional light's vector is the host's as it is: unit already (the
+ * host normalises it in double, btf_render_ctx_lights in
+ * src/render/pairs.c), scale 1. */
+BTF_FN btf_vec4 btf_shade_light_at(BTF_SHADE_CTX ctx, int j, float px, float py, float pz)
 {
     float dx = BTF_SHADE_LIGHT_VEC(ctx, j, 0);
     float dy = BTF_SHADE_LIGHT_VEC(ctx, j, 1);
     float dz = BTF_SHADE_LIGHT_VEC(ctx, j, 2);
     if (BTF_SHADE_LIGHT_KIND(ctx, j) != 1)
-        return BTF_RGB(dx, dy, dz);
-    BTF_PRECISE float qx = dx - px;
-    BTF_PRECISE float qy = dy - py;
-    BTF_PRECISE float qz = dz - pz;
-    float d2 = btf_shade_dot3(qx, qy, qz, qx, qy, qz);
-    if (!(d2 > 1e-24f) || !(d2 < BTF_RENDER_COORD_MAX))
-        return BTF_RGB(0.0f, 0.0f, 0.0f);
-    BTF_PRECISE float d = BTF_HEMI_SQRT(d2);
-    BTF_PRECISE float x = qx / d;
-    BTF_PRECISE float y = qy / d;
-    BTF_PRECISE float z = qz / d;
-    return BTF_RGB(x, y, z);
+        return BTF_VEC4(dx, dy, dz, 1.0f);
+    return btf_shade_light(1, dx, dy, dz, px, py, pz);
 }
 
-/* Light j's intensity scale at the point: 1, or 1 / d^2 for a point light. */
-BTF_FN float btf_shade_light_scale(BTF_SHADE_CTX ctx, int j, float px, float py, float pz)
+/* The unit world direction from (px, py, pz) towards light j; (0, 0, 0)
+ * for a point light at the point itself (the needed set's rule,
+ * src/render/needed.c). */
+BTF_FN btf_rgb btf_shade_light_dir(BTF_SHADE_CTX ctx, int j, float px, float py, float pz)
 {
-    if (BTF_SHADE_LIGHT_KIND(ctx, j) != 1)
-        return 1.0f;
-    BTF_PRECISE float qx = BTF_SHADE_LIGHT_VEC(ctx, j, 0) - px;
-    BTF_PRECISE float qy = BTF_SHADE_LIGHT_VEC(ctx, j, 1) - py;
-    BTF_PRECISE float qz = BTF_SHADE_LIGHT_VEC(ctx, j, 2) - pz;
-    float d2 = btf_shade_dot3(qx, qy, qz, qx, qy, qz);
-    if (!(d2 > 1e-24f) || !(d2 < BTF_RENDER_COORD_MAX))
-        return 0.0f;
-    BTF_PRECISE float inv = 1.0f / d2;
-    return inv;
+    btf_vec4 d = btf_shade_light_at(ctx, j, px, py, pz);
+    return BTF_RGB(d.x, d.y, d.z);
 }
 
 /* One pixel (docs/render.md, "Shading"): frame rows T (f0..f2), B (f3..f5),
@@ -554,26 +494,19 @@ BTF_FN btf_pixel btf_shade_pixel(BTF_SHADE_CTX ctx, float f0, float f1, float f2
                                  float py, float pz, float ex, float ey, float ez, float u,
                                  float v, float relief)
 {
-    float vx = btf_shade_dot3(f0, f1, f2, ex, ey, ez);
-    float vy = btf_shade_dot3(f3, f4, f5, ex, ey, ez);
-    float vz = btf_shade_dot3(f6, f7, f8, ex, ey, ez);
-    vz = vz > BTF_RENDER_MIN_Z ? vz : BTF_RENDER_MIN_Z;
+    btf_rgb w = btf_shade_local_view(f0, f1, f2, f3, f4, f5, f6, f7, f8, ex, ey, ez);
+    float vx = w.r, vy = w.g, vz = w.b;
     btf_hemi_weights hv = btf_hemi_lookup(BTF_SHADE_VIEWS(ctx), vx, vy, vz);
     btf_rgb uv2 = btf_shade_parallax(ctx, u, v, vx, vy, vz, relief);
     int s = BTF_SHADE_SIZE(ctx);
     btf_tap1 tx = btf_shade_tap1(uv2.r, s);
     btf_tap1 ty = btf_shade_tap1(uv2.g, s);
     btf_rgb n = btf_shade_relief_normal(ctx, tx, ty, relief);
-    BTF_PRECISE float r = 0.0f;
-    BTF_PRECISE float g = 0.0f;
-    BTF_PRECISE float b = 0.0f;
+    btf_rgb sum = BTF_RGB(0.0f, 0.0f, 0.0f);
     for (int j = 0; j < BTF_SHADE_N_LIGHTS(ctx); j++) {
-        btf_rgb d = btf_shade_light_dir(ctx, j, px, py, pz);
-        float scale = btf_shade_light_scale(ctx, j, px, py, pz);
-        float dx = d.r, dy = d.g, dz = d.b;
-        float lx = btf_shade_dot3(f0, f1, f2, dx, dy, dz);
-        float ly = btf_shade_dot3(f3, f4, f5, dx, dy, dz);
-        float lz = btf_shade_dot3(f6, f7, f8, dx, dy, dz);
+        btf_vec4 d = btf_shade_light_at(ctx, j, px, py, pz);
+        btf_rgb l = btf_shade_local(f0, f1, f2, f3, f4, f5, f6, f7, f8, d.x, d.y, d.z);
+        float lx = l.r, ly = l.g, lz = l.b;
         if (!(lz > 0.0f))
             continue; /* below the surface's horizon: no light */
         btf_hemi_weights hl = btf_hemi_lookup(BTF_SHADE_LIGHTS(ctx), lx, ly, lz);
@@ -582,25 +515,15 @@ BTF_FN btf_pixel btf_shade_pixel(BTF_SHADE_CTX ctx, float f0, float f1, float f2
         btf_rgb c = btf_shade_blend(ctx, hv, hl, tx, ty);
         float vis = btf_shade_shadow(ctx, tx, ty, lx, ly, lz, relief);
         float factor = btf_shade_bump(ctx, n.r, n.g, n.b, lx, ly, lz, vis);
-        BTF_PRECISE float ir = BTF_SHADE_LIGHT_RGB(ctx, j, 0) * scale;
-        BTF_PRECISE float ig = BTF_SHADE_LIGHT_RGB(ctx, j, 1) * scale;
-        BTF_PRECISE float ib = BTF_SHADE_LIGHT_RGB(ctx, j, 2) * scale;
         BTF_PRECISE float cr = c.r * factor;
         BTF_PRECISE float cg = c.g * factor;
         BTF_PRECISE float cb = c.b * factor;
-        BTF_PRECISE float tr = ir * cr;
-        BTF_PRECISE float tg = ig * cg;
-        BTF_PRECISE float tb = ib * cb;
-        r = r + tr;
-        g = g + tg;
-        b = b + tb;
+        sum = btf_shade_add_light(sum, BTF_SHADE_LIGHT_RGB(ctx, j, 0),
+                                  BTF_SHADE_LIGHT_RGB(ctx, j, 1), BTF_SHADE_LIGHT_RGB(ctx, j, 2),
+                                  d.w, BTF_RGB(cr, cg, cb));
     }
-    /* No negative radiance (the CAR model's Gaussian tails), nothing
-     * non-finite. */
-    r = r > 0.0f && r < BTF_RENDER_COORD_MAX ? r : 0.0f;
-    g = g > 0.0f && g < BTF_RENDER_COORD_MAX ? g : 0.0f;
-    b = b > 0.0f && b < BTF_RENDER_COORD_MAX ? b : 0.0f;
-    return BTF_PIXEL(r, g, b, 0);
+    btf_rgb rad = btf_shade_radiance(sum);
+    return BTF_PIXEL(rad.r, rad.g, rad.b, 0);
 }
 
 #endif /* BTF_RENDER_SHARED_H */

@@ -7,7 +7,10 @@
  * luminance of a texel (sections 4.1, 4.2), the four closest measured views
  * and their bilinear weights in theta and phi (section 5.4), the local view
  * and light directions of a scene pixel, and the blend (equation (3) with
- * one light per term).
+ * one light per term). The steps of a scene pixel that the CAR model's
+ * renders take alike (the tangent frame, the lights' directions and
+ * falloff, the per-light sum, the radiance clamp, the texel wrap) are
+ * src/render/btf_shade_common.h, one text for both families.
  *
  * The arithmetic is float, each result BTF_PRECISE ("precise" in GLSL, so no
  * contraction into FMA), in one written order. pow, exp2, log2 and atan2
@@ -55,16 +58,20 @@
  *                               (equal theta) that starts at view i
  *
  * Keep this file in the common subset of C11 and GLSL 4.50 (the rules of
- * src/synth/btf_noise.h, but sqrt and division through BTF_RF_SQRT and
- * "/"): ASCII only, no pointers and no arrays (the one scratch array of
- * the C side is BTF_RF_SCRATCH's), no casts "(T)x" (the BTF_RF_ macros
- * below), float constants with the f suffix and at most 9 significant
- * digits, no GLSL reserved words as names.
+ * src/synth/btf_noise.h, but sqrt and division through BTF_SQRT and "/"):
+ * ASCII only, no pointers and no arrays (the one scratch array of the C
+ * side is BTF_RF_SCRATCH's), no casts "(T)x" (BTF_F2I, BTF_I2F of
+ * btf_shade_common.h, BTF_RF_I2U below), float constants with the f suffix
+ * and at most 9 significant digits, no GLSL reserved words as names.
  */
 #ifndef BTF_RF_SHARED_H
 #define BTF_RF_SHARED_H
 
 #include "btf_noise.h" /* BTF_FN, BTF_PRECISE, btf_uint, bit casts, btf_noise_log */
+/* btf_rgb, BTF_FLOOR, BTF_ABS, BTF_SQRT, BTF_F2I, BTF_I2F and the shading
+ * steps both families take; the path is relative to this file, which both
+ * the C compiler and glslangValidator search first. */
+#include "../render/btf_shade_common.h"
 
 /* The fits (btf_rf_fit_kind) and the most slots of a texel in one field
  * (BTF_RF_MAX_SLOTS of include/btfcar.h: 1 + 5 * 4 lobes + 3 colours). */
@@ -86,12 +93,6 @@
 #define BTF_RF_CHROMA_MAX 64.0f
 /* 16-bit codes: v = lo + code * (hi - lo) / 65535 (docs/rf.md, "Quantisation"). */
 #define BTF_RF_QSTEPS 65535.0f
-/* A scene pixel's view is held at least this far above the horizon
- * (src/render/btf_render_shared.h's BTF_RENDER_MIN_Z). */
-#define BTF_RF_MIN_Z 1e-3f
-/* Coordinates and radiances beyond this are taken as 0 (NaN fails the test
- * too; BTF_RENDER_COORD_MAX). */
-#define BTF_RF_COORD_MAX 1.0e30f
 #define BTF_RF_FLT_MIN 1.17549435e-38f
 #define BTF_RF_FLT_MAX 3.40282347e38f
 #define BTF_RF_INV_LN2 1.44269504f
@@ -117,9 +118,6 @@
 
 #if defined(BTF_GLSL) || defined(VULKAN) || defined(GL_core_profile) || defined(GL_ES)
 /* ------------------------------------------------------------------ GLSL */
-struct btf_rf_rgb {
-    float r, g, b;
-};
 /* The four closest measured views (field indices) and their weights. */
 struct btf_rf_views {
     int i0, i1, i2, i3;
@@ -129,14 +127,8 @@ struct btf_rf_pair {
     int i0, i1;
     float t;
 };
-#define BTF_RF_RGB(a, b, c) btf_rf_rgb(a, b, c)
 #define BTF_RF_VIEWS(a, b, c, d, e, f, g, h) btf_rf_views(a, b, c, d, e, f, g, h)
 #define BTF_RF_PAIR(a, b, c) btf_rf_pair(a, b, c)
-#define BTF_RF_FLOOR(x) floor(x)
-#define BTF_RF_ABS(x) abs(x)
-#define BTF_RF_SQRT(x) sqrt(x)
-#define BTF_RF_F2I(x) int(x)
-#define BTF_RF_I2F(i) float(i)
 #define BTF_RF_I2U(i) uint(i)
 /* The shader defines BTF_RF_OPEN(ctx, f, t, scratch) as btf_rf_open(f, t)
  * and BTF_RF_P(src, s) as btf_rf_param(src, s): the slot
@@ -147,10 +139,6 @@ uvec4 btf_rf_open(int f, uint t);
 float btf_rf_param(uvec4 src, int s);
 #else
 /* --------------------------------------------------------------------- C */
-#include <math.h>
-typedef struct btf_rf_rgb {
-    float r, g, b;
-} btf_rf_rgb;
 typedef struct btf_rf_views {
     int i0, i1, i2, i3;
     float w0, w1, w2, w3;
@@ -159,11 +147,6 @@ typedef struct btf_rf_pair {
     int i0, i1;
     float t;
 } btf_rf_pair;
-static inline btf_rf_rgb btf_rf_make_rgb(float a, float b, float c)
-{
-    btf_rf_rgb v = {a, b, c};
-    return v;
-}
 static inline btf_rf_views btf_rf_make_views(int a, int b, int c, int d, float e, float f,
                                              float g, float h)
 {
@@ -175,16 +158,13 @@ static inline btf_rf_pair btf_rf_make_pair(int a, int b, float c)
     btf_rf_pair v = {a, b, c};
     return v;
 }
-#define BTF_RF_RGB(a, b, c) btf_rf_make_rgb(a, b, c)
 #define BTF_RF_VIEWS(a, b, c, d, e, f, g, h) btf_rf_make_views(a, b, c, d, e, f, g, h)
 #define BTF_RF_PAIR(a, b, c) btf_rf_make_pair(a, b, c)
-#define BTF_RF_FLOOR(x) floorf(x)
-#define BTF_RF_ABS(x) fabsf(x)
-#define BTF_RF_SQRT(x) sqrtf(x)
-#define BTF_RF_F2I(x) ((int)(x))
-#define BTF_RF_I2F(i) ((float)(i))
 #define BTF_RF_I2U(i) ((btf_uint)(i))
 #endif
+/* A texel's colour is btf_shade_common.h's btf_rgb; the family's sources
+ * and its shader know it by this name. */
+#define btf_rf_rgb btf_rgb
 
 /* ============================================== shared part: C and GLSL */
 
@@ -223,12 +203,12 @@ BTF_FN float btf_rf_exp2(float t)
     if (!(t > -125.0f))
         return 0.0f;
     float tt = t < 126.0f ? t : 126.0f;
-    float k = BTF_RF_FLOOR(tt + 0.5f);
+    float k = BTF_FLOOR(tt + 0.5f);
     BTF_PRECISE float f = tt - k;
     BTF_PRECISE float p = 1.0f + f * (BTF_RF_EXP2_C1 + f * (BTF_RF_EXP2_C2 + f * (BTF_RF_EXP2_C3 +
                           f * (BTF_RF_EXP2_C4 + f * (BTF_RF_EXP2_C5 + f * (BTF_RF_EXP2_C6 +
                           f * BTF_RF_EXP2_C7))))));
-    int e = BTF_RF_F2I(k) + 127;
+    int e = BTF_F2I(k) + 127;
     BTF_PRECISE float r = p * btf_bits_float(BTF_RF_I2U(e) << 23u);
     return r;
 }
@@ -251,7 +231,7 @@ BTF_FN float btf_rf_pow(float c, float n)
  * tan(pi/8) and its polynomial. */
 BTF_FN float btf_rf_atan2(float y, float x)
 {
-    float ax = BTF_RF_ABS(x), ay = BTF_RF_ABS(y);
+    float ax = BTF_ABS(x), ay = BTF_ABS(y);
     float mx = ax > ay ? ax : ay, mn = ax > ay ? ay : ax;
     if (!(mx > 0.0f) || !(mx <= BTF_RF_FLT_MAX))
         return 0.0f;
@@ -293,7 +273,7 @@ BTF_FN float btf_rf_lobe(float rho0, float x0, float y0, float e0, float lx, flo
     BTF_PRECISE float yy = y * y;
     BTF_PRECISE float s1 = xx + yy;
     BTF_PRECISE float s2 = s1 + 1.0f;
-    BTF_PRECISE float len = BTF_RF_SQRT(s2);
+    BTF_PRECISE float len = BTF_SQRT(s2);
     BTF_PRECISE float a = x * lx;
     BTF_PRECISE float b = y * ly;
     BTF_PRECISE float ab = a + b;
@@ -371,7 +351,7 @@ BTF_FN float btf_rf_lum(BTF_RF_SRC p, int fit, int lobes, float lx, float ly, fl
 BTF_FN float btf_rf_wrap360(float phi)
 {
     BTF_PRECISE float q = phi / 360.0f;
-    float k = BTF_RF_FLOOR(q);
+    float k = BTF_FLOOR(q);
     BTF_PRECISE float k360 = 360.0f * k;
     BTF_PRECISE float r = phi - k360;
     if (r >= 360.0f)
@@ -463,10 +443,7 @@ BTF_FN btf_rf_views btf_rf_views_at(BTF_RF_CTX ctx, float vx, float vy, float vz
 {
     if (BTF_RF_FIT(ctx) == BTF_RF_FIT_LAFORTUNE)
         return BTF_RF_VIEWS(0, 0, 0, 0, 1.0f, 0.0f, 0.0f, 0.0f);
-    BTF_PRECISE float xx = vx * vx;
-    BTF_PRECISE float yy = vy * vy;
-    BTF_PRECISE float s = xx + yy;
-    BTF_PRECISE float rho = BTF_RF_SQRT(s);
+    BTF_PRECISE float rho = btf_shade_len_xy(vx, vy);
     BTF_PRECISE float theta = btf_rf_atan2(rho, vz) * BTF_RF_DEG;
     BTF_PRECISE float phi = btf_rf_atan2(vy, vx) * BTF_RF_DEG;
     return btf_rf_four_views(BTF_RF_VIEWSET(ctx), theta, phi);
@@ -481,8 +458,8 @@ BTF_FN btf_rf_views btf_rf_views_at(BTF_RF_CTX ctx, float vx, float vy, float vz
  * of vs (paper equation (3) for one light: "multiply the resulting
  * luminances by the average colors for the reflectance field and the
  * weights w_v, and add them"). (vx, vy, vz): the unit view, for Lafortune. */
-BTF_FN btf_rf_rgb btf_rf_blend(BTF_RF_CTX ctx, btf_rf_views vs, BTF_RF_TEXEL t, float lx,
-                               float ly, float lz, float vx, float vy, float vz)
+BTF_FN btf_rgb btf_rf_blend(BTF_RF_CTX ctx, btf_rf_views vs, BTF_RF_TEXEL t, float lx,
+                            float ly, float lz, float vx, float vy, float vz)
 {
     int fit = BTF_RF_FIT(ctx), lobes = BTF_RF_LOBES(ctx), np = BTF_RF_NPARAMS(ctx);
     BTF_RF_SCRATCH(scratch);
@@ -506,7 +483,7 @@ BTF_FN btf_rf_rgb btf_rf_blend(BTF_RF_CTX ctx, btf_rf_views vs, BTF_RF_TEXEL t, 
         g = g + tg;
         b = b + tb;
     }
-    return BTF_RF_RGB(r, g, b);
+    return BTF_RGB(r, g, b);
 }
 
 /* ------------------------------------------------------- scene pixels */
@@ -516,115 +493,60 @@ BTF_FN btf_rf_rgb btf_rf_blend(BTF_RF_CTX ctx, btf_rf_views vs, BTF_RF_TEXEL t, 
  * 10^30 (or NaN) the coordinate is taken as 0. */
 BTF_FN int btf_rf_wrap(float c, int n, float inv_n)
 {
-    float u = c;
-    if (!(BTF_RF_ABS(u) < BTF_RF_COORD_MAX))
-        u = 0.0f;
-    float fl = BTF_RF_FLOOR(u);
+    float fl = BTF_FLOOR(btf_shade_coord(c));
     BTF_PRECISE float q = fl * inv_n;
-    float k = BTF_RF_FLOOR(q);
-    BTF_PRECISE float nk = BTF_RF_I2F(n) * k;
+    float k = BTF_FLOOR(q);
+    BTF_PRECISE float nk = BTF_I2F(n) * k;
     BTF_PRECISE float r = fl - nk;
-    if (!(BTF_RF_ABS(r) < 16777216.0f)) /* past 2^24 floats skip texels */
+    if (!(BTF_ABS(r) < 16777216.0f)) /* past 2^24 floats skip texels */
         r = 0.0f;
-    int i = BTF_RF_F2I(r);
-    return i < 0 ? n - 1 - ((-i - 1) % n) : i % n;
+    return btf_shade_wrap(BTF_F2I(r), n);
 }
 
-BTF_FN float btf_rf_dot3(float a0, float a1, float a2, float b0, float b1, float b2)
-{
-    BTF_PRECISE float p = a0 * b0;
-    BTF_PRECISE float q = a1 * b1;
-    BTF_PRECISE float r = a2 * b2;
-    BTF_PRECISE float s = p + q;
-    BTF_PRECISE float t = s + r;
-    return t;
-}
-
-/* Light j seen from the world point (px, py, pz): the unit direction
- * towards it (x, y, z) and its intensity scale (w: 1, or 1 / d^2 for a
- * point light); w = 0 when it gives no light (a point light at the point,
- * or a non-finite one). */
+/* Light j seen from the world point (px, py, pz): btf_shade_light's unit
+ * direction (x, y, z) and intensity scale (w). A directional light's
+ * vector is normalised here, in float: the hosts (src/rf/rf.h,
+ * gpu/rf_render_gpu.c) pass the scene's as it is. */
 BTF_FN btf_vec4 btf_rf_light(BTF_RF_CTX ctx, int j, float px, float py, float pz)
 {
-    int point = BTF_RF_LIGHT_KIND(ctx, j) == 1 ? 1 : 0;
-    BTF_PRECISE float qx = BTF_RF_LIGHT_VEC(ctx, j, 0);
-    BTF_PRECISE float qy = BTF_RF_LIGHT_VEC(ctx, j, 1);
-    BTF_PRECISE float qz = BTF_RF_LIGHT_VEC(ctx, j, 2);
-    if (point == 1) {
-        qx = qx - px;
-        qy = qy - py;
-        qz = qz - pz;
-    }
-    float d2 = btf_rf_dot3(qx, qy, qz, qx, qy, qz);
-    if (!(d2 > 1e-24f) || !(d2 < BTF_RF_COORD_MAX))
-        return BTF_VEC4(0.0f, 0.0f, 0.0f, 0.0f);
-    BTF_PRECISE float inv = 1.0f / d2;
-    float scale = point == 1 ? inv : 1.0f;
-    BTF_PRECISE float d = BTF_RF_SQRT(d2);
-    BTF_PRECISE float dx = qx / d;
-    BTF_PRECISE float dy = qy / d;
-    BTF_PRECISE float dz = qz / d;
-    return BTF_VEC4(dx, dy, dz, scale);
+    return btf_shade_light(BTF_RF_LIGHT_KIND(ctx, j) == 1 ? 1 : 0, BTF_RF_LIGHT_VEC(ctx, j, 0),
+                           BTF_RF_LIGHT_VEC(ctx, j, 1), BTF_RF_LIGHT_VEC(ctx, j, 2), px, py, pz);
 }
 
 /* One pixel of a scene (docs/rf.md, "Rendering"): frame rows T (f0..f2),
  * B (f3..f5), N (f6..f8), world hit (px, py, pz), world unit vector to the
  * eye (ex, ey, ez), texture coordinate (u, v). The local view is held at
- * least BTF_RF_MIN_Z above the horizon; the texel is floor(u), floor(v)
+ * least BTF_SHADE_MIN_Z above the horizon; the texel is floor(u), floor(v)
  * wrapped into the model; per light above the surface's horizon the four
  * closest views' fields at the exact light direction, times the light's
  * intensity (and 1/d^2). Linear RGB, >= 0 and finite. No parallax and no
  * bump mapping: a field holds the surface's relief itself. */
-BTF_FN btf_rf_rgb btf_rf_shade_pixel(BTF_RF_CTX ctx, float f0, float f1, float f2, float f3,
-                                     float f4, float f5, float f6, float f7, float f8,
-                                     float px, float py, float pz, float ex, float ey, float ez,
-                                     float u, float v)
+BTF_FN btf_rgb btf_rf_shade_pixel(BTF_RF_CTX ctx, float f0, float f1, float f2, float f3,
+                                  float f4, float f5, float f6, float f7, float f8, float px,
+                                  float py, float pz, float ex, float ey, float ez, float u,
+                                  float v)
 {
-    float vx = btf_rf_dot3(f0, f1, f2, ex, ey, ez);
-    float vy = btf_rf_dot3(f3, f4, f5, ex, ey, ez);
-    float vz = btf_rf_dot3(f6, f7, f8, ex, ey, ez);
-    vz = vz > BTF_RF_MIN_Z ? vz : BTF_RF_MIN_Z;
+    btf_rgb w = btf_shade_local_view(f0, f1, f2, f3, f4, f5, f6, f7, f8, ex, ey, ez);
+    float vx = w.r, vy = w.g, vz = w.b;
     btf_rf_views vs = btf_rf_views_at(ctx, vx, vy, vz);
     /* the unit view, which a Lafortune lobe is evaluated at */
-    float vn = BTF_RF_SQRT(btf_rf_dot3(vx, vy, vz, vx, vy, vz));
-    BTF_PRECISE float nx = vx / vn;
-    BTF_PRECISE float ny = vy / vn;
-    BTF_PRECISE float nz = vz / vn;
-    if (!(vn > 0.0f) || !(vn < BTF_RF_COORD_MAX)) {
-        nx = 0.0f;
-        ny = 0.0f;
-        nz = 1.0f;
-    }
+    btf_rgb n = btf_shade_unit(vx, vy, vz, 0.0f);
     int tx = btf_rf_wrap(u, BTF_RF_WIDTH(ctx), BTF_RF_INV_WIDTH(ctx));
     int ty = btf_rf_wrap(v, BTF_RF_HEIGHT(ctx), BTF_RF_INV_HEIGHT(ctx));
     BTF_RF_TEXEL t = BTF_RF_TEXEL_AT(ctx, tx, ty);
-    BTF_PRECISE float r = 0.0f;
-    BTF_PRECISE float g = 0.0f;
-    BTF_PRECISE float b = 0.0f;
+    btf_rgb sum = BTF_RGB(0.0f, 0.0f, 0.0f);
     for (int j = 0; j < BTF_RF_N_LIGHTS(ctx); j++) {
         btf_vec4 d = btf_rf_light(ctx, j, px, py, pz);
         if (d.w == 0.0f)
             continue;
-        float lx = btf_rf_dot3(f0, f1, f2, d.x, d.y, d.z);
-        float ly = btf_rf_dot3(f3, f4, f5, d.x, d.y, d.z);
-        float lz = btf_rf_dot3(f6, f7, f8, d.x, d.y, d.z);
-        if (!(lz > 0.0f))
+        btf_rgb l = btf_shade_local(f0, f1, f2, f3, f4, f5, f6, f7, f8, d.x, d.y, d.z);
+        if (!(l.b > 0.0f))
             continue; /* below the surface's horizon: no light */
-        btf_rf_rgb c = btf_rf_blend(ctx, vs, t, lx, ly, lz, nx, ny, nz);
-        BTF_PRECISE float ir = BTF_RF_LIGHT_RGB(ctx, j, 0) * d.w;
-        BTF_PRECISE float ig = BTF_RF_LIGHT_RGB(ctx, j, 1) * d.w;
-        BTF_PRECISE float ib = BTF_RF_LIGHT_RGB(ctx, j, 2) * d.w;
-        BTF_PRECISE float tr = ir * c.r;
-        BTF_PRECISE float tg = ig * c.g;
-        BTF_PRECISE float tb = ib * c.b;
-        r = r + tr;
-        g = g + tg;
-        b = b + tb;
+        btf_rgb c = btf_rf_blend(ctx, vs, t, l.r, l.g, l.b, n.r, n.g, n.b);
+        sum = btf_shade_add_light(sum, BTF_RF_LIGHT_RGB(ctx, j, 0), BTF_RF_LIGHT_RGB(ctx, j, 1),
+                                  BTF_RF_LIGHT_RGB(ctx, j, 2), d.w, c);
     }
-    r = r > 0.0f && r < BTF_RF_COORD_MAX ? r : 0.0f;
-    g = g > 0.0f && g < BTF_RF_COORD_MAX ? g : 0.0f;
-    b = b > 0.0f && b < BTF_RF_COORD_MAX ? b : 0.0f;
-    return BTF_RF_RGB(r, g, b);
+    return btf_shade_radiance(sum);
 }
 
 #endif /* BTF_RF_SHARED_H */

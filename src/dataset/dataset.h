@@ -63,6 +63,10 @@ typedef struct btf_dataset_entries {
 btf_status btf_dataset_entries_add(btf_dataset_entries *l, const char *path, btf_dir light,
                                    btf_dir view, btf_error *err);
 void btf_dataset_entries_free(btf_dataset_entries *l);
+/* The first entry whose path an earlier one has (*again) and that earlier
+ * one (*first); both -1 when every path is listed once. */
+btf_status btf_dataset_entries_repeat(const btf_dataset_entries *l, int *first, int *again,
+                                      btf_error *err);
 
 /* A near-field image's per-pixel correction (dataset/near_field.c): every
  * pixel multiplied by the light's irradiance at the image centre over its own,

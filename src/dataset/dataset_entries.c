@@ -7,6 +7,7 @@
  */
 #include "core/core.h"
 #include "dataset/dataset.h"
+#include "io/io.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -35,4 +36,17 @@ void btf_dataset_entries_free(btf_dataset_entries *l)
         free(l->items[i].path);
     free(l->items);
     memset(l, 0, sizeof *l);
+}
+
+btf_status btf_dataset_entries_repeat(const btf_dataset_entries *l, int *first, int *again,
+                                      btf_error *err)
+{
+    const char **names = btf_alloc((size_t)(l->count > 0 ? l->count : 1), sizeof *names, err);
+    if (!names)
+        return BTF_E_NOMEM;
+    for (int i = 0; i < l->count; i++)
+        names[i] = l->items[i].path;
+    btf_status rc = btf_first_repeat(names, l->count, first, again, err);
+    free(names);
+    return rc;
 }

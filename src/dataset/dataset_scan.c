@@ -141,14 +141,8 @@ static btf_status scan_folder(btf_dataset_entries *l, const char *dir, const int
 static btf_status no_duplicate_paths(const btf_dataset_entries *l, const btf_tsv *t,
                                      const char *path, btf_error *err)
 {
-    const char **names = btf_alloc((size_t)(l->count > 0 ? l->count : 1), sizeof *names, err);
-    if (!names)
-        return BTF_E_NOMEM;
-    for (int i = 0; i < l->count; i++)
-        names[i] = l->items[i].path;
     int first, again;
-    btf_status rc = btf_first_repeat(names, l->count, &first, &again, err);
-    free(names);
+    btf_status rc = btf_dataset_entries_repeat(l, &first, &again, err);
     if (rc == BTF_OK && first >= 0)
         rc = btf_fail(err, BTF_E_DATA, "%s:%d: %s is listed again (first on line %d); each "
                       "image under one (light, view) pair", path, t->line_no[again],

@@ -198,14 +198,8 @@ static btf_status parse_owned(char *text, size_t n, const char *name, const char
     if (l->count < count)
         return btf_fail(err, BTF_E_FORMAT, "%s:%d: %d image lines, fewer than the count %ld of "
                         "line %d", name, line_no, l->count, count, count_line);
-    const char **names = btf_alloc((size_t)l->count, sizeof *names, err);
-    if (!names)
-        return BTF_E_NOMEM;
-    for (int i = 0; i < l->count; i++)
-        names[i] = l->items[i].path;
     int first, again;
-    btf_status rc = btf_first_repeat(names, l->count, &first, &again, err);
-    free(names);
+    btf_status rc = btf_dataset_entries_repeat(l, &first, &again, err);
     if (rc == BTF_OK && first >= 0)
         rc = btf_fail(err, BTF_E_DATA, "%s:%d: %s is listed again (first on line %d); one "
                       "image per light", name, (*line_of)[again], l->items[again].path,

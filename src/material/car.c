@@ -8,11 +8,6 @@
 #include "model/model.h"
 
 
-static int car_sniff(const unsigned char *data, size_t size)
-{
-    return btf_model_sniff(data, size);
-}
-
 static btf_status car_read(const char *path, void *model, btf_error *err)
 {
     return btf_model_read(path, model, err);
@@ -101,7 +96,7 @@ const btf_family_ops btf_car_family = {
     .name = "car",
     .caps = BTF_MATERIAL_SYNTHESISES,
     .model_size = sizeof(btf_model),
-    .sniff = car_sniff,
+    .sniff = btf_model_sniff,
     .read = car_read,
     .free = car_free,
     .dirsets = car_dirsets,

@@ -27,14 +27,19 @@ struct btf_material {
     long long bytes;
 };
 
+/* The family whose signature the bytes start with, NULL for none. */
+static const btf_family_ops *sniffed(const unsigned char *data, size_t size)
+{
+    for (size_t i = 0; data && i < N_FAMILIES; i++)
+        if (FAMILIES[i]->sniff(data, size))
+            return FAMILIES[i];
+    return NULL;
+}
+
 btf_family btf_material_sniff(const unsigned char *data, size_t size)
 {
-    if (!data)
-        return BTF_FAMILY_NONE;
-    for (size_t i = 0; i < N_FAMILIES; i++)
-        if (FAMILIES[i]->sniff(data, size))
-            return FAMILIES[i]->family;
-    return BTF_FAMILY_NONE;
+    const btf_family_ops *ops = sniffed(data, size);
+    return ops ? ops->family : BTF_FAMILY_NONE;
 }
 
 /* The file's first bytes and size; n 0 when it cannot be read (the
@@ -52,14 +57,6 @@ static size_t read_head(const char *path, unsigned char *head, long long *bytes)
     return r > 0 ? (size_t)r : 0;
 }
 
-static const btf_family_ops *family_of(const unsigned char *head, size_t n)
-{
-    for (size_t i = 0; i < N_FAMILIES; i++)
-        if (FAMILIES[i]->sniff(head, n))
-            return FAMILIES[i];
-    return FAMILIES[0];
-}
-
 btf_status btf_material_read(const char *path, btf_material **out, btf_error *err)
 {
     if (!path || !out)
@@ -68,7 +65,9 @@ btf_status btf_material_read(const char *path, btf_material **out, btf_error *er
     unsigned char head[HEAD_BYTES] = {0};
     long long bytes;
     size_t n = read_head(path, head, &bytes);
-    const btf_family_ops *ops = family_of(head, n);
+    const btf_family_ops *ops = sniffed(head, n);
+    if (!ops) /* no family's: the first family's reader says what is wrong */
+        ops = FAMILIES[0];
     btf_material *m = calloc(1, sizeof *m);
     void *model = m ? calloc(1, ops->model_size) : NULL;
     char *name = model ? strdup(path) : NULL;

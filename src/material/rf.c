@@ -15,11 +15,6 @@
 /* The material interface's frame without a size (btfcar/material.h). */
 #define DEFAULT_SIDE 512
 
-static int rf_sniff(const unsigned char *data, size_t size)
-{
-    return btf_rf_sniff(data, size);
-}
-
 static btf_status rf_read(const char *path, void *model, btf_error *err)
 {
     return btf_rf_read(path, model, err);
@@ -123,7 +118,7 @@ const btf_family_ops btf_rf_family = {
     .name = "rf",
     .caps = 0,
     .model_size = sizeof(btf_rf_model),
-    .sniff = rf_sniff,
+    .sniff = btf_rf_sniff,
     .read = rf_read,
     .free = rf_free,
     .dirsets = rf_dirsets,

@@ -7,7 +7,6 @@
 #include "material/family.h"
 #include "model/model.h"
 
-
 static btf_status car_read(const char *path, void *model, btf_error *err)
 {
     return btf_model_read(path, model, err);

@@ -143,9 +143,7 @@ typedef struct batch {
 
 static void batch_free(batch *bt)
 {
-    free(bt->tasks);
-    free(bt->fs);
-    free(bt->unmix);
+    BTF_FREE_ALL(bt->tasks, bt->fs, bt->unmix);
     memset(bt, 0, sizeof *bt);
 }
 

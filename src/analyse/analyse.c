@@ -73,9 +73,7 @@ static btf_status range_tile(const btf_image *h, int n, btf_model *m, btf_error 
     double *acc = btf_calloc(cells, sizeof(double), err);
     int *cnt = btf_calloc(cells, sizeof(int), err);
     if (!m->range || !acc || !cnt) {
-        free(acc);
-        free(cnt);
-        free(m->range);
+        BTF_FREE_ALL(acc, cnt, m->range);
         m->range = NULL;
         return BTF_E_NOMEM;
     }
@@ -254,9 +252,7 @@ static btf_status fit_ambient(const btf_image *imgs, const btf_segmentation *seg
         }
     if (rc == BTF_OK)
         m->ambient = (float)btf_structure_fit_ambient(on, dirs, g, n, m);
-    free(on);
-    free(dirs);
-    free(g);
+    BTF_FREE_ALL(on, dirs, g);
     return rc;
 }
 

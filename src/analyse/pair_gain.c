@@ -115,8 +115,6 @@ btf_status btf_pair_predict_views(const btf_model *m, const double *tex_mean,
                 pred[3 * pair + c] = tex_mean[3 * k + c] * refl * (a * total[c] + dot[c]) / (double)n;
         }
     }
-    free(lit);
-    free(alb);
-    free(w);
+    BTF_FREE_ALL(lit, alb, w);
     return rc;
 }

@@ -363,9 +363,7 @@ double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights,
         if (d.n)
             a = ambient_search(&d);
     }
-    free(d.y);
-    free(d.lit);
-    free(d.which);
+    BTF_FREE_ALL(d.y, d.lit, d.which);
     return a;
 }
 

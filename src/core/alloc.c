@@ -33,6 +33,12 @@ void *btf_calloc(size_t count, size_t size, btf_error *err)
     return p;
 }
 
+void btf_free_list(void *const *ptrs, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        free(ptrs[i]);
+}
+
 /* A "Key:   N kB" line of /proc/meminfo, in bytes; 0 when absent. */
 static uint64_t meminfo_bytes(const char *text, const char *key)
 {

@@ -34,6 +34,13 @@ int btf_fail(btf_error *err, int code, const char *fmt, ...) BTF_PRINTF(3, 4);
 /* malloc/calloc that report BTF_E_NOMEM through err; size overflow checked. */
 void *btf_alloc(size_t count, size_t size, btf_error *err);
 void *btf_calloc(size_t count, size_t size, btf_error *err);
+/* Frees every pointer of a list (NULL ones too, as free() does), so that a
+ * free function names the arrays it owns in one statement. The list is
+ * evaluated whole before the first free, so BTF_FREE_ALL(s->a, s) is safe. */
+void btf_free_list(void *const *ptrs, size_t n);
+#define BTF_FREE_ALL(...)                                                                          \
+    btf_free_list((void *const[]){__VA_ARGS__},                                                    \
+                  sizeof((void *const[]){__VA_ARGS__}) / sizeof(void *))
 /* Bytes this process can still allocate, as far as the system says: the
  * kernel's MemAvailable plus free swap (the physical memory without /proc),
  * at most a cgroup's remaining limit and the address-space limit

@@ -308,9 +308,7 @@ static btf_status factor_by_rows(const fact *f, chan ch[3], double total[3], flo
         project_rows(f, a, m, vec, ch[m].sxv, kc);
         ubo_report(f->src, 0.3 + 0.25 * (m + 1) / f->nm, "eigenvectors");
     }
-    free(g);
-    free(val);
-    free(vec);
+    BTF_FREE_ALL(g, val, vec);
     if (rc) {
         free(a);
         return rc;

@@ -78,9 +78,7 @@ void ubo_close(ubo_open_file *o)
         munmap(o->map, o->map_size);
     btf_dirset_free(&o->views);
     btf_dirset_free(&o->lights);
-    free(o->view_index);
-    free(o->light_index);
-    free(o);
+    BTF_FREE_ALL(o->view_index, o->light_index, o);
 }
 
 btf_status ubo_open(const char *path, ubo_open_file **out, btf_error *err)

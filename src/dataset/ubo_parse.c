@@ -618,10 +618,7 @@ static int model_supported(int m)
 
 void ubo_free(ubo_file *f)
 {
-    free(f->view_rad);
-    free(f->light_rad);
-    free(f->rank);
-    free(f->slots);
+    BTF_FREE_ALL(f->view_rad, f->light_rad, f->rank, f->slots);
     f->view_rad = f->light_rad = NULL;
     f->rank = NULL;
     f->slots = NULL;

@@ -204,12 +204,7 @@ btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_
                           "the eigenpairs of a %d x %d Gram matrix did not converge in 1000 "
                           "subspace iterations", n, n);
     }
-    free(q);
-    free(z);
-    free(t);
-    free(tv);
-    free(tval);
-    free(prev);
+    BTF_FREE_ALL(q, z, t, tv, tval, prev);
     return rc;
 }
 

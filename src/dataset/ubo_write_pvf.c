@@ -259,11 +259,7 @@ typedef struct pvf_work {
 
 static void work_free(pvf_work *w)
 {
-    free(w->x);
-    free(w->g);
-    free(w->mu);
-    free(w->val);
-    free(w->vec);
+    BTF_FREE_ALL(w->x, w->g, w->mu, w->val, w->vec);
 }
 
 static btf_status work_alloc(pvf_work *w, uint64_t px, uint64_t dim, uint32_t k, btf_error *err)
@@ -286,10 +282,8 @@ typedef struct pvf_slots {
 static void slots_free(pvf_slots *sl)
 {
     for (int i = 0; sl->v && i < sl->n; i++) {
-        free((void *)sl->v[i].ev);
-        free((void *)sl->v[i].mean);
-        free((void *)sl->v[i].c);
-        free((void *)sl->v[i].w);
+        BTF_FREE_ALL((void *)sl->v[i].ev, (void *)sl->v[i].mean, (void *)sl->v[i].c,
+                     (void *)sl->v[i].w);
     }
     free(sl->v);
 }

@@ -18,9 +18,7 @@ void btf_tsv_free(btf_tsv *t)
 {
     if (!t)
         return;
-    free(t->text);
-    free(t->cells);
-    free(t->line_no);
+    BTF_FREE_ALL(t->text, t->cells, t->line_no);
     memset(t, 0, sizeof *t);
 }
 

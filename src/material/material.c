@@ -78,9 +78,7 @@ btf_status btf_material_read(const char *path, btf_material **out, btf_error *er
     }
     btf_status rc = ops->read(path, model, err);
     if (rc) {
-        free(name);
-        free(model);
-        free(m);
+        BTF_FREE_ALL(name, model, m);
         return rc;
     }
     *m = (btf_material){.ops = ops, .model = model, .path = name, .bytes = bytes,
@@ -95,9 +93,7 @@ void btf_material_free(btf_material *m)
     if (!m)
         return;
     m->ops->free(m->model);
-    free(m->model);
-    free(m->path);
-    free(m);
+    BTF_FREE_ALL(m->model, m->path, m);
 }
 
 void btf_material_get_info(const btf_material *m, btf_material_info *out)

@@ -15,12 +15,7 @@ void btf_model_free(btf_model *m)
         return;
     btf_dirset_free(&m->views);
     btf_dirset_free(&m->lights);
-    free(m->index);
-    free(m->subspaces);
-    free(m->range);
-    free(m->albedo);
-    free(m->chroma);
-    free(m->gain);
+    BTF_FREE_ALL(m->index, m->subspaces, m->range, m->albedo, m->chroma, m->gain);
     btf_model_internal_free(m->internal);
     memset(m, 0, sizeof *m);
 }

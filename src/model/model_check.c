@@ -349,10 +349,7 @@ static btf_status check_stability(const btf_model *m, const char *name, btf_stat
                    "(expected every root of the recursion below 1 - %g in modulus, as fitting "
                    "makes)", s, b, l, why, BTF_CAR_STABILITY_MARGIN);
     }
-    free(keys);
-    free(same);
-    free(unique);
-    free(sj.stable);
+    BTF_FREE_ALL(keys, same, unique, sj.stable);
     return rc;
 }
 

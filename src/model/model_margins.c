@@ -91,10 +91,7 @@ btf_status btf_model_keep_margins(btf_model *m, double budget)
     margin_jobs mj = {m, kept, calloc(nkept, sizeof(int)), calloc(nkept, sizeof(double)), budget,
                       0};
     if (!in || !kept || !mj.band || !mj.work) {
-        free(in);
-        free(kept);
-        free(mj.band);
-        free(mj.work);
+        BTF_FREE_ALL(in, kept, mj.band, mj.work);
         return BTF_E_NOMEM;
     }
     in->n_subspaces = m->n_subspaces;

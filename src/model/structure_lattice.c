@@ -146,8 +146,6 @@ int btf_structure_lattice(const btf_model *m, int lattice[4])
                 found = 1;
             }
     }
-    free(re);
-    free(im);
-    free(pk);
+    BTF_FREE_ALL(re, im, pk);
     return found;
 }

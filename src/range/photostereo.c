@@ -256,10 +256,7 @@ btf_status btf_ps_run(btf_ps_source *src, const double *lights, const double *in
     if (rc == BTF_OK)
         btf_ps_report(o, 1.0, "done");
 done:
-    free(job.fit_sets);
-    free(grey);
-    free(inside);
-    free(unit_lights);
+    BTF_FREE_ALL(job.fit_sets, grey, inside, unit_lights);
     return rc;
 }
 
@@ -370,9 +367,7 @@ btf_status btf_photostereo_dataset_view(const btf_dataset *ds, const btf_dir *wa
     const char **paths = btf_alloc((size_t)nl, sizeof(char *), err);
     int *light_of = btf_alloc((size_t)nl, sizeof(int), err);
     if (!lights || !paths || !light_of) {
-        free(lights);
-        free(paths);
-        free(light_of);
+        BTF_FREE_ALL(lights, paths, light_of);
         return BTF_E_NOMEM;
     }
     int n = 0; /* the lights the set holds at this view (all of a full grid) */
@@ -389,9 +384,7 @@ btf_status btf_photostereo_dataset_view(const btf_dataset *ds, const btf_dir *wa
     rc = btf_ps_run(&src, lights, NULL, &o, out, err);
     out->view = view;
     out->view_dir = info->views->dirs[view];
-    free(lights);
-    free(paths);
-    free(light_of);
+    BTF_FREE_ALL(lights, paths, light_of);
     if (rc)
         btf_ps_result_free(out);
     return rc;

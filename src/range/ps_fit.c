@@ -251,10 +251,7 @@ void btf_ps_fallback_set(const double *lights, int count, const double *samples,
 
 void btf_ps_scratch_free(btf_ps_scratch *s)
 {
-    free(s->values);
-    free(s->residuals);
-    free(s->unshadowed);
-    free(s->row_samples);
+    BTF_FREE_ALL(s->values, s->residuals, s->unshadowed, s->row_samples);
     memset(s, 0, sizeof *s);
 }
 

@@ -155,10 +155,7 @@ static void manifest_free(manifest *m)
 {
     for (int i = 0; m->paths && i < m->count; i++)
         free(m->paths[i]);
-    free(m->paths);
-    free(m->lights);
-    free(m->intensity);
-    free(m->views);
+    BTF_FREE_ALL(m->paths, m->lights, m->intensity, m->views);
     memset(m, 0, sizeof *m);
 }
 

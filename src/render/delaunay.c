@@ -255,10 +255,7 @@ static btf_status walk_hull(const dt *d, const char *name, int32_t **hull, int32
     *hull = btf_alloc((size_t)n, sizeof **hull, err);
     *apex = btf_alloc((size_t)n, sizeof **apex, err);
     if (!next || !nexta || !*hull || !*apex) {
-        free(next);
-        free(nexta);
-        free(*hull);
-        free(*apex);
+        BTF_FREE_ALL(next, nexta, *hull, *apex);
         *hull = *apex = NULL;
         return BTF_E_NOMEM;
     }
@@ -343,8 +340,6 @@ btf_status btf_delaunay(const double *xy, int n, const char *name, int32_t **tri
     *n_tris = d.n_tri;
     d.tri = NULL;
 done:
-    free(d.tri);
-    free(d.edge);
-    free(d.stack);
+    BTF_FREE_ALL(d.tri, d.edge, d.stack);
     return st;
 }

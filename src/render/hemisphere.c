@@ -29,13 +29,7 @@ void btf_hemisphere_free(btf_hemisphere *h)
 {
     if (!h)
         return;
-    free(h->points);
-    free(h->triangles);
-    free(h->cell_start);
-    free(h->cell_tris);
-    free(h->hull);
-    free(h->hull_apex);
-    free(h);
+    BTF_FREE_ALL(h->points, h->triangles, h->cell_start, h->cell_tris, h->hull, h->hull_apex, h);
 }
 
 /* The projection of the set, in double (the lookup's, btf_hemi_project):

@@ -130,9 +130,7 @@ btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf
     if (count)
         *count = n;
 done:
-    free(pair_index);
-    free(w.rows_needed);
-    free(w.ctx);
+    BTF_FREE_ALL(pair_index, w.rows_needed, w.ctx);
     btf_hemisphere_free(views);
     btf_hemisphere_free(lts);
     return rc;

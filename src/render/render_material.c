@@ -70,11 +70,7 @@ void btf_render_material_free(btf_render_material *rm)
     if (rm->tex)
         for (int k = 0; k < rm->n_subspaces; k++)
             btf_image_free(&rm->tex[k]);
-    free(rm->tex);
-    free(rm->index);
-    free(rm->gain);
-    free(rm->horizon);
-    free(rm);
+    BTF_FREE_ALL(rm->tex, rm->index, rm->gain, rm->horizon, rm);
 }
 
 static btf_status build_tables(const btf_model *m, btf_render_material *rm, btf_error *err)

@@ -64,9 +64,7 @@ static btf_status trade_files(const btf_report_base *r, const char *dir, btf_err
         if (rc == BTF_OK)
             rc = btf_svg_scatter_write(path, &sc, err);
     }
-    free(x);
-    free(labels);
-    free(lp);
+    BTF_FREE_ALL(x, labels, lp);
     return rc;
 }
 

@@ -68,10 +68,7 @@ static btf_status one_image(const btf_dataset *ds, int view, int light, int qual
     *sq += s;
 done:
     btf_image_free(&img);
-    free(lv);
-    free(px);
-    free(enc);
-    free(dec.pixels);
+    BTF_FREE_ALL(lv, px, enc, dec.pixels);
     return rc;
 }
 

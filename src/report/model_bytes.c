@@ -104,9 +104,7 @@ btf_status btf_model_byte_breakdown(const btf_model *m, btf_model_bytes *out, bt
     out->payload = pp.n;
     out->deflated = comp != 0;
 done:
-    free(data);
-    free(pp.payload);
-    free(pp.part);
+    BTF_FREE_ALL(data, pp.payload, pp.part);
     if (rc) {
         btf_status keep = rc;
         memset(out, 0, sizeof *out);

@@ -241,11 +241,7 @@ static btf_status view_job(void *user, int view, int worker, btf_error *err)
     c->residual[view] = kept_tail;
 done:
     btf_image_free(&img);
-    free(x);
-    free(xi);
-    free(gram);
-    free(val);
-    free(vec);
+    BTF_FREE_ALL(x, xi, gram, val, vec);
     return rc;
 }
 
@@ -280,9 +276,7 @@ btf_status btf_pca_contrast(const btf_dataset *ds, const btf_pca_opts *opts,
     c.residual = btf_calloc((size_t)info->n_views, sizeof *c.residual, NULL);
     out->view_rms = btf_calloc((size_t)info->n_views, sizeof *out->view_rms, NULL);
     if (!c.components || !c.residual || !out->view_rms) {
-        free(c.components);
-        free(c.residual);
-        free(out->view_rms);
+        BTF_FREE_ALL(c.components, c.residual, out->view_rms);
         out->view_rms = NULL;
         return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", info->root);
     }

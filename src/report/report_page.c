@@ -152,9 +152,7 @@ btf_status btf_report_heatmap(const btf_report_base *r, const char *dir, const c
     }
     for (int i = 0; rows && i < nv + nl; i++)
         free(rows[i]);
-    free(rows);
-    free(v);
-    free(marked);
+    BTF_FREE_ALL(rows, v, marked);
     return rc;
 }
 

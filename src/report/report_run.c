@@ -227,9 +227,7 @@ btf_status btf_report_run(btf_report_base *r, const btf_report_family *f,
 
 void btf_report_base_free(btf_report_base *r)
 {
-    free(r->pairs);
-    free(r->pictured);
-    free(r->worst);
+    BTF_FREE_ALL(r->pairs, r->pictured, r->worst);
     r->pairs = NULL;
     r->pictured = NULL;
     r->worst = NULL;

@@ -210,6 +210,11 @@ btf_status rf_scene_trace(const btf_rf_model *m, const btf_scene *s, int *width,
 typedef void (*rf_lm_fn)(void *user, const double *p, double *cost, double *jtj, double *jtr);
 int rf_lm(rf_lm_fn fn, void *user, int np, double *p, const double *lo, const double *hi,
           int iterations, double *cost);
+/* Adds one residual r with gradient g (np entries) to the normal equations
+ * of a Gauss-Newton step: jtr += g r and the upper triangle of jtj += g g^T.
+ * Zero entries of g (parameters of lobes the sample does not see) are
+ * skipped. Both fits' cost functions end each sample with it. */
+void rf_lm_accumulate(const double *g, int np, double r, double *jtj, double *jtr);
 /* Solves the symmetric positive definite system a x = b (n <= RF_LM_MAX, a
  * full row-major, only the upper triangle read) by Cholesky (core/linalg.c);
  * -1 when not positive definite, or when the factor or x is not finite. */

@@ -389,10 +389,8 @@ btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_mod
     if (c.imgs)
         for (int l = 0; l < c.nl; l++)
             btf_image_free(&c.imgs[l]);
-    free(c.imgs);
-    free(c.lvec), free(c.pinv), free(c.vals), free(c.scratch);
-    free(c.row_err), free(c.row_lum), free(c.row_steps), free(c.row_runs);
-    free(c.lum), free(c.rgbsum), free(c.lall), free(c.vall);
+    BTF_FREE_ALL(c.imgs, c.lvec, c.pinv, c.vals, c.scratch, c.row_err, c.row_lum, c.row_steps,
+                 c.row_runs, c.lum, c.rgbsum, c.lall, c.vall);
     if (rc)
         btf_rf_model_free(out);
     return rc;

@@ -23,6 +23,17 @@
  * after the factorisation refuses exactly the matrices a check at each
  * pivot would: the factor's entries up to the first infinite pivot are the
  * same, and that pivot stays on l's diagonal. */
+void rf_lm_accumulate(const double *g, int np, double r, double *jtj, double *jtr)
+{
+    for (int a = 0; a < np; a++) {
+        if (g[a] == 0.0)
+            continue;
+        jtr[a] += g[a] * r;
+        for (int b = a; b < np; b++)
+            jtj[a * np + b] += g[a] * g[b];
+    }
+}
+
 int rf_cholesky_solve(const double *a, const double *b, int n, double *x)
 {
     double l[RF_LM_MAX * RF_LM_MAX];

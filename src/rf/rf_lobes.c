@@ -69,13 +69,7 @@ static void lobes_residuals(void *user, const double *p, double *cost, double *j
         sum += r * r;
         if (!jtj)
             continue;
-        for (int a = 0; a < np; a++) {
-            if (g[a] == 0.0)
-                continue;
-            jtr[a] += g[a] * r;
-            for (int b = a; b < np; b++)
-                jtj[a * np + b] += g[a] * g[b];
-        }
+        rf_lm_accumulate(g, np, r, jtj, jtr);
     }
     *cost = sum;
 }

@@ -45,10 +45,7 @@ void btf_rf_model_free(btf_rf_model *m)
         return;
     btf_dirset_free(&m->views);
     btf_dirset_free(&m->lights);
-    free(m->lo);
-    free(m->hi);
-    free(m->codes);
-    free(m->map);
+    BTF_FREE_ALL(m->lo, m->hi, m->codes, m->map);
     memset(m, 0, sizeof *m);
 }
 

@@ -317,9 +317,7 @@ static btf_status run(quilt *Q, btf_error *err)
             if (rc == BTF_OK)
                 place(Q, pick % Q->nu, pick / Q->nu, e, take, e + (size_t)B * B, path);
         }
-    free(e);
-    free(take);
-    free(path);
+    BTF_FREE_ALL(e, take, path);
     return rc;
 }
 

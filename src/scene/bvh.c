@@ -244,9 +244,7 @@ void scene_bvh_free(scene_bvh *b)
 {
     if (!b)
         return;
-    free(b->nodes);
-    free(b->tris);
-    free(b->tri_index);
+    BTF_FREE_ALL(b->nodes, b->tris, b->tri_index);
     memset(b, 0, sizeof *b);
 }
 

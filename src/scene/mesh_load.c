@@ -24,10 +24,7 @@ void scene_mesh_free(btf_mesh *m)
 {
     if (!m)
         return;
-    free(m->positions);
-    free(m->normals);
-    free(m->uvs);
-    free(m->indices);
+    BTF_FREE_ALL(m->positions, m->normals, m->uvs, m->indices);
     memset(m, 0, sizeof *m);
 }
 

@@ -111,11 +111,7 @@ void btf_gbuffer_free(btf_gbuffer *g)
 {
     if (!g)
         return;
-    free(g->object);
-    free(g->uv);
-    free(g->frame);
-    free(g->position);
-    free(g->view);
+    BTF_FREE_ALL(g->object, g->uv, g->frame, g->position, g->view);
     memset(g, 0, sizeof *g);
 }
 

@@ -258,11 +258,7 @@ btf_status btf_kmeans(const float *points, int n, int dim, int k, const btf_kmea
             memcpy(best.centres, w.centres, (size_t)kk * dim * sizeof(float));
         }
     }
-    free(w.labels);
-    free(w.count);
-    free(w.centres);
-    free(w.d2);
-    free(w.acc);
+    BTF_FREE_ALL(w.labels, w.count, w.centres, w.d2, w.acc);
     if (rc) {
         free(best.labels);
         free(best.centres);

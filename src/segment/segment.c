@@ -35,12 +35,7 @@ void btf_segmentation_free(btf_segmentation *s)
 {
     if (!s)
         return;
-    free(s->index);
-    free(s->rep_view);
-    free(s->rep_light);
-    free(s->members);
-    free(s->distortion_by_k);
-    free(s->means);
+    BTF_FREE_ALL(s->index, s->rep_view, s->rep_light, s->members, s->distortion_by_k, s->means);
     memset(s, 0, sizeof *s);
 }
 

@@ -78,12 +78,7 @@ btf_status synth_field_init(synth_field *f, const btf_car_band *band, int margin
 
 void synth_field_free(synth_field *f)
 {
-    free(f->ring);
-    free(f->noise);
-    free(f->noise_next);
-    free(f->acc);
-    free(f->acc_next);
-    free(f->period_noise);
+    BTF_FREE_ALL(f->ring, f->noise, f->noise_next, f->acc, f->acc_next, f->period_noise);
     btf_wave_free(f->wave);
     memset(f, 0, sizeof *f);
 }

@@ -54,23 +54,25 @@ static int grow(void **p, size_t *cap, size_t need, size_t elem)
     return 0;
 }
 
-/* Appends n ints (or floats) and returns their offset; -1: no memory. */
+/* Appends n elements of elem bytes to a growing array and returns their
+ * offset; -1: no memory. put_ints and put_floats keep the element types. */
+static long append(void **buf, size_t *cap, size_t *len, const void *v, size_t n, size_t elem)
+{
+    if (grow(buf, cap, *len + n, elem))
+        return -1;
+    memcpy((char *)*buf + *len * elem, v, n * elem);
+    *len += n;
+    return (long)(*len - n);
+}
+
 static long put_ints(params *pr, const int32_t *v, size_t n)
 {
-    if (grow((void **)&pr->ints, &pr->cap_ints, pr->n_ints + n, sizeof *pr->ints))
-        return -1;
-    memcpy(pr->ints + pr->n_ints, v, n * sizeof *v);
-    pr->n_ints += n;
-    return (long)(pr->n_ints - n);
+    return append((void **)&pr->ints, &pr->cap_ints, &pr->n_ints, v, n, sizeof *v);
 }
 
 static long put_floats(params *pr, const float *v, size_t n)
 {
-    if (grow((void **)&pr->floats, &pr->cap_floats, pr->n_floats + n, sizeof *pr->floats))
-        return -1;
-    memcpy(pr->floats + pr->n_floats, v, n * sizeof *v);
-    pr->n_floats += n;
-    return (long)(pr->n_floats - n);
+    return append((void **)&pr->floats, &pr->cap_floats, &pr->n_floats, v, n, sizeof *v);
 }
 
 /* One hemisphere table into the parameter buffers, its offsets at tab. */

@@ -61,6 +61,19 @@ static void orthonormalise(double *q, int n, int b)
 }
 
 /* out (n x b) = g (n x n) x q (n x b). */
+/* The block's Rayleigh quotient t = q^T z (b x b) with z = g q: its
+ * eigenvalues are the Ritz values of the subspace iteration. */
+static void project_block(const double *q, const double *z, int n, int b, double *t)
+{
+    for (int i = 0; i < b; i++)
+        for (int j = 0; j < b; j++) {
+            double d = 0;
+            for (int r = 0; r < n; r++)
+                d += q[(size_t)r * b + i] * z[(size_t)r * b + j];
+            t[(size_t)i * b + j] = d;
+        }
+}
+
 static void multiply(const double *g, const double *q, int n, int b, double *out)
 {
     for (int i = 0; i < n; i++) {
@@ -146,13 +159,7 @@ btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_
         for (int it = 0; it < 1000 && !converged; it++) {
             multiply(g, q, n, b, z);
             if (it % 5 == 4) { /* Ritz values of the block: stop when the top k settle */
-                for (int i = 0; i < b; i++)
-                    for (int j = 0; j < b; j++) {
-                        double d = 0;
-                        for (int r = 0; r < n; r++)
-                            d += q[(size_t)r * b + i] * z[(size_t)r * b + j];
-                        t[(size_t)i * b + j] = d;
-                    }
+                project_block(q, z, n, b, t);
                 jacobi(t, b, tval, tv);
                 double top = 0, change = 0;
                 for (int i = 0; i < b; i++)
@@ -179,13 +186,7 @@ btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_
         }
         /* Rayleigh-Ritz on the final block. */
         multiply(g, q, n, b, z);
-        for (int i = 0; i < b; i++)
-            for (int j = 0; j < b; j++) {
-                double d = 0;
-                for (int r = 0; r < n; r++)
-                    d += q[(size_t)r * b + i] * z[(size_t)r * b + j];
-                t[(size_t)i * b + j] = d;
-            }
+        project_block(q, z, n, b, t);
         for (int i = 0; i < b; i++) /* symmetrise rounding */
             for (int j = i + 1; j < b; j++)
                 t[(size_t)i * b + j] = t[(size_t)j * b + i] =

@@ -28,6 +28,7 @@
 btf_gpu_opts btf_gpu_defaults(void)
 {
     btf_gpu_opts o = {
+        .struct_size = sizeof o,
         .use_device = 0, /* the best device */
         .device = 0,
         .allow_cpu = 0,
@@ -39,7 +40,9 @@ btf_gpu_opts btf_gpu_defaults(void)
 btf_status btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err)
 {
     *out = NULL;
-    btf_gpu_opts d = btf_gpu_defaults(), o = opts ? *opts : d;
+    btf_gpu_opts d = btf_gpu_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_gpu_open", err))
+        return BTF_E_ARG;
     o.use_device = o.use_device ? o.use_device : d.use_device;
     o.device = o.device ? o.device : d.device;
     o.allow_cpu = o.allow_cpu ? o.allow_cpu : d.allow_cpu;

@@ -712,7 +712,9 @@ btf_status btf_gpu_synthesise_each(btf_gpu *g, const btf_model *m, const int *su
                                    const btf_synth_opts *opts, btf_image_fn fn, void *user,
                                    btf_error *err)
 {
-    btf_synth_opts o = btf_synth_resolve(opts);
+    btf_synth_opts o;
+    if (btf_synth_resolve(opts, &o, err))
+        return BTF_E_ARG;
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
     int *w = n > 0 ? btf_calloc((size_t)n * 2, sizeof(int), err) : NULL;
     int *h = w ? w + n : NULL; /* widths, heights */
@@ -834,7 +836,9 @@ btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *
                                      const btf_synth_opts *opts, btf_gpu_images *out,
                                      uint64_t *offsets, btf_error *err)
 {
-    btf_synth_opts o = btf_synth_resolve(opts);
+    btf_synth_opts o;
+    if (btf_synth_resolve(opts, &o, err))
+        return BTF_E_ARG;
     if (out)
         memset(out, 0, sizeof *out);
     if (!g || n < 1 || !offsets || !out)

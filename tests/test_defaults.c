@@ -10,6 +10,7 @@
 #include "segment/segment.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -139,6 +140,73 @@ static void kmeans_and_segmentation(void **state)
     free(p);
 }
 
+/* The leading struct_size of every options struct (docs/api.md, "Options
+ * structs"): the defaults set it; a caller's shorter struct (an older
+ * header) is read only as far as its size says, the rest taken as zero,
+ * that is as the defaults; a size larger than the library's, or too small
+ * to hold the member, is refused with the function's name. */
+static void struct_size_layouts(void **state)
+{
+    (void)state;
+#define SIZE_SET(T, D) assert_int_equal(D().struct_size, sizeof(T))
+    SIZE_SET(btf_feature_opts, btf_feature_defaults);
+    SIZE_SET(btf_kmeans_opts, btf_kmeans_defaults);
+    SIZE_SET(btf_segment_opts, btf_segment_defaults);
+    SIZE_SET(btf_integrate_opts, btf_integrate_defaults);
+    SIZE_SET(btf_photostereo_opts, btf_photostereo_defaults);
+    SIZE_SET(btf_car_fit_opts, btf_car_fit_defaults);
+    SIZE_SET(btf_fit_opts, btf_fit_defaults);
+    SIZE_SET(btf_analyse_opts, btf_analyse_defaults);
+    SIZE_SET(btf_rf_opts, btf_rf_defaults);
+    SIZE_SET(btf_rf_sample_opts, btf_rf_sample_defaults);
+    SIZE_SET(btf_dataset_opts, btf_dataset_defaults);
+    SIZE_SET(btf_ubo2014_write_opts, btf_ubo2014_write_defaults);
+    SIZE_SET(btf_generate_opts, btf_generate_defaults);
+    SIZE_SET(btf_gpu_opts, btf_gpu_defaults);
+    SIZE_SET(btf_read_opts, btf_read_defaults);
+    SIZE_SET(btf_exr_opts, btf_exr_defaults);
+    SIZE_SET(btf_render_opts, btf_render_defaults);
+    SIZE_SET(btf_texture_distance_opts, btf_texture_distance_defaults);
+    SIZE_SET(btf_pca_opts, btf_pca_defaults);
+    SIZE_SET(btf_quality_opts, btf_quality_defaults);
+    SIZE_SET(btf_sweep_opts, btf_sweep_defaults);
+    SIZE_SET(btf_report_opts, btf_report_defaults);
+    SIZE_SET(btf_synth_opts, btf_synth_defaults);
+#undef SIZE_SET
+    /* The nested structs of the defaults carry their own sizes. */
+    assert_int_equal(btf_analyse_defaults().segment.kmeans.struct_size, sizeof(btf_kmeans_opts));
+    assert_int_equal(btf_analyse_defaults().fit.car.struct_size, sizeof(btf_car_fit_opts));
+
+    btf_error e = {0};
+    int n = 48, dim = 5;
+    float *p = cluster_points(n, dim);
+    btf_kmeans_result r0, r1;
+    TU_OK(btf_kmeans(p, n, dim, 3, NULL, &r0, &e), &e);
+    /* An older caller's struct that ends before max_iter: the junk after it
+     * is not read. */
+    btf_kmeans_opts old;
+    memset(&old, 0xA5, sizeof old);
+    old.struct_size = offsetof(btf_kmeans_opts, max_iter);
+    old.restarts = 0;
+    TU_OK(btf_kmeans(p, n, dim, 3, &old, &r1, &e), &e);
+    same_kmeans(&r0, &r1, n, dim);
+    btf_kmeans_free(&r0);
+    btf_kmeans_free(&r1);
+
+    btf_kmeans_opts newer = btf_kmeans_defaults();
+    newer.struct_size = sizeof newer + 8;
+    assert_int_equal(btf_kmeans(p, n, dim, 3, &newer, &r1, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "btf_kmeans: options struct of"));
+    newer.struct_size = 3;
+    assert_int_equal(btf_kmeans(p, n, dim, 3, &newer, &r1, &e), BTF_E_ARG);
+    btf_segment_opts seg = btf_segment_defaults();
+    seg.struct_size = 1u << 20;
+    btf_segmentation s;
+    assert_int_equal(btf_segment_features(p, 6, 8, dim, &seg, &s, &e), BTF_E_ARG);
+    assert_non_null(strstr(e.msg, "btf_segment"));
+    free(p);
+}
+
 /* A small colour texture: a smoothed random field per channel. */
 static void texture(btf_image *img, int w, int h)
 {
@@ -203,6 +271,7 @@ int main(void)
         cmocka_unit_test(documented_values),
         cmocka_unit_test(kmeans_and_segmentation),
         cmocka_unit_test(car_and_subspace_fits),
+        cmocka_unit_test(struct_size_layouts),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -30,6 +30,7 @@ extern "C" {
  * member image closest to its centre (a real measured image). */
 
 typedef struct btf_feature_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int bins;                 /* per channel; 0: 32 */
     int threads;              /* 0: all CPUs */
     btf_progress_fn progress;
@@ -43,6 +44,7 @@ typedef struct btf_feature_opts {
 btf_feature_opts btf_feature_defaults(void);
 
 typedef struct btf_kmeans_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int restarts;             /* 0: 5; the best run by distortion is kept */
     int max_iter;             /* 0: 100 Lloyd iterations per run */
     uint64_t seed;            /* 0 is a valid seed */
@@ -51,6 +53,7 @@ typedef struct btf_kmeans_opts {
 btf_kmeans_opts btf_kmeans_defaults(void);
 
 typedef struct btf_segment_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int subspaces;            /* K; 0: auto */
     int max_subspaces;        /* cap for auto; 0: 20 (the paper's bound) */
     double auto_threshold;    /* auto: smallest K whose distortion is at most
@@ -120,6 +123,7 @@ typedef enum btf_integrate_method {
 } btf_integrate_method;
 
 typedef struct btf_integrate_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     btf_integrate_method method; /* default: BTF_INTEGRATE_POISSON */
     double max_slope;   /* default 10; |dz/dx| and |dz/dy| are clamped to it,
                            so normals near the horizon (n_z -> 0) stay finite */
@@ -134,6 +138,7 @@ btf_integrate_opts btf_integrate_defaults(void);
 /* Options of photometric stereo. Each field's default is given; a zero
  * field means that default, a negative one switches a rule off where said. */
 typedef struct btf_photostereo_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     double dark;          /* default 0.1; samples below dark x the pixel's
                              reference level (its brightest after the top 5 %)
                              are shadowed and excluded; < 0: no dark rule */
@@ -249,6 +254,7 @@ btf_status btf_ps_write(const btf_ps_result *r, const btf_image *mask, const cha
 #define BTF_CAR_MISSED_TEXT "the model misses"
 
 typedef struct btf_car_fit_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int n_fixed;                          /* 0: choose by the Bayesian rule */
     btf_offset fixed[BTF_CAR_MAX_NEIGHBOURS];
     int max_neighbours;                   /* auto: largest candidate; 0: 24 */
@@ -264,6 +270,7 @@ typedef struct btf_car_fit_opts {
 btf_car_fit_opts btf_car_fit_defaults(void);
 
 typedef struct btf_fit_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int levels;               /* pyramid levels 1..BTF_MAX_LEVELS; 0: auto (docs/model.md) */
     int max_auto_levels;      /* auto: at most this many; 0: 3 (the paper's bound) */
     const float *masking;     /* auto: NULL, or (the image's size) the factor the
@@ -290,6 +297,7 @@ typedef struct btf_analyse_report {
 } btf_analyse_report;
 
 typedef struct btf_analyse_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     btf_segment_opts segment;         /* stage 1 */
     btf_photostereo_opts photostereo; /* stage 2 (its own threads field: 0, all CPUs) */
     btf_fit_opts fit;                 /* stage 3; fit.car.warn also gets stage 2's
@@ -361,6 +369,7 @@ typedef struct btf_rf_fit_info {
 } btf_rf_fit_info;
 
 typedef struct btf_rf_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int fit;            /* btf_rf_fit_kind; 0: PTM */
     int lobes;          /* k for lobes and lafortune, 1..BTF_RF_MAX_LOBES; 0: 2 */
     int iterations;     /* Levenberg-Marquardt steps per texel at most; 0: 40 */
@@ -401,6 +410,7 @@ btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_mod
  * sample keeps its place: the surface's texels under it map to themselves
  * (the data's pixel correspondence holds there, and only there). */
 typedef struct btf_rf_sample_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int width, height;          /* the sample's texels, 1..the images' sides (required) */
     int placed;                 /* 1: the sample's window is at (x, y); 0: the window
                                    whose statistics (mean and spread of the

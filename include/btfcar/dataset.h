@@ -61,6 +61,7 @@ typedef struct btf_dataset_info {
 } btf_dataset_info;
 
 typedef struct btf_dataset_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int skip_verify;         /* 0: probe every image (size, structure); 1: only the first */
     btf_progress_fn progress;
     void *progress_user;
@@ -171,6 +172,7 @@ typedef enum btf_ubo2014_variant {
 } btf_ubo2014_variant;
 
 typedef struct btf_ubo2014_write_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int variant;          /* btf_ubo2014_variant; 0: DFMF */
     int components;       /* DFMF: per channel, FMF: in all, PVF: per view (at
                              most the matrix's rank); 0: 16 */

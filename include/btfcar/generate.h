@@ -52,6 +52,7 @@ btf_status btf_procedural_render(const btf_procedural *m, btf_dir view, btf_dir 
                                btf_image *out, btf_error *err);
 
 typedef struct btf_generate_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int size;               /* 0: 128 */
     uint64_t seed;          /* 0 is a valid seed */
     int jpeg_quality;       /* 0: 95 */

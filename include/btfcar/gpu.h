@@ -60,6 +60,7 @@ btf_status btf_gpu_list_devices(btf_gpu_device **list, int *count, btf_error *er
 
 /* Options of btf_gpu_open; zero-initialised means the defaults. */
 typedef struct btf_gpu_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int use_device;   /* 1: take `device` (an index of btf_gpu_list_devices);
                          0: the best device, discrete > integrated > virtual
                          GPU > CPU */

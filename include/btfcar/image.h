@@ -63,6 +63,7 @@ btf_status btf_image_probe(const char *path, btf_image_header *hdr, btf_error *e
 #define BTF_DEFAULT_MAX_PIXELS ((uint64_t)1 << 28)
 
 typedef struct btf_read_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int channels;       /* 0: 3 for colour files, 1 for grey; 1 or 3 forces it */
     int linear_8bit;    /* 0 (default): 8-bit files are sRGB and are linearised;
                            1: 8-bit values are taken as linear (v/255) */
@@ -139,6 +140,7 @@ typedef struct btf_exr_times {
 } btf_exr_times;
 
 typedef struct btf_exr_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int half;           /* 0 (default): 32-bit float; 1: half, clamped to +-65504 */
     int compression;    /* btf_exr_compression; 0: ZIP */
     int background;     /* 0 (default): the caller compresses and writes; 1: a

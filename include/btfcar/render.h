@@ -148,6 +148,7 @@ btf_status btf_scene_sphere(btf_dir light, double texture_scale, btf_scene *out,
  * which are sampled at parallax-shifted texture coordinates and blended with
  * the barycentric weights; the result is relit by the range map's normals. */
 typedef struct btf_render_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int width, height;   /* frame size, 1..BTF_RENDER_MAX_SIDE; 0: 512 */
     uint64_t seed;       /* synthesis seed of the subspace images */
     int threads;         /* 0: all CPUs */

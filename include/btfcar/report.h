@@ -34,6 +34,7 @@ extern "C" {
  * values above 1 scaled by one exposure the reference fixes, 1 / its
  * largest value, the same for both; negative values count as 0). */
 typedef struct btf_texture_distance_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int levels;                 /* structure: pyramid levels; 0: as many as
                                    the smallest view compared allows (bands of
                                    at least 8 pixels), at most 6 */
@@ -107,6 +108,7 @@ uint64_t btf_phase_randomise_bytes(int width, int height);
  * eigenvalues) is at most max_rms; stored: the mean image, c eigen-images and
  * n_lights x c weights, each value in `bits` bits (docs/report-compression.md). */
 typedef struct btf_pca_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     double max_rms;         /* 0: 2.0, in 8-bit sRGB levels */
     int bits;               /* bits per stored value, 1..32; 0: 16 */
     int max_components;     /* cap on c per view, 1..n_lights; 0: n_lights */
@@ -123,6 +125,7 @@ btf_pca_opts btf_pca_defaults(void);
  * the texture distances above (src/report/, docs/report.md). */
 
 typedef struct btf_quality_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int all;                  /* 1: every (view, light) pair of the dataset */
     int views, lights;        /* the spread measured when not all: this many views and
                                  lights, evenly strided through each set's order
@@ -196,6 +199,7 @@ typedef struct btf_sweep_point {
 #define BTF_SWEEP_MAX_VALUES 8
 #define BTF_SWEEP_MAX_SEEDS 16
 typedef struct btf_sweep_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int n_subspaces, subspaces[BTF_SWEEP_MAX_VALUES];  /* values of K (0: auto);
                                                           n 0: {0, 2, 4, 8} */
     int n_levels, levels[BTF_SWEEP_MAX_VALUES];        /* n 0: {0, 1, 2, 3} */
@@ -279,6 +283,7 @@ btf_status btf_library_write(const char *const *reports, int n, const char *dir,
  * pictures and SVG plots beside it, no scripts, nothing fetched), and
  * DIR/report.json with the same numbers (keys: docs/report.md). */
 typedef struct btf_report_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     const char *dataset_name;    /* shown; NULL: the dataset's root */
     const char *model_name;      /* shown; NULL: "model" */
     btf_quality_opts quality;    /* the pairs measured (all or the spread), seed, relief */

@@ -33,6 +33,7 @@ typedef int (*btf_rows_fn)(void *user, int y, int nrows, const float *rows, btf_
 
 /* Options of a synthesis; zero-initialised means the defaults. */
 typedef struct btf_synth_opts {
+    size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int width, height;   /* output size, each side 1..2^24; 0: the subspace's
                             analysed size (btf_subspace_model.width, height) */
     uint64_t seed;       /* noise seed; the same seed gives the same bytes */

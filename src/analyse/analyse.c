@@ -508,6 +508,7 @@ static void structure_reason(const btf_model *m, const btf_analyse_opts *o, doub
 btf_analyse_opts btf_analyse_defaults(void)
 {
     return (btf_analyse_opts){
+        .struct_size = sizeof(btf_analyse_opts),
         .segment = btf_segment_defaults(),
         .photostereo = btf_photostereo_defaults(),
         .fit = btf_fit_defaults(),
@@ -518,18 +519,22 @@ btf_analyse_opts btf_analyse_defaults(void)
 
 /* range_size zero (or negative) becomes its default; the stages' nested
  * options are resolved by the stages' own calls. */
-static btf_analyse_opts resolve_opts(const btf_analyse_opts *opts)
+static btf_status resolve_opts(const btf_analyse_opts *opts, btf_analyse_opts *o, btf_error *err)
 {
-    btf_analyse_opts d = btf_analyse_defaults(), o = opts ? *opts : d;
-    if (o.range_size <= 0)
-        o.range_size = 1 << 30; /* the image's own size: texel 1 */
-    return o;
+    btf_analyse_opts d = btf_analyse_defaults();
+    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_analyse", err))
+        return BTF_E_ARG;
+    if (o->range_size <= 0)
+        o->range_size = 1 << 30; /* the image's own size: texel 1 */
+    return BTF_OK;
 }
 
 btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
                        btf_error *err)
 {
-    btf_analyse_opts o = resolve_opts(opts);
+    btf_analyse_opts o;
+    if (resolve_opts(opts, &o, err))
+        return BTF_E_ARG;
     memset(out, 0, sizeof *out);
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     if (o.segment.features.progress == NULL) {
@@ -605,7 +610,9 @@ btf_status btf_analyse_range(const btf_dataset *ds, const btf_analyse_opts *opts
 {
     if (!ds || !out)
         return btf_fail(err, BTF_E_ARG, "analyse: no dataset or no output given");
-    btf_analyse_opts o = resolve_opts(opts);
+    btf_analyse_opts o;
+    if (resolve_opts(opts, &o, err))
+        return BTF_E_ARG;
     o.range_from = NULL;
     out->range = NULL;
     return stage_range(ds, &o, out, NULL, err);

@@ -15,7 +15,8 @@
 
 btf_fit_opts btf_fit_defaults(void)
 {
-    return (btf_fit_opts){.levels = 0, .car = btf_car_fit_defaults()};
+    return (btf_fit_opts){.struct_size = sizeof(btf_fit_opts),
+                          .levels = 0, .car = btf_car_fit_defaults()};
 }
 
 btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
@@ -23,8 +24,10 @@ btf_status btf_fit_subspace(const btf_image *img, const btf_fit_opts *opts,
 {
     /* levels 0 is auto, decided below from the image; btf_car_fit resolves
      * the CAR options' own defaults. */
-    btf_fit_opts o = opts ? *opts : btf_fit_defaults();
     memset(out, 0, sizeof *out);
+    btf_fit_opts d = btf_fit_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_fit_subspace", err))
+        return BTF_E_ARG;
     if (o.levels < 0 || o.levels > BTF_MAX_LEVELS)
         return btf_fail(err, BTF_E_ARG, "levels %d: expected 1..%d or auto", o.levels, BTF_MAX_LEVELS);
     if (o.max_auto_levels < 0 || o.max_auto_levels > BTF_MAX_LEVELS)

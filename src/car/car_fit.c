@@ -281,16 +281,19 @@ static int stabilise(btf_car_band *b, double *factor, char *why, size_t why_n)
 
 btf_car_fit_opts btf_car_fit_defaults(void)
 {
-    return (btf_car_fit_opts){.n_fixed = 0, .max_neighbours = BTF_CAR_MAX_NEIGHBOURS};
+    return (btf_car_fit_opts){.struct_size = sizeof(btf_car_fit_opts),
+                              .n_fixed = 0, .max_neighbours = BTF_CAR_MAX_NEIGHBOURS};
 }
 
 /* The options with every zero (or negative) count replaced by its default. */
-static btf_car_fit_opts resolve_opts(const btf_car_fit_opts *opts)
+static btf_status resolve_opts(const btf_car_fit_opts *opts, btf_car_fit_opts *o, btf_error *err)
 {
-    btf_car_fit_opts d = btf_car_fit_defaults(), o = opts ? *opts : d;
-    if (o.max_neighbours <= 0)
-        o.max_neighbours = d.max_neighbours;
-    return o;
+    btf_car_fit_opts d = btf_car_fit_defaults();
+    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_car_fit", err))
+        return BTF_E_ARG;
+    if (o->max_neighbours <= 0)
+        o->max_neighbours = d.max_neighbours;
+    return BTF_OK;
 }
 
 /* The fit of `band`, or with `sub` (not NULL) the complement fit: the
@@ -301,7 +304,9 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
                       const btf_car_fit_opts *opts, btf_car_band *out, btf_car_fit_info *info,
                       btf_error *err)
 {
-    btf_car_fit_opts o = resolve_opts(opts);
+    btf_car_fit_opts o;
+    if (resolve_opts(opts, &o, err))
+        return BTF_E_ARG;
     btf_car_fit_info inf = {.chosen = -1, .shrink = 1.0};
     memset(out, 0, sizeof *out);
     if (!band || w < 1 || h < 1)

@@ -39,6 +39,28 @@ void btf_free_list(void *const *ptrs, size_t n)
         free(ptrs[i]);
 }
 
+btf_status btf_opts_take(void *dst, size_t dst_size, const void *src, const void *defaults,
+                         const char *what, btf_error *err)
+{
+    if (!src) {
+        memcpy(dst, defaults, dst_size);
+        return BTF_OK;
+    }
+    size_t n;
+    memcpy(&n, src, sizeof n); /* struct_size, the first member of every options struct */
+    if (n == 0)
+        n = dst_size;
+    if (n < sizeof n || n > dst_size)
+        return btf_fail(err, BTF_E_ARG,
+                        "%s: options struct of %zu bytes, this library's has %zu (built against "
+                        "another btfcar header?)",
+                        what, n, dst_size);
+    memset(dst, 0, dst_size);
+    memcpy(dst, src, n);
+    memcpy(dst, &dst_size, sizeof dst_size);
+    return BTF_OK;
+}
+
 /* A "Key:   N kB" line of /proc/meminfo, in bytes; 0 when absent. */
 static uint64_t meminfo_bytes(const char *text, const char *key)
 {

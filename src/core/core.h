@@ -41,6 +41,18 @@ void btf_free_list(void *const *ptrs, size_t n);
 #define BTF_FREE_ALL(...)                                                                          \
     btf_free_list((void *const[]){__VA_ARGS__},                                                    \
                   sizeof((void *const[]){__VA_ARGS__}) / sizeof(void *))
+/* The caller's options struct as this library's (docs/api.md, "Options
+ * structs"): every public options struct begins with size_t struct_size,
+ * which btf_X_defaults() sets to the struct's size. NULL gives *defaults; a
+ * struct_size of 0 (a zeroed struct) is this header's layout; a smaller
+ * size (a caller built against an older header, before fields were added
+ * at the end) is copied as far as it goes and the rest reads as zero, which
+ * every option takes as its default. A size below the member itself or
+ * above this library's struct is refused (BTF_E_ARG, naming `what`): the
+ * caller was built against a newer header. dst's struct_size is set to
+ * dst_size. */
+btf_status btf_opts_take(void *dst, size_t dst_size, const void *src, const void *defaults,
+                         const char *what, btf_error *err);
 /* Bytes this process can still allocate, as far as the system says: the
  * kernel's MemAvailable plus free swap (the physical memory without /proc),
  * at most a cgroup's remaining limit and the address-space limit

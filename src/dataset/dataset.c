@@ -210,7 +210,8 @@ const btf_ubo2014_info *btf_dataset_ubo2014(const btf_dataset *ds)
 
 btf_dataset_opts btf_dataset_defaults(void)
 {
-    return (btf_dataset_opts){.skip_verify = 0, .progress = NULL, .progress_user = NULL,
+    return (btf_dataset_opts){.struct_size = sizeof(btf_dataset_opts),
+                              .skip_verify = 0, .progress = NULL, .progress_user = NULL,
                               .max_pixels = BTF_DEFAULT_MAX_PIXELS};
 }
 
@@ -218,7 +219,9 @@ btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_
                             btf_error *err)
 {
     *out = NULL;
-    btf_dataset_opts o = opts ? *opts : btf_dataset_defaults();
+    btf_dataset_opts d = btf_dataset_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_dataset_open", err))
+        return BTF_E_ARG;
     btf_dataset *ds = btf_calloc(1, sizeof *ds, err);
     if (!ds)
         return BTF_E_NOMEM;

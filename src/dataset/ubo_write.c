@@ -300,7 +300,8 @@ static btf_status write_fmf_images(const ubo_source *src, const btf_ubo2014_writ
 
 btf_ubo2014_write_opts btf_ubo2014_write_defaults(void)
 {
-    return (btf_ubo2014_write_opts){.variant = BTF_UBO2014_DFMF, .components = 16,
+    return (btf_ubo2014_write_opts){.struct_size = sizeof(btf_ubo2014_write_opts),
+                                    .variant = BTF_UBO2014_DFMF, .components = 16,
                                     .scalar_size = 2, .max_bytes = (uint64_t)1 << 31};
 }
 
@@ -341,7 +342,9 @@ btf_status btf_ubo2014_write(const char *path, const btf_dirset *views, const bt
                              const btf_ubo2014_write_opts *opts, btf_ubo2014_write_stats *stats,
                              btf_error *err)
 {
-    btf_ubo2014_write_opts d = btf_ubo2014_write_defaults(), o = opts ? *opts : d;
+    btf_ubo2014_write_opts d = btf_ubo2014_write_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_ubo2014_write", err))
+        return BTF_E_ARG;
     if (o.components == 0)
         o.components = d.components;
     if (o.scalar_size == 0)

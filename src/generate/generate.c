@@ -166,13 +166,16 @@ static int generate_into(const btf_procedural *m, const btf_dirset *dirs, const 
 
 btf_generate_opts btf_generate_defaults(void)
 {
-    return (btf_generate_opts){.size = 128, .seed = 0, .jpeg_quality = 95, .threads = 0};
+    return (btf_generate_opts){.struct_size = sizeof(btf_generate_opts),
+                               .size = 128, .seed = 0, .jpeg_quality = 95, .threads = 0};
 }
 
 btf_status btf_generate(const char *material, const char *outdir, const btf_generate_opts *opts,
                         btf_error *err)
 {
-    btf_generate_opts d = btf_generate_defaults(), o = opts ? *opts : d;
+    btf_generate_opts d = btf_generate_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_generate", err))
+        return BTF_E_ARG;
     if (o.jpeg_quality < 0 || o.jpeg_quality > 100)
         return btf_fail(err, BTF_E_ARG, "JPEG quality %d: expected 1..100", o.jpeg_quality);
     /* Zero means the default; seed 0 and threads 0 (all CPUs) are taken as

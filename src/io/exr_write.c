@@ -195,7 +195,7 @@ const char *btf_exr_compression_name(int compression)
 
 btf_exr_opts btf_exr_defaults(void)
 {
-    return (btf_exr_opts){0};
+    return (btf_exr_opts){.struct_size = sizeof(btf_exr_opts)};
 }
 
 /* Where a file channel's samples sit in an interleaved pixel. */
@@ -344,10 +344,12 @@ btf_status btf_exr_writer_open_opts(const char *path, int width, int height, int
                                     const btf_exr_opts *opts, const btf_exr_meta *meta,
                                     btf_exr_writer **out, btf_error *err)
 {
-    btf_exr_opts o = opts ? *opts : btf_exr_defaults();
     if (!out)
         return btf_fail(err, BTF_E_ARG, "btf_exr_writer_open: NULL output pointer");
     *out = NULL;
+    btf_exr_opts d = btf_exr_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_exr_writer_open", err))
+        return BTF_E_ARG;
     if (!path || !*path)
         return btf_fail(err, BTF_E_ARG, "btf_exr_writer_open: no path");
     if (width < 1 || height < 1 || width > BTF_EXR_MAX_SIDE || height > BTF_EXR_MAX_SIDE)

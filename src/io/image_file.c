@@ -21,7 +21,8 @@
 
 btf_read_opts btf_read_defaults(void)
 {
-    return (btf_read_opts){.channels = 0, .linear_8bit = 0, .srgb_16bit = 0,
+    return (btf_read_opts){.struct_size = sizeof(btf_read_opts),
+                           .channels = 0, .linear_8bit = 0, .srgb_16bit = 0,
                            .max_pixels = BTF_DEFAULT_MAX_PIXELS};
 }
 
@@ -306,8 +307,10 @@ static btf_status check_read_opts(const btf_read_opts *o, const char *name, btf_
 btf_status btf_image_decode(const void *data, size_t n, const char *name,
                             const btf_read_opts *opts, btf_image *out, btf_error *err)
 {
-    btf_read_opts o = opts ? *opts : btf_read_defaults();
     memset(out, 0, sizeof *out);
+    btf_read_opts d = btf_read_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_image_decode", err))
+        return BTF_E_ARG;
     btf_source src;
     btf_source_memory(&src, data, n, name);
     btf_status rc = check_read_opts(&o, src.name, err);
@@ -317,8 +320,10 @@ btf_status btf_image_decode(const void *data, size_t n, const char *name,
 btf_status btf_image_read(const char *path, const btf_read_opts *opts, btf_image *out,
                           btf_error *err)
 {
-    btf_read_opts o = opts ? *opts : btf_read_defaults();
     memset(out, 0, sizeof *out);
+    btf_read_opts d = btf_read_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_image_read", err))
+        return BTF_E_ARG;
     btf_status rc = check_read_opts(&o, path, err);
     if (rc)
         return rc;

@@ -138,8 +138,11 @@ btf_status btf_material_render_flat(const btf_material *m, btf_gpu *g, btf_dir v
     if (!m || !opts || !out)
         return btf_fail(err, BTF_E_ARG, "btf_material_render_flat: NULL argument");
     btf_render_info none;
+    btf_render_opts o, d = btf_render_defaults();
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_material_render_flat", err))
+        return BTF_E_ARG;
     btf_status rc = m->ops->renders(m->model, m->path, err);
-    return rc ? rc : m->ops->render_flat(m->model, g, view, light, opts, out,
+    return rc ? rc : m->ops->render_flat(m->model, g, view, light, &o, out,
                                          info ? info : &none, err);
 }
 
@@ -150,8 +153,11 @@ btf_status btf_material_render_scene(const btf_material *m, btf_gpu *g, const bt
     if (!m || !s || !opts || !out)
         return btf_fail(err, BTF_E_ARG, "btf_material_render_scene: NULL argument");
     btf_render_info none;
+    btf_render_opts o, d = btf_render_defaults();
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_material_render_scene", err))
+        return BTF_E_ARG;
     btf_status rc = m->ops->renders(m->model, m->path, err);
-    return rc ? rc : m->ops->render_scene(m->model, g, s, opts, out, info ? info : &none, err);
+    return rc ? rc : m->ops->render_scene(m->model, g, s, &o, out, info ? info : &none, err);
 }
 
 void btf_material_render_note(const btf_material *m, const btf_scene *s, btf_dir view,

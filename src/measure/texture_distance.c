@@ -27,7 +27,8 @@ enum { VIEW_REF, VIEW_IMG, VIEW_Q0, VIEWS = VIEW_Q0 + 4 };
 
 btf_texture_distance_opts btf_texture_distance_defaults(void)
 {
-    btf_texture_distance_opts o = {.levels = 0, .reference_name = NULL, .image_name = NULL};
+    btf_texture_distance_opts o = {.struct_size = sizeof o,
+                                   .levels = 0, .reference_name = NULL, .image_name = NULL};
     return o;
 }
 
@@ -139,7 +140,9 @@ btf_status btf_texture_distance(const btf_image *ref, const btf_image *img,
                                 const btf_texture_distance_opts *opts,
                                 btf_texture_distances *out, btf_error *err)
 {
-    btf_texture_distance_opts o = opts ? *opts : btf_texture_distance_defaults();
+    btf_texture_distance_opts d = btf_texture_distance_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_texture_distance", err))
+        return BTF_E_ARG;
     const char *rname = o.reference_name ? o.reference_name : "reference";
     const char *iname = o.image_name ? o.image_name : "image";
     if (!out)

@@ -379,6 +379,7 @@ static btf_status integrate_poisson(int w, int h, const double *p, const double 
 btf_integrate_opts btf_integrate_defaults(void)
 {
     btf_integrate_opts o = {
+        .struct_size = sizeof o,
         .method = BTF_INTEGRATE_POISSON,
         .max_slope = 10.0,
         .tolerance = 1e-7,
@@ -412,9 +413,9 @@ static btf_status check_inputs(const btf_image *normals, const btf_image *mask,
 btf_status btf_integrate(const btf_image *normals, const btf_image *mask,
                          const btf_integrate_opts *opts, btf_image *height, btf_error *err)
 {
-    btf_integrate_opts o = {0};
-    if (opts)
-        o = *opts;
+    btf_integrate_opts zero = {0}, o;
+    if (btf_opts_take(&o, sizeof o, opts, &zero, "btf_integrate", err))
+        return BTF_E_ARG;
     if (!height)
         return btf_fail(err, BTF_E_ARG, "integrate: no output image given");
     memset(height, 0, sizeof *height);

@@ -30,6 +30,7 @@
 btf_photostereo_opts btf_photostereo_defaults(void)
 {
     btf_photostereo_opts o = {
+        .struct_size = sizeof o,
         .dark = 0.1,
         .trim_low = 0.0,
         .trim_high = 0.1,
@@ -268,9 +269,9 @@ btf_status btf_photostereo(const btf_ps_input *in, const btf_photostereo_opts *o
     btf_status rc = btf_ps_result_start(out, err);
     if (rc)
         return rc;
-    btf_photostereo_opts o = {0};
-    if (opts)
-        o = *opts;
+    btf_photostereo_opts zero = {0}, o;
+    if (btf_opts_take(&o, sizeof o, opts, &zero, "btf_photostereo", err))
+        return BTF_E_ARG;
     if (!in || !in->images || !in->lights || in->count < 3)
         return btf_fail(err, BTF_E_ARG, "photostereo: %d images given; at least 3 lights are "
                         "needed", in && in->images && in->lights ? in->count : 0);
@@ -356,9 +357,9 @@ btf_status btf_photostereo_dataset_view(const btf_dataset *ds, const btf_dir *wa
         return rc;
     if (!ds)
         return btf_fail(err, BTF_E_ARG, "photostereo: no dataset given");
-    btf_photostereo_opts o = {0};
-    if (opts)
-        o = *opts;
+    btf_photostereo_opts zero = {0}, o;
+    if (btf_opts_take(&o, sizeof o, opts, &zero, "btf_photostereo", err))
+        return BTF_E_ARG;
     const btf_dataset_info *info = btf_dataset_get_info(ds);
     int view = 0, nl = info->n_lights;
     if ((rc = ps_usable_view(ds, want, &view, err)))

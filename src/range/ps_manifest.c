@@ -263,9 +263,9 @@ btf_status btf_photostereo_manifest_view(const char *path, const btf_dir *want,
         return rc;
     if (!path)
         return btf_fail(err, BTF_E_ARG, "photostereo: no manifest given");
-    btf_photostereo_opts o = {0};
-    if (opts)
-        o = *opts;
+    btf_photostereo_opts zero = {0}, o;
+    if (btf_opts_take(&o, sizeof o, opts, &zero, "btf_photostereo_manifest", err))
+        return BTF_E_ARG;
     btf_tsv t;
     if ((rc = btf_tsv_read(path, &t, err)))
         return rc;

@@ -21,6 +21,7 @@ btf_render_opts btf_render_defaults(void)
 {
     btf_render_opts o;
     memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
     o.width = o.height = 512;
     o.relief = 1.0;
     return o;
@@ -29,7 +30,8 @@ btf_render_opts btf_render_defaults(void)
 static btf_status resolve_opts(const btf_render_opts *in, btf_render_opts *o, btf_error *err)
 {
     btf_render_opts d = btf_render_defaults();
-    *o = in ? *in : d;
+    if (btf_opts_take(o, sizeof *o, in, &d, "btf_render", err))
+        return BTF_E_ARG;
     if (o->width == 0)
         o->width = d.width;
     if (o->height == 0)

@@ -34,20 +34,22 @@
 
 btf_pca_opts btf_pca_defaults(void)
 {
-    btf_pca_opts o = {0};
+    btf_pca_opts o = {.struct_size = sizeof o};
     o.max_rms = DEFAULT_MAX_RMS;
     o.bits = DEFAULT_BITS;
     return o;
 }
 
-static btf_pca_opts resolve(const btf_pca_opts *opts)
+static btf_status resolve(const btf_pca_opts *opts, btf_pca_opts *o, btf_error *err)
 {
-    btf_pca_opts o = opts ? *opts : btf_pca_defaults();
-    if (o.max_rms == 0)
-        o.max_rms = DEFAULT_MAX_RMS;
-    if (o.bits == 0)
-        o.bits = DEFAULT_BITS;
-    return o;
+    btf_pca_opts d = btf_pca_defaults();
+    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_pca_contrast", err))
+        return BTF_E_ARG;
+    if (o->max_rms == 0)
+        o->max_rms = DEFAULT_MAX_RMS;
+    if (o->bits == 0)
+        o->bits = DEFAULT_BITS;
+    return BTF_OK;
 }
 
 void btf_pca_result_free(btf_pca_result *r)
@@ -255,7 +257,9 @@ btf_status btf_pca_contrast(const btf_dataset *ds, const btf_pca_opts *opts,
         return btf_fail(err, BTF_E_ARG, "dataset: no dataset for the PCA contrast");
     double t0 = btf_now();
     const btf_dataset_info *info = btf_dataset_get_info(ds);
-    btf_pca_opts o = resolve(opts);
+    btf_pca_opts o;
+    if (resolve(opts, &o, err))
+        return BTF_E_ARG;
     if (!(o.max_rms > 0) || !isfinite(o.max_rms))
         return btf_fail(err, BTF_E_ARG, "%s: PCA error target %g (expected a finite value > 0, "
                         "in 8-bit levels)", info->root, o.max_rms);

@@ -21,6 +21,7 @@ btf_quality_opts btf_quality_defaults(void)
 {
     btf_quality_opts o;
     memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
     o.views = 9;
     o.lights = 9;
     o.relief = 1.0;
@@ -285,7 +286,9 @@ btf_status btf_quality_measure(const btf_dataset *ds, const btf_model *m,
     memset(out, 0, sizeof *out);
     if (!ds || !m)
         return btf_fail(err, BTF_E_ARG, "quality: no dataset or no model given");
-    btf_quality_opts o = opts ? *opts : btf_quality_defaults();
+    btf_quality_opts d = btf_quality_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_quality_measure", err))
+        return BTF_E_ARG;
     if (o.views <= 0)
         o.views = 9;
     if (o.lights <= 0)

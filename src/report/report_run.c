@@ -17,6 +17,7 @@ btf_report_opts btf_report_defaults(void)
 {
     btf_report_opts o;
     memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
     o.quality = btf_quality_defaults();
     o.sphere_light = (btf_dir){45.0, 135.0};
     o.sphere_light_set = 1;
@@ -31,7 +32,8 @@ btf_report_opts btf_report_defaults(void)
 btf_status btf_report_resolve(const btf_report_opts *in, btf_report_opts *o, btf_error *err)
 {
     btf_report_opts d = btf_report_defaults();
-    *o = in ? *in : d;
+    if (btf_opts_take(o, sizeof *o, in, &d, "btf_report_write", err))
+        return BTF_E_ARG;
     if (!o->sphere_light_set && o->sphere_light.theta == 0.0 && o->sphere_light.phi == 0.0)
         o->sphere_light = d.sphere_light;
     if (o->sphere_size == 0)

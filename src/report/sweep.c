@@ -32,6 +32,7 @@ btf_sweep_opts btf_sweep_defaults(void)
 {
     btf_sweep_opts o;
     memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
     static const int k[] = {0, 2, 4, 8}, l[] = {0, 1, 2, 3}, n[] = {0, 4, 8, 12};
     o.n_subspaces = o.n_levels = o.n_neighbours = 4;
     memcpy(o.subspaces, k, sizeof k);
@@ -48,7 +49,8 @@ btf_sweep_opts btf_sweep_defaults(void)
 static btf_status resolve(const btf_sweep_opts *in, btf_sweep_opts *o, btf_error *err)
 {
     btf_sweep_opts d = btf_sweep_defaults();
-    *o = in ? *in : d;
+    if (btf_opts_take(o, sizeof *o, in, &d, "btf_sweep_run", err))
+        return BTF_E_ARG;
     if (o->n_subspaces == 0) {
         o->n_subspaces = d.n_subspaces;
         memcpy(o->subspaces, d.subspaces, sizeof d.subspaces);

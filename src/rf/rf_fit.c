@@ -303,7 +303,9 @@ btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_mod
         return btf_fail(err, BTF_E_ARG, "btf_rf_fit: no dataset");
     if (btf_rf_refuse_sparse(ds, err))
         return BTF_E_DATA;
-    btf_rf_opts d = btf_rf_defaults(), o = opts ? *opts : d;
+    btf_rf_opts d = btf_rf_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_rf_fit", err))
+        return BTF_E_ARG;
     if (o.lobes == 0)
         o.lobes = d.lobes;
     if (o.iterations == 0)

@@ -31,6 +31,7 @@ btf_rf_opts btf_rf_defaults(void)
 {
     btf_rf_opts o;
     memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
     o.fit = BTF_RF_PTM;
     o.lobes = 2;
     o.iterations = 40;
@@ -53,6 +54,7 @@ btf_rf_sample_opts btf_rf_sample_defaults(void)
 {
     btf_rf_sample_opts o;
     memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
     return o;
 }
 

@@ -27,7 +27,9 @@
 static btf_status resolve(const btf_rf_sample_opts *so, const btf_dataset_info *in,
                           btf_rf_sample_opts *r, btf_error *err)
 {
-    *r = *so;
+    btf_rf_sample_opts d = btf_rf_sample_defaults();
+    if (btf_opts_take(r, sizeof *r, so, &d, "btf_rf_fit_sampled", err))
+        return BTF_E_ARG;
     if (so->width < 1 || so->height < 1 || so->width > in->width || so->height > in->height)
         return btf_fail(err, BTF_E_ARG, "sample of %dx%d texels (expected 1x1 up to the "
                         "dataset's %dx%d)", so->width, so->height, in->width, in->height);
@@ -107,7 +109,9 @@ btf_status btf_rf_fit_sampled(const btf_dataset *ds, const btf_rf_opts *opts,
     if (btf_rf_refuse_sparse(ds, err))
         return BTF_E_DATA;
     double t0 = btf_now();
-    btf_rf_opts o = opts ? *opts : btf_rf_defaults();
+    btf_rf_opts d = btf_rf_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_rf_fit_sampled", err))
+        return BTF_E_ARG;
     if (o.threads < 0)
         return btf_fail(err, BTF_E_ARG, "threads %d (expected >= 0)", o.threads);
     btf_rf_sample_opts r;

@@ -203,13 +203,15 @@ static btf_status feature_job(void *user, int image, int worker, btf_error *err)
 
 btf_feature_opts btf_feature_defaults(void)
 {
-    return (btf_feature_opts){.bins = 32, .threads = 0};
+    return (btf_feature_opts){.struct_size = sizeof(btf_feature_opts), .bins = 32, .threads = 0};
 }
 
 btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
                                 float **features, int *dim, btf_error *err)
 {
-    btf_feature_opts o = opts ? *opts : btf_feature_defaults();
+    btf_feature_opts d = btf_feature_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_dataset_features", err))
+        return BTF_E_ARG;
     int bins = o.bins ? o.bins : btf_feature_defaults().bins;
     if (bins < 2 || bins > 4096)
         return btf_fail(err, BTF_E_ARG, "histogram bins %d: expected 2..4096", bins);

@@ -205,26 +205,31 @@ void btf_kmeans_free(btf_kmeans_result *r)
 
 btf_kmeans_opts btf_kmeans_defaults(void)
 {
-    return (btf_kmeans_opts){.restarts = 5, .max_iter = 100, .seed = 0};
+    return (btf_kmeans_opts){.struct_size = sizeof(btf_kmeans_opts),
+                             .restarts = 5, .max_iter = 100, .seed = 0};
 }
 
 /* The options with every zero (or negative) count replaced by its default;
  * the seed is taken as it is (0 is a seed like any other). */
-static btf_kmeans_opts resolve_opts(const btf_kmeans_opts *opts)
+static btf_status resolve_opts(const btf_kmeans_opts *opts, btf_kmeans_opts *o, btf_error *err)
 {
-    btf_kmeans_opts d = btf_kmeans_defaults(), o = opts ? *opts : d;
-    if (o.restarts <= 0)
-        o.restarts = d.restarts;
-    if (o.max_iter <= 0)
-        o.max_iter = d.max_iter;
-    return o;
+    btf_kmeans_opts d = btf_kmeans_defaults();
+    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_kmeans", err))
+        return BTF_E_ARG;
+    if (o->restarts <= 0)
+        o->restarts = d.restarts;
+    if (o->max_iter <= 0)
+        o->max_iter = d.max_iter;
+    return BTF_OK;
 }
 
 btf_status btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
                       btf_kmeans_result *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
-    btf_kmeans_opts o = resolve_opts(opts);
+    btf_kmeans_opts o;
+    if (resolve_opts(opts, &o, err))
+        return BTF_E_ARG;
     if (n < 1 || dim < 1 || k < 1)
         return btf_fail(err, BTF_E_ARG, "k-means on %d points of dimension %d with k = %d", n, dim, k);
     for (size_t i = 0; i < (size_t)n * dim; i++)

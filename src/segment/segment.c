@@ -185,7 +185,7 @@ static btf_status choose_k(const float *f, int n, int dim, const btf_segment_opt
 
 btf_segment_opts btf_segment_defaults(void)
 {
-    return (btf_segment_opts){.subspaces = 0,
+    return (btf_segment_opts){.struct_size = sizeof(btf_segment_opts), .subspaces = 0,
                               .max_subspaces = 20,
                               .auto_threshold = 0.10,
                               .split_gain = 0.12,
@@ -196,16 +196,18 @@ btf_segment_opts btf_segment_defaults(void)
 /* The options with zero (or negative) cap and threshold replaced by their
  * defaults; subspaces 0 stays (it means auto), and the nested features and
  * k-means options are resolved by their own calls. */
-static btf_segment_opts resolve_opts(const btf_segment_opts *opts)
+static btf_status resolve_opts(const btf_segment_opts *opts, btf_segment_opts *o, btf_error *err)
 {
-    btf_segment_opts d = btf_segment_defaults(), o = opts ? *opts : d;
-    if (o.max_subspaces <= 0)
-        o.max_subspaces = d.max_subspaces;
-    if (!(o.auto_threshold > 0.0))
-        o.auto_threshold = d.auto_threshold;
-    if (o.split_gain == 0.0 || isnan(o.split_gain))
-        o.split_gain = d.split_gain;
-    return o;
+    btf_segment_opts d = btf_segment_defaults();
+    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_segment", err))
+        return BTF_E_ARG;
+    if (o->max_subspaces <= 0)
+        o->max_subspaces = d.max_subspaces;
+    if (!(o->auto_threshold > 0.0))
+        o->auto_threshold = d.auto_threshold;
+    if (o->split_gain == 0.0 || isnan(o->split_gain))
+        o->split_gain = d.split_gain;
+    return BTF_OK;
 }
 
 btf_status btf_segment_features(const float *features, int n_views, int n_lights, int dim,
@@ -213,7 +215,9 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
                                 btf_error *err)
 {
     memset(out, 0, sizeof *out);
-    btf_segment_opts o = resolve_opts(opts);
+    btf_segment_opts o;
+    if (resolve_opts(opts, &o, err))
+        return BTF_E_ARG;
     if (n_views < 1 || n_lights < 1 || dim < 1)
         return btf_fail(err, BTF_E_ARG, "segmentation of %d x %d images", n_views, n_lights);
     int n_pairs = n_views * n_lights;
@@ -301,7 +305,9 @@ btf_status btf_segment(const btf_dataset *ds, const btf_segment_opts *opts,
                        btf_segmentation *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
-    btf_segment_opts o = opts ? *opts : btf_segment_defaults();
+    btf_segment_opts d = btf_segment_defaults(), o;
+    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_segment", err))
+        return BTF_E_ARG;
     float *f;
     int dim;
     const btf_dataset_info *in = btf_dataset_get_info(ds);

@@ -42,9 +42,10 @@
 
 /* ------------------------------------------------------------ synthesise.c */
 
-/* opts (NULL: none) with every zero field replaced by its default
- * (btf_synth_defaults); shared with the GPU host code. */
-btf_synth_opts btf_synth_resolve(const btf_synth_opts *opts);
+/* *o = opts (NULL: none; btf_opts_take) with every zero field replaced by
+ * its default (btf_synth_defaults); shared with the GPU host code.
+ * BTF_E_ARG: an options struct of another header's size. */
+btf_status btf_synth_resolve(const btf_synth_opts *opts, btf_synth_opts *o, btf_error *err);
 
 /* The CPU switches of btf_synth_opts, resolved: which generators run. */
 typedef struct synth_paths {

@@ -26,6 +26,7 @@
 btf_synth_opts btf_synth_defaults(void)
 {
     btf_synth_opts o = {
+        .struct_size = sizeof o,
         .width = 0, /* the subspace's analysed size */
         .height = 0,
         .seed = 0,
@@ -37,19 +38,18 @@ btf_synth_opts btf_synth_defaults(void)
     return o;
 }
 
-btf_synth_opts btf_synth_resolve(const btf_synth_opts *opts)
+btf_status btf_synth_resolve(const btf_synth_opts *opts, btf_synth_opts *o, btf_error *err)
 {
     btf_synth_opts d = btf_synth_defaults();
-    if (!opts)
-        return d;
-    btf_synth_opts o = *opts;
-    o.width = o.width ? o.width : d.width;
-    o.height = o.height ? o.height : d.height;
-    o.seed = o.seed ? o.seed : d.seed;
-    o.portable_noise = o.portable_noise ? o.portable_noise : d.portable_noise;
-    o.row_by_row = o.row_by_row ? o.row_by_row : d.row_by_row;
-    o.tileable = o.tileable ? o.tileable : d.tileable;
-    return o;
+    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_synthesise", err))
+        return BTF_E_ARG;
+    o->width = o->width ? o->width : d.width;
+    o->height = o->height ? o->height : d.height;
+    o->seed = o->seed ? o->seed : d.seed;
+    o->portable_noise = o->portable_noise ? o->portable_noise : d.portable_noise;
+    o->row_by_row = o->row_by_row ? o->row_by_row : d.row_by_row;
+    o->tileable = o->tileable ? o->tileable : d.tileable;
+    return BTF_OK;
 }
 
 static synth_paths paths_of(const btf_synth_opts *o)
@@ -261,7 +261,9 @@ static btf_status synth_rows(const btf_model *m, int subspace,
                              btf_rows_fn fn, void *user, btf_background *bg,
                              const btf_image *albedo, btf_error *err)
 {
-    btf_synth_opts o = btf_synth_resolve(opts);
+    btf_synth_opts o;
+    if (btf_synth_resolve(opts, &o, err))
+        return BTF_E_ARG;
     int width, height;
     btf_status rc = check_subspace(m, subspace, err);
     if (rc == BTF_OK)
@@ -430,7 +432,9 @@ static int match_keeps_whole(const btf_synth_opts *o, int width, int height)
 
 int btf_synth_holds_whole(const btf_model *m, int subspace, const btf_synth_opts *opts)
 {
-    btf_synth_opts o = btf_synth_resolve(opts);
+    btf_synth_opts o;
+    if (btf_synth_resolve(opts, &o, NULL)) /* the synthesis itself reports it */
+        return 0;
     btf_error quiet;
     int w, h, match = 0;
     return check_subspace(m, subspace, &quiet) == BTF_OK &&
@@ -488,7 +492,9 @@ static btf_status raw_image(const btf_model *m, int subspace, const btf_synth_op
                             btf_image *out, int *match, btf_background *bg,
                             const btf_image *given, btf_image *cache, btf_error *err)
 {
-    btf_synth_opts o = btf_synth_resolve(opts);
+    btf_synth_opts o;
+    if (btf_synth_resolve(opts, &o, err))
+        return BTF_E_ARG;
     int w, h;
     btf_status rc = check_subspace(m, subspace, err);
     if (rc == BTF_OK)
@@ -656,7 +662,9 @@ btf_status btf_car_synthesise_field(const btf_car_band *band, int margin, uint32
                                     const btf_synth_opts *opts, btf_rows_fn fn, void *user,
                                     btf_error *err)
 {
-    btf_synth_opts o = btf_synth_resolve(opts);
+    btf_synth_opts o;
+    if (btf_synth_resolve(opts, &o, err))
+        return BTF_E_ARG;
     int width = o.width, height = o.height;
     btf_status rc = btf_synth_check_size(width, height, err);
     if (rc == 0)

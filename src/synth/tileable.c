@@ -214,7 +214,9 @@ btf_status btf_synthesise_torus_dft(const btf_model *m, int subspace, const btf_
                                     btf_image *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
-    btf_synth_opts o = btf_synth_resolve(opts);
+    btf_synth_opts o;
+    if (btf_synth_resolve(opts, &o, err))
+        return BTF_E_ARG;
     if (!m || subspace < 0 || subspace >= m->n_subspaces)
         return btf_fail(err, BTF_E_ARG, "subspace %d: the model has %d", subspace,
                         m ? m->n_subspaces : 0);

@@ -58,12 +58,16 @@ static int write_text(const char *path, FILE *mem, char **text, size_t *len, btf
     return rc;
 }
 
-/* A text file built in memory, then written by write_text. */
-static FILE *text_begin(char **text, size_t *len, const char *path, btf_error *err)
+/* A table built in memory, its header line first, then written by
+ * write_text. */
+static FILE *text_begin(char **text, size_t *len, const char *path, const char *header,
+                        btf_error *err)
 {
     FILE *f = open_memstream(text, len);
     if (!f)
         cli_set_error(err, BTF_E_NOMEM, "%s: out of memory formatting it", path);
+    else
+        fputs(header, f);
     return f;
 }
 
@@ -72,10 +76,10 @@ static int write_index_tsv(const btf_segmentation *s, const btf_dataset_info *in
 {
     char *text = NULL;
     size_t len = 0;
-    FILE *f = text_begin(&text, &len, path, err);
+    FILE *f = text_begin(&text, &len, path,
+                         "view\tlight\ttheta_v\tphi_v\ttheta_l\tphi_l\tsubspace\n", err);
     if (!f)
         return BTF_E_NOMEM;
-    fprintf(f, "view\tlight\ttheta_v\tphi_v\ttheta_l\tphi_l\tsubspace\n");
     for (int v = 0; v < s->n_views; v++)
         for (int l = 0; l < s->n_lights; l++)
             if (s->index[v * s->n_lights + l] != BTF_PAIR_NONE) /* a sparse set's pairs only */
@@ -90,10 +94,11 @@ static int write_subspaces_tsv(const btf_segmentation *s, const btf_dataset_info
 {
     char *text = NULL;
     size_t len = 0;
-    FILE *f = text_begin(&text, &len, path, err);
+    FILE *f = text_begin(&text, &len, path,
+                         "subspace\tmembers\tview\tlight\ttheta_v\tphi_v\ttheta_l\tphi_l\timage\n",
+                         err);
     if (!f)
         return BTF_E_NOMEM;
-    fprintf(f, "subspace\tmembers\tview\tlight\ttheta_v\tphi_v\ttheta_l\tphi_l\timage\n");
     for (int c = 0; c < s->k; c++) {
         int v = s->rep_view[c], l = s->rep_light[c];
         fprintf(f, "%d\t%d\t%d\t%d\t%g\t%g\t%g\t%g\tsubspace_%02d.exr\n", c, s->members[c], v,

@@ -106,6 +106,9 @@ void ubo_close(ubo_open_file *o);
  * descending into val[k], eigenvectors as the columns of vec (n x k,
  * row-major). Deterministic. BTF_E_NUMERIC if it does not converge. */
 btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_error *err);
+/* How many of the k eigenpairs (val descending) are worth keeping: those
+ * with sqrt(lambda) above 1e-7 of the first's; at least 1. */
+int ubo_keep_components(const double *val, int k);
 
 /* ---- writing (ubo_out.c) ---- */
 

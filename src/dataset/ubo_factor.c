@@ -78,16 +78,6 @@ static const float *held_row(const fact *f, const float *a, int m, uint64_t r)
     return a + r * f->px * 3 + (uint64_t)m;
 }
 
-/* The number of components worth keeping: sqrt(lambda) above 1e-7 of the first. */
-static int keep(const double *val, int k)
-{
-    int kc = 0;
-    double top = val[0] > 0 ? sqrt(val[0]) : 0;
-    while (kc < k && val[kc] > 0 && sqrt(val[kc]) > 1e-7 * top)
-        kc++;
-    return kc ? kc : 1;
-}
-
 static btf_status finish_channel(chan *ch, int s, uint64_t px, btf_error *err)
 {
     int kc = ch->kc;
@@ -229,7 +219,7 @@ static btf_status factor_by_pixels(const fact *f, chan ch[3], double total[3], b
         rc = ubo_top_eigen(g, (int)px, f->k, val, vec, err);
         if (rc)
             break;
-        ch[m].kc = keep(val, f->k);
+        ch[m].kc = ubo_keep_components(val, f->k);
         ch[m].sxv = btf_alloc(px * (uint64_t)ch[m].kc, sizeof(float), err);
         if (!ch[m].sxv) {
             rc = BTF_E_NOMEM;
@@ -299,7 +289,7 @@ static btf_status factor_by_rows(const fact *f, chan ch[3], double total[3], flo
         rc = ubo_top_eigen(g, (int)R, f->k, val, vec, err);
         if (rc)
             break;
-        int kc = ch[m].kc = keep(val, f->k);
+        int kc = ch[m].kc = ubo_keep_components(val, f->k);
         ch[m].sxv = btf_alloc(px * (uint64_t)kc, sizeof(float), err);
         if (!ch[m].sxv) {
             rc = BTF_E_NOMEM;

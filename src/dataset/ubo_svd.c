@@ -209,3 +209,11 @@ btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_
     return rc;
 }
 
+int ubo_keep_components(const double *val, int k)
+{
+    int kc = 0;
+    double top = val[0] > 0 ? sqrt(val[0]) : 0;
+    while (kc < k && val[kc] > 0 && sqrt(val[kc]) > 1e-7 * top)
+        kc++;
+    return kc ? kc : 1;
+}

@@ -174,16 +174,6 @@ static void gram(const float *x, uint64_t px, uint64_t dim, double *g)
         }
 }
 
-/* The number of components worth keeping: sqrt(lambda) above 1e-7 of the first. */
-static uint32_t keep(const double *val, uint32_t k)
-{
-    uint32_t kc = 0;
-    double top = val[0] > 0 ? sqrt(val[0]) : 0;
-    while (kc < k && val[kc] > 0 && sqrt(val[kc]) > 1e-7 * top)
-        kc++;
-    return kc ? kc : 1;
-}
-
 /* C (dim x kc, unit columns): the eigenvectors themselves (covariance
  * side) or X' e_j / sqrt(lambda_j) (pixel side); rounded. */
 static void components(const float *x, uint64_t px, uint64_t dim, const double *val,
@@ -308,7 +298,7 @@ static btf_status view_slot(const ubo_source *src, int v, uint32_t k, int s, pvf
     rc = ubo_top_eigen(w->g, (int)n, (int)kn, w->val, w->vec, err);
     if (rc)
         return rc;
-    uint32_t kc = keep(w->val, kn);
+    uint32_t kc = (uint32_t)ubo_keep_components(w->val, (int)kn);
     float *c = btf_alloc(dim * kc, sizeof *c, err), *wt = btf_alloc(px * kc, sizeof *wt, err);
     float *ev = btf_alloc(kc, sizeof *ev, err);
     out->c = c, out->w = wt, out->ev = ev;

@@ -2,7 +2,7 @@
  * fuzzutil.h — what the libFuzzer targets share: for the readers that work
  * on paths (a dataset manifest names files beside it), the input is written
  * to a per-process temporary file first; the parsers take it from memory.
- * Header-only, because `make fuzz` builds every tests/fuzz_*.c on its own.
+ * Header-only, because `make fuzz` builds every tests/fuzz/fuzz_*.c on its own.
  */
 #ifndef BTF_FUZZUTIL_H
 #define BTF_FUZZUTIL_H

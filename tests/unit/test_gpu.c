@@ -358,7 +358,7 @@ static void cli_backends_agree(void **state)
     btf_model_free(&m);
     char *err = NULL;
     /* The command with validation on (not under ASan: the layer's own known
-     * leak, tests/lsan.supp, cannot be matched once the loader unloads it). */
+     * leak, tests/unit/lsan.supp, cannot be matched once the loader unloads it). */
     const char *validate = getenv("BTF_ASAN") ? "" : "BTF_VK_VALIDATION=1";
     int rc = tu_run(tu_fmt("%s %s synthesise -q %s/m.btfcar --size 50x20 --backend gpu -o %s/g",
                            validate, tu_cli(), dir, dir), &err);

@@ -2,7 +2,7 @@
  * fuzz_container.h — the model file's outer container (docs/model-format.md)
  * around a fuzzed payload, with a correct CRC-32, so that the model fuzz
  * targets reach the payload's parser instead of stopping at the checksum.
- * Header-only: `make fuzz` builds every tests/fuzz_*.c on its own.
+ * Header-only: `make fuzz` builds every tests/fuzz/fuzz_*.c on its own.
  */
 #ifndef BTF_FUZZ_CONTAINER_H
 #define BTF_FUZZ_CONTAINER_H

@@ -173,7 +173,7 @@ int main(int argc, char **argv)
     if (argc > 2 && !strcmp(argv[1], "--sheet"))
         sheet = argv[2], first = 3;
     if (first >= argc) {
-        printf("bench_fidelity: [--sheet PATH] IMAGE... (tests/bench.sh runs it on the "
+        printf("bench_fidelity: [--sheet PATH] IMAGE... (tests/bench/bench.sh runs it on the "
                "generated materials and tools/fetch-textures.sh's photographs)\n");
         return 0;
     }

@@ -1,7 +1,7 @@
 /*
  * testutil.h — shared helpers for the cmocka test programs.
- * Each tests/test_*.c is its own program, linked with testutil.o and
- * libbtfcar.a; tests/run.sh runs them all and prints the total.
+ * Each tests/unit/test_*.c is its own program, linked with testutil.o and
+ * libbtfcar.a; tests/unit/run.sh runs them all and prints the total.
  */
 #ifndef BTF_TESTUTIL_H
 #define BTF_TESTUTIL_H
@@ -59,7 +59,7 @@ void tu_exr_write_raw(const char *path, const tu_exr_spec *s, tu_exr_value_fn va
 
 /* Under ASan, keeps the Vulkan validation layer loaded after the loader lets
  * it go, so that LeakSanitizer can name its frames and the suppression of its
- * known leak (tests/lsan.supp) matches. A no-op otherwise. */
+ * known leak (tests/unit/lsan.supp) matches. A no-op otherwise. */
 void tu_vk_keep_layer_loaded(void);
 /* The GPU tests' device: lavapipe unless VK_DRIVER_FILES names another
  * driver, CPU devices allowed, the Khronos validation layer on. 0, or -1

@@ -21,14 +21,14 @@
  *    section parser and the validator instead of all dying at the CRC.
  *
  * Build from the repository root (`make fuzz-build` does this for every
- * tests/fuzz_*.c, library sources instrumented too):
+ * tests/fuzz/fuzz_*.c, library sources instrumented too):
  *
  *   mkdir -p build-fuzz
  *   clang++ -std=c++17 -g -O1 -fsanitize=fuzzer-no-link,address,undefined \
  *       -Iinclude -Isrc -I/usr/include/opencv4 -c src/io/cv_bridge.cpp -o build-fuzz/cv_bridge.o
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -ffp-contract=off \
  *       -Iinclude -Isrc -Igpu -Ibuild/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
- *       -c tests/fuzz_model.c -o build-fuzz/fuzz_model.o
+ *       -c tests/fuzz/fuzz_model.c -o build-fuzz/fuzz_model.o
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer-no-link,address,undefined -ffp-contract=off \
  *       -Iinclude -Isrc -Igpu -Ibuild/gen -I/usr/include/OpenEXR -D_DEFAULT_SOURCE \
  *       -c src/model/model_file.c ...   (each library source, one object each)
@@ -38,17 +38,17 @@
  *       -lvulkan -lz -lm -lpthread
  *
  * Run with the seed corpus as a second, read-only corpus folder (as
- * tests/fuzz.sh does; new inputs go to the first):
+ * tests/fuzz/fuzz.sh does; new inputs go to the first):
  *
  *   ./build-fuzz/fuzz_model -max_total_time=60 build-fuzz/corpus/fuzz_model \
- *       tests/fuzz-corpus/fuzz_model
+ *       tests/fuzz/corpus/fuzz_model
  *
  * Seeds: built with -DFUZZ_MODEL_SEEDS (and without -fsanitize=fuzzer) this
  * file is a program that writes small valid inputs of both kinds:
  *
  *   cc -std=c11 -DFUZZ_MODEL_SEEDS -D_DEFAULT_SOURCE -Iinclude -Isrc -o /tmp/seeds \
- *       tests/fuzz_model.c build/libbtfcar.a <the Makefile's LDLIBS>
- *   /tmp/seeds tests/fuzz-corpus/fuzz_model
+ *       tests/fuzz/fuzz_model.c build/libbtfcar.a <the Makefile's LDLIBS>
+ *   /tmp/seeds tests/fuzz/corpus/fuzz_model
  */
 #include "btfcar.h"
 #include "rf/rf_render.h"

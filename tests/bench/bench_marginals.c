@@ -100,7 +100,7 @@ static int measure(const btf_image *ex, const btf_image *syn, const btf_subspace
 int main(int argc, char **argv)
 {
     if (argc < 3) {
-        printf("bench_marginals: DATASET MODEL (tests/bench.sh runs it on the generated "
+        printf("bench_marginals: DATASET MODEL (tests/bench/bench.sh runs it on the generated "
                "materials)\n");
         return 0;
     }

@@ -167,12 +167,12 @@ rfbytes=$(stat -c %s "$TMP/rf.btfcar")
 echo "   model $rfbytes bytes, $((rfbytes / 65536)) bytes per texel; $((rfbytes / bytes)) x the CAR model's $bytes bytes"
 timed "render --view 37.5,100 --light 45,20 (1024^2, 4 views blended)" "$BTFCAR" render -q "$TMP/rf.btfcar" --view 37.5,100 --light 45,20 --size 1024x1024 --threads 2 -o "$TMP/rf.png"
 timed "the same, --backend gpu (lavapipe)" "$BTFCAR" render -q "$TMP/rf.btfcar" --view 37.5,100 --light 45,20 --size 1024x1024 --threads 2 --backend gpu -o "$TMP/rf.png"
-timed "render --scene (the one-light sphere, 1024^2)" "$BTFCAR" render -q "$TMP/rf.btfcar" --scene "$(dirname "$0")/../examples/sphere-one-light.json" --size 1024x1024 --threads 2 -o "$TMP/rf.png"
-timed "the same, --backend gpu (lavapipe)" "$BTFCAR" render -q "$TMP/rf.btfcar" --scene "$(dirname "$0")/../examples/sphere-one-light.json" --size 1024x1024 --threads 2 --backend gpu -o "$TMP/rf.png"
+timed "render --scene (the one-light sphere, 1024^2)" "$BTFCAR" render -q "$TMP/rf.btfcar" --scene "$(dirname "$0")/../../examples/sphere-one-light.json" --size 1024x1024 --threads 2 -o "$TMP/rf.png"
+timed "the same, --backend gpu (lavapipe)" "$BTFCAR" render -q "$TMP/rf.btfcar" --scene "$(dirname "$0")/../../examples/sphere-one-light.json" --size 1024x1024 --threads 2 --backend gpu -o "$TMP/rf.png"
 rm -f "$TMP/rf.btfcar"
 
 echo "== render: a 1024^2 sphere of the analysed 256^2 material under one light (examples/sphere-one-light.json)"
-SPHERE=$(dirname "$0")/../examples/sphere-one-light.json
+SPHERE=$(dirname "$0")/../../examples/sphere-one-light.json
 if [ -n "$RENDER_BENCH" ]; then
     for n in 1 2; do
         LP_NUM_THREADS=$n "$RENDER_BENCH" "$TMP/m.btfcar" "$SPHERE" 1024x1024 5 ||
@@ -207,7 +207,7 @@ if [ -n "$FIDELITY_BENCH" ]; then
                 set -- "$@" "$TMP/$mat-$(basename "$img")"
             done
     done
-    if sh "$(dirname "$0")/../tools/fetch-textures.sh" "$TMP/tex" >/dev/null 2>&1; then
+    if sh "$(dirname "$0")/../../tools/fetch-textures.sh" "$TMP/tex" >/dev/null 2>&1; then
         set -- "$@" "$TMP"/tex/*.pat
     else
         echo "   (no photographs: tools/fetch-textures.sh could not download gimp-data)"

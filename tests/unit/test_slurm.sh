@@ -12,11 +12,11 @@
 # (examples/slurm/library-task.sbatch, library-merge.sbatch) gives one
 # library page with their figures. Skipped, saying so, only where slurm-wlm or munge
 # is not installed (make deps installs them). Needs root (the daemons).
-# Usage: BTF_CLI=build/btfcar sh tests/test_slurm.sh
+# Usage: BTF_CLI=build/btfcar sh tests/unit/test_slurm.sh
 set -u
 CLI=${BTF_CLI:-build/btfcar}
 case $CLI in /*) ;; *) CLI=$(pwd)/$CLI ;; esac
-HERE=$(cd "$(dirname "$0")/.." && pwd)
+HERE=$(cd "$(dirname "$0")/../.." && pwd)
 passed=0
 failed=0
 ok() { passed=$((passed + 1)); echo "ok: $1"; }

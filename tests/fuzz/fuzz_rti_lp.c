@@ -5,7 +5,7 @@
  * reached), every light it returns a unit direction above the surface; then,
  * from a temporary file named *.lp, the dataset reader, whose images do not
  * exist: it must fail cleanly (one line, no crash, no leak).
- * `make fuzz` builds and runs it (seeds in tests/fuzz-corpus/fuzz_rti_lp/).
+ * `make fuzz` builds and runs it (seeds in tests/fuzz/corpus/fuzz_rti_lp/).
  */
 #include "core/core.h"
 #include "dataset/dataset.h"

@@ -6,7 +6,7 @@
  * and the photometric-stereo manifest reader (src/range/ps_manifest.c:
  * theta/phi or lx/ly/lz, r g b). Paths in a fuzzed manifest name files that
  * do not exist, so both must fail cleanly: one line, no crash, no leak.
- * `make fuzz` builds and runs it (seeds in tests/fuzz-corpus/fuzz_manifest/).
+ * `make fuzz` builds and runs it (seeds in tests/fuzz/corpus/fuzz_manifest/).
  */
 #include "core/core.h"
 #include "io/io.h"

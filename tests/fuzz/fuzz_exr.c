@@ -8,12 +8,12 @@
  * `make fuzz-build` builds it with the whole library instrumented (clang,
  * ASan + UBSan, -DBTF_EXR_MAX_CHUNK_BYTES='(64u << 20)' to keep the
  * library's per-chunk buffers well under libFuzzer's memory limit); `make
- * fuzz` runs it from the seed corpus tests/fuzz-corpus/fuzz_exr/ (small EXR
+ * fuzz` runs it from the seed corpus tests/fuzz/corpus/fuzz_exr/ (small EXR
  * files: btf_image_write_exr_opts output, and files from other writers with
  * other compressions and tiles). By hand:
  *
  *   ./build-fuzz/fuzz_exr -max_total_time=60 -max_len=65536 build-fuzz/corpus/fuzz_exr \
- *       tests/fuzz-corpus/fuzz_exr
+ *       tests/fuzz/corpus/fuzz_exr
  *
  * OpenEXRCore itself is not instrumented unless rebuilt with the sanitizers,
  * so memory errors inside it show only where they reach our code.

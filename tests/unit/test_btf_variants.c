@@ -771,7 +771,7 @@ static void test_writer_refusals(void **state)
 /* ------------------------------------------------------- the fuzz seeds */
 
 /* Small files of every FMF and PVF form for the fuzz target's corpus
- * (tests/fuzz-corpus/fuzz_btf/): written here and parsed; copied to
+ * (tests/fuzz/corpus/fuzz_btf/): written here and parsed; copied to
  * $BTF_FUZZ_SEEDS when it is set (how the committed seeds were made). */
 static void test_fuzz_seeds(void **state)
 {

@@ -7,7 +7,7 @@
  * assimp must refuse cleanly). Every outcome is a clean load or one error
  * line; a loaded scene is traced at 4 x 3 and every G-buffer value must be
  * finite. `make fuzz` builds and runs it (seeds in
- * tests/fuzz-corpus/fuzz_scene/).
+ * tests/fuzz/corpus/fuzz_scene/).
  */
 #include "btfcar.h"
 #include "scene/gbuffer.h"

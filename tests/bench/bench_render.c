@@ -30,7 +30,7 @@ static int bench_fail(const btf_error *e)
 int main(int argc, char **argv)
 {
     if (argc < 4) {
-        printf("bench_render: MODEL SCENE WxH [RUNS] (tests/bench.sh runs it on a sphere)\n");
+        printf("bench_render: MODEL SCENE WxH [RUNS] (tests/bench/bench.sh runs it on a sphere)\n");
         return 0;
     }
     int w = 0, h = 0, runs = argc > 4 ? atoi(argv[4]) : 7;

@@ -7,7 +7,7 @@
  * images wrap around without a seam and keep the model's statistics at
  * their edges, the same seed gives the same bytes on every CPU path, bad
  * sizes are clear errors, and the CLI takes the option on either backend
- * (GPU parity: tests/test_gpu_tileable.c).
+ * (GPU parity: tests/unit/test_gpu_tileable.c).
  */
 #include "testutil.h"
 
@@ -384,7 +384,7 @@ static double variance_of(const btf_image *img, int k, int x0, int x1, int y0, i
  * strongly correlated pixels each) and the four edges' mean within 8 %; and
  * every channel's variance over the image is the streaming synthesis'
  * (within 5 %), which holds the model's stationary variance
- * (tests/test_car.c): nothing is lost near the edges nor anywhere. (At 400
+ * (tests/unit/test_car.c): nothing is lost near the edges nor anywhere. (At 400
  * images the edge lines are within 0.5 % of the whole.) */
 static void tileable_images_keep_the_statistics(void **state)
 {
@@ -627,7 +627,7 @@ static void tileable_streams_rows_in_order(void **state)
 }
 
 /* btfcar synthesise --tileable: the CPU under --backend auto, the library's
- * pixels (--float), the size error (--backend gpu: tests/test_gpu_tileable.c). */
+ * pixels (--float), the size error (--backend gpu: tests/unit/test_gpu_tileable.c). */
 static void cli_tileable(void **state)
 {
     (void)state;

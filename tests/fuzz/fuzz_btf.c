@@ -6,16 +6,16 @@
  * the first and the last (view, light) images are reconstructed, which must
  * read nothing outside the input (ASan sees a copy of exactly size bytes).
  *
- * Seeds (tests/fuzz-corpus/fuzz_btf/) are small files from the writers:
+ * Seeds (tests/fuzz/corpus/fuzz_btf/) are small files from the writers:
  * DFMF with half and float factors, colour models 0 and 11, the cosine
  * flag, and BDIF (btf_ubo2014_write, btf_ubo2014_write_factors); FMF under
  * each signature (half, float, double; header versions 0 and 2, the
  * dynamic-range flag, a height map, the transposed layout) and PVF (both
- * orientations, the legacy header), from tests/test_btf_variants.c's
+ * orientations, the legacy header), from tests/unit/test_btf_variants.c's
  * test_fuzz_seeds (BTF_FUZZ_SEEDS=DIR writes them there).
  *
  *   make fuzz-build && build-fuzz/fuzz_btf -max_total_time=60 \
- *       build-fuzz/corpus/fuzz_btf tests/fuzz-corpus/fuzz_btf
+ *       build-fuzz/corpus/fuzz_btf tests/fuzz/corpus/fuzz_btf
  */
 #include "dataset/ubo2014.h"
 

@@ -16,13 +16,13 @@
  * 2 pixels and a partial wavefront tile are exercised).
  *
  * `make fuzz-build` builds it (build-fuzz/fuzz_synth); `make fuzz` runs it
- * from the seeds in tests/fuzz-corpus/fuzz_synth/. Seeds: built with
+ * from the seeds in tests/fuzz/corpus/fuzz_synth/. Seeds: built with
  * -DFUZZ_SYNTH_SEEDS (no -fsanitize=fuzzer) this file writes them, models
  * that btf_texture_fit made of two small textures:
  *
  *   cc -std=c11 -DFUZZ_SYNTH_SEEDS -D_DEFAULT_SOURCE -Iinclude -o /tmp/seeds \
- *       tests/fuzz_synth.c build/libbtfcar.a <the Makefile's LDLIBS>
- *   /tmp/seeds tests/fuzz-corpus/fuzz_synth
+ *       tests/fuzz/fuzz_synth.c build/libbtfcar.a <the Makefile's LDLIBS>
+ *   /tmp/seeds tests/fuzz/corpus/fuzz_synth
  */
 #include "btfcar.h"
 

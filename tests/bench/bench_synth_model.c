@@ -2,7 +2,7 @@
  * bench_synth_model.c — the in-memory synthesis time of a model file:
  * btf_synthesise_images of every subspace at WxH on the CPU, the same images
  * `btfcar synthesise --size WxH --backend cpu` writes (same seed, same
- * pixels), with no output. tests/bench.sh runs it on the paper's workload
+ * pixels), with no output. tests/bench/bench.sh runs it on the paper's workload
  * beside the whole `btfcar synthesise` process and prints the ratio.
  *
  *   bench_synth_model MODEL WxH [RUNS]   prints "in-memory synthesis: ..."
@@ -22,7 +22,7 @@
 int main(int argc, char **argv)
 {
     if (argc < 3) {
-        printf("bench_synth_model: MODEL WxH [RUNS] (tests/bench.sh runs it on the paper's "
+        printf("bench_synth_model: MODEL WxH [RUNS] (tests/bench/bench.sh runs it on the paper's "
                "workload)\n");
         return 0;
     }

@@ -382,6 +382,7 @@ static void gpu_check_dry_run(void **state)
     int st;
     char *out = tu_capture(tu_fmt("BTF_CLI=%s sh tools/gpu-check.sh --dry-run", tu_cli()), &st);
     assert_int_equal(st, 0);
+    /* the test programs as built: <the command's folder>/tests/test_gpu etc. */
     const char *want[] = {"tests/test_gpu\n", "tests/test_gpu_render\n", "tests/test_gpu_tileable\n",
                           "tests/test_gpu_rf\n", "tests/test_gpu_match\n", "--family rf",
                           "synthesise -q WORK/car.btfcar --size 512x512 -o WORK/gpu-synth --backend gpu",

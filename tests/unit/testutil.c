@@ -14,7 +14,7 @@
 
 #ifdef TU_ASAN
 #include <dlfcn.h>
-/* Leaks of libraries, not of btfcar: tests/lsan.supp explains both rules.
+/* Leaks of libraries, not of btfcar: tests/unit/lsan.supp explains both rules.
  * The btfcar processes the tests start get the same file through
  * LSAN_OPTIONS (make asan). */
 const char *__lsan_default_suppressions(void);

@@ -4,7 +4,7 @@
  * src/report/sweep.c through cJSON): any input is a point or a refusal,
  * never a crash, and an accepted point holds only values a measurement can
  * give. `make fuzz` builds and runs it (seeds in
- * tests/fuzz-corpus/fuzz_sweep_point/).
+ * tests/fuzz/corpus/fuzz_sweep_point/).
  */
 #include "btfcar.h"
 #include "report/report.h"

@@ -134,7 +134,7 @@ median5 "synthesise, default options (half, none, writer thread, colour matching
 def=$med
 [ -n "${mem:-}" ] && echo "   whole process / in-memory synthesis: $(echo "$def $mem" | awk '{printf "%.2f", $1/$2}') (target <= 4)"
 median5 "synthesise --no-match-colours" $SYN --no-match-colours
-echo "   colour matching costs the whole command $(echo "$def $med" | awk '{printf "%+.1f%%", 100 * ($1 / $2 - 1)}') (issue 17's bound: 10 %)"
+echo "   colour matching costs the whole command $(echo "$def $med" | awk '{printf "%+.1f%%", 100 * ($1 / $2 - 1)}') (target: <= 10 %)"
 $SYN -v 2>&1 >/dev/null | sed 's/^/   --verbose: /'
 if command -v exrheader >/dev/null 2>&1; then
     exrheader "$TMP/p/subspace_00.exr" >"$TMP/hdr" 2>&1 &&
@@ -237,7 +237,7 @@ echo "report --sweep, 8 settings: $sw s, peak RSS $(($(cut -d' ' -f2 "$TMP/time"
     --sweep --sweep-subspaces auto,4 --sweep-levels auto,2 --sweep-neighbours auto,8
 echo "   the same again, every point resumed: $(cat "$TMP/time") s"
 
-echo "== structure layers (issue 28; docs/model.md): before and after on the three 81 x 81 x 128^2 materials"
+echo "== structure layers (docs/model.md): before and after on the three 81 x 81 x 128^2 materials"
 # Three model formats' worth of analysis, each the whole command: 1.3
 # (--no-structure --range-size 64 --no-gains: the CAR fields model every
 # exemplar whole), 1.4 (--no-shadows --no-gains: the structure layer alone)

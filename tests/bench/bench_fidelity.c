@@ -1,5 +1,5 @@
 /*
- * bench_fidelity.c — the fidelity bench of issue 17 (docs/fidelity.md):
+ * bench_fidelity.c — the fidelity bench (docs/fidelity.md):
  * for each exemplar, the texture distances (src/measure/, docs/measure.md)
  * between the exemplar and a synthesis of the same size by
  *   - btfcar's default model (auto levels, auto neighbourhoods) and its
@@ -248,7 +248,7 @@ int main(int argc, char **argv)
            "model's bytes\n", sum_comb[0] / counted, sum_comb[N_VARIANTS - 1] / counted,
            sum_comb[0] <= sum_comb[N_VARIANTS - 1] ? "no worse" : "worse",
            sum_bytes[N_VARIANTS - 1] / sum_bytes[0]);
-    printf("   default's first-order component: worst %.2f (issue 17: <= 1.2 on every exemplar: "
+    printf("   default's first-order component: worst %.2f (target: <= 1.2 on every exemplar: "
            "%s)\n", worst_first[0], worst_first[0] <= 1.2 ? "met" : "not met");
     return 0;
 }

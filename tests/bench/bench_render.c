@@ -1,5 +1,5 @@
 /*
- * bench_render.c — the CPU renderer's frame rate (issue 15): a scene is
+ * bench_render.c — the CPU renderer's frame rate: a scene is
  * traced once, its needed subspaces synthesised once, then the G-buffer is
  * shaded RUNS times with 1 and with 2 threads; prints the median shading
  * time and frames per second of each, and the trace and synthesis times.

@@ -1,5 +1,5 @@
 /*
- * bench_rf.c — the reflectance-field family (issue 19; Meseth, Müller &
+ * bench_rf.c — the reflectance-field family (Meseth, Müller &
  * Klein 2003; docs/rf.md) on a generated 81 x 81 material: the time of
  * each fit (PTM, k = 2 lobes, Lafortune with 2 lobes) with 2 threads, its
  * Table-1 error, its bytes per texel against the CAR model of the same

@@ -1,6 +1,6 @@
 /*
  * bench_rf_sample.c — the memory reduction of Meseth, Müller & Klein 2003,
- * section 6 (issue 19, point 2; docs/rf.md, "Memory reduction"): on each
+ * section 6 (docs/rf.md, "Memory reduction"): on each
  * generated material, the whole reflectance-field fit against the fit of
  * an N x N sample with a quilted coordinate map: bytes (in memory and in
  * the file), fitting time, the pixel-wise error (mean |dY| over every image,

@@ -49,9 +49,9 @@ int main(int argc, char **argv)
     btf_synth_opts so = btf_synth_defaults();
     so.width = w, so.height = h, so.seed = 1;
     /* Three syntheses in alternate runs, so that they share the machine's
-     * state: 0, a model without marginal transfers (format 1.1, before
-     * issue 17); 1, with the transfers (docs/synthesis.md, "Marginals"),
-     * colour matching off; 2, the default: transfers and colour matching
+     * state: 0, a model without marginal transfers (format 1.1, before the
+     * MARG section of format 1.2); 1, with the transfers (docs/synthesis.md,
+     * "Marginals"), colour matching off; 2, the default: transfers and colour matching
      * (docs/synthesis.md, "Colour matching"; format 1.3 models). */
     btf_marginal *keep = malloc(sizeof *keep * (size_t)m.n_subspaces);
     int with = 0;

@@ -1,7 +1,7 @@
-/* test_car_scales.c — what the CAR model reproduces of a texture, measured
- * (issue 17, points 4 and 5): the Bayesian neighbourhood choice is interior
- * to the candidate family on the test textures, and more pyramid levels
- * reproduce the luminance power spectrum no worse than fewer.
+/* test_car_scales.c — what the CAR model reproduces of a texture, measured:
+ * the Bayesian neighbourhood choice is interior to the candidate family on
+ * the test textures, and more pyramid levels reproduce the luminance power
+ * spectrum no worse than fewer.
  *
  * The spectrum distance is a small helper of this test (the project's
  * texture-distance module lives elsewhere): the luminance of each image,
@@ -210,7 +210,7 @@ static void distances(const texture *tx, double d[4])
            d[0], d[1], d[2], d[3]);
 }
 
-/* Issue 17 point 5: more pyramid levels reproduce the luminance power
+/* More pyramid levels reproduce the luminance power
  * spectrum no worse than fewer (on leather, 3 levels were worse than 1
  * before the levels were fitted as complements), and --levels auto comes
  * near the best depth on every material. */
@@ -232,7 +232,7 @@ static void test_levels_reproduce_spectrum(void **state)
     }
 }
 
-/* Issue 17 point 4: the Bayesian rule's choice is interior to the candidate
+/* The Bayesian rule's choice is interior to the candidate
  * family (below its 24 offsets) on the test textures: the data, not the
  * family, limit it. Every band of a one-level model of leather and wood, and
  * most bands of the fabric (a periodic weave, which long models suit). */

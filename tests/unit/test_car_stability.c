@@ -1,5 +1,5 @@
 /* test_car_stability.c — the exact stability test of a CAR band's causal
- * recursion (issue 29, defect 5; car/stability.c, docs/model.md
+ * recursion (car/stability.c, docs/model.md
  * "Stability"): one- and two-neighbour bands at and near the boundary,
  * bands whose roots are known in closed form, a recursion run as synthesis
  * runs it that grows exactly where the test says unstable, every band of
@@ -348,13 +348,13 @@ static void keep_warning(void *user, const char *msg)
         snprintf(w->text, sizeof w->text, "%s", msg);
 }
 
-/* (v) texture-fit of a 2048-wide 1.002^x ramp, one level, neighbourhood
- * 0:-1 (the issue's case): least squares says gamma = 1.002, which grows
- * along every row of a synthesis (to +-1100 at 2000 pixels for a texture of
- * mean 0.3). The fit writes a band that passes instead, shrunk below 1 by
- * more than the margin, and says so naming the band; its synthesis, without
- * the marginal transfer that would hide a growth by clamping, stays near
- * the texture's range. */
+/* (v) texture-fit of a 2048-wide 1.002^x ramp, one level, neighbourhood 0:-1
+ * (a growth too slow for a small test field to see): least squares says
+ * gamma = 1.002, which grows along every row of a synthesis (to +-1100 at 2000
+ * pixels for a texture of mean 0.3). The fit writes a band that passes
+ * instead, shrunk below 1 by more than the margin, and says so naming the
+ * band; its synthesis, without the marginal transfer that would hide a growth
+ * by clamping, stays near the texture's range. */
 static void ramp_fit_is_stable(void **state)
 {
     (void)state;

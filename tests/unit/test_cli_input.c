@@ -1,4 +1,4 @@
-/* test_cli_input.c — the command's edges of issue 29: direction numbers are
+/* test_cli_input.c — the command line's input edges: direction numbers are
  * decimals, JSON stays UTF-8 whatever the file names, errors name the model,
  * and a frame that cannot fit in memory is refused before the work. */
 #include "testutil.h"

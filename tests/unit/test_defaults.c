@@ -36,7 +36,7 @@ static void documented_values(void **state)
 
     btf_car_fit_opts c = btf_car_fit_defaults();
     assert_int_equal(c.n_fixed, 0);
-    assert_int_equal(c.max_neighbours, 24); /* issue 17: the family reaches BTF_CAR_MAX_NEIGHBOURS */
+    assert_int_equal(c.max_neighbours, 24); /* the candidate family reaches BTF_CAR_MAX_NEIGHBOURS */
     assert_null(c.warn);
     assert_null(c.what);
 

@@ -1,9 +1,9 @@
-/* test_fifo.c — only regular files are read (issue 29): a FIFO given as any
- * input (a model, an image, a scene, a dataset's image, a manifest, a file
- * a mesh names) is refused at once with one line naming it, where opening
- * it used to wait for a writer forever; and a mesh reads no file outside
- * its folder (a glTF buffer of ../../etc/passwd). Every command runs under
- * `timeout 10`: a hang is exit 124, not the error exit 1. */
+/* test_fifo.c — only regular files are read: a FIFO given as any input (a
+ * model, an image, a scene, a dataset's image, a manifest, a file a mesh
+ * names) is refused at once with one line naming it, where opening it used to
+ * wait for a writer forever; and a mesh reads no file outside its folder (a
+ * glTF buffer of ../../etc/passwd). Every command runs under `timeout 10`: a
+ * hang is exit 124, not the error exit 1. */
 #include "testutil.h"
 #include "core/core.h"
 

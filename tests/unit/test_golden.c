@@ -83,18 +83,19 @@ static void demo_model_file_is_unchanged(void **state)
     (void)state;
     uint64_t h = hash_file(model_path);
     print_message("model file: 0x%016llx\n", (unsigned long long)h);
-    /* format 1.5 with issue 28's third round (the split gain of --subspaces
-     * auto; beside the structure layer 2 levels chosen for the rendered
-     * product and the coefficients' prior); 0xe8be646f4de2918a without the
-     * masked levels, 0x4049c37a683658e7 before the round. Format 1.5 (issue 28, second
-     * round): pair gains, cast shadows and registered exemplars; was 0x7082c93aaa5517a8 in format 1.4 (the range
+    /* format 1.5 with the structure layer's third round (the split gain of
+     * --subspaces auto; beside the structure layer 2 levels chosen for the
+     * rendered product and the coefficients' prior); 0xe8be646f4de2918a
+     * without the masked levels, 0x4049c37a683658e7 before the round. Format
+     * 1.5 (the structure layer's second round): pair gains, cast shadows and
+     * registered exemplars; was 0x7082c93aaa5517a8 in format 1.4 (the range
      * map at the analysed resolution and the STRC structure layer: the CAR
      * fields model the remainder) and 0x8b38e17b719eef1b in format 1.3 */
-    /* format 1.3 (issue 17): the LABQ section of the exemplars' CIE Lab
+    /* format 1.3 (colour matching): the LABQ section of the exemplars' CIE Lab
      * histograms for colour matching; was 0x7f43cc9068708f5c in format 1.2
      * (the MARG section of marginal transfers, and the fit of the 24-offset
      * family with complement levels and the measured --levels auto),
-     * 0x466160cca9c7fc78 in format 1.1 (issue 15: the periodic range tile
+     * 0x466160cca9c7fc78 in format 1.1 (the periodic range tile
      * and its RANG flags byte) and 0x5941461f4c59f500 in format 1.0 */
     assert_true(h == 0x55882430cf58549bull);
 }
@@ -123,7 +124,7 @@ static void cpu_synthesis_is_unchanged(void **state)
                                    "--no-match-colours -o %s", tu_cli(), model_path, dir), NULL),
                      0);
     /* the synthesis itself, before colour matching (matched_synthesis_is_
-     * unchanged below); changed deliberately (issue 17): the marginal transfer on a uniform
+     * unchanged below); changed deliberately: the marginal transfer on a uniform
      * grid (14 segments plus the model's end segments) and the closed-form
      * gamut step */
     static const uint64_t expect[6] = {
@@ -181,7 +182,8 @@ static void gpu_synthesis_is_unchanged(void **state)
     assert_int_equal(tu_run(tu_fmt("%s synthesise %s --size 200x130 --seed 3 --backend gpu --float "
                                    "--quiet --no-match-colours -o %s", tu_cli(), model_path, dir),
                             NULL), 0);
-    /* changed deliberately (issue 17, and issue 28: the structure layer), as the CPU's */
+    /* changed deliberately (the uniform-grid marginal transfer and the
+     * closed-form gamut step, then the structure layer), as the CPU's */
     static const uint64_t expect[6] = {
         0x9058c29fa377ee59ull, 0xd17893b8fc228963ull, 0x69c12d80f2ad2f72ull,
         0x2dbc5422d1b16d4full, 0xaf1ea5ef3308537aull, 0xcab24d57c20e6bf1ull,
@@ -210,7 +212,8 @@ static void both_backends_give(const char *name, const char *args, const uint64_
 static void tileable_synthesis_is_unchanged(void **state)
 {
     (void)state;
-    /* changed deliberately (issue 17), as above */
+    /* changed deliberately (the uniform-grid marginal transfer and the
+     * closed-form gamut step), as above */
     static const uint64_t expect[6] = {
         0x47b4ddcd9152dc46ull, 0xa2b2aebd51cfad04ull, 0xacc028ca77098dd4ull,
         0xa2b3471acfb4b5c9ull, 0x8b7180eb755040e5ull, 0xbd2ca24a944f2129ull,
@@ -218,7 +221,7 @@ static void tileable_synthesis_is_unchanged(void **state)
     both_backends_give("tile", "--seed 5 --tileable --no-match-colours", expect, 128, 96);
 }
 
-/* The default synthesis, colour-matched (issue 17, docs/synthesis.md): fixed
+/* The default synthesis, colour-matched (docs/synthesis.md): fixed
  * hashes on the CPU, streamed (the whole image kept), and the GPU's the
  * same (matched on the host after the read-back). */
 static void matched_synthesis_is_unchanged(void **state)

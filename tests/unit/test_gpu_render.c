@@ -259,11 +259,11 @@ static void test_sphere_parity(void **state)
     btf_model_free(&m);
 }
 
-/* A format 1.1 model (a range map, no marginal transfer: unclamped
- * Gaussian synthesis) whose colours reach far below -0.5, the value that
- * once doubled as the shading's "subspace not synthesised" marker (issue
- * 29): both backends render it, the same bits, a pair at a measured
- * direction and the sphere's blends of many pairs under two lights. */
+/* A format 1.1 model (a range map, no marginal transfer: unclamped Gaussian
+ * synthesis) whose colours reach far below -0.5, the value that once doubled
+ * as the shading's "subspace not synthesised" marker and failed the render:
+ * both backends render it, the same bits, a pair at a measured direction and
+ * the sphere's blends of many pairs under two lights. */
 static void test_deep_tails_parity(void **state)
 {
     (void)state;
@@ -344,7 +344,7 @@ static void test_bands(void **state)
     btf_model_free(&m);
 }
 
-/* The subspace images over several storage buffers (issue 31): with a
+/* The subspace images over several storage buffers (gpu/gpu_images.c): with a
  * limit that holds one image per buffer, the sphere (every subspace
  * needed) renders to the same bits as without the limit and as the CPU. */
 /* The range and normal maps past four buffers: a flat render that needs one

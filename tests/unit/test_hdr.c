@@ -1,11 +1,11 @@
 /*
- * test_hdr.c — linear float datasets in any units (issue 29, defect 6): the
- * analysis of a linear EXR dataset x 1000 gives the range map and the
- * segmentation of the same dataset x 1 (photometric stereo's clip level
- * follows the data's peak beyond 1, src/range/photostereo.c; the Lab
- * features divide float data by their white level, src/segment/features.c);
- * most pixels without a fit is a warning that names the dataset and
- * --saturation; bad --saturation values are usage errors.
+ * test_hdr.c — linear float datasets in any units: the analysis of a linear
+ * EXR dataset x 1000 gives the range map and the segmentation of the same
+ * dataset x 1 (photometric stereo's clip level follows the data's peak beyond
+ * 1, src/range/photostereo.c; the Lab features divide float data by their
+ * white level, src/segment/features.c); most pixels without a fit is a
+ * warning that names the dataset and --saturation; bad --saturation values
+ * are usage errors.
  */
 #include "testutil.h"
 #include "analyse/analyse.h"

@@ -522,12 +522,12 @@ static void sample_quantiles_are_exact(void **state)
 }
 
 /* Colour matching (btf_synth_opts.match_colours, btf_colour_match) on the
- * generated materials: the first-order texture distance (CIE Lab
- * histograms, issue 17) of a 64 x 64 synthesis comes within 1.2 of the
+ * generated materials: the first-order texture distance (CIE Lab histograms,
+ * src/measure/first_order.c) of a 64 x 64 synthesis comes within 1.2 of the
  * material's own (fabric: a tenth of the unmatched) and below the unmatched
- * synthesis'; the default matches (the bytes of match_colours 1); pixels
- * stay in the exemplar's box; the streaming synthesis gives the image's
- * bytes, whole image kept or synthesised twice. */
+ * synthesis'; the default matches (the bytes of match_colours 1); pixels stay
+ * in the exemplar's box; the streaming synthesis gives the image's bytes,
+ * whole image kept or synthesised twice. */
 static void colour_match_keeps_lab_histograms(void **state)
 {
     (void)state;

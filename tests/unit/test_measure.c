@@ -1,5 +1,5 @@
 /* test_measure.c — texture distances without pixel correspondence and the
- * phase-randomisation baseline (src/measure/, docs/measure.md, issue 17). */
+ * phase-randomisation baseline (src/measure/, docs/measure.md). */
 #include "testutil.h"
 
 #include "car/car.h"

@@ -269,7 +269,7 @@ static void outputs_checked_first(void **state)
 /* btfcar synthesise of a large image, interrupted once its temporary file
  * exists: exit 128 + signal, nothing of the run left. */
 /* sub: "" or folders (ending in '/') that do not exist yet, created by the
- * run above its output: the signal removes them too (issue 29, 9). */
+ * run above its output: the signal removes them too (they used to be left). */
 static void interrupt_one(const char *model, int sig, const char *sub)
 {
     char *root = tu_tmpdir();
@@ -373,13 +373,14 @@ static void failed_write_of_a_batch_leaves_nothing(void **state)
      * synthesised: the run stops naming that file, nothing is left */
     snprintf(out, sizeof out, "%s/bfs", tu_dir);
     char *err = NULL;
-    /* (no `trap '' XFSZ`: btfcar ignores SIGXFSZ itself, issue 29, 4) */
+    /* (no `trap '' XFSZ`: btfcar ignores SIGXFSZ itself, so
+     * the write fails with EFBIG and the run reports it in one line) */
     assert_int_equal(tu_run(tu_fmt("(ulimit -f 100; exec %s synthesise -q %s "
                                    "--size 256x256 --backend cpu -o %s)", tu_cli(), model, out),
                             &err), 1);
     print_message("%s", err);
     /* the file as the user will look for it: under the output, not under
-     * the temporary folder (issue 29) */
+     * the temporary folder */
     assert_non_null(strstr(err, tu_fmt("%s/subspace_00.exr", out)));
     assert_null(strstr(err, ".btfcar-tmp-"));
     assert_null(strstr(err, "b.btfcar:")); /* the output's error, not the model's */
@@ -403,7 +404,7 @@ static void failed_write_of_a_batch_leaves_nothing(void **state)
 
 /* An output folder given as a symlink to a folder: every command that
  * writes a set fills the folder it names and leaves the link a link
- * (issue 29, 8: before, the work was done and the final rename failed with
+ * (before, the work was done and the final rename failed with
  * "Not a directory"). */
 static void symlinked_output_folders(void **state)
 {
@@ -474,7 +475,9 @@ static int hold_temporary(const char *dir)
 
 /* A temporary of a live process in another PID namespace (a container
  * sharing the folder), whose PID no process of ours has: kept, although
- * kill(PID, 0) says ESRCH here (issue 29, 1). Needs root and unshare(1). */
+ * kill(PID, 0) says ESRCH here: a temporary's name carries the identity of
+ * the host's boot and PID namespace, and only a temporary of this identity
+ * whose PID is gone is stale. Needs root and unshare(1). */
 static void other_namespace_temporaries_are_kept(void **state)
 {
     (void)state;

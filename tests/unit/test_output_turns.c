@@ -1,11 +1,11 @@
 /*
- * test_output_turns.c — two writers of one existing output folder take
- * turns (issue 29, 2): before, `btfcar synthesise` runs into the same
- * folder could interleave their files and commit a mixed set, both exiting
- * 0. The library's rename() calls are wrapped (Makefile: --wrap=rename) so
- * that two committing writers follow a schedule that interleaves them
- * (may_go): without turns the set is mixed for certain, not by a timing
- * race; with them one writer waits for the other's whole set (the
+ * test_output_turns.c — two writers of one existing output folder take turns
+ * (a lock on the folder while a set moves in): before, `btfcar synthesise`
+ * runs into the same folder could interleave their files and commit a mixed
+ * set, both exiting 0. The library's rename() calls are wrapped (Makefile:
+ * --wrap=rename) so that two committing writers follow a schedule that
+ * interleaves them (may_go): without turns the set is mixed for certain, not
+ * by a timing race; with them one writer waits for the other's whole set (the
  * schedule's waits then time out and let the lone writer go on).
  */
 #include "testutil.h"

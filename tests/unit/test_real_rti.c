@@ -1,8 +1,8 @@
 /* test_real_rti.c — RTI light files (.lp, layout BTF_LAYOUT_RTI,
- * src/dataset/rti_lp.c) and the real light-dome capture tests/data/real/rti-lion
- * (issue 30): the parser's directions and every refused input; the frame of
- * the light vectors against a procedural material's truth; the lion head
- * through `btfcar info`, `photostereo`, `analyse` and `synthesise`.
+ * src/dataset/rti_lp.c) and the real light-dome capture
+ * tests/data/real/rti-lion: the parser's directions and every refused input;
+ * the frame of the light vectors against a procedural material's truth; the
+ * lion head through `btfcar info`, `photostereo`, `analyse` and `synthesise`.
  *
  * The captures are read from $BTF_TEST_DATA/real (default tests/data/real:
  * `make test` runs the programs from the repository root, as a clean clone

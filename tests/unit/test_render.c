@@ -100,7 +100,7 @@ static void test_flat_equals_subspace(void **state)
 /* A format 1.0 model (no marginal transfer: the synthesis is the plain,
  * unclamped Gaussian) whose colours reach far below -0.5: real values,
  * which once read as the shading's "subspace not synthesised" marker and
- * failed the render (issue 29). The render succeeds and is the selected
+ * failed the render. The render succeeds and is the selected
  * subspace image with its negative radiance set to 0, as for any model. */
 static void test_deep_gaussian_tails(void **state)
 {

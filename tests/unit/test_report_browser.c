@@ -1,12 +1,11 @@
-/* test_report_browser.c — the report's page as a reader's browser sees it
- * (issue 18): a small page of the report's kind (SVG plots from
- * src/report/, a PNG from btf_image_write_png, escaped text) opened in
- * headless Chromium by build/check-page (tools/check-page.c) loads with no
- * console error or warning and every image shown, and a screenshot of the
- * asked size is taken; and the checker fails, as it must, on a missing
- * image, a PNG that does not decode, a script error and a console warning.
- * Chromium is installed by `make deps`: when it is missing this test fails
- * (it does not skip). */
+/* test_report_browser.c — the report's page as a reader's browser sees it: a
+ * small page of the report's kind (SVG plots from src/report/, a PNG from
+ * btf_image_write_png, escaped text) opened in headless Chromium by
+ * build/check-page (tools/check-page.c) loads with no console error or
+ * warning and every image shown, and a screenshot of the asked size is taken;
+ * and the checker fails, as it must, on a missing image, a PNG that does not
+ * decode, a script error and a console warning. Chromium is installed by
+ * `make deps`: when it is missing this test fails (it does not skip). */
 #include "testutil.h"
 
 #include "report/report.h"

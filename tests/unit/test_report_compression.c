@@ -1,6 +1,6 @@
 /*
  * test_report_compression.c — the report's compression accounting
- * (src/report/, issue 18): the model file's byte breakdown adds up to the
+ * (src/report/, docs/report.md): the model file's byte breakdown adds up to the
  * file exactly and each part holds what it says; the deflate bit
  * attribution accounts for every bit of a zlib stream; the per-view PCA
  * finds the rank of data of known rank with no error, stays finite on

@@ -1,9 +1,9 @@
 /*
- * test_report_page.c — `btfcar report` as a user runs it (issue 18,
- * docs/report.md): the folder's files, every picture the page names is
- * there, no script, report.json parses and agrees with the model file, the
- * page opens in headless Chromium with no console error and no missing
- * image (tools/check-page.c), --all, the sweep and its resume, bad input.
+ * test_report_page.c — `btfcar report` as a user runs it (docs/report.md):
+ * the folder's files, every picture the page names is there, no script,
+ * report.json parses and agrees with the model file, the page opens in
+ * headless Chromium with no console error and no missing image
+ * (tools/check-page.c), --all, the sweep and its resume, bad input.
  *
  * One small generated material (81 x 81 images of 32^2) and its model.
  */
@@ -265,7 +265,7 @@ static void test_report_errors(void **state)
     free(d);
 }
 
-/* A reflectance-field model's report (issue 19, point 4): its file
+/* A reflectance-field model's report (btf_rf_report_write): its file
  * against the raw BTF, per pair the texture distances and the pixel-wise
  * |dY|, the pictures, the page in Chromium; --sweep is a usage error. */
 static void test_report_rf(void **state)
@@ -396,8 +396,9 @@ static void report_twice(const char *model, const char *name, int spans)
                             NULL), 0);
 }
 
-/* `report` differs run to run only in its times (issue 29, h): the CAR
- * model's report and the reflectance-field model's. */
+/* `report` differs run to run only in its times (the page's time spans,
+ * report.json's date and *seconds keys): the CAR model's report and the
+ * reflectance-field model's. */
 static void test_report_repeatable(void **state)
 {
     (void)state;

@@ -1,5 +1,5 @@
 /*
- * test_rf.c — the reflectance-field family (issue 19; Meseth, Müller &
+ * test_rf.c — the reflectance-field family (Meseth, Müller &
  * Klein 2003; src/rf/, docs/rf.md): a PTM texel recovered exactly, a known
  * lobe recovered by Levenberg–Marquardt, finite fits at the extremes (black,
  * saturated, constant, NaN, grazing), the four-view weights, fits of a

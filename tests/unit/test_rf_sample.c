@@ -1,6 +1,6 @@
 /*
  * test_rf_sample.c — the memory reduction of Meseth, Müller & Klein 2003,
- * section 6 (issue 19, point 2; src/rf/rf_sampled.c, rf_quilt.c,
+ * section 6 (src/rf/rf_sampled.c, rf_quilt.c,
  * rf_sample.c, rf_feature.c, rf_cut.c; docs/rf.md, "Memory reduction"):
  * the coordinate map stays in the sample, a sample of the whole image is
  * the whole fit exactly, the map is the same for a seed and any thread

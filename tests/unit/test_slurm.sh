@@ -1,6 +1,6 @@
 #!/bin/sh
 # test_slurm.sh — a sweep split over a real Slurm cluster of one node
-# (docs/cluster.md; issue 33): munged, slurmctld and slurmd started here on
+# (docs/cluster.md): munged, slurmctld and slurmd started here on
 # loopback from a slurm.conf written into a temporary folder, the sweep of a
 # generated material submitted as a 4-task job array
 # (examples/slurm/sweep-share.sbatch) and merged by a job that waits for it

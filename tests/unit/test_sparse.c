@@ -1,11 +1,11 @@
 /*
- * test_sparse.c — sparse pair sets and near-field captures (issue 30;
- * docs/datasets.md, "Sparse pair sets" and "Near-field captures";
- * docs/render.md, "Sparse pair sets"): a full grid, a sparse set and a
- * 1 x N set through the same code; the real bath-tile flash capture
- * (tests/data/real/bath-tile) analysed, rendered at every measured pair and
- * at a pair held out of the analysis, and reported; bad near-field
- * manifests refused in one line naming the file and line.
+ * test_sparse.c — sparse pair sets and near-field captures (docs/datasets.md,
+ * "Sparse pair sets" and "Near-field captures"; docs/render.md, "Sparse pair
+ * sets"): a full grid, a sparse set and a 1 x N set through the same code;
+ * the real bath-tile flash capture (tests/data/real/bath-tile) analysed,
+ * rendered at every measured pair and at a pair held out of the analysis, and
+ * reported; bad near-field manifests refused in one line naming the file and
+ * line.
  */
 #include "testutil.h"
 #include "range/range.h"

@@ -1,8 +1,8 @@
-/* test_validate.c — bad input caught before the work (issue 14, items 4, 6
- * and 7): unstable models rejected by the validator with the file, subspace,
- * band and level named; multi-view photometric stereo manifests; the CAR
- * fit's relative variance floor; periodic patterns reported; strict numbers;
- * duplicate manifest paths; info on an image. */
+/* test_validate.c — bad input caught before the work: unstable models
+ * rejected by the validator with the file, subspace, band and level named;
+ * multi-view photometric stereo manifests; the CAR fit's relative variance
+ * floor; periodic patterns reported; strict numbers; duplicate manifest
+ * paths; info on an image. */
 #include "testutil.h"
 #include "car/car.h"
 #include "range/range.h"
@@ -143,7 +143,7 @@ static void unstable_model_rejected(void **state)
     free(err);
 }
 
-/* Slow growth (issue 29): 0:-1 of gamma 1.002, and 0.501, 0.501 on
+/* Slow growth: 0:-1 of gamma 1.002, and 0.501, 0.501 on
  * 0:-1,-1:0, grow too slowly for a 160 x 192 test field to see, but
  * without bound in synthesis (1.002^2000 along a row). The reader refuses
  * both, naming the file, the band and the recursion that grows; info says

@@ -32,11 +32,15 @@ LIB_C     := $(sort $(wildcard src/*/*.c) $(wildcard gpu/*.c))
 LIB_CXX   := $(sort $(wildcard src/*/*.cpp))
 LIB_OBJ   := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
 CLI_OBJ   := $(patsubst %.c,$(BUILD)/%.o,$(sort $(wildcard cli/*.c)))
-TEST_SRC  := $(sort $(wildcard tests/test_*.c))
-TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
-TEST_HELP := $(BUILD)/tests/testutil.o
-BENCH_SRC := $(sort $(wildcard tests/bench_*.c))
-BENCH_BIN := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
+# The tests' sources: tests/unit/ (the cmocka programs, their helpers and
+# scripts), tests/bench/, tests/fuzz/ (further down), tests/data/ (inputs).
+# Every test and bench program is built as $(BUILD)/tests/NAME; the objects
+# lie under $(BUILD)/tests/unit/ and $(BUILD)/tests/bench/.
+TEST_SRC  := $(sort $(wildcard tests/unit/test_*.c))
+TEST_BIN  := $(TEST_SRC:tests/unit/%.c=$(BUILD)/tests/%)
+TEST_HELP := $(BUILD)/tests/unit/testutil.o
+BENCH_SRC := $(sort $(wildcard tests/bench/bench_*.c))
+BENCH_BIN := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/tests/%)
 SHADERS   := $(sort $(wildcard gpu/*.comp))
 SPIRV_H   := $(SHADERS:gpu/%.comp=$(BUILD)/gen/%_spv.h)
 
@@ -138,15 +142,20 @@ check-exports: $(SHARED) $(PUBLIC_H)
 $(CLI): $(CLI_OBJ) $(STATIC)
 	$(CC) $(SAN) -pthread -o $@ $(CLI_OBJ) $(STATIC) $(LDLIBS)
 
-$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_HELP) $(STATIC)
+$(BUILD)/tests/test_%: $(BUILD)/tests/unit/test_%.o $(TEST_HELP) $(STATIC)
 	$(CC) $(SAN) -pthread $(TEST_LDFLAGS) -o $@ $< $(TEST_HELP) $(STATIC) $(LDLIBS) -lcmocka
 
-# The fault simulator (tests/test_alloc_fail.c): the library's calls of
+# The benchmarks use the tests' helpers (testutil.h, scene_sphere_obj.h).
+$(BUILD)/tests/bench/%.o: CPPFLAGS += -Itests/unit
+$(BUILD)/tests/bench_%: $(BUILD)/tests/bench/bench_%.o $(TEST_HELP) $(STATIC)
+	$(CC) $(SAN) -pthread -o $@ $< $(TEST_HELP) $(STATIC) $(LDLIBS) -lcmocka
+
+# The fault simulator (tests/unit/test_alloc_fail.c): the library's calls of
 # malloc & co. go to the test's __wrap_* functions, which fail the n-th one.
 ALLOC_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free \
               -Wl,--wrap=aligned_alloc,--wrap=posix_memalign,--wrap=strdup,--wrap=strndup
 $(BUILD)/tests/test_alloc_fail: TEST_LDFLAGS = $(ALLOC_WRAP)
-# Writers taking turns (tests/test_output_turns.c): the library's renames go
+# Writers taking turns (tests/unit/test_output_turns.c): the library's renames go
 # through the test's __wrap_rename, which makes two writers alternate.
 $(BUILD)/tests/test_output_turns: TEST_LDFLAGS = -Wl,--wrap=rename
 
@@ -154,9 +163,9 @@ $(BUILD)/tests/test_output_turns: TEST_LDFLAGS = -Wl,--wrap=rename
 check-layering: $(LIB_OBJ)
 	@sh tools/check-layering.sh $(LIB_OBJ)
 
-# Run every test program; tests/run.sh prints the final "N passed, N failed".
+# Run every test program; tests/unit/run.sh prints the final "N passed, N failed".
 test-run: $(TEST_BIN) $(CLI) $(CHECK_PAGE) check-exports check-layering
-	@BTF_CLI=$(abspath $(CLI)) BTF_CHECK_PAGE=$(abspath $(CHECK_PAGE)) sh tests/run.sh $(TEST_BIN)
+	@BTF_CLI=$(abspath $(CLI)) BTF_CHECK_PAGE=$(abspath $(CHECK_PAGE)) sh tests/unit/run.sh $(TEST_BIN)
 
 test: deps
 	@$(MAKE) --no-print-directory all
@@ -166,19 +175,19 @@ test: deps
 # A one-node Slurm cluster started and stopped by the test itself: a split
 # sweep as a job array, merged (docs/cluster.md).
 test-cluster: $(CLI)
-	@BTF_CLI=$(abspath $(CLI)) sh tests/test_slurm.sh
+	@BTF_CLI=$(abspath $(CLI)) sh tests/unit/test_slurm.sh
 
 asan: deps
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
 	  SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/unit/lsan.supp:print_suppressions=0 \
 	  BTF_ASAN=1 $(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
 	  SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" test-run
 
 bench: deps
 	@$(MAKE) --no-print-directory all
-	@BTF_CLI=$(abspath $(CLI)) sh tests/bench.sh $(BENCH_BIN)
+	@BTF_CLI=$(abspath $(CLI)) sh tests/bench/bench.sh $(BENCH_BIN)
 
 # The real-GPU check (tools/gpu-check.sh, docs/gpu.md): the GPU parity tests
 # on the best Vulkan device, then CPU against GPU timings of four workloads
@@ -193,18 +202,18 @@ demo: deps
 	@$(MAKE) --no-print-directory all
 	@sh examples/demo.sh $(abspath $(CLI))
 
-# libFuzzer targets: every tests/fuzz_*.c becomes $(FUZZ_BUILD)/fuzz_NAME,
+# libFuzzer targets: every tests/fuzz/fuzz_*.c becomes $(FUZZ_BUILD)/fuzz_NAME,
 # linked (by clang++) with the whole library, whose C sources clang compiles
 # and whose C++ bridge clang++ compiles, all with ASan + UBSan and coverage
-# instrumentation. tests/fuzz.sh then runs each for FUZZ_SECONDS from its
-# seed corpus (tests/fuzz-corpus/NAME/) and fails if any input crashes.
+# instrumentation. tests/fuzz/fuzz.sh then runs each for FUZZ_SECONDS from
+# its seed corpus (tests/fuzz/corpus/NAME/) and fails if any input crashes.
 # Warnings are shown but not fatal here: gcc's -Werror build is the gate.
 # The small EXR chunk limit (BTF_EXR_MAX_CHUNK_BYTES) keeps the chunk
 # buffers of src/io/exr_read.c under libFuzzer's memory limit.
 FUZZ_SECONDS ?= 30
 FUZZ_BUILD   ?= build-fuzz
-FUZZ_SRC     := $(sort $(wildcard tests/fuzz_*.c))
-FUZZ_BIN     := $(FUZZ_SRC:tests/%.c=$(FUZZ_BUILD)/%)
+FUZZ_SRC     := $(sort $(wildcard tests/fuzz/fuzz_*.c))
+FUZZ_BIN     := $(FUZZ_SRC:tests/fuzz/%.c=$(FUZZ_BUILD)/%)
 FUZZ_OBJ     := $(LIB_C:%.c=$(FUZZ_BUILD)/%.o) $(LIB_CXX:%.cpp=$(FUZZ_BUILD)/%.o)
 FUZZ_SAN     := -fsanitize=address,undefined -fno-sanitize-recover=undefined
 FUZZ_FLAGS   := -g -O1 -fno-omit-frame-pointer -ffp-contract=off -pthread -Wall -Wextra \
@@ -219,20 +228,20 @@ $(FUZZ_BUILD)/%.o: %.cpp
 	clang++ $(CPPFLAGS) -std=c++17 -I/usr/include/opencv4 $(FUZZ_FLAGS) $(DEPFLAGS) \
 	  -fsanitize=fuzzer-no-link $(FUZZ_SAN) -c $< -o $@
 
-$(FUZZ_BUILD)/fuzz_%: tests/fuzz_%.c $(FUZZ_OBJ)
+$(FUZZ_BUILD)/fuzz_%: tests/fuzz/fuzz_%.c $(FUZZ_OBJ)
 	@mkdir -p $(dir $@)
 	clang $(CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -fsanitize=fuzzer $(FUZZ_SAN) -c $< -o $@.o
 	clang++ -fsanitize=fuzzer $(FUZZ_SAN) -pthread -o $@ $@.o $(FUZZ_OBJ) $(LDLIBS)
 
 # Keep the objects (pattern-rule intermediates) so rebuilds are incremental.
 # (A .SECONDARY with a list makes only those secondary: the test objects too.)
-.SECONDARY: $(FUZZ_OBJ) $(SPIRV_H) $(TEST_BIN:%=%.o) $(BENCH_BIN:%=%.o) $(TEST_HELP)
+.SECONDARY: $(FUZZ_OBJ) $(SPIRV_H) $(TEST_SRC:%.c=$(BUILD)/%.o) $(BENCH_SRC:%.c=$(BUILD)/%.o) $(TEST_HELP)
 
 fuzz-build: $(FUZZ_BIN)
 
 fuzz: deps
 	@$(MAKE) --no-print-directory fuzz-build
-	@sh tests/fuzz.sh $(FUZZ_SECONDS) $(FUZZ_BIN)
+	@sh tests/fuzz/fuzz.sh $(FUZZ_SECONDS) $(FUZZ_BIN)
 
 # The headers: PREFIX/include/btfcar.h and PREFIX/include/btfcar/*.h.
 install: $(STATIC) $(SHARED) $(CLI)

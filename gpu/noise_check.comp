@@ -5,7 +5,7 @@
 // btf_noise4 for that (row, block) to z[i], the raw Philox-4x32-7 words of
 // the same counter to raw[i], and btf_noise1 of the block's 4 columns to z1[i].
 // The workgroup size is specialisation constant 0 (default 64), so the host
-// test (tests/test_vk.c) can check that results do not depend on it.
+// test (tests/unit/test_vk.c) can check that results do not depend on it.
 #version 450
 #extension GL_GOOGLE_include_directive : require
 

@@ -27,7 +27,7 @@
  * from its start-up) as leaks in "<unknown module>", which no suppression
  * can name. Pinning those libraries keeps their data reachable and their
  * frames named, so the leak check judges btfcar's own memory only
- * (tests/lsan.supp). */
+ * (tests/unit/lsan.supp). */
 static int pin_one(struct dl_phdr_info *info, size_t size, void *user)
 {
     (void)size;

@@ -1,6 +1,6 @@
 #!/bin/sh
 # Extracts the photographs of stochastic textures that the fidelity bench
-# (tests/bench_fidelity.c, docs/fidelity.md) uses, from Debian 12's gimp-data
+# (tests/bench/bench_fidelity.c, docs/fidelity.md) uses, from Debian 12's gimp-data
 # package: GIMP's patterns, photographs of real surfaces, GPL-3+ (the GIMP
 # authors; /usr/share/doc/gimp-data/copyright in the package). They are not
 # stored in this repository; this script downloads the package from the

@@ -48,7 +48,7 @@ done
 unset BTF_VK_DEVICE BTF_VK_VALIDATION
 
 # The test programs take lavapipe when neither loader variable is set
-# (tests/testutil.c); naming every installed driver lets them, like the
+# (tests/unit/testutil.c); naming every installed driver lets them, like the
 # command, see the real GPU. One variable set: the other follows it (the
 # loader reads VK_DRIVER_FILES from 1.3.234 on, VK_ICD_FILENAMES before).
 all_drivers() {
@@ -206,7 +206,7 @@ wait
 pids=""
 
 # "N/M" for a cmocka program's log: passed of run (a crash counts as one
-# failure, as tests/run.sh counts it).
+# failure, as tests/unit/run.sh counts it).
 tally() {
     ran=$(sed -n 's/^\[==========\] \([0-9]*\) test(s) run\./\1/p' "$1" | awk '{s+=$1} END {print s+0}')
     bad=$(sed -n 's/^\[  FAILED  \] \([0-9]*\) test(s), listed below:/\1/p' "$1" | awk '{s+=$1} END {print s+0}')

@@ -4,7 +4,7 @@
 set -eu
 
 # chromium: the browser test of `btfcar report` (build/check-page, tools/check-page.c).
-# slurm-wlm, munge: the cluster test (tests/test_slurm.sh, docs/cluster.md).
+# slurm-wlm, munge: the cluster test (tests/unit/test_slurm.sh, docs/cluster.md).
 PKGS="build-essential g++ pkg-config clang
 libopencv-core-dev libopencv-imgproc-dev
 libopenexr-dev libpng-dev libjpeg62-turbo-dev

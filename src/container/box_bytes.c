@@ -3,7 +3,7 @@
  * files (docs/model-format.md, "Conventions": u8..u32, i16, i32, f32 and
  * f64 little-endian, floats bit for bit), a growing writer and a
  * bounds-checked reader. The reader is what makes hostile input safe
- * (tests/fuzz_model.c): no read leaves the section it was given.
+ * (tests/fuzz/fuzz_model.c): no read leaves the section it was given.
  */
 #include "container/container.h"
 

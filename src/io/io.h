@@ -94,7 +94,7 @@ int btfcv_rgb_to_lab(const float *rgb, size_t n, float *lab, char *errbuf, size_
 int btfcv_dft2(double *re, double *im, int w, int h, int inverse, char *errbuf, size_t errlen);
 int btfcv_dct2(double *a, int w, int h, int inverse, char *errbuf, size_t errlen);
 
-/* Testing (tests/test_exr.c): 1 makes the EXR writer pack chunks with
+/* Testing (tests/unit/test_exr.c): 1 makes the EXR writer pack chunks with
  * OpenEXRCore's own packer instead of its F16C one (the same bytes). */
 extern int btf_exr_library_pack;
 

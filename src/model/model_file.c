@@ -13,7 +13,7 @@
  * The validator (model/model_check.c) serves both directions: the encoder
  * refuses any model the decoder would reject, so whatever btfcar writes it
  * can read, and the decoder trusts nothing it has not checked. Decoding is
- * designed for hostile input (it runs under libFuzzer, tests/fuzz_model.c):
+ * designed for hostile input (it runs under libFuzzer, tests/fuzz/fuzz_model.c):
  * every count is bounded before it sizes an allocation, every read is
  * bounds-checked, and a failure frees whatever was built.
  */

@@ -38,7 +38,7 @@
  *
  * The arithmetic is float, each result BTF_PRECISE, in one written order;
  * sqrt and division are the only operations whose last bits GPU drivers do
- * not pin down, so the two paths agree to rounding (tests/test_gpu_render.c
+ * not pin down, so the two paths agree to rounding (tests/unit/test_gpu_render.c
  * measures it). Keep this file in the common subset of C and GLSL (the
  * rules of src/synth/btf_noise.h and btf_hemisphere_lookup.h).
  */

@@ -19,7 +19,7 @@
  * that their CPU and GPU renders keep their bits. sqrt and division are
  * the only operations whose last bits GPU drivers do not pin down (on
  * lavapipe, the CPU's IEEE operations, both paths agree bit for bit;
- * tests/test_gpu_render.c, tests/test_gpu_rf.c).
+ * tests/unit/test_gpu_render.c, tests/unit/test_gpu_rf.c).
  *
  * Keep this file in the common subset of C11 and GLSL 4.50 (the rules of
  * src/synth/btf_noise.h, but sqrt through BTF_SQRT and division by "/"):

@@ -19,12 +19,12 @@
  * last bits differ between glibc and GPU drivers. Only sqrt and division
  * remain, as in src/render/btf_render_shared.h: on lavapipe (the CPU's IEEE
  * operations) both paths give the same bits; a real GPU may round those two
- * differently (tests/test_gpu_rf.c states the tolerance).
+ * differently (tests/unit/test_gpu_rf.c states the tolerance).
  *
  * Accuracy against the double-precision functions of libm: exp2 within
  * 1.2e-7 relative on [-125, 126]; log2 from btf_noise_log (1e-7 relative);
  * pow(c, n) = exp2(n log2 c) within 1.5e-7 (2 + |n log2 c|) relative;
- * atan2 within 3e-7 rad (tests/test_rf.c, shared_math_matches_libm). Values below FLT_MIN are taken as 0, so no
+ * atan2 within 3e-7 rad (tests/unit/test_rf.c, shared_math_matches_libm). Values below FLT_MIN are taken as 0, so no
  * subnormal (which GPUs may flush) is ever an operand.
  *
  * Data access goes through macros that the includer defines BEFORE

@@ -11,7 +11,7 @@
  *  - 32-bit integer arithmetic (Philox-4x32-7, a counter-based generator:
  *    J. K. Salmon, M. A. Moraes, R. O. Dror, D. E. Shaw, "Parallel random
  *    numbers: as easy as 1, 2, 3", SC'11; Random123 known answers in
- *    tests/test_noise.c).  The paper reports Philox-4x32 with 7 rounds
+ *    tests/unit/test_noise.c).  The paper reports Philox-4x32 with 7 rounds
  *    passing all of TestU01's BigCrush; Random123 defaults to 10 for a
  *    safety margin, which texture synthesis, whose noise the CAR model
  *    filters, does not need, while the generator is the largest cost of CPU
@@ -34,7 +34,7 @@
  * ("precise" in GLSL, so SPIR-V marks each operation NoContraction); the C
  * build uses -ffp-contract=off.  Parentheses fix the evaluation order in both.
  *
- * Accuracy (measured by tests/test_noise.c, exhaustive or dense sweeps):
+ * Accuracy (measured by tests/unit/test_noise.c, exhaustive or dense sweeps):
  *  - btf_noise_log: 5.0e-7 absolute on every multiple of 2^-24 in (0, 1)
  *    (a quarter ulp of ln 2^-24), 1.0e-7 relative there and on [2^-100, 2^100];
  *  - btf_noise_sqrt: 2.2e-7 relative (at most 4 ulp); sqrt(0) = 0;

@@ -17,7 +17,7 @@
  * Zen 3 core. It performs the very same IEEE operations in the same order
  * (additions, multiplications, exact int -> float conversions, bit
  * operations; no FMA: the build forbids contraction and nothing here asks
- * for it), so the bits do not change: tests/test_noise.c compares the two
+ * for it), so the bits do not change: tests/unit/test_noise.c compares the two
  * paths over many rows, and the GPU parity tests hold.
  */
 #include "core/core.h"

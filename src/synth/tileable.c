@@ -4,7 +4,7 @@
  * btf_synthesise_torus_dft): the pyramid of Haindl & Filip 2007, section
  * II.C, on a torus. Production tileable synthesis is the streaming
  * recursion driven by periodic noise (field.c, rows.c), whose window
- * converges to these fields; tests/test_synth_tileable.c measures how close. Every level l of every spectral band is a CAR field on the
+ * converges to these fields; tests/unit/test_synth_tileable.c measures how close. Every level l of every spectral band is a CAR field on the
  * (W >> l) x (H >> l) torus (torus.c); the pyramid collapses as in the
  * streaming path, G_l = mean_l + Y_l + up(G_{l+1}), with the same pyrUp
  * weights (btf_up_row, btf_level_sum_row) but coarse indices taken modulo

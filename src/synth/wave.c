@@ -34,7 +34,7 @@
  * code (src/synth/rows.c) and the GPU shader (btf_shared.h): earlier-row terms
  * in stored order starting from 0, then sigma e, then the same-row terms
  * farthest first. Noise is btf_noise4 of the same (row, block) through the
- * same AVX2 code as noise rows (src/synth/noise_avx2.h). tests/test_car.c checks
+ * same AVX2 code as noise rows (src/synth/noise_avx2.h). tests/unit/test_car.c checks
  * every value against the recursion written out pixel by pixel.
  *
  * Scope: GCC on x86-64 with AVX2 (else, or when the caller asks for the

@@ -97,17 +97,6 @@ btf_gpu *cli_open_gpu(const char *backend, int device, btf_error *err);
 btf_gpu *cli_open_gpu_for(const char *backend, int device, uint64_t image_bytes,
                           btf_error *err);
 
-/* A writer thread for whole images (cli/write_behind.c): put hands img
- * over (taking it; it blocks while the previous one is still being written)
- * and write(user, key, img, err) runs on the thread; the first failure is
- * returned by the next put and by finish, which waits for the last write
- * (wait_s: how long). Without a thread, put writes. */
-typedef int (*cli_behind_fn)(void *user, int key, const btf_image *img, btf_error *err);
-typedef struct cli_behind cli_behind;
-cli_behind *cli_behind_start(cli_behind_fn write, void *user, btf_error *err);
-int cli_behind_put(cli_behind *b, int key, btf_image *img, btf_error *err);
-int cli_behind_finish(cli_behind *b, double *wait_s, btf_error *err);
-
 /* Monotonic wall-clock seconds, for the timings commands print. */
 double cli_now(void);
 

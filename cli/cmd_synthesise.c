@@ -4,6 +4,7 @@
  * environment switches the library does not (BTF_VK_*, BTF_SYNTH_WAVE,
  * BTF_NOISE_PORTABLE) and passes them as options. */
 #include "cli.h"
+#include "synth/each_behind.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -37,7 +38,7 @@ static const char ABOUT[] =
 typedef struct phases {
     double read, synth, rows, close, preview, exr_open;
     btf_exr_times exr;
-    int behind; /* whole images, written by a thread of ours (synth_matched) */
+    int behind; /* whole images, written behind the synthesis (synth_matched) */
 } phases;
 
 typedef struct sink {
@@ -171,22 +172,28 @@ static int write_range_maps(const btf_model *m, int w, int h, uint64_t seed, con
     return rc;
 }
 
-/* The GPU path: btf_gpu_synthesise_each groups the chosen subspaces by the
- * device's memory budget (the library's policy) and hands each finished
- * image here to be written. */
-typedef struct gpu_sink {
+/* Where whole images i = 0.. (subspaces subs[i]) are written. */
+typedef struct image_sink {
     const btf_model *m;
     const output *out;
     uint64_t seed;
     const int *subs;
     int write_failed; /* the error is the output's, not the model's */
-} gpu_sink;
+} image_sink;
 
+static int write_each(void *user, int i, btf_image *img, btf_error *err)
+{
+    image_sink *s = user;
+    return write_image(img, s->m, s->subs[i], s->seed, s->out, err);
+}
+
+/* The GPU path: btf_gpu_synthesise_each groups the chosen subspaces by the
+ * device's memory budget (the library's policy) and hands each finished
+ * image here to be written. */
 static int gpu_write(void *user, int i, btf_image *img, btf_error *err)
 {
-    gpu_sink *s = user;
-    int rc = write_image(img, s->m, s->subs[i], s->seed, s->out, err);
-    s->write_failed = rc != 0;
+    int rc = write_each(user, i, img, err);
+    ((image_sink *)user)->write_failed = rc != 0;
     return rc;
 }
 
@@ -199,7 +206,7 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick,
     for (int k = 0; k < m->n_subspaces; k++)
         if (pick[k])
             subs[n++] = k;
-    gpu_sink s = {m, out, so->seed, subs, 0};
+    image_sink s = {m, out, so->seed, subs, 0};
     int rc = btf_gpu_synthesise_each(g, m, subs, n, so, gpu_write, &s, err);
     if (!s.write_failed) /* a write's message names its file */
         name_model(rc, out->model_path, err);
@@ -209,40 +216,10 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick,
 
 /* The CPU path with colour matching (docs/synthesis.md, "Colour
  * matching"), which reads whole images anyway: btf_synthesise_each matches
- * image i - 1 on the CPU that image i's fields leave idle, and a writer
- * thread (cli/write_behind.c) writes each finished image beside the next
- * one's synthesis: three images in memory at most (one written, one
- * matched, one synthesised). The bytes are those of the streaming path. */
-typedef struct matched_sink {
-    const btf_model *m;
-    const output *out;
-    uint64_t seed;
-    const int *subs;
-    int n;
-    cli_behind *behind;
-    btf_progress_fn progress;
-    double put_s;
-    int write_failed; /* the error is the output's, not the model's */
-} matched_sink;
-
-static int write_behind(void *user, int k, const btf_image *img, btf_error *err)
-{
-    matched_sink *s = user;
-    return write_image(img, s->m, k, s->seed, s->out, err);
-}
-
-static int put_image(void *user, int i, btf_image *img, btf_error *err)
-{
-    matched_sink *s = user;
-    double t0 = cli_now();
-    int rc = cli_behind_put(s->behind, s->subs[i], img, err);
-    s->put_s += cli_now() - t0;
-    s->write_failed = rc != 0;
-    if (rc == 0 && s->progress)
-        s->progress(NULL, (double)(i + 1) / s->n, "synthesising");
-    return rc;
-}
-
+ * image i - 1 on the CPU that image i's fields leave idle, and
+ * btf_synthesise_each_behind writes each finished image on a thread beside
+ * the next one's synthesis: three images in memory at most (one written,
+ * one matched, one synthesised). The bytes are those of the streaming path. */
 static int synth_matched(const cli_ctx *c, const btf_model *m, const unsigned char *pick,
                          const btf_synth_opts *so, const output *out, btf_error *err)
 {
@@ -254,22 +231,15 @@ static int synth_matched(const cli_ctx *c, const btf_model *m, const unsigned ch
             subs[n++] = k;
     output wout = *out;
     wout.exr.background = 0; /* the writer is a thread already */
-    matched_sink s = {m, &wout, so->seed, subs, n, NULL, cli_progress_fn(c), 0.0, 0};
-    s.behind = cli_behind_start(write_behind, &s, err);
-    int rc = s.behind ? 0 : BTF_E_NOMEM;
-    double t0 = cli_now(), wait = 0;
-    if (rc == 0)
-        rc = btf_synthesise_each(m, subs, n, so, put_image, &s, err);
-    if (!s.write_failed) /* a write's message names its file */
+    image_sink s = {m, &wout, so->seed, subs, 0};
+    btf_each_behind b = {.write = write_each, .user = &s, .progress = cli_progress_fn(c)};
+    double t0 = cli_now();
+    int rc = btf_synthesise_each_behind(m, subs, n, so, &b, err);
+    if (!b.write_failed) /* a write's message names its file */
         name_model(rc, out->model_path, err);
-    double t1 = cli_now();
-    btf_error werr = {0};
-    int wrc = cli_behind_finish(s.behind, &wait, &werr);
-    if (rc == 0 && wrc)
-        rc = wrc, *err = werr;
-    out->ph->synth += t1 - t0;
-    out->ph->rows += s.put_s;
-    out->ph->exr.wait_s += wait;
+    out->ph->synth += cli_now() - t0 - b.wait_s;
+    out->ph->rows += b.hand_s;
+    out->ph->exr.wait_s += b.wait_s;
     out->ph->behind = 1;
     free(subs);
     return rc;

@@ -32,6 +32,7 @@
  * that the fsync before the rename has little left to wait for. */
 #define _GNU_SOURCE
 #include <stdio.h>
+#include "core/behind.h"
 #include "core/core.h"
 #include "io/exr.h"
 
@@ -40,7 +41,6 @@
 #include <float.h>
 #include <inttypes.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,15 +85,17 @@ static int64_t write_at(btf_exr_io *io, const void *buffer, uint64_t sz, uint64_
 }
 
 /* Background writing: the caller fills slab `fill` (whole chunks) while the
- * writer's thread compresses and writes the queued ones, oldest first.
- * NSLAB slabs of about SLAB_BYTES (at least one chunk) bound the memory. */
+ * write-behind thread (core/behind.h) compresses and writes the queued ones,
+ * oldest first. NSLAB slabs of about SLAB_BYTES (at least one chunk) bound
+ * the memory: the thread holds nslab - 1 of them at most, and the caller
+ * fills the one left. */
 #define NSLAB 6
 #define SLAB_BYTES ((size_t)1 << 18)
 
 typedef struct slab {
     float *data;
     int y0, nrows;
-} slab;
+} slab; /* also the thread's job: these rows, from data */
 
 /* Chunks are written through a buffer of this many bytes: one-scanline
  * chunks (NONE, RLE, ZIPS) would otherwise cost a system call per row. */
@@ -126,15 +128,12 @@ struct btf_exr_writer {
     uint64_t bytes;             /* the file's size, once finished */
     int fast_pack;              /* pack with F16C (fast_pack), not the library */
     /* background writing (background 1) */
-    int background, has_thread, nslab;
+    int background, nslab;
     slab slabs[NSLAB];
-    int fill, head, queued;     /* slab being filled; oldest queued; how many */
-    int stop;                   /* close or abort: no more slabs */
+    int fill;                   /* the slab being filled */
+    btf_behind *behind;         /* the thread, until close or abort */
     int thread_failed;          /* the thread's error, in thread_err */
     btf_error thread_err;
-    pthread_t thread;
-    pthread_mutex_t mu;
-    pthread_cond_t cv;
 };
 
 /* Writes out the buffered bytes. */
@@ -279,7 +278,7 @@ static exr_result_t writer_header(btf_exr_writer *w, const btf_exr_meta *meta)
     return rv;
 }
 
-static void *writer_thread(void *arg);
+static btf_status write_slab(void *user, void *job, btf_error *err);
 
 /* The staging buffers: one chunk, or NSLAB slabs and the thread. */
 static btf_status start_slabs(btf_exr_writer *w, btf_error *err)
@@ -298,20 +297,15 @@ static btf_status start_slabs(btf_exr_writer *w, btf_error *err)
         return BTF_E_NOMEM;
     if (!w->background)
         return BTF_OK;
-    if (pthread_mutex_init(&w->mu, NULL) != 0)
-        return btf_fail(err, BTF_E_NOMEM, "%s: cannot create a lock", w->path);
-    if (pthread_cond_init(&w->cv, NULL) != 0) {
-        pthread_mutex_destroy(&w->mu);
-        return btf_fail(err, BTF_E_NOMEM, "%s: cannot create a condition", w->path);
+    btf_behind_spec spec = {.run = write_slab, .user = w, .job_size = sizeof(slab),
+                            .depth = w->nslab - 1};
+    btf_error e = {0};
+    if (!(w->behind = btf_behind_start(&spec, &e))) {
+        btf_error_name(&e, w->path);
+        if (err)
+            *err = e;
+        return e.code;
     }
-    int e = pthread_create(&w->thread, NULL, writer_thread, w);
-    if (e) {
-        pthread_cond_destroy(&w->cv);
-        pthread_mutex_destroy(&w->mu);
-        return btf_fail(err, BTF_E_NOMEM, "%s: cannot start the writer thread: %s", w->path,
-                        strerror(e));
-    }
-    w->has_thread = 1;
     return BTF_OK;
 }
 
@@ -630,88 +624,51 @@ static btf_status write_rows(btf_exr_writer *w, const float *data, int y0, int n
     return BTF_OK;
 }
 
-/* The writer's thread: the queued slabs in order, until stop. After an
- * error it only frees slabs (the error is final; the caller reports it). */
-static void *writer_thread(void *arg)
+/* The thread's job: one slab's rows. The sink is the thread's while it
+ * writes (the caller calls no library function meanwhile). */
+static btf_status write_slab(void *user, void *job, btf_error *err)
 {
-    btf_exr_writer *w = arg;
-    pthread_mutex_lock(&w->mu);
-    for (;;) {
-        while (!w->queued && !w->stop)
-            pthread_cond_wait(&w->cv, &w->mu);
-        if (!w->queued)
-            break;
-        slab *s = &w->slabs[w->head];
-        int skip = w->thread_failed || w->stop > 1;
-        pthread_mutex_unlock(&w->mu);
-        btf_status rc = BTF_OK;
-        if (!skip) {
-            btf_exr_io *prev = btf_exr_sink_enter(&w->io);
-            rc = write_rows(w, s->data, s->y0, s->nrows, &w->thread_err);
-            btf_exr_sink_leave(prev);
-        }
-        pthread_mutex_lock(&w->mu);
-        if (rc)
-            w->thread_failed = 1;
-        w->head = (w->head + 1) % w->nslab;
-        w->queued--;
-        pthread_cond_broadcast(&w->cv);
-    }
-    pthread_mutex_unlock(&w->mu);
-    return NULL;
-}
-
-/* The thread's error, if it had one, into err. Under the lock. */
-static btf_status thread_status(btf_exr_writer *w, btf_error *err)
-{
-    if (!w->thread_failed)
-        return BTF_OK;
-    if (err)
-        *err = w->thread_err;
-    return w->thread_err.code ? (btf_status)w->thread_err.code : BTF_E_IO;
+    btf_exr_writer *w = user;
+    const slab *s = job;
+    btf_exr_io *prev = btf_exr_sink_enter(&w->io);
+    btf_status rc = write_rows(w, s->data, s->y0, s->nrows, err);
+    btf_exr_sink_leave(prev);
+    return rc;
 }
 
 /* The staged rows (whole chunks, or the image's last rows) go out: written
- * here, or queued for the thread once a free slab is there to fill next. */
+ * here, or queued for the thread, which holds nslab - 1 slabs at most, so
+ * the next slab is free to fill when the put returns. */
 static btf_status flush_slab(btf_exr_writer *w, btf_error *err)
 {
     int y0 = w->rows_done - w->rows_staged, n = w->rows_staged;
     w->rows_staged = 0;
-    if (!w->has_thread)
+    if (!w->behind)
         return write_rows(w, w->stage, y0, n, err);
     double t0 = btf_now();
-    pthread_mutex_lock(&w->mu);
-    btf_status rc = thread_status(w, err);
-    if (!rc) {
-        w->slabs[w->fill].y0 = y0;
-        w->slabs[w->fill].nrows = n;
+    slab job = {w->stage, y0, n};
+    btf_status rc = btf_behind_put(w->behind, &job, err);
+    if (!rc)
         w->fill = (w->fill + 1) % w->nslab;
-        w->queued++;
-        pthread_cond_broadcast(&w->cv);
-        while (w->queued == w->nslab && !w->thread_failed)
-            pthread_cond_wait(&w->cv, &w->mu);
-        rc = thread_status(w, err);
-    }
-    pthread_mutex_unlock(&w->mu);
     w->stage = w->slabs[w->fill].data;
     w->t.wait_s += btf_now() - t0;
     return rc;
 }
 
-/* Stops the thread after the queued slabs (how 1) or at once, dropping
- * them (how 2), and waits for it. */
+/* Stops the thread after the queued slabs, keeping its error
+ * (WRITE_QUEUED), or at once, dropping them (DROP_QUEUED: an abort), and
+ * waits for it. */
+enum { WRITE_QUEUED, DROP_QUEUED };
+
 static void stop_thread(btf_exr_writer *w, int how)
 {
-    if (!w->has_thread)
+    if (!w->behind)
         return;
-    pthread_mutex_lock(&w->mu);
-    w->stop = how;
-    pthread_cond_broadcast(&w->cv);
-    pthread_mutex_unlock(&w->mu);
-    pthread_join(w->thread, NULL);
-    pthread_cond_destroy(&w->cv);
-    pthread_mutex_destroy(&w->mu);
-    w->has_thread = 0;
+    if (how == DROP_QUEUED)
+        btf_behind_abort(w->behind);
+    else if (btf_behind_finish(w->behind, &w->thread_err) != BTF_OK)
+        w->thread_failed = 1;
+    w->behind = NULL;
 }
 
 btf_status btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nrows, btf_error *err)
@@ -729,7 +686,7 @@ btf_status btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nro
     size_t rowlen = (size_t)w->width * (size_t)w->channels;
     /* With the thread, this thread calls no library function: the sink
      * (and w->io) belong to the thread. */
-    btf_exr_io *prev = w->has_thread ? NULL : btf_exr_sink_enter(&w->io);
+    btf_exr_io *prev = w->behind ? NULL : btf_exr_sink_enter(&w->io);
     for (int i = 0; i < nrows && !rc; i++) {
         double t0 = btf_now();
         rc = stage_row(w, rows + (size_t)i * rowlen, err);
@@ -737,7 +694,7 @@ btf_status btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nro
         if (!rc && (w->rows_staged == w->slab_rows || w->rows_done == w->height))
             rc = flush_slab(w, err);
     }
-    if (!w->has_thread)
+    if (!w->behind)
         btf_exr_sink_leave(prev);
     /* Any error is final: a file with a hole in it must never be committed. */
     if (rc)
@@ -748,7 +705,7 @@ btf_status btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nro
 /* Writes the offset table, closes the descriptor and renames into place. */
 static btf_status writer_finish(btf_exr_writer *w, btf_error *err)
 {
-    stop_thread(w, 1);
+    stop_thread(w, WRITE_QUEUED);
     if (w->thread_failed) {
         if (err)
             *err = w->thread_err;
@@ -790,7 +747,7 @@ btf_status btf_exr_writer_close(btf_exr_writer *w, btf_error *err)
         rc = btf_fail(err, BTF_E_ARG, "%s: EXR writer closed after %d of %d rows; nothing written",
                       w->path, w->rows_done, w->height);
     if (!rc) {
-        stop_thread(w, 1); /* the queued rows first: then the sink is ours */
+        stop_thread(w, WRITE_QUEUED); /* the queued rows first: then the sink is ours */
         btf_exr_io *prev = btf_exr_sink_enter(&w->io);
         rc = writer_finish(w, err);
         btf_exr_sink_leave(prev);
@@ -811,7 +768,7 @@ void btf_exr_writer_abort(btf_exr_writer *w)
 {
     if (!w)
         return;
-    stop_thread(w, 2);
+    stop_thread(w, DROP_QUEUED);
     /* Messages from tearing down a half-written file are of no interest. */
     btf_exr_io *prev = btf_exr_sink_enter(&w->io);
     if (w->ctx) {

@@ -158,7 +158,7 @@ $(BUILD)/tests/test_alloc_fail: TEST_LDFLAGS = $(ALLOC_WRAP)
 # Writers taking turns (tests/unit/test_output_turns.c): the library's renames go
 # through the test's __wrap_rename, which makes two writers alternate.
 $(BUILD)/tests/test_output_turns: TEST_LDFLAGS = -Wl,--wrap=rename
-# Writing behind without a thread (tests/test_behind.c): the library's
+# Writing behind without a thread (tests/unit/test_behind.c): the library's
 # pthread_create goes through the test's __wrap_pthread_create, which fails
 # when told to.
 $(BUILD)/tests/test_behind: TEST_LDFLAGS = -Wl,--wrap=pthread_create

@@ -136,8 +136,8 @@ $(SHARED): $(LIB_OBJ) $(EXPORT_MAP)
 
 # The dynamic symbols of libbtfcar.so against the header's declarations,
 # both ways: no internal symbol exported, no public function missing.
-check-exports: $(SHARED) $(PUBLIC_H)
-	@CC="$(CC)" sh tools/check-exports.sh $(SHARED) include/btfcar.h
+check-exports: $(SHARED) $(STATIC) $(PUBLIC_H)
+	@CC="$(CC)" sh tools/check-exports.sh $(SHARED) include/btfcar.h $(STATIC)
 
 $(CLI): $(CLI_OBJ) $(STATIC)
 	$(CC) $(SAN) -pthread -o $@ $(CLI_OBJ) $(STATIC) $(LDLIBS)

@@ -148,7 +148,7 @@ static int name_model(int rc, const char *model, btf_error *err)
 }
 
 /* --range: the seamless range map and its normal map at the output size
- * (btf_range_map; docs/render.md), as 32-bit float EXR whatever --half
+ * (btf__range_map; docs/render.md), as 32-bit float EXR whatever --half
  * says, since heights and normals are data, not colours. */
 static int write_range_maps(const btf_model *m, int w, int h, uint64_t seed, const output *out,
                             btf_error *err)
@@ -217,7 +217,7 @@ static int synth_gpu(btf_gpu *g, const btf_model *m, const unsigned char *pick,
 /* The CPU path with colour matching (docs/synthesis.md, "Colour
  * matching"), which reads whole images anyway: btf_synthesise_each matches
  * image i - 1 on the CPU that image i's fields leave idle, and
- * btf_synthesise_each_behind writes each finished image on a thread beside
+ * btf__synthesise_each_behind writes each finished image on a thread beside
  * the next one's synthesis: three images in memory at most (one written,
  * one matched, one synthesised). The bytes are those of the streaming path. */
 static int synth_matched(const cli_ctx *c, const btf_model *m, const unsigned char *pick,
@@ -234,7 +234,7 @@ static int synth_matched(const cli_ctx *c, const btf_model *m, const unsigned ch
     image_sink s = {m, &wout, so->seed, subs, 0};
     btf_each_behind b = {.write = write_each, .user = &s, .progress = cli_progress_fn(c)};
     double t0 = cli_now();
-    int rc = btf_synthesise_each_behind(m, subs, n, so, &b, err);
+    int rc = btf__synthesise_each_behind(m, subs, n, so, &b, err);
     if (!b.write_failed) /* a write's message names its file */
         name_model(rc, out->model_path, err);
     out->ph->synth += cli_now() - t0 - b.wait_s;

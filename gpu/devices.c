@@ -25,10 +25,10 @@ btf_status btf_gpu_list_devices(btf_gpu_device **list, int *count, btf_error *er
     *count = 0;
     btf_vk_device_info *in;
     int n;
-    btf_status rc = btf_vk_list_devices(&in, &n, err);
+    btf_status rc = btf__vk_list_devices(&in, &n, err);
     if (rc)
         return rc;
-    btf_gpu_device *out = btf_calloc(n > 0 ? (size_t)n : 1, sizeof *out, err);
+    btf_gpu_device *out = btf__calloc(n > 0 ? (size_t)n : 1, sizeof *out, err);
     if (!out) {
         free(in);
         return BTF_E_NOMEM;
@@ -40,8 +40,8 @@ btf_status btf_gpu_list_devices(btf_gpu_device **list, int *count, btf_error *er
         d->type = in[i].type >= (int)BTF_GPU_OTHER && in[i].type <= (int)BTF_GPU_CPU
                       ? (btf_gpu_device_type)in[i].type
                       : BTF_GPU_OTHER;
-        d->type_name = btf_vk_type_name(in[i].type);
-        btf_vk_version_text(in[i].api_version, d->vulkan_version, sizeof d->vulkan_version);
+        d->type_name = btf__vk_type_name(in[i].type);
+        btf__vk_version_text(in[i].api_version, d->vulkan_version, sizeof d->vulkan_version);
         d->usable = in[i].usable;
         d->max_buffer_bytes = in[i].max_storage_buffer_range;
         d->device_local_bytes = in[i].device_local_bytes;

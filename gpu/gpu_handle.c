@@ -41,29 +41,29 @@ btf_status btf_gpu_open(const btf_gpu_opts *opts, btf_gpu **out, btf_error *err)
 {
     *out = NULL;
     btf_gpu_opts d = btf_gpu_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_gpu_open", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_gpu_open", err))
         return BTF_E_ARG;
     o.use_device = o.use_device ? o.use_device : d.use_device;
     o.device = o.device ? o.device : d.device;
     o.allow_cpu = o.allow_cpu ? o.allow_cpu : d.allow_cpu;
     o.validation = o.validation ? o.validation : d.validation;
-    btf_gpu *g = btf_calloc(1, sizeof *g, err);
+    btf_gpu *g = btf__calloc(1, sizeof *g, err);
     if (!g)
         return BTF_E_NOMEM;
     btf_vk_opts vo = {.use_device = o.use_device, .device = o.device, .allow_cpu = o.allow_cpu,
                       .validation = o.validation};
-    btf_status rc = btf_vk_create(&vo, &g->vk, err);
+    btf_status rc = btf__vk_create(&vo, &g->vk, err);
     if (rc == 0)
-        rc = btf_vk_pipeline_create(g->vk, synth_field_spv, sizeof synth_field_spv, 2, 20, NULL, 0,
-                                    &g->field, err); /* push: seed, s0, s1, task_base */
+        rc = btf__vk_pipeline_create(g->vk, synth_field_spv, sizeof synth_field_spv, 2, 20, NULL, 0,
+                                     &g->field, err); /* push: seed, s0, s1, task_base */
     if (rc == 0)
-        rc = btf_vk_pipeline_create(g->vk, synth_collapse_spv, sizeof synth_collapse_spv, 3, 4,
-                                    NULL, 0, &g->collapse, err);
+        rc = btf__vk_pipeline_create(g->vk, synth_collapse_spv, sizeof synth_collapse_spv, 3, 4,
+                                     NULL, 0, &g->collapse, err);
     if (rc == 0)
-        rc = btf_vk_pipeline_create(g->vk, synth_unmix_spv, sizeof synth_unmix_spv, 3, 4, NULL, 0,
-                                    &g->unmix, err);
+        rc = btf__vk_pipeline_create(g->vk, synth_unmix_spv, sizeof synth_unmix_spv, 3, 4, NULL, 0,
+                                     &g->unmix, err);
     if (rc == 0)
-        rc = btf_gpu_matcher_create(g->vk, &g->matcher, err);
+        rc = btf__gpu_matcher_create(g->vk, &g->matcher, err);
     if (rc) {
         btf_gpu_close(g);
         return rc;
@@ -76,57 +76,57 @@ void btf_gpu_close(btf_gpu *g)
 {
     if (!g)
         return;
-    btf_vk_pipeline_destroy(g->field);
-    btf_vk_pipeline_destroy(g->collapse);
-    btf_vk_pipeline_destroy(g->unmix);
-    btf_gpu_matcher_free(g->matcher);
-    btf_vk_destroy(g->vk);
+    btf__vk_pipeline_destroy(g->field);
+    btf__vk_pipeline_destroy(g->collapse);
+    btf__vk_pipeline_destroy(g->unmix);
+    btf__gpu_matcher_free(g->matcher);
+    btf__vk_destroy(g->vk);
     free(g);
 }
 
 const char *btf_gpu_device_name(const btf_gpu *g)
 {
-    return btf_vk_info(g->vk)->name;
+    return btf__vk_info(g->vk)->name;
 }
 
-int btf_gpu_is_cpu(const btf_gpu *g)
+int btf__gpu_is_cpu(const btf_gpu *g)
 {
-    return btf_vk_info(g->vk)->is_cpu;
+    return btf__vk_info(g->vk)->is_cpu;
 }
 
 unsigned btf_gpu_validation_errors(const btf_gpu *g)
 {
-    return btf_vk_validation_errors(g->vk);
+    return btf__vk_validation_errors(g->vk);
 }
 
-void btf_gpu_last_tiling(const btf_gpu *g, int *batches, int *jobs)
+void btf__gpu_last_tiling(const btf_gpu *g, int *batches, int *jobs)
 {
     *batches = g->batches;
     *jobs = g->jobs;
 }
 
-void btf_gpu_set_max_buffer_bytes(btf_gpu *g, uint64_t bytes)
+void btf__gpu_set_max_buffer_bytes(btf_gpu *g, uint64_t bytes)
 {
     g->max_buffer_bytes = bytes;
 }
 
 const char *btf_gpu_first_validation_message(const btf_gpu *g)
 {
-    return btf_vk_first_validation_message(g->vk);
+    return btf__vk_first_validation_message(g->vk);
 }
 
-uint64_t btf_gpu_max_buffer_bytes(const btf_gpu *g)
+uint64_t btf__gpu_max_buffer_bytes(const btf_gpu *g)
 {
-    uint64_t dev = btf_vk_info(g->vk)->max_storage_buffer_range;
+    uint64_t dev = btf__vk_info(g->vk)->max_storage_buffer_range;
     return g->max_buffer_bytes && g->max_buffer_bytes < dev ? g->max_buffer_bytes : dev;
 }
 
-const btf_gpu_matcher *btf_gpu_match_pipes(const btf_gpu *g)
+const btf_gpu_matcher *btf__gpu_match_pipes(const btf_gpu *g)
 {
     return g->matcher;
 }
 
-btf_vk *btf_gpu_vk(btf_gpu *g)
+btf_vk *btf__gpu_vk(btf_gpu *g)
 {
     return g->vk;
 }
@@ -144,18 +144,18 @@ static uint64_t floats_per_buffer(uint64_t max_buffer_bytes)
     return cap > 0 ? cap : 1;
 }
 
-uint64_t btf_gpu_images_cap(const btf_gpu *g)
+uint64_t btf__gpu_images_cap(const btf_gpu *g)
 {
-    return floats_per_buffer(btf_gpu_max_buffer_bytes(g));
+    return floats_per_buffer(btf__gpu_max_buffer_bytes(g));
 }
 
 /* Bindings of the render pass besides its two arrays, the images and the
  * range and normal maps (gpu/render.comp). */
 #define RENDER_OTHER_BINDINGS 6
 
-int btf_gpu_images_buffers(const btf_gpu *g)
+int btf__gpu_images_buffers(const btf_gpu *g)
 {
-    int64_t n = ((int64_t)btf_vk_info(g->vk)->max_storage_buffers - RENDER_OTHER_BINDINGS) / 2;
+    int64_t n = ((int64_t)btf__vk_info(g->vk)->max_storage_buffers - RENDER_OTHER_BINDINGS) / 2;
     return n >= BTF_GPU_DEVICE_BUFFERS ? BTF_GPU_DEVICE_BUFFERS : n >= 1 ? (int)n : 1;
 }
 
@@ -174,9 +174,9 @@ static uint64_t budget_bytes(uint64_t max_buffer_bytes, uint64_t heap_bytes)
 
 uint64_t btf_gpu_memory_budget(const btf_gpu *g)
 {
-    uint64_t b = budget_bytes(btf_gpu_max_buffer_bytes(g),
-                              btf_vk_info(g->vk)->device_local_bytes);
-    uint64_t spans = 4ull * btf_gpu_images_buffers(g) * btf_gpu_images_cap(g);
+    uint64_t b = budget_bytes(btf__gpu_max_buffer_bytes(g),
+                              btf__vk_info(g->vk)->device_local_bytes);
+    uint64_t spans = 4ull * btf__gpu_images_buffers(g) * btf__gpu_images_cap(g);
     return b < spans ? b : spans;
 }
 
@@ -185,7 +185,7 @@ int btf_gpu_auto_fits(const btf_gpu *g, uint64_t image_bytes)
     return g && image_bytes <= btf_gpu_memory_budget(g);
 }
 
-/* The automatic choice's order (as btf_vk_create's best device):
+/* The automatic choice's order (as btf__vk_create's best device):
  * discrete, integrated, virtual, other; a CPU device never. */
 static int auto_rank(btf_gpu_device_type t)
 {

@@ -9,8 +9,8 @@
  * limit (maxStorageBufferRange) bounds an image; one walker, each_piece,
  * cuts every transfer where it crosses a buffer, so the host writes the
  * index arithmetic (float f in buffer f / cap at f % cap, the shaders'
- * too) once. How large an array of a btf_gpu may be (btf_gpu_images_cap,
- * btf_gpu_images_buffers) is a matter of the device's limits:
+ * too) once. How large an array of a btf_gpu may be (btf__gpu_images_cap,
+ * btf__gpu_images_buffers) is a matter of the device's limits:
  * gpu/gpu_handle.c. Of the GPU files it calls only the Vulkan layer
  * (gpu/vk.h).
  */
@@ -52,12 +52,12 @@ static btf_status copy_piece(void *user, btf_vk_buffer *buf, uint64_t at_bytes, 
                              uint64_t n, btf_error *err)
 {
     piece_copy *c = user;
-    return btf_vk_job_copy(c->job, c->src, c->src_bytes + 4 * done, buf, at_bytes, 4 * n, err);
+    return btf__vk_job_copy(c->job, c->src, c->src_bytes + 4 * done, buf, at_bytes, 4 * n, err);
 }
 
-btf_status btf_gpu_images_copy_in(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_bytes,
-                                  const btf_gpu_images *im, uint64_t off, uint64_t floats,
-                                  btf_error *err)
+btf_status btf__gpu_images_copy_in(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_bytes,
+                                   const btf_gpu_images *im, uint64_t off, uint64_t floats,
+                                   btf_error *err)
 {
     piece_copy c = {job, src, src_bytes};
     return each_piece(im, off, floats, copy_piece, &c, err);
@@ -73,48 +73,48 @@ static btf_status host_piece(void *user, btf_vk_buffer *buf, uint64_t at_bytes, 
                              uint64_t n, btf_error *err)
 {
     piece_host *h = user;
-    return h->down ? btf_vk_buffer_download(h->vk, buf, at_bytes, h->down + done, 4 * n, err)
-                   : btf_vk_buffer_upload(h->vk, buf, at_bytes, h->up + done, 4 * n, err);
+    return h->down ? btf__vk_buffer_download(h->vk, buf, at_bytes, h->down + done, 4 * n, err)
+                   : btf__vk_buffer_upload(h->vk, buf, at_bytes, h->up + done, 4 * n, err);
 }
 
-btf_status btf_gpu_images_download(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
-                                   float *data, uint64_t floats, btf_error *err)
+btf_status btf__gpu_images_download(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
+                                    float *data, uint64_t floats, btf_error *err)
 {
     piece_host h = {vk, data, NULL};
     return each_piece(im, off, floats, host_piece, &h, err);
 }
 
-btf_status btf_gpu_images_upload(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
-                                 const float *data, uint64_t floats, btf_error *err)
+btf_status btf__gpu_images_upload(btf_vk *vk, const btf_gpu_images *im, uint64_t off,
+                                  const float *data, uint64_t floats, btf_error *err)
 {
     piece_host h = {vk, NULL, data};
     return each_piece(im, off, floats, host_piece, &h, err);
 }
 
-btf_status btf_gpu_images_create(btf_vk *vk, uint64_t floats, uint64_t cap, int most,
-                                 const char *what, btf_gpu_images *out, btf_error *err)
+btf_status btf__gpu_images_create(btf_vk *vk, uint64_t floats, uint64_t cap, int most,
+                                  const char *what, btf_gpu_images *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
     out->cap = cap > 0 ? cap : 1;
     most = most < 1 ? 1 : most > BTF_GPU_DEVICE_BUFFERS ? BTF_GPU_DEVICE_BUFFERS : most;
     if (floats > (uint64_t)most * out->cap)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s need %.1f MiB, more than %d storage buffers "
-                        "of %.1f MiB (the device's limits) hold; use the CPU backend", what,
-                        4 * floats / 1048576.0, most, 4 * out->cap / 1048576.0);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "%s need %.1f MiB, more than %d storage buffers "
+                         "of %.1f MiB (the device's limits) hold; use the CPU backend", what,
+                         4 * floats / 1048576.0, most, 4 * out->cap / 1048576.0);
     btf_status rc = BTF_OK;
     for (uint64_t b = 0; rc == BTF_OK && b * out->cap < floats; b++) {
         uint64_t part = floats - b * out->cap < out->cap ? floats - b * out->cap : out->cap;
-        rc = btf_vk_buffer_create(vk, 4 * part, &out->buf[b], err);
+        rc = btf__vk_buffer_create(vk, 4 * part, &out->buf[b], err);
     }
     if (rc)
-        btf_gpu_images_free(out);
+        btf__gpu_images_free(out);
     return rc;
 }
 
-void btf_gpu_images_free(btf_gpu_images *im)
+void btf__gpu_images_free(btf_gpu_images *im)
 {
     for (int b = 0; im && b < BTF_GPU_DEVICE_BUFFERS; b++) {
-        btf_vk_buffer_destroy(im->buf[b]);
+        btf__vk_buffer_destroy(im->buf[b]);
         im->buf[b] = NULL;
     }
 }

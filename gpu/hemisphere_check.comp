@@ -1,4 +1,4 @@
-// hemisphere_check.comp -- compiles src/render/btf_hemisphere_lookup.h as GLSL
+// hemisphere_check.comp -- compiles src/render/btf__hemisphere_lookup.h as GLSL
 // (the accessors a render shader defines over storage buffers; docs/render.md,
 // "Interpolation over the hemisphere"), so the build proves the shared text
 // stays valid GLSL. Not dispatched by the library; the render pass (render.comp)

@@ -2,7 +2,7 @@
 // (docs/gpu.md, "Colour matching on the device"): each pixel times the
 // structure layer's pattern, then (when matching) to Lab, each channel
 // through its map, back to RGB clamped into the exemplar's box, in place:
-// btf_structure_apply_row and btf_lab_match_row (src/model/structure_map.c,
+// btf__structure_apply_row and btf__lab_match_row (src/model/structure_map.c,
 // src/synth/colour_lab.c) with the same bits. One invocation per pixel, the
 // workgroups in rows of ROW_PIX pixels (a frame may have more workgroups
 // than a dispatch's x may count).

@@ -10,7 +10,7 @@
  *      back for the 64 order statistics per channel the quantiles need,
  *      never the image);
  *   3. on the host, the quantiles and the maps by the CPU's own code
- *      (btf_lab_quantiles_at, btf_colour_match_maps: a few microseconds),
+ *      (btf__lab_quantiles_at, btf__colour_match_maps: a few microseconds),
  *      then match_apply.comp maps every pixel in place.
  * Each shader does the CPU's float operations in the CPU's order
  * (gpu/match_lab.glsl), so lavapipe gives the CPU's bytes; tests compare
@@ -44,39 +44,39 @@ struct btf_gpu_matcher {
     btf_vk_buffer *placeholder; /* bound where an image buffer or the pattern is unused */
 };
 
-btf_status btf_gpu_matcher_create(btf_vk *vk, btf_gpu_matcher **out, btf_error *err)
+btf_status btf__gpu_matcher_create(btf_vk *vk, btf_gpu_matcher **out, btf_error *err)
 {
     *out = NULL;
-    btf_gpu_matcher *mt = btf_calloc(1, sizeof *mt, err);
+    btf_gpu_matcher *mt = btf__calloc(1, sizeof *mt, err);
     if (!mt)
         return BTF_E_NOMEM;
     mt->vk = vk;
-    btf_status rc = btf_vk_pipeline_create(vk, match_sample_spv, sizeof match_sample_spv, 12, 0,
-                                           NULL, 0, &mt->sample, err);
+    btf_status rc = btf__vk_pipeline_create(vk, match_sample_spv, sizeof match_sample_spv, 12, 0,
+                                            NULL, 0, &mt->sample, err);
     if (rc == BTF_OK)
-        rc = btf_vk_pipeline_create(vk, match_sort_spv, sizeof match_sort_spv, 1, 16, NULL, 0,
-                                    &mt->sort, err);
+        rc = btf__vk_pipeline_create(vk, match_sort_spv, sizeof match_sort_spv, 1, 16, NULL, 0,
+                                     &mt->sort, err);
     if (rc == BTF_OK)
-        rc = btf_vk_pipeline_create(vk, match_apply_spv, sizeof match_apply_spv, 11, 0, NULL, 0,
-                                    &mt->apply, err);
+        rc = btf__vk_pipeline_create(vk, match_apply_spv, sizeof match_apply_spv, 11, 0, NULL, 0,
+                                     &mt->apply, err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(vk, 16, &mt->placeholder, err);
+        rc = btf__vk_buffer_create(vk, 16, &mt->placeholder, err);
     if (rc) {
-        btf_gpu_matcher_free(mt);
+        btf__gpu_matcher_free(mt);
         return rc;
     }
     *out = mt;
     return BTF_OK;
 }
 
-void btf_gpu_matcher_free(btf_gpu_matcher *mt)
+void btf__gpu_matcher_free(btf_gpu_matcher *mt)
 {
     if (!mt)
         return;
-    btf_vk_pipeline_destroy(mt->sample);
-    btf_vk_pipeline_destroy(mt->sort);
-    btf_vk_pipeline_destroy(mt->apply);
-    btf_vk_buffer_destroy(mt->placeholder);
+    btf__vk_pipeline_destroy(mt->sample);
+    btf__vk_pipeline_destroy(mt->sort);
+    btf__vk_pipeline_destroy(mt->apply);
+    btf__vk_buffer_destroy(mt->placeholder);
     free(mt);
 }
 
@@ -109,13 +109,13 @@ static void params_fill(match_params *p, const btf_marginal *mg, const btf_gpu_i
     pi[BTF_MP_ROW_PIX] = 64 * (int32_t)(groups < max_x ? groups : max_x);
     float *pf = p->floats;
     if (match) {
-        pf[BTF_MF_SCALE] = btf_lab_scale(mg);
-        pf[BTF_MF_INV] = 1.0f / pf[BTF_MF_SCALE]; /* as btf_lab_match_row */
+        pf[BTF_MF_SCALE] = btf__lab_scale(mg);
+        pf[BTF_MF_INV] = 1.0f / pf[BTF_MF_SCALE]; /* as btf__lab_match_row */
         memcpy(pf + BTF_MF_LO, mg->rgb_lo, 3 * sizeof(float));
         memcpy(pf + BTF_MF_HI, mg->rgb_hi, 3 * sizeof(float));
     }
-    btf_lab_constants(pf + BTF_MF_TO_XYZ, pf + BTF_MF_TO_RGB, pf + BTF_MF_CONST,
-                      &pi[BTF_MP_MAGIC]);
+    btf__lab_constants(pf + BTF_MF_TO_XYZ, pf + BTF_MF_TO_RGB, pf + BTF_MF_CONST,
+                       &pi[BTF_MP_MAGIC]);
 }
 
 /* The smallest power of two >= n (n <= BTF_LAB_MATCH_SAMPLE). */
@@ -136,8 +136,8 @@ static btf_status dispatch_rows(btf_vk_job *job, const btf_vk_pipeline *pipe,
 {
     uint64_t groups = (invocations + 63) / 64, gx = groups < max_x ? groups : max_x;
     uint64_t gy = (groups + gx - 1) / gx;
-    return btf_vk_job_dispatch(job, pipe, bufs, nbufs, push, push_bytes, (uint32_t)gx,
-                               (uint32_t)gy, 1, err);
+    return btf__vk_job_dispatch(job, pipe, bufs, nbufs, push, push_bytes, (uint32_t)gx,
+                                (uint32_t)gy, 1, err);
 }
 
 /* The bitonic network over rows of npad keys: for each run length k, each
@@ -161,36 +161,36 @@ static btf_status record_sort(btf_vk_job *job, const btf_gpu_matcher *mt, btf_vk
 static btf_status device_maps(btf_vk *vk, const btf_gpu_matcher *mt, btf_vk_buffer **bufs,
                               const btf_marginal *mg, match_params *p, btf_error *err)
 {
-    uint32_t max_x = btf_vk_info(vk)->max_workgroup_count[0];
+    uint32_t max_x = btf__vk_info(vk)->max_workgroup_count[0];
     btf_vk_job *job = NULL;
-    btf_status rc = btf_vk_job_begin(vk, &job, err);
+    btf_status rc = btf__vk_job_begin(vk, &job, err);
     if (rc == BTF_OK)
         rc = dispatch_rows(job, mt->sample, bufs, 12, NULL, 0, p->npad, max_x, err);
     if (rc == BTF_OK)
         rc = record_sort(job, mt, bufs[KEYS], p->npad, max_x, err);
     if (rc == BTF_OK) {
-        rc = btf_vk_job_submit_wait(job, err);
+        rc = btf__vk_job_submit_wait(job, err);
         job = NULL;
     }
-    btf_vk_job_abort(job);
+    btf__vk_job_abort(job);
     size_t ranks[2 * BTF_MARGIN_KNOTS];
     double frac[BTF_MARGIN_KNOTS];
-    int nr = btf_lab_quantile_ranks(p->grid.n, ranks, frac);
+    int nr = btf__lab_quantile_ranks(p->grid.n, ranks, frac);
     float src[3][BTF_MARGIN_KNOTS], *sorted = NULL;
-    if (rc == BTF_OK && !(sorted = btf_alloc(3 * p->npad, sizeof(float), err)))
+    if (rc == BTF_OK && !(sorted = btf__alloc(3 * p->npad, sizeof(float), err)))
         rc = BTF_E_NOMEM;
     if (rc == BTF_OK) /* one read: a few round trips cost more than 192 KiB on a real GPU */
-        rc = btf_vk_buffer_download(vk, bufs[KEYS], 0, sorted, 4 * 3 * (uint64_t)p->npad, err);
+        rc = btf__vk_buffer_download(vk, bufs[KEYS], 0, sorted, 4 * 3 * (uint64_t)p->npad, err);
     for (int c = 0; rc == BTF_OK && c < 3; c++) {
         float at[2 * BTF_MARGIN_KNOTS];
         for (int r = 0; r < nr; r++)
             at[r] = sorted[c * p->npad + ranks[r]];
-        btf_lab_quantiles_at(c, at, frac, src[c]);
+        btf__lab_quantiles_at(c, at, frac, src[c]);
     }
     free(sorted);
     if (rc == BTF_OK) {
         btf_lab_map maps[3];
-        btf_colour_match_maps(mg, (const float (*)[BTF_MARGIN_KNOTS])src, maps);
+        btf__colour_match_maps(mg, (const float (*)[BTF_MARGIN_KNOTS])src, maps);
         memcpy(p->floats + BTF_MF_MAPS, maps, sizeof maps);
     }
     return rc;
@@ -199,41 +199,41 @@ static btf_status device_maps(btf_vk *vk, const btf_gpu_matcher *mt, btf_vk_buff
 static btf_status apply_maps(btf_vk *vk, const btf_gpu_matcher *mt, btf_vk_buffer **bufs,
                              const match_params *p, uint64_t pixels, btf_error *err)
 {
-    uint32_t max_x = btf_vk_info(vk)->max_workgroup_count[0];
+    uint32_t max_x = btf__vk_info(vk)->max_workgroup_count[0];
     btf_vk_job *job = NULL;
-    btf_status rc = btf_vk_buffer_upload(vk, bufs[FLOATS], 0, p->floats, sizeof p->floats, err);
+    btf_status rc = btf__vk_buffer_upload(vk, bufs[FLOATS], 0, p->floats, sizeof p->floats, err);
     if (rc == BTF_OK)
-        rc = btf_vk_job_begin(vk, &job, err);
+        rc = btf__vk_job_begin(vk, &job, err);
     if (rc == BTF_OK)
         rc = dispatch_rows(job, mt->apply, bufs, 11, NULL, 0, pixels, max_x, err);
     if (rc == BTF_OK) {
-        rc = btf_vk_job_submit_wait(job, err);
+        rc = btf__vk_job_submit_wait(job, err);
         job = NULL;
     }
-    btf_vk_job_abort(job);
+    btf__vk_job_abort(job);
     return rc;
 }
 
-btf_status btf_gpu_match_images(btf_vk *vk, const btf_gpu_matcher *mt, const btf_model *m,
-                                int subspace, int match, const btf_gpu_images *im,
-                                uint64_t off, int w, int h, const btf_image *pattern,
-                                btf_error *err)
+btf_status btf__gpu_match_images(btf_vk *vk, const btf_gpu_matcher *mt, const btf_model *m,
+                                 int subspace, int match, const btf_gpu_images *im,
+                                 uint64_t off, int w, int h, const btf_image *pattern,
+                                 btf_error *err)
 {
     if (!match && !(pattern && pattern->data))
         return BTF_OK;
     const btf_marginal *mg = &m->subspaces[subspace].marginal;
     uint64_t pixels = (uint64_t)w * h;
     if (off + 3 * pixels > 0x7FFFFFFFull || im->cap > 0x7FFFFFFFull)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "colour matching on the device: an image at "
-                        "float %llu is past the shaders' 32-bit indices",
-                        (unsigned long long)off);
-    match_params *p = btf_calloc(1, sizeof *p, err); /* 6 KB of maps: not on the stack */
+        return btf__fail(err, BTF_E_UNSUPPORTED, "colour matching on the device: an image at "
+                         "float %llu is past the shaders' 32-bit indices",
+                         (unsigned long long)off);
+    match_params *p = btf__calloc(1, sizeof *p, err); /* 6 KB of maps: not on the stack */
     if (!p)
         return BTF_E_NOMEM;
     btf_status rc = BTF_OK;
-    btf_lab_sample_grid(&p->grid, w, h, BTF_LAB_MATCH_SAMPLE); /* the device holds the values */
+    btf__lab_sample_grid(&p->grid, w, h, BTF_LAB_MATCH_SAMPLE); /* the device holds the values */
     p->npad = pow2_at_least(p->grid.n);
-    params_fill(p, mg, im, off, w, h, pattern, match, btf_vk_info(vk)->max_workgroup_count[0]);
+    params_fill(p, mg, im, off, w, h, pattern, match, btf__vk_info(vk)->max_workgroup_count[0]);
     /* bindings: the image array 0-7, ints, floats, the pattern, the keys */
     btf_vk_buffer *bufs[12] = {0};
     for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
@@ -242,19 +242,19 @@ btf_status btf_gpu_match_images(btf_vk *vk, const btf_gpu_matcher *mt, const btf
                               ? (uint64_t)pattern->width * pattern->height * pattern->channels
                               : 0;
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(vk, sizeof p->ints, &bufs[INTS], err);
+        rc = btf__vk_buffer_create(vk, sizeof p->ints, &bufs[INTS], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(vk, sizeof p->floats, &bufs[FLOATS], err);
+        rc = btf__vk_buffer_create(vk, sizeof p->floats, &bufs[FLOATS], err);
     if (rc == BTF_OK && pat_floats)
-        rc = btf_vk_buffer_create(vk, 4 * pat_floats, &bufs[PATTERN], err);
+        rc = btf__vk_buffer_create(vk, 4 * pat_floats, &bufs[PATTERN], err);
     if (rc == BTF_OK && match)
-        rc = btf_vk_buffer_create(vk, 4 * 3 * (uint64_t)p->npad, &bufs[KEYS], err);
+        rc = btf__vk_buffer_create(vk, 4 * 3 * (uint64_t)p->npad, &bufs[KEYS], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(vk, bufs[INTS], 0, p->ints, sizeof p->ints, err);
+        rc = btf__vk_buffer_upload(vk, bufs[INTS], 0, p->ints, sizeof p->ints, err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(vk, bufs[FLOATS], 0, p->floats, sizeof p->floats, err);
+        rc = btf__vk_buffer_upload(vk, bufs[FLOATS], 0, p->floats, sizeof p->floats, err);
     if (rc == BTF_OK && pat_floats)
-        rc = btf_vk_buffer_upload(vk, bufs[PATTERN], 0, pattern->data, 4 * pat_floats, err);
+        rc = btf__vk_buffer_upload(vk, bufs[PATTERN], 0, pattern->data, 4 * pat_floats, err);
     btf_vk_buffer *owned[4] = {bufs[INTS], bufs[FLOATS], bufs[PATTERN], bufs[KEYS]};
     bufs[PATTERN] = bufs[PATTERN] ? bufs[PATTERN] : mt->placeholder;
     bufs[KEYS] = bufs[KEYS] ? bufs[KEYS] : mt->placeholder;
@@ -263,7 +263,7 @@ btf_status btf_gpu_match_images(btf_vk *vk, const btf_gpu_matcher *mt, const btf
     if (rc == BTF_OK)
         rc = apply_maps(vk, mt, bufs, p, pixels, err);
     for (int i = 0; i < 4; i++)
-        btf_vk_buffer_destroy(owned[i]);
+        btf__vk_buffer_destroy(owned[i]);
     free(p);
     return rc;
 }

@@ -19,7 +19,7 @@ float img_read(int f)
 }
 
 // Pixel p of the image, multiplied by the structure layer's pattern as
-// btf_structure_apply_row (src/model/structure_map.c).
+// btf__structure_apply_row (src/model/structure_map.c).
 vec3 pixel_read(int x, int y)
 {
     int f = pi[BTF_MP_OFF] + 3 * (y * pi[BTF_MP_WIDTH] + x);

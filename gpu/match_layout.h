@@ -31,7 +31,7 @@
 #define BTF_MP_INTS 16
 
 /* floats */
-#define BTF_MF_SCALE 0   /* the exposure (btf_lab_scale) and its inverse */
+#define BTF_MF_SCALE 0   /* the exposure (btf__lab_scale) and its inverse */
 #define BTF_MF_INV 1
 #define BTF_MF_LO 2      /* [3] the exemplar's RGB box */
 #define BTF_MF_HI 5      /* [3] */

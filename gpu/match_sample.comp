@@ -1,7 +1,7 @@
 // match_sample.comp -- the first pass of colour matching on the device
 // (docs/gpu.md, "Colour matching on the device"; the CPU's pass is
 // src/synth/colour_match.c): the L*, a*, b* of the image's sample grid
-// (btf_lab_sample_row: every sx-th pixel of every sy-th row), after the
+// (btf__lab_sample_row: every sx-th pixel of every sy-th row), after the
 // structure layer's multiply, into three rows of NPAD keys; the keys past
 // the sample are +Inf, so that the sort (match_sort.comp) leaves them last.
 // One invocation per key.

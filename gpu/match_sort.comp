@@ -1,7 +1,7 @@
 // match_sort.comp -- one step of a bitonic sort (Batcher 1968) of the three
 // rows of keys match_sample.comp wrote, each row of NPAD (a power of two)
 // keys on its own: the exact order statistics of the sample, whose values
-// the host turns into quantiles by the CPU's code (btf_lab_quantiles_at,
+// the host turns into quantiles by the CPU's code (btf__lab_quantiles_at,
 // src/synth/colour_lab.c), so that the maps are the CPU's. A sort of 16,384
 // keys is 105 such steps; each invocation compares one pair.
 #version 450

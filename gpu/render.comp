@@ -1,7 +1,7 @@
 // render.comp -- the second GPU pass (Haindl & Filip 2007, section III and
 // Fig. 1; docs/render.md, "On the GPU"): per pixel of a G-buffer traced on
 // the host, the local view and light directions, the triangle lookups and
-// barycentric weights (src/render/btf_hemisphere_lookup.h), the index-table
+// barycentric weights (src/render/btf__hemisphere_lookup.h), the index-table
 // lookup, the parallax-shifted reads of the subspace images the first pass
 // (synthesis) left in a device buffer, the relit result
 // (src/render/btf_render_shared.h: the very text the CPU renderer runs).

@@ -4,7 +4,7 @@
  * host traces the scene into a G-buffer (src/scene/) and finds the needed
  * subspaces (render/needed.c) as the CPU renderer does (one plan,
  * render/render_scene.c); the first pass synthesises those subspaces
- * tileable into one device buffer (btf_gpu_synthesise_device), which stays
+ * tileable into one device buffer (btf__gpu_synthesise_device), which stays
  * on the device; this pass (gpu/render.comp) shades every pixel from the
  * G-buffer, the hemisphere tables, the index table, that buffer and the
  * range and normal maps, with the shading text the CPU runs
@@ -110,10 +110,10 @@ static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
     int32_t zero[BTF_RP_INTS] = {0};
     float fzero[BTF_RP_FLOATS] = {0};
     if (put_ints(pr, zero, BTF_RP_INTS) < 0 || put_floats(pr, fzero, BTF_RP_FLOATS) < 0)
-        return btf_fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
+        return btf__fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
     size_t pairs = (size_t)sets->views.count * (size_t)sets->lights.count;
-    int32_t *tmp = btf_alloc(pairs + 2 * (size_t)m->n_subspaces + 1, sizeof *tmp, err);
-    uint8_t *index = tmp ? btf_render_pair_index(m, sets, err) : NULL; /* sparse sets filled */
+    int32_t *tmp = btf__alloc(pairs + 2 * (size_t)m->n_subspaces + 1, sizeof *tmp, err);
+    uint8_t *index = tmp ? btf__render_pair_index(m, sets, err) : NULL; /* sparse sets filled */
     if (!tmp || !index) {
         free(tmp);
         return BTF_E_NOMEM;
@@ -132,20 +132,20 @@ static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
     long have = put_ints(pr, tmp, (size_t)K);
     long texoff = put_ints(pr, tmp + K, (size_t)K);
     free(tmp);
-    float *gains = btf_render_gains(m, sets, err);
+    float *gains = btf__render_gains(m, sets, err);
     if (!gains)
         return BTF_E_NOMEM;
     long gain = put_floats(pr, gains, pairs * 3);
     free(gains);
     btf_hemisphere_table tv, tl;
-    btf_hemisphere_get_table(views, &tv);
-    btf_hemisphere_get_table(lights, &tl);
+    btf__hemisphere_get_table(views, &tv);
+    btf__hemisphere_get_table(lights, &tl);
     if (idx < 0 || have < 0 || texoff < 0 || gain < 0 || put_table(pr, 0, &tv) || put_table(pr, 1, &tl))
-        return btf_fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
-    btf_shade_ctx *ctx = btf_alloc(1, sizeof *ctx, err);
+        return btf__fail(err, BTF_E_NOMEM, "GPU render: out of memory for the parameters");
+    btf_shade_ctx *ctx = btf__alloc(1, sizeof *ctx, err);
     if (!ctx)
         return BTF_E_NOMEM;
-    btf_status rc = btf_render_ctx_lights(ctx, p->lights, p->n_lights, err);
+    btf_status rc = btf__render_ctx_lights(ctx, p->lights, p->n_lights, err);
     int32_t *hi = pr->ints;
     float *hf = pr->floats;
     hi[BTF_RP_SIZE] = p->side;
@@ -157,9 +157,9 @@ static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
     hi[BTF_RP_TEXCAP] = (int32_t)(cap > 0 ? cap : 1);
     hi[BTF_RP_NORMAL] = p->side * p->side;
     hi[BTF_RP_GAIN] = (int32_t)gain;
-    hf[BTF_RP_OUTER] = btf_render_light_outer_z(m);
+    hf[BTF_RP_OUTER] = btf__render_light_outer_z(m);
     hf[BTF_RP_RELIEF] = (float)p->o.relief;
-    hf[BTF_RP_AMBIENT] = btf_render_ambient(m);
+    hf[BTF_RP_AMBIENT] = btf__render_ambient(m);
     for (int c = 0; c < 3; c++)
         hf[BTF_RP_BG + c] = p->background[c];
     for (int j = 0; rc == BTF_OK && j < p->n_lights; j++) {
@@ -175,7 +175,7 @@ static btf_status build_params(const btf_model *m, const btf_render_sets *sets,
 
 /* Rows [y0, y1) of the G-buffer, packed BTF_RP_GB floats per pixel (also
  * the reflectance-field pass's input, gpu/render_gpu.h). */
-void btf_render_pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out)
+void btf__render_pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out)
 {
     for (size_t p = (size_t)y0 * g->width, q = 0; p < (size_t)y1 * g->width; p++, q++) {
         float *o = out + q * BTF_RP_GB;
@@ -188,7 +188,7 @@ void btf_render_pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out)
     }
 }
 
-/* A structure layer's textures hold reflectance (btf_render_reflectance):
+/* A structure layer's textures hold reflectance (btf__render_reflectance):
  * each is read back, scaled by the CPU's code and written again, so the
  * two backends shade the same floats. */
 static btf_status scale_textures(btf_vk *vk, const btf_model *m, const int *subs, int n,
@@ -198,13 +198,13 @@ static btf_status scale_textures(btf_vk *vk, const btf_model *m, const int *subs
     if (!m->albedo)
         return BTF_OK;
     size_t floats = (size_t)side * side * 3;
-    float *buf = btf_alloc(floats, sizeof(float), err);
+    float *buf = btf__alloc(floats, sizeof(float), err);
     btf_status rc = buf ? BTF_OK : BTF_E_NOMEM;
     for (int j = 0; rc == BTF_OK && j < n; j++) {
-        rc = btf_gpu_images_download(vk, tex, offs[j], buf, floats, err);
-        btf_render_scale_texture(buf, floats, btf_render_reflectance(m, subs[j]));
+        rc = btf__gpu_images_download(vk, tex, offs[j], buf, floats, err);
+        btf__render_scale_texture(buf, floats, btf__render_reflectance(m, subs[j]));
         if (rc == BTF_OK)
-            rc = btf_gpu_images_upload(vk, tex, offs[j], buf, floats, err);
+            rc = btf__gpu_images_upload(vk, tex, offs[j], buf, floats, err);
     }
     free(buf);
     return rc;
@@ -222,19 +222,19 @@ static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t
     btf_status rc = btf_structure_maps(m, side, side, seed, &h, &n, NULL, err);
     size_t px = (size_t)side * side;
     if (rc == BTF_OK)
-        rc = btf_render_relief(m, &h, threads, &hz, bounds, err);
+        rc = btf__render_relief(m, &h, threads, &hz, bounds, err);
     *shadows = hz != NULL;
     if (rc == BTF_OK)
-        rc = btf_gpu_images_create(vk, px * 4, cap, most,
-                                   "GPU render: the range and normal maps", out, err);
+        rc = btf__gpu_images_create(vk, px * 4, cap, most,
+                                    "GPU render: the range and normal maps", out, err);
     if (rc == BTF_OK)
-        rc = btf_gpu_images_upload(vk, out, 0, h.data, px, err);
+        rc = btf__gpu_images_upload(vk, out, 0, h.data, px, err);
     if (rc == BTF_OK)
-        rc = btf_gpu_images_upload(vk, out, px, n.data, px * 3, err);
+        rc = btf__gpu_images_upload(vk, out, px, n.data, px * 3, err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(vk, hz ? px * 2 * sizeof(uint32_t) : 16, hor, err);
+        rc = btf__vk_buffer_create(vk, hz ? px * 2 * sizeof(uint32_t) : 16, hor, err);
     if (rc == BTF_OK && hz)
-        rc = btf_vk_buffer_upload(vk, *hor, 0, hz, px * 2 * sizeof(uint32_t), err);
+        rc = btf__vk_buffer_upload(vk, *hor, 0, hz, px * 2 * sizeof(uint32_t), err);
     free(hz);
     btf_image_free(&h);
     btf_image_free(&n);
@@ -245,7 +245,7 @@ static btf_status upload_maps(btf_vk *vk, const btf_model *m, int side, uint64_t
  * fit one storage buffer (and the ints must index them). */
 static int band_rows(const btf_gpu *g, int width, int height)
 {
-    uint64_t lim = btf_gpu_max_buffer_bytes(g);
+    uint64_t lim = btf__gpu_max_buffer_bytes(g);
     if (lim > (1ull << 31) - 4)
         lim = (1ull << 31) - 4;
     uint64_t per_row = (uint64_t)width * BTF_RP_GB * sizeof(float);
@@ -267,12 +267,12 @@ typedef struct pass {
 
 static void pass_free(pass *ps)
 {
-    btf_vk_pipeline_destroy(ps->pipe);
+    btf__vk_pipeline_destroy(ps->pipe);
     for (int i = 0; i < 8; i++)
         if (i != 1 && i != 2) /* the images' and maps' arrays own theirs */
-            btf_vk_buffer_destroy(ps->bufs[i]);
-    btf_gpu_images_free(&ps->maps);
-    btf_vk_buffer_destroy(ps->placeholder);
+            btf__vk_buffer_destroy(ps->bufs[i]);
+    btf__gpu_images_free(&ps->maps);
+    btf__vk_buffer_destroy(ps->placeholder);
     free(ps->pr.ints);
     free(ps->pr.floats);
 }
@@ -282,38 +282,38 @@ static btf_status run_band(pass *ps, const btf_gbuffer *g, int y0, int y1, float
                            btf_image *out, btf_error *err)
 {
     size_t npix = (size_t)(y1 - y0) * g->width;
-    btf_render_pack_gbuffer(g, y0, y1, scratch);
+    btf__render_pack_gbuffer(g, y0, y1, scratch);
     uint32_t groups = (uint32_t)((npix + 63) / 64);
     uint32_t gx = groups < 65535 ? groups : 65535, gy = (groups + gx - 1) / gx;
     ps->pr.ints[BTF_RP_NPIX] = (int32_t)npix;
     ps->pr.ints[BTF_RP_ROW_PIX] = (int32_t)(gx * 64);
-    btf_status rc = btf_vk_buffer_upload(ps->vk, ps->bufs[0], 0, scratch,
-                                         npix * BTF_RP_GB * sizeof(float), err);
+    btf_status rc = btf__vk_buffer_upload(ps->vk, ps->bufs[0], 0, scratch,
+                                          npix * BTF_RP_GB * sizeof(float), err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(ps->vk, ps->bufs[3], 0, ps->pr.ints,
-                                  ps->pr.n_ints * sizeof(int32_t), err);
+        rc = btf__vk_buffer_upload(ps->vk, ps->bufs[3], 0, ps->pr.ints,
+                                   ps->pr.n_ints * sizeof(int32_t), err);
     btf_vk_job *job = NULL;
     if (rc == BTF_OK)
-        rc = btf_vk_job_begin(ps->vk, &job, err);
+        rc = btf__vk_job_begin(ps->vk, &job, err);
     if (rc == BTF_OK) /* the flag of a band's missing subspaces starts clear */
-        rc = btf_vk_job_fill(job, ps->bufs[7], 0, sizeof(uint32_t), 0, err);
+        rc = btf__vk_job_fill(job, ps->bufs[7], 0, sizeof(uint32_t), 0, err);
     if (rc == BTF_OK)
-        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, 22, NULL, 0, gx, gy, 1, err);
+        rc = btf__vk_job_dispatch(job, ps->pipe, ps->bufs, 22, NULL, 0, gx, gy, 1, err);
     if (rc == BTF_OK) {
-        rc = btf_vk_job_submit_wait(job, err);
+        rc = btf__vk_job_submit_wait(job, err);
         job = NULL;
     }
-    btf_vk_job_abort(job);
+    btf__vk_job_abort(job);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_download(ps->vk, ps->bufs[5], 0,
-                                    out->data + (size_t)y0 * g->width * 3,
-                                    npix * 3 * sizeof(float), err);
+        rc = btf__vk_buffer_download(ps->vk, ps->bufs[5], 0,
+                                     out->data + (size_t)y0 * g->width * 3,
+                                     npix * 3 * sizeof(float), err);
     uint32_t missing = 0;
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_download(ps->vk, ps->bufs[7], 0, &missing, sizeof missing, err);
+        rc = btf__vk_buffer_download(ps->vk, ps->bufs[7], 0, &missing, sizeof missing, err);
     if (rc == BTF_OK && missing != 0)
-        rc = btf_fail(err, BTF_E_ARG, "GPU render: a pixel selects a subspace the first "
-                      "pass did not synthesise");
+        rc = btf__fail(err, BTF_E_ARG, "GPU render: a pixel selects a subspace the first "
+                       "pass did not synthesise");
     return rc;
 }
 
@@ -322,18 +322,18 @@ static btf_status shade_frame(pass *ps, const btf_gbuffer *g, btf_image *out, bt
 {
     int rows = band_rows(ps->gpu, g->width, g->height);
     if (rows < 1)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU render: one row of %d pixels needs more "
-                        "than the device's largest storage buffer", g->width);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "GPU render: one row of %d pixels needs more "
+                         "than the device's largest storage buffer", g->width);
     size_t band_px = (size_t)rows * g->width;
-    float *scratch = btf_alloc(band_px, BTF_RP_GB * sizeof(float), err);
+    float *scratch = btf__alloc(band_px, BTF_RP_GB * sizeof(float), err);
     if (!scratch)
         return BTF_E_NOMEM;
-    btf_status rc = btf_vk_buffer_create(ps->vk, band_px * BTF_RP_GB * sizeof(float),
-                                         &ps->bufs[0], err);
+    btf_status rc = btf__vk_buffer_create(ps->vk, band_px * BTF_RP_GB * sizeof(float),
+                                          &ps->bufs[0], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(ps->vk, band_px * 3 * sizeof(float), &ps->bufs[5], err);
+        rc = btf__vk_buffer_create(ps->vk, band_px * 3 * sizeof(float), &ps->bufs[5], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(ps->vk, 16, &ps->bufs[7], err);
+        rc = btf__vk_buffer_create(ps->vk, 16, &ps->bufs[7], err);
     for (int y0 = 0; rc == BTF_OK && y0 < g->height; y0 += rows)
         rc = run_band(ps, g, y0, y0 + rows < g->height ? y0 + rows : g->height, scratch, out,
                       err);
@@ -343,13 +343,13 @@ static btf_status shade_frame(pass *ps, const btf_gbuffer *g, btf_image *out, bt
 
 static btf_status upload_params(pass *ps, btf_error *err)
 {
-    btf_status rc = btf_vk_buffer_create(ps->vk, ps->pr.n_ints * sizeof(int32_t), &ps->bufs[3],
-                                         err);
+    btf_status rc = btf__vk_buffer_create(ps->vk, ps->pr.n_ints * sizeof(int32_t), &ps->bufs[3],
+                                          err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(ps->vk, ps->pr.n_floats * sizeof(float), &ps->bufs[4], err);
+        rc = btf__vk_buffer_create(ps->vk, ps->pr.n_floats * sizeof(float), &ps->bufs[4], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(ps->vk, ps->bufs[4], 0, ps->pr.floats,
-                                  ps->pr.n_floats * sizeof(float), err);
+        rc = btf__vk_buffer_upload(ps->vk, ps->bufs[4], 0, ps->pr.floats,
+                                   ps->pr.n_floats * sizeof(float), err);
     return rc;
 }
 
@@ -361,9 +361,9 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     pass ps;
     memset(&ps, 0, sizeof ps);
     ps.gpu = gpu;
-    ps.vk = btf_gpu_vk(gpu);
-    int *subs = btf_alloc((size_t)m->n_subspaces, sizeof *subs, err);
-    uint64_t *offs = btf_alloc((size_t)m->n_subspaces, sizeof *offs, err);
+    ps.vk = btf__gpu_vk(gpu);
+    int *subs = btf__alloc((size_t)m->n_subspaces, sizeof *subs, err);
+    uint64_t *offs = btf__alloc((size_t)m->n_subspaces, sizeof *offs, err);
     btf_hemisphere *views = NULL, *lights = NULL;
     btf_gpu_images tex;
     memset(&tex, 0, sizeof tex);
@@ -372,39 +372,39 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
     for (int k = 0; rc == BTF_OK && k < m->n_subspaces; k++)
         if (p->needed[k])
             subs[n++] = k;
-    double t0 = btf_now();
+    double t0 = btf__now();
     btf_synth_opts so = btf_synth_defaults();
     so.width = so.height = p->side;
     so.seed = p->o.seed;
     so.tileable = 1;
     if (rc == BTF_OK && n > 0)
-        rc = btf_gpu_synthesise_device(gpu, m, subs, n, &so, &tex, offs, err);
+        rc = btf__gpu_synthesise_device(gpu, m, subs, n, &so, &tex, offs, err);
     if (rc == BTF_OK && n > 0)
         rc = scale_textures(ps.vk, m, subs, n, offs, p->side, &tex, err);
-    double t1 = btf_now();
+    double t1 = btf__now();
     /* unused texture bindings: a buffer the shader may bind, never read */
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(ps.vk, 16, &ps.placeholder, err);
+        rc = btf__vk_buffer_create(ps.vk, 16, &ps.placeholder, err);
     static const int slot[BTF_GPU_DEVICE_BUFFERS] = {1, 8, 9, 10, 14, 15, 16, 17}; /* render.comp */
     for (int b = 0; rc == BTF_OK && b < BTF_GPU_DEVICE_BUFFERS; b++)
         ps.bufs[slot[b]] = tex.buf[b] ? tex.buf[b] : ps.placeholder;
     btf_render_sets sets;
     memset(&sets, 0, sizeof sets);
     if (rc == BTF_OK)
-        rc = btf_render_sets_make(m, &sets, err);
+        rc = btf__render_sets_make(m, &sets, err);
     if (rc == BTF_OK)
         rc = btf_hemisphere_build(&sets.views, &views, err);
     if (rc == BTF_OK)
         rc = btf_hemisphere_build(&sets.lights, &lights, err);
     if (rc == BTF_OK)
-        rc = build_params(m, &sets, p, views, lights, subs, n, btf_gpu_images_cap(ps.gpu), offs,
+        rc = build_params(m, &sets, p, views, lights, subs, n, btf__gpu_images_cap(ps.gpu), offs,
                           &ps.pr, err);
-    btf_render_sets_free(&sets);
+    btf__render_sets_free(&sets);
     int shadows = 0;
     float bounds[2] = {0.0f, 0.0f};
     if (rc == BTF_OK)
         rc = upload_maps(ps.vk, m, p->side, p->o.seed, p->o.threads,
-                         btf_gpu_images_cap(ps.gpu), btf_gpu_images_buffers(ps.gpu), &ps.maps,
+                         btf__gpu_images_cap(ps.gpu), btf__gpu_images_buffers(ps.gpu), &ps.maps,
                          &ps.bufs[6], &shadows, bounds, err);
     static const int mslot[BTF_GPU_DEVICE_BUFFERS] = {2, 11, 12, 13, 18, 19, 20, 21};
     for (int b = 0; rc == BTF_OK && b < BTF_GPU_DEVICE_BUFFERS; b++) /* render.comp */
@@ -416,21 +416,21 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
         rc = upload_params(&ps, err);
     }
     if (rc == BTF_OK)
-        rc = btf_vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 22, 0, NULL, 0,
-                                    &ps.pipe, err);
+        rc = btf__vk_pipeline_create(ps.vk, render_spv, sizeof render_spv, 22, 0, NULL, 0,
+                                     &ps.pipe, err);
     if (rc == BTF_OK && (rc = btf_image_alloc(out, p->g.width, p->g.height, 3, err)) == BTF_OK) {
         rc = shade_frame(&ps, &p->g, out, err);
         if (rc)
             btf_image_free(out);
     }
-    double t2 = btf_now();
-    btf_render_plan_info(m, p, info);
+    double t2 = btf__now();
+    btf__render_plan_info(m, p, info);
     if (info) {
         info->synth_s = p->needed_s + (t1 - t0);
         info->shade_s = t2 - t1;
     }
     pass_free(&ps);
-    btf_gpu_images_free(&tex);
+    btf__gpu_images_free(&tex);
     btf_hemisphere_free(views);
     btf_hemisphere_free(lights);
     free(subs);
@@ -442,7 +442,7 @@ static btf_status render_plan_gpu(btf_gpu *gpu, const btf_model *m, const btf_re
 static btf_status begin(btf_gpu *g, btf_image *out, btf_render_info *info, btf_error *err)
 {
     if (!g || !out)
-        return btf_fail(err, BTF_E_ARG, "GPU render: no device or output given");
+        return btf__fail(err, BTF_E_ARG, "GPU render: no device or output given");
     memset(out, 0, sizeof *out);
     if (info)
         memset(info, 0, sizeof *info);
@@ -455,7 +455,7 @@ static btf_status finish(btf_gpu *g, const btf_model *m, btf_render_plan *p, btf
 {
     if (rc == BTF_OK)
         rc = render_plan_gpu(g, m, p, out, info, err);
-    btf_render_plan_free(p);
+    btf__render_plan_free(p);
     return rc;
 }
 
@@ -467,7 +467,7 @@ btf_status btf_gpu_render_scene(btf_gpu *g, const btf_model *m, const btf_scene 
     if (rc)
         return rc;
     btf_render_plan p;
-    rc = btf_render_plan_scene(m, s, opts, &p, err);
+    rc = btf__render_plan_scene(m, s, opts, &p, err);
     return finish(g, m, &p, rc, out, info, err);
 }
 
@@ -479,6 +479,6 @@ btf_status btf_gpu_render_flat(btf_gpu *g, const btf_model *m, btf_dir view, btf
     if (rc)
         return rc;
     btf_render_plan p;
-    rc = btf_render_plan_flat(m, view, light, opts, &p, err);
+    rc = btf__render_plan_flat(m, view, light, opts, &p, err);
     return finish(g, m, &p, rc, out, info, err);
 }

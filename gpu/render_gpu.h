@@ -13,6 +13,6 @@
 /* Rows [y0, y1) of the G-buffer into out, BTF_RP_GB floats per pixel:
  * hit flag (1, or -1 for the background), u, v, frame[9], position[3],
  * view[3]. */
-void btf_render_pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out);
+void btf__render_pack_gbuffer(const btf_gbuffer *g, int y0, int y1, float *out);
 
 #endif

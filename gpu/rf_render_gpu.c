@@ -16,7 +16,7 @@
  *    for every pixel, so the host computes them (rf_look_at, the CPU's own
  *    call) and uploads only those (at most four) fields; the shader shades
  *    each distinct texel once (the tile) and the host expands it, as the
- *    CPU's btf_rf_render_flat does;
+ *    CPU's btf__rf_render_flat does;
  *  - scene: the G-buffer is traced on the host (rf_scene_trace, the CPU
  *    renderer's own trace and checks) and packed as the CAR render pass
  *    packs it (gpu/render_gpu.h); every field is uploaded, since every
@@ -62,9 +62,9 @@ typedef struct rf_pass {
 
 static void pass_free(rf_pass *ps)
 {
-    btf_vk_pipeline_destroy(ps->pipe);
+    btf__vk_pipeline_destroy(ps->pipe);
     for (int i = 0; i < NBUFS; i++)
-        btf_vk_buffer_destroy(ps->bufs[i]);
+        btf__vk_buffer_destroy(ps->bufs[i]);
     free(ps->pr.ints);
     free(ps->pr.floats);
 }
@@ -74,21 +74,21 @@ static void pass_free(rf_pass *ps)
 static btf_status check_model(const btf_rf_model *m, btf_error *err)
 {
     if (!m || !m->codes || !m->lo || !m->hi)
-        return btf_fail(err, BTF_E_ARG, "GPU RF render: no model");
+        return btf__fail(err, BTF_E_ARG, "GPU RF render: no model");
     /* a sampled model's surface is its coordinate map into the codes
      * (rf_map.h), uploaded with the parameters */
     if (m->map && (m->surface_width < 1 || m->surface_height < 1))
-        return btf_fail(err, BTF_E_ARG, "GPU RF render: a sampled model with a %dx%d surface "
-                        "(expected sides >= 1)", m->surface_width, m->surface_height);
+        return btf__fail(err, BTF_E_ARG, "GPU RF render: a sampled model with a %dx%d surface "
+                         "(expected sides >= 1)", m->surface_width, m->surface_height);
     int fields = m->fit == BTF_RF_LAFORTUNE ? 1 : m->views.count;
     if (m->fit < BTF_RF_PTM || m->fit > BTF_RF_LAFORTUNE || m->width < 1 || m->height < 1 ||
         m->lobes < 0 || m->lobes > BTF_RF_MAX_LOBES || m->views.count < 1 || !m->views.dirs ||
-        m->params != btf_rf_param_count(m->fit, m->lobes) || m->slots != m->params + 3 ||
+        m->params != btf__rf_param_count(m->fit, m->lobes) || m->slots != m->params + 3 ||
         m->slots > BTF_RF_MAX_SLOTS || m->fields != fields)
-        return btf_fail(err, BTF_E_ARG, "GPU RF render: an inconsistent model (fit %d, %d lobes, "
-                        "%d params, %d slots, %d fields, %d views, %dx%d texels)", m->fit,
-                        m->lobes, m->params, m->slots, m->fields, m->views.count, m->width,
-                        m->height);
+        return btf__fail(err, BTF_E_ARG, "GPU RF render: an inconsistent model (fit %d, %d lobes, "
+                         "%d params, %d slots, %d fields, %d views, %dx%d texels)", m->fit,
+                         m->lobes, m->params, m->slots, m->fields, m->views.count, m->width,
+                         m->height);
     return BTF_OK;
 }
 
@@ -106,13 +106,13 @@ static btf_status plan_codes(const rf_pass *ps, const btf_rf_model *m, const uin
                              btf_error *err)
 {
     uint64_t fw = field_words(m), cap = ps->limit / 4;
-    int64_t most = (int64_t)btf_vk_info(ps->vk)->max_storage_buffers - 4;
+    int64_t most = (int64_t)btf__vk_info(ps->vk)->max_storage_buffers - 4;
     most = most > RFP_CODE_BUFS ? RFP_CODE_BUFS : most < 1 ? 1 : most;
     if (fw > cap)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU RF render: one field's codes (%llu bytes) "
-                        "exceed the device's largest storage buffer (%llu bytes); use "
-                        "--backend cpu", (unsigned long long)fw * 4,
-                        (unsigned long long)ps->limit);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "GPU RF render: one field's codes (%llu bytes) "
+                         "exceed the device's largest storage buffer (%llu bytes); use "
+                         "--backend cpu", (unsigned long long)fw * 4,
+                         (unsigned long long)ps->limit);
     int b = 0;
     uint64_t total = 0;
     for (int i = 0; i < RFP_CODE_BUFS; i++)
@@ -125,10 +125,10 @@ static btf_status plan_codes(const rf_pass *ps, const btf_rf_model *m, const uin
         if (words[b] + fw > cap)
             b++;
         if (b >= most)
-            return btf_fail(err, BTF_E_UNSUPPORTED, "GPU RF render: the model's codes (%llu "
-                            "bytes and more) exceed %d storage buffers of %llu bytes; use "
-                            "--backend cpu", (unsigned long long)total * 4, (int)most,
-                            (unsigned long long)ps->limit);
+            return btf__fail(err, BTF_E_UNSUPPORTED, "GPU RF render: the model's codes (%llu "
+                             "bytes and more) exceed %d storage buffers of %llu bytes; use "
+                             "--backend cpu", (unsigned long long)total * 4, (int)most,
+                             (unsigned long long)ps->limit);
         buf[f] = b, base[f] = (int32_t)words[b];
         words[b] += fw;
     }
@@ -143,10 +143,10 @@ static btf_status upload_codes(rf_pass *ps, const btf_rf_model *m, const int32_t
 {
     btf_status rc = BTF_OK;
     for (int b = 0; rc == BTF_OK && b < RFP_CODE_BUFS; b++)
-        rc = btf_vk_buffer_create(ps->vk, words[b] ? words[b] * 4 : 16, &ps->bufs[4 + b], err);
+        rc = btf__vk_buffer_create(ps->vk, words[b] ? words[b] * 4 : 16, &ps->bufs[4 + b], err);
     uint64_t fw = field_words(m);
     size_t codes = (size_t)m->width * m->height * m->slots;
-    uint32_t *w = rc == BTF_OK ? btf_alloc((size_t)fw, sizeof *w, err) : NULL;
+    uint32_t *w = rc == BTF_OK ? btf__alloc((size_t)fw, sizeof *w, err) : NULL;
     if (rc == BTF_OK && !w)
         rc = BTF_E_NOMEM;
     for (int f = 0; rc == BTF_OK && f < m->fields; f++) {
@@ -157,8 +157,8 @@ static btf_status upload_codes(rf_pass *ps, const btf_rf_model *m, const int32_t
             uint32_t hi = 2 * i + 1 < codes ? q[2 * i + 1] : 0;
             w[i] = (uint32_t)q[2 * i] | hi << 16;
         }
-        rc = btf_vk_buffer_upload(ps->vk, ps->bufs[4 + buf[f]], (uint64_t)base[f] * 4, w,
-                                  fw * 4, err);
+        rc = btf__vk_buffer_upload(ps->vk, ps->bufs[4 + buf[f]], (uint64_t)base[f] * 4, w,
+                                   fw * 4, err);
     }
     free(w);
     return rc;
@@ -197,11 +197,11 @@ static btf_status model_params(rf_params *pr, const btf_rf_model *m, const int32
     int32_t zi[RFP_INTS] = {0};
     float zf[RFP_FLOATS] = {0};
     size_t nfs = (size_t)m->fields * m->slots, nv = (size_t)m->views.count;
-    float *lo = btf_alloc(nfs, sizeof *lo, err), *sc = btf_alloc(nfs, sizeof *sc, err);
-    float *th = btf_alloc(nv, sizeof *th, err), *ph = btf_alloc(nv, sizeof *ph, err);
-    int32_t *ring = btf_alloc(nv, sizeof *ring, err);
+    float *lo = btf__alloc(nfs, sizeof *lo, err), *sc = btf__alloc(nfs, sizeof *sc, err);
+    float *th = btf__alloc(nv, sizeof *th, err), *ph = btf__alloc(nv, sizeof *ph, err);
+    int32_t *ring = btf__alloc(nv, sizeof *ring, err);
     size_t nmap = m->map ? (size_t)m->surface_width * (size_t)m->surface_height : 0;
-    int32_t *map = m->map ? btf_alloc(nmap, sizeof *map, err) : NULL;
+    int32_t *map = m->map ? btf__alloc(nmap, sizeof *map, err) : NULL;
     btf_status rc = lo && sc && th && ph && ring && (map || !nmap) ? BTF_OK : BTF_E_NOMEM;
     for (size_t i = 0; rc == BTF_OK && i < nmap; i++)
         map[i] = (int32_t)((uint32_t)m->map[2 * i] | (uint32_t)m->map[2 * i + 1] << 16);
@@ -222,7 +222,7 @@ static btf_status model_params(rf_params *pr, const btf_rf_model *m, const int32
     }
     for (int i = 0; rc == BTF_OK && i < 8; i++)
         if (o[i] < 0 || pr->n_ints < RFP_INTS || pr->n_floats < RFP_FLOATS)
-            rc = btf_fail(err, BTF_E_NOMEM, "GPU RF render: out of memory for the parameters");
+            rc = btf__fail(err, BTF_E_NOMEM, "GPU RF render: out of memory for the parameters");
     if (rc == BTF_OK) {
         int32_t *h = pr->ints;
         h[RFP_FIT] = m->fit, h[RFP_LOBES] = m->lobes, h[RFP_NPARAMS] = m->params;
@@ -244,9 +244,9 @@ static btf_status model_params(rf_params *pr, const btf_rf_model *m, const int32
 static btf_status light_params(rf_params *pr, const btf_scene *s, btf_error *err)
 {
     int n = s->n_lights;
-    int32_t *kind = btf_alloc((size_t)n + 1, sizeof *kind, err);
-    float *vec = btf_alloc(3 * (size_t)n + 1, sizeof *vec, err);
-    float *rgb = btf_alloc(3 * (size_t)n + 1, sizeof *rgb, err);
+    int32_t *kind = btf__alloc((size_t)n + 1, sizeof *kind, err);
+    float *vec = btf__alloc(3 * (size_t)n + 1, sizeof *vec, err);
+    float *rgb = btf__alloc(3 * (size_t)n + 1, sizeof *rgb, err);
     btf_status rc = kind && vec && rgb ? BTF_OK : BTF_E_NOMEM;
     for (int j = 0; rc == BTF_OK && j < n; j++) {
         const btf_light *lt = &s->lights[j];
@@ -261,7 +261,7 @@ static btf_status light_params(rf_params *pr, const btf_scene *s, btf_error *err
     long b = rc ? -1 : add_floats(pr, vec, 3 * (size_t)n + 1);
     long c = rc ? -1 : add_floats(pr, rgb, 3 * (size_t)n + 1);
     if (rc == BTF_OK && (a < 0 || b < 0 || c < 0))
-        rc = btf_fail(err, BTF_E_NOMEM, "GPU RF render: out of memory for the lights");
+        rc = btf__fail(err, BTF_E_NOMEM, "GPU RF render: out of memory for the lights");
     if (rc == BTF_OK) {
         pr->ints[RFP_NLIGHTS] = n, pr->ints[RFP_LIGHT_KIND] = (int32_t)a;
         pr->ints[RFP_LIGHT_VEC] = (int32_t)b, pr->ints[RFP_LIGHT_RGB] = (int32_t)c;
@@ -279,12 +279,12 @@ static btf_status pass_open(rf_pass *ps, btf_gpu *g, const btf_rf_model *m, cons
                             btf_error *err)
 {
     memset(ps, 0, sizeof *ps);
-    ps->vk = btf_gpu_vk(g);
-    ps->limit = btf_gpu_max_buffer_bytes(g);
+    ps->vk = btf__gpu_vk(g);
+    ps->limit = btf__gpu_max_buffer_bytes(g);
     if (ps->limit > (1ull << 31) - 4) /* int32 word offsets */
         ps->limit = (1ull << 31) - 4;
-    int32_t *buf = btf_alloc((size_t)m->fields, sizeof *buf, err);
-    int32_t *base = btf_alloc((size_t)m->fields, sizeof *base, err);
+    int32_t *buf = btf__alloc((size_t)m->fields, sizeof *buf, err);
+    int32_t *base = btf__alloc((size_t)m->fields, sizeof *base, err);
     uint64_t words[RFP_CODE_BUFS];
     btf_status rc = buf && base ? BTF_OK : BTF_E_NOMEM;
     if (rc == BTF_OK)
@@ -294,8 +294,8 @@ static btf_status pass_open(rf_pass *ps, btf_gpu *g, const btf_rf_model *m, cons
     if (rc == BTF_OK)
         rc = model_params(&ps->pr, m, buf, base, err);
     if (rc == BTF_OK)
-        rc = btf_vk_pipeline_create(ps->vk, rf_render_spv, sizeof rf_render_spv, NBUFS, 0, NULL,
-                                    0, &ps->pipe, err);
+        rc = btf__vk_pipeline_create(ps->vk, rf_render_spv, sizeof rf_render_spv, NBUFS, 0, NULL,
+                                     0, &ps->pipe, err);
     free(buf);
     free(base);
     return rc;
@@ -307,20 +307,20 @@ static btf_status pass_upload(rf_pass *ps, btf_error *err)
     /* the int parameters hold a sampled model's map, 4 bytes a surface texel */
     uint64_t ib = ps->pr.n_ints * sizeof(int32_t);
     if (ps->pr.ints[RFP_MAP] >= 0 && ib > ps->limit)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU RF render: the int parameters with the "
-                        "coordinate map (%llu bytes) exceed the device's largest storage "
-                        "buffer (%llu bytes); use --backend cpu", (unsigned long long)ib,
-                        (unsigned long long)ps->limit);
-    btf_status rc = btf_vk_buffer_create(ps->vk, ps->pr.n_ints * sizeof(int32_t), &ps->bufs[1],
-                                         err);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "GPU RF render: the int parameters with the "
+                         "coordinate map (%llu bytes) exceed the device's largest storage "
+                         "buffer (%llu bytes); use --backend cpu", (unsigned long long)ib,
+                         (unsigned long long)ps->limit);
+    btf_status rc = btf__vk_buffer_create(ps->vk, ps->pr.n_ints * sizeof(int32_t), &ps->bufs[1],
+                                          err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(ps->vk, ps->pr.n_floats * sizeof(float), &ps->bufs[2], err);
+        rc = btf__vk_buffer_create(ps->vk, ps->pr.n_floats * sizeof(float), &ps->bufs[2], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(ps->vk, ps->bufs[1], 0, ps->pr.ints,
-                                  ps->pr.n_ints * sizeof(int32_t), err);
+        rc = btf__vk_buffer_upload(ps->vk, ps->bufs[1], 0, ps->pr.ints,
+                                   ps->pr.n_ints * sizeof(int32_t), err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_upload(ps->vk, ps->bufs[2], 0, ps->pr.floats,
-                                  ps->pr.n_floats * sizeof(float), err);
+        rc = btf__vk_buffer_upload(ps->vk, ps->bufs[2], 0, ps->pr.floats,
+                                   ps->pr.n_floats * sizeof(float), err);
     return rc;
 }
 
@@ -333,20 +333,20 @@ static btf_status run_band(rf_pass *ps, size_t npix, size_t pix0, float *dst, bt
     ps->pr.ints[RFP_NPIX] = (int32_t)npix;
     ps->pr.ints[RFP_ROW_PIX] = (int32_t)(gx * 64);
     ps->pr.ints[RFP_PIX0] = (int32_t)pix0;
-    btf_status rc = btf_vk_buffer_upload(ps->vk, ps->bufs[1], 0, ps->pr.ints,
-                                         RFP_INTS * sizeof(int32_t), err);
+    btf_status rc = btf__vk_buffer_upload(ps->vk, ps->bufs[1], 0, ps->pr.ints,
+                                          RFP_INTS * sizeof(int32_t), err);
     btf_vk_job *job = NULL;
     if (rc == BTF_OK)
-        rc = btf_vk_job_begin(ps->vk, &job, err);
+        rc = btf__vk_job_begin(ps->vk, &job, err);
     if (rc == BTF_OK)
-        rc = btf_vk_job_dispatch(job, ps->pipe, ps->bufs, NBUFS, NULL, 0, gx, gy, 1, err);
+        rc = btf__vk_job_dispatch(job, ps->pipe, ps->bufs, NBUFS, NULL, 0, gx, gy, 1, err);
     if (rc == BTF_OK) {
-        rc = btf_vk_job_submit_wait(job, err);
+        rc = btf__vk_job_submit_wait(job, err);
         job = NULL;
     }
-    btf_vk_job_abort(job);
+    btf__vk_job_abort(job);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_download(ps->vk, ps->bufs[3], 0, dst, npix * 3 * sizeof(float), err);
+        rc = btf__vk_buffer_download(ps->vk, ps->bufs[3], 0, dst, npix * 3 * sizeof(float), err);
     return rc;
 }
 
@@ -364,9 +364,9 @@ static btf_status shade_tile(rf_pass *ps, int tile_w, int tile_h, float *tile, b
 {
     size_t total = (size_t)tile_w * tile_h, band = band_pixels(ps, 0, total);
     ps->pr.ints[RFP_TILE_W] = tile_w;
-    btf_status rc = btf_vk_buffer_create(ps->vk, 16, &ps->bufs[0], err);
+    btf_status rc = btf__vk_buffer_create(ps->vk, 16, &ps->bufs[0], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(ps->vk, band * 3 * sizeof(float), &ps->bufs[3], err);
+        rc = btf__vk_buffer_create(ps->vk, band * 3 * sizeof(float), &ps->bufs[3], err);
     for (size_t p0 = 0; rc == BTF_OK && p0 < total; p0 += band)
         rc = run_band(ps, total - p0 < band ? total - p0 : band, p0, tile + 3 * p0, err);
     return rc;
@@ -378,21 +378,21 @@ static btf_status shade_scene(rf_pass *ps, const btf_gbuffer *g, btf_image *out,
     size_t rows = band_pixels(ps, BTF_RP_GB * sizeof(float), (size_t)g->width * g->height) /
                   (size_t)g->width;
     if (rows < 1)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU RF render: one row of %d pixels needs "
-                        "more than the device's largest storage buffer", g->width);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "GPU RF render: one row of %d pixels needs "
+                         "more than the device's largest storage buffer", g->width);
     size_t band_px = rows * g->width;
-    float *scratch = btf_alloc(band_px, BTF_RP_GB * sizeof(float), err);
+    float *scratch = btf__alloc(band_px, BTF_RP_GB * sizeof(float), err);
     btf_status rc = scratch ? BTF_OK : BTF_E_NOMEM;
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(ps->vk, band_px * BTF_RP_GB * sizeof(float), &ps->bufs[0], err);
+        rc = btf__vk_buffer_create(ps->vk, band_px * BTF_RP_GB * sizeof(float), &ps->bufs[0], err);
     if (rc == BTF_OK)
-        rc = btf_vk_buffer_create(ps->vk, band_px * 3 * sizeof(float), &ps->bufs[3], err);
+        rc = btf__vk_buffer_create(ps->vk, band_px * 3 * sizeof(float), &ps->bufs[3], err);
     for (int y0 = 0; rc == BTF_OK && y0 < g->height; y0 += (int)rows) {
         int y1 = y0 + (int)rows < g->height ? y0 + (int)rows : g->height;
         size_t npix = (size_t)(y1 - y0) * g->width;
-        btf_render_pack_gbuffer(g, y0, y1, scratch);
-        rc = btf_vk_buffer_upload(ps->vk, ps->bufs[0], 0, scratch,
-                                  npix * BTF_RP_GB * sizeof(float), err);
+        btf__render_pack_gbuffer(g, y0, y1, scratch);
+        rc = btf__vk_buffer_upload(ps->vk, ps->bufs[0], 0, scratch,
+                                   npix * BTF_RP_GB * sizeof(float), err);
         if (rc == BTF_OK)
             rc = run_band(ps, npix, 0, out->data + (size_t)y0 * g->width * 3, err);
     }
@@ -400,17 +400,17 @@ static btf_status shade_scene(rf_pass *ps, const btf_gbuffer *g, btf_image *out,
     return rc;
 }
 
-btf_status btf_gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir view,
-                                  btf_dir light, int width, int height, btf_image *out,
-                                  btf_render_info *info, btf_error *err)
+btf_status btf__gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir view,
+                                   btf_dir light, int width, int height, btf_image *out,
+                                   btf_render_info *info, btf_error *err)
 {
     if (info)
         memset(info, 0, sizeof *info);
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_gpu_rf_render_flat: no output image");
+        return btf__fail(err, BTF_E_ARG, "btf_gpu_rf_render_flat: no output image");
     memset(out, 0, sizeof *out);
     if (!g)
-        return btf_fail(err, BTF_E_ARG, "btf_gpu_rf_render_flat: no device");
+        return btf__fail(err, BTF_E_ARG, "btf_gpu_rf_render_flat: no device");
     btf_status rc = check_model(m, err);
     if (rc == BTF_OK)
         rc = rf_flat_check(m, view, light, width, height, 0, err);
@@ -419,12 +419,12 @@ btf_status btf_gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir vie
     int sw = rf_surface_w(m), sh = rf_surface_h(m);
     width = width ? width : sw;
     height = height ? height : sh;
-    double t0 = btf_now();
+    double t0 = btf__now();
     /* the fields and weights of the view: the CPU render's own call */
     rf_look look = rf_look_at(m, view);
     int fs[4] = {look.vs.i0, look.vs.i1, look.vs.i2, look.vs.i3};
     float ws[4] = {look.vs.w0, look.vs.w1, look.vs.w2, look.vs.w3};
-    uint8_t *want = btf_calloc((size_t)m->fields, 1, err);
+    uint8_t *want = btf__calloc((size_t)m->fields, 1, err);
     if (!want)
         return BTF_E_NOMEM;
     for (int i = 0; i < 4; i++)
@@ -442,10 +442,10 @@ btf_status btf_gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir vie
             ps.pr.floats[RFP_LIGHT + k] = (float)l[k], ps.pr.floats[RFP_VIEW + k] = look.v[k];
         rc = pass_upload(&ps, err);
     }
-    double t1 = btf_now();
-    /* the surface's distinct texels, as btf_rf_render_flat shades them */
+    double t1 = btf__now();
+    /* the surface's distinct texels, as btf__rf_render_flat shades them */
     int tile_w = width < sw ? width : sw, tile_h = height < sh ? height : sh;
-    float *tile = rc == BTF_OK ? btf_alloc((size_t)tile_w * tile_h, 3 * sizeof(float), err) : NULL;
+    float *tile = rc == BTF_OK ? btf__alloc((size_t)tile_w * tile_h, 3 * sizeof(float), err) : NULL;
     if (rc == BTF_OK && !tile)
         rc = BTF_E_NOMEM;
     if (rc == BTF_OK)
@@ -457,29 +457,29 @@ btf_status btf_gpu_rf_render_flat(btf_gpu *g, const btf_rf_model *m, btf_dir vie
     free(tile);
     pass_free(&ps);
     if (rc == BTF_OK && info)
-        info->synth_s = t1 - t0, info->shade_s = btf_now() - t1;
+        info->synth_s = t1 - t0, info->shade_s = btf__now() - t1;
     return rc;
 }
 
-btf_status btf_gpu_rf_render_scene(btf_gpu *g, const btf_rf_model *m, const btf_scene *s,
-                                   int width, int height, int threads, btf_image *out,
-                                   btf_render_info *info, btf_error *err)
+btf_status btf__gpu_rf_render_scene(btf_gpu *g, const btf_rf_model *m, const btf_scene *s,
+                                    int width, int height, int threads, btf_image *out,
+                                    btf_render_info *info, btf_error *err)
 {
     if (info)
         memset(info, 0, sizeof *info);
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_gpu_rf_render_scene: no output image");
+        return btf__fail(err, BTF_E_ARG, "btf_gpu_rf_render_scene: no output image");
     memset(out, 0, sizeof *out);
     if (!g)
-        return btf_fail(err, BTF_E_ARG, "btf_gpu_rf_render_scene: no device");
+        return btf__fail(err, BTF_E_ARG, "btf_gpu_rf_render_scene: no device");
     btf_status rc = check_model(m, err);
     if (rc)
         return rc;
     btf_gbuffer gb;
-    double t0 = btf_now();
+    double t0 = btf__now();
     rc = rf_scene_trace(m, s, &width, &height, threads, &gb, err);
-    double t1 = btf_now();
-    uint8_t *want = rc == BTF_OK ? btf_alloc((size_t)m->fields, 1, err) : NULL;
+    double t1 = btf__now();
+    uint8_t *want = rc == BTF_OK ? btf__alloc((size_t)m->fields, 1, err) : NULL;
     if (rc == BTF_OK && !want)
         rc = BTF_E_NOMEM;
     rf_pass ps;
@@ -495,14 +495,14 @@ btf_status btf_gpu_rf_render_scene(btf_gpu *g, const btf_rf_model *m, const btf_
     }
     if (rc == BTF_OK)
         rc = pass_upload(&ps, err);
-    double t2 = btf_now();
+    double t2 = btf__now();
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, width, height, 3, err);
     if (rc == BTF_OK && (rc = shade_scene(&ps, &gb, out, err)))
         btf_image_free(out);
     pass_free(&ps);
-    btf_gbuffer_free(&gb);
+    btf__gbuffer_free(&gb);
     if (rc == BTF_OK && info)
-        info->trace_s = t1 - t0, info->synth_s = t2 - t1, info->shade_s = btf_now() - t2;
+        info->trace_s = t1 - t0, info->synth_s = t2 - t1, info->shade_s = btf__now() - t2;
     return rc;
 }

@@ -17,7 +17,7 @@
  * same computation with periodic noise (gpu_task.period_w, period_h;
  * docs/synthesis.md, "Tileable synthesis"). The images go to host memory
  * (btf_gpu_synthesise) or stay in one device buffer
- * (btf_gpu_synthesise_device, gpu/synth_gpu.h).
+ * (btf__gpu_synthesise_device, gpu/synth_gpu.h).
  * The btf_gpu handle that holds the pipelines, its limits and memory budget
  * are gpu/gpu_handle.c's, the image arrays on the device gpu/gpu_images.c's
  * (docs/gpu.md, "Images left on the device"); both are called from here,
@@ -108,7 +108,7 @@ static void fill_task(gpu_task *t, const btf_car_band *b, int margin, uint32_t s
             k++;
         }
     t->n_earlier = k;
-    int nsame = btf_car_same_row_order(b, same);
+    int nsame = btf__car_same_row_order(b, same);
     for (int i = 0; i < nsame; i++, k++) {
         t->off_r[k] = 0;
         t->off_c[k] = b->offsets[same[i]].col;
@@ -236,10 +236,10 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
     for (int l = 0; l < max_levels; l++)
         bt->level_start[l + 1] = bt->level_start[l] + count[l];
     bt->ntasks = bt->level_start[max_levels];
-    bt->tasks = btf_calloc((size_t)bt->ntasks, sizeof(gpu_task), err);
-    bt->fs = btf_calloc((size_t)bt->ntasks, sizeof(field_state), err);
-    bt->unmix = btf_calloc((size_t)n, sizeof(gpu_unmix), err);
-    int *keep = btf_calloc((size_t)bt->ntasks * 2, sizeof(int), err);
+    bt->tasks = btf__calloc((size_t)bt->ntasks, sizeof(gpu_task), err);
+    bt->fs = btf__calloc((size_t)bt->ntasks, sizeof(field_state), err);
+    bt->unmix = btf__calloc((size_t)n, sizeof(gpu_unmix), err);
+    int *keep = btf__calloc((size_t)bt->ntasks * 2, sizeof(int), err);
     if (!bt->tasks || !bt->fs || !bt->unmix || !keep) {
         free(keep);
         return BTF_E_NOMEM;
@@ -270,7 +270,7 @@ static int build_batch(const btf_model *m, const int *subs, const int (*margins)
         memcpy(bt->unmix[j].basis, sm->basis, sizeof bt->unmix[j].basis);
         bt->unmix[j].width = w;
         btf_marginal_table mt; /* the CPU's very table (src/synth/marginal.c) */
-        btf_marginal_table_make(sm, &mt);
+        btf__marginal_table_make(sm, &mt);
         unmix_take_table(&bt->unmix[j], &mt);
     }
     /* Walk the strips once to size every field's buffer rows. */
@@ -309,16 +309,16 @@ static int dispatch_range(btf_gpu *g, btf_vk_job *job, const btf_vk_pipeline *pi
                           btf_vk_buffer *const *bufs, int nbufs, uint32_t *push, int push_words,
                           uint32_t base, uint32_t count, uint32_t gy, btf_error *err)
 {
-    const btf_vk_device_info *in = btf_vk_info(g->vk);
+    const btf_vk_device_info *in = btf__vk_info(g->vk);
     uint32_t limit = in->max_workgroup_count[0];
     if (gy > in->max_workgroup_count[1])
-        return btf_fail(err, BTF_E_UNSUPPORTED, "GPU synthesis needs %u workgroups along y, more "
-                        "than the device's %u; use the CPU backend", gy,
-                        in->max_workgroup_count[1]);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "GPU synthesis needs %u workgroups along y, more "
+                         "than the device's %u; use the CPU backend", gy,
+                         in->max_workgroup_count[1]);
     while (count > 0) {
         uint32_t k = count < limit ? count : limit;
         push[push_words - 1] = base; /* the base is the last push word */
-        int rc = btf_vk_job_dispatch(job, pipe, bufs, nbufs, push, 4u * push_words, k, gy, 1, err);
+        int rc = btf__vk_job_dispatch(job, pipe, bufs, nbufs, push, 4u * push_words, k, gy, 1, err);
         if (rc)
             return rc;
         base += k;
@@ -376,30 +376,30 @@ typedef struct batch_buffers {
 
 static void buffers_free(batch_buffers *b)
 {
-    btf_vk_buffer_destroy(b->tasks);
-    btf_vk_buffer_destroy(b->unmix);
-    btf_vk_buffer_destroy(b->fields);
-    btf_vk_buffer_destroy(b->gauss);
-    btf_vk_buffer_destroy(b->out);
-    btf_vk_buffer_destroy(b->carry);
+    btf__vk_buffer_destroy(b->tasks);
+    btf__vk_buffer_destroy(b->unmix);
+    btf__vk_buffer_destroy(b->fields);
+    btf__vk_buffer_destroy(b->gauss);
+    btf__vk_buffer_destroy(b->out);
+    btf__vk_buffer_destroy(b->carry);
 }
 
 static int buffers_make(btf_gpu *g, const batch *bt, batch_buffers *b, btf_error *err)
 {
     memset(b, 0, sizeof *b);
-    int rc = btf_vk_buffer_create(g->vk, sizeof(gpu_task) * (uint64_t)bt->ntasks, &b->tasks, err);
+    int rc = btf__vk_buffer_create(g->vk, sizeof(gpu_task) * (uint64_t)bt->ntasks, &b->tasks, err);
     if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, sizeof(gpu_unmix) * (uint64_t)bt->n_images, &b->unmix,
-                                  err);
+        rc = btf__vk_buffer_create(g->vk, sizeof(gpu_unmix) * (uint64_t)bt->n_images, &b->unmix,
+                                   err);
     if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, 4 * bt->field_floats, &b->fields, err);
+        rc = btf__vk_buffer_create(g->vk, 4 * bt->field_floats, &b->fields, err);
     if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, 4 * bt->gauss_floats, &b->gauss, err);
+        rc = btf__vk_buffer_create(g->vk, 4 * bt->gauss_floats, &b->gauss, err);
     if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, 4 * bt->out_floats, &b->out, err);
+        rc = btf__vk_buffer_create(g->vk, 4 * bt->out_floats, &b->out, err);
     if (rc == 0)
-        rc = btf_vk_buffer_create(g->vk, 4 * (bt->carry_floats ? bt->carry_floats : 1), &b->carry,
-                                  err);
+        rc = btf__vk_buffer_create(g->vk, 4 * (bt->carry_floats ? bt->carry_floats : 1), &b->carry,
+                                   err);
     return rc;
 }
 
@@ -415,17 +415,17 @@ static int record_carry(btf_vk_job *job, const batch *bt, const batch_buffers *b
         uint64_t bytes = 4ull * t->fw * keep[i], from = 4ull * t->field_off;
         if (bytes == 0 || keep_from[i] == 0)
             continue; /* nothing to keep, or already in place */
-        rc = btf_vk_job_copy(job, b->fields, from + 4ull * t->fw * keep_from[i], b->carry, toff,
-                             bytes, err);
+        rc = btf__vk_job_copy(job, b->fields, from + 4ull * t->fw * keep_from[i], b->carry, toff,
+                              bytes, err);
         if (rc == 0)
-            rc = btf_vk_job_copy(job, b->carry, toff, b->fields, from, bytes, err);
+            rc = btf__vk_job_copy(job, b->carry, toff, b->fields, from, bytes, err);
         toff += bytes;
     }
     return rc;
 }
 
 /* Where a batch's images go: host images, or the device array dev at
- * float offsets dev_off[j] (btf_gpu_synthesise_device). */
+ * float offsets dev_off[j] (btf__gpu_synthesise_device). */
 typedef struct batch_dest {
     btf_image *images;
     const btf_gpu_images *dev;
@@ -448,15 +448,15 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
         for (int band = 0; band < 3; band++)
             bt->unmix[j].gauss_off[band] = bt->tasks[3 * j + band].gauss_off;
     btf_vk_job *job = NULL;
-    int rc = btf_vk_buffer_upload(g->vk, b->tasks, 0, bt->tasks,
-                                  sizeof(gpu_task) * (uint64_t)bt->ntasks, err);
+    int rc = btf__vk_buffer_upload(g->vk, b->tasks, 0, bt->tasks,
+                                   sizeof(gpu_task) * (uint64_t)bt->ntasks, err);
     if (rc == 0)
-        rc = btf_vk_buffer_upload(g->vk, b->unmix, 0, bt->unmix,
-                                  sizeof(gpu_unmix) * (uint64_t)bt->n_images, err);
+        rc = btf__vk_buffer_upload(g->vk, b->unmix, 0, bt->unmix,
+                                   sizeof(gpu_unmix) * (uint64_t)bt->n_images, err);
     if (rc == 0)
-        rc = btf_vk_job_begin(g->vk, &job, err);
+        rc = btf__vk_job_begin(g->vk, &job, err);
     if (rc == 0 && first)
-        rc = btf_vk_job_fill(job, b->fields, 0, 4 * bt->field_floats, 0, err);
+        rc = btf__vk_job_fill(job, b->fields, 0, 4 * bt->field_floats, 0, err);
     if (rc == 0 && !first)
         rc = record_carry(job, bt, b, keep, keep + bt->ntasks, err);
     btf_vk_buffer *fb[2] = {b->tasks, b->fields};
@@ -483,18 +483,18 @@ static int run_strip(btf_gpu *g, batch *bt, batch_buffers *b, int y0, int y1, ui
                             chunks((uint64_t)bt->width * (y1 - y0)), err);
     uint64_t strip_bytes = 4ull * bt->width * (y1 - y0) * 3;
     for (int j = 0; rc == 0 && dst->dev && j < bt->n_images; j++) /* on the device */
-        rc = btf_gpu_images_copy_in(job, b->out, 4ull * bt->unmix[j].out_off, dst->dev,
-                                    dst->dev_off[j] + (uint64_t)y0 * bt->width * 3,
-                                    strip_bytes / 4, err);
+        rc = btf__gpu_images_copy_in(job, b->out, 4ull * bt->unmix[j].out_off, dst->dev,
+                                     dst->dev_off[j] + (uint64_t)y0 * bt->width * 3,
+                                     strip_bytes / 4, err);
     if (rc == 0) {
-        rc = btf_vk_job_submit_wait(job, err);
+        rc = btf__vk_job_submit_wait(job, err);
         job = NULL;
     }
     for (int j = 0; rc == 0 && !dst->dev && j < bt->n_images; j++)
-        rc = btf_vk_buffer_download(g->vk, b->out, 4ull * bt->unmix[j].out_off,
-                                    dst->images[j].data + (size_t)y0 * bt->width * 3,
-                                    strip_bytes, err);
-    btf_vk_job_abort(job);
+        rc = btf__vk_buffer_download(g->vk, b->out, 4ull * bt->unmix[j].out_off,
+                                     dst->images[j].data + (size_t)y0 * bt->width * 3,
+                                     strip_bytes, err);
+    btf__vk_job_abort(job);
     return rc;
 }
 
@@ -502,7 +502,7 @@ static int run_batch(btf_gpu *g, batch *bt, uint64_t seed, const batch_dest *dst
                      btf_error *err)
 {
     batch_buffers b;
-    int *keep = btf_calloc((size_t)bt->ntasks * 2, sizeof(int), err);
+    int *keep = btf__calloc((size_t)bt->ntasks * 2, sizeof(int), err);
     int rc = keep ? buffers_make(g, bt, &b, err) : BTF_E_NOMEM;
     for (int y = 0; rc == 0 && y < bt->height; y += bt->strip) {
         int y1 = y + bt->strip < bt->height ? y + bt->strip : bt->height;
@@ -523,19 +523,19 @@ static btf_status check_request(const btf_model *m, const int *subs, int n,
 {
     for (int j = 0; j < n; j++) {
         if (subs[j] < 0 || subs[j] >= m->n_subspaces)
-            return btf_fail(err, BTF_E_ARG, "subspace %d: the model has %d", subs[j],
-                            m->n_subspaces);
+            return btf__fail(err, BTF_E_ARG, "subspace %d: the model has %d", subs[j],
+                             m->n_subspaces);
         const btf_subspace_model *sm = &m->subspaces[subs[j]];
         if (sm->levels < 1 || sm->levels > BTF_MAX_LEVELS)
-            return btf_fail(err, BTF_E_ARG, "subspace %d: %d pyramid levels", subs[j], sm->levels);
+            return btf__fail(err, BTF_E_ARG, "subspace %d: %d pyramid levels", subs[j], sm->levels);
         for (int b = 0; b < 3; b++)
             for (int l = 0; l < sm->levels; l++) {
-                btf_status rc = btf_synth_check_band(&sm->bands[b][l], 0, err);
+                btf_status rc = btf__synth_check_band(&sm->bands[b][l], 0, err);
                 if (rc)
                     return rc;
-                if ((margins[j][b][l] = btf_model_margin(m, subs[j], b, l)) < 0)
-                    return btf_fail(err, BTF_E_NOMEM, "out of memory");
-                if ((rc = btf_synth_check_band(&sm->bands[b][l], margins[j][b][l], err)))
+                if ((margins[j][b][l] = btf__model_margin(m, subs[j], b, l)) < 0)
+                    return btf__fail(err, BTF_E_NOMEM, "out of memory");
+                if ((rc = btf__synth_check_band(&sm->bands[b][l], margins[j][b][l], err)))
                     return rc;
             }
     }
@@ -559,15 +559,15 @@ static int plan_batch(const btf_model *m, const int *subs, const int (*margins)[
             batch_free(bt);
             if (strip == 1) {
                 if (k == 1)
-                    return btf_fail(err, BTF_E_UNSUPPORTED,
-                                    "synthesis of width %d needs a %.1f MiB GPU buffer even in "
-                                    "strips of one row, more than the device's limit of %.1f MiB; "
-                                    "use the CPU backend", w, need / 1048576.0, limit / 1048576.0);
+                    return btf__fail(err, BTF_E_UNSUPPORTED,
+                                     "synthesis of width %d needs a %.1f MiB GPU buffer even in "
+                                     "strips of one row, more than the device's limit of %.1f MiB; "
+                                     "use the CPU backend", w, need / 1048576.0, limit / 1048576.0);
                 break;
             }
         }
     }
-    return btf_fail(err, BTF_E_UNSUPPORTED, "no GPU batch fits"); /* not reached */
+    return btf__fail(err, BTF_E_UNSUPPORTED, "no GPU batch fits"); /* not reached */
 }
 
 /* The output size of image j: opts' or, where 0, the analysed size. */
@@ -584,18 +584,18 @@ static btf_status check_all(const btf_model *m, const int *subspaces, int n,
 {
     *margins = NULL;
     if (!m || n < 0 || (n > 0 && !subspaces))
-        return btf_fail(err, BTF_E_ARG, "GPU synthesis: no model, or %d images", n);
-    if (n > 0 && !(*margins = btf_calloc((size_t)n, sizeof **margins, err)))
+        return btf__fail(err, BTF_E_ARG, "GPU synthesis: no model, or %d images", n);
+    if (n > 0 && !(*margins = btf__calloc((size_t)n, sizeof **margins, err)))
         return BTF_E_NOMEM;
     btf_status rc = check_request(m, subspaces, n, *margins, err);
     for (int j = 0; rc == 0 && j < n; j++) {
         image_size(m, subspaces[j], o, &w[j], &h[j]);
-        rc = btf_synth_check_size(w[j], h[j], err);
+        rc = btf__synth_check_size(w[j], h[j], err);
         if (rc == 0 && o->tileable) /* the CPU's rule and message */
-            rc = btf_synth_check_tileable(w[j], h[j], m->subspaces[subspaces[j]].levels, err);
+            rc = btf__synth_check_tileable(w[j], h[j], m->subspaces[subspaces[j]].levels, err);
         int match; /* the CPU's rule and message */
         if (rc == 0)
-            rc = btf_colour_match_wanted(m, subspaces[j], o->match_colours, &match, err);
+            rc = btf__colour_match_wanted(m, subspaces[j], o->match_colours, &match, err);
     }
     return rc;
 }
@@ -607,7 +607,7 @@ static btf_status run_all(btf_gpu *g, const btf_model *m, const int *subspaces, 
                           const int (*margins)[3][BTF_MAX_LEVELS], const batch_dest *dst,
                           btf_error *err)
 {
-    uint64_t limit = btf_vk_info(g->vk)->max_storage_buffer_range;
+    uint64_t limit = btf__vk_info(g->vk)->max_storage_buffer_range;
     if (g->max_buffer_bytes && g->max_buffer_bytes < limit)
         limit = g->max_buffer_bytes;
     btf_status rc = BTF_OK;
@@ -625,8 +625,8 @@ static btf_status run_all(btf_gpu *g, const btf_model *m, const int *subspaces, 
         rc = run_batch(g, &bt, o->seed, &d, err);
         for (int j = 0; rc == 0 && dst->images && j < bt.n_images; j++)
             for (int y = 0; rc == 0 && y < height; y++)
-                rc = btf_check_finite_row(dst->images[start + j].data + (size_t)y * width * 3,
-                                          (size_t)width * 3, subspaces[start + j], y, err);
+                rc = btf__check_finite_row(dst->images[start + j].data + (size_t)y * width * 3,
+                                           (size_t)width * 3, subspaces[start + j], y, err);
         start += bt.n_images;
         batch_free(&bt);
     }
@@ -639,11 +639,11 @@ static btf_status finish_on_host(const btf_model *m, int subspace, const btf_syn
                                  btf_image *img, btf_image *pattern, btf_error *err)
 {
     int match = 0;
-    btf_status rc = btf_structure_apply(m, o->seed, img, pattern, err);
+    btf_status rc = btf__structure_apply(m, o->seed, img, pattern, err);
     if (rc == BTF_OK)
-        rc = btf_colour_match_wanted(m, subspace, o->match_colours, &match, err);
+        rc = btf__colour_match_wanted(m, subspace, o->match_colours, &match, err);
     if (rc == BTF_OK && match)
-        rc = btf_colour_match(m, subspace, img, err);
+        rc = btf__colour_match(m, subspace, img, err);
     return rc;
 }
 
@@ -682,7 +682,7 @@ static btf_status group_on_device(btf_gpu *g, const btf_model *m, const int *sub
                                   void *user, btf_error *err)
 {
     btf_gpu_images dev;
-    uint64_t *off = btf_calloc((size_t)k, sizeof *off, err);
+    uint64_t *off = btf__calloc((size_t)k, sizeof *off, err);
     btf_status rc = off ? synth_to_device(g, m, subs + first, k, o, w + first, h + first,
                                           margins + first, &dev, off, err)
                         : BTF_E_NOMEM;
@@ -695,15 +695,15 @@ static btf_status group_on_device(btf_gpu *g, const btf_model *m, const int *sub
         btf_image img;
         if ((rc = btf_image_alloc(&img, wj, hj, 3, err)))
             break;
-        rc = btf_gpu_images_download(g->vk, &dev, off[j], img.data, (uint64_t)wj * hj * 3, err);
+        rc = btf__gpu_images_download(g->vk, &dev, off[j], img.data, (uint64_t)wj * hj * 3, err);
         for (int y = 0; rc == BTF_OK && y < hj; y++)
-            rc = btf_check_finite_row(img.data + (size_t)y * wj * 3, (size_t)wj * 3,
-                                      subs[first + j], y, err);
+            rc = btf__check_finite_row(img.data + (size_t)y * wj * 3, (size_t)wj * 3,
+                                       subs[first + j], y, err);
         if (rc == BTF_OK)
             rc = fn(user, first + j, &img, err);
         btf_image_free(&img);
     }
-    btf_gpu_images_free(&dev);
+    btf__gpu_images_free(&dev);
     free(off);
     return rc;
 }
@@ -713,16 +713,16 @@ btf_status btf_gpu_synthesise_each(btf_gpu *g, const btf_model *m, const int *su
                                    btf_error *err)
 {
     btf_synth_opts o;
-    if (btf_synth_resolve(opts, &o, err))
+    if (btf__synth_resolve(opts, &o, err))
         return BTF_E_ARG;
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
-    int *w = n > 0 ? btf_calloc((size_t)n * 2, sizeof(int), err) : NULL;
+    int *w = n > 0 ? btf__calloc((size_t)n * 2, sizeof(int), err) : NULL;
     int *h = w ? w + n : NULL; /* widths, heights */
     btf_status rc = n > 0 && !w ? BTF_E_NOMEM : BTF_OK;
     if (rc == BTF_OK)
         rc = check_all(m, subspaces, n, &o, w, h, &margins, err);
     if (rc == BTF_OK && (!g || !fn))
-        rc = btf_fail(err, BTF_E_ARG, "GPU synthesis: no GPU (btf_gpu_open) or no receiver");
+        rc = btf__fail(err, BTF_E_ARG, "GPU synthesis: no GPU (btf_gpu_open) or no receiver");
     const int (*mg)[3][BTF_MAX_LEVELS] = (const int (*)[3][BTF_MAX_LEVELS])margins;
     uint64_t budget = rc == BTF_OK ? btf_gpu_memory_budget(g) / 4 : 0; /* floats */
     if (g)
@@ -780,25 +780,25 @@ static btf_status match_image(btf_gpu *g, const btf_model *m, int subspace,
                               btf_error *err)
 {
     int match;
-    btf_status rc = btf_colour_match_wanted(m, subspace, o->match_colours, &match, err);
-    int layer = m->albedo && btf_structure_quilted(m);
+    btf_status rc = btf__colour_match_wanted(m, subspace, o->match_colours, &match, err);
+    int layer = m->albedo && btf__structure_quilted(m);
     if (rc || (!match && !layer))
         return rc;
-    if (layer && (rc = btf_structure_pattern(m, width, height, o->seed, pattern, err)))
+    if (layer && (rc = btf__structure_pattern(m, width, height, o->seed, pattern, err)))
         return rc;
     uint64_t pat_bytes = layer ? 4ull * pattern->width * pattern->height * pattern->channels : 0;
-    if (pat_bytes <= btf_gpu_max_buffer_bytes(g))
-        return btf_gpu_match_images(g->vk, g->matcher, m, subspace, match, im, offset, width,
-                                    height, layer ? pattern : NULL, err);
+    if (pat_bytes <= btf__gpu_max_buffer_bytes(g))
+        return btf__gpu_match_images(g->vk, g->matcher, m, subspace, match, im, offset, width,
+                                     height, layer ? pattern : NULL, err);
     btf_image img;
     if ((rc = btf_image_alloc(&img, width, height, 3, err)))
         return rc;
     uint64_t floats = (uint64_t)width * height * 3;
-    rc = btf_gpu_images_download(g->vk, im, offset, img.data, floats, err);
+    rc = btf__gpu_images_download(g->vk, im, offset, img.data, floats, err);
     if (rc == BTF_OK)
         rc = finish_on_host(m, subspace, o, &img, pattern, err);
     if (rc == BTF_OK)
-        rc = btf_gpu_images_upload(g->vk, im, offset, img.data, floats, err);
+        rc = btf__gpu_images_upload(g->vk, im, offset, img.data, floats, err);
     btf_image_free(&img);
     return rc;
 }
@@ -818,8 +818,8 @@ static btf_status synth_to_device(btf_gpu *g, const btf_model *m, const int *sub
     }
     char what[96];
     snprintf(what, sizeof what, "GPU synthesis to the device: %d images", n);
-    btf_status rc = btf_gpu_images_create(g->vk, floats, btf_gpu_images_cap(g),
-                                          btf_gpu_images_buffers(g), what, out, err);
+    btf_status rc = btf__gpu_images_create(g->vk, floats, btf__gpu_images_cap(g),
+                                           btf__gpu_images_buffers(g), what, out, err);
     batch_dest d = {NULL, out, offsets};
     if (rc == BTF_OK)
         rc = run_all(g, m, subs, n, o, w, h, margins, &d, err);
@@ -828,24 +828,24 @@ static btf_status synth_to_device(btf_gpu *g, const btf_model *m, const int *sub
         rc = match_image(g, m, subs[j], o, out, offsets[j], w[j], h[j], &pattern, err);
     btf_image_free(&pattern);
     if (rc)
-        btf_gpu_images_free(out);
+        btf__gpu_images_free(out);
     return rc;
 }
 
-btf_status btf_gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
-                                     const btf_synth_opts *opts, btf_gpu_images *out,
-                                     uint64_t *offsets, btf_error *err)
+btf_status btf__gpu_synthesise_device(btf_gpu *g, const btf_model *m, const int *subspaces, int n,
+                                      const btf_synth_opts *opts, btf_gpu_images *out,
+                                      uint64_t *offsets, btf_error *err)
 {
     btf_synth_opts o;
-    if (btf_synth_resolve(opts, &o, err))
+    if (btf__synth_resolve(opts, &o, err))
         return BTF_E_ARG;
     if (out)
         memset(out, 0, sizeof *out);
     if (!g || n < 1 || !offsets || !out)
-        return btf_fail(err, BTF_E_ARG, "GPU synthesis to the device: no GPU, no output or "
-                        "%d images (at least 1)", n);
+        return btf__fail(err, BTF_E_ARG, "GPU synthesis to the device: no GPU, no output or "
+                         "%d images (at least 1)", n);
     int (*margins)[3][BTF_MAX_LEVELS] = NULL;
-    int *w = btf_calloc((size_t)n * 2, sizeof(int), err);
+    int *w = btf__calloc((size_t)n * 2, sizeof(int), err);
     btf_status rc = w ? check_all(m, subspaces, n, &o, w, w + n, &margins, err) : BTF_E_NOMEM;
     g->jobs = g->batches = 0;
     if (rc == BTF_OK)

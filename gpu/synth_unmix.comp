@@ -34,7 +34,7 @@ float transfer_band(uint j, int b, float v)
     return btf_transfer(t, fl, jobs[j].q[i], jobs[j].dq[i], jobs[j].qmin[b], jobs[j].qmax[b]);
 }
 
-// The colour into the exemplar's box, as btf_marginal_gamut (src/synth/marginal.c).
+// The colour into the exemplar's box, as btf__marginal_gamut (src/synth/marginal.c).
 void gamut(uint j, inout float c[3])
 {
     int inside = 1;
@@ -67,7 +67,7 @@ void main()
         float b1 = gauss[jobs[j].gauss_off[1] + p];
         float b2 = gauss[jobs[j].gauss_off[2] + p];
         // a non-finite band skips the transfer, so that the host's finite
-        // test refuses the image as the CPU does (btf_unmix_row)
+        // test refuses the image as the CPU does (btf__unmix_row)
         uint e = 0x7F800000u;
         bool finite = (floatBitsToUint(b0) & e) != e && (floatBitsToUint(b1) & e) != e &&
                       (floatBitsToUint(b2) & e) != e;

@@ -52,12 +52,12 @@ enum {
 };
 
 typedef struct btf_vk_device_info {
-    int index;                      /* in btf_vk_list_devices (btf_vk_opts.device) */
+    int index;                      /* in btf__vk_list_devices (btf_vk_opts.device) */
     char name[256];
     int type;                       /* BTF_VK_TYPE_... (VkPhysicalDeviceType) */
     int is_cpu;                     /* type == BTF_VK_TYPE_CPU (lavapipe) */
     uint32_t vendor_id, device_id;
-    uint32_t api_version;           /* VK_MAKE_API_VERSION; see btf_vk_version_text */
+    uint32_t api_version;           /* VK_MAKE_API_VERSION; see btf__vk_version_text */
     int usable;                     /* Vulkan >= 1.1 and a compute queue */
     uint64_t max_storage_buffer_range;  /* bytes one storage buffer may hold */
     uint64_t max_allocation_bytes;  /* maxMemoryAllocationSize (0: not reported) */
@@ -70,7 +70,7 @@ typedef struct btf_vk_device_info {
     uint32_t subgroup_size;         /* 0 if the device does not say */
     int storage_16bit;              /* storageBuffer16BitAccess (Vulkan 1.1 16-bit storage):
                                        16-bit values in storage buffers */
-    /* Filled by btf_vk_create only (0 in btf_vk_list_devices): */
+    /* Filled by btf__vk_create only (0 in btf__vk_list_devices): */
     int mapped_buffers;             /* 1: buffers are host-visible and coherent, upload and
                                        download are memcpy; 0: staging copies */
 } btf_vk_device_info;
@@ -78,19 +78,19 @@ typedef struct btf_vk_device_info {
 /* Every Vulkan device, in the driver's enumeration order (the index of
  * btf_vk_opts.device). *list is malloc'd (free() it);
  * *count may be 0. No driver: BTF_E_UNSUPPORTED. */
-btf_status btf_vk_list_devices(btf_vk_device_info **list, int *count, btf_error *err);
+btf_status btf__vk_list_devices(btf_vk_device_info **list, int *count, btf_error *err);
 
 /* "discrete GPU", "integrated GPU", "virtual GPU", "CPU", "other". */
-const char *btf_vk_type_name(int type);
+const char *btf__vk_type_name(int type);
 /* "1.3.230" into buf. */
-void btf_vk_version_text(uint32_t api_version, char *buf, size_t n);
+void btf__vk_version_text(uint32_t api_version, char *buf, size_t n);
 
 /* ---------------------------------------------------------------- context */
 
 typedef struct btf_vk btf_vk;
 
 typedef struct btf_vk_opts {
-    int use_device;  /* 1: take `device` (an index of btf_vk_list_devices);
+    int use_device;  /* 1: take `device` (an index of btf__vk_list_devices);
                         0: the best device: discrete > integrated > virtual
                         GPU > CPU */
     int device;
@@ -106,22 +106,22 @@ typedef struct btf_vk_opts {
 } btf_vk_opts;
 
 /* Instance, device, compute queue, command pool. o may be NULL (defaults). */
-btf_status btf_vk_create(const btf_vk_opts *o, btf_vk **out, btf_error *err);
+btf_status btf__vk_create(const btf_vk_opts *o, btf_vk **out, btf_error *err);
 /* Waits for the device to be idle, then frees everything; NULL is fine.
  * Buffers and pipelines must be destroyed first. */
-void btf_vk_destroy(btf_vk *vk);
-/* The same, and returns btf_vk_validation_errors counted over the whole life
+void btf__vk_destroy(btf_vk *vk);
+/* The same, and returns btf__vk_validation_errors counted over the whole life
  * including the teardown (where the layer reports objects never destroyed);
  * the first message goes to first_message (n bytes; may be NULL). */
-unsigned btf_vk_destroy_checked(btf_vk *vk, char *first_message, size_t n);
+unsigned btf__vk_destroy_checked(btf_vk *vk, char *first_message, size_t n);
 
-const btf_vk_device_info *btf_vk_info(const btf_vk *vk);
+const btf_vk_device_info *btf__vk_info(const btf_vk *vk);
 /* 1 if the validation layer is on. */
-int btf_vk_validating(const btf_vk *vk);
+int btf__vk_validating(const btf_vk *vk);
 /* Errors and warnings the validation layer reported so far (0 without it),
  * and the text of the first one ("" if none). */
-unsigned btf_vk_validation_errors(const btf_vk *vk);
-const char *btf_vk_first_validation_message(const btf_vk *vk);
+unsigned btf__vk_validation_errors(const btf_vk *vk);
+const char *btf__vk_first_validation_message(const btf_vk *vk);
 
 /* ---------------------------------------------------------------- buffers */
 
@@ -131,19 +131,19 @@ typedef struct btf_vk_buffer btf_vk_buffer;
  * undefined). Larger data must be split by the caller. Errors: BTF_E_ARG for
  * a size beyond the device's limits, BTF_E_NOMEM when the memory heap cannot
  * hold it. */
-btf_status btf_vk_buffer_create(btf_vk *vk, uint64_t bytes, btf_vk_buffer **out, btf_error *err);
-void btf_vk_buffer_destroy(btf_vk_buffer *buf); /* NULL is fine */
-uint64_t btf_vk_buffer_size(const btf_vk_buffer *buf);
+btf_status btf__vk_buffer_create(btf_vk *vk, uint64_t bytes, btf_vk_buffer **out, btf_error *err);
+void btf__vk_buffer_destroy(btf_vk_buffer *buf); /* NULL is fine */
+uint64_t btf__vk_buffer_size(const btf_vk_buffer *buf);
 /* The mapped memory when info.mapped_buffers (read and write it directly
  * between jobs), else NULL. */
-void *btf_vk_buffer_mapped(btf_vk_buffer *buf);
+void *btf__vk_buffer_mapped(btf_vk_buffer *buf);
 
 /* Copies bytes between host memory and [offset, offset + bytes) of the
  * buffer. Synchronous; never while a submitted job uses the buffer (jobs
  * are synchronous too, so only threads could break this). */
-btf_status btf_vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset, const void *data,
+btf_status btf__vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset, const void *data,
                          uint64_t bytes, btf_error *err);
-btf_status btf_vk_buffer_download(btf_vk *vk, const btf_vk_buffer *buf, uint64_t offset, void *data,
+btf_status btf__vk_buffer_download(btf_vk *vk, const btf_vk_buffer *buf, uint64_t offset, void *data,
                            uint64_t bytes, btf_error *err);
 
 /* -------------------------------------------------------------- pipelines */
@@ -158,45 +158,45 @@ typedef struct btf_vk_pipeline btf_vk_pipeline;
  * constants at offset 0; specialisation constants constant_id 0 .. n_spec - 1,
  * 4 bytes each (uint, int or float bits). The shader must declare exactly
  * this interface (the validation layer checks). */
-btf_status btf_vk_pipeline_create(btf_vk *vk, const uint32_t *spirv, size_t spirv_bytes,
+btf_status btf__vk_pipeline_create(btf_vk *vk, const uint32_t *spirv, size_t spirv_bytes,
                            int n_buffers, uint32_t push_constant_bytes,
                            const uint32_t *spec_values, int n_spec,
                            btf_vk_pipeline **out, btf_error *err);
-void btf_vk_pipeline_destroy(btf_vk_pipeline *pipe); /* NULL is fine */
+void btf__vk_pipeline_destroy(btf_vk_pipeline *pipe); /* NULL is fine */
 
 /* ------------------------------------------------------------------- jobs */
 
 typedef struct btf_vk_job btf_vk_job;
 
 /* A job records commands into one command buffer; nothing runs before
- * btf_vk_job_submit_wait. Every command is followed by a memory barrier, so
+ * btf__vk_job_submit_wait. Every command is followed by a memory barrier, so
  * each one sees the results of all before it (and the host sees everything
  * once the job is done). A failed record call leaves the job as it was. */
-btf_status btf_vk_job_begin(btf_vk *vk, btf_vk_job **out, btf_error *err);
+btf_status btf__vk_job_begin(btf_vk *vk, btf_vk_job **out, btf_error *err);
 
 /* Dispatches gx * gy * gz workgroups of pipe with bufs[0 .. nbufs-1] bound at
  * bindings 0 .. nbufs-1 (nbufs must equal the pipeline's n_buffers) and
  * push_bytes (equal to its push_constant_bytes) of push constants. Counts
  * beyond maxComputeWorkGroupCount are refused (BTF_E_ARG); a zero count
  * records nothing. */
-btf_status btf_vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
+btf_status btf__vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
                         btf_vk_buffer *const *bufs, int nbufs, const void *push,
                         uint32_t push_bytes, uint32_t gx, uint32_t gy, uint32_t gz,
                         btf_error *err);
 /* Fills [offset, offset + bytes) with the 32-bit value; offset and bytes are
  * multiples of 4. */
-btf_status btf_vk_job_fill(btf_vk_job *job, btf_vk_buffer *buf, uint64_t offset, uint64_t bytes,
+btf_status btf__vk_job_fill(btf_vk_job *job, btf_vk_buffer *buf, uint64_t offset, uint64_t bytes,
                     uint32_t value, btf_error *err);
 /* Copies bytes from src at src_offset to dst at dst_offset (regions of one
  * buffer must not overlap). */
-btf_status btf_vk_job_copy(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_offset,
+btf_status btf__vk_job_copy(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_offset,
                     btf_vk_buffer *dst, uint64_t dst_offset, uint64_t bytes, btf_error *err);
 
 /* Submits, waits (at most opts.timeout_ms) and frees the job, whatever the
  * outcome. A timeout or a lost device is BTF_E_UNSUPPORTED and leaves the
- * btf_vk unusable (only btf_vk_destroy then, which waits for the device). */
-btf_status btf_vk_job_submit_wait(btf_vk_job *job, btf_error *err);
+ * btf_vk unusable (only btf__vk_destroy then, which waits for the device). */
+btf_status btf__vk_job_submit_wait(btf_vk_job *job, btf_error *err);
 /* Frees a job without running it; NULL is fine. */
-void btf_vk_job_abort(btf_vk_job *job);
+void btf__vk_job_abort(btf_vk_job *job);
 
 #endif

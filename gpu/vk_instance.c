@@ -2,7 +2,7 @@
  * vk_instance.c — the bottom of the Vulkan compute layer (gpu/vk.h; the
  * files: gpu/vk_internal.h): the loader check, the instance with the
  * optional validation layer and the messenger counting its messages, the
- * device list (btf_vk_list_devices) and the choice of one device, the
+ * device list (btf__vk_list_devices) and the choice of one device, the
  * logical device with its compute queue, command pool and fence, and the
  * one-line messages every Vulkan failure of the layer becomes.
  */
@@ -38,12 +38,12 @@ static int pin_one(struct dl_phdr_info *info, size_t size, void *user)
     return 0;
 }
 
-void btf_vk_pin_modules(void)
+void btf__vk_pin_modules(void)
 {
     dl_iterate_phdr(pin_one, NULL);
 }
 #else
-void btf_vk_pin_modules(void)
+void btf__vk_pin_modules(void)
 {
 }
 #endif
@@ -54,7 +54,7 @@ void btf_vk_pin_modules(void)
 
 /* ------------------------------------------------------------ messages */
 
-const char *btf_vk_result_name(VkResult r)
+const char *btf__vk_result_name(VkResult r)
 {
     switch (r) {
 #define R(x) case x: return #x;
@@ -76,12 +76,12 @@ const char *btf_vk_result_name(VkResult r)
 }
 
 /* "vkCreateDevice failed: VK_ERROR_..." (out-of-memory results: BTF_E_NOMEM). */
-int btf_vk_fail(btf_error *err, VkResult r, const char *call)
+int btf__vk_fail(btf_error *err, VkResult r, const char *call)
 {
     int code = (r == VK_ERROR_OUT_OF_HOST_MEMORY || r == VK_ERROR_OUT_OF_DEVICE_MEMORY)
                    ? BTF_E_NOMEM
                    : BTF_E_UNSUPPORTED;
-    return btf_fail(err, code, "%s failed: %s (%d)", call, btf_vk_result_name(r), (int)r);
+    return btf__fail(err, code, "%s failed: %s (%d)", call, btf__vk_result_name(r), (int)r);
 }
 
 /* The validation layer's messages: count errors and warnings, keep the first. */
@@ -121,7 +121,7 @@ static VkDebugUtilsMessengerCreateInfoEXT messenger_info(btf_vk *vk)
 
 /* ------------------------------------------------------- small helpers */
 
-const char *btf_vk_type_name(int type)
+const char *btf__vk_type_name(int type)
 {
     switch (type) {
     case BTF_VK_TYPE_DISCRETE_GPU: return "discrete GPU";
@@ -132,7 +132,7 @@ const char *btf_vk_type_name(int type)
     }
 }
 
-void btf_vk_version_text(uint32_t v, char *buf, size_t n)
+void btf__vk_version_text(uint32_t v, char *buf, size_t n)
 {
     snprintf(buf, n, "%u.%u.%u", VK_API_VERSION_MAJOR(v), VK_API_VERSION_MINOR(v),
              VK_API_VERSION_PATCH(v));
@@ -146,8 +146,8 @@ static int has_layer(const char *name, int *found, btf_error *err)
     *found = 0;
     VkResult r = vkEnumerateInstanceLayerProperties(&n, NULL);
     if (r != VK_SUCCESS)
-        return btf_vk_fail(err, r, "vkEnumerateInstanceLayerProperties");
-    VkLayerProperties *lp = btf_calloc(n, sizeof *lp, err);
+        return btf__vk_fail(err, r, "vkEnumerateInstanceLayerProperties");
+    VkLayerProperties *lp = btf__calloc(n, sizeof *lp, err);
     if (!lp)
         return BTF_E_NOMEM;
     r = vkEnumerateInstanceLayerProperties(&n, lp);
@@ -155,7 +155,7 @@ static int has_layer(const char *name, int *found, btf_error *err)
         *found |= !strcmp(lp[i].layerName, name);
     free(lp);
     if (r < 0)
-        return btf_vk_fail(err, r, "vkEnumerateInstanceLayerProperties");
+        return btf__vk_fail(err, r, "vkEnumerateInstanceLayerProperties");
     return BTF_OK;
 }
 
@@ -186,9 +186,9 @@ static int check_loader(btf_error *err)
         v = VK_API_VERSION_1_0;
     if (v < NEED_API) {
         char t[32];
-        btf_vk_version_text(v, t, sizeof t);
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "the Vulkan loader supports Vulkan %s; btfcar needs 1.1", t);
+        btf__vk_version_text(v, t, sizeof t);
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "the Vulkan loader supports Vulkan %s; btfcar needs 1.1", t);
     }
     return BTF_OK;
 }
@@ -201,15 +201,15 @@ static int check_validation_support(int *sync_validation, btf_error *err)
     if (rc)
         return rc;
     if (!found)
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "Vulkan validation was requested (btf_vk_opts.validation) but the "
-                        "layer %s is not installed (Debian: vulkan-validationlayers)",
-                        VALIDATION_LAYER);
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "Vulkan validation was requested (btf_vk_opts.validation) but the "
+                         "layer %s is not installed (Debian: vulkan-validationlayers)",
+                         VALIDATION_LAYER);
     if (!has_instance_extension(NULL, VK_EXT_DEBUG_UTILS_EXTENSION_NAME) &&
         !has_instance_extension(VALIDATION_LAYER, VK_EXT_DEBUG_UTILS_EXTENSION_NAME))
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "Vulkan validation needs the instance extension %s, which is missing",
-                        VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "Vulkan validation needs the instance extension %s, which is missing",
+                         VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
     *sync_validation = has_instance_extension(VALIDATION_LAYER,
                                               VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME);
     return BTF_OK;
@@ -217,7 +217,7 @@ static int check_validation_support(int *sync_validation, btf_error *err)
 
 /* A Vulkan 1.1 instance; with vk != NULL and validation, the layer and a
  * messenger creation chain reporting to vk (also during create/destroy). */
-int btf_vk_make_instance(btf_vk *vk, int validation, VkInstance *out, btf_error *err)
+int btf__vk_make_instance(btf_vk *vk, int validation, VkInstance *out, btf_error *err)
 {
     *out = VK_NULL_HANDLE;
     int rc = check_loader(err), sync = 0;
@@ -256,26 +256,26 @@ int btf_vk_make_instance(btf_vk *vk, int validation, VkInstance *out, btf_error 
     };
     VkResult r = vkCreateInstance(&ci, NULL, out);
     if (r == VK_ERROR_INCOMPATIBLE_DRIVER)
-        return btf_fail(err, BTF_E_UNSUPPORTED, NO_DEVICE_MSG);
+        return btf__fail(err, BTF_E_UNSUPPORTED, NO_DEVICE_MSG);
     if (r != VK_SUCCESS) {
         *out = VK_NULL_HANDLE;
-        return btf_vk_fail(err, r, "vkCreateInstance");
+        return btf__vk_fail(err, r, "vkCreateInstance");
     }
     return BTF_OK;
 }
 
-int btf_vk_make_messenger(btf_vk *vk, btf_error *err)
+int btf__vk_make_messenger(btf_vk *vk, btf_error *err)
 {
     PFN_vkCreateDebugUtilsMessengerEXT create = (PFN_vkCreateDebugUtilsMessengerEXT)
         vkGetInstanceProcAddr(vk->instance, "vkCreateDebugUtilsMessengerEXT");
     if (!create)
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "vkGetInstanceProcAddr found no vkCreateDebugUtilsMessengerEXT");
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "vkGetInstanceProcAddr found no vkCreateDebugUtilsMessengerEXT");
     VkDebugUtilsMessengerCreateInfoEXT mi = messenger_info(vk);
     VkResult r = create(vk->instance, &mi, NULL, &vk->messenger);
     if (r != VK_SUCCESS) {
         vk->messenger = VK_NULL_HANDLE;
-        return btf_vk_fail(err, r, "vkCreateDebugUtilsMessengerEXT");
+        return btf__vk_fail(err, r, "vkCreateDebugUtilsMessengerEXT");
     }
     return BTF_OK;
 }
@@ -290,11 +290,11 @@ static int enumerate(VkInstance inst, VkPhysicalDevice **devs, int *count, btf_e
         VkResult r = vkEnumeratePhysicalDevices(inst, &n, NULL);
         if (r != VK_SUCCESS)
             return r == VK_ERROR_INITIALIZATION_FAILED
-                       ? btf_fail(err, BTF_E_UNSUPPORTED, NO_DEVICE_MSG)
-                       : btf_vk_fail(err, r, "vkEnumeratePhysicalDevices");
+                       ? btf__fail(err, BTF_E_UNSUPPORTED, NO_DEVICE_MSG)
+                       : btf__vk_fail(err, r, "vkEnumeratePhysicalDevices");
         if (n == 0)
-            return btf_fail(err, BTF_E_UNSUPPORTED, NO_DEVICE_MSG);
-        VkPhysicalDevice *d = btf_calloc(n, sizeof *d, err);
+            return btf__fail(err, BTF_E_UNSUPPORTED, NO_DEVICE_MSG);
+        VkPhysicalDevice *d = btf__calloc(n, sizeof *d, err);
         if (!d)
             return BTF_E_NOMEM;
         r = vkEnumeratePhysicalDevices(inst, &n, d);
@@ -305,7 +305,7 @@ static int enumerate(VkInstance inst, VkPhysicalDevice **devs, int *count, btf_e
         }
         free(d);
         if (r != VK_INCOMPLETE) /* VK_INCOMPLETE: a device appeared; ask again */
-            return btf_vk_fail(err, r, "vkEnumeratePhysicalDevices");
+            return btf__vk_fail(err, r, "vkEnumeratePhysicalDevices");
     }
 }
 
@@ -372,12 +372,12 @@ static void fill_info(VkPhysicalDevice p, int index, btf_vk_device_info *di)
             di->device_local_bytes = mp.memoryHeaps[h].size;
 }
 
-btf_status btf_vk_list_devices(btf_vk_device_info **list, int *count, btf_error *err)
+btf_status btf__vk_list_devices(btf_vk_device_info **list, int *count, btf_error *err)
 {
     *list = NULL;
     *count = 0;
     VkInstance inst;
-    int rc = btf_vk_make_instance(NULL, 0, &inst, err);
+    int rc = btf__vk_make_instance(NULL, 0, &inst, err);
     if (rc)
         return rc;
     VkPhysicalDevice *devs;
@@ -387,13 +387,13 @@ btf_status btf_vk_list_devices(btf_vk_device_info **list, int *count, btf_error 
         rc = BTF_OK;
         devs = NULL;
     }
-    btf_vk_device_info *out = rc ? NULL : btf_calloc((size_t)n, sizeof *out, err);
+    btf_vk_device_info *out = rc ? NULL : btf__calloc((size_t)n, sizeof *out, err);
     if (!rc && !out)
         rc = BTF_E_NOMEM;
     for (int i = 0; !rc && i < n; i++)
         fill_info(devs[i], i, &out[i]);
     free(devs);
-    btf_vk_pin_modules();
+    btf__vk_pin_modules();
     vkDestroyInstance(inst, NULL);
     if (rc) {
         free(out);
@@ -421,17 +421,17 @@ static int type_rank(int type)
 static int named_device(const btf_vk_device_info *in, int n, int index, btf_error *err)
 {
     if (index < 0 || index >= n)
-        return btf_fail(err, BTF_E_ARG,
-                        "Vulkan device %d does not exist (%d device%s: indices 0..%d; see "
-                        "btfcar info --devices)",
-                        index, n, n == 1 ? "" : "s", n - 1);
+        return btf__fail(err, BTF_E_ARG,
+                         "Vulkan device %d does not exist (%d device%s: indices 0..%d; see "
+                         "btfcar info --devices)",
+                         index, n, n == 1 ? "" : "s", n - 1);
     if (!in[index].usable) {
         char v[32];
-        btf_vk_version_text(in[index].api_version, v, sizeof v);
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "Vulkan device %d (%s, Vulkan %s) cannot run btfcar's shaders "
-                        "(Vulkan 1.1 and a compute queue needed)",
-                        index, in[index].name, v);
+        btf__vk_version_text(in[index].api_version, v, sizeof v);
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "Vulkan device %d (%s, Vulkan %s) cannot run btfcar's shaders "
+                         "(Vulkan 1.1 and a compute queue needed)",
+                         index, in[index].name, v);
     }
     return BTF_OK;
 }
@@ -456,24 +456,24 @@ static int best_device(const btf_vk_device_info *in, int n, int allow_cpu, int *
     if (best >= 0)
         return BTF_OK;
     if (cpu >= 0)
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "only a CPU Vulkan device was found (%d: %s); allow it "
-                        "(btf_gpu_opts.allow_cpu) or name it (btf_gpu_opts.device = %d)",
-                        cpu, in[cpu].name, cpu);
-    return btf_fail(err, BTF_E_UNSUPPORTED,
-                    "no usable Vulkan device (Vulkan 1.1 with a compute queue needed; %d "
-                    "found, see btfcar info --devices)",
-                    n);
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "only a CPU Vulkan device was found (%d: %s); allow it "
+                         "(btf_gpu_opts.allow_cpu) or name it (btf_gpu_opts.device = %d)",
+                         cpu, in[cpu].name, cpu);
+    return btf__fail(err, BTF_E_UNSUPPORTED,
+                     "no usable Vulkan device (Vulkan 1.1 with a compute queue needed; %d "
+                     "found, see btfcar info --devices)",
+                     n);
 }
 
-int btf_vk_choose_device(btf_vk *vk, const btf_vk_opts *o, btf_error *err)
+int btf__vk_choose_device(btf_vk *vk, const btf_vk_opts *o, btf_error *err)
 {
     VkPhysicalDevice *devs;
     int n, chosen = -1;
     int rc = enumerate(vk->instance, &devs, &n, err);
     if (rc)
         return rc;
-    btf_vk_device_info *in = btf_calloc((size_t)n, sizeof *in, err);
+    btf_vk_device_info *in = btf__calloc((size_t)n, sizeof *in, err);
     rc = in ? BTF_OK : BTF_E_NOMEM;
     for (int i = 0; !rc && i < n; i++)
         fill_info(devs[i], i, &in[i]);
@@ -491,7 +491,7 @@ int btf_vk_choose_device(btf_vk *vk, const btf_vk_opts *o, btf_error *err)
     return rc;
 }
 
-int btf_vk_make_device(btf_vk *vk, btf_error *err)
+int btf__vk_make_device(btf_vk *vk, btf_error *err)
 {
     float prio = 1.0f;
     VkDeviceQueueCreateInfo qi = {
@@ -508,7 +508,7 @@ int btf_vk_make_device(btf_vk *vk, btf_error *err)
     VkResult r = vkCreateDevice(vk->phys, &di, NULL, &vk->device);
     if (r != VK_SUCCESS) {
         vk->device = VK_NULL_HANDLE;
-        return btf_vk_fail(err, r, "vkCreateDevice");
+        return btf__vk_fail(err, r, "vkCreateDevice");
     }
     vkGetDeviceQueue(vk->device, vk->queue_family, 0, &vk->queue);
     VkCommandPoolCreateInfo pi = {
@@ -519,13 +519,13 @@ int btf_vk_make_device(btf_vk *vk, btf_error *err)
     r = vkCreateCommandPool(vk->device, &pi, NULL, &vk->cmd_pool);
     if (r != VK_SUCCESS) {
         vk->cmd_pool = VK_NULL_HANDLE;
-        return btf_vk_fail(err, r, "vkCreateCommandPool");
+        return btf__vk_fail(err, r, "vkCreateCommandPool");
     }
     VkFenceCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     r = vkCreateFence(vk->device, &fi, NULL, &vk->fence);
     if (r != VK_SUCCESS) {
         vk->fence = VK_NULL_HANDLE;
-        return btf_vk_fail(err, r, "vkCreateFence");
+        return btf__vk_fail(err, r, "vkCreateFence");
     }
     return BTF_OK;
 }

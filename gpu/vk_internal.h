@@ -5,7 +5,7 @@
  * header; only gpu/vk*.c include this file.
  *
  * The files, each calling only those after it (make check-layering):
- *   vk.c           the context: btf_vk_create, btf_vk_destroy, accessors;
+ *   vk.c           the context: btf__vk_create, btf__vk_destroy, accessors;
  *   vk_memory.c    memory types, storage buffers, upload and download
  *                  (staging copies are jobs);
  *   vk_job.c       pipelines, jobs, descriptor pools, barriers, the fence
@@ -74,41 +74,41 @@ struct btf_vk_job {
 /* ------------------------------------------------- vk_instance.c */
 
 /* "VK_ERROR_DEVICE_LOST" and so on ("unknown VkResult" otherwise). */
-const char *btf_vk_result_name(VkResult r);
+const char *btf__vk_result_name(VkResult r);
 /* "vkCreateDevice failed: VK_ERROR_..." (out-of-memory results: BTF_E_NOMEM). */
-int btf_vk_fail(btf_error *err, VkResult r, const char *call);
+int btf__vk_fail(btf_error *err, VkResult r, const char *call);
 /* Sanitizer builds: keeps the driver and layer libraries loaded before the
  * last instance goes (see vk_instance.c); otherwise nothing. */
-void btf_vk_pin_modules(void);
+void btf__vk_pin_modules(void);
 /* A Vulkan 1.1 instance; with vk != NULL and validation, the layer and a
  * messenger creation chain reporting to vk (also during create/destroy). */
-int btf_vk_make_instance(btf_vk *vk, int validation, VkInstance *out, btf_error *err);
+int btf__vk_make_instance(btf_vk *vk, int validation, VkInstance *out, btf_error *err);
 /* The messenger counting the validation layer's errors and warnings. */
-int btf_vk_make_messenger(btf_vk *vk, btf_error *err);
+int btf__vk_make_messenger(btf_vk *vk, btf_error *err);
 /* vk->phys, info and queue_family: the device o names, or the best one. */
-int btf_vk_choose_device(btf_vk *vk, const btf_vk_opts *o, btf_error *err);
+int btf__vk_choose_device(btf_vk *vk, const btf_vk_opts *o, btf_error *err);
 /* The logical device, its compute queue, the command pool and the fence. */
-int btf_vk_make_device(btf_vk *vk, btf_error *err);
+int btf__vk_make_device(btf_vk *vk, btf_error *err);
 
 /* ------------------------------------------------------ vk_job.c */
 
 /* BTF_OK, or the reason this context can no longer be used. */
-int btf_vk_check_usable(const btf_vk *vk, btf_error *err);
+int btf__vk_check_usable(const btf_vk *vk, btf_error *err);
 /* [offset, offset + bytes) lies inside the buffer (overflow-safe); what
  * starts the message. */
-int btf_vk_check_range(const btf_vk_buffer *b, uint64_t offset, uint64_t bytes,
-                       const char *what, btf_error *err);
+int btf__vk_check_range(const btf_vk_buffer *b, uint64_t offset, uint64_t bytes,
+                        const char *what, btf_error *err);
 /* After a timeout: wait for the job that did not finish and free it, so
  * that what it uses can be destroyed (the context stays unusable). */
-void btf_vk_settle(btf_vk *vk);
+void btf__vk_settle(btf_vk *vk);
 /* Records a copy of bytes and the barrier after it (no checks). */
-void btf_vk_record_copy(btf_vk_job *job, VkBuffer src, uint64_t src_off, VkBuffer dst,
-                        uint64_t dst_off, uint64_t bytes);
+void btf__vk_record_copy(btf_vk_job *job, VkBuffer src, uint64_t src_off, VkBuffer dst,
+                         uint64_t dst_off, uint64_t bytes);
 
 /* --------------------------------------------------- vk_memory.c */
 
 /* The memory types of storage and staging buffers, and whether storage
  * buffers are mapped (vk->info.mapped_buffers). */
-int btf_vk_choose_memory(btf_vk *vk, int force_staging, btf_error *err);
+int btf__vk_choose_memory(btf_vk *vk, int force_staging, btf_error *err);
 
 #endif

@@ -17,23 +17,23 @@
 /* ---------------------------------------------------------- checks */
 
 /* BTF_OK, or the reason this context can no longer be used. */
-int btf_vk_check_usable(const btf_vk *vk, btf_error *err)
+int btf__vk_check_usable(const btf_vk *vk, btf_error *err)
 {
     if (vk->broken[0])
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s", vk->broken);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "%s", vk->broken);
     return BTF_OK;
 }
 
 /* [offset, offset + bytes) lies inside the buffer (overflow-safe). */
-int btf_vk_check_range(const btf_vk_buffer *b, uint64_t offset, uint64_t bytes,
-                       const char *what, btf_error *err)
+int btf__vk_check_range(const btf_vk_buffer *b, uint64_t offset, uint64_t bytes,
+                        const char *what, btf_error *err)
 {
     if (offset > b->size || bytes > b->size - offset)
-        return btf_fail(err, BTF_E_ARG,
-                        "%s: bytes %llu..%llu are outside the Vulkan buffer of %llu bytes",
-                        what, (unsigned long long)offset,
-                        (unsigned long long)offset + (unsigned long long)bytes,
-                        (unsigned long long)b->size);
+        return btf__fail(err, BTF_E_ARG,
+                         "%s: bytes %llu..%llu are outside the Vulkan buffer of %llu bytes",
+                         what, (unsigned long long)offset,
+                         (unsigned long long)offset + (unsigned long long)bytes,
+                         (unsigned long long)b->size);
     return BTF_OK;
 }
 
@@ -44,25 +44,25 @@ static int check_pipeline_args(const btf_vk *vk, const uint32_t *spirv, size_t s
                                int n_spec, btf_error *err)
 {
     if (!spirv || spirv_bytes < 20 || spirv_bytes % 4 || spirv[0] != 0x07230203u)
-        return btf_fail(err, BTF_E_ARG,
-                        "btf_vk_pipeline_create: not a SPIR-V module (%zu bytes)", spirv_bytes);
+        return btf__fail(err, BTF_E_ARG,
+                         "btf_vk_pipeline_create: not a SPIR-V module (%zu bytes)", spirv_bytes);
     int max_buffers = (int)(vk->info.max_storage_buffers < BTF_VK_MAX_BUFFERS
                                 ? vk->info.max_storage_buffers
                                 : BTF_VK_MAX_BUFFERS);
     if (n_buffers < 0 || n_buffers > max_buffers)
-        return btf_fail(err, BTF_E_ARG,
-                        "btf_vk_pipeline_create: %d storage buffers (0..%d allowed on %s)",
-                        n_buffers, max_buffers, vk->info.name);
+        return btf__fail(err, BTF_E_ARG,
+                         "btf_vk_pipeline_create: %d storage buffers (0..%d allowed on %s)",
+                         n_buffers, max_buffers, vk->info.name);
     if (push_bytes % 4 || push_bytes > vk->info.max_push_constants_bytes)
-        return btf_fail(err, BTF_E_ARG,
-                        "btf_vk_pipeline_create: %u push constant bytes (a multiple of 4, at "
-                        "most maxPushConstantsSize = %u)",
-                        push_bytes, vk->info.max_push_constants_bytes);
+        return btf__fail(err, BTF_E_ARG,
+                         "btf_vk_pipeline_create: %u push constant bytes (a multiple of 4, at "
+                         "most maxPushConstantsSize = %u)",
+                         push_bytes, vk->info.max_push_constants_bytes);
     if (n_spec < 0 || n_spec > BTF_VK_MAX_SPEC || (n_spec > 0 && !spec))
-        return btf_fail(err, BTF_E_ARG,
-                        "btf_vk_pipeline_create: %d specialisation constants (0..%d, values "
-                        "given)",
-                        n_spec, BTF_VK_MAX_SPEC);
+        return btf__fail(err, BTF_E_ARG,
+                         "btf_vk_pipeline_create: %d specialisation constants (0..%d, values "
+                         "given)",
+                         n_spec, BTF_VK_MAX_SPEC);
     return BTF_OK;
 }
 
@@ -84,7 +84,7 @@ static int make_layouts(btf_vk_pipeline *p, uint32_t push_bytes, btf_error *err)
     VkResult r = vkCreateDescriptorSetLayout(dev, &si, NULL, &p->set_layout);
     if (r != VK_SUCCESS) {
         p->set_layout = VK_NULL_HANDLE;
-        return btf_vk_fail(err, r, "vkCreateDescriptorSetLayout");
+        return btf__vk_fail(err, r, "vkCreateDescriptorSetLayout");
     }
     VkPushConstantRange pr = {.stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .size = push_bytes};
     VkPipelineLayoutCreateInfo li = {
@@ -97,7 +97,7 @@ static int make_layouts(btf_vk_pipeline *p, uint32_t push_bytes, btf_error *err)
     r = vkCreatePipelineLayout(dev, &li, NULL, &p->layout);
     if (r != VK_SUCCESS) {
         p->layout = VK_NULL_HANDLE;
-        return btf_vk_fail(err, r, "vkCreatePipelineLayout");
+        return btf__vk_fail(err, r, "vkCreatePipelineLayout");
     }
     return BTF_OK;
 }
@@ -112,7 +112,7 @@ static int make_pipeline(btf_vk_pipeline *p, const uint32_t *spirv, size_t spirv
     VkShaderModule module;
     VkResult r = vkCreateShaderModule(dev, &mi, NULL, &module);
     if (r != VK_SUCCESS)
-        return btf_vk_fail(err, r, "vkCreateShaderModule");
+        return btf__vk_fail(err, r, "vkCreateShaderModule");
     VkSpecializationMapEntry map[BTF_VK_MAX_SPEC];
     for (int i = 0; i < n_spec; i++)
         map[i] = (VkSpecializationMapEntry){
@@ -134,24 +134,24 @@ static int make_pipeline(btf_vk_pipeline *p, const uint32_t *spirv, size_t spirv
     vkDestroyShaderModule(dev, module, NULL);
     if (r != VK_SUCCESS) {
         p->pipeline = VK_NULL_HANDLE;
-        return btf_vk_fail(err, r, "vkCreateComputePipelines");
+        return btf__vk_fail(err, r, "vkCreateComputePipelines");
     }
     return BTF_OK;
 }
 
-btf_status btf_vk_pipeline_create(btf_vk *vk, const uint32_t *spirv, size_t spirv_bytes,
+btf_status btf__vk_pipeline_create(btf_vk *vk, const uint32_t *spirv, size_t spirv_bytes,
                            int n_buffers, uint32_t push_constant_bytes,
                            const uint32_t *spec_values, int n_spec, btf_vk_pipeline **out,
                            btf_error *err)
 {
     *out = NULL;
-    int rc = btf_vk_check_usable(vk, err);
+    int rc = btf__vk_check_usable(vk, err);
     if (!rc)
         rc = check_pipeline_args(vk, spirv, spirv_bytes, n_buffers, push_constant_bytes,
                                  spec_values, n_spec, err);
     if (rc)
         return rc;
-    btf_vk_pipeline *p = btf_calloc(1, sizeof *p, err);
+    btf_vk_pipeline *p = btf__calloc(1, sizeof *p, err);
     if (!p)
         return BTF_E_NOMEM;
     p->vk = vk;
@@ -161,18 +161,18 @@ btf_status btf_vk_pipeline_create(btf_vk *vk, const uint32_t *spirv, size_t spir
     if (!rc)
         rc = make_pipeline(p, spirv, spirv_bytes, spec_values, n_spec, err);
     if (rc) {
-        btf_vk_pipeline_destroy(p);
+        btf__vk_pipeline_destroy(p);
         return rc;
     }
     *out = p;
     return BTF_OK;
 }
 
-void btf_vk_pipeline_destroy(btf_vk_pipeline *p)
+void btf__vk_pipeline_destroy(btf_vk_pipeline *p)
 {
     if (!p)
         return;
-    btf_vk_settle(p->vk);
+    btf__vk_settle(p->vk);
     VkDevice dev = p->vk->device;
     if (p->pipeline)
         vkDestroyPipeline(dev, p->pipeline, NULL);
@@ -200,7 +200,7 @@ static void job_free(btf_vk_job *job)
 
 /* After a timeout: wait for the job that did not finish and free it, so
  * that what it uses can be destroyed (the context stays unusable). */
-void btf_vk_settle(btf_vk *vk)
+void btf__vk_settle(btf_vk *vk)
 {
     if (vk->stuck) {
         vkDeviceWaitIdle(vk->device);
@@ -209,13 +209,13 @@ void btf_vk_settle(btf_vk *vk)
     }
 }
 
-btf_status btf_vk_job_begin(btf_vk *vk, btf_vk_job **out, btf_error *err)
+btf_status btf__vk_job_begin(btf_vk *vk, btf_vk_job **out, btf_error *err)
 {
     *out = NULL;
-    int rc = btf_vk_check_usable(vk, err);
+    int rc = btf__vk_check_usable(vk, err);
     if (rc)
         return rc;
-    btf_vk_job *job = btf_calloc(1, sizeof *job, err);
+    btf_vk_job *job = btf__calloc(1, sizeof *job, err);
     if (!job)
         return BTF_E_NOMEM;
     job->vk = vk;
@@ -227,19 +227,19 @@ btf_status btf_vk_job_begin(btf_vk *vk, btf_vk_job **out, btf_error *err)
     if (r != VK_SUCCESS) {
         job->cmd = VK_NULL_HANDLE;
         job_free(job);
-        return btf_vk_fail(err, r, "vkAllocateCommandBuffers");
+        return btf__vk_fail(err, r, "vkAllocateCommandBuffers");
     }
     VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
                                    .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT};
     if ((r = vkBeginCommandBuffer(job->cmd, &bi)) != VK_SUCCESS) {
         job_free(job);
-        return btf_vk_fail(err, r, "vkBeginCommandBuffer");
+        return btf__vk_fail(err, r, "vkBeginCommandBuffer");
     }
     *out = job;
     return BTF_OK;
 }
 
-void btf_vk_job_abort(btf_vk_job *job)
+void btf__vk_job_abort(btf_vk_job *job)
 {
     job_free(job);
 }
@@ -271,7 +271,7 @@ static int reserve_set(btf_vk_job *job, uint32_t n, btf_error *err)
         int cap = job->cap_pools ? 2 * job->cap_pools : 4;
         VkDescriptorPool *np = realloc(job->pools, (size_t)cap * sizeof *np);
         if (!np)
-            return btf_fail(err, BTF_E_NOMEM, "out of memory for Vulkan descriptor pools");
+            return btf__fail(err, BTF_E_NOMEM, "out of memory for Vulkan descriptor pools");
         job->pools = np;
         job->cap_pools = cap;
     }
@@ -285,7 +285,7 @@ static int reserve_set(btf_vk_job *job, uint32_t n, btf_error *err)
                                      .pPoolSizes = &size};
     VkResult r = vkCreateDescriptorPool(job->vk->device, &pi, NULL, &job->pools[job->n_pools]);
     if (r != VK_SUCCESS)
-        return btf_vk_fail(err, r, "vkCreateDescriptorPool");
+        return btf__vk_fail(err, r, "vkCreateDescriptorPool");
     job->n_pools++;
     job->sets_left = sets;
     job->descriptors_left = sets * per;
@@ -306,7 +306,7 @@ static int make_set(btf_vk_job *job, const btf_vk_pipeline *pipe, btf_vk_buffer 
                                       .pSetLayouts = &pipe->set_layout};
     VkResult r = vkAllocateDescriptorSets(job->vk->device, &ai, set);
     if (r != VK_SUCCESS)
-        return btf_vk_fail(err, r, "vkAllocateDescriptorSets");
+        return btf__vk_fail(err, r, "vkAllocateDescriptorSets");
     job->sets_left--;
     job->descriptors_left -= n;
     VkDescriptorBufferInfo bi[BTF_VK_MAX_BUFFERS];
@@ -330,37 +330,37 @@ static int check_dispatch(const btf_vk_job *job, const btf_vk_pipeline *pipe,
 {
     const btf_vk_device_info *in = &job->vk->info;
     if (pipe->vk != job->vk)
-        return btf_fail(err, BTF_E_ARG, "btf_vk_job_dispatch: pipeline of another context");
+        return btf__fail(err, BTF_E_ARG, "btf_vk_job_dispatch: pipeline of another context");
     if (nbufs != pipe->n_buffers || (nbufs > 0 && !bufs))
-        return btf_fail(err, BTF_E_ARG,
-                        "btf_vk_job_dispatch: %d buffers given, the pipeline binds %d", nbufs,
-                        pipe->n_buffers);
+        return btf__fail(err, BTF_E_ARG,
+                         "btf_vk_job_dispatch: %d buffers given, the pipeline binds %d", nbufs,
+                         pipe->n_buffers);
     for (int i = 0; i < nbufs; i++)
         if (!bufs[i] || bufs[i]->vk != job->vk)
-            return btf_fail(err, BTF_E_ARG, "btf_vk_job_dispatch: buffer %d is %s", i,
-                            bufs[i] ? "of another context" : "NULL");
+            return btf__fail(err, BTF_E_ARG, "btf_vk_job_dispatch: buffer %d is %s", i,
+                             bufs[i] ? "of another context" : "NULL");
     if (push_bytes != pipe->push_bytes || (push_bytes && !push))
-        return btf_fail(err, BTF_E_ARG,
-                        "btf_vk_job_dispatch: %u push constant bytes given, the pipeline "
-                        "declares %u",
-                        push_bytes, pipe->push_bytes);
+        return btf__fail(err, BTF_E_ARG,
+                         "btf_vk_job_dispatch: %u push constant bytes given, the pipeline "
+                         "declares %u",
+                         push_bytes, pipe->push_bytes);
     for (int i = 0; i < 3; i++)
         if (g[i] > in->max_workgroup_count[i])
-            return btf_fail(err, BTF_E_ARG,
-                            "btf_vk_job_dispatch: %u x %u x %u workgroups exceed "
-                            "maxComputeWorkGroupCount %u x %u x %u of %s",
-                            g[0], g[1], g[2], in->max_workgroup_count[0],
-                            in->max_workgroup_count[1], in->max_workgroup_count[2], in->name);
+            return btf__fail(err, BTF_E_ARG,
+                             "btf_vk_job_dispatch: %u x %u x %u workgroups exceed "
+                             "maxComputeWorkGroupCount %u x %u x %u of %s",
+                             g[0], g[1], g[2], in->max_workgroup_count[0],
+                             in->max_workgroup_count[1], in->max_workgroup_count[2], in->name);
     return BTF_OK;
 }
 
-btf_status btf_vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
+btf_status btf__vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
                         btf_vk_buffer *const *bufs, int nbufs, const void *push,
                         uint32_t push_bytes, uint32_t gx, uint32_t gy, uint32_t gz,
                         btf_error *err)
 {
     const uint32_t g[3] = {gx, gy, gz};
-    int rc = btf_vk_check_usable(job->vk, err);
+    int rc = btf__vk_check_usable(job->vk, err);
     if (!rc)
         rc = check_dispatch(job, pipe, bufs, nbufs, push, push_bytes, g, err);
     if (rc || gx == 0 || gy == 0 || gz == 0)
@@ -380,18 +380,18 @@ btf_status btf_vk_job_dispatch(btf_vk_job *job, const btf_vk_pipeline *pipe,
     return BTF_OK;
 }
 
-btf_status btf_vk_job_fill(btf_vk_job *job, btf_vk_buffer *buf, uint64_t offset, uint64_t bytes,
+btf_status btf__vk_job_fill(btf_vk_job *job, btf_vk_buffer *buf, uint64_t offset, uint64_t bytes,
                     uint32_t value, btf_error *err)
 {
-    int rc = btf_vk_check_usable(job->vk, err);
+    int rc = btf__vk_check_usable(job->vk, err);
     if (!rc && buf->vk != job->vk)
-        rc = btf_fail(err, BTF_E_ARG, "btf_vk_job_fill: buffer of another context");
+        rc = btf__fail(err, BTF_E_ARG, "btf_vk_job_fill: buffer of another context");
     if (!rc)
-        rc = btf_vk_check_range(buf, offset, bytes, "btf_vk_job_fill", err);
+        rc = btf__vk_check_range(buf, offset, bytes, "btf_vk_job_fill", err);
     if (!rc && (offset % 4 || bytes % 4))
-        rc = btf_fail(err, BTF_E_ARG,
-                      "btf_vk_job_fill: offset %llu and size %llu must be multiples of 4",
-                      (unsigned long long)offset, (unsigned long long)bytes);
+        rc = btf__fail(err, BTF_E_ARG,
+                       "btf_vk_job_fill: offset %llu and size %llu must be multiples of 4",
+                       (unsigned long long)offset, (unsigned long long)bytes);
     if (rc || bytes == 0)
         return rc;
     vkCmdFillBuffer(job->cmd, buf->buffer, offset, bytes, value);
@@ -399,34 +399,34 @@ btf_status btf_vk_job_fill(btf_vk_job *job, btf_vk_buffer *buf, uint64_t offset,
     return BTF_OK;
 }
 
-void btf_vk_record_copy(btf_vk_job *job, VkBuffer src, uint64_t src_off, VkBuffer dst,
-                        uint64_t dst_off, uint64_t bytes)
+void btf__vk_record_copy(btf_vk_job *job, VkBuffer src, uint64_t src_off, VkBuffer dst,
+                         uint64_t dst_off, uint64_t bytes)
 {
     VkBufferCopy region = {.srcOffset = src_off, .dstOffset = dst_off, .size = bytes};
     vkCmdCopyBuffer(job->cmd, src, dst, 1, &region);
     barrier_after(job->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
 }
 
-btf_status btf_vk_job_copy(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_offset,
+btf_status btf__vk_job_copy(btf_vk_job *job, const btf_vk_buffer *src, uint64_t src_offset,
                     btf_vk_buffer *dst, uint64_t dst_offset, uint64_t bytes, btf_error *err)
 {
-    int rc = btf_vk_check_usable(job->vk, err);
+    int rc = btf__vk_check_usable(job->vk, err);
     if (!rc && (src->vk != job->vk || dst->vk != job->vk))
-        rc = btf_fail(err, BTF_E_ARG, "btf_vk_job_copy: buffer of another context");
+        rc = btf__fail(err, BTF_E_ARG, "btf_vk_job_copy: buffer of another context");
     if (!rc)
-        rc = btf_vk_check_range(src, src_offset, bytes, "btf_vk_job_copy (source)", err);
+        rc = btf__vk_check_range(src, src_offset, bytes, "btf_vk_job_copy (source)", err);
     if (!rc)
-        rc = btf_vk_check_range(dst, dst_offset, bytes, "btf_vk_job_copy (destination)", err);
+        rc = btf__vk_check_range(dst, dst_offset, bytes, "btf_vk_job_copy (destination)", err);
     if (!rc && src == dst && src_offset < dst_offset + bytes && dst_offset < src_offset + bytes)
-        rc = btf_fail(err, BTF_E_ARG, "btf_vk_job_copy: source and destination overlap");
+        rc = btf__fail(err, BTF_E_ARG, "btf_vk_job_copy: source and destination overlap");
     if (rc || bytes == 0)
         return rc;
-    btf_vk_record_copy(job, src->buffer, src_offset, dst->buffer, dst_offset, bytes);
+    btf__vk_record_copy(job, src->buffer, src_offset, dst->buffer, dst_offset, bytes);
     return BTF_OK;
 }
 
 /* A timeout or a lost device: the job may still run, so it is kept for
- * btf_vk_destroy and the context refuses further work. */
+ * btf__vk_destroy and the context refuses further work. */
 static int job_stuck(btf_vk_job *job, VkResult r, btf_error *err)
 {
     btf_vk *vk = job->vk;
@@ -439,14 +439,14 @@ static int job_stuck(btf_vk_job *job, VkResult r, btf_error *err)
     else
         snprintf(vk->broken, sizeof vk->broken,
                  "vkWaitForFences failed: %s (%d) on %s; the Vulkan context is unusable now",
-                 btf_vk_result_name(r), (int)r, vk->info.name);
-    return btf_fail(err, BTF_E_UNSUPPORTED, "%s", vk->broken);
+                 btf__vk_result_name(r), (int)r, vk->info.name);
+    return btf__fail(err, BTF_E_UNSUPPORTED, "%s", vk->broken);
 }
 
-btf_status btf_vk_job_submit_wait(btf_vk_job *job, btf_error *err)
+btf_status btf__vk_job_submit_wait(btf_vk_job *job, btf_error *err)
 {
     btf_vk *vk = job->vk;
-    int rc = btf_vk_check_usable(vk, err);
+    int rc = btf__vk_check_usable(vk, err);
     if (rc) {
         job_free(job);
         return rc;
@@ -454,11 +454,11 @@ btf_status btf_vk_job_submit_wait(btf_vk_job *job, btf_error *err)
     VkResult r = vkEndCommandBuffer(job->cmd);
     if (r != VK_SUCCESS) {
         job_free(job);
-        return btf_vk_fail(err, r, "vkEndCommandBuffer");
+        return btf__vk_fail(err, r, "vkEndCommandBuffer");
     }
     if ((r = vkResetFences(vk->device, 1, &vk->fence)) != VK_SUCCESS) {
         job_free(job);
-        return btf_vk_fail(err, r, "vkResetFences");
+        return btf__vk_fail(err, r, "vkResetFences");
     }
     VkSubmitInfo si = {.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO,
                        .commandBufferCount = 1,
@@ -468,7 +468,7 @@ btf_status btf_vk_job_submit_wait(btf_vk_job *job, btf_error *err)
         return job_stuck(job, r, err);
     if (r != VK_SUCCESS) {
         job_free(job);
-        return btf_vk_fail(err, r, "vkQueueSubmit");
+        return btf__vk_fail(err, r, "vkQueueSubmit");
     }
     r = vkWaitForFences(vk->device, 1, &vk->fence, VK_TRUE, vk->timeout_ns);
     if (r != VK_SUCCESS)

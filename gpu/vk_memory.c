@@ -26,7 +26,7 @@ static int type_bits(btf_vk *vk, VkBufferUsageFlags usage, uint32_t *bits, btf_e
     VkBuffer b;
     VkResult r = vkCreateBuffer(vk->device, &bi, NULL, &b);
     if (r != VK_SUCCESS)
-        return btf_vk_fail(err, r, "vkCreateBuffer");
+        return btf__vk_fail(err, r, "vkCreateBuffer");
     VkMemoryRequirements mr;
     vkGetBufferMemoryRequirements(vk->device, b, &mr);
     vkDestroyBuffer(vk->device, b, NULL);
@@ -62,7 +62,7 @@ static int main_heap(const VkPhysicalDeviceMemoryProperties *m)
  * on a discrete GPU only a device-local one on its main heap (resizable BAR;
  * not the small 256 MiB window). Otherwise device-local memory and staging
  * buffers (host-visible, coherent; cached for downloads where offered). */
-int btf_vk_choose_memory(btf_vk *vk, int force_staging, btf_error *err)
+int btf__vk_choose_memory(btf_vk *vk, int force_staging, btf_error *err)
 {
     const VkMemoryPropertyFlags hv = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
                                      VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
@@ -92,9 +92,9 @@ int btf_vk_choose_memory(btf_vk *vk, int force_staging, btf_error *err)
     int up = pick_type(&vk->mem, sbits, hv, -1);
     int down = pick_type(&vk->mem, sbits, hv | VK_MEMORY_PROPERTY_HOST_CACHED_BIT, -1);
     if (t < 0 || (!vk->info.mapped_buffers && up < 0))
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "Vulkan device %s offers no memory type for %s buffers", vk->info.name,
-                        t < 0 ? "storage" : "host-visible staging");
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "Vulkan device %s offers no memory type for %s buffers", vk->info.name,
+                         t < 0 ? "storage" : "host-visible staging");
     vk->storage_type = (uint32_t)t;
     if (!vk->info.mapped_buffers) {
         vk->upload_type = (uint32_t)up;
@@ -111,46 +111,46 @@ static int bind_memory(btf_vk *vk, btf_vk_buffer *b, uint32_t type, int map, btf
     VkMemoryRequirements mr;
     vkGetBufferMemoryRequirements(vk->device, b->buffer, &mr);
     if (!(mr.memoryTypeBits & (1u << type)))
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "vkGetBufferMemoryRequirements: memory type %u not allowed for a "
-                        "buffer of %llu bytes",
-                        type, (unsigned long long)b->size);
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "vkGetBufferMemoryRequirements: memory type %u not allowed for a "
+                         "buffer of %llu bytes",
+                         type, (unsigned long long)b->size);
     uint32_t heap = vk->mem.memoryTypes[type].heapIndex;
     VkDeviceSize heap_size = vk->mem.memoryHeaps[heap].size;
     if (mr.size > heap_size)
-        return btf_fail(err, BTF_E_NOMEM,
-                        "a Vulkan buffer of %llu bytes does not fit in memory heap %u of %s "
-                        "(%llu bytes)",
-                        (unsigned long long)mr.size, heap, vk->info.name,
-                        (unsigned long long)heap_size);
+        return btf__fail(err, BTF_E_NOMEM,
+                         "a Vulkan buffer of %llu bytes does not fit in memory heap %u of %s "
+                         "(%llu bytes)",
+                         (unsigned long long)mr.size, heap, vk->info.name,
+                         (unsigned long long)heap_size);
     if (vk->info.max_allocation_bytes && mr.size > vk->info.max_allocation_bytes)
-        return btf_fail(err, BTF_E_NOMEM,
-                        "a Vulkan buffer of %llu bytes exceeds maxMemoryAllocationSize "
-                        "(%llu bytes) of %s",
-                        (unsigned long long)mr.size,
-                        (unsigned long long)vk->info.max_allocation_bytes, vk->info.name);
+        return btf__fail(err, BTF_E_NOMEM,
+                         "a Vulkan buffer of %llu bytes exceeds maxMemoryAllocationSize "
+                         "(%llu bytes) of %s",
+                         (unsigned long long)mr.size,
+                         (unsigned long long)vk->info.max_allocation_bytes, vk->info.name);
     VkMemoryAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
                                .allocationSize = mr.size,
                                .memoryTypeIndex = type};
     VkResult r = vkAllocateMemory(vk->device, &ai, NULL, &b->memory);
     if (r != VK_SUCCESS) {
         b->memory = VK_NULL_HANDLE;
-        return btf_fail(err, BTF_E_NOMEM,
-                        "vkAllocateMemory of %llu bytes failed: %s (heap %u: %llu bytes, "
-                        "%llu of them already allocated by btfcar)",
-                        (unsigned long long)mr.size, btf_vk_result_name(r), heap,
-                        (unsigned long long)heap_size,
-                        (unsigned long long)vk->heap_used[heap]);
+        return btf__fail(err, BTF_E_NOMEM,
+                         "vkAllocateMemory of %llu bytes failed: %s (heap %u: %llu bytes, "
+                         "%llu of them already allocated by btfcar)",
+                         (unsigned long long)mr.size, btf__vk_result_name(r), heap,
+                         (unsigned long long)heap_size,
+                         (unsigned long long)vk->heap_used[heap]);
     }
     b->alloc_size = mr.size;
     b->heap = heap;
     vk->heap_used[heap] += mr.size;
     if ((r = vkBindBufferMemory(vk->device, b->buffer, b->memory, 0)) != VK_SUCCESS)
-        return btf_vk_fail(err, r, "vkBindBufferMemory");
+        return btf__vk_fail(err, r, "vkBindBufferMemory");
     if (map && (r = vkMapMemory(vk->device, b->memory, 0, VK_WHOLE_SIZE, 0, &b->mapped)) !=
                    VK_SUCCESS) {
         b->mapped = NULL;
-        return btf_vk_fail(err, r, "vkMapMemory");
+        return btf__vk_fail(err, r, "vkMapMemory");
     }
     return BTF_OK;
 }
@@ -160,7 +160,7 @@ static void buffer_free(btf_vk_buffer *b)
     if (!b)
         return;
     btf_vk *vk = b->vk;
-    btf_vk_settle(vk);
+    btf__vk_settle(vk);
     if (b->buffer)
         vkDestroyBuffer(vk->device, b->buffer, NULL);
     if (b->memory) {
@@ -176,7 +176,7 @@ static int buffer_make(btf_vk *vk, VkDeviceSize bytes, VkBufferUsageFlags usage,
                        int map, btf_vk_buffer **out, btf_error *err)
 {
     *out = NULL;
-    btf_vk_buffer *b = btf_calloc(1, sizeof *b, err);
+    btf_vk_buffer *b = btf__calloc(1, sizeof *b, err);
     if (!b)
         return BTF_E_NOMEM;
     b->vk = vk;
@@ -189,7 +189,7 @@ static int buffer_make(btf_vk *vk, VkDeviceSize bytes, VkBufferUsageFlags usage,
     int rc = BTF_OK;
     if (r != VK_SUCCESS) {
         b->buffer = VK_NULL_HANDLE;
-        rc = btf_vk_fail(err, r, "vkCreateBuffer");
+        rc = btf__vk_fail(err, r, "vkCreateBuffer");
     }
     if (!rc)
         rc = bind_memory(vk, b, type, map, err);
@@ -201,35 +201,35 @@ static int buffer_make(btf_vk *vk, VkDeviceSize bytes, VkBufferUsageFlags usage,
     return BTF_OK;
 }
 
-btf_status btf_vk_buffer_create(btf_vk *vk, uint64_t bytes, btf_vk_buffer **out, btf_error *err)
+btf_status btf__vk_buffer_create(btf_vk *vk, uint64_t bytes, btf_vk_buffer **out, btf_error *err)
 {
     *out = NULL;
-    int rc = btf_vk_check_usable(vk, err);
+    int rc = btf__vk_check_usable(vk, err);
     if (rc)
         return rc;
     if (bytes == 0 || bytes > vk->info.max_storage_buffer_range)
-        return btf_fail(err, BTF_E_ARG,
-                        "a Vulkan storage buffer of %llu bytes: %s holds 1 to %llu bytes "
-                        "(maxStorageBufferRange; larger data must be split)",
-                        (unsigned long long)bytes, vk->info.name,
-                        (unsigned long long)vk->info.max_storage_buffer_range);
+        return btf__fail(err, BTF_E_ARG,
+                         "a Vulkan storage buffer of %llu bytes: %s holds 1 to %llu bytes "
+                         "(maxStorageBufferRange; larger data must be split)",
+                         (unsigned long long)bytes, vk->info.name,
+                         (unsigned long long)vk->info.max_storage_buffer_range);
     return buffer_make(vk, bytes,
                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
                            VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                        vk->storage_type, vk->info.mapped_buffers, out, err);
 }
 
-void btf_vk_buffer_destroy(btf_vk_buffer *buf)
+void btf__vk_buffer_destroy(btf_vk_buffer *buf)
 {
     buffer_free(buf);
 }
 
-uint64_t btf_vk_buffer_size(const btf_vk_buffer *buf)
+uint64_t btf__vk_buffer_size(const btf_vk_buffer *buf)
 {
     return buf->size;
 }
 
-void *btf_vk_buffer_mapped(btf_vk_buffer *buf)
+void *btf__vk_buffer_mapped(btf_vk_buffer *buf)
 {
     return buf->mapped;
 }
@@ -240,14 +240,14 @@ static int staged_copy(btf_vk *vk, btf_vk_buffer *stage, VkBuffer buf, uint64_t 
                        uint64_t bytes, int up, btf_error *err)
 {
     btf_vk_job *job;
-    int rc = btf_vk_job_begin(vk, &job, err);
+    int rc = btf__vk_job_begin(vk, &job, err);
     if (rc)
         return rc;
     if (up)
-        btf_vk_record_copy(job, stage->buffer, 0, buf, offset, bytes);
+        btf__vk_record_copy(job, stage->buffer, 0, buf, offset, bytes);
     else
-        btf_vk_record_copy(job, buf, offset, stage->buffer, 0, bytes);
-    return btf_vk_job_submit_wait(job, err);
+        btf__vk_record_copy(job, buf, offset, stage->buffer, 0, bytes);
+    return btf__vk_job_submit_wait(job, err);
 }
 
 /* Upload (up) or download through a staging buffer, STAGING_CHUNK at a time. */
@@ -271,12 +271,12 @@ static int staged(btf_vk *vk, VkBuffer buf, uint64_t offset, unsigned char *host
     return rc;
 }
 
-btf_status btf_vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset, const void *data,
+btf_status btf__vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset, const void *data,
                          uint64_t bytes, btf_error *err)
 {
-    int rc = btf_vk_check_usable(vk, err);
+    int rc = btf__vk_check_usable(vk, err);
     if (!rc)
-        rc = btf_vk_check_range(buf, offset, bytes, "btf_vk_buffer_upload", err);
+        rc = btf__vk_check_range(buf, offset, bytes, "btf_vk_buffer_upload", err);
     if (rc || bytes == 0)
         return rc;
     if (buf->mapped) {
@@ -286,12 +286,12 @@ btf_status btf_vk_buffer_upload(btf_vk *vk, btf_vk_buffer *buf, uint64_t offset,
     return staged(vk, buf->buffer, offset, (unsigned char *)(uintptr_t)data, bytes, 1, err);
 }
 
-btf_status btf_vk_buffer_download(btf_vk *vk, const btf_vk_buffer *buf, uint64_t offset, void *data,
+btf_status btf__vk_buffer_download(btf_vk *vk, const btf_vk_buffer *buf, uint64_t offset, void *data,
                            uint64_t bytes, btf_error *err)
 {
-    int rc = btf_vk_check_usable(vk, err);
+    int rc = btf__vk_check_usable(vk, err);
     if (!rc)
-        rc = btf_vk_check_range(buf, offset, bytes, "btf_vk_buffer_download", err);
+        rc = btf__vk_check_range(buf, offset, bytes, "btf_vk_buffer_download", err);
     if (rc || bytes == 0)
         return rc;
     if (buf->mapped) {

@@ -74,7 +74,7 @@ btf_status btf_material_describe(const btf_material *m, FILE *out, int json, btf
 /* The flat (view, light) render of docs/render.md and the render of a scene
  * (btf_scene_load), on g's Vulkan device or on the CPU (g NULL), each by
  * its family's renderer (btf_render_flat / btf_gpu_render_flat and the
- * reflectance field's btf_rf_render_flat / btf_gpu_rf_render_flat, and the
+ * reflectance field's btf__rf_render_flat / btf__gpu_rf_render_flat, and the
  * same for scenes). opts: the frame (width, height 0: 512) and threads; the
  * rest as BTF_MATERIAL_SYNTHESISES says. A model that cannot be rendered (a
  * single texture, direction sets that cannot be triangulated) is BTF_E_ARG
@@ -91,7 +91,7 @@ void btf_material_render_note(const btf_material *m, const btf_scene *s, btf_dir
                               const btf_render_info *info, char *buf, size_t n);
 
 /* The report of m, analysed from ds, into the folder dir (btf_report_write,
- * btf_rf_report_write: docs/report.md). summary may be NULL. */
+ * btf__rf_report_write: docs/report.md). summary may be NULL. */
 btf_status btf_material_report_write(const btf_dataset *ds, const btf_material *m,
                                      const char *dir, const btf_report_opts *opts,
                                      btf_report_summary *summary, btf_error *err);

@@ -248,7 +248,7 @@ typedef struct btf_rf_model {
 } btf_rf_model;
 void btf_rf_model_free(btf_rf_model *m);
 /* The texels the model describes: the coordinate map's size when it has one,
- * else width x height. Every evaluation (flat and scene render, btf_rf_eval,
+ * else width x height. Every evaluation (flat and scene render, btf__rf_eval,
  * the fits' error) wraps coordinates into this surface. */
 void btf_rf_surface_size(const btf_rf_model *m, int *width, int *height);
 

@@ -325,7 +325,7 @@ typedef struct btf_report_summary {
     double mean_held_out;        /* their mean combined distance */
     int sweep_points, sweep_resumed;
     double seconds;
-    double mean_abs_error;       /* btf_rf_report_write only: mean |Y data - Y model| over
+    double mean_abs_error;       /* btf__rf_report_write only: mean |Y data - Y model| over
                                     every texel and image (the paper's Table 1);
                                     0 for a CAR report */
     double mean_luminance;       /* the data's mean luminance (RF reports only) */

@@ -69,9 +69,9 @@ static btf_status range_tile(const btf_image *h, int n, btf_model *m, btf_error 
 {
     tile_grid g = range_grid(h->width, h->height, n);
     size_t cells = (size_t)g.tw * g.th;
-    m->range = btf_calloc(cells, sizeof(float), err);
-    double *acc = btf_calloc(cells, sizeof(double), err);
-    int *cnt = btf_calloc(cells, sizeof(int), err);
+    m->range = btf__calloc(cells, sizeof(float), err);
+    double *acc = btf__calloc(cells, sizeof(double), err);
+    int *cnt = btf__calloc(cells, sizeof(int), err);
     if (!m->range || !acc || !cnt) {
         BTF_FREE_ALL(acc, cnt, m->range);
         m->range = NULL;
@@ -100,7 +100,7 @@ static btf_status range_tile(const btf_image *h, int n, btf_model *m, btf_error 
          * no cross-fade, whose half-shifted copy blurs the cells away. */
         for (size_t i = 0; i < cells; i++) /* 1/32 texel: 8 bits a texel in the file */
             m->range[i] = (float)(floor((double)m->range[i] * RANGE_STEPS + 0.5) / RANGE_STEPS);
-        btf_range_snap(m->range, cells);
+        btf__range_snap(m->range, cells);
         return BTF_OK;
     }
     /* The tile must tile: its periodic component (Moisan's periodic-plus-
@@ -146,7 +146,7 @@ static btf_status registered_mean(const btf_dataset *ds, const btf_analyse_opts 
     if (rc == BTF_OK)
         rc = btf_image_alloc(&mean, in->width, in->height, 3, err);
     size_t n = (size_t)in->width * in->height * 3;
-    double *acc = rc == BTF_OK ? btf_calloc(n, sizeof(double), err) : NULL;
+    double *acc = rc == BTF_OK ? btf__calloc(n, sizeof(double), err) : NULL;
     if (rc == BTF_OK && !acc)
         rc = BTF_E_NOMEM;
     int count = 0;
@@ -167,8 +167,8 @@ static btf_status registered_mean(const btf_dataset *ds, const btf_analyse_opts 
             mean.data[i] = (float)(acc[i] / (count > 0 ? count : 1));
         rc = range_tile(&height, o->range_size, m, err);
     }
-    if (rc == BTF_OK && btf_structure_quilted(m) && !o->no_structure)
-        rc = btf_structure_albedo_from(&mean, m, spread, err);
+    if (rc == BTF_OK && btf__structure_quilted(m) && !o->no_structure)
+        rc = btf__structure_albedo_from(&mean, m, spread, err);
     free(acc);
     btf_image_free(&height);
     btf_image_free(&mean);
@@ -181,21 +181,21 @@ static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, 
     if (o->range_from) { /* shared by a sweep: the range does not depend on its settings */
         const btf_model *r = o->range_from;
         if (!r->range || r->range_width < 1 || r->range_height < 1)
-            return btf_fail(err, BTF_E_ARG, "analyse: the model to copy the range map from "
-                            "has none");
+            return btf__fail(err, BTF_E_ARG, "analyse: the model to copy the range map from "
+                             "has none");
         size_t cells = (size_t)r->range_width * (size_t)r->range_height;
-        if (!(m->range = btf_alloc(cells, sizeof(float), err)))
+        if (!(m->range = btf__alloc(cells, sizeof(float), err)))
             return BTF_E_NOMEM;
         memcpy(m->range, r->range, cells * sizeof(float));
         m->range_width = r->range_width;
         m->range_height = r->range_height;
         m->range_texel = r->range_texel;
         if (r->albedo && !o->no_structure) {
-            if (!(m->albedo = btf_alloc(cells, sizeof(float), err)))
+            if (!(m->albedo = btf__alloc(cells, sizeof(float), err)))
                 return BTF_E_NOMEM;
             memcpy(m->albedo, r->albedo, cells * sizeof(float)); /* a: fitted per analysis */
             if (r->chroma) {
-                if (!(m->chroma = btf_alloc(cells, 3 * sizeof(float), err)))
+                if (!(m->chroma = btf__alloc(cells, 3 * sizeof(float), err)))
                     return BTF_E_NOMEM;
                 memcpy(m->chroma, r->chroma, cells * 3 * sizeof(float));
             }
@@ -203,13 +203,13 @@ static btf_status stage_range(const btf_dataset *ds, const btf_analyse_opts *o, 
         return BTF_OK;
     }
     btf_ps_result ps;
-    btf_status rc = btf_photostereo_dataset(ds, &o->photostereo, &ps, err);
+    btf_status rc = btf__photostereo_dataset(ds, &o->photostereo, &ps, err);
     if (rc)
         return rc;
     warn_if_flat(ds, &ps, &o->fit.car);
     rc = range_tile(&ps.height, o->range_size, m, err);
-    if (rc == BTF_OK && btf_structure_quilted(m) && !o->no_structure)
-        rc = btf_structure_albedo_from(&ps.albedo, m, spread, err);
+    if (rc == BTF_OK && btf__structure_quilted(m) && !o->no_structure)
+        rc = btf__structure_albedo_from(&ps.albedo, m, spread, err);
     btf_ps_result_free(&ps);
     return rc;
 }
@@ -228,7 +228,7 @@ static int on_grid(const btf_image *img, const btf_model *m)
 static btf_status read_exemplars(const btf_dataset *ds, const btf_segmentation *seg,
                                  btf_image **out, btf_error *err)
 {
-    btf_image *imgs = btf_calloc((size_t)seg->k, sizeof *imgs, err);
+    btf_image *imgs = btf__calloc((size_t)seg->k, sizeof *imgs, err);
     btf_status rc = imgs ? BTF_OK : BTF_E_NOMEM;
     for (int k = 0; rc == BTF_OK && k < seg->k; k++)
         rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &imgs[k], err);
@@ -239,9 +239,9 @@ static btf_status read_exemplars(const btf_dataset *ds, const btf_segmentation *
 static btf_status fit_ambient(const btf_image *imgs, const btf_segmentation *seg, btf_model *m,
                               const btf_structure_geom *geoms, btf_error *err)
 {
-    btf_image *on = btf_calloc((size_t)seg->k, sizeof *on, err);
-    btf_dir *dirs = btf_calloc((size_t)seg->k, sizeof *dirs, err);
-    btf_structure_geom *g = btf_calloc((size_t)seg->k, sizeof *g, err);
+    btf_image *on = btf__calloc((size_t)seg->k, sizeof *on, err);
+    btf_dir *dirs = btf__calloc((size_t)seg->k, sizeof *dirs, err);
+    btf_structure_geom *g = btf__calloc((size_t)seg->k, sizeof *g, err);
     btf_status rc = on && dirs && g ? BTF_OK : BTF_E_NOMEM;
     int n = 0;
     for (int k = 0; rc == BTF_OK && k < seg->k; k++)
@@ -251,12 +251,12 @@ static btf_status fit_ambient(const btf_image *imgs, const btf_segmentation *seg
             dirs[n++] = m->lights.dirs[seg->rep_light[k]];
         }
     if (rc == BTF_OK)
-        m->ambient = (float)btf_structure_fit_ambient(on, dirs, g, n, m);
+        m->ambient = (float)btf__structure_fit_ambient(on, dirs, g, n, m);
     BTF_FREE_ALL(on, dirs, g);
     return rc;
 }
 
-/* Per exemplar on the grid, the texels its pixels show (btf_structure_warp:
+/* Per exemplar on the grid, the texels its pixels show (btf__structure_warp:
  * the renderer's parallax under the exemplar's view), so that the layers
  * divided out are registered with what the camera saw. */
 static btf_status exemplar_geoms(const btf_image *imgs, const btf_segmentation *seg,
@@ -264,7 +264,7 @@ static btf_status exemplar_geoms(const btf_image *imgs, const btf_segmentation *
                                  const uint32_t *horizon, btf_structure_geom **out,
                                  btf_error *err)
 {
-    btf_structure_geom *g = btf_calloc((size_t)seg->k, sizeof *g, err);
+    btf_structure_geom *g = btf__calloc((size_t)seg->k, sizeof *g, err);
     if (!g)
         return BTF_E_NOMEM;
     *out = g;
@@ -273,7 +273,7 @@ static btf_status exemplar_geoms(const btf_image *imgs, const btf_segmentation *
         g[k].horizon = horizon;
         btf_structure_tap *taps = NULL;
         if (on_grid(&imgs[k], m)) {
-            btf_status rc = btf_structure_warp(m, m->views.dirs[seg->rep_view[k]], &taps, err);
+            btf_status rc = btf__structure_warp(m, m->views.dirs[seg->rep_view[k]], &taps, err);
             if (rc)
                 return rc;
         }
@@ -293,7 +293,7 @@ static void free_geoms(btf_structure_geom *g, int k)
 static void image_mean(const btf_image *img, double *mean)
 {
     float f[3];
-    btf_image_mean_rgb(img, f);
+    btf__image_mean_rgb(img, f);
     for (int c = 0; c < 3; c++)
         mean[c] = f[c];
 }
@@ -345,8 +345,8 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     if (!g) {
         if (tex_mean) /* the texture is the exemplar itself */
             image_mean(img, tex_mean);
-        btf_status rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
-        return rc ? rc : btf_fit_marginals(img, m, k, err);
+        btf_status rc = btf__fit_subspace(img, &fo, &m->subspaces[k], err);
+        return rc ? rc : btf__fit_marginals(img, m, k, err);
     }
     btf_image shaded;
     btf_status rc = btf_image_alloc(&shaded, img->width, img->height, 3, err);
@@ -355,25 +355,25 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     size_t n = (size_t)img->width * img->height;
     /* the levels' mask: only where they are chosen and none was given */
     float *factor = NULL;
-    if (!fo.levels && !fo.masking && !(factor = btf_alloc(n, sizeof(float), err))) {
+    if (!fo.levels && !fo.masking && !(factor = btf__alloc(n, sizeof(float), err))) {
         btf_image_free(&shaded);
         return BTF_E_NOMEM;
     }
     memcpy(shaded.data, img->data, n * 3 * sizeof(float));
-    btf_structure_divide(&shaded, m, g, light, 0, NULL);
+    btf__structure_divide(&shaded, m, g, light, 0, NULL);
     if (tex_mean) /* the texture is the shaded-out exemplar (colour matched to it) */
         image_mean(&shaded, tex_mean);
     for (size_t i = 0; factor && i < n; i++) /* the exemplar's luminance, before division */
         factor[i] = (float)pixel_luminance(img, i);
-    btf_structure_divide(img, m, g, light, 1, NULL);
+    btf__structure_divide(img, m, g, light, 1, NULL);
     if (factor) {
         masking_factor(img, factor);
         fo.masking = factor;
     }
-    rc = btf_fit_subspace(img, &fo, &m->subspaces[k], err);
+    rc = btf__fit_subspace(img, &fo, &m->subspaces[k], err);
     free(factor);
     if (rc == BTF_OK)
-        rc = btf_fit_marginals_lab(img, &shaded, m, k, err);
+        rc = btf__fit_marginals_lab(img, &shaded, m, k, err);
     btf_image_free(&shaded);
     return rc;
 }
@@ -381,7 +381,7 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
 /* The pair gains from the images' mean colours (those of the
  * segmentation's pass, the caller's, or read now) against the renderer's,
  * made from each subspace texture's mean tex_mean[k * 3 + c]: with a
- * structure layer by btf_pair_predict_views (what each pair's view sees
+ * structure layer by btf__pair_predict_views (what each pair's view sees
  * under its light), without one the texture's mean itself. */
 static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg,
                               const btf_analyse_opts *o, const double *tex_mean,
@@ -390,21 +390,21 @@ static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg
 {
     size_t pairs = (size_t)m->views.count * m->lights.count;
     float *own = NULL;
-    double *pp = btf_alloc(pairs * 3, sizeof(double), err);
+    double *pp = btf__alloc(pairs * 3, sizeof(double), err);
     btf_status rc = pp ? BTF_OK : BTF_E_NOMEM;
     if (rc == BTF_OK && m->albedo && normal->data)
-        rc = btf_pair_predict_views(m, tex_mean, normal, horizon, pp, err);
+        rc = btf__pair_predict_views(m, tex_mean, normal, horizon, pp, err);
     else
         for (size_t i = 0; rc == BTF_OK && i < pairs; i++)
             for (int c = 0; c < 3; c++) /* a pair not measured: 0, gain 1 */
                 pp[3 * i + c] = m->index[i] == BTF_PAIR_NONE ? 0.0
                                                              : tex_mean[3 * (size_t)m->index[i] + c];
     const float *means = seg->means ? seg->means : o->means;
-    if (rc == BTF_OK && !means && (rc = btf_dataset_means(ds, o->segment.features.threads,
-                                                          &own, err)) == BTF_OK)
+    if (rc == BTF_OK && !means && (rc = btf__dataset_means(ds, o->segment.features.threads,
+                                                           &own, err)) == BTF_OK)
         means = own;
     if (rc == BTF_OK)
-        rc = btf_pair_gains(m, means, pp, err);
+        rc = btf__pair_gains(m, means, pp, err);
     free(own);
     free(pp);
     return rc;
@@ -413,7 +413,7 @@ static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg
 static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
                             const btf_analyse_opts *o, btf_model *m, btf_error *err)
 {
-    m->subspaces = btf_calloc((size_t)seg->k, sizeof(btf_subspace_model), err);
+    m->subspaces = btf__calloc((size_t)seg->k, sizeof(btf_subspace_model), err);
     if (!m->subspaces)
         return BTF_E_NOMEM;
     m->n_subspaces = seg->k;
@@ -422,15 +422,15 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
     btf_status rc = BTF_OK;
     double *tex_mean = NULL; /* [k][3]: each subspace texture's mean (the pair gains) */
     if (!o->no_gains && m->views.count > 0 &&
-        !(tex_mean = btf_alloc((size_t)seg->k * 3, sizeof(double), err)))
+        !(tex_mean = btf__alloc((size_t)seg->k * 3, sizeof(double), err)))
         return BTF_E_NOMEM;
     uint32_t *horizon = NULL; /* the relief's shadows (btf_horizon.h), on the sample */
     btf_structure_geom *geoms = NULL; /* per exemplar: what its shading reads */
     m->shadows = m->albedo && !o->no_shadows;
-    if (m->albedo && ((rc = btf_structure_normals(m, &normal, err)) ||
+    if (m->albedo && ((rc = btf__structure_normals(m, &normal, err)) ||
                       (m->shadows &&
-                       (rc = btf_horizon_map(m->range, m->range_width, m->range_height, 0,
-                                             o->segment.features.threads, &horizon, err))) ||
+                       (rc = btf__horizon_map(m->range, m->range_width, m->range_height, 0,
+                                              o->segment.features.threads, &horizon, err))) ||
                       (rc = read_exemplars(ds, seg, &imgs, err)) ||
                       (rc = exemplar_geoms(imgs, seg, m, &normal, horizon, &geoms, err)) ||
                       (rc = fit_ambient(imgs, seg, m, geoms, err))))
@@ -453,8 +453,8 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
             m->chroma = NULL;
             m->ambient = 0.0f;
             m->shadows = 0;
-            rc = k ? btf_fail(err, BTF_E_DATA, "subspace %d: exemplar not on the range map's "
-                              "grid", k) : BTF_OK;
+            rc = k ? btf__fail(err, BTF_E_DATA, "subspace %d: exemplar not on the range map's "
+                               "grid", k) : BTF_OK;
         }
         if (rc)
             break;
@@ -522,7 +522,7 @@ btf_analyse_opts btf_analyse_defaults(void)
 static btf_status resolve_opts(const btf_analyse_opts *opts, btf_analyse_opts *o, btf_error *err)
 {
     btf_analyse_opts d = btf_analyse_defaults();
-    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_analyse", err))
+    if (btf__opts_take(o, sizeof *o, opts, &d, "btf_analyse", err))
         return BTF_E_ARG;
     if (o->range_size <= 0)
         o->range_size = 1 << 30; /* the image's own size: texel 1 */
@@ -543,24 +543,24 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
     }
     unsigned char *present = NULL; /* a sparse set's pairs (precomputed features) */
     if (o.features && in->n_pairs < in->n_views * in->n_lights) {
-        if (btf_dataset_present(ds, &present, err))
+        if (btf__dataset_present(ds, &present, err))
             return BTF_E_NOMEM;
         o.segment.present = present;
     }
     btf_segmentation seg;
-    btf_status rc = o.features ? btf_segment_features(o.features, in->n_views, in->n_lights,
-                                                      o.feature_dim, &o.segment, &seg, err)
+    btf_status rc = o.features ? btf__segment_features(o.features, in->n_views, in->n_lights,
+                                                       o.feature_dim, &o.segment, &seg, err)
                                : btf_segment(ds, &o.segment, &seg, err);
     free(present);
     o.segment.present = NULL;
     if (rc)
         return rc;
-    rc = btf_dirset_copy(&out->views, in->views, err);
+    rc = btf__dirset_copy(&out->views, in->views, err);
     if (rc == 0)
-        rc = btf_dirset_copy(&out->lights, in->lights, err);
+        rc = btf__dirset_copy(&out->lights, in->lights, err);
     if (rc == 0) {
         size_t n = (size_t)in->n_views * in->n_lights;
-        out->index = btf_alloc(n, 1, err);
+        out->index = btf__alloc(n, 1, err);
         if (out->index)
             memcpy(out->index, seg.index, n);
         else
@@ -570,15 +570,15 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
     /* A sparse set may hold no view with the 3 lights photometric stereo
      * needs (a flash capture: one light per view): the model then has no
      * range map, and says why (docs/datasets.md, "Sparse pair sets"). */
-    int no_ps = !o.no_range && !o.range_from && btf_photostereo_best_lights(ds) < 3;
+    int no_ps = !o.no_range && !o.range_from && btf__photostereo_best_lights(ds) < 3;
     if (rc == 0 && !o.no_range && !no_ps)
         rc = stage_range(ds, &o, out, &spread, err);
     else if (rc == 0 && no_ps && !o.no_structure) /* a flat map holds nothing else */
         rc = registered_mean(ds, &o, out, &spread, err);
     if (rc == 0)
         rc = stage_fit(ds, &seg, &o, out, err);
-    if (rc == 0 && btf_model_keep_margins(out, -1.0) != BTF_OK) /* for synthesis */
-        rc = btf_fail(err, BTF_E_NOMEM, "out of memory");
+    if (rc == 0 && btf__model_keep_margins(out, -1.0) != BTF_OK) /* for synthesis */
+        rc = btf__fail(err, BTF_E_NOMEM, "out of memory");
     if (rc == 0 && o.report) {
         memset(o.report, 0, sizeof *o.report);
         snprintf(o.report->segment_reason, sizeof o.report->segment_reason, "%s", seg.reason);
@@ -588,14 +588,14 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
             snprintf(o.report->structure_reason, sizeof o.report->structure_reason,
                      "none: no range map (photometric stereo needs one view with at least 3 "
                      "lights, and the set holds at most %d at any view) and --no-structure",
-                     btf_photostereo_best_lights(ds));
+                     btf__photostereo_best_lights(ds));
         else if (no_ps) {
             char kept[200];
             snprintf(kept, sizeof kept, "%s", o.report->structure_reason);
             snprintf(o.report->structure_reason, sizeof o.report->structure_reason,
                      "a flat range map: photometric stereo needs one view with at least 3 "
                      "lights, and the set holds at most %d at any view; the albedo pattern is "
-                     "the mean of the registered images (%s)", btf_photostereo_best_lights(ds),
+                     "the mean of the registered images (%s)", btf__photostereo_best_lights(ds),
                      kept);
         }
     }
@@ -605,11 +605,11 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
     return rc;
 }
 
-btf_status btf_analyse_range(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
-                             btf_error *err)
+btf_status btf__analyse_range(const btf_dataset *ds, const btf_analyse_opts *opts, btf_model *out,
+                              btf_error *err)
 {
     if (!ds || !out)
-        return btf_fail(err, BTF_E_ARG, "analyse: no dataset or no output given");
+        return btf__fail(err, BTF_E_ARG, "analyse: no dataset or no output given");
     btf_analyse_opts o;
     if (resolve_opts(opts, &o, err))
         return BTF_E_ARG;

@@ -7,7 +7,7 @@
  * (a neighbour at level l is 2^l pixels away), but each level is one more
  * model fitted to fewer pixels, so whether it helps is a question for the
  * data. The answer is measured on the dominant band: for every depth L from
- * 1 to the cap, the band's models are fitted (btf_fit_band_levels), a field
+ * 1 to the cap, the band's models are fitted (btf__fit_band_levels), a field
  * of the band's size is synthesised from them (every level its own CAR field,
  * the pyramid collapsed, as synthesis does) for SEEDS seeds, and both the
  * band and the syntheses are cut into octaves by a deep Laplacian pyramid
@@ -47,7 +47,7 @@
 #define REL_MARGIN 0.17
 #define MAX_OCTAVES 24
 
-int btf_levels_cap(int w, int h)
+int btf__levels_cap(int w, int h)
 {
     int side = w < h ? w : h, cap = 1;
     while (cap < AUTO_MAX_LEVELS && (side >> cap) >= COARSEST_MIN)
@@ -64,7 +64,7 @@ static int octave_energies(const double *band, int w, int h, double *e, btf_erro
     while (k < MAX_OCTAVES && k < BTF_MAX_LEVELS && (side >> k) >= OCTAVE_MIN)
         k++;
     btf_pyramid p;
-    if (btf_pyramid_build(band, w, h, k, &p, err))
+    if (btf__pyramid_build(band, w, h, k, &p, err))
         return -1;
     for (int l = 0; l < k; l++) {
         size_t n = (size_t)p.width[l] * p.height[l];
@@ -76,7 +76,7 @@ static int octave_energies(const double *band, int w, int h, double *e, btf_erro
             v += (p.level[l][i] - m) * (p.level[l][i] - m);
         e[l] = v / (double)n;
     }
-    btf_pyramid_free(&p);
+    btf__pyramid_free(&p);
     return k;
 }
 
@@ -105,21 +105,21 @@ static btf_status synthesise_band(const btf_car_band *models, int levels, int w,
     btf_status rc = BTF_OK;
     for (int l = 0; l < levels && rc == BTF_OK; l++) {
         p.width[l] = w, p.height[l] = h;
-        if (!(p.level[l] = btf_alloc((size_t)w * h, sizeof(double), err))) {
+        if (!(p.level[l] = btf__alloc((size_t)w * h, sizeof(double), err))) {
             rc = BTF_E_NOMEM;
             break;
         }
         btf_synth_opts o = btf_synth_defaults();
         o.width = w, o.height = h, o.seed = seed;
         rows_into r = {p.level[l], w};
-        rc = btf_car_synthesise_field(&models[l], -1, (uint32_t)(0x5eed0u + l), &o, store_rows, &r,
-                                      err);
+        rc = btf__car_synthesise_field(&models[l], -1, (uint32_t)(0x5eed0u + l), &o, store_rows, &r,
+                                       err);
         w = (w + 1) / 2;
         h = (h + 1) / 2;
     }
     if (rc == BTF_OK)
-        rc = btf_pyramid_collapse(&p, out, err);
-    btf_pyramid_free(&p);
+        rc = btf__pyramid_collapse(&p, out, err);
+    btf__pyramid_free(&p);
     return rc;
 }
 
@@ -165,7 +165,7 @@ static int mask_energies(const btf_levels_mask *mask, int w, int h, double big, 
     if (!mask || !mask->factor || !(mask->level > 0.0) || !isfinite(mask->level))
         return 0;
     size_t n = (size_t)w * h;
-    double *f = btf_alloc(n, sizeof(double), err), mean = 0.0;
+    double *f = btf__alloc(n, sizeof(double), err), mean = 0.0;
     if (!f)
         return -1;
     for (size_t i = 0; i < n; i++)
@@ -184,14 +184,14 @@ static int mask_energies(const btf_levels_mask *mask, int w, int h, double big, 
     return k;
 }
 
-btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit_opts *car,
-                             int max_levels, const btf_levels_mask *mask, int *levels,
-                             double *distance, btf_error *err)
+btf_status btf__choose_levels(const double *band, int w, int h, const btf_car_fit_opts *car,
+                              int max_levels, const btf_levels_mask *mask, int *levels,
+                              double *distance, btf_error *err)
 {
     *levels = 1;
     for (int l = 0; distance && l < BTF_MAX_LEVELS; l++)
         distance[l] = -1.0;
-    int cap = btf_levels_cap(w, h);
+    int cap = btf__levels_cap(w, h);
     if (max_levels > 0 && cap > max_levels)
         cap = max_levels;
     if (cap == 1)
@@ -209,7 +209,7 @@ btf_status btf_choose_levels(const double *band, int w, int h, const btf_car_fit
     double mask_e[MAX_OCTAVES] = {0};
     if (mask_energies(mask, w, h, big, mask_e, err) < 0)
         return BTF_E_NOMEM;
-    double *z = btf_alloc(n, sizeof(double), err);
+    double *z = btf__alloc(n, sizeof(double), err);
     if (!z)
         return BTF_E_NOMEM;
     for (size_t i = 0; i < n; i++)
@@ -239,7 +239,7 @@ static btf_status choose(const double *band, int w, int h, const btf_car_fit_opt
     for (int L = 1; L <= cap; L++) {
         btf_car_band models[BTF_MAX_LEVELS];
         double d;
-        btf_status rc = btf_fit_band_levels(band, w, h, L, &quiet, "levels", models, err);
+        btf_status rc = btf__fit_band_levels(band, w, h, L, &quiet, "levels", models, err);
         if (rc == BTF_OK)
             rc = depth_distance(models, L, w, h, e_band, octaves, floor_e, &d, err);
         if (rc == BTF_E_NOMEM)
@@ -259,14 +259,14 @@ static btf_status choose(const double *band, int w, int h, const btf_car_fit_opt
     return BTF_OK;
 }
 
-int btf_auto_levels(const double *band, int w, int h)
+int btf__auto_levels(const double *band, int w, int h)
 {
     int levels = 1;
     btf_error e = {0};
     if (!band || w < 1 || h < 1)
         return 1;
     btf_car_fit_opts car = btf_car_fit_defaults();
-    if (btf_choose_levels(band, w, h, &car, 0, NULL, &levels, NULL, &e) != BTF_OK)
+    if (btf__choose_levels(band, w, h, &car, 0, NULL, &levels, NULL, &e) != BTF_OK)
         return 1;
     return levels;
 }

@@ -80,10 +80,10 @@ static btf_status measure_synthesis(const btf_model *m, int subspace, float mean
     size_t n = (size_t)out.width * out.height;
     double *bands[3] = {NULL, NULL, NULL};
     for (int b = 0; b < 3 && rc == BTF_OK; b++)
-        if (!(bands[b] = btf_alloc(n, sizeof(double), err)))
+        if (!(bands[b] = btf__alloc(n, sizeof(double), err)))
             rc = BTF_E_NOMEM;
     if (rc == BTF_OK) {
-        btf_decorrelate(&out, sm.mean, sm.basis, bands);
+        btf__decorrelate(&out, sm.mean, sm.basis, bands);
         for (int b = 0; b < 3; b++) {
             double s = 0.0, ss = 0.0;
             for (size_t i = 0; i < n; i++)
@@ -119,19 +119,19 @@ static int within_limits(const btf_marginal *mg)
     return 1;
 }
 
-btf_status btf_fit_marginals(const btf_image *img, btf_model *m, int subspace, btf_error *err)
+btf_status btf__fit_marginals(const btf_image *img, btf_model *m, int subspace, btf_error *err)
 {
-    return btf_fit_marginals_lab(img, img, m, subspace, err);
+    return btf__fit_marginals_lab(img, img, m, subspace, err);
 }
 
-btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img, btf_model *m,
-                                 int subspace, btf_error *err)
+btf_status btf__fit_marginals_lab(const btf_image *img, const btf_image *lab_img, btf_model *m,
+                                  int subspace, btf_error *err)
 {
     if (!img || !img->data || img->channels != 3 || img->width < 1 || img->height < 1)
-        return btf_fail(err, BTF_E_ARG, "marginal transfer needs an RGB image");
+        return btf__fail(err, BTF_E_ARG, "marginal transfer needs an RGB image");
     if (!m || subspace < 0 || subspace >= m->n_subspaces || !m->subspaces)
-        return btf_fail(err, BTF_E_ARG, "marginal transfer: subspace %d (expected 0..%d)",
-                        subspace, m ? m->n_subspaces - 1 : -1);
+        return btf__fail(err, BTF_E_ARG, "marginal transfer: subspace %d (expected 0..%d)",
+                         subspace, m ? m->n_subspaces - 1 : -1);
     btf_subspace_model *sm = &m->subspaces[subspace];
     btf_marginal mg = {0};
     size_t n = (size_t)img->width * img->height;
@@ -140,7 +140,7 @@ btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img,
         for (size_t i = 0; i < n; i++) {
             float v = img->data[3 * i + k];
             if (!isfinite(v))
-                return btf_fail(err, BTF_E_ARG, "image pixel %zu is not finite", i);
+                return btf__fail(err, BTF_E_ARG, "image pixel %zu is not finite", i);
             lo = v < lo ? v : lo;
             hi = v > hi ? v : hi;
         }
@@ -149,7 +149,7 @@ btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img,
         for (size_t i = 0; lab_img != img && i < n; i++) {
             float v = lab_img->data[3 * i + k];
             if (!isfinite(v))
-                return btf_fail(err, BTF_E_ARG, "image pixel %zu is not finite", i);
+                return btf__fail(err, BTF_E_ARG, "image pixel %zu is not finite", i);
             lo = v < lo ? v : lo;
             hi = v > hi ? v : hi;
         }
@@ -159,10 +159,10 @@ btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img,
     double *bands[3] = {NULL, NULL, NULL};
     btf_status rc = BTF_OK;
     for (int b = 0; b < 3 && rc == BTF_OK; b++)
-        if (!(bands[b] = btf_alloc(n, sizeof(double), err)))
+        if (!(bands[b] = btf__alloc(n, sizeof(double), err)))
             rc = BTF_E_NOMEM;
     if (rc == BTF_OK) {
-        btf_decorrelate(img, sm->mean, sm->basis, bands);
+        btf__decorrelate(img, sm->mean, sm->basis, bands);
         for (int b = 0; b < 3; b++)
             band_quantiles(bands[b], n, mg.quantile[b]);
         btf_error me = {0};
@@ -177,7 +177,7 @@ btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img,
             return BTF_OK;
         }
         if (rc)
-            btf_fail(err, rc, "%s", me.msg);
+            btf__fail(err, rc, "%s", me.msg);
     }
     for (int b = 0; b < 3; b++)
         free(bands[b]);
@@ -188,11 +188,11 @@ btf_status btf_fit_marginals_lab(const btf_image *img, const btf_image *lab_img,
         return BTF_OK;
     }
     /* the exemplar's Lab histogram, for colour matching (synth/colour_match.c) */
-    if ((rc = btf_lab_quantiles(lab_img, btf_lab_scale(&mg), BTF_LAB_SAMPLE, mg.lab_quantile, err)))
+    if ((rc = btf__lab_quantiles(lab_img, btf__lab_scale(&mg), BTF_LAB_SAMPLE, mg.lab_quantile, err)))
         return rc;
     for (int c = 0; c < 3; c++) /* what the model file keeps (monotone: still nondecreasing) */
         for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
-            mg.lab_quantile[c][j] = btf_lab_decode(c, btf_lab_code(c, mg.lab_quantile[c][j]));
+            mg.lab_quantile[c][j] = btf__lab_decode(c, btf__lab_code(c, mg.lab_quantile[c][j]));
     mg.lab_knots = BTF_MARGIN_KNOTS;
     mg.knots = BTF_MARGIN_KNOTS;
     sm->marginal = mg;

@@ -22,11 +22,11 @@
 /* The flat surface's l_z floor (BTF_FLAT_MIN_Z of the renderer). */
 #define FLAT_MIN_Z 0.05
 
-btf_status btf_pair_gains(btf_model *m, const float *means, const double *pred, btf_error *err)
+btf_status btf__pair_gains(btf_model *m, const float *means, const double *pred, btf_error *err)
 {
     int V = m->views.count, L = m->lights.count;
     size_t pairs = (size_t)V * L;
-    float *g = btf_alloc(pairs * 3, sizeof(float), err);
+    float *g = btf__alloc(pairs * 3, sizeof(float), err);
     if (!g)
         return BTF_E_NOMEM;
     for (size_t i = 0; i < pairs; i++) {
@@ -34,7 +34,7 @@ btf_status btf_pair_gains(btf_model *m, const float *means, const double *pred, 
             double p = pred[3 * i + c], meas = means[3 * i + c];
             /* a black channel (or a prediction of nothing) keeps gain 1 */
             double r = p > 1e-12 && meas > 1e-12 && isfinite(p) && isfinite(meas) ? meas / p : 1.0;
-            g[3 * i + c] = btf_gain_value(btf_gain_code((float)r)); /* as the file keeps it */
+            g[3 * i + c] = btf__gain_value(btf__gain_code((float)r)); /* as the file keeps it */
         }
     }
     free(m->gain);
@@ -55,22 +55,22 @@ static void view_weights(const btf_structure_tap *taps, size_t n, const float *a
         }
 }
 
-btf_status btf_pair_predict_views(const btf_model *m, const double *tex_mean,
-                                  const btf_image *normal, const uint32_t *horizon,
-                                  double *pred, btf_error *err)
+btf_status btf__pair_predict_views(const btf_model *m, const double *tex_mean,
+                                   const btf_image *normal, const uint32_t *horizon,
+                                   double *pred, btf_error *err)
 {
     int V = m->views.count, L = m->lights.count;
     size_t n = (size_t)m->range_width * m->range_height;
-    float *lit = btf_alloc((size_t)L * n, sizeof(float), err);
-    float *alb = btf_alloc(n, 3 * sizeof(float), err);
-    double *w = btf_alloc(n, 3 * sizeof(double), err);
+    float *lit = btf__alloc((size_t)L * n, sizeof(float), err);
+    float *alb = btf__alloc(n, 3 * sizeof(float), err);
+    double *w = btf__alloc(n, 3 * sizeof(double), err);
     btf_status rc = lit && alb && w ? BTF_OK : BTF_E_NOMEM;
     btf_structure_geom g = {normal, horizon, NULL};
     for (int l = 0; rc == BTF_OK && l < L; l++) { /* vis max(0, n.l) per texel */
         double v[3];
         btf_dir_to_vec(m->lights.dirs[l], v);
         for (size_t t = 0; t < n; t++)
-            lit[(size_t)l * n + t] = (float)btf_structure_lit(&g, t, v);
+            lit[(size_t)l * n + t] = (float)btf__structure_lit(&g, t, v);
     }
     double mean[3] = {0, 0, 0};
     for (size_t t = 0; rc == BTF_OK && t < n; t++)
@@ -84,8 +84,8 @@ btf_status btf_pair_predict_views(const btf_model *m, const double *tex_mean,
     double a = m->ambient > 0.0f ? m->ambient : 0.0;
     for (int v = 0; rc == BTF_OK && v < V; v++) {
         btf_structure_tap *taps = NULL;
-        rc = m->shadows ? btf_structure_march_taps(m, m->views.dirs[v], &taps, err)
-                        : btf_structure_warp(m, m->views.dirs[v], &taps, err);
+        rc = m->shadows ? btf__structure_march_taps(m, m->views.dirs[v], &taps, err)
+                        : btf__structure_warp(m, m->views.dirs[v], &taps, err);
         if (rc)
             break;
         view_weights(taps, n, alb, w);
@@ -105,7 +105,7 @@ btf_status btf_pair_predict_views(const btf_model *m, const double *tex_mean,
             double lk[3] = {0, 0, 1}, dot[3] = {0, 0, 0};
             if (own >= 0 && own < L)
                 btf_dir_to_vec(m->lights.dirs[own], lk);
-            /* btf_render_reflectance: 1 / (a + max(l_kz, floor)) */
+            /* btf__render_reflectance: 1 / (a + max(l_kz, floor)) */
             double refl = 1.0 / (a + (lk[2] > FLAT_MIN_Z ? lk[2] : FLAT_MIN_Z));
             const float *li = lit + (size_t)l * n;
             for (size_t t = 0; t < n; t++)

@@ -12,7 +12,7 @@
  * under light l_k is modelled as
  *     S_k(x) = R_k(x) * A(x) * (a + vis_k(x) max(0, n(x) . l_k)) / (a + l_kz)
  * with A the albedo's luminance pattern from photometric stereo (mean 1),
- * n the range map's normals (btf_normal_map, as the renderer derives
+ * n the range map's normals (btf__normal_map, as the renderer derives
  * them), a the ambient term fitted below, and R_k what the CAR model
  * fits, and vis_k the light's visibility over the range map's horizon
  * (the relief's cast shadows, src/render/btf_horizon.h). The factor is the
@@ -51,7 +51,7 @@ static btf_status colour_layer(const btf_image *albedo, btf_model *m, double *sp
                                btf_error *err)
 {
     size_t n = (size_t)m->range_width * m->range_height;
-    float *c = btf_alloc(n, 3 * sizeof(float), err);
+    float *c = btf__alloc(n, 3 * sizeof(float), err);
     if (!c)
         return BTF_E_NOMEM;
     double sum[3] = {0, 0, 0}, spread = 0.0;
@@ -67,7 +67,7 @@ static btf_status colour_layer(const btf_image *albedo, btf_model *m, double *sp
     for (int k = 0; k < 3; k++) {
         double mean = sum[k] > 0.0 ? sum[k] / (double)n : 1.0, s1 = 0.0, s2 = 0.0;
         for (size_t i = 0; i < n; i++) {
-            float v = btf_albedo_value(btf_albedo_code((float)(c[3 * i + k] / mean)));
+            float v = btf__albedo_value(btf__albedo_code((float)(c[3 * i + k] / mean)));
             c[3 * i + k] = v; /* as the file keeps it */
             double l = log2(v);
             s1 += l, s2 += l * l;
@@ -84,15 +84,15 @@ static btf_status colour_layer(const btf_image *albedo, btf_model *m, double *sp
     return BTF_OK;
 }
 
-btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, double *spread,
-                                     btf_error *err)
+btf_status btf__structure_albedo_from(const btf_image *albedo, btf_model *m, double *spread,
+                                      btf_error *err)
 {
     if (spread)
         *spread = 0.0;
     size_t n = (size_t)m->range_width * m->range_height;
     if (albedo->width != m->range_width || albedo->height != m->range_height)
-        return btf_fail(err, BTF_E_ARG, "structure layer: albedo %dx%d, range map %dx%d",
-                        albedo->width, albedo->height, m->range_width, m->range_height);
+        return btf__fail(err, BTF_E_ARG, "structure layer: albedo %dx%d, range map %dx%d",
+                         albedo->width, albedo->height, m->range_width, m->range_height);
     double sum = 0.0;
     size_t count = 0;
     for (size_t i = 0; i < n; i++) {
@@ -100,19 +100,19 @@ btf_status btf_structure_albedo_from(const btf_image *albedo, btf_model *m, doub
         if (y > 0.0 && isfinite(y))
             sum += y, count++;
     }
-    m->albedo = btf_alloc(n, sizeof(float), err);
+    m->albedo = btf__alloc(n, sizeof(float), err);
     if (!m->albedo)
         return BTF_E_NOMEM;
     double mean = count && sum > 0.0 ? sum / (double)count : 1.0;
     for (size_t i = 0; i < n; i++) {
         double y = luminance(albedo->data + i * albedo->channels, albedo->channels);
         float a = y > 0.0 && isfinite(y) ? (float)(y / mean) : 1.0f;
-        m->albedo[i] = btf_albedo_value(btf_albedo_code(a)); /* as the file keeps it */
+        m->albedo[i] = btf__albedo_value(btf__albedo_code(a)); /* as the file keeps it */
     }
     return albedo->channels == 3 ? colour_layer(albedo, m, spread, err) : BTF_OK;
 }
 
-float btf_structure_vis(const uint32_t *horizon, size_t i, const double l[3])
+float btf__structure_vis(const uint32_t *horizon, size_t i, const double l[3])
 {
     if (!horizon)
         return 1.0f;
@@ -136,20 +136,20 @@ static double shade_factor(double lit, const double l[3], double a)
     return (a + lit) / (a + flat);
 }
 
-btf_status btf_structure_normals(const btf_model *m, btf_image *normal, btf_error *err)
+btf_status btf__structure_normals(const btf_model *m, btf_image *normal, btf_error *err)
 {
     btf_image h = {m->range_width, m->range_height, 1, m->range};
-    return btf_normal_map(&h, 1.0, normal, err);
+    return btf__normal_map(&h, 1.0, normal, err);
 }
 
 static double lit_at(const btf_structure_geom *g, size_t t, const double l[3])
 {
     const float *nv = g->normal->data + 3 * t;
     double d = nv[0] * l[0] + nv[1] * l[1] + nv[2] * l[2];
-    return d > 0.0 ? btf_structure_vis(g->horizon, t, l) * d : 0.0;
+    return d > 0.0 ? btf__structure_vis(g->horizon, t, l) * d : 0.0;
 }
 
-double btf_structure_lit(const btf_structure_geom *g, size_t i, const double l[3])
+double btf__structure_lit(const btf_structure_geom *g, size_t i, const double l[3])
 {
     if (!g->taps)
         return lit_at(g, i, l);
@@ -160,7 +160,7 @@ double btf_structure_lit(const btf_structure_geom *g, size_t i, const double l[3
     return s;
 }
 
-double btf_structure_albedo_at(const btf_structure_geom *g, const btf_model *m, size_t i, int c)
+double btf__structure_albedo_at(const btf_structure_geom *g, const btf_model *m, size_t i, int c)
 {
     const btf_structure_tap *t = g->taps ? &g->taps[i] : NULL;
     double s = 0.0;
@@ -200,7 +200,7 @@ static btf_structure_tap *view_taps(const btf_model *m, btf_dir view, double *dx
     btf_dir_to_vec(view, v);
     double z = v[2] > PARALLAX_MIN_Z ? v[2] : PARALLAX_MIN_Z;
     *dx = v[0] / z, *dy = -v[1] / z;
-    return btf_alloc((size_t)m->range_width * m->range_height, sizeof(btf_structure_tap), err);
+    return btf__alloc((size_t)m->range_width * m->range_height, sizeof(btf_structure_tap), err);
 }
 
 static double height_wrapped(const btf_model *m, double u, double v)
@@ -213,8 +213,8 @@ static double height_wrapped(const btf_model *m, double u, double v)
     return s;
 }
 
-btf_status btf_structure_march_taps(const btf_model *m, btf_dir view, btf_structure_tap **taps,
-                                    btf_error *err)
+btf_status btf__structure_march_taps(const btf_model *m, btf_dir view, btf_structure_tap **taps,
+                                     btf_error *err)
 {
     int w = m->range_width, h = m->range_height;
     double dx, dy, lo = 0.0, hi = 0.0;
@@ -246,8 +246,8 @@ btf_status btf_structure_march_taps(const btf_model *m, btf_dir view, btf_struct
     return BTF_OK;
 }
 
-btf_status btf_structure_warp(const btf_model *m, btf_dir view, btf_structure_tap **taps,
-                              btf_error *err)
+btf_status btf__structure_warp(const btf_model *m, btf_dir view, btf_structure_tap **taps,
+                               btf_error *err)
 {
     int w = m->range_width, h = m->range_height;
     double dx, dy;
@@ -276,7 +276,7 @@ btf_status btf_structure_warp(const btf_model *m, btf_dir view, btf_structure_ta
  *     log(luminance / A) - log(a + vis max(0, n . l))
  * (the CAR fields then carry the least of the relief's shading). A
  * least-squares line of luminance / A against the lit term was tried
- * first; with the exemplars registered (btf_structure_warp) its errors in
+ * first; with the exemplars registered (btf__structure_warp) its errors in
  * the lit term drove a towards 0 and shadows far too dark. Searched on a
  * log grid over [AMBIENT_MIN, BTF_STRUCTURE_AMBIENT_MAX], then refined by
  * golden section. */
@@ -332,8 +332,8 @@ static double ambient_search(const ambient_data *d)
     return a < AMBIENT_MIN ? 0.0 : a > BTF_STRUCTURE_AMBIENT_MAX ? BTF_STRUCTURE_AMBIENT_MAX : a;
 }
 
-double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights,
-                                 const btf_structure_geom *geoms, int n, const btf_model *m)
+double btf__structure_fit_ambient(const btf_image *imgs, const btf_dir *lights,
+                                  const btf_structure_geom *geoms, int n, const btf_model *m)
 {
     size_t total = 0;
     for (int k = 0; k < n; k++)
@@ -351,11 +351,11 @@ double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights,
             size_t px = (size_t)imgs[k].width * imgs[k].height;
             for (size_t i = 0; i < px; i++) {
                 double y = luminance(imgs[k].data + 3 * i, 3) /
-                           btf_structure_albedo_at(&geoms[k], m, i, -1);
+                           btf__structure_albedo_at(&geoms[k], m, i, -1);
                 if (!(y > 0.0) || !isfinite(y))
                     continue; /* black: says nothing about the ratio */
                 d.y[d.n] = (float)log(y);
-                d.lit[d.n] = (float)btf_structure_lit(&geoms[k], i, l);
+                d.lit[d.n] = (float)btf__structure_lit(&geoms[k], i, l);
                 d.which[d.n++] = d.count;
             }
             d.count++;
@@ -367,20 +367,20 @@ double btf_structure_fit_ambient(const btf_image *imgs, const btf_dir *lights,
     return a;
 }
 
-void btf_structure_divide(btf_image *img, const btf_model *m, const btf_structure_geom *g,
-                          btf_dir light, int albedo, double *mean_shade)
+void btf__structure_divide(btf_image *img, const btf_model *m, const btf_structure_geom *g,
+                           btf_dir light, int albedo, double *mean_shade)
 {
     double l[3];
     btf_dir_to_vec(light, l);
     size_t n = (size_t)img->width * img->height;
     double s = 0.0;
     for (size_t i = 0; i < n; i++) {
-        double f = l[2] > 0.0 ? shade_factor(btf_structure_lit(g, i, l), l, m->ambient) : 1.0;
+        double f = l[2] > 0.0 ? shade_factor(btf__structure_lit(g, i, l), l, m->ambient) : 1.0;
         s += f;
         double e = f > SHADE_DIVIDE_MIN ? f : SHADE_DIVIDE_MIN;
         for (int c = 0; c < 3; c++)
             img->data[3 * i + c] = (float)(img->data[3 * i + c] /
-                                           (albedo ? e * btf_structure_albedo_at(g, m, i, c) : e));
+                                           (albedo ? e * btf__structure_albedo_at(g, m, i, c) : e));
     }
     if (mean_shade)
         *mean_shade = n ? s / (double)n : 1.0;

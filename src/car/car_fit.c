@@ -66,7 +66,7 @@ static const btf_offset FAMILY[BTF_CAR_MAX_NEIGHBOURS] = {
 static const int FAMILY_SIZES[] = {1, 2, 3, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24};
 #define N_FAMILY_SIZES 14
 
-int btf_car_candidate_offsets(btf_offset offsets[BTF_CAR_MAX_NEIGHBOURS])
+int btf__car_candidate_offsets(btf_offset offsets[BTF_CAR_MAX_NEIGHBOURS])
 {
     memcpy(offsets, FAMILY, sizeof FAMILY);
     return BTF_CAR_MAX_NEIGHBOURS;
@@ -118,7 +118,7 @@ static long accumulate_one(const double *z, int w, int h, const btf_offset *o, i
 }
 
 /* The moments V of z, less those of `sub` when it is not NULL (the
- * complement fit of btf_car_fit_complement: the moments of a field whose
+ * complement fit of btf__car_fit_complement: the moments of a field whose
  * autocovariance is z's minus sub's). */
 static long accumulate(const double *z, const double *sub, int w, int h, const btf_offset *o,
                        int n, double *v)
@@ -146,10 +146,10 @@ static int fit_prefix(const double *v, int m, int eta, long t, double *gamma, do
             a[i * eta + j] = v[(i + 1) * m + (j + 1)] + (i == j ? PRIOR_V0 : 0.0);
         vxy[i] = v[(i + 1) * m];
     }
-    if (btf_linalg_cholesky(a, eta, 0, eta, l) != 0)
+    if (btf__linalg_cholesky(a, eta, 0, eta, l) != 0)
         return -1;
     memcpy(gamma, vxy, (size_t)eta * sizeof *gamma);
-    btf_linalg_cholesky_solve(l, eta, gamma);
+    btf__linalg_cholesky_solve(l, eta, gamma);
     double fit = 0.0, logdet = 0.0;
     for (int i = 0; i < eta; i++) {
         fit += vxy[i] * gamma[i];
@@ -234,11 +234,11 @@ static void moments(const double *band, size_t n, double *mean, double *sd)
 static int keeps(const btf_car_band *b, char *why, size_t why_n)
 {
     char reason[200];
-    if (!btf_car_stability_why(b, reason, sizeof reason)) {
+    if (!btf__car_stability_why(b, reason, sizeof reason)) {
         snprintf(why, why_n, "unstable estimate (%s)", reason);
         return 0;
     }
-    int settles = btf_car_fit_settles(b);
+    int settles = btf__car_fit_settles(b);
     if (settles == 0)
         snprintf(why, why_n, "estimate too near the unit circle to settle (a field of it from "
                  "zeros still grows over 160 rows: its correlation outreaches the synthesis "
@@ -289,7 +289,7 @@ btf_car_fit_opts btf_car_fit_defaults(void)
 static btf_status resolve_opts(const btf_car_fit_opts *opts, btf_car_fit_opts *o, btf_error *err)
 {
     btf_car_fit_opts d = btf_car_fit_defaults();
-    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_car_fit", err))
+    if (btf__opts_take(o, sizeof *o, opts, &d, "btf_car_fit", err))
         return BTF_E_ARG;
     if (o->max_neighbours <= 0)
         o->max_neighbours = d.max_neighbours;
@@ -310,26 +310,26 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
     btf_car_fit_info inf = {.chosen = -1, .shrink = 1.0};
     memset(out, 0, sizeof *out);
     if (!band || w < 1 || h < 1)
-        return btf_fail(err, BTF_E_ARG, "CAR fit of a %d x %d band", w, h);
+        return btf__fail(err, BTF_E_ARG, "CAR fit of a %d x %d band", w, h);
     if (o.n_fixed < 0 || o.n_fixed > BTF_CAR_MAX_NEIGHBOURS)
-        return btf_fail(err, BTF_E_ARG, "neighbourhood of %d offsets", o.n_fixed);
+        return btf__fail(err, BTF_E_ARG, "neighbourhood of %d offsets", o.n_fixed);
     if (!(o.coefficient_bits >= 0.0 && o.coefficient_bits <= 1e6))
-        return btf_fail(err, BTF_E_ARG, "CAR fit: %g bits per coefficient (expected 0..1e6)",
-                        o.coefficient_bits);
+        return btf__fail(err, BTF_E_ARG, "CAR fit: %g bits per coefficient (expected 0..1e6)",
+                         o.coefficient_bits);
     for (int i = 0; i < o.n_fixed; i++)
-        if (!btf_offset_is_causal(o.fixed[i]))
-            return btf_fail(err, BTF_E_ARG, "offset %d:%d is not causal", o.fixed[i].row,
-                            o.fixed[i].col);
+        if (!btf__offset_is_causal(o.fixed[i]))
+            return btf__fail(err, BTF_E_ARG, "offset %d:%d is not causal", o.fixed[i].row,
+                             o.fixed[i].col);
     size_t n = (size_t)w * h;
     for (size_t i = 0; i < n; i++)
         if (!isfinite(band[i]) || (sub && !isfinite(sub[i])))
-            return btf_fail(err, BTF_E_ARG, "CAR fit: sample %zu of the band is not finite", i);
+            return btf__fail(err, BTF_E_ARG, "CAR fit: sample %zu of the band is not finite", i);
     double mean, sd, sub_mean = 0.0, sub_sd = 0.0;
     moments(band, n, &mean, &sd);
     if (sub)
         moments(sub, n, &sub_mean, &sub_sd);
     if (!isfinite(mean) || !isfinite(sd) || !isfinite(sub_mean) || !isfinite(sub_sd))
-        return btf_fail(err, BTF_E_NUMERIC, "CAR fit: band mean or variance overflows");
+        return btf__fail(err, BTF_E_NUMERIC, "CAR fit: band mean or variance overflows");
     double band_mean = mean;
     if (sub) {
         /* the complement's variance: what the band holds beyond sub */
@@ -361,7 +361,7 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
             *info = inf;
         return BTF_OK;
     }
-    double *z = btf_alloc(sub ? 2 * n : n, sizeof(double), err), *zs = sub ? z + n : NULL;
+    double *z = btf__alloc(sub ? 2 * n : n, sizeof(double), err), *zs = sub ? z + n : NULL;
     if (!z)
         return BTF_E_NOMEM;
     for (size_t i = 0; i < n; i++)
@@ -436,7 +436,7 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
     char why[300];
     if (stabilise(out, &inf.shrink, why, sizeof why) < 0) {
         free(z);
-        return btf_fail(err, BTF_E_NOMEM, "out of memory checking the model's stability");
+        return btf__fail(err, BTF_E_NOMEM, "out of memory checking the model's stability");
     }
     if (inf.shrink < 1.0) {
         double gs[BTF_CAR_MAX_NEIGHBOURS];
@@ -449,15 +449,15 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
     }
     out->sigma = to_float(sqrt(s2) * sd);
     free(z);
-    int margin = btf_car_margin(out);
+    int margin = btf__car_margin(out);
     if (margin < 0)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+        return btf__fail(err, BTF_E_NOMEM, "out of memory");
     if (margin == BTF_SYNTH_MARGIN_MAX) {
         /* Nearly unstable: its correlation outreaches the largest margin. */
-        double short_by = btf_car_margin_shortfall(out, BTF_SYNTH_MARGIN_MAX);
+        double short_by = btf__car_margin_shortfall(out, BTF_SYNTH_MARGIN_MAX);
         /* What synthesis really gives against the band's own variance: a
          * pure periodic pattern comes out (nearly) flat. */
-        double got = btf_car_synth_variance(out, BTF_SYNTH_MARGIN_MAX);
+        double got = btf__car_synth_variance(out, BTF_SYNTH_MARGIN_MAX);
         double missed = got < 0.0 ? -1.0 : 1.0 - got / (sd * sd);
         if (missed >= BTF_CAR_MISSED_LOUD) {
             char text[300];
@@ -480,22 +480,22 @@ static btf_status fit(const double *band, const double *sub, int w, int h,
     return BTF_OK;
 }
 
-btf_status btf_car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
-                       btf_car_band *out, btf_car_fit_info *info, btf_error *err)
+btf_status btf__car_fit(const double *band, int w, int h, const btf_car_fit_opts *opts,
+                        btf_car_band *out, btf_car_fit_info *info, btf_error *err)
 {
     return fit(band, NULL, w, h, opts, out, info, err);
 }
 
-btf_status btf_car_fit_complement(const double *band, const double *sub, int w, int h,
-                                  const btf_car_fit_opts *opts, btf_car_band *out,
-                                  btf_car_fit_info *info, btf_error *err)
+btf_status btf__car_fit_complement(const double *band, const double *sub, int w, int h,
+                                   const btf_car_fit_opts *opts, btf_car_band *out,
+                                   btf_car_fit_info *info, btf_error *err)
 {
     btf_status rc = fit(band, sub, w, h, opts, out, info, err);
     if ((int)rc != 1)
         return rc;
     /* No complement to fit: the difference band itself. */
     size_t n = (size_t)w * h;
-    double *d = btf_alloc(n, sizeof(double), err);
+    double *d = btf__alloc(n, sizeof(double), err);
     if (!d)
         return BTF_E_NOMEM;
     for (size_t i = 0; i < n; i++)

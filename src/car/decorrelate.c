@@ -23,11 +23,11 @@
 static const btf_linalg_jacobi_rule COLOUR_RULE = {
     .max_sweeps = 64, .abs_sums = 1, .tiny = 1e-300, .relative = 1e-17, .finite_tangent = 1};
 
-btf_status btf_pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
-                    btf_error *err)
+btf_status btf__pca3(const btf_image *img, float mean[3], float basis[9], double variance[3],
+                     btf_error *err)
 {
     if (!img || !img->data || img->channels != 3)
-        return btf_fail(err, BTF_E_ARG, "spectral decorrelation needs an RGB image");
+        return btf__fail(err, BTF_E_ARG, "spectral decorrelation needs an RGB image");
     size_t n = (size_t)img->width * img->height;
     double m[3] = {0, 0, 0};
     for (size_t i = 0; i < n; i++)
@@ -50,10 +50,10 @@ btf_status btf_pca3(const btf_image *img, float mean[3], float basis[9], double 
     for (int a = 0; a < 3; a++)
         for (int b = 0; b < 3; b++)
             if (!isfinite(c[a][b]))
-                return btf_fail(err, BTF_E_NUMERIC, "colour covariance is not finite "
-                                "(pixel values too large)");
+                return btf__fail(err, BTF_E_NUMERIC, "colour covariance is not finite "
+                                 "(pixel values too large)");
     double v[3][3], ev[3];
-    btf_linalg_jacobi(&c[0][0], 3, &COLOUR_RULE, ev, &v[0][0]);
+    btf__linalg_jacobi(&c[0][0], 3, &COLOUR_RULE, ev, &v[0][0]);
     /* Order bands by decreasing variance; fix each vector's sign so that its
      * largest component is positive (one basis per image, run to run). */
     int order[3] = {0, 1, 2};
@@ -80,8 +80,8 @@ btf_status btf_pca3(const btf_image *img, float mean[3], float basis[9], double 
     return BTF_OK;
 }
 
-void btf_decorrelate(const btf_image *img, const float mean[3], const float basis[9],
-                     double *bands[3])
+void btf__decorrelate(const btf_image *img, const float mean[3], const float basis[9],
+                      double *bands[3])
 {
     size_t n = (size_t)img->width * img->height;
     for (size_t i = 0; i < n; i++) {

@@ -21,7 +21,7 @@
  * margin would be too much for most and too little for some. A band that
  * needs more than the cap (a nearly unstable one) is synthesised with 256
  * and its first rows fall short of the stationary variance: fitting warns
- * of it (btf_car_margin_shortfall).
+ * of it (btf__car_margin_shortfall).
  *
  * The response is computed in double on a grid of 2m + 1 rows and 4m + 1
  * columns with the synthesis' own zero boundary, so the estimate includes
@@ -110,7 +110,7 @@ static int margin_enough(const btf_car_band *b, int m, int reach, double *budget
     return share <= BTF_SYNTH_MARGIN_EPS;
 }
 
-int btf_car_margin_within(const btf_car_band *b, double *budget)
+int btf__car_margin_within(const btf_car_band *b, double *budget)
 {
     if (b->n == 0)
         return 0; /* white noise: no memory, no transient */
@@ -146,12 +146,12 @@ int btf_car_margin_within(const btf_car_band *b, double *budget)
     return hi;
 }
 
-int btf_car_margin(const btf_car_band *b)
+int btf__car_margin(const btf_car_band *b)
 {
-    return btf_car_margin_within(b, NULL);
+    return btf__car_margin_within(b, NULL);
 }
 
-double btf_car_margin_shortfall(const btf_car_band *b, int m)
+double btf__car_margin_shortfall(const btf_car_band *b, int m)
 {
     if (b->n == 0)
         return 0.0;

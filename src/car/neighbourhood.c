@@ -10,7 +10,7 @@
 
 #include <stdlib.h>
 
-int btf_offset_is_causal(btf_offset o)
+int btf__offset_is_causal(btf_offset o)
 {
     return o.row < 0 || (o.row == 0 && o.col < 0);
 }
@@ -24,30 +24,30 @@ btf_status btf_neighbourhood_parse(const char *spec, btf_offset *offsets, int *n
         char *end;
         long r = strtol(p, &end, 10);
         if (end == p || *end != ':')
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': expected row:col at '%s'", spec, p);
+            return btf__fail(err, BTF_E_ARG, "neighbourhood '%s': expected row:col at '%s'", spec, p);
         p = end + 1;
         long c = strtol(p, &end, 10);
         if (end == p || (*end != ',' && *end != '\0'))
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': expected row:col at '%s'", spec, p);
+            return btf__fail(err, BTF_E_ARG, "neighbourhood '%s': expected row:col at '%s'", spec, p);
         if (r < -64 || r > 64 || c < -64 || c > 64)
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld beyond 64", spec, r, c);
+            return btf__fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld beyond 64", spec, r, c);
         btf_offset o = {(int8_t)r, (int8_t)c};
-        if (!btf_offset_is_causal(o))
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld is not causal "
-                            "(need row < 0, or row 0 and col < 0)", spec, r, c);
+        if (!btf__offset_is_causal(o))
+            return btf__fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld is not causal "
+                             "(need row < 0, or row 0 and col < 0)", spec, r, c);
         for (int i = 0; i < *n; i++)
             if (offsets[i].row == o.row && offsets[i].col == o.col)
-                return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld repeated", spec, r, c);
+                return btf__fail(err, BTF_E_ARG, "neighbourhood '%s': offset %ld:%ld repeated", spec, r, c);
         if (*n == BTF_CAR_MAX_NEIGHBOURS)
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': more than %d offsets", spec,
-                            BTF_CAR_MAX_NEIGHBOURS);
+            return btf__fail(err, BTF_E_ARG, "neighbourhood '%s': more than %d offsets", spec,
+                             BTF_CAR_MAX_NEIGHBOURS);
         offsets[(*n)++] = o;
         p = *end == ',' ? end + 1 : end;
         if (*end == ',' && *p == '\0')
-            return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': trailing comma", spec);
+            return btf__fail(err, BTF_E_ARG, "neighbourhood '%s': trailing comma", spec);
     }
     if (*n == 0)
-        return btf_fail(err, BTF_E_ARG, "neighbourhood '%s': empty", spec);
+        return btf__fail(err, BTF_E_ARG, "neighbourhood '%s': empty", spec);
     return BTF_OK;
 }
 

@@ -31,12 +31,12 @@ static int mirror(int i, int n)
     return i;
 }
 
-btf_status btf_pyr_down(const double *src, int w, int h, double **dst, btf_error *err)
+btf_status btf__pyr_down(const double *src, int w, int h, double **dst, btf_error *err)
 {
     static const double k[5] = {1.0 / 16, 4.0 / 16, 6.0 / 16, 4.0 / 16, 1.0 / 16};
     int w2 = (w + 1) / 2, h2 = (h + 1) / 2;
-    double *tmp = btf_alloc((size_t)w2 * h, sizeof(double), err);
-    double *out = btf_alloc((size_t)w2 * h2, sizeof(double), err);
+    double *tmp = btf__alloc((size_t)w2 * h, sizeof(double), err);
+    double *out = btf__alloc((size_t)w2 * h2, sizeof(double), err);
     if (!tmp || !out) {
         free(tmp);
         free(out);
@@ -72,10 +72,10 @@ static double up_sample(const double *c, int stride, int n, int x)
     return (c[(size_t)mirror(i, n) * stride] + c[(size_t)mirror(i + 1, n) * stride]) * 0.5;
 }
 
-btf_status btf_pyr_up(const double *src, int w2, int h2, int w, int h, double **dst, btf_error *err)
+btf_status btf__pyr_up(const double *src, int w2, int h2, int w, int h, double **dst, btf_error *err)
 {
-    double *tmp = btf_alloc((size_t)w * h2, sizeof(double), err);
-    double *out = btf_alloc((size_t)w * h, sizeof(double), err);
+    double *tmp = btf__alloc((size_t)w * h2, sizeof(double), err);
+    double *out = btf__alloc((size_t)w * h, sizeof(double), err);
     if (!tmp || !out) {
         free(tmp);
         free(out);
@@ -92,20 +92,20 @@ btf_status btf_pyr_up(const double *src, int w2, int h2, int w, int h, double **
     return BTF_OK;
 }
 
-void btf_pyramid_free(btf_pyramid *p)
+void btf__pyramid_free(btf_pyramid *p)
 {
     for (int l = 0; l < p->levels; l++)
         free(p->level[l]);
     memset(p, 0, sizeof *p);
 }
 
-btf_status btf_pyramid_build(const double *band, int w, int h, int levels, btf_pyramid *p,
-                             btf_error *err)
+btf_status btf__pyramid_build(const double *band, int w, int h, int levels, btf_pyramid *p,
+                              btf_error *err)
 {
     memset(p, 0, sizeof *p);
     if (levels < 1 || levels > BTF_MAX_LEVELS)
-        return btf_fail(err, BTF_E_ARG, "pyramid levels %d: expected 1..%d", levels, BTF_MAX_LEVELS);
-    double *g = btf_alloc((size_t)w * h, sizeof(double), err);
+        return btf__fail(err, BTF_E_ARG, "pyramid levels %d: expected 1..%d", levels, BTF_MAX_LEVELS);
+    double *g = btf__alloc((size_t)w * h, sizeof(double), err);
     if (!g)
         return BTF_E_NOMEM;
     memcpy(g, band, (size_t)w * h * sizeof(double));
@@ -118,15 +118,15 @@ btf_status btf_pyramid_build(const double *band, int w, int h, int levels, btf_p
             break;
         }
         double *down, *up;
-        btf_status rc = btf_pyr_down(g, w, h, &down, err);
+        btf_status rc = btf__pyr_down(g, w, h, &down, err);
         if (rc == 0) {
-            rc = btf_pyr_up(down, (w + 1) / 2, (h + 1) / 2, w, h, &up, err);
+            rc = btf__pyr_up(down, (w + 1) / 2, (h + 1) / 2, w, h, &up, err);
             if (rc)
                 free(down);
         }
         if (rc) {
             free(g);
-            btf_pyramid_free(p);
+            btf__pyramid_free(p);
             return rc;
         }
         for (size_t i = 0; i < (size_t)w * h; i++)
@@ -140,16 +140,16 @@ btf_status btf_pyramid_build(const double *band, int w, int h, int levels, btf_p
     return BTF_OK;
 }
 
-btf_status btf_pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err)
+btf_status btf__pyramid_collapse(const btf_pyramid *p, double **out, btf_error *err)
 {
     int l = p->levels - 1;
-    double *g = btf_alloc((size_t)p->width[l] * p->height[l], sizeof(double), err);
+    double *g = btf__alloc((size_t)p->width[l] * p->height[l], sizeof(double), err);
     if (!g)
         return BTF_E_NOMEM;
     memcpy(g, p->level[l], (size_t)p->width[l] * p->height[l] * sizeof(double));
     for (l = p->levels - 2; l >= 0; l--) {
         double *up;
-        btf_status rc = btf_pyr_up(g, p->width[l + 1], p->height[l + 1], p->width[l], p->height[l], &up, err);
+        btf_status rc = btf__pyr_up(g, p->width[l + 1], p->height[l + 1], p->width[l], p->height[l], &up, err);
         free(g);
         if (rc)
             return rc;

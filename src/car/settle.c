@@ -111,12 +111,12 @@ static int recursion_grows(const btf_car_band *b)
         }
     }
     btf_rng rng;
-    btf_rng_seed(&rng, 12345);
+    btf__rng_seed(&rng, 12345);
     for (int y = 0; y < R; y++) {
         double *row = pad + (size_t)(y + P) * W + P;
         /* Uniform noise of unit variance is enough to excite growth. */
         for (int x = 0; x < C; x++)
-            row[x] = (btf_rng_uniform(&rng) - 0.5) * 3.4641016151377544;
+            row[x] = (btf__rng_uniform(&rng) - 0.5) * 3.4641016151377544;
         for (int k = 0; k < n_up; k++)
             add_scaled(row, row + up[k], gu[k]);
         for (int x = 0; x < C; x++) {
@@ -155,7 +155,7 @@ static int recursion_grows(const btf_car_band *b)
 
 /* 1 when the band settles, 0 when not, -1 when out of memory (so that a
  * fit under memory pressure fails instead of shrinking for no reason). */
-int btf_car_fit_settles(const btf_car_band *b)
+int btf__car_fit_settles(const btf_car_band *b)
 {
     double sum = 0.0;
     for (int i = 0; i < b->n; i++)

@@ -348,7 +348,7 @@ static int sum_within(const btf_car_band *b)
 
 /* A recursion at all: at most BTF_CAR_MAX_NEIGHBOURS causal offsets within
  * REACH pixels, finite coefficients (the validator says which rule a file
- * breaks before it asks for stability; btf_car_is_stable, which the tests
+ * breaks before it asks for stability; btf__car_is_stable, which the tests
  * call directly, may get anything). */
 static int band_valid(const btf_car_band *b, char *why, size_t n)
 {
@@ -358,7 +358,7 @@ static int band_valid(const btf_car_band *b, char *why, size_t n)
     }
     for (int s = 0; s < b->n; s++) {
         btf_offset o = b->offsets[s];
-        if (!btf_offset_is_causal(o) || o.row < -REACH || o.col < -REACH || o.col > REACH) {
+        if (!btf__offset_is_causal(o) || o.row < -REACH || o.col < -REACH || o.col > REACH) {
             snprintf(why, n, "offset %d:%d is not a causal offset within %d pixels", o.row, o.col,
                      REACH);
             return 0;
@@ -371,7 +371,7 @@ static int band_valid(const btf_car_band *b, char *why, size_t n)
     return 1;
 }
 
-int btf_car_stability_why(const btf_car_band *b, char *why, size_t n)
+int btf__car_stability_why(const btf_car_band *b, char *why, size_t n)
 {
     char dummy[1];
     if (!why)
@@ -399,9 +399,9 @@ int btf_car_stability_why(const btf_car_band *b, char *why, size_t n)
     return down == 1;
 }
 
-int btf_car_is_stable(const btf_car_band *b)
+int btf__car_is_stable(const btf_car_band *b)
 {
-    return btf_car_stability_why(b, NULL, 0);
+    return btf__car_stability_why(b, NULL, 0);
 }
 
 /* |A(w1, w2)|^2 on an n x n grid of the frequency torus: the mean of its
@@ -425,12 +425,12 @@ static double spectrum_mean_inverse(const btf_car_band *b, int n)
     return acc / ((double)n * n);
 }
 
-double btf_car_stationary_variance(const btf_car_band *b)
+double btf__car_stationary_variance(const btf_car_band *b)
 {
     return (double)b->sigma * b->sigma * spectrum_mean_inverse(b, 256);
 }
 
-double btf_car_synth_variance(const btf_car_band *b, int margin)
+double btf__car_synth_variance(const btf_car_band *b, int margin)
 {
     /* The field synthesis runs (synth/field.c): zeros outside, the window
      * starting `margin` rows below the top and `margin` columns in from
@@ -449,7 +449,7 @@ double btf_car_synth_variance(const btf_car_band *b, int margin)
     for (int k = 0; k < b->n; k++)
         rel[k] = (long)b->offsets[k].row * w + b->offsets[k].col;
     btf_rng rng;
-    btf_rng_seed(&rng, 271828);
+    btf__rng_seed(&rng, 271828);
     double sum = 0.0, sq = 0.0, sigma = b->sigma;
     for (int y = 0; y < rows; y++) {
         double *row = pad + (size_t)(y + P) * w + P;
@@ -457,7 +457,7 @@ double btf_car_synth_variance(const btf_car_band *b, int margin)
             double s = 0.0;
             for (int k = 0; k < b->n; k++)
                 s += b->gamma[k] * row[x + rel[k]];
-            row[x] = s + sigma * (btf_rng_uniform(&rng) - 0.5) * 3.4641016151377544;
+            row[x] = s + sigma * (btf__rng_uniform(&rng) - 0.5) * 3.4641016151377544;
             if (y >= margin && x >= margin && x < margin + WIN) {
                 sum += row[x];
                 sq += row[x] * row[x];

@@ -9,12 +9,12 @@
 #include <stdarg.h>
 #include <stdio.h>
 
-btf_status btf_box_fail(btf_error *err, btf_status code, const char *name, const char *fmt, ...)
+btf_status btf__box_fail(btf_error *err, btf_status code, const char *name, const char *fmt, ...)
 {
     char msg[sizeof err->msg];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    return btf_fail(err, code, "%s: %s", name, msg);
+    return btf__fail(err, code, "%s: %s", name, msg);
 }

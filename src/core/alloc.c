@@ -12,35 +12,35 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-void *btf_alloc(size_t count, size_t size, btf_error *err)
+void *btf__alloc(size_t count, size_t size, btf_error *err)
 {
     if (size && count > SIZE_MAX / size) {
-        btf_fail(err, BTF_E_NOMEM, "allocation of %zu x %zu bytes overflows", count, size);
+        btf__fail(err, BTF_E_NOMEM, "allocation of %zu x %zu bytes overflows", count, size);
         return NULL;
     }
     size_t bytes = count * size;
     void *p = malloc(bytes > 0 ? bytes : 1);
     if (!p)
-        btf_fail(err, BTF_E_NOMEM, "out of memory allocating %zu bytes", count * size);
+        btf__fail(err, BTF_E_NOMEM, "out of memory allocating %zu bytes", count * size);
     return p;
 }
 
-void *btf_calloc(size_t count, size_t size, btf_error *err)
+void *btf__calloc(size_t count, size_t size, btf_error *err)
 {
     void *p = calloc(count ? count : 1, size ? size : 1);
     if (!p)
-        btf_fail(err, BTF_E_NOMEM, "out of memory allocating %zu x %zu bytes", count, size);
+        btf__fail(err, BTF_E_NOMEM, "out of memory allocating %zu x %zu bytes", count, size);
     return p;
 }
 
-void btf_free_list(void *const *ptrs, size_t n)
+void btf__free_list(void *const *ptrs, size_t n)
 {
     for (size_t i = 0; i < n; i++)
         free(ptrs[i]);
 }
 
-btf_status btf_opts_take(void *dst, size_t dst_size, const void *src, const void *defaults,
-                         const char *what, btf_error *err)
+btf_status btf__opts_take(void *dst, size_t dst_size, const void *src, const void *defaults,
+                          const char *what, btf_error *err)
 {
     if (!src) {
         memcpy(dst, defaults, dst_size);
@@ -51,10 +51,10 @@ btf_status btf_opts_take(void *dst, size_t dst_size, const void *src, const void
     if (n == 0)
         n = dst_size;
     if (n < sizeof n || n > dst_size)
-        return btf_fail(err, BTF_E_ARG,
-                        "%s: options struct of %zu bytes, this library's has %zu (built against "
-                        "another btfcar header?)",
-                        what, n, dst_size);
+        return btf__fail(err, BTF_E_ARG,
+                         "%s: options struct of %zu bytes, this library's has %zu (built against "
+                         "another btfcar header?)",
+                         what, n, dst_size);
     memset(dst, 0, dst_size);
     memcpy(dst, src, n);
     memcpy(dst, &dst_size, sizeof dst_size);
@@ -88,7 +88,7 @@ static uint64_t min_u64(uint64_t a, uint64_t b)
     return a < b ? a : b;
 }
 
-uint64_t btf_memory_available(void)
+uint64_t btf__memory_available(void)
 {
     /* The kernel's estimate of what can be allocated without swapping out
      * (MemAvailable counts reclaimable caches), plus free swap; without

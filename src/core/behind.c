@@ -101,32 +101,32 @@ static void *behind_main(void *arg)
 static btf_status start_thread(btf_behind *b, btf_error *err)
 {
     if (pthread_mutex_init(&b->lock, NULL) != 0)
-        return btf_fail(err, BTF_E_NOMEM, "cannot create a lock");
+        return btf__fail(err, BTF_E_NOMEM, "cannot create a lock");
     if (pthread_cond_init(&b->cond, NULL) != 0) {
         pthread_mutex_destroy(&b->lock);
-        return btf_fail(err, BTF_E_NOMEM, "cannot create a condition");
+        return btf__fail(err, BTF_E_NOMEM, "cannot create a condition");
     }
     int e = pthread_create(&b->thread, NULL, behind_main, b);
     b->has_thread = e == 0;
     if (e && !b->spec.run_here_without_thread) {
         pthread_cond_destroy(&b->cond);
         pthread_mutex_destroy(&b->lock);
-        return btf_fail(err, BTF_E_NOMEM, "cannot start the writer thread: %s", strerror(e));
+        return btf__fail(err, BTF_E_NOMEM, "cannot start the writer thread: %s", strerror(e));
     }
     return BTF_OK;
 }
 
-btf_behind *btf_behind_start(const btf_behind_spec *spec, btf_error *err)
+btf_behind *btf__behind_start(const btf_behind_spec *spec, btf_error *err)
 {
     if (!spec || !spec->run || spec->job_size < 1 || spec->depth < 1) {
-        btf_fail(err, BTF_E_ARG, "write-behind: no job function, or a job size or depth below 1");
+        btf__fail(err, BTF_E_ARG, "write-behind: no job function, or a job size or depth below 1");
         return NULL;
     }
-    btf_behind *b = btf_calloc(1, sizeof *b, err);
+    btf_behind *b = btf__calloc(1, sizeof *b, err);
     if (!b)
         return NULL;
     b->spec = *spec;
-    b->slots = btf_calloc((size_t)spec->depth, spec->job_size, err);
+    b->slots = btf__calloc((size_t)spec->depth, spec->job_size, err);
     if (!b->slots || start_thread(b, err) != BTF_OK) {
         free(b->slots);
         free(b);
@@ -145,7 +145,7 @@ static btf_status run_here(btf_behind *b, void *job, btf_error *err)
     return kept_failure(b, err);
 }
 
-btf_status btf_behind_put(btf_behind *b, void *job, btf_error *err)
+btf_status btf__behind_put(btf_behind *b, void *job, btf_error *err)
 {
     if (!b->has_thread)
         return run_here(b, job, err);
@@ -185,7 +185,7 @@ static void release(btf_behind *b)
     free(b);
 }
 
-btf_status btf_behind_finish(btf_behind *b, btf_error *err)
+btf_status btf__behind_finish(btf_behind *b, btf_error *err)
 {
     if (!b)
         return BTF_OK;
@@ -195,7 +195,7 @@ btf_status btf_behind_finish(btf_behind *b, btf_error *err)
     return rc;
 }
 
-void btf_behind_abort(btf_behind *b)
+void btf__behind_abort(btf_behind *b)
 {
     if (!b)
         return;

@@ -41,17 +41,17 @@ typedef struct btf_behind btf_behind;
 
 /* NULL with err filled (BTF_E_ARG for a bad spec, else BTF_E_NOMEM: out of
  * memory, or no lock or thread to be had). */
-btf_behind *btf_behind_start(const btf_behind_spec *spec, btf_error *err);
+btf_behind *btf__behind_start(const btf_behind_spec *spec, btf_error *err);
 /* Hands a job over (job_size bytes at job, copied; the caller's copy is
  * done with, as what it owns now belongs to the job): waits while depth
  * jobs are held, then queues it; or returns the first failure so far (then
  * the job goes to done and never runs). */
-btf_status btf_behind_put(btf_behind *b, void *job, btf_error *err);
+btf_status btf__behind_put(btf_behind *b, void *job, btf_error *err);
 /* Runs what is queued, stops the thread and frees b; returns the first
  * failure of all the jobs (err may be NULL). b NULL: BTF_OK. */
-btf_status btf_behind_finish(btf_behind *b, btf_error *err);
+btf_status btf__behind_finish(btf_behind *b, btf_error *err);
 /* Stops at once: the job running finishes, the queued ones do not run;
  * frees b. b NULL: nothing. */
-void btf_behind_abort(btf_behind *b);
+void btf__behind_abort(btf_behind *b);
 
 #endif

@@ -7,13 +7,13 @@
 #include <time.h>
 #include <unistd.h>
 
-int btf_cpu_count(void)
+int btf__cpu_count(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);
     return n < 1 ? 1 : (int)n;
 }
 
-double btf_now(void)
+double btf__now(void)
 {
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);

@@ -61,7 +61,7 @@ static int make_rings(btf_dirset *set, const char *name, const double *theta, co
     int total = 0;
     for (int r = 0; r < rings; r++)
         total += count[r];
-    set->dirs = btf_alloc((size_t)total, sizeof(btf_dir), err);
+    set->dirs = btf__alloc((size_t)total, sizeof(btf_dir), err);
     if (!set->dirs)
         return BTF_E_NOMEM;
     int k = 0;
@@ -84,7 +84,7 @@ btf_status btf_dirset_ubo81(btf_dirset *set, btf_error *err)
     return make_rings(set, "ubo81", theta, count, offset, 6, err);
 }
 
-btf_status btf_dirset_ubo151(btf_dirset *set, btf_error *err)
+btf_status btf__dirset_ubo151(btf_dirset *set, btf_error *err)
 {
     static const double theta[] = {0, 11, 23.5, 30, 37.5, 45, 52.5, 60, 67.5, 75};
     static const int count[] = {1, 6, 12, 12, 12, 18, 18, 24, 24, 24};
@@ -101,9 +101,9 @@ void btf_dirset_free(btf_dirset *set)
     set->count = 0;
 }
 
-btf_status btf_dirset_copy(btf_dirset *dst, const btf_dirset *src, btf_error *err)
+btf_status btf__dirset_copy(btf_dirset *dst, const btf_dirset *src, btf_error *err)
 {
-    dst->dirs = btf_alloc((size_t)(src->count ? src->count : 1), sizeof(btf_dir), err);
+    dst->dirs = btf__alloc((size_t)(src->count ? src->count : 1), sizeof(btf_dir), err);
     if (!dst->dirs)
         return BTF_E_NOMEM;
     memcpy(dst->dirs, src->dirs, (size_t)src->count * sizeof(btf_dir));
@@ -163,16 +163,16 @@ btf_status btf_dirset_from_list(btf_dirset *set, const btf_dir *dirs, int count,
 {
     memset(set, 0, sizeof *set);
     if (count < 1)
-        return btf_fail(err, BTF_E_ARG, "empty direction list");
-    set->dirs = btf_alloc((size_t)count, sizeof(btf_dir), err);
+        return btf__fail(err, BTF_E_ARG, "empty direction list");
+    set->dirs = btf__alloc((size_t)count, sizeof(btf_dir), err);
     if (!set->dirs)
         return BTF_E_NOMEM;
     for (int i = 0; i < count; i++) {
         btf_dir d = dirs[i];
         if (!isfinite(d.theta) || !isfinite(d.phi) || d.theta < 0.0 || d.theta > 90.0) {
             btf_dirset_free(set);
-            return btf_fail(err, BTF_E_ARG, "direction (theta %g, phi %g): theta must be in [0, 90]",
-                            d.theta, d.phi);
+            return btf__fail(err, BTF_E_ARG, "direction (theta %g, phi %g): theta must be in [0, 90]",
+                             d.theta, d.phi);
         }
         d.phi = fmod(d.phi, 360.0);
         if (d.phi < 0.0)
@@ -190,7 +190,7 @@ btf_status btf_dirset_from_list(btf_dirset *set, const btf_dir *dirs, int count,
     snprintf(set->name, sizeof set->name, "custom");
     int r = adopt_known(set, btf_dirset_ubo81, err);
     if (r == 0)
-        r = adopt_known(set, btf_dirset_ubo151, err);
+        r = adopt_known(set, btf__dirset_ubo151, err);
     if (r < 0) {
         btf_dirset_free(set);
         return BTF_E_NOMEM;

@@ -23,7 +23,7 @@ const char *btf_status_name(btf_status status)
     }
 }
 
-int btf_fail(btf_error *err, int code, const char *fmt, ...)
+int btf__fail(btf_error *err, int code, const char *fmt, ...)
 {
     if (err) {
         va_list ap;
@@ -39,14 +39,14 @@ int btf_fail(btf_error *err, int code, const char *fmt, ...)
     return code;
 }
 
-int btf_error_name(btf_error *err, const char *name)
+int btf__error_name(btf_error *err, const char *name)
 {
     if (!err)
         return BTF_E_NOMEM;
     if (name && strncmp(err->msg, name, strlen(name)) != 0) {
         char m[sizeof err->msg];
         memcpy(m, err->msg, sizeof m);
-        btf_fail(err, err->code, "%s: %s", name, m[0] ? m : btf_status_name(err->code));
+        btf__fail(err, err->code, "%s: %s", name, m[0] ? m : btf_status_name(err->code));
     }
     return err->code;
 }

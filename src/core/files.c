@@ -184,7 +184,7 @@ static uint64_t digest_file(uint64_t h, const char *path)
  * identity digests the host name, the boot id and the PID namespace. It is
  * read again each time, not cached: a child forked into a new namespace
  * must not inherit its parent's. */
-void btf_tmp_identity(char out[BTF_TMP_IDENTITY_SIZE])
+void btf__tmp_identity(char out[BTF_TMP_IDENTITY_SIZE])
 {
     uint64_t h = 14695981039346656037ull;
     char buf[256] = "";
@@ -202,14 +202,14 @@ static int tmp_name(const char *path, char *tmp, size_t n, btf_error *err)
     static _Atomic unsigned long counter;
     unsigned long c = ++counter;
     char id[BTF_TMP_IDENTITY_SIZE];
-    btf_tmp_identity(id);
+    btf__tmp_identity(id);
     int k = snprintf(tmp, n, "%s" TMP_TAG "%s-%ld-%lu", path, id, (long)getpid(), c);
     if (k < 0 || (size_t)k >= n)
-        return btf_fail(err, BTF_E_ARG, "%s: path too long", path);
+        return btf__fail(err, BTF_E_ARG, "%s: path too long", path);
     return BTF_OK;
 }
 
-int btf_tmp_create(const char *path, char *tmp, size_t n, int *fd, btf_error *err)
+int btf__tmp_create(const char *path, char *tmp, size_t n, int *fd, btf_error *err)
 {
     *fd = -1;
     for (int t = 0; t < TMP_TRIES; t++) {
@@ -224,24 +224,24 @@ int btf_tmp_create(const char *path, char *tmp, size_t n, int *fd, btf_error *er
             return BTF_OK;
         }
         if (errno != EEXIST)
-            return btf_fail(err, BTF_E_IO, "%s: cannot create: %s", path, strerror(errno));
+            return btf__fail(err, BTF_E_IO, "%s: cannot create: %s", path, strerror(errno));
     }
-    return btf_fail(err, BTF_E_IO, "%s: cannot create a temporary file: %d names taken", path,
-                    TMP_TRIES);
+    return btf__fail(err, BTF_E_IO, "%s: cannot create a temporary file: %d names taken", path,
+                     TMP_TRIES);
 }
 
-int btf_commit_file(const char *tmp, const char *path, btf_error *err)
+int btf__commit_file(const char *tmp, const char *path, btf_error *err)
 {
     if (rename(tmp, path) != 0) {
         int e = errno;
-        btf_abort_file(tmp);
-        return btf_fail(err, BTF_E_IO, "%s: cannot rename into place: %s", path, strerror(e));
+        btf__abort_file(tmp);
+        return btf__fail(err, BTF_E_IO, "%s: cannot rename into place: %s", path, strerror(e));
     }
     live_drop(tmp);
     return BTF_OK;
 }
 
-void btf_abort_file(const char *tmp)
+void btf__abort_file(const char *tmp)
 {
     remove(tmp);
     live_drop(tmp);
@@ -251,7 +251,7 @@ btf_status btf_write_file_atomic(const char *path, const void *data, size_t n, b
 {
     char tmp[4096];
     int fd;
-    int rc = btf_tmp_create(path, tmp, sizeof tmp, &fd, err);
+    int rc = btf__tmp_create(path, tmp, sizeof tmp, &fd, err);
     if (rc)
         return rc;
     const unsigned char *p = data;
@@ -273,10 +273,10 @@ btf_status btf_write_file_atomic(const char *path, const void *data, size_t n, b
     if (close(fd) != 0 && !e)
         e = errno;
     if (e) {
-        btf_abort_file(tmp);
-        return btf_fail(err, BTF_E_IO, "%s: write failed: %s", path, strerror(e));
+        btf__abort_file(tmp);
+        return btf__fail(err, BTF_E_IO, "%s: write failed: %s", path, strerror(e));
     }
-    return btf_commit_file(tmp, path, err);
+    return btf__commit_file(tmp, path, err);
 }
 
 /* -1 with the message of what failed on fd (closed here), errno kept. */
@@ -285,12 +285,12 @@ static int open_failed(int fd, btf_error *err, const char *fmt, const char *path
     int e = errno;
     if (fd >= 0)
         close(fd);
-    btf_fail(err, BTF_E_IO, fmt, path, strerror(e));
+    btf__fail(err, BTF_E_IO, fmt, path, strerror(e));
     errno = e;
     return -1;
 }
 
-int btf_open_regular(const char *path, uint64_t *size, btf_error *err)
+int btf__open_regular(const char *path, uint64_t *size, btf_error *err)
 {
     /* O_NONBLOCK: opening a FIFO for reading otherwise waits for a writer,
      * forever; O_NOCTTY: a terminal never becomes the controlling one. */
@@ -304,7 +304,7 @@ int btf_open_regular(const char *path, uint64_t *size, btf_error *err)
      * none at all yet (a FIFO without a writer); a folder no bytes. */
     if (!S_ISREG(st.st_mode)) {
         close(fd);
-        btf_fail(err, BTF_E_IO, "%s: not a regular file", path);
+        btf__fail(err, BTF_E_IO, "%s: not a regular file", path);
         errno = EINVAL;
         return -1;
     }
@@ -318,38 +318,38 @@ int btf_open_regular(const char *path, uint64_t *size, btf_error *err)
     return fd;
 }
 
-int btf_read_file(const char *path, size_t max_bytes, unsigned char **data,
-                  size_t *n, btf_error *err)
+int btf__read_file(const char *path, size_t max_bytes, unsigned char **data,
+                   size_t *n, btf_error *err)
 {
     *data = NULL;
     *n = 0;
-    int fd = btf_open_regular(path, NULL, err);
+    int fd = btf__open_regular(path, NULL, err);
     if (fd < 0)
         return BTF_E_IO;
     FILE *f = fdopen(fd, "rb");
     if (!f) {
         close(fd);
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", path);
     }
     size_t cap = 1 << 16, len = 0;
     unsigned char *buf = malloc(cap);
     if (!buf) {
         fclose(f);
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", path);
     }
     for (;;) {
         if (len == cap) {
             if (cap >= max_bytes) {
                 free(buf);
                 fclose(f);
-                return btf_fail(err, BTF_E_FORMAT, "%s: larger than %zu bytes", path, max_bytes);
+                return btf__fail(err, BTF_E_FORMAT, "%s: larger than %zu bytes", path, max_bytes);
             }
             size_t ncap = cap * 2 > max_bytes ? max_bytes : cap * 2;
             unsigned char *nb = realloc(buf, ncap);
             if (!nb) {
                 free(buf);
                 fclose(f);
-                return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+                return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", path);
             }
             buf = nb;
             cap = ncap;
@@ -363,7 +363,7 @@ int btf_read_file(const char *path, size_t max_bytes, unsigned char **data,
     fclose(f);
     if (bad) {
         free(buf);
-        return btf_fail(err, BTF_E_IO, "%s: read error", path);
+        return btf__fail(err, BTF_E_IO, "%s: read error", path);
     }
     *data = buf;
     *n = len;
@@ -375,34 +375,34 @@ btf_status btf_mkdirs(const char *path, btf_error *err)
     char buf[4096];
     size_t len = strlen(path);
     if (len == 0 || len >= sizeof buf)
-        return btf_fail(err, BTF_E_ARG, "'%s': bad folder name", path);
+        return btf__fail(err, BTF_E_ARG, "'%s': bad folder name", path);
     memcpy(buf, path, len + 1);
     for (size_t i = 1; i <= len; i++) {
         if (buf[i] == '/' || buf[i] == '\0') {
             char c = buf[i];
             buf[i] = '\0';
             if (mkdir(buf, 0777) != 0 && errno != EEXIST)
-                return btf_fail(err, BTF_E_IO, "%s: cannot create folder: %s", buf, strerror(errno));
+                return btf__fail(err, BTF_E_IO, "%s: cannot create folder: %s", buf, strerror(errno));
             buf[i] = c;
         }
     }
     struct stat st;
     if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode))
-        return btf_fail(err, BTF_E_IO, "%s: exists and is not a folder", path);
+        return btf__fail(err, BTF_E_IO, "%s: exists and is not a folder", path);
     return BTF_OK;
 }
 
-int btf_path_join(char *out, size_t n, const char *dir, const char *name, btf_error *err)
+int btf__path_join(char *out, size_t n, const char *dir, const char *name, btf_error *err)
 {
     size_t dl = strlen(dir);
     int slash = dl > 0 && dir[dl - 1] != '/';
     int k = snprintf(out, n, "%s%s%s", dir, slash ? "/" : "", name);
     if (k < 0 || (size_t)k >= n)
-        return btf_fail(err, BTF_E_ARG, "%s/%s: path too long", dir, name);
+        return btf__fail(err, BTF_E_ARG, "%s/%s: path too long", dir, name);
     return BTF_OK;
 }
 
-void btf_remove_tree(const char *path)
+void btf__remove_tree(const char *path)
 {
     DIR *d = opendir(path);
     if (d) {
@@ -414,7 +414,7 @@ void btf_remove_tree(const char *path)
             snprintf(sub, sizeof sub, "%s/%s", path, e->d_name);
             struct stat st;
             if (lstat(sub, &st) == 0 && S_ISDIR(st.st_mode))
-                btf_remove_tree(sub);
+                btf__remove_tree(sub);
             else
                 remove(sub);
         }
@@ -439,7 +439,7 @@ static int strip_slashes(const char *path, char *out, size_t n, btf_error *err)
     while (len > 1 && path[len - 1] == '/')
         len--;
     if (len == 0 || len >= n)
-        return btf_fail(err, BTF_E_ARG, "'%s': bad path", path);
+        return btf__fail(err, BTF_E_ARG, "'%s': bad path", path);
     memcpy(out, path, len);
     out[len] = '\0';
     return BTF_OK;
@@ -476,25 +476,25 @@ static btf_status follow_folder_link(char *dir, size_t n, btf_error *err)
         return BTF_OK;
     char *real = realpath(dir, NULL);
     if (!real)
-        return btf_fail(err, BTF_E_IO, "%s: cannot follow the link: %s", dir, strerror(errno));
+        return btf__fail(err, BTF_E_IO, "%s: cannot follow the link: %s", dir, strerror(errno));
     int fits = strlen(real) < n;
     if (fits)
         strcpy(dir, real);
     free(real);
-    return fits ? BTF_OK : btf_fail(err, BTF_E_ARG, "%s: the folder it links to has too long a "
-                                    "path", dir);
+    return fits ? BTF_OK : btf__fail(err, BTF_E_ARG, "%s: the folder it links to has too long a "
+                                     "path", dir);
 }
 
 btf_status btf_output_dir_begin(const char *dir, btf_output_dir **out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_output_dir_begin: NULL output pointer");
+        return btf__fail(err, BTF_E_ARG, "btf_output_dir_begin: NULL output pointer");
     *out = NULL;
     if (!dir)
-        return btf_fail(err, BTF_E_ARG, "btf_output_dir_begin: no folder");
+        return btf__fail(err, BTF_E_ARG, "btf_output_dir_begin: no folder");
     btf_output_dir *d = calloc(1, sizeof *d);
     if (!d)
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", dir);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", dir);
     btf_status rc = strip_slashes(dir, d->dir, sizeof d->dir, err);
     memcpy(d->given, d->dir, sizeof d->given);
     if (!rc)
@@ -523,8 +523,8 @@ btf_status btf_output_dir_begin(const char *dir, btf_output_dir **out, btf_error
             return BTF_OK;
         }
         if (errno != EEXIST || t == TMP_TRIES)
-            rc = btf_fail(err, BTF_E_IO, "%s: cannot create a folder beside it: %s", d->dir,
-                          strerror(errno));
+            rc = btf__fail(err, BTF_E_IO, "%s: cannot create a folder beside it: %s", d->dir,
+                           strerror(errno));
     }
     undo_ancestors(d);
     free(d);
@@ -545,7 +545,7 @@ static btf_status move_entries(const btf_output_dir *d, btf_error *err)
     for (int pass = 0; pass < 2 && !rc; pass++) {
         DIR *dh = opendir(d->tmp);
         if (!dh)
-            return btf_fail(err, BTF_E_IO, "%s: %s", d->dir, strerror(errno));
+            return btf__fail(err, BTF_E_IO, "%s: %s", d->dir, strerror(errno));
         struct dirent *e;
         while (!rc && (e = readdir(dh))) {
             if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
@@ -556,11 +556,11 @@ static btf_status move_entries(const btf_output_dir *d, btf_error *err)
             struct stat a, b;
             if (pass == 0 && lstat(from, &a) == 0 && lstat(to, &b) == 0 &&
                 (S_ISDIR(a.st_mode) || S_ISDIR(b.st_mode)))
-                rc = btf_fail(err, BTF_E_IO, "%s: exists and is %s; nothing moved into %s", to,
-                              S_ISDIR(b.st_mode) ? "a folder" : "a file", d->dir);
+                rc = btf__fail(err, BTF_E_IO, "%s: exists and is %s; nothing moved into %s", to,
+                               S_ISDIR(b.st_mode) ? "a folder" : "a file", d->dir);
             else if (pass == 1 && rename(from, to) != 0)
-                rc = btf_fail(err, BTF_E_IO, "%s: cannot move into place: %s", to,
-                              strerror(errno));
+                rc = btf__fail(err, BTF_E_IO, "%s: cannot move into place: %s", to,
+                               strerror(errno));
         }
         closedir(dh);
     }
@@ -597,7 +597,7 @@ static int lock_folder(const char *dir)
 btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err)
 {
     if (!d)
-        return btf_fail(err, BTF_E_ARG, "btf_output_dir_commit: NULL");
+        return btf__fail(err, BTF_E_ARG, "btf_output_dir_commit: NULL");
     /* Wait for another writer of the folder first, interruptibly. */
     int lock = lock_folder(d->dir);
     /* No interrupt between the renames: the set moves as a whole. */
@@ -618,9 +618,9 @@ btf_status btf_output_dir_commit(btf_output_dir *d, btf_error *err)
                 lock = lock_folder(d->dir);
             rc = move_entries(d, err);
         } else
-            rc = btf_fail(err, BTF_E_IO, "%s: cannot move the output into place: %s", d->dir,
-                          strerror(errno));
-        btf_remove_tree(d->tmp);
+            rc = btf__fail(err, BTF_E_IO, "%s: cannot move the output into place: %s", d->dir,
+                           strerror(errno));
+        btf__remove_tree(d->tmp);
     }
     live_drop(d->tmp);
     if (rc)
@@ -667,7 +667,7 @@ void btf_output_dir_abort(btf_output_dir *d)
 {
     if (!d)
         return;
-    btf_remove_tree(d->tmp);
+    btf__remove_tree(d->tmp);
     live_drop(d->tmp);
     undo_ancestors(d);
     free(d);
@@ -682,55 +682,55 @@ static btf_status probe_folder(const char *path, const char *folder, btf_error *
     int fd;
     btf_error e = {0};
     snprintf(name, sizeof name, "%s/.btfcar-probe", folder);
-    if (btf_tmp_create(name, tmp, sizeof tmp, &fd, &e) != 0) {
+    if (btf__tmp_create(name, tmp, sizeof tmp, &fd, &e) != 0) {
         const char *why = strstr(e.msg, ": cannot create: ");
-        return btf_fail(err, BTF_E_IO, "%s: cannot write in folder %s%s", path, folder,
-                        why ? why + 15 : "");
+        return btf__fail(err, BTF_E_IO, "%s: cannot write in folder %s%s", path, folder,
+                         why ? why + 15 : "");
     }
     close(fd);
-    btf_abort_file(tmp);
+    btf__abort_file(tmp);
     return BTF_OK;
 }
 
 btf_status btf_output_check(const char *path, btf_output_kind kind, btf_error *err)
 {
     if (!path || !*path)
-        return btf_fail(err, BTF_E_ARG, "no output path given");
+        return btf__fail(err, BTF_E_ARG, "no output path given");
     if (kind != BTF_OUTPUT_FILE && kind != BTF_OUTPUT_FOLDER)
-        return btf_fail(err, BTF_E_ARG, "%s: unknown output kind %d", path, (int)kind);
+        return btf__fail(err, BTF_E_ARG, "%s: unknown output kind %d", path, (int)kind);
     char p[4096], parent[4096];
     btf_status rc = strip_slashes(path, p, sizeof p, err);
     if (rc)
         return rc;
     size_t len = strlen(path);
     if (kind == BTF_OUTPUT_FILE && path[len - 1] == '/')
-        return btf_fail(err, BTF_E_ARG, "%s: names a folder; expected a file name", path);
+        return btf__fail(err, BTF_E_ARG, "%s: names a folder; expected a file name", path);
     struct stat st;
     int exists = stat(p, &st) == 0;
     if (!exists && errno != ENOENT)
-        return btf_fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
+        return btf__fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
     if (exists && kind == BTF_OUTPUT_FILE && S_ISDIR(st.st_mode))
-        return btf_fail(err, BTF_E_ARG, "%s: is a folder; expected a file name", path);
+        return btf__fail(err, BTF_E_ARG, "%s: is a folder; expected a file name", path);
     if (exists && kind == BTF_OUTPUT_FILE && !S_ISREG(st.st_mode))
-        return btf_fail(err, BTF_E_ARG, "%s: exists and is not a regular file", path);
+        return btf__fail(err, BTF_E_ARG, "%s: exists and is not a regular file", path);
     if (exists && kind == BTF_OUTPUT_FOLDER && !S_ISDIR(st.st_mode))
-        return btf_fail(err, BTF_E_ARG, "%s: exists and is not a folder", path);
+        return btf__fail(err, BTF_E_ARG, "%s: exists and is not a folder", path);
     parent_of(p, parent, sizeof parent);
     /* A folder output may create missing folders above it (removed again
      * on failure); a file goes into an existing folder. */
     while (stat(parent, &st) != 0) {
         if (errno == ENOENT && kind == BTF_OUTPUT_FILE)
-            return btf_fail(err, BTF_E_IO, "%s: folder %s does not exist", path, parent);
+            return btf__fail(err, BTF_E_IO, "%s: folder %s does not exist", path, parent);
         if (errno != ENOENT)
-            return btf_fail(err, BTF_E_IO, "%s: folder %s: %s", path, parent, strerror(errno));
+            return btf__fail(err, BTF_E_IO, "%s: folder %s: %s", path, parent, strerror(errno));
         char up[4096];
         parent_of(parent, up, sizeof up);
         if (!strcmp(up, parent))
-            return btf_fail(err, BTF_E_IO, "%s: folder %s: %s", path, parent, strerror(errno));
+            return btf__fail(err, BTF_E_IO, "%s: folder %s: %s", path, parent, strerror(errno));
         snprintf(parent, sizeof parent, "%s", up);
     }
     if (!S_ISDIR(st.st_mode))
-        return btf_fail(err, BTF_E_ARG, "%s: %s is not a folder", path, parent);
+        return btf__fail(err, BTF_E_ARG, "%s: %s is not a folder", path, parent);
     rc = probe_folder(path, parent, err);
     if (!rc && exists && kind == BTF_OUTPUT_FOLDER)
         rc = probe_folder(path, p, err);
@@ -744,7 +744,7 @@ int btf_remove_stale_temporaries(const char *folder)
         return 0;
     int removed = 0;
     char ours[BTF_TMP_IDENTITY_SIZE];
-    btf_tmp_identity(ours);
+    btf__tmp_identity(ours);
     struct dirent *e;
     while ((e = readdir(dh))) {
         const char *t = strstr(e->d_name, TMP_TAG), *next;
@@ -775,7 +775,7 @@ int btf_remove_stale_temporaries(const char *folder)
         if (kill((pid_t)pid, 0) == 0 || errno != ESRCH)
             continue; /* alive, or not ours to judge */
         if (S_ISDIR(st.st_mode))
-            btf_remove_tree(sub);
+            btf__remove_tree(sub);
         else
             unlink(sub);
         removed++;

@@ -13,11 +13,11 @@ btf_status btf_image_alloc(btf_image *img, int width, int height, int channels,
     img->data = NULL;
     img->width = img->height = img->channels = 0;
     if (width < 1 || height < 1 || width > BTF_MAX_SIDE || height > BTF_MAX_SIDE)
-        return btf_fail(err, BTF_E_ARG, "image size %dx%d out of range 1..%d", width,
-                        height, BTF_MAX_SIDE);
+        return btf__fail(err, BTF_E_ARG, "image size %dx%d out of range 1..%d", width,
+                         height, BTF_MAX_SIDE);
     if (channels != 1 && channels != 3)
-        return btf_fail(err, BTF_E_ARG, "image channels %d: expected 1 or 3", channels);
-    float *d = btf_calloc((size_t)width * (size_t)height * (size_t)channels, sizeof(float), err);
+        return btf__fail(err, BTF_E_ARG, "image channels %d: expected 1 or 3", channels);
+    float *d = btf__calloc((size_t)width * (size_t)height * (size_t)channels, sizeof(float), err);
     if (!d)
         return BTF_E_NOMEM;
     img->data = d;
@@ -27,17 +27,17 @@ btf_status btf_image_alloc(btf_image *img, int width, int height, int channels,
     return BTF_OK;
 }
 
-int btf_check_pixels(const char *name, int width, int height, uint64_t max_pixels,
-                     btf_error *err)
+int btf__check_pixels(const char *name, int width, int height, uint64_t max_pixels,
+                      btf_error *err)
 {
     uint64_t cap = max_pixels ? max_pixels : BTF_DEFAULT_MAX_PIXELS;
     uint64_t n = (uint64_t)(width > 0 ? width : 0) * (uint64_t)(height > 0 ? height : 0);
     if (n <= cap)
         return BTF_OK;
-    return btf_fail(err, BTF_E_UNSUPPORTED,
-                    "%s: %dx%d image (%llu pixels) exceeds the cap of %llu decoded pixels "
-                    "(--max-pixels raises it)",
-                    name, width, height, (unsigned long long)n, (unsigned long long)cap);
+    return btf__fail(err, BTF_E_UNSUPPORTED,
+                     "%s: %dx%d image (%llu pixels) exceeds the cap of %llu decoded pixels "
+                     "(--max-pixels raises it)",
+                     name, width, height, (unsigned long long)n, (unsigned long long)cap);
 }
 
 void btf_image_free(btf_image *img)
@@ -49,7 +49,7 @@ void btf_image_free(btf_image *img)
     img->width = img->height = img->channels = 0;
 }
 
-float btf_srgb_to_linear(float v)
+float btf__srgb_to_linear(float v)
 {
     if (!(v > 0.0f))
         return 0.0f;
@@ -60,7 +60,7 @@ float btf_srgb_to_linear(float v)
     return powf((v + 0.055f) / 1.055f, 2.4f);
 }
 
-float btf_linear_to_srgb(float v)
+float btf__linear_to_srgb(float v)
 {
     if (!(v > 0.0f))
         return 0.0f;
@@ -71,7 +71,7 @@ float btf_linear_to_srgb(float v)
     return 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
 }
 
-void btf_image_mean_rgb(const btf_image *img, float *rgb)
+void btf__image_mean_rgb(const btf_image *img, float *rgb)
 {
     double s[3] = {0.0, 0.0, 0.0};
     size_t n = (size_t)img->width * img->height;

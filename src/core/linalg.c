@@ -18,8 +18,8 @@
 
 /* ------------------------------------------------------ cyclic Jacobi */
 
-void btf_linalg_jacobi(double *a, int n, const btf_linalg_jacobi_rule *rule, double *val,
-                       double *vec)
+void btf__linalg_jacobi(double *a, int n, const btf_linalg_jacobi_rule *rule, double *val,
+                        double *vec)
 {
     size_t un = (size_t)n;
     for (size_t i = 0; i < un; i++)
@@ -69,8 +69,8 @@ void btf_linalg_jacobi(double *a, int n, const btf_linalg_jacobi_rule *rule, dou
         val[i] = a[i * un + i];
 }
 
-int btf_linalg_sym_eigen(double *a, int n, const btf_linalg_jacobi_rule *rule, double *val,
-                         double *vec)
+int btf__linalg_sym_eigen(double *a, int n, const btf_linalg_jacobi_rule *rule, double *val,
+                          double *vec)
 {
     size_t un = (size_t)n;
     /* Allocated first, so that running out of memory leaves a untouched. */
@@ -81,7 +81,7 @@ int btf_linalg_sym_eigen(double *a, int n, const btf_linalg_jacobi_rule *rule, d
         free(tmp);
         return -1;
     }
-    btf_linalg_jacobi(a, n, rule, val, vec);
+    btf__linalg_jacobi(a, n, rule, val, vec);
     /* An insertion sort, descending: equal values keep their index order. */
     for (int i = 0; i < n; i++) {
         int j = i;
@@ -109,7 +109,7 @@ int btf_linalg_sym_eigen(double *a, int n, const btf_linalg_jacobi_rule *rule, d
  * by pivot j. Each entry needs only entries of earlier rows and earlier
  * columns, so the column-by-column order gives the same operations on the
  * same values, the same bits. */
-int btf_linalg_cholesky(const double *a, int lda, int upper, int n, double *l)
+int btf__linalg_cholesky(const double *a, int lda, int upper, int n, double *l)
 {
     size_t un = (size_t)n, ua = (size_t)lda;
     for (size_t i = 0; i < un; i++)
@@ -128,7 +128,7 @@ int btf_linalg_cholesky(const double *a, int lda, int upper, int n, double *l)
     return 0;
 }
 
-void btf_linalg_cholesky_solve(const double *l, int n, double *x)
+void btf__linalg_cholesky_solve(const double *l, int n, double *x)
 {
     size_t un = (size_t)n;
     for (size_t i = 0; i < un; i++) { /* l y = b */
@@ -176,7 +176,7 @@ static void sym3_eigenvalues(const btf_sym3 *m, double ev[3])
     ev[1] = 3.0 * mean - ev[0] - ev[2];
 }
 
-double btf_sym3_condition(const btf_sym3 *m)
+double btf__sym3_condition(const btf_sym3 *m)
 {
     double ev[3];
     sym3_eigenvalues(m, ev);
@@ -188,7 +188,7 @@ double btf_sym3_condition(const btf_sym3 *m)
 /* The cross product of two rows of A - lambda_min I is orthogonal to both,
  * hence an eigenvector of lambda_min; the longest of the three such
  * products is the best conditioned. */
-void btf_sym3_weakest_axis(const btf_sym3 *m, double axis[3])
+void btf__sym3_weakest_axis(const btf_sym3 *m, double axis[3])
 {
     double ev[3];
     sym3_eigenvalues(m, ev);
@@ -211,8 +211,8 @@ void btf_sym3_weakest_axis(const btf_sym3 *m, double axis[3])
 }
 
 /* By the adjugate: A^-1 = adj(A) / det(A). */
-int btf_sym3_solve(const btf_sym3 *m, const double rhs[3], double max_condition, double x[3],
-                   btf_sym3 *inverse)
+int btf__sym3_solve(const btf_sym3 *m, const double rhs[3], double max_condition, double x[3],
+                    btf_sym3 *inverse)
 {
     double cxx = m->yy * m->zz - m->yz * m->yz;
     double cxy = m->xz * m->yz - m->xy * m->zz;
@@ -228,7 +228,7 @@ int btf_sym3_solve(const btf_sym3 *m, const double rhs[3], double max_condition,
      * the eigenvalues need not be computed (most pixels). */
     double trace = m->xx + m->yy + m->zz;
     if (!(trace * trace * trace <= max_condition * det) &&
-        !(btf_sym3_condition(m) <= max_condition))
+        !(btf__sym3_condition(m) <= max_condition))
         return 0;
     x[0] = (cxx * rhs[0] + cxy * rhs[1] + cxz * rhs[2]) / det;
     x[1] = (cxy * rhs[0] + cyy * rhs[1] + cyz * rhs[2]) / det;

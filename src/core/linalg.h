@@ -15,7 +15,7 @@
 
 /* ------------------------------------------------------ cyclic Jacobi */
 
-/* When the sweeps of btf_linalg_jacobi stop. Each sweep first measures the
+/* When the sweeps of btf__linalg_jacobi stop. Each sweep first measures the
  * off-diagonal part `off` against the diagonal `diag` (with abs_sums, the
  * sums of |a_ij| over i < j and of |a_ii|; otherwise the sums of their
  * squares) and stops when off <= tiny or off <= relative * diag, or after
@@ -35,13 +35,13 @@ typedef struct btf_linalg_jacobi_rule {
  * component i of vector k), by cyclic Jacobi rotations (Golub & Van Loan,
  * section 8.5): slow for a large n but accurate for the small eigenvalues
  * too, and deterministic. */
-void btf_linalg_jacobi(double *a, int n, const btf_linalg_jacobi_rule *rule, double *val,
-                       double *vec);
+void btf__linalg_jacobi(double *a, int n, const btf_linalg_jacobi_rule *rule, double *val,
+                        double *vec);
 
-/* btf_linalg_jacobi with the eigenpairs sorted by decreasing eigenvalue
+/* btf__linalg_jacobi with the eigenpairs sorted by decreasing eigenvalue
  * (equal values keep their index order). -1 when out of memory. */
-int btf_linalg_sym_eigen(double *a, int n, const btf_linalg_jacobi_rule *rule, double *val,
-                         double *vec);
+int btf__linalg_sym_eigen(double *a, int n, const btf_linalg_jacobi_rule *rule, double *val,
+                          double *vec);
 
 /* ------------------------------------------------------------ Cholesky */
 
@@ -52,11 +52,11 @@ int btf_linalg_sym_eigen(double *a, int n, const btf_linalg_jacobi_rule *rule, d
  * 0, or -1 when a pivot is not positive (nor a NaN): not positive
  * definite. A pivot of +infinity is not refused; a caller that must refuse
  * it checks l's diagonal. */
-int btf_linalg_cholesky(const double *a, int lda, int upper, int n, double *l);
+int btf__linalg_cholesky(const double *a, int lda, int upper, int n, double *l);
 
 /* Solves (l l^T) x = b in place: x holds b on entry, the solution on
- * return; l from btf_linalg_cholesky. */
-void btf_linalg_cholesky_solve(const double *l, int n, double *x);
+ * return; l from btf__linalg_cholesky. */
+void btf__linalg_cholesky_solve(const double *l, int n, double *x);
 
 /* ---------------------------------------------------- symmetric 3 x 3 */
 
@@ -87,14 +87,14 @@ static inline double btf_sym3_quadratic(const btf_sym3 *m, const double v[3])
 }
 
 /* Condition number lambda_max / lambda_min; infinity when singular. */
-double btf_sym3_condition(const btf_sym3 *m);
+double btf__sym3_condition(const btf_sym3 *m);
 /* The unit eigenvector of the smallest eigenvalue: the direction a set of
  * lights resolves worst. */
-void btf_sym3_weakest_axis(const btf_sym3 *m, double axis[3]);
+void btf__sym3_weakest_axis(const btf_sym3 *m, double axis[3]);
 /* Solves m x = rhs when m is positive definite with a condition number of
  * at most max_condition; 0 when rejected. inverse (may be NULL) receives
  * m^-1. */
-int btf_sym3_solve(const btf_sym3 *m, const double rhs[3], double max_condition, double x[3],
-                   btf_sym3 *inverse);
+int btf__sym3_solve(const btf_sym3 *m, const double rhs[3], double max_condition, double x[3],
+                    btf_sym3 *inverse);
 
 #endif

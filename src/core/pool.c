@@ -82,9 +82,9 @@ static void *work(void *arg)
     return NULL;
 }
 
-int btf_pool_workers(int threads, int jobs)
+int btf__pool_workers(int threads, int jobs)
 {
-    int n = threads > 0 ? threads : btf_cpu_count();
+    int n = threads > 0 ? threads : btf__cpu_count();
     if (n > BTF_POOL_MAX_THREADS)
         n = BTF_POOL_MAX_THREADS;
     if (n > jobs)
@@ -92,20 +92,20 @@ int btf_pool_workers(int threads, int jobs)
     return n < 1 ? 1 : n;
 }
 
-btf_status btf_pool_run(int jobs, int threads, btf_pool_job_fn job, void *user,
-                        const btf_pool_progress *progress, btf_error *err)
+btf_status btf__pool_run(int jobs, int threads, btf_pool_job_fn job, void *user,
+                         const btf_pool_progress *progress, btf_error *err)
 {
     if (jobs <= 0)
         return BTF_OK;
     if (!job)
-        return btf_fail(err, BTF_E_ARG, "thread pool: no job function given");
+        return btf__fail(err, BTF_E_ARG, "thread pool: no job function given");
     pool_run r = {.jobs = jobs, .job = job, .user = user, .progress = progress,
                   .status = BTF_OK};
     atomic_init(&r.next, 0);
     atomic_init(&r.done, 0);
     atomic_init(&r.failed, 0);
     pthread_mutex_init(&r.lock, NULL);
-    int workers = btf_pool_workers(threads, jobs);
+    int workers = btf__pool_workers(threads, jobs);
     pthread_t tid[BTF_POOL_MAX_THREADS];
     pool_worker arg[BTF_POOL_MAX_THREADS];
     int started = 0;
@@ -167,10 +167,10 @@ static void cpu_relax(void)
 static void relay_spin(btf_relay *r, int seen)
 {
     pthread_mutex_unlock(&r->lock);
-    double t0 = btf_now();
+    double t0 = btf__now();
     for (int i = 0; atomic_load(&r->posted) == seen; i++) {
         cpu_relax();
-        if ((i & 63) == 63 && btf_now() - t0 > RELAY_SPIN_S)
+        if ((i & 63) == 63 && btf__now() - t0 > RELAY_SPIN_S)
             break;
     }
     pthread_mutex_lock(&r->lock);
@@ -240,7 +240,7 @@ static void *relay_main(void *arg)
     return NULL;
 }
 
-void btf_relay_background(btf_relay *r, btf_background *bg)
+void btf__relay_background(btf_relay *r, btf_background *bg)
 {
     pthread_mutex_lock(&r->lock);
     r->bg = bg;
@@ -250,9 +250,9 @@ void btf_relay_background(btf_relay *r, btf_background *bg)
     pthread_mutex_unlock(&r->lock);
 }
 
-btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err)
+btf_relay *btf__relay_start(btf_pool_job_fn job, void *user, btf_error *err)
 {
-    btf_relay *r = btf_calloc(1, sizeof *r, err);
+    btf_relay *r = btf__calloc(1, sizeof *r, err);
     if (!r)
         return NULL;
     r->job = job;
@@ -261,11 +261,11 @@ btf_relay *btf_relay_start(btf_pool_job_fn job, void *user, btf_error *err)
     pthread_mutex_init(&r->lock, NULL);
     pthread_cond_init(&r->cond, NULL);
     /* one CPU: a second thread would only take turns with the caller */
-    r->threaded = btf_cpu_count() > 1 && pthread_create(&r->tid, NULL, relay_main, r) == 0;
+    r->threaded = btf__cpu_count() > 1 && pthread_create(&r->tid, NULL, relay_main, r) == 0;
     return r;
 }
 
-void btf_relay_post(btf_relay *r, int first, int count)
+void btf__relay_post(btf_relay *r, int first, int count)
 {
     pthread_mutex_lock(&r->lock);
     r->first = first;
@@ -278,7 +278,7 @@ void btf_relay_post(btf_relay *r, int first, int count)
     pthread_mutex_unlock(&r->lock);
 }
 
-btf_status btf_relay_wait(btf_relay *r, btf_error *err)
+btf_status btf__relay_wait(btf_relay *r, btf_error *err)
 {
     pthread_mutex_lock(&r->lock);
     relay_run(r, 0); /* what the helper has not taken yet, the caller does */
@@ -291,7 +291,7 @@ btf_status btf_relay_wait(btf_relay *r, btf_error *err)
     return rc;
 }
 
-void btf_relay_stop(btf_relay *r)
+void btf__relay_stop(btf_relay *r)
 {
     if (!r)
         return;

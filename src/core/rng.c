@@ -6,12 +6,12 @@
  */
 #include "core/core.h"
 
-void btf_rng_seed(btf_rng *r, uint64_t seed)
+void btf__rng_seed(btf_rng *r, uint64_t seed)
 {
     r->state = seed;
 }
 
-uint64_t btf_rng_next(btf_rng *r)
+uint64_t btf__rng_next(btf_rng *r)
 {
     uint64_t z = (r->state += 0x9E3779B97F4A7C15ull);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
@@ -19,7 +19,7 @@ uint64_t btf_rng_next(btf_rng *r)
     return z ^ (z >> 31);
 }
 
-double btf_rng_uniform(btf_rng *r)
+double btf__rng_uniform(btf_rng *r)
 {
-    return (double)(btf_rng_next(r) >> 11) * 0x1.0p-53;
+    return (double)(btf__rng_next(r) >> 11) * 0x1.0p-53;
 }

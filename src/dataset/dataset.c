@@ -38,7 +38,7 @@ struct btf_dataset {
 static btf_status collect_dirs(const btf_dataset_entries *l, int lights, btf_dirset *set,
                                btf_error *err)
 {
-    btf_dir *d = btf_alloc((size_t)l->count, sizeof *d, err);
+    btf_dir *d = btf__alloc((size_t)l->count, sizeof *d, err);
     if (!d)
         return BTF_E_NOMEM;
     for (int i = 0; i < l->count; i++)
@@ -76,7 +76,7 @@ static void expected_name(const btf_dataset *ds, int vi, int li, char *buf, size
 static btf_status build_table(btf_dataset *ds, const btf_dataset_entries *l, btf_error *err)
 {
     int nv = ds->views.count, nl = ds->lights.count;
-    ds->paths = btf_calloc((size_t)nv * nl, sizeof(char *), err);
+    ds->paths = btf__calloc((size_t)nv * nl, sizeof(char *), err);
     if (!ds->paths)
         return BTF_E_NOMEM;
     for (int i = 0; i < l->count; i++) {
@@ -84,17 +84,17 @@ static btf_status build_table(btf_dataset *ds, const btf_dataset_entries *l, btf
         int vi = btf_dirset_find(&ds->views, e->view, BTF_DIR_NAME_TOLERANCE);
         int li = btf_dirset_find(&ds->lights, e->light, BTF_DIR_NAME_TOLERANCE);
         if (vi < 0 || li < 0) /* the sets were made from these very entries */
-            return btf_fail(err, BTF_E_DATA, "%s: direction not in the dataset's set", e->path);
+            return btf__fail(err, BTF_E_DATA, "%s: direction not in the dataset's set", e->path);
         char **slot = &ds->paths[(size_t)vi * nl + li];
         if (*slot) {
             char pair[160];
             describe_pair(pair, sizeof pair, e->light, e->view);
-            return btf_fail(err, BTF_E_DATA, "%s: second file for %s (the first is %s)", e->path,
-                            pair, *slot);
+            return btf__fail(err, BTF_E_DATA, "%s: second file for %s (the first is %s)", e->path,
+                             pair, *slot);
         }
         *slot = e->path;
         if (e->near.on) {
-            if (!ds->near && !(ds->near = btf_calloc((size_t)nv * nl, sizeof *ds->near, err)))
+            if (!ds->near && !(ds->near = btf__calloc((size_t)nv * nl, sizeof *ds->near, err)))
                 return BTF_E_NOMEM;
             ds->near[(size_t)vi * nl + li] = &e->near;
             ds->info.near_field = 1;
@@ -114,9 +114,9 @@ static btf_status build_table(btf_dataset *ds, const btf_dataset_entries *l, btf
                 char name[BTF_DATASET_PATH_MAX], pair[160];
                 expected_name(ds, vi, li, name, sizeof name);
                 describe_pair(pair, sizeof pair, ds->lights.dirs[li], ds->views.dirs[vi]);
-                return btf_fail(err, BTF_E_DATA, "%s: missing image for %s (%d of %d pairs present; "
-                                "a manifest may list any set of pairs)",
-                                name, pair, l->count, nv * nl);
+                return btf__fail(err, BTF_E_DATA, "%s: missing image for %s (%d of %d pairs present; "
+                                 "a manifest may list any set of pairs)",
+                                 name, pair, l->count, nv * nl);
             }
     return BTF_OK;
 }
@@ -135,21 +135,21 @@ static btf_status probe_files(btf_dataset *ds, const btf_dataset_opts *o, btf_er
         if (!first_path || !o->skip_verify) {
             btf_status rc = btf_image_probe(p, &h, err);
             if (!rc)
-                rc = btf_check_pixels(p, h.width, h.height, o->max_pixels, err);
+                rc = btf__check_pixels(p, h.width, h.height, o->max_pixels, err);
             if (rc)
                 return rc;
             if (!first_path) {
                 first = h;
                 first_path = p;
             } else if (h.width != first.width || h.height != first.height) {
-                return btf_fail(err, BTF_E_DATA, "%s: size %dx%d differs from %dx%d of %s", p,
-                                h.width, h.height, first.width, first.height, first_path);
+                return btf__fail(err, BTF_E_DATA, "%s: size %dx%d differs from %dx%d of %s", p,
+                                 h.width, h.height, first.width, first.height, first_path);
             }
             ds->info.bytes_on_disk += h.file_bytes;
         } else {
             struct stat st;
             if (stat(p, &st) != 0)
-                return btf_fail(err, BTF_E_IO, "%s: %s", p, strerror(errno));
+                return btf__fail(err, BTF_E_IO, "%s: %s", p, strerror(errno));
             ds->info.bytes_on_disk += (uint64_t)st.st_size;
         }
         if (o->progress && (i % 256 == 0 || i == n - 1))
@@ -166,7 +166,7 @@ void btf_dataset_close(btf_dataset *ds)
 {
     if (!ds)
         return;
-    btf_dataset_entries_free(&ds->files);
+    btf__dataset_entries_free(&ds->files);
     btf_dirset_free(&ds->views);
     btf_dirset_free(&ds->lights);
     free(ds->paths);
@@ -180,12 +180,12 @@ static btf_status open_ubo(btf_dataset *ds, const btf_dataset_opts *o, btf_error
 {
     btf_status rc = ubo_open(ds->root, &ds->ubo, err);
     if (rc == BTF_OK)
-        rc = btf_dirset_copy(&ds->views, &ds->ubo->views, err);
+        rc = btf__dirset_copy(&ds->views, &ds->ubo->views, err);
     if (rc == BTF_OK)
-        rc = btf_dirset_copy(&ds->lights, &ds->ubo->lights, err);
+        rc = btf__dirset_copy(&ds->lights, &ds->ubo->lights, err);
     if (rc == BTF_OK)
-        rc = btf_check_pixels(ds->root, (int)ds->ubo->f.width, (int)ds->ubo->f.height,
-                              o->max_pixels, err);
+        rc = btf__check_pixels(ds->root, (int)ds->ubo->f.width, (int)ds->ubo->f.height,
+                               o->max_pixels, err);
     if (rc)
         return rc;
     ds->info.layout = BTF_LAYOUT_UBO2014;
@@ -220,9 +220,9 @@ btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_
 {
     *out = NULL;
     btf_dataset_opts d = btf_dataset_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_dataset_open", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_dataset_open", err))
         return BTF_E_ARG;
-    btf_dataset *ds = btf_calloc(1, sizeof *ds, err);
+    btf_dataset *ds = btf__calloc(1, sizeof *ds, err);
     if (!ds)
         return BTF_E_NOMEM;
     ds->max_pixels = o.max_pixels;
@@ -239,7 +239,7 @@ btf_status btf_dataset_open(const char *path, const btf_dataset_opts *opts, btf_
         *out = ds;
         return BTF_OK;
     }
-    btf_status rc = btf_dataset_list_entries(ds->root, &ds->files, err);
+    btf_status rc = btf__dataset_list_entries(ds->root, &ds->files, err);
     if (rc == BTF_OK)
         rc = collect_dirs(&ds->files, 0, &ds->views, err);
     if (rc == BTF_OK)
@@ -268,10 +268,10 @@ const btf_dataset_info *btf_dataset_get_info(const btf_dataset *ds)
     return &ds->info;
 }
 
-btf_status btf_dataset_present(const btf_dataset *ds, unsigned char **present, btf_error *err)
+btf_status btf__dataset_present(const btf_dataset *ds, unsigned char **present, btf_error *err)
 {
     int nv = ds->info.n_views, nl = ds->info.n_lights;
-    *present = btf_alloc((size_t)(nv * nl > 0 ? nv * nl : 1), 1, err);
+    *present = btf__alloc((size_t)(nv * nl > 0 ? nv * nl : 1), 1, err);
     if (!*present)
         return BTF_E_NOMEM;
     for (int v = 0; v < nv; v++)
@@ -299,12 +299,12 @@ btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_imag
 {
     const char *p = btf_dataset_path(ds, view, light);
     if (!p && view >= 0 && light >= 0 && view < ds->info.n_views && light < ds->info.n_lights)
-        return btf_fail(err, BTF_E_ARG, "%s: no image of (view %d, light %d): the set holds %d "
-                        "of its %d x %d pairs", ds->root, view, light, ds->info.n_pairs,
-                        ds->info.n_views, ds->info.n_lights);
+        return btf__fail(err, BTF_E_ARG, "%s: no image of (view %d, light %d): the set holds %d "
+                         "of its %d x %d pairs", ds->root, view, light, ds->info.n_pairs,
+                         ds->info.n_views, ds->info.n_lights);
     if (!p)
-        return btf_fail(err, BTF_E_ARG, "%s: no (view %d, light %d) in a %d x %d dataset", ds->root,
-                        view, light, ds->info.n_views, ds->info.n_lights);
+        return btf__fail(err, BTF_E_ARG, "%s: no (view %d, light %d) in a %d x %d dataset", ds->root,
+                         view, light, ds->info.n_views, ds->info.n_lights);
     if (ds->ubo) {
         btf_status rc = btf_image_alloc(out, ds->info.width, ds->info.height, 3, err);
         if (rc == BTF_OK)
@@ -317,17 +317,17 @@ btf_status btf_dataset_read(const btf_dataset *ds, int view, int light, btf_imag
     btf_read_opts ro = {.channels = 3, .max_pixels = ds->max_pixels};
     btf_status rc = btf_image_read(p, &ro, out, err);
     if (rc == BTF_OK && (out->width != ds->info.width || out->height != ds->info.height)) {
-        rc = btf_fail(err, BTF_E_DATA, "%s: size %dx%d differs from the dataset's %dx%d", p,
-                      out->width, out->height, ds->info.width, ds->info.height);
+        rc = btf__fail(err, BTF_E_DATA, "%s: size %dx%d differs from the dataset's %dx%d", p,
+                       out->width, out->height, ds->info.width, ds->info.height);
         btf_image_free(out);
     }
     if (rc == BTF_OK && ds->near && ds->near[(size_t)view * ds->info.n_lights + light])
-        btf_near_field_correct(ds->near[(size_t)view * ds->info.n_lights + light], out);
+        btf__near_field_correct(ds->near[(size_t)view * ds->info.n_lights + light], out);
     return rc;
 }
 
-btf_status btf_dataset_read_into(const btf_dataset *ds, int view, int light, btf_image *img,
-                                 btf_error *err)
+btf_status btf__dataset_read_into(const btf_dataset *ds, int view, int light, btf_image *img,
+                                  btf_error *err)
 {
     int reuse = ds->ubo && img->data && img->width == ds->info.width &&
                 img->height == ds->info.height && img->channels == 3;
@@ -371,8 +371,8 @@ int btf_dataset_iter_next(btf_dataset_iter *it, btf_error *err)
     s->light_dir = ds->lights.dirs[s->light];
     s->path = btf_dataset_path(ds, s->view, s->light);
     /* The sample's buffer is the iterator's: a .btf file's next image is
-     * decoded into it (btf_dataset_read_into). */
-    int rc = btf_dataset_read_into(ds, s->view, s->light, &s->image, err);
+     * decoded into it (btf__dataset_read_into). */
+    int rc = btf__dataset_read_into(ds, s->view, s->light, &s->image, err);
     return rc ? rc : 1;
 }
 

@@ -20,12 +20,12 @@
  * loops keep one such buffer per thread instead of allocating one per
  * image: on a 151 x 151 x 400^2 .btf file the fresh buffers' page faults
  * were 40 % of an analysis (docs/datasets.md, "UBO2014 .btf files"). */
-btf_status btf_dataset_read_into(const btf_dataset *ds, int view, int light, btf_image *img,
-                                 btf_error *err);
+btf_status btf__dataset_read_into(const btf_dataset *ds, int view, int light, btf_image *img,
+                                  btf_error *err);
 
 /* The measured pairs of a dataset as *present: [view * n_lights + light]
  * 1 when the set holds the pair (dataset/dataset.c); freed by the caller. */
-btf_status btf_dataset_present(const btf_dataset *ds, unsigned char **present, btf_error *err);
+btf_status btf__dataset_present(const btf_dataset *ds, unsigned char **present, btf_error *err);
 
 /* Dataset layouts (dataset/dataset_scan.c): the image files of a dataset
  * folder (UBO2003 or UTIA names) or manifest as entries, from the names
@@ -57,42 +57,42 @@ typedef struct btf_dataset_entries {
     char ext[8];     /* the first file's extension, for messages */
 } btf_dataset_entries;
 /* The entry list (dataset/dataset_entries.c), shared by every layout's
- * reader: btf_dataset_entries_add appends a copy of path with its
- * directions (BTF_E_NOMEM when out of memory); btf_dataset_entries_free
+ * reader: btf__dataset_entries_add appends a copy of path with its
+ * directions (BTF_E_NOMEM when out of memory); btf__dataset_entries_free
  * frees the entries and zeroes l. */
-btf_status btf_dataset_entries_add(btf_dataset_entries *l, const char *path, btf_dir light,
-                                   btf_dir view, btf_error *err);
-void btf_dataset_entries_free(btf_dataset_entries *l);
+btf_status btf__dataset_entries_add(btf_dataset_entries *l, const char *path, btf_dir light,
+                                    btf_dir view, btf_error *err);
+void btf__dataset_entries_free(btf_dataset_entries *l);
 /* The first entry whose path an earlier one has (*again) and that earlier
  * one (*first); both -1 when every path is listed once. */
-btf_status btf_dataset_entries_repeat(const btf_dataset_entries *l, int *first, int *again,
-                                      btf_error *err);
+btf_status btf__dataset_entries_repeat(const btf_dataset_entries *l, int *first, int *again,
+                                       btf_error *err);
 
 /* A near-field image's per-pixel correction (dataset/near_field.c): every
  * pixel multiplied by the light's irradiance at the image centre over its own,
  * (|L - P| / |L|)^3 for a point light L over the surface point P (inverse
  * square and cosine), so that the image is lit as its centre is. */
-void btf_near_field_correct(const btf_near_field *nf, btf_image *img);
+void btf__near_field_correct(const btf_near_field *nf, btf_image *img);
 /* The largest angle (degrees) between the centre's view or light direction
  * and a corner's. */
-double btf_near_field_spread(const btf_near_field *nf);
+double btf__near_field_spread(const btf_near_field *nf);
 /* Directions from the image centre to a position (x, y, z > 0). */
-btf_dir btf_near_field_dir(const double *pos);
+btf_dir btf__near_field_dir(const double *pos);
 
 /* Every entry of the dataset at path: a folder is scanned, a file is read as
  * a manifest. A folder without any image of a known layout is BTF_E_FORMAT.
- * Free l (also on failure) with btf_dataset_entries_free. */
-btf_status btf_dataset_list_entries(const char *path, btf_dataset_entries *l, btf_error *err);
+ * Free l (also on failure) with btf__dataset_entries_free. */
+btf_status btf__dataset_list_entries(const char *path, btf_dataset_entries *l, btf_error *err);
 /* RTI light files (dataset/rti_lp.c, layout BTF_LAYOUT_RTI): "N", then N
  * lines "PATH X Y Z" (the unit vector towards the light; PATH relative to base,
- * or absolute) as entries of view (0, 0). btf_rti_lp_name: 1 when path ends
- * in ".lp". btf_rti_lp_parse reads n bytes of text named name (messages
+ * or absolute) as entries of view (0, 0). btf__rti_lp_name: 1 when path ends
+ * in ".lp". btf__rti_lp_parse reads n bytes of text named name (messages
  * "NAME:LINE: ..."), checking that every image is a regular file when
- * check_files; btf_rti_lp_read reads the file at path, images beside it.
- * Free l (also on failure) with btf_dataset_entries_free. */
-int btf_rti_lp_name(const char *path);
-btf_status btf_rti_lp_parse(const char *text, size_t n, const char *name, const char *base,
-                            int check_files, btf_dataset_entries *l, btf_error *err);
-btf_status btf_rti_lp_read(const char *path, btf_dataset_entries *l, btf_error *err);
+ * check_files; btf__rti_lp_read reads the file at path, images beside it.
+ * Free l (also on failure) with btf__dataset_entries_free. */
+int btf__rti_lp_name(const char *path);
+btf_status btf__rti_lp_parse(const char *text, size_t n, const char *name, const char *base,
+                             int check_files, btf_dataset_entries *l, btf_error *err);
+btf_status btf__rti_lp_read(const char *path, btf_dataset_entries *l, btf_error *err);
 
 #endif

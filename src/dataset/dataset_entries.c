@@ -12,25 +12,25 @@
 #include <stdlib.h>
 #include <string.h>
 
-btf_status btf_dataset_entries_add(btf_dataset_entries *l, const char *path, btf_dir light,
-                                   btf_dir view, btf_error *err)
+btf_status btf__dataset_entries_add(btf_dataset_entries *l, const char *path, btf_dir light,
+                                    btf_dir view, btf_error *err)
 {
     if (l->count == l->cap) {
         int ncap = l->cap ? l->cap * 2 : 256;
         btf_dataset_entry *n = realloc(l->items, (size_t)ncap * sizeof *n);
         if (!n)
-            return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
+            return btf__fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
         l->items = n;
         l->cap = ncap;
     }
     char *p = strdup(path);
     if (!p)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
+        return btf__fail(err, BTF_E_NOMEM, "out of memory listing the dataset");
     l->items[l->count++] = (btf_dataset_entry){p, light, view, {0}};
     return BTF_OK;
 }
 
-void btf_dataset_entries_free(btf_dataset_entries *l)
+void btf__dataset_entries_free(btf_dataset_entries *l)
 {
     for (int i = 0; i < l->count; i++)
         free(l->items[i].path);
@@ -38,15 +38,15 @@ void btf_dataset_entries_free(btf_dataset_entries *l)
     memset(l, 0, sizeof *l);
 }
 
-btf_status btf_dataset_entries_repeat(const btf_dataset_entries *l, int *first, int *again,
-                                      btf_error *err)
+btf_status btf__dataset_entries_repeat(const btf_dataset_entries *l, int *first, int *again,
+                                       btf_error *err)
 {
-    const char **names = btf_alloc((size_t)(l->count > 0 ? l->count : 1), sizeof *names, err);
+    const char **names = btf__alloc((size_t)(l->count > 0 ? l->count : 1), sizeof *names, err);
     if (!names)
         return BTF_E_NOMEM;
     for (int i = 0; i < l->count; i++)
         names[i] = l->items[i].path;
-    btf_status rc = btf_first_repeat(names, l->count, first, again, err);
+    btf_status rc = btf__first_repeat(names, l->count, first, again, err);
     free(names);
     return rc;
 }

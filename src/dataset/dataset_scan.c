@@ -90,12 +90,12 @@ static btf_status add_file(btf_dataset_entries *l, const char *dir, const char *
         return BTF_OK; /* not an image of the dataset (a README, truth/, ...) */
     }
     char path[BTF_DATASET_PATH_MAX];
-    btf_status rc = btf_path_join(path, sizeof path, dir, name, err);
+    btf_status rc = btf__path_join(path, sizeof path, dir, name, err);
     if (rc)
         return rc;
     if (l->layout != BTF_LAYOUT_UNKNOWN && l->layout != kind)
-        return btf_fail(err, BTF_E_DATA, "%s: %s file in a %s dataset (mixed layouts)", path,
-                        btf_layout_name(kind), btf_layout_name(l->layout));
+        return btf__fail(err, BTF_E_DATA, "%s: %s file in a %s dataset (mixed layouts)", path,
+                         btf_layout_name(kind), btf_layout_name(l->layout));
     if (l->count == 0) {
         l->flat = folder_view == NULL;
         const char *dot = strrchr(name, '.');
@@ -103,11 +103,11 @@ static btf_status add_file(btf_dataset_entries *l, const char *dir, const char *
     }
     l->layout = kind;
     if (n[0] > 90 || n[2] > 90 || n[1] >= 360 || n[3] >= 360)
-        return btf_fail(err, BTF_E_DATA, "%s: direction out of range in the name", path);
+        return btf__fail(err, BTF_E_DATA, "%s: direction out of range in the name", path);
     if (folder_view && (folder_view[0] != n[2] || folder_view[1] != n[3]))
-        return btf_fail(err, BTF_E_DATA, "%s: view tv%03d pv%03d differs from its folder's", path,
-                        n[2], n[3]);
-    return btf_dataset_entries_add(l, path, dir_of(n[0], n[1]), dir_of(n[2], n[3]), err);
+        return btf__fail(err, BTF_E_DATA, "%s: view tv%03d pv%03d differs from its folder's", path,
+                         n[2], n[3]);
+    return btf__dataset_entries_add(l, path, dir_of(n[0], n[1]), dir_of(n[2], n[3]), err);
 }
 
 static btf_status scan_folder(btf_dataset_entries *l, const char *dir, const int *folder_view,
@@ -115,7 +115,7 @@ static btf_status scan_folder(btf_dataset_entries *l, const char *dir, const int
 {
     DIR *d = opendir(dir);
     if (!d)
-        return btf_fail(err, BTF_E_IO, "%s: cannot open folder: %s", dir, strerror(errno));
+        return btf__fail(err, BTF_E_IO, "%s: cannot open folder: %s", dir, strerror(errno));
     btf_status rc = BTF_OK;
     struct dirent *e;
     while (rc == BTF_OK && (e = readdir(d))) {
@@ -124,7 +124,7 @@ static btf_status scan_folder(btf_dataset_entries *l, const char *dir, const int
         int view[8];
         char sub[BTF_DATASET_PATH_MAX];
         if (!folder_view && match_name(e->d_name, VIEW_DIR, view) == 2) {
-            rc = btf_path_join(sub, sizeof sub, dir, e->d_name, err);
+            rc = btf__path_join(sub, sizeof sub, dir, e->d_name, err);
             struct stat st;
             if (rc == BTF_OK && stat(sub, &st) == 0 && S_ISDIR(st.st_mode))
                 rc = scan_folder(l, sub, view, err);
@@ -142,11 +142,11 @@ static btf_status no_duplicate_paths(const btf_dataset_entries *l, const btf_tsv
                                      const char *path, btf_error *err)
 {
     int first, again;
-    btf_status rc = btf_dataset_entries_repeat(l, &first, &again, err);
+    btf_status rc = btf__dataset_entries_repeat(l, &first, &again, err);
     if (rc == BTF_OK && first >= 0)
-        rc = btf_fail(err, BTF_E_DATA, "%s:%d: %s is listed again (first on line %d); each "
-                      "image under one (light, view) pair", path, t->line_no[again],
-                      l->items[again].path, t->line_no[first]);
+        rc = btf__fail(err, BTF_E_DATA, "%s:%d: %s is listed again (first on line %d); each "
+                       "image under one (light, view) pair", path, t->line_no[again],
+                       l->items[again].path, t->line_no[first]);
     return rc;
 }
 
@@ -160,60 +160,60 @@ static btf_status near_row(const btf_tsv *t, const char *path, int r, const int 
 {
     double v[8];
     for (int i = 0; i < 8; i++) {
-        btf_status rc = btf_tsv_number(t, path, r, c[i + 1], &v[i], err);
+        btf_status rc = btf__tsv_number(t, path, r, c[i + 1], &v[i], err);
         if (rc)
             return rc;
     }
     int line = t->line_no[r];
     if (!(v[2] > 0.0))
-        return btf_fail(err, BTF_E_DATA, "%s:%d: camera below the surface (cam_z %g; expected > 0, "
-                        "z along the surface normal towards the camera)", path, line, v[2]);
+        return btf__fail(err, BTF_E_DATA, "%s:%d: camera below the surface (cam_z %g; expected > 0, "
+                         "z along the surface normal towards the camera)", path, line, v[2]);
     if (!(v[5] > 0.0))
-        return btf_fail(err, BTF_E_DATA, "%s:%d: light below the surface (light_z %g; expected > 0)",
-                        path, line, v[5]);
+        return btf__fail(err, BTF_E_DATA, "%s:%d: light below the surface (light_z %g; expected > 0)",
+                         path, line, v[5]);
     if (!(v[6] > 0.0) || !(v[7] > 0.0))
-        return btf_fail(err, BTF_E_DATA, "%s:%d: image size %g x %g (expected both > 0: the "
-                        "sample's width and height the image covers, in the positions' unit)",
-                        path, line, v[6], v[7]);
+        return btf__fail(err, BTF_E_DATA, "%s:%d: image size %g x %g (expected both > 0: the "
+                         "sample's width and height the image covers, in the positions' unit)",
+                         path, line, v[6], v[7]);
     *nf = (btf_near_field){.on = 1, .camera = {v[0], v[1], v[2]}, .light = {v[3], v[4], v[5]},
                            .size_x = v[6], .size_y = v[7]};
-    double spread = btf_near_field_spread(nf);
+    double spread = btf__near_field_spread(nf);
     if (!(spread <= BTF_NEAR_FIELD_MAX_SPREAD))
-        return btf_fail(err, BTF_E_DATA, "%s:%d: the directions change by %.1f degrees across the "
-                        "image (at most %g: one image is one (view, light) pair after the "
-                        "fall-off correction); crop it to a smaller patch", path, line, spread,
-                        BTF_NEAR_FIELD_MAX_SPREAD);
+        return btf__fail(err, BTF_E_DATA, "%s:%d: the directions change by %.1f degrees across the "
+                         "image (at most %g: one image is one (view, light) pair after the "
+                         "fall-off correction); crop it to a smaller patch", path, line, spread,
+                         BTF_NEAR_FIELD_MAX_SPREAD);
     return BTF_OK;
 }
 
 static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_error *err)
 {
     btf_tsv t;
-    btf_status rc = btf_tsv_read(path, &t, err);
+    btf_status rc = btf__tsv_read(path, &t, err);
     if (rc)
         return rc;
     static const char *cols[5] = {"path", "theta_l", "phi_l", "theta_v", "phi_v"};
     /* Positions (a near-field capture) when the header names cam_x. */
-    int near = btf_tsv_column(&t, "cam_x") >= 0;
+    int near = btf__tsv_column(&t, "cam_x") >= 0;
     int c[9];
     for (int i = 0; i < (near ? 9 : 5); i++)
-        if ((c[i] = btf_tsv_column(&t, near ? NEAR_COLS[i] : cols[i])) < 0) {
-            btf_tsv_free(&t);
+        if ((c[i] = btf__tsv_column(&t, near ? NEAR_COLS[i] : cols[i])) < 0) {
+            btf__tsv_free(&t);
             if (near)
-                return btf_fail(err, BTF_E_FORMAT,
-                                "%s: near-field manifest header lacks the column '%s' (expected: "
-                                "path cam_x cam_y cam_z light_x light_y light_z size_x size_y, "
-                                "tab-separated)", path, NEAR_COLS[i]);
-            return btf_fail(err, BTF_E_FORMAT,
-                            "%s: manifest header lacks the column '%s' (expected: path theta_l "
-                            "phi_l theta_v phi_v, tab-separated; or, for a near-field capture, "
-                            "path cam_x cam_y cam_z light_x light_y light_z size_x size_y)",
-                            path, cols[i]);
+                return btf__fail(err, BTF_E_FORMAT,
+                                 "%s: near-field manifest header lacks the column '%s' (expected: "
+                                 "path cam_x cam_y cam_z light_x light_y light_z size_x size_y, "
+                                 "tab-separated)", path, NEAR_COLS[i]);
+            return btf__fail(err, BTF_E_FORMAT,
+                             "%s: manifest header lacks the column '%s' (expected: path theta_l "
+                             "phi_l theta_v phi_v, tab-separated; or, for a near-field capture, "
+                             "path cam_x cam_y cam_z light_x light_y light_z size_x size_y)",
+                             path, cols[i]);
         }
-    if (near && btf_tsv_column(&t, "theta_l") >= 0) {
-        btf_tsv_free(&t);
-        return btf_fail(err, BTF_E_FORMAT, "%s: manifest gives both directions (theta_l ...) and "
-                        "positions (cam_x ...); give one of the two", path);
+    if (near && btf__tsv_column(&t, "theta_l") >= 0) {
+        btf__tsv_free(&t);
+        return btf__fail(err, BTF_E_FORMAT, "%s: manifest gives both directions (theta_l ...) and "
+                         "positions (cam_x ...); give one of the two", path);
     }
     char base[BTF_DATASET_PATH_MAX];
     snprintf(base, sizeof base, "%s", path);
@@ -229,50 +229,50 @@ static btf_status read_manifest(btf_dataset_entries *l, const char *path, btf_er
         if (near) {
             rc = near_row(&t, path, r, c, &nf, err);
             if (rc == BTF_OK) {
-                btf_dir L = btf_near_field_dir(nf.light), V = btf_near_field_dir(nf.camera);
+                btf_dir L = btf__near_field_dir(nf.light), V = btf__near_field_dir(nf.camera);
                 v[0] = L.theta, v[1] = L.phi, v[2] = V.theta, v[3] = V.phi;
             }
         }
         for (int i = 0; !near && rc == BTF_OK && i < 4; i++)
-            rc = btf_tsv_number(&t, path, r, c[i + 1], &v[i], err);
+            rc = btf__tsv_number(&t, path, r, c[i + 1], &v[i], err);
         if (rc)
             break;
-        const char *p = btf_tsv_cell(&t, r, c[0]);
+        const char *p = btf__tsv_cell(&t, r, c[0]);
         char full[BTF_DATASET_PATH_MAX];
         if (p[0] == '/')
             snprintf(full, sizeof full, "%s", p);
         else
-            rc = btf_path_join(full, sizeof full, base, p, err);
+            rc = btf__path_join(full, sizeof full, base, p, err);
         if (rc == BTF_OK && (v[0] < 0 || v[0] > 90 || v[2] < 0 || v[2] > 90))
-            rc = btf_fail(err, BTF_E_DATA, "%s:%d: theta outside [0, 90]", path, t.line_no[r]);
+            rc = btf__fail(err, BTF_E_DATA, "%s:%d: theta outside [0, 90]", path, t.line_no[r]);
         if (rc == BTF_OK)
-            rc = btf_dataset_entries_add(l, full, (btf_dir){v[0], v[1]}, (btf_dir){v[2], v[3]},
-                                         err);
+            rc = btf__dataset_entries_add(l, full, (btf_dir){v[0], v[1]}, (btf_dir){v[2], v[3]},
+                                          err);
         if (rc == BTF_OK)
             l->items[l->count - 1].near = nf;
     }
     if (rc == BTF_OK && t.nrows == 0)
-        rc = btf_fail(err, BTF_E_DATA, "%s: manifest lists no images", path);
+        rc = btf__fail(err, BTF_E_DATA, "%s: manifest lists no images", path);
     if (rc == BTF_OK && l->count == t.nrows)
         rc = no_duplicate_paths(l, &t, path, err);
-    btf_tsv_free(&t);
+    btf__tsv_free(&t);
     return rc;
 }
 
-btf_status btf_dataset_list_entries(const char *path, btf_dataset_entries *l, btf_error *err)
+btf_status btf__dataset_list_entries(const char *path, btf_dataset_entries *l, btf_error *err)
 {
     struct stat st;
     if (stat(path, &st) != 0)
-        return btf_fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
-    if (S_ISREG(st.st_mode) && btf_rti_lp_name(path))
-        return btf_rti_lp_read(path, l, err); /* an RTI light file (dataset/rti_lp.c) */
+        return btf__fail(err, BTF_E_IO, "%s: %s", path, strerror(errno));
+    if (S_ISREG(st.st_mode) && btf__rti_lp_name(path))
+        return btf__rti_lp_read(path, l, err); /* an RTI light file (dataset/rti_lp.c) */
     if (!S_ISDIR(st.st_mode))
         return read_manifest(l, path, err);
     btf_status rc = scan_folder(l, path, NULL, err);
     if (rc == BTF_OK && l->count == 0)
-        rc = btf_fail(err, BTF_E_FORMAT,
-                      "%s: unknown layout: no UBO2003 ('NNNNN tlAAA plBBB tvCCC pvDDD.jpg') or "
-                      "UTIA ('tvCCC_pvDDD/tlAAA_plBBB_tvCCC_pvDDD.png|exr') images; for other "
-                      "layouts pass a manifest .tsv", path);
+        rc = btf__fail(err, BTF_E_FORMAT,
+                       "%s: unknown layout: no UBO2003 ('NNNNN tlAAA plBBB tvCCC pvDDD.jpg') or "
+                       "UTIA ('tvCCC_pvDDD/tlAAA_plBBB_tvCCC_pvDDD.png|exr') images; for other "
+                       "layouts pass a manifest .tsv", path);
     return rc;
 }

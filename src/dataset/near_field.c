@@ -21,7 +21,7 @@ static double norm3(const double *v)
     return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
 }
 
-btf_dir btf_near_field_dir(const double *pos)
+btf_dir btf__near_field_dir(const double *pos)
 {
     double r = norm3(pos);
     double theta = acos(pos[2] / r) * 57.29577951308232;
@@ -37,7 +37,7 @@ static void pixel_point(const btf_near_field *nf, int w, int h, double c, double
     p[2] = 0.0;
 }
 
-void btf_near_field_correct(const btf_near_field *nf, btf_image *img)
+void btf__near_field_correct(const btf_near_field *nf, btf_image *img)
 {
     if (!nf->on || !img->data)
         return;
@@ -62,7 +62,7 @@ static double angle_deg(const double *a, const double *b)
     return acos(d > 1.0 ? 1.0 : d < -1.0 ? -1.0 : d) * 57.29577951308232;
 }
 
-double btf_near_field_spread(const btf_near_field *nf)
+double btf__near_field_spread(const btf_near_field *nf)
 {
     double worst = 0.0;
     for (int corner = 0; corner < 4; corner++) {

@@ -39,7 +39,7 @@
 #define RTI_LP_MAX_BYTES (64u << 20)
 #define RTI_LP_MAX_COUNT 1000000
 
-int btf_rti_lp_name(const char *path)
+int btf__rti_lp_name(const char *path)
 {
     size_t n = strlen(path);
     return n > 3 && strcasecmp(path + n - 3, ".lp") == 0 && path[n - 4] != '/';
@@ -79,8 +79,8 @@ static btf_status parse_image_line(char *line, const char *name, int line_no, ch
         while (b > line && !blank(b[-1]))
             b--;
         if (b == line) /* no path before the numbers */
-            return btf_fail(err, BTF_E_FORMAT, "%s:%d: expected 'PATH X Y Z' (an image and its "
-                            "light's unit vector)", name, line_no);
+            return btf__fail(err, BTF_E_FORMAT, "%s:%d: expected 'PATH X Y Z' (an image and its "
+                             "light's unit vector)", name, line_no);
         *e = '\0';
         field[k] = b;
         e = b;
@@ -91,8 +91,8 @@ static btf_status parse_image_line(char *line, const char *name, int line_no, ch
     static const char *axis[3] = {"X", "Y", "Z"};
     for (int k = 0; k < 3; k++)
         if (decimal(field[k], &v[k]) != 0)
-            return btf_fail(err, BTF_E_FORMAT, "%s:%d: %s '%.40s' is not a finite decimal number",
-                            name, line_no, axis[k], field[k]);
+            return btf__fail(err, BTF_E_FORMAT, "%s:%d: %s '%.40s' is not a finite decimal number",
+                             name, line_no, axis[k], field[k]);
     *path = line;
     return BTF_OK;
 }
@@ -104,15 +104,15 @@ static btf_status image_path(const char *name, int line_no, const char *base, co
 {
     int k = p[0] == '/' ? snprintf(full, n, "%s", p) : snprintf(full, n, "%s/%s", base, p);
     if (k < 0 || (size_t)k >= n)
-        return btf_fail(err, BTF_E_ARG, "%s:%d: path too long (%zu bytes at most)", name, line_no,
-                        n - 1);
+        return btf__fail(err, BTF_E_ARG, "%s:%d: path too long (%zu bytes at most)", name, line_no,
+                         n - 1);
     if (!check_files)
         return BTF_OK;
     struct stat st;
     if (stat(full, &st) != 0)
-        return btf_fail(err, BTF_E_IO, "%s:%d: %s: %s", name, line_no, full, strerror(errno));
+        return btf__fail(err, BTF_E_IO, "%s:%d: %s: %s", name, line_no, full, strerror(errno));
     if (!S_ISREG(st.st_mode))
-        return btf_fail(err, BTF_E_IO, "%s:%d: %s: not a regular file", name, line_no, full);
+        return btf__fail(err, BTF_E_IO, "%s:%d: %s: not a regular file", name, line_no, full);
     return BTF_OK;
 }
 
@@ -126,8 +126,8 @@ static btf_status parse_owned(char *text, size_t n, const char *name, const char
         int line_no = 1;
         for (const char *c = text; c < nul; c++)
             line_no += *c == '\n';
-        return btf_fail(err, BTF_E_FORMAT, "%s:%d: a NUL byte: not an RTI light file (text)",
-                        name, line_no);
+        return btf__fail(err, BTF_E_FORMAT, "%s:%d: a NUL byte: not an RTI light file (text)",
+                         name, line_no);
     }
     long count = -1;
     int line_no = 0, count_line = 0;
@@ -154,16 +154,16 @@ static btf_status parse_owned(char *text, size_t n, const char *name, const char
             errno = 0;
             long c = strtol(line, NULL, 10);
             if (d == line || *d || errno || c < 1 || c > RTI_LP_MAX_COUNT)
-                return btf_fail(err, BTF_E_FORMAT, "%s:%d: bad image count '%.40s' (the first "
-                                "line of an RTI light file: a whole number 1 .. %d)", name,
-                                line_no, line, RTI_LP_MAX_COUNT);
+                return btf__fail(err, BTF_E_FORMAT, "%s:%d: bad image count '%.40s' (the first "
+                                 "line of an RTI light file: a whole number 1 .. %d)", name,
+                                 line_no, line, RTI_LP_MAX_COUNT);
             count = c;
             count_line = line_no;
             continue;
         }
         if (l->count == count)
-            return btf_fail(err, BTF_E_FORMAT, "%s:%d: more image lines than the count %ld of "
-                            "line %d", name, line_no, count, count_line);
+            return btf__fail(err, BTF_E_FORMAT, "%s:%d: more image lines than the count %ld of "
+                             "line %d", name, line_no, count, count_line);
         char *p = NULL;
         double v[3];
         btf_status rc = parse_image_line(line, name, line_no, &p, v, err);
@@ -171,39 +171,39 @@ static btf_status parse_owned(char *text, size_t n, const char *name, const char
             return rc;
         double r = hypot(hypot(v[0], v[1]), v[2]);
         if (!(fabs(r - 1.0) <= 0.01))
-            return btf_fail(err, BTF_E_DATA, "%s:%d: light vector (%g, %g, %g) has length %g, "
-                            "not 1 (within 1 %%)", name, line_no, v[0], v[1], v[2], r);
+            return btf__fail(err, BTF_E_DATA, "%s:%d: light vector (%g, %g, %g) has length %g, "
+                             "not 1 (within 1 %%)", name, line_no, v[0], v[1], v[2], r);
         if (!(v[2] > 0.0))
-            return btf_fail(err, BTF_E_DATA, "%s:%d: light vector (%g, %g, %g) has Z <= 0: a "
-                            "light below the surface (Z points to the camera)", name, line_no,
-                            v[0], v[1], v[2]);
+            return btf__fail(err, BTF_E_DATA, "%s:%d: light vector (%g, %g, %g) has Z <= 0: a "
+                             "light below the surface (Z points to the camera)", name, line_no,
+                             v[0], v[1], v[2]);
         for (int k = 0; k < 3; k++)
             v[k] /= r;
         char full[BTF_DATASET_PATH_MAX];
         rc = image_path(name, line_no, base, p, check_files, full, sizeof full, err);
         if (rc == BTF_OK)
-            rc = btf_dataset_entries_add(l, full, btf_vec_to_dir(v), (btf_dir){0.0, 0.0},
-                                         err); /* one view: the camera looks straight down */
+            rc = btf__dataset_entries_add(l, full, btf_vec_to_dir(v), (btf_dir){0.0, 0.0},
+                                          err); /* one view: the camera looks straight down */
         if (rc)
             return rc;
         int *grown = realloc(*line_of, (size_t)l->cap * sizeof **line_of);
         if (!grown)
-            return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", name);
+            return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", name);
         *line_of = grown;
         grown[l->count - 1] = line_no;
     }
     if (count < 0)
-        return btf_fail(err, BTF_E_FORMAT, "%s:%d: no image count (an empty RTI light file)", name,
-                        line_no > 0 ? line_no : 1);
+        return btf__fail(err, BTF_E_FORMAT, "%s:%d: no image count (an empty RTI light file)", name,
+                         line_no > 0 ? line_no : 1);
     if (l->count < count)
-        return btf_fail(err, BTF_E_FORMAT, "%s:%d: %d image lines, fewer than the count %ld of "
-                        "line %d", name, line_no, l->count, count, count_line);
+        return btf__fail(err, BTF_E_FORMAT, "%s:%d: %d image lines, fewer than the count %ld of "
+                         "line %d", name, line_no, l->count, count, count_line);
     int first, again;
-    btf_status rc = btf_dataset_entries_repeat(l, &first, &again, err);
+    btf_status rc = btf__dataset_entries_repeat(l, &first, &again, err);
     if (rc == BTF_OK && first >= 0)
-        rc = btf_fail(err, BTF_E_DATA, "%s:%d: %s is listed again (first on line %d); one "
-                      "image per light", name, (*line_of)[again], l->items[again].path,
-                      (*line_of)[first]);
+        rc = btf__fail(err, BTF_E_DATA, "%s:%d: %s is listed again (first on line %d); one "
+                       "image per light", name, (*line_of)[again], l->items[again].path,
+                       (*line_of)[first]);
     return rc;
 }
 
@@ -219,20 +219,20 @@ static void folder_of(const char *path, char *base, size_t n)
         snprintf(base, n, ".");
 }
 
-btf_status btf_rti_lp_parse(const char *text, size_t n, const char *name, const char *base,
-                            int check_files, btf_dataset_entries *l, btf_error *err)
+btf_status btf__rti_lp_parse(const char *text, size_t n, const char *name, const char *base,
+                             int check_files, btf_dataset_entries *l, btf_error *err)
 {
     memset(l, 0, sizeof *l);
     l->layout = BTF_LAYOUT_RTI;
     if (!name)
         name = "light file";
     if (!text && n)
-        return btf_fail(err, BTF_E_ARG, "%s: no text", name);
+        return btf__fail(err, BTF_E_ARG, "%s: no text", name);
     if (n > RTI_LP_MAX_BYTES)
-        return btf_fail(err, BTF_E_FORMAT, "%s: larger than %u bytes", name, RTI_LP_MAX_BYTES);
+        return btf__fail(err, BTF_E_FORMAT, "%s: larger than %u bytes", name, RTI_LP_MAX_BYTES);
     char *copy = malloc(n + 1);
     if (!copy)
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", name);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", name);
     if (n)
         memcpy(copy, text, n);
     copy[n] = '\0';
@@ -243,18 +243,18 @@ btf_status btf_rti_lp_parse(const char *text, size_t n, const char *name, const 
     return rc;
 }
 
-btf_status btf_rti_lp_read(const char *path, btf_dataset_entries *l, btf_error *err)
+btf_status btf__rti_lp_read(const char *path, btf_dataset_entries *l, btf_error *err)
 {
     memset(l, 0, sizeof *l);
     l->layout = BTF_LAYOUT_RTI;
     unsigned char *data;
     size_t n;
-    btf_status rc = btf_read_file(path, RTI_LP_MAX_BYTES, &data, &n, err);
+    btf_status rc = btf__read_file(path, RTI_LP_MAX_BYTES, &data, &n, err);
     if (rc)
         return rc;
     char base[BTF_DATASET_PATH_MAX];
     folder_of(path, base, sizeof base);
-    rc = btf_rti_lp_parse((const char *)data, n, path, base, 1, l, err);
+    rc = btf__rti_lp_parse((const char *)data, n, path, base, 1, l, err);
     free(data);
     return rc;
 }

@@ -328,8 +328,8 @@ typedef struct btf_ubo2014_factors {
     int components[3];
     const float *u[3], *sxv[3];
 } btf_ubo2014_factors;
-btf_status btf_ubo2014_write_factors(const char *path, const btf_dirset *views,
-                                     const btf_dirset *lights, int width, int height,
-                                     const btf_ubo2014_factors *f, btf_error *err);
+btf_status btf__ubo2014_write_factors(const char *path, const btf_dirset *views,
+                                      const btf_dirset *lights, int width, int height,
+                                      const btf_ubo2014_factors *f, btf_error *err);
 
 #endif

@@ -157,7 +157,7 @@ static btf_status decode_factors(const ubo_file *f, uint64_t lv, float *out, btf
     for (int c = 0; c < 3; c++)
         if (f->u[fmf ? 0 : c].k > kmax)
             kmax = f->u[fmf ? 0 : c].k;
-    float *a = btf_alloc(kmax, sizeof *a, err);
+    float *a = btf__alloc(kmax, sizeof *a, err);
     if (!a)
         return BTF_E_NOMEM;
     for (int c = 0; c < 3; c++) {
@@ -188,7 +188,7 @@ static btf_status decode_pvf(const ubo_file *f, uint32_t v, uint32_t l, float *o
 {
     const ubo_pvf_slot *sl = &f->slots[v];
     uint64_t px = (uint64_t)f->width * f->height, sz = (uint64_t)sl->scalar;
-    float *a = btf_alloc(sl->k ? sl->k : 1, sizeof *a, err);
+    float *a = btf__alloc(sl->k ? sl->k : 1, sizeof *a, err);
     if (!a)
         return BTF_E_NOMEM;
     for (int c = 0; c < 3; c++) {
@@ -234,8 +234,8 @@ static void decode_bdif(const ubo_file *f, uint32_t v, uint32_t l, float *out)
 btf_status ubo_decode(const ubo_file *f, uint32_t fv, uint32_t fl, float *out, btf_error *err)
 {
     if (fv >= f->nv || fl >= f->nl)
-        return btf_fail(err, BTF_E_ARG, "%s: no view %u, light %u in %u x %u", f->name, fv, fl,
-                        f->nv, f->nl);
+        return btf__fail(err, BTF_E_ARG, "%s: no view %u, light %u in %u x %u", f->name, fv, fl,
+                         f->nv, f->nl);
     uint64_t px = (uint64_t)f->width * f->height;
     if (f->variant == UBO_BDIF) {
         decode_bdif(f, fv, fl, out);
@@ -257,9 +257,9 @@ btf_status ubo_decode(const ubo_file *f, uint32_t fv, uint32_t fl, float *out, b
     }
     for (uint64_t i = 0; i < 3 * px; i++)
         if (!isfinite(out[i]))
-            return btf_fail(err, BTF_E_DATA,
-                            "%s: view %u, light %u: pixel (%llu, %llu) decodes to a non-finite "
-                            "value", f->name, fv, fl, (unsigned long long)(i / 3 % f->width),
-                            (unsigned long long)(i / 3 / f->width));
+            return btf__fail(err, BTF_E_DATA,
+                             "%s: view %u, light %u: pixel (%llu, %llu) decodes to a non-finite "
+                             "value", f->name, fv, fl, (unsigned long long)(i / 3 % f->width),
+                             (unsigned long long)(i / 3 / f->width));
     return BTF_OK;
 }

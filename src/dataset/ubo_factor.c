@@ -59,9 +59,9 @@ static btf_status get_image(const fact *f, uint64_t i, btf_image *img, double to
             continue;
         if (!(x > -UBO_EPS)) {
             int v = (int)(i / (uint64_t)f->src->lights->count);
-            rc = btf_fail(err, BTF_E_ARG, "%s: image (view %d, light %d) has the value %g: the "
-                          "logarithm of the dynamic-range reduction needs values above -1e-5",
-                          f->src->path, v, (int)(i % (uint64_t)f->src->lights->count), x);
+            rc = btf__fail(err, BTF_E_ARG, "%s: image (view %d, light %d) has the value %g: the "
+                           "logarithm of the dynamic-range reduction needs values above -1e-5",
+                           f->src->path, v, (int)(i % (uint64_t)f->src->lights->count), x);
         }
         img->data[j] = (float)log(x + UBO_EPS);
     }
@@ -83,16 +83,16 @@ static btf_status finish_channel(chan *ch, int s, uint64_t px, btf_error *err)
     int kc = ch->kc;
     for (uint64_t i = 0; i < px * (uint64_t)kc; i++)
         ch->sxv[i] = ubo_stored(ch->sxv[i], s);
-    ch->chol = btf_calloc((size_t)kc * kc, sizeof *ch->chol, err);
+    ch->chol = btf__calloc((size_t)kc * kc, sizeof *ch->chol, err);
     if (!ch->chol)
         return BTF_E_NOMEM;
     for (uint64_t r = 0; r < px; r++)
         for (int i = 0; i < kc; i++)
             for (int j = 0; j <= i; j++)
                 ch->chol[i * kc + j] += (double)ch->sxv[r * kc + i] * ch->sxv[r * kc + j];
-    if (btf_linalg_cholesky(ch->chol, kc, 0, kc, ch->chol) != 0)
-        return btf_fail(err, BTF_E_NUMERIC, "the rounded S x V's columns are dependent; use fewer "
-                        "components");
+    if (btf__linalg_cholesky(ch->chol, kc, 0, kc, ch->chol) != 0)
+        return btf__fail(err, BTF_E_NUMERIC, "the rounded S x V's columns are dependent; use fewer "
+                         "components");
     return BTF_OK;
 }
 
@@ -120,7 +120,7 @@ static void fit_row(const fact *f, const chan *ch, const float *x, float *urow, 
         for (int j = 0; j < kc; j++)
             work[j] += xv * sr[j];
     }
-    btf_linalg_cholesky_solve(ch->chol, kc, work);
+    btf__linalg_cholesky_solve(ch->chol, kc, work);
     for (int j = 0; j < kc; j++)
         urow[j] = ubo_stored((float)work[j], f->s);
     for (uint64_t r = 0; r < f->px; r++) {
@@ -169,7 +169,7 @@ static btf_status accumulate_grams(const fact *f, gram_job *gj, double total[3],
 {
     uint64_t px = f->px;
     int nb = 32;
-    float *xb = btf_alloc((size_t)nb * px * 3, sizeof *xb, err);
+    float *xb = btf__alloc((size_t)nb * px * 3, sizeof *xb, err);
     if (!xb)
         return BTF_E_NOMEM;
     gj->xb = xb;
@@ -185,7 +185,7 @@ static btf_status accumulate_grams(const fact *f, gram_job *gj, double total[3],
             btf_image_free(&img);
         }
         if (rc == BTF_OK)
-            rc = btf_pool_run(jobs, 0, gram_rows, gj, NULL, err);
+            rc = btf__pool_run(jobs, 0, gram_rows, gj, NULL, err);
         ubo_report(f->src, 0.45 * (double)(i0 + (uint64_t)gj->nb) / (double)f->n, "Gram matrices");
     }
     free(xb);
@@ -199,13 +199,13 @@ static btf_status factor_by_pixels(const fact *f, chan ch[3], double total[3], b
     gram_job gj = {.px = px, .rows_per_job = 16};
     btf_status rc = BTF_OK;
     for (int c = 0; c < 3 && rc == BTF_OK; c++) {
-        gj.g[c] = btf_calloc(px * px, sizeof(double), err);
+        gj.g[c] = btf__calloc(px * px, sizeof(double), err);
         rc = gj.g[c] ? BTF_OK : BTF_E_NOMEM;
     }
     if (rc == BTF_OK)
         rc = accumulate_grams(f, &gj, total, err);
-    double *val = rc == BTF_OK ? btf_alloc((size_t)f->k, sizeof *val, err) : NULL;
-    double *vec = rc == BTF_OK ? btf_alloc(px * (uint64_t)f->k, sizeof *vec, err) : NULL;
+    double *val = rc == BTF_OK ? btf__alloc((size_t)f->k, sizeof *val, err) : NULL;
+    double *vec = rc == BTF_OK ? btf__alloc(px * (uint64_t)f->k, sizeof *vec, err) : NULL;
     if (rc == BTF_OK && (!val || !vec))
         rc = BTF_E_NOMEM;
     if (rc == BTF_OK && f->fmf) /* §4: one matrix; its Gram is the channels' sum */
@@ -220,7 +220,7 @@ static btf_status factor_by_pixels(const fact *f, chan ch[3], double total[3], b
         if (rc)
             break;
         ch[m].kc = ubo_keep_components(val, f->k);
-        ch[m].sxv = btf_alloc(px * (uint64_t)ch[m].kc, sizeof(float), err);
+        ch[m].sxv = btf__alloc(px * (uint64_t)ch[m].kc, sizeof(float), err);
         if (!ch[m].sxv) {
             rc = BTF_E_NOMEM;
             break;
@@ -271,10 +271,10 @@ static btf_status factor_by_rows(const fact *f, chan ch[3], double total[3], flo
                                  btf_error *err)
 {
     uint64_t n = f->n, px = f->px, R = f->rows;
-    float *a = btf_alloc(n * px * 3, sizeof *a, err);
-    double *g = btf_alloc(R * R, sizeof *g, err);
-    double *val = btf_alloc((size_t)f->k, sizeof *val, err);
-    double *vec = btf_alloc(R * (uint64_t)f->k, sizeof *vec, err);
+    float *a = btf__alloc(n * px * 3, sizeof *a, err);
+    double *g = btf__alloc(R * R, sizeof *g, err);
+    double *val = btf__alloc((size_t)f->k, sizeof *val, err);
+    double *vec = btf__alloc(R * (uint64_t)f->k, sizeof *vec, err);
     btf_status rc = a && g && val && vec ? BTF_OK : BTF_E_NOMEM;
     for (uint64_t i = 0; i < n && rc == BTF_OK; i++) {
         btf_image img = {0};
@@ -290,7 +290,7 @@ static btf_status factor_by_rows(const fact *f, chan ch[3], double total[3], flo
         if (rc)
             break;
         int kc = ch[m].kc = ubo_keep_components(val, f->k);
-        ch[m].sxv = btf_alloc(px * (uint64_t)kc, sizeof(float), err);
+        ch[m].sxv = btf__alloc(px * (uint64_t)kc, sizeof(float), err);
         if (!ch[m].sxv) {
             rc = BTF_E_NOMEM;
             break;
@@ -352,15 +352,15 @@ btf_status ubo_factorise(const ubo_source *src, int fmf, int log_values, int com
     uint64_t small = f.rows < f.px ? f.rows : f.px;
     f.k = (int)((uint64_t)components < small ? (uint64_t)components : small);
     if (f.k > UBO_MAX_COMPONENTS)
-        return btf_fail(err, BTF_E_ARG, "%s: %d components: at most %d", src->path, f.k,
-                        UBO_MAX_COMPONENTS);
+        return btf__fail(err, BTF_E_ARG, "%s: %d components: at most %d", src->path, f.k,
+                         UBO_MAX_COMPONENTS);
     uint64_t need = working_bytes(&f);
     if (small > 46340 || need > max_bytes)
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "%s: the factorisation of %llu rows of %llu pixels needs %llu bytes of "
-                        "working memory, over the cap of %llu (btf_ubo2014_write_opts.max_bytes)",
-                        src->path, (unsigned long long)f.rows, (unsigned long long)f.px,
-                        (unsigned long long)need, (unsigned long long)max_bytes);
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "%s: the factorisation of %llu rows of %llu pixels needs %llu bytes of "
+                         "working memory, over the cap of %llu (btf_ubo2014_write_opts.max_bytes)",
+                         src->path, (unsigned long long)f.rows, (unsigned long long)f.px,
+                         (unsigned long long)need, (unsigned long long)max_bytes);
     chan ch[3] = {{0}};
     double total[3] = {0}, sum2[3] = {0}, maxe[3] = {0};
     float *held = NULL;
@@ -369,7 +369,7 @@ btf_status ubo_factorise(const ubo_source *src, int fmf, int log_values, int com
     for (int m = 0; m < f.nm && rc == BTF_OK; m++) {
         rc = finish_channel(&ch[m], f.s, f.px, err);
         if (rc == BTF_OK) {
-            ch[m].u = btf_alloc(f.rows * (uint64_t)ch[m].kc, sizeof(float), err);
+            ch[m].u = btf__alloc(f.rows * (uint64_t)ch[m].kc, sizeof(float), err);
             rc = ch[m].u ? BTF_OK : BTF_E_NOMEM;
         }
     }

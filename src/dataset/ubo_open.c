@@ -20,7 +20,7 @@
 
 int ubo_sniff(const char *path)
 {
-    int fd = btf_open_regular(path, NULL, NULL); /* no FIFO, device or folder */
+    int fd = btf__open_regular(path, NULL, NULL); /* no FIFO, device or folder */
     if (fd < 0)
         return 0;
     unsigned char head[8] = {0};
@@ -36,7 +36,7 @@ int ubo_sniff(const char *path)
 static btf_status make_set(const ubo_file *f, const float *rad, uint32_t n, const char *what,
                            btf_dirset *set, uint32_t **index, btf_error *err)
 {
-    btf_dir *d = btf_alloc(n, sizeof *d, err);
+    btf_dir *d = btf__alloc(n, sizeof *d, err);
     if (!d)
         return BTF_E_NOMEM;
     for (uint32_t i = 0; i < n; i++) {
@@ -46,10 +46,10 @@ static btf_status make_set(const ubo_file *f, const float *rad, uint32_t n, cons
     }
     btf_status rc = btf_dirset_from_list(set, d, (int)n, err);
     if (rc == BTF_OK && (uint32_t)set->count != n)
-        rc = btf_fail(err, BTF_E_FORMAT, "%s: the %s list names a direction twice (%u entries, "
-                      "%d distinct)", f->name, what, n, set->count);
+        rc = btf__fail(err, BTF_E_FORMAT, "%s: the %s list names a direction twice (%u entries, "
+                       "%d distinct)", f->name, what, n, set->count);
     if (rc == BTF_OK) {
-        *index = btf_alloc(n, sizeof **index, err);
+        *index = btf__alloc(n, sizeof **index, err);
         rc = *index ? BTF_OK : BTF_E_NOMEM;
         for (uint32_t i = 0; rc == BTF_OK && i < n; i++)
             (*index)[i] = UINT32_MAX;
@@ -58,9 +58,9 @@ static btf_status make_set(const ubo_file *f, const float *rad, uint32_t n, cons
              * degree); the nearest one is the file's direction. */
             int j = btf_dirset_find(set, d[i], BTF_DIR_NAME_TOLERANCE);
             if (j < 0 || (*index)[j] != UINT32_MAX)
-                rc = btf_fail(err, BTF_E_FORMAT,
-                              "%s: %s %u (theta %g, phi %g degrees) cannot be told from another",
-                              f->name, what, i, d[i].theta, d[i].phi);
+                rc = btf__fail(err, BTF_E_FORMAT,
+                               "%s: %s %u (theta %g, phi %g degrees) cannot be told from another",
+                               f->name, what, i, d[i].theta, d[i].phi);
             else
                 (*index)[j] = i;
         }
@@ -84,25 +84,25 @@ void ubo_close(ubo_open_file *o)
 btf_status ubo_open(const char *path, ubo_open_file **out, btf_error *err)
 {
     *out = NULL;
-    ubo_open_file *o = btf_calloc(1, sizeof *o, err);
+    ubo_open_file *o = btf__calloc(1, sizeof *o, err);
     if (!o)
         return BTF_E_NOMEM;
     uint64_t size;
-    int fd = btf_open_regular(path, &size, err);
+    int fd = btf__open_regular(path, &size, err);
     if (fd < 0) {
         free(o);
         return BTF_E_IO;
     }
     btf_status rc = BTF_OK;
     if (size == 0)
-        rc = btf_fail(err, BTF_E_FORMAT, "%s: empty file", path);
+        rc = btf__fail(err, BTF_E_FORMAT, "%s: empty file", path);
     if (rc == BTF_OK) {
         o->map_size = (size_t)size;
         o->map = mmap(NULL, o->map_size, PROT_READ, MAP_SHARED, fd, 0);
         if (o->map == MAP_FAILED) {
             o->map = NULL;
-            rc = btf_fail(err, BTF_E_IO, "%s: cannot map %llu bytes: %s", path,
-                          (unsigned long long)size, strerror(errno));
+            rc = btf__fail(err, BTF_E_IO, "%s: cannot map %llu bytes: %s", path,
+                           (unsigned long long)size, strerror(errno));
         }
     }
     close(fd);

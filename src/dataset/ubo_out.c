@@ -119,7 +119,7 @@ btf_status ubo_bytes_check(ubo_bytes *b, const char *path, btf_error *err)
         return BTF_OK;
     free(b->p);
     b->p = NULL;
-    return btf_fail(err, BTF_E_NOMEM, "%s: out of memory for the header", path);
+    return btf__fail(err, BTF_E_NOMEM, "%s: out of memory for the header", path);
 }
 
 btf_status ubo_out_open(ubo_outfile *o, const char *path, uint64_t size, btf_error *err)
@@ -127,9 +127,9 @@ btf_status ubo_out_open(ubo_outfile *o, const char *path, uint64_t size, btf_err
     memset(o, 0, sizeof *o);
     o->fd = -1;
     if (size > (uint64_t)SIZE_MAX / 2)
-        return btf_fail(err, BTF_E_ARG, "%s: %llu bytes is too large", path,
-                        (unsigned long long)size);
-    btf_status rc = btf_tmp_create(path, o->tmp, sizeof o->tmp, &o->fd, err);
+        return btf__fail(err, BTF_E_ARG, "%s: %llu bytes is too large", path,
+                         (unsigned long long)size);
+    btf_status rc = btf__tmp_create(path, o->tmp, sizeof o->tmp, &o->fd, err);
     if (rc)
         return rc;
     o->size = (size_t)size;
@@ -137,24 +137,24 @@ btf_status ubo_out_open(ubo_outfile *o, const char *path, uint64_t size, btf_err
      * needs it open for reading too: the same new file, reopened. */
     int rw = open(o->tmp, O_RDWR | O_NOFOLLOW | O_CLOEXEC);
     if (rw < 0) {
-        rc = btf_fail(err, BTF_E_IO, "%s: cannot reopen %s: %s", path, o->tmp, strerror(errno));
+        rc = btf__fail(err, BTF_E_IO, "%s: cannot reopen %s: %s", path, o->tmp, strerror(errno));
     } else {
         close(o->fd);
         o->fd = rw;
     }
     if (rc == BTF_OK && ftruncate(o->fd, (off_t)size) != 0)
-        rc = btf_fail(err, BTF_E_IO, "%s: cannot make a file of %llu bytes: %s", path,
-                      (unsigned long long)size, strerror(errno));
+        rc = btf__fail(err, BTF_E_IO, "%s: cannot make a file of %llu bytes: %s", path,
+                       (unsigned long long)size, strerror(errno));
     if (rc == BTF_OK) {
         o->map = mmap(NULL, o->size, PROT_READ | PROT_WRITE, MAP_SHARED, o->fd, 0);
         if (o->map == MAP_FAILED) {
             o->map = NULL;
-            rc = btf_fail(err, BTF_E_IO, "%s: cannot map the output: %s", path, strerror(errno));
+            rc = btf__fail(err, BTF_E_IO, "%s: cannot map the output: %s", path, strerror(errno));
         }
     }
     if (rc) {
         close(o->fd);
-        btf_abort_file(o->tmp);
+        btf__abort_file(o->tmp);
         o->fd = -1;
     }
     return rc;
@@ -164,20 +164,20 @@ btf_status ubo_out_close(ubo_outfile *o, const char *path, btf_status rc, btf_er
 {
     if (o->map) {
         if (rc == BTF_OK && msync(o->map, o->size, MS_SYNC) != 0)
-            rc = btf_fail(err, BTF_E_IO, "%s: cannot write: %s", path, strerror(errno));
+            rc = btf__fail(err, BTF_E_IO, "%s: cannot write: %s", path, strerror(errno));
         munmap(o->map, o->size);
         o->map = NULL;
     }
     if (o->fd >= 0) {
         if (rc == BTF_OK && fsync(o->fd) != 0)
-            rc = btf_fail(err, BTF_E_IO, "%s: cannot write: %s", path, strerror(errno));
+            rc = btf__fail(err, BTF_E_IO, "%s: cannot write: %s", path, strerror(errno));
         if (close(o->fd) != 0 && rc == BTF_OK)
-            rc = btf_fail(err, BTF_E_IO, "%s: cannot write: %s", path, strerror(errno));
+            rc = btf__fail(err, BTF_E_IO, "%s: cannot write: %s", path, strerror(errno));
         o->fd = -1;
         if (rc == BTF_OK)
-            rc = btf_commit_file(o->tmp, path, err);
+            rc = btf__commit_file(o->tmp, path, err);
         else
-            btf_abort_file(o->tmp);
+            btf__abort_file(o->tmp);
     }
     return rc;
 }
@@ -222,8 +222,8 @@ btf_status ubo_store_all(unsigned char **p, const float *v, uint64_t n, int size
 {
     for (uint64_t i = 0; i < n; i++) {
         if (!isfinite(v[i]))
-            return btf_fail(err, BTF_E_ARG, "%s: %s has a non-finite value at %llu", path, what,
-                            (unsigned long long)i);
+            return btf__fail(err, BTF_E_ARG, "%s: %s has a non-finite value at %llu", path, what,
+                             (unsigned long long)i);
         ubo_store(*p, v[i], size);
         *p += size;
     }
@@ -234,13 +234,13 @@ btf_status ubo_check_sets(const char *path, const btf_dirset *views, const btf_d
                           int width, int height, btf_error *err)
 {
     if (!views || !lights || views->count < 1 || lights->count < 1)
-        return btf_fail(err, BTF_E_ARG, "%s: the view and light sets must not be empty", path);
+        return btf__fail(err, BTF_E_ARG, "%s: the view and light sets must not be empty", path);
     if (width < 1 || height < 1 || width > BTF_MAX_SIDE || height > BTF_MAX_SIDE)
-        return btf_fail(err, BTF_E_ARG, "%s: image size %dx%d out of range 1..%d", path, width,
-                        height, BTF_MAX_SIDE);
+        return btf__fail(err, BTF_E_ARG, "%s: image size %dx%d out of range 1..%d", path, width,
+                         height, BTF_MAX_SIDE);
     if ((uint64_t)views->count * lights->count > UINT32_MAX / 3)
-        return btf_fail(err, BTF_E_ARG, "%s: %d x %d (view, light) pairs do not fit the format",
-                        path, views->count, lights->count);
+        return btf__fail(err, BTF_E_ARG, "%s: %d x %d (view, light) pairs do not fit the format",
+                         path, views->count, lights->count);
     return BTF_OK;
 }
 
@@ -249,13 +249,13 @@ btf_status ubo_get_image(const ubo_source *s, uint64_t i, btf_image *img, btf_er
     int v = (int)(i / (uint64_t)s->lights->count), l = (int)(i % (uint64_t)s->lights->count);
     btf_status rc = s->image(s->user, v, l, img, err);
     if (rc == BTF_OK && (img->width != s->width || img->height != s->height || img->channels != 3))
-        rc = btf_fail(err, BTF_E_ARG, "%s: image (view %d, light %d) is %dx%dx%d, expected %dx%dx3",
-                      s->path, v, l, img->width, img->height, img->channels, s->width, s->height);
+        rc = btf__fail(err, BTF_E_ARG, "%s: image (view %d, light %d) is %dx%dx%d, expected %dx%dx3",
+                       s->path, v, l, img->width, img->height, img->channels, s->width, s->height);
     uint64_t n = 3 * (uint64_t)s->width * s->height;
     for (uint64_t j = 0; rc == BTF_OK && j < n; j++)
         if (!isfinite(img->data[j]))
-            rc = btf_fail(err, BTF_E_ARG, "%s: image (view %d, light %d) has a non-finite value",
-                          s->path, v, l);
+            rc = btf__fail(err, BTF_E_ARG, "%s: image (view %d, light %d) has a non-finite value",
+                           s->path, v, l);
     if (rc)
         btf_image_free(img);
     return rc;

@@ -27,11 +27,11 @@ typedef struct cursor {
 
 static btf_status truncated(cursor *c, const char *what, uint64_t need)
 {
-    return btf_fail(c->err, BTF_E_FORMAT,
-                    "%s: truncated at byte %llu: %s needs %llu bytes, %llu remain (the file has "
-                    "%llu)", c->f->name, (unsigned long long)c->pos, what,
-                    (unsigned long long)need, (unsigned long long)(c->f->size - c->pos),
-                    (unsigned long long)c->f->size);
+    return btf__fail(c->err, BTF_E_FORMAT,
+                     "%s: truncated at byte %llu: %s needs %llu bytes, %llu remain (the file has "
+                     "%llu)", c->f->name, (unsigned long long)c->pos, what,
+                     (unsigned long long)need, (unsigned long long)(c->f->size - c->pos),
+                     (unsigned long long)c->f->size);
 }
 
 static btf_status need(cursor *c, uint64_t n, const char *what)
@@ -139,10 +139,10 @@ static btf_status parse_meta(cursor *c, ubo_file *f)
     if (rc)
         return rc;
     if (c->pos - start != meta_size)
-        return btf_fail(c->err, BTF_E_FORMAT,
-                        "%s: meta block of version %u is %llu bytes long but says meta_size %u "
-                        "(the notes' §2a check)", f->name, version,
-                        (unsigned long long)(c->pos - start), meta_size);
+        return btf__fail(c->err, BTF_E_FORMAT,
+                         "%s: meta block of version %u is %llu bytes long but says meta_size %u "
+                         "(the notes' §2a check)", f->name, version,
+                         (unsigned long long)(c->pos - start), meta_size);
     f->info.n_channels = (int)f->nc;
     return BTF_OK;
 }
@@ -152,9 +152,9 @@ static btf_status check_angles(cursor *c, const float *tp, const char *what, uin
     /* theta in [0, pi/2] (a hair over for float rounding), phi finite. */
     if (!isfinite(tp[0]) || !isfinite(tp[1]) || tp[0] < 0.0f || tp[0] > 1.5708f ||
         fabsf(tp[1]) > 100.0f)
-        return btf_fail(c->err, BTF_E_FORMAT,
-                        "%s: %s direction %u has theta %g, phi %g radians: expected theta in "
-                        "[0, pi/2] and a finite phi", c->f->name, what, i, tp[0], tp[1]);
+        return btf__fail(c->err, BTF_E_FORMAT,
+                         "%s: %s direction %u has theta %g, phi %g radians: expected theta in "
+                         "[0, pi/2] and a finite phi", c->f->name, what, i, tp[0], tp[1]);
     return BTF_OK;
 }
 
@@ -167,9 +167,9 @@ static btf_status parse_sampling(cursor *c, ubo_file *f)
         return rc;
     /* Each view takes at least 12 bytes: a bound before any allocation. */
     if (f->nv == 0 || f->nv > (f->size - c->pos) / 12)
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %u views do not fit the file's %llu bytes",
-                        f->name, f->nv, (unsigned long long)f->size);
-    f->view_rad = btf_alloc(f->nv, 2 * sizeof(float), c->err);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %u views do not fit the file's %llu bytes",
+                         f->name, f->nv, (unsigned long long)f->size);
+    f->view_rad = btf__alloc(f->nv, 2 * sizeof(float), c->err);
     if (!f->view_rad)
         return BTF_E_NOMEM;
     for (uint32_t v = 0; v < f->nv; v++) {
@@ -183,20 +183,20 @@ static btf_status parse_sampling(cursor *c, ubo_file *f)
             return rc;
         if (v == 0) {
             if (nl == 0 || nl > (f->size - c->pos) / 8)
-                return btf_fail(c->err, BTF_E_FORMAT,
-                                "%s: %u lights do not fit the file's %llu bytes", f->name, nl,
-                                (unsigned long long)f->size);
+                return btf__fail(c->err, BTF_E_FORMAT,
+                                 "%s: %u lights do not fit the file's %llu bytes", f->name, nl,
+                                 (unsigned long long)f->size);
             f->nl = nl;
-            f->light_rad = btf_alloc(nl, 2 * sizeof(float), c->err);
+            f->light_rad = btf__alloc(nl, 2 * sizeof(float), c->err);
             if (!f->light_rad)
                 return BTF_E_NOMEM;
             rc = get_f32(c, f->light_rad, 2 * (int)nl, "the light directions");
             for (uint32_t l = 0; !rc && l < nl; l++)
                 rc = check_angles(c, f->light_rad + 2 * l, "light", l);
         } else if (nl != f->nl) {
-            return btf_fail(c->err, BTF_E_FORMAT,
-                            "%s: view %u has %u lights, view 0 has %u (the light count must be "
-                            "the same for every view)", f->name, v, nl, f->nl);
+            return btf__fail(c->err, BTF_E_FORMAT,
+                             "%s: view %u has %u lights, view 0 has %u (the light count must be "
+                             "the same for every view)", f->name, v, nl, f->nl);
         } else {
             rc = skip(c, 8 * (uint64_t)nl, "a view's light directions");
         }
@@ -224,8 +224,8 @@ static btf_status parse_size(cursor *c, ubo_file *f)
     if (rc)
         return rc;
     if (f->width < 1 || f->height < 1 || f->width > BTF_MAX_SIDE || f->height > BTF_MAX_SIDE)
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: image size %ux%u: expected sides in 1..%d",
-                        f->name, f->width, f->height, BTF_MAX_SIDE);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: image size %ux%u: expected sides in 1..%d",
+                         f->name, f->width, f->height, BTF_MAX_SIDE);
     return BTF_OK;
 }
 
@@ -234,17 +234,17 @@ static btf_status take_matrix(cursor *c, ubo_matrix *m, uint64_t rows, uint32_t 
                               const char *what)
 {
     if (rows > UINT32_MAX)
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %s has %llu rows", c->f->name, what,
-                        (unsigned long long)rows);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %s has %llu rows", c->f->name, what,
+                         (unsigned long long)rows);
     /* rows < 2^32, k < 2^32, scalar <= 8: the product fits 2^67 only in
      * theory; divide instead of multiplying. */
     uint64_t left = c->f->size - c->pos;
     if (k && rows > left / k / (uint64_t)scalar)
-        return btf_fail(c->err, BTF_E_FORMAT,
-                        "%s: truncated: %s of %llu x %u values of %d bytes does not fit the %llu "
-                        "bytes left at byte %llu (the file has %llu)", c->f->name, what,
-                        (unsigned long long)rows, k, scalar, (unsigned long long)left,
-                        (unsigned long long)c->pos, (unsigned long long)c->f->size);
+        return btf__fail(c->err, BTF_E_FORMAT,
+                         "%s: truncated: %s of %llu x %u values of %d bytes does not fit the %llu "
+                         "bytes left at byte %llu (the file has %llu)", c->f->name, what,
+                         (unsigned long long)rows, k, scalar, (unsigned long long)left,
+                         (unsigned long long)c->pos, (unsigned long long)c->f->size);
     m->p = c->f->data + c->pos;
     m->rows = (uint32_t)rows;
     m->k = k;
@@ -256,9 +256,9 @@ static btf_status take_matrix(cursor *c, ubo_matrix *m, uint64_t rows, uint32_t 
 static btf_status check_scalar(cursor *c, uint32_t s)
 {
     if (s != 2 && s != 4 && s != 8)
-        return btf_fail(c->err, BTF_E_FORMAT,
-                        "%s: scalar size %u at byte %llu: expected 2 (half), 4 or 8", c->f->name,
-                        s, (unsigned long long)(c->pos - 1));
+        return btf__fail(c->err, BTF_E_FORMAT,
+                         "%s: scalar size %u at byte %llu: expected 2 (half), 4 or 8", c->f->name,
+                         s, (unsigned long long)(c->pos - 1));
     return BTF_OK;
 }
 
@@ -275,19 +275,19 @@ static btf_status factors_fit(cursor *c, const char *what, uint32_t k, uint32_t 
     if (k <= left / per)
         return BTF_OK;
     if (k > (UINT64_MAX - pos) / per) /* beyond 2^64 bytes */
-        return btf_fail(c->err, BTF_E_FORMAT,
-                        "%s: truncated: %s (%u components of %u bytes: S, U of %u rows, SxV of "
-                        "%u rows) does not fit the %llu bytes left at byte %llu (the file has "
-                        "%llu)", c->f->name, what, k, scalar, rows, cols,
-                        (unsigned long long)left, (unsigned long long)pos,
-                        (unsigned long long)size);
+        return btf__fail(c->err, BTF_E_FORMAT,
+                         "%s: truncated: %s (%u components of %u bytes: S, U of %u rows, SxV of "
+                         "%u rows) does not fit the %llu bytes left at byte %llu (the file has "
+                         "%llu)", c->f->name, what, k, scalar, rows, cols,
+                         (unsigned long long)left, (unsigned long long)pos,
+                         (unsigned long long)size);
     uint64_t bytes = k * per;
-    return btf_fail(c->err, BTF_E_FORMAT,
-                    "%s: truncated: %s (%u components of %u bytes: S, U of %u rows, SxV of %u "
-                    "rows; %llu bytes from byte %llu) does not fit: expected a file of %s%llu "
-                    "bytes, the file has %llu", c->f->name, what, k, scalar, rows, cols,
-                    (unsigned long long)bytes, (unsigned long long)pos, last ? "" : "at least ",
-                    (unsigned long long)(pos + bytes), (unsigned long long)size);
+    return btf__fail(c->err, BTF_E_FORMAT,
+                     "%s: truncated: %s (%u components of %u bytes: S, U of %u rows, SxV of %u "
+                     "rows; %llu bytes from byte %llu) does not fit: expected a file of %s%llu "
+                     "bytes, the file has %llu", c->f->name, what, k, scalar, rows, cols,
+                     (unsigned long long)bytes, (unsigned long long)pos, last ? "" : "at least ",
+                     (unsigned long long)(pos + bytes), (unsigned long long)size);
 }
 
 /* §3: DFMF, one U and one SxV per channel. */
@@ -305,8 +305,8 @@ static btf_status parse_dfmf(cursor *c, ubo_file *f)
         return rc;
     f->info.colour_model = (int)model;
     if (f->nc != 3)
-        return btf_fail(c->err, BTF_E_UNSUPPORTED,
-                        "%s: %u channels: only 3-channel (RGB) files are supported", f->name, f->nc);
+        return btf__fail(c->err, BTF_E_UNSUPPORTED,
+                         "%s: %u channels: only 3-channel (RGB) files are supported", f->name, f->nc);
     uint64_t lv = (uint64_t)f->nv * f->nl, px = (uint64_t)f->width * f->height;
     for (int ch = 0; ch < 3; ch++) {
         uint32_t s, k, rows, cols;
@@ -323,17 +323,17 @@ static btf_status parse_dfmf(cursor *c, ubo_file *f)
             return rc;
         int tr = rows == px && cols == lv && !(rows == lv && cols == px);
         if (!tr && (rows != lv || cols != px))
-            return btf_fail(c->err, BTF_E_FORMAT,
-                            "%s: channel %d is %u x %u: expected %llu (views x lights) x %llu "
-                            "(pixels) or the transpose", f->name, ch, rows, cols,
-                            (unsigned long long)lv, (unsigned long long)px);
+            return btf__fail(c->err, BTF_E_FORMAT,
+                             "%s: channel %d is %u x %u: expected %llu (views x lights) x %llu "
+                             "(pixels) or the transpose", f->name, ch, rows, cols,
+                             (unsigned long long)lv, (unsigned long long)px);
         if (k < 1)
-            return btf_fail(c->err, BTF_E_FORMAT, "%s: channel %d has 0 components", f->name,
-                            ch);
+            return btf__fail(c->err, BTF_E_FORMAT, "%s: channel %d has 0 components", f->name,
+                             ch);
         if (ch > 0 && tr != f->transposed)
-            return btf_fail(c->err, BTF_E_FORMAT,
-                            "%s: channel %d's layout is transposed unlike channel 0's", f->name,
-                            ch);
+            return btf__fail(c->err, BTF_E_FORMAT,
+                             "%s: channel %d's layout is transposed unlike channel 0's", f->name,
+                             ch);
         f->transposed = tr;
         f->info.components[ch] = (int)k;
         if (ch == 0 || (int)s > f->info.scalar_size)
@@ -363,8 +363,8 @@ static btf_status parse_fmf(cursor *c, ubo_file *f, int extended)
         uint32_t hv, drr = 0, a = 0, b = 0;
         rc = get_u8(c, &hv, "the FMF header version");
         if (!rc && hv >= 3)
-            return btf_fail(c->err, BTF_E_UNSUPPORTED,
-                            "%s: FMF header version %u is not supported (1 or 2)", f->name, hv);
+            return btf__fail(c->err, BTF_E_UNSUPPORTED,
+                             "%s: FMF header version %u is not supported (1 or 2)", f->name, hv);
         if (!rc && hv >= 1)
             rc = get_u32(c, &drr, "dynamic_range_reduction_method");
         if (!rc && hv >= 2) {
@@ -393,16 +393,16 @@ static btf_status parse_fmf(cursor *c, ubo_file *f, int extended)
         return rc;
     uint64_t lv = (uint64_t)f->nv * f->nl, px = (uint64_t)f->width * f->height;
     if (f->nc != 3)
-        return btf_fail(c->err, BTF_E_UNSUPPORTED,
-                        "%s: %u channels: only 3-channel (RGB) files are supported", f->name, f->nc);
+        return btf__fail(c->err, BTF_E_UNSUPPORTED,
+                         "%s: %u channels: only 3-channel (RGB) files are supported", f->name, f->nc);
     int tr = rows == 3 * px && cols == lv && !(rows == 3 * lv && cols == px);
     if (!tr && (rows != 3 * lv || cols != px))
-        return btf_fail(c->err, BTF_E_FORMAT,
-                        "%s: FMF matrix is %u x %u: expected %llu (3 x views x lights) x %llu "
-                        "(pixels) or 3 x pixels x (views x lights)", f->name, rows, cols,
-                        (unsigned long long)(3 * lv), (unsigned long long)px);
+        return btf__fail(c->err, BTF_E_FORMAT,
+                         "%s: FMF matrix is %u x %u: expected %llu (3 x views x lights) x %llu "
+                         "(pixels) or 3 x pixels x (views x lights)", f->name, rows, cols,
+                         (unsigned long long)(3 * lv), (unsigned long long)px);
     if (k < 1)
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: FMF matrix has 0 components", f->name);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: FMF matrix has 0 components", f->name);
     f->transposed = tr;
     f->info.scalar_size = (int)s;
     rc = factors_fit(c, "the FMF matrix", k, s, rows, cols, 1);
@@ -424,9 +424,9 @@ static btf_status parse_fmf(cursor *c, ubo_file *f, int extended)
 static btf_status parse_pvf_slots(cursor *c, ubo_file *f, uint32_t slots)
 {
     if (slots != f->nv)
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %u PVF view slots for %u views", f->name,
-                        slots, f->nv);
-    f->slots = btf_calloc(slots, sizeof *f->slots, c->err);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %u PVF view slots for %u views", f->name,
+                         slots, f->nv);
+    f->slots = btf__calloc(slots, sizeof *f->slots, c->err);
     if (!f->slots)
         return BTF_E_NOMEM;
     f->num_slots = slots;
@@ -449,10 +449,10 @@ static btf_status parse_pvf_slots(cursor *c, ubo_file *f, uint32_t slots)
         int per_pixel = sl->dim == 3 * f->nl && sl->num_weights == px;
         int per_light = (uint64_t)sl->dim == 3 * px && sl->num_weights == f->nl;
         if (!per_pixel && !per_light)
-            return btf_fail(c->err, BTF_E_FORMAT,
-                            "%s: PVF slot %u has dim %u and %u weights: expected 3 x lights and "
-                            "pixels, or 3 x pixels and lights", f->name, v, sl->dim,
-                            sl->num_weights);
+            return btf__fail(c->err, BTF_E_FORMAT,
+                             "%s: PVF slot %u has dim %u and %u weights: expected 3 x lights and "
+                             "pixels, or 3 x pixels and lights", f->name, v, sl->dim,
+                             sl->num_weights);
         if (v == 0 || (int)s > f->info.scalar_size)
             f->info.scalar_size = (int)s;
         if ((int)sl->k > f->info.components[0])
@@ -484,13 +484,13 @@ static btf_status parse_bdif(cursor *c, ubo_file *f)
     if (rc)
         return rc;
     if (f->lines_per_chunk < 1)
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: 0 scan lines per chunk", f->name);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: 0 scan lines per chunk", f->name);
     if (comp == 1)
-        return btf_fail(c->err, BTF_E_UNSUPPORTED,
-                        "%s: BDIF compression 1 (bzip2) is not supported (0 and 2 are)", f->name);
+        return btf__fail(c->err, BTF_E_UNSUPPORTED,
+                         "%s: BDIF compression 1 (bzip2) is not supported (0 and 2 are)", f->name);
     if (comp != 0 && comp != 2)
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: BDIF compression %u: expected 0, 1 or 2",
-                        f->name, comp);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: BDIF compression %u: expected 0, 1 or 2",
+                         f->name, comp);
     f->compression = (int)comp;
     f->info.scalar_size = 2;
     uint64_t px = (uint64_t)f->width * f->height;
@@ -504,7 +504,7 @@ static btf_status parse_bdif(cursor *c, ubo_file *f)
         return rc;
     f->stored = px;
     if (comp == 2) {
-        f->rank = btf_alloc(px, sizeof *f->rank, c->err);
+        f->rank = btf__alloc(px, sizeof *f->rank, c->err);
         if (!f->rank)
             return BTF_E_NOMEM;
         uint64_t n = 0;
@@ -526,11 +526,11 @@ static btf_status parse_bdif(cursor *c, ubo_file *f)
         if (rc)
             return rc;
         if (bytes != texels * per_texel)
-            return btf_fail(c->err, BTF_E_FORMAT,
-                            "%s: chunk %llu says %u bytes: expected %llu (%llu texels of %llu "
-                            "bytes)", f->name, (unsigned long long)i, bytes,
-                            (unsigned long long)(texels * per_texel), (unsigned long long)texels,
-                            (unsigned long long)per_texel);
+            return btf__fail(c->err, BTF_E_FORMAT,
+                             "%s: chunk %llu says %u bytes: expected %llu (%llu texels of %llu "
+                             "bytes)", f->name, (unsigned long long)i, bytes,
+                             (unsigned long long)(texels * per_texel), (unsigned long long)texels,
+                             (unsigned long long)per_texel);
         rc = skip(c, bytes, "a chunk");
         if (rc)
             return rc;
@@ -577,10 +577,10 @@ static btf_status check_finite_pvf(const ubo_file *f, btf_error *err)
             ubo_matrix x = {m[i].p, sl->scalar, (uint32_t)m[i].rows, m[i].k};
             uint64_t bad;
             if (!matrix_finite(&x, &bad))
-                return btf_fail(err, BTF_E_DATA, "%s: %s of PVF view slot %u has a NaN or Inf at "
-                                "row %llu, component %llu", f->name, m[i].what, v,
-                                (unsigned long long)(bad / m[i].k),
-                                (unsigned long long)(bad % m[i].k));
+                return btf__fail(err, BTF_E_DATA, "%s: %s of PVF view slot %u has a NaN or Inf at "
+                                 "row %llu, component %llu", f->name, m[i].what, v,
+                                 (unsigned long long)(bad / m[i].k),
+                                 (unsigned long long)(bad % m[i].k));
         }
     }
     return BTF_OK;
@@ -598,13 +598,13 @@ static btf_status check_finite(const ubo_file *f, btf_error *err)
         const char *name = names[f->variant == UBO_FMF ? 3 : ch];
         uint64_t bad;
         if (!matrix_finite(&f->u[ch], &bad))
-            return btf_fail(err, BTF_E_DATA, "%s: U%s has a NaN or Inf at row %llu, component "
-                            "%llu", f->name, name, (unsigned long long)(bad / f->u[ch].k),
-                            (unsigned long long)(bad % f->u[ch].k));
+            return btf__fail(err, BTF_E_DATA, "%s: U%s has a NaN or Inf at row %llu, component "
+                             "%llu", f->name, name, (unsigned long long)(bad / f->u[ch].k),
+                             (unsigned long long)(bad % f->u[ch].k));
         if (!matrix_finite(&f->sxv[ch], &bad))
-            return btf_fail(err, BTF_E_DATA, "%s: SxV%s has a NaN or Inf at row %llu, component "
-                            "%llu", f->name, name, (unsigned long long)(bad / f->sxv[ch].k),
-                            (unsigned long long)(bad % f->sxv[ch].k));
+            return btf__fail(err, BTF_E_DATA, "%s: SxV%s has a NaN or Inf at row %llu, component "
+                             "%llu", f->name, name, (unsigned long long)(bad / f->sxv[ch].k),
+                             (unsigned long long)(bad % f->sxv[ch].k));
     }
     return BTF_OK;
 }
@@ -654,8 +654,8 @@ static btf_status parse_pvf(cursor *c, ubo_file *f, int rotations, uint64_t *sta
             rc = get_u32(c, &slots, "num_view_slots");
     }
     if (!rc && f->nc != 3)
-        rc = btf_fail(c->err, BTF_E_UNSUPPORTED,
-                      "%s: %u channels: only 3-channel (RGB) files are supported", f->name, f->nc);
+        rc = btf__fail(c->err, BTF_E_UNSUPPORTED,
+                       "%s: %u channels: only 3-channel (RGB) files are supported", f->name, f->nc);
     *start = c->pos;
     /* num_components (k) is informational: each slot has its own K. */
     return rc ? rc : parse_pvf_slots(c, f, slots);
@@ -685,24 +685,24 @@ static btf_status check_parsed(cursor *c, ubo_file *f, int skip_finite, uint64_t
     btf_error *err = c->err;
     btf_status rc = BTF_OK;
     if (c->pos != f->size)
-        rc = btf_fail(err, BTF_E_FORMAT,
-                      "%s: %llu byte%s after the end of the %s data at byte %llu: expected a "
-                      "file of %llu bytes, the file has %llu", f->name,
-                      (unsigned long long)(f->size - c->pos), f->size - c->pos == 1 ? "" : "s",
-                      f->info.variant,
-                      (unsigned long long)c->pos, (unsigned long long)c->pos,
-                      (unsigned long long)f->size);
+        rc = btf__fail(err, BTF_E_FORMAT,
+                       "%s: %llu byte%s after the end of the %s data at byte %llu: expected a "
+                       "file of %llu bytes, the file has %llu", f->name,
+                       (unsigned long long)(f->size - c->pos), f->size - c->pos == 1 ? "" : "s",
+                       f->info.variant,
+                       (unsigned long long)c->pos, (unsigned long long)c->pos,
+                       (unsigned long long)f->size);
     if (!rc && f->variant == UBO_DFMF && !model_supported(f->info.colour_model))
-        rc = btf_fail(err, BTF_E_UNSUPPORTED,
-                      "%s: colour model %d not supported (0, 1, 3, 4, 9, 10, 11 and 12 are)",
-                      f->name, f->info.colour_model);
+        rc = btf__fail(err, BTF_E_UNSUPPORTED,
+                       "%s: colour model %d not supported (0, 1, 3, 4, 9, 10, 11 and 12 are)",
+                       f->name, f->info.colour_model);
     if (!rc && f->info.cosine_flag)
         for (uint32_t l = 0; l < f->nl && !rc; l++)
             if (cosf(f->light_rad[2 * l]) < 1e-3f)
-                rc = btf_fail(err, BTF_E_DATA,
-                              "%s: cosine_flag is set and light %u lies at theta %g degrees: "
-                              "cannot divide by its cosine", f->name, l,
-                              f->light_rad[2 * l] * 57.29577951308232);
+                rc = btf__fail(err, BTF_E_DATA,
+                               "%s: cosine_flag is set and light %u lies at theta %g degrees: "
+                               "cannot divide by its cosine", f->name, l,
+                               f->light_rad[2 * l] * 57.29577951308232);
     if (!rc && !skip_finite)
         rc = check_finite(f, err);
     if (rc)
@@ -757,10 +757,10 @@ static btf_status unknown_signature(const unsigned char *data, uint64_t size, co
         k += (size_t)snprintf(shown + k, sizeof shown - k,
                               data[i] >= 33 && data[i] < 127 ? "%c" : "\\x%02x", data[i]);
     shown[k] = '\0';
-    return btf_fail(err, BTF_E_FORMAT,
-                    "%s: unknown signature \"%s\": expected a Bonn .btf file (!DFMF08FCR, "
-                    "!FMF12FCER, !FMF06FCR, !FMF06FC, !PVF06FCR, !PVF06FC, !BDIF06R2!)",
-                    name ? name : "btf", shown);
+    return btf__fail(err, BTF_E_FORMAT,
+                     "%s: unknown signature \"%s\": expected a Bonn .btf file (!DFMF08FCR, "
+                     "!FMF12FCER, !FMF06FCR, !FMF06FC, !PVF06FCR, !PVF06FC, !BDIF06R2!)",
+                     name ? name : "btf", shown);
 }
 
 /* The signature is the longest one the file starts with (§1). "!FMF06FC"

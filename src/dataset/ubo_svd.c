@@ -28,7 +28,7 @@
 static void jacobi(double *a, int n, double *val, double *vec)
 {
     static const btf_linalg_jacobi_rule rule = {.max_sweeps = 60, .relative = 1e-30};
-    btf_linalg_jacobi(a, n, &rule, val, vec);
+    btf__linalg_jacobi(a, n, &rule, val, vec);
 }
 
 /* Orthonormalises the b columns of q (n x b) by modified Gram-Schmidt,
@@ -122,10 +122,10 @@ static void take_top(const double *vals, const double *vecs, int n, int m, int k
 btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_error *err)
 {
     if (k < 1 || k > n)
-        return btf_fail(err, BTF_E_ARG, "eigenpairs: %d of a %d x %d matrix", k, n, n);
+        return btf__fail(err, BTF_E_ARG, "eigenpairs: %d of a %d x %d matrix", k, n, n);
     if (n <= 256) {
-        double *vals = btf_alloc((size_t)n, sizeof *vals, err);
-        double *vecs = btf_alloc((size_t)n * n, sizeof *vecs, err);
+        double *vals = btf__alloc((size_t)n, sizeof *vals, err);
+        double *vecs = btf__alloc((size_t)n * n, sizeof *vecs, err);
         if (!vals || !vecs) {
             free(vals);
             free(vecs);
@@ -138,12 +138,12 @@ btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_
         return BTF_OK;
     }
     int b = k + 8 < n ? k + 8 : n;
-    double *q = btf_alloc((size_t)n * b, sizeof *q, err);
-    double *z = btf_alloc((size_t)n * b, sizeof *z, err);
-    double *t = btf_alloc((size_t)b * b, sizeof *t, err);
-    double *tv = btf_alloc((size_t)b * b, sizeof *tv, err);
-    double *tval = btf_alloc((size_t)b, sizeof *tval, err);
-    double *prev = btf_calloc((size_t)b, sizeof *prev, err);
+    double *q = btf__alloc((size_t)n * b, sizeof *q, err);
+    double *z = btf__alloc((size_t)n * b, sizeof *z, err);
+    double *t = btf__alloc((size_t)b * b, sizeof *t, err);
+    double *tv = btf__alloc((size_t)b * b, sizeof *tv, err);
+    double *tval = btf__alloc((size_t)b, sizeof *tval, err);
+    double *prev = btf__calloc((size_t)b, sizeof *prev, err);
     btf_status rc = q && z && t && tv && tval && prev ? BTF_OK : BTF_E_NOMEM;
     if (rc == BTF_OK) {
         uint64_t s = 0x9e3779b97f4a7c15ull; /* a fixed start: splitmix64 */
@@ -201,9 +201,9 @@ btf_status ubo_top_eigen(double *g, int n, int k, double *val, double *vec, btf_
             }
         take_top(tval, z, n, b, k, val, vec);
         if (!converged)
-            rc = btf_fail(err, BTF_E_NUMERIC,
-                          "the eigenpairs of a %d x %d Gram matrix did not converge in 1000 "
-                          "subspace iterations", n, n);
+            rc = btf__fail(err, BTF_E_NUMERIC,
+                           "the eigenpairs of a %d x %d Gram matrix did not converge in 1000 "
+                           "subspace iterations", n, n);
     }
     BTF_FREE_ALL(q, z, t, tv, tval, prev);
     return rc;

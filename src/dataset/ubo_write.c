@@ -64,21 +64,21 @@ static void put_u32_at(unsigned char **p, uint32_t v)
     *p += 4;
 }
 
-btf_status btf_ubo2014_write_factors(const char *path, const btf_dirset *views,
-                                     const btf_dirset *lights, int width, int height,
-                                     const btf_ubo2014_factors *f, btf_error *err)
+btf_status btf__ubo2014_write_factors(const char *path, const btf_dirset *views,
+                                      const btf_dirset *lights, int width, int height,
+                                      const btf_ubo2014_factors *f, btf_error *err)
 {
     btf_status rc = ubo_check_sets(path, views, lights, width, height, err);
     if (rc)
         return rc;
     int s = f->scalar_size ? f->scalar_size : 2;
     if (s != 2 && s != 4 && s != 8)
-        return btf_fail(err, BTF_E_ARG, "%s: scalar size %d: expected 2, 4 or 8", path, s);
+        return btf__fail(err, BTF_E_ARG, "%s: scalar size %d: expected 2, 4 or 8", path, s);
     int kmax = 0;
     for (int c = 0; c < 3; c++) {
         if (f->components[c] < 1 || !f->u[c] || !f->sxv[c])
-            return btf_fail(err, BTF_E_ARG, "%s: channel %d has %d components or no matrices",
-                            path, c, f->components[c]);
+            return btf__fail(err, BTF_E_ARG, "%s: channel %d has %d components or no matrices",
+                             path, c, f->components[c]);
         kmax = f->components[c] > kmax ? f->components[c] : kmax;
     }
     uint64_t rows = (uint64_t)views->count * lights->count, cols = (uint64_t)width * height;
@@ -135,18 +135,18 @@ static btf_status check_fmf(const char *path, const btf_dirset *views, const btf
     uint64_t n = (uint64_t)views->count * lights->count, px = (uint64_t)width * height;
     int normal = f->rows == 3 * n && f->cols == px, transposed = f->rows == 3 * px && f->cols == n;
     if (!normal && !transposed)
-        return btf_fail(err, BTF_E_ARG, "%s: FMF matrix %u x %u: expected %llu x %llu or %llu x "
-                        "%llu", path, f->rows, f->cols, (unsigned long long)(3 * n),
-                        (unsigned long long)px, (unsigned long long)(3 * px),
-                        (unsigned long long)n);
+        return btf__fail(err, BTF_E_ARG, "%s: FMF matrix %u x %u: expected %llu x %llu or %llu x "
+                         "%llu", path, f->rows, f->cols, (unsigned long long)(3 * n),
+                         (unsigned long long)px, (unsigned long long)(3 * px),
+                         (unsigned long long)n);
     if (f->scalar_size != 2 && f->scalar_size != 4 && f->scalar_size != 8)
-        return btf_fail(err, BTF_E_ARG, "%s: scalar size %d: expected 2, 4 or 8", path,
-                        f->scalar_size);
+        return btf__fail(err, BTF_E_ARG, "%s: scalar size %d: expected 2, 4 or 8", path,
+                         f->scalar_size);
     if (f->k < 1 || !f->u || !f->sxv)
-        return btf_fail(err, BTF_E_ARG, "%s: FMF with %u components or no matrices", path, f->k);
+        return btf__fail(err, BTF_E_ARG, "%s: FMF with %u components or no matrices", path, f->k);
     if (f->header_version < 0 || f->header_version > 2)
-        return btf_fail(err, BTF_E_ARG, "%s: FMF header version %d: expected 0, 1 or 2", path,
-                        f->header_version);
+        return btf__fail(err, BTF_E_ARG, "%s: FMF header version %d: expected 0, 1 or 2", path,
+                         f->header_version);
     return BTF_OK;
 }
 
@@ -172,8 +172,8 @@ btf_status ubo_write_fmf(const char *path, const btf_dirset *views, const btf_di
     int rotations = 0, extended = 0;
     btf_status rc = ubo_check_sets(path, views, lights, width, height, err);
     if (rc == BTF_OK && !fmf_signature(f->signature, &rotations, &extended))
-        rc = btf_fail(err, BTF_E_ARG, "%s: FMF signature \"%s\": expected !FMF12FCER, !FMF06FCR "
-                      "or !FMF06FC", path, f->signature ? f->signature : "(none)");
+        rc = btf__fail(err, BTF_E_ARG, "%s: FMF signature \"%s\": expected !FMF12FCER, !FMF06FCR "
+                       "or !FMF06FC", path, f->signature ? f->signature : "(none)");
     if (rc == BTF_OK)
         rc = check_fmf(path, views, lights, width, height, f, err);
     if (rc)
@@ -211,9 +211,9 @@ static btf_status write_bdif(const ubo_source *src, btf_ubo2014_write_stats *st,
     uint64_t per_texel = n * 3 * 2, a = (uint64_t)width * lines;
     uint64_t chunks = (px + a - 1) / a;
     if (a * per_texel > UINT32_MAX)
-        return btf_fail(err, BTF_E_ARG, "%s: a chunk of %llu texels of %llu bytes exceeds the "
-                        "format's 4 GiB chunk size", path, (unsigned long long)a,
-                        (unsigned long long)per_texel);
+        return btf__fail(err, BTF_E_ARG, "%s: a chunk of %llu texels of %llu bytes exceeds the "
+                         "format's 4 GiB chunk size", path, (unsigned long long)a,
+                         (unsigned long long)per_texel);
     ubo_bytes h = {0};
     ubo_common_header(&h, "!BDIF06R2!", src->views, src->lights, width, src->height, 0);
     ubo_put_u32(&h, lines);
@@ -273,8 +273,8 @@ static btf_status write_dfmf(const ubo_source *src, const btf_ubo2014_write_opts
         f.u[c] = fa.u[c];
         f.sxv[c] = fa.sxv[c];
     }
-    rc = btf_ubo2014_write_factors(src->path, src->views, src->lights, src->width, src->height, &f,
-                                   err);
+    rc = btf__ubo2014_write_factors(src->path, src->views, src->lights, src->width, src->height, &f,
+                                    err);
     ubo_factors_free(&fa);
     return rc;
 }
@@ -326,14 +326,14 @@ static const struct {
 static btf_status check_opts(const char *path, const btf_ubo2014_write_opts *o, btf_error *err)
 {
     if (o->variant < 0 || o->variant >= N_VARIANTS)
-        return btf_fail(err, BTF_E_ARG, "%s: variant %d: expected 0 (DFMF) to %d (PVF06)", path,
-                        o->variant, N_VARIANTS - 1);
+        return btf__fail(err, BTF_E_ARG, "%s: variant %d: expected 0 (DFMF) to %d (PVF06)", path,
+                         o->variant, N_VARIANTS - 1);
     if (o->components < 1)
-        return btf_fail(err, BTF_E_ARG, "%s: %d components: expected at least 1", path,
-                        o->components);
+        return btf__fail(err, BTF_E_ARG, "%s: %d components: expected at least 1", path,
+                         o->components);
     if (o->variant != BTF_UBO2014_BDIF && o->scalar_size != 2 && o->scalar_size != 4)
-        return btf_fail(err, BTF_E_ARG, "%s: scalar size %d: expected 2 (half) or 4 (float)",
-                        path, o->scalar_size);
+        return btf__fail(err, BTF_E_ARG, "%s: scalar size %d: expected 2 (half) or 4 (float)",
+                         path, o->scalar_size);
     return BTF_OK;
 }
 
@@ -343,7 +343,7 @@ btf_status btf_ubo2014_write(const char *path, const btf_dirset *views, const bt
                              btf_error *err)
 {
     btf_ubo2014_write_opts d = btf_ubo2014_write_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_ubo2014_write", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_ubo2014_write", err))
         return BTF_E_ARG;
     if (o.components == 0)
         o.components = d.components;
@@ -357,7 +357,7 @@ btf_status btf_ubo2014_write(const char *path, const btf_dirset *views, const bt
     if (rc == BTF_OK)
         rc = check_opts(path, &o, err);
     if (rc == BTF_OK && !image)
-        rc = btf_fail(err, BTF_E_ARG, "%s: no image callback", path);
+        rc = btf__fail(err, BTF_E_ARG, "%s: no image callback", path);
     if (rc)
         return rc;
     ubo_source src = {path, views, lights, width, height, image, user, o.progress,

@@ -91,18 +91,18 @@ btf_status ubo_write_pvf(const char *path, const btf_dirset *views, const btf_di
 {
     btf_status rc = ubo_check_sets(path, views, lights, width, height, err);
     if (rc == BTF_OK && !pvf_signature_ok(pv->signature))
-        rc = btf_fail(err, BTF_E_ARG, "%s: PVF signature \"%s\": expected !PVF06FCR or !PVF06FC",
-                      path, pv->signature ? pv->signature : "(none)");
+        rc = btf__fail(err, BTF_E_ARG, "%s: PVF signature \"%s\": expected !PVF06FCR or !PVF06FC",
+                       path, pv->signature ? pv->signature : "(none)");
     int s = pv->scalar_size;
     if (rc == BTF_OK && s != 2 && s != 4 && s != 8)
-        rc = btf_fail(err, BTF_E_ARG, "%s: scalar size %d: expected 2, 4 or 8", path, s);
+        rc = btf__fail(err, BTF_E_ARG, "%s: scalar size %d: expected 2, 4 or 8", path, s);
     if (rc)
         return rc;
     uint64_t body = 0;
     for (int v = 0; v < views->count; v++) {
         const ubo_pvf_view *sl = &pv->views[v];
         if (!sl->mean || !sl->c || !sl->w)
-            return btf_fail(err, BTF_E_ARG, "%s: PVF view %d has no matrices", path, v);
+            return btf__fail(err, BTF_E_ARG, "%s: PVF view %d has no matrices", path, v);
         body += slot_bytes(s, sl->k, sl->num_weights, sl->dim);
     }
     ubo_bytes h = {0};
@@ -208,17 +208,17 @@ static btf_status fit_weights(const float *x, const double *mu, uint64_t px, uin
                               uint32_t k, int s, const float *mean, const float *c, float *w,
                               double sum2[3], double maxe[3], btf_error *err)
 {
-    double *l = btf_calloc((size_t)k * k, sizeof *l, err), b[UBO_MAX_COMPONENTS];
+    double *l = btf__calloc((size_t)k * k, sizeof *l, err), b[UBO_MAX_COMPONENTS];
     if (!l)
         return BTF_E_NOMEM;
     for (uint64_t d = 0; d < dim; d++)
         for (uint32_t i = 0; i < k; i++)
             for (uint32_t j = 0; j <= i; j++)
                 l[i * k + j] += (double)c[d * k + i] * c[d * k + j];
-    if (btf_linalg_cholesky(l, (int)k, 0, (int)k, l) != 0) {
+    if (btf__linalg_cholesky(l, (int)k, 0, (int)k, l) != 0) {
         free(l);
-        return btf_fail(err, BTF_E_NUMERIC, "a PVF view's rounded components are dependent; use "
-                        "fewer components");
+        return btf__fail(err, BTF_E_NUMERIC, "a PVF view's rounded components are dependent; use "
+                         "fewer components");
     }
     for (uint64_t p = 0; p < px; p++) {
         const float *row = x + p * dim;
@@ -228,7 +228,7 @@ static btf_status fit_weights(const float *x, const double *mu, uint64_t px, uin
         for (uint64_t d = 0; d < dim; d++)
             for (uint32_t j = 0; j < k; j++)
                 b[j] += ((double)row[d] + mu[d] - mean[d]) * c[d * k + j];
-        btf_linalg_cholesky_solve(l, (int)k, b);
+        btf__linalg_cholesky_solve(l, (int)k, b);
         for (uint32_t j = 0; j < k; j++)
             wr[j] = ubo_stored((float)b[j], s);
         for (uint64_t d = 0; d < dim; d++) {
@@ -255,11 +255,11 @@ static void work_free(pvf_work *w)
 static btf_status work_alloc(pvf_work *w, uint64_t px, uint64_t dim, uint32_t k, btf_error *err)
 {
     uint64_t n = px <= dim ? px : dim;
-    w->x = btf_alloc(px * dim, sizeof *w->x, err);
-    w->g = btf_alloc(n * n, sizeof *w->g, err);
-    w->mu = btf_alloc(dim, sizeof *w->mu, err);
-    w->val = btf_alloc(k, sizeof *w->val, err);
-    w->vec = btf_alloc(n * k, sizeof *w->vec, err);
+    w->x = btf__alloc(px * dim, sizeof *w->x, err);
+    w->g = btf__alloc(n * n, sizeof *w->g, err);
+    w->mu = btf__alloc(dim, sizeof *w->mu, err);
+    w->val = btf__alloc(k, sizeof *w->val, err);
+    w->vec = btf__alloc(n * k, sizeof *w->vec, err);
     return w->x && w->g && w->mu && w->val && w->vec ? BTF_OK : BTF_E_NOMEM;
 }
 
@@ -289,7 +289,7 @@ static btf_status view_slot(const ubo_source *src, int v, uint32_t k, int s, pvf
     btf_status rc = read_view(src, v, w->x, total, err);
     if (rc)
         return rc;
-    float *mean = btf_alloc(dim, sizeof *mean, err);
+    float *mean = btf__alloc(dim, sizeof *mean, err);
     if (!mean)
         return BTF_E_NOMEM;
     out->mean = mean;
@@ -299,8 +299,8 @@ static btf_status view_slot(const ubo_source *src, int v, uint32_t k, int s, pvf
     if (rc)
         return rc;
     uint32_t kc = (uint32_t)ubo_keep_components(w->val, (int)kn);
-    float *c = btf_alloc(dim * kc, sizeof *c, err), *wt = btf_alloc(px * kc, sizeof *wt, err);
-    float *ev = btf_alloc(kc, sizeof *ev, err);
+    float *c = btf__alloc(dim * kc, sizeof *c, err), *wt = btf__alloc(px * kc, sizeof *wt, err);
+    float *ev = btf__alloc(kc, sizeof *ev, err);
     out->c = c, out->w = wt, out->ev = ev;
     if (!c || !wt || !ev)
         return BTF_E_NOMEM;
@@ -321,17 +321,17 @@ btf_status ubo_write_pvf_images(const ubo_source *src, const char *signature, in
     uint64_t n = px <= dim ? px : dim;
     uint32_t k = (uint32_t)((uint64_t)components < n ? (uint64_t)components : n);
     if (k > UBO_MAX_COMPONENTS)
-        return btf_fail(err, BTF_E_ARG, "%s: %u components: at most %d", path, k,
-                        UBO_MAX_COMPONENTS);
+        return btf__fail(err, BTF_E_ARG, "%s: %u components: at most %d", path, k,
+                         UBO_MAX_COMPONENTS);
     uint64_t need = px * dim * 4 + n * n * 8 + (uint64_t)nv * (dim + px) * k * 4;
     if (n > 46340 || need > max_bytes)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: the PCA of %d views of %llu pixels in "
-                        "%llu dimensions needs %llu bytes of working memory, over the cap of "
-                        "%llu (btf_ubo2014_write_opts.max_bytes)", path, nv,
-                        (unsigned long long)px, (unsigned long long)dim,
-                        (unsigned long long)need, (unsigned long long)max_bytes);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "%s: the PCA of %d views of %llu pixels in "
+                         "%llu dimensions needs %llu bytes of working memory, over the cap of "
+                         "%llu (btf_ubo2014_write_opts.max_bytes)", path, nv,
+                         (unsigned long long)px, (unsigned long long)dim,
+                         (unsigned long long)need, (unsigned long long)max_bytes);
     pvf_work w = {0};
-    pvf_slots sl = {btf_calloc((size_t)nv, sizeof *sl.v, err), nv};
+    pvf_slots sl = {btf__calloc((size_t)nv, sizeof *sl.v, err), nv};
     btf_status rc = sl.v ? work_alloc(&w, px, dim, k, err) : BTF_E_NOMEM;
     double total[3] = {0}, sum2[3] = {0}, maxe[3] = {0};
     uint32_t kmax = 0;

@@ -45,7 +45,7 @@ static int render_one(const gen_job *j, int vi, int li, btf_error *err)
 {
     btf_dir v = j->dirs->dirs[vi], l = j->dirs->dirs[li];
     btf_image img = {0};
-    int rc = btf_material_render_maps(j->m, j->views[vi], j->lights[li], v, l, &img, err);
+    int rc = btf__material_render_maps(j->m, j->views[vi], j->lights[li], v, l, &img, err);
     if (rc)
         return rc;
     char folder[32], name[64], path[4096];
@@ -53,7 +53,7 @@ static int render_one(const gen_job *j, int vi, int li, btf_error *err)
     snprintf(name, sizeof name, "%s/%05d tl%03d pl%03d tv%03d pv%03d.jpg", folder,
              li * j->dirs->count + vi, (int)(l.theta + 0.5), (int)(l.phi + 0.5),
              (int)(v.theta + 0.5), (int)(v.phi + 0.5));
-    rc = btf_path_join(path, sizeof path, j->dir, name, err);
+    rc = btf__path_join(path, sizeof path, j->dir, name, err);
     if (rc == 0)
         rc = btf_image_write_jpeg(path, &img, j->quality, err);
     btf_image_free(&img);
@@ -67,8 +67,8 @@ static btf_status map_job(void *user, int t, int worker, btf_error *err)
     gen_job *j = user;
     int n = j->dirs->count;
     if (t < n)
-        return btf_view_map_make(j->m, j->dirs->dirs[t], &j->views[t], err);
-    return btf_light_map_make(j->m, j->dirs->dirs[t - n], &j->lights[t - n], err);
+        return btf__view_map_make(j->m, j->dirs->dirs[t], &j->views[t], err);
+    return btf__light_map_make(j->m, j->dirs->dirs[t - n], &j->lights[t - n], err);
 }
 
 /* Phase 2 jobs walk view-major so that one view's folder fills at a time. */
@@ -83,14 +83,14 @@ static btf_status image_job(void *user, int t, int worker, btf_error *err)
 static btf_status write_truth(const btf_procedural *m, const char *dir, btf_error *err)
 {
     char tdir[4096], path[4096];
-    btf_status rc = btf_path_join(tdir, sizeof tdir, dir, "truth", err);
+    btf_status rc = btf__path_join(tdir, sizeof tdir, dir, "truth", err);
     if (rc == 0)
         rc = btf_mkdirs(tdir, err);
     struct { const char *name; float *data; int channels; } maps[3] = {
         {"height.exr", m->height, 1}, {"normals.exr", m->normal, 3}, {"albedo.exr", m->albedo, 3}};
     for (int i = 0; rc == 0 && i < 3; i++) {
         btf_image img = {m->size, m->size, maps[i].channels, maps[i].data};
-        rc = btf_path_join(path, sizeof path, tdir, maps[i].name, err);
+        rc = btf__path_join(path, sizeof path, tdir, maps[i].name, err);
         if (rc == 0)
             rc = btf_image_write_exr_opts(path, &img, NULL, NULL, err);
     }
@@ -102,7 +102,7 @@ static btf_status make_view_folders(const btf_dirset *dirs, const char *dir, btf
     for (int i = 0; i < dirs->count; i++) {
         char folder[32], path[4096];
         view_folder(folder, sizeof folder, dirs->dirs[i]);
-        btf_status rc = btf_path_join(path, sizeof path, dir, folder, err);
+        btf_status rc = btf__path_join(path, sizeof path, dir, folder, err);
         if (rc == 0)
             rc = btf_mkdirs(path, err);
         if (rc)
@@ -118,20 +118,20 @@ static btf_status check_outdir(const char *outdir, btf_error *err)
     struct stat st;
     if (stat(outdir, &st) != 0)
         return errno == ENOENT ? BTF_OK
-                               : btf_fail(err, BTF_E_IO, "%s: %s", outdir, strerror(errno));
+                               : btf__fail(err, BTF_E_IO, "%s: %s", outdir, strerror(errno));
     if (!S_ISDIR(st.st_mode))
-        return btf_fail(err, BTF_E_ARG, "%s: exists and is not a folder", outdir);
+        return btf__fail(err, BTF_E_ARG, "%s: exists and is not a folder", outdir);
     DIR *d = opendir(outdir);
     if (!d)
-        return btf_fail(err, BTF_E_IO, "%s: %s", outdir, strerror(errno));
+        return btf__fail(err, BTF_E_IO, "%s: %s", outdir, strerror(errno));
     int empty = 1;
     struct dirent *e;
     while (empty && (e = readdir(d)))
         empty = !strcmp(e->d_name, ".") || !strcmp(e->d_name, "..");
     closedir(d);
     if (!empty)
-        return btf_fail(err, BTF_E_ARG, "%s: folder exists and is not empty; give a new or empty "
-                        "folder", outdir);
+        return btf__fail(err, BTF_E_ARG, "%s: folder exists and is not empty; give a new or empty "
+                         "folder", outdir);
     return BTF_OK;
 }
 
@@ -140,24 +140,24 @@ static int generate_into(const btf_procedural *m, const btf_dirset *dirs, const 
 {
     int n = dirs->count;
     gen_job j = {.m = m, .dirs = dirs, .dir = tmp, .quality = o->jpeg_quality};
-    j.views = btf_calloc((size_t)n, sizeof *j.views, err);
-    j.lights = btf_calloc((size_t)n, sizeof *j.lights, err);
+    j.views = btf__calloc((size_t)n, sizeof *j.views, err);
+    j.lights = btf__calloc((size_t)n, sizeof *j.lights, err);
     int rc = (j.views && j.lights) ? BTF_OK : BTF_E_NOMEM;
     btf_pool_progress progress = {o->progress, o->progress_user, "rendering images", 0.0, 1.0,
                                   n};
     if (rc == 0)
         rc = make_view_folders(dirs, tmp, err);
     if (rc == 0)
-        rc = btf_pool_run(2 * n, o->threads, map_job, &j, NULL, err);
+        rc = btf__pool_run(2 * n, o->threads, map_job, &j, NULL, err);
     if (rc == 0)
-        rc = btf_pool_run(n * n, o->threads, image_job, &j, &progress, err);
+        rc = btf__pool_run(n * n, o->threads, image_job, &j, &progress, err);
     if (rc == 0)
         rc = write_truth(m, tmp, err);
     for (int i = 0; i < n; i++) {
         if (j.views)
-            btf_view_map_free(j.views[i]);
+            btf__view_map_free(j.views[i]);
         if (j.lights)
-            btf_light_map_free(j.lights[i]);
+            btf__light_map_free(j.lights[i]);
     }
     free(j.views);
     free(j.lights);
@@ -174,10 +174,10 @@ btf_status btf_generate(const char *material, const char *outdir, const btf_gene
                         btf_error *err)
 {
     btf_generate_opts d = btf_generate_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_generate", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_generate", err))
         return BTF_E_ARG;
     if (o.jpeg_quality < 0 || o.jpeg_quality > 100)
-        return btf_fail(err, BTF_E_ARG, "JPEG quality %d: expected 1..100", o.jpeg_quality);
+        return btf__fail(err, BTF_E_ARG, "JPEG quality %d: expected 1..100", o.jpeg_quality);
     /* Zero means the default; seed 0 and threads 0 (all CPUs) are taken as
      * they are. A negative size is refused by btf_procedural_make. */
     if (o.size == 0)

@@ -327,7 +327,7 @@ const char *const *btf_procedural_names(void)
     return material_names;
 }
 
-void btf_material_normals_from_height(btf_procedural *m)
+void btf__material_normals_from_height(btf_procedural *m)
 {
     int n = m->size;
     for (int row = 0; row < n; row++) {
@@ -363,22 +363,22 @@ btf_status btf_procedural_make(const char *name, int size, uint64_t seed, btf_pr
                              btf_error *err)
 {
     if (!m)
-        return btf_fail(err, BTF_E_ARG, "material: no output given");
+        return btf__fail(err, BTF_E_ARG, "material: no output given");
     memset(m, 0, sizeof *m);
     if (!name)
-        return btf_fail(err, BTF_E_ARG, "material: no name given");
+        return btf__fail(err, BTF_E_ARG, "material: no name given");
     const material_entry *e = NULL;
     for (size_t i = 0; i < N_MATERIALS; i++)
         if (!strcmp(name, materials[i].name))
             e = &materials[i];
     if (!e)
-        return btf_fail(err, BTF_E_ARG, "unknown material '%s' (expected leather, fabric or wood)",
-                        name);
+        return btf__fail(err, BTF_E_ARG, "unknown material '%s' (expected leather, fabric or wood)",
+                         name);
     if (size < 1 || size > BTF_MATERIAL_MAX_SIZE)
-        return btf_fail(err, BTF_E_ARG, "material %s: size %d out of range 1..%d", name, size,
-                        BTF_MATERIAL_MAX_SIZE);
+        return btf__fail(err, BTF_E_ARG, "material %s: size %d out of range 1..%d", name, size,
+                         BTF_MATERIAL_MAX_SIZE);
     size_t count = (size_t)size * size;
-    float *block = btf_alloc(count * 7, sizeof(float), err);
+    float *block = btf__alloc(count * 7, sizeof(float), err);
     if (!block)
         return BTF_E_NOMEM;
     snprintf(m->name, sizeof m->name, "%s", name);
@@ -389,7 +389,7 @@ btf_status btf_procedural_make(const char *name, int size, uint64_t seed, btf_pr
     noise ns = {seed, size};
     e->make(m, &ns);
     centre_height(m);
-    btf_material_normals_from_height(m);
+    btf__material_normals_from_height(m);
     return BTF_OK;
 }
 

@@ -46,24 +46,24 @@
 static btf_status check_material(const btf_procedural *m, btf_error *err)
 {
     if (!m || !m->height || !m->normal || !m->albedo)
-        return btf_fail(err, BTF_E_ARG, "material: not made (NULL arrays)");
+        return btf__fail(err, BTF_E_ARG, "material: not made (NULL arrays)");
     if (m->size < 1 || m->size > BTF_MATERIAL_MAX_SIZE)
-        return btf_fail(err, BTF_E_ARG, "material %s: size %d out of range 1..%d", m->name,
-                        m->size, BTF_MATERIAL_MAX_SIZE);
+        return btf__fail(err, BTF_E_ARG, "material %s: size %d out of range 1..%d", m->name,
+                         m->size, BTF_MATERIAL_MAX_SIZE);
     if (!isfinite(m->specular) || !isfinite(m->shininess) || !isfinite(m->fresnel0) ||
         !isfinite(m->ambient) || m->shininess < 0 || m->fresnel0 < 0 || m->fresnel0 > 1)
-        return btf_fail(err, BTF_E_ARG,
-                        "material %s: reflectance parameters not finite or out of range "
-                        "(shininess >= 0, fresnel0 in [0, 1])",
-                        m->name);
+        return btf__fail(err, BTF_E_ARG,
+                         "material %s: reflectance parameters not finite or out of range "
+                         "(shininess >= 0, fresnel0 in [0, 1])",
+                         m->name);
     return BTF_OK;
 }
 
 static btf_status check_dir(const char *what, btf_dir d, btf_error *err)
 {
     if (!(d.theta >= 0.0 && d.theta <= 90.0) || !isfinite(d.phi))
-        return btf_fail(err, BTF_E_ARG, "%s direction (theta %g, phi %g): theta must be in "
-                        "[0, 90] degrees and phi finite", what, d.theta, d.phi);
+        return btf__fail(err, BTF_E_ARG, "%s direction (theta %g, phi %g): theta must be in "
+                         "[0, 90] degrees and phi finite", what, d.theta, d.phi);
     return BTF_OK;
 }
 
@@ -95,18 +95,18 @@ static btf_status field_init(field *f, const btf_procedural *m, double reach, bt
     for (size_t k = 0; k < count; k++) {
         float v = m->height[k];
         if (!isfinite(v))
-            return btf_fail(err, BTF_E_DATA, "material %s: height at texel %zu is not finite",
-                            m->name, k);
+            return btf__fail(err, BTF_E_DATA, "material %s: height at texel %zu is not finite",
+                             m->name, k);
         f->lo = v < f->lo ? v : f->lo;
         f->hi = v > f->hi ? v : f->hi;
     }
     double span = reach * fmax(fabs((double)f->lo), fabs((double)f->hi)) * 2.0 + 3.0;
     if (span > (double)(1 << 24))
-        return btf_fail(err, BTF_E_ARG, "material %s: relief (%g..%g texels) too deep to march",
-                        m->name, f->lo, f->hi);
+        return btf__fail(err, BTF_E_ARG, "material %s: relief (%g..%g texels) too deep to march",
+                         m->name, f->lo, f->hi);
     f->pad = (int)ceil(span);
     int len = f->n + 2 * f->pad + 2;
-    f->wrap = btf_alloc((size_t)len, sizeof(int), err);
+    f->wrap = btf__alloc((size_t)len, sizeof(int), err);
     if (!f->wrap)
         return BTF_E_NOMEM;
     for (int k = 0; k < len; k++)
@@ -195,11 +195,11 @@ static float view_hit_z(const field *f, float x, float y, float a, float b, int 
     return f->lo;
 }
 
-btf_status btf_view_map_make(const btf_procedural *m, btf_dir view, btf_view_map **out,
-                             btf_error *err)
+btf_status btf__view_map_make(const btf_procedural *m, btf_dir view, btf_view_map **out,
+                              btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "view map: no output given");
+        return btf__fail(err, BTF_E_ARG, "view map: no output given");
     *out = NULL;
     btf_status rc = check_material(m, err);
     if (rc || (rc = check_dir("view", view, err)))
@@ -210,8 +210,8 @@ btf_status btf_view_map_make(const btf_procedural *m, btf_dir view, btf_view_map
         return rc;
     int n = m->size;
     size_t count = (size_t)n * n;
-    btf_view_map *vm = btf_alloc(1, sizeof *vm, err);
-    float *block = vm ? btf_alloc(count * 8, sizeof(float), err) : NULL;
+    btf_view_map *vm = btf__alloc(1, sizeof *vm, err);
+    float *block = vm ? btf__alloc(count * 8, sizeof(float), err) : NULL;
     if (!block) {
         free(vm);
         free(f.wrap);
@@ -259,7 +259,7 @@ btf_status btf_view_map_make(const btf_procedural *m, btf_dir view, btf_view_map
     return BTF_OK;
 }
 
-void btf_view_map_free(btf_view_map *vm)
+void btf__view_map_free(btf_view_map *vm)
 {
     if (!vm)
         return;
@@ -290,11 +290,11 @@ static float light_vis(const field *f, float x, float y, float h0, float cu, flo
     return v > 1.0f ? 1.0f : v < 0.0f ? 0.0f : v;
 }
 
-btf_status btf_light_map_make(const btf_procedural *m, btf_dir light, btf_light_map **out,
-                              btf_error *err)
+btf_status btf__light_map_make(const btf_procedural *m, btf_dir light, btf_light_map **out,
+                               btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "light map: no output given");
+        return btf__fail(err, BTF_E_ARG, "light map: no output given");
     *out = NULL;
     btf_status rc = check_material(m, err);
     if (rc || (rc = check_dir("light", light, err)))
@@ -305,8 +305,8 @@ btf_status btf_light_map_make(const btf_procedural *m, btf_dir light, btf_light_
         return rc;
     int n = m->size;
     size_t count = (size_t)n * n;
-    btf_light_map *lm = btf_alloc(1, sizeof *lm, err);
-    float *vis = lm ? btf_alloc(count, sizeof(float), err) : NULL;
+    btf_light_map *lm = btf__alloc(1, sizeof *lm, err);
+    float *vis = lm ? btf__alloc(count, sizeof(float), err) : NULL;
     if (!vis) {
         free(lm);
         free(f.wrap);
@@ -332,7 +332,7 @@ btf_status btf_light_map_make(const btf_procedural *m, btf_dir light, btf_light_
     return BTF_OK;
 }
 
-void btf_light_map_free(btf_light_map *lm)
+void btf__light_map_free(btf_light_map *lm)
 {
     if (!lm)
         return;
@@ -380,18 +380,18 @@ static shade_consts shade_setup(const btf_procedural *m, btf_dir view, btf_dir l
     return s;
 }
 
-btf_status btf_material_render_maps(const btf_procedural *m, const btf_view_map *vm,
-                                    const btf_light_map *lm, btf_dir view, btf_dir light,
-                                    btf_image *out, btf_error *err)
+btf_status btf__material_render_maps(const btf_procedural *m, const btf_view_map *vm,
+                                     const btf_light_map *lm, btf_dir view, btf_dir light,
+                                     btf_image *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "render: no output image given");
+        return btf__fail(err, BTF_E_ARG, "render: no output image given");
     btf_status rc = check_material(m, err);
     if (rc || (rc = check_dir("view", view, err)) || (rc = check_dir("light", light, err)))
         return rc;
     if (!vm || !lm || vm->size != m->size || lm->size != m->size)
-        return btf_fail(err, BTF_E_ARG, "render: maps missing or not of material %s (size %d)",
-                        m->name, m->size);
+        return btf__fail(err, BTF_E_ARG, "render: maps missing or not of material %s (size %d)",
+                         m->name, m->size);
     int n = m->size;
     if ((rc = btf_image_alloc(out, n, n, 3, err)))
         return rc;
@@ -424,12 +424,12 @@ btf_status btf_procedural_render(const btf_procedural *m, btf_dir view, btf_dir 
 {
     btf_view_map *vm = NULL;
     btf_light_map *lm = NULL;
-    btf_status rc = btf_view_map_make(m, view, &vm, err);
+    btf_status rc = btf__view_map_make(m, view, &vm, err);
     if (!rc)
-        rc = btf_light_map_make(m, light, &lm, err);
+        rc = btf__light_map_make(m, light, &lm, err);
     if (!rc)
-        rc = btf_material_render_maps(m, vm, lm, view, light, out, err);
-    btf_view_map_free(vm);
-    btf_light_map_free(lm);
+        rc = btf__material_render_maps(m, vm, lm, view, light, out, err);
+    btf__view_map_free(vm);
+    btf__light_map_free(lm);
     return rc;
 }

@@ -29,7 +29,7 @@ static void on_exr_error(exr_const_context_t ctxt, exr_result_t code, const char
              msg && *msg ? msg : exr_get_default_error_message(code));
 }
 
-btf_exr_io *btf_exr_sink_enter(btf_exr_io *io)
+btf_exr_io *btf__exr_sink_enter(btf_exr_io *io)
 {
     btf_exr_io *prev = tl_sink;
     io->msg[0] = '\0';
@@ -38,12 +38,12 @@ btf_exr_io *btf_exr_sink_enter(btf_exr_io *io)
     return prev;
 }
 
-void btf_exr_sink_leave(btf_exr_io *prev)
+void btf__exr_sink_leave(btf_exr_io *prev)
 {
     tl_sink = prev;
 }
 
-exr_context_initializer_t btf_exr_initializer(btf_exr_io *io)
+exr_context_initializer_t btf__exr_initializer(btf_exr_io *io)
 {
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = on_exr_error;
@@ -64,11 +64,11 @@ static btf_status exr_status(const btf_exr_io *io, exr_result_t rv, int writing)
     }
 }
 
-btf_status btf_exr_fail(btf_error *err, const btf_exr_io *io, exr_result_t rv, int writing,
-                        const char *what)
+btf_status btf__exr_fail(btf_error *err, const btf_exr_io *io, exr_result_t rv, int writing,
+                         const char *what)
 {
     const char *detail = io->sys_errno ? strerror(io->sys_errno)
                          : io->msg[0]  ? io->msg
                                        : exr_get_default_error_message(rv);
-    return btf_fail(err, exr_status(io, rv, writing), "%s: %s: %s", io->path, what, detail);
+    return btf__fail(err, exr_status(io, rv, writing), "%s: %s: %s", io->path, what, detail);
 }

@@ -24,21 +24,21 @@ typedef struct btf_exr_io {
     char msg[512];      /* the library's first message, "" if none */
 } btf_exr_io;
 
-/* Routes the library's messages to io until btf_exr_sink_leave; returns the
+/* Routes the library's messages to io until btf__exr_sink_leave; returns the
  * previous sink so that calls may nest (the one-shot writer runs the
  * streaming writer's entry points). Clears io's message and errno. */
-btf_exr_io *btf_exr_sink_enter(btf_exr_io *io);
-void btf_exr_sink_leave(btf_exr_io *prev);
+btf_exr_io *btf__exr_sink_enter(btf_exr_io *io);
+void btf__exr_sink_leave(btf_exr_io *prev);
 
 /* A context initializer whose error handler feeds the sink, with io as the
  * user data and the side limits set; the caller adds its I/O functions. */
-exr_context_initializer_t btf_exr_initializer(btf_exr_io *io);
+exr_context_initializer_t btf__exr_initializer(btf_exr_io *io);
 
 /* Fills err with "PATH: what: detail" and returns the status: BTF_E_IO for a
  * failed system call, BTF_E_NOMEM, BTF_E_UNSUPPORTED for a feature the
  * library lacks, else BTF_E_FORMAT when reading (the file is damaged) and
  * BTF_E_IO when writing. */
-btf_status btf_exr_fail(btf_error *err, const btf_exr_io *io, exr_result_t rv, int writing,
-                        const char *what);
+btf_status btf__exr_fail(btf_error *err, const btf_exr_io *io, exr_result_t rv, int writing,
+                         const char *what);
 
 #endif

@@ -49,7 +49,7 @@ static int64_t io_read(exr_const_context_t ctxt, void *user, void *buffer, uint6
     (void)ctxt;
     (void)error_cb;
     btf_exr_io *io = user;
-    int64_t r = btf_source_read(io->src, buffer, sz, offset);
+    int64_t r = btf__source_read(io->src, buffer, sz, offset);
     if (r < 0)
         io->sys_errno = io->src->sys_errno;
     return r;
@@ -84,14 +84,14 @@ static btf_status in_open(exr_in *in, btf_source *src, btf_error *err)
     in->io.src = src;
     in->io.path = src->name;
     in->io.fd = -1;
-    exr_context_initializer_t init = btf_exr_initializer(&in->io);
+    exr_context_initializer_t init = btf__exr_initializer(&in->io);
     init.read_fn = io_read;
     init.size_fn = io_size;
     init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
     exr_result_t rv = exr_start_read(&in->ctx, src->name, &init);
     if (rv != EXR_ERR_SUCCESS) {
         in->ctx = NULL; /* exr_start_read frees it on failure */
-        return btf_exr_fail(err, &in->io, rv, 0, "not a readable EXR file");
+        return btf__exr_fail(err, &in->io, rv, 0, "not a readable EXR file");
     }
     return BTF_OK;
 }
@@ -128,7 +128,7 @@ static btf_status pick_channels(exr_in *in, btf_error *err)
     const exr_attr_chlist_t *cl = NULL;
     exr_result_t rv = exr_get_channels(in->ctx, 0, &cl);
     if (rv != EXR_ERR_SUCCESS || !cl || cl->num_channels < 1 || !cl->entries)
-        return btf_fail(err, BTF_E_FORMAT, "%s: EXR part has no channels", path);
+        return btf__fail(err, BTF_E_FORMAT, "%s: EXR part has no channels", path);
     int idx[3];
     int r = find_channel(cl, "R"), g = find_channel(cl, "G"), b = find_channel(cl, "B");
     int y = find_channel(cl, "Y");
@@ -139,8 +139,8 @@ static btf_status pick_channels(exr_in *in, btf_error *err)
         /* Y with RY/BY is luminance/chroma colour with subsampled chroma:
          * reading Y alone would silently drop the colour. */
         if (find_channel(cl, "RY") >= 0 || find_channel(cl, "BY") >= 0)
-            return btf_fail(err, BTF_E_UNSUPPORTED,
-                            "%s: luminance/chroma EXR (Y, RY, BY) is not supported", path);
+            return btf__fail(err, BTF_E_UNSUPPORTED,
+                             "%s: luminance/chroma EXR (Y, RY, BY) is not supported", path);
         in->nsrc = 1;
         idx[0] = y;
     } else if (cl->num_channels == 1) {
@@ -149,25 +149,25 @@ static btf_status pick_channels(exr_in *in, btf_error *err)
     } else {
         char names[256];
         list_channels(cl, names, sizeof names);
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "%s: EXR channels (%s): expected R, G, B, or Y, or a single channel",
-                        path, names);
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "%s: EXR channels (%s): expected R, G, B, or Y, or a single channel",
+                         path, names);
     }
     in->bits = 16;
     for (int k = 0; k < in->nsrc; k++) {
         const exr_attr_chlist_entry_t *e = &cl->entries[idx[k]];
         const char *name = e->name.str ? e->name.str : "?";
         if (e->pixel_type == EXR_PIXEL_UINT)
-            return btf_fail(err, BTF_E_UNSUPPORTED,
-                            "%s: EXR channel %s holds UINT samples: only HALF and FLOAT are supported",
-                            path, name);
+            return btf__fail(err, BTF_E_UNSUPPORTED,
+                             "%s: EXR channel %s holds UINT samples: only HALF and FLOAT are supported",
+                             path, name);
         if (e->pixel_type != EXR_PIXEL_HALF && e->pixel_type != EXR_PIXEL_FLOAT)
-            return btf_fail(err, BTF_E_FORMAT, "%s: EXR channel %s has an unknown pixel type %d",
-                            path, name, (int)e->pixel_type);
+            return btf__fail(err, BTF_E_FORMAT, "%s: EXR channel %s has an unknown pixel type %d",
+                             path, name, (int)e->pixel_type);
         if (e->x_sampling != 1 || e->y_sampling != 1)
-            return btf_fail(err, BTF_E_UNSUPPORTED,
-                            "%s: EXR channel %s is subsampled (%d x %d): not supported", path,
-                            name, e->x_sampling, e->y_sampling);
+            return btf__fail(err, BTF_E_UNSUPPORTED,
+                             "%s: EXR channel %s is subsampled (%d x %d): not supported", path,
+                             name, e->x_sampling, e->y_sampling);
         if (e->pixel_type == EXR_PIXEL_FLOAT)
             in->bits = 32;
         in->names[k] = e->name.str;
@@ -183,20 +183,20 @@ static btf_status check_chunk_layout(exr_in *in, btf_error *err)
     int32_t count = 0;
     exr_result_t rv = exr_get_chunk_count(in->ctx, 0, &count);
     if (rv != EXR_ERR_SUCCESS || count < 1)
-        return btf_exr_fail(err, &in->io, rv ? rv : EXR_ERR_INVALID_ATTR, 0, "bad chunk count");
+        return btf__exr_fail(err, &in->io, rv ? rv : EXR_ERR_INVALID_ATTR, 0, "bad chunk count");
     if ((uint64_t)count * 8u > (uint64_t)in->io.src->size)
-        return btf_fail(err, BTF_E_FORMAT,
-                        "%s: truncated: the offsets of %d chunks do not fit in %lld bytes", path,
-                        (int)count, (long long)in->io.src->size);
+        return btf__fail(err, BTF_E_FORMAT,
+                         "%s: truncated: the offsets of %d chunks do not fit in %lld bytes", path,
+                         (int)count, (long long)in->io.src->size);
     uint64_t unpacked = 0;
     rv = exr_get_chunk_unpacked_size(in->ctx, 0, &unpacked);
     if (rv != EXR_ERR_SUCCESS)
-        return btf_exr_fail(err, &in->io, rv, 0, "bad chunk size");
+        return btf__exr_fail(err, &in->io, rv, 0, "bad chunk size");
     if (unpacked > BTF_EXR_MAX_CHUNK_BYTES)
-        return btf_fail(err, BTF_E_UNSUPPORTED,
-                        "%s: EXR chunks of %llu bytes exceed the limit of %llu", path,
-                        (unsigned long long)unpacked,
-                        (unsigned long long)BTF_EXR_MAX_CHUNK_BYTES);
+        return btf__fail(err, BTF_E_UNSUPPORTED,
+                         "%s: EXR chunks of %llu bytes exceed the limit of %llu", path,
+                         (unsigned long long)unpacked,
+                         (unsigned long long)BTF_EXR_MAX_CHUNK_BYTES);
     return BTF_OK;
 }
 
@@ -206,30 +206,30 @@ static btf_status in_inspect(exr_in *in, btf_error *err)
     const char *path = in->io.path;
     exr_result_t rv = exr_get_storage(in->ctx, 0, &in->storage);
     if (rv != EXR_ERR_SUCCESS)
-        return btf_exr_fail(err, &in->io, rv, 0, "bad EXR part");
+        return btf__exr_fail(err, &in->io, rv, 0, "bad EXR part");
     if (in->storage == EXR_STORAGE_DEEP_SCANLINE || in->storage == EXR_STORAGE_DEEP_TILED)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: deep EXR images are not supported", path);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "%s: deep EXR images are not supported", path);
     if (in->storage != EXR_STORAGE_SCANLINE && in->storage != EXR_STORAGE_TILED)
-        return btf_fail(err, BTF_E_FORMAT, "%s: unknown EXR storage type %d", path,
-                        (int)in->storage);
+        return btf__fail(err, BTF_E_FORMAT, "%s: unknown EXR storage type %d", path,
+                         (int)in->storage);
     /* OpenEXR 3.1's B44/B44A decoder (Debian 12) reads out of bounds on a
      * damaged file (found by fuzz_exr); such files are refused before any
      * chunk is decoded rather than risk a crash. */
     exr_compression_t comp;
     rv = exr_get_compression(in->ctx, 0, &comp);
     if (rv != EXR_ERR_SUCCESS)
-        return btf_exr_fail(err, &in->io, rv, 0, "bad compression attribute");
+        return btf__exr_fail(err, &in->io, rv, 0, "bad compression attribute");
     if (comp == EXR_COMPRESSION_B44 || comp == EXR_COMPRESSION_B44A)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: B44/B44A-compressed EXR is not supported "
-                        "(convert it, e.g. to ZIP or PIZ)", path);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "%s: B44/B44A-compressed EXR is not supported "
+                         "(convert it, e.g. to ZIP or PIZ)", path);
     exr_attr_box2i_t dw;
     rv = exr_get_data_window(in->ctx, 0, &dw);
     if (rv != EXR_ERR_SUCCESS)
-        return btf_exr_fail(err, &in->io, rv, 0, "bad data window");
+        return btf__exr_fail(err, &in->io, rv, 0, "bad data window");
     int64_t w = (int64_t)dw.max.x - dw.min.x + 1, h = (int64_t)dw.max.y - dw.min.y + 1;
     if (w < 1 || h < 1 || w > BTF_EXR_MAX_SIDE || h > BTF_EXR_MAX_SIDE)
-        return btf_fail(err, BTF_E_FORMAT, "%s: EXR data window %lld x %lld out of range 1..%d",
-                        path, (long long)w, (long long)h, BTF_EXR_MAX_SIDE);
+        return btf__fail(err, BTF_E_FORMAT, "%s: EXR data window %lld x %lld out of range 1..%d",
+                         path, (long long)w, (long long)h, BTF_EXR_MAX_SIDE);
     in->x0 = dw.min.x;
     in->y0 = dw.min.y;
     in->width = (int)w;
@@ -251,11 +251,11 @@ static btf_status check_chunk(const exr_in *in, const exr_chunk_info_t *ci, int 
     uint64_t size = (uint64_t)in->io.src->size;
     if (ci->width < 1 || ci->height < 1 || cx < 0 || cy < 0 ||
         (int64_t)cx + ci->width > in->width || (int64_t)cy + ci->height > in->height)
-        return btf_fail(err, BTF_E_FORMAT, "%s: EXR chunk %d (%d x %d at %d, %d) lies outside the image",
-                        in->io.path, (int)ci->idx, (int)ci->width, (int)ci->height, cx, cy);
+        return btf__fail(err, BTF_E_FORMAT, "%s: EXR chunk %d (%d x %d at %d, %d) lies outside the image",
+                         in->io.path, (int)ci->idx, (int)ci->width, (int)ci->height, cx, cy);
     if (ci->data_offset > size || ci->packed_size > size - ci->data_offset)
-        return btf_fail(err, BTF_E_FORMAT, "%s: truncated: EXR chunk %d ends past the end of the file",
-                        in->io.path, (int)ci->idx);
+        return btf__fail(err, BTF_E_FORMAT, "%s: truncated: EXR chunk %d ends past the end of the file",
+                         in->io.path, (int)ci->idx);
     return BTF_OK;
 }
 
@@ -264,12 +264,12 @@ static btf_status each_scanline_chunk(exr_in *in, chunk_fn fn, void *user, btf_e
     int32_t lines = 0;
     exr_result_t rv = exr_get_scanlines_per_chunk(in->ctx, 0, &lines);
     if (rv != EXR_ERR_SUCCESS || lines < 1)
-        return btf_exr_fail(err, &in->io, rv ? rv : EXR_ERR_INVALID_ATTR, 0, "bad scanlines per chunk");
+        return btf__exr_fail(err, &in->io, rv ? rv : EXR_ERR_INVALID_ATTR, 0, "bad scanlines per chunk");
     for (int64_t y = in->y0; y < (int64_t)in->y0 + in->height; y += lines) {
         exr_chunk_info_t ci;
         rv = exr_read_scanline_chunk_info(in->ctx, 0, (int)y, &ci);
         if (rv != EXR_ERR_SUCCESS)
-            return btf_exr_fail(err, &in->io, rv, 0, "bad EXR chunk");
+            return btf__exr_fail(err, &in->io, rv, 0, "bad EXR chunk");
         int cy = (int)((int64_t)ci.start_y - in->y0);
         btf_status rc = check_chunk(in, &ci, 0, cy, err);
         if (!rc)
@@ -285,14 +285,14 @@ static btf_status each_tile(exr_in *in, chunk_fn fn, void *user, btf_error *err)
     int32_t tw = 0, th = 0;
     exr_result_t rv = exr_get_tile_sizes(in->ctx, 0, 0, 0, &tw, &th);
     if (rv != EXR_ERR_SUCCESS || tw < 1 || th < 1)
-        return btf_exr_fail(err, &in->io, rv ? rv : EXR_ERR_INVALID_ATTR, 0, "bad tile size");
+        return btf__exr_fail(err, &in->io, rv ? rv : EXR_ERR_INVALID_ATTR, 0, "bad tile size");
     int64_t ntx = ((int64_t)in->width + tw - 1) / tw, nty = ((int64_t)in->height + th - 1) / th;
     for (int64_t ty = 0; ty < nty; ty++) {
         for (int64_t tx = 0; tx < ntx; tx++) {
             exr_chunk_info_t ci;
             rv = exr_read_tile_chunk_info(in->ctx, 0, (int)tx, (int)ty, 0, 0, &ci);
             if (rv != EXR_ERR_SUCCESS)
-                return btf_exr_fail(err, &in->io, rv, 0, "bad EXR tile");
+                return btf__exr_fail(err, &in->io, rv, 0, "bad EXR tile");
             /* tx < ntx, so tx * tw < width <= 65536: no overflow. */
             int cx = (int)(tx * tw), cy = (int)(ty * th);
             btf_status rc = check_chunk(in, &ci, cx, cy, err);
@@ -350,7 +350,7 @@ static btf_status bind_outputs(exr_in *in, decoder *d, const exr_chunk_info_t *c
     if (need > d->unused_cap) {
         free(d->unused);
         d->unused_cap = 0;
-        if (!(d->unused = btf_alloc(need, sizeof(float), err)))
+        if (!(d->unused = btf__alloc(need, sizeof(float), err)))
             return BTF_E_NOMEM;
         d->unused_cap = need;
     }
@@ -361,8 +361,8 @@ static btf_status bind_outputs(exr_in *in, decoder *d, const exr_chunk_info_t *c
         if (k < 0) {
             if (ch->width > ci->width || ch->height > ci->height || ch->width < 0 ||
                 ch->height < 0)
-                return btf_fail(err, BTF_E_FORMAT, "%s: EXR channel %s is larger than its chunk",
-                                in->io.path, ch->channel_name);
+                return btf__fail(err, BTF_E_FORMAT, "%s: EXR channel %s is larger than its chunk",
+                                 in->io.path, ch->channel_name);
             ch->decode_to_ptr = (uint8_t *)(d->unused + plane * (size_t)c);
             ch->user_pixel_stride = (int32_t)sizeof(float);
             ch->user_line_stride = (int32_t)((size_t)(ch->width > 0 ? ch->width : 1) *
@@ -374,8 +374,8 @@ static btf_status bind_outputs(exr_in *in, decoder *d, const exr_chunk_info_t *c
         /* Our channels are not subsampled, so each must cover the chunk:
          * anything else would write past the scratch buffer. */
         if (ch->width != ci->width || ch->height != ci->height)
-            return btf_fail(err, BTF_E_FORMAT, "%s: EXR channel %s does not cover its chunk",
-                            in->io.path, in->names[k]);
+            return btf__fail(err, BTF_E_FORMAT, "%s: EXR channel %s does not cover its chunk",
+                             in->io.path, in->names[k]);
         ch->decode_to_ptr = (uint8_t *)(d->buf + k);
         ch->user_pixel_stride = (int32_t)(in->nsrc * sizeof(float));
         ch->user_line_stride = (int32_t)((size_t)ci->width * in->nsrc * sizeof(float));
@@ -384,7 +384,7 @@ static btf_status bind_outputs(exr_in *in, decoder *d, const exr_chunk_info_t *c
         bound++;
     }
     if (bound != in->nsrc)
-        return btf_fail(err, BTF_E_FORMAT, "%s: EXR chunk lacks some of its channels", in->io.path);
+        return btf__fail(err, BTF_E_FORMAT, "%s: EXR chunk lacks some of its channels", in->io.path);
     return BTF_OK;
 }
 
@@ -412,8 +412,8 @@ static btf_status store_chunk(const exr_in *in, const float *buf, const exr_chun
         for (int x = 0; x < ci->width; x++, p += nsrc, o += want) {
             for (int k = 0; k < nsrc; k++)
                 if (!isfinite(p[k]))
-                    return btf_fail(err, BTF_E_DATA, "%s: NaN or Inf at pixel (%d, %d)",
-                                    in->io.path, cx + x, cy + r);
+                    return btf__fail(err, BTF_E_DATA, "%s: NaN or Inf at pixel (%d, %d)",
+                                     in->io.path, cx + x, cy + r);
             if (want == nsrc)
                 memcpy(o, p, (size_t)nsrc * sizeof(float));
             else if (want == 1)
@@ -433,7 +433,7 @@ static btf_status decode_chunk(exr_in *in, const exr_chunk_info_t *ci, int cx, i
     if (n > d->cap) {
         free(d->buf);
         d->cap = 0;
-        d->buf = btf_alloc(n, sizeof(float), err);
+        d->buf = btf__alloc(n, sizeof(float), err);
         if (!d->buf)
             return BTF_E_NOMEM;
         d->cap = n;
@@ -444,7 +444,7 @@ static btf_status decode_chunk(exr_in *in, const exr_chunk_info_t *ci, int cx, i
                                  : exr_decoding_initialize(in->ctx, 0, ci, &d->dec);
     d->started = 1;
     if (rv != EXR_ERR_SUCCESS)
-        return btf_exr_fail(err, &in->io, rv, 0, "cannot decode EXR chunk");
+        return btf__exr_fail(err, &in->io, rv, 0, "cannot decode EXR chunk");
     btf_status rc = bind_outputs(in, d, ci, err);
     if (rc)
         return rc;
@@ -453,7 +453,7 @@ static btf_status decode_chunk(exr_in *in, const exr_chunk_info_t *ci, int cx, i
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_decoding_run(in->ctx, 0, &d->dec);
     if (rv != EXR_ERR_SUCCESS)
-        return btf_exr_fail(err, &in->io, rv, 0, "corrupt EXR chunk");
+        return btf__exr_fail(err, &in->io, rv, 0, "corrupt EXR chunk");
     return store_chunk(in, d->buf, ci, cx, cy, d->out, err);
 }
 
@@ -465,7 +465,7 @@ static btf_status read_pixels(exr_in *in, int channels, btf_image *out, btf_erro
         if (err) {
             char m[sizeof err->msg];
             memcpy(m, err->msg, sizeof m);
-            btf_fail(err, rc, "%s: %s", in->io.path, m);
+            btf__fail(err, rc, "%s: %s", in->io.path, m);
         }
         return rc;
     }
@@ -480,14 +480,14 @@ static btf_status read_pixels(exr_in *in, int channels, btf_image *out, btf_erro
     return rc;
 }
 
-btf_status btf_exr_probe_source(btf_source *src, btf_image_header *hdr, btf_error *err)
+btf_status btf__exr_probe_source(btf_source *src, btf_image_header *hdr, btf_error *err)
 {
     if (!src || !hdr)
-        return btf_fail(err, BTF_E_ARG, "btf_exr_probe: NULL argument");
+        return btf__fail(err, BTF_E_ARG, "btf_exr_probe: NULL argument");
     memset(hdr, 0, sizeof *hdr);
     exr_in in;
     memset(&in, 0, sizeof in);
-    btf_exr_io *prev = btf_exr_sink_enter(&in.io);
+    btf_exr_io *prev = btf__exr_sink_enter(&in.io);
     btf_status rc = in_open(&in, src, err);
     if (!rc)
         rc = in_inspect(&in, err);
@@ -503,27 +503,27 @@ btf_status btf_exr_probe_source(btf_source *src, btf_image_header *hdr, btf_erro
         hdr->file_bytes = src->size;
     }
     in_close(&in);
-    btf_exr_sink_leave(prev);
+    btf__exr_sink_leave(prev);
     return rc;
 }
 
-btf_status btf_exr_read_source(btf_source *src, int channels, uint64_t max_pixels, btf_image *out,
-                               btf_error *err)
+btf_status btf__exr_read_source(btf_source *src, int channels, uint64_t max_pixels, btf_image *out,
+                                btf_error *err)
 {
     if (!src || !out)
-        return btf_fail(err, BTF_E_ARG, "btf_exr_read: NULL argument");
+        return btf__fail(err, BTF_E_ARG, "btf_exr_read: NULL argument");
     memset(out, 0, sizeof *out);
     if (channels != 0 && channels != 1 && channels != 3)
-        return btf_fail(err, BTF_E_ARG, "%s: channels %d: expected 0, 1 or 3", src->name,
-                        channels);
+        return btf__fail(err, BTF_E_ARG, "%s: channels %d: expected 0, 1 or 3", src->name,
+                         channels);
     exr_in in;
     memset(&in, 0, sizeof in);
-    btf_exr_io *prev = btf_exr_sink_enter(&in.io);
+    btf_exr_io *prev = btf__exr_sink_enter(&in.io);
     btf_status rc = in_open(&in, src, err);
     if (!rc)
         rc = in_inspect(&in, err);
     if (!rc)
-        rc = btf_check_pixels(src->name, in.width, in.height, max_pixels, err);
+        rc = btf__check_pixels(src->name, in.width, in.height, max_pixels, err);
     /* A cut-off or damaged chunk table fails here, before the image is
      * allocated (a header may claim 65536 x 65536 in a few kilobytes). */
     if (!rc)
@@ -531,36 +531,36 @@ btf_status btf_exr_read_source(btf_source *src, int channels, uint64_t max_pixel
     if (!rc)
         rc = read_pixels(&in, channels, out, err);
     in_close(&in);
-    btf_exr_sink_leave(prev);
+    btf__exr_sink_leave(prev);
     if (rc)
         btf_image_free(out);
     return rc;
 }
 
-btf_status btf_exr_probe(const char *path, btf_image_header *hdr, btf_error *err)
+btf_status btf__exr_probe(const char *path, btf_image_header *hdr, btf_error *err)
 {
     if (!path || !hdr)
-        return btf_fail(err, BTF_E_ARG, "btf_exr_probe: NULL argument");
+        return btf__fail(err, BTF_E_ARG, "btf_exr_probe: NULL argument");
     memset(hdr, 0, sizeof *hdr);
     btf_source src;
-    btf_status rc = btf_source_open(&src, path, err);
+    btf_status rc = btf__source_open(&src, path, err);
     if (!rc)
-        rc = btf_exr_probe_source(&src, hdr, err);
-    btf_source_close(&src);
+        rc = btf__exr_probe_source(&src, hdr, err);
+    btf__source_close(&src);
     return rc;
 }
 
-btf_status btf_exr_read(const char *path, int channels, btf_image *out, btf_error *err)
+btf_status btf__exr_read(const char *path, int channels, btf_image *out, btf_error *err)
 {
     if (!path || !out)
-        return btf_fail(err, BTF_E_ARG, "btf_exr_read: NULL argument");
+        return btf__fail(err, BTF_E_ARG, "btf_exr_read: NULL argument");
     memset(out, 0, sizeof *out);
     if (channels != 0 && channels != 1 && channels != 3)
-        return btf_fail(err, BTF_E_ARG, "%s: channels %d: expected 0, 1 or 3", path, channels);
+        return btf__fail(err, BTF_E_ARG, "%s: channels %d: expected 0, 1 or 3", path, channels);
     btf_source src;
-    btf_status rc = btf_source_open(&src, path, err);
+    btf_status rc = btf__source_open(&src, path, err);
     if (!rc)
-        rc = btf_exr_read_source(&src, channels, 0, out, err);
-    btf_source_close(&src);
+        rc = btf__exr_read_source(&src, channels, 0, out, err);
+    btf__source_close(&src);
     return rc;
 }

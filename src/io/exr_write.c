@@ -18,8 +18,8 @@
  *
  * We do the file I/O ourselves (pwrite on our own descriptor), so a failing
  * system call is reported as such, and so the writer writes to the
- * temporary file from btf_tmp_create() (O_EXCL | O_NOFOLLOW), fsync'd, and
- * the file appears only through btf_commit_file().
+ * temporary file from btf__tmp_create() (O_EXCL | O_NOFOLLOW), fsync'd, and
+ * the file appears only through btf__commit_file().
  *
  * Provenance (btf_exr_meta): string attributes btfcarVersion, and with a
  * model btfcarModel, btfcarSeed, btfcarSubspace, and with directions
@@ -186,7 +186,7 @@ static const struct {
 };
 #define N_COMPRESSIONS ((int)(sizeof COMPRESSIONS / sizeof COMPRESSIONS[0]))
 
-const char *btf_exr_compression_name(int compression)
+const char *btf__exr_compression_name(int compression)
 {
     return compression >= 0 && compression < N_COMPRESSIONS ? COMPRESSIONS[compression].name
                                                            : NULL;
@@ -290,18 +290,18 @@ static btf_status start_slabs(btf_exr_writer *w, btf_error *err)
     /* chunks of 4 MiB or more (wide rows, 16- or 32-row chunks): 3 slabs */
     w->nslab = !w->background ? 1 : chunk >= ((size_t)4 << 20) ? 3 : NSLAB;
     for (int i = 0; i < w->nslab; i++)
-        if (!(w->slabs[i].data = btf_alloc((size_t)w->slab_rows * row, sizeof(float), err)))
+        if (!(w->slabs[i].data = btf__alloc((size_t)w->slab_rows * row, sizeof(float), err)))
             return BTF_E_NOMEM;
     w->stage = w->slabs[0].data;
-    if (!(w->wbuf = btf_alloc(WRITE_BUFFER, 1, err)))
+    if (!(w->wbuf = btf__alloc(WRITE_BUFFER, 1, err)))
         return BTF_E_NOMEM;
     if (!w->background)
         return BTF_OK;
     btf_behind_spec spec = {.run = write_slab, .user = w, .job_size = sizeof(slab),
                             .depth = w->nslab - 1};
     btf_error e = {0};
-    if (!(w->behind = btf_behind_start(&spec, &e))) {
-        btf_error_name(&e, w->path);
+    if (!(w->behind = btf__behind_start(&spec, &e))) {
+        btf__error_name(&e, w->path);
         if (err)
             *err = e;
         return e.code;
@@ -314,23 +314,23 @@ static btf_status start_slabs(btf_exr_writer *w, btf_error *err)
 static btf_status writer_start(btf_exr_writer *w, const btf_exr_meta *meta, btf_error *err)
 {
     int fd;
-    btf_status rc = btf_tmp_create(w->path, w->tmp, sizeof w->tmp, &fd, err);
+    btf_status rc = btf__tmp_create(w->path, w->tmp, sizeof w->tmp, &fd, err);
     if (rc)
         return rc;
     w->io.fd = fd;
     w->tmp_created = 1;
-    exr_context_initializer_t init = btf_exr_initializer(&w->io);
+    exr_context_initializer_t init = btf__exr_initializer(&w->io);
     init.write_fn = io_write;
     exr_result_t rv = exr_start_write(&w->ctx, w->path, EXR_WRITE_FILE_DIRECTLY, &init);
     if (rv != EXR_ERR_SUCCESS) {
         w->ctx = NULL; /* exr_start_write frees it on failure */
-        return btf_exr_fail(err, &w->io, rv, 1, "cannot start EXR file");
+        return btf__exr_fail(err, &w->io, rv, 1, "cannot start EXR file");
     }
-    double t0 = btf_now();
+    double t0 = btf__now();
     rv = writer_header(w, meta);
-    w->t.write_s += btf_now() - t0;
+    w->t.write_s += btf__now() - t0;
     if (rv != EXR_ERR_SUCCESS)
-        return btf_exr_fail(err, &w->io, rv, 1, "cannot write EXR header");
+        return btf__exr_fail(err, &w->io, rv, 1, "cannot write EXR header");
     return start_slabs(w, err);
 }
 
@@ -339,21 +339,21 @@ btf_status btf_exr_writer_open_opts(const char *path, int width, int height, int
                                     btf_exr_writer **out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_exr_writer_open: NULL output pointer");
+        return btf__fail(err, BTF_E_ARG, "btf_exr_writer_open: NULL output pointer");
     *out = NULL;
     btf_exr_opts d = btf_exr_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_exr_writer_open", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_exr_writer_open", err))
         return BTF_E_ARG;
     if (!path || !*path)
-        return btf_fail(err, BTF_E_ARG, "btf_exr_writer_open: no path");
+        return btf__fail(err, BTF_E_ARG, "btf_exr_writer_open: no path");
     if (width < 1 || height < 1 || width > BTF_EXR_MAX_SIDE || height > BTF_EXR_MAX_SIDE)
-        return btf_fail(err, BTF_E_ARG, "%s: image size %dx%d out of range 1..%d", path, width,
-                        height, BTF_EXR_MAX_SIDE);
+        return btf__fail(err, BTF_E_ARG, "%s: image size %dx%d out of range 1..%d", path, width,
+                         height, BTF_EXR_MAX_SIDE);
     if (channels != 1 && channels != 3)
-        return btf_fail(err, BTF_E_ARG, "%s: channels %d: expected 1 or 3", path, channels);
+        return btf__fail(err, BTF_E_ARG, "%s: channels %d: expected 1 or 3", path, channels);
     if (o.compression < 0 || o.compression >= N_COMPRESSIONS)
-        return btf_fail(err, BTF_E_ARG, "%s: unknown EXR compression %d", path, o.compression);
-    btf_exr_writer *w = btf_calloc(1, sizeof *w, err);
+        return btf__fail(err, BTF_E_ARG, "%s: unknown EXR compression %d", path, o.compression);
+    btf_exr_writer *w = btf__calloc(1, sizeof *w, err);
     if (!w)
         return BTF_E_NOMEM;
     w->io.fd = -1;
@@ -365,19 +365,19 @@ btf_status btf_exr_writer_open_opts(const char *path, int width, int height, int
     w->background = o.background != 0;
     w->times = o.times;
 #ifdef HAVE_FAST_PACK
-    w->fast_pack = !btf_exr_library_pack && have_f16c();
+    w->fast_pack = !btf__exr_library_pack && have_f16c();
 #endif
     w->path = strdup(path);
     if (!w->path) {
         free(w);
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", path);
     }
     w->io.path = w->path;
     btf_status rc = BTF_OK;
     {
-        btf_exr_io *prev = btf_exr_sink_enter(&w->io);
+        btf_exr_io *prev = btf__exr_sink_enter(&w->io);
         rc = writer_start(w, meta, err);
-        btf_exr_sink_leave(prev);
+        btf__exr_sink_leave(prev);
     }
     if (rc) {
         btf_exr_writer_abort(w);
@@ -426,9 +426,9 @@ static btf_status stage_row(btf_exr_writer *w, const float *src, btf_error *err)
     int bad = w->half ? copy_clamped(dst, src, n) : copy_checked(dst, src, n);
     for (size_t i = 0; bad && i < n; i++)
         if (!isfinite(src[i]))
-            return btf_fail(err, BTF_E_ARG, "%s: %s at pixel (%d, %d): EXR output must be finite",
-                            w->path, isnan(src[i]) ? "NaN" : "Inf",
-                            (int)(i / (size_t)w->channels), w->rows_done);
+            return btf__fail(err, BTF_E_ARG, "%s: %s at pixel (%d, %d): EXR output must be finite",
+                             w->path, isnan(src[i]) ? "NaN" : "Inf",
+                             (int)(i / (size_t)w->channels), w->rows_done);
     w->rows_staged++;
     w->rows_done++;
     return BTF_OK;
@@ -441,8 +441,8 @@ static btf_status bind_inputs(btf_exr_writer *w, const float *rows, btf_error *e
         exr_coding_channel_info_t *ch = &w->enc.channels[c];
         int k = channel_slot(ch->channel_name);
         if (k < 0 || k >= w->channels)
-            return btf_fail(err, BTF_E_IO, "%s: unexpected EXR channel %s", w->path,
-                            ch->channel_name ? ch->channel_name : "?");
+            return btf__fail(err, BTF_E_IO, "%s: unexpected EXR channel %s", w->path,
+                             ch->channel_name ? ch->channel_name : "?");
         ch->encode_from_ptr = (const uint8_t *)(rows + k);
         ch->user_pixel_stride = (int32_t)((size_t)w->channels * sizeof(float));
         ch->user_line_stride = (int32_t)((size_t)w->width * w->channels * sizeof(float));
@@ -460,7 +460,7 @@ static btf_status bind_inputs(btf_exr_writer *w, const float *rows, btf_error *e
 static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
 {
     btf_exr_writer *w = enc->encoding_user_data;
-    double t0 = btf_now();
+    double t0 = btf__now();
     exr_result_t rv = w->compress(enc);
     if (rv == EXR_ERR_SUCCESS && enc->compressed_bytes >= enc->packed_bytes) {
         if (enc->compressed_buffer != enc->packed_buffer) {
@@ -473,11 +473,11 @@ static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
         }
         enc->compressed_bytes = enc->packed_bytes;
     }
-    w->t.compress_s += btf_now() - t0;
+    w->t.compress_s += btf__now() - t0;
     return rv;
 }
 
-int btf_exr_library_pack = 0;
+int btf__exr_library_pack = 0;
 
 #ifdef HAVE_FAST_PACK
 
@@ -560,7 +560,7 @@ static exr_result_t fast_pack(exr_encode_pipeline_t *enc)
 static exr_result_t timed_pack(exr_encode_pipeline_t *enc)
 {
     btf_exr_writer *w = enc->encoding_user_data;
-    double t0 = btf_now();
+    double t0 = btf__now();
     exr_result_t rv;
 #ifdef HAVE_FAST_PACK
     if (w->fast_pack)
@@ -568,16 +568,16 @@ static exr_result_t timed_pack(exr_encode_pipeline_t *enc)
     else
 #endif
         rv = w->pack(enc);
-    w->t.convert_s += btf_now() - t0;
+    w->t.convert_s += btf__now() - t0;
     return rv;
 }
 
 static exr_result_t timed_write(exr_encode_pipeline_t *enc)
 {
     btf_exr_writer *w = enc->encoding_user_data;
-    double t0 = btf_now();
+    double t0 = btf__now();
     exr_result_t rv = w->write(enc);
-    w->t.write_s += btf_now() - t0;
+    w->t.write_s += btf__now() - t0;
     return rv;
 }
 
@@ -596,7 +596,7 @@ static btf_status write_rows(btf_exr_writer *w, const float *data, int y0, int n
             w->enc_started = 1;
         }
         if (rv)
-            return btf_exr_fail(err, &w->io, rv, 1, "cannot encode rows");
+            return btf__exr_fail(err, &w->io, rv, 1, "cannot encode rows");
         btf_status rc = bind_inputs(w, data + (size_t)r * row, err);
         if (rc)
             return rc;
@@ -619,7 +619,7 @@ static btf_status write_rows(btf_exr_writer *w, const float *data, int y0, int n
         if (!rv)
             rv = exr_encoding_run(w->ctx, 0, &w->enc);
         if (rv)
-            return btf_exr_fail(err, &w->io, rv, 1, "cannot write rows");
+            return btf__exr_fail(err, &w->io, rv, 1, "cannot write rows");
     }
     return BTF_OK;
 }
@@ -630,9 +630,9 @@ static btf_status write_slab(void *user, void *job, btf_error *err)
 {
     btf_exr_writer *w = user;
     const slab *s = job;
-    btf_exr_io *prev = btf_exr_sink_enter(&w->io);
+    btf_exr_io *prev = btf__exr_sink_enter(&w->io);
     btf_status rc = write_rows(w, s->data, s->y0, s->nrows, err);
-    btf_exr_sink_leave(prev);
+    btf__exr_sink_leave(prev);
     return rc;
 }
 
@@ -645,13 +645,13 @@ static btf_status flush_slab(btf_exr_writer *w, btf_error *err)
     w->rows_staged = 0;
     if (!w->behind)
         return write_rows(w, w->stage, y0, n, err);
-    double t0 = btf_now();
+    double t0 = btf__now();
     slab job = {w->stage, y0, n};
-    btf_status rc = btf_behind_put(w->behind, &job, err);
+    btf_status rc = btf__behind_put(w->behind, &job, err);
     if (!rc)
         w->fill = (w->fill + 1) % w->nslab;
     w->stage = w->slabs[w->fill].data;
-    w->t.wait_s += btf_now() - t0;
+    w->t.wait_s += btf__now() - t0;
     return rc;
 }
 
@@ -665,8 +665,8 @@ static void stop_thread(btf_exr_writer *w, int how)
     if (!w->behind)
         return;
     if (how == DROP_QUEUED)
-        btf_behind_abort(w->behind);
-    else if (btf_behind_finish(w->behind, &w->thread_err) != BTF_OK)
+        btf__behind_abort(w->behind);
+    else if (btf__behind_finish(w->behind, &w->thread_err) != BTF_OK)
         w->thread_failed = 1;
     w->behind = NULL;
 }
@@ -674,28 +674,28 @@ static void stop_thread(btf_exr_writer *w, int how)
 btf_status btf_exr_writer_put_rows(btf_exr_writer *w, const float *rows, int nrows, btf_error *err)
 {
     if (!w)
-        return btf_fail(err, BTF_E_ARG, "btf_exr_writer_put_rows: NULL writer");
+        return btf__fail(err, BTF_E_ARG, "btf_exr_writer_put_rows: NULL writer");
     if (w->failed)
-        return btf_fail(err, BTF_E_ARG, "%s: the EXR writer failed earlier", w->path);
+        return btf__fail(err, BTF_E_ARG, "%s: the EXR writer failed earlier", w->path);
     btf_status rc = BTF_OK;
     if (nrows < 0 || (nrows > 0 && !rows))
-        rc = btf_fail(err, BTF_E_ARG, "%s: bad rows (%d)", w->path, nrows);
+        rc = btf__fail(err, BTF_E_ARG, "%s: bad rows (%d)", w->path, nrows);
     else if (nrows > w->height - w->rows_done)
-        rc = btf_fail(err, BTF_E_ARG, "%s: %d rows given, but only %d of %d remain", w->path,
-                      nrows, w->height - w->rows_done, w->height);
+        rc = btf__fail(err, BTF_E_ARG, "%s: %d rows given, but only %d of %d remain", w->path,
+                       nrows, w->height - w->rows_done, w->height);
     size_t rowlen = (size_t)w->width * (size_t)w->channels;
     /* With the thread, this thread calls no library function: the sink
      * (and w->io) belong to the thread. */
-    btf_exr_io *prev = w->behind ? NULL : btf_exr_sink_enter(&w->io);
+    btf_exr_io *prev = w->behind ? NULL : btf__exr_sink_enter(&w->io);
     for (int i = 0; i < nrows && !rc; i++) {
-        double t0 = btf_now();
+        double t0 = btf__now();
         rc = stage_row(w, rows + (size_t)i * rowlen, err);
-        w->t.stage_s += btf_now() - t0;
+        w->t.stage_s += btf__now() - t0;
         if (!rc && (w->rows_staged == w->slab_rows || w->rows_done == w->height))
             rc = flush_slab(w, err);
     }
     if (!w->behind)
-        btf_exr_sink_leave(prev);
+        btf__exr_sink_leave(prev);
     /* Any error is final: a file with a hole in it must never be committed. */
     if (rc)
         w->failed = 1;
@@ -711,7 +711,7 @@ static btf_status writer_finish(btf_exr_writer *w, btf_error *err)
             *err = w->thread_err;
         return w->thread_err.code ? (btf_status)w->thread_err.code : BTF_E_IO;
     }
-    double t0 = btf_now();
+    double t0 = btf__now();
     if (w->enc_started)
         exr_encoding_destroy(w->ctx, &w->enc);
     w->enc_started = 0;
@@ -719,7 +719,7 @@ static btf_status writer_finish(btf_exr_writer *w, btf_error *err)
     if (flush_buffer(w) != 0 && rv == EXR_ERR_SUCCESS)
         rv = EXR_ERR_WRITE_IO;
     if (rv != EXR_ERR_SUCCESS || w->io.sys_errno)
-        return btf_exr_fail(err, &w->io, rv ? rv : EXR_ERR_WRITE_IO, 1, "cannot finish EXR file");
+        return btf__exr_fail(err, &w->io, rv ? rv : EXR_ERR_WRITE_IO, 1, "cannot finish EXR file");
     off_t end = lseek(w->io.fd, 0, SEEK_END);
     w->bytes = end > 0 ? (uint64_t)end : 0;
     int fd = w->io.fd;
@@ -728,29 +728,29 @@ static btf_status writer_finish(btf_exr_writer *w, btf_error *err)
     if (close(fd) != 0 && !e)
         e = errno;
     if (e)
-        return btf_fail(err, BTF_E_IO, "%s: write failed: %s", w->path, strerror(e));
-    btf_status rc = btf_commit_file(w->tmp, w->path, err);
-    w->tmp_created = 0; /* renamed, or removed by btf_commit_file */
-    w->t.write_s += btf_now() - t0;
+        return btf__fail(err, BTF_E_IO, "%s: write failed: %s", w->path, strerror(e));
+    btf_status rc = btf__commit_file(w->tmp, w->path, err);
+    w->tmp_created = 0; /* renamed, or removed by btf__commit_file */
+    w->t.write_s += btf__now() - t0;
     return rc;
 }
 
 btf_status btf_exr_writer_close(btf_exr_writer *w, btf_error *err)
 {
     if (!w)
-        return btf_fail(err, BTF_E_ARG, "btf_exr_writer_close: NULL writer");
+        return btf__fail(err, BTF_E_ARG, "btf_exr_writer_close: NULL writer");
     btf_status rc = BTF_OK;
     if (w->failed)
-        rc = btf_fail(err, BTF_E_ARG, "%s: the EXR writer failed earlier; nothing written",
-                      w->path);
+        rc = btf__fail(err, BTF_E_ARG, "%s: the EXR writer failed earlier; nothing written",
+                       w->path);
     else if (w->rows_done != w->height)
-        rc = btf_fail(err, BTF_E_ARG, "%s: EXR writer closed after %d of %d rows; nothing written",
-                      w->path, w->rows_done, w->height);
+        rc = btf__fail(err, BTF_E_ARG, "%s: EXR writer closed after %d of %d rows; nothing written",
+                       w->path, w->rows_done, w->height);
     if (!rc) {
         stop_thread(w, WRITE_QUEUED); /* the queued rows first: then the sink is ours */
-        btf_exr_io *prev = btf_exr_sink_enter(&w->io);
+        btf_exr_io *prev = btf__exr_sink_enter(&w->io);
         rc = writer_finish(w, err);
-        btf_exr_sink_leave(prev);
+        btf__exr_sink_leave(prev);
     }
     if (!rc && w->times) {
         w->t.files = 1;
@@ -770,17 +770,17 @@ void btf_exr_writer_abort(btf_exr_writer *w)
         return;
     stop_thread(w, DROP_QUEUED);
     /* Messages from tearing down a half-written file are of no interest. */
-    btf_exr_io *prev = btf_exr_sink_enter(&w->io);
+    btf_exr_io *prev = btf__exr_sink_enter(&w->io);
     if (w->ctx) {
         if (w->enc_started)
             exr_encoding_destroy(w->ctx, &w->enc);
         exr_finish(&w->ctx);
     }
-    btf_exr_sink_leave(prev);
+    btf__exr_sink_leave(prev);
     if (w->io.fd >= 0)
         close(w->io.fd);
     if (w->tmp_created)
-        btf_abort_file(w->tmp);
+        btf__abort_file(w->tmp);
     for (int i = 0; i < NSLAB; i++)
         free(w->slabs[i].data);
     free(w->wbuf);
@@ -793,7 +793,7 @@ btf_status btf_image_write_exr_opts(const char *path, const btf_image *img,
                                     btf_error *err)
 {
     if (!img || !img->data)
-        return btf_fail(err, BTF_E_ARG, "%s: no image to write", path ? path : "(null)");
+        return btf__fail(err, BTF_E_ARG, "%s: no image to write", path ? path : "(null)");
     btf_exr_writer *w = NULL;
     btf_status rc = btf_exr_writer_open_opts(path, img->width, img->height, img->channels, opts,
                                              meta, &w, err);

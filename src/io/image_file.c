@@ -40,14 +40,14 @@ static btf_file_format format_of_signature(const unsigned char *sig, size_t n)
 static btf_file_format format_of_source(btf_source *src)
 {
     unsigned char sig[4] = {0};
-    int64_t n = btf_source_read(src, sig, 4, 0);
+    int64_t n = btf__source_read(src, sig, 4, 0);
     return format_of_signature(sig, n > 0 ? (size_t)n : 0);
 }
 
-btf_file_format btf_file_format_of(const char *path)
+btf_file_format btf__file_format_of(const char *path)
 {
     unsigned char sig[4] = {0};
-    int fd = btf_open_regular(path, NULL, NULL); /* a FIFO would block */
+    int fd = btf__open_regular(path, NULL, NULL); /* a FIFO would block */
     if (fd < 0)
         return BTF_FILE_UNKNOWN;
     ssize_t n = read(fd, sig, 4);
@@ -64,7 +64,7 @@ static uint32_t be32(const unsigned char *p)
  * way the structure the probe wants is not there). */
 static int read_exact(btf_source *src, void *buf, uint64_t n, uint64_t offset)
 {
-    return btf_source_read(src, buf, n, offset) == (int64_t)n;
+    return btf__source_read(src, buf, n, offset) == (int64_t)n;
 }
 
 /* PNG: signature, IHDR first, IEND chunk as the last 12 bytes. */
@@ -75,16 +75,16 @@ static btf_status probe_png(btf_source *src, btf_image_header *hdr, btf_error *e
     uint64_t size = src->size;
     unsigned char b[33], tail[12];
     if (size < 8 + 25 + 12 || !read_exact(src, b, 33, 0))
-        return btf_fail(err, BTF_E_FORMAT, "%s: truncated PNG (%llu bytes)", name,
-                        (unsigned long long)size);
+        return btf__fail(err, BTF_E_FORMAT, "%s: truncated PNG (%llu bytes)", name,
+                         (unsigned long long)size);
     if (be32(b + 8) != 13 || memcmp(b + 12, "IHDR", 4) != 0)
-        return btf_fail(err, BTF_E_FORMAT, "%s: PNG without IHDR header", name);
+        return btf__fail(err, BTF_E_FORMAT, "%s: PNG without IHDR header", name);
     uint32_t w = be32(b + 16), h = be32(b + 20);
     int depth = b[24], ctype = b[25];
     if (w < 1 || h < 1 || w > BTF_MAX_SIDE || h > BTF_MAX_SIDE)
-        return btf_fail(err, BTF_E_FORMAT, "%s: PNG size %ux%u out of range", name, w, h);
+        return btf__fail(err, BTF_E_FORMAT, "%s: PNG size %ux%u out of range", name, w, h);
     if (!read_exact(src, tail, 12, size - 12) || memcmp(tail, iend, 12) != 0)
-        return btf_fail(err, BTF_E_FORMAT, "%s: truncated PNG (no IEND chunk at the end)", name);
+        return btf__fail(err, BTF_E_FORMAT, "%s: truncated PNG (no IEND chunk at the end)", name);
     hdr->width = (int)w;
     hdr->height = (int)h;
     hdr->bits = depth == 16 ? 16 : 8;
@@ -111,8 +111,8 @@ static btf_status probe_jpeg(btf_source *src, btf_image_header *hdr, btf_error *
         if (!read_exact(src, b, 4, pos))
             break;
         if (b[0] != 0xFF)
-            return btf_fail(err, BTF_E_FORMAT, "%s: corrupt JPEG (bad marker at byte %llu)", name,
-                            (unsigned long long)pos);
+            return btf__fail(err, BTF_E_FORMAT, "%s: corrupt JPEG (bad marker at byte %llu)", name,
+                             (unsigned long long)pos);
         if (b[1] == 0xFF) { /* fill byte */
             pos++;
             continue;
@@ -133,29 +133,29 @@ static btf_status probe_jpeg(btf_source *src, btf_image_header *hdr, btf_error *
         pos += 2 + len;
     }
     if (!found)
-        return btf_fail(err, BTF_E_FORMAT, "%s: truncated or corrupt JPEG (no frame header)", name);
+        return btf__fail(err, BTF_E_FORMAT, "%s: truncated or corrupt JPEG (no frame header)", name);
     if (hdr->width < 1 || hdr->height < 1)
-        return btf_fail(err, BTF_E_FORMAT, "%s: JPEG size %dx%d unsupported", name, hdr->width,
-                        hdr->height);
+        return btf__fail(err, BTF_E_FORMAT, "%s: JPEG size %dx%d unsupported", name, hdr->width,
+                         hdr->height);
     /* Encoders may pad after EOI; look for it in the last 64 bytes. */
     unsigned char tail[64];
     uint64_t start = size > 64 ? size - 64 : 0;
-    int64_t got = btf_source_read(src, tail, sizeof tail, start);
+    int64_t got = btf__source_read(src, tail, sizeof tail, start);
     if (got < 2)
-        return btf_fail(err, BTF_E_FORMAT, "%s: truncated JPEG", name);
+        return btf__fail(err, BTF_E_FORMAT, "%s: truncated JPEG", name);
     size_t n = (size_t)got;
     while (n > 2 && (tail[n - 1] == 0 || tail[n - 1] == '\n' || tail[n - 1] == '\r'))
         n--;
     if (tail[n - 2] == 0xFF && tail[n - 1] == 0xD9)
         return BTF_OK;
-    return btf_fail(err, BTF_E_FORMAT, "%s: truncated JPEG (no end-of-image marker)", name);
+    return btf__fail(err, BTF_E_FORMAT, "%s: truncated JPEG (no end-of-image marker)", name);
 }
 
 static btf_status probe_source(btf_source *src, btf_image_header *hdr, btf_error *err)
 {
     memset(hdr, 0, sizeof *hdr);
     if (src->size == 0)
-        return btf_fail(err, BTF_E_FORMAT, "%s: empty file", src->name);
+        return btf__fail(err, BTF_E_FORMAT, "%s: empty file", src->name);
     btf_status rc;
     switch (format_of_source(src)) {
     case BTF_FILE_PNG:
@@ -167,9 +167,9 @@ static btf_status probe_source(btf_source *src, btf_image_header *hdr, btf_error
         rc = probe_jpeg(src, hdr, err);
         break;
     case BTF_FILE_EXR:
-        return btf_exr_probe_source(src, hdr, err);
+        return btf__exr_probe_source(src, hdr, err);
     default:
-        rc = btf_fail(err, BTF_E_FORMAT, "%s: not a PNG, JPEG or EXR file", src->name);
+        rc = btf__fail(err, BTF_E_FORMAT, "%s: not a PNG, JPEG or EXR file", src->name);
     }
     hdr->file_bytes = src->size;
     return rc;
@@ -179,7 +179,7 @@ btf_status btf_image_probe_memory(const void *data, size_t n, const char *name,
                                   btf_image_header *hdr, btf_error *err)
 {
     btf_source src;
-    btf_source_memory(&src, data, n, name);
+    btf__source_memory(&src, data, n, name);
     return probe_source(&src, hdr, err);
 }
 
@@ -187,10 +187,10 @@ btf_status btf_image_probe(const char *path, btf_image_header *hdr, btf_error *e
 {
     memset(hdr, 0, sizeof *hdr);
     btf_source src;
-    btf_status rc = btf_source_open(&src, path, err);
+    btf_status rc = btf__source_open(&src, path, err);
     if (!rc)
         rc = probe_source(&src, hdr, err);
-    btf_source_close(&src);
+    btf__source_close(&src);
     return rc;
 }
 
@@ -200,7 +200,7 @@ static void convert_8bit(const unsigned char *src, size_t count, int linear, flo
 {
     float lut[256];
     for (int i = 0; i < 256; i++)
-        lut[i] = linear ? (float)i / 255.0f : btf_srgb_to_linear((float)i / 255.0f);
+        lut[i] = linear ? (float)i / 255.0f : btf__srgb_to_linear((float)i / 255.0f);
     for (size_t i = 0; i < count; i++)
         dst[i] = lut[src[i]];
 }
@@ -209,7 +209,7 @@ static void convert_16bit(const uint16_t *src, size_t count, int srgb, float *ds
 {
     for (size_t i = 0; i < count; i++) {
         float v = (float)src[i] / 65535.0f;
-        dst[i] = srgb ? btf_srgb_to_linear(v) : v;
+        dst[i] = srgb ? btf__srgb_to_linear(v) : v;
     }
 }
 
@@ -245,25 +245,25 @@ static btf_status decode_png_jpeg(btf_source *src, const btf_read_opts *o, btf_i
     btf_image_header hdr;
     btf_status rc = probe_source(src, &hdr, err);
     if (!rc)
-        rc = btf_check_pixels(src->name, hdr.width, hdr.height, o->max_pixels, err);
+        rc = btf__check_pixels(src->name, hdr.width, hdr.height, o->max_pixels, err);
     if (rc)
         return rc;
     /* The output first: a file too large for memory fails before decoding. */
     if ((rc = btf_image_alloc(out, hdr.width, hdr.height, hdr.channels, err)))
-        return btf_error_name(err, src->name);
+        return btf__error_name(err, src->name);
     const unsigned char *bytes;
     unsigned char *owned;
-    if ((rc = btf_source_bytes(src, &bytes, &owned, err)))
-        return btf_error_name(err, src->name);
+    if ((rc = btf__source_bytes(src, &bytes, &owned, err)))
+        return btf__error_name(err, src->name);
     btf_decoded d;
-    rc = btf_png_jpeg_decode(bytes, (size_t)src->size, hdr.format, src->name, &d, err);
+    rc = btf__png_jpeg_decode(bytes, (size_t)src->size, hdr.format, src->name, &d, err);
     free(owned);
     if (rc)
         return rc;
     if (d.width != hdr.width || d.height != hdr.height || d.channels != hdr.channels)
-        rc = btf_fail(err, BTF_E_FORMAT, "%s: decoded %dx%d, %d channels, differs from the "
-                      "header's %dx%d, %d channels", src->name, d.width, d.height, d.channels,
-                      hdr.width, hdr.height, hdr.channels);
+        rc = btf__fail(err, BTF_E_FORMAT, "%s: decoded %dx%d, %d channels, differs from the "
+                       "header's %dx%d, %d channels", src->name, d.width, d.height, d.channels,
+                       hdr.width, hdr.height, hdr.channels);
     size_t count = (size_t)d.width * d.height * d.channels;
     if (rc == 0 && d.depth16)
         convert_16bit(d.pixels, count, o->srgb_16bit, out->data);
@@ -281,16 +281,16 @@ static btf_status decode_source(btf_source *src, const btf_read_opts *o, btf_ima
     switch (format_of_source(src)) {
     case BTF_FILE_EXR:
         /* The EXR reader converts the channel count while it copies. */
-        return btf_exr_read_source(src, o->channels, o->max_pixels, out, err);
+        return btf__exr_read_source(src, o->channels, o->max_pixels, out, err);
     case BTF_FILE_PNG:
     case BTF_FILE_JPEG:
         rc = decode_png_jpeg(src, o, out, err);
         break;
     default:
-        return btf_fail(err, BTF_E_FORMAT, "%s: not a PNG, JPEG or EXR file", src->name);
+        return btf__fail(err, BTF_E_FORMAT, "%s: not a PNG, JPEG or EXR file", src->name);
     }
     if (rc == 0 && (rc = convert_channels(out, o->channels, err)))
-        btf_error_name(err, src->name);
+        btf__error_name(err, src->name);
     if (rc)
         btf_image_free(out);
     return rc;
@@ -299,8 +299,8 @@ static btf_status decode_source(btf_source *src, const btf_read_opts *o, btf_ima
 static btf_status check_read_opts(const btf_read_opts *o, const char *name, btf_error *err)
 {
     if (o->channels != 0 && o->channels != 1 && o->channels != 3)
-        return btf_fail(err, BTF_E_ARG, "%s: channels %d requested: expected 0, 1 or 3", name,
-                        o->channels);
+        return btf__fail(err, BTF_E_ARG, "%s: channels %d requested: expected 0, 1 or 3", name,
+                         o->channels);
     return BTF_OK;
 }
 
@@ -309,10 +309,10 @@ btf_status btf_image_decode(const void *data, size_t n, const char *name,
 {
     memset(out, 0, sizeof *out);
     btf_read_opts d = btf_read_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_image_decode", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_image_decode", err))
         return BTF_E_ARG;
     btf_source src;
-    btf_source_memory(&src, data, n, name);
+    btf__source_memory(&src, data, n, name);
     btf_status rc = check_read_opts(&o, src.name, err);
     return rc ? rc : decode_source(&src, &o, out, err);
 }
@@ -322,16 +322,16 @@ btf_status btf_image_read(const char *path, const btf_read_opts *opts, btf_image
 {
     memset(out, 0, sizeof *out);
     btf_read_opts d = btf_read_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_image_read", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_image_read", err))
         return BTF_E_ARG;
     btf_status rc = check_read_opts(&o, path, err);
     if (rc)
         return rc;
     btf_source src;
-    rc = btf_source_open(&src, path, err);
+    rc = btf__source_open(&src, path, err);
     if (!rc)
         rc = decode_source(&src, &o, out, err);
-    btf_source_close(&src);
+    btf__source_close(&src);
     return rc;
 }
 
@@ -339,11 +339,11 @@ btf_status btf_image_read(const char *path, const btf_read_opts *opts, btf_image
 static unsigned char *to_srgb8(const btf_image *img, btf_error *err)
 {
     size_t n = (size_t)img->width * img->height * img->channels;
-    unsigned char *b = btf_alloc(n, 1, err);
+    unsigned char *b = btf__alloc(n, 1, err);
     if (!b)
         return NULL;
     for (size_t i = 0; i < n; i++) {
-        float v = btf_linear_to_srgb(img->data[i]);
+        float v = btf__linear_to_srgb(img->data[i]);
         b[i] = (unsigned char)lrintf(v * 255.0f);
     }
     return b;
@@ -353,18 +353,18 @@ static btf_status write_encoded(const char *path, btf_file_format format, const 
                                 int quality, btf_error *err)
 {
     if (!img || !img->data || (img->channels != 1 && img->channels != 3))
-        return btf_fail(err, BTF_E_ARG, "%s: no image to write", path);
+        return btf__fail(err, BTF_E_ARG, "%s: no image to write", path);
     unsigned char *px = to_srgb8(img, err);
     if (!px)
         return BTF_E_NOMEM;
     unsigned char *enc;
     size_t len;
     char msg[256];
-    int bad = btf_png_jpeg_encode(format, img->width, img->height, img->channels, px, quality,
-                                  &enc, &len, msg, sizeof msg);
+    int bad = btf__png_jpeg_encode(format, img->width, img->height, img->channels, px, quality,
+                                   &enc, &len, msg, sizeof msg);
     free(px);
     if (bad)
-        return btf_fail(err, BTF_E_IO, "%s: cannot encode: %s", path, msg);
+        return btf__fail(err, BTF_E_IO, "%s: cannot encode: %s", path, msg);
     btf_status rc = btf_write_file_atomic(path, enc, len, err);
     free(enc);
     return rc;
@@ -379,6 +379,6 @@ btf_status btf_image_write_jpeg(const char *path, const btf_image *img, int qual
                                 btf_error *err)
 {
     if (quality < 1 || quality > 100)
-        return btf_fail(err, BTF_E_ARG, "%s: JPEG quality %d: expected 1..100", path, quality);
+        return btf__fail(err, BTF_E_ARG, "%s: JPEG quality %d: expected 1..100", path, quality);
     return write_encoded(path, BTF_FILE_JPEG, img, quality, err);
 }

@@ -141,15 +141,15 @@ static btf_status decode_png(const unsigned char *data, size_t n, const char *na
         s.info = png_create_info_struct(s.png);
     if (!s.png || !s.info) {
         png_destroy_read_struct(s.png ? &s.png : NULL, NULL, NULL);
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory starting the PNG decoder", name);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory starting the PNG decoder", name);
     }
     int rc = png_decode_body(&s);
     png_destroy_read_struct(&s.png, &s.info, NULL);
     free(s.rows);
     if (rc) {
         free(s.px);
-        return btf_fail(err, rc == -2 ? BTF_E_NOMEM : BTF_E_FORMAT, "%s: %s%s", name,
-                        rc == -2 ? "" : "corrupt PNG: ", s.msg);
+        return btf__fail(err, rc == -2 ? BTF_E_NOMEM : BTF_E_FORMAT, "%s: %s%s", name,
+                         rc == -2 ? "" : "corrupt PNG: ", s.msg);
     }
     out->pixels = s.px;
     return BTF_OK;
@@ -270,7 +270,7 @@ static btf_status decode_jpeg(const unsigned char *data, size_t n, const char *n
 {
     jpeg_state *s = calloc(1, sizeof *s);
     if (!s)
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory starting the JPEG decoder", name);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory starting the JPEG decoder", name);
     s->d.err = jpeg_std_error(&s->mgr);
     s->mgr.error_exit = jpeg_on_error;
     s->mgr.emit_message = jpeg_on_message;
@@ -285,8 +285,8 @@ static btf_status decode_jpeg(const unsigned char *data, size_t n, const char *n
         free(s->px);
         static const char lead[] = "Corrupt JPEG data: "; /* said once, not twice */
         const char *m = strncmp(s->msg, lead, sizeof lead - 1) ? s->msg : s->msg + sizeof lead - 1;
-        st = btf_fail(err, s->nomem ? BTF_E_NOMEM : BTF_E_FORMAT, "%s: %s%s", name,
-                      s->nomem ? "" : "corrupt JPEG: ", m);
+        st = btf__fail(err, s->nomem ? BTF_E_NOMEM : BTF_E_FORMAT, "%s: %s%s", name,
+                       s->nomem ? "" : "corrupt JPEG: ", m);
     } else {
         out->pixels = s->px;
     }
@@ -294,13 +294,13 @@ static btf_status decode_jpeg(const unsigned char *data, size_t n, const char *n
     return st;
 }
 
-btf_status btf_png_jpeg_decode(const void *data, size_t n, btf_file_format format,
-                               const char *name, btf_decoded *out, btf_error *err)
+btf_status btf__png_jpeg_decode(const void *data, size_t n, btf_file_format format,
+                                const char *name, btf_decoded *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
     if (format == BTF_FILE_PNG)
         return decode_png(data, n, name, out, err);
     if (format == BTF_FILE_JPEG)
         return decode_jpeg(data, n, name, out, err);
-    return btf_fail(err, BTF_E_FORMAT, "%s: not a PNG or JPEG file", name);
+    return btf__fail(err, BTF_E_FORMAT, "%s: not a PNG or JPEG file", name);
 }

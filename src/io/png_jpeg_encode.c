@@ -100,7 +100,7 @@ static int png_encode_body(png_structp png, png_infop info, int w, int h, int c,
     png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, 8,
                  c == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-    /* The pixels are sRGB-encoded (btf_linear_to_srgb): say so, so that
+    /* The pixels are sRGB-encoded (btf__linear_to_srgb): say so, so that
      * viewers do not guess. */
     png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
     png_write_info(png, info);
@@ -241,9 +241,9 @@ static int encode_jpeg(int w, int h, int c, const unsigned char *px, int quality
     return 0;
 }
 
-int btf_png_jpeg_encode(btf_file_format format, int w, int h, int c,
-                        const unsigned char *pixels, int jpeg_quality, unsigned char **out,
-                        size_t *outlen, char *msg, size_t msglen)
+int btf__png_jpeg_encode(btf_file_format format, int w, int h, int c,
+                         const unsigned char *pixels, int jpeg_quality, unsigned char **out,
+                         size_t *outlen, char *msg, size_t msglen)
 {
     *out = NULL;
     *outlen = 0;

@@ -13,7 +13,7 @@
 #include <string.h>
 #include <unistd.h>
 
-void btf_source_memory(btf_source *s, const void *data, size_t n, const char *name)
+void btf__source_memory(btf_source *s, const void *data, size_t n, const char *name)
 {
     memset(s, 0, sizeof *s);
     s->name = name ? name : "image";
@@ -22,25 +22,25 @@ void btf_source_memory(btf_source *s, const void *data, size_t n, const char *na
     s->size = data ? (uint64_t)n : 0;
 }
 
-btf_status btf_source_open(btf_source *s, const char *path, btf_error *err)
+btf_status btf__source_open(btf_source *s, const char *path, btf_error *err)
 {
     memset(s, 0, sizeof *s);
     s->name = path;
     s->fd = -1;
     /* A folder or a device has no size to check chunk offsets against, and
      * a FIFO would block the open itself: regular files only. */
-    s->fd = btf_open_regular(path, &s->size, err);
+    s->fd = btf__open_regular(path, &s->size, err);
     return s->fd < 0 ? BTF_E_IO : BTF_OK;
 }
 
-void btf_source_close(btf_source *s)
+void btf__source_close(btf_source *s)
 {
     if (s->fd >= 0)
         close(s->fd);
     s->fd = -1;
 }
 
-int64_t btf_source_read(btf_source *s, void *buf, uint64_t n, uint64_t offset)
+int64_t btf__source_read(btf_source *s, void *buf, uint64_t n, uint64_t offset)
 {
     /* Offsets come from the file and may be anything: a request past the
      * end returns what exists, and the parser reports the short read. */
@@ -70,8 +70,8 @@ int64_t btf_source_read(btf_source *s, void *buf, uint64_t n, uint64_t offset)
     return (int64_t)done;
 }
 
-btf_status btf_source_bytes(btf_source *s, const unsigned char **data, unsigned char **owned,
-                            btf_error *err)
+btf_status btf__source_bytes(btf_source *s, const unsigned char **data, unsigned char **owned,
+                             btf_error *err)
 {
     *owned = NULL;
     if (s->fd < 0) {
@@ -79,18 +79,18 @@ btf_status btf_source_bytes(btf_source *s, const unsigned char **data, unsigned 
         return BTF_OK;
     }
     if (s->size > (uint64_t)SIZE_MAX - 1)
-        return btf_fail(err, BTF_E_NOMEM, "%s: too large to load (%llu bytes)", s->name,
-                        (unsigned long long)s->size);
+        return btf__fail(err, BTF_E_NOMEM, "%s: too large to load (%llu bytes)", s->name,
+                         (unsigned long long)s->size);
     unsigned char *buf = malloc(s->size ? (size_t)s->size : 1);
     if (!buf)
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", s->name);
-    int64_t got = btf_source_read(s, buf, s->size, 0);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", s->name);
+    int64_t got = btf__source_read(s, buf, s->size, 0);
     if (got < 0 || (uint64_t)got != s->size) {
         free(buf);
-        return got < 0 ? btf_fail(err, BTF_E_IO, "%s: read error: %s", s->name,
-                                  strerror(s->sys_errno))
-                       : btf_fail(err, BTF_E_IO, "%s: the file shrank while being read",
-                                  s->name);
+        return got < 0 ? btf__fail(err, BTF_E_IO, "%s: read error: %s", s->name,
+                                   strerror(s->sys_errno))
+                       : btf__fail(err, BTF_E_IO, "%s: the file shrank while being read",
+                                   s->name);
     }
     *data = buf;
     *owned = buf;

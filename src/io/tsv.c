@@ -3,7 +3,7 @@
  * (datasets, photometric stereo): a header line naming the columns, then one
  * record per line. Blank lines and lines starting with '#' are skipped. Fields
  * are separated by tabs only, so paths may contain spaces. The parser works
- * on a buffer (btf_tsv_parse); btf_tsv_read loads a file and parses it.
+ * on a buffer (btf__tsv_parse); btf__tsv_read loads a file and parses it.
  */
 #include "core/core.h"
 #include "io/io.h"
@@ -14,7 +14,7 @@
 
 #define TSV_MAX_BYTES (64u << 20)
 
-void btf_tsv_free(btf_tsv *t)
+void btf__tsv_free(btf_tsv *t)
 {
     if (!t)
         return;
@@ -71,8 +71,8 @@ static btf_status parse_owned(char *text, size_t n, const char *name, btf_tsv *t
 {
     t->text = text;
     if (memchr(text, 0, n)) {
-        btf_tsv_free(t);
-        return btf_fail(err, BTF_E_FORMAT, "%s: not a text file (contains NUL bytes)", name);
+        btf__tsv_free(t);
+        return btf__fail(err, BTF_E_FORMAT, "%s: not a text file (contains NUL bytes)", name);
     }
     text[n] = '\0';
     size_t lines = 1;
@@ -93,15 +93,15 @@ static btf_status parse_owned(char *text, size_t n, const char *name, btf_tsv *t
         if (!have_header) {
             t->ncols = count_fields(l);
             if (t->ncols > 64) {
-                btf_tsv_free(t);
-                return btf_fail(err, BTF_E_FORMAT, "%s:%d: more than 64 columns", name, line);
+                btf__tsv_free(t);
+                return btf__fail(err, BTF_E_FORMAT, "%s:%d: more than 64 columns", name, line);
             }
-            char **header = btf_alloc((size_t)t->ncols, sizeof(char *), err);
-            t->cells = btf_alloc(lines * (size_t)t->ncols, sizeof(char *), err);
-            t->line_no = btf_alloc(lines, sizeof(int), err);
+            char **header = btf__alloc((size_t)t->ncols, sizeof(char *), err);
+            t->cells = btf__alloc(lines * (size_t)t->ncols, sizeof(char *), err);
+            t->line_no = btf__alloc(lines, sizeof(int), err);
             if (!header || !t->cells || !t->line_no) {
                 free(header);
-                btf_tsv_free(t);
+                btf__tsv_free(t);
                 return BTF_E_NOMEM;
             }
             split_line(l, header, t->ncols);
@@ -115,57 +115,57 @@ static btf_status parse_owned(char *text, size_t n, const char *name, btf_tsv *t
         int k = split_line(l, row, t->ncols);
         if (k != t->ncols) {
             int ncols = t->ncols;
-            btf_tsv_free(t);
-            return btf_fail(err, BTF_E_FORMAT, "%s:%d: %d fields, the header names %d", name, line,
-                            k, ncols);
+            btf__tsv_free(t);
+            return btf__fail(err, BTF_E_FORMAT, "%s:%d: %d fields, the header names %d", name, line,
+                             k, ncols);
         }
         for (int c = 0; c < t->ncols; c++)
             row[c] = trim(row[c]);
         t->line_no[t->nrows++] = line;
     }
     if (!have_header) {
-        btf_tsv_free(t);
-        return btf_fail(err, BTF_E_FORMAT, "%s: empty manifest (no header line)", name);
+        btf__tsv_free(t);
+        return btf__fail(err, BTF_E_FORMAT, "%s: empty manifest (no header line)", name);
     }
     return BTF_OK;
 }
 
-btf_status btf_tsv_parse(const char *text, size_t n, const char *name, btf_tsv *t,
-                         btf_error *err)
+btf_status btf__tsv_parse(const char *text, size_t n, const char *name, btf_tsv *t,
+                          btf_error *err)
 {
     memset(t, 0, sizeof *t);
     if (!name)
         name = "manifest";
     if (!text && n)
-        return btf_fail(err, BTF_E_ARG, "%s: no text", name);
+        return btf__fail(err, BTF_E_ARG, "%s: no text", name);
     if (n > TSV_MAX_BYTES)
-        return btf_fail(err, BTF_E_FORMAT, "%s: larger than %u bytes", name, TSV_MAX_BYTES);
+        return btf__fail(err, BTF_E_FORMAT, "%s: larger than %u bytes", name, TSV_MAX_BYTES);
     char *copy = malloc(n + 1);
     if (!copy)
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", name);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", name);
     if (n)
         memcpy(copy, text, n);
     return parse_owned(copy, n, name, t, err);
 }
 
-btf_status btf_tsv_read(const char *path, btf_tsv *t, btf_error *err)
+btf_status btf__tsv_read(const char *path, btf_tsv *t, btf_error *err)
 {
     memset(t, 0, sizeof *t);
     unsigned char *data;
     size_t n;
-    btf_status rc = btf_read_file(path, TSV_MAX_BYTES, &data, &n, err);
+    btf_status rc = btf__read_file(path, TSV_MAX_BYTES, &data, &n, err);
     if (rc)
         return rc;
     /* Room for the terminating NUL; the bytes are parsed where they are. */
     char *text = realloc(data, n + 1);
     if (!text) {
         free(data);
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", path);
     }
     return parse_owned(text, n, path, t, err);
 }
 
-int btf_tsv_column(const btf_tsv *t, const char *name)
+int btf__tsv_column(const btf_tsv *t, const char *name)
 {
     for (int c = 0; c < t->ncols; c++)
         if (strcmp(t->names[c], name) == 0)
@@ -173,7 +173,7 @@ int btf_tsv_column(const btf_tsv *t, const char *name)
     return -1;
 }
 
-const char *btf_tsv_cell(const btf_tsv *t, int row, int col)
+const char *btf__tsv_cell(const btf_tsv *t, int row, int col)
 {
     return t->cells[(size_t)row * t->ncols + col];
 }
@@ -187,10 +187,10 @@ static int is_decimal_start(const char *s)
     return (*s >= '0' && *s <= '9') || (*s == '.' && s[1] >= '0' && s[1] <= '9');
 }
 
-btf_status btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
-                          btf_error *err)
+btf_status btf__tsv_number(const btf_tsv *t, const char *path, int row, int col, double *out,
+                           btf_error *err)
 {
-    const char *s = btf_tsv_cell(t, row, col);
+    const char *s = btf__tsv_cell(t, row, col);
     char *end;
     double v = 0.0;
     /* Decimal only: strtod would also read "0x1e" as thirty and "inf" or
@@ -199,8 +199,8 @@ btf_status btf_tsv_number(const btf_tsv *t, const char *path, int row, int col, 
     if (decimal)
         v = strtod(s, &end);
     if (!decimal || end == s || *end != '\0' || !isfinite(v))
-        return btf_fail(err, BTF_E_FORMAT, "%s:%d: %s '%s' is not a finite decimal number", path,
-                        t->line_no[row], t->names[col], s);
+        return btf__fail(err, BTF_E_FORMAT, "%s:%d: %s '%s' is not a finite decimal number", path,
+                         t->line_no[row], t->names[col], s);
     *out = v;
     return BTF_OK;
 }
@@ -217,13 +217,13 @@ static int by_name_then_index(const void *a, const void *b)
     return c ? c : (x->index > y->index) - (x->index < y->index);
 }
 
-btf_status btf_first_repeat(const char *const *names, int n, int *first, int *again,
-                            btf_error *err)
+btf_status btf__first_repeat(const char *const *names, int n, int *first, int *again,
+                             btf_error *err)
 {
     *first = *again = -1;
     if (n < 2)
         return BTF_OK;
-    name_index *order = btf_alloc((size_t)n, sizeof *order, err);
+    name_index *order = btf__alloc((size_t)n, sizeof *order, err);
     if (!order)
         return BTF_E_NOMEM;
     for (int i = 0; i < n; i++)

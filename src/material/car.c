@@ -43,8 +43,8 @@ static btf_status car_renders(const void *model, const char *path, btf_error *er
 {
     const btf_model *m = model;
     if (!m->index || m->views.count < 1 || m->lights.count < 1)
-        return btf_fail(err, BTF_E_ARG, "%s: the model is a single texture: it has no view and "
-                        "light directions to render with (analyse a BTF dataset)", path);
+        return btf__fail(err, BTF_E_ARG, "%s: the model is a single texture: it has no view and "
+                         "light directions to render with (analyse a BTF dataset)", path);
     const btf_dirset *sets[2] = {&m->views, &m->lights};
     for (int i = 0; i < 2; i++) {
         btf_hemisphere *h = NULL;
@@ -52,8 +52,8 @@ static btf_status car_renders(const void *model, const char *path, btf_error *er
         if (sets[i]->count < 3)
             continue;
         if (btf_hemisphere_build(sets[i], &h, &why) != BTF_OK)
-            return btf_fail(err, why.code, "%s: its %s cannot be rendered: %s", path,
-                            i ? "lights" : "views", why.msg);
+            return btf__fail(err, why.code, "%s: its %s cannot be rendered: %s", path,
+                             i ? "lights" : "views", why.msg);
         btf_hemisphere_free(h);
     }
     return BTF_OK;
@@ -90,12 +90,12 @@ static btf_status car_report(const btf_dataset *ds, const void *model, const cha
     return btf_report_write(ds, model, dir, opts, summary, err);
 }
 
-const btf_family_ops btf_car_family = {
+const btf_family_ops btf__car_family = {
     .family = BTF_FAMILY_CAR,
     .name = "car",
     .caps = BTF_MATERIAL_SYNTHESISES,
     .model_size = sizeof(btf_model),
-    .sniff = btf_model_sniff,
+    .sniff = btf__model_sniff,
     .read = car_read,
     .free = car_free,
     .dirsets = car_dirsets,

@@ -51,7 +51,7 @@ btf_status rf_describe(const btf_rf_model *m, const describe_file *file, FILE *f
                        btf_error *err);
 
 /* The families (src/material/car.c, src/material/rf.c). */
-extern const btf_family_ops btf_car_family;
-extern const btf_family_ops btf_rf_family;
+extern const btf_family_ops btf__car_family;
+extern const btf_family_ops btf__rf_family;
 
 #endif

@@ -12,7 +12,7 @@
 
 /* The families, in the order their signatures are tried; the first is also
  * the reader of a file of none, whose message says what is wrong. */
-static const btf_family_ops *const FAMILIES[] = {&btf_car_family, &btf_rf_family};
+static const btf_family_ops *const FAMILIES[] = {&btf__car_family, &btf__rf_family};
 #define N_FAMILIES (sizeof FAMILIES / sizeof FAMILIES[0])
 
 /* Both families' files begin with an 11-byte signature and the format's
@@ -47,7 +47,7 @@ btf_family btf_material_sniff(const unsigned char *data, size_t size)
 static size_t read_head(const char *path, unsigned char *head, long long *bytes)
 {
     uint64_t size = 0;
-    int fd = btf_open_regular(path, &size, NULL);
+    int fd = btf__open_regular(path, &size, NULL);
     *bytes = -1;
     if (fd < 0)
         return 0;
@@ -60,7 +60,7 @@ static size_t read_head(const char *path, unsigned char *head, long long *bytes)
 btf_status btf_material_read(const char *path, btf_material **out, btf_error *err)
 {
     if (!path || !out)
-        return btf_fail(err, BTF_E_ARG, "btf_material_read: NULL argument");
+        return btf__fail(err, BTF_E_ARG, "btf_material_read: NULL argument");
     *out = NULL;
     unsigned char head[HEAD_BYTES] = {0};
     long long bytes;
@@ -74,7 +74,7 @@ btf_status btf_material_read(const char *path, btf_material **out, btf_error *er
     if (!name) {
         free(model);
         free(m);
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", path);
     }
     btf_status rc = ops->read(path, model, err);
     if (rc) {
@@ -123,11 +123,11 @@ const btf_rf_model *btf_material_rf(const btf_material *m)
 btf_status btf_material_describe(const btf_material *m, FILE *out, int json, btf_error *err)
 {
     if (!m || !out)
-        return btf_fail(err, BTF_E_ARG, "btf_material_describe: NULL argument");
+        return btf__fail(err, BTF_E_ARG, "btf_material_describe: NULL argument");
     describe_file file = {m->path, m->major, m->minor, m->bytes};
     btf_status rc = m->ops->describe(m->model, &file, out, json, err);
     if (rc == BTF_OK && fflush(out) != 0)
-        rc = btf_fail(err, BTF_E_IO, "%s: cannot write its description", m->path);
+        rc = btf__fail(err, BTF_E_IO, "%s: cannot write its description", m->path);
     return rc;
 }
 
@@ -136,10 +136,10 @@ btf_status btf_material_render_flat(const btf_material *m, btf_gpu *g, btf_dir v
                                     btf_render_info *info, btf_error *err)
 {
     if (!m || !opts || !out)
-        return btf_fail(err, BTF_E_ARG, "btf_material_render_flat: NULL argument");
+        return btf__fail(err, BTF_E_ARG, "btf_material_render_flat: NULL argument");
     btf_render_info none;
     btf_render_opts o, d = btf_render_defaults();
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_material_render_flat", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_material_render_flat", err))
         return BTF_E_ARG;
     btf_status rc = m->ops->renders(m->model, m->path, err);
     return rc ? rc : m->ops->render_flat(m->model, g, view, light, &o, out,
@@ -151,10 +151,10 @@ btf_status btf_material_render_scene(const btf_material *m, btf_gpu *g, const bt
                                      btf_render_info *info, btf_error *err)
 {
     if (!m || !s || !opts || !out)
-        return btf_fail(err, BTF_E_ARG, "btf_material_render_scene: NULL argument");
+        return btf__fail(err, BTF_E_ARG, "btf_material_render_scene: NULL argument");
     btf_render_info none;
     btf_render_opts o, d = btf_render_defaults();
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_material_render_scene", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_material_render_scene", err))
         return BTF_E_ARG;
     btf_status rc = m->ops->renders(m->model, m->path, err);
     return rc ? rc : m->ops->render_scene(m->model, g, s, &o, out, info ? info : &none, err);
@@ -175,6 +175,6 @@ btf_status btf_material_report_write(const btf_dataset *ds, const btf_material *
                                      btf_report_summary *summary, btf_error *err)
 {
     if (!ds || !m || !dir || !opts)
-        return btf_fail(err, BTF_E_ARG, "btf_material_report_write: NULL argument");
+        return btf__fail(err, BTF_E_ARG, "btf_material_report_write: NULL argument");
     return m->ops->report(ds, m->model, dir, opts, summary, err);
 }

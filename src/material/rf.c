@@ -17,7 +17,7 @@
 
 static btf_status rf_read(const char *path, void *model, btf_error *err)
 {
-    return btf_rf_read(path, model, err);
+    return btf__rf_read(path, model, err);
 }
 
 static void rf_free(void *model)
@@ -59,10 +59,10 @@ static btf_status rf_render_flat_ops(const void *model, btf_gpu *g, btf_dir view
     frame_size(opts, &w, &h);
     memset(info, 0, sizeof *info);
     if (g)
-        return btf_gpu_rf_render_flat(g, model, view, light, w, h, out, info, err);
-    double t = btf_now();
-    btf_status rc = btf_rf_render_flat(model, view, light, w, h, opts->threads, out, err);
-    info->shade_s = btf_now() - t;
+        return btf__gpu_rf_render_flat(g, model, view, light, w, h, out, info, err);
+    double t = btf__now();
+    btf_status rc = btf__rf_render_flat(model, view, light, w, h, opts->threads, out, err);
+    info->shade_s = btf__now() - t;
     return rc;
 }
 
@@ -73,8 +73,8 @@ static btf_status rf_render_scene_ops(const void *model, btf_gpu *g, const btf_s
     int w, h;
     frame_size(opts, &w, &h);
     memset(info, 0, sizeof *info);
-    return g ? btf_gpu_rf_render_scene(g, model, s, w, h, opts->threads, out, info, err)
-             : btf_rf_render_scene(model, s, w, h, opts->threads, out, info, err);
+    return g ? btf__gpu_rf_render_scene(g, model, s, w, h, opts->threads, out, info, err)
+             : btf__rf_render_scene(model, s, w, h, opts->threads, out, info, err);
 }
 
 /* The views a render blends: at a flat render's view, the four closest
@@ -96,7 +96,7 @@ static void rf_render_note(const void *model, const btf_scene *s, btf_dir view,
     }
     int idx[4];
     double w[4];
-    btf_rf_view_weights(&m->views, view, idx, w);
+    btf__rf_view_weights(&m->views, view, idx, w);
     size_t used = (size_t)snprintf(buf, n, "reflectance-field model (%s): views",
                                    btf_rf_fit_name(m->fit));
     for (int i = 0; i < 4 && used < n; i++)
@@ -110,15 +110,15 @@ static btf_status rf_report(const btf_dataset *ds, const void *model, const char
                             const btf_report_opts *opts, btf_report_summary *summary,
                             btf_error *err)
 {
-    return btf_rf_report_write(ds, model, dir, opts, summary, err);
+    return btf__rf_report_write(ds, model, dir, opts, summary, err);
 }
 
-const btf_family_ops btf_rf_family = {
+const btf_family_ops btf__rf_family = {
     .family = BTF_FAMILY_RF,
     .name = "rf",
     .caps = 0,
     .model_size = sizeof(btf_rf_model),
-    .sniff = btf_rf_sniff,
+    .sniff = btf__rf_sniff,
     .read = rf_read,
     .free = rf_free,
     .dirsets = rf_dirsets,

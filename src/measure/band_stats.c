@@ -102,7 +102,7 @@ btf_status ms_band_stats(const ms_view *v, int levels, ms_band *out, btf_error *
 {
     int w = v->w, h = v->h;
     size_t n = (size_t)w * h;
-    double *g = btf_alloc(3 * n, sizeof(double), err);
+    double *g = btf__alloc(3 * n, sizeof(double), err);
     if (!g)
         return BTF_E_NOMEM;
     double *blur = g + n, *tmp = blur + n;

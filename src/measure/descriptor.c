@@ -26,8 +26,8 @@ btf_status ms_describe(const ms_view *v, int s, int levels, ms_desc *d, btf_erro
     d->n = (size_t)v->w * v->h;
     d->nbins = nbins;
     d->levels = levels;
-    d->spectrum = btf_alloc((size_t)nbins, sizeof(double), err);
-    d->sorted[0] = d->spectrum ? btf_alloc(3 * d->n, sizeof(float), err) : NULL;
+    d->spectrum = btf__alloc((size_t)nbins, sizeof(double), err);
+    d->sorted[0] = d->spectrum ? btf__alloc(3 * d->n, sizeof(float), err) : NULL;
     if (!d->sorted[0]) {
         ms_desc_free(d);
         return BTF_E_NOMEM;

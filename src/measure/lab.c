@@ -37,8 +37,8 @@ btf_status ms_lab(const btf_image *img, double scale, const char *name, float **
     *lab = NULL;
     size_t n = (size_t)img->width * img->height;
     int c = img->channels;
-    float *out = btf_alloc(n * MS_CH, sizeof(float), err);
-    float *rgb = out ? btf_alloc(n * 6, sizeof(float), err) : NULL;
+    float *out = btf__alloc(n * MS_CH, sizeof(float), err);
+    float *rgb = out ? btf__alloc(n * 6, sizeof(float), err) : NULL;
     if (!rgb) {
         free(out);
         return BTF_E_NOMEM;
@@ -51,8 +51,8 @@ btf_status ms_lab(const btf_image *img, double scale, const char *name, float **
             if (!isfinite(v)) {
                 free(rgb);
                 free(out);
-                return btf_fail(err, BTF_E_DATA, "%s: pixel (%zu, %zu) is not finite", name,
-                                i % (size_t)img->width, i / (size_t)img->width);
+                return btf__fail(err, BTF_E_DATA, "%s: pixel (%zu, %zu) is not finite", name,
+                                 i % (size_t)img->width, i / (size_t)img->width);
             }
             double s = (double)v * scale;
             y += Y_WEIGHTS[k] * s;
@@ -66,7 +66,7 @@ btf_status ms_lab(const btf_image *img, double scale, const char *name, float **
     if (btfcv_rgb_to_lab(rgb, n, lab3, why, sizeof why) != 0) {
         free(rgb);
         free(out);
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: Lab conversion failed: %s", name, why);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "%s: Lab conversion failed: %s", name, why);
     }
     for (size_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)

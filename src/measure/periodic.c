@@ -18,7 +18,7 @@
 btf_status ms_periodic_component(double *u, int w, int h, btf_error *err)
 {
     size_t n = (size_t)w * h;
-    double *re = btf_calloc(2 * n, sizeof(double), err);
+    double *re = btf__calloc(2 * n, sizeof(double), err);
     if (!re)
         return BTF_E_NOMEM;
     double *im = re + n;
@@ -36,7 +36,7 @@ btf_status ms_periodic_component(double *u, int w, int h, btf_error *err)
     char why[256];
     if (btfcv_dft2(re, im, w, h, 0, why, sizeof why) != 0) {
         free(re);
-        return btf_fail(err, BTF_E_UNSUPPORTED, "periodic component: DFT failed: %s", why);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "periodic component: DFT failed: %s", why);
     }
     for (int r = 0; r < h; r++)
         for (int q = 0; q < w; q++) {
@@ -51,7 +51,7 @@ btf_status ms_periodic_component(double *u, int w, int h, btf_error *err)
         }
     if (btfcv_dft2(re, im, w, h, 1, why, sizeof why) != 0) {
         free(re);
-        return btf_fail(err, BTF_E_UNSUPPORTED, "periodic component: DFT failed: %s", why);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "periodic component: DFT failed: %s", why);
     }
     for (size_t i = 0; i < n; i++)
         u[i] -= re[i];

@@ -35,7 +35,7 @@ uint64_t btf_phase_randomise_bytes(int width, int height)
 /* Standard normal by Box-Muller (u1 in (0, 1], so the log is finite). */
 static double gaussian(btf_rng *r)
 {
-    double u1 = 1.0 - btf_rng_uniform(r), u2 = btf_rng_uniform(r);
+    double u1 = 1.0 - btf__rng_uniform(r), u2 = btf__rng_uniform(r);
     return sqrt(-2.0 * log(u1)) * cos(2.0 * M_PI * u2);
 }
 
@@ -55,14 +55,14 @@ static btf_status randomise_band(double *band, int w, int h, btf_rng *rng, doubl
     char why[256];
     if (btfcv_dft2(band, im, w, h, 0, why, sizeof why) != 0 ||
         btfcv_dft2(zr, zi, w, h, 0, why, sizeof why) != 0)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "phase randomisation: DFT failed: %s", why);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "phase randomisation: DFT failed: %s", why);
     for (size_t i = 1; i < n; i++) {
         double amp = hypot(band[i], im[i]), mag = hypot(zr[i], zi[i]);
         band[i] = mag > 0.0 ? amp * zr[i] / mag : amp;
         im[i] = mag > 0.0 ? amp * zi[i] / mag : 0.0;
     }
     if (btfcv_dft2(band, im, w, h, 1, why, sizeof why) != 0)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "phase randomisation: DFT failed: %s", why);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "phase randomisation: DFT failed: %s", why);
     return BTF_OK; /* the imaginary part is rounding error: dropped */
 }
 
@@ -70,21 +70,21 @@ static btf_status check_args(const btf_image *ex, int width, int height, btf_ima
                              btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "phase randomisation: no output image");
+        return btf__fail(err, BTF_E_ARG, "phase randomisation: no output image");
     if (!ex || !ex->data || ex->width < 1 || ex->height < 1)
-        return btf_fail(err, BTF_E_ARG, "phase randomisation: no exemplar image");
+        return btf__fail(err, BTF_E_ARG, "phase randomisation: no exemplar image");
     if (ex->channels != 1 && ex->channels != 3)
-        return btf_fail(err, BTF_E_ARG, "phase randomisation: exemplar has %d channels, "
-                        "expected 1 or 3", ex->channels);
+        return btf__fail(err, BTF_E_ARG, "phase randomisation: exemplar has %d channels, "
+                         "expected 1 or 3", ex->channels);
     if (width < 1 || height < 1 || width > BTF_MAX_SIDE || height > BTF_MAX_SIDE)
-        return btf_fail(err, BTF_E_ARG, "phase randomisation: output size %dx%d out of "
-                        "range 1..%d", width, height, BTF_MAX_SIDE);
+        return btf__fail(err, BTF_E_ARG, "phase randomisation: output size %dx%d out of "
+                         "range 1..%d", width, height, BTF_MAX_SIDE);
     size_t n = (size_t)ex->width * ex->height * ex->channels;
     for (size_t i = 0; i < n; i++)
         if (!isfinite(ex->data[i]))
-            return btf_fail(err, BTF_E_DATA, "phase randomisation: exemplar pixel (%zu, %zu) "
-                            "is not finite", i / ex->channels % ex->width,
-                            i / ex->channels / ex->width);
+            return btf__fail(err, BTF_E_DATA, "phase randomisation: exemplar pixel (%zu, %zu) "
+                             "is not finite", i / ex->channels % ex->width,
+                             i / ex->channels / ex->width);
     return BTF_OK;
 }
 
@@ -94,9 +94,9 @@ static btf_status decorrelate(const btf_image *ex, float mean[3], float basis[9]
 {
     size_t n = (size_t)ex->width * ex->height;
     if (ex->channels == 3) {
-        btf_status rc = btf_pca3(ex, mean, basis, NULL, err);
+        btf_status rc = btf__pca3(ex, mean, basis, NULL, err);
         if (rc == BTF_OK)
-            btf_decorrelate(ex, mean, basis, bands);
+            btf__decorrelate(ex, mean, basis, bands);
         return rc;
     }
     double m = 0.0;
@@ -120,7 +120,7 @@ btf_status btf_phase_randomise(const btf_image *exemplar, int width, int height,
     }
     int w = exemplar->width, h = exemplar->height, nc = exemplar->channels;
     size_t n = (size_t)w * h;
-    double *mem = btf_alloc((size_t)(nc + 3) * n, sizeof(double), err);
+    double *mem = btf__alloc((size_t)(nc + 3) * n, sizeof(double), err);
     if (!mem) {
         memset(out, 0, sizeof *out);
         return BTF_E_NOMEM;
@@ -128,7 +128,7 @@ btf_status btf_phase_randomise(const btf_image *exemplar, int width, int height,
     double *bands[3] = {mem, mem + n, mem + 2 * n}, *work = mem + (size_t)nc * n;
     float mean[3] = {0, 0, 0}, basis[9] = {0};
     btf_rng rng;
-    btf_rng_seed(&rng, seed);
+    btf__rng_seed(&rng, seed);
     rc = decorrelate(exemplar, mean, basis, bands, err);
     for (int c = 0; c < nc && rc == BTF_OK; c++)
         rc = randomise_band(bands[c], w, h, &rng, work, err);
@@ -158,8 +158,8 @@ btf_status btf_phase_randomise(const btf_image *exemplar, int width, int height,
     if (rc != BTF_OK) {
         btf_image_free(out);
         memset(out, 0, sizeof *out);
-        return btf_fail(err, BTF_E_NUMERIC, "phase randomisation: the result is not finite "
-                        "(exemplar values too large)");
+        return btf__fail(err, BTF_E_NUMERIC, "phase randomisation: the result is not finite "
+                         "(exemplar values too large)");
     }
     return BTF_OK;
 }

@@ -48,7 +48,7 @@ btf_status ms_spectrum(const ms_view *v, int s, double *out, btf_error *err)
 {
     int w = v->w, h = v->h, nbins = s / 2;
     size_t n = (size_t)w * h;
-    double *re = btf_alloc(2 * n + w + h + 2 * (size_t)nbins, sizeof(double), err);
+    double *re = btf__alloc(2 * n + w + h + 2 * (size_t)nbins, sizeof(double), err);
     if (!re)
         return BTF_E_NOMEM;
     double *im = re + n, *wx = im + n, *wy = wx + w, *count = wy + h, *sum = count + nbins;
@@ -75,7 +75,7 @@ btf_status ms_spectrum(const ms_view *v, int s, double *out, btf_error *err)
     char why[256];
     if (btfcv_dft2(re, im, w, h, 0, why, sizeof why) != 0) {
         free(re);
-        return btf_fail(err, BTF_E_UNSUPPORTED, "power spectrum: DFT failed: %s", why);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "power spectrum: DFT failed: %s", why);
     }
     for (int k = 0; k < nbins; k++)
         count[k] = sum[k] = 0.0;

@@ -35,14 +35,14 @@ btf_texture_distance_opts btf_texture_distance_defaults(void)
 static btf_status check_image(const btf_image *img, const char *name, btf_error *err)
 {
     if (!img || !img->data)
-        return btf_fail(err, BTF_E_ARG, "%s: no image", name);
+        return btf__fail(err, BTF_E_ARG, "%s: no image", name);
     if (img->channels != 1 && img->channels != 3)
-        return btf_fail(err, BTF_E_ARG, "%s: %d channels, expected 1 or 3", name,
-                        img->channels);
+        return btf__fail(err, BTF_E_ARG, "%s: %d channels, expected 1 or 3", name,
+                         img->channels);
     if (img->width < MS_MIN_SIDE || img->height < MS_MIN_SIDE)
-        return btf_fail(err, BTF_E_ARG,
-                        "%s: %dx%d is too small to measure as a texture: each side must be "
-                        "at least %d", name, img->width, img->height, MS_MIN_SIDE);
+        return btf__fail(err, BTF_E_ARG,
+                         "%s: %dx%d is too small to measure as a texture: each side must be "
+                         "at least %d", name, img->width, img->height, MS_MIN_SIDE);
     return BTF_OK;
 }
 
@@ -141,12 +141,12 @@ btf_status btf_texture_distance(const btf_image *ref, const btf_image *img,
                                 btf_texture_distances *out, btf_error *err)
 {
     btf_texture_distance_opts d = btf_texture_distance_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_texture_distance", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_texture_distance", err))
         return BTF_E_ARG;
     const char *rname = o.reference_name ? o.reference_name : "reference";
     const char *iname = o.image_name ? o.image_name : "image";
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "texture distance: no output");
+        return btf__fail(err, BTF_E_ARG, "texture distance: no output");
     memset(out, 0, sizeof *out);
     btf_status rc = check_image(ref, rname, err);
     if (rc == BTF_OK)
@@ -154,8 +154,8 @@ btf_status btf_texture_distance(const btf_image *ref, const btf_image *img,
     if (rc != BTF_OK)
         return rc;
     if (o.levels < 0 || o.levels > MS_MAX_LEVELS)
-        return btf_fail(err, BTF_E_ARG, "texture distance: levels %d out of range 0..%d",
-                        o.levels, MS_MAX_LEVELS);
+        return btf__fail(err, BTF_E_ARG, "texture distance: levels %d out of range 0..%d",
+                         o.levels, MS_MAX_LEVELS);
     int s = ref->width / 2;
     if (ref->height / 2 < s)
         s = ref->height / 2;
@@ -174,7 +174,7 @@ btf_status btf_texture_distance(const btf_image *ref, const btf_image *img,
     free(lab_ref);
     free(lab_img);
     if (rc == BTF_OK && !all_finite(out))
-        rc = btf_fail(err, BTF_E_NUMERIC, "%s vs %s: a distance is not finite", rname, iname);
+        rc = btf__fail(err, BTF_E_NUMERIC, "%s vs %s: a distance is not finite", rname, iname);
     if (rc != BTF_OK) {
         memset(out, 0, sizeof *out);
         return rc;

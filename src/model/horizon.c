@@ -68,14 +68,14 @@ static btf_status horizon_row(void *user, int y, int worker, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_horizon_map(const float *h, int w, int hh, int wrap, int threads,
-                           uint32_t **out, btf_error *err)
+btf_status btf__horizon_map(const float *h, int w, int hh, int wrap, int threads,
+                            uint32_t **out, btf_error *err)
 {
     *out = NULL;
     if (!h || w < 1 || hh < 1)
-        return btf_fail(err, BTF_E_ARG, "horizon map: no heights or size %dx%d", w, hh);
+        return btf__fail(err, BTF_E_ARG, "horizon map: no heights or size %dx%d", w, hh);
     size_t n = (size_t)w * hh;
-    uint32_t *o = btf_alloc(n, 2 * sizeof(uint32_t), err);
+    uint32_t *o = btf__alloc(n, 2 * sizeof(uint32_t), err);
     if (!o)
         return BTF_E_NOMEM;
     float top = -INFINITY;
@@ -84,7 +84,7 @@ btf_status btf_horizon_map(const float *h, int w, int hh, int wrap, int threads,
     if (!isfinite(top))
         top = 0.0f;
     horizon_job j = {h, w, hh, wrap, top, o};
-    btf_status rc = btf_pool_run(hh, threads, horizon_row, &j, NULL, err);
+    btf_status rc = btf__pool_run(hh, threads, horizon_row, &j, NULL, err);
     if (rc) {
         free(o);
         return rc;

@@ -16,7 +16,7 @@ void btf_model_free(btf_model *m)
     btf_dirset_free(&m->views);
     btf_dirset_free(&m->lights);
     BTF_FREE_ALL(m->index, m->subspaces, m->range, m->albedo, m->chroma, m->gain);
-    btf_model_internal_free(m->internal);
+    btf__model_internal_free(m->internal);
     memset(m, 0, sizeof *m);
 }
 

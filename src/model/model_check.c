@@ -19,7 +19,7 @@
  * basis by transposition. */
 #define BASIS_TOL 1e-3
 
-#define failf btf_box_fail
+#define failf btf__box_fail
 
 /* A set of no directions is a model of a single texture; the pole at
  * several phi is left to the renderer, which refuses it: a set of such
@@ -39,16 +39,16 @@ static btf_status check_dirset(const btf_dirset *s, const char *what, const char
     if (len > BTF_MODEL_MAX_NAME)
         return failf(err, code, name, "%s: set name is not terminated (expected at most %d characters)",
                      what, BTF_MODEL_MAX_NAME);
-    size_t bad = btf_box_name_unprintable(s->name, len);
+    size_t bad = btf__box_name_unprintable(s->name, len);
     if (bad < len)
         return failf(err, code, name, "%s: set name has byte 0x%02x (expected printable ASCII)",
                      what, (unsigned char)s->name[bad]);
     for (int i = 0; i < s->count; i++)
-        if (!btf_box_dir_in_range(s->dirs[i]))
+        if (!btf__box_dir_in_range(s->dirs[i]))
             return failf(err, code, name,
                          "%s: direction %d is (theta %g, phi %g) (expected theta in [0, 90], "
                          "phi in [0, 360))", what, i, s->dirs[i].theta, s->dirs[i].phi);
-    int j, i = btf_box_dirs_repeat(s, &j);
+    int j, i = btf__box_dirs_repeat(s, &j);
     if (i >= 0)
         return failf(err, code, name, "%s: directions %d and %d are both (theta %g, phi %g) "
                      "(expected distinct directions)", what, i, j, s->dirs[i].theta,
@@ -86,7 +86,7 @@ static btf_status check_band(const btf_car_band *b, const char *where, const cha
                      BTF_CAR_MAX_NEIGHBOURS);
     for (int i = 0; i < b->n; i++) {
         btf_offset o = b->offsets[i];
-        if (!btf_offset_is_causal(o))
+        if (!btf__offset_is_causal(o))
             return failf(err, code, name,
                          "%s: neighbour offset %d:%d is not causal (expected row < 0, or row 0 "
                          "and column < 0)", where, o.row, o.col);
@@ -276,7 +276,7 @@ static btf_status stability_job(void *user, int k, int worker, btf_error *err)
 {
     (void)worker, (void)err;
     stability_jobs *sj = user;
-    sj->stable[sj->unique[k]] = (signed char)btf_car_is_stable(band_of(sj->m, sj->unique[k]));
+    sj->stable[sj->unique[k]] = (signed char)btf__car_is_stable(band_of(sj->m, sj->unique[k]));
     return BTF_OK;
 }
 
@@ -333,17 +333,17 @@ static btf_status check_stability(const btf_model *m, const char *name, btf_stat
     stability_jobs sj = {m, unique, calloc((size_t)jobs, 1)};
     btf_status rc = BTF_OK;
     if (!keys || !same || !unique || !sj.stable)
-        rc = btf_fail(err, BTF_E_NOMEM, "%s: out of memory checking the CAR stability", name);
+        rc = btf__fail(err, BTF_E_NOMEM, "%s: out of memory checking the CAR stability", name);
     if (rc == BTF_OK)
-        rc = btf_pool_run(distinct_bands(m, jobs, keys, same, unique), 0, stability_job, &sj,
-                          NULL, err);
+        rc = btf__pool_run(distinct_bands(m, jobs, keys, same, unique), 0, stability_job, &sj,
+                           NULL, err);
     for (int j = 0; rc == BTF_OK && j < jobs; j++) {
         if (!band_of(m, j) || sj.stable[same[j]])
             continue;
         int s, b, l;
         band_of_job(j, &s, &b, &l);
         char why[200];
-        btf_car_stability_why(band_of(m, j), why, sizeof why);
+        btf__car_stability_why(band_of(m, j), why, sizeof why);
         rc = failf(err, code, name,
                    "subspace %d, band %d, level %d: the CAR coefficients are unstable: %s "
                    "(expected every root of the recursion below 1 - %g in modulus, as fitting "
@@ -416,8 +416,8 @@ static btf_status check_range(const btf_model *m, const char *name, btf_status c
 /* Every rule of docs/model-format.md that a model in memory must meet. code
  * is BTF_E_DATA when writing (the caller's model is wrong) and BTF_E_FORMAT
  * when reading (the file is). */
-btf_status btf_model_validate(const btf_model *m, const char *name, btf_status code,
-                              btf_error *err)
+btf_status btf__model_validate(const btf_model *m, const char *name, btf_status code,
+                               btf_error *err)
 {
     btf_status rc;
     if ((rc = check_dirset(&m->views, "views", name, code, err)) ||

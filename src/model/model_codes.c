@@ -23,13 +23,13 @@ static double lab_span(int c)
     return c == 0 ? 100.0 : 256.0;
 }
 
-unsigned btf_lab_code(int c, float v)
+unsigned btf__lab_code(int c, float v)
 {
     double t = ((double)v - lab_low(c)) / lab_span(c) * 65535.0;
     return t <= 0.0 ? 0u : t >= 65535.0 ? 65535u : (unsigned)lround(t);
 }
 
-float btf_lab_decode(int c, unsigned code)
+float btf__lab_decode(int c, unsigned code)
 {
     return (float)(lab_low(c) + lab_span(c) * (double)(code > 65535u ? 65535u : code) / 65535.0);
 }
@@ -38,14 +38,14 @@ float btf_lab_decode(int c, unsigned code)
  * steps, one signed byte a channel (docs/model-format.md, "GAIN"). A
  * pair more than four times off its subspace is held there. */
 #define GAIN_STEPS_PER_OCTAVE 64.0
-int btf_gain_code(float g)
+int btf__gain_code(float g)
 {
     double l = log2(g > 0.0f && isfinite(g) ? (double)g : 1.0);
     double q = floor(l * GAIN_STEPS_PER_OCTAVE + 0.5);
     return q < -128.0 ? -128 : q > 127.0 ? 127 : (int)q;
 }
 
-float btf_gain_value(int q)
+float btf__gain_value(int q)
 {
     return (float)exp2((double)q / GAIN_STEPS_PER_OCTAVE);
 }

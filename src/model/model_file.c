@@ -74,8 +74,8 @@ static unsigned minor_version(const btf_model *m)
     return has_unmeasured(m)                      ? FMT_MINOR_SPARSE
            : m->gain || m->shadows || m->chroma   ? FMT_MINOR_GAINS
            : m->albedo                            ? FMT_MINOR_STRUCTURE
-           : btf_model_has_lab(m)                 ? FMT_MINOR_LAB
-           : btf_model_has_marginals(m)           ? FMT_MINOR_MARGINALS
+           : btf__model_has_lab(m)                 ? FMT_MINOR_LAB
+           : btf__model_has_marginals(m)           ? FMT_MINOR_MARGINALS
            : m->range                             ? FMT_MINOR_RANGE_FLAGS
                                                   : 0;
 }
@@ -85,19 +85,19 @@ static unsigned minor_version(const btf_model *m)
 static btf_status build_payload(const btf_model *m, btf_box_writer *w, const char *name,
                                 btf_error *err)
 {
-    btf_model_put_tables(w, m);
-    btf_model_put_subspaces(w, m);
+    btf__model_put_tables(w, m);
+    btf__model_put_subspaces(w, m);
     btf_status rc = BTF_OK;
     if (m->range)
-        rc = btf_model_put_range(w, m, name, err);
-    if (rc == BTF_OK && btf_model_has_marginals(m))
-        btf_model_put_marginals(w, m);
-    if (rc == BTF_OK && btf_model_has_lab(m))
-        btf_model_put_lab(w, m);
+        rc = btf__model_put_range(w, m, name, err);
+    if (rc == BTF_OK && btf__model_has_marginals(m))
+        btf__model_put_marginals(w, m);
+    if (rc == BTF_OK && btf__model_has_lab(m))
+        btf__model_put_lab(w, m);
     if (rc == BTF_OK && m->albedo)
-        rc = btf_model_put_structure(w, m, name, err);
+        rc = btf__model_put_structure(w, m, name, err);
     if (rc == BTF_OK && m->gain)
-        rc = btf_model_put_gains(w, m, name, err);
+        rc = btf__model_put_gains(w, m, name, err);
     if (rc == BTF_OK && w->failed)
         rc = failf(err, BTF_E_NOMEM, name, "out of memory encoding the model");
     return rc;
@@ -108,22 +108,22 @@ static btf_status build_payload(const btf_model *m, btf_box_writer *w, const cha
 static btf_status wrap_payload(const btf_box_writer *pl, unsigned minor, const char *name,
                                unsigned char **data, size_t *size, btf_error *err)
 {
-    unsigned char *out = btf_model_alloc(btf_box_bound(pl->n), 1, 0, name, err);
+    unsigned char *out = btf__model_alloc(btf__box_bound(pl->n), 1, 0, name, err);
     if (!out)
         return BTF_E_NOMEM;
-    *size = btf_box_seal(&FORMAT, FMT_MAJOR, minor, pl->p, pl->n, out);
+    *size = btf__box_seal(&FORMAT, FMT_MAJOR, minor, pl->p, pl->n, out);
     *data = out;
     return BTF_OK;
 }
 
-/* parts: NULL, or where the payload and its labels go (btf_model_encode_parts). */
+/* parts: NULL, or where the payload and its labels go (btf__model_encode_parts). */
 static btf_status encode_named(const btf_model *m, const char *name, unsigned char **data,
                                size_t *size, btf_model_payload_parts *parts, btf_error *err)
 {
-    btf_status rc = btf_box_output(data, size, name, err);
+    btf_status rc = btf__box_output(data, size, name, err);
     if (rc == BTF_OK && !m)
         rc = failf(err, BTF_E_ARG, name, "no model");
-    if (rc || (rc = btf_model_validate(m, name, BTF_E_DATA, err)))
+    if (rc || (rc = btf__model_validate(m, name, BTF_E_DATA, err)))
         return rc;
     btf_box_writer pl = {0};
     pl.labelled = parts != NULL;
@@ -150,8 +150,8 @@ btf_status btf_model_encode(const btf_model *m, unsigned char **data, size_t *si
     return encode_named(m, "model", data, size, NULL, err);
 }
 
-btf_status btf_model_encode_parts(const btf_model *m, unsigned char **data, size_t *size,
-                                  btf_model_payload_parts *parts, btf_error *err)
+btf_status btf__model_encode_parts(const btf_model *m, unsigned char **data, size_t *size,
+                                   btf_model_payload_parts *parts, btf_error *err)
 {
     if (!parts)
         return failf(err, BTF_E_ARG, "model", "no payload parts to fill");
@@ -162,7 +162,7 @@ btf_status btf_model_encode_parts(const btf_model *m, unsigned char **data, size
 btf_status btf_model_write(const char *path, const btf_model *m, btf_error *err)
 {
     if (!path)
-        return btf_fail(err, BTF_E_ARG, "model: no path to write to");
+        return btf__fail(err, BTF_E_ARG, "model: no path to write to");
     unsigned char *data;
     size_t size;
     btf_status rc = encode_named(m, path, &data, &size, NULL, err);
@@ -175,9 +175,9 @@ btf_status btf_model_write(const char *path, const btf_model *m, btf_error *err)
 
 /* -------------------------------------------------------------- decoding */
 
-int btf_model_sniff(const unsigned char *data, size_t size)
+int btf__model_sniff(const unsigned char *data, size_t size)
 {
-    return btf_box_stem(SIGNATURE, data, size);
+    return btf__box_stem(SIGNATURE, data, size);
 }
 
 /* The signature comes first: a foreign file, a truncated one and one mangled
@@ -185,7 +185,7 @@ int btf_model_sniff(const unsigned char *data, size_t size)
 static btf_status check_signature(const unsigned char *data, size_t size, const char *name,
                                   btf_error *err)
 {
-    switch (btf_box_signature(SIGNATURE, data, size)) {
+    switch (btf__box_signature(SIGNATURE, data, size)) {
     case BTF_BOX_WHOLE:
         return BTF_OK;
     case BTF_BOX_PREFIX:
@@ -209,8 +209,8 @@ static btf_status check_version(const unsigned char *data, size_t size, const ch
     if (size < BTF_BOX_AT_MINOR + 2)
         return failf(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected at least %d)", size,
                      BTF_BOX_HEADER_BYTES + BTF_BOX_CRC_BYTES);
-    unsigned major = btf_box_load_u16(data + BTF_BOX_AT_MAJOR);
-    unsigned minor = btf_box_load_u16(data + BTF_BOX_AT_MINOR);
+    unsigned major = btf__box_load_u16(data + BTF_BOX_AT_MAJOR);
+    unsigned minor = btf__box_load_u16(data + BTF_BOX_AT_MINOR);
     if (major > FMT_MAJOR)
         return failf(err, BTF_E_FORMAT, name,
                      "format version %u.%u is newer than this reader (expected major version %d; "
@@ -229,12 +229,12 @@ static btf_status open_payload(const unsigned char *data, size_t size, const cha
     btf_status rc;
     if ((rc = check_signature(data, size, name, err)) ||
         (rc = check_version(data, size, name, err)) ||
-        (rc = btf_box_open(&FORMAT, data, size, name, pl, err)) || !pl->deflated)
+        (rc = btf__box_open(&FORMAT, data, size, name, pl, err)) || !pl->deflated)
         return rc;
-    *owned = btf_model_alloc(pl->size ? pl->size : 1, 1, 0, name, err);
+    *owned = btf__model_alloc(pl->size ? pl->size : 1, 1, 0, name, err);
     if (!*owned)
         return BTF_E_NOMEM;
-    rc = btf_box_inflate(pl, *owned, name, err);
+    rc = btf__box_inflate(pl, *owned, name, err);
     pl->data = *owned;
     pl->n = pl->size;
     return rc;
@@ -245,7 +245,7 @@ static btf_status split_payload(const btf_box_payload *pl, btf_box_span *sec, co
                                 btf_error *err)
 {
     btf_box_split_at at;
-    switch (btf_box_split(pl->data, pl->size, btf_model_tags, S_COUNT, sec, &at)) {
+    switch (btf__box_split(pl->data, pl->size, btf__model_tags, S_COUNT, sec, &at)) {
     case BTF_BOX_SPLIT_OK:
         return BTF_OK;
     case BTF_BOX_SPLIT_SHORT_HEAD:
@@ -257,7 +257,7 @@ static btf_status split_payload(const btf_box_payload *pl, btf_box_span *sec, co
                      at.len, at.room);
     default:
         return failf(err, BTF_E_FORMAT, name, "section %s appears twice (expected once)",
-                     btf_model_tags[at.tag]);
+                     btf__model_tags[at.tag]);
     }
 }
 
@@ -281,9 +281,9 @@ static btf_status check_presence(const btf_box_span *sec, const char *name, btf_
  * need whatever their order in the file: STRC after RANG, MARG and LABQ
  * after SUBS, GAIN after INDX. */
 static btf_model_section_reader *const READERS[S_COUNT] = {
-    [S_SUBS] = btf_model_read_subspaces, [S_RANG] = btf_model_read_range,
-    [S_MARG] = btf_model_read_marginals, [S_LABQ] = btf_model_read_lab,
-    [S_STRC] = btf_model_read_structure, [S_GAIN] = btf_model_read_gains};
+    [S_SUBS] = btf__model_read_subspaces, [S_RANG] = btf__model_read_range,
+    [S_MARG] = btf__model_read_marginals, [S_LABQ] = btf__model_read_lab,
+    [S_STRC] = btf__model_read_structure, [S_GAIN] = btf__model_read_gains};
 
 static btf_status read_payload(const btf_box_payload *pl, btf_model *m, const char *name,
                                btf_error *err)
@@ -291,12 +291,12 @@ static btf_status read_payload(const btf_box_payload *pl, btf_model *m, const ch
     btf_box_span sec[S_COUNT] = {{0}};
     btf_status rc;
     if ((rc = split_payload(pl, sec, name, err)) || (rc = check_presence(sec, name, err)) ||
-        (sec[S_VIEW].present && (rc = btf_model_read_tables(sec, m, name, err))))
+        (sec[S_VIEW].present && (rc = btf__model_read_tables(sec, m, name, err))))
         return rc;
     for (int s = S_SUBS; s < S_COUNT; s++)
         if (sec[s].present && (rc = READERS[s](&sec[s], m, name, err)))
             return rc;
-    return btf_model_validate(m, name, BTF_E_FORMAT, err);
+    return btf__model_validate(m, name, BTF_E_FORMAT, err);
 }
 
 /* The model in data, its margins included. Margins are not stored: they
@@ -313,7 +313,7 @@ static btf_status decode_model(const unsigned char *data, size_t size, const cha
     if (rc == BTF_OK)
         rc = read_payload(&pl, m, name, err);
     free(owned);
-    if (rc == BTF_OK && btf_model_keep_margins(m, 1e9) != BTF_OK)
+    if (rc == BTF_OK && btf__model_keep_margins(m, 1e9) != BTF_OK)
         rc = failf(err, BTF_E_NOMEM, name, "out of memory");
     return rc;
 }
@@ -326,7 +326,7 @@ btf_status btf_model_decode(const unsigned char *data, size_t size, const char *
     if (!m)
         return failf(err, BTF_E_ARG, name, "no model to decode into");
     memset(m, 0, sizeof *m);
-    btf_status rc = btf_box_input(&data, size, name, err);
+    btf_status rc = btf__box_input(&data, size, name, err);
     if (rc == BTF_OK && (rc = decode_model(data, size, name, m, err)))
         btf_model_free(m);
     return rc;
@@ -335,13 +335,13 @@ btf_status btf_model_decode(const unsigned char *data, size_t size, const char *
 btf_status btf_model_read(const char *path, btf_model *m, btf_error *err)
 {
     if (!m)
-        return btf_fail(err, BTF_E_ARG, "model: nothing to read into");
+        return btf__fail(err, BTF_E_ARG, "model: nothing to read into");
     memset(m, 0, sizeof *m);
     if (!path)
-        return btf_fail(err, BTF_E_ARG, "model: no path to read");
+        return btf__fail(err, BTF_E_ARG, "model: no path to read");
     unsigned char *data;
     size_t n;
-    btf_status rc = btf_read_file(path, MAX_BYTES, &data, &n, err);
+    btf_status rc = btf__read_file(path, MAX_BYTES, &data, &n, err);
     if (rc)
         return rc;
     rc = btf_model_decode(data, n, path, m, err);

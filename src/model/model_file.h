@@ -16,39 +16,39 @@
 /* The sections in the order the writer emits them (docs/model-format.md,
  * "Payload: sections") and the reader decodes them. */
 enum { S_VIEW, S_LGHT, S_INDX, S_SUBS, S_RANG, S_MARG, S_LABQ, S_STRC, S_GAIN, S_COUNT };
-extern const char btf_model_tags[S_COUNT][5];
+extern const char btf__model_tags[S_COUNT][5];
 
 /* Every message names the file or buffer. */
-#define failf btf_box_fail
+#define failf btf__box_fail
 
 /* An allocation whose failure message names the file, like every other
  * (zero: calloc). */
-void *btf_model_alloc(size_t count, size_t size, int zero, const char *name, btf_error *err);
+void *btf__model_alloc(size_t count, size_t size, int zero, const char *name, btf_error *err);
 /* "section TAG is truncated": a body that ends inside a field. */
-btf_status btf_model_short(int tag, const char *name, btf_error *err);
+btf_status btf__model_short(int tag, const char *name, btf_error *err);
 
 /* Encoders, in the writer's order; those that allocate report it. */
-void btf_model_put_tables(btf_box_writer *w, const btf_model *m);
-void btf_model_put_subspaces(btf_box_writer *w, const btf_model *m);
-int btf_model_has_marginals(const btf_model *m);
-int btf_model_has_lab(const btf_model *m);
-void btf_model_put_marginals(btf_box_writer *w, const btf_model *m);
-void btf_model_put_lab(btf_box_writer *w, const btf_model *m);
+void btf__model_put_tables(btf_box_writer *w, const btf_model *m);
+void btf__model_put_subspaces(btf_box_writer *w, const btf_model *m);
+int btf__model_has_marginals(const btf_model *m);
+int btf__model_has_lab(const btf_model *m);
+void btf__model_put_marginals(btf_box_writer *w, const btf_model *m);
+void btf__model_put_lab(btf_box_writer *w, const btf_model *m);
 typedef btf_status btf_model_section_writer(btf_box_writer *w, const btf_model *m,
                                             const char *name, btf_error *err);
-btf_model_section_writer btf_model_put_range, btf_model_put_structure, btf_model_put_gains;
+btf_model_section_writer btf__model_put_range, btf__model_put_structure, btf__model_put_gains;
 
 /* Decoders: each fills its part of m from its section's body, checking
- * the counts that size loops and allocations; btf_model_validate checks
+ * the counts that size loops and allocations; btf__model_validate checks
  * the rest once the model is whole. The tables read VIEW, LGHT and INDX
  * of sec[]; the others their own section, in the order of the enum
  * (MARG and LABQ after SUBS, STRC after RANG, GAIN after INDX). */
-btf_status btf_model_read_tables(const btf_box_span *sec, btf_model *m, const char *name,
-                                 btf_error *err);
+btf_status btf__model_read_tables(const btf_box_span *sec, btf_model *m, const char *name,
+                                  btf_error *err);
 typedef btf_status btf_model_section_reader(const btf_box_span *sp, btf_model *m,
                                             const char *name, btf_error *err);
-btf_model_section_reader btf_model_read_subspaces, btf_model_read_range,
-    btf_model_read_marginals, btf_model_read_lab, btf_model_read_structure,
-    btf_model_read_gains;
+btf_model_section_reader btf__model_read_subspaces, btf__model_read_range,
+    btf__model_read_marginals, btf__model_read_lab, btf__model_read_structure,
+    btf__model_read_gains;
 
 #endif

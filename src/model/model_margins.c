@@ -33,7 +33,7 @@ static size_t kept_index(int k, int b, int l)
     return ((size_t)k * 3 + (size_t)b) * BTF_MAX_LEVELS + (size_t)l;
 }
 
-void btf_model_internal_free(struct btf_model_internal *in)
+void btf__model_internal_free(struct btf_model_internal *in)
 {
     if (!in)
         return;
@@ -66,7 +66,7 @@ static btf_status margin_job(void *user, int j, int worker, btf_error *err)
         return BTF_OK; /* the walk in turn takes it from here */
     double left = UNLIMITED;
     kept_margin *e = &mj->kept[i];
-    e->margin = btf_car_margin_within(&mj->m->subspaces[k].bands[b][l], &left);
+    e->margin = btf__car_margin_within(&mj->m->subspaces[k].bands[b][l], &left);
     mj->work[j] = UNLIMITED - left;
     atomic_fetch_add(&mj->spent, (long long)mj->work[j]);
     return e->margin < 0 ? BTF_E_NOMEM : BTF_OK;
@@ -79,9 +79,9 @@ static btf_status margin_job(void *user, int j, int worker, btf_error *err)
  * (or that was not computed), the rest are computed in turn with what is
  * left. So the margins are those of the single-threaded walk, bit for bit,
  * and the work at most the budget plus one band per CPU. */
-btf_status btf_model_keep_margins(btf_model *m, double budget)
+btf_status btf__model_keep_margins(btf_model *m, double budget)
 {
-    btf_model_internal_free(m->internal);
+    btf__model_internal_free(m->internal);
     m->internal = NULL;
     if (m->n_subspaces <= 0)
         return BTF_OK;
@@ -108,7 +108,7 @@ btf_status btf_model_keep_margins(btf_model *m, double budget)
                 mj.band[jobs++] = (int)kept_index(k, b, l);
             }
     btf_error perr = {0};
-    btf_status rc = btf_pool_run(jobs, 0, margin_job, &mj, NULL, &perr);
+    btf_status rc = btf__pool_run(jobs, 0, margin_job, &mj, NULL, &perr);
     for (int j = 0; rc == BTF_OK && budget >= 0 && j < jobs; j++) {
         if (mj.work[j] >= 0 && budget >= mj.work[j]) {
             budget -= mj.work[j];
@@ -117,15 +117,15 @@ btf_status btf_model_keep_margins(btf_model *m, double budget)
         for (; j < jobs; j++) { /* the budget runs out in band j: in turn from here */
             int i = mj.band[j], l = i % BTF_MAX_LEVELS, b = i / BTF_MAX_LEVELS % 3;
             int k = i / BTF_MAX_LEVELS / 3;
-            if ((kept[i].margin = btf_car_margin_within(&m->subspaces[k].bands[b][l],
-                                                        &budget)) < 0)
+            if ((kept[i].margin = btf__car_margin_within(&m->subspaces[k].bands[b][l],
+                                                         &budget)) < 0)
                 rc = BTF_E_NOMEM;
         }
     }
     free(mj.band);
     free(mj.work);
     if (rc != BTF_OK) {
-        btf_model_internal_free(in);
+        btf__model_internal_free(in);
         return BTF_E_NOMEM;
     }
     m->internal = in;
@@ -141,7 +141,7 @@ static int kept_for(const kept_margin *e, const btf_car_band *b)
            !memcmp(e->gamma, b->gamma, (size_t)b->n * sizeof b->gamma[0]);
 }
 
-int btf_model_margin(const btf_model *m, int k, int b, int l)
+int btf__model_margin(const btf_model *m, int k, int b, int l)
 {
     const btf_car_band *cb = &m->subspaces[k].bands[b][l];
     const struct btf_model_internal *in = m->internal;
@@ -150,5 +150,5 @@ int btf_model_margin(const btf_model *m, int k, int b, int l)
         if (kept_for(e, cb))
             return e->margin;
     }
-    return btf_car_margin(cb);
+    return btf__car_margin(cb);
 }

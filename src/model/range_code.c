@@ -17,7 +17,7 @@
  * condition only coarsens as e grows, and heights decoded from a grid pick
  * the same grid again (docs/model-format.md), so decode(encode(m)) is a
  * fixed point. -1 when no e fits (a span near FLT_MAX). */
-int btf_range_grid_choose(double lo, double hi, int *e, int32_t *k)
+int btf__range_grid_choose(double lo, double hi, int *e, int32_t *k)
 {
     for (int x = BTF_RANGE_GRID_E_MIN; x <= BTF_RANGE_GRID_E_MAX; x++) {
         double a = floor(ldexp(lo, -x)), b = floor(ldexp(hi, -x));
@@ -31,7 +31,7 @@ int btf_range_grid_choose(double lo, double hi, int *e, int32_t *k)
     return -1;
 }
 
-int btf_range_snap(float *h, size_t n)
+int btf__range_snap(float *h, size_t n)
 {
     if (n == 0)
         return 0;
@@ -42,14 +42,14 @@ int btf_range_snap(float *h, size_t n)
     }
     int e;
     int32_t k;
-    if (btf_range_grid_choose(lo, hi, &e, &k) != 0)
+    if (btf__range_grid_choose(lo, hi, &e, &k) != 0)
         return -1;
     for (size_t i = 0; i < n; i++)
-        h[i] = btf_range_grid_value(e, k, (unsigned)(floor(ldexp(h[i], -e)) - k));
+        h[i] = btf__range_grid_value(e, k, (unsigned)(floor(ldexp(h[i], -e)) - k));
     return 0;
 }
 
-float btf_range_grid_value(int e, int32_t k, unsigned q)
+float btf__range_grid_value(int e, int32_t k, unsigned q)
 {
     return (float)ldexp((double)k + (double)q + 0.5, e);
 }
@@ -57,7 +57,7 @@ float btf_range_grid_value(int e, int32_t k, unsigned q)
 /* The predictor of sample (x, y) from its quantised left, upper and
  * upper-left neighbours (a plane through them, clamped): smooth surfaces
  * leave small residuals, which deflate well. */
-unsigned btf_range_predict(const uint16_t *q, int w, int x, int y)
+unsigned btf__range_predict(const uint16_t *q, int w, int x, int y)
 {
     if (y == 0)
         return x == 0 ? 0 : q[x - 1];
@@ -70,13 +70,13 @@ unsigned btf_range_predict(const uint16_t *q, int w, int x, int y)
 
 /* Residual modulo 2^16 as a signed value, zigzag-mapped so that small
  * magnitudes of either sign give small codes: 0, -1, 1, -2 -> 0, 1, 2, 3. */
-unsigned btf_range_zigzag(unsigned q, unsigned pred)
+unsigned btf__range_zigzag(unsigned q, unsigned pred)
 {
     unsigned d = (q - pred) & 0xFFFFu;
     return d < 0x8000u ? 2 * d : 2 * (0x10000u - d) - 1;
 }
 
-unsigned btf_range_unzigzag(unsigned z, unsigned pred)
+unsigned btf__range_unzigzag(unsigned z, unsigned pred)
 {
     unsigned mag = z >> 1;
     unsigned d = (z & 1) ? 0x10000u - mag - 1 : mag;

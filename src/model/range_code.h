@@ -22,19 +22,19 @@
 /* The canonical grid (e, k) of heights in [lo, hi]: the smallest e at which
  * every height floors to k + q with q <= 65535 and k + q + 1 within 24 bits;
  * -1 when no e fits. */
-int btf_range_grid_choose(double lo, double hi, int *e, int32_t *k);
+int btf__range_grid_choose(double lo, double hi, int *e, int32_t *k);
 /* The height of grid value q: (k + q + 1/2) 2^e as a float. */
-float btf_range_grid_value(int e, int32_t k, unsigned q);
+float btf__range_grid_value(int e, int32_t k, unsigned q);
 /* Moves n finite heights onto their canonical grid, as writing and reading
  * them would (a tile on its grid is a fixed point of the file); -1 when
  * their span fits no grid (they stay). */
-int btf_range_snap(float *h, size_t n);
+int btf__range_snap(float *h, size_t n);
 /* The prediction of quantised sample (x, y) of a w-wide tile q from its
  * left, upper and upper-left neighbours (those before it in row order). */
-unsigned btf_range_predict(const uint16_t *q, int w, int x, int y);
+unsigned btf__range_predict(const uint16_t *q, int w, int x, int y);
 /* The residual q - pred modulo 2^16, zigzag-coded (0, -1, 1, -2 -> 0, 1, 2,
  * 3), and back: unzigzag(zigzag(q, p), p) == q. */
-unsigned btf_range_zigzag(unsigned q, unsigned pred);
-unsigned btf_range_unzigzag(unsigned z, unsigned pred);
+unsigned btf__range_zigzag(unsigned q, unsigned pred);
+unsigned btf__range_unzigzag(unsigned z, unsigned pred);
 
 #endif

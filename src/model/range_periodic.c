@@ -108,16 +108,16 @@ static float finite_float(double v)
 btf_status btf_range_make_periodic(float *heights, int width, int height, btf_error *err)
 {
     if (!heights || width < 1 || height < 1)
-        return btf_fail(err, BTF_E_ARG, "range tile: %d x %d heights%s (expected at least 1 x 1)",
-                        width, height, heights ? "" : " at NULL");
+        return btf__fail(err, BTF_E_ARG, "range tile: %d x %d heights%s (expected at least 1 x 1)",
+                         width, height, heights ? "" : " at NULL");
     size_t n = (size_t)width * height;
     for (size_t i = 0; i < n; i++)
         if (!isfinite(heights[i]))
-            return btf_fail(err, BTF_E_DATA, "range tile: height %g at (%zu, %zu) (expected finite "
-                            "heights)", heights[i], i % (size_t)width, i / (size_t)width);
+            return btf__fail(err, BTF_E_DATA, "range tile: height %g at (%zu, %zu) (expected finite "
+                             "heights)", heights[i], i % (size_t)width, i / (size_t)width);
     if (n == 1)
         return BTF_OK; /* a single sample is periodic */
-    double *u = btf_alloc(n * 2, sizeof(double), err);
+    double *u = btf__alloc(n * 2, sizeof(double), err);
     if (!u)
         return BTF_E_NOMEM;
     double *tmp = u + n, mean = 0.0;
@@ -139,7 +139,7 @@ btf_status btf_range_make_periodic(float *heights, int width, int height, btf_er
         heights[i] = finite_float(u[i] + mean);
     /* On the model file's 16-bit grid, so that writing the tile loses
      * nothing and a converted 1.0 file re-reads to the same model. */
-    btf_range_snap(heights, n);
+    btf__range_snap(heights, n);
     free(u);
     return BTF_OK;
 }

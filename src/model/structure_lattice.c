@@ -61,11 +61,11 @@ static btf_status autocorrelation(const btf_model *m, const float *layer, int lo
     btf_status rc = ms_periodic_component(re, w, h, err);
     char why[256];
     if (rc == BTF_OK && btfcv_dft2(re, im, w, h, 0, why, sizeof why) != 0)
-        rc = btf_fail(err, BTF_E_UNSUPPORTED, "lattice: DFT failed: %s", why);
+        rc = btf__fail(err, BTF_E_UNSUPPORTED, "lattice: DFT failed: %s", why);
     for (size_t i = 0; rc == BTF_OK && i < n; i++)
         re[i] = re[i] * re[i] + im[i] * im[i], im[i] = 0.0;
     if (rc == BTF_OK && btfcv_dft2(re, im, w, h, 1, why, sizeof why) != 0)
-        rc = btf_fail(err, BTF_E_UNSUPPORTED, "lattice: DFT failed: %s", why);
+        rc = btf__fail(err, BTF_E_UNSUPPORTED, "lattice: DFT failed: %s", why);
     if (rc == BTF_OK) {
         double r0 = re[0] > 0.0 ? re[0] : 1.0;
         for (size_t i = 0; i < n; i++)
@@ -99,10 +99,10 @@ static int find_peaks(const double *r, int w, int h, peak *out, int max)
     return n;
 }
 
-int btf_structure_lattice(const btf_model *m, int lattice[4])
+int btf__structure_lattice(const btf_model *m, int lattice[4])
 {
     memset(lattice, 0, 4 * sizeof *lattice);
-    /* (btf_structure_quilted's test, written out: that file calls this one) */
+    /* (btf__structure_quilted's test, written out: that file calls this one) */
     if (!m || !m->range || m->range_texel != 1.0f || m->range_width < 1 || m->range_height < 1)
         return 0;
     int w = m->range_width, h = m->range_height;

@@ -35,25 +35,25 @@
  * steps, one byte a texel (docs/model-format.md, "STRC"). */
 #define ALBEDO_LOG_MIN (-4.0)
 #define ALBEDO_STEPS_PER_OCTAVE 32.0
-unsigned btf_albedo_code(float a)
+unsigned btf__albedo_code(float a)
 {
     double l = log2(a > 0.0f && isfinite(a) ? (double)a : 1.0);
     double q = floor((l - ALBEDO_LOG_MIN) * ALBEDO_STEPS_PER_OCTAVE + 0.5);
     return q < 0.0 ? 0u : q > 255.0 ? 255u : (unsigned)q;
 }
 
-float btf_albedo_value(unsigned q)
+float btf__albedo_value(unsigned q)
 {
     return (float)exp2((double)q / ALBEDO_STEPS_PER_OCTAVE + ALBEDO_LOG_MIN);
 }
 
-int btf_structure_quilted(const btf_model *m)
+int btf__structure_quilted(const btf_model *m)
 {
     return m && m->range && m->range_texel == 1.0f && m->range_width > 0 &&
            m->range_height > 0;
 }
 
-int btf_structure_period(int n)
+int btf__structure_period(int n)
 {
     if (n <= STRUCT_PERIOD_MAX)
         return n;
@@ -86,7 +86,7 @@ static btf_status features(const btf_model *m, float **out, btf_error *err)
 {
     int w = m->range_width, h = m->range_height;
     size_t n = (size_t)w * h;
-    float *f = btf_alloc(n, RF_FEATURES * sizeof(float), err);
+    float *f = btf__alloc(n, RF_FEATURES * sizeof(float), err);
     if (!f)
         return BTF_E_NOMEM;
     for (size_t i = 0; i < n; i++) {
@@ -109,27 +109,27 @@ static btf_status features(const btf_model *m, float **out, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_structure_coords(const btf_model *m, int pw, int ph, uint64_t seed,
-                                uint16_t **map, btf_error *err)
+btf_status btf__structure_coords(const btf_model *m, int pw, int ph, uint64_t seed,
+                                 uint16_t **map, btf_error *err)
 {
     *map = NULL;
-    if (!btf_structure_quilted(m))
-        return btf_fail(err, BTF_E_ARG, "structure map: the model has no range map at the "
-                        "analysed resolution");
+    if (!btf__structure_quilted(m))
+        return btf__fail(err, BTF_E_ARG, "structure map: the model has no range map at the "
+                         "analysed resolution");
     if (pw < 1 || ph < 1)
-        return btf_fail(err, BTF_E_ARG, "structure map: size %dx%d", pw, ph);
+        return btf__fail(err, BTF_E_ARG, "structure map: size %dx%d", pw, ph);
     int sw = m->range_width, sh = m->range_height;
     int side = sw < sh ? sw : sh;
     int block = side < STRUCT_BLOCK_MAX ? side : STRUCT_BLOCK_MAX;
     float *feat = NULL;
     btf_status rc = features(m, &feat, err);
-    uint16_t *out = rc ? NULL : btf_alloc((size_t)pw * ph, 2 * sizeof(uint16_t), err);
+    uint16_t *out = rc ? NULL : btf__alloc((size_t)pw * ph, 2 * sizeof(uint16_t), err);
     if (!rc && !out)
         rc = BTF_E_NOMEM;
     if (rc == BTF_OK) {
         rf_quilt_args q = {feat, sw, 0, 0, sw, sh, pw, ph, block, block / 6, 0.0,
                            seed ^ STRUCT_SEED_SALT, 1, STRUCT_CANDIDATES, {0, 0, 0, 0}};
-        btf_structure_lattice(m, q.lattice); /* a weave's repeat, kept in step */
+        btf__structure_lattice(m, q.lattice); /* a weave's repeat, kept in step */
         rc = rf_quilt(&q, out, err);
     }
     free(feat);
@@ -141,39 +141,39 @@ btf_status btf_structure_coords(const btf_model *m, int pw, int ph, uint64_t see
     return BTF_OK;
 }
 
-int btf_structure_channels(const btf_model *m)
+int btf__structure_channels(const btf_model *m)
 {
     return m && m->albedo && m->chroma ? 3 : 1;
 }
 
-btf_status btf_structure_albedo(const btf_model *m, int width, int height, uint64_t seed,
-                                btf_image *out, btf_error *err)
+btf_status btf__structure_albedo(const btf_model *m, int width, int height, uint64_t seed,
+                                 btf_image *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
     /* the period's own map is the whole surface's (its period is itself) */
-    int pw = btf_structure_period(width), ph = btf_structure_period(height);
-    btf_status rc = btf_image_alloc(out, pw, ph, btf_structure_channels(m), err);
+    int pw = btf__structure_period(width), ph = btf__structure_period(height);
+    btf_status rc = btf_image_alloc(out, pw, ph, btf__structure_channels(m), err);
     if (rc == BTF_OK)
-        rc = btf_structure_layers(m, pw, ph, seed, NULL, out->data, err);
+        rc = btf__structure_layers(m, pw, ph, seed, NULL, out->data, err);
     if (rc)
         btf_image_free(out);
     return rc;
 }
 
-btf_status btf_structure_pattern(const btf_model *m, int width, int height, uint64_t seed,
-                                 btf_image *cache, btf_error *err)
+btf_status btf__structure_pattern(const btf_model *m, int width, int height, uint64_t seed,
+                                  btf_image *cache, btf_error *err)
 {
-    if (cache->data && cache->width == btf_structure_period(width) &&
-        cache->height == btf_structure_period(height))
+    if (cache->data && cache->width == btf__structure_period(width) &&
+        cache->height == btf__structure_period(height))
         return BTF_OK;
     btf_image_free(cache); /* another size: another map */
-    return btf_structure_albedo(m, width, height, seed, cache, err);
+    return btf__structure_albedo(m, width, height, seed, cache, err);
 }
 
 /* Row y of the periodic albedo pattern a (pw x ph, grey or RGB) over width
  * texels times the RGB row, in place: one multiply per channel, the same on every
  * path (the CPU's rows, the GPU's read-back). */
-void btf_structure_apply_row(const btf_image *a, int y, float *rgb, int width)
+void btf__structure_apply_row(const btf_image *a, int y, float *rgb, int width)
 {
     int ch = a->channels == 3 ? 3 : 1;
     const float *row = a->data + (size_t)(y % a->height) * a->width * ch;
@@ -185,28 +185,28 @@ void btf_structure_apply_row(const btf_image *a, int y, float *rgb, int width)
     }
 }
 
-btf_status btf_structure_apply(const btf_model *m, uint64_t seed, btf_image *img,
-                               btf_image *cache, btf_error *err)
+btf_status btf__structure_apply(const btf_model *m, uint64_t seed, btf_image *img,
+                                btf_image *cache, btf_error *err)
 {
-    if (!m->albedo || !btf_structure_quilted(m))
+    if (!m->albedo || !btf__structure_quilted(m))
         return BTF_OK;
     btf_image own = {0}, *a = cache ? cache : &own;
-    btf_status rc = btf_structure_pattern(m, img->width, img->height, seed, a, err);
+    btf_status rc = btf__structure_pattern(m, img->width, img->height, seed, a, err);
     if (rc)
         return rc;
     for (int y = 0; y < img->height; y++)
-        btf_structure_apply_row(a, y, img->data + (size_t)y * img->width * 3, img->width);
+        btf__structure_apply_row(a, y, img->data + (size_t)y * img->width * 3, img->width);
     btf_image_free(&own);
     return BTF_OK;
 }
 
-btf_status btf_structure_layers(const btf_model *m, int width, int height, uint64_t seed,
-                                float *heights, float *albedo, btf_error *err)
+btf_status btf__structure_layers(const btf_model *m, int width, int height, uint64_t seed,
+                                 float *heights, float *albedo, btf_error *err)
 {
     uint16_t *map;
-    int pw = btf_structure_period(width), ph = btf_structure_period(height);
-    int ch = btf_structure_channels(m);
-    btf_status rc = btf_structure_coords(m, pw, ph, seed, &map, err);
+    int pw = btf__structure_period(width), ph = btf__structure_period(height);
+    int ch = btf__structure_channels(m);
+    btf_status rc = btf__structure_coords(m, pw, ph, seed, &map, err);
     if (rc)
         return rc;
     for (int y = 0; y < height; y++)

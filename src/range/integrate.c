@@ -113,7 +113,7 @@ static btf_status integrate_fc(int w, int h, const double *p, const double *q, d
                                btf_error *err)
 {
     size_t count = (size_t)w * h;
-    double *re = btf_alloc(count * 2, sizeof(double), err);
+    double *re = btf__alloc(count * 2, sizeof(double), err);
     if (!re)
         return BTF_E_NOMEM;
     double *im = re + count;
@@ -124,9 +124,9 @@ static btf_status integrate_fc(int w, int h, const double *p, const double *q, d
     char msg[256];
     if (btfcv_dft2(re, im, w, h, 0, msg, sizeof msg) != 0) {
         free(re);
-        return btf_fail(err, BTF_E_NUMERIC, "integrate (Frankot-Chellappa): DFT failed: %s", msg);
+        return btf__fail(err, BTF_E_NUMERIC, "integrate (Frankot-Chellappa): DFT failed: %s", msg);
     }
-    double *zr = btf_alloc(count * 2, sizeof(double), err);
+    double *zr = btf__alloc(count * 2, sizeof(double), err);
     if (!zr) {
         free(re);
         return BTF_E_NOMEM;
@@ -155,8 +155,8 @@ static btf_status integrate_fc(int w, int h, const double *p, const double *q, d
     free(re);
     if (btfcv_dft2(zr, zi, w, h, 1, msg, sizeof msg) != 0) {
         free(zr);
-        return btf_fail(err, BTF_E_NUMERIC, "integrate (Frankot-Chellappa): inverse DFT failed: %s",
-                        msg);
+        return btf__fail(err, BTF_E_NUMERIC, "integrate (Frankot-Chellappa): inverse DFT failed: %s",
+                         msg);
     }
     memcpy(z, zr, count * sizeof(double));
     free(zr);
@@ -208,7 +208,7 @@ static btf_status poisson_full(int w, int h, double *a, double *scratch, btf_err
     int even = (w == 1 || w % 2 == 0) && (h == 1 || h % 2 == 0);
     if (even) {
         if (btfcv_dct2(a, w, h, 0, msg, sizeof msg) != 0)
-            return btf_fail(err, BTF_E_NUMERIC, "integrate (Poisson): DCT failed: %s", msg);
+            return btf__fail(err, BTF_E_NUMERIC, "integrate (Poisson): DCT failed: %s", msg);
         for (int l = 0; l < h; l++) {
             double el = neumann_eig(l, h);
             for (int k = 0; k < w; k++) {
@@ -218,7 +218,7 @@ static btf_status poisson_full(int w, int h, double *a, double *scratch, btf_err
             }
         }
         if (btfcv_dct2(a, w, h, 1, msg, sizeof msg) != 0)
-            return btf_fail(err, BTF_E_NUMERIC, "integrate (Poisson): inverse DCT failed: %s", msg);
+            return btf__fail(err, BTF_E_NUMERIC, "integrate (Poisson): inverse DCT failed: %s", msg);
         return BTF_OK;
     }
     /* The even-symmetric extension about the half-pixel borders turns the
@@ -236,7 +236,7 @@ static btf_status poisson_full(int w, int h, double *a, double *scratch, btf_err
         }
     }
     if (btfcv_dft2(re, im, W, H, 0, msg, sizeof msg) != 0)
-        return btf_fail(err, BTF_E_NUMERIC, "integrate (Poisson): DFT failed: %s", msg);
+        return btf__fail(err, BTF_E_NUMERIC, "integrate (Poisson): DFT failed: %s", msg);
     for (int l = 0; l < H; l++) {
         double el = 2.0 - 2.0 * cos(2.0 * INT_PI * (double)l / (double)H);
         for (int k = 0; k < W; k++) {
@@ -251,7 +251,7 @@ static btf_status poisson_full(int w, int h, double *a, double *scratch, btf_err
         }
     }
     if (btfcv_dft2(re, im, W, H, 1, msg, sizeof msg) != 0)
-        return btf_fail(err, BTF_E_NUMERIC, "integrate (Poisson): inverse DFT failed: %s", msg);
+        return btf__fail(err, BTF_E_NUMERIC, "integrate (Poisson): inverse DFT failed: %s", msg);
     for (int r = 0; r < h; r++)
         for (int c = 0; c < w; c++)
             a[(size_t)r * w + c] = re[(size_t)r * W + c];
@@ -313,7 +313,7 @@ static btf_status poisson_masked(int w, int h, const unsigned char *valid, const
                                  double *x, double tol, int max_iter, btf_error *err)
 {
     size_t count = (size_t)w * h;
-    double *buf = btf_alloc(count * 12, sizeof(double), err);
+    double *buf = btf__alloc(count * 12, sizeof(double), err);
     if (!buf)
         return BTF_E_NOMEM;
     double *r = buf, *z = buf + count, *pd = buf + 2 * count, *ap = buf + 3 * count;
@@ -358,7 +358,7 @@ static btf_status integrate_poisson(int w, int h, const double *p, const double 
                                     int max_iter, double *z, btf_error *err)
 {
     size_t count = (size_t)w * h;
-    double *b = btf_alloc(count * 9, sizeof(double), err);
+    double *b = btf__alloc(count * 9, sizeof(double), err);
     if (!b)
         return BTF_E_NOMEM;
     poisson_rhs(w, h, p, q, valid, b);
@@ -393,31 +393,31 @@ static btf_status check_inputs(const btf_image *normals, const btf_image *mask,
 {
     if (!normals || !normals->data || normals->channels != 3 || normals->width < 1 ||
         normals->height < 1)
-        return btf_fail(err, BTF_E_ARG, "integrate: the normal map must be a 3-channel image");
+        return btf__fail(err, BTF_E_ARG, "integrate: the normal map must be a 3-channel image");
     if (mask && (!mask->data || mask->width != normals->width || mask->height != normals->height))
-        return btf_fail(err, BTF_E_ARG,
-                        "integrate: mask size %dx%d differs from the normal map's %dx%d",
-                        mask->width, mask->height, normals->width, normals->height);
+        return btf__fail(err, BTF_E_ARG,
+                         "integrate: mask size %dx%d differs from the normal map's %dx%d",
+                         mask->width, mask->height, normals->width, normals->height);
     if (o->method != BTF_INTEGRATE_DEFAULT && o->method != BTF_INTEGRATE_POISSON &&
         o->method != BTF_INTEGRATE_FC)
-        return btf_fail(err, BTF_E_ARG, "integrate: unknown method %d", (int)o->method);
+        return btf__fail(err, BTF_E_ARG, "integrate: unknown method %d", (int)o->method);
     if (!(o->max_slope >= 0.0) || !isfinite(o->max_slope) || !(o->tolerance >= 0.0) ||
         !isfinite(o->tolerance) || o->max_iter < 0)
-        return btf_fail(err, BTF_E_ARG,
-                        "integrate: max_slope %g, tolerance %g, max_iter %d: expected finite "
-                        "values >= 0",
-                        o->max_slope, o->tolerance, o->max_iter);
+        return btf__fail(err, BTF_E_ARG,
+                         "integrate: max_slope %g, tolerance %g, max_iter %d: expected finite "
+                         "values >= 0",
+                         o->max_slope, o->tolerance, o->max_iter);
     return BTF_OK;
 }
 
-btf_status btf_integrate(const btf_image *normals, const btf_image *mask,
-                         const btf_integrate_opts *opts, btf_image *height, btf_error *err)
+btf_status btf__integrate(const btf_image *normals, const btf_image *mask,
+                          const btf_integrate_opts *opts, btf_image *height, btf_error *err)
 {
     btf_integrate_opts zero = {0}, o;
-    if (btf_opts_take(&o, sizeof o, opts, &zero, "btf_integrate", err))
+    if (btf__opts_take(&o, sizeof o, opts, &zero, "btf_integrate", err))
         return BTF_E_ARG;
     if (!height)
-        return btf_fail(err, BTF_E_ARG, "integrate: no output image given");
+        return btf__fail(err, BTF_E_ARG, "integrate: no output image given");
     memset(height, 0, sizeof *height);
     btf_status rc = check_inputs(normals, mask, &o, err);
     if (rc)
@@ -431,8 +431,8 @@ btf_status btf_integrate(const btf_image *normals, const btf_image *mask,
     size_t count = (size_t)w * h;
     if ((rc = btf_image_alloc(height, w, h, 1, err)))
         return rc;
-    unsigned char *valid = btf_alloc(count, 1, err);
-    double *buf = valid ? btf_alloc(count * 3, sizeof(double), err) : NULL;
+    unsigned char *valid = btf__alloc(count, 1, err);
+    double *buf = valid ? btf__alloc(count * 3, sizeof(double), err) : NULL;
     if (!buf) {
         free(valid);
         btf_image_free(height);

@@ -9,7 +9,7 @@
 
 /* Quickselect (Hoare's partition): the median of the residuals costs O(N)
  * per reweighting step, not a sort. */
-double btf_select_kth(double *a, int n, int k)
+double btf__select_kth(double *a, int n, int k)
 {
     int lo = 0, hi = n - 1;
     while (lo < hi) {
@@ -41,7 +41,7 @@ double btf_select_kth(double *a, int n, int k)
 /* Shell sort with fixed gaps: the shadow rules need the whole order once
  * per pixel; n is small, and this sorts in place without qsort's call per
  * comparison. */
-void btf_sort_small(double *a, int n)
+void btf__sort_small(double *a, int n)
 {
     static const int gaps[] = {57, 23, 10, 4, 1};
     for (int g = 0; g < 5; g++) {

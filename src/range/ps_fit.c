@@ -97,7 +97,7 @@ static int fit_set(const double *lights, int count, const double *samples,
         used++;
     }
     return used >= 3 &&
-           btf_sym3_solve(&gram, rhs, max_condition, scaled_normal, gram_inverse);
+           btf__sym3_solve(&gram, rhs, max_condition, scaled_normal, gram_inverse);
 }
 
 /* Residuals of every sample against the fit into s->residuals; for the
@@ -125,7 +125,7 @@ static double residuals(const double *lights, int count, const double *samples,
         s->residuals[i] = res;
     }
     double albedo = sqrt(dot3(scaled_normal, scaled_normal));
-    double scale = in > 0 ? MAD_TO_SIGMA * btf_select_kth(s->values, in, in / 2) : 0.0;
+    double scale = in > 0 ? MAD_TO_SIGMA * btf__select_kth(s->values, in, in / 2) : 0.0;
     return scale > SCALE_FLOOR * albedo ? scale : SCALE_FLOOR * albedo;
 }
 
@@ -168,7 +168,7 @@ static int reweight(const btf_ps_params *params, const double *lights, const dou
 static int first_set(const btf_ps_params *params, int count, const double *samples,
                      int n_candidates, btf_ps_scratch *s)
 {
-    btf_sort_small(s->values, n_candidates);
+    btf__sort_small(s->values, n_candidates);
     double ref = s->values[(int)floor(REF_QUANTILE * (n_candidates - 1))];
     double dark_cut = params->dark * ref;
     double gap = shadow_gap(s->values, n_candidates, ref, dark_cut);
@@ -190,9 +190,9 @@ static int first_set(const btf_ps_params *params, int count, const double *sampl
     return n_lit;
 }
 
-int btf_ps_fit_pixel(const btf_ps_params *params, const double *lights, const double *halfway,
-                     int count, const double *samples, btf_ps_scratch *s,
-                     double scaled_normal[3])
+int btf__ps_fit_pixel(const btf_ps_params *params, const double *lights, const double *halfway,
+                      int count, const double *samples, btf_ps_scratch *s,
+                      double scaled_normal[3])
 {
     btf_sym3 gram_inverse;
     int n_candidates = 0;
@@ -236,8 +236,8 @@ int btf_ps_fit_pixel(const btf_ps_params *params, const double *lights, const do
 /* The normal (0, 0, 1) explains best the samples of lights above the
  * horizon; the unsaturated positive ones, else the saturated ones (a lower
  * bound on the albedo, better than none). */
-void btf_ps_fallback_set(const double *lights, int count, const double *samples,
-                         unsigned char *in_fit)
+void btf__ps_fallback_set(const double *lights, int count, const double *samples,
+                          unsigned char *in_fit)
 {
     int any = 0;
     for (int i = 0; i < count; i++) {
@@ -249,21 +249,21 @@ void btf_ps_fallback_set(const double *lights, int count, const double *samples,
             in_fit[i] = (unsigned char)(samples[i] < 0.0 && lights[3 * i + 2] > 0.0);
 }
 
-void btf_ps_scratch_free(btf_ps_scratch *s)
+void btf__ps_scratch_free(btf_ps_scratch *s)
 {
     BTF_FREE_ALL(s->values, s->residuals, s->unshadowed, s->row_samples);
     memset(s, 0, sizeof *s);
 }
 
-btf_status btf_ps_scratch_alloc(btf_ps_scratch *s, int count, int width, btf_error *err)
+btf_status btf__ps_scratch_alloc(btf_ps_scratch *s, int count, int width, btf_error *err)
 {
     memset(s, 0, sizeof *s);
-    s->values = btf_alloc((size_t)count, sizeof(double), err);
-    s->residuals = btf_alloc((size_t)count, sizeof(double), err);
-    s->unshadowed = btf_alloc((size_t)count, 3, err); /* the three flag arrays in one block */
-    s->row_samples = btf_alloc((size_t)count * (size_t)width, sizeof(double), err);
+    s->values = btf__alloc((size_t)count, sizeof(double), err);
+    s->residuals = btf__alloc((size_t)count, sizeof(double), err);
+    s->unshadowed = btf__alloc((size_t)count, 3, err); /* the three flag arrays in one block */
+    s->row_samples = btf__alloc((size_t)count * (size_t)width, sizeof(double), err);
     if (!s->values || !s->residuals || !s->unshadowed || !s->row_samples) {
-        btf_ps_scratch_free(s);
+        btf__ps_scratch_free(s);
         return BTF_E_NOMEM;
     }
     s->in_fit = s->unshadowed + count;

@@ -14,7 +14,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-void btf_ps_report(const btf_photostereo_opts *o, double fraction, const char *what)
+void btf__ps_report(const btf_photostereo_opts *o, double fraction, const char *what)
 {
     if (o->progress)
         o->progress(o->progress_user, fraction, what);
@@ -42,7 +42,7 @@ static double clean(float v)
  * value / intensity. A sample with a raw channel >= clip is saturated and
  * stored negated, so that the fit knows it without a second array (and a
  * saturated 0 as -FLT_MIN). Returns the largest finite raw value inside the
- * mask, which sets the clip level of data beyond 1 (btf_ps_full_scale). */
+ * mask, which sets the clip level of data beyond 1 (btf__ps_full_scale). */
 static double grey_of(const btf_image *img, int i, const double *intensity, double clip,
                       const unsigned char *inside, float *out)
 {
@@ -75,7 +75,7 @@ static double grey_of(const btf_image *img, int i, const double *intensity, doub
     return peak;
 }
 
-double btf_ps_full_scale(double peak)
+double btf__ps_full_scale(double peak)
 {
     return peak > 1.0 ? peak : 1.0;
 }
@@ -108,23 +108,23 @@ static void albedo_add(const btf_image *img, int i, const double *intensity,
 
 /* Files take the first two fifths of the progress bar, memory none to
  * speak of. */
-btf_status btf_ps_pass_grey(const btf_ps_source *src, const double *intensity, double clip,
-                            const unsigned char *inside, float *grey, double *peak,
-                            const btf_photostereo_opts *o, btf_error *err)
+btf_status btf__ps_pass_grey(const btf_ps_source *src, const double *intensity, double clip,
+                             const unsigned char *inside, float *grey, double *peak,
+                             const btf_photostereo_opts *o, btf_error *err)
 {
     size_t wh = (size_t)src->width * src->height;
-    btf_image tmp = {0}; /* one buffer for every image (btf_ps_source_get) */
+    btf_image tmp = {0}; /* one buffer for every image (btf__ps_source_get) */
     double most = 0.0;
     for (int i = 0; i < src->count; i++) {
         const btf_image *img;
-        btf_status rc = btf_ps_source_get(src, i, &tmp, &img, err);
+        btf_status rc = btf__ps_source_get(src, i, &tmp, &img, err);
         if (rc)
             return rc;
         double p = grey_of(img, i, intensity, clip, inside, grey + (size_t)i * wh);
         most = p > most ? p : most;
         if (!src->images)
-            btf_ps_report(o, 0.4 * (i + 1) / src->count,
-                          peak ? "reading images" : "reading images (clip level of HDR data)");
+            btf__ps_report(o, 0.4 * (i + 1) / src->count,
+                           peak ? "reading images" : "reading images (clip level of HDR data)");
     }
     btf_image_free(&tmp);
     if (peak)
@@ -132,25 +132,25 @@ btf_status btf_ps_pass_grey(const btf_ps_source *src, const double *intensity, d
     return BTF_OK;
 }
 
-btf_status btf_ps_pass_albedo(const btf_ps_source *src, const double *intensity,
-                              const btf_ps_solve *job, btf_image *albedo,
-                              const btf_photostereo_opts *o, btf_error *err)
+btf_status btf__ps_pass_albedo(const btf_ps_source *src, const double *intensity,
+                               const btf_ps_solve *job, btf_image *albedo,
+                               const btf_photostereo_opts *o, btf_error *err)
 {
     size_t wh = (size_t)src->width * src->height;
     int channels = src->channels;
-    double *num = btf_calloc(wh * (size_t)(channels + 1), sizeof(double), err);
+    double *num = btf__calloc(wh * (size_t)(channels + 1), sizeof(double), err);
     if (!num)
         return BTF_E_NOMEM;
     double *den = num + wh * (size_t)channels;
     btf_status rc = BTF_OK;
-    btf_image tmp = {0}; /* one buffer for every image (btf_ps_source_get) */
+    btf_image tmp = {0}; /* one buffer for every image (btf__ps_source_get) */
     for (int i = 0; i < src->count && rc == BTF_OK; i++) {
         const btf_image *img;
-        if ((rc = btf_ps_source_get(src, i, &tmp, &img, err)))
+        if ((rc = btf__ps_source_get(src, i, &tmp, &img, err)))
             break;
         albedo_add(img, i, intensity, job, num, den);
         if (!src->images)
-            btf_ps_report(o, 0.5 + 0.4 * (i + 1) / src->count, "reading images (albedo)");
+            btf__ps_report(o, 0.5 + 0.4 * (i + 1) / src->count, "reading images (albedo)");
     }
     btf_image_free(&tmp);
     for (size_t k = 0; rc == BTF_OK && k < wh; k++) {

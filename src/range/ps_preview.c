@@ -12,13 +12,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-btf_status btf_normals_preview(const btf_image *normals, btf_image *out, btf_error *err)
+btf_status btf__normals_preview(const btf_image *normals, btf_image *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "normals preview: no output given");
+        return btf__fail(err, BTF_E_ARG, "normals preview: no output given");
     memset(out, 0, sizeof *out);
     if (!normals || !normals->data || normals->channels != 3)
-        return btf_fail(err, BTF_E_ARG, "normals preview: a 3-channel normal map is needed");
+        return btf__fail(err, BTF_E_ARG, "normals preview: a 3-channel normal map is needed");
     btf_status rc = btf_image_alloc(out, normals->width, normals->height, 3, err);
     if (rc)
         return rc;
@@ -31,7 +31,7 @@ btf_status btf_normals_preview(const btf_image *normals, btf_image *out, btf_err
             float v = isfinite(n[c]) ? 0.5f * (n[c] + 1.0f) : 0.5f;
             /* The PNG writer encodes to sRGB; pre-linearise so the file holds
              * (n + 1) / 2 as the usual normal-map convention wants. */
-            out->data[3 * k + c] = btf_srgb_to_linear(v);
+            out->data[3 * k + c] = btf__srgb_to_linear(v);
         }
     }
     return BTF_OK;
@@ -58,20 +58,20 @@ static double slope_at(const btf_image *height_map, const unsigned char *inside,
     return 0.0;
 }
 
-btf_status btf_height_relief(const btf_image *height, const btf_image *mask, btf_image *out,
-                             btf_error *err)
+btf_status btf__height_relief(const btf_image *height, const btf_image *mask, btf_image *out,
+                              btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "relief: no output given");
+        return btf__fail(err, BTF_E_ARG, "relief: no output given");
     memset(out, 0, sizeof *out);
     if (!height || !height->data || height->channels != 1)
-        return btf_fail(err, BTF_E_ARG, "relief: a 1-channel height map is needed");
+        return btf__fail(err, BTF_E_ARG, "relief: a 1-channel height map is needed");
     int width = height->width, rows = height->height, pixels;
     size_t count = (size_t)width * rows;
-    unsigned char *inside = btf_alloc(count, 1, err);
+    unsigned char *inside = btf__alloc(count, 1, err);
     if (!inside)
         return BTF_E_NOMEM;
-    btf_status rc = btf_ps_mask_inside("relief", mask, width, rows, inside, &pixels, err);
+    btf_status rc = btf__ps_mask_inside("relief", mask, width, rows, inside, &pixels, err);
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, width, rows, 3, err);
     if (rc) {
@@ -114,7 +114,7 @@ btf_status btf_height_relief(const btf_image *height, const btf_image *mask, btf
             const double low[3] = {0.55, 0.62, 0.75}, high[3] = {1.0, 0.97, 0.88};
             for (int c = 0; c < 3; c++) {
                 double v = shade * (low[c] + (high[c] - low[c]) * t);
-                out->data[3 * k + c] = btf_srgb_to_linear((float)(v > 1.0 ? 1.0 : v));
+                out->data[3 * k + c] = btf__srgb_to_linear((float)(v > 1.0 ? 1.0 : v));
             }
         }
     free(inside);

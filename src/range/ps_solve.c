@@ -40,7 +40,7 @@ static void solve_row(btf_ps_solve *j, btf_ps_scratch *s, int y, int *fitted, in
             continue;
         const double *samples = s->row_samples + (size_t)x * n;
         double g[3] = {0, 0, 0}; /* the scaled normal, albedo x normal */
-        int ok = btf_ps_fit_pixel(&j->params, j->lights, j->halfway, n, samples, s, g);
+        int ok = btf__ps_fit_pixel(&j->params, j->lights, j->halfway, n, samples, s, g);
         float *normal = j->normal + 3 * k;
         if (ok) {
             double albedo = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
@@ -54,7 +54,7 @@ static void solve_row(btf_ps_solve *j, btf_ps_scratch *s, int y, int *fitted, in
             j->valid[k] = 1.0f;
             ++*fitted;
         } else {
-            btf_ps_fallback_set(j->lights, n, samples, s->in_fit);
+            btf__ps_fallback_set(j->lights, n, samples, s->in_fit);
             normal[0] = normal[1] = 0.0f;
             normal[2] = 1.0f;
             ++*fallback;
@@ -81,26 +81,26 @@ static btf_status solve_rows(void *user, int block, int worker, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_ps_solve_all(btf_ps_solve *job, int threads, btf_progress_fn progress,
-                            void *progress_user, double from, double to, btf_error *err)
+btf_status btf__ps_solve_all(btf_ps_solve *job, int threads, btf_progress_fn progress,
+                             void *progress_user, double from, double to, btf_error *err)
 {
     int blocks = (job->height + ROWS_PER_JOB - 1) / ROWS_PER_JOB;
-    int workers = btf_pool_workers(threads, blocks);
+    int workers = btf__pool_workers(threads, blocks);
     solve_batch b = {.job = job};
     atomic_init(&b.fitted, 0);
     atomic_init(&b.fallback, 0);
-    b.scratch = btf_calloc((size_t)workers, sizeof *b.scratch, err);
+    b.scratch = btf__calloc((size_t)workers, sizeof *b.scratch, err);
     if (!b.scratch)
         return BTF_E_NOMEM;
     btf_status rc = BTF_OK;
     int made = 0;
     for (; made < workers && rc == BTF_OK; made++)
-        rc = btf_ps_scratch_alloc(&b.scratch[made], job->count, job->width, err);
+        rc = btf__ps_scratch_alloc(&b.scratch[made], job->count, job->width, err);
     btf_pool_progress pp = {progress, progress_user, "fitting normals", from, to, 1};
     if (rc == BTF_OK)
-        rc = btf_pool_run(blocks, threads, solve_rows, &b, &pp, err);
+        rc = btf__pool_run(blocks, threads, solve_rows, &b, &pp, err);
     for (int t = 0; t < made; t++)
-        btf_ps_scratch_free(&b.scratch[t]);
+        btf__ps_scratch_free(&b.scratch[t]);
     free(b.scratch);
     job->fitted = atomic_load(&b.fitted);
     job->fallback = atomic_load(&b.fallback);

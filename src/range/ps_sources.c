@@ -11,7 +11,7 @@
 
 #include <math.h>
 
-btf_status btf_ps_source_probe(btf_ps_source *src, btf_error *err)
+btf_status btf__ps_source_probe(btf_ps_source *src, btf_error *err)
 {
     btf_image_header hdr;
     btf_status rc = btf_image_probe(src->paths[0], &hdr, err);
@@ -23,8 +23,8 @@ btf_status btf_ps_source_probe(btf_ps_source *src, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
-                             const btf_image **img, btf_error *err)
+btf_status btf__ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
+                              const btf_image **img, btf_error *err)
 {
     if (src->images) {
         *img = &src->images[i];
@@ -34,8 +34,8 @@ btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
     ro.channels = 3; /* the fit's grey value and the albedo need the colour */
     btf_status rc;
     if (src->ds) { /* a .btf file's image goes into tmp's buffer when it has one */
-        rc = btf_dataset_read_into(src->ds, src->view, src->light_of ? src->light_of[i] : i,
-                                   tmp, err);
+        rc = btf__dataset_read_into(src->ds, src->view, src->light_of ? src->light_of[i] : i,
+                                    tmp, err);
     } else {
         btf_image_free(tmp);
         rc = btf_image_read(src->paths[i], &ro, tmp, err);
@@ -43,8 +43,8 @@ btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
     if (rc)
         return rc;
     if (tmp->width != src->width || tmp->height != src->height) {
-        rc = btf_fail(err, BTF_E_DATA, "%s: size %dx%d differs from the first image's %dx%d",
-                      src->paths[i], tmp->width, tmp->height, src->width, src->height);
+        rc = btf__fail(err, BTF_E_DATA, "%s: size %dx%d differs from the first image's %dx%d",
+                       src->paths[i], tmp->width, tmp->height, src->width, src->height);
         btf_image_free(tmp);
         return rc;
     }
@@ -52,15 +52,15 @@ btf_status btf_ps_source_get(const btf_ps_source *src, int i, btf_image *tmp,
     return BTF_OK;
 }
 
-btf_status btf_ps_mask_inside(const char *name, const btf_image *mask, int width, int height,
-                              unsigned char *inside, int *pixels, btf_error *err)
+btf_status btf__ps_mask_inside(const char *name, const btf_image *mask, int width, int height,
+                               unsigned char *inside, int *pixels, btf_error *err)
 {
     size_t wh = (size_t)width * height;
     if (mask && (!mask->data || mask->width != width || mask->height != height ||
                  (mask->channels != 1 && mask->channels != 3)))
-        return btf_fail(err, BTF_E_ARG, "%s: the mask (%dx%d, %d channels) does not fit the "
-                        "images (%dx%d; 1 or 3 channels)", name, mask->width, mask->height,
-                        mask->channels, width, height);
+        return btf__fail(err, BTF_E_ARG, "%s: the mask (%dx%d, %d channels) does not fit the "
+                         "images (%dx%d; 1 or 3 channels)", name, mask->width, mask->height,
+                         mask->channels, width, height);
     int n = 0;
     for (size_t k = 0; k < wh; k++) {
         int in = 1;
@@ -89,8 +89,8 @@ static double angle_between(btf_dir a, btf_dir b)
     return acos(d) * 57.29577951308232;
 }
 
-btf_status btf_ps_pick_view(const btf_dir *dirs, int n, const btf_dir *want, const char *name,
-                            int *view, btf_error *err)
+btf_status btf__ps_pick_view(const btf_dir *dirs, int n, const btf_dir *want, const char *name,
+                             int *view, btf_error *err)
 {
     int best = 0;
     for (int v = 1; v < n; v++)
@@ -98,10 +98,10 @@ btf_status btf_ps_pick_view(const btf_dir *dirs, int n, const btf_dir *want, con
                  : dirs[v].theta < dirs[best].theta)
             best = v;
     if (want && !(angle_between(dirs[best], *want) <= BTF_PS_VIEW_TOL))
-        return btf_fail(err, BTF_E_ARG, "%s: no view near theta %g phi %g (the nearest of its %d "
-                        "views is theta %g phi %g, %.1f degrees away; at most %g)", name,
-                        want->theta, want->phi, n, dirs[best].theta, dirs[best].phi,
-                        angle_between(dirs[best], *want), BTF_PS_VIEW_TOL);
+        return btf__fail(err, BTF_E_ARG, "%s: no view near theta %g phi %g (the nearest of its %d "
+                         "views is theta %g phi %g, %.1f degrees away; at most %g)", name,
+                         want->theta, want->phi, n, dirs[best].theta, dirs[best].phi,
+                         angle_between(dirs[best], *want), BTF_PS_VIEW_TOL);
     *view = best;
     return BTF_OK;
 }

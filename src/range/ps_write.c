@@ -17,11 +17,11 @@ static btf_status write_pair(const char *outdir, const char *name, const btf_ima
     char path[4096], file[64];
     btf_status rc;
     snprintf(file, sizeof file, "%s.exr", name);
-    if ((rc = btf_path_join(path, sizeof path, outdir, file, err)) ||
+    if ((rc = btf__path_join(path, sizeof path, outdir, file, err)) ||
         (rc = btf_image_write_exr_opts(path, exr, NULL, NULL, err)))
         return rc;
     snprintf(file, sizeof file, "%s.png", name);
-    if ((rc = btf_path_join(path, sizeof path, outdir, file, err)) ||
+    if ((rc = btf__path_join(path, sizeof path, outdir, file, err)) ||
         (rc = btf_image_write_png(path, png, err)))
         return rc;
     return BTF_OK;
@@ -31,20 +31,20 @@ btf_status btf_ps_write(const btf_ps_result *r, const btf_image *mask, const cha
                         btf_error *err)
 {
     if (!r || !outdir || !r->normal.data || !r->albedo.data || !r->height.data)
-        return btf_fail(err, BTF_E_ARG,
-                        "photostereo: nothing to write (empty result or no folder)");
+        return btf__fail(err, BTF_E_ARG,
+                         "photostereo: nothing to write (empty result or no folder)");
     btf_output_dir *od;
     btf_status rc = btf_output_dir_begin(outdir, &od, err);
     if (rc)
         return rc;
     const char *dir = btf_output_dir_path(od);
     btf_image prev = {0};
-    if ((rc = btf_normals_preview(&r->normal, &prev, err)) == BTF_OK)
+    if ((rc = btf__normals_preview(&r->normal, &prev, err)) == BTF_OK)
         rc = write_pair(dir, "normals", &r->normal, &prev, err);
     btf_image_free(&prev);
     if (rc == BTF_OK)
         rc = write_pair(dir, "albedo", &r->albedo, &r->albedo, err);
-    if (rc == BTF_OK && (rc = btf_height_relief(&r->height, mask, &prev, err)) == BTF_OK)
+    if (rc == BTF_OK && (rc = btf__height_relief(&r->height, mask, &prev, err)) == BTF_OK)
         rc = write_pair(dir, "height", &r->height, &prev, err);
     btf_image_free(&prev);
     if (rc) {

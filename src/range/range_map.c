@@ -76,8 +76,8 @@ static btf_status axis_taps_make(int out_len, int tile_len, double periods, axis
      * floors differ by at most floor(s) + 1 and their taps fit in
      * floor(s) + 5 consecutive indices (4 for a single sample) */
     t->count = k == 1 ? 4 : (int)floor(s) + 5;
-    t->first = btf_alloc((size_t)out_len, sizeof *t->first, err);
-    t->weight = btf_calloc((size_t)out_len * (size_t)t->count, sizeof *t->weight, err);
+    t->first = btf__alloc((size_t)out_len, sizeof *t->first, err);
+    t->weight = btf__calloc((size_t)out_len * (size_t)t->count, sizeof *t->weight, err);
     if (!t->first || !t->weight) {
         taps_free(t);
         return BTF_E_NOMEM;
@@ -145,7 +145,7 @@ static btf_status resample(const btf_model *m, int w, int h, btf_image *out, btf
         rc = axis_taps_make(h, th, whole_periods(h, th * texel), &ty, err);
     size_t nt = (size_t)tw * th, nb = (size_t)w * th < (size_t)tw * h ? (size_t)w * th
                                                                         : (size_t)tw * h;
-    double *tile = rc ? NULL : btf_alloc(nt + nb + (size_t)w * h, sizeof(double), err);
+    double *tile = rc ? NULL : btf__alloc(nt + nb + (size_t)w * h, sizeof(double), err);
     if (rc || !tile) {
         taps_free(&tx);
         taps_free(&ty);
@@ -176,36 +176,36 @@ static btf_status resample(const btf_model *m, int w, int h, btf_image *out, btf
 static btf_status check_tile(const btf_model *m, btf_error *err)
 {
     if (m->range_width < 1 || m->range_height < 1)
-        return btf_fail(err, BTF_E_DATA, "range map: tile of %d x %d texels (expected at least "
-                        "1 x 1)", m->range_width, m->range_height);
+        return btf__fail(err, BTF_E_DATA, "range map: tile of %d x %d texels (expected at least "
+                         "1 x 1)", m->range_width, m->range_height);
     if (!isfinite(m->range_texel) || m->range_texel <= 0.0f)
-        return btf_fail(err, BTF_E_DATA, "range map: texel %g (expected finite and > 0)",
-                        m->range_texel);
+        return btf__fail(err, BTF_E_DATA, "range map: texel %g (expected finite and > 0)",
+                         m->range_texel);
     size_t n = (size_t)m->range_width * m->range_height;
     for (size_t i = 0; i < n; i++)
         if (!isfinite(m->range[i]))
-            return btf_fail(err, BTF_E_DATA, "range map: height %g at tile texel (%zu, %zu) "
-                            "(expected finite heights)", m->range[i], i % (size_t)m->range_width,
-                            i / (size_t)m->range_width);
+            return btf__fail(err, BTF_E_DATA, "range map: height %g at tile texel (%zu, %zu) "
+                             "(expected finite heights)", m->range[i], i % (size_t)m->range_width,
+                             i / (size_t)m->range_width);
     return BTF_OK;
 }
 
-btf_status btf_normal_map(const btf_image *height, double scale, btf_image *normal,
-                          btf_error *err)
+btf_status btf__normal_map(const btf_image *height, double scale, btf_image *normal,
+                           btf_error *err)
 {
     if (!normal)
-        return btf_fail(err, BTF_E_ARG, "normal map: no output image");
+        return btf__fail(err, BTF_E_ARG, "normal map: no output image");
     normal->data = NULL;
     normal->width = normal->height = normal->channels = 0;
     if (!height || !height->data || height->channels != 1)
-        return btf_fail(err, BTF_E_ARG, "normal map: expected a height map of 1 channel");
+        return btf__fail(err, BTF_E_ARG, "normal map: expected a height map of 1 channel");
     if (!isfinite(scale))
-        return btf_fail(err, BTF_E_ARG, "normal map: scale %g (expected finite)", scale);
+        return btf__fail(err, BTF_E_ARG, "normal map: scale %g (expected finite)", scale);
     int w = height->width, h = height->height;
     for (size_t i = 0; i < (size_t)w * h; i++)
         if (!isfinite(height->data[i]))
-            return btf_fail(err, BTF_E_DATA, "normal map: height %g at (%zu, %zu) (expected "
-                            "finite heights)", height->data[i], i % (size_t)w, i / (size_t)w);
+            return btf__fail(err, BTF_E_DATA, "normal map: height %g at (%zu, %zu) (expected "
+                             "finite heights)", height->data[i], i % (size_t)w, i / (size_t)w);
     btf_status rc = btf_image_alloc(normal, w, h, 3, err);
     if (rc)
         return rc;
@@ -250,10 +250,10 @@ btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_
     if (albedo_out)
         *albedo_out = none;
     if (!m)
-        return btf_fail(err, BTF_E_ARG, "range map: no model");
+        return btf__fail(err, BTF_E_ARG, "range map: no model");
     if (width < 1 || height < 1)
-        return btf_fail(err, BTF_E_ARG, "range map: size %dx%d (expected at least 1x1)", width,
-                        height);
+        return btf__fail(err, BTF_E_ARG, "range map: size %dx%d (expected at least 1x1)", width,
+                         height);
     if (m->range) {
         btf_status rc = check_tile(m, err);
         if (rc)
@@ -263,18 +263,18 @@ btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_
         return BTF_OK;
     btf_status rc = btf_image_alloc(hm, width, height, 1, err); /* zeros: flat */
     if (rc == BTF_OK && albedo_out)
-        rc = btf_image_alloc(albedo_out, width, height, btf_structure_channels(m), err);
-    int layers = btf_structure_quilted(m);
+        rc = btf_image_alloc(albedo_out, width, height, btf__structure_channels(m), err);
+    int layers = btf__structure_quilted(m);
     if (rc == BTF_OK && layers) /* one quilting map places both layers */
-        rc = btf_structure_layers(m, width, height, seed, hm->data,
-                                  albedo_out ? albedo_out->data : NULL, err);
+        rc = btf__structure_layers(m, width, height, seed, hm->data,
+                                   albedo_out ? albedo_out->data : NULL, err);
     else if (rc == BTF_OK && m->range)
         rc = resample(m, width, height, hm, err);
     for (size_t i = 0; rc == BTF_OK && albedo_out && !layers &&
                        i < (size_t)width * height * albedo_out->channels; i++)
         albedo_out->data[i] = 1.0f; /* a small tile: no structure layer */
     if (rc == BTF_OK && normal_out)
-        rc = btf_normal_map(hm, 1.0, normal_out, err);
+        rc = btf__normal_map(hm, 1.0, normal_out, err);
     if (rc) {
         btf_image_free(hm);
         if (albedo_out)
@@ -285,8 +285,8 @@ btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_
     return rc;
 }
 
-btf_status btf_range_map(const btf_model *m, int width, int height, btf_image *height_out,
-                         btf_image *normal_out, btf_error *err)
+btf_status btf__range_map(const btf_model *m, int width, int height, btf_image *height_out,
+                          btf_image *normal_out, btf_error *err)
 {
     return btf_structure_maps(m, width, height, 0, height_out, normal_out, NULL, err);
 }

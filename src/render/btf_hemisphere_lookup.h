@@ -1,9 +1,9 @@
 /*
- * btf_hemisphere_lookup.h -- the lookup of a local direction on a
+ * btf__hemisphere_lookup.h -- the lookup of a local direction on a
  * triangulated direction set (Haindl & Filip 2007, section III, "BTF
  * Interpolation": the three measured directions enclosing a view or light
  * direction and their barycentric weights; angles as in Fig. 1). ONE text
- * shared by the C library (src/render/hemisphere.c, btf_hemisphere_lookup)
+ * shared by the C library (src/render/hemisphere.c, btf__hemisphere_lookup)
  * and the GPU render pass (GLSL 4.50), reading the flat arrays of
  * btf_hemisphere_table (render/render.h). The rules are in docs/render.md,
  * "Interpolation over the hemisphere".

@@ -20,7 +20,7 @@
  * Packing: one byte per direction, the tangent times BTF_HORIZON_PER_UNIT
  * rounded (0..255), four directions per 32-bit word: word 0 holds
  * directions 0..3 (direction d in bits 8d..8d+7), word 1 directions 4..7.
- * The common subset of C and GLSL (rules of btf_hemisphere_lookup.h).
+ * The common subset of C and GLSL (rules of btf__hemisphere_lookup.h).
  */
 #ifndef BTF_HORIZON_H
 #define BTF_HORIZON_H
@@ -32,7 +32,7 @@
 #define BTF_HORIZON_REACH 24       /* texels marched from each texel */
 #define BTF_SHADOW_SOFT 0.04f      /* half-width of a shadow's edge, in tangent */
 /* The view march of a relief that casts shadows (btf_shade_march in
- * btf_render_shared.h, btf_structure_warp in the analysis): steps of at
+ * btf_render_shared.h, btf__structure_warp in the analysis): steps of at
  * most this many texels, at most this many steps. */
 #define BTF_MARCH_STEP 0.5f
 #define BTF_MARCH_MAX 96

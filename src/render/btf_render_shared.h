@@ -5,7 +5,7 @@
  * -ffp-contract=off) and the GPU render pass (gpu/render.comp, GLSL 4.50),
  * so that the two cannot drift: the constants, the wrapped bilinear taps,
  * the parallax shift, the relief normal, the pair weights, the bump factor
- * and the horizon fade. The direction lookup is btf_hemisphere_lookup.h's;
+ * and the horizon fade. The direction lookup is btf__hemisphere_lookup.h's;
  * the tangent frame, the lights' directions and falloff, the per-light sum
  * and the radiance clamp are btf_shade_common.h's, which the reflectance
  * field's renders (src/rf/btf_rf_shared.h) share.
@@ -40,7 +40,7 @@
  * sqrt and division are the only operations whose last bits GPU drivers do
  * not pin down, so the two paths agree to rounding (tests/unit/test_gpu_render.c
  * measures it). Keep this file in the common subset of C and GLSL (the
- * rules of src/synth/btf_noise.h and btf_hemisphere_lookup.h).
+ * rules of src/synth/btf_noise.h and btf__hemisphere_lookup.h).
  */
 #ifndef BTF_RENDER_SHARED_H
 #define BTF_RENDER_SHARED_H
@@ -296,7 +296,7 @@ BTF_FN btf_rgb btf_shade_blend(BTF_SHADE_CTX ctx, btf_hemi_weights hv, btf_hemi_
  * times the horizon fade l_z / cos(theta_outer) beyond the outermost light
  * ring; 0 for l_z <= 0. A model with a structure layer (a >= 0; -1
  * without) has textures divided by (a + l_z) of their subspace's light
- * (btf_render_reflectance), so the factor is a + max(0, n . l) itself and a
+ * (btf__render_reflectance), so the factor is a + max(0, n . l) itself and a
  * pair's brightness follows its own light, not its subspace's; the
  * analysis divides each exemplar by the relit shading under its own light
  * (docs/model.md, "Structure"). */
@@ -463,7 +463,7 @@ BTF_FN btf_rgb btf_shade_parallax(BTF_SHADE_CTX ctx, float u, float v, float vx,
 /* Light j seen from the world point (px, py, pz): the unit world direction
  * towards it (x, y, z) and its intensity scale (w), btf_shade_light's. A
  * directional light's vector is the host's as it is: unit already (the
- * host normalises it in double, btf_render_ctx_lights in
+ * host normalises it in double, btf__render_ctx_lights in
  * src/render/pairs.c), scale 1. */
 BTF_FN btf_vec4 btf_shade_light_at(BTF_SHADE_CTX ctx, int j, float px, float py, float pz)
 {

@@ -35,8 +35,8 @@ static double side(const dt *d, int a, int b, int p)
     return (ex * (P[1] - A[1]) - ey * (P[0] - A[0])) / hypot(ex, ey);
 }
 
-double btf_incircle(const double *a, const double *b, const double *c, const double *d,
-                    double *bound)
+double btf__incircle(const double *a, const double *b, const double *c, const double *d,
+                     double *bound)
 {
     double adx = a[0] - d[0], ady = a[1] - d[1];
     double bdx = b[0] - d[0], bdy = b[1] - d[1];
@@ -105,7 +105,7 @@ static int legalize(dt *d, int p, int cap)
             continue; /* a hull edge */
         int q = third(d, s, b, a);
         double bound;
-        double in = btf_incircle(pt(d, a), pt(d, b), pt(d, p), pt(d, q), &bound);
+        double in = btf__incircle(pt(d, a), pt(d, b), pt(d, p), pt(d, q), &bound);
         if (!(in > BTF_DELAUNAY_CIRCLE_EPS * bound))
             continue;
         clear_tri(d, t);
@@ -250,10 +250,10 @@ static btf_status walk_hull(const dt *d, const char *name, int32_t **hull, int32
                             int *n_hull, btf_error *err)
 {
     int n = d->n;
-    int32_t *next = btf_alloc((size_t)n, sizeof *next, err);
-    int32_t *nexta = btf_alloc((size_t)n, sizeof *nexta, err);
-    *hull = btf_alloc((size_t)n, sizeof **hull, err);
-    *apex = btf_alloc((size_t)n, sizeof **apex, err);
+    int32_t *next = btf__alloc((size_t)n, sizeof *next, err);
+    int32_t *nexta = btf__alloc((size_t)n, sizeof *nexta, err);
+    *hull = btf__alloc((size_t)n, sizeof **hull, err);
+    *apex = btf__alloc((size_t)n, sizeof **apex, err);
     if (!next || !nexta || !*hull || !*apex) {
         BTF_FREE_ALL(next, nexta, *hull, *apex);
         *hull = *apex = NULL;
@@ -288,15 +288,15 @@ static btf_status walk_hull(const dt *d, const char *name, int32_t **hull, int32
         free(*hull);
         free(*apex);
         *hull = *apex = NULL;
-        return btf_fail(err, BTF_E_NUMERIC, "%s: the triangulation's boundary is not one loop",
-                        name);
+        return btf__fail(err, BTF_E_NUMERIC, "%s: the triangulation's boundary is not one loop",
+                         name);
     }
     *n_hull = m;
     return BTF_OK;
 }
 
-btf_status btf_delaunay(const double *xy, int n, const char *name, int32_t **tris, int *n_tris,
-                        int32_t **hull, int32_t **hull_apex, int *n_hull, btf_error *err)
+btf_status btf__delaunay(const double *xy, int n, const char *name, int32_t **tris, int *n_tris,
+                         int32_t **hull, int32_t **hull_apex, int *n_hull, btf_error *err)
 {
     *tris = NULL;
     *hull = *hull_apex = NULL;
@@ -304,16 +304,16 @@ btf_status btf_delaunay(const double *xy, int n, const char *name, int32_t **tri
     dt d = {xy, n, NULL, 0, 0, NULL, NULL, 0};
     int i, j, k;
     if (first_triangle(&d, &i, &j, &k) != 0)
-        return btf_fail(err, BTF_E_ARG,
-                        "%s: all %d directions lie on one line after the projection "
-                        "(one great circle through the pole): no triangle to interpolate in",
-                        name, n);
+        return btf__fail(err, BTF_E_ARG,
+                         "%s: all %d directions lie on one line after the projection "
+                         "(one great circle through the pole): no triangle to interpolate in",
+                         name, n);
     /* Euler: at most 2n - 5 triangles; every split adds at most 2. */
     int cap_tri = 2 * n + 4, cap_stack = 6 * cap_tri + 16;
     d.cap_tri = cap_tri;
-    d.tri = btf_alloc((size_t)cap_tri, sizeof *d.tri, err);
-    d.edge = btf_alloc((size_t)n * (size_t)n, sizeof *d.edge, err);
-    d.stack = btf_alloc((size_t)cap_stack, sizeof *d.stack, err);
+    d.tri = btf__alloc((size_t)cap_tri, sizeof *d.tri, err);
+    d.edge = btf__alloc((size_t)n * (size_t)n, sizeof *d.edge, err);
+    d.stack = btf__alloc((size_t)cap_stack, sizeof *d.stack, err);
     btf_status st = BTF_OK;
     if (!d.tri || !d.edge || !d.stack) {
         st = BTF_E_NOMEM;
@@ -327,9 +327,9 @@ btf_status btf_delaunay(const double *xy, int n, const char *name, int32_t **tri
         if (p == i || p == j || p == k)
             continue;
         if (d.n_tri + 2 > cap_tri || insert(&d, p, cap_stack) != 0) {
-            st = btf_fail(err, BTF_E_NUMERIC,
-                          "%s: direction %d could not be inserted into the triangulation", name,
-                          p);
+            st = btf__fail(err, BTF_E_NUMERIC,
+                           "%s: direction %d could not be inserted into the triangulation", name,
+                           p);
             goto done;
         }
     }

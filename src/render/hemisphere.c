@@ -5,7 +5,7 @@
  * barycentric weights; the angles of Fig. 1). btf_hemisphere_build projects
  * a direction set to the unit disk, triangulates it (render/delaunay.c) and
  * grids the triangles; the lookup itself is the C/GLSL text of
- * render/btf_hemisphere_lookup.h. Rules: docs/render.md.
+ * render/btf__hemisphere_lookup.h. Rules: docs/render.md.
  */
 #include "render/render.h"
 #include "render/btf_hemisphere_lookup.h"
@@ -44,9 +44,9 @@ static btf_status project_set(const btf_dirset *set, const char *name, double *x
     for (int i = 0; i < set->count; i++) {
         btf_dir d = set->dirs[i];
         if (!isfinite(d.theta) || !isfinite(d.phi) || d.theta < 0.0 || d.theta > 90.0)
-            return btf_fail(err, BTF_E_ARG,
-                            "%s: direction %d (theta %g, phi %g): theta must be in [0, 90]",
-                            name, i, d.theta, d.phi);
+            return btf__fail(err, BTF_E_ARG,
+                             "%s: direction %d (theta %g, phi %g): theta must be in [0, 90]",
+                             name, i, d.theta, d.phi);
         double r = sqrt(1.0 - cos(d.theta * (BTF_PI / 180.0))), p = d.phi * (BTF_PI / 180.0);
         xy[2 * i] = r * cos(p);
         xy[2 * i + 1] = r * sin(p);
@@ -55,11 +55,11 @@ static btf_status project_set(const btf_dirset *set, const char *name, double *x
         for (int j = i + 1; j < set->count; j++)
             if (hypot(xy[2 * i] - xy[2 * j], xy[2 * i + 1] - xy[2 * j + 1]) <
                 BTF_DELAUNAY_SAME_EPS)
-                return btf_fail(err, BTF_E_ARG,
-                                "%s: directions %d (theta %g, phi %g) and %d (theta %g, phi %g) "
-                                "are the same direction",
-                                name, i, set->dirs[i].theta, set->dirs[i].phi, j,
-                                set->dirs[j].theta, set->dirs[j].phi);
+                return btf__fail(err, BTF_E_ARG,
+                                 "%s: directions %d (theta %g, phi %g) and %d (theta %g, phi %g) "
+                                 "are the same direction",
+                                 name, i, set->dirs[i].theta, set->dirs[i].phi, j,
+                                 set->dirs[j].theta, set->dirs[j].phi);
     return BTF_OK;
 }
 
@@ -79,7 +79,7 @@ static btf_status build_grid(btf_hemisphere *h, btf_error *err)
     while (g * g < 32 * h->n_triangles && g < 256)
         g *= 2;
     h->grid = g;
-    h->cell_start = btf_calloc((size_t)g * g + 1, sizeof *h->cell_start, err);
+    h->cell_start = btf__calloc((size_t)g * g + 1, sizeof *h->cell_start, err);
     if (!h->cell_start)
         return BTF_E_NOMEM;
     for (int pass = 0; pass < 2; pass++) {
@@ -106,8 +106,8 @@ static btf_status build_grid(btf_hemisphere *h, btf_error *err)
             for (int c = 0; c < g * g; c++)
                 h->cell_start[c + 1] += h->cell_start[c];
             h->n_cell_tris = h->cell_start[g * g];
-            h->cell_tris = btf_alloc((size_t)(h->n_cell_tris ? h->n_cell_tris : 1),
-                                     sizeof *h->cell_tris, err);
+            h->cell_tris = btf__alloc((size_t)(h->n_cell_tris ? h->n_cell_tris : 1),
+                                      sizeof *h->cell_tris, err);
             if (!h->cell_tris)
                 return BTF_E_NOMEM;
         }
@@ -124,25 +124,25 @@ btf_status btf_hemisphere_build(const btf_dirset *set, btf_hemisphere **out, btf
     if (out)
         *out = NULL;
     if (!set || !out)
-        return btf_fail(err, BTF_E_ARG, "hemisphere: no direction set");
+        return btf__fail(err, BTF_E_ARG, "hemisphere: no direction set");
     const char *name = set->name[0] ? set->name : "direction set";
     if (set->count < 3 || !set->dirs)
-        return btf_fail(err, BTF_E_ARG,
-                        "%s: %d directions; interpolation over the hemisphere needs at least 3",
-                        name, set->count);
+        return btf__fail(err, BTF_E_ARG,
+                         "%s: %d directions; interpolation over the hemisphere needs at least 3",
+                         name, set->count);
     if (set->count > BTF_HEMISPHERE_MAX_POINTS)
-        return btf_fail(err, BTF_E_ARG, "%s: %d directions; at most %d are supported", name,
-                        set->count, BTF_HEMISPHERE_MAX_POINTS);
+        return btf__fail(err, BTF_E_ARG, "%s: %d directions; at most %d are supported", name,
+                         set->count, BTF_HEMISPHERE_MAX_POINTS);
     int n = set->count;
-    double *xy = btf_alloc((size_t)n * 2, sizeof *xy, err);
-    btf_hemisphere *h = btf_calloc(1, sizeof *h, err);
+    double *xy = btf__alloc((size_t)n * 2, sizeof *xy, err);
+    btf_hemisphere *h = btf__calloc(1, sizeof *h, err);
     btf_status st = (!xy || !h) ? BTF_E_NOMEM : project_set(set, name, xy, err);
     if (st == BTF_OK)
-        st = btf_delaunay(xy, n, name, &h->triangles, &h->n_triangles, &h->hull, &h->hull_apex,
-                          &h->n_hull, err);
+        st = btf__delaunay(xy, n, name, &h->triangles, &h->n_triangles, &h->hull, &h->hull_apex,
+                           &h->n_hull, err);
     if (st == BTF_OK) {
         h->n_points = n;
-        h->points = btf_alloc((size_t)n * 2, sizeof *h->points, err);
+        h->points = btf__alloc((size_t)n * 2, sizeof *h->points, err);
         if (!h->points)
             st = BTF_E_NOMEM;
     }
@@ -160,7 +160,7 @@ btf_status btf_hemisphere_build(const btf_dirset *set, btf_hemisphere **out, btf
     return BTF_OK;
 }
 
-void btf_hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t)
+void btf__hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t)
 {
     t->n_points = h->n_points;
     t->n_triangles = h->n_triangles;
@@ -175,10 +175,10 @@ void btf_hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t)
     t->hull_apex = h->hull_apex;
 }
 
-void btf_hemisphere_lookup(const btf_hemisphere *h, const float v[3], int idx[3], float w[3])
+void btf__hemisphere_lookup(const btf_hemisphere *h, const float v[3], int idx[3], float w[3])
 {
     btf_hemisphere_table t;
-    btf_hemisphere_get_table(h, &t);
+    btf__hemisphere_get_table(h, &t);
     btf_hemi_weights r = btf_hemi_lookup(&t, v[0], v[1], v[2]);
     idx[0] = r.i0;
     idx[1] = r.i1;

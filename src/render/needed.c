@@ -70,55 +70,55 @@ static btf_status walk_row(void *user, int y, int worker, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_render_check_model(const btf_model *m, btf_error *err)
+btf_status btf__render_check_model(const btf_model *m, btf_error *err)
 {
     if (!m || m->n_subspaces < 1 || !m->subspaces)
-        return btf_fail(err, BTF_E_ARG, "no model to render");
+        return btf__fail(err, BTF_E_ARG, "no model to render");
     if (!m->index || m->views.count < 1 || m->lights.count < 1)
-        return btf_fail(err, BTF_E_ARG, "the model is a single texture: it has no view and "
-                        "light directions to render with (analyse a BTF dataset)");
+        return btf__fail(err, BTF_E_ARG, "the model is a single texture: it has no view and "
+                         "light directions to render with (analyse a BTF dataset)");
     return BTF_OK;
 }
 
-btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf_light *lights,
-                             int n_lights, uint8_t *needed, int *count, btf_error *err)
+btf_status btf__render_needed(const btf_model *m, const btf_gbuffer *g, const btf_light *lights,
+                              int n_lights, uint8_t *needed, int *count, btf_error *err)
 {
-    btf_status rc = btf_render_check_model(m, err);
+    btf_status rc = btf__render_check_model(m, err);
     if (rc)
         return rc;
     if (!g || !needed || (n_lights > 0 && !lights) || n_lights < 0)
-        return btf_fail(err, BTF_E_ARG, "needed subspaces: missing G-buffer or lights");
+        return btf__fail(err, BTF_E_ARG, "needed subspaces: missing G-buffer or lights");
     needed_walk w = {m, g, NULL, NULL};
     btf_hemisphere *views = NULL, *lts = NULL;
     uint8_t *pair_index = NULL;
-    w.ctx = btf_alloc(1, sizeof *w.ctx, err);
+    w.ctx = btf__alloc(1, sizeof *w.ctx, err);
     if (!w.ctx)
         return BTF_E_NOMEM;
     memset(w.ctx, 0, sizeof *w.ctx);
     btf_render_sets sets;
-    if ((rc = btf_render_sets_make(m, &sets, err)))
+    if ((rc = btf__render_sets_make(m, &sets, err)))
         goto done;
-    if ((rc = btf_render_ctx_lights(w.ctx, lights, n_lights, err)) ||
+    if ((rc = btf__render_ctx_lights(w.ctx, lights, n_lights, err)) ||
         (rc = btf_hemisphere_build(&sets.views, &views, err)) ||
         (rc = btf_hemisphere_build(&sets.lights, &lts, err)) ||
-        !(pair_index = btf_render_pair_index(m, &sets, err))) {
-        btf_render_sets_free(&sets);
+        !(pair_index = btf__render_pair_index(m, &sets, err))) {
+        btf__render_sets_free(&sets);
         rc = rc ? rc : BTF_E_NOMEM;
         goto done;
     }
     w.ctx->n_lights_set = sets.lights.count;
-    btf_render_sets_free(&sets);
-    btf_hemisphere_get_table(views, &w.ctx->views);
-    btf_hemisphere_get_table(lts, &w.ctx->lights);
+    btf__render_sets_free(&sets);
+    btf__hemisphere_get_table(views, &w.ctx->views);
+    btf__hemisphere_get_table(lts, &w.ctx->lights);
     w.ctx->index = pair_index;
-    w.rows_needed = btf_alloc((size_t)(g->height > 0 ? g->height : 1),
-                              (size_t)m->n_subspaces, err);
+    w.rows_needed = btf__alloc((size_t)(g->height > 0 ? g->height : 1),
+                               (size_t)m->n_subspaces, err);
     if (!w.rows_needed) {
         rc = BTF_E_NOMEM;
         goto done;
     }
     memset(w.rows_needed, 0, (size_t)(g->height > 0 ? g->height : 1) * (size_t)m->n_subspaces);
-    if ((rc = btf_pool_run(g->height, 0, walk_row, &w, NULL, err)))
+    if ((rc = btf__pool_run(g->height, 0, walk_row, &w, NULL, err)))
         goto done;
     memset(needed, 0, (size_t)m->n_subspaces);
     int n = 0;

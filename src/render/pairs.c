@@ -11,12 +11,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-btf_status btf_render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, int n_lights,
-                                 btf_error *err)
+btf_status btf__render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, int n_lights,
+                                  btf_error *err)
 {
     if (n_lights < 0 || n_lights > BTF_RENDER_MAX_LIGHTS)
-        return btf_fail(err, BTF_E_ARG, "%d lights: the renderer takes at most %d", n_lights,
-                        BTF_RENDER_MAX_LIGHTS);
+        return btf__fail(err, BTF_E_ARG, "%d lights: the renderer takes at most %d", n_lights,
+                         BTF_RENDER_MAX_LIGHTS);
     ctx->n_lights = n_lights;
     for (int j = 0; j < n_lights; j++) {
         const btf_light *l = &lights[j];
@@ -33,10 +33,10 @@ btf_status btf_render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, in
     return BTF_OK;
 }
 
-void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_material *rm)
+void btf__render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_material *rm)
 {
-    btf_hemisphere_get_table(rm->views, &ctx->views);
-    btf_hemisphere_get_table(rm->lights, &ctx->lights);
+    btf__hemisphere_get_table(rm->views, &ctx->views);
+    btf__hemisphere_get_table(rm->lights, &ctx->lights);
     ctx->size = rm->size;
     ctx->n_lights_set = rm->n_lights;
     ctx->index = rm->index;
@@ -52,7 +52,7 @@ void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_materia
     ctx->ambient = rm->ambient;
 }
 
-float btf_render_ambient(const btf_model *m)
+float btf__render_ambient(const btf_model *m)
 {
     return m->albedo ? (isfinite(m->ambient) && m->ambient > 0.0f ? m->ambient : 0.0f) : -1.0f;
 }
@@ -100,7 +100,7 @@ static btf_status render_set(const btf_dirset *set, btf_dirset *out, int **of, b
     btf_dir list[2 + 2];
     btf_status rc;
     if (set->count >= 3 || set->count < 1) {
-        rc = btf_dirset_copy(out, set, err);
+        rc = btf__dirset_copy(out, set, err);
     } else {
         for (int i = 0; i < set->count; i++)
             list[i] = set->dirs[i];
@@ -111,7 +111,7 @@ static btf_status render_set(const btf_dirset *set, btf_dirset *out, int **of, b
     }
     if (rc)
         return rc;
-    *of = btf_alloc((size_t)(out->count > 0 ? out->count : 1), sizeof(int), err);
+    *of = btf__alloc((size_t)(out->count > 0 ? out->count : 1), sizeof(int), err);
     if (!*of) {
         btf_dirset_free(out);
         return BTF_E_NOMEM;
@@ -121,18 +121,18 @@ static btf_status render_set(const btf_dirset *set, btf_dirset *out, int **of, b
     return BTF_OK;
 }
 
-btf_status btf_render_sets_make(const btf_model *m, btf_render_sets *s, btf_error *err)
+btf_status btf__render_sets_make(const btf_model *m, btf_render_sets *s, btf_error *err)
 {
     memset(s, 0, sizeof *s);
     btf_status rc = render_set(&m->views, &s->views, &s->view_of, err);
     if (rc == BTF_OK)
         rc = render_set(&m->lights, &s->lights, &s->light_of, err);
     if (rc)
-        btf_render_sets_free(s);
+        btf__render_sets_free(s);
     return rc;
 }
 
-void btf_render_sets_free(btf_render_sets *s)
+void btf__render_sets_free(btf_render_sets *s)
 {
     btf_dirset_free(&s->views);
     btf_dirset_free(&s->lights);
@@ -170,8 +170,8 @@ static size_t nearest_measured(const btf_model *m, const double *vv, const doubl
 static btf_status pair_sources(const btf_model *m, size_t **out, btf_error *err)
 {
     size_t n = (size_t)m->views.count * (size_t)m->lights.count;
-    size_t *src = btf_alloc(n ? n : 1, sizeof *src, err);
-    double *vv = btf_alloc((size_t)m->views.count + m->lights.count + 1, 3 * sizeof(double), err);
+    size_t *src = btf__alloc(n ? n : 1, sizeof *src, err);
+    double *vv = btf__alloc((size_t)m->views.count + m->lights.count + 1, 3 * sizeof(double), err);
     if (!src || !vv) {
         free(src);
         free(vv);
@@ -197,10 +197,10 @@ static size_t model_pair(const btf_model *m, const btf_render_sets *s, const siz
     return src[(size_t)s->view_of[p / L] * (size_t)m->lights.count + (size_t)s->light_of[p % L]];
 }
 
-uint8_t *btf_render_pair_index(const btf_model *m, const btf_render_sets *s, btf_error *err)
+uint8_t *btf__render_pair_index(const btf_model *m, const btf_render_sets *s, btf_error *err)
 {
     size_t n = (size_t)s->views.count * (size_t)s->lights.count, *src = NULL;
-    uint8_t *idx = btf_alloc(n ? n : 1, 1, err);
+    uint8_t *idx = btf__alloc(n ? n : 1, 1, err);
     if (!idx || pair_sources(m, &src, err)) {
         free(idx);
         return NULL;
@@ -211,10 +211,10 @@ uint8_t *btf_render_pair_index(const btf_model *m, const btf_render_sets *s, btf
     return idx;
 }
 
-float *btf_render_gains(const btf_model *m, const btf_render_sets *s, btf_error *err)
+float *btf__render_gains(const btf_model *m, const btf_render_sets *s, btf_error *err)
 {
     size_t n = (size_t)s->views.count * (size_t)s->lights.count, *src = NULL;
-    float *g = btf_alloc(n ? 3 * n : 1, sizeof(float), err);
+    float *g = btf__alloc(n ? 3 * n : 1, sizeof(float), err);
     if (!g || pair_sources(m, &src, err)) {
         free(g);
         return NULL;
@@ -228,9 +228,9 @@ float *btf_render_gains(const btf_model *m, const btf_render_sets *s, btf_error 
     return g;
 }
 
-float btf_render_reflectance(const btf_model *m, int k)
+float btf__render_reflectance(const btf_model *m, int k)
 {
-    float a = btf_render_ambient(m);
+    float a = btf__render_ambient(m);
     if (a < 0.0f || k < 0 || k >= m->n_subspaces || m->subspaces[k].light < 0 ||
         m->subspaces[k].light >= m->lights.count)
         return 1.0f;
@@ -240,13 +240,13 @@ float btf_render_reflectance(const btf_model *m, int k)
     return (float)(1.0 / (a + z));
 }
 
-void btf_render_scale_texture(float *data, size_t floats, float g)
+void btf__render_scale_texture(float *data, size_t floats, float g)
 {
     for (size_t i = 0; i < floats; i++)
         data[i] = data[i] * g;
 }
 
-float btf_render_light_outer_z(const btf_model *m)
+float btf__render_light_outer_z(const btf_model *m)
 {
     double outer = 0.0;
     for (int i = 0; i < m->lights.count; i++)
@@ -254,8 +254,8 @@ float btf_render_light_outer_z(const btf_model *m)
     return (float)cos(outer * (3.14159265358979323846 / 180.0));
 }
 
-btf_status btf_render_relief(const btf_model *m, const btf_image *height, int threads,
-                             uint32_t **horizon, float bounds[2], btf_error *err)
+btf_status btf__render_relief(const btf_model *m, const btf_image *height, int threads,
+                              uint32_t **horizon, float bounds[2], btf_error *err)
 {
     size_t n = (size_t)height->width * height->height;
     const float *h = height->data;
@@ -268,5 +268,5 @@ btf_status btf_render_relief(const btf_model *m, const btf_image *height, int th
     *horizon = NULL;
     if (!(m->shadows && m->albedo))
         return BTF_OK;
-    return btf_horizon_map(h, height->width, height->height, 1, threads, horizon, err);
+    return btf__horizon_map(h, height->width, height->height, 1, threads, horizon, err);
 }

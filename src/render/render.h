@@ -26,8 +26,8 @@
 
 /* The in-circle determinant of d against counter-clockwise (a, b, c): > 0
  * when d is inside; *bound receives the bound its magnitude stays under. */
-double btf_incircle(const double *a, const double *b, const double *c, const double *d,
-                    double *bound);
+double btf__incircle(const double *a, const double *b, const double *c, const double *d,
+                     double *bound);
 
 /* Delaunay triangulation of n >= 3 distinct points xy[n][2], not all on
  * one line: incremental insertion with Lawson flips (Lawson 1977; Guibas &
@@ -38,8 +38,8 @@ double btf_incircle(const double *a, const double *b, const double *c, const dou
  * and the hull: *hull and *hull_apex (malloc'd [*n_hull]), counter-clockwise
  * from its smallest point index, collinear boundary points included.
  * `name` prefixes error messages. */
-btf_status btf_delaunay(const double *xy, int n, const char *name, int32_t **tris, int *n_tris,
-                        int32_t **hull, int32_t **hull_apex, int *n_hull, btf_error *err);
+btf_status btf__delaunay(const double *xy, int n, const char *name, int32_t **tris, int *n_tris,
+                         int32_t **hull, int32_t **hull_apex, int *n_hull, btf_error *err);
 
 /* ------------------------------------- the parts the library shares */
 
@@ -49,10 +49,10 @@ btf_status btf_delaunay(const double *xy, int n, const char *name, int32_t **tri
  * v, 1 at a measured direction. A zero or non-finite v is taken as the
  * pole. Beyond the hull the third weight is 0 (idx[2] then names the apex
  * of the triangle on that hull edge). */
-void btf_hemisphere_lookup(const btf_hemisphere *h, const float v[3], int idx[3], float w[3]);
+void btf__hemisphere_lookup(const btf_hemisphere *h, const float v[3], int idx[3], float w[3]);
 
 /* The flat tables the CPU and GPU lookups both read (the lookup itself is
- * src/render/btf_hemisphere_lookup.h, the same text for C and GLSL). The
+ * src/render/btf__hemisphere_lookup.h, the same text for C and GLSL). The
  * pointers stay owned by h. */
 typedef struct btf_hemisphere_table {
     int n_points, n_triangles;
@@ -67,7 +67,7 @@ typedef struct btf_hemisphere_table {
     const int32_t *hull_apex;   /* [n_hull]: the third vertex of the triangle on edge
                                    hull[i] -> hull[(i + 1) % n_hull] */
 } btf_hemisphere_table;
-void btf_hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t);
+void btf__hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t);
 
 /* The model's range tile (paper section II.B) enlarged to a seamless
  * width x height map in analysed-image texels: the map wraps (its right
@@ -78,35 +78,35 @@ void btf_hemisphere_get_table(const btf_hemisphere *h, btf_hemisphere_table *t);
  * y up the image, z out), derived from the heights with wrap-around
  * differences. Either output may be NULL. A model without a range map
  * gives a flat map (heights 0, normals (0, 0, 1)). */
-btf_status btf_range_map(const btf_model *m, int width, int height, btf_image *height_out,
-                         btf_image *normal_out, btf_error *err);
+btf_status btf__range_map(const btf_model *m, int width, int height, btf_image *height_out,
+                          btf_image *normal_out, btf_error *err);
 /* The unit normals of the height map scale * h (1 channel) into normal
  * (allocated here, 3 channels, same size): n = normalize(-dh/dx, -dh/dy, 1)
  * with x right and y up the image (rows grow downwards), from wrap-around
  * central differences, so a map that wraps gives normals that wrap. Finite
  * heights give finite unit normals (scale finite; huge slopes included). */
-btf_status btf_normal_map(const btf_image *height, double scale, btf_image *normal,
-                          btf_error *err);
+btf_status btf__normal_map(const btf_image *height, double scale, btf_image *normal,
+                           btf_error *err);
 /* The subspaces (needed[k] = 1) that the nine pairs of any pixel of g
  * select under any of the lights, and their count. needed has
  * m->n_subspaces entries. */
-btf_status btf_render_needed(const btf_model *m, const btf_gbuffer *g, const btf_light *lights,
-                             int n_lights, uint8_t *needed, int *count, btf_error *err);
+btf_status btf__render_needed(const btf_model *m, const btf_gbuffer *g, const btf_light *lights,
+                              int n_lights, uint8_t *needed, int *count, btf_error *err);
 
 /* A material ready to shade with: the model's hemisphere tables, its
  * range and normal map, and the synthesised (tileable) subspace images
  * (only those with needed[k] set; needed NULL: all), all of side
  * texture_size. Kept in memory; repeated renders reuse it. */
 typedef struct btf_render_material btf_render_material;
-btf_status btf_render_material_build(const btf_model *m, const uint8_t *needed,
-                                     int texture_size, uint64_t seed, int threads,
-                                     btf_render_material **out, btf_error *err);
-void btf_render_material_free(btf_render_material *rm);
+btf_status btf__render_material_build(const btf_model *m, const uint8_t *needed,
+                                      int texture_size, uint64_t seed, int threads,
+                                      btf_render_material **out, btf_error *err);
+void btf__render_material_free(btf_render_material *rm);
 
 /* Shades a G-buffer into out (linear RGB, g's size; allocated here). A pixel
  * that needs a subspace the material was not built with is an error. */
-btf_status btf_render_shade(const btf_render_material *rm, const btf_gbuffer *g,
-                            const btf_light *lights, int n_lights, const float background[3],
-                            double relief, int threads, btf_image *out, btf_error *err);
+btf_status btf__render_shade(const btf_render_material *rm, const btf_gbuffer *g,
+                             const btf_light *lights, int n_lights, const float background[3],
+                             double relief, int threads, btf_image *out, btf_error *err);
 
 #endif /* BTF_RENDER_H */

@@ -74,27 +74,27 @@ static btf_status shade_row(void *user, int y, int worker, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_render_shade(const btf_render_material *rm, const btf_gbuffer *g,
-                            const btf_light *lights, int n_lights, const float background[3],
-                            double relief, int threads, btf_image *out, btf_error *err)
+btf_status btf__render_shade(const btf_render_material *rm, const btf_gbuffer *g,
+                             const btf_light *lights, int n_lights, const float background[3],
+                             double relief, int threads, btf_image *out, btf_error *err)
 {
     static const float black[3] = {0.0f, 0.0f, 0.0f};
     if (!rm || !g || !out || (n_lights > 0 && !lights) || n_lights < 0)
-        return btf_fail(err, BTF_E_ARG, "shade: missing material, G-buffer, lights or output");
+        return btf__fail(err, BTF_E_ARG, "shade: missing material, G-buffer, lights or output");
     if (!isfinite(relief) || fabs(relief) > 1e6)
-        return btf_fail(err, BTF_E_ARG, "relief %g: expected a finite scale up to 1e6", relief);
+        return btf__fail(err, BTF_E_ARG, "relief %g: expected a finite scale up to 1e6", relief);
     memset(out, 0, sizeof *out);
     btf_status rc = btf_image_alloc(out, g->width, g->height, 3, err);
     if (rc)
         return rc;
-    shade_job *j = btf_alloc(1, sizeof *j, err);
+    shade_job *j = btf__alloc(1, sizeof *j, err);
     if (!j) {
         btf_image_free(out);
         return BTF_E_NOMEM;
     }
     memset(j, 0, sizeof *j);
-    btf_render_ctx_material(&j->ctx, rm);
-    if ((rc = btf_render_ctx_lights(&j->ctx, lights, n_lights, err))) {
+    btf__render_ctx_material(&j->ctx, rm);
+    if ((rc = btf__render_ctx_lights(&j->ctx, lights, n_lights, err))) {
         free(j);
         btf_image_free(out);
         return rc;
@@ -103,10 +103,10 @@ btf_status btf_render_shade(const btf_render_material *rm, const btf_gbuffer *g,
     j->background = background ? background : black;
     j->relief = (float)relief;
     j->out = out;
-    rc = btf_pool_run(g->height, threads, shade_row, j, NULL, err);
+    rc = btf__pool_run(g->height, threads, shade_row, j, NULL, err);
     if (rc == BTF_OK && atomic_load(&j->missing))
-        rc = btf_fail(err, BTF_E_ARG, "shade: a pixel selects a subspace the material was "
-                      "not built with (btf_render_needed gives the set)");
+        rc = btf__fail(err, BTF_E_ARG, "shade: a pixel selects a subspace the material was "
+                       "not built with (btf_render_needed gives the set)");
     free(j);
     if (rc)
         btf_image_free(out);

@@ -75,22 +75,22 @@ typedef struct btf_shade_ctx {
  * highest; the view march's span) and, for a model whose relief casts
  * shadows, its horizon map round the torus (*horizon, the caller frees it;
  * NULL without shadows). */
-btf_status btf_render_relief(const btf_model *m, const btf_image *height, int threads,
-                             uint32_t **horizon, float bounds[2], btf_error *err);
+btf_status btf__render_relief(const btf_model *m, const btf_image *height, int threads,
+                              uint32_t **horizon, float bounds[2], btf_error *err);
 
 /* A model that can be rendered: subspaces, an index table, directions. */
-btf_status btf_render_check_model(const btf_model *m, btf_error *err);
+btf_status btf__render_check_model(const btf_model *m, btf_error *err);
 
 /* The tileable size nearest above `side` that every subspace's pyramid
  * divides (a multiple of 2^(levels - 1)), at least 8. */
-int btf_render_texture_side(const btf_model *m, int side);
+int btf__render_texture_side(const btf_model *m, int side);
 
 /* cos of the largest measured light theta: below it a light is beyond the
  * outermost ring (btf_shade_bump's horizon fade). */
-float btf_render_light_outer_z(const btf_model *m);
+float btf__render_light_outer_z(const btf_model *m);
 /* The shading's ambient term of m (btf_render_shared.h): -1 without a
  * structure layer (the plain bump factor). */
-float btf_render_ambient(const btf_model *m);
+float btf__render_ambient(const btf_model *m);
 /* The direction sets the renderer triangulates (docs/render.md, "Sparse
  * pair sets"): the model's; a set of 1 or 2 directions (one camera over a
  * light dome) gains ghost directions to make a triangle, each standing for
@@ -100,30 +100,30 @@ typedef struct btf_render_sets {
     btf_dirset views, lights;
     int *view_of, *light_of;
 } btf_render_sets;
-btf_status btf_render_sets_make(const btf_model *m, btf_render_sets *s, btf_error *err);
-void btf_render_sets_free(btf_render_sets *s);
+btf_status btf__render_sets_make(const btf_model *m, btf_render_sets *s, btf_error *err);
+void btf__render_sets_free(btf_render_sets *s);
 /* The index table the shading reads (the renderer's views x lights, the
  * caller frees it): the model's, where a sparse model (BTF_PAIR_NONE
  * entries) lets each pair it did not measure stand for the measured pair
  * nearest in the space of pairs (docs/render.md, "Sparse pair sets"). */
-uint8_t *btf_render_pair_index(const btf_model *m, const btf_render_sets *s, btf_error *err);
+uint8_t *btf__render_pair_index(const btf_model *m, const btf_render_sets *s, btf_error *err);
 /* The pair gains the shading multiplies (views x lights x 3 floats, the
  * caller frees them): the model's, or 1 for a model without; a pair not
- * measured takes its stand-in's (btf_render_pair_index). */
-float *btf_render_gains(const btf_model *m, const btf_render_sets *s, btf_error *err);
+ * measured takes its stand-in's (btf__render_pair_index). */
+float *btf__render_gains(const btf_model *m, const btf_render_sets *s, btf_error *err);
 /* The factor subspace k's texture is scaled by before shading: 1 / (a +
  * l_z) of its representative light with a structure layer, else 1. */
-float btf_render_reflectance(const btf_model *m, int k);
+float btf__render_reflectance(const btf_model *m, int k);
 /* floats of a texture times g, in place (the same on both backends). */
-void btf_render_scale_texture(float *data, size_t floats, float g);
+void btf__render_scale_texture(float *data, size_t floats, float g);
 
 /* The lights as the shared shading reads them (directions made unit);
  * BTF_E_ARG for more than BTF_RENDER_MAX_LIGHTS. */
-btf_status btf_render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, int n_lights,
-                                 btf_error *err);
+btf_status btf__render_ctx_lights(btf_shade_ctx *ctx, const btf_light *lights, int n_lights,
+                                  btf_error *err);
 
 /* The context of a material (lights not set). */
-void btf_render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_material *rm);
+void btf__render_ctx_material(btf_shade_ctx *ctx, const struct btf_render_material *rm);
 
 /* What a render does before it synthesises and shades, the same for both
  * backends: the options resolved, the G-buffer traced (or the flat
@@ -141,22 +141,22 @@ typedef struct btf_render_plan {
     double trace_s, needed_s;
 } btf_render_plan;
 
-btf_status btf_render_plan_scene(const btf_model *m, const btf_scene *s,
+btf_status btf__render_plan_scene(const btf_model *m, const btf_scene *s,
+                                  const btf_render_opts *opts, btf_render_plan *p,
+                                  btf_error *err);
+btf_status btf__render_plan_flat(const btf_model *m, btf_dir view, btf_dir light,
                                  const btf_render_opts *opts, btf_render_plan *p,
                                  btf_error *err);
-btf_status btf_render_plan_flat(const btf_model *m, btf_dir view, btf_dir light,
-                                const btf_render_opts *opts, btf_render_plan *p,
-                                btf_error *err);
-void btf_render_plan_free(btf_render_plan *p);
+void btf__render_plan_free(btf_render_plan *p);
 /* The CPU backend on a plan: synthesis of the needed subspaces, shading. */
-btf_status btf_render_plan_cpu(const btf_model *m, const btf_render_plan *p, btf_image *out,
-                               btf_render_info *info, btf_error *err);
+btf_status btf__render_plan_cpu(const btf_model *m, const btf_render_plan *p, btf_image *out,
+                                btf_render_info *info, btf_error *err);
 /* The orthographic G-buffer of a flat patch (the flat render's): texel
  * (x, y) at pixel (x, y), the tangent frame the world's axes, the unit
  * vector view towards the eye for every pixel. */
-btf_status btf_render_flat_gbuffer(int w, int h, const float view[3], btf_gbuffer *g,
-                                   btf_error *err);
+btf_status btf__render_flat_gbuffer(int w, int h, const float view[3], btf_gbuffer *g,
+                                    btf_error *err);
 /* The counts and the trace time of a plan into info. */
-void btf_render_plan_info(const btf_model *m, const btf_render_plan *p, btf_render_info *info);
+void btf__render_plan_info(const btf_model *m, const btf_render_plan *p, btf_render_info *info);
 
 #endif

@@ -25,15 +25,15 @@ static btf_status resolve(int given, const char *missing, const btf_report_opts 
                           btf_report_opts *o, btf_error *err)
 {
     if (!given)
-        return btf_fail(err, BTF_E_ARG, "report: no %s given", missing);
-    btf_status rc = btf_report_resolve(in, o, err);
+        return btf__fail(err, BTF_E_ARG, "report: no %s given", missing);
+    btf_status rc = btf__report_resolve(in, o, err);
     if (rc)
         return rc;
     if (o->jpeg_quality == 0)
         o->jpeg_quality = btf_report_defaults().jpeg_quality;
     if (o->jpeg_quality < 1 || o->jpeg_quality > 100)
-        return btf_fail(err, BTF_E_ARG, "report: JPEG quality %d: expected 1..100",
-                        o->jpeg_quality);
+        return btf__fail(err, BTF_E_ARG, "report: JPEG quality %d: expected 1..100",
+                         o->jpeg_quality);
     o->quality.threads = o->threads;
     o->pca.threads = o->threads;
     return BTF_OK;
@@ -73,7 +73,7 @@ static btf_status on_pair(void *user, int pair, int view, int light, const btf_i
     pair_ctx *c = user;
     if (!c->want[(size_t)view * c->r->in->n_lights + light])
         return BTF_OK;
-    return btf_report_picture(c->r, c->dir, pair, view, light, meas, model, err);
+    return btf__report_picture(c->r, c->dir, pair, view, light, meas, model, err);
 }
 
 /* The renders' options: the quality's seed and relief, the report's threads. */
@@ -111,13 +111,13 @@ static btf_status run_sweep(const btf_dataset *ds, const char *final_dir,
                             btf_error *err)
 {
     char state[4096];
-    btf_status rc = btf_path_join(state, sizeof state, final_dir, "sweep", err);
+    btf_status rc = btf__path_join(state, sizeof state, final_dir, "sweep", err);
     if (rc)
         return rc;
     /* The state folder lives in the report's folder itself, not in the
      * temporary one: what an interrupted run finished must survive it. */
     if (mkdir(final_dir, 0777) != 0 && errno != EEXIST)
-        return btf_fail(err, BTF_E_IO, "%s: cannot create the report folder", final_dir);
+        return btf__fail(err, BTF_E_IO, "%s: cannot create the report folder", final_dir);
     btf_sweep_opts so = o->sweep_opts;
     so.state_dir = state;
     so.quality = o->quality;
@@ -126,14 +126,14 @@ static btf_status run_sweep(const btf_dataset *ds, const char *final_dir,
     so.threads = o->threads;
     so.progress = step_report;
     so.progress_user = sp;
-    return btf_sweep_run(ds, &so, out, err);
+    return btf__sweep_run(ds, &so, out, err);
 }
 
 /* The measured pairs as the shared sections list them, ranked by the
  * combined distance. */
 static btf_status list_pairs(btf_car_report *d, btf_error *err)
 {
-    btf_status rc = btf_report_pairs_alloc(&d->r, d->q.n_pairs, err);
+    btf_status rc = btf__report_pairs_alloc(&d->r, d->q.n_pairs, err);
     for (int i = 0; rc == BTF_OK && i < d->q.n_pairs; i++) {
         const btf_pair_quality *p = &d->q.pairs[i];
         d->r.pairs[i] = (btf_report_pair){p->view, p->light, &p->d, p->d.combined};
@@ -156,7 +156,7 @@ static void summarise(const btf_report_base *r, btf_report_summary *s)
 }
 
 static const btf_report_section *const car_sections[] = {
-    &btf_car_top, &btf_car_compression, &btf_car_quality, &btf_car_preview, &btf_car_trade,
+    &btf__car_top, &btf__car_compression, &btf__car_quality, &btf__car_preview, &btf__car_trade,
 };
 
 static const btf_report_family car_family = {
@@ -168,7 +168,7 @@ static const btf_report_family car_family = {
     .render_flat = render_flat,
     .render_scene = render_scene,
     .summarise = summarise,
-    .about = &btf_car_about,
+    .about = &btf__car_about,
     .sections = car_sections,
     .n_sections = (int)(sizeof car_sections / sizeof car_sections[0]),
 };
@@ -182,12 +182,12 @@ static btf_status measure(btf_report_base *r, const btf_dataset *ds, const char 
     step_progress sp;
     step(&sp, o, 0.0, 0.02 * span);
     step_report(&sp, 0.0, "model file by part");
-    btf_status rc = btf_model_byte_breakdown(d->m, &d->bytes, err);
+    btf_status rc = btf__model_byte_breakdown(d->m, &d->bytes, err);
     r->model_bytes = d->bytes.total;
     if (rc == BTF_OK)
-        rc = btf_dataset_raw_bytes(ds, &r->raw, err);
+        rc = btf__dataset_raw_bytes(ds, &r->raw, err);
     if (rc == BTF_OK)
-        rc = btf_jpeg_subspace_contrast(ds, d->m, o->jpeg_quality, &d->jpeg, err);
+        rc = btf__jpeg_subspace_contrast(ds, d->m, o->jpeg_quality, &d->jpeg, err);
     step(&sp, o, 0.02 * span, 0.45 * span);
     btf_pca_opts pca = o->pca;
     pca.progress = step_report;
@@ -195,10 +195,10 @@ static btf_status measure(btf_report_base *r, const btf_dataset *ds, const char 
     /* Per-view PCA compresses every light of a view: a sparse set has no
      * such images (the page says so; d->pca stays zero). */
     if (rc == BTF_OK && r->in->n_pairs == r->in->n_views * r->in->n_lights)
-        rc = btf_pca_contrast(ds, &pca, &d->pca, err);
+        rc = btf__pca_contrast(ds, &pca, &d->pca, err);
     unsigned char *want = NULL;
     if (rc == BTF_OK)
-        rc = btf_report_pictures_begin(r, &want, err);
+        rc = btf__report_pictures_begin(r, &want, err);
     step(&sp, o, 0.45 * span, 0.9 * span);
     btf_quality_opts q = o->quality;
     pair_ctx pc = {r, dir, want};
@@ -207,7 +207,7 @@ static btf_status measure(btf_report_base *r, const btf_dataset *ds, const char 
     q.on_pair = on_pair;
     q.on_pair_user = &pc;
     if (rc == BTF_OK)
-        rc = btf_quality_measure(ds, d->m, &q, &d->q, err);
+        rc = btf__quality_measure(ds, d->m, &q, &d->q, err);
     free(want);
     if (rc == BTF_OK)
         rc = list_pairs(d, err);
@@ -215,9 +215,9 @@ static btf_status measure(btf_report_base *r, const btf_dataset *ds, const char 
     step_report(&sp, 0.0, "the worst pairs and the preview");
     /* one pair at a time: each render runs on every thread */
     if (rc == BTF_OK)
-        rc = btf_report_worst(r, &car_family, ds, dir, 1, err);
+        rc = btf__report_worst(r, &car_family, ds, dir, 1, err);
     if (rc == BTF_OK)
-        rc = btf_report_preview(r, &car_family, dir, err);
+        rc = btf__report_preview(r, &car_family, dir, err);
     step(&sp, o, span, 0.99);
     if (rc == BTF_OK && o->sweep) {
         rc = run_sweep(ds, final_dir, o, &sp, &d->sweep, err);
@@ -235,20 +235,20 @@ btf_status btf_report_write(const btf_dataset *ds, const btf_model *m, const cha
         memset(summary, 0, sizeof *summary);
     btf_status rc = resolve(ds && m && dir, "dataset, model or folder", opts, &o, err);
     if (rc == BTF_OK && o.sweep && o.sweep_opts.share_count > 0)
-        rc = btf_fail(err, BTF_E_ARG, "report: a share of the sweep (%d of %d) writes its "
-                      "points only (btf_report_sweep_points); the page comes from the merge",
-                      o.sweep_opts.share_index, o.sweep_opts.share_count);
+        rc = btf__fail(err, BTF_E_ARG, "report: a share of the sweep (%d of %d) writes its "
+                       "points only (btf_report_sweep_points); the page comes from the merge",
+                       o.sweep_opts.share_index, o.sweep_opts.share_count);
     if (rc)
         return rc;
     btf_car_report d;
     memset(&d, 0, sizeof d);
     d.m = m;
-    btf_report_begin(&d.r, ds, &o);
-    rc = btf_report_run(&d.r, &car_family, ds, dir, summary, err);
-    btf_pca_result_free(&d.pca);
-    btf_quality_free(&d.q);
+    btf__report_begin(&d.r, ds, &o);
+    rc = btf__report_run(&d.r, &car_family, ds, dir, summary, err);
+    btf__pca_result_free(&d.pca);
+    btf__quality_free(&d.q);
     btf_sweep_free(&d.sweep);
-    btf_report_base_free(&d.r);
+    btf__report_base_free(&d.r);
     return rc;
 }
 

@@ -34,7 +34,7 @@ typedef struct btf_car_report {
  * preview and the cards), the compression, the quality per direction, the
  * preview's keys (car_report_page.c), the speed/accuracy trade
  * (car_report_trade.c). */
-extern const btf_report_section btf_car_about, btf_car_top, btf_car_compression,
-    btf_car_quality, btf_car_preview, btf_car_trade;
+extern const btf_report_section btf__car_about, btf__car_top, btf__car_compression,
+    btf__car_quality, btf__car_preview, btf__car_trade;
 
 #endif

@@ -23,9 +23,9 @@ static const btf_car_report *car(const btf_report_base *r)
 
 static void about_html(btf_buf *b, const btf_report_base *r)
 {
-    btf_buf_puts(b, "model ");
-    btf_buf_html(b, r->model_name);
-    btf_buf_printf(b, " · %d views × %d lights of %d×%d pixels · %d subspace images · "
+    btf__buf_puts(b, "model ");
+    btf__buf_html(b, r->model_name);
+    btf__buf_printf(b, " · %d views × %d lights of %d×%d pixels · %d subspace images · "
                       "btfcar %s · " BTF_HTML_TIME("%s") " · measured in " BTF_HTML_TIME("%.1f s"),
                    r->in->n_views, r->in->n_lights, r->in->width, r->in->height,
                    car(r)->m->n_subspaces, BTF_VERSION_STRING, r->date, r->seconds);
@@ -36,7 +36,7 @@ static void about_json(cJSON *root, const btf_report_base *r)
     cJSON_AddNumberToObject(root, "subspaces", car(r)->m->n_subspaces);
 }
 
-const btf_report_section btf_car_about = {NULL, about_html, about_json};
+const btf_report_section btf__car_about = {NULL, about_html, about_json};
 
 /* ------------------------------------------------------------ the top */
 
@@ -47,23 +47,23 @@ static void top_html(btf_buf *b, const btf_report_base *r)
     char note[96], vd[48], ld[48];
     snprintf(note, sizeof note, "%d of %d subspace images needed, ", d->sphere_info.needed,
              d->sphere_info.total);
-    btf_report_top_begin(b, r, note);
-    btf_buf_printf(b, BTF_HTML_CARD("%.2f", "mean combined distance over %d pairs (1.0: as "
+    btf__report_top_begin(b, r, note);
+    btf__buf_printf(b, BTF_HTML_CARD("%.2f", "mean combined distance over %d pairs (1.0: as "
                                             "close as the material is to itself)"),
                    q->mean_combined, q->n_pairs - q->n_held_out);
     if (q->n_held_out)
-        btf_buf_printf(b, BTF_HTML_CARD("%.2f", "mean combined distance over %d pair%s held "
+        btf__buf_printf(b, BTF_HTML_CARD("%.2f", "mean combined distance over %d pair%s held "
                                                 "out of the analysis (rendered by "
                                                 "interpolation)"),
                        q->mean_held_out, q->n_held_out, q->n_held_out == 1 ? "" : "s");
     const btf_pair_quality *w = &q->pairs[q->worst];
-    btf_buf_printf(b, BTF_HTML_CARD("%.2f", "worst pair: view %s, light %s"), w->d.combined,
-                   btf_report_dir_text(r->in->views->dirs[w->view], vd, sizeof vd),
-                   btf_report_dir_text(r->in->lights->dirs[w->light], ld, sizeof ld));
-    btf_report_top_end(b);
+    btf__buf_printf(b, BTF_HTML_CARD("%.2f", "worst pair: view %s, light %s"), w->d.combined,
+                    btf__report_dir_text(r->in->views->dirs[w->view], vd, sizeof vd),
+                    btf__report_dir_text(r->in->lights->dirs[w->light], ld, sizeof ld));
+    btf__report_top_end(b);
 }
 
-const btf_report_section btf_car_top = {NULL, top_html, NULL};
+const btf_report_section btf__car_top = {NULL, top_html, NULL};
 
 /* ------------------------------------------------------------ compression */
 
@@ -72,7 +72,7 @@ static void compression_html(btf_buf *b, const btf_report_base *r)
     const btf_car_report *d = car(r);
     const btf_raw_bytes *raw = &r->raw;
     char x[64], y[64], note[192];
-    btf_buf_puts(b, "<h2>Compression</h2>\n<p class=\"note\">What the parameter file costs "
+    btf__buf_puts(b, "<h2>Compression</h2>\n<p class=\"note\">What the parameter file costs "
                     "against the measured BTF, and what two plain codecs store for the same "
                     "data (definitions: docs/report.md).</p>\n<table>\n<tr><th class=\"l\">"
                     "what</th><th>bytes</th><th>ratio to raw</th><th class=\"l\">note</th>"
@@ -83,52 +83,52 @@ static void compression_html(btf_buf *b, const btf_report_base *r)
     else
         snprintf(note, sizeof note, "%d × %d images × %d × %d × 3", raw->views, raw->lights,
                  raw->width, raw->height);
-    btf_report_row(b, NULL, "raw BTF, 8 bits per value",
-                   btf_report_bytes_text(raw->raw, x, sizeof x), "1 : 1", note);
-    btf_report_row(b, NULL, "the dataset as stored",
-                   btf_report_bytes_text(raw->on_disk, x, sizeof x),
-                   btf_report_ratio_text(btf_report_ratio(raw->raw, raw->on_disk), y, sizeof y),
-                   "the image files on disk");
+    btf__report_row(b, NULL, "raw BTF, 8 bits per value",
+                    btf__report_bytes_text(raw->raw, x, sizeof x), "1 : 1", note);
+    btf__report_row(b, NULL, "the dataset as stored",
+                    btf__report_bytes_text(raw->on_disk, x, sizeof x),
+                    btf__report_ratio_text(btf__report_ratio(raw->raw, raw->on_disk), y, sizeof y),
+                    "the image files on disk");
     snprintf(note, sizeof note, "%d subspaces, CAR parameters, marginals, range tile",
              d->m->n_subspaces);
-    btf_report_row(b, "def", "btfcar model", btf_report_bytes_text(r->model_bytes, x, sizeof x),
-                   btf_report_ratio_text(btf_report_ratio(raw->raw, r->model_bytes), y,
+    btf__report_row(b, "def", "btfcar model", btf__report_bytes_text(r->model_bytes, x, sizeof x),
+                    btf__report_ratio_text(btf__report_ratio(raw->raw, r->model_bytes), y,
                                          sizeof y), note);
-    btf_report_row(b, NULL, "the paper's claim", "–",
-                   btf_report_ratio_text(BTF_REPORT_PAPER_RATIO, y, sizeof y),
-                   "Haindl &amp; Filip 2007: about 1 : 10<sup>5</sup>");
+    btf__report_row(b, NULL, "the paper's claim", "–",
+                    btf__report_ratio_text(BTF_REPORT_PAPER_RATIO, y, sizeof y),
+                    "Haindl &amp; Filip 2007: about 1 : 10<sup>5</sup>");
     if (d->pca.views == 0) {
-        btf_report_row(b, NULL, "per-view PCA", "–", "–", "not measured: a sparse set holds "
-                       "no view under every light");
+        btf__report_row(b, NULL, "per-view PCA", "–", "–", "not measured: a sparse set holds "
+                        "no view under every light");
     } else {
         snprintf(note, sizeof note, "%.1f components per view on average (%d–%d) for an RMS "
                  "error ≤ %.1f 8-bit levels (reached: %.2f), %d-bit values",
                  d->pca.mean_components, d->pca.min_components, d->pca.max_components,
                  r->o->pca.max_rms > 0 ? r->o->pca.max_rms : 2.0, d->pca.rms,
                  r->o->pca.bits > 0 ? r->o->pca.bits : 16);
-        btf_report_row(b, NULL, "per-view PCA", btf_report_bytes_text(d->pca.bytes, x, sizeof x),
-                       btf_report_ratio_text(d->pca.ratio, y, sizeof y), note);
+        btf__report_row(b, NULL, "per-view PCA", btf__report_bytes_text(d->pca.bytes, x, sizeof x),
+                        btf__report_ratio_text(d->pca.ratio, y, sizeof y), note);
     }
     snprintf(note, sizeof note, "%d images at quality %d (RMS %.2f levels) + the %llu-byte "
              "index table; no relief, no synthesis at other sizes", d->jpeg.images,
              d->jpeg.quality, d->jpeg.rms, (unsigned long long)d->jpeg.index_bytes);
-    btf_report_row(b, NULL, "JPEG of the subspace images",
-                   btf_report_bytes_text(d->jpeg.bytes, x, sizeof x),
-                   btf_report_ratio_text(d->jpeg.ratio, y, sizeof y), note);
-    btf_buf_puts(b, "</table>\n<h3>The model file by part</h3>\n<table>\n<tr><th class=\"l\">"
+    btf__report_row(b, NULL, "JPEG of the subspace images",
+                    btf__report_bytes_text(d->jpeg.bytes, x, sizeof x),
+                    btf__report_ratio_text(d->jpeg.ratio, y, sizeof y), note);
+    btf__buf_puts(b, "</table>\n<h3>The model file by part</h3>\n<table>\n<tr><th class=\"l\">"
                     "part</th><th>bytes in the file</th><th>share</th><th>bytes before "
                     "deflate</th></tr>\n");
     const btf_model_bytes *mb = &d->bytes;
     for (int p = 0; p < BTF_MODEL_PART_COUNT; p++) {
         if (!mb->file[p] && !mb->raw[p])
             continue;
-        btf_buf_printf(b, "<tr><td class=\"l\">%s</td><td>%llu</td><td>%.1f %%</td><td>%llu"
-                          "</td></tr>\n", btf_model_part_name(p),
+        btf__buf_printf(b, "<tr><td class=\"l\">%s</td><td>%llu</td><td>%.1f %%</td><td>%llu"
+                          "</td></tr>\n", btf__model_part_name(p),
                        (unsigned long long)mb->file[p],
                        mb->total ? 100.0 * mb->file[p] / mb->total : 0.0,
                        (unsigned long long)mb->raw[p]);
     }
-    btf_buf_printf(b, "<tr><th class=\"l\">total</th><th>%llu</th><th>100 %%</th><th>%llu"
+    btf__buf_printf(b, "<tr><th class=\"l\">total</th><th>%llu</th><th>100 %%</th><th>%llu"
                       "</th></tr>\n</table>\n", (unsigned long long)mb->total,
                    (unsigned long long)mb->payload);
 }
@@ -136,13 +136,13 @@ static void compression_html(btf_buf *b, const btf_report_base *r)
 static void compression_json(cJSON *root, const btf_report_base *r)
 {
     const btf_car_report *d = car(r);
-    cJSON *c = btf_report_json_compression(root, r);
+    cJSON *c = btf__report_json_compression(root, r);
     cJSON_AddNumberToObject(c, "paper_ratio", BTF_REPORT_PAPER_RATIO);
     cJSON *parts = cJSON_AddObjectToObject(c, "model_parts");
     cJSON *raw = cJSON_AddObjectToObject(c, "model_parts_before_deflate");
     for (int p = 0; p < BTF_MODEL_PART_COUNT; p++) {
-        cJSON_AddNumberToObject(parts, btf_model_part_name(p), (double)d->bytes.file[p]);
-        cJSON_AddNumberToObject(raw, btf_model_part_name(p), (double)d->bytes.raw[p]);
+        cJSON_AddNumberToObject(parts, btf__model_part_name(p), (double)d->bytes.file[p]);
+        cJSON_AddNumberToObject(raw, btf__model_part_name(p), (double)d->bytes.raw[p]);
     }
     cJSON *pca = cJSON_AddObjectToObject(c, "pca");
     if (d->pca.views == 0)
@@ -166,22 +166,22 @@ static void compression_json(cJSON *root, const btf_report_base *r)
     cJSON_AddNumberToObject(jp, "rms", d->jpeg.rms);
 }
 
-const btf_report_section btf_car_compression = {NULL, compression_html, compression_json};
+const btf_report_section btf__car_compression = {NULL, compression_html, compression_json};
 
 /* ------------------------------------------------------------ quality */
 
 static btf_status quality_files(const btf_report_base *r, const char *dir, btf_error *err)
 {
-    return btf_report_heatmap(r, dir, "Combined distance per (view, light) pair", "combined",
-                              err);
+    return btf__report_heatmap(r, dir, "Combined distance per (view, light) pair", "combined",
+                               err);
 }
 
 static void pair_caption(btf_buf *b, const btf_report_base *r, int i)
 {
     const btf_texture_distances *d = r->pairs[i].d;
-    btf_buf_printf(b, "spectrum %.2f · first order %.2f · structure %.2f · <b>%.2f</b>",
-                   d->spectrum.normalised, d->first_order.normalised, d->structure.normalised,
-                   d->combined);
+    btf__buf_printf(b, "spectrum %.2f · first order %.2f · structure %.2f · <b>%.2f</b>",
+                    d->spectrum.normalised, d->first_order.normalised, d->structure.normalised,
+                    d->combined);
 }
 
 static void pair_cells(btf_buf *b, const btf_report_base *r, int i)
@@ -192,15 +192,15 @@ static void pair_cells(btf_buf *b, const btf_report_base *r, int i)
         snprintf(sub, sizeof sub, "held out");
     else
         snprintf(sub, sizeof sub, "%d", p->subspace);
-    btf_buf_printf(b, "<td>%s</td><td>%.2f</td><td>%.2f</td><td>%.2f</td><td><b>%.2f</b></td>",
-                   sub, p->d.spectrum.normalised, p->d.first_order.normalised,
-                   p->d.structure.normalised, p->d.combined);
+    btf__buf_printf(b, "<td>%s</td><td>%.2f</td><td>%.2f</td><td>%.2f</td><td><b>%.2f</b></td>",
+                    sub, p->d.spectrum.normalised, p->d.first_order.normalised,
+                    p->d.structure.normalised, p->d.combined);
 }
 
 static void quality_html(btf_buf *b, const btf_report_base *r)
 {
     const btf_quality *q = &car(r)->q;
-    btf_buf_printf(b, "<h2>Quality per direction</h2>\n<p class=\"note\">Each measured image "
+    btf__buf_printf(b, "<h2>Quality per direction</h2>\n<p class=\"note\">Each measured image "
                       "against the model's flat render of the same (view, light) pair, by "
                       "texture distances that need no pixel correspondence (the model is a new "
                       "sample of the material, not a copy): the power spectrum, the first-order "
@@ -212,7 +212,7 @@ static void quality_html(btf_buf *b, const btf_report_base *r)
                    r->o->quality.all ? "Every pair" : "A spread of views × lights over every "
                                                       "ring of the hemisphere",
                    q->n_pairs, q->seconds);
-    btf_buf_printf(b, "<table>\n<tr><th class=\"l\"></th><th>spectrum</th><th>first order"
+    btf__buf_printf(b, "<table>\n<tr><th class=\"l\"></th><th>spectrum</th><th>first order"
                       "</th><th>structure</th><th>combined</th></tr>\n<tr><td class=\"l\">mean"
                       "</td><td>%.2f</td><td>%.2f</td><td>%.2f</td><td><b>%.2f</b></td></tr>\n"
                       "<tr><td class=\"l\">median</td><td></td><td></td><td></td><td>%.2f</td>"
@@ -221,19 +221,19 @@ static void quality_html(btf_buf *b, const btf_report_base *r)
                    q->mean_spectrum, q->mean_first_order, q->mean_structure, q->mean_combined,
                    q->median_combined, q->worst_combined);
     if (q->n_held_out)
-        btf_buf_printf(b, "<p>%d of these pairs were held out of the analysis (the table's "
+        btf__buf_printf(b, "<p>%d of these pairs were held out of the analysis (the table's "
                           "\"held out\"): the model renders them by interpolating the pairs "
                           "it measured (docs/render.md, \"Sparse pair sets\"); their mean "
                           "combined distance is <b>%.2f</b>, not counted in the mean, median "
                           "and worst above.</p>\n", q->n_held_out, q->mean_held_out);
-    btf_report_heatmap_figure(b, "heat map of the combined distance over views and lights",
-                              "Rows: views; columns: lights; empty cells were not measured; "
-                              "outlined: the worst pairs.");
+    btf__report_heatmap_figure(b, "heat map of the combined distance over views and lights",
+                               "Rows: views; columns: lights; empty cells were not measured; "
+                               "outlined: the worst pairs.");
     char worst[64];
     snprintf(worst, sizeof worst, "The %d worst pairs (measured | model)", r->n_worst);
-    btf_report_galleries(b, r, worst, "Pairs with pictures (measured | model)", 0,
-                         pair_caption);
-    btf_report_pair_table(b, r, "<th>subspace</th><th>spectrum</th><th>first order</th>"
+    btf__report_galleries(b, r, worst, "Pairs with pictures (measured | model)", 0,
+                          pair_caption);
+    btf__report_pair_table(b, r, "<th>subspace</th><th>spectrum</th><th>first order</th>"
                                 "<th>structure</th><th>combined</th>", pair_cells);
 }
 
@@ -260,7 +260,7 @@ static void quality_json(cJSON *root, const btf_report_base *r)
 {
     const btf_quality *q = &car(r)->q;
     const btf_quality_opts *qo = &r->o->quality;
-    cJSON *o = btf_report_json_quality(root, r, q->mean_combined);
+    cJSON *o = btf__report_json_quality(root, r, q->mean_combined);
     cJSON_AddNumberToObject(o, "held_out", q->n_held_out);
     cJSON_AddNumberToObject(o, "mean_held_out", q->mean_held_out);
     cJSON_AddNumberToObject(o, "median_combined", q->median_combined);
@@ -272,17 +272,17 @@ static void quality_json(cJSON *root, const btf_report_base *r)
     cJSON_AddNumberToObject(o, "relief", qo->relief < 0 ? 1.0 : qo->relief);
     cJSON_AddNumberToObject(o, "seed", (double)qo->seed);
     cJSON_AddNumberToObject(o, "seconds", q->seconds);
-    btf_report_json_pairs(o, r, pair_json, 1);
+    btf__report_json_pairs(o, r, pair_json, 1);
 }
 
-const btf_report_section btf_car_quality = {quality_files, quality_html, quality_json};
+const btf_report_section btf__car_quality = {quality_files, quality_html, quality_json};
 
 /* ------------------------------------------------------------ the preview */
 
 static void preview_json(cJSON *root, const btf_report_base *r)
 {
-    cJSON *pv = btf_report_json_preview(root, r);
+    cJSON *pv = btf__report_json_preview(root, r);
     cJSON_AddNumberToObject(pv, "subspaces_needed", car(r)->sphere_info.needed);
 }
 
-const btf_report_section btf_car_preview = {NULL, NULL, preview_json};
+const btf_report_section btf__car_preview = {NULL, NULL, preview_json};

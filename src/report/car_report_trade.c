@@ -1,7 +1,7 @@
 /*
  * car_report_trade.c — the CAR report's speed/accuracy trade
  * (docs/report.md, "The sweep"): with --sweep, the dataset analysed over a
- * grid of settings, each timed, sized and measured (btf_sweep_run), shown
+ * grid of settings, each timed, sized and measured (btf__sweep_run), shown
  * as two Pareto plots, the front and a table, and in report.json's
  * "sweep"; without it, a note on how to measure it (and "sweep": null).
  */
@@ -31,9 +31,9 @@ static btf_status trade_files(const btf_report_base *r, const char *dir, btf_err
         return BTF_OK;
     const btf_sweep *s = &d->sweep;
     int n = s->n_points;
-    double *x = btf_alloc((size_t)n * 3, sizeof(double), err);
-    char (*labels)[48] = btf_alloc((size_t)n, 48, err);
-    const char **lp = btf_alloc((size_t)n, sizeof(char *), err);
+    double *x = btf__alloc((size_t)n * 3, sizeof(double), err);
+    char (*labels)[48] = btf__alloc((size_t)n, 48, err);
+    const char **lp = btf__alloc((size_t)n, sizeof(char *), err);
     btf_status rc = x && labels && lp ? BTF_OK : BTF_E_NOMEM;
     int marked = -1;
     for (int i = 0; rc == BTF_OK && i < n; i++) {
@@ -59,10 +59,10 @@ static btf_status trade_files(const btf_report_base *r, const char *dir, btf_err
         sc.marked_label = marked >= 0 ? "default" : NULL;
         sc.marked = marked >= 0 ? marked : 0;
         char path[4096];
-        rc = btf_path_join(path, sizeof path, dir, which ? "pareto-time.svg" : "pareto-bytes.svg",
-                           err);
+        rc = btf__path_join(path, sizeof path, dir, which ? "pareto-time.svg" : "pareto-bytes.svg",
+                            err);
         if (rc == BTF_OK)
-            rc = btf_svg_scatter_write(path, &sc, err);
+            rc = btf__svg_scatter_write(path, &sc, err);
     }
     BTF_FREE_ALL(x, labels, lp);
     return rc;
@@ -71,9 +71,9 @@ static btf_status trade_files(const btf_report_base *r, const char *dir, btf_err
 static void trade_html(btf_buf *b, const btf_report_base *r)
 {
     const btf_car_report *d = (const btf_car_report *)r;
-    btf_buf_puts(b, "<h2>The speed/accuracy trade</h2>\n");
+    btf__buf_puts(b, "<h2>The speed/accuracy trade</h2>\n");
     if (!d->have_sweep) {
-        btf_buf_puts(b, "<p class=\"note\">Not measured: <code>btfcar report DATASET MODEL -o "
+        btf__buf_puts(b, "<p class=\"note\">Not measured: <code>btfcar report DATASET MODEL -o "
                         "DIR --sweep</code> analyses the dataset over a grid of settings and "
                         "shows here what each costs and gives. <code>btfcar analyse --preset "
                         "fast|balanced|accurate</code> picks a point measured on the "
@@ -81,7 +81,7 @@ static void trade_html(btf_buf *b, const btf_report_base *r)
         return;
     }
     const btf_sweep *s = &d->sweep;
-    btf_buf_printf(b, "<p class=\"note\">The dataset analysed under %d settings: K subspace "
+    btf__buf_printf(b, "<p class=\"note\">The dataset analysed under %d settings: K subspace "
                       "images, L pyramid levels, N neighbours (a fixed neighbourhood of the "
                       "first N candidate offsets; auto: the Bayesian choice per band). The "
                       "features and the range map were computed once (" BTF_HTML_TIME("%.1f s") ") and shared; "
@@ -96,7 +96,7 @@ static void trade_html(btf_buf *b, const btf_report_base *r)
                       "%d of %d points were read back from an earlier run.</p>\n",
                    s->n_points, s->shared_s, r->o->sweep_opts.synth_size,
                    r->o->sweep_opts.render_size, s->seeds, s->resumed, s->n_points);
-    btf_buf_puts(b, "<figure><img class=\"plot\" src=\"pareto-bytes.svg\" alt=\"quality "
+    btf__buf_puts(b, "<figure><img class=\"plot\" src=\"pareto-bytes.svg\" alt=\"quality "
                     "against model bytes\"></figure>\n<figure><img class=\"plot\" "
                     "src=\"pareto-time.svg\" alt=\"quality against synthesis time\"></figure>"
                     "\n<p><b>Pareto-optimal</b> (no other setting is both smaller and "
@@ -106,13 +106,13 @@ static void trade_html(btf_buf *b, const btf_report_base *r)
         if (s->points[i].pareto_bytes || s->points[i].pareto_time) {
             char t[64];
             setting_text(&s->points[i].setting, t, sizeof t);
-            btf_buf_printf(b, "%s%s (%s)", first ? "" : "; ", t,
-                           s->points[i].pareto_bytes && s->points[i].pareto_time
+            btf__buf_printf(b, "%s%s (%s)", first ? "" : "; ", t,
+                            s->points[i].pareto_bytes && s->points[i].pareto_time
                                ? "bytes and time"
                                : s->points[i].pareto_bytes ? "bytes" : "time");
             first = 0;
         }
-    btf_buf_puts(b, ".</p>\n<table>\n<tr><th class=\"l\">setting</th><th>K made</th>"
+    btf__buf_puts(b, ".</p>\n<table>\n<tr><th class=\"l\">setting</th><th>K made</th>"
                     "<th>analysis s</th><th>synthesis s</th><th>GPU s</th><th>render s</th>"
                     "<th>bytes</th><th>mean</th><th>±</th><th>worst</th>"
                     "<th class=\"l\">front</th></tr>\n");
@@ -124,7 +124,7 @@ static void trade_html(btf_buf *b, const btf_report_base *r)
             snprintf(g, sizeof g, "%.3f", p->gpu_synth_s);
         else
             snprintf(g, sizeof g, "–");
-        btf_buf_printf(b, "<tr class=\"%s%s\"><td class=\"l\">%s%s</td><td>%d</td><td class=\"time\">%.2f</td>"
+        btf__buf_printf(b, "<tr class=\"%s%s\"><td class=\"l\">%s%s</td><td>%d</td><td class=\"time\">%.2f</td>"
                           "<td class=\"time\">%.3f</td><td class=\"time\">%s</td><td class=\"time\">%.3f</td>"
                           "<td>%llu</td><td>%.3f</td>"
                           "<td>%.3f</td><td>%.2f</td><td class=\"l\">%s%s</td></tr>\n",
@@ -135,7 +135,7 @@ static void trade_html(btf_buf *b, const btf_report_base *r)
                        p->seed_spread, p->worst_combined, p->pareto_bytes ? "bytes " : "",
                        p->pareto_time ? "time" : "");
     }
-    btf_buf_puts(b, "</table>\n<p class=\"note\">No GPU time where no GPU was present (a CPU "
+    btf__buf_puts(b, "</table>\n<p class=\"note\">No GPU time where no GPU was present (a CPU "
                     "Vulkan driver is not timed).</p>\n");
 }
 
@@ -183,4 +183,4 @@ static void trade_json(cJSON *root, const btf_report_base *r)
     }
 }
 
-const btf_report_section btf_car_trade = {trade_files, trade_html, trade_json};
+const btf_report_section btf__car_trade = {trade_files, trade_html, trade_json};

@@ -40,7 +40,7 @@ static unsigned char encode_srgb(double v)
     return (unsigned char)lround(e * 255);
 }
 
-void btf_colour_scale(double t, unsigned char out[3])
+void btf__colour_scale(double t, unsigned char out[3])
 {
     t = isnan(t) ? 0 : t < 0 ? 0 : t > 1 ? 1 : t;
     double L = 0.30 + 0.63 * t;

@@ -279,14 +279,14 @@ static void dynamic(state *s)
     codes(s, &lencode, &distcode);
 }
 
-btf_status btf_deflate_cost(const unsigned char *z, size_t zn, const unsigned char *expect,
-                            const unsigned char *label, size_t n, int nlabels, double *bits,
-                            double *overhead_bits, const char *name, btf_error *err)
+btf_status btf__deflate_cost(const unsigned char *z, size_t zn, const unsigned char *expect,
+                             const unsigned char *label, size_t n, int nlabels, double *bits,
+                             double *overhead_bits, const char *name, btf_error *err)
 {
     /* 2 bytes of zlib header (deflate, no preset dictionary), 4 of Adler-32. */
     if (zn < 6 || (z[0] & 0x0f) != 8 || ((unsigned)z[0] << 8 | z[1]) % 31 != 0 || (z[1] & 0x20))
-        return btf_fail(err, BTF_E_FORMAT, "%s: not a zlib stream (expected a deflate header)",
-                        name);
+        return btf__fail(err, BTF_E_FORMAT, "%s: not a zlib stream (expected a deflate header)",
+                         name);
     state s = {.in = z + 2, .in_n = zn - 6, .expect = expect, .label = label, .out_n = n,
                .nlabels = nlabels, .bits = bits};
     int last;
@@ -305,9 +305,9 @@ btf_status btf_deflate_cost(const unsigned char *z, size_t zn, const unsigned ch
             s.bad = 1;
     } while (!last && !s.bad);
     if (s.bad || s.out_pos != n)
-        return btf_fail(err, BTF_E_FORMAT,
-                        "%s: the deflate stream does not decode to the %zu payload bytes "
-                        "(decoded %zu)", name, n, s.out_pos);
+        return btf__fail(err, BTF_E_FORMAT,
+                         "%s: the deflate stream does not decode to the %zu payload bytes "
+                         "(decoded %zu)", name, n, s.out_pos);
     *overhead_bits = 8.0 * (double)zn - (double)s.coded;
     return BTF_OK;
 }

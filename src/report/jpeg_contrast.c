@@ -29,33 +29,33 @@ static btf_status one_image(const btf_dataset *ds, int view, int light, int qual
         return rc;
     const char *name = btf_dataset_path(ds, view, light);
     size_t n = (size_t)img.width * img.height * 3;
-    float *lv = btf_alloc(n, sizeof *lv, NULL);
-    unsigned char *px = btf_alloc(n, 1, NULL);
+    float *lv = btf__alloc(n, sizeof *lv, NULL);
+    unsigned char *px = btf__alloc(n, 1, NULL);
     unsigned char *enc = NULL;
     size_t len = 0;
     btf_decoded dec = {0};
     if (!lv || !px) {
-        rc = btf_fail(err, BTF_E_NOMEM, "%s: out of memory", name);
+        rc = btf__fail(err, BTF_E_NOMEM, "%s: out of memory", name);
         goto done;
     }
     if (img.channels != 3) {
-        rc = btf_fail(err, BTF_E_DATA, "%s: %d channels (expected RGB)", name, img.channels);
+        rc = btf__fail(err, BTF_E_DATA, "%s: %d channels (expected RGB)", name, img.channels);
         goto done;
     }
-    btf_srgb_levels(t, img.data, n, lv);
+    btf__srgb_levels(t, img.data, n, lv);
     for (size_t i = 0; i < n; i++) /* as btf_image_write_jpeg rounds */
-        px[i] = (unsigned char)lrintf(btf_linear_to_srgb(img.data[i]) * 255.0f);
+        px[i] = (unsigned char)lrintf(btf__linear_to_srgb(img.data[i]) * 255.0f);
     char msg[256];
-    if (btf_png_jpeg_encode(BTF_FILE_JPEG, img.width, img.height, 3, px, quality, &enc, &len,
-                            msg, sizeof msg) != 0) {
-        rc = btf_fail(err, BTF_E_DATA, "%s: cannot encode as JPEG: %s", name, msg);
+    if (btf__png_jpeg_encode(BTF_FILE_JPEG, img.width, img.height, 3, px, quality, &enc, &len,
+                             msg, sizeof msg) != 0) {
+        rc = btf__fail(err, BTF_E_DATA, "%s: cannot encode as JPEG: %s", name, msg);
         goto done;
     }
-    if ((rc = btf_png_jpeg_decode(enc, len, BTF_FILE_JPEG, name, &dec, err)))
+    if ((rc = btf__png_jpeg_decode(enc, len, BTF_FILE_JPEG, name, &dec, err)))
         goto done;
     if (dec.width != img.width || dec.height != img.height || dec.channels != 3 || dec.depth16) {
-        rc = btf_fail(err, BTF_E_DATA, "%s: the JPEG decoded to %dx%d of %d channels", name,
-                      dec.width, dec.height, dec.channels);
+        rc = btf__fail(err, BTF_E_DATA, "%s: the JPEG decoded to %dx%d of %d channels", name,
+                       dec.width, dec.height, dec.channels);
         goto done;
     }
     const unsigned char *back = dec.pixels;
@@ -72,27 +72,27 @@ done:
     return rc;
 }
 
-btf_status btf_jpeg_subspace_contrast(const btf_dataset *ds, const btf_model *m, int quality,
-                                      btf_jpeg_contrast *out, btf_error *err)
+btf_status btf__jpeg_subspace_contrast(const btf_dataset *ds, const btf_model *m, int quality,
+                                       btf_jpeg_contrast *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "dataset: no JPEG contrast to fill");
+        return btf__fail(err, BTF_E_ARG, "dataset: no JPEG contrast to fill");
     memset(out, 0, sizeof *out);
     if (!ds || !m)
-        return btf_fail(err, BTF_E_ARG, "dataset: the JPEG contrast needs a dataset and a model");
+        return btf__fail(err, BTF_E_ARG, "dataset: the JPEG contrast needs a dataset and a model");
     const btf_dataset_info *info = btf_dataset_get_info(ds);
     if (quality == 0)
         quality = DEFAULT_QUALITY;
     if (quality < 1 || quality > 100)
-        return btf_fail(err, BTF_E_ARG, "%s: JPEG quality %d (expected 1..100)", info->root,
-                        quality);
+        return btf__fail(err, BTF_E_ARG, "%s: JPEG quality %d (expected 1..100)", info->root,
+                         quality);
     if (!m->index)
-        return btf_fail(err, BTF_E_DATA, "%s: the model has no index table", info->root);
+        return btf__fail(err, BTF_E_DATA, "%s: the model has no index table", info->root);
     if (m->n_subspaces < 1 || !m->subspaces)
-        return btf_fail(err, BTF_E_DATA, "%s: the model has no subspaces", info->root);
+        return btf__fail(err, BTF_E_DATA, "%s: the model has no subspaces", info->root);
     /* Each representative pair in the dataset's own indices: the same sets,
      * or (a model of some of its pairs) the same directions. */
-    int *at = btf_alloc((size_t)m->n_subspaces, 2 * sizeof(int), err);
+    int *at = btf__alloc((size_t)m->n_subspaces, 2 * sizeof(int), err);
     if (!at)
         return BTF_E_NOMEM;
     for (int k = 0; k < m->n_subspaces; k++) {
@@ -105,14 +105,14 @@ btf_status btf_jpeg_subspace_contrast(const btf_dataset *ds, const btf_model *m,
         }
         if (v < 0 || l < 0 || !btf_dataset_has(ds, v, l)) {
             free(at);
-            return btf_fail(err, BTF_E_DATA,
-                            "%s: subspace %d's representative pair (view %d, light %d of the "
-                            "model) is not in the dataset", info->root, k, s->view, s->light);
+            return btf__fail(err, BTF_E_DATA,
+                             "%s: subspace %d's representative pair (view %d, light %d of the "
+                             "model) is not in the dataset", info->root, k, s->view, s->light);
         }
         at[2 * k] = v, at[2 * k + 1] = l;
     }
     btf_srgb_levels_table t;
-    btf_srgb_levels_init(&t);
+    btf__srgb_levels_init(&t);
     uint64_t bytes = 0;
     double sq = 0;
     for (int k = 0; k < m->n_subspaces; k++) {
@@ -124,7 +124,7 @@ btf_status btf_jpeg_subspace_contrast(const btf_dataset *ds, const btf_model *m,
         }
     }
     free(at);
-    btf_raw_bytes_of(info, &out->raw);
+    btf__raw_bytes_of(info, &out->raw);
     out->images = m->n_subspaces;
     out->quality = quality;
     out->jpeg_bytes = bytes;

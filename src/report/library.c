@@ -38,7 +38,7 @@ static void text(const cJSON *o, const char *key, char *out, size_t n)
     snprintf(out, n, "%s", cJSON_IsString(v) ? v->valuestring : "");
 }
 
-int btf_library_row_parse(const char *data, size_t n, btf_library_row *r)
+int btf__library_row_parse(const char *data, size_t n, btf_library_row *r)
 {
     cJSON *j = cJSON_ParseWithLength(data, n);
     const cJSON *f = cJSON_GetObjectItemCaseSensitive(j, "format");
@@ -71,18 +71,18 @@ static btf_status read_row(const char *dir, library_row *r, btf_error *err)
 {
     memset(r, 0, sizeof *r);
     char path[PATH_MAX];
-    btf_status rc = btf_path_join(path, sizeof path, dir, "report.json", err);
+    btf_status rc = btf__path_join(path, sizeof path, dir, "report.json", err);
     unsigned char *data = NULL;
     size_t n = 0;
-    if (rc == BTF_OK && btf_read_file(path, REPORT_JSON_MAX, &data, &n, err))
+    if (rc == BTF_OK && btf__read_file(path, REPORT_JSON_MAX, &data, &n, err))
         rc = BTF_E_IO;
     if (rc)
         return rc;
-    int ok = btf_library_row_parse((const char *)data, n, r);
+    int ok = btf__library_row_parse((const char *)data, n, r);
     free(data);
     if (!ok)
-        return btf_fail(err, BTF_E_DATA, "%s: not a btfcar report (no \"format\": "
-                        "\"btfcar-report\")", path);
+        return btf__fail(err, BTF_E_DATA, "%s: not a btfcar report (no \"format\": "
+                         "\"btfcar-report\")", path);
     if (!realpath(dir, r->dir))
         snprintf(r->dir, sizeof r->dir, "%s", dir);
     return BTF_OK;
@@ -108,40 +108,40 @@ static void relative(const char *from, const char *to, char *out, size_t n)
 
 static void write_page(btf_buf *b, const library_row *rows, int n, const char *out_abs)
 {
-    btf_buf_puts(b, "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+    btf__buf_puts(b, "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
                     "<title>btfcar library report</title><style>body{font-family:sans-serif;"
                     "margin:2em}table{border-collapse:collapse}td,th{border:1px solid #ccc;"
                     "padding:4px 8px;text-align:right}td.l,th.l{text-align:left}"
                     "img{width:96px;height:96px}</style></head><body>\n");
-    btf_buf_printf(b, "<h1>Material library: %d material%s</h1>\n<p>One row per material, read "
-                   "from each material's report (<code>report.json</code>); distances are "
-                   "combined texture distances, 1.0 as close as the material is to itself.</p>\n",
-                   n, n == 1 ? "" : "s");
-    btf_buf_puts(b, "<table><tr><th>preview</th><th class=\"l\">material</th><th>model bytes"
+    btf__buf_printf(b, "<h1>Material library: %d material%s</h1>\n<p>One row per material, read "
+                    "from each material's report (<code>report.json</code>); distances are "
+                    "combined texture distances, 1.0 as close as the material is to itself.</p>\n",
+                    n, n == 1 ? "" : "s");
+    btf__buf_puts(b, "<table><tr><th>preview</th><th class=\"l\">material</th><th>model bytes"
                     "</th><th>ratio</th><th>mean distance</th><th>worst</th><th>pairs</th>"
                     "<th>report s</th></tr>\n");
     for (int i = 0; i < n; i++) {
         const library_row *r = &rows[i];
         char link[PATH_MAX];
         relative(out_abs, r->dir, link, sizeof link);
-        btf_buf_puts(b, "<tr><td>");
+        btf__buf_puts(b, "<tr><td>");
         if (r->preview[0]) {
-            btf_buf_puts(b, "<img alt=\"\" src=\"");
-            btf_buf_html(b, link);
-            btf_buf_puts(b, "/");
-            btf_buf_html(b, r->preview);
-            btf_buf_puts(b, "\">");
+            btf__buf_puts(b, "<img alt=\"\" src=\"");
+            btf__buf_html(b, link);
+            btf__buf_puts(b, "/");
+            btf__buf_html(b, r->preview);
+            btf__buf_puts(b, "\">");
         }
-        btf_buf_puts(b, "</td><td class=\"l\"><a href=\"");
-        btf_buf_html(b, link);
-        btf_buf_puts(b, "/index.html\">");
-        btf_buf_html(b, r->dataset[0] ? r->dataset : r->dir);
-        btf_buf_puts(b, "</a></td>");
-        btf_buf_printf(b, "<td>%.0f</td><td>1 : %.0f</td><td>%.2f</td><td>%.2f</td><td>%d</td>"
-                       "<td>%.1f</td></tr>\n", r->model_bytes, r->ratio, r->mean, r->worst,
-                       r->pairs, r->seconds);
+        btf__buf_puts(b, "</td><td class=\"l\"><a href=\"");
+        btf__buf_html(b, link);
+        btf__buf_puts(b, "/index.html\">");
+        btf__buf_html(b, r->dataset[0] ? r->dataset : r->dir);
+        btf__buf_puts(b, "</a></td>");
+        btf__buf_printf(b, "<td>%.0f</td><td>1 : %.0f</td><td>%.2f</td><td>%.2f</td><td>%d</td>"
+                        "<td>%.1f</td></tr>\n", r->model_bytes, r->ratio, r->mean, r->worst,
+                        r->pairs, r->seconds);
     }
-    btf_buf_puts(b, "</table>\n</body></html>\n");
+    btf__buf_puts(b, "</table>\n</body></html>\n");
 }
 
 static char *library_json(const library_row *rows, int n, const char *out_abs)
@@ -190,8 +190,8 @@ static btf_status read_all(const char *const *dirs, int n, library_row *rows, bt
     if (missing == 1 && err)
         *err = first;
     if (missing > 1)
-        btf_fail(err, BTF_E_IO, "library: %d of %d material reports are missing or unreadable: "
-                 "%s (first: %s)", missing, n, list, first.msg);
+        btf__fail(err, BTF_E_IO, "library: %d of %d material reports are missing or unreadable: "
+                  "%s (first: %s)", missing, n, list, first.msg);
     return missing ? (missing == 1 ? first.code : BTF_E_IO) : BTF_OK;
 }
 
@@ -201,8 +201,8 @@ btf_status btf_library_write(const char *const *reports, int n, const char *dir,
     if (rows_out)
         *rows_out = 0;
     if (!reports || n < 1 || !dir)
-        return btf_fail(err, BTF_E_ARG, "library: no report folders or no output folder");
-    library_row *rows = btf_calloc((size_t)n, sizeof *rows, err);
+        return btf__fail(err, BTF_E_ARG, "library: no report folders or no output folder");
+    library_row *rows = btf__calloc((size_t)n, sizeof *rows, err);
     if (!rows)
         return BTF_E_NOMEM;
     btf_status rc = read_all(reports, n, rows, err);
@@ -215,7 +215,7 @@ btf_status btf_library_write(const char *const *reports, int n, const char *dir,
         *slash = '\0';
     char pabs[PATH_MAX];
     if (rc == BTF_OK && !realpath(slash ? (parent[0] ? parent : "/") : ".", pabs))
-        rc = btf_fail(err, BTF_E_IO, "%s: its parent folder does not exist", dir);
+        rc = btf__fail(err, BTF_E_IO, "%s: its parent folder does not exist", dir);
     if (rc == BTF_OK)
         snprintf(out_abs, sizeof out_abs, "%s/%s", strcmp(pabs, "/") ? pabs : "", base);
     btf_output_dir *od = NULL;
@@ -226,21 +226,21 @@ btf_status btf_library_write(const char *const *reports, int n, const char *dir,
     char path[PATH_MAX];
     if (rc == BTF_OK) {
         write_page(&page, rows, n, out_abs);
-        rc = btf_path_join(path, sizeof path, btf_output_dir_path(od), "index.html", err);
+        rc = btf__path_join(path, sizeof path, btf_output_dir_path(od), "index.html", err);
     }
     if (rc == BTF_OK)
-        rc = btf_buf_write(&page, path, err);
+        rc = btf__buf_write(&page, path, err);
     if (rc == BTF_OK && !(json = library_json(rows, n, out_abs)))
-        rc = btf_fail(err, BTF_E_NOMEM, "library: out of memory");
+        rc = btf__fail(err, BTF_E_NOMEM, "library: out of memory");
     if (rc == BTF_OK)
-        rc = btf_path_join(path, sizeof path, btf_output_dir_path(od), "library.json", err);
+        rc = btf__path_join(path, sizeof path, btf_output_dir_path(od), "library.json", err);
     if (rc == BTF_OK)
         rc = btf_write_file_atomic(path, json, strlen(json), err);
     if (od && rc == BTF_OK)
         rc = btf_output_dir_commit(od, err);
     else if (od)
         btf_output_dir_fail(od, err);
-    btf_buf_free(&page);
+    btf__buf_free(&page);
     cJSON_free(json);
     free(rows);
     if (rc == BTF_OK && rows_out)

@@ -4,7 +4,7 @@
  * accounting (the model file by part, the raw BTF, the per-view PCA and
  * subspace-JPEG contrasts), quality per direction, and the sweep itself.
  * The public entries are btf_report_write, btf_report_sweep_points and
- * btf_rf_report_write (btfcar/report.h). Private to the library.
+ * btf__rf_report_write (btfcar/report.h). Private to the library.
  */
 #ifndef BTF_REPORT_MEASURES_H
 #define BTF_REPORT_MEASURES_H
@@ -17,7 +17,7 @@
 /* -------------------------------------------------- compression accounting */
 
 /* A short name of a part ("gammas", ...); "?" out of range. */
-const char *btf_model_part_name(int part);
+const char *btf__model_part_name(int part);
 
 typedef struct btf_model_bytes {
     uint64_t total;         /* the encoded file's size (btf_model_encode) */
@@ -36,7 +36,7 @@ typedef struct btf_model_bytes {
 
 /* Encodes m (btf_model_encode: same bytes) and accounts for every byte of
  * the file. BTF_E_DATA when m cannot be encoded. */
-btf_status btf_model_byte_breakdown(const btf_model *m, btf_model_bytes *out, btf_error *err);
+btf_status btf__model_byte_breakdown(const btf_model *m, btf_model_bytes *out, btf_error *err);
 
 /* The raw BTF a dataset holds: what the report's ratios divide (also
  * filled into the PCA and JPEG results below). */
@@ -45,7 +45,7 @@ typedef struct btf_raw_bytes {
     uint64_t raw;           /* views x lights x width x height x 3, one byte per value */
     uint64_t on_disk;       /* btf_dataset_info.bytes_on_disk: the image files' sizes */
 } btf_raw_bytes;
-btf_status btf_dataset_raw_bytes(const btf_dataset *ds, btf_raw_bytes *out, btf_error *err);
+btf_status btf__dataset_raw_bytes(const btf_dataset *ds, btf_raw_bytes *out, btf_error *err);
 
 typedef struct btf_pca_result {
     int views, lights, width, height;
@@ -62,10 +62,10 @@ typedef struct btf_pca_result {
 
 /* Views in parallel (opts->threads), one view's images in memory per
  * thread; the results do not depend on the thread count. opts NULL: the
- * defaults. Free out with btf_pca_result_free (NULL and twice are fine). */
-btf_status btf_pca_contrast(const btf_dataset *ds, const btf_pca_opts *opts,
-                            btf_pca_result *out, btf_error *err);
-void btf_pca_result_free(btf_pca_result *r);
+ * defaults. Free out with btf__pca_result_free (NULL and twice are fine). */
+btf_status btf__pca_contrast(const btf_dataset *ds, const btf_pca_opts *opts,
+                             btf_pca_result *out, btf_error *err);
+void btf__pca_result_free(btf_pca_result *r);
 
 /* The subspace-image contrast: each subspace's representative measured image
  * (m->subspaces[k].view, .light, read from ds) encoded as JPEG in memory,
@@ -83,8 +83,8 @@ typedef struct btf_jpeg_contrast {
 
 /* quality 1..100; 0: 90. The model must be a BTF model of ds (same view and
  * light counts, subspace pairs in range); BTF_E_DATA otherwise. */
-btf_status btf_jpeg_subspace_contrast(const btf_dataset *ds, const btf_model *m, int quality,
-                                      btf_jpeg_contrast *out, btf_error *err);
+btf_status btf__jpeg_subspace_contrast(const btf_dataset *ds, const btf_model *m, int quality,
+                                       btf_jpeg_contrast *out, btf_error *err);
 
 /* -------------------------------------------------- quality per direction */
 
@@ -117,22 +117,22 @@ typedef struct btf_quality {
  * are synthesised once, tileable, at the dataset's image size; each pair
  * is shaded and measured on the pool. The model must be of this
  * dataset's direction sets (BTF_E_ARG otherwise). */
-btf_status btf_quality_measure(const btf_dataset *ds, const btf_model *m,
-                               const btf_quality_opts *opts, btf_quality *out, btf_error *err);
-void btf_quality_free(btf_quality *q);
+btf_status btf__quality_measure(const btf_dataset *ds, const btf_model *m,
+                                const btf_quality_opts *opts, btf_quality *out, btf_error *err);
+void btf__quality_free(btf_quality *q);
 /* The spread: indices of n directions of set, evenly strided through the
  * set's order (ring by ring from the pole, phi ascending in a ring):
  * idx[i] = floor(i count / n), so every ring gets its share and the
  * azimuths vary. n is clamped to 1..set->count; returns the count written
  * to idx. */
-int btf_spread_directions(const btf_dirset *set, int n, int *idx);
+int btf__spread_directions(const btf_dirset *set, int n, int *idx);
 
 /* -------------------------------------------------------------- the sweep */
 
 /* The speed/accuracy trade over opts' grid (btf_sweep in btfcar/report.h
- * says what it measures; quality by btf_quality_measure). Free out with
+ * says what it measures; quality by btf__quality_measure). Free out with
  * btf_sweep_free. */
-btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_sweep *out,
-                         btf_error *err);
+btf_status btf__sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_sweep *out,
+                          btf_error *err);
 
 #endif

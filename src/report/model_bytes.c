@@ -22,7 +22,7 @@ static const char *const PART_NAMES[BTF_MODEL_PART_COUNT] = {
     "neighbourhoods", "gammas", "sigmas", "band means", "marginals", "range",
     "structure", "pair gains"};
 
-const char *btf_model_part_name(int part)
+const char *btf__model_part_name(int part)
 {
     return part >= 0 && part < BTF_MODEL_PART_COUNT ? PART_NAMES[part] : "?";
 }
@@ -60,26 +60,26 @@ static uint32_t le32(const unsigned char *p)
     return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 }
 
-btf_status btf_model_byte_breakdown(const btf_model *m, btf_model_bytes *out, btf_error *err)
+btf_status btf__model_byte_breakdown(const btf_model *m, btf_model_bytes *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "model: no breakdown to fill");
+        return btf__fail(err, BTF_E_ARG, "model: no breakdown to fill");
     memset(out, 0, sizeof *out);
     if (!m)
-        return btf_fail(err, BTF_E_ARG, "model: no model to account for");
+        return btf__fail(err, BTF_E_ARG, "model: no model to account for");
     unsigned char *data = NULL;
     size_t size = 0;
     btf_model_payload_parts pp;
-    btf_status rc = btf_model_encode_parts(m, &data, &size, &pp, err);
+    btf_status rc = btf__model_encode_parts(m, &data, &size, &pp, err);
     if (rc)
         return rc;
     unsigned hdr = data[15] | (unsigned)data[16] << 8;
     unsigned comp = data[17];
     size_t stored = le32(data + 22);
     if (hdr + stored + CRC_BYTES != size || le32(data + 18) != pp.n) {
-        rc = btf_fail(err, BTF_E_DATA,
-                      "model: encoded file of %zu bytes does not match its header (header %u, "
-                      "stored %zu, payload %zu)", size, hdr, stored, pp.n);
+        rc = btf__fail(err, BTF_E_DATA,
+                       "model: encoded file of %zu bytes does not match its header (header %u, "
+                       "stored %zu, payload %zu)", size, hdr, stored, pp.n);
         goto done;
     }
     for (size_t i = 0; i < pp.n; i++)
@@ -90,8 +90,8 @@ btf_status btf_model_byte_breakdown(const btf_model *m, btf_model_bytes *out, bt
             share[p] = (double)out->raw[p];
     } else {
         double bits[BTF_MODEL_PART_COUNT] = {0}, overhead = 0;
-        rc = btf_deflate_cost(data + hdr, stored, pp.payload, pp.part, pp.n,
-                              BTF_MODEL_PART_COUNT, bits, &overhead, "model", err);
+        rc = btf__deflate_cost(data + hdr, stored, pp.payload, pp.part, pp.n,
+                               BTF_MODEL_PART_COUNT, bits, &overhead, "model", err);
         if (rc)
             goto done;
         for (int p = 0; p < BTF_MODEL_PART_COUNT; p++)

@@ -11,7 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
-void btf_report_pair_file(int view, int light, char *buf, size_t n)
+void btf__report_pair_file(int view, int light, char *buf, size_t n)
 {
     snprintf(buf, n, "pair-v%02d-l%02d.png", view, light);
 }
@@ -42,7 +42,7 @@ static btf_status write_pair(const char *dir, const char *name, const btf_image 
 {
     char path[4096];
     btf_image both = {0};
-    btf_status rc = btf_path_join(path, sizeof path, dir, name, err);
+    btf_status rc = btf__path_join(path, sizeof path, dir, name, err);
     if (rc == BTF_OK)
         rc = side_by_side(meas, model, &both, err);
     if (rc == BTF_OK)
@@ -51,11 +51,11 @@ static btf_status write_pair(const char *dir, const char *name, const btf_image 
     return rc;
 }
 
-btf_status btf_report_picture(btf_report_base *r, const char *dir, int pair, int view, int light,
-                              const btf_image *measured, const btf_image *model, btf_error *err)
+btf_status btf__report_picture(btf_report_base *r, const char *dir, int pair, int view, int light,
+                               const btf_image *measured, const btf_image *model, btf_error *err)
 {
     char name[64];
-    btf_report_pair_file(view, light, name, sizeof name);
+    btf__report_pair_file(view, light, name, sizeof name);
     btf_status rc = write_pair(dir, name, measured, model, err);
     r->pictured[pair] = rc == BTF_OK;
     return rc;

@@ -15,8 +15,8 @@ static int dominates(double ax, double ay, double bx, double by, int xh, int yh)
     return dx >= 0 && dy >= 0 && (dx > 0 || dy > 0);
 }
 
-int btf_pareto_front(const double *x, const double *y, int n, int x_higher_better,
-                     int y_higher_better, int *idx)
+int btf__pareto_front(const double *x, const double *y, int n, int x_higher_better,
+                      int y_higher_better, int *idx)
 {
     if (n <= 0 || !x || !y || !idx)
         return 0;

@@ -43,7 +43,7 @@ btf_pca_opts btf_pca_defaults(void)
 static btf_status resolve(const btf_pca_opts *opts, btf_pca_opts *o, btf_error *err)
 {
     btf_pca_opts d = btf_pca_defaults();
-    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_pca_contrast", err))
+    if (btf__opts_take(o, sizeof *o, opts, &d, "btf_pca_contrast", err))
         return BTF_E_ARG;
     if (o->max_rms == 0)
         o->max_rms = DEFAULT_MAX_RMS;
@@ -52,7 +52,7 @@ static btf_status resolve(const btf_pca_opts *opts, btf_pca_opts *o, btf_error *
     return BTF_OK;
 }
 
-void btf_pca_result_free(btf_pca_result *r)
+void btf__pca_result_free(btf_pca_result *r)
 {
     if (!r)
         return;
@@ -174,16 +174,16 @@ static btf_status view_job(void *user, int view, int worker, btf_error *err)
     const btf_dataset_info *info = c->info;
     int n = info->n_lights;
     size_t d = (size_t)info->width * info->height * 3;
-    float *x = btf_alloc((size_t)n * d, sizeof *x, NULL);
-    int16_t *xi = btf_alloc((size_t)n * d, sizeof *xi, NULL);
-    double *gram = btf_calloc((size_t)n * n, sizeof *gram, NULL);
-    double *val = btf_alloc((size_t)n, sizeof *val, NULL);
-    double *vec = btf_alloc((size_t)n * n, sizeof *vec, NULL);
+    float *x = btf__alloc((size_t)n * d, sizeof *x, NULL);
+    int16_t *xi = btf__alloc((size_t)n * d, sizeof *xi, NULL);
+    double *gram = btf__calloc((size_t)n * n, sizeof *gram, NULL);
+    double *val = btf__alloc((size_t)n, sizeof *val, NULL);
+    double *vec = btf__alloc((size_t)n * n, sizeof *vec, NULL);
     btf_image img = {0};
     btf_status rc = BTF_OK;
     if (!x || !xi || !gram || !val || !vec) {
-        rc = btf_fail(err, BTF_E_NOMEM, "%s: out of memory for the images of view %d (%zu x %zu values)",
-                      info->root, view, (size_t)n, d);
+        rc = btf__fail(err, BTF_E_NOMEM, "%s: out of memory for the images of view %d (%zu x %zu values)",
+                       info->root, view, (size_t)n, d);
         goto done;
     }
     int whole = 1; /* every value a whole level (8-bit files) */
@@ -191,14 +191,14 @@ static btf_status view_job(void *user, int view, int worker, btf_error *err)
         if ((rc = btf_dataset_read(c->ds, view, l, &img, err)))
             goto done;
         if (img.width != info->width || img.height != info->height || img.channels != 3) {
-            rc = btf_fail(err, BTF_E_DATA, "%s: %dx%d image of %d channels (expected %dx%d RGB)",
-                          btf_dataset_path(c->ds, view, l), img.width, img.height,
-                          img.channels, info->width, info->height);
+            rc = btf__fail(err, BTF_E_DATA, "%s: %dx%d image of %d channels (expected %dx%d RGB)",
+                           btf_dataset_path(c->ds, view, l), img.width, img.height,
+                           img.channels, info->width, info->height);
             goto done;
         }
         float *row = x + (size_t)l * d;
         int16_t *irow = xi + (size_t)l * d;
-        btf_srgb_levels(c->levels, img.data, d, row);
+        btf__srgb_levels(c->levels, img.data, d, row);
         for (size_t p = 0; p < d && whole; p++) {
             irow[p] = (int16_t)row[p];
             whole = (float)irow[p] == row[p];
@@ -212,9 +212,9 @@ static btf_status view_job(void *user, int view, int worker, btf_error *err)
     /* Until the off-diagonal part vanishes (at most 100 sweeps): the
      * rule the report's numbers have been made with. */
     static const btf_linalg_jacobi_rule rule = {.max_sweeps = 100, .relative = 1e-30};
-    if (btf_linalg_sym_eigen(gram, n, &rule, val, vec) != 0) {
-        rc = btf_fail(err, BTF_E_NOMEM, "%s: out of memory for view %d's eigenproblem",
-                      info->root, view);
+    if (btf__linalg_sym_eigen(gram, n, &rule, val, vec) != 0) {
+        rc = btf__fail(err, BTF_E_NOMEM, "%s: out of memory for view %d's eigenproblem",
+                       info->root, view);
         goto done;
     }
     /* residual[c] = sum of the eigenvalues from c on (negative ones are
@@ -235,8 +235,8 @@ static btf_status view_job(void *user, int view, int worker, btf_error *err)
         kept_tail = t;
     }
     if (!isfinite(kept_tail)) {
-        rc = btf_fail(err, BTF_E_NUMERIC, "%s: view %d: the PCA's error is not finite",
-                      info->root, view);
+        rc = btf__fail(err, BTF_E_NUMERIC, "%s: view %d: the PCA's error is not finite",
+                       info->root, view);
         goto done;
     }
     c->components[view] = keep;
@@ -247,52 +247,52 @@ done:
     return rc;
 }
 
-btf_status btf_pca_contrast(const btf_dataset *ds, const btf_pca_opts *opts,
-                            btf_pca_result *out, btf_error *err)
+btf_status btf__pca_contrast(const btf_dataset *ds, const btf_pca_opts *opts,
+                             btf_pca_result *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "dataset: no PCA result to fill");
+        return btf__fail(err, BTF_E_ARG, "dataset: no PCA result to fill");
     memset(out, 0, sizeof *out);
     if (!ds)
-        return btf_fail(err, BTF_E_ARG, "dataset: no dataset for the PCA contrast");
-    double t0 = btf_now();
+        return btf__fail(err, BTF_E_ARG, "dataset: no dataset for the PCA contrast");
+    double t0 = btf__now();
     const btf_dataset_info *info = btf_dataset_get_info(ds);
     btf_pca_opts o;
     if (resolve(opts, &o, err))
         return BTF_E_ARG;
     if (!(o.max_rms > 0) || !isfinite(o.max_rms))
-        return btf_fail(err, BTF_E_ARG, "%s: PCA error target %g (expected a finite value > 0, "
-                        "in 8-bit levels)", info->root, o.max_rms);
+        return btf__fail(err, BTF_E_ARG, "%s: PCA error target %g (expected a finite value > 0, "
+                         "in 8-bit levels)", info->root, o.max_rms);
     if (o.bits < 1 || o.bits > 32)
-        return btf_fail(err, BTF_E_ARG, "%s: %d bits per stored value (expected 1..32)",
-                        info->root, o.bits);
+        return btf__fail(err, BTF_E_ARG, "%s: %d bits per stored value (expected 1..32)",
+                         info->root, o.bits);
     if (o.max_components < 0 || o.max_components > info->n_lights)
-        return btf_fail(err, BTF_E_ARG, "%s: at most %d components (expected 0..%d, the lights)",
-                        info->root, o.max_components, info->n_lights);
+        return btf__fail(err, BTF_E_ARG, "%s: at most %d components (expected 0..%d, the lights)",
+                         info->root, o.max_components, info->n_lights);
     if (o.threads < 0)
-        return btf_fail(err, BTF_E_ARG, "%s: %d threads (expected 0 for all CPUs, or more)",
-                        info->root, o.threads);
+        return btf__fail(err, BTF_E_ARG, "%s: %d threads (expected 0 for all CPUs, or more)",
+                         info->root, o.threads);
     btf_srgb_levels_table table;
-    btf_srgb_levels_init(&table);
+    btf__srgb_levels_init(&table);
     job_ctx c = {ds, info, &table, o.max_components ? o.max_components : info->n_lights,
                  o.max_rms, NULL, NULL};
-    c.components = btf_calloc((size_t)info->n_views, sizeof *c.components, NULL);
-    c.residual = btf_calloc((size_t)info->n_views, sizeof *c.residual, NULL);
-    out->view_rms = btf_calloc((size_t)info->n_views, sizeof *out->view_rms, NULL);
+    c.components = btf__calloc((size_t)info->n_views, sizeof *c.components, NULL);
+    c.residual = btf__calloc((size_t)info->n_views, sizeof *c.residual, NULL);
+    out->view_rms = btf__calloc((size_t)info->n_views, sizeof *out->view_rms, NULL);
     if (!c.components || !c.residual || !out->view_rms) {
         BTF_FREE_ALL(c.components, c.residual, out->view_rms);
         out->view_rms = NULL;
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", info->root);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", info->root);
     }
     btf_pool_progress pr = {o.progress, o.progress_user, "PCA per view", 0, 1, 1};
-    btf_status rc = btf_pool_run(info->n_views, o.threads, view_job, &c, &pr, err);
+    btf_status rc = btf__pool_run(info->n_views, o.threads, view_job, &c, &pr, err);
     if (rc) {
         free(c.components);
         free(c.residual);
-        btf_pca_result_free(out);
+        btf__pca_result_free(out);
         return rc;
     }
-    btf_raw_bytes_of(info, &out->raw);
+    btf__raw_bytes_of(info, &out->raw);
     out->views = info->n_views;
     out->lights = info->n_lights;
     out->width = info->width;
@@ -315,6 +315,6 @@ btf_status btf_pca_contrast(const btf_dataset *ds, const btf_pca_opts *opts,
     out->mean_components = comps / info->n_views;
     out->rms = sqrt(residual / (values * info->n_views));
     out->ratio = (double)out->raw.raw / (double)out->bytes;
-    out->seconds = btf_now() - t0;
+    out->seconds = btf__now() - t0;
     return BTF_OK;
 }

@@ -36,7 +36,7 @@ const char *const *btf_analyse_preset_names(void)
 btf_status btf_analyse_preset(const char *name, btf_analyse_opts *o, btf_error *err)
 {
     if (!o)
-        return btf_fail(err, BTF_E_ARG, "preset: no options given");
+        return btf__fail(err, BTF_E_ARG, "preset: no options given");
     for (size_t i = 0; name && i < sizeof PRESETS / sizeof PRESETS[0]; i++) {
         if (strcmp(name, PRESETS[i].name))
             continue;
@@ -46,12 +46,12 @@ btf_status btf_analyse_preset(const char *name, btf_analyse_opts *o, btf_error *
         o->fit.car.n_fixed = 0;
         if (p->neighbours > 0) {
             btf_offset fam[BTF_CAR_MAX_NEIGHBOURS];
-            btf_car_candidate_offsets(fam);
+            btf__car_candidate_offsets(fam);
             memcpy(o->fit.car.fixed, fam, (size_t)p->neighbours * sizeof fam[0]);
             o->fit.car.n_fixed = p->neighbours;
         }
         return BTF_OK;
     }
-    return btf_fail(err, BTF_E_ARG, "preset '%s': expected fast, balanced or accurate",
-                    name ? name : "(null)");
+    return btf__fail(err, BTF_E_ARG, "preset '%s': expected fast, balanced or accurate",
+                     name ? name : "(null)");
 }

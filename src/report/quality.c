@@ -28,7 +28,7 @@ btf_quality_opts btf_quality_defaults(void)
     return o;
 }
 
-int btf_spread_directions(const btf_dirset *set, int n, int *idx)
+int btf__spread_directions(const btf_dirset *set, int n, int *idx)
 {
     int count = set ? set->count : 0;
     if (count <= 0 || !idx)
@@ -88,18 +88,18 @@ static btf_status check_match(const btf_dataset *ds, const btf_dataset_info *in,
                               const btf_model *m, btf_error *err)
 {
     if (!m->index)
-        return btf_fail(err, BTF_E_ARG, "the model has no index table: it does not describe "
-                        "dataset %s", in->root);
+        return btf__fail(err, BTF_E_ARG, "the model has no index table: it does not describe "
+                         "dataset %s", in->root);
     int same = same_sets(in, m);
     for (int v = 0; v < in->n_views; v++)
         for (int l = 0; l < in->n_lights; l++)
             if (btf_dataset_has(ds, v, l) && model_subspace(in, m, same, v, l) >= 0)
                 return BTF_OK;
-    return btf_fail(err, BTF_E_ARG,
-                    "model of %d views x %d lights does not describe dataset %s "
-                    "(%d views x %d lights): none of the dataset's pairs is one the model "
-                    "measured", m->views.count, m->lights.count, in->root, in->n_views,
-                    in->n_lights);
+    return btf__fail(err, BTF_E_ARG,
+                     "model of %d views x %d lights does not describe dataset %s "
+                     "(%d views x %d lights): none of the dataset's pairs is one the model "
+                     "measured", m->views.count, m->lights.count, in->root, in->n_views,
+                     in->n_lights);
 }
 
 typedef struct measure_job {
@@ -135,9 +135,9 @@ static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
     static const float black[3] = {0, 0, 0};
     btf_status rc = btf_dataset_read(J->ds, pq->view, pq->light, &meas, err);
     if (rc == BTF_OK)
-        rc = btf_render_flat_gbuffer(J->in->width, J->in->height, vf, &g, err);
+        rc = btf__render_flat_gbuffer(J->in->width, J->in->height, vf, &g, err);
     if (rc == BTF_OK)
-        rc = btf_render_shade(J->rm, &g, &sun, 1, black, J->o->relief, 1, &model, err);
+        rc = btf__render_shade(J->rm, &g, &sun, 1, black, J->o->relief, 1, &model, err);
     if (rc == BTF_OK) {
         btf_texture_distance_opts d = btf_texture_distance_defaults();
         d.reference_name = btf_dataset_path(J->ds, pq->view, pq->light);
@@ -146,7 +146,7 @@ static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
     }
     if (rc == BTF_OK && J->o->on_pair)
         rc = J->o->on_pair(J->o->on_pair_user, job, pq->view, pq->light, &meas, &model, err);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     btf_image_free(&meas);
     btf_image_free(&model);
     return rc;
@@ -212,7 +212,7 @@ static btf_status choose_sparse(const btf_dataset *ds, const btf_dataset_info *i
 {
     int want = o->all ? in->n_pairs : o->views * o->lights;
     want = want < in->n_pairs ? want : in->n_pairs;
-    q->pairs = btf_calloc((size_t)(want > 0 ? want : 1), sizeof *q->pairs, err);
+    q->pairs = btf__calloc((size_t)(want > 0 ? want : 1), sizeof *q->pairs, err);
     if (!q->pairs)
         return BTF_E_NOMEM;
     int same = same_sets(in, m), seen = 0;
@@ -242,8 +242,8 @@ static btf_status choose_pairs(const btf_dataset *ds, const btf_dataset_info *in
     if (in->n_pairs < in->n_views * in->n_lights)
         return choose_sparse(ds, in, m, o, q, err);
     int same = same_sets(in, m);
-    int *vi = btf_alloc((size_t)in->n_views, sizeof(int), err);
-    int *li = btf_alloc((size_t)in->n_lights, sizeof(int), err);
+    int *vi = btf__alloc((size_t)in->n_views, sizeof(int), err);
+    int *li = btf__alloc((size_t)in->n_lights, sizeof(int), err);
     if (!vi || !li) {
         free(vi);
         free(li);
@@ -258,13 +258,13 @@ static btf_status choose_pairs(const btf_dataset *ds, const btf_dataset_info *in
         nv = in->n_views;
         nl = in->n_lights;
     } else {
-        nv = btf_spread_directions(in->views, o->views, vi);
-        nl = btf_spread_directions(in->lights, o->lights, li);
+        nv = btf__spread_directions(in->views, o->views, vi);
+        nl = btf__spread_directions(in->lights, o->lights, li);
     }
     btf_status rc = BTF_OK;
-    q->pairs = nv && nl ? btf_calloc((size_t)nv * nl, sizeof *q->pairs, err) : NULL;
+    q->pairs = nv && nl ? btf__calloc((size_t)nv * nl, sizeof *q->pairs, err) : NULL;
     if (!q->pairs)
-        rc = (nv && nl) ? BTF_E_NOMEM : btf_fail(err, BTF_E_NOMEM, "out of memory");
+        rc = (nv && nl) ? BTF_E_NOMEM : btf__fail(err, BTF_E_NOMEM, "out of memory");
     for (int a = 0; rc == BTF_OK && a < nv; a++)
         for (int b = 0; b < nl; b++) {
             btf_pair_quality *p = &q->pairs[q->n_pairs++];
@@ -278,16 +278,16 @@ static btf_status choose_pairs(const btf_dataset *ds, const btf_dataset_info *in
     return rc;
 }
 
-btf_status btf_quality_measure(const btf_dataset *ds, const btf_model *m,
-                               const btf_quality_opts *opts, btf_quality *out, btf_error *err)
+btf_status btf__quality_measure(const btf_dataset *ds, const btf_model *m,
+                                const btf_quality_opts *opts, btf_quality *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "quality: no output given");
+        return btf__fail(err, BTF_E_ARG, "quality: no output given");
     memset(out, 0, sizeof *out);
     if (!ds || !m)
-        return btf_fail(err, BTF_E_ARG, "quality: no dataset or no model given");
+        return btf__fail(err, BTF_E_ARG, "quality: no dataset or no model given");
     btf_quality_opts d = btf_quality_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_quality_measure", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_quality_measure", err))
         return BTF_E_ARG;
     if (o.views <= 0)
         o.views = 9;
@@ -296,38 +296,38 @@ btf_status btf_quality_measure(const btf_dataset *ds, const btf_model *m,
     if (o.relief < 0.0)
         o.relief = 1.0;
     if (!isfinite(o.relief) || o.relief > 1e6)
-        return btf_fail(err, BTF_E_ARG, "quality: relief %g: expected 0..1e6", o.relief);
-    double t0 = btf_now();
+        return btf__fail(err, BTF_E_ARG, "quality: relief %g: expected 0..1e6", o.relief);
+    double t0 = btf__now();
     const btf_dataset_info *in = btf_dataset_get_info(ds);
-    btf_status rc = btf_render_check_model(m, err);
+    btf_status rc = btf__render_check_model(m, err);
     if (rc || (rc = check_match(ds, in, m, err)) ||
         (rc = choose_pairs(ds, in, m, &o, out, err))) {
-        btf_quality_free(out);
+        btf__quality_free(out);
         return rc;
     }
-    int side = btf_render_texture_side(m, in->width > in->height ? in->width : in->height);
+    int side = btf__render_texture_side(m, in->width > in->height ? in->width : in->height);
     out->texture_size = side;
     if (o.progress)
         o.progress(o.progress_user, 0.0, "synthesising the subspace images");
     btf_render_material *rm = NULL;
-    rc = btf_render_material_build(m, NULL, side, o.seed, o.threads, &rm, err);
+    rc = btf__render_material_build(m, NULL, side, o.seed, o.threads, &rm, err);
     if (rc == BTF_OK) {
         measure_job J = {ds, in, m, rm, &o, out};
         btf_pool_progress pp = {o.progress, o.progress_user, "measuring (view, light) pairs",
                                 0.0, 1.0, 1};
-        rc = btf_pool_run(out->n_pairs, o.threads, measure_pair, &J, &pp, err);
+        rc = btf__pool_run(out->n_pairs, o.threads, measure_pair, &J, &pp, err);
     }
-    btf_render_material_free(rm);
+    btf__render_material_free(rm);
     if (rc) {
-        btf_quality_free(out);
+        btf__quality_free(out);
         return rc;
     }
     summarise(out);
-    out->seconds = btf_now() - t0;
+    out->seconds = btf__now() - t0;
     return BTF_OK;
 }
 
-void btf_quality_free(btf_quality *q)
+void btf__quality_free(btf_quality *q)
 {
     if (!q)
         return;

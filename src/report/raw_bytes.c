@@ -9,7 +9,7 @@
 
 #include <string.h>
 
-void btf_raw_bytes_of(const btf_dataset_info *info, btf_raw_bytes *out)
+void btf__raw_bytes_of(const btf_dataset_info *info, btf_raw_bytes *out)
 {
     memset(out, 0, sizeof *out);
     out->views = info->n_views;
@@ -21,13 +21,13 @@ void btf_raw_bytes_of(const btf_dataset_info *info, btf_raw_bytes *out)
     out->on_disk = info->bytes_on_disk;
 }
 
-btf_status btf_dataset_raw_bytes(const btf_dataset *ds, btf_raw_bytes *out, btf_error *err)
+btf_status btf__dataset_raw_bytes(const btf_dataset *ds, btf_raw_bytes *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "dataset: no raw-bytes result to fill");
+        return btf__fail(err, BTF_E_ARG, "dataset: no raw-bytes result to fill");
     memset(out, 0, sizeof *out);
     if (!ds)
-        return btf_fail(err, BTF_E_ARG, "dataset: no dataset to account for");
-    btf_raw_bytes_of(btf_dataset_get_info(ds), out);
+        return btf__fail(err, BTF_E_ARG, "dataset: no dataset to account for");
+    btf__raw_bytes_of(btf_dataset_get_info(ds), out);
     return BTF_OK;
 }

@@ -31,7 +31,7 @@
 /* ------------------------------------------------------------ text buffer */
 
 /* A growable NUL-terminated text; zero-initialise it. An allocation failure
- * is sticky: later appends do nothing and btf_buf_check reports it, so a
+ * is sticky: later appends do nothing and btf__buf_check reports it, so a
  * writer appends freely and checks once. */
 typedef struct btf_buf {
     char *data;   /* malloc'd, NUL-terminated (NULL while empty) */
@@ -42,23 +42,23 @@ typedef struct btf_buf {
 
 /* Appends n bytes / a C string / printf output (C locale number formats as
  * the library never calls setlocale). 0, or -1 when the buffer failed. */
-int btf_buf_put(btf_buf *b, const char *s, size_t n);
-int btf_buf_puts(btf_buf *b, const char *s);
-int btf_buf_printf(btf_buf *b, const char *fmt, ...) BTF_PRINTF(2, 3);
+int btf__buf_put(btf_buf *b, const char *s, size_t n);
+int btf__buf_puts(btf_buf *b, const char *s);
+int btf__buf_printf(btf_buf *b, const char *fmt, ...) BTF_PRINTF(2, 3);
 /* Appends text escaped for HTML and XML, both in content and in attribute
  * values: & < > " ' become entities; control characters other than tab,
  * newline and carriage return (not allowed in XML 1.0) and bytes that are
  * not valid UTF-8 become U+FFFD. NULL appends nothing. */
-int btf_buf_html(btf_buf *b, const char *text);
+int btf__buf_html(btf_buf *b, const char *text);
 /* BTF_OK, or BTF_E_NOMEM ("NAME: out of memory ...") when the buffer failed. */
-btf_status btf_buf_check(const btf_buf *b, const char *name, btf_error *err);
+btf_status btf__buf_check(const btf_buf *b, const char *name, btf_error *err);
 /* Writes the text to path atomically (btf_write_file_atomic); checks the
  * buffer first. */
-btf_status btf_buf_write(const btf_buf *b, const char *path, btf_error *err);
-void btf_buf_free(btf_buf *b);
+btf_status btf__buf_write(const btf_buf *b, const char *path, btf_error *err);
+void btf__buf_free(btf_buf *b);
 
-/* The same escaping as btf_buf_html, written to f: 0, or -1 on a write error. */
-int btf_html_fputs(FILE *f, const char *text);
+/* The same escaping as btf__buf_html, written to f: 0, or -1 on a write error. */
+int btf__html_fputs(FILE *f, const char *text);
 
 /* ------------------------------------------------------------ library.c */
 
@@ -72,7 +72,7 @@ typedef struct btf_library_row {
 /* report.json's text into *r (whose dir is left alone): 1, or 0 when it is
  * not a btfcar report. Missing or bad figures read as 0; the preview is a
  * plain file name or empty. */
-int btf_library_row_parse(const char *data, size_t n, btf_library_row *r);
+int btf__library_row_parse(const char *data, size_t n, btf_library_row *r);
 
 /* ------------------------------------------------------------ Pareto front */
 
@@ -84,8 +84,8 @@ int btf_library_row_parse(const char *data, size_t n, btf_library_row *r);
  * (room for n) in increasing x, ties by increasing y then index, and
  * returns their count (0 when n <= 0). O(n^2): for sweeps of up to a few
  * thousand settings. */
-int btf_pareto_front(const double *x, const double *y, int n, int x_higher_better,
-                     int y_higher_better, int *idx);
+int btf__pareto_front(const double *x, const double *y, int n, int x_higher_better,
+                      int y_higher_better, int *idx);
 
 /* ------------------------------------------------------------ colour scale */
 
@@ -95,35 +95,35 @@ int btf_pareto_front(const double *x, const double *y, int n, int x_higher_bette
  * through blue and green to yellow (105 deg); chroma is reduced where
  * needed to stay inside sRGB. Monotone lightness keeps it readable in grey
  * and for colour-blind readers. */
-void btf_colour_scale(double t, unsigned char rgb[3]);
+void btf__colour_scale(double t, unsigned char rgb[3]);
 
 /* ------------------------------------------------ SVG pieces (svg.c) */
 
 /* What the plot files share; report writers may use them for their own
- * figures. Numbers are written through btf_svg_num, which never writes
+ * figures. Numbers are written through btf__svg_num, which never writes
  * "nan" or "inf" (a non-finite value becomes 0). */
 #define BTF_SVG_FONT "DejaVu Sans, Liberation Sans, Arial, Helvetica, sans-serif"
 /* The XML declaration and the <svg> element: width, height, viewBox, the
  * font; then a white background. */
-void btf_svg_begin(btf_buf *b, double width, double height);
-void btf_svg_end(btf_buf *b);
+void btf__svg_begin(btf_buf *b, double width, double height);
+void btf__svg_end(btf_buf *b);
 /* Writes b, which a plot function filled and answered made for, to path
  * (atomically) when made is BTF_OK, else names path in err's message; frees
  * b and returns the status: the *_write of every plot. */
-btf_status btf_svg_save(const char *path, btf_buf *b, btf_status made, btf_error *err);
+btf_status btf__svg_save(const char *path, btf_buf *b, btf_status made, btf_error *err);
 /* v with at most 2 decimals, trailing zeros dropped, into out (32 bytes). */
-const char *btf_svg_num(char out[32], double v);
+const char *btf__svg_num(char out[32], double v);
 /* A value for a label: 4 significant digits, no exponent between 1e-4 and
  * 1e6, "-0" as "0"; non-finite values as "–". */
-const char *btf_svg_label(char out[32], double v);
+const char *btf__svg_label(char out[32], double v);
 /* <text x y font-size text-anchor [transform rotate(angle about x,y)]>
  * with the escaped text; anchor "start", "middle" or "end"; extra NULL or
  * more attributes (e.g. "font-weight=\"bold\""). */
-void btf_svg_text(btf_buf *b, double x, double y, double size, const char *anchor,
-                  double angle, const char *extra, const char *text);
+void btf__svg_text(btf_buf *b, double x, double y, double size, const char *anchor,
+                   double angle, const char *extra, const char *text);
 /* The width of text in px at a font size (an estimate: 0.6 em per
  * character, counted in UTF-8 code points). */
-double btf_svg_text_width(const char *text, double size);
+double btf__svg_text_width(const char *text, double size);
 
 /* An axis: the data range [lo, hi] widened to nice bounds (linear) or
  * padded (log), and its ticks at 1-2-5 multiples of powers of ten (log:
@@ -137,10 +137,10 @@ typedef struct btf_axis {
     int nticks;
     double ticks[BTF_AXIS_MAX_TICKS];
 } btf_axis;
-void btf_axis_make(btf_axis *a, double lo, double hi, int log);
+void btf__axis_make(btf_axis *a, double lo, double hi, int log);
 /* A value's position in [0, 1] along the axis (clamped to [-0.05, 1.05];
  * non-finite: 0). */
-double btf_axis_pos(const btf_axis *a, double v);
+double btf__axis_pos(const btf_axis *a, double v);
 
 /* ------------------------------------------------------------ heat map */
 
@@ -176,9 +176,9 @@ typedef struct btf_heatmap {
 
 /* Appends the heat map as one SVG document to out; BTF_E_ARG for sizes out
  * of range, a NULL values pointer or a marked cell outside the grid. */
-btf_status btf_svg_heatmap(const btf_heatmap *h, btf_buf *out, btf_error *err);
+btf_status btf__svg_heatmap(const btf_heatmap *h, btf_buf *out, btf_error *err);
 /* The same written to path (atomically); messages name path. */
-btf_status btf_svg_heatmap_write(const char *path, const btf_heatmap *h, btf_error *err);
+btf_status btf__svg_heatmap_write(const char *path, const btf_heatmap *h, btf_error *err);
 
 /* ------------------------------------------------------------ scatter plot */
 
@@ -208,8 +208,8 @@ typedef struct btf_scatter {
 
 /* Appends the scatter plot as one SVG document to out; BTF_E_ARG for n
  * out of range, NULL arrays with n > 0, a marked index outside 0..n-1. */
-btf_status btf_svg_scatter(const btf_scatter *s, btf_buf *out, btf_error *err);
-btf_status btf_svg_scatter_write(const char *path, const btf_scatter *s, btf_error *err);
+btf_status btf__svg_scatter(const btf_scatter *s, btf_buf *out, btf_error *err);
+btf_status btf__svg_scatter_write(const char *path, const btf_scatter *s, btf_error *err);
 
 /* ---------------------------------------------- compression accounting */
 
@@ -224,21 +224,21 @@ btf_status btf_svg_scatter_write(const char *path, const btf_scatter *s, btf_err
  * bits and overhead is 8 zn. name starts error messages; BTF_E_FORMAT when
  * the stream is not valid or does not inflate to expect
  * (report/deflate_cost.c). */
-btf_status btf_deflate_cost(const unsigned char *z, size_t zn, const unsigned char *expect,
-                            const unsigned char *label, size_t n, int nlabels, double *bits,
-                            double *overhead_bits, const char *name, btf_error *err);
+btf_status btf__deflate_cost(const unsigned char *z, size_t zn, const unsigned char *expect,
+                             const unsigned char *label, size_t n, int nlabels, double *bits,
+                             double *overhead_bits, const char *name, btf_error *err);
 
 /* An image's linear float values as the report's 8-bit sRGB levels, 0..255
- * and not rounded: btf_linear_to_srgb (which clamps to [0, 1]) x 255; a
+ * and not rounded: btf__linear_to_srgb (which clamps to [0, 1]) x 255; a
  * value decoded from an 8-bit sRGB file gives back its stored code exactly
  * (report/srgb_levels.c). The table makes that exact path cheap: fill it
- * once with btf_srgb_levels_init. */
+ * once with btf__srgb_levels_init. */
 typedef struct btf_srgb_levels_table {
     float lut[256];              /* the linear value of each 8-bit code */
     unsigned char start[4097];   /* the first code whose value is >= k / 4096 */
 } btf_srgb_levels_table;
-void btf_srgb_levels_init(btf_srgb_levels_table *t);
-void btf_srgb_levels(const btf_srgb_levels_table *t, const float *linear, size_t n, float *out);
+void btf__srgb_levels_init(btf_srgb_levels_table *t);
+void btf__srgb_levels(const btf_srgb_levels_table *t, const float *linear, size_t n, float *out);
 
 /* The eigenvalues (descending) and unit eigenvectors (columns of vec, n x n
  * row-major: vec[i * n + k] is component i of eigenvector k) of the
@@ -247,9 +247,9 @@ void btf_srgb_levels(const btf_srgb_levels_table *t, const float *linear, size_t
  * (report/jacobi.c). */
 int btf_sym_eigen(double *a, int n, double *val, double *vec);
 
-/* The raw BTF of a dataset (report/raw_bytes.c): btf_dataset_raw_bytes
+/* The raw BTF of a dataset (report/raw_bytes.c): btf__dataset_raw_bytes
  * without the argument checks. */
-void btf_raw_bytes_of(const btf_dataset_info *info, btf_raw_bytes *out);
+void btf__raw_bytes_of(const btf_dataset_info *info, btf_raw_bytes *out);
 
 /* ------------------------------------------------------ the sweep's state */
 
@@ -258,8 +258,8 @@ void btf_raw_bytes_of(const btf_dataset_info *info, btf_raw_bytes *out);
  * with values a measurement can give (then *p holds them, resumed set);
  * 0 for anything else (*p untouched), never a crash: the file is read back
  * from a folder anyone may have edited. */
-int btf_sweep_point_parse(const char *text, size_t n, const char *fingerprint,
-                          btf_sweep_point *p);
+int btf__sweep_point_parse(const char *text, size_t n, const char *fingerprint,
+                           btf_sweep_point *p);
 
 /* Reached through the material interface (btfcar/material.h) by users;
  * declared here for the library and its tests. */
@@ -268,16 +268,16 @@ int btf_sweep_point_parse(const char *text, size_t n, const char *fingerprint,
 /* The report of an RF model (docs/report.md, "Reflectance-field models"),
  * the counterpart of btf_report_write in the same folder layout: the model
  * file's bytes against the raw BTF; per sampled pair (opts->quality: the
- * spread or all) the measured image against btf_rf_render_flat of that
+ * spread or all) the measured image against btf__rf_render_flat of that
  * pair by btf_texture_distance and the pixel-wise mean |dY|; the mean |dY|
  * over every texel and image (the paper's Table 1); pictures of the sampled
  * pairs and of the
- * opts->worst pairs by |dY|; the preview sphere (btf_rf_render_scene);
+ * opts->worst pairs by |dY|; the preview sphere (btf__rf_render_scene);
  * DIR/index.html and DIR/report.json. The model must be of ds (size and
  * direction sets; BTF_E_ARG). opts->sweep is BTF_E_ARG (no CAR settings to
  * trade); the PCA, JPEG and relief options do not apply. */
-btf_status btf_rf_report_write(const btf_dataset *ds, const btf_rf_model *m, const char *dir,
-                               const btf_report_opts *opts, btf_report_summary *summary,
-                               btf_error *err);
+btf_status btf__rf_report_write(const btf_dataset *ds, const btf_rf_model *m, const char *dir,
+                                const btf_report_opts *opts, btf_report_summary *summary,
+                                btf_error *err);
 
 #endif

@@ -36,7 +36,7 @@ typedef struct btf_report_base {
     const btf_report_opts *o;     /* resolved */
     const char *dataset_name, *model_name;
     char date[64];                /* UTC, ISO 8601 */
-    double t0;                    /* btf_now() at the start */
+    double t0;                    /* btf__now() at the start */
     double seconds;               /* the whole report, up to the writing */
     /* compression */
     btf_raw_bytes raw;
@@ -89,65 +89,65 @@ typedef struct btf_report_family {
 
 /* The options every family takes, defaults filled in (the preview's light
  * and size, the worst pairs) and checked. */
-btf_status btf_report_resolve(const btf_report_opts *in, btf_report_opts *o, btf_error *err);
+btf_status btf__report_resolve(const btf_report_opts *in, btf_report_opts *o, btf_error *err);
 /* Starts r (zeroed by the caller): the dataset, the resolved options o, the
  * names shown, the date, the clock. */
-void btf_report_begin(btf_report_base *r, const btf_dataset *ds, const btf_report_opts *o);
+void btf__report_begin(btf_report_base *r, const btf_dataset *ds, const btf_report_opts *o);
 /* Which pairs get pictures, *want [view * n_lights + light] (free it): the
  * spread of views x lights measured; with every pair measured, the default
  * spread (the worst come later). Allocates r->pictured too. */
-btf_status btf_report_pictures_begin(btf_report_base *r, unsigned char **want, btf_error *err);
+btf_status btf__report_pictures_begin(btf_report_base *r, unsigned char **want, btf_error *err);
 /* The picture of pair (its dataset view and light) into dir, marked in
  * r->pictured: measured | model side by side, a 4-pixel dark gap between,
  * as PNG (pair_file.c). */
-btf_status btf_report_picture(btf_report_base *r, const char *dir, int pair, int view, int light,
-                              const btf_image *measured, const btf_image *model, btf_error *err);
+btf_status btf__report_picture(btf_report_base *r, const char *dir, int pair, int view, int light,
+                               const btf_image *measured, const btf_image *model, btf_error *err);
 /* r->pairs for n pairs, zeroed, for the family to fill. */
-btf_status btf_report_pairs_alloc(btf_report_base *r, int n, btf_error *err);
+btf_status btf__report_pairs_alloc(btf_report_base *r, int n, btf_error *err);
 /* The worst pairs by rank (ties: the lower index first), then the pictures
  * of those not pictured yet, rendered again by f->render_flat, on a pool
  * of threads (1: one after the other, for a render that itself runs on
  * every thread). */
-btf_status btf_report_worst(btf_report_base *r, const btf_report_family *f,
-                            const btf_dataset *ds, const char *dir, int threads,
-                            btf_error *err);
+btf_status btf__report_worst(btf_report_base *r, const btf_report_family *f,
+                             const btf_dataset *ds, const char *dir, int threads,
+                             btf_error *err);
 /* The preview: the material on a sphere under the chosen light, dir/sphere.png.
  * A texel per pixel at the sphere's centre: the surface shows about
  * side / 2.4 texels across its radius. */
-btf_status btf_report_preview(btf_report_base *r, const btf_report_family *f, const char *dir,
-                              btf_error *err);
+btf_status btf__report_preview(btf_report_base *r, const btf_report_family *f, const char *dir,
+                               btf_error *err);
 /* The whole report of family f into the folder dir: measured into a
  * temporary folder, written (files, page, report.json) and moved into place
  * as a whole; the summary (may be NULL) filled on success; progress "done". */
-btf_status btf_report_run(btf_report_base *r, const btf_report_family *f,
-                          const btf_dataset *ds, const char *dir, btf_report_summary *summary,
-                          btf_error *err);
-void btf_report_base_free(btf_report_base *r);
+btf_status btf__report_run(btf_report_base *r, const btf_report_family *f,
+                           const btf_dataset *ds, const char *dir, btf_report_summary *summary,
+                           btf_error *err);
+void btf__report_base_free(btf_report_base *r);
 
 /* The picture of a pair: "pair-vVV-lLL.png" (dataset indices). */
-void btf_report_pair_file(int view, int light, char *buf, size_t n);
+void btf__report_pair_file(int view, int light, char *buf, size_t n);
 
 /* ------------------------------------------- the page (report_page.c) */
 
 /* dir/index.html: the skeleton (head, styles, title), the family's about
  * line, its sections, the closing line. */
-btf_status btf_report_page(const btf_report_base *r, const btf_report_family *f,
-                           const char *dir, btf_error *err);
+btf_status btf__report_page(const btf_report_base *r, const btf_report_family *f,
+                            const char *dir, btf_error *err);
 
 /* Numbers as the page writes them, into buf (32 bytes at least): a size
  * ("12.3 KB"), a ratio ("1 : 1027", "–" when not positive and finite), a
  * direction ("θ 30 φ 60"). */
-const char *btf_report_bytes_text(uint64_t bytes, char *buf, size_t n);
-const char *btf_report_ratio_text(double ratio, char *buf, size_t n);
-const char *btf_report_dir_text(btf_dir d, char *buf, size_t n);
+const char *btf__report_bytes_text(uint64_t bytes, char *buf, size_t n);
+const char *btf__report_ratio_text(double ratio, char *buf, size_t n);
+const char *btf__report_dir_text(btf_dir d, char *buf, size_t n);
 /* raw / bytes, 0 without bytes. */
-double btf_report_ratio(uint64_t raw, uint64_t bytes);
+double btf__report_ratio(uint64_t raw, uint64_t bytes);
 
 /* The top: the preview with its caption (note, HTML, stands before
  * "rendered in"), then the cards of the model file and its ratio to the
  * raw BTF; the family adds its cards and closes it. */
-void btf_report_top_begin(btf_buf *b, const btf_report_base *r, const char *note);
-void btf_report_top_end(btf_buf *b);
+void btf__report_top_begin(btf_buf *b, const btf_report_base *r, const char *note);
+void btf__report_top_end(btf_buf *b);
 /* A card of the top, as a literal format piece (like BTF_HTML_TIME), so
  * that the compiler checks its arguments: a figure and what it is. */
 #define BTF_HTML_CARD(value, label) \
@@ -155,8 +155,8 @@ void btf_report_top_end(btf_buf *b);
 
 /* A row of a table of sizes: what, bytes, ratio and a note (NULL: none),
  * each HTML; what and the note left-aligned. tr_class NULL: none. */
-void btf_report_row(btf_buf *b, const char *tr_class, const char *what, const char *bytes,
-                    const char *ratio, const char *note);
+void btf__report_row(btf_buf *b, const char *tr_class, const char *what, const char *bytes,
+                     const char *ratio, const char *note);
 
 /* What a family writes of one pair: its caption under the picture, its
  * cells in the table of every pair, its keys in report.json. */
@@ -165,42 +165,42 @@ typedef void (*btf_report_pair_json)(cJSON *o, const btf_report_base *r, int pai
 
 /* dir/heatmap.svg: the pairs' rank over views (rows) x lights (columns),
  * the pairs not measured left empty, the worst outlined. */
-btf_status btf_report_heatmap(const btf_report_base *r, const char *dir, const char *title,
-                              const char *legend, btf_error *err);
+btf_status btf__report_heatmap(const btf_report_base *r, const char *dir, const char *title,
+                               const char *legend, btf_error *err);
 /* The heat map on the page; caption NULL: none. */
-void btf_report_heatmap_figure(btf_buf *b, const char *alt, const char *caption);
+void btf__report_heatmap_figure(btf_buf *b, const char *alt, const char *caption);
 /* The galleries: the worst pairs (shown larger when small), then every
  * pictured pair (larger too when zoom_pictured), each with its caption. */
-void btf_report_galleries(btf_buf *b, const btf_report_base *r, const char *worst_heading,
-                          const char *pictured_heading, int zoom_pictured,
-                          btf_report_pair_html caption);
+void btf__report_galleries(btf_buf *b, const btf_report_base *r, const char *worst_heading,
+                           const char *pictured_heading, int zoom_pictured,
+                           btf_report_pair_html caption);
 /* "Every measured pair": view, light, then the family's columns (head:
  * their <th> cells) and cells. */
-void btf_report_pair_table(btf_buf *b, const btf_report_base *r, const char *head,
-                           btf_report_pair_html cells);
+void btf__report_pair_table(btf_buf *b, const btf_report_base *r, const char *head,
+                            btf_report_pair_html cells);
 
 /* ------------------------------------------- report.json (report_json.c) */
 
 /* dir/report.json: the format, the family, the version, the date, the
  * names and the dataset, the family's about keys, "seconds", the sections. */
-btf_status btf_report_json(const btf_report_base *r, const btf_report_family *f,
-                           const char *dir, btf_error *err);
+btf_status btf__report_json(const btf_report_base *r, const btf_report_family *f,
+                            const char *dir, btf_error *err);
 /* {"theta", "phi"} under key. */
-void btf_report_json_dir(cJSON *o, const char *key, btf_dir d);
+void btf__report_json_dir(cJSON *o, const char *key, btf_dir d);
 /* "compression" with the raw BTF, the dataset on disk, the model file and
  * their ratio; the family adds its keys to it. */
-cJSON *btf_report_json_compression(cJSON *root, const btf_report_base *r);
+cJSON *btf__report_json_compression(cJSON *root, const btf_report_base *r);
 /* "quality" with the sample, the pair count and the mean combined
  * distance, which every family's report has first (the library page reads
  * them: library.c); the family adds its figures, then
- * btf_report_json_pairs. */
-cJSON *btf_report_json_quality(cJSON *root, const btf_report_base *r, double mean_combined);
+ * btf__report_json_pairs. */
+cJSON *btf__report_json_quality(cJSON *root, const btf_report_base *r, double mean_combined);
 /* "worst" and "pairs_measured" under quality: each pair's indices and
  * directions, the family's keys, its picture (null_picture: null for a
  * pair without one, else the key is left out, as the RF report has it). */
-void btf_report_json_pairs(cJSON *quality, const btf_report_base *r, btf_report_pair_json keys,
-                           int null_picture);
+void btf__report_json_pairs(cJSON *quality, const btf_report_base *r, btf_report_pair_json keys,
+                            int null_picture);
 /* "preview": the picture, its light, size and time; the family may add. */
-cJSON *btf_report_json_preview(cJSON *root, const btf_report_base *r);
+cJSON *btf__report_json_preview(cJSON *root, const btf_report_base *r);
 
 #endif

@@ -13,24 +13,24 @@
 #include <stdlib.h>
 #include <string.h>
 
-void btf_report_json_dir(cJSON *o, const char *key, btf_dir d)
+void btf__report_json_dir(cJSON *o, const char *key, btf_dir d)
 {
     cJSON *j = cJSON_AddObjectToObject(o, key);
     cJSON_AddNumberToObject(j, "theta", d.theta);
     cJSON_AddNumberToObject(j, "phi", d.phi);
 }
 
-cJSON *btf_report_json_compression(cJSON *root, const btf_report_base *r)
+cJSON *btf__report_json_compression(cJSON *root, const btf_report_base *r)
 {
     cJSON *c = cJSON_AddObjectToObject(root, "compression");
     cJSON_AddNumberToObject(c, "raw_bytes", (double)r->raw.raw);
     cJSON_AddNumberToObject(c, "on_disk_bytes", (double)r->raw.on_disk);
     cJSON_AddNumberToObject(c, "model_bytes", (double)r->model_bytes);
-    cJSON_AddNumberToObject(c, "ratio", btf_report_ratio(r->raw.raw, r->model_bytes));
+    cJSON_AddNumberToObject(c, "ratio", btf__report_ratio(r->raw.raw, r->model_bytes));
     return c;
 }
 
-cJSON *btf_report_json_quality(cJSON *root, const btf_report_base *r, double mean_combined)
+cJSON *btf__report_json_quality(cJSON *root, const btf_report_base *r, double mean_combined)
 {
     cJSON *q = cJSON_AddObjectToObject(root, "quality");
     cJSON_AddStringToObject(q, "sample", r->o->quality.all ? "all" : "spread");
@@ -39,8 +39,8 @@ cJSON *btf_report_json_quality(cJSON *root, const btf_report_base *r, double mea
     return q;
 }
 
-void btf_report_json_pairs(cJSON *quality, const btf_report_base *r, btf_report_pair_json keys,
-                           int null_picture)
+void btf__report_json_pairs(cJSON *quality, const btf_report_base *r, btf_report_pair_json keys,
+                            int null_picture)
 {
     cJSON *worst = cJSON_AddArrayToObject(quality, "worst");
     for (int k = 0; k < r->n_worst; k++)
@@ -52,12 +52,12 @@ void btf_report_json_pairs(cJSON *quality, const btf_report_base *r, btf_report_
         cJSON_AddItemToArray(arr, j);
         cJSON_AddNumberToObject(j, "view", p->view);
         cJSON_AddNumberToObject(j, "light", p->light);
-        btf_report_json_dir(j, "view_dir", r->in->views->dirs[p->view]);
-        btf_report_json_dir(j, "light_dir", r->in->lights->dirs[p->light]);
+        btf__report_json_dir(j, "view_dir", r->in->views->dirs[p->view]);
+        btf__report_json_dir(j, "light_dir", r->in->lights->dirs[p->light]);
         keys(j, r, i);
         if (r->pictured[i]) {
             char name[64];
-            btf_report_pair_file(p->view, p->light, name, sizeof name);
+            btf__report_pair_file(p->view, p->light, name, sizeof name);
             cJSON_AddStringToObject(j, "picture", name);
         } else if (null_picture) {
             cJSON_AddNullToObject(j, "picture");
@@ -65,22 +65,22 @@ void btf_report_json_pairs(cJSON *quality, const btf_report_base *r, btf_report_
     }
 }
 
-cJSON *btf_report_json_preview(cJSON *root, const btf_report_base *r)
+cJSON *btf__report_json_preview(cJSON *root, const btf_report_base *r)
 {
     cJSON *pv = cJSON_AddObjectToObject(root, "preview");
     cJSON_AddStringToObject(pv, "picture", "sphere.png");
-    btf_report_json_dir(pv, "light", r->o->sphere_light);
+    btf__report_json_dir(pv, "light", r->o->sphere_light);
     cJSON_AddNumberToObject(pv, "size", r->o->sphere_size);
     cJSON_AddNumberToObject(pv, "seconds", r->sphere_s);
     return pv;
 }
 
-btf_status btf_report_json(const btf_report_base *r, const btf_report_family *f,
-                           const char *dir, btf_error *err)
+btf_status btf__report_json(const btf_report_base *r, const btf_report_family *f,
+                            const char *dir, btf_error *err)
 {
     cJSON *root = cJSON_CreateObject();
     if (!root)
-        return btf_fail(err, BTF_E_NOMEM, "report.json: out of memory");
+        return btf__fail(err, BTF_E_NOMEM, "report.json: out of memory");
     cJSON_AddStringToObject(root, "format", "btfcar-report");
     cJSON_AddNumberToObject(root, "format_version", 1);
     if (f->name)
@@ -103,9 +103,9 @@ btf_status btf_report_json(const btf_report_base *r, const btf_report_family *f,
     char *text = cJSON_Print(root);
     cJSON_Delete(root);
     if (!text)
-        return btf_fail(err, BTF_E_NOMEM, "report.json: out of memory");
+        return btf__fail(err, BTF_E_NOMEM, "report.json: out of memory");
     char path[4096];
-    btf_status rc = btf_path_join(path, sizeof path, dir, "report.json", err);
+    btf_status rc = btf__path_join(path, sizeof path, dir, "report.json", err);
     if (rc == BTF_OK)
         rc = btf_write_file_atomic(path, text, strlen(text), err);
     cJSON_free(text);

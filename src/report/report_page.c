@@ -36,7 +36,7 @@ static const char STYLE_END[] =
     ".pair img{image-rendering:pixelated;display:block}.note{font-size:13px;color:#444}"
     "img.plot{max-width:100%;height:auto}";
 
-const char *btf_report_bytes_text(uint64_t b, char *buf, size_t n)
+const char *btf__report_bytes_text(uint64_t b, char *buf, size_t n)
 {
     if (b < 10000)
         snprintf(buf, n, "%llu B", (unsigned long long)b);
@@ -49,7 +49,7 @@ const char *btf_report_bytes_text(uint64_t b, char *buf, size_t n)
     return buf;
 }
 
-const char *btf_report_ratio_text(double r, char *buf, size_t n)
+const char *btf__report_ratio_text(double r, char *buf, size_t n)
 {
     if (!(r > 0) || !isfinite(r))
         snprintf(buf, n, "–");
@@ -60,59 +60,59 @@ const char *btf_report_ratio_text(double r, char *buf, size_t n)
     return buf;
 }
 
-double btf_report_ratio(uint64_t raw, uint64_t bytes)
+double btf__report_ratio(uint64_t raw, uint64_t bytes)
 {
     return bytes ? (double)raw / (double)bytes : 0.0;
 }
 
-const char *btf_report_dir_text(btf_dir d, char *buf, size_t n)
+const char *btf__report_dir_text(btf_dir d, char *buf, size_t n)
 {
     snprintf(buf, n, "θ %g φ %g", d.theta, d.phi);
     return buf;
 }
 
-void btf_report_top_begin(btf_buf *b, const btf_report_base *r, const char *note)
+void btf__report_top_begin(btf_buf *b, const btf_report_base *r, const char *note)
 {
     char t[64], q[64], l[64];
-    btf_report_dir_text(r->o->sphere_light, l, sizeof l);
-    btf_buf_printf(b, "<div class=\"top\">\n<figure><img src=\"sphere.png\" width=\"%d\" "
+    btf__report_dir_text(r->o->sphere_light, l, sizeof l);
+    btf__buf_printf(b, "<div class=\"top\">\n<figure><img src=\"sphere.png\" width=\"%d\" "
                       "height=\"%d\" alt=\"the material on a sphere\">\n<figcaption>The "
                       "model on a sphere, one directional light from %s (camera frame), "
                       "%srendered in " BTF_HTML_TIME("%.2f s") ".</figcaption></figure>\n"
                       "<div class=\"cards\">\n",
                    r->o->sphere_size, r->o->sphere_size, l, note ? note : "", r->sphere_s);
-    btf_buf_printf(b, BTF_HTML_CARD("%s", "the model file"),
-                   btf_report_bytes_text(r->model_bytes, t, sizeof t));
-    btf_buf_printf(b, BTF_HTML_CARD("%s", "against the raw BTF (%s)"),
-                   btf_report_ratio_text(btf_report_ratio(r->raw.raw, r->model_bytes), q,
+    btf__buf_printf(b, BTF_HTML_CARD("%s", "the model file"),
+                    btf__report_bytes_text(r->model_bytes, t, sizeof t));
+    btf__buf_printf(b, BTF_HTML_CARD("%s", "against the raw BTF (%s)"),
+                    btf__report_ratio_text(btf__report_ratio(r->raw.raw, r->model_bytes), q,
                                          sizeof q),
-                   btf_report_bytes_text(r->raw.raw, t, sizeof t));
+                   btf__report_bytes_text(r->raw.raw, t, sizeof t));
 }
 
-void btf_report_top_end(btf_buf *b)
+void btf__report_top_end(btf_buf *b)
 {
-    btf_buf_puts(b, "</div>\n</div>\n");
+    btf__buf_puts(b, "</div>\n</div>\n");
 }
 
-void btf_report_row(btf_buf *b, const char *tr_class, const char *what, const char *bytes,
-                    const char *ratio, const char *note)
+void btf__report_row(btf_buf *b, const char *tr_class, const char *what, const char *bytes,
+                     const char *ratio, const char *note)
 {
-    btf_buf_puts(b, "<tr");
+    btf__buf_puts(b, "<tr");
     if (tr_class)
-        btf_buf_printf(b, " class=\"%s\"", tr_class);
-    btf_buf_printf(b, "><td class=\"l\">%s</td><td>%s</td><td>%s</td>", what, bytes, ratio);
+        btf__buf_printf(b, " class=\"%s\"", tr_class);
+    btf__buf_printf(b, "><td class=\"l\">%s</td><td>%s</td><td>%s</td>", what, bytes, ratio);
     if (note)
-        btf_buf_printf(b, "<td class=\"l\">%s</td>", note);
-    btf_buf_puts(b, "</tr>\n");
+        btf__buf_printf(b, "<td class=\"l\">%s</td>", note);
+    btf__buf_puts(b, "</tr>\n");
 }
 
-btf_status btf_report_heatmap(const btf_report_base *r, const char *dir, const char *title,
-                              const char *legend, btf_error *err)
+btf_status btf__report_heatmap(const btf_report_base *r, const char *dir, const char *title,
+                               const char *legend, btf_error *err)
 {
     int nv = r->in->n_views, nl = r->in->n_lights;
-    double *v = btf_alloc((size_t)nv * nl, sizeof(double), err);
-    char **rows = btf_calloc((size_t)nv + nl, sizeof(char *), err);
-    btf_svg_cell *marked = btf_calloc((size_t)r->n_worst + 1, sizeof *marked, err);
+    double *v = btf__alloc((size_t)nv * nl, sizeof(double), err);
+    char **rows = btf__calloc((size_t)nv + nl, sizeof(char *), err);
+    btf_svg_cell *marked = btf__calloc((size_t)r->n_worst + 1, sizeof *marked, err);
     btf_status rc = v && rows && marked ? BTF_OK : BTF_E_NOMEM;
     for (int i = 0; rc == BTF_OK && i < nv * nl; i++)
         v[i] = NAN;
@@ -120,7 +120,7 @@ btf_status btf_report_heatmap(const btf_report_base *r, const char *dir, const c
         v[(size_t)r->pairs[i].view * nl + r->pairs[i].light] = r->pairs[i].rank;
     for (int i = 0; rc == BTF_OK && i < nv + nl; i++) {
         btf_dir dd = i < nv ? r->in->views->dirs[i] : r->in->lights->dirs[i - nv];
-        if (!(rows[i] = btf_alloc(32, 1, err)))
+        if (!(rows[i] = btf__alloc(32, 1, err)))
             rc = BTF_E_NOMEM;
         else
             snprintf(rows[i], 32, "%g, %g", dd.theta, dd.phi);
@@ -146,9 +146,9 @@ btf_status btf_report_heatmap(const btf_report_base *r, const char *dir, const c
         h.marked_label = "the worst pairs";
         h.tooltips = 1;
         char path[4096];
-        rc = btf_path_join(path, sizeof path, dir, "heatmap.svg", err);
+        rc = btf__path_join(path, sizeof path, dir, "heatmap.svg", err);
         if (rc == BTF_OK)
-            rc = btf_svg_heatmap_write(path, &h, err);
+            rc = btf__svg_heatmap_write(path, &h, err);
     }
     for (int i = 0; rows && i < nv + nl; i++)
         free(rows[i]);
@@ -156,12 +156,12 @@ btf_status btf_report_heatmap(const btf_report_base *r, const char *dir, const c
     return rc;
 }
 
-void btf_report_heatmap_figure(btf_buf *b, const char *alt, const char *caption)
+void btf__report_heatmap_figure(btf_buf *b, const char *alt, const char *caption)
 {
-    btf_buf_printf(b, "<figure><img class=\"plot\" src=\"heatmap.svg\" alt=\"%s\">", alt);
+    btf__buf_printf(b, "<figure><img class=\"plot\" src=\"heatmap.svg\" alt=\"%s\">", alt);
     if (caption)
-        btf_buf_printf(b, "<figcaption>%s</figcaption>", caption);
-    btf_buf_puts(b, "</figure>\n");
+        btf__buf_printf(b, "<figcaption>%s</figcaption>", caption);
+    btf__buf_puts(b, "</figure>\n");
 }
 
 static void pair_figure(btf_buf *b, const btf_report_base *r, int i, int zoom,
@@ -169,73 +169,73 @@ static void pair_figure(btf_buf *b, const btf_report_base *r, int i, int zoom,
 {
     const btf_report_pair *p = &r->pairs[i];
     char name[64], vd[48], ld[48];
-    btf_report_pair_file(p->view, p->light, name, sizeof name);
-    btf_report_dir_text(r->in->views->dirs[p->view], vd, sizeof vd);
-    btf_report_dir_text(r->in->lights->dirs[p->light], ld, sizeof ld);
+    btf__report_pair_file(p->view, p->light, name, sizeof name);
+    btf__report_dir_text(r->in->views->dirs[p->view], vd, sizeof vd);
+    btf__report_dir_text(r->in->lights->dirs[p->light], ld, sizeof ld);
     int w = r->in->width * 2 + 4, h = r->in->height;
     /* Small measurements are shown larger where there are few. */
     int scale = zoom && w < 300 ? 2 : 1;
-    btf_buf_printf(b, "<div class=\"pair\"><img src=\"%s\" width=\"%d\" height=\"%d\" "
+    btf__buf_printf(b, "<div class=\"pair\"><img src=\"%s\" width=\"%d\" height=\"%d\" "
                       "alt=\"measured and model, view %s light %s\">view %s, light %s<br>",
                    name, w * scale, h * scale, vd, ld, vd, ld);
     caption(b, r, i);
-    btf_buf_puts(b, "</div>\n");
+    btf__buf_puts(b, "</div>\n");
 }
 
-void btf_report_galleries(btf_buf *b, const btf_report_base *r, const char *worst_heading,
-                          const char *pictured_heading, int zoom_pictured,
-                          btf_report_pair_html caption)
+void btf__report_galleries(btf_buf *b, const btf_report_base *r, const char *worst_heading,
+                           const char *pictured_heading, int zoom_pictured,
+                           btf_report_pair_html caption)
 {
-    btf_buf_printf(b, "<h3>%s</h3>\n<div class=\"pairs\">\n", worst_heading);
+    btf__buf_printf(b, "<h3>%s</h3>\n<div class=\"pairs\">\n", worst_heading);
     for (int k = 0; k < r->n_worst; k++)
         pair_figure(b, r, r->worst[k], 1, caption);
-    btf_buf_printf(b, "</div>\n<h3>%s</h3>\n<div class=\"pairs\">\n", pictured_heading);
+    btf__buf_printf(b, "</div>\n<h3>%s</h3>\n<div class=\"pairs\">\n", pictured_heading);
     for (int i = 0; i < r->n_pairs; i++)
         if (r->pictured[i])
             pair_figure(b, r, i, zoom_pictured, caption);
-    btf_buf_puts(b, "</div>\n");
+    btf__buf_puts(b, "</div>\n");
 }
 
-void btf_report_pair_table(btf_buf *b, const btf_report_base *r, const char *head,
-                           btf_report_pair_html cells)
+void btf__report_pair_table(btf_buf *b, const btf_report_base *r, const char *head,
+                            btf_report_pair_html cells)
 {
-    btf_buf_printf(b, "<h3>Every measured pair</h3>\n<table>\n<tr><th class=\"l\">view</th>"
+    btf__buf_printf(b, "<h3>Every measured pair</h3>\n<table>\n<tr><th class=\"l\">view</th>"
                       "<th class=\"l\">light</th>%s</tr>\n", head);
     for (int i = 0; i < r->n_pairs; i++) {
         const btf_report_pair *p = &r->pairs[i];
         char vd[48], ld[48];
-        btf_buf_printf(b, "<tr><td class=\"l\">%s</td><td class=\"l\">%s</td>",
-                       btf_report_dir_text(r->in->views->dirs[p->view], vd, sizeof vd),
-                       btf_report_dir_text(r->in->lights->dirs[p->light], ld, sizeof ld));
+        btf__buf_printf(b, "<tr><td class=\"l\">%s</td><td class=\"l\">%s</td>",
+                        btf__report_dir_text(r->in->views->dirs[p->view], vd, sizeof vd),
+                        btf__report_dir_text(r->in->lights->dirs[p->light], ld, sizeof ld));
         cells(b, r, i);
-        btf_buf_puts(b, "</tr>\n");
+        btf__buf_puts(b, "</tr>\n");
     }
-    btf_buf_puts(b, "</table>\n");
+    btf__buf_puts(b, "</table>\n");
 }
 
-btf_status btf_report_page(const btf_report_base *r, const btf_report_family *f,
-                           const char *dir, btf_error *err)
+btf_status btf__report_page(const btf_report_base *r, const btf_report_family *f,
+                            const char *dir, btf_error *err)
 {
     btf_buf b = {0};
-    btf_buf_puts(&b, "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+    btf__buf_puts(&b, "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
                      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
                      "<title>btfcar report: ");
-    btf_buf_html(&b, r->dataset_name);
-    btf_buf_printf(&b, "</title>\n<style>%s%s%s</style>\n</head>\n<body>\n<h1>btfcar report: ",
-                   STYLE_TOP, f->style, STYLE_END);
-    btf_buf_html(&b, r->dataset_name);
-    btf_buf_puts(&b, "</h1>\n<p class=\"meta\">");
+    btf__buf_html(&b, r->dataset_name);
+    btf__buf_printf(&b, "</title>\n<style>%s%s%s</style>\n</head>\n<body>\n<h1>btfcar report: ",
+                    STYLE_TOP, f->style, STYLE_END);
+    btf__buf_html(&b, r->dataset_name);
+    btf__buf_puts(&b, "</h1>\n<p class=\"meta\">");
     f->about->html(&b, r);
-    btf_buf_puts(&b, "</p>\n");
+    btf__buf_puts(&b, "</p>\n");
     for (int i = 0; i < f->n_sections; i++)
         if (f->sections[i]->html)
             f->sections[i]->html(&b, r);
-    btf_buf_printf(&b, "<p class=\"meta\">Made by btfcar " BTF_VERSION_STRING " (%s). The same "
+    btf__buf_printf(&b, "<p class=\"meta\">Made by btfcar " BTF_VERSION_STRING " (%s). The same "
                        "numbers: report.json.</p>\n</body>\n</html>\n", f->citation);
     char path[4096];
-    btf_status rc = btf_path_join(path, sizeof path, dir, "index.html", err);
+    btf_status rc = btf__path_join(path, sizeof path, dir, "index.html", err);
     if (rc == BTF_OK)
-        rc = btf_buf_write(&b, path, err);
-    btf_buf_free(&b);
+        rc = btf__buf_write(&b, path, err);
+    btf__buf_free(&b);
     return rc;
 }

@@ -29,10 +29,10 @@ btf_report_opts btf_report_defaults(void)
     return o;
 }
 
-btf_status btf_report_resolve(const btf_report_opts *in, btf_report_opts *o, btf_error *err)
+btf_status btf__report_resolve(const btf_report_opts *in, btf_report_opts *o, btf_error *err)
 {
     btf_report_opts d = btf_report_defaults();
-    if (btf_opts_take(o, sizeof *o, in, &d, "btf_report_write", err))
+    if (btf__opts_take(o, sizeof *o, in, &d, "btf_report_write", err))
         return BTF_E_ARG;
     if (!o->sphere_light_set && o->sphere_light.theta == 0.0 && o->sphere_light.phi == 0.0)
         o->sphere_light = d.sphere_light;
@@ -41,16 +41,16 @@ btf_status btf_report_resolve(const btf_report_opts *in, btf_report_opts *o, btf
     if (o->worst == 0)
         o->worst = d.worst;
     if (o->sphere_size < 16 || o->sphere_size > 4096)
-        return btf_fail(err, BTF_E_ARG, "report: preview size %d: expected 16..4096",
-                        o->sphere_size);
+        return btf__fail(err, BTF_E_ARG, "report: preview size %d: expected 16..4096",
+                         o->sphere_size);
     if (o->worst < 0 || o->worst > 100)
-        return btf_fail(err, BTF_E_ARG, "report: %d worst pairs: expected 0..100", o->worst);
+        return btf__fail(err, BTF_E_ARG, "report: %d worst pairs: expected 0..100", o->worst);
     return BTF_OK;
 }
 
-void btf_report_begin(btf_report_base *r, const btf_dataset *ds, const btf_report_opts *o)
+void btf__report_begin(btf_report_base *r, const btf_dataset *ds, const btf_report_opts *o)
 {
-    r->t0 = btf_now();
+    r->t0 = btf__now();
     r->in = btf_dataset_get_info(ds);
     r->o = o;
     r->dataset_name = o->dataset_name ? o->dataset_name : r->in->root;
@@ -61,13 +61,13 @@ void btf_report_begin(btf_report_base *r, const btf_dataset *ds, const btf_repor
     strftime(r->date, sizeof r->date, "%Y-%m-%d %H:%M UTC", &tm);
 }
 
-btf_status btf_report_pictures_begin(btf_report_base *r, unsigned char **want, btf_error *err)
+btf_status btf__report_pictures_begin(btf_report_base *r, unsigned char **want, btf_error *err)
 {
     const btf_dataset_info *in = r->in;
     size_t every = (size_t)in->n_views * in->n_lights;
-    *want = btf_calloc(every, 1, err);
-    r->pictured = *want ? btf_calloc(every, 1, err) : NULL;
-    int *vi = r->pictured ? btf_alloc((size_t)in->n_views + in->n_lights, sizeof(int), err) : NULL;
+    *want = btf__calloc(every, 1, err);
+    r->pictured = *want ? btf__calloc(every, 1, err) : NULL;
+    int *vi = r->pictured ? btf__alloc((size_t)in->n_views + in->n_lights, sizeof(int), err) : NULL;
     if (!vi) {
         free(*want);
         *want = NULL;
@@ -76,9 +76,9 @@ btf_status btf_report_pictures_begin(btf_report_base *r, unsigned char **want, b
     int *li = vi + in->n_views;
     const btf_quality_opts *q = &r->o->quality;
     btf_quality_opts def = btf_quality_defaults();
-    int nv = btf_spread_directions(in->views, q->all ? def.views : (q->views > 0 ? q->views : 9), vi);
-    int nl = btf_spread_directions(in->lights,
-                                   q->all ? def.lights : (q->lights > 0 ? q->lights : 9), li);
+    int nv = btf__spread_directions(in->views, q->all ? def.views : (q->views > 0 ? q->views : 9), vi);
+    int nl = btf__spread_directions(in->lights,
+                                    q->all ? def.lights : (q->lights > 0 ? q->lights : 9), li);
     for (int a = 0; a < nv; a++)
         for (int b = 0; b < nl; b++)
             (*want)[(size_t)vi[a] * in->n_lights + li[b]] = 1;
@@ -86,9 +86,9 @@ btf_status btf_report_pictures_begin(btf_report_base *r, unsigned char **want, b
     return BTF_OK;
 }
 
-btf_status btf_report_pairs_alloc(btf_report_base *r, int n, btf_error *err)
+btf_status btf__report_pairs_alloc(btf_report_base *r, int n, btf_error *err)
 {
-    r->pairs = btf_calloc(n > 0 ? (size_t)n : 1, sizeof *r->pairs, err);
+    r->pairs = btf__calloc(n > 0 ? (size_t)n : 1, sizeof *r->pairs, err);
     if (!r->pairs)
         return BTF_E_NOMEM;
     r->n_pairs = n;
@@ -130,19 +130,19 @@ static btf_status picture_worst(void *user, int job, int worker, btf_error *err)
     if (rc == BTF_OK)
         rc = J->f->render_flat(J->r, p->view, p->light, &model, err);
     if (rc == BTF_OK)
-        rc = btf_report_picture(J->r, J->dir, i, p->view, p->light, &meas, &model, err);
+        rc = btf__report_picture(J->r, J->dir, i, p->view, p->light, &meas, &model, err);
     btf_image_free(&meas);
     btf_image_free(&model);
     return rc;
 }
 
-btf_status btf_report_worst(btf_report_base *r, const btf_report_family *f,
-                            const btf_dataset *ds, const char *dir, int threads,
-                            btf_error *err)
+btf_status btf__report_worst(btf_report_base *r, const btf_report_family *f,
+                             const btf_dataset *ds, const char *dir, int threads,
+                             btf_error *err)
 {
     int n = r->n_pairs;
-    int *order = btf_alloc((size_t)n, sizeof(int), err);
-    ranked *k = btf_alloc((size_t)n, sizeof(ranked), err);
+    int *order = btf__alloc((size_t)n, sizeof(int), err);
+    ranked *k = btf__alloc((size_t)n, sizeof(ranked), err);
     if (!order || !k) {
         free(order);
         free(k);
@@ -157,11 +157,11 @@ btf_status btf_report_worst(btf_report_base *r, const btf_report_family *f,
     r->worst = order;
     r->n_worst = r->o->worst < n ? r->o->worst : n;
     worst_job J = {r, f, ds, dir};
-    return btf_pool_run(r->n_worst, threads, picture_worst, &J, NULL, err);
+    return btf__pool_run(r->n_worst, threads, picture_worst, &J, NULL, err);
 }
 
-btf_status btf_report_preview(btf_report_base *r, const btf_report_family *f, const char *dir,
-                              btf_error *err)
+btf_status btf__report_preview(btf_report_base *r, const btf_report_family *f, const char *dir,
+                               btf_error *err)
 {
     btf_scene sc;
     int side = r->o->sphere_size;
@@ -169,12 +169,12 @@ btf_status btf_report_preview(btf_report_base *r, const btf_report_family *f, co
     if (rc)
         return rc;
     btf_image img = {0};
-    double t0 = btf_now();
+    double t0 = btf__now();
     rc = f->render_scene(r, &sc, side, &img, err);
-    r->sphere_s = btf_now() - t0;
+    r->sphere_s = btf__now() - t0;
     char path[4096];
     if (rc == BTF_OK)
-        rc = btf_path_join(path, sizeof path, dir, "sphere.png", err);
+        rc = btf__path_join(path, sizeof path, dir, "sphere.png", err);
     if (rc == BTF_OK)
         rc = btf_image_write_png(path, &img, err);
     btf_image_free(&img);
@@ -191,15 +191,15 @@ static btf_status write_all(const btf_report_base *r, const btf_report_family *f
         if (f->sections[i]->files)
             rc = f->sections[i]->files(r, dir, err);
     if (rc == BTF_OK)
-        rc = btf_report_page(r, f, dir, err);
+        rc = btf__report_page(r, f, dir, err);
     if (rc == BTF_OK)
-        rc = btf_report_json(r, f, dir, err);
+        rc = btf__report_json(r, f, dir, err);
     return rc;
 }
 
-btf_status btf_report_run(btf_report_base *r, const btf_report_family *f,
-                          const btf_dataset *ds, const char *dir, btf_report_summary *summary,
-                          btf_error *err)
+btf_status btf__report_run(btf_report_base *r, const btf_report_family *f,
+                           const btf_dataset *ds, const char *dir, btf_report_summary *summary,
+                           btf_error *err)
 {
     btf_output_dir *od = NULL;
     btf_status rc = btf_output_dir_begin(dir, &od, err);
@@ -207,7 +207,7 @@ btf_status btf_report_run(btf_report_base *r, const btf_report_family *f,
         return rc;
     const char *tmp = btf_output_dir_path(od);
     rc = f->measure(r, ds, tmp, dir, err);
-    r->seconds = btf_now() - r->t0;
+    r->seconds = btf__now() - r->t0;
     if (rc == BTF_OK)
         rc = write_all(r, f, tmp, err);
     if (rc == BTF_OK)
@@ -217,17 +217,17 @@ btf_status btf_report_run(btf_report_base *r, const btf_report_family *f,
     if (rc == BTF_OK && summary) {
         summary->model_bytes = r->model_bytes;
         summary->raw_bytes = r->raw.raw;
-        summary->ratio = btf_report_ratio(r->raw.raw, r->model_bytes);
+        summary->ratio = btf__report_ratio(r->raw.raw, r->model_bytes);
         summary->pairs = r->n_pairs;
         f->summarise(r, summary);
-        summary->seconds = btf_now() - r->t0;
+        summary->seconds = btf__now() - r->t0;
     }
     if (r->o->progress)
         r->o->progress(r->o->progress_user, 1.0, "done");
     return rc;
 }
 
-void btf_report_base_free(btf_report_base *r)
+void btf__report_base_free(btf_report_base *r)
 {
     BTF_FREE_ALL(r->pairs, r->pictured, r->worst);
     r->pairs = NULL;

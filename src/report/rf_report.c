@@ -1,15 +1,15 @@
 /*
- * rf_report.c — btf_rf_report_write: the report of a reflectance-field
+ * rf_report.c — btf__rf_report_write: the report of a reflectance-field
  * model (docs/report.md, "Reflectance-field models"): beside the CAR
  * model's compression and quality, the pixel-wise error, by which only
  * this family can be judged. Compression: the model file's bytes against
  * the raw BTF. Quality per sampled (view, light) pair: the measured image
- * against the model's flat render of that pair (btf_rf_render_flat, at a
+ * against the model's flat render of that pair (btf__rf_render_flat, at a
  * measured pair the fitted field itself) by the texture distances the CAR
  * report uses, and — since this family keeps every texel — the pixel-wise
  * mean |dY|; over every image of the dataset the paper's Table 1 error
- * (btf_rf_error). Pictures of the sampled and the worst pairs, the preview
- * sphere (btf_rf_render_scene). No sweep: an RF model has no CAR settings
+ * (btf__rf_error). Pictures of the sampled and the worst pairs, the preview
+ * sphere (btf__rf_render_scene). No sweep: an RF model has no CAR settings
  * to trade. A sampled model (the paper's section 6) is measured like any
  * other, its surface through the coordinate map, and its compression
  * figures split into the sample's coefficients and the map. The shared run
@@ -32,19 +32,19 @@ static btf_status check_match(const btf_dataset_info *in, const btf_rf_model *m,
     /* a sampled model's surface is compared as the flat render shows it */
     if ((!m->map && (m->width != in->width || m->height != in->height)) ||
         m->views.count != in->n_views || m->lights.count != in->n_lights)
-        return btf_fail(err, BTF_E_ARG, "reflectance-field model of %d views x %d lights of "
-                        "%dx%d texels does not describe dataset %s (%d views x %d lights of "
-                        "%dx%d)", m->views.count, m->lights.count, m->width, m->height,
-                        in->root, in->n_views, in->n_lights, in->width, in->height);
+        return btf__fail(err, BTF_E_ARG, "reflectance-field model of %d views x %d lights of "
+                         "%dx%d texels does not describe dataset %s (%d views x %d lights of "
+                         "%dx%d)", m->views.count, m->lights.count, m->width, m->height,
+                         in->root, in->n_views, in->n_lights, in->width, in->height);
     for (int i = 0; i < in->n_views + in->n_lights; i++) {
         btf_dir a = i < in->n_views ? m->views.dirs[i] : m->lights.dirs[i - in->n_views];
         btf_dir b = i < in->n_views ? in->views->dirs[i] : in->lights->dirs[i - in->n_views];
         if (btf_dir_angle(a, b) > BTF_DIR_NAME_TOLERANCE)
-            return btf_fail(err, BTF_E_ARG, "reflectance-field model's %s %d (theta %g, phi "
-                            "%g) is not dataset %s's (theta %g, phi %g)",
-                            i < in->n_views ? "view" : "light",
-                            i < in->n_views ? i : i - in->n_views, a.theta, a.phi, in->root,
-                            b.theta, b.phi);
+            return btf__fail(err, BTF_E_ARG, "reflectance-field model's %s %d (theta %g, phi "
+                             "%g) is not dataset %s's (theta %g, phi %g)",
+                             i < in->n_views ? "view" : "light",
+                             i < in->n_views ? i : i - in->n_views, a.theta, a.phi, in->root,
+                             b.theta, b.phi);
     }
     return BTF_OK;
 }
@@ -65,8 +65,8 @@ static btf_status render_flat(const btf_report_base *r, int view, int light, btf
                               btf_error *err)
 {
     const btf_rf_report *d = (const btf_rf_report *)r;
-    return btf_rf_render_flat(d->m, r->in->views->dirs[view], r->in->lights->dirs[light],
-                              r->in->width, r->in->height, 1, out, err);
+    return btf__rf_render_flat(d->m, r->in->views->dirs[view], r->in->lights->dirs[light],
+                               r->in->width, r->in->height, 1, out, err);
 }
 
 /* One pair: the measured image against the flat render, by texture
@@ -94,7 +94,7 @@ static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
         p->mean_abs_dy = n ? s / (double)n : 0.0;
     }
     if (rc == BTF_OK && J->want[(size_t)rp->view * r->in->n_lights + rp->light])
-        rc = btf_report_picture(r, J->dir, job, rp->view, rp->light, &meas, &model, err);
+        rc = btf__report_picture(r, J->dir, job, rp->view, rp->light, &meas, &model, err);
     btf_image_free(&meas);
     btf_image_free(&model);
     return rc;
@@ -105,7 +105,7 @@ static btf_status choose_pairs(btf_rf_report *d, btf_error *err)
 {
     const btf_dataset_info *in = d->r.in;
     const btf_quality_opts *q = &d->r.o->quality;
-    int *vi = btf_alloc((size_t)in->n_views + in->n_lights, sizeof(int), err);
+    int *vi = btf__alloc((size_t)in->n_views + in->n_lights, sizeof(int), err);
     if (!vi)
         return BTF_E_NOMEM;
     int *li = vi + in->n_views, nv, nl;
@@ -116,11 +116,11 @@ static btf_status choose_pairs(btf_rf_report *d, btf_error *err)
             li[i] = i;
         nv = in->n_views, nl = in->n_lights;
     } else {
-        nv = btf_spread_directions(in->views, q->views > 0 ? q->views : 9, vi);
-        nl = btf_spread_directions(in->lights, q->lights > 0 ? q->lights : 9, li);
+        nv = btf__spread_directions(in->views, q->views > 0 ? q->views : 9, vi);
+        nl = btf__spread_directions(in->lights, q->lights > 0 ? q->lights : 9, li);
     }
-    btf_status rc = btf_report_pairs_alloc(&d->r, nv * nl, err);
-    if (rc == BTF_OK && !(d->pairs = btf_calloc((size_t)nv * nl, sizeof *d->pairs, err)))
+    btf_status rc = btf__report_pairs_alloc(&d->r, nv * nl, err);
+    if (rc == BTF_OK && !(d->pairs = btf__calloc((size_t)nv * nl, sizeof *d->pairs, err)))
         rc = BTF_E_NOMEM;
     for (int a = 0; rc == BTF_OK && a < nv; a++)
         for (int b = 0; b < nl; b++) {
@@ -155,7 +155,7 @@ static btf_status render_scene(btf_report_base *r, const btf_scene *sc, int side
                                btf_error *err)
 {
     const btf_rf_report *d = (const btf_rf_report *)r;
-    return btf_rf_render_scene(d->m, sc, side, side, r->o->threads, out, NULL, err);
+    return btf__rf_render_scene(d->m, sc, side, side, r->o->threads, out, NULL, err);
 }
 
 static void summarise(const btf_report_base *r, btf_report_summary *s)
@@ -171,7 +171,7 @@ static btf_status measure(btf_report_base *r, const btf_dataset *ds, const char 
                           const char *final_dir, btf_error *err);
 
 static const btf_report_section *const rf_sections[] = {
-    &btf_rf_top, &btf_rf_compression, &btf_rf_pixelwise, &btf_rf_quality, &btf_rf_preview,
+    &btf__rf_top, &btf__rf_compression, &btf__rf_pixelwise, &btf__rf_quality, &btf__rf_preview,
 };
 
 static const btf_report_family rf_family = {
@@ -183,7 +183,7 @@ static const btf_report_family rf_family = {
     .render_flat = render_flat,
     .render_scene = render_scene,
     .summarise = summarise,
-    .about = &btf_rf_about,
+    .about = &btf__rf_about,
     .sections = rf_sections,
     .n_sections = (int)(sizeof rf_sections / sizeof rf_sections[0]),
 };
@@ -200,59 +200,59 @@ static btf_status measure(btf_report_base *r, const btf_dataset *ds, const char 
     btf_status rc = btf_rf_model_bytes(d->m, &d->bytes, err);
     r->model_bytes = d->bytes.file;
     if (rc == BTF_OK)
-        rc = btf_dataset_raw_bytes(ds, &r->raw, err);
+        rc = btf__dataset_raw_bytes(ds, &r->raw, err);
     if (rc == BTF_OK && o->progress)
         o->progress(o->progress_user, 0.05, "pixel-wise error over every image");
     if (rc == BTF_OK)
-        rc = btf_rf_error(ds, d->m, o->threads, &d->mean_abs_error, &d->mean_luminance, err);
+        rc = btf__rf_error(ds, d->m, o->threads, &d->mean_abs_error, &d->mean_luminance, err);
     if (rc == BTF_OK)
-        rc = btf_report_pictures_begin(r, &want, err);
+        rc = btf__report_pictures_begin(r, &want, err);
     if (rc == BTF_OK)
         rc = choose_pairs(d, err);
     if (rc == BTF_OK) {
         pair_job J = {ds, d, dir, want};
         btf_pool_progress pp = {o->progress, o->progress_user,
                                 "measuring (view, light) pairs", 0.5, 0.9, 1};
-        rc = btf_pool_run(r->n_pairs, o->threads, measure_pair, &J, &pp, err);
+        rc = btf__pool_run(r->n_pairs, o->threads, measure_pair, &J, &pp, err);
     }
     free(want);
     if (rc == BTF_OK) {
         summarise_pairs(d);
-        rc = btf_report_worst(r, &rf_family, ds, dir, o->threads, err);
+        rc = btf__report_worst(r, &rf_family, ds, dir, o->threads, err);
     }
     if (rc == BTF_OK && o->progress)
         o->progress(o->progress_user, 0.9, "the preview");
     if (rc == BTF_OK)
-        rc = btf_report_preview(r, &rf_family, dir, err);
+        rc = btf__report_preview(r, &rf_family, dir, err);
     return rc;
 }
 
-btf_status btf_rf_report_write(const btf_dataset *ds, const btf_rf_model *m, const char *dir,
-                               const btf_report_opts *opts, btf_report_summary *summary,
-                               btf_error *err)
+btf_status btf__rf_report_write(const btf_dataset *ds, const btf_rf_model *m, const char *dir,
+                                const btf_report_opts *opts, btf_report_summary *summary,
+                                btf_error *err)
 {
     if (summary)
         memset(summary, 0, sizeof *summary);
     if (!ds || !m || !m->codes || !dir)
-        return btf_fail(err, BTF_E_ARG, "report: no dataset, reflectance-field model or "
-                        "folder given");
+        return btf__fail(err, BTF_E_ARG, "report: no dataset, reflectance-field model or "
+                         "folder given");
     if (opts && opts->sweep)
-        return btf_fail(err, BTF_E_ARG, "report: the sweep varies the CAR analysis; a "
-                        "reflectance-field model has no such settings");
+        return btf__fail(err, BTF_E_ARG, "report: the sweep varies the CAR analysis; a "
+                         "reflectance-field model has no such settings");
     btf_report_opts o;
-    btf_status rc = btf_report_resolve(opts, &o, err);
+    btf_status rc = btf__report_resolve(opts, &o, err);
     if (rc)
         return rc;
     if (o.threads < 0)
-        return btf_fail(err, BTF_E_ARG, "report: threads %d: expected >= 0", o.threads);
+        return btf__fail(err, BTF_E_ARG, "report: threads %d: expected >= 0", o.threads);
     btf_rf_report d;
     memset(&d, 0, sizeof d);
     d.m = m;
-    btf_report_begin(&d.r, ds, &o);
+    btf__report_begin(&d.r, ds, &o);
     rc = check_match(d.r.in, m, err);
     if (rc == BTF_OK)
-        rc = btf_report_run(&d.r, &rf_family, ds, dir, summary, err);
+        rc = btf__report_run(&d.r, &rf_family, ds, dir, summary, err);
     free(d.pairs);
-    btf_report_base_free(&d.r);
+    btf__report_base_free(&d.r);
     return rc;
 }

@@ -22,7 +22,7 @@ typedef struct btf_rf_report {
     const btf_rf_model *m;
     /* compression: r.model_bytes is btf_rf_encode's file */
     btf_rf_bytes bytes;        /* coefficients and coordinate map (section 6) */
-    /* pixel-wise error over every image (btf_rf_error, the paper's Table 1) */
+    /* pixel-wise error over every image (btf__rf_error, the paper's Table 1) */
     double mean_abs_error, mean_luminance;
     /* quality per sampled pair */
     btf_rf_pair *pairs;        /* r.n_pairs, as r.pairs */
@@ -33,7 +33,7 @@ typedef struct btf_rf_report {
 /* The reflectance-field report's sections (rf_report_page.c): the model
  * under the title, the top, the compression, the pixel-wise error's keys,
  * the quality per direction, the preview's keys. */
-extern const btf_report_section btf_rf_about, btf_rf_top, btf_rf_compression,
-    btf_rf_pixelwise, btf_rf_quality, btf_rf_preview;
+extern const btf_report_section btf__rf_about, btf__rf_top, btf__rf_compression,
+    btf__rf_pixelwise, btf__rf_quality, btf__rf_preview;
 
 #endif

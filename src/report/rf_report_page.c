@@ -34,12 +34,12 @@ static double bytes_per_texel(const btf_report_base *r)
 static void about_html(btf_buf *b, const btf_report_base *r)
 {
     const btf_rf_model *m = rf(r)->m;
-    btf_buf_puts(b, "reflectance-field model ");
-    btf_buf_html(b, r->model_name);
-    btf_buf_printf(b, " (%s", btf_rf_fit_name(m->fit));
+    btf__buf_puts(b, "reflectance-field model ");
+    btf__buf_html(b, r->model_name);
+    btf__buf_printf(b, " (%s", btf_rf_fit_name(m->fit));
     if (m->fit != BTF_RF_PTM)
-        btf_buf_printf(b, ", %d lobe%s", m->lobes, m->lobes == 1 ? "" : "s");
-    btf_buf_printf(b, "; Meseth, Müller &amp; Klein 2003) · %d views × %d lights of %d×%d "
+        btf__buf_printf(b, ", %d lobe%s", m->lobes, m->lobes == 1 ? "" : "s");
+    btf__buf_printf(b, "; Meseth, Müller &amp; Klein 2003) · %d views × %d lights of %d×%d "
                       "pixels · " BTF_HTML_TIME("%s") " · " BTF_HTML_TIME("%.1f s"),
                    r->in->n_views, r->in->n_lights, r->in->width, r->in->height, r->date,
                    r->seconds);
@@ -64,25 +64,25 @@ static void about_json(cJSON *root, const btf_report_base *r)
     }
 }
 
-const btf_report_section btf_rf_about = {NULL, about_html, about_json};
+const btf_report_section btf__rf_about = {NULL, about_html, about_json};
 
 /* ------------------------------------------------------------ the top */
 
 static void top_html(btf_buf *b, const btf_report_base *r)
 {
     const btf_rf_report *d = rf(r);
-    btf_report_top_begin(b, r, NULL);
-    btf_buf_printf(b, BTF_HTML_CARD("%.5f", "mean |ΔY| over every image (%.1f %% of the mean "
+    btf__report_top_begin(b, r, NULL);
+    btf__buf_printf(b, BTF_HTML_CARD("%.5f", "mean |ΔY| over every image (%.1f %% of the mean "
                                             "luminance %.4f)"),
                    d->mean_abs_error, percent(d->mean_abs_error, d->mean_luminance),
                    d->mean_luminance);
-    btf_buf_printf(b, BTF_HTML_CARD("%.2f", "mean combined distance over %d pairs (1.0: as "
+    btf__buf_printf(b, BTF_HTML_CARD("%.2f", "mean combined distance over %d pairs (1.0: as "
                                             "close as the material is to itself)"),
                    d->mean_combined, r->n_pairs);
-    btf_report_top_end(b);
+    btf__report_top_end(b);
 }
 
-const btf_report_section btf_rf_top = {NULL, top_html, NULL};
+const btf_report_section btf__rf_top = {NULL, top_html, NULL};
 
 /* ------------------------------------------------------------ compression */
 
@@ -94,14 +94,14 @@ static void sample_rows(btf_buf *b, const btf_rf_report *d)
     const btf_rf_bytes *y = &d->bytes;
     char what[160], t[64], u[64], q[64];
     snprintf(what, sizeof what, "of which the %d×%d sample's coefficients (in memory: %s)",
-             m->width, m->height, btf_report_bytes_text(y->coefficients, u, sizeof u));
-    btf_report_row(b, NULL, what, btf_report_bytes_text(y->file - y->file_map, t, sizeof t),
-                   btf_report_ratio_text(btf_report_ratio(d->r.raw.raw, y->file - y->file_map),
+             m->width, m->height, btf__report_bytes_text(y->coefficients, u, sizeof u));
+    btf__report_row(b, NULL, what, btf__report_bytes_text(y->file - y->file_map, t, sizeof t),
+                    btf__report_ratio_text(btf__report_ratio(d->r.raw.raw, y->file - y->file_map),
                                          q, sizeof q), NULL);
     snprintf(what, sizeof what, "and the %d×%d coordinate map (in memory: %s, 4 bytes per "
              "texel)", m->surface_width, m->surface_height,
-             btf_report_bytes_text(y->map, u, sizeof u));
-    btf_report_row(b, NULL, what, btf_report_bytes_text(y->file_map, t, sizeof t), "–", NULL);
+             btf__report_bytes_text(y->map, u, sizeof u));
+    btf__report_row(b, NULL, what, btf__report_bytes_text(y->file_map, t, sizeof t), "–", NULL);
 }
 
 static void compression_html(btf_buf *b, const btf_report_base *r)
@@ -109,25 +109,25 @@ static void compression_html(btf_buf *b, const btf_report_base *r)
     const btf_dataset_info *in = r->in;
     const btf_rf_model *m = rf(r)->m;
     char what[160], t[64], q[64], bq[80];
-    btf_buf_puts(b, "<h2>Compression</h2>\n<table>\n<tr><th class=\"l\">what</th><th>bytes"
+    btf__buf_puts(b, "<h2>Compression</h2>\n<table>\n<tr><th class=\"l\">what</th><th>bytes"
                     "</th><th>against raw</th></tr>\n");
     snprintf(what, sizeof what, "raw BTF (%d × %d × %d × %d × 3 bytes)", in->n_views,
              in->n_lights, in->width, in->height);
-    btf_report_row(b, NULL, what, btf_report_bytes_text(r->raw.raw, t, sizeof t), "1 : 1", NULL);
-    btf_report_row(b, NULL, "the dataset as stored",
-                   btf_report_bytes_text(r->raw.on_disk, t, sizeof t),
-                   btf_report_ratio_text(btf_report_ratio(r->raw.raw, r->raw.on_disk), q,
+    btf__report_row(b, NULL, what, btf__report_bytes_text(r->raw.raw, t, sizeof t), "1 : 1", NULL);
+    btf__report_row(b, NULL, "the dataset as stored",
+                    btf__report_bytes_text(r->raw.on_disk, t, sizeof t),
+                    btf__report_ratio_text(btf__report_ratio(r->raw.raw, r->raw.on_disk), q,
                                          sizeof q), NULL);
     snprintf(what, sizeof what, "reflectance-field model file (%d fields × %d slots × 16 bits "
              "per texel, deflated)", m->fields, m->slots);
     snprintf(bq, sizeof bq, "<b>%s</b>",
-             btf_report_ratio_text(btf_report_ratio(r->raw.raw, r->model_bytes), q, sizeof q));
-    btf_report_row(b, NULL, what, btf_report_bytes_text(r->model_bytes, t, sizeof t), bq, NULL);
+             btf__report_ratio_text(btf__report_ratio(r->raw.raw, r->model_bytes), q, sizeof q));
+    btf__report_row(b, NULL, what, btf__report_bytes_text(r->model_bytes, t, sizeof t), bq, NULL);
     if (m->map)
         sample_rows(b, rf(r));
-    btf_buf_puts(b, "</table>\n");
+    btf__buf_puts(b, "</table>\n");
     if (m->map)
-        btf_buf_printf(b, "<p class=\"note\">%.1f bytes of the file per texel. Memory "
+        btf__buf_printf(b, "<p class=\"note\">%.1f bytes of the file per texel. Memory "
                           "reduction (paper section 6, docs/rf.md): the fields are fitted on a "
                           "%d×%d sample at (%d, %d) only, and a %d×%d map of texture "
                           "coordinates from an image quilting of the sample says which sample "
@@ -138,7 +138,7 @@ static void compression_html(btf_buf *b, const btf_report_base *r)
                        bytes_per_texel(r), m->width, m->height, m->sample_x, m->sample_y,
                        m->surface_width, m->surface_height);
     else
-        btf_buf_printf(b, "<p class=\"note\">%.1f bytes of the file per texel. The model "
+        btf__buf_printf(b, "<p class=\"note\">%.1f bytes of the file per texel. The model "
                           "keeps every texel (docs/rf.md), so it is judged pixel by pixel as "
                           "well as by the texture distances.</p>\n",
                        bytes_per_texel(r));
@@ -147,14 +147,14 @@ static void compression_html(btf_buf *b, const btf_report_base *r)
 static void compression_json(cJSON *root, const btf_report_base *r)
 {
     const btf_rf_bytes *y = &rf(r)->bytes;
-    cJSON *c = btf_report_json_compression(root, r);
+    cJSON *c = btf__report_json_compression(root, r);
     cJSON_AddNumberToObject(c, "bytes_per_texel", bytes_per_texel(r));
     cJSON_AddNumberToObject(c, "coefficient_bytes", (double)y->coefficients);
     cJSON_AddNumberToObject(c, "map_bytes", (double)y->map);
     cJSON_AddNumberToObject(c, "file_map_bytes", (double)y->file_map);
 }
 
-const btf_report_section btf_rf_compression = {NULL, compression_html, compression_json};
+const btf_report_section btf__rf_compression = {NULL, compression_html, compression_json};
 
 /* ------------------------------------------------------------ pixel-wise error */
 
@@ -168,34 +168,34 @@ static void pixelwise_json(cJSON *root, const btf_report_base *r)
     cJSON_AddNumberToObject(pw, "worst_pair_abs_dy", d->worst_pair_dy);
 }
 
-const btf_report_section btf_rf_pixelwise = {NULL, NULL, pixelwise_json};
+const btf_report_section btf__rf_pixelwise = {NULL, NULL, pixelwise_json};
 
 /* ------------------------------------------------------------ quality */
 
 static btf_status quality_files(const btf_report_base *r, const char *dir, btf_error *err)
 {
-    return btf_report_heatmap(r, dir, "Pixel-wise mean |ΔY| per (view, light) pair", "|ΔY|",
-                              err);
+    return btf__report_heatmap(r, dir, "Pixel-wise mean |ΔY| per (view, light) pair", "|ΔY|",
+                               err);
 }
 
 static void pair_caption(btf_buf *b, const btf_report_base *r, int i)
 {
     const btf_rf_pair *p = &rf(r)->pairs[i];
-    btf_buf_printf(b, "|ΔY| %.5f · combined %.2f", p->mean_abs_dy, p->d.combined);
+    btf__buf_printf(b, "|ΔY| %.5f · combined %.2f", p->mean_abs_dy, p->d.combined);
 }
 
 static void pair_cells(btf_buf *b, const btf_report_base *r, int i)
 {
     const btf_rf_pair *p = &rf(r)->pairs[i];
-    btf_buf_printf(b, "<td><b>%.5f</b></td><td>%.2f</td><td>%.2f</td><td>%.2f</td><td>%.2f</td>",
-                   p->mean_abs_dy, p->d.spectrum.normalised, p->d.first_order.normalised,
-                   p->d.structure.normalised, p->d.combined);
+    btf__buf_printf(b, "<td><b>%.5f</b></td><td>%.2f</td><td>%.2f</td><td>%.2f</td><td>%.2f</td>",
+                    p->mean_abs_dy, p->d.spectrum.normalised, p->d.first_order.normalised,
+                    p->d.structure.normalised, p->d.combined);
 }
 
 static void quality_html(btf_buf *b, const btf_report_base *r)
 {
     const btf_rf_report *d = rf(r);
-    btf_buf_printf(b, "<h2>Quality per direction</h2>\n<p class=\"note\">%d (view, light) "
+    btf__buf_printf(b, "<h2>Quality per direction</h2>\n<p class=\"note\">%d (view, light) "
                       "pairs: each measured image against the model's flat render of that "
                       "pair (at a measured pair the fitted field itself). Pixel-wise: mean "
                       "|ΔY| %.5f over the pairs, worst %.5f; over every image of the dataset "
@@ -204,11 +204,11 @@ static void quality_html(btf_buf *b, const btf_report_base *r)
                    r->n_pairs, d->mean_pair_dy, d->worst_pair_dy, d->mean_abs_error,
                    d->mean_spectrum, d->mean_first_order, d->mean_structure, d->mean_combined,
                    d->worst_combined);
-    btf_report_heatmap_figure(b, "pixel-wise error per pair", NULL);
+    btf__report_heatmap_figure(b, "pixel-wise error per pair", NULL);
     /* every picture larger when small: the pixel-wise error is what to look at */
-    btf_report_galleries(b, r, "The worst pairs (by |ΔY|)", "The pictured pairs", 1,
-                         pair_caption);
-    btf_report_pair_table(b, r, "<th>|ΔY|</th><th>spectrum</th><th>first order</th>"
+    btf__report_galleries(b, r, "The worst pairs (by |ΔY|)", "The pictured pairs", 1,
+                          pair_caption);
+    btf__report_pair_table(b, r, "<th>|ΔY|</th><th>spectrum</th><th>first order</th>"
                                 "<th>structure</th><th>combined</th>", pair_cells);
 }
 
@@ -225,21 +225,21 @@ static void pair_json(cJSON *o, const btf_report_base *r, int i)
 static void quality_json(cJSON *root, const btf_report_base *r)
 {
     const btf_rf_report *d = rf(r);
-    cJSON *q = btf_report_json_quality(root, r, d->mean_combined);
+    cJSON *q = btf__report_json_quality(root, r, d->mean_combined);
     cJSON_AddNumberToObject(q, "worst_combined", d->worst_combined);
     cJSON_AddNumberToObject(q, "mean_spectrum", d->mean_spectrum);
     cJSON_AddNumberToObject(q, "mean_first_order", d->mean_first_order);
     cJSON_AddNumberToObject(q, "mean_structure", d->mean_structure);
-    btf_report_json_pairs(q, r, pair_json, 0);
+    btf__report_json_pairs(q, r, pair_json, 0);
 }
 
-const btf_report_section btf_rf_quality = {quality_files, quality_html, quality_json};
+const btf_report_section btf__rf_quality = {quality_files, quality_html, quality_json};
 
 /* ------------------------------------------------------------ the preview */
 
 static void preview_json(cJSON *root, const btf_report_base *r)
 {
-    btf_report_json_preview(root, r);
+    btf__report_json_preview(root, r);
 }
 
-const btf_report_section btf_rf_preview = {NULL, NULL, preview_json};
+const btf_report_section btf__rf_preview = {NULL, NULL, preview_json};

@@ -10,10 +10,10 @@
 
 #include <math.h>
 
-void btf_srgb_levels_init(btf_srgb_levels_table *t)
+void btf__srgb_levels_init(btf_srgb_levels_table *t)
 {
     for (int i = 0; i < 256; i++)
-        t->lut[i] = btf_srgb_to_linear((float)i / 255.0f);
+        t->lut[i] = btf__srgb_to_linear((float)i / 255.0f);
     int code = 0;
     for (int k = 0; k <= 4096; k++) {
         float at = (float)k / 4096.0f;
@@ -23,7 +23,7 @@ void btf_srgb_levels_init(btf_srgb_levels_table *t)
     }
 }
 
-void btf_srgb_levels(const btf_srgb_levels_table *t, const float *linear, size_t n, float *out)
+void btf__srgb_levels(const btf_srgb_levels_table *t, const float *linear, size_t n, float *out)
 {
     for (size_t i = 0; i < n; i++) {
         float v = linear[i];
@@ -38,6 +38,6 @@ void btf_srgb_levels(const btf_srgb_levels_table *t, const float *linear, size_t
                 continue;
             }
         }
-        out[i] = btf_linear_to_srgb(v) * 255.0f;
+        out[i] = btf__linear_to_srgb(v) * 255.0f;
     }
 }

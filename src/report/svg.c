@@ -11,35 +11,35 @@
 #include <stdio.h>
 #include <string.h>
 
-void btf_svg_begin(btf_buf *b, double width, double height)
+void btf__svg_begin(btf_buf *b, double width, double height)
 {
     char w[32], h[32];
-    btf_svg_num(w, width);
-    btf_svg_num(h, height);
-    btf_buf_printf(b,
-                   "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-                   "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%s\" height=\"%s\" "
-                   "viewBox=\"0 0 %s %s\" font-family=\"%s\" font-size=\"12\" fill=\"#222222\">\n"
-                   "<rect x=\"0\" y=\"0\" width=\"%s\" height=\"%s\" fill=\"#ffffff\"/>\n",
-                   w, h, w, h, BTF_SVG_FONT, w, h);
+    btf__svg_num(w, width);
+    btf__svg_num(h, height);
+    btf__buf_printf(b,
+                    "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+                    "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%s\" height=\"%s\" "
+                    "viewBox=\"0 0 %s %s\" font-family=\"%s\" font-size=\"12\" fill=\"#222222\">\n"
+                    "<rect x=\"0\" y=\"0\" width=\"%s\" height=\"%s\" fill=\"#ffffff\"/>\n",
+                    w, h, w, h, BTF_SVG_FONT, w, h);
 }
 
-void btf_svg_end(btf_buf *b)
+void btf__svg_end(btf_buf *b)
 {
-    btf_buf_puts(b, "</svg>\n");
+    btf__buf_puts(b, "</svg>\n");
 }
 
-btf_status btf_svg_save(const char *path, btf_buf *b, btf_status made, btf_error *err)
+btf_status btf__svg_save(const char *path, btf_buf *b, btf_status made, btf_error *err)
 {
     if (made == BTF_OK)
-        made = btf_buf_write(b, path, err);
+        made = btf__buf_write(b, path, err);
     else
-        btf_error_name(err, path);
-    btf_buf_free(b);
+        btf__error_name(err, path);
+    btf__buf_free(b);
     return made;
 }
 
-const char *btf_svg_num(char out[32], double v)
+const char *btf__svg_num(char out[32], double v)
 {
     if (!isfinite(v) || fabs(v) > 1e9)
         v = isfinite(v) ? (v > 0 ? 1e9 : -1e9) : 0;
@@ -57,7 +57,7 @@ const char *btf_svg_num(char out[32], double v)
     return out;
 }
 
-const char *btf_svg_label(char out[32], double v)
+const char *btf__svg_label(char out[32], double v)
 {
     if (!isfinite(v)) {
         strcpy(out, "\xE2\x80\x93"); /* en dash */
@@ -75,25 +75,25 @@ const char *btf_svg_label(char out[32], double v)
     return out;
 }
 
-void btf_svg_text(btf_buf *b, double x, double y, double size, const char *anchor,
-                  double angle, const char *extra, const char *text)
+void btf__svg_text(btf_buf *b, double x, double y, double size, const char *anchor,
+                   double angle, const char *extra, const char *text)
 {
     char xs[32], ys[32], ss[32], as[32];
-    btf_svg_num(xs, x);
-    btf_svg_num(ys, y);
-    btf_svg_num(ss, size);
-    btf_buf_printf(b, "<text x=\"%s\" y=\"%s\" font-size=\"%s\" text-anchor=\"%s\"", xs, ys, ss,
-                   anchor ? anchor : "start");
+    btf__svg_num(xs, x);
+    btf__svg_num(ys, y);
+    btf__svg_num(ss, size);
+    btf__buf_printf(b, "<text x=\"%s\" y=\"%s\" font-size=\"%s\" text-anchor=\"%s\"", xs, ys, ss,
+                    anchor ? anchor : "start");
     if (angle != 0 && isfinite(angle))
-        btf_buf_printf(b, " transform=\"rotate(%s %s %s)\"", btf_svg_num(as, angle), xs, ys);
+        btf__buf_printf(b, " transform=\"rotate(%s %s %s)\"", btf__svg_num(as, angle), xs, ys);
     if (extra)
-        btf_buf_printf(b, " %s", extra);
-    btf_buf_puts(b, ">");
-    btf_buf_html(b, text);
-    btf_buf_puts(b, "</text>\n");
+        btf__buf_printf(b, " %s", extra);
+    btf__buf_puts(b, ">");
+    btf__buf_html(b, text);
+    btf__buf_puts(b, "</text>\n");
 }
 
-double btf_svg_text_width(const char *text, double size)
+double btf__svg_text_width(const char *text, double size)
 {
     size_t n = 0;
     for (const unsigned char *s = (const unsigned char *)(text ? text : ""); *s; s++)
@@ -130,7 +130,7 @@ static void linear_ticks(btf_axis *a, double lo, double hi, int snap)
     }
 }
 
-void btf_axis_make(btf_axis *a, double lo, double hi, int log)
+void btf__axis_make(btf_axis *a, double lo, double hi, int log)
 {
     memset(a, 0, sizeof *a);
     a->log = log != 0;
@@ -198,7 +198,7 @@ void btf_axis_make(btf_axis *a, double lo, double hi, int log)
     }
 }
 
-double btf_axis_pos(const btf_axis *a, double v)
+double btf__axis_pos(const btf_axis *a, double v)
 {
     if (!isfinite(v))
         return 0;

@@ -49,7 +49,7 @@ btf_sweep_opts btf_sweep_defaults(void)
 static btf_status resolve(const btf_sweep_opts *in, btf_sweep_opts *o, btf_error *err)
 {
     btf_sweep_opts d = btf_sweep_defaults();
-    if (btf_opts_take(o, sizeof *o, in, &d, "btf_sweep_run", err))
+    if (btf__opts_take(o, sizeof *o, in, &d, "btf_sweep_run", err))
         return BTF_E_ARG;
     if (o->n_subspaces == 0) {
         o->n_subspaces = d.n_subspaces;
@@ -68,31 +68,31 @@ static btf_status resolve(const btf_sweep_opts *in, btf_sweep_opts *o, btf_error
     if (o->n_range_sizes == 0)
         o->n_range_sizes = 1, o->range_sizes[0] = 0;
     if (o->n_range_sizes < 0 || o->n_range_sizes > BTF_SWEEP_MAX_VALUES)
-        return btf_fail(err, BTF_E_ARG, "sweep: at most %d range sizes", BTF_SWEEP_MAX_VALUES);
+        return btf__fail(err, BTF_E_ARG, "sweep: at most %d range sizes", BTF_SWEEP_MAX_VALUES);
     for (int i = 0; i < o->n_range_sizes; i++)
         if (o->range_sizes[i] != 0 && (o->range_sizes[i] < 4 || o->range_sizes[i] > 4096))
-            return btf_fail(err, BTF_E_ARG,
-                            "sweep: range size %d: expected 0 (the analysed resolution) or "
-                            "4..4096", o->range_sizes[i]);
+            return btf__fail(err, BTF_E_ARG,
+                             "sweep: range size %d: expected 0 (the analysed resolution) or "
+                             "4..4096", o->range_sizes[i]);
     if (o->n_plain < 0 || o->n_plain > 2 || (o->n_plain == 2 && o->plain[0] == o->plain[1]))
-        return btf_fail(err, BTF_E_ARG, "sweep: %d structure values (expected on, off or both)",
-                        o->n_plain);
+        return btf__fail(err, BTF_E_ARG, "sweep: %d structure values (expected on, off or both)",
+                         o->n_plain);
     for (int i = 0; i < o->n_plain; i++)
         if (o->plain[i] != 0 && o->plain[i] != 1)
-            return btf_fail(err, BTF_E_ARG, "sweep: structure value %d (expected 0: on, 1: off)",
-                            o->plain[i]);
+            return btf__fail(err, BTF_E_ARG, "sweep: structure value %d (expected 0: on, 1: off)",
+                             o->plain[i]);
     if (o->share_count < 0 || o->share_count > 100000 ||
         (o->share_count > 0 && (o->share_index < 0 || o->share_index >= o->share_count)) ||
         (o->share_count == 0 && o->share_index != 0))
-        return btf_fail(err, BTF_E_ARG, "sweep: share %d of %d (expected 0 <= I < N)",
-                        o->share_index, o->share_count);
+        return btf__fail(err, BTF_E_ARG, "sweep: share %d of %d (expected 0 <= I < N)",
+                         o->share_index, o->share_count);
     if (o->resume_only && !o->state_dir)
-        return btf_fail(err, BTF_E_ARG, "sweep: a merge (resume_only) needs the state folder");
+        return btf__fail(err, BTF_E_ARG, "sweep: a merge (resume_only) needs the state folder");
     if (o->seeds == 0)
         o->seeds = d.seeds;
     if (o->seeds < 1 || o->seeds > BTF_SWEEP_MAX_SEEDS)
-        return btf_fail(err, BTF_E_ARG, "sweep: %d seeds (expected 1..%d)", o->seeds,
-                        BTF_SWEEP_MAX_SEEDS);
+        return btf__fail(err, BTF_E_ARG, "sweep: %d seeds (expected 1..%d)", o->seeds,
+                         BTF_SWEEP_MAX_SEEDS);
     if (o->synth_size == 0)
         o->synth_size = d.synth_size;
     if (o->render_size == 0)
@@ -100,25 +100,25 @@ static btf_status resolve(const btf_sweep_opts *in, btf_sweep_opts *o, btf_error
     if (o->n_subspaces < 0 || o->n_subspaces > BTF_SWEEP_MAX_VALUES || o->n_levels < 0 ||
         o->n_levels > BTF_SWEEP_MAX_VALUES || o->n_neighbours < 0 ||
         o->n_neighbours > BTF_SWEEP_MAX_VALUES)
-        return btf_fail(err, BTF_E_ARG, "sweep: at most %d values per setting",
-                        BTF_SWEEP_MAX_VALUES);
+        return btf__fail(err, BTF_E_ARG, "sweep: at most %d values per setting",
+                         BTF_SWEEP_MAX_VALUES);
     for (int i = 0; i < o->n_subspaces; i++)
         if (o->subspaces[i] < 0 || o->subspaces[i] > 255)
-            return btf_fail(err, BTF_E_ARG, "sweep: subspaces %d: expected 0 (auto) or 1..255",
-                            o->subspaces[i]);
+            return btf__fail(err, BTF_E_ARG, "sweep: subspaces %d: expected 0 (auto) or 1..255",
+                             o->subspaces[i]);
     for (int i = 0; i < o->n_levels; i++)
         if (o->levels[i] < 0 || o->levels[i] > BTF_MAX_LEVELS)
-            return btf_fail(err, BTF_E_ARG, "sweep: levels %d: expected 0 (auto) or 1..%d",
-                            o->levels[i], BTF_MAX_LEVELS);
+            return btf__fail(err, BTF_E_ARG, "sweep: levels %d: expected 0 (auto) or 1..%d",
+                             o->levels[i], BTF_MAX_LEVELS);
     for (int i = 0; i < o->n_neighbours; i++)
         if (o->neighbours[i] < 0 || o->neighbours[i] > BTF_CAR_MAX_NEIGHBOURS)
-            return btf_fail(err, BTF_E_ARG,
-                            "sweep: neighbours %d: expected 0 (auto) or 1..%d",
-                            o->neighbours[i], BTF_CAR_MAX_NEIGHBOURS);
+            return btf__fail(err, BTF_E_ARG,
+                             "sweep: neighbours %d: expected 0 (auto) or 1..%d",
+                             o->neighbours[i], BTF_CAR_MAX_NEIGHBOURS);
     if (o->synth_size < 8 || o->synth_size > 8192 || o->render_size < 16 ||
         o->render_size > 4096)
-        return btf_fail(err, BTF_E_ARG, "sweep: synthesis size %d (8..8192) or render size %d "
-                        "(16..4096) out of range", o->synth_size, o->render_size);
+        return btf__fail(err, BTF_E_ARG, "sweep: synthesis size %d (8..8192) or render size %d "
+                         "(16..4096) out of range", o->synth_size, o->render_size);
     return BTF_OK;
 }
 
@@ -166,7 +166,7 @@ static btf_status state_path(const sweep_ctx *c, const btf_sweep_setting *s, cha
 {
     char name[64];
     point_name(s, name, sizeof name);
-    return btf_path_join(path, n, c->o->state_dir, name, err);
+    return btf__path_join(path, n, c->o->state_dir, name, err);
 }
 
 static double num(const cJSON *o, const char *key, int *ok)
@@ -179,8 +179,8 @@ static double num(const cJSON *o, const char *key, int *ok)
     return j->valuedouble;
 }
 
-int btf_sweep_point_parse(const char *text, size_t n, const char *fingerprint,
-                          btf_sweep_point *p)
+int btf__sweep_point_parse(const char *text, size_t n, const char *fingerprint,
+                           btf_sweep_point *p)
 {
     cJSON *j = cJSON_ParseWithLength(text, n);
     if (!j)
@@ -229,9 +229,9 @@ static int read_point(const sweep_ctx *c, btf_sweep_point *p)
     unsigned char *data = NULL;
     size_t n = 0;
     if (!c->o->state_dir || state_path(c, &p->setting, path, sizeof path, &e) ||
-        btf_read_file(path, 1 << 20, &data, &n, &e))
+        btf__read_file(path, 1 << 20, &data, &n, &e))
         return 0;
-    int ok = btf_sweep_point_parse((const char *)data, n, c->fingerprint, p);
+    int ok = btf__sweep_point_parse((const char *)data, n, c->fingerprint, p);
     free(data);
     return ok;
 }
@@ -246,7 +246,7 @@ static btf_status write_point(const sweep_ctx *c, const btf_sweep_point *p, btf_
         return rc;
     cJSON *j = cJSON_CreateObject();
     if (!j)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+        return btf__fail(err, BTF_E_NOMEM, "out of memory");
     cJSON_AddStringToObject(j, "format", "btfcar-sweep-point");
     cJSON_AddStringToObject(j, "fingerprint", c->fingerprint);
     cJSON_AddNumberToObject(j, "subspaces", p->setting.subspaces);
@@ -266,7 +266,7 @@ static btf_status write_point(const sweep_ctx *c, const btf_sweep_point *p, btf_
     char *text = cJSON_Print(j);
     cJSON_Delete(j);
     if (!text)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+        return btf__fail(err, BTF_E_NOMEM, "out of memory");
     rc = btf_write_file_atomic(path, text, strlen(text), err);
     cJSON_free(text);
     return rc;
@@ -283,7 +283,7 @@ static btf_analyse_opts setting_opts(const sweep_ctx *c, const btf_sweep_setting
     a.fit.car.n_fixed = 0;
     if (s->neighbours > 0) {
         btf_offset fam[BTF_CAR_MAX_NEIGHBOURS];
-        btf_car_candidate_offsets(fam);
+        btf__car_candidate_offsets(fam);
         memcpy(a.fit.car.fixed, fam, (size_t)s->neighbours * sizeof fam[0]);
         a.fit.car.n_fixed = s->neighbours;
     }
@@ -316,7 +316,7 @@ static int drop_image(void *user, int i, btf_image *img, btf_error *err)
  * of memory. */
 static int *every_subspace(int n, btf_error *err)
 {
-    int *ks = btf_alloc((size_t)n, sizeof(int), err);
+    int *ks = btf__alloc((size_t)n, sizeof(int), err);
     for (int k = 0; ks && k < n; k++)
         ks[k] = k;
     return ks;
@@ -342,9 +342,9 @@ static btf_status time_synthesis(const btf_model *m, const btf_sweep_opts *o, do
     if (!ks)
         return BTF_E_NOMEM;
     btf_synth_opts so = timed_synth_opts(o);
-    double t0 = btf_now();
+    double t0 = btf__now();
     btf_status rc = btf_synthesise_each(m, ks, n, &so, drop_image, NULL, err);
-    *seconds = btf_now() - t0;
+    *seconds = btf__now() - t0;
     free(ks);
     return rc;
 }
@@ -359,7 +359,7 @@ static btf_status time_gpu_synthesis(const btf_model *m, const btf_sweep_opts *o
         return BTF_OK;
     int n = m->n_subspaces;
     int *ks = every_subspace(n, err);
-    btf_image *imgs = btf_calloc((size_t)n, sizeof(btf_image), err);
+    btf_image *imgs = btf__calloc((size_t)n, sizeof(btf_image), err);
     if (!ks || !imgs) {
         free(ks);
         free(imgs);
@@ -367,9 +367,9 @@ static btf_status time_gpu_synthesis(const btf_model *m, const btf_sweep_opts *o
     }
     btf_synth_opts so = timed_synth_opts(o);
     pthread_mutex_lock(gpu_lock);
-    double t0 = btf_now();
+    double t0 = btf__now();
     btf_status rc = btf_gpu_synthesise(o->gpu, m, ks, n, &so, imgs, err);
-    *seconds = btf_now() - t0;
+    *seconds = btf__now() - t0;
     pthread_mutex_unlock(gpu_lock);
     for (int k = 0; k < n; k++)
         btf_image_free(&imgs[k]);
@@ -393,9 +393,9 @@ static btf_status time_render(const btf_model *m, const btf_sweep_opts *o, doubl
     ro.seed = o->quality.seed;
     ro.threads = 1;
     btf_image img = {0};
-    double t0 = btf_now();
+    double t0 = btf__now();
     rc = btf_render_scene(m, &sc, &ro, &img, NULL, err);
-    *seconds = btf_now() - t0;
+    *seconds = btf__now() - t0;
     btf_image_free(&img);
     btf_scene_free(&sc);
     return rc;
@@ -417,13 +417,13 @@ static btf_status measure_quality(const sweep_ctx *c, const btf_model *m, btf_sw
         q.progress = NULL;
         q.on_pair = NULL;
         btf_quality r;
-        btf_status rc = btf_quality_measure(c->ds, m, &q, &r, err);
+        btf_status rc = btf__quality_measure(c->ds, m, &q, &r, err);
         if (rc == BTF_OK) {
             sum += r.mean_combined;
             sum2 += r.mean_combined * r.mean_combined;
             worst += r.worst_combined;
         }
-        btf_quality_free(&r);
+        btf__quality_free(&r);
         if (rc)
             return rc;
     }
@@ -441,11 +441,11 @@ static btf_status measure_point(sweep_ctx *c, btf_sweep_point *p, btf_error *err
 {
     btf_analyse_opts a = setting_opts(c, &p->setting);
     btf_model m;
-    double t0 = btf_now();
+    double t0 = btf__now();
     btf_status rc = btf_analyse(c->ds, &a, &m, err);
     if (rc)
         return rc;
-    p->analyse_s = btf_now() - t0;
+    p->analyse_s = btf__now() - t0;
     p->k = m.n_subspaces;
     unsigned char *bytes = NULL;
     size_t size = 0;
@@ -478,8 +478,8 @@ static btf_status sweep_job(void *user, int job, int worker, btf_error *err)
         /* Name the setting, keep the cause. */
         char why[sizeof err->msg];
         snprintf(why, sizeof why, "%s", err->msg);
-        btf_fail(err, rc, "sweep point K %d, levels %d, neighbours %d: %s",
-                 p->setting.subspaces, p->setting.levels, p->setting.neighbours, why);
+        btf__fail(err, rc, "sweep point K %d, levels %d, neighbours %d: %s",
+                  p->setting.subspaces, p->setting.levels, p->setting.neighbours, why);
     }
     return rc;
 }
@@ -515,8 +515,8 @@ static btf_status make_grid(const btf_sweep_opts *o, btf_sweep *s, btf_error *er
         per_setting += o->plain[d] ? 1 : o->n_range_sizes;
     int n = o->n_subspaces * o->n_levels * o->n_neighbours * per_setting;
     if (n < 1)
-        return btf_fail(err, BTF_E_ARG, "sweep: an empty grid");
-    s->points = btf_calloc((size_t)n, sizeof *s->points, err);
+        return btf__fail(err, BTF_E_ARG, "sweep: an empty grid");
+    s->points = btf__calloc((size_t)n, sizeof *s->points, err);
     if (!s->points)
         return BTF_E_NOMEM;
     int def_n = o->analyse.fit.car.n_fixed;
@@ -559,9 +559,9 @@ static btf_status missing_error(const btf_sweep *s, const char *dir, btf_error *
         at += (size_t)w;
         shown++;
     }
-    return btf_fail(err, BTF_E_DATA, "%s: %d of the sweep's %d points are missing: %s%s; run "
-                    "their shares (--points I/N: point i is in share i mod N)", dir,
-                    s->n_missing, s->n_points, list, s->n_missing > shown ? ", ..." : "");
+    return btf__fail(err, BTF_E_DATA, "%s: %d of the sweep's %d points are missing: %s%s; run "
+                     "their shares (--points I/N: point i is in share i mod N)", dir,
+                     s->n_missing, s->n_points, list, s->n_missing > shown ? ", ..." : "");
 }
 
 static btf_status make_state_dir(const char *dir, btf_error *err)
@@ -569,20 +569,20 @@ static btf_status make_state_dir(const char *dir, btf_error *err)
     struct stat st;
     if (stat(dir, &st) == 0)
         return S_ISDIR(st.st_mode) ? BTF_OK
-                                   : btf_fail(err, BTF_E_IO, "%s: not a folder", dir);
+                                   : btf__fail(err, BTF_E_IO, "%s: not a folder", dir);
     if (mkdir(dir, 0777) != 0)
-        return btf_fail(err, BTF_E_IO, "%s: cannot create the sweep's state folder", dir);
+        return btf__fail(err, BTF_E_IO, "%s: cannot create the sweep's state folder", dir);
     return BTF_OK;
 }
 
-btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_sweep *out,
-                         btf_error *err)
+btf_status btf__sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_sweep *out,
+                          btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "sweep: no output given");
+        return btf__fail(err, BTF_E_ARG, "sweep: no output given");
     memset(out, 0, sizeof *out);
     if (!ds)
-        return btf_fail(err, BTF_E_ARG, "sweep: no dataset given");
+        return btf__fail(err, BTF_E_ARG, "sweep: no dataset given");
     btf_sweep_opts o;
     btf_status rc = resolve(opts, &o, err);
     if (rc || (rc = make_grid(&o, out, err)))
@@ -591,7 +591,7 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
         btf_sweep_free(out);
         return rc;
     }
-    double t0 = btf_now();
+    double t0 = btf__now();
     sweep_ctx c = {.ds = ds, .in = btf_dataset_get_info(ds), .o = &o, .s = out};
     pthread_mutex_init(&c.gpu_lock, NULL);
     make_fingerprint(&c);
@@ -622,22 +622,22 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
         fo.threads = o.threads;
         fo.progress = NULL;
         const btf_dataset_info *in = btf_dataset_get_info(ds);
-        means = btf_alloc((size_t)in->n_views * in->n_lights * 3, sizeof(float), err);
+        means = btf__alloc((size_t)in->n_views * in->n_lights * 3, sizeof(float), err);
         fo.means = means; /* read in the same pass, shared by every setting */
-        rc = means ? btf_dataset_features(ds, &fo, &features, &c.dim, err) : BTF_E_NOMEM;
+        rc = means ? btf__dataset_features(ds, &fo, &features, &c.dim, err) : BTF_E_NOMEM;
         c.means = means;
         if (rc == BTF_OK && !o.analyse.no_range) {
             btf_analyse_opts a = o.analyse;
             a.photostereo.threads = o.threads;
-            rc = btf_analyse_range(ds, &a, &range, err);
+            rc = btf__analyse_range(ds, &a, &range, err);
             c.range = &range;
         }
         c.features = features;
-        out->shared_s = btf_now() - t0;
+        out->shared_s = btf__now() - t0;
     }
     if (rc == BTF_OK) {
         btf_pool_progress pp = {o.progress, o.progress_user, "sweep: settings", 0.0, 1.0, 1};
-        rc = btf_pool_run(out->n_points, o.threads, sweep_job, &c, &pp, err);
+        rc = btf__pool_run(out->n_points, o.threads, sweep_job, &c, &pp, err);
     }
     pthread_mutex_destroy(&c.gpu_lock);
     free(features);
@@ -652,7 +652,7 @@ btf_status btf_sweep_run(const btf_dataset *ds, const btf_sweep_opts *opts, btf_
     mark_front(out, 1);
     mark_front(out, 0);
     out->seeds = o.seeds;
-    out->seconds = btf_now() - t0;
+    out->seconds = btf__now() - t0;
     return BTF_OK;
 }
 

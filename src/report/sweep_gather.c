@@ -37,7 +37,7 @@ static btf_status copy_point(const char *from, const char *to, btf_error *err)
 {
     unsigned char *data = NULL;
     size_t n = 0;
-    if (btf_read_file(from, 1 << 20, &data, &n, err))
+    if (btf__read_file(from, 1 << 20, &data, &n, err))
         return BTF_E_IO;
     btf_status rc = btf_write_file_atomic(to, data, n, err);
     free(data);
@@ -50,17 +50,17 @@ static btf_status gather_one(const char *dir, const char *state_dir, int *copied
     points_folder(dir, src, sizeof src);
     DIR *d = opendir(src);
     if (!d)
-        return btf_fail(err, BTF_E_IO, "%s: cannot read the sweep's points: %s", src,
-                        strerror(errno));
+        return btf__fail(err, BTF_E_IO, "%s: cannot read the sweep's points: %s", src,
+                         strerror(errno));
     btf_status rc = BTF_OK;
     struct dirent *e;
     while (rc == BTF_OK && (e = readdir(d)) != NULL) {
         if (!is_point_file(e->d_name))
             continue;
         char from[4096], to[4096];
-        rc = btf_path_join(from, sizeof from, src, e->d_name, err);
+        rc = btf__path_join(from, sizeof from, src, e->d_name, err);
         if (rc == BTF_OK)
-            rc = btf_path_join(to, sizeof to, state_dir, e->d_name, err);
+            rc = btf__path_join(to, sizeof to, state_dir, e->d_name, err);
         if (rc == BTF_OK && strcmp(from, to))
             rc = copy_point(from, to, err);
         *copied += rc == BTF_OK;
@@ -75,10 +75,10 @@ btf_status btf_sweep_gather(const char *const *dirs, int n, const char *state_di
     if (copied)
         *copied = 0;
     if (!dirs || n < 0 || !state_dir)
-        return btf_fail(err, BTF_E_ARG, "sweep: no folders to gather from, or no state folder");
+        return btf__fail(err, BTF_E_ARG, "sweep: no folders to gather from, or no state folder");
     if (mkdir(state_dir, 0777) != 0 && errno != EEXIST)
-        return btf_fail(err, BTF_E_IO, "%s: cannot create the sweep's state folder: %s",
-                        state_dir, strerror(errno));
+        return btf__fail(err, BTF_E_IO, "%s: cannot create the sweep's state folder: %s",
+                         state_dir, strerror(errno));
     int count = 0;
     btf_status rc = BTF_OK;
     for (int i = 0; rc == BTF_OK && i < n; i++)

@@ -34,7 +34,7 @@ static int grow(btf_buf *b, size_t extra)
     return 0;
 }
 
-int btf_buf_put(btf_buf *b, const char *s, size_t n)
+int btf__buf_put(btf_buf *b, const char *s, size_t n)
 {
     if (grow(b, n))
         return -1;
@@ -45,12 +45,12 @@ int btf_buf_put(btf_buf *b, const char *s, size_t n)
     return 0;
 }
 
-int btf_buf_puts(btf_buf *b, const char *s)
+int btf__buf_puts(btf_buf *b, const char *s)
 {
-    return s ? btf_buf_put(b, s, strlen(s)) : 0;
+    return s ? btf__buf_put(b, s, strlen(s)) : 0;
 }
 
-int btf_buf_printf(btf_buf *b, const char *fmt, ...)
+int btf__buf_printf(btf_buf *b, const char *fmt, ...)
 {
     if (b->failed)
         return -1;
@@ -64,7 +64,7 @@ int btf_buf_printf(btf_buf *b, const char *fmt, ...)
         return -1;
     }
     if ((size_t)n < sizeof small)
-        return btf_buf_put(b, small, (size_t)n);
+        return btf__buf_put(b, small, (size_t)n);
     if (grow(b, (size_t)n))
         return -1;
     va_start(ap, fmt);
@@ -144,7 +144,7 @@ static int escape(const char *text, put_fn put, void *user)
 
 static int put_buf(void *user, const char *s, size_t n)
 {
-    return btf_buf_put(user, s, n);
+    return btf__buf_put(user, s, n);
 }
 
 static int put_file(void *user, const char *s, size_t n)
@@ -152,35 +152,35 @@ static int put_file(void *user, const char *s, size_t n)
     return fwrite(s, 1, n, user) == n ? 0 : -1;
 }
 
-int btf_buf_html(btf_buf *b, const char *text)
+int btf__buf_html(btf_buf *b, const char *text)
 {
     if (b->failed)
         return -1;
     return text ? escape(text, put_buf, b) : 0;
 }
 
-int btf_html_fputs(FILE *f, const char *text)
+int btf__html_fputs(FILE *f, const char *text)
 {
     return text ? escape(text, put_file, f) : 0;
 }
 
-btf_status btf_buf_check(const btf_buf *b, const char *name, btf_error *err)
+btf_status btf__buf_check(const btf_buf *b, const char *name, btf_error *err)
 {
     if (b->failed)
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory while composing the text",
-                        name ? name : "text");
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory while composing the text",
+                         name ? name : "text");
     return BTF_OK;
 }
 
-btf_status btf_buf_write(const btf_buf *b, const char *path, btf_error *err)
+btf_status btf__buf_write(const btf_buf *b, const char *path, btf_error *err)
 {
-    btf_status st = btf_buf_check(b, path, err);
+    btf_status st = btf__buf_check(b, path, err);
     if (st != BTF_OK)
         return st;
     return btf_write_file_atomic(path, b->data ? b->data : "", b->len, err);
 }
 
-void btf_buf_free(btf_buf *b)
+void btf__buf_free(btf_buf *b)
 {
     if (!b)
         return;

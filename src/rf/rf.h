@@ -195,7 +195,7 @@ btf_status rf_flat_check(const btf_rf_model *m, btf_dir view, btf_dir light, int
 
 /* rf_scene.c: the checks of a scene render with m and the G-buffer traced
  * (width, height 0: 512, set here); g is zeroed first, to free in any case
- * (btf_gbuffer_free). Shared by the CPU and the GPU scene renders. */
+ * (btf__gbuffer_free). Shared by the CPU and the GPU scene renders. */
 btf_status rf_scene_trace(const btf_rf_model *m, const btf_scene *s, int *width, int *height,
                           int threads, btf_gbuffer *g, btf_error *err);
 
@@ -249,16 +249,16 @@ void rf_quantise_field(const float *vals, size_t texels, int slots, float *lo, f
 void rf_chroma(double r, double g, double b, float out[3]);
 
 /* Luminance parameters per texel and field of a fit with k lobes. */
-int btf_rf_param_count(int fit, int lobes);
+int btf__rf_param_count(int fit, int lobes);
 /* BTF_E_DATA with the message when ds is a sparse set (the family fits
  * every light at each view); BTF_OK for a full grid. */
-btf_status btf_rf_refuse_sparse(const btf_dataset *ds, btf_error *err);
+btf_status btf__rf_refuse_sparse(const btf_dataset *ds, btf_error *err);
 /* Linear RGB of texel (x, y) (wrapped into the surface, btf_rf_surface_size;
  * a sampled model's through its coordinate map) of field `field` (a view
  * index; 0 for lafortune) lit from `light` (view: the view direction, used
- * by lafortune only); btf_rf_eval weights four of them. */
-void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
-                       int y, float rgb[3]);
+ * by lafortune only); btf__rf_eval weights four of them. */
+void btf__rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
+                        int y, float rgb[3]);
 
 #include "rf/rf_render.h"
 

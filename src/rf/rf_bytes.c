@@ -15,10 +15,10 @@
 btf_status btf_rf_model_bytes(const btf_rf_model *m, btf_rf_bytes *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_model_bytes: no output");
+        return btf__fail(err, BTF_E_ARG, "btf_rf_model_bytes: no output");
     memset(out, 0, sizeof *out);
     if (!m)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_model_bytes: no model");
+        return btf__fail(err, BTF_E_ARG, "btf_rf_model_bytes: no model");
     uint64_t planes = (uint64_t)m->fields * (uint64_t)m->slots;
     out->coefficients = planes * (2 * (uint64_t)m->width * (uint64_t)m->height + 8);
     if (m->map)

@@ -37,9 +37,9 @@ static btf_status image_job(void *user, int i, int worker, btf_error *err)
         return rc;
     const btf_dataset_info *in = btf_dataset_get_info(c->ds);
     if (img.width != in->width || img.height != in->height) {
-        rc = btf_fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the dataset)",
-                      btf_dataset_path(c->ds, v, l), img.width, img.height, in->width,
-                      in->height);
+        rc = btf__fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the dataset)",
+                       btf_dataset_path(c->ds, v, l), img.width, img.height, in->width,
+                       in->height);
         btf_image_free(&img);
         return rc;
     }
@@ -65,22 +65,22 @@ static btf_status image_job(void *user, int i, int worker, btf_error *err)
     return BTF_OK;
 }
 
-btf_status btf_rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
-                        double *mean_abs_error, double *mean_luminance, btf_error *err)
+btf_status btf__rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
+                         double *mean_abs_error, double *mean_luminance, btf_error *err)
 {
     if (!ds || !m || !m->codes)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_error: no dataset or no model");
+        return btf__fail(err, BTF_E_ARG, "btf_rf_error: no dataset or no model");
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     if (in->n_views != m->views.count || in->n_lights != m->lights.count ||
         (!m->map && (in->width != m->width || in->height != m->height)))
-        return btf_fail(err, BTF_E_DATA, "%s: %d views x %d lights of %dx%d (expected the "
-                        "model's %d x %d of %dx%d)", in->root, in->n_views, in->n_lights,
-                        in->width, in->height, m->views.count, m->lights.count, m->width,
-                        m->height);
+        return btf__fail(err, BTF_E_DATA, "%s: %d views x %d lights of %dx%d (expected the "
+                         "model's %d x %d of %dx%d)", in->root, in->n_views, in->n_lights,
+                         in->width, in->height, m->views.count, m->lights.count, m->width,
+                         m->height);
     int n = in->n_views * in->n_lights;
-    err_ctx c = {ds, m, in->n_lights, btf_calloc((size_t)n, sizeof(double), err),
-                 btf_calloc((size_t)n, sizeof(double), err)};
-    btf_status rc = c.e && c.s ? btf_pool_run(n, threads, image_job, &c, NULL, err) : BTF_E_NOMEM;
+    err_ctx c = {ds, m, in->n_lights, btf__calloc((size_t)n, sizeof(double), err),
+                 btf__calloc((size_t)n, sizeof(double), err)};
+    btf_status rc = c.e && c.s ? btf__pool_run(n, threads, image_job, &c, NULL, err) : BTF_E_NOMEM;
     if (rc == BTF_OK) {
         double e = 0.0, s = 0.0;
         for (int i = 0; i < n; i++)

@@ -15,7 +15,7 @@
  * sets, and its size unless the model is sampled: then data texel (x, y)
  * is compared with surface texel (x, y), wrapped, as the flat render shows
  * it (no correspondence outside the sample's own place). */
-btf_status btf_rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
-                        double *mean_abs_error, double *mean_luminance, btf_error *err);
+btf_status btf__rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
+                         double *mean_abs_error, double *mean_luminance, btf_error *err);
 
 #endif

@@ -30,8 +30,8 @@ static void blend_to(const btf_rf_model *m, btf_rf_views vs, const float v[3], b
     rgb[0] = r.r, rgb[1] = r.g, rgb[2] = r.b;
 }
 
-void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
-                       int y, float rgb[3])
+void btf__rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir light, int x,
+                        int y, float rgb[3])
 {
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
     if (!m || !m->codes || field < 0 || field >= m->fields || rf_surface_w(m) < 1 ||
@@ -42,7 +42,7 @@ void btf_rf_eval_field(const btf_rf_model *m, int field, btf_dir view, btf_dir l
              rgb);
 }
 
-void btf_rf_eval(const btf_rf_model *m, btf_dir view, btf_dir light, int x, int y, float rgb[3])
+void btf__rf_eval(const btf_rf_model *m, btf_dir view, btf_dir light, int x, int y, float rgb[3])
 {
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
     if (!m || !m->codes || rf_surface_w(m) < 1 || rf_surface_h(m) < 1)

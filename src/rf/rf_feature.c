@@ -39,8 +39,8 @@ static btf_status read_job(void *user, int l, int worker, btf_error *err)
     if (rc)
         return rc;
     if (img.width != c->w || img.height != c->h || img.channels != 3) {
-        rc = btf_fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the dataset)",
-                      btf_dataset_path(c->ds, c->view, l), img.width, img.height, c->w, c->h);
+        rc = btf__fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the dataset)",
+                       btf_dataset_path(c->ds, c->view, l), img.width, img.height, c->w, c->h);
         btf_image_free(&img);
         return rc;
     }
@@ -95,9 +95,9 @@ static btf_status lambert_operator(const btf_dirset *lights, double *p, btf_erro
         double l[3], x[3];
         btf_dir_to_vec(lights->dirs[j], l);
         if (rf_cholesky_solve(ata, l, 3, x) != 0)
-            return btf_fail(err, BTF_E_NUMERIC, "representative image: the %d light "
-                            "directions give no Lambertian fit (expected lights above the "
-                            "surface)", n);
+            return btf__fail(err, BTF_E_NUMERIC, "representative image: the %d light "
+                             "directions give no Lambertian fit (expected lights above the "
+                             "surface)", n);
         for (int r = 0; r < 3; r++)
             p[r * n + j] = x[r];
     }
@@ -116,15 +116,15 @@ btf_status rf_feature_image(const btf_dataset *ds, int threads, float **out, int
         if (in->views->dirs[v].theta < in->views->dirs[c.view].theta)
             c.view = v;
     *view = c.view;
-    double *p = btf_alloc((size_t)3 * c.n, sizeof(double), err);
-    c.lum = btf_alloc((size_t)c.n * c.w * c.h, sizeof(float), err);
-    c.out = btf_alloc((size_t)c.w * c.h * RF_FEATURES, sizeof(float), err);
+    double *p = btf__alloc((size_t)3 * c.n, sizeof(double), err);
+    c.lum = btf__alloc((size_t)c.n * c.w * c.h, sizeof(float), err);
+    c.out = btf__alloc((size_t)c.w * c.h * RF_FEATURES, sizeof(float), err);
     c.p = p;
     btf_status rc = p && c.lum && c.out ? lambert_operator(in->lights, p, err) : BTF_E_NOMEM;
     if (rc == BTF_OK)
-        rc = btf_pool_run(c.n, threads, read_job, &c, NULL, err);
+        rc = btf__pool_run(c.n, threads, read_job, &c, NULL, err);
     if (rc == BTF_OK)
-        rc = btf_pool_run(c.h, threads, row_job, &c, NULL, err);
+        rc = btf__pool_run(c.h, threads, row_job, &c, NULL, err);
     free(p);
     free(c.lum);
     if (rc) {

@@ -43,11 +43,11 @@ static const char TAGS[S_COUNT][5] = {"VIEW", "LGHT", "RFHD", "RFQR", "RFCD", "R
 #define RFMP_HEAD 17
 #define RFMP_VERSION 1
 
-#define failn btf_box_fail
+#define failn btf__box_fail
 
-int btf_rf_sniff(const unsigned char *data, size_t size)
+int btf__rf_sniff(const unsigned char *data, size_t size)
 {
-    return btf_box_stem(SIGNATURE, data, size);
+    return btf__box_stem(SIGNATURE, data, size);
 }
 
 /* ----------------------------------------------------------- validation */
@@ -57,7 +57,7 @@ int btf_rf_sniff(const unsigned char *data, size_t size)
 static btf_status check_name(const char *set, size_t len, const char *what, const char *name,
                              int code, btf_error *err)
 {
-    size_t i = btf_box_name_unprintable(set, len);
+    size_t i = btf__box_name_unprintable(set, len);
     if (i < len)
         return failn(err, code, name, "%s: name byte %zu is 0x%02x (expected printable ASCII)",
                      what, i, (unsigned char)set[i]);
@@ -78,11 +78,11 @@ static btf_status check_dirset(const btf_dirset *s, const char *what, const char
     btf_status rc = check_name(s->name, len, what, name, code, err);
     for (int i = 0; rc == BTF_OK && i < s->count; i++) {
         btf_dir d = s->dirs[i];
-        if (!btf_box_dir_in_range(d))
+        if (!btf__box_dir_in_range(d))
             return failn(err, code, name, "%s: direction %d is (%g, %g) (expected theta in "
                          "[0, 90], phi in [0, 360))", what, i, d.theta, d.phi);
         btf_dir p = i > 0 ? s->dirs[i - 1] : d;
-        if (i > 0 && !btf_box_dir_follows(p, d))
+        if (i > 0 && !btf__box_dir_follows(p, d))
             return failn(err, code, name, "%s: direction %d (%g, %g) after (%g, %g) "
                          "(expected ring by ring, theta ascending, phi ascending in a "
                          "ring)", what, i, d.theta, d.phi, p.theta, p.phi);
@@ -126,7 +126,7 @@ static btf_status validate(const btf_rf_model *m, const char *name, int code, bt
     if (m->fit == BTF_RF_PTM ? m->lobes != 0 : (m->lobes < 1 || m->lobes > BTF_RF_MAX_LOBES))
         return failn(err, code, name, "%d lobes with the %s fit (expected %s)", m->lobes,
                      btf_rf_fit_name(m->fit), m->fit == BTF_RF_PTM ? "0" : "1..4");
-    int params = btf_rf_param_count(m->fit, m->fit == BTF_RF_PTM ? 2 : m->lobes);
+    int params = btf__rf_param_count(m->fit, m->fit == BTF_RF_PTM ? 2 : m->lobes);
     if (m->params != params || m->slots != params + 3)
         return failn(err, code, name, "%d parameters in %d slots (expected %d in %d for %s)",
                      m->params, m->slots, params, params + 3, btf_rf_fit_name(m->fit));
@@ -156,12 +156,12 @@ static btf_status validate(const btf_rf_model *m, const char *name, int code, bt
  * planes: x shifts' low bytes, their high bytes, y shifts' low, high. */
 static void w_map(btf_box_writer *b, const btf_rf_model *m)
 {
-    size_t body = btf_box_section_begin(b, TAGS[S_RFMP]);
-    btf_box_put_u8(b, RFMP_VERSION);
-    btf_box_put_u32(b, (uint32_t)m->surface_width), btf_box_put_u32(b, (uint32_t)m->surface_height);
-    btf_box_put_u32(b, (uint32_t)m->sample_x), btf_box_put_u32(b, (uint32_t)m->sample_y);
+    size_t body = btf__box_section_begin(b, TAGS[S_RFMP]);
+    btf__box_put_u8(b, RFMP_VERSION);
+    btf__box_put_u32(b, (uint32_t)m->surface_width), btf__box_put_u32(b, (uint32_t)m->surface_height);
+    btf__box_put_u32(b, (uint32_t)m->sample_x), btf__box_put_u32(b, (uint32_t)m->sample_y);
     size_t n = (size_t)m->surface_width * m->surface_height;
-    unsigned char *p = btf_box_reserve(b, 4 * n);
+    unsigned char *p = btf__box_reserve(b, 4 * n);
     if (p)
         for (size_t t = 0; t < n; t++) {
             int x = (int)(t % m->surface_width), y = (int)(t / m->surface_width);
@@ -172,7 +172,7 @@ static void w_map(btf_box_writer *b, const btf_rf_model *m)
                                             m->height);
             p[t] = dx & 255, p[n + t] = dx >> 8, p[2 * n + t] = dy & 255, p[3 * n + t] = dy >> 8;
         }
-    btf_box_section_end(b, body);
+    btf__box_section_end(b, body);
 }
 
 /* The payload: the direction sets, RFHD, RFQR, RFCD and, in a sampled
@@ -180,20 +180,20 @@ static void w_map(btf_box_writer *b, const btf_rf_model *m)
 static void build_payload(btf_box_writer *b, const btf_rf_model *m, size_t planes,
                           size_t texels)
 {
-    btf_box_put_dirset(b, TAGS[S_VIEW], &m->views, 0);
-    btf_box_put_dirset(b, TAGS[S_LGHT], &m->lights, 0);
-    size_t body = btf_box_section_begin(b, TAGS[S_RFHD]);
-    btf_box_put_u8(b, (unsigned)m->fit), btf_box_put_u8(b, (unsigned)m->lobes);
-    btf_box_put_u16(b, (unsigned)m->params), btf_box_put_u16(b, (unsigned)m->slots);
-    btf_box_put_u32(b, (uint32_t)m->width), btf_box_put_u32(b, (uint32_t)m->height);
-    btf_box_put_u32(b, (uint32_t)m->fields);
-    btf_box_section_end(b, body);
-    body = btf_box_section_begin(b, TAGS[S_RFQR]);
+    btf__box_put_dirset(b, TAGS[S_VIEW], &m->views, 0);
+    btf__box_put_dirset(b, TAGS[S_LGHT], &m->lights, 0);
+    size_t body = btf__box_section_begin(b, TAGS[S_RFHD]);
+    btf__box_put_u8(b, (unsigned)m->fit), btf__box_put_u8(b, (unsigned)m->lobes);
+    btf__box_put_u16(b, (unsigned)m->params), btf__box_put_u16(b, (unsigned)m->slots);
+    btf__box_put_u32(b, (uint32_t)m->width), btf__box_put_u32(b, (uint32_t)m->height);
+    btf__box_put_u32(b, (uint32_t)m->fields);
+    btf__box_section_end(b, body);
+    body = btf__box_section_begin(b, TAGS[S_RFQR]);
     for (size_t i = 0; i < planes; i++)
-        btf_box_put_f32(b, m->lo[i]), btf_box_put_f32(b, m->hi[i]);
-    btf_box_section_end(b, body);
-    body = btf_box_section_begin(b, TAGS[S_RFCD]);
-    unsigned char *cd = btf_box_reserve(b, planes * texels * 2);
+        btf__box_put_f32(b, m->lo[i]), btf__box_put_f32(b, m->hi[i]);
+    btf__box_section_end(b, body);
+    body = btf__box_section_begin(b, TAGS[S_RFCD]);
+    unsigned char *cd = btf__box_reserve(b, planes * texels * 2);
     if (cd)
         for (size_t pl = 0; pl < planes; pl++) {
             size_t f = pl / m->slots, s = pl % m->slots;
@@ -204,7 +204,7 @@ static void build_payload(btf_box_writer *b, const btf_rf_model *m, size_t plane
                 lo[t] = (unsigned char)(v & 255), hi[t] = (unsigned char)(v >> 8);
             }
         }
-    btf_box_section_end(b, body);
+    btf__box_section_end(b, body);
     if (m->map)
         w_map(b, m);
 }
@@ -213,7 +213,7 @@ btf_status btf_rf_encode(const btf_rf_model *m, unsigned char **data, size_t *si
                          btf_error *err)
 {
     const char *name = "reflectance-field model";
-    btf_status rc = btf_box_output(data, size, name, err);
+    btf_status rc = btf__box_output(data, size, name, err);
     if (rc)
         return rc;
     if (!m)
@@ -230,12 +230,12 @@ btf_status btf_rf_encode(const btf_rf_model *m, unsigned char **data, size_t *si
                      map_bytes, MAX_BYTES);
     btf_box_writer b = {0};
     build_payload(&b, m, planes, texels);
-    unsigned char *out = b.failed ? NULL : btf_alloc(btf_box_bound(b.n), 1, NULL);
+    unsigned char *out = b.failed ? NULL : btf__alloc(btf__box_bound(b.n), 1, NULL);
     if (!out) {
         free(b.p);
         return failn(err, BTF_E_NOMEM, name, "out of memory encoding the model");
     }
-    *size = btf_box_seal(&FORMAT, m->map ? FMT_MAJOR_MAP : FMT_MAJOR, FMT_MINOR, b.p, b.n, out);
+    *size = btf__box_seal(&FORMAT, m->map ? FMT_MAJOR_MAP : FMT_MAJOR, FMT_MINOR, b.p, b.n, out);
     *data = out;
     free(b.p);
     return BTF_OK;
@@ -244,12 +244,12 @@ btf_status btf_rf_encode(const btf_rf_model *m, unsigned char **data, size_t *si
 btf_status btf_rf_write(const char *path, const btf_rf_model *m, btf_error *err)
 {
     if (!path)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_write: no path");
+        return btf__fail(err, BTF_E_ARG, "btf_rf_write: no path");
     unsigned char *data;
     size_t n;
     btf_status rc = btf_rf_encode(m, &data, &n, err);
     if (rc) {
-        btf_error_name(err, path);
+        btf__error_name(err, path);
         return rc;
     }
     rc = btf_write_file_atomic(path, data, n, err);
@@ -266,30 +266,30 @@ static btf_status open_payload(const unsigned char *data, size_t size, const cha
                                btf_box_payload *pl, unsigned char **owned, unsigned *major_out,
                                btf_error *err)
 {
-    if (!btf_box_stem(SIGNATURE, data, size))
+    if (!btf__box_stem(SIGNATURE, data, size))
         return failn(err, BTF_E_FORMAT, name, "not a reflectance-field model (expected the "
                      "signature \\x89BTFRFL)");
-    if (btf_box_signature(SIGNATURE, data, size) != BTF_BOX_WHOLE)
+    if (btf__box_signature(SIGNATURE, data, size) != BTF_BOX_WHOLE)
         return failn(err, BTF_E_FORMAT, name, "damaged signature: the file went through a "
                      "text-mode transfer (expected \\x89BTFRFL\\r\\n\\x1a\\n; line endings "
                      "converted)");
     if (size < BTF_BOX_HEADER_BYTES + BTF_BOX_CRC_BYTES)
         return failn(err, BTF_E_FORMAT, name, "truncated: %zu bytes (expected at least %d)",
                      size, BTF_BOX_HEADER_BYTES + BTF_BOX_CRC_BYTES);
-    unsigned major = btf_box_load_u16(data + BTF_BOX_AT_MAJOR);
-    unsigned minor = btf_box_load_u16(data + BTF_BOX_AT_MINOR);
+    unsigned major = btf__box_load_u16(data + BTF_BOX_AT_MAJOR);
+    unsigned minor = btf__box_load_u16(data + BTF_BOX_AT_MINOR);
     if (major != FMT_MAJOR && major != FMT_MAJOR_MAP)
         return failn(err, BTF_E_FORMAT, name, "format version %u.%u (expected major version %d "
                      "or %d%s)", major, minor, FMT_MAJOR, FMT_MAJOR_MAP,
                      major > FMT_MAJOR_MAP ? "; a newer btfcar reads it" : "");
     *major_out = major;
-    btf_status rc = btf_box_open(&FORMAT, data, size, name, pl, err);
+    btf_status rc = btf__box_open(&FORMAT, data, size, name, pl, err);
     if (rc || !pl->deflated)
         return rc;
-    *owned = btf_alloc(pl->size ? pl->size : 1, 1, NULL);
+    *owned = btf__alloc(pl->size ? pl->size : 1, 1, NULL);
     if (!*owned)
         return failn(err, BTF_E_NOMEM, name, "out of memory inflating %zu bytes", pl->size);
-    rc = btf_box_inflate(pl, *owned, name, err);
+    rc = btf__box_inflate(pl, *owned, name, err);
     pl->data = *owned;
     pl->n = pl->size;
     return rc;
@@ -303,7 +303,7 @@ static btf_status read_dirset(const btf_box_span *s, const char *what, const cha
         return failn(err, BTF_E_FORMAT, name, "%s section of %zu bytes (expected at least 3)",
                      what, s->n);
     btf_box_dirset_head h;
-    btf_box_dirset_head_of(s->p, s->n, &h);
+    btf__box_dirset_head_of(s->p, s->n, &h);
     if (h.name_len > BTF_BOX_MAX_NAME || s->n < h.head)
         return failn(err, BTF_E_FORMAT, name, "%s: name of %zu bytes in a section of %zu "
                      "(expected at most 31)", what, h.name_len, s->n);
@@ -313,10 +313,10 @@ static btf_status read_dirset(const btf_box_span *s, const char *what, const cha
     if (h.count < 1 || h.count > MAX_DIRS || s->n != h.head + BTF_BOX_DIR_BYTES * h.count)
         return failn(err, BTF_E_FORMAT, name, "%s: %zu directions in %zu bytes (expected 1..%d "
                      "directions of 16 bytes)", what, h.count, s->n, MAX_DIRS);
-    d->dirs = btf_alloc(h.count, sizeof(btf_dir), NULL);
+    d->dirs = btf__alloc(h.count, sizeof(btf_dir), NULL);
     if (!d->dirs)
         return failn(err, BTF_E_NOMEM, name, "out of memory reading the %s", what);
-    btf_box_dirset_fill(s->p, &h, d);
+    btf__box_dirset_fill(s->p, &h, d);
     return BTF_OK;
 }
 
@@ -327,8 +327,8 @@ static btf_status read_map(const btf_box_span *s, const char *name, btf_rf_model
         return failn(err, BTF_E_FORMAT, name, "RFMP section of %zu bytes, version %d (expected "
                      "at least %d bytes, version %d)", s->n, s->n ? s->p[0] : -1, RFMP_HEAD,
                      RFMP_VERSION);
-    uint32_t sw = btf_box_load_u32(s->p + 1), sh = btf_box_load_u32(s->p + 5);
-    uint32_t x0 = btf_box_load_u32(s->p + 9), y0 = btf_box_load_u32(s->p + 13);
+    uint32_t sw = btf__box_load_u32(s->p + 1), sh = btf__box_load_u32(s->p + 5);
+    uint32_t x0 = btf__box_load_u32(s->p + 9), y0 = btf__box_load_u32(s->p + 13);
     if (sw < 1 || sw > BTF_RF_MAX_SURFACE_SIDE || sh < 1 || sh > BTF_RF_MAX_SURFACE_SIDE ||
         x0 > (uint32_t)(MAX_SIDE - m->width) || y0 > (uint32_t)(MAX_SIDE - m->height))
         return failn(err, BTF_E_FORMAT, name, "coordinate map of %ux%u texels, sample at (%u, "
@@ -338,7 +338,7 @@ static btf_status read_map(const btf_box_span *s, const char *name, btf_rf_model
     if (s->n != RFMP_HEAD + 4 * n)
         return failn(err, BTF_E_FORMAT, name, "RFMP section of %zu bytes (expected %zu for a "
                      "%ux%u map)", s->n, RFMP_HEAD + 4 * n, sw, sh);
-    m->map = btf_alloc(n, 2 * sizeof(uint16_t), NULL);
+    m->map = btf__alloc(n, 2 * sizeof(uint16_t), NULL);
     if (!m->map)
         return failn(err, BTF_E_NOMEM, name, "out of memory for a %ux%u coordinate map", sw, sh);
     m->surface_width = (int)sw, m->surface_height = (int)sh;
@@ -366,7 +366,7 @@ static btf_status split_payload(const btf_box_payload *pl, unsigned major, btf_b
 {
     char tag[5];
     btf_box_split_at at;
-    switch (btf_box_split(pl->data, pl->size, TAGS, S_COUNT, sec, &at)) {
+    switch (btf__box_split(pl->data, pl->size, TAGS, S_COUNT, sec, &at)) {
     case BTF_BOX_SPLIT_OK:
         break;
     case BTF_BOX_SPLIT_SHORT_HEAD:
@@ -375,7 +375,7 @@ static btf_status split_payload(const btf_box_payload *pl, unsigned major, btf_b
     case BTF_BOX_SPLIT_PAST_END:
         return failn(err, BTF_E_FORMAT, name, "section '%s' of %zu bytes at payload byte %zu "
                      "runs past the payload (expected at most %zu bytes)",
-                     btf_box_tag_text(pl->data + at.at, tag), at.len, at.at, at.room);
+                     btf__box_tag_text(pl->data + at.at, tag), at.len, at.at, at.room);
     default:
         return failn(err, BTF_E_FORMAT, name, "section %s twice (expected once)", TAGS[at.tag]);
     }
@@ -398,9 +398,9 @@ static btf_status read_header(const btf_box_span *h, const char *name, btf_rf_mo
         return failn(err, BTF_E_FORMAT, name, "RFHD section of %zu bytes (expected %d)", h->n,
                      RFHD_BYTES);
     m->fit = h->p[0], m->lobes = h->p[1];
-    m->params = (int)btf_box_load_u16(h->p + 2), m->slots = (int)btf_box_load_u16(h->p + 4);
-    uint32_t w = btf_box_load_u32(h->p + 6), ht = btf_box_load_u32(h->p + 10);
-    uint32_t fields = btf_box_load_u32(h->p + 14);
+    m->params = (int)btf__box_load_u16(h->p + 2), m->slots = (int)btf__box_load_u16(h->p + 4);
+    uint32_t w = btf__box_load_u32(h->p + 6), ht = btf__box_load_u32(h->p + 10);
+    uint32_t fields = btf__box_load_u32(h->p + 14);
     if (w < 1 || w > MAX_SIDE || ht < 1 || ht > MAX_SIDE || fields < 1 || fields > MAX_DIRS ||
         m->slots < 1 || m->slots > BTF_RF_MAX_SLOTS)
         return failn(err, BTF_E_FORMAT, name, "%ux%u texels, %u fields, %d slots (expected sides "
@@ -425,15 +425,15 @@ static btf_status read_codes(const btf_box_span *qr, const btf_box_span *cd, con
                      "fields x %d slots x %ux%u texels x 2)", cd->n,
                      (unsigned long long)planes * texels * 2, (size_t)m->fields, m->slots,
                      (unsigned)m->width, (unsigned)m->height);
-    m->lo = btf_alloc(planes, sizeof(float), NULL);
-    m->hi = btf_alloc(planes, sizeof(float), NULL);
-    m->codes = btf_alloc(planes * texels, sizeof(uint16_t), NULL);
+    m->lo = btf__alloc(planes, sizeof(float), NULL);
+    m->hi = btf__alloc(planes, sizeof(float), NULL);
+    m->codes = btf__alloc(planes * texels, sizeof(uint16_t), NULL);
     if (!m->lo || !m->hi || !m->codes)
         return failn(err, BTF_E_NOMEM, name, "out of memory for %zu parameter codes",
                      planes * texels);
     for (size_t i = 0; i < planes; i++) {
-        m->lo[i] = btf_box_load_f32(qr->p + 8 * i);
-        m->hi[i] = btf_box_load_f32(qr->p + 8 * i + 4);
+        m->lo[i] = btf__box_load_f32(qr->p + 8 * i);
+        m->hi[i] = btf__box_load_f32(qr->p + 8 * i + 4);
     }
     for (size_t pl = 0; pl < planes; pl++) {
         size_t f = pl / m->slots, s = pl % m->slots;
@@ -468,7 +468,7 @@ btf_status btf_rf_decode(const unsigned char *data, size_t size, const char *nam
     if (!out)
         return failn(err, BTF_E_ARG, name, "no output model");
     memset(out, 0, sizeof *out);
-    btf_status rc = btf_box_input(&data, size, name, err);
+    btf_status rc = btf__box_input(&data, size, name, err);
     if (rc)
         return rc;
     btf_box_payload pl;
@@ -483,15 +483,15 @@ btf_status btf_rf_decode(const unsigned char *data, size_t size, const char *nam
     return rc;
 }
 
-btf_status btf_rf_read(const char *path, btf_rf_model *out, btf_error *err)
+btf_status btf__rf_read(const char *path, btf_rf_model *out, btf_error *err)
 {
     if (out)
         memset(out, 0, sizeof *out);
     if (!path || !out)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_read: no path or no output model");
+        return btf__fail(err, BTF_E_ARG, "btf_rf_read: no path or no output model");
     unsigned char *data;
     size_t n;
-    btf_status rc = btf_read_file(path, MAX_BYTES, &data, &n, err);
+    btf_status rc = btf__read_file(path, MAX_BYTES, &data, &n, err);
     if (rc)
         return rc;
     rc = btf_rf_decode(data, n, path, out, err);

@@ -15,7 +15,7 @@
  * data, so the model is the same for any thread count. After a field is
  * fitted its slots are quantised (rf_quant.c), and the quantised model's
  * luminance error is measured against the view's images still in memory
- * (the Lafortune model's by btf_rf_error, another pass).
+ * (the Lafortune model's by btf__rf_error, another pass).
  *
  * A crop (opts->crop_*) fits one window of the images only, the sample of
  * the memory reduction of section 6 (rf_sampled.c): each image is cut to
@@ -67,9 +67,9 @@ static btf_status read_job(void *user, int l, int worker, btf_error *err)
     btf_image_free(&c->imgs[l]);
     btf_status rc = btf_dataset_read(c->ds, c->view, l, &c->imgs[l], err);
     if (rc == BTF_OK && (c->imgs[l].width != c->iw || c->imgs[l].height != c->ih))
-        rc = btf_fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the dataset)",
-                      btf_dataset_path(c->ds, c->view, l), c->imgs[l].width, c->imgs[l].height,
-                      c->iw, c->ih);
+        rc = btf__fail(err, BTF_E_DATA, "%s: %dx%d image (expected %dx%d like the dataset)",
+                       btf_dataset_path(c->ds, c->view, l), c->imgs[l].width, c->imgs[l].height,
+                       c->iw, c->ih);
     if (rc == BTF_OK && c->cropped)
         crop_image(&c->imgs[l], c->cx, c->cy, c->w, c->h);
     return rc;
@@ -78,7 +78,7 @@ static btf_status read_job(void *user, int l, int worker, btf_error *err)
 static btf_status read_view(fit_ctx *c, int v, btf_error *err)
 {
     c->view = v;
-    return btf_pool_run(c->nl, c->o.threads, read_job, c, NULL, err);
+    return btf__pool_run(c->nl, c->o.threads, read_job, c, NULL, err);
 }
 
 static inline void pixel(const btf_image *img, size_t t, float rgb[3])
@@ -158,20 +158,20 @@ static btf_status fit_per_view(fit_ctx *c, btf_rf_opts *o, btf_error *err)
     btf_status rc = BTF_OK;
     double t_read = 0.0, t_fit = 0.0;
     for (int v = 0; v < c->nv && rc == BTF_OK; v++) {
-        double t0 = btf_now();
+        double t0 = btf__now();
         rc = read_view(c, v, err);
-        t_read += btf_now() - t0;
+        t_read += btf__now() - t0;
         if (rc)
             break;
-        t0 = btf_now();
-        rc = btf_pool_run(c->h, o->threads, fit_row_job, c, NULL, err);
+        t0 = btf__now();
+        rc = btf__pool_run(c->h, o->threads, fit_row_job, c, NULL, err);
         if (rc)
             break;
         rf_quantise_field(c->vals, c->texels, m->slots, m->lo + (size_t)v * m->slots,
                           m->hi + (size_t)v * m->slots,
                           m->codes + (size_t)v * c->texels * m->slots);
-        rc = btf_pool_run(c->h, o->threads, error_row_job, c, NULL, err);
-        t_fit += btf_now() - t0;
+        rc = btf__pool_run(c->h, o->threads, error_row_job, c, NULL, err);
+        t_fit += btf__now() - t0;
         progress(c, (double)(v + 1) / c->nv);
     }
     if (o->info) {
@@ -229,10 +229,10 @@ static btf_status fit_lafortune(fit_ctx *c, btf_rf_opts *o, btf_error *err)
     size_t per_row = (size_t)c->w * c->n_img * sizeof(float);
     size_t rows = o->memory / (per_row ? per_row : 1);
     c->rows = rows < 1 ? 1 : rows > (size_t)c->h ? c->h : (int)rows;
-    c->lum = btf_alloc((size_t)c->rows * c->w, (size_t)c->n_img * sizeof(float), err);
-    c->rgbsum = btf_alloc((size_t)c->rows * c->w * 3, sizeof(double), err);
-    c->lall = btf_alloc((size_t)c->n_img * 3, sizeof(double), err);
-    c->vall = btf_alloc((size_t)c->n_img * 3, sizeof(double), err);
+    c->lum = btf__alloc((size_t)c->rows * c->w, (size_t)c->n_img * sizeof(float), err);
+    c->rgbsum = btf__alloc((size_t)c->rows * c->w * 3, sizeof(double), err);
+    c->lall = btf__alloc((size_t)c->n_img * 3, sizeof(double), err);
+    c->vall = btf__alloc((size_t)c->n_img * 3, sizeof(double), err);
     if (!c->lum || !c->rgbsum || !c->lall || !c->vall)
         return BTF_E_NOMEM;
     for (int v = 0; v < c->nv; v++)
@@ -241,24 +241,24 @@ static btf_status fit_lafortune(fit_ctx *c, btf_rf_opts *o, btf_error *err)
             memcpy(c->lall + 3 * ((size_t)v * c->nl + l), c->lvec + 3 * l, 3 * sizeof(double));
         }
     btf_status rc = BTF_OK;
-    double t_read = 0.0, t_fit = 0.0, t_start = btf_now();
+    double t_read = 0.0, t_fit = 0.0, t_start = btf__now();
     int passes = (c->h + c->rows - 1) / c->rows;
     for (c->y0 = 0; c->y0 < c->h && rc == BTF_OK; c->y0 += c->rows) {
         int rows_now = c->h - c->y0 < c->rows ? c->h - c->y0 : c->rows;
         memset(c->rgbsum, 0, (size_t)c->rows * c->w * 3 * sizeof(double));
         for (int v = 0; v < c->nv && rc == BTF_OK; v++) {
-            double t0 = btf_now();
+            double t0 = btf__now();
             rc = read_view(c, v, err);
             if (rc == BTF_OK)
-                rc = btf_pool_run(rows_now, o->threads, scatter_row_job, c, NULL, err);
-            t_read += btf_now() - t0;
+                rc = btf__pool_run(rows_now, o->threads, scatter_row_job, c, NULL, err);
+            t_read += btf__now() - t0;
             progress(c, 0.5 * ((double)(c->y0 / c->rows) + (double)(v + 1) / c->nv) / passes);
         }
         if (rc)
             break;
-        double t0 = btf_now();
-        rc = btf_pool_run(rows_now, o->threads, laf_row_job, c, NULL, err);
-        t_fit += btf_now() - t0;
+        double t0 = btf__now();
+        rc = btf__pool_run(rows_now, o->threads, laf_row_job, c, NULL, err);
+        t_fit += btf__now() - t0;
         progress(c, (double)(c->y0 + rows_now) / c->h);
     }
     if (rc)
@@ -274,7 +274,7 @@ static btf_status fit_lafortune(fit_ctx *c, btf_rf_opts *o, btf_error *err)
     if (c->cropped)
         return BTF_OK;
     double e = 0.0, s = 0.0;
-    rc = btf_rf_error(c->ds, m, o->threads, &e, &s, err);
+    rc = btf__rf_error(c->ds, m, o->threads, &e, &s, err);
     if (rc == BTF_OK && o->info) {
         o->info->mean_abs_error = e;
         o->info->mean_luminance = s;
@@ -282,29 +282,29 @@ static btf_status fit_lafortune(fit_ctx *c, btf_rf_opts *o, btf_error *err)
     return rc;
 }
 
-btf_status btf_rf_refuse_sparse(const btf_dataset *ds, btf_error *err)
+btf_status btf__rf_refuse_sparse(const btf_dataset *ds, btf_error *err)
 {
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     if (in->n_pairs == in->n_views * in->n_lights)
         return BTF_OK;
-    return btf_fail(err, BTF_E_DATA, "%s: the reflectance-field family fits every light at each "
-                    "view, and this sparse set holds %d of the %d x %d pairs (the CAR family, "
-                    "the default, takes any set)", in->root, in->n_pairs,
-                    in->n_views, in->n_lights);
+    return btf__fail(err, BTF_E_DATA, "%s: the reflectance-field family fits every light at each "
+                     "view, and this sparse set holds %d of the %d x %d pairs (the CAR family, "
+                     "the default, takes any set)", in->root, in->n_pairs,
+                     in->n_views, in->n_lights);
 }
 
 btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_model *out,
                       btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_fit: no output model");
+        return btf__fail(err, BTF_E_ARG, "btf_rf_fit: no output model");
     memset(out, 0, sizeof *out);
     if (!ds)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_fit: no dataset");
-    if (btf_rf_refuse_sparse(ds, err))
+        return btf__fail(err, BTF_E_ARG, "btf_rf_fit: no dataset");
+    if (btf__rf_refuse_sparse(ds, err))
         return BTF_E_DATA;
     btf_rf_opts d = btf_rf_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_rf_fit", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_rf_fit", err))
         return BTF_E_ARG;
     if (o.lobes == 0)
         o.lobes = d.lobes;
@@ -313,21 +313,21 @@ btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_mod
     if (o.memory == 0)
         o.memory = d.memory;
     if (!btf_rf_fit_name(o.fit))
-        return btf_fail(err, BTF_E_ARG, "reflectance-field fit %d (expected 0 ptm, 1 lobes or "
-                        "2 lafortune)", o.fit);
+        return btf__fail(err, BTF_E_ARG, "reflectance-field fit %d (expected 0 ptm, 1 lobes or "
+                         "2 lafortune)", o.fit);
     if (o.lobes < 1 || o.lobes > BTF_RF_MAX_LOBES)
-        return btf_fail(err, BTF_E_ARG, "%d lobes (expected 1..%d)", o.lobes, BTF_RF_MAX_LOBES);
+        return btf__fail(err, BTF_E_ARG, "%d lobes (expected 1..%d)", o.lobes, BTF_RF_MAX_LOBES);
     if (o.iterations < 0 || o.threads < 0)
-        return btf_fail(err, BTF_E_ARG, "iterations %d, threads %d (expected >= 0)",
-                        o.iterations, o.threads);
+        return btf__fail(err, BTF_E_ARG, "iterations %d, threads %d (expected >= 0)",
+                         o.iterations, o.threads);
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     int cropped = o.crop_width != 0 || o.crop_height != 0;
     if (cropped && (o.crop_width < 1 || o.crop_height < 1 || o.crop_x < 0 || o.crop_y < 0 ||
                     o.crop_x > in->width - o.crop_width || o.crop_y > in->height - o.crop_height))
-        return btf_fail(err, BTF_E_ARG, "crop of %dx%d at (%d, %d) (expected a window inside "
-                        "the %dx%d images)", o.crop_width, o.crop_height, o.crop_x, o.crop_y,
-                        in->width, in->height);
-    double t_start = btf_now();
+        return btf__fail(err, BTF_E_ARG, "crop of %dx%d at (%d, %d) (expected a window inside "
+                         "the %dx%d images)", o.crop_width, o.crop_height, o.crop_x, o.crop_y,
+                         in->width, in->height);
+    double t_start = btf__now();
     if (o.info)
         memset(o.info, 0, sizeof *o.info);
     fit_ctx c;
@@ -338,30 +338,30 @@ btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_mod
     c.cx = cropped ? o.crop_x : 0, c.cy = cropped ? o.crop_y : 0;
     c.w = cropped ? o.crop_width : c.iw, c.h = cropped ? o.crop_height : c.ih;
     c.texels = (size_t)c.w * c.h;
-    c.workers = btf_pool_workers(o.threads, c.h > c.nl ? c.h : c.nl);
+    c.workers = btf__pool_workers(o.threads, c.h > c.nl ? c.h : c.nl);
     out->fit = o.fit;
     out->lobes = o.fit == BTF_RF_PTM ? 0 : o.lobes;
     out->width = c.w, out->height = c.h;
-    out->params = btf_rf_param_count(o.fit, o.lobes);
+    out->params = btf__rf_param_count(o.fit, o.lobes);
     out->slots = out->params + 3;
     out->fields = o.fit == BTF_RF_LAFORTUNE ? 1 : c.nv;
-    btf_status rc = btf_dirset_copy(&out->views, in->views, err);
+    btf_status rc = btf__dirset_copy(&out->views, in->views, err);
     if (rc == BTF_OK)
-        rc = btf_dirset_copy(&out->lights, in->lights, err);
+        rc = btf__dirset_copy(&out->lights, in->lights, err);
     if (rc == BTF_OK) {
         size_t fs = (size_t)out->fields * out->slots;
-        out->lo = btf_alloc(fs, sizeof(float), err);
-        out->hi = btf_alloc(fs, sizeof(float), err);
-        out->codes = btf_alloc(fs * c.texels, sizeof(uint16_t), err);
-        c.lvec = btf_alloc((size_t)c.nl * 3, sizeof(double), err);
-        c.pinv = btf_alloc((size_t)c.nl * 6, sizeof(double), err);
-        c.imgs = btf_calloc((size_t)c.nl, sizeof(btf_image), err);
-        c.vals = btf_alloc(c.texels * out->slots, sizeof(float), err);
-        c.scratch = btf_alloc((size_t)c.workers * c.nl, sizeof(float), err);
-        c.row_err = btf_calloc((size_t)c.h, sizeof(double), err);
-        c.row_lum = btf_calloc((size_t)c.h, sizeof(double), err);
-        c.row_steps = btf_calloc((size_t)c.h, sizeof(long long), err);
-        c.row_runs = btf_calloc((size_t)c.h, sizeof(long long), err);
+        out->lo = btf__alloc(fs, sizeof(float), err);
+        out->hi = btf__alloc(fs, sizeof(float), err);
+        out->codes = btf__alloc(fs * c.texels, sizeof(uint16_t), err);
+        c.lvec = btf__alloc((size_t)c.nl * 3, sizeof(double), err);
+        c.pinv = btf__alloc((size_t)c.nl * 6, sizeof(double), err);
+        c.imgs = btf__calloc((size_t)c.nl, sizeof(btf_image), err);
+        c.vals = btf__alloc(c.texels * out->slots, sizeof(float), err);
+        c.scratch = btf__alloc((size_t)c.workers * c.nl, sizeof(float), err);
+        c.row_err = btf__calloc((size_t)c.h, sizeof(double), err);
+        c.row_lum = btf__calloc((size_t)c.h, sizeof(double), err);
+        c.row_steps = btf__calloc((size_t)c.h, sizeof(long long), err);
+        c.row_runs = btf__calloc((size_t)c.h, sizeof(long long), err);
         if (!out->lo || !out->hi || !out->codes || !c.lvec || !c.pinv || !c.imgs || !c.vals ||
             !c.scratch || !c.row_err || !c.row_lum || !c.row_steps || !c.row_runs)
             rc = BTF_E_NOMEM;
@@ -386,7 +386,7 @@ btf_status btf_rf_fit(const btf_dataset *ds, const btf_rf_opts *opts, btf_rf_mod
         }
         o.info->lm_iterations = steps;
         o.info->lm_runs = runs;
-        o.info->seconds = btf_now() - t_start;
+        o.info->seconds = btf__now() - t_start;
     }
     if (c.imgs)
         for (int l = 0; l < c.nl; l++)

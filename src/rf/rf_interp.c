@@ -19,7 +19,7 @@
  */
 #include "rf/rf.h"
 
-void btf_rf_view_weights(const btf_dirset *views, btf_dir view, int idx[4], double w[4])
+void btf__rf_view_weights(const btf_dirset *views, btf_dir view, int idx[4], double w[4])
 {
     for (int i = 0; i < 4; i++)
         idx[i] = 0, w[i] = 0.0;

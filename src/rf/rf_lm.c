@@ -37,14 +37,14 @@ void rf_lm_accumulate(const double *g, int np, double r, double *jtj, double *jt
 int rf_cholesky_solve(const double *a, const double *b, int n, double *x)
 {
     double l[RF_LM_MAX * RF_LM_MAX];
-    if (btf_linalg_cholesky(a, n, 1, n, l) != 0)
+    if (btf__linalg_cholesky(a, n, 1, n, l) != 0)
         return -1;
     for (int i = 0; i < n; i++)
         if (!isfinite(l[i * n + i]))
             return -1;
     for (int i = 0; i < n; i++)
         x[i] = b[i];
-    btf_linalg_cholesky_solve(l, n, x);
+    btf__linalg_cholesky_solve(l, n, x);
     for (int i = 0; i < n; i++)
         if (!isfinite(x[i]))
             return -1;

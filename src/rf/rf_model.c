@@ -17,7 +17,7 @@ const char *btf_rf_fit_name(int fit)
     return fit >= 0 && fit < 3 ? names[fit] : NULL;
 }
 
-int btf_rf_param_count(int fit, int lobes)
+int btf__rf_param_count(int fit, int lobes)
 {
     switch (fit) {
     case BTF_RF_PTM: return 6;

@@ -37,8 +37,8 @@ btf_status rf_ptm_operator(const btf_dirset *lights, double *pinv, btf_error *er
         btf_dir_to_vec(lights->dirs[j], l);
         rf_ptm_basis(l[0], l[1], b);
         if (rf_cholesky_solve(ata, b, 6, x) != 0)
-            return btf_fail(err, BTF_E_NUMERIC, "PTM fit: the %d light directions do not "
-                            "determine a biquadratic (expected at least 6 distinct)", n);
+            return btf__fail(err, BTF_E_NUMERIC, "PTM fit: the %d light directions do not "
+                             "determine a biquadratic (expected at least 6 distinct)", n);
         for (int r = 0; r < 6; r++)
             pinv[r * n + j] = x[r];
     }

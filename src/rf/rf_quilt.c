@@ -64,7 +64,7 @@ static btf_status axis_init(axis *a, int n, int start, int fe, int block, int ov
 {
     memset(a, 0, sizeof *a);
     a->n = n;
-    a->pos = btf_alloc((size_t)n + 2, sizeof(int), err);
+    a->pos = btf__alloc((size_t)n + 2, sizeof(int), err);
     if (!a->pos)
         return BTF_E_NOMEM;
     if (n <= block) { /* one block, the whole side */
@@ -222,7 +222,7 @@ static btf_status choose_drawn(quilt *Q, btf_rng *rng, int *pick)
     int lattice = has_lattice(Q), any = 0;
     *pick = 0;
     for (int c = 0; c < Q->q->candidates; c++) {
-        int i = (int)(btf_rng_next(rng) % n);
+        int i = (int)(btf__rng_next(rng) % n);
         if (lattice && !snap(Q, &i))
             continue;
         double s = score_one(Q, i % Q->nu, i / Q->nu);
@@ -240,7 +240,7 @@ static btf_status choose(quilt *Q, btf_rng *rng, int *pick, btf_error *err)
 {
     size_t n = (size_t)Q->nu * Q->nv;
     if (Q->nk == 0) { /* nothing to match: any position (on the lattice) */
-        *pick = (int)(btf_rng_next(rng) % n);
+        *pick = (int)(btf__rng_next(rng) % n);
         if (Q->q->candidates > 0 && has_lattice(Q))
             snap(Q, pick);
         return BTF_OK;
@@ -249,7 +249,7 @@ static btf_status choose(quilt *Q, btf_rng *rng, int *pick, btf_error *err)
         return choose_drawn(Q, rng, pick);
     /* thread start-up costs more than a small block's scores */
     int threads = (double)n * Q->nk < 65536.0 ? 1 : Q->q->threads;
-    btf_status rc = btf_pool_run(Q->nv, threads, score_job, Q, NULL, err);
+    btf_status rc = btf__pool_run(Q->nv, threads, score_job, Q, NULL, err);
     if (rc)
         return rc;
     double best = DBL_MAX;
@@ -259,7 +259,7 @@ static btf_status choose(quilt *Q, btf_rng *rng, int *pick, btf_error *err)
     uint64_t within = 0;
     for (size_t i = 0; i < n; i++)
         within += Q->score[i] <= limit;
-    uint64_t k = within ? btf_rng_next(rng) % within : 0;
+    uint64_t k = within ? btf__rng_next(rng) % within : 0;
     for (size_t i = 0; i < n; i++)
         if (Q->score[i] <= limit && k-- == 0) {
             *pick = (int)i;
@@ -294,12 +294,12 @@ static btf_status run(quilt *Q, btf_error *err)
 {
     const rf_quilt_args *q = Q->q;
     int B = q->block;
-    double *e = btf_alloc((size_t)B * B, 2 * sizeof(double), err);
-    unsigned char *take = btf_alloc((size_t)B * B, 1, err);
-    int *path = btf_alloc((size_t)4 * B, sizeof(int), err);
+    double *e = btf__alloc((size_t)B * B, 2 * sizeof(double), err);
+    unsigned char *take = btf__alloc((size_t)B * B, 1, err);
+    int *path = btf__alloc((size_t)4 * B, sizeof(int), err);
     btf_status rc = e && take && path ? BTF_OK : BTF_E_NOMEM;
     btf_rng rng;
-    btf_rng_seed(&rng, q->seed);
+    btf__rng_seed(&rng, q->seed);
     Q->bw = Q->ax.len, Q->bh = Q->ay.len;
     Q->nu = q->sw - Q->bw + 1, Q->nv = q->sh - Q->bh + 1;
     for (int j = 0; rc == BTF_OK && j < Q->ay.count; j++)
@@ -333,20 +333,20 @@ btf_status rf_quilt(const rf_quilt_args *q, uint16_t *map, btf_error *err)
     if (q->sw < 1 || q->sh < 1 || q->sw > 65536 || q->sh > 65536 || q->surface_w < 1 ||
         q->surface_h < 1 || q->block < 1 || q->block > q->sw || q->block > q->sh ||
         q->overlap < 0 || 2 * q->overlap > q->block || !(q->tolerance >= 0.0))
-        return btf_fail(err, BTF_E_ARG, "quilting: sample %dx%d, surface %dx%d, block %d, "
-                        "overlap %d, tolerance %g (expected a block within the sample, an "
-                        "overlap of at most half the block)", q->sw, q->sh, q->surface_w,
-                        q->surface_h, q->block, q->overlap, q->tolerance);
+        return btf__fail(err, BTF_E_ARG, "quilting: sample %dx%d, surface %dx%d, block %d, "
+                         "overlap %d, tolerance %g (expected a block within the sample, an "
+                         "overlap of at most half the block)", q->sw, q->sh, q->surface_w,
+                         q->surface_h, q->block, q->overlap, q->tolerance);
     quilt Q;
     memset(&Q, 0, sizeof Q);
     Q.q = q, Q.map = map;
     size_t B2 = (size_t)q->block * q->block;
-    Q.sf = btf_alloc((size_t)q->sw * q->sh, RF_FEATURES * sizeof(float), err);
-    Q.known = btf_calloc((size_t)q->surface_w * q->surface_h, 1, err);
-    Q.kx = btf_alloc(B2, sizeof(int), err);
-    Q.ky = btf_alloc(B2, sizeof(int), err);
-    Q.kf = btf_alloc(B2, RF_FEATURES * sizeof(float), err);
-    Q.score = btf_alloc((size_t)q->sw * q->sh, sizeof(double), err);
+    Q.sf = btf__alloc((size_t)q->sw * q->sh, RF_FEATURES * sizeof(float), err);
+    Q.known = btf__calloc((size_t)q->surface_w * q->surface_h, 1, err);
+    Q.kx = btf__alloc(B2, sizeof(int), err);
+    Q.ky = btf__alloc(B2, sizeof(int), err);
+    Q.kf = btf__alloc(B2, RF_FEATURES * sizeof(float), err);
+    Q.score = btf__alloc((size_t)q->sw * q->sh, sizeof(double), err);
     btf_status rc = BTF_E_NOMEM;
     if (Q.sf && Q.known && Q.kx && Q.ky && Q.kf && Q.score &&
         axis_init(&Q.ax, q->surface_w, q->sx, place_extent(q->sx, q->sw, q->surface_w),

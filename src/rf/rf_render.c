@@ -65,20 +65,20 @@ btf_status rf_flat_check(const btf_rf_model *m, btf_dir view, btf_dir light, int
 {
     if (!m || !m->codes || m->width < 1 || m->height < 1 ||
         (m->map && (m->surface_width < 1 || m->surface_height < 1)))
-        return btf_fail(err, BTF_E_ARG, "flat render: no model");
+        return btf__fail(err, BTF_E_ARG, "flat render: no model");
     if (width < 0 || height < 0 || threads < 0 || !(view.theta >= 0 && view.theta <= 90) ||
         !(light.theta >= 0 && light.theta <= 90) || !isfinite(view.phi) || !isfinite(light.phi))
-        return btf_fail(err, BTF_E_ARG, "flat render: size %dx%d, threads %d, view (%g, %g), "
-                        "light (%g, %g) (expected sizes and threads >= 0, theta in [0, 90])",
-                        width, height, threads, view.theta, view.phi, light.theta, light.phi);
+        return btf__fail(err, BTF_E_ARG, "flat render: size %dx%d, threads %d, view (%g, %g), "
+                         "light (%g, %g) (expected sizes and threads >= 0, theta in [0, 90])",
+                         width, height, threads, view.theta, view.phi, light.theta, light.phi);
     return BTF_OK;
 }
 
-btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light, int width,
-                              int height, int threads, btf_image *out, btf_error *err)
+btf_status btf__rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light, int width,
+                               int height, int threads, btf_image *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_render_flat: no output image");
+        return btf__fail(err, BTF_E_ARG, "btf_rf_render_flat: no output image");
     memset(out, 0, sizeof *out);
     btf_status rc = rf_flat_check(m, view, light, width, height, threads, err);
     if (rc)
@@ -96,10 +96,10 @@ btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light
         r.l[k] = (float)l[k];
     r.tile_w = width < sw ? width : sw;
     int tile_h = height < sh ? height : sh;
-    r.tile = btf_alloc((size_t)r.tile_w * tile_h, 3 * sizeof(float), err);
+    r.tile = btf__alloc((size_t)r.tile_w * tile_h, 3 * sizeof(float), err);
     if (!r.tile)
         return BTF_E_NOMEM;
-    rc = btf_pool_run(tile_h, threads, tile_job, &r, NULL, err);
+    rc = btf__pool_run(tile_h, threads, tile_job, &r, NULL, err);
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, width, height, 3, err);
     if (rc == BTF_OK)

@@ -13,7 +13,7 @@
 
 /* 1 when the bytes start like a reflectance-field file (the signature's
  * first 7 bytes), else 0. */
-int btf_rf_sniff(const unsigned char *data, size_t size);
+int btf__rf_sniff(const unsigned char *data, size_t size);
 
 /* ------------------------------------------- reflectance-field renders */
 
@@ -23,20 +23,20 @@ int btf_rf_sniff(const unsigned char *data, size_t size);
  * in theta and phi that sum to 1 (computed in float, as the renderers
  * blend: to 1e-6). idx[i] and w[i], i < 4 (an index may repeat, e.g. at
  * the pole; unused weights are 0). */
-void btf_rf_view_weights(const btf_dirset *views, btf_dir view, int idx[4], double w[4]);
+void btf__rf_view_weights(const btf_dirset *views, btf_dir view, int idx[4], double w[4]);
 
 /* Linear RGB of texel (x, y) (wrapped into the surface, btf_rf_surface_size;
  * a sampled model's through its coordinate map) seen from `view` and lit
  * from `light`: the four closest views' fields weighted
- * (btf_rf_view_weights); lafortune evaluates its one field at the view. */
-void btf_rf_eval(const btf_rf_model *m, btf_dir view, btf_dir light, int x, int y,
-                 float rgb[3]);
+ * (btf__rf_view_weights); lafortune evaluates its one field at the view. */
+void btf__rf_eval(const btf_rf_model *m, btf_dir view, btf_dir light, int x, int y,
+                  float rgb[3]);
 /* The flat (view, light) render of docs/render.md with an RF model: pixel
  * (x, y) is surface texel (x mod width, y mod height) (btf_rf_surface_size;
  * a sampled model's through its map), lit by one unit light. width/height
  * 0: the surface's. threads 0: all CPUs. */
-btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light, int width,
-                              int height, int threads, btf_image *out, btf_error *err);
+btf_status btf__rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light, int width,
+                               int height, int threads, btf_image *out, btf_error *err);
 
 /* A scene (btf_scene_load, docs/scene.md) rendered with an RF model on the
  * CPU: traced into the CAR renderer's G-buffer; per pixel the local view
@@ -49,12 +49,12 @@ btf_status btf_rf_render_flat(const btf_rf_model *m, btf_dir view, btf_dir light
  * or bump mapping (the fields hold the relief). width/height 0: 512;
  * threads 0: all CPUs. info (NULL: not wanted): trace_s and shade_s, the
  * rest 0. */
-btf_status btf_rf_render_scene(const btf_rf_model *m, const btf_scene *s, int width,
-                               int height, int threads, btf_image *out, btf_render_info *info,
-                               btf_error *err);
+btf_status btf__rf_render_scene(const btf_rf_model *m, const btf_scene *s, int width,
+                                int height, int threads, btf_image *out, btf_render_info *info,
+                                btf_error *err);
 
 /* The file's reader (rf_file.c); users read a model of either family with
  * btf_material_read (btfcar/material.h). */
-btf_status btf_rf_read(const char *path, btf_rf_model *out, btf_error *err);
+btf_status btf__rf_read(const char *path, btf_rf_model *out, btf_error *err);
 
 #endif

@@ -21,11 +21,11 @@ btf_status rf_sample_choose(const float *feat, int width, int height, int sw, in
 {
     *x = *y = 0;
     if (sw < 1 || sh < 1 || sw > width || sh > height)
-        return btf_fail(err, BTF_E_ARG, "sample of %dx%d texels (expected 1x1 up to the "
-                        "images' %dx%d)", sw, sh, width, height);
+        return btf__fail(err, BTF_E_ARG, "sample of %dx%d texels (expected 1x1 up to the "
+                         "images' %dx%d)", sw, sh, width, height);
     size_t W = (size_t)width + 1;
     /* per channel: sum and sum of squares, (width + 1) x (height + 1) */
-    double *sat = btf_calloc(W * ((size_t)height + 1), 2 * RF_FEATURES * sizeof(double), err);
+    double *sat = btf__calloc(W * ((size_t)height + 1), 2 * RF_FEATURES * sizeof(double), err);
     if (!sat)
         return BTF_E_NOMEM;
     const int K = 2 * RF_FEATURES;

@@ -11,7 +11,7 @@
  * Stages: the representative image (rf_feature.c), the sample's window
  * (rf_sample.c, or the caller's), the fit of that window (btf_rf_fit with
  * a crop), the coordinate map (rf_quilt.c), and the pixel-wise error over
- * the whole dataset through the map (btf_rf_error, one more pass), which
+ * the whole dataset through the map (btf__rf_error, one more pass), which
  * shows what the reduction costs: outside the sample's own place no texel
  * of the surface corresponds to the data's.
  */
@@ -28,36 +28,36 @@ static btf_status resolve(const btf_rf_sample_opts *so, const btf_dataset_info *
                           btf_rf_sample_opts *r, btf_error *err)
 {
     btf_rf_sample_opts d = btf_rf_sample_defaults();
-    if (btf_opts_take(r, sizeof *r, so, &d, "btf_rf_fit_sampled", err))
+    if (btf__opts_take(r, sizeof *r, so, &d, "btf_rf_fit_sampled", err))
         return BTF_E_ARG;
     if (so->width < 1 || so->height < 1 || so->width > in->width || so->height > in->height)
-        return btf_fail(err, BTF_E_ARG, "sample of %dx%d texels (expected 1x1 up to the "
-                        "dataset's %dx%d)", so->width, so->height, in->width, in->height);
+        return btf__fail(err, BTF_E_ARG, "sample of %dx%d texels (expected 1x1 up to the "
+                         "dataset's %dx%d)", so->width, so->height, in->width, in->height);
     if (so->placed && (so->x < 0 || so->y < 0 || so->x > in->width - so->width ||
                        so->y > in->height - so->height))
-        return btf_fail(err, BTF_E_ARG, "sample of %dx%d at (%d, %d) (expected a window inside "
-                        "the %dx%d images)", so->width, so->height, so->x, so->y, in->width,
-                        in->height);
+        return btf__fail(err, BTF_E_ARG, "sample of %dx%d at (%d, %d) (expected a window inside "
+                         "the %dx%d images)", so->width, so->height, so->x, so->y, in->width,
+                         in->height);
     r->surface_width = so->surface_width ? so->surface_width : in->width;
     r->surface_height = so->surface_height ? so->surface_height : in->height;
     if (r->surface_width < 1 || r->surface_height < 1 ||
         r->surface_width > BTF_RF_MAX_SURFACE_SIDE || r->surface_height > BTF_RF_MAX_SURFACE_SIDE)
-        return btf_fail(err, BTF_E_ARG, "surface of %dx%d texels (expected sides 1..%d)",
-                        r->surface_width, r->surface_height, BTF_RF_MAX_SURFACE_SIDE);
+        return btf__fail(err, BTF_E_ARG, "surface of %dx%d texels (expected sides 1..%d)",
+                         r->surface_width, r->surface_height, BTF_RF_MAX_SURFACE_SIDE);
     int side = so->width < so->height ? so->width : so->height;
     int half = side / 2 < 32 ? side / 2 : 32;
     r->block = so->block ? so->block : half > 1 ? half : 1;
     if (r->block < 1 || r->block > side)
-        return btf_fail(err, BTF_E_ARG, "quilting block of %d texels (expected 1..%d, the "
-                        "sample's shorter side)", so->block, side);
+        return btf__fail(err, BTF_E_ARG, "quilting block of %d texels (expected 1..%d, the "
+                         "sample's shorter side)", so->block, side);
     r->overlap = so->overlap ? so->overlap : r->block / 4;
     if (r->overlap < 0 || 2 * r->overlap > r->block)
-        return btf_fail(err, BTF_E_ARG, "quilting overlap of %d texels (expected 0..%d, half "
-                        "the block)", so->overlap, r->block / 2);
+        return btf__fail(err, BTF_E_ARG, "quilting overlap of %d texels (expected 0..%d, half "
+                         "the block)", so->overlap, r->block / 2);
     r->tolerance = so->tolerance != 0.0 ? so->tolerance : 0.1;
     if (!(r->tolerance >= 0.0 && r->tolerance <= 1e6))
-        return btf_fail(err, BTF_E_ARG, "quilting tolerance %g (expected 0..1e6)",
-                        so->tolerance);
+        return btf__fail(err, BTF_E_ARG, "quilting tolerance %g (expected 0..1e6)",
+                         so->tolerance);
     return BTF_OK;
 }
 
@@ -67,18 +67,18 @@ static btf_status synthesise(const btf_dataset *ds, const btf_rf_sample_opts *r,
                              btf_error *err)
 {
     const btf_dataset_info *in = btf_dataset_get_info(ds);
-    double t0 = btf_now();
+    double t0 = btf__now();
     float *feat = NULL;
     int view;
     btf_status rc = rf_feature_image(ds, threads, &feat, &view, err);
     *sx = r->x, *sy = r->y;
     if (rc == BTF_OK && !r->placed)
         rc = rf_sample_choose(feat, in->width, in->height, r->width, r->height, sx, sy, err);
-    double t1 = btf_now();
+    double t1 = btf__now();
     *map = NULL;
     if (rc == BTF_OK) {
-        *map = btf_alloc((size_t)r->surface_width * r->surface_height, 2 * sizeof(uint16_t),
-                         err);
+        *map = btf__alloc((size_t)r->surface_width * r->surface_height, 2 * sizeof(uint16_t),
+                          err);
         rc = *map ? BTF_OK : BTF_E_NOMEM;
     }
     if (rc == BTF_OK) {
@@ -93,7 +93,7 @@ static btf_status synthesise(const btf_dataset *ds, const btf_rf_sample_opts *r,
         *map = NULL;
     }
     info->sample_s = t1 - t0;
-    info->quilt_s = btf_now() - t1;
+    info->quilt_s = btf__now() - t1;
     return rc;
 }
 
@@ -102,18 +102,18 @@ btf_status btf_rf_fit_sampled(const btf_dataset *ds, const btf_rf_opts *opts,
                               btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_fit_sampled: no output model");
+        return btf__fail(err, BTF_E_ARG, "btf_rf_fit_sampled: no output model");
     memset(out, 0, sizeof *out);
     if (!ds || !so)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_fit_sampled: no dataset or no sample options");
-    if (btf_rf_refuse_sparse(ds, err))
+        return btf__fail(err, BTF_E_ARG, "btf_rf_fit_sampled: no dataset or no sample options");
+    if (btf__rf_refuse_sparse(ds, err))
         return BTF_E_DATA;
-    double t0 = btf_now();
+    double t0 = btf__now();
     btf_rf_opts d = btf_rf_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_rf_fit_sampled", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_rf_fit_sampled", err))
         return BTF_E_ARG;
     if (o.threads < 0)
-        return btf_fail(err, BTF_E_ARG, "threads %d (expected >= 0)", o.threads);
+        return btf__fail(err, BTF_E_ARG, "threads %d (expected >= 0)", o.threads);
     btf_rf_sample_opts r;
     btf_status rc = resolve(so, btf_dataset_get_info(ds), &r, err);
     if (rc)
@@ -136,8 +136,8 @@ btf_status btf_rf_fit_sampled(const btf_dataset *ds, const btf_rf_opts *opts,
     out->map = map;
     out->surface_width = r.surface_width, out->surface_height = r.surface_height;
     out->sample_x = sx, out->sample_y = sy;
-    double t1 = btf_now(), e = 0.0, s = 0.0;
-    rc = btf_rf_error(ds, out, o.threads, &e, &s, err);
+    double t1 = btf__now(), e = 0.0, s = 0.0;
+    rc = btf__rf_error(ds, out, o.threads, &e, &s, err);
     if (rc) {
         btf_rf_model_free(out);
         return rc;
@@ -147,9 +147,9 @@ btf_status btf_rf_fit_sampled(const btf_dataset *ds, const btf_rf_opts *opts,
         user->sample_mean_abs_error = out->fit == BTF_RF_LAFORTUNE ? 0.0 : fi.mean_abs_error;
         user->mean_abs_error = e, user->mean_luminance = s;
         user->sample_s = si.sample_s, user->quilt_s = si.quilt_s;
-        user->error_s = btf_now() - t1;
+        user->error_s = btf__now() - t1;
         user->quilt_block = r.block, user->quilt_overlap = r.overlap;
-        user->seconds = btf_now() - t0;
+        user->seconds = btf__now() - t0;
     }
     return BTF_OK;
 }

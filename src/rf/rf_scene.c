@@ -2,7 +2,7 @@
  * rf_scene.c — a scene rendered with a reflectance-field model (Meseth,
  * Müller & Klein 2003, section 5, on the CPU; docs/rf.md, "Rendering"):
  * the scene is traced into the G-buffer the CAR renderer shades
- * (btf_scene_trace), and every pixel is shaded by btf_rf_shade_pixel of
+ * (btf__scene_trace), and every pixel is shaded by btf_rf_shade_pixel of
  * src/rf/btf_rf_shared.h, the text the GPU pass (gpu/rf_render.comp) runs:
  * the local view and light directions in the pixel's tangent frame as
  * src/render/ takes them (T, B, N rows, the view held at least 1e-3 above
@@ -56,50 +56,50 @@ btf_status rf_scene_trace(const btf_rf_model *m, const btf_scene *s, int *width,
     memset(g, 0, sizeof *g);
     if (!m || !m->codes || m->width < 1 || m->height < 1 || m->fields < 1 ||
         (m->map && (m->surface_width < 1 || m->surface_height < 1)))
-        return btf_fail(err, BTF_E_ARG, "RF scene render: no model");
+        return btf__fail(err, BTF_E_ARG, "RF scene render: no model");
     if (!s)
-        return btf_fail(err, BTF_E_ARG, "RF scene render: no scene given");
+        return btf__fail(err, BTF_E_ARG, "RF scene render: no scene given");
     *width = *width ? *width : 512;
     *height = *height ? *height : 512;
     if (*width < 1 || *height < 1 || *width > BTF_RENDER_MAX_SIDE ||
         *height > BTF_RENDER_MAX_SIDE || threads < 0)
-        return btf_fail(err, BTF_E_ARG, "scene render: frame %dx%d, threads %d (expected "
-                        "each side 1..%d, threads >= 0)", *width, *height, threads,
-                        BTF_RENDER_MAX_SIDE);
+        return btf__fail(err, BTF_E_ARG, "scene render: frame %dx%d, threads %d (expected "
+                         "each side 1..%d, threads >= 0)", *width, *height, threads,
+                         BTF_RENDER_MAX_SIDE);
     btf_status rc = btf_scene_check(s, err);
     if (rc)
         return rc;
     if (s->n_lights > 0 && !s->lights)
-        return btf_fail(err, BTF_E_ARG, "scene: %d lights but no light array", s->n_lights);
-    return btf_scene_trace(s, *width, *height, threads, g, err);
+        return btf__fail(err, BTF_E_ARG, "scene: %d lights but no light array", s->n_lights);
+    return btf__scene_trace(s, *width, *height, threads, g, err);
 }
 
-btf_status btf_rf_render_scene(const btf_rf_model *m, const btf_scene *s, int width,
-                               int height, int threads, btf_image *out, btf_render_info *info,
-                               btf_error *err)
+btf_status btf__rf_render_scene(const btf_rf_model *m, const btf_scene *s, int width,
+                                int height, int threads, btf_image *out, btf_render_info *info,
+                                btf_error *err)
 {
     if (info)
         memset(info, 0, sizeof *info);
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_rf_render_scene: no output image");
+        return btf__fail(err, BTF_E_ARG, "btf_rf_render_scene: no output image");
     memset(out, 0, sizeof *out);
     btf_gbuffer g;
-    double t0 = btf_now();
+    double t0 = btf__now();
     btf_status rc = rf_scene_trace(m, s, &width, &height, threads, &g, err);
-    double t1 = btf_now();
+    double t1 = btf__now();
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, width, height, 3, err);
     if (rc == BTF_OK) {
         scene_job j = {rf_ctx_of(m), s, &g, out};
         j.c.lights = s->lights, j.c.n_lights = s->n_lights;
-        rc = btf_pool_run(height, threads, row_job, &j, NULL, err);
+        rc = btf__pool_run(height, threads, row_job, &j, NULL, err);
         if (rc)
             btf_image_free(out);
     }
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     if (rc == BTF_OK && info) {
         info->trace_s = t1 - t0;
-        info->shade_s = btf_now() - t1;
+        info->shade_s = btf__now() - t1;
     }
     return rc;
 }

@@ -190,16 +190,16 @@ btf_status scene_bvh_build(const btf_mesh *m, scene_bvh *out, btf_error *err)
     memset(out, 0, sizeof *out);
     int n = m->n_triangles;
     if (n <= 0)
-        return btf_fail(err, BTF_E_ARG, "bvh: mesh without triangles");
+        return btf__fail(err, BTF_E_ARG, "bvh: mesh without triangles");
     builder bd = {0};
-    bd.tri_box = btf_alloc((size_t)n, sizeof *bd.tri_box, err);
-    bd.centroid = btf_alloc((size_t)n * 3, sizeof *bd.centroid, err);
-    bd.order = btf_alloc((size_t)n, sizeof *bd.order, err);
+    bd.tri_box = btf__alloc((size_t)n, sizeof *bd.tri_box, err);
+    bd.centroid = btf__alloc((size_t)n * 3, sizeof *bd.centroid, err);
+    bd.order = btf__alloc((size_t)n, sizeof *bd.order, err);
     /* Node 0 is the root and the left child is always the next node:
      * 2n - 1 nodes at most. */
-    bd.nodes = btf_calloc((size_t)2 * (size_t)n, sizeof *bd.nodes, err);
-    out->tris = btf_alloc((size_t)n * 9, sizeof *out->tris, err);
-    out->tri_index = btf_alloc((size_t)n, sizeof *out->tri_index, err);
+    bd.nodes = btf__calloc((size_t)2 * (size_t)n, sizeof *bd.nodes, err);
+    out->tris = btf__alloc((size_t)n * 9, sizeof *out->tris, err);
+    out->tri_index = btf__alloc((size_t)n, sizeof *out->tri_index, err);
     if (!bd.tri_box || !bd.centroid || !bd.order || !bd.nodes || !out->tris ||
         !out->tri_index) {
         free(bd.tri_box), free(bd.centroid), free(bd.order), free(bd.nodes);

@@ -1,7 +1,7 @@
 /*
  * gbuffer.h — ray casting a scene into a G-buffer (src/scene/trace.c),
  * which the CPU and GPU renderers of both model families shade. Private to
- * the library; the public entries are btf_render_scene, btf_rf_render_scene
+ * the library; the public entries are btf_render_scene, btf__rf_render_scene
  * and their GPU forms.
  */
 #ifndef BTF_SCENE_GBUFFER_H
@@ -32,8 +32,8 @@ typedef struct btf_gbuffer {
  * on `threads` threads (0: all CPUs); the result does not depend on the
  * thread count. Checks the scene first (btf_scene_check). width, height in
  * 1 .. 65536. */
-btf_status btf_scene_trace(const btf_scene *s, int width, int height, int threads,
-                           btf_gbuffer *out, btf_error *err);
-void btf_gbuffer_free(btf_gbuffer *g);
+btf_status btf__scene_trace(const btf_scene *s, int width, int height, int threads,
+                            btf_gbuffer *out, btf_error *err);
+void btf__gbuffer_free(btf_gbuffer *g);
 
 #endif

@@ -1,6 +1,6 @@
 /*
  * mesh_io.c — assimp's file access for one mesh (mesh_io.h): every open
- * goes through btf_open_regular, and a file other than the mesh itself
+ * goes through btf__open_regular, and a file other than the mesh itself
  * must resolve (realpath: links and .. followed) to the mesh's folder or
  * below. A refusal is kept in io->refused and fails the load after assimp
  * returns: assimp treats a file it cannot open as absent, and an OBJ
@@ -70,7 +70,7 @@ static struct aiFile *refuse(scene_mesh_io *io, const char *path, const btf_erro
     if (!io->refused.code) {
         io->refused = *e;
         if (strcmp(path, io->mesh) != 0)
-            btf_fail(&io->refused, e->code, "%s: %s", io->mesh, e->msg);
+            btf__fail(&io->refused, e->code, "%s: %s", io->mesh, e->msg);
     }
     return NULL;
 }
@@ -88,8 +88,8 @@ static int inside_folder(scene_mesh_io *io, const char *path)
     if (below || strcmp(io->folder, "/") == 0)
         return 1;
     btf_error e = {0};
-    btf_fail(&e, BTF_E_IO, "%s: outside the mesh's folder %s (a mesh may read only files "
-             "beside it or below)", path, io->folder);
+    btf__fail(&e, BTF_E_IO, "%s: outside the mesh's folder %s (a mesh may read only files "
+              "beside it or below)", path, io->folder);
     refuse(io, path, &e);
     return 0;
 }
@@ -103,7 +103,7 @@ static struct aiFile *io_open(struct aiFileIO *fs, const char *path, const char 
         return NULL;
     btf_error e = {0};
     uint64_t size;
-    int fd = btf_open_regular(path, &size, &e);
+    int fd = btf__open_regular(path, &size, &e);
     if (fd < 0) /* missing: assimp's matter, as before (an OBJ loads without its .mtl) */
         return errno == ENOENT || errno == ENOTDIR ? NULL : refuse(io, path, &e);
     mesh_file *m = calloc(1, sizeof *m);
@@ -111,7 +111,7 @@ static struct aiFile *io_open(struct aiFileIO *fs, const char *path, const char 
     if (!fp) {
         free(m);
         close(fd);
-        btf_fail(&e, BTF_E_NOMEM, "%s: out of memory", path);
+        btf__fail(&e, BTF_E_NOMEM, "%s: out of memory", path);
         return refuse(io, path, &e);
     }
     m->fp = fp;
@@ -142,7 +142,7 @@ btf_status scene_mesh_io_init(scene_mesh_io *io, const char *path, btf_error *er
     char dir[PATH_MAX];
     size_t n = slash ? (size_t)(slash - path) : 1;
     if (n >= sizeof dir)
-        return btf_fail(err, BTF_E_ARG, "%s: path too long", path);
+        return btf__fail(err, BTF_E_ARG, "%s: path too long", path);
     if (!slash)
         memcpy(dir, ".", 2);
     else if (n == 0)
@@ -150,6 +150,6 @@ btf_status scene_mesh_io_init(scene_mesh_io *io, const char *path, btf_error *er
     else
         memcpy(dir, path, n), dir[n] = '\0';
     if (!realpath(dir, io->folder))
-        return btf_fail(err, BTF_E_IO, "%s: cannot resolve: %s", dir, strerror(errno));
+        return btf__fail(err, BTF_E_IO, "%s: cannot resolve: %s", dir, strerror(errno));
     return BTF_OK;
 }

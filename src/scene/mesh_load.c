@@ -44,8 +44,8 @@ static btf_status count_meshes(const struct aiScene *sc, const char *name, const
         if (!is_triangles(am))
             continue; /* points and lines (SortByPType split them off) */
         if (!am->mTextureCoords[0])
-            return btf_fail(err, BTF_E_DATA, "%s: %s: %s: mesh %u has no texture coordinates "
-                            "(UVs are required)", name, key, path, i);
+            return btf__fail(err, BTF_E_DATA, "%s: %s: %s: mesh %u has no texture coordinates "
+                             "(UVs are required)", name, key, path, i);
         if (!am->mNormals)
             *all_normals = 0;
         *nv += am->mNumVertices;
@@ -53,10 +53,10 @@ static btf_status count_meshes(const struct aiScene *sc, const char *name, const
             *nt += am->mFaces[f].mNumIndices == 3;
     }
     if (*nt == 0)
-        return btf_fail(err, BTF_E_DATA, "%s: %s: %s: no triangles", name, key, path);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: %s: no triangles", name, key, path);
     if (*nt > SCENE_MAX_TRIANGLES || *nv > (long long)UINT32_MAX / 2)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: %s: %s: %lld triangles (at most %d)",
-                        name, key, path, *nt, SCENE_MAX_TRIANGLES);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "%s: %s: %s: %lld triangles (at most %d)",
+                         name, key, path, *nt, SCENE_MAX_TRIANGLES);
     return BTF_OK;
 }
 
@@ -98,7 +98,7 @@ static btf_status name_key(btf_error *err, const char *name, const char *key)
 {
     char m[sizeof err->msg];
     memcpy(m, err->msg, sizeof m);
-    return btf_fail(err, err->code, "%s: %s: %s", name, key, m);
+    return btf__fail(err, err->code, "%s: %s: %s", name, key, m);
 }
 
 btf_status scene_mesh_load(const char *path, const char *name, const char *key, btf_mesh *out,
@@ -106,13 +106,13 @@ btf_status scene_mesh_load(const char *path, const char *name, const char *key, 
 {
     memset(out, 0, sizeof *out);
     uint64_t size;
-    int fd = btf_open_regular(path, &size, err);
+    int fd = btf__open_regular(path, &size, err);
     if (fd < 0)
         return name_key(err, name, key);
     close(fd);
     if (size > (uint64_t)SCENE_MAX_MESH_BYTES)
-        return btf_fail(err, BTF_E_UNSUPPORTED, "%s: %s: %s: %llu bytes (at most %lld)", name,
-                        key, path, (unsigned long long)size, SCENE_MAX_MESH_BYTES);
+        return btf__fail(err, BTF_E_UNSUPPORTED, "%s: %s: %s: %llu bytes (at most %lld)", name,
+                         key, path, (unsigned long long)size, SCENE_MAX_MESH_BYTES);
     scene_mesh_io io;
     if (scene_mesh_io_init(&io, path, err))
         return name_key(err, name, key);
@@ -128,8 +128,8 @@ btf_status scene_mesh_load(const char *path, const char *name, const char *key, 
     }
     if (!sc) {
         const char *why = aiGetErrorString();
-        return btf_fail(err, BTF_E_FORMAT, "%s: %s: %s: not a mesh assimp reads (%s)", name,
-                        key, path, why && *why ? why : "no reason given");
+        return btf__fail(err, BTF_E_FORMAT, "%s: %s: %s: not a mesh assimp reads (%s)", name,
+                         key, path, why && *why ? why : "no reason given");
     }
     long long nv, nt;
     int all_normals;
@@ -137,14 +137,14 @@ btf_status scene_mesh_load(const char *path, const char *name, const char *key, 
     if (rc == BTF_OK) {
         out->n_vertices = (int)nv;
         out->n_triangles = (int)nt;
-        out->positions = btf_alloc((size_t)nv * 3, sizeof(float), err);
-        out->uvs = btf_alloc((size_t)nv * 2, sizeof(float), err);
-        out->indices = btf_alloc((size_t)nt * 3, sizeof(uint32_t), err);
+        out->positions = btf__alloc((size_t)nv * 3, sizeof(float), err);
+        out->uvs = btf__alloc((size_t)nv * 2, sizeof(float), err);
+        out->indices = btf__alloc((size_t)nt * 3, sizeof(uint32_t), err);
         /* Normals only where every part has them: else face normals. */
-        out->normals = all_normals ? btf_alloc((size_t)nv * 3, sizeof(float), err) : NULL;
+        out->normals = all_normals ? btf__alloc((size_t)nv * 3, sizeof(float), err) : NULL;
         if (!out->positions || !out->uvs || !out->indices || (all_normals && !out->normals))
-            rc = btf_fail(err, BTF_E_NOMEM, "%s: %s: %s: out of memory for %lld triangles",
-                          name, key, path, nt);
+            rc = btf__fail(err, BTF_E_NOMEM, "%s: %s: %s: out of memory for %lld triangles",
+                           name, key, path, nt);
         else
             copy_meshes(sc, out);
     }

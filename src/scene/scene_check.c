@@ -24,10 +24,10 @@ static btf_status check_vec(const char *name, const char *k, const double v[3], 
 {
     for (int i = 0; i < 3; i++) {
         if (!isfinite(v[i]))
-            return btf_fail(err, BTF_E_DATA, "%s: %s: component %d is not finite", name, k, i);
+            return btf__fail(err, BTF_E_DATA, "%s: %s: component %d is not finite", name, k, i);
         if (fabs(v[i]) > SCENE_MAX_COORD)
-            return btf_fail(err, BTF_E_DATA, "%s: %s: component %d is %g, beyond +-%g", name,
-                            k, i, v[i], SCENE_MAX_COORD);
+            return btf__fail(err, BTF_E_DATA, "%s: %s: component %d is %g, beyond +-%g", name,
+                             k, i, v[i], SCENE_MAX_COORD);
     }
     return BTF_OK;
 }
@@ -39,9 +39,9 @@ static btf_status check_unit(const char *name, const char *k, const double v[3],
         return rc;
     double l = v3_len(v);
     if (l == 0.0)
-        return btf_fail(err, BTF_E_DATA, "%s: %s: zero-length direction", name, k);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: zero-length direction", name, k);
     if (fabs(l - 1.0) > 1e-6)
-        return btf_fail(err, BTF_E_DATA, "%s: %s: not a unit vector (length %g)", name, k, l);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: not a unit vector (length %g)", name, k, l);
     return BTF_OK;
 }
 
@@ -49,10 +49,10 @@ static btf_status check_unit(const char *name, const char *k, const double v[3],
 static btf_status check_length(const char *name, const char *k, double v, btf_error *err)
 {
     if (!isfinite(v))
-        return btf_fail(err, BTF_E_DATA, "%s: %s: not finite", name, k);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: not finite", name, k);
     if (!(v > 0.0) || v > SCENE_MAX_COORD)
-        return btf_fail(err, BTF_E_DATA, "%s: %s: %g is out of range (0, %g]", name, k, v,
-                        SCENE_MAX_COORD);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: %g is out of range (0, %g]", name, k, v,
+                         SCENE_MAX_COORD);
     return BTF_OK;
 }
 
@@ -60,8 +60,8 @@ static btf_status check_rgb(const char *name, const char *k, const float c[3], b
 {
     for (int i = 0; i < 3; i++)
         if (!isfinite(c[i]) || c[i] < 0.0f || c[i] > SCENE_MAX_COORD)
-            return btf_fail(err, BTF_E_DATA, "%s: %s: component %d is %g, not in [0, %g]",
-                            name, k, i, (double)c[i], SCENE_MAX_COORD);
+            return btf__fail(err, BTF_E_DATA, "%s: %s: component %d is %g, not in [0, %g]",
+                             name, k, i, (double)c[i], SCENE_MAX_COORD);
     return BTF_OK;
 }
 
@@ -73,19 +73,19 @@ static btf_status check_camera(const btf_camera *c, const char *name, btf_error 
         (rc = check_vec(name, "camera.up", c->up, err)))
         return rc;
     if (!isfinite(c->fov_deg) || !(c->fov_deg > 0.0 && c->fov_deg < 180.0))
-        return btf_fail(err, BTF_E_DATA, "%s: camera.fov: %g degrees is not in (0, 180)", name,
-                        c->fov_deg);
+        return btf__fail(err, BTF_E_DATA, "%s: camera.fov: %g degrees is not in (0, 180)", name,
+                         c->fov_deg);
     double f[3], u[3] = {c->up[0], c->up[1], c->up[2]}, x[3];
     v3_sub(c->target, c->position, f);
     if (!v3_normalize(f) || v3_len(f) == 0.0)
-        return btf_fail(err, BTF_E_DATA, "%s: camera.target: equals camera.position (no view "
-                        "direction)", name);
+        return btf__fail(err, BTF_E_DATA, "%s: camera.target: equals camera.position (no view "
+                         "direction)", name);
     if (!v3_normalize(u))
-        return btf_fail(err, BTF_E_DATA, "%s: camera.up: zero-length direction", name);
+        return btf__fail(err, BTF_E_DATA, "%s: camera.up: zero-length direction", name);
     v3_cross(f, u, x);
     if (v3_len(x) < 1e-6)
-        return btf_fail(err, BTF_E_DATA, "%s: camera.up: parallel to the view direction "
-                        "(target - position)", name);
+        return btf__fail(err, BTF_E_DATA, "%s: camera.up: parallel to the view direction "
+                         "(target - position)", name);
     return BTF_OK;
 }
 
@@ -103,8 +103,8 @@ static btf_status check_light(const btf_light *l, int i, const char *name, btf_e
         if (rc)
             return rc;
     } else {
-        return btf_fail(err, BTF_E_DATA, "%s: %s: unknown light kind %d", name,
-                        key(k, sizeof k, "lights", i, "type"), (int)l->kind);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: unknown light kind %d", name,
+                         key(k, sizeof k, "lights", i, "type"), (int)l->kind);
     }
     return check_rgb(name, key(k, sizeof k, "lights", i, "intensity"), l->rgb, err);
 }
@@ -112,25 +112,25 @@ static btf_status check_light(const btf_light *l, int i, const char *name, btf_e
 static btf_status check_mesh(const btf_mesh *m, const char *name, const char *k, btf_error *err)
 {
     if (m->n_vertices < 3 || m->n_triangles < 1 || m->n_triangles > SCENE_MAX_TRIANGLES)
-        return btf_fail(err, BTF_E_DATA, "%s: %s: %d vertices, %d triangles (at least 3 and "
-                        "1, at most %d triangles)", name, k, m->n_vertices, m->n_triangles,
-                        SCENE_MAX_TRIANGLES);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: %d vertices, %d triangles (at least 3 and "
+                         "1, at most %d triangles)", name, k, m->n_vertices, m->n_triangles,
+                         SCENE_MAX_TRIANGLES);
     if (!m->positions || !m->uvs || !m->indices)
-        return btf_fail(err, BTF_E_DATA, "%s: %s: positions, uvs and indices are required",
-                        name, k);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: positions, uvs and indices are required",
+                         name, k);
     for (size_t i = 0; i < 3 * (size_t)m->n_triangles; i++)
         if (m->indices[i] >= (uint32_t)m->n_vertices)
-            return btf_fail(err, BTF_E_DATA, "%s: %s: index %zu is %u, beyond %d vertices",
-                            name, k, i, m->indices[i], m->n_vertices);
+            return btf__fail(err, BTF_E_DATA, "%s: %s: index %zu is %u, beyond %d vertices",
+                             name, k, i, m->indices[i], m->n_vertices);
     for (size_t i = 0; i < 3 * (size_t)m->n_vertices; i++)
         if (!isfinite(m->positions[i]) || fabsf(m->positions[i]) > SCENE_MAX_COORD ||
             (m->normals && !isfinite(m->normals[i])))
-            return btf_fail(err, BTF_E_DATA, "%s: %s: vertex %zu: a position beyond +-%g or "
-                            "a non-finite normal", name, k, i / 3, SCENE_MAX_COORD);
+            return btf__fail(err, BTF_E_DATA, "%s: %s: vertex %zu: a position beyond +-%g or "
+                             "a non-finite normal", name, k, i / 3, SCENE_MAX_COORD);
     for (size_t i = 0; i < 2 * (size_t)m->n_vertices; i++)
         if (!isfinite(m->uvs[i]) || fabsf(m->uvs[i]) > SCENE_MAX_COORD)
-            return btf_fail(err, BTF_E_DATA, "%s: %s: vertex %zu: uv beyond +-%g", name, k,
-                            i / 2, SCENE_MAX_COORD);
+            return btf__fail(err, BTF_E_DATA, "%s: %s: vertex %zu: uv beyond +-%g", name, k,
+                             i / 2, SCENE_MAX_COORD);
     return BTF_OK;
 }
 
@@ -139,16 +139,16 @@ static btf_status check_object(const btf_object *o, int i, const char *name, btf
     char k[64];
     btf_status rc;
     if (o->kind < BTF_OBJECT_PLANE || o->kind > BTF_OBJECT_MESH)
-        return btf_fail(err, BTF_E_DATA, "%s: %s: unknown object kind %d", name,
-                        key(k, sizeof k, "objects", i, "type"), (int)o->kind);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: unknown object kind %d", name,
+                         key(k, sizeof k, "objects", i, "type"), (int)o->kind);
     if ((rc = check_vec(name, key(k, sizeof k, "objects", i, "center"), o->center, err)) ||
         (rc = check_length(name, key(k, sizeof k, "objects", i, "texture_scale"),
                            o->texture_scale, err)))
         return rc;
     if (!isfinite(o->rotation_deg) || fabs(o->rotation_deg) > SCENE_MAX_COORD)
-        return btf_fail(err, BTF_E_DATA, "%s: %s: %g is not a finite angle within +-%g", name,
-                        key(k, sizeof k, "objects", i, "rotation"), o->rotation_deg,
-                        SCENE_MAX_COORD);
+        return btf__fail(err, BTF_E_DATA, "%s: %s: %g is not a finite angle within +-%g", name,
+                         key(k, sizeof k, "objects", i, "rotation"), o->rotation_deg,
+                         SCENE_MAX_COORD);
     if (o->kind == BTF_OBJECT_MESH)
         return check_mesh(&o->mesh, name, key(k, sizeof k, "objects", i, "file"), err);
     if ((rc = check_unit(name, key(k, sizeof k, "objects", i, "axis"), o->axis, err)))
@@ -165,17 +165,17 @@ static btf_status check_object(const btf_object *o, int i, const char *name, btf
 btf_status scene_check_named(const btf_scene *s, const char *name, btf_error *err)
 {
     if (!s)
-        return btf_fail(err, BTF_E_ARG, "%s: no scene given", name);
+        return btf__fail(err, BTF_E_ARG, "%s: no scene given", name);
     btf_status rc = check_camera(&s->camera, name, err);
     if (rc)
         return rc;
     if ((rc = check_rgb(name, "background", s->background, err)))
         return rc;
     if (s->n_lights < 1 || !s->lights)
-        return btf_fail(err, BTF_E_DATA, "%s: lights: at least one light is required", name);
+        return btf__fail(err, BTF_E_DATA, "%s: lights: at least one light is required", name);
     if (s->n_objects < 0 || (s->n_objects > 0 && !s->objects))
-        return btf_fail(err, BTF_E_DATA, "%s: objects: %d objects and no array", name,
-                        s->n_objects);
+        return btf__fail(err, BTF_E_DATA, "%s: objects: %d objects and no array", name,
+                         s->n_objects);
     for (int i = 0; i < s->n_lights; i++)
         if ((rc = check_light(&s->lights[i], i, name, err)))
             return rc;

@@ -56,13 +56,13 @@ static btf_status check_keys(jctx *c, const cJSON *obj, const char *path,
             for (int i = 0; known[i]; i++)
                 snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "",
                          known[i]);
-            return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: unknown key (known here: %s)",
-                            c->name, join(p, sizeof p, path, it->string), list);
+            return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: unknown key (known here: %s)",
+                             c->name, join(p, sizeof p, path, it->string), list);
         }
         for (const cJSON *q = obj->child; q != it; q = q->next)
             if (strcmp(q->string, it->string) == 0)
-                return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: key given twice", c->name,
-                                join(p, sizeof p, path, it->string));
+                return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: key given twice", c->name,
+                                 join(p, sizeof p, path, it->string));
     }
     return BTF_OK;
 }
@@ -74,8 +74,8 @@ static btf_status member(jctx *c, const cJSON *obj, const char *path, const char
     *out = cJSON_GetObjectItemCaseSensitive(obj, k);
     if (!*out && required) {
         char p[128];
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: missing (required)", c->name,
-                        join(p, sizeof p, path, k));
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: missing (required)", c->name,
+                         join(p, sizeof p, path, k));
     }
     return BTF_OK;
 }
@@ -83,10 +83,10 @@ static btf_status member(jctx *c, const cJSON *obj, const char *path, const char
 static btf_status as_number(jctx *c, const cJSON *j, const char *k, double *out)
 {
     if (!cJSON_IsNumber(j))
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: expected a number, got %s", c->name, k,
-                        type_name(j));
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: expected a number, got %s", c->name, k,
+                         type_name(j));
     if (!isfinite(j->valuedouble))
-        return btf_fail(c->err, BTF_E_DATA, "%s: %s: not a finite number", c->name, k);
+        return btf__fail(c->err, BTF_E_DATA, "%s: %s: not a finite number", c->name, k);
     *out = j->valuedouble;
     return BTF_OK;
 }
@@ -106,8 +106,8 @@ static btf_status get_number(jctx *c, const cJSON *obj, const char *path, const 
 static btf_status as_vec3(jctx *c, const cJSON *j, const char *k, double out[3])
 {
     if (!cJSON_IsArray(j) || cJSON_GetArraySize(j) != 3)
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: expected an array of 3 numbers, got %s%s",
-                        c->name, k, type_name(j), cJSON_IsArray(j) ? " of another length" : "");
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: expected an array of 3 numbers, got %s%s",
+                         c->name, k, type_name(j), cJSON_IsArray(j) ? " of another length" : "");
     int i = 0;
     for (const cJSON *e = j->child; e; e = e->next, i++) {
         char p[144];
@@ -142,11 +142,11 @@ static btf_status get_direction(jctx *c, const cJSON *obj, const char *path, con
     double l = v3_len(out);
     char p[128];
     if (!(l > 0.0))
-        return btf_fail(c->err, BTF_E_DATA, "%s: %s: zero-length direction", c->name,
-                        join(p, sizeof p, path, k));
+        return btf__fail(c->err, BTF_E_DATA, "%s: %s: zero-length direction", c->name,
+                         join(p, sizeof p, path, k));
     if (!isfinite(l))
-        return btf_fail(c->err, BTF_E_DATA, "%s: %s: too long (%g)", c->name,
-                        join(p, sizeof p, path, k), l);
+        return btf__fail(c->err, BTF_E_DATA, "%s: %s: too long (%g)", c->name,
+                         join(p, sizeof p, path, k), l);
     v3_scale(out, 1.0 / l);
     return BTF_OK;
 }
@@ -169,13 +169,13 @@ static btf_status get_rgb(jctx *c, const cJSON *obj, const char *path, const cha
     } else if (cJSON_IsArray(j)) {
         rc = as_vec3(c, j, p, v);
     } else {
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: expected [r, g, b] or a number, got %s",
-                        c->name, p, type_name(j));
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: expected [r, g, b] or a number, got %s",
+                         c->name, p, type_name(j));
     }
     for (int i = 0; i < 3 && !rc; i++) {
         if (v[i] < 0.0 || v[i] > SCENE_MAX_COORD)
-            return btf_fail(c->err, BTF_E_DATA, "%s: %s: %g is not in [0, %g]", c->name, p,
-                            v[i], SCENE_MAX_COORD);
+            return btf__fail(c->err, BTF_E_DATA, "%s: %s: %g is not in [0, %g]", c->name, p,
+                             v[i], SCENE_MAX_COORD);
         out[i] = (float)v[i];
     }
     return rc;
@@ -190,8 +190,8 @@ static btf_status get_string(jctx *c, const cJSON *obj, const char *path, const 
     if (rc)
         return rc;
     if (!cJSON_IsString(j) || !j->valuestring)
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: expected a string, got %s", c->name,
-                        join(p, sizeof p, path, k), type_name(j));
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: expected a string, got %s", c->name,
+                         join(p, sizeof p, path, k), type_name(j));
     *out = j->valuestring;
     return BTF_OK;
 }
@@ -200,8 +200,8 @@ static btf_status expect(jctx *c, const cJSON *j, const char *path, int object)
 {
     if (object ? cJSON_IsObject(j) : cJSON_IsArray(j))
         return BTF_OK;
-    return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: expected %s, got %s", c->name, path,
-                    object ? "an object" : "an array", type_name(j));
+    return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: expected %s, got %s", c->name, path,
+                     object ? "an object" : "an array", type_name(j));
 }
 
 static btf_status parse_camera(jctx *c, const cJSON *root, btf_camera *cam)
@@ -240,8 +240,8 @@ static btf_status parse_light(jctx *c, const cJSON *j, const char *path, btf_lig
             (rc = get_vec3(c, j, path, "position", 1, NULL, l->position)))
             return rc;
     } else {
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: \"%s\" is not a light type "
-                        "(directional, point)", c->name, join(p, sizeof p, path, "type"), type);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: \"%s\" is not a light type "
+                         "(directional, point)", c->name, join(p, sizeof p, path, "type"), type);
     }
     return get_rgb(c, j, path, "intensity", 1.0f, l->rgb);
 }
@@ -252,7 +252,7 @@ static btf_status mesh_path(jctx *c, const char *file, const char *k, char *out,
     int len = file[0] == '/' || !c->dir[0] ? snprintf(out, n, "%s", file)
                                           : snprintf(out, n, "%s/%s", c->dir, file);
     if (len < 0 || (size_t)len >= n)
-        return btf_fail(c->err, BTF_E_ARG, "%s: %s: path too long", c->name, k);
+        return btf__fail(c->err, BTF_E_ARG, "%s: %s: path too long", c->name, k);
     return BTF_OK;
 }
 
@@ -282,9 +282,9 @@ static btf_status parse_object(jctx *c, const cJSON *j, const char *path, btf_ob
     else if (strcmp(type, "mesh") == 0)
         o->kind = BTF_OBJECT_MESH, known = mesh_keys;
     else
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: %s: \"%s\" is not an object type (plane, "
-                        "sphere, cylinder, mesh)", c->name, join(p, sizeof p, path, "type"),
-                        type);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: %s: \"%s\" is not an object type (plane, "
+                         "sphere, cylinder, mesh)", c->name, join(p, sizeof p, path, "type"),
+                         type);
     if ((rc = check_keys(c, j, path, known)) ||
         (rc = get_vec3(c, j, path, "center", 0, zero, o->center)) ||
         (rc = get_number(c, j, path, "texture_scale", 0, DEFAULT_TEXTURE_SCALE,
@@ -319,11 +319,11 @@ static btf_status parse_list(jctx *c, const cJSON *root, const char *k, int requ
         return rc;
     int n = cJSON_GetArraySize(j);
     int lights = k[0] == 'l';
-    void *arr = n ? btf_calloc((size_t)n, lights ? sizeof(btf_light) : sizeof(btf_object),
-                               c->err)
+    void *arr = n ? btf__calloc((size_t)n, lights ? sizeof(btf_light) : sizeof(btf_object),
+                                c->err)
                   : NULL;
     if (n && !arr)
-        return btf_error_name(c->err, c->name);
+        return btf__error_name(c->err, c->name);
     if (lights)
         s->lights = arr;
     else
@@ -360,8 +360,8 @@ static void line_column(const char *text, size_t off, int *line, int *col)
 static btf_status parse_text(jctx *c, const char *text, size_t n, btf_scene *s)
 {
     if (memchr(text, '\0', n))
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: not a JSON text (contains a NUL byte)",
-                        c->name);
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: not a JSON text (contains a NUL byte)",
+                         c->name);
     const char *end = NULL;
     /* n + 1: the terminating NUL is inside the buffer, so that cJSON's
      * trailing-garbage check can see it. */
@@ -370,8 +370,8 @@ static btf_status parse_text(jctx *c, const char *text, size_t n, btf_scene *s)
         size_t off = end && end >= text && end <= text + n ? (size_t)(end - text) : n;
         int line, col;
         line_column(text, off, &line, &col);
-        return btf_fail(c->err, BTF_E_FORMAT, "%s: invalid JSON at line %d, column %d%s", c->name,
-                        line, col, off >= n ? " (unexpected end of file)" : "");
+        return btf__fail(c->err, BTF_E_FORMAT, "%s: invalid JSON at line %d, column %d%s", c->name,
+                         line, col, off >= n ? " (unexpected end of file)" : "");
     }
     static const char *const known[] = {"camera", "background", "lights", "objects", NULL};
     btf_status rc;
@@ -387,16 +387,16 @@ static btf_status parse_text(jctx *c, const char *text, size_t n, btf_scene *s)
 btf_status btf_scene_load(const char *path, btf_scene *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_scene_load: no output scene");
+        return btf__fail(err, BTF_E_ARG, "btf_scene_load: no output scene");
     memset(out, 0, sizeof *out);
     if (!path || !*path)
-        return btf_fail(err, BTF_E_ARG, "btf_scene_load: no file name");
+        return btf__fail(err, BTF_E_ARG, "btf_scene_load: no file name");
     jctx c = {.name = path, .err = err};
     const char *slash = strrchr(path, '/');
     if (slash) {
         size_t n = (size_t)(slash - path);
         if (n >= sizeof c.dir)
-            return btf_fail(err, BTF_E_ARG, "%s: path too long", path);
+            return btf__fail(err, BTF_E_ARG, "%s: path too long", path);
         memcpy(c.dir, path, n);
         c.dir[n ? n : 1] = '\0';
         if (n == 0)
@@ -404,13 +404,13 @@ btf_status btf_scene_load(const char *path, btf_scene *out, btf_error *err)
     }
     unsigned char *data;
     size_t n;
-    btf_status rc = btf_read_file(path, SCENE_MAX_FILE_BYTES, &data, &n, err);
+    btf_status rc = btf__read_file(path, SCENE_MAX_FILE_BYTES, &data, &n, err);
     if (rc)
         return rc;
     char *text = malloc(n + 1);
     if (!text) {
         free(data);
-        return btf_fail(err, BTF_E_NOMEM, "%s: out of memory", path);
+        return btf__fail(err, BTF_E_NOMEM, "%s: out of memory", path);
     }
     memcpy(text, data, n);
     text[n] = '\0';

@@ -13,16 +13,16 @@
 btf_status btf_scene_sphere(btf_dir light, double texture_scale, btf_scene *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "sphere scene: no output given");
+        return btf__fail(err, BTF_E_ARG, "sphere scene: no output given");
     memset(out, 0, sizeof *out);
     if (!(light.theta >= 0.0 && light.theta <= 90.0) || !isfinite(light.phi))
-        return btf_fail(err, BTF_E_ARG, "sphere scene: light (theta %g, phi %g): theta must be "
-                        "in [0, 90] degrees and phi finite", light.theta, light.phi);
+        return btf__fail(err, BTF_E_ARG, "sphere scene: light (theta %g, phi %g): theta must be "
+                         "in [0, 90] degrees and phi finite", light.theta, light.phi);
     if (!(texture_scale > 0.0 && texture_scale <= 1e6))
-        return btf_fail(err, BTF_E_ARG, "sphere scene: texture scale %g: expected (0, 1e6]",
-                        texture_scale);
-    out->lights = btf_calloc(1, sizeof(btf_light), err);
-    out->objects = btf_calloc(1, sizeof(btf_object), err);
+        return btf__fail(err, BTF_E_ARG, "sphere scene: texture scale %g: expected (0, 1e6]",
+                         texture_scale);
+    out->lights = btf__calloc(1, sizeof(btf_light), err);
+    out->objects = btf__calloc(1, sizeof(btf_object), err);
     if (!out->lights || !out->objects) {
         btf_scene_free(out);
         return BTF_E_NOMEM;

@@ -1,5 +1,5 @@
 /*
- * trace.c — btf_scene_trace: one primary ray per pixel centre through a
+ * trace.c — btf__scene_trace: one primary ray per pixel centre through a
  * pinhole camera (row 0 at the top), the nearest hit over every object
  * (analytic shapes, meshes through their BVH, built here once per call),
  * written to the G-buffer the renderer shades (docs/scene.md, "G-buffer").
@@ -107,7 +107,7 @@ static btf_status trace_row(void *user, int y, int worker, btf_error *err)
     return BTF_OK;
 }
 
-void btf_gbuffer_free(btf_gbuffer *g)
+void btf__gbuffer_free(btf_gbuffer *g)
 {
     if (!g)
         return;
@@ -127,23 +127,23 @@ static void camera_basis(const btf_camera *cam, trace_ctx *c)
     c->tan_half = tan(0.5 * cam->fov_deg * (M_PI / 180.0));
 }
 
-btf_status btf_scene_trace(const btf_scene *s, int width, int height, int threads,
-                           btf_gbuffer *out, btf_error *err)
+btf_status btf__scene_trace(const btf_scene *s, int width, int height, int threads,
+                            btf_gbuffer *out, btf_error *err)
 {
     if (!out)
-        return btf_fail(err, BTF_E_ARG, "btf_scene_trace: no G-buffer given");
+        return btf__fail(err, BTF_E_ARG, "btf_scene_trace: no G-buffer given");
     memset(out, 0, sizeof *out);
     if (width < 1 || height < 1 || width > BTF_MAX_SIDE || height > BTF_MAX_SIDE)
-        return btf_fail(err, BTF_E_ARG, "btf_scene_trace: size %dx%d is not within 1..%d",
-                        width, height, BTF_MAX_SIDE);
+        return btf__fail(err, BTF_E_ARG, "btf_scene_trace: size %dx%d is not within 1..%d",
+                         width, height, BTF_MAX_SIDE);
     if (threads < 0)
-        return btf_fail(err, BTF_E_ARG, "btf_scene_trace: threads %d < 0", threads);
+        return btf__fail(err, BTF_E_ARG, "btf_scene_trace: threads %d < 0", threads);
     btf_status rc = scene_check_named(s, "scene", err);
     if (rc)
         return rc;
     trace_ctx c = {.s = s, .g = out, .aspect = (double)width / height};
     camera_basis(&s->camera, &c);
-    c.bvh = btf_calloc(s->n_objects ? (size_t)s->n_objects : 1, sizeof *c.bvh, err);
+    c.bvh = btf__calloc(s->n_objects ? (size_t)s->n_objects : 1, sizeof *c.bvh, err);
     if (!c.bvh)
         return BTF_E_NOMEM;
     for (int i = 0; i < s->n_objects && !rc; i++)
@@ -152,21 +152,21 @@ btf_status btf_scene_trace(const btf_scene *s, int width, int height, int thread
     size_t n = (size_t)width * (size_t)height;
     out->width = width, out->height = height;
     if (!rc) {
-        out->object = btf_alloc(n, sizeof *out->object, err);
-        out->uv = btf_alloc(n * 2, sizeof *out->uv, err);
-        out->frame = btf_alloc(n * 9, sizeof *out->frame, err);
-        out->position = btf_alloc(n * 3, sizeof *out->position, err);
-        out->view = btf_alloc(n * 3, sizeof *out->view, err);
+        out->object = btf__alloc(n, sizeof *out->object, err);
+        out->uv = btf__alloc(n * 2, sizeof *out->uv, err);
+        out->frame = btf__alloc(n * 9, sizeof *out->frame, err);
+        out->position = btf__alloc(n * 3, sizeof *out->position, err);
+        out->view = btf__alloc(n * 3, sizeof *out->view, err);
         if (!out->object || !out->uv || !out->frame || !out->position || !out->view)
-            rc = btf_fail(err, BTF_E_NOMEM, "btf_scene_trace: out of memory for a %dx%d "
-                          "G-buffer", width, height);
+            rc = btf__fail(err, BTF_E_NOMEM, "btf_scene_trace: out of memory for a %dx%d "
+                           "G-buffer", width, height);
     }
     if (!rc)
-        rc = btf_pool_run(height, threads, trace_row, &c, NULL, err);
+        rc = btf__pool_run(height, threads, trace_row, &c, NULL, err);
     for (int i = 0; i < s->n_objects; i++)
         scene_bvh_free(&c.bvh[i]);
     free(c.bvh);
     if (rc)
-        btf_gbuffer_free(out);
+        btf__gbuffer_free(out);
     return rc;
 }

@@ -47,7 +47,7 @@ static int bin_of(float v, float lo, float hi, int bins)
     return (int)t;
 }
 
-/* btf_lab_cumhist of img / white. The division is one float division per
+/* btf__lab_cumhist of img / white. The division is one float division per
  * value, so data x k with white x k give the same bits (when both products
  * are exact, as for half floats x 1000); white 1 leaves the values as they
  * are. */
@@ -55,11 +55,11 @@ static btf_status lab_cumhist_white(const btf_image *img, int bins, float white,
                                     btf_error *err)
 {
     if (bins < 2 || bins > 4096)
-        return btf_fail(err, BTF_E_ARG, "histogram bins %d: expected 2..4096", bins);
+        return btf__fail(err, BTF_E_ARG, "histogram bins %d: expected 2..4096", bins);
     if (!img || !img->data || img->channels != 3)
-        return btf_fail(err, BTF_E_ARG, "Lab histogram needs an RGB image");
+        return btf__fail(err, BTF_E_ARG, "Lab histogram needs an RGB image");
     size_t n = (size_t)img->width * img->height;
-    uint32_t *count = btf_calloc((size_t)bins * 3, sizeof(uint32_t), err);
+    uint32_t *count = btf__calloc((size_t)bins * 3, sizeof(uint32_t), err);
     if (!count)
         return BTF_E_NOMEM;
     const size_t CHUNK = 1024;
@@ -76,7 +76,7 @@ static btf_status lab_cumhist_white(const btf_image *img, int bins, float white,
         }
         if (btfcv_rgb_to_lab(rgb, m, lab, msg, sizeof msg) != 0) {
             free(count);
-            return btf_fail(err, BTF_E_NUMERIC, "Lab conversion failed: %s", msg);
+            return btf__fail(err, BTF_E_NUMERIC, "Lab conversion failed: %s", msg);
         }
         for (size_t i = 0; i < m; i++) {
             count[bin_of(lab[3 * i], 0.0f, 100.0f, bins)]++;
@@ -95,7 +95,7 @@ static btf_status lab_cumhist_white(const btf_image *img, int bins, float white,
     return BTF_OK;
 }
 
-btf_status btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *err)
+btf_status btf__lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *err)
 {
     return lab_cumhist_white(img, bins, 1.0f, feature, err);
 }
@@ -120,8 +120,8 @@ static btf_status white_job(void *user, int j, int worker, btf_error *err)
                                                           image % b->n_lights); step++)
         image = (image + 1) % b->total;
     btf_image *img = &b->buffers[worker];
-    btf_status rc = btf_dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
-                                          err);
+    btf_status rc = btf__dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
+                                           err);
     if (rc)
         return rc;
     float *out = b->values + (size_t)j * b->per_image;
@@ -154,12 +154,12 @@ static btf_status feature_white(const btf_dataset *ds, int threads, float *white
     size_t want = WHITE_PIXELS / (size_t)b.images; /* pixels per image, about */
     b.stride = want >= wh ? 1 : (wh + want - 1) / want;
     b.per_image = (wh + b.stride - 1) / b.stride;
-    int workers = btf_pool_workers(threads, b.images);
+    int workers = btf__pool_workers(threads, b.images);
     size_t n = (size_t)b.images * b.per_image;
-    b.values = btf_alloc(n, sizeof(float), err);
-    b.buffers = btf_calloc((size_t)(workers > 0 ? workers : 1), sizeof *b.buffers, err);
+    b.values = btf__alloc(n, sizeof(float), err);
+    b.buffers = btf__calloc((size_t)(workers > 0 ? workers : 1), sizeof *b.buffers, err);
     btf_status rc = b.values && b.buffers
-                        ? btf_pool_run(b.images, threads, white_job, &b, NULL, err)
+                        ? btf__pool_run(b.images, threads, white_job, &b, NULL, err)
                         : BTF_E_NOMEM;
     for (int w = 0; b.buffers && w < workers; w++)
         btf_image_free(&b.buffers[w]);
@@ -191,13 +191,13 @@ static btf_status feature_job(void *user, int image, int worker, btf_error *err)
     if (!btf_dataset_has(b->ds, image / b->n_lights, image % b->n_lights))
         return BTF_OK; /* a sparse set: its row stays 0 and is not clustered */
     btf_image *img = &b->buffers[worker];
-    btf_status rc = btf_dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
-                                          err);
+    btf_status rc = btf__dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
+                                           err);
     if (rc == BTF_OK)
         rc = lab_cumhist_white(img, b->bins, b->white, b->features + (size_t)image * b->dim,
                                err);
     if (rc == BTF_OK && b->means)
-        btf_image_mean_rgb(img, b->means + 3 * (size_t)image);
+        btf__image_mean_rgb(img, b->means + 3 * (size_t)image);
     return rc;
 }
 
@@ -206,15 +206,15 @@ btf_feature_opts btf_feature_defaults(void)
     return (btf_feature_opts){.struct_size = sizeof(btf_feature_opts), .bins = 32, .threads = 0};
 }
 
-btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
-                                float **features, int *dim, btf_error *err)
+btf_status btf__dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
+                                 float **features, int *dim, btf_error *err)
 {
     btf_feature_opts d = btf_feature_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_dataset_features", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_dataset_features", err))
         return BTF_E_ARG;
     int bins = o.bins ? o.bins : btf_feature_defaults().bins;
     if (bins < 2 || bins > 4096)
-        return btf_fail(err, BTF_E_ARG, "histogram bins %d: expected 2..4096", bins);
+        return btf__fail(err, BTF_E_ARG, "histogram bins %d: expected 2..4096", bins);
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     feature_batch b = {.ds = ds, .n_lights = in->n_lights, .bins = bins, .dim = 3 * bins,
                        .means = o.means};
@@ -222,17 +222,17 @@ btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *o
     if (rc)
         return rc;
     int total = in->n_views * in->n_lights;
-    b.features = btf_calloc((size_t)total * b.dim, sizeof(float), err);
+    b.features = btf__calloc((size_t)total * b.dim, sizeof(float), err);
     if (!b.features)
         return BTF_E_NOMEM;
-    int workers = btf_pool_workers(o.threads, total);
-    b.buffers = btf_calloc((size_t)(workers > 0 ? workers : 1), sizeof *b.buffers, err);
+    int workers = btf__pool_workers(o.threads, total);
+    b.buffers = btf__calloc((size_t)(workers > 0 ? workers : 1), sizeof *b.buffers, err);
     if (!b.buffers) {
         free(b.features);
         return BTF_E_NOMEM;
     }
     btf_pool_progress progress = {o.progress, o.progress_user, "image features", 0.0, 1.0, 64};
-    rc = btf_pool_run(total, o.threads, feature_job, &b, &progress, err);
+    rc = btf__pool_run(total, o.threads, feature_job, &b, &progress, err);
     for (int w = 0; w < workers; w++)
         btf_image_free(&b.buffers[w]);
     free(b.buffers);
@@ -259,22 +259,22 @@ static btf_status mean_job(void *user, int image, int worker, btf_error *err)
     if (!btf_dataset_has(b->ds, image / b->n_lights, image % b->n_lights))
         return BTF_OK; /* a sparse set: the pair's mean stays 0 */
     btf_image *img = &b->buffers[worker];
-    btf_status rc = btf_dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
-                                          err);
+    btf_status rc = btf__dataset_read_into(b->ds, image / b->n_lights, image % b->n_lights, img,
+                                           err);
     if (rc == BTF_OK)
-        btf_image_mean_rgb(img, b->means + 3 * (size_t)image);
+        btf__image_mean_rgb(img, b->means + 3 * (size_t)image);
     return rc;
 }
 
-btf_status btf_dataset_means(const btf_dataset *ds, int threads, float **means, btf_error *err)
+btf_status btf__dataset_means(const btf_dataset *ds, int threads, float **means, btf_error *err)
 {
     const btf_dataset_info *in = btf_dataset_get_info(ds);
     int total = in->n_views * in->n_lights;
     mean_batch b = {ds, in->n_lights, NULL, NULL};
-    int workers = btf_pool_workers(threads, total);
-    b.means = btf_calloc((size_t)total * 3, sizeof(float), err);
-    b.buffers = btf_calloc((size_t)(workers > 0 ? workers : 1), sizeof *b.buffers, err);
-    btf_status rc = b.means && b.buffers ? btf_pool_run(total, threads, mean_job, &b, NULL, err)
+    int workers = btf__pool_workers(threads, total);
+    b.means = btf__calloc((size_t)total * 3, sizeof(float), err);
+    b.buffers = btf__calloc((size_t)(workers > 0 ? workers : 1), sizeof *b.buffers, err);
+    btf_status rc = b.means && b.buffers ? btf__pool_run(total, threads, mean_job, &b, NULL, err)
                                          : BTF_E_NOMEM;
     for (int w = 0; b.buffers && w < workers; w++)
         btf_image_free(&b.buffers[w]);

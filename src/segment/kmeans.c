@@ -34,7 +34,7 @@ static double dist2(const float *a, const float *b, int dim)
 static int seed_plus_plus(const float *x, int n, int dim, int k, btf_rng *rng, float *centres,
                           double *d2)
 {
-    int first = (int)(btf_rng_uniform(rng) * n);
+    int first = (int)(btf__rng_uniform(rng) * n);
     memcpy(centres, x + (size_t)first * dim, (size_t)dim * sizeof(float));
     for (int i = 0; i < n; i++)
         d2[i] = dist2(x + (size_t)i * dim, centres, dim);
@@ -45,7 +45,7 @@ static int seed_plus_plus(const float *x, int n, int dim, int k, btf_rng *rng, f
             total += d2[i];
         if (!(total > 0.0))
             break; /* all points coincide with chosen centres */
-        double target = btf_rng_uniform(rng) * total, run = 0.0;
+        double target = btf__rng_uniform(rng) * total, run = 0.0;
         int pick = -1;
         for (int i = 0; i < n; i++) {
             if (d2[i] <= 0.0)
@@ -162,8 +162,8 @@ static double one_run(const float *x, int n, int dim, int k, int max_iter, btf_r
  * without members. */
 static btf_status canonical_order(btf_kmeans_result *r, int n, int dim, btf_error *err)
 {
-    int *map = btf_alloc((size_t)r->k, sizeof(int), err);
-    float *c = btf_alloc((size_t)r->k * dim, sizeof(float), err);
+    int *map = btf__alloc((size_t)r->k, sizeof(int), err);
+    float *c = btf__alloc((size_t)r->k * dim, sizeof(float), err);
     if (!map || !c) {
         free(map);
         free(c);
@@ -194,7 +194,7 @@ static btf_status canonical_order(btf_kmeans_result *r, int n, int dim, btf_erro
     return BTF_OK;
 }
 
-void btf_kmeans_free(btf_kmeans_result *r)
+void btf__kmeans_free(btf_kmeans_result *r)
 {
     if (!r)
         return;
@@ -214,7 +214,7 @@ btf_kmeans_opts btf_kmeans_defaults(void)
 static btf_status resolve_opts(const btf_kmeans_opts *opts, btf_kmeans_opts *o, btf_error *err)
 {
     btf_kmeans_opts d = btf_kmeans_defaults();
-    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_kmeans", err))
+    if (btf__opts_take(o, sizeof *o, opts, &d, "btf_kmeans", err))
         return BTF_E_ARG;
     if (o->restarts <= 0)
         o->restarts = d.restarts;
@@ -223,36 +223,36 @@ static btf_status resolve_opts(const btf_kmeans_opts *opts, btf_kmeans_opts *o, 
     return BTF_OK;
 }
 
-btf_status btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
-                      btf_kmeans_result *out, btf_error *err)
+btf_status btf__kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
+                       btf_kmeans_result *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
     btf_kmeans_opts o;
     if (resolve_opts(opts, &o, err))
         return BTF_E_ARG;
     if (n < 1 || dim < 1 || k < 1)
-        return btf_fail(err, BTF_E_ARG, "k-means on %d points of dimension %d with k = %d", n, dim, k);
+        return btf__fail(err, BTF_E_ARG, "k-means on %d points of dimension %d with k = %d", n, dim, k);
     for (size_t i = 0; i < (size_t)n * dim; i++)
         if (!(points[i] > -FLT_MAX && points[i] < FLT_MAX))
-            return btf_fail(err, BTF_E_ARG, "k-means: feature %zu of point %zu is not finite",
-                            i % (size_t)dim, i / (size_t)dim);
+            return btf__fail(err, BTF_E_ARG, "k-means: feature %zu of point %zu is not finite",
+                             i % (size_t)dim, i / (size_t)dim);
     if (k > n)
         k = n;
     int restarts = o.restarts, max_iter = o.max_iter;
     km_work w = {0}, best = {0};
-    w.labels = btf_alloc((size_t)n, sizeof(int), err);
-    w.count = btf_alloc((size_t)k, sizeof(int), err);
-    w.centres = btf_alloc((size_t)k * dim, sizeof(float), err);
-    w.d2 = btf_alloc((size_t)n, sizeof(double), err);
-    w.acc = btf_alloc((size_t)k * dim, sizeof(double), err);
-    best.labels = btf_alloc((size_t)n, sizeof(int), err);
-    best.centres = btf_alloc((size_t)k * dim, sizeof(float), err);
+    w.labels = btf__alloc((size_t)n, sizeof(int), err);
+    w.count = btf__alloc((size_t)k, sizeof(int), err);
+    w.centres = btf__alloc((size_t)k * dim, sizeof(float), err);
+    w.d2 = btf__alloc((size_t)n, sizeof(double), err);
+    w.acc = btf__alloc((size_t)k * dim, sizeof(double), err);
+    best.labels = btf__alloc((size_t)n, sizeof(int), err);
+    best.centres = btf__alloc((size_t)k * dim, sizeof(float), err);
     btf_status rc = (w.labels && w.count && w.centres && w.d2 && w.acc && best.labels && best.centres)
                  ? BTF_OK : BTF_E_NOMEM;
     double best_dist = -1.0;
     int best_k = 0;
     btf_rng rng;
-    btf_rng_seed(&rng, o.seed);
+    btf__rng_seed(&rng, o.seed);
     for (int r = 0; rc == BTF_OK && r < restarts; r++) {
         int kk;
         double d = one_run(points, n, dim, k, max_iter, &rng, &w, &kk);
@@ -275,6 +275,6 @@ btf_status btf_kmeans(const float *points, int n, int dim, int k, const btf_kmea
     out->distortion = best_dist;
     rc = canonical_order(out, n, dim, err);
     if (rc)
-        btf_kmeans_free(out);
+        btf__kmeans_free(out);
     return rc;
 }

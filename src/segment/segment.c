@@ -44,7 +44,7 @@ static btf_status pick_representatives(const float *f, int n, int dim, const btf
                                        const int *pair_of, int n_lights, btf_segmentation *s,
                                        btf_error *err)
 {
-    double *best = btf_alloc((size_t)km->k, sizeof(double), err);
+    double *best = btf__alloc((size_t)km->k, sizeof(double), err);
     if (!best)
         return BTF_E_NOMEM;
     for (int c = 0; c < km->k; c++) {
@@ -78,10 +78,10 @@ static btf_status fill_result(const float *f, int n, int dim, const int *pair_of
 {
     s->k = km->k;
     s->distortion = km->distortion;
-    s->index = btf_alloc((size_t)n_pairs, 1, err);
-    s->rep_view = btf_alloc((size_t)km->k, sizeof(int), err);
-    s->rep_light = btf_alloc((size_t)km->k, sizeof(int), err);
-    s->members = btf_alloc((size_t)km->k, sizeof(int), err);
+    s->index = btf__alloc((size_t)n_pairs, 1, err);
+    s->rep_view = btf__alloc((size_t)km->k, sizeof(int), err);
+    s->rep_light = btf__alloc((size_t)km->k, sizeof(int), err);
+    s->members = btf__alloc((size_t)km->k, sizeof(int), err);
     if (!s->index || !s->rep_view || !s->rep_light || !s->members)
         return BTF_E_NOMEM;
     memset(s->index, BTF_PAIR_NONE, (size_t)n_pairs);
@@ -128,7 +128,7 @@ static btf_status choose_k(const float *f, int n, int dim, const btf_segment_opt
     int k_tau = 0;   /* the smallest K the threshold held at */
     btf_kmeans_result km = {0}, next = {0};
     for (int k = 1; k <= max_k; k++) {
-        btf_status rc = have ? BTF_OK : btf_kmeans(f, n, dim, k, &o->kmeans, &km, err);
+        btf_status rc = have ? BTF_OK : btf__kmeans(f, n, dim, k, &o->kmeans, &km, err);
         have = 0;
         if (rc)
             return rc;
@@ -140,19 +140,19 @@ static btf_status choose_k(const float *f, int n, int dim, const btf_segment_opt
         if (pass && !k_tau)
             k_tau = k;
         if (pass && !fewer && k < max_k && k < 2 * k_tau && d1 > 0.0 && o->split_gain > 0.0) {
-            if ((rc = btf_kmeans(f, n, dim, k + 1, &o->kmeans, &next, err))) {
-                btf_kmeans_free(&km);
+            if ((rc = btf__kmeans(f, n, dim, k + 1, &o->kmeans, &next, err))) {
+                btf__kmeans_free(&km);
                 return rc;
             }
             if (clear_split(&km, &next, k, o->split_gain)) {
-                btf_kmeans_free(&km);
+                btf__kmeans_free(&km);
                 km = next; /* K + 1's result, taken up by the next round */
                 memset(&next, 0, sizeof next);
                 have = 1;
                 continue;
             }
             s->distortion_by_k[k + 1] = next.distortion;
-            btf_kmeans_free(&next);
+            btf__kmeans_free(&next);
         }
         if (pass || fewer || k == max_k) {
             if (!(d1 > 0.0))
@@ -178,9 +178,9 @@ static btf_status choose_k(const float *f, int n, int dim, const btf_segment_opt
             *chosen = km;
             return BTF_OK;
         }
-        btf_kmeans_free(&km);
+        btf__kmeans_free(&km);
     }
-    return btf_fail(err, BTF_E_ARG, "segmentation: no K tried (max %d)", max_k);
+    return btf__fail(err, BTF_E_ARG, "segmentation: no K tried (max %d)", max_k);
 }
 
 btf_segment_opts btf_segment_defaults(void)
@@ -199,7 +199,7 @@ btf_segment_opts btf_segment_defaults(void)
 static btf_status resolve_opts(const btf_segment_opts *opts, btf_segment_opts *o, btf_error *err)
 {
     btf_segment_opts d = btf_segment_defaults();
-    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_segment", err))
+    if (btf__opts_take(o, sizeof *o, opts, &d, "btf_segment", err))
         return BTF_E_ARG;
     if (o->max_subspaces <= 0)
         o->max_subspaces = d.max_subspaces;
@@ -210,16 +210,16 @@ static btf_status resolve_opts(const btf_segment_opts *opts, btf_segment_opts *o
     return BTF_OK;
 }
 
-btf_status btf_segment_features(const float *features, int n_views, int n_lights, int dim,
-                                const btf_segment_opts *opts, btf_segmentation *out,
-                                btf_error *err)
+btf_status btf__segment_features(const float *features, int n_views, int n_lights, int dim,
+                                 const btf_segment_opts *opts, btf_segmentation *out,
+                                 btf_error *err)
 {
     memset(out, 0, sizeof *out);
     btf_segment_opts o;
     if (resolve_opts(opts, &o, err))
         return BTF_E_ARG;
     if (n_views < 1 || n_lights < 1 || dim < 1)
-        return btf_fail(err, BTF_E_ARG, "segmentation of %d x %d images", n_views, n_lights);
+        return btf__fail(err, BTF_E_ARG, "segmentation of %d x %d images", n_views, n_lights);
     int n_pairs = n_views * n_lights;
     int n = n_pairs;
     int *pair_of = NULL;         /* a sparse set: row i of rows is pair pair_of[i] */
@@ -229,11 +229,11 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
         for (int i = 0; i < n_pairs; i++)
             n += o.present[i] != 0;
         if (n == 0)
-            return btf_fail(err, BTF_E_ARG, "segmentation of a set without images");
+            return btf__fail(err, BTF_E_ARG, "segmentation of a set without images");
     }
     if (o.present && n < n_pairs) {
-        pair_of = btf_alloc((size_t)n, sizeof(int), err);
-        rows = btf_alloc((size_t)n * dim, sizeof(float), err);
+        pair_of = btf__alloc((size_t)n, sizeof(int), err);
+        rows = btf__alloc((size_t)n * dim, sizeof(float), err);
         if (!pair_of || !rows) {
             free(pair_of);
             free(rows);
@@ -250,13 +250,13 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
     btf_status rc = BTF_OK;
     double tau = o.auto_threshold;
     if (o.subspaces < 0 || o.subspaces > SEGMENT_MAX_K)
-        rc = btf_fail(err, BTF_E_ARG, "subspaces %d: expected 1..%d or auto", o.subspaces,
-                      SEGMENT_MAX_K);
+        rc = btf__fail(err, BTF_E_ARG, "subspaces %d: expected 1..%d or auto", o.subspaces,
+                       SEGMENT_MAX_K);
     else if (!(tau < 1.0))
-        rc = btf_fail(err, BTF_E_ARG, "auto threshold %g: expected in (0, 1)", tau);
+        rc = btf__fail(err, BTF_E_ARG, "auto threshold %g: expected in (0, 1)", tau);
     else if (!(o.split_gain < 1.0))
-        rc = btf_fail(err, BTF_E_ARG, "split gain %g: expected below 1 (negative: off)",
-                      o.split_gain);
+        rc = btf__fail(err, BTF_E_ARG, "split gain %g: expected below 1 (negative: off)",
+                       o.split_gain);
     if (rc) {
         free(pair_of);
         free(rows);
@@ -270,7 +270,7 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
     out->n_views = n_views;
     out->n_lights = n_lights;
     out->max_k = max_k;
-    out->distortion_by_k = btf_calloc((size_t)max_k + 1, sizeof(double), err);
+    out->distortion_by_k = btf__calloc((size_t)max_k + 1, sizeof(double), err);
     if (!out->distortion_by_k) {
         free(pair_of);
         free(rows);
@@ -278,7 +278,7 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
     }
     btf_kmeans_result km;
     if (o.subspaces > 0) {
-        rc = btf_kmeans(features, n, dim, o.subspaces, &o.kmeans, &km, err);
+        rc = btf__kmeans(features, n, dim, o.subspaces, &o.kmeans, &km, err);
         if (rc == 0) {
             out->distortion_by_k[km.k] = km.distortion;
             if (km.k < o.subspaces)
@@ -292,7 +292,7 @@ btf_status btf_segment_features(const float *features, int n_views, int n_lights
     }
     if (rc == 0) {
         rc = fill_result(features, n, dim, pair_of, n_pairs, n_lights, &km, out, err);
-        btf_kmeans_free(&km);
+        btf__kmeans_free(&km);
     }
     free(pair_of);
     free(rows);
@@ -306,26 +306,26 @@ btf_status btf_segment(const btf_dataset *ds, const btf_segment_opts *opts,
 {
     memset(out, 0, sizeof *out);
     btf_segment_opts d = btf_segment_defaults(), o;
-    if (btf_opts_take(&o, sizeof o, opts, &d, "btf_segment", err))
+    if (btf__opts_take(&o, sizeof o, opts, &d, "btf_segment", err))
         return BTF_E_ARG;
     float *f;
     int dim;
     const btf_dataset_info *in = btf_dataset_get_info(ds);
-    float *means = btf_calloc((size_t)in->n_views * in->n_lights * 3, sizeof(float), err);
+    float *means = btf__calloc((size_t)in->n_views * in->n_lights * 3, sizeof(float), err);
     if (!means)
         return BTF_E_NOMEM;
     o.features.means = means;
     unsigned char *present = NULL; /* a sparse set's measured pairs */
-    btf_status rc = btf_dataset_present(ds, &present, err);
+    btf_status rc = btf__dataset_present(ds, &present, err);
     if (rc == BTF_OK)
-        rc = btf_dataset_features(ds, &o.features, &f, &dim, err);
+        rc = btf__dataset_features(ds, &o.features, &f, &dim, err);
     if (rc) {
         free(present);
         free(means);
         return rc;
     }
     o.present = present;
-    rc = btf_segment_features(f, in->n_views, in->n_lights, dim, &o, out, err);
+    rc = btf__segment_features(f, in->n_views, in->n_lights, dim, &o, out, err);
     free(f);
     free(present);
     if (rc == BTF_OK)
@@ -348,7 +348,7 @@ btf_status btf_segmentation_write_png(const btf_segmentation *s, int cell, const
     if (cell <= 0)
         cell = 6;
     if (cell > 64)
-        return btf_fail(err, BTF_E_ARG, "%s: cell size %d: expected 1..64", path, cell);
+        return btf__fail(err, BTF_E_ARG, "%s: cell size %d: expected 1..64", path, cell);
     btf_image img;
     btf_status rc = btf_image_alloc(&img, s->n_views * cell, s->n_lights * cell, 3, err);
     if (rc)
@@ -360,7 +360,7 @@ btf_status btf_segmentation_write_png(const btf_segmentation *s, int cell, const
             static const unsigned char NONE[3] = {0, 0, 0}; /* a pair not measured */
             const unsigned char *c = k == BTF_PAIR_NONE ? NONE : PALETTE[k % 20];
             for (int k = 0; k < 3; k++)
-                img.data[(y * img.width + x) * 3 + k] = btf_srgb_to_linear(c[k] / 255.0f);
+                img.data[(y * img.width + x) * 3 + k] = btf__srgb_to_linear(c[k] / 255.0f);
         }
     rc = btf_image_write_png(path, &img, err);
     btf_image_free(&img);

@@ -16,16 +16,16 @@
 
 /* The feature of one linear-RGB image: the cumulative histograms of L*, a*,
  * b* (each normalised to end at 1), concatenated: 3 * bins floats. */
-btf_status btf_lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *err);
+btf_status btf__lab_cumhist(const btf_image *img, int bins, float *feature, btf_error *err);
 
 /* Features of every image of a dataset, streamed (one image decoded at a time
  * per thread): features[(view * n_lights + light) * dim + i], dim = 3 * bins. */
-btf_status btf_dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
-                                float **features, int *dim, btf_error *err);
+btf_status btf__dataset_features(const btf_dataset *ds, const btf_feature_opts *opts,
+                                 float **features, int *dim, btf_error *err);
 /* Each image's mean linear RGB alone (what btf_feature_opts.means gives in
  * the features' pass): means[(view * n_lights + light) * 3 + c], the
  * caller frees it. */
-btf_status btf_dataset_means(const btf_dataset *ds, int threads, float **means, btf_error *err);
+btf_status btf__dataset_means(const btf_dataset *ds, int threads, float **means, btf_error *err);
 
 typedef struct btf_kmeans_result {
     int k;                    /* clusters produced: min(k asked, distinct points) */
@@ -37,14 +37,14 @@ typedef struct btf_kmeans_result {
 /* k-means with k-means++ seeding and restarts. k larger than the number of
  * distinct points is reduced to it; clusters that go empty are re-seeded at
  * the point farthest from its centre. Same inputs and seed, same result. */
-btf_status btf_kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
-                      btf_kmeans_result *out, btf_error *err);
-void btf_kmeans_free(btf_kmeans_result *r);
+btf_status btf__kmeans(const float *points, int n, int dim, int k, const btf_kmeans_opts *opts,
+                       btf_kmeans_result *out, btf_error *err);
+void btf__kmeans_free(btf_kmeans_result *r);
 
 /* btf_segment from features already computed (n = n_views * n_lights);
  * out->means is NULL. */
-btf_status btf_segment_features(const float *features, int n_views, int n_lights, int dim,
-                                const btf_segment_opts *opts, btf_segmentation *out,
-                                btf_error *err);
+btf_status btf__segment_features(const float *features, int n_views, int n_lights, int dim,
+                                 const btf_segment_opts *opts, btf_segmentation *out,
+                                 btf_error *err);
 
 #endif

@@ -15,7 +15,7 @@
  * independent chains, so the core overlaps their latencies (one pixel waits
  * on the previous one for a multiply and an add, 6 cycles on Zen 3, the
  * largest cost of synthesis after the noise when a chain runs alone).
- * n_chains and shape are constants in each copy (btf_chains below), so the
+ * n_chains and shape are constants in each copy (btf__chains below), so the
  * tests on shape fold away and the chains' last values live in registers.
  * A missing term is skipped, never added as 0 * y, which could turn -0 into
  * +0. */
@@ -51,7 +51,7 @@ static inline __attribute__((always_inline)) void chains_run(const synth_chain *
     }
 }
 
-void btf_chains(const synth_chain *c, int n_chains, int shape, int len)
+void btf__chains(const synth_chain *c, int n_chains, int shape, int len)
 {
     switch (n_chains * 4 + shape) {
 #define CHAINS_CASE(n_, shape_)                                                                  \

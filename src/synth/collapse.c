@@ -57,14 +57,14 @@ btf_status synth_band_init(synth_band *sb, const btf_car_band *bands, const int 
          * output, (w >> l) x (h >> l) (docs/synthesis.md, "Tileable synthesis") */
         btf_status rc = synth_field_init(&lv->field, &bands[l], margins[l], stream, xs.lo, xs.hi,
                                          ys.lo, ys.hi, w >> l, h >> l, paths, err);
-        if (rc == BTF_OK && !(lv->gauss_row = btf_alloc((size_t)(xs.hi - xs.lo), sizeof(float),
+        if (rc == BTF_OK && !(lv->gauss_row = btf__alloc((size_t)(xs.hi - xs.lo), sizeof(float),
                                                        err)))
             rc = BTF_E_NOMEM;
         if (rc == BTF_OK && l > 0) {
             lv->fine_x0 = sb->level[l - 1].x0;
             lv->fine_w = sb->level[l - 1].x1 - sb->level[l - 1].x0;
             for (int k = 0; rc == BTF_OK && k < 3; k++)
-                if (!(lv->up_rows[k] = btf_alloc((size_t)lv->fine_w, sizeof(float), err)))
+                if (!(lv->up_rows[k] = btf__alloc((size_t)lv->fine_w, sizeof(float), err)))
                     rc = BTF_E_NOMEM;
         }
         if (rc) {
@@ -97,7 +97,7 @@ static void up_rows(synth_band *sb, int nb, int l, int i, const float **out)
         synth_gauss_rows(sb, nb, l, i, rows);
         for (int b = 0; b < nb; b++) {
             synth_level *lv = &sb[b].level[l];
-            btf_up_row(rows[b], lv->x0, lv->fine_x0, lv->fine_w, lv->up_rows[slot]);
+            btf__up_row(rows[b], lv->x0, lv->fine_x0, lv->fine_w, lv->up_rows[slot]);
             lv->up_row_of[slot] = i;
         }
     }
@@ -141,11 +141,11 @@ static void gauss_rows(synth_band *sb, int nb, int l, int y, const float **out,
         int w = lv->x1 - lv->x0;
         float mean = lv->field.band->mean, *g = dst ? dst[n] : lv->gauss_row;
         if (last)
-            btf_level_sum_row(w, mean, f[n], NULL, NULL, NULL, g);
+            btf__level_sum_row(w, mean, f[n], NULL, NULL, NULL, g);
         else if (y & 1)
-            btf_level_sum_row(w, mean, f[n], NULL, b[n], c[n], g);
+            btf__level_sum_row(w, mean, f[n], NULL, b[n], c[n], g);
         else
-            btf_level_sum_row(w, mean, f[n], a[n], b[n], c[n], g);
+            btf__level_sum_row(w, mean, f[n], a[n], b[n], c[n], g);
         out[n] = g;
     }
 }

@@ -6,7 +6,7 @@
  * btf_unmix of src/synth/btf_shared.h, as in the GPU shader
  * gpu/synth_unmix.comp; the AVX2 loop performs its operations in the same
  * order, so every path gives the same bits. With a marginal transfer
- * the whole colour step is src/synth/marginal.c's (btf_marginal_unmix_row).
+ * the whole colour step is src/synth/marginal.c's (btf__marginal_unmix_row).
  */
 #include "core/core.h"
 #include "synth/synth.h"
@@ -128,12 +128,12 @@ static int unmix_plain(const btf_subspace_model *sm, const float *b0, const floa
     return unmix_planar(sm, b0, b1, b2, width, plane, row);
 }
 
-int btf_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t, const float *b0,
-                  const float *b1, const float *b2, int width, float *scratch, float *row)
+int btf__unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t, const float *b0,
+                   const float *b1, const float *b2, int width, float *scratch, float *row)
 {
     if (!t || !t->on)
         return unmix_plain(sm, b0, b1, b2, width, scratch, row);
-    if (!btf_marginal_unmix_row(sm, t, b0, b1, b2, width, row))
+    if (!btf__marginal_unmix_row(sm, t, b0, b1, b2, width, row))
         return 0;
     /* A band is Inf or NaN: the row without the transfer, which carries it
      * into the colours, so that the caller's finite test refuses the image
@@ -141,7 +141,7 @@ int btf_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t, con
     return unmix_plain(sm, b0, b1, b2, width, scratch, row);
 }
 
-int btf_any_nonfinite(const float *v, size_t n)
+int btf__any_nonfinite(const float *v, size_t n)
 {
     uint32_t bad = 0;
     for (size_t i = 0; i < n; i++)
@@ -149,11 +149,11 @@ int btf_any_nonfinite(const float *v, size_t n)
     return bad != 0;
 }
 
-btf_status btf_check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err)
+btf_status btf__check_finite_row(const float *v, size_t n, int subspace, int y, btf_error *err)
 {
-    if (btf_any_nonfinite(v, n))
-        return btf_fail(err, BTF_E_NUMERIC,
-                        "synthesis of subspace %d overflowed the float range at row %d "
-                        "(the model's values are too large for float images)", subspace, y);
+    if (btf__any_nonfinite(v, n))
+        return btf__fail(err, BTF_E_NUMERIC,
+                         "synthesis of subspace %d overflowed the float range at row %d "
+                         "(the model's values are too large for float images)", subspace, y);
     return BTF_OK;
 }

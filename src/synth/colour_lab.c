@@ -55,7 +55,7 @@ static lab_consts lab_consts_make(void)
     return c;
 }
 
-void btf_lab_constants(float to_xyz[9], float to_rgb[9], float k[10], int32_t *magic)
+void btf__lab_constants(float to_xyz[9], float to_rgb[9], float k[10], int32_t *magic)
 {
     const lab_consts c = lab_consts_make();
     memcpy(to_xyz, c.to_xyz, 9 * sizeof(float));
@@ -284,7 +284,7 @@ static int match_row_avx2(const lab_consts *c, const btf_lab_map map[3], float s
 #define HAVE_AVX2() 0
 #endif
 
-void btf_lab_row(const float *rgb, int n, float scale, float *l, float *a, float *b)
+void btf__lab_row(const float *rgb, int n, float scale, float *l, float *a, float *b)
 {
     const lab_consts c = lab_consts_make();
     int x = 0;
@@ -296,8 +296,8 @@ void btf_lab_row(const float *rgb, int n, float scale, float *l, float *a, float
         lab_pixel(&c, rgb + 3 * (size_t)x, scale, l + x, a + x, b + x);
 }
 
-void btf_rgb_row_from_lab(const float *l, const float *a, const float *b, int n, float scale,
-                          const float lo[3], const float hi[3], float *rgb)
+void btf__rgb_row_from_lab(const float *l, const float *a, const float *b, int n, float scale,
+                           const float lo[3], const float hi[3], float *rgb)
 {
     const lab_consts c = lab_consts_make();
     const float inv = 1.0f / scale;
@@ -310,8 +310,8 @@ void btf_rgb_row_from_lab(const float *l, const float *a, const float *b, int n,
         rgb_pixel(&c, l[x], a[x], b[x], inv, lo, hi, rgb + 3 * (size_t)x);
 }
 
-void btf_lab_match_row(const btf_lab_map map[3], float scale, const float lo[3],
-                       const float hi[3], float *rgb, int n)
+void btf__lab_match_row(const btf_lab_map map[3], float scale, const float lo[3],
+                        const float hi[3], float *rgb, int n)
 {
     const lab_consts c = lab_consts_make();
     const float inv = 1.0f / scale;
@@ -335,7 +335,7 @@ void btf_lab_match_row(const btf_lab_map map[3], float scale, const float lo[3],
  * black is not a cube root), and matching in another exposure than the one
  * measured left up to 1.29 of first-order distance where this leaves 0.9
  * (docs/fidelity.md). */
-float btf_lab_scale(const btf_marginal *mg)
+float btf__lab_scale(const btf_marginal *mg)
 {
     float big = mg->rgb_hi[0];
     for (int k = 1; k < 3; k++)
@@ -372,7 +372,7 @@ static btf_status order_stats(const float *v, float *tmp, size_t n, const size_t
             out[r] = lo;
         return BTF_OK;
     }
-    uint32_t *start = btf_calloc(2 * (ORDER_BUCKETS + 1), sizeof(uint32_t), err);
+    uint32_t *start = btf__calloc(2 * (ORDER_BUCKETS + 1), sizeof(uint32_t), err);
     if (!start)
         return BTF_E_NOMEM;
     uint32_t *fill = start + ORDER_BUCKETS + 1; /* next free place of a wanted bucket, else 0 */
@@ -423,7 +423,7 @@ static void sample_steps(int w, int h, size_t most, int *sx, int *sy)
     }
 }
 
-void btf_lab_sample_grid(btf_lab_sample *s, int width, int height, size_t most)
+void btf__lab_sample_grid(btf_lab_sample *s, int width, int height, size_t most)
 {
     memset(s, 0, sizeof *s);
     sample_steps(width, height, most, &s->sx, &s->sy);
@@ -431,16 +431,16 @@ void btf_lab_sample_grid(btf_lab_sample *s, int width, int height, size_t most)
     s->n = (size_t)s->cols * s->rows;
 }
 
-btf_status btf_lab_sample_begin(btf_lab_sample *s, int width, int height, size_t most,
-                                float scale, btf_error *err)
+btf_status btf__lab_sample_begin(btf_lab_sample *s, int width, int height, size_t most,
+                                 float scale, btf_error *err)
 {
-    btf_lab_sample_grid(s, width, height, most);
+    btf__lab_sample_grid(s, width, height, most);
     s->scale = scale;
-    s->v = btf_alloc(s->n * 4, sizeof(float), err); /* 3 channels, then the sort's scratch */
+    s->v = btf__alloc(s->n * 4, sizeof(float), err); /* 3 channels, then the sort's scratch */
     return s->v ? BTF_OK : BTF_E_NOMEM;
 }
 
-void btf_lab_sample_row(btf_lab_sample *s, int y, const float *row, float *scratch)
+void btf__lab_sample_row(btf_lab_sample *s, int y, const float *row, float *scratch)
 {
     if (y % s->sy)
         return;
@@ -450,10 +450,10 @@ void btf_lab_sample_row(btf_lab_sample *s, int y, const float *row, float *scrat
         row = scratch;
     }
     size_t at = (size_t)(y / s->sy) * s->cols;
-    btf_lab_row(row, s->cols, s->scale, s->v + at, s->v + s->n + at, s->v + 2 * s->n + at);
+    btf__lab_row(row, s->cols, s->scale, s->v + at, s->v + s->n + at, s->v + 2 * s->n + at);
 }
 
-void btf_lab_sample_free(btf_lab_sample *s)
+void btf__lab_sample_free(btf_lab_sample *s)
 {
     free(s->v);
     s->v = NULL;
@@ -466,8 +466,8 @@ void btf_lab_sample_free(btf_lab_sample *s)
  * samples of a match, less than starting a thread (about 0.1 ms on a VM);
  * a batch runs them on the relay helper beside the next image's synthesis
  * (colour_match.c's task). */
-int btf_lab_quantile_ranks(size_t n, size_t ranks[2 * BTF_MARGIN_KNOTS],
-                           double frac[BTF_MARGIN_KNOTS])
+int btf__lab_quantile_ranks(size_t n, size_t ranks[2 * BTF_MARGIN_KNOTS],
+                            double frac[BTF_MARGIN_KNOTS])
 {
     int nr = 0;
     for (int j = 0; j < BTF_MARGIN_KNOTS; j++) { /* the two order statistics around h_j */
@@ -480,8 +480,8 @@ int btf_lab_quantile_ranks(size_t n, size_t ranks[2 * BTF_MARGIN_KNOTS],
     return nr;
 }
 
-void btf_lab_quantiles_at(int c, const float at[2 * BTF_MARGIN_KNOTS],
-                          const double frac[BTF_MARGIN_KNOTS], float q[BTF_MARGIN_KNOTS])
+void btf__lab_quantiles_at(int c, const float at[2 * BTF_MARGIN_KNOTS],
+                           const double frac[BTF_MARGIN_KNOTS], float q[BTF_MARGIN_KNOTS])
 {
     for (int j = 0; j < BTF_MARGIN_KNOTS; j++) {
         float a = at[2 * j], b = at[2 * j + 1];
@@ -493,36 +493,36 @@ void btf_lab_quantiles_at(int c, const float at[2 * BTF_MARGIN_KNOTS],
     }
 }
 
-btf_status btf_lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNOTS],
-                                    btf_error *err)
+btf_status btf__lab_sample_quantiles(btf_lab_sample *s, float q[3][BTF_MARGIN_KNOTS],
+                                     btf_error *err)
 {
     size_t n = s->n, ranks[2 * BTF_MARGIN_KNOTS];
     double frac[BTF_MARGIN_KNOTS];
-    int nr = btf_lab_quantile_ranks(n, ranks, frac);
+    int nr = btf__lab_quantile_ranks(n, ranks, frac);
     for (int c = 0; c < 3; c++) {
         float at[2 * BTF_MARGIN_KNOTS];
         btf_status rc = order_stats(s->v + c * n, s->v + 3 * n, n, ranks, nr, at, err);
         if (rc)
             return rc;
-        btf_lab_quantiles_at(c, at, frac, q[c]);
+        btf__lab_quantiles_at(c, at, frac, q[c]);
     }
     return BTF_OK;
 }
 
-btf_status btf_lab_quantiles(const btf_image *img, float scale, size_t most,
-                             float q[3][BTF_MARGIN_KNOTS], btf_error *err)
+btf_status btf__lab_quantiles(const btf_image *img, float scale, size_t most,
+                              float q[3][BTF_MARGIN_KNOTS], btf_error *err)
 {
     btf_lab_sample s;
-    btf_status rc = btf_lab_sample_begin(&s, img->width, img->height, most, scale, err);
+    btf_status rc = btf__lab_sample_begin(&s, img->width, img->height, most, scale, err);
     if (rc)
         return rc;
-    float *scratch = btf_alloc((size_t)s.cols * 3, sizeof(float), err);
+    float *scratch = btf__alloc((size_t)s.cols * 3, sizeof(float), err);
     for (int r = 0; scratch && r < s.rows; r++) {
         int y = r * s.sy;
-        btf_lab_sample_row(&s, y, img->data + (size_t)y * img->width * 3, scratch);
+        btf__lab_sample_row(&s, y, img->data + (size_t)y * img->width * 3, scratch);
     }
-    rc = scratch ? btf_lab_sample_quantiles(&s, q, err) : BTF_E_NOMEM;
+    rc = scratch ? btf__lab_sample_quantiles(&s, q, err) : BTF_E_NOMEM;
     free(scratch);
-    btf_lab_sample_free(&s);
+    btf__lab_sample_free(&s);
     return rc;
 }

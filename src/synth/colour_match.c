@@ -72,33 +72,33 @@ static void lab_map_make(const float *src, const float *dst, btf_lab_map *m)
         m->dq[i] = m->q[i + 1] - m->q[i];
 }
 
-btf_status btf_colour_match_check(const btf_model *m, int subspace, btf_error *err)
+btf_status btf__colour_match_check(const btf_model *m, int subspace, btf_error *err)
 {
     if (!m || !m->subspaces || subspace < 0 || subspace >= m->n_subspaces)
-        return btf_fail(err, BTF_E_ARG, "colour matching: subspace %d (expected 0..%d)",
-                        subspace, m ? m->n_subspaces - 1 : -1);
+        return btf__fail(err, BTF_E_ARG, "colour matching: subspace %d (expected 0..%d)",
+                         subspace, m ? m->n_subspaces - 1 : -1);
     const btf_marginal *mg = &m->subspaces[subspace].marginal;
     if (!mg->knots || !mg->lab_knots)
-        return btf_fail(err, BTF_E_ARG,
-                        "colour matching: subspace %d holds no Lab histogram (a model file of "
-                        "format 1.2 or older: analyse the material again)", subspace);
+        return btf__fail(err, BTF_E_ARG,
+                         "colour matching: subspace %d holds no Lab histogram (a model file of "
+                         "format 1.2 or older: analyse the material again)", subspace);
     return BTF_OK;
 }
 
-btf_status btf_colour_match_wanted(const btf_model *m, int subspace, int opt, int *on,
+btf_status btf__colour_match_wanted(const btf_model *m, int subspace, int opt, int *on,
                                   btf_error *err)
 {
     *on = 0;
     if (opt < 0)
         return BTF_OK;
     btf_error quiet; /* the default: a subspace that cannot be matched is not, no error */
-    btf_status rc = btf_colour_match_check(m, subspace, opt > 0 ? err : &quiet);
+    btf_status rc = btf__colour_match_check(m, subspace, opt > 0 ? err : &quiet);
     *on = rc == BTF_OK;
     return opt > 0 ? rc : BTF_OK;
 }
 
-void btf_colour_match_maps(const btf_marginal *mg, const float src[3][BTF_MARGIN_KNOTS],
-                           btf_lab_map map[3])
+void btf__colour_match_maps(const btf_marginal *mg, const float src[3][BTF_MARGIN_KNOTS],
+                            btf_lab_map map[3])
 {
     for (int c = 0; c < 3; c++)
         lab_map_make(src[c], mg->lab_quantile[c], &map[c]);
@@ -122,42 +122,42 @@ static btf_status task_job(void *user, int j, int worker, btf_error *err)
         r1 = r1 < t->sample.rows ? r1 : t->sample.rows;
         for (int r = r0; r < r1; r++) {
             int y = r * t->sample.sy;
-            btf_lab_sample_row(&t->sample, y, t->img->data + (size_t)y * w * 3,
-                               t->scratch + (size_t)worker * t->sample.cols * 3);
+            btf__lab_sample_row(&t->sample, y, t->img->data + (size_t)y * w * 3,
+                                t->scratch + (size_t)worker * t->sample.cols * 3);
         }
         return BTF_OK;
     }
     if (j == s) { /* the image's own quantiles, the maps onto the exemplar's */
         float src[3][BTF_MARGIN_KNOTS];
-        btf_status rc = btf_lab_sample_quantiles(&t->sample, src, err);
+        btf_status rc = btf__lab_sample_quantiles(&t->sample, src, err);
         if (rc == BTF_OK)
-            btf_colour_match_maps(mg, src, t->map);
+            btf__colour_match_maps(mg, src, t->map);
         return rc;
     }
     int y0 = (j - s - 1) * t->rows_per_job, y1 = y0 + t->rows_per_job;
     y1 = y1 < t->img->height ? y1 : t->img->height;
     for (int y = y0; y < y1; y++)
-        btf_lab_match_row(t->map, t->scale, mg->rgb_lo, mg->rgb_hi,
-                          t->img->data + (size_t)y * w * 3, w);
+        btf__lab_match_row(t->map, t->scale, mg->rgb_lo, mg->rgb_hi,
+                           t->img->data + (size_t)y * w * 3, w);
     return BTF_OK;
 }
 
-btf_status btf_match_task_begin(btf_match_task **out, const btf_model *m, int subspace,
-                                btf_image *img, btf_error *err)
+btf_status btf__match_task_begin(btf_match_task **out, const btf_model *m, int subspace,
+                                 btf_image *img, btf_error *err)
 {
     *out = NULL;
-    btf_status rc = btf_colour_match_check(m, subspace, err);
+    btf_status rc = btf__colour_match_check(m, subspace, err);
     if (rc)
         return rc;
-    btf_match_task *t = btf_calloc(1, sizeof *t, err); /* 6 KB of maps: not on the stack */
+    btf_match_task *t = btf__calloc(1, sizeof *t, err); /* 6 KB of maps: not on the stack */
     if (!t)
         return BTF_E_NOMEM;
-    t->img = img, t->mg = &m->subspaces[subspace].marginal, t->scale = btf_lab_scale(t->mg);
-    rc = btf_lab_sample_begin(&t->sample, img->width, img->height, BTF_LAB_MATCH_SAMPLE,
-                              t->scale, err);
-    t->scratch = rc ? NULL : btf_alloc((size_t)t->sample.cols * 3 * 2, sizeof(float), err);
+    t->img = img, t->mg = &m->subspaces[subspace].marginal, t->scale = btf__lab_scale(t->mg);
+    rc = btf__lab_sample_begin(&t->sample, img->width, img->height, BTF_LAB_MATCH_SAMPLE,
+                               t->scale, err);
+    t->scratch = rc ? NULL : btf__alloc((size_t)t->sample.cols * 3 * 2, sizeof(float), err);
     if (!t->scratch) {
-        btf_match_task_free(t);
+        btf__match_task_free(t);
         return rc ? rc : BTF_E_NOMEM;
     }
     t->sample_rows_per_job = PIXELS_PER_JOB / t->sample.cols;
@@ -181,7 +181,7 @@ static btf_status rest_job(void *user, int j, int worker, btf_error *err)
     return task_job(r->t, r->first + j, worker, err);
 }
 
-btf_status btf_match_task_finish(btf_match_task *t, btf_error *err)
+btf_status btf__match_task_finish(btf_match_task *t, btf_error *err)
 {
     btf_background *bg = &t->bg;
     if (bg->status) {
@@ -195,44 +195,44 @@ btf_status btf_match_task_finish(btf_match_task *t, btf_error *err)
         rc = task_job(t, bg->done, 0, err);
     task_rest rest = {t, bg->done};
     if (rc == BTF_OK)
-        rc = btf_pool_run(bg->count - bg->done, 0, rest_job, &rest, NULL, err);
+        rc = btf__pool_run(bg->count - bg->done, 0, rest_job, &rest, NULL, err);
     if (rc == BTF_OK)
         bg->done = bg->count;
     return rc;
 }
 
-void btf_match_task_free(btf_match_task *t)
+void btf__match_task_free(btf_match_task *t)
 {
     if (!t)
         return;
-    btf_lab_sample_free(&t->sample);
+    btf__lab_sample_free(&t->sample);
     free(t->scratch);
     free(t);
 }
 
-btf_status btf_colour_match(const btf_model *m, int subspace, btf_image *img, btf_error *err)
+btf_status btf__colour_match(const btf_model *m, int subspace, btf_image *img, btf_error *err)
 {
-    btf_status rc = btf_colour_match_check(m, subspace, err);
+    btf_status rc = btf__colour_match_check(m, subspace, err);
     if (rc)
         return rc;
     if (!img || !img->data || img->channels != 3 || img->width < 1 || img->height < 1)
-        return btf_fail(err, BTF_E_ARG, "colour matching needs an RGB image");
+        return btf__fail(err, BTF_E_ARG, "colour matching needs an RGB image");
     size_t n = (size_t)img->width * img->height * 3;
-    int bad = btf_any_nonfinite(img->data, n); /* then the first such pixel, for the message */
+    int bad = btf__any_nonfinite(img->data, n); /* then the first such pixel, for the message */
     for (size_t i = 0; bad && i < n; i++)
         if (!isfinite(img->data[i]))
-            return btf_fail(err, BTF_E_ARG, "colour matching: pixel (%zu, %zu) is not finite",
-                            i / 3 % (size_t)img->width, i / 3 / (size_t)img->width);
-    return btf_match_synthesised(m, subspace, img, err);
+            return btf__fail(err, BTF_E_ARG, "colour matching: pixel (%zu, %zu) is not finite",
+                             i / 3 % (size_t)img->width, i / 3 / (size_t)img->width);
+    return btf__match_synthesised(m, subspace, img, err);
 }
 
-btf_status btf_match_synthesised(const btf_model *m, int subspace, btf_image *img,
-                                 btf_error *err)
+btf_status btf__match_synthesised(const btf_model *m, int subspace, btf_image *img,
+                                  btf_error *err)
 {
     btf_match_task *t;
-    btf_status rc = btf_match_task_begin(&t, m, subspace, img, err);
+    btf_status rc = btf__match_task_begin(&t, m, subspace, img, err);
     if (rc == BTF_OK)
-        rc = btf_match_task_finish(t, err);
-    btf_match_task_free(t);
+        rc = btf__match_task_finish(t, err);
+    btf__match_task_free(t);
     return rc;
 }

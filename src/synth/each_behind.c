@@ -32,7 +32,7 @@ static btf_status write_job(void *user, void *job, btf_error *err)
     /* btf_image_fn: a btf_status, or any other non-zero value for I/O */
     btf_status rc = got > 0 ? BTF_E_IO : (btf_status)got;
     if (rc && err && !err->msg[0])
-        btf_fail(err, rc, "writing image %d failed", j->i);
+        btf__fail(err, rc, "writing image %d failed", j->i);
     return rc;
 }
 
@@ -46,36 +46,36 @@ static void free_job(void *user, void *job)
 static int put_image(void *user, int i, btf_image *img, btf_error *err)
 {
     hand_over *h = user;
-    double t0 = btf_now();
+    double t0 = btf__now();
     image_job job = {i, *img};
     memset(img, 0, sizeof *img); /* the job's now */
-    btf_status rc = btf_behind_put(h->behind, &job, err);
-    h->b->hand_s += btf_now() - t0;
+    btf_status rc = btf__behind_put(h->behind, &job, err);
+    h->b->hand_s += btf__now() - t0;
     h->b->write_failed = rc != BTF_OK;
     if (rc == BTF_OK && h->b->progress)
         h->b->progress(h->b->progress_user, (double)(i + 1) / h->n, "synthesising");
     return rc;
 }
 
-btf_status btf_synthesise_each_behind(const btf_model *m, const int *subspaces, int n,
-                                      const btf_synth_opts *opts, btf_each_behind *b,
-                                      btf_error *err)
+btf_status btf__synthesise_each_behind(const btf_model *m, const int *subspaces, int n,
+                                       const btf_synth_opts *opts, btf_each_behind *b,
+                                       btf_error *err)
 {
     if (!b || !b->write)
-        return btf_fail(err, BTF_E_ARG, "synthesis written behind: no writer");
+        return btf__fail(err, BTF_E_ARG, "synthesis written behind: no writer");
     b->hand_s = b->wait_s = 0;
     b->write_failed = 0;
     btf_behind_spec spec = {.run = write_job, .done = free_job, .user = b,
                             .job_size = sizeof(image_job), .depth = 1,
                             .run_here_without_thread = 1};
-    hand_over h = {b, btf_behind_start(&spec, err), n};
+    hand_over h = {b, btf__behind_start(&spec, err), n};
     if (!h.behind)
         return err ? (btf_status)err->code : BTF_E_NOMEM;
     btf_status rc = btf_synthesise_each(m, subspaces, n, opts, put_image, &h, err);
-    double t0 = btf_now();
+    double t0 = btf__now();
     btf_error werr = {0};
-    btf_status wrc = btf_behind_finish(h.behind, &werr); /* the last image's write */
-    b->wait_s = btf_now() - t0;
+    btf_status wrc = btf__behind_finish(h.behind, &werr); /* the last image's write */
+    b->wait_s = btf__now() - t0;
     if (rc == BTF_OK && wrc) {
         rc = wrc, b->write_failed = 1;
         if (err)

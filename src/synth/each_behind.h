@@ -30,8 +30,8 @@ typedef struct btf_each_behind {
  * is returned (nothing is written after it); without a thread to be had,
  * the writes run on the calling thread. The same files as writing each
  * image in the btf_image_fn of btf_synthesise_each. */
-btf_status btf_synthesise_each_behind(const btf_model *m, const int *subspaces, int n,
-                                      const btf_synth_opts *opts, btf_each_behind *b,
-                                      btf_error *err);
+btf_status btf__synthesise_each_behind(const btf_model *m, const int *subspaces, int n,
+                                       const btf_synth_opts *opts, btf_each_behind *b,
+                                       btf_error *err);
 
 #endif

@@ -45,41 +45,41 @@ btf_status synth_field_init(synth_field *f, const btf_car_band *band, int margin
      * coordinates; periodic noise is a lookup of one period instead (rows.c),
      * so periodic fields run row by row (the same sums: the same bits as the
      * GPU's, which wraps the coordinates of every pixel's noise). */
-    int wave = paths->wave && !periodic && btf_wave_supported(band, f->fw);
+    int wave = paths->wave && !periodic && btf__wave_supported(band, f->fw);
     if (wave) {
         f->depth = BTF_WAVE_DEPTH;
-        f->pad = btf_wave_pad();
+        f->pad = btf__wave_pad();
     }
-    f->same_row_shape = btf_car_same_row_shape(band, f->same_row_gamma3);
+    f->same_row_shape = btf__car_same_row_shape(band, f->same_row_gamma3);
     int same[BTF_CAR_MAX_NEIGHBOURS];
-    f->n_same_row = btf_car_same_row_order(band, same);
+    f->n_same_row = btf__car_same_row_order(band, same);
     for (int t = 0; t < f->n_same_row; t++) {
         f->same_row_col[t] = band->offsets[same[t]].col;
         f->same_row_gamma[t] = band->gamma[same[t]];
     }
     f->next = y0 - margin;
-    f->ring = btf_calloc((size_t)f->depth * (f->fw + 2 * f->pad), sizeof(float), err);
+    f->ring = btf__calloc((size_t)f->depth * (f->fw + 2 * f->pad), sizeof(float), err);
     if (!f->ring)
         return BTF_E_NOMEM;
     if (wave) /* the wave draws its noise lane by lane: no noise or sum rows */
-        return (f->wave = btf_wave_new(band, f->fw, f->fx0, f->next, stream, f->ring, f->depth,
-                                       f->pad, err)) ? BTF_OK : BTF_E_NOMEM;
+        return (f->wave = btf__wave_new(band, f->fw, f->fx0, f->next, stream, f->ring, f->depth,
+                                        f->pad, err)) ? BTF_OK : BTF_E_NOMEM;
     if (periodic) {
         f->period_w = period_w, f->period_h = period_h;
-        if (!(f->period_noise = btf_alloc((size_t)period_w + 4, sizeof(float), err)))
+        if (!(f->period_noise = btf__alloc((size_t)period_w + 4, sizeof(float), err)))
             return BTF_E_NOMEM;
     }
-    f->noise = btf_alloc((size_t)f->fw + 6, sizeof(float), err);
-    f->noise_next = btf_alloc((size_t)f->fw + 6, sizeof(float), err);
-    f->acc = btf_alloc((size_t)f->fw, sizeof(float), err);
-    f->acc_next = btf_alloc((size_t)f->fw, sizeof(float), err);
+    f->noise = btf__alloc((size_t)f->fw + 6, sizeof(float), err);
+    f->noise_next = btf__alloc((size_t)f->fw + 6, sizeof(float), err);
+    f->acc = btf__alloc((size_t)f->fw, sizeof(float), err);
+    f->acc_next = btf__alloc((size_t)f->fw, sizeof(float), err);
     return f->noise && f->noise_next && f->acc && f->acc_next ? BTF_OK : BTF_E_NOMEM;
 }
 
 void synth_field_free(synth_field *f)
 {
     BTF_FREE_ALL(f->ring, f->noise, f->noise_next, f->acc, f->acc_next, f->period_noise);
-    btf_wave_free(f->wave);
+    btf__wave_free(f->wave);
     memset(f, 0, sizeof *f);
 }
 
@@ -93,19 +93,19 @@ static void advance(synth_field *const *all, int n_all, int until, uint32_t seed
     int n = 0;
     for (int b = 0; b < n_all; b++) {
         if (all[b]->wave) /* a wave runs eight rows at once on its own */
-            btf_wave_run(all[b]->wave, all[b]->next++, seed_lo, seed_hi);
+            btf__wave_run(all[b]->wave, all[b]->next++, seed_lo, seed_hi);
         else
             f[n++] = all[b];
     }
     if (n == 0)
         return;
-    int lead = btf_rows_pair_lead(f, n), narrow = 0;
+    int lead = btf__rows_pair_lead(f, n), narrow = 0;
     for (int b = 0; b < n; b++)
         narrow |= f[b]->fw < 2 * lead;
     if (f[0]->next + 1 < until && !narrow)
-        btf_rows_pair(f, n, lead, seed_lo, seed_hi);
+        btf__rows_pair(f, n, lead, seed_lo, seed_hi);
     else
-        btf_rows_step(f, n, seed_lo, seed_hi);
+        btf__rows_step(f, n, seed_lo, seed_hi);
 }
 
 const float *synth_field_row(synth_field *f, int y, uint32_t seed_lo, uint32_t seed_hi)

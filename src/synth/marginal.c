@@ -6,7 +6,7 @@
  * undone each band v goes through a monotone piecewise-linear map from the
  * synthesised band's distribution onto the exemplar's quantiles, and the
  * RGB result is brought into the exemplar's RGB box (btf_shared.h,
- * "Gamut"). btf_marginal_unmix_row does the whole colour step of a row.
+ * "Gamut"). btf__marginal_unmix_row does the whole colour step of a row.
  *
  * The model keeps, per band, the exemplar's quantiles at p_j = j / 31 for
  * j = 1..30, and at 1/4096 and 1 - 1/4096 for the first and last; their
@@ -40,7 +40,7 @@ _Static_assert(BTF_MARGIN_SEGS == 14 && BTF_MARGIN_TABLE == 16 &&
                "btf_knot_segment clamps to 14; the table and the AVX2 lookups hold 16");
 
 /* Phi^-1(p_j), made exactly antisymmetric (statistics.NormalDist). */
-const double btf_marginal_normal_knots[BTF_MARGIN_KNOTS] = {
+const double btf__marginal_normal_knots[BTF_MARGIN_KNOTS] = {
     -3.4871041041144313, -1.8485962885014087, -1.5179291595942783, -1.3001534333634233,
     -1.1309776082451579, -0.98916862734063515, -0.86489435868528297, -0.75272879425816974,
     -0.64932391318646587, -0.55244258464677443, -0.460494539103116, -0.37228936046519095,
@@ -76,7 +76,7 @@ static float rise(float q, float want, float next)
     return dq > 0.0f ? dq : 0.0f;
 }
 
-void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t)
+void btf__marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t)
 {
     enum { S = BTF_MARGIN_SEGS, LOWER = BTF_MARGIN_TABLE - 1, LAST = BTF_MARGIN_KNOTS - 1 };
     memset(t, 0, sizeof *t);
@@ -88,7 +88,7 @@ void btf_marginal_table_make(const btf_subspace_model *sm, btf_marginal_table *t
         const float *q = mg->quantile[b];
         double z[BTF_MARGIN_KNOTS];
         for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
-            z[j] = (double)mg->synth_mean[b] + (double)mg->synth_sd[b] * btf_marginal_normal_knots[j];
+            z[j] = (double)mg->synth_mean[b] + (double)mg->synth_sd[b] * btf__marginal_normal_knots[j];
         t->qmin[b] = q[0], t->qmax[b] = q[LAST];
         double ih = (double)S / (z[LAST - 1] - z[1]);
         if (!(ih > 0 && ih <= 1e30)) {
@@ -155,7 +155,7 @@ static inline float transfer1(const btf_marginal_table *t, int b, float v)
     return btf_transfer(x, fl, t->q[b][i], t->dq[b][i], t->qmin[b], t->qmax[b]);
 }
 
-int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int width, float *out)
+int btf__marginal_row(const btf_marginal_table *t, int band, const float *v, int width, float *out)
 {
     uint32_t bad = 0;
     for (int x = 0; x < width; x++) {
@@ -166,7 +166,7 @@ int btf_marginal_row(const btf_marginal_table *t, int band, const float *v, int 
 }
 
 /* One colour into the box (btf_shared.h, "Gamut"): as gpu/synth_unmix.comp. */
-void btf_marginal_gamut(const btf_marginal_table *t, float c[3])
+void btf__marginal_gamut(const btf_marginal_table *t, float c[3])
 {
     if (btf_in_box(c[0], t->lo[0], t->hi[0]) && btf_in_box(c[1], t->lo[1], t->hi[1]) &&
         btf_in_box(c[2], t->lo[2], t->hi[2]))
@@ -185,7 +185,7 @@ void btf_marginal_gamut(const btf_marginal_table *t, float c[3])
 
 /* The colour step of pixels [x0, width), 64 at a time: the bands' transfers
  * in loops over the pixels, then per pixel the unmix, the gamut (a test
- * that rarely fails, then btf_marginal_gamut) and the interleave. */
+ * that rarely fails, then btf__marginal_gamut) and the interleave. */
 static int unmix_row_portable(const btf_subspace_model *sm, const btf_marginal_table *t,
                               const float *const *band, int x0, int width, float *row)
 {
@@ -203,7 +203,7 @@ static int unmix_row_portable(const btf_subspace_model *sm, const btf_marginal_t
             for (int k = 0; k < 3; k++)
                 c[k] = btf_unmix(sm->mean[k], sm->basis[k], sm->basis[3 + k], sm->basis[6 + k],
                                  v[0][i], v[1][i], v[2][i]);
-            btf_marginal_gamut(t, c);
+            btf__marginal_gamut(t, c);
             for (int k = 0; k < 3; k++)
                 row[3 * (c0 + i) + k] = c[k];
         }
@@ -250,7 +250,7 @@ static inline __m256 transfer8(const band_avx2 *bt, __m256 v)
     return _mm256_min_ps(bt->qmax, _mm256_max_ps(bt->qmin, r));
 }
 
-/* btf_marginal_gamut on 8 colours, applied where `out` is set: each
+/* btf__marginal_gamut on 8 colours, applied where `out` is set: each
  * btf_gamut_share and btf_recip step as a vector op in the shared order;
  * `d < 0 ? -d : d` as a blend, the min and max as in transfer8. */
 static inline void gamut8(const btf_marginal_table *t, __m256 c[3], __m256 out)
@@ -347,9 +347,9 @@ static int unmix_row_avx2(const btf_subspace_model *sm, const btf_marginal_table
 #pragma GCC pop_options
 #endif
 
-int btf_marginal_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t,
-                           const float *b0, const float *b1, const float *b2, int width,
-                           float *row)
+int btf__marginal_unmix_row(const btf_subspace_model *sm, const btf_marginal_table *t,
+                            const float *b0, const float *b1, const float *b2, int width,
+                            float *row)
 {
     const float *band[3] = {b0, b1, b2};
     int x = 0, bad = 0;

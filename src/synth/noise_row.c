@@ -113,7 +113,7 @@ static void noise_blocks_avx2(uint32_t seed_lo, uint32_t seed_hi, uint32_t strea
 #pragma GCC pop_options
 #endif
 
-int btf_noise_avx2_available(void)
+int btf__noise_avx2_available(void)
 {
 #ifdef BTF_HAVE_AVX2_PATH
     return __builtin_cpu_supports("avx2") != 0;
@@ -122,8 +122,8 @@ int btf_noise_avx2_available(void)
 #endif
 }
 
-void btf_noise_blocks(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint32_t row,
-                      uint32_t b0, uint32_t n, int vector_path, float *out)
+void btf__noise_blocks(uint32_t seed_lo, uint32_t seed_hi, uint32_t stream, uint32_t row,
+                       uint32_t b0, uint32_t n, int vector_path, float *out)
 {
 #ifdef BTF_HAVE_AVX2_PATH
     if (vector_path && __builtin_cpu_supports("avx2")) { /* a load and a test */

@@ -9,7 +9,7 @@
  * vectorises (earlier_rows); the same-row terms are a sequential chain
  * (chains.c). To give the core independent chains to overlap, the bands of
  * one subspace step together and each produces two rows at once where it
- * is wide enough (btf_rows_pair): row r + 1 runs a chunk behind row r.
+ * is wide enough (btf__rows_pair): row r + 1 runs a chunk behind row r.
  */
 #include "synth/synth.h"
 
@@ -103,8 +103,8 @@ static void noise_row(const synth_field *f, uint32_t seed_lo, uint32_t seed_hi, 
     if (f->period_w > 0) {
         uint32_t row = (uint32_t)(btf_period_coord(r, f->period_h) + BTF_NOISE_ORIGIN);
         uint32_t b0 = (uint32_t)BTF_NOISE_ORIGIN >> 2, n = ((uint32_t)f->period_w + 3u) >> 2;
-        btf_noise_blocks(seed_lo, seed_hi, f->stream, row, b0, n, f->vector_noise,
-                         f->period_noise);
+        btf__noise_blocks(seed_lo, seed_hi, f->stream, row, b0, n, f->vector_noise,
+                          f->period_noise);
         int c = btf_period_coord(f->fx0, f->period_w);
         for (int i = 0; i < f->fw; i++) {
             e[i] = f->period_noise[c];
@@ -116,8 +116,8 @@ static void noise_row(const synth_field *f, uint32_t seed_lo, uint32_t seed_hi, 
     uint32_t c0 = (uint32_t)(f->fx0 + BTF_NOISE_ORIGIN), c1 = c0 + (uint32_t)f->fw;
     uint32_t b0 = c0 >> 2, b1 = (c1 + 3u) >> 2;
     /* out[4 * (b - b0) + lane] is column b * 4 + lane */
-    btf_noise_blocks(seed_lo, seed_hi, f->stream, urow, b0, b1 - b0, f->vector_noise,
-                     e - (c0 & 3u));
+    btf__noise_blocks(seed_lo, seed_hi, f->stream, urow, b0, b1 - b0, f->vector_noise,
+                      e - (c0 & 3u));
 }
 
 /* Starts field row r: its noise into noise + 3 (3 floats of slack before,
@@ -182,19 +182,19 @@ static void jobs_same_row(row_job *const *jobs, const int *from, int n, int len)
                 grp[m++] = (synth_chain){jobs[t]->acc + from[t], jobs[t]->out + from[t],
                                          jobs[t]->f->same_row_gamma3};
                 if (m == SYNTH_MAX_CHAINS) {
-                    btf_chains(grp, m, k, len);
+                    btf__chains(grp, m, k, len);
                     m = 0;
                 }
             }
         if (m)
-            btf_chains(grp, m, k, len);
+            btf__chains(grp, m, k, len);
     }
     for (int t = 0; t < n; t++)
         if (jobs[t]->f->same_row_shape < 0)
             same_row_general(jobs[t], from[t], len);
 }
 
-void btf_rows_step(synth_field *const *f, int n, uint32_t seed_lo, uint32_t seed_hi)
+void btf__rows_step(synth_field *const *f, int n, uint32_t seed_lo, uint32_t seed_hi)
 {
     row_job job[3], *jp[3] = {NULL, NULL, NULL};
     int zero[3] = {0, 0, 0}, common = INT_MAX;
@@ -209,13 +209,13 @@ void btf_rows_step(synth_field *const *f, int n, uint32_t seed_lo, uint32_t seed
         jobs_same_row(&jp[b], &common, 1, f[b]->fw - common);
 }
 
-/* The columns of a chunk in btf_rows_pair. */
+/* The columns of a chunk in btf__rows_pair. */
 #define PAIR_CHUNK 64
 
 /* How far row r + 1 trails row r: a chunk plus row r + 1's reach into row
  * r to the right, so that a chunk of row r + 1 reads only finished columns
  * of row r. */
-int btf_rows_pair_lead(synth_field *const *f, int n)
+int btf__rows_pair_lead(synth_field *const *f, int n)
 {
     int reach = 0;
     for (int b = 0; b < n; b++)
@@ -268,7 +268,7 @@ static void row_pair_chunk_uniform(row_pair *p, int x)
         c[2 * b + 1] = (synth_chain){second->acc + x - p->lead, second->out + x - p->lead,
                                      second->f->same_row_gamma3};
     }
-    btf_chains(c, 2 * p->n, p->shape, PAIR_CHUNK);
+    btf__chains(c, 2 * p->n, p->shape, PAIR_CHUNK);
 }
 
 /* The same for any bands: those past their width sit out, those in their
@@ -297,9 +297,9 @@ static void row_pair_chunk(row_pair *p, int x)
 /* Row r + 1 runs `lead` columns behind row r, chunk by chunk, its
  * earlier-row part computed just before each chunk from the part of row r
  * already finished. Every value is the same sum in the same order as
- * btf_rows_step gives. Each band runs over its own width (the margins
+ * btf__rows_step gives. Each band runs over its own width (the margins
  * differ). */
-void btf_rows_pair(synth_field *const *f, int n, int lead, uint32_t seed_lo, uint32_t seed_hi)
+void btf__rows_pair(synth_field *const *f, int n, int lead, uint32_t seed_lo, uint32_t seed_hi)
 {
     row_pair p;
     row_pair_init(&p, f, n, lead, seed_lo, seed_hi);

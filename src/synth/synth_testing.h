@@ -13,10 +13,10 @@
 
 /* One CAR field alone (its mean included), 1 channel, opts->width x
  * opts->height (both required), streamed like btf_synthesise; stream names
- * the noise stream; margin < 0: the band's own (btf_car_margin). */
-btf_status btf_car_synthesise_field(const btf_car_band *band, int margin, uint32_t stream,
-                                    const btf_synth_opts *opts, btf_rows_fn fn, void *user,
-                                    btf_error *err);
+ * the noise stream; margin < 0: the band's own (btf__car_margin). */
+btf_status btf__car_synthesise_field(const btf_car_band *band, int margin, uint32_t stream,
+                                     const btf_synth_opts *opts, btf_rows_fn fn, void *user,
+                                     btf_error *err);
 
 /* The DFT reference's bounds: width x height (8192 x 8192), and the largest
  * prime factor of a side (its DFT's cost grows with it). */
@@ -25,8 +25,8 @@ btf_status btf_car_synthesise_field(const btf_car_band *band, int margin, uint32
 
 /* One CAR field alone on the w x h torus (tileable synthesis' generator,
  * src/synth/torus.c), zero-mean (without band->mean), into out (w h floats). */
-btf_status btf_car_torus_field(const btf_car_band *band, uint32_t stream, int w, int h,
-                               uint64_t seed, float *out, btf_error *err);
+btf_status btf__car_torus_field(const btf_car_band *band, uint32_t stream, int w, int h,
+                                uint64_t seed, float *out, btf_error *err);
 
 /* The exact tileable reference (src/synth/tileable.c): subspace image of
  * opts' size (0: the analysed size) with every CAR field solved on its
@@ -34,21 +34,21 @@ btf_status btf_car_torus_field(const btf_car_band *band, uint32_t stream, int w,
  * the streaming tileable synthesis (btf_synth_opts.tileable) converges to
  * it. Sizes within BTF_SYNTH_TILE_MAX_PIXELS, prime factors at most
  * BTF_SYNTH_TILE_MAX_PRIME; BTF_E_NUMERIC where a level is singular. */
-btf_status btf_synthesise_torus_dft(const btf_model *m, int subspace, const btf_synth_opts *opts,
-                                    btf_image *out, btf_error *err);
+btf_status btf__synthesise_torus_dft(const btf_model *m, int subspace, const btf_synth_opts *opts,
+                                     btf_image *out, btf_error *err);
 
 /* btf_synthesise with margins[band][level] instead of the bands' own
  * (NULL: their own). */
-btf_status btf_synthesise_margins(const btf_model *m, int subspace,
-                                  const int (*margins)[BTF_MAX_LEVELS],
-                                  const btf_synth_opts *opts, btf_rows_fn fn, void *user,
-                                  btf_error *err);
+btf_status btf__synthesise_margins(const btf_model *m, int subspace,
+                                   const int (*margins)[BTF_MAX_LEVELS],
+                                   const btf_synth_opts *opts, btf_rows_fn fn, void *user,
+                                   btf_error *err);
 
 /* GPU buffers of at most `bytes` (0: the device's maxStorageBufferRange),
  * so that tests can force the tiling of btf_gpu_synthesise. */
-void btf_gpu_set_max_buffer_bytes(btf_gpu *g, uint64_t bytes);
+void btf__gpu_set_max_buffer_bytes(btf_gpu *g, uint64_t bytes);
 /* How the last btf_gpu_synthesise was cut: batches of images, and jobs
  * (one per strip of rows of a batch). */
-void btf_gpu_last_tiling(const btf_gpu *g, int *batches, int *jobs);
+void btf__gpu_last_tiling(const btf_gpu *g, int *batches, int *jobs);
 
 #endif

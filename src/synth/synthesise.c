@@ -38,10 +38,10 @@ btf_synth_opts btf_synth_defaults(void)
     return o;
 }
 
-btf_status btf_synth_resolve(const btf_synth_opts *opts, btf_synth_opts *o, btf_error *err)
+btf_status btf__synth_resolve(const btf_synth_opts *opts, btf_synth_opts *o, btf_error *err)
 {
     btf_synth_opts d = btf_synth_defaults();
-    if (btf_opts_take(o, sizeof *o, opts, &d, "btf_synthesise", err))
+    if (btf__opts_take(o, sizeof *o, opts, &d, "btf_synthesise", err))
         return BTF_E_ARG;
     o->width = o->width ? o->width : d.width;
     o->height = o->height ? o->height : d.height;
@@ -63,14 +63,14 @@ static synth_paths paths_of(const btf_synth_opts *o)
 static btf_status check_subspace(const btf_model *m, int subspace, btf_error *err)
 {
     if (!m || subspace < 0 || subspace >= m->n_subspaces)
-        return btf_fail(err, BTF_E_ARG, "subspace %d: the model has %d", subspace,
-                        m ? m->n_subspaces : 0);
+        return btf__fail(err, BTF_E_ARG, "subspace %d: the model has %d", subspace,
+                         m ? m->n_subspaces : 0);
     const btf_subspace_model *sm = &m->subspaces[subspace];
     if (sm->levels < 1 || sm->levels > BTF_MAX_LEVELS)
-        return btf_fail(err, BTF_E_ARG, "subspace %d: %d pyramid levels", subspace, sm->levels);
+        return btf__fail(err, BTF_E_ARG, "subspace %d: %d pyramid levels", subspace, sm->levels);
     for (int b = 0; b < 3; b++)
         for (int l = 0; l < sm->levels; l++) {
-            btf_status rc = btf_synth_check_band(&sm->bands[b][l], 0, err);
+            btf_status rc = btf__synth_check_band(&sm->bands[b][l], 0, err);
             if (rc)
                 return rc;
         }
@@ -84,20 +84,20 @@ static btf_status output_size(const btf_model *m, int subspace, const btf_synth_
     const btf_subspace_model *sm = &m->subspaces[subspace];
     *w = o->width ? o->width : sm->width;
     *h = o->height ? o->height : sm->height;
-    return btf_synth_check_size(*w, *h, err);
+    return btf__synth_check_size(*w, *h, err);
 }
 
 /* Tileable synthesis is the streaming recursion driven by periodic noise
  * (field.c, rows.c; docs/synthesis.md, "Tileable synthesis"): level l's
  * period is (W >> l) x (H >> l), whole only when 2^(levels - 1) divides
  * both sides. No other bound: memory is the streaming path's. */
-btf_status btf_synth_check_tileable(int width, int height, int levels, btf_error *err)
+btf_status btf__synth_check_tileable(int width, int height, int levels, btf_error *err)
 {
     int factor = 1 << (levels - 1);
     if (width % factor || height % factor)
-        return btf_fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: with %d pyramid levels "
-                        "both sides must be multiples of %d (2^(levels - 1)), so that every "
-                        "level tiles", width, height, levels, factor);
+        return btf__fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: with %d pyramid levels "
+                         "both sides must be multiples of %d (2^(levels - 1)), so that every "
+                         "level tiles", width, height, levels, factor);
     return BTF_OK;
 }
 
@@ -121,7 +121,7 @@ typedef struct colour_job {
     int width, subspace;
     float *bands[2];  /* [row][band][width] of blocks k even, odd */
     float *rgb[2];    /* [row][width * 3] */
-    float *scratch;   /* [worker][width * BTF_UNMIX_SCRATCH] (btf_unmix_row) */
+    float *scratch;   /* [worker][width * BTF_UNMIX_SCRATCH] (btf__unmix_row) */
 } colour_job;
 
 /* Row y of the image, in block y / COLOUR_BLOCK. */
@@ -132,9 +132,9 @@ static btf_status colour_row(void *user, int y, int worker, btf_error *err)
     int k = y / COLOUR_BLOCK;
     const float *b = c->bands[k & 1] + j * 3 * w;
     float *rgb = c->rgb[k & 1] + j * 3 * w;
-    if (btf_unmix_row(c->sm, c->mt, b, b + w, b + 2 * w, c->width,
-                      c->scratch + (size_t)worker * w * BTF_UNMIX_SCRATCH, rgb))
-        return btf_check_finite_row(rgb, 3 * w, c->subspace, y, err);
+    if (btf__unmix_row(c->sm, c->mt, b, b + w, b + 2 * w, c->width,
+                       c->scratch + (size_t)worker * w * BTF_UNMIX_SCRATCH, rgb))
+        return btf__check_finite_row(rgb, 3 * w, c->subspace, y, err);
     return BTF_OK;
 }
 
@@ -144,12 +144,12 @@ static btf_status consumer_status(int got, btf_error *err)
 {
     btf_status rc = got > 0 ? BTF_E_IO : (btf_status)got;
     if (rc && err && !err->msg[0])
-        btf_fail(err, rc, "synthesis stopped by its consumer");
+        btf__fail(err, rc, "synthesis stopped by its consumer");
     return rc;
 }
 
-btf_status btf_synth_emit_row(btf_rows_fn fn, void *user, int y, const float *row,
-                              btf_error *err)
+btf_status btf__synth_emit_row(btf_rows_fn fn, void *user, int y, const float *row,
+                               btf_error *err)
 {
     return consumer_status(fn(user, y, 1, row, err), err);
 }
@@ -160,16 +160,16 @@ static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal
 {
     size_t w = (size_t)width, block = w * 3 * COLOUR_BLOCK;
     colour_job c = {sm, mt, width, subspace, {NULL, NULL}, {NULL, NULL}, NULL};
-    float *mem = btf_alloc(4 * block + 2 * w * BTF_UNMIX_SCRATCH, sizeof(float), err);
+    float *mem = btf__alloc(4 * block + 2 * w * BTF_UNMIX_SCRATCH, sizeof(float), err);
     if (!mem)
         return BTF_E_NOMEM;
     for (int i = 0; i < 2; i++)
         c.bands[i] = mem + (size_t)i * block, c.rgb[i] = mem + (size_t)(2 + i) * block;
     c.scratch = mem + 4 * block;
-    btf_relay *relay = btf_relay_start(colour_row, &c, err);
+    btf_relay *relay = btf__relay_start(colour_row, &c, err);
     btf_status rc = relay ? BTF_OK : BTF_E_NOMEM;
     if (relay && bg)
-        btf_relay_background(relay, bg);
+        btf__relay_background(relay, bg);
     int blocks = (height + COLOUR_BLOCK - 1) / COLOUR_BLOCK;
     for (int k = 0; rc == BTF_OK && k <= blocks; k++) {
         int y0 = k * COLOUR_BLOCK, n = height - y0 < COLOUR_BLOCK ? height - y0 : COLOUR_BLOCK;
@@ -180,16 +180,16 @@ static btf_status colour_blocks(const btf_subspace_model *sm, const btf_marginal
             synth_gauss_rows_to(sb, 3, y0 + j, dst);
         }
         if (k > 0) {
-            rc = btf_relay_wait(relay, err);
+            rc = btf__relay_wait(relay, err);
             int p0 = y0 - COLOUR_BLOCK;
             for (int j = 0; rc == BTF_OK && j < COLOUR_BLOCK && p0 + j < height; j++)
-                rc = btf_synth_emit_row(fn, user, p0 + j, c.rgb[(k - 1) & 1] + (size_t)j * 3 * w,
-                                        err);
+                rc = btf__synth_emit_row(fn, user, p0 + j, c.rgb[(k - 1) & 1] + (size_t)j * 3 * w,
+                                         err);
         }
         if (rc == BTF_OK && k < blocks)
-            btf_relay_post(relay, y0, n);
+            btf__relay_post(relay, y0, n);
     }
-    btf_relay_stop(relay);
+    btf__relay_stop(relay);
     free(mem);
     return rc;
 }
@@ -225,7 +225,7 @@ static int structured_cb(void *user, int y, int nrows, const float *rows, btf_er
     size_t n = (size_t)s->width * 3;
     for (int r = 0; r < nrows; r++) {
         memcpy(s->row, rows + (size_t)r * n, n * sizeof(float));
-        btf_structure_apply_row(s->albedo, y + r, s->row, s->width);
+        btf__structure_apply_row(s->albedo, y + r, s->row, s->width);
         int got = s->fn(s->user, y + r, 1, s->row, err);
         if (got)
             return got;
@@ -240,12 +240,12 @@ static btf_status structured_rows(const btf_model *m, int subspace,
                                   const btf_image *albedo, btf_error *err)
 {
     structured s = {.albedo = albedo, .width = width, .fn = fn, .user = user};
-    btf_status rc = albedo ? BTF_OK : btf_structure_albedo(m, width, height, o->seed, &s.own, err);
+    btf_status rc = albedo ? BTF_OK : btf__structure_albedo(m, width, height, o->seed, &s.own, err);
     if (rc)
         return rc;
     if (!albedo)
         s.albedo = &s.own;
-    s.row = btf_alloc((size_t)width * 3, sizeof(float), err);
+    s.row = btf__alloc((size_t)width * 3, sizeof(float), err);
     rc = s.row ? plain_rows(m, subspace, margins, o, width, height, structured_cb, &s, bg, err)
                : BTF_E_NOMEM;
     free(s.row);
@@ -253,7 +253,7 @@ static btf_status structured_rows(const btf_model *m, int subspace,
     return rc;
 }
 
-/* btf_synthesise_margins, where bg (NULL: none) is work for the colour
+/* btf__synthesise_margins, where bg (NULL: none) is work for the colour
  * pipeline's relay helper to do in its idle time (the previous image's
  * colour matching, btf_synthesise_images); the caller finishes it. */
 static btf_status synth_rows(const btf_model *m, int subspace,
@@ -262,7 +262,7 @@ static btf_status synth_rows(const btf_model *m, int subspace,
                              const btf_image *albedo, btf_error *err)
 {
     btf_synth_opts o;
-    if (btf_synth_resolve(opts, &o, err))
+    if (btf__synth_resolve(opts, &o, err))
         return BTF_E_ARG;
     int width, height;
     btf_status rc = check_subspace(m, subspace, err);
@@ -270,15 +270,15 @@ static btf_status synth_rows(const btf_model *m, int subspace,
         rc = output_size(m, subspace, &o, &width, &height, err);
     int match = 0;
     if (rc == BTF_OK)
-        rc = btf_colour_match_wanted(m, subspace, o.match_colours, &match, err);
+        rc = btf__colour_match_wanted(m, subspace, o.match_colours, &match, err);
     if (rc)
         return rc;
     if (match)
         return matched_rows(m, subspace, margins, &o, width, height, fn, user, err);
-    if (o.tileable && (rc = btf_synth_check_tileable(width, height,
-                                                     m->subspaces[subspace].levels, err)))
+    if (o.tileable && (rc = btf__synth_check_tileable(width, height,
+                                                      m->subspaces[subspace].levels, err)))
         return rc;
-    if (m->albedo && btf_structure_quilted(m))
+    if (m->albedo && btf__structure_quilted(m))
         return structured_rows(m, subspace, margins, &o, width, height, fn, user, bg, albedo,
                                err);
     return plain_rows(m, subspace, margins, &o, width, height, fn, user, bg, err);
@@ -296,10 +296,10 @@ static btf_status plain_rows(const btf_model *m, int subspace,
     int margin[3][BTF_MAX_LEVELS];
     for (int b = 0; b < 3; b++)
         for (int l = 0; l < sm->levels; l++) {
-            margin[b][l] = margins ? margins[b][l] : btf_model_margin(m, subspace, b, l);
+            margin[b][l] = margins ? margins[b][l] : btf__model_margin(m, subspace, b, l);
             if (margin[b][l] < 0 && !margins)
-                return btf_fail(err, BTF_E_NOMEM, "out of memory");
-            if ((rc = btf_synth_check_band(&sm->bands[b][l], margin[b][l], err)))
+                return btf__fail(err, BTF_E_NOMEM, "out of memory");
+            if ((rc = btf__synth_check_band(&sm->bands[b][l], margin[b][l], err)))
                 return rc;
         }
     synth_paths paths = paths_of(&o);
@@ -309,24 +309,24 @@ static btf_status plain_rows(const btf_model *m, int subspace,
         rc = synth_band_init(&sb[made], sm->bands[made], margin[made], sm->levels, subspace, made,
                              width, height, o.seed, &paths, err);
     btf_marginal_table mt;
-    btf_marginal_table_make(sm, &mt);
+    btf__marginal_table_make(sm, &mt);
     if (rc == 0 && mt.on) {
         rc = colour_blocks(sm, &mt, sb, width, height, subspace, fn, user, bg, err);
         for (int b = 0; b < made; b++)
             synth_band_free(&sb[b]);
         return rc;
     }
-    float *row = rc ? NULL : btf_alloc((size_t)width * (3 + BTF_UNMIX_SCRATCH), sizeof(float), err);
-    float *plane = row ? row + (size_t)width * 3 : NULL; /* btf_unmix_row's scratch */
+    float *row = rc ? NULL : btf__alloc((size_t)width * (3 + BTF_UNMIX_SCRATCH), sizeof(float), err);
+    float *plane = row ? row + (size_t)width * 3 : NULL; /* btf__unmix_row's scratch */
     if (!rc && !row)
         rc = BTF_E_NOMEM;
     for (int y = 0; rc == 0 && y < height; y++) {
         const float *g0[3];
         synth_gauss_rows(sb, 3, 0, y, g0);
-        if (btf_unmix_row(sm, &mt, g0[0], g0[1], g0[2], width, plane, row)) /* the message names y */
-            rc = btf_check_finite_row(row, (size_t)width * 3, subspace, y, err);
+        if (btf__unmix_row(sm, &mt, g0[0], g0[1], g0[2], width, plane, row)) /* the message names y */
+            rc = btf__check_finite_row(row, (size_t)width * 3, subspace, y, err);
         if (rc == 0)
-            rc = btf_synth_emit_row(fn, user, y, row, err);
+            rc = btf__synth_emit_row(fn, user, y, row, err);
     }
     free(row);
     for (int b = 0; b < made; b++)
@@ -334,10 +334,10 @@ static btf_status plain_rows(const btf_model *m, int subspace,
     return rc;
 }
 
-btf_status btf_synthesise_margins(const btf_model *m, int subspace,
-                                  const int (*margins)[BTF_MAX_LEVELS],
-                                  const btf_synth_opts *opts, btf_rows_fn fn, void *user,
-                                  btf_error *err)
+btf_status btf__synthesise_margins(const btf_model *m, int subspace,
+                                   const int (*margins)[BTF_MAX_LEVELS],
+                                   const btf_synth_opts *opts, btf_rows_fn fn, void *user,
+                                   btf_error *err)
 {
     return synth_rows(m, subspace, margins, opts, fn, user, NULL, NULL, err);
 }
@@ -345,7 +345,7 @@ btf_status btf_synthesise_margins(const btf_model *m, int subspace,
 btf_status btf_synthesise(const btf_model *m, int subspace, const btf_synth_opts *opts,
                           btf_rows_fn fn, void *user, btf_error *err)
 {
-    return btf_synthesise_margins(m, subspace, NULL, opts, fn, user, err);
+    return btf__synthesise_margins(m, subspace, NULL, opts, fn, user, err);
 }
 
 static int to_image(void *user, int y, int nrows, const float *rows, btf_error *err)
@@ -378,7 +378,7 @@ static int sample_rows_cb(void *user, int y, int nrows, const float *rows, btf_e
     (void)err;
     match_stream *ms = user;
     for (int r = 0; r < nrows; r++)
-        btf_lab_sample_row(&ms->sample, y + r, rows + (size_t)r * ms->width * 3, ms->row);
+        btf__lab_sample_row(&ms->sample, y + r, rows + (size_t)r * ms->width * 3, ms->row);
     return 0;
 }
 
@@ -388,9 +388,9 @@ static int map_rows_cb(void *user, int y, int nrows, const float *rows, btf_erro
     size_t n = (size_t)ms->width * 3;
     for (int r = 0; r < nrows; r++) {
         memcpy(ms->row, rows + r * n, n * sizeof(float));
-        btf_lab_match_row(ms->map, ms->sample.scale, ms->mg->rgb_lo, ms->mg->rgb_hi, ms->row,
-                          ms->width);
-        btf_status rc = btf_synth_emit_row(ms->fn, ms->user, y + r, ms->row, err);
+        btf__lab_match_row(ms->map, ms->sample.scale, ms->mg->rgb_lo, ms->mg->rgb_hi, ms->row,
+                           ms->width);
+        btf_status rc = btf__synth_emit_row(ms->fn, ms->user, y + r, ms->row, err);
         if (rc)
             return rc;
     }
@@ -403,22 +403,22 @@ static btf_status matched_twice(const btf_model *m, int subspace,
 {
     match_stream ms = {.mg = &m->subspaces[subspace].marginal, .width = plain->width,
                        .fn = fn, .user = user};
-    btf_status rc = btf_lab_sample_begin(&ms.sample, plain->width, plain->height,
-                                         BTF_LAB_MATCH_SAMPLE, btf_lab_scale(ms.mg), err);
+    btf_status rc = btf__lab_sample_begin(&ms.sample, plain->width, plain->height,
+                                          BTF_LAB_MATCH_SAMPLE, btf__lab_scale(ms.mg), err);
     if (rc)
         return rc;
-    ms.row = btf_alloc((size_t)plain->width * 3, sizeof(float), err);
-    rc = ms.row ? btf_synthesise_margins(m, subspace, margins, plain, sample_rows_cb, &ms, err)
+    ms.row = btf__alloc((size_t)plain->width * 3, sizeof(float), err);
+    rc = ms.row ? btf__synthesise_margins(m, subspace, margins, plain, sample_rows_cb, &ms, err)
                 : BTF_E_NOMEM;
     float src[3][BTF_MARGIN_KNOTS];
     if (rc == BTF_OK)
-        rc = btf_lab_sample_quantiles(&ms.sample, src, err);
+        rc = btf__lab_sample_quantiles(&ms.sample, src, err);
     if (rc == BTF_OK) {
-        btf_colour_match_maps(ms.mg, src, ms.map);
-        rc = btf_synthesise_margins(m, subspace, margins, plain, map_rows_cb, &ms, err);
+        btf__colour_match_maps(ms.mg, src, ms.map);
+        rc = btf__synthesise_margins(m, subspace, margins, plain, map_rows_cb, &ms, err);
     }
     free(ms.row);
-    btf_lab_sample_free(&ms.sample);
+    btf__lab_sample_free(&ms.sample);
     return rc;
 }
 
@@ -433,13 +433,13 @@ static int match_keeps_whole(const btf_synth_opts *o, int width, int height)
 int btf_synth_holds_whole(const btf_model *m, int subspace, const btf_synth_opts *opts)
 {
     btf_synth_opts o;
-    if (btf_synth_resolve(opts, &o, NULL)) /* the synthesis itself reports it */
+    if (btf__synth_resolve(opts, &o, NULL)) /* the synthesis itself reports it */
         return 0;
     btf_error quiet;
     int w, h, match = 0;
     return check_subspace(m, subspace, &quiet) == BTF_OK &&
            output_size(m, subspace, &o, &w, &h, &quiet) == BTF_OK &&
-           btf_colour_match_wanted(m, subspace, o.match_colours, &match, &quiet) == BTF_OK &&
+           btf__colour_match_wanted(m, subspace, o.match_colours, &match, &quiet) == BTF_OK &&
            match && match_keeps_whole(&o, w, h);
 }
 
@@ -456,11 +456,11 @@ static btf_status matched_rows(const btf_model *m, int subspace,
     btf_status rc = btf_image_alloc(&img, width, height, 3, err);
     if (rc)
         return rc;
-    rc = btf_synthesise_margins(m, subspace, margins, &plain, to_image, &img, err);
+    rc = btf__synthesise_margins(m, subspace, margins, &plain, to_image, &img, err);
     if (rc == BTF_OK)
-        rc = btf_match_synthesised(m, subspace, &img, err);
+        rc = btf__match_synthesised(m, subspace, &img, err);
     for (int y = 0; rc == BTF_OK && y < height; y++)
-        rc = btf_synth_emit_row(fn, user, y, img.data + (size_t)y * width * 3, err);
+        rc = btf__synth_emit_row(fn, user, y, img.data + (size_t)y * width * 3, err);
     btf_image_free(&img);
     return rc;
 }
@@ -474,13 +474,13 @@ static btf_status batch_albedo(const btf_model *m, int w, int h, uint64_t seed,
                                const btf_image **albedo, btf_error *err)
 {
     *albedo = NULL;
-    if (!m->albedo || !btf_structure_quilted(m))
+    if (!m->albedo || !btf__structure_quilted(m))
         return BTF_OK;
     if (given) {
         *albedo = given;
         return BTF_OK;
     }
-    btf_status rc = btf_structure_pattern(m, w, h, seed, cache, err);
+    btf_status rc = btf__structure_pattern(m, w, h, seed, cache, err);
     *albedo = rc ? NULL : cache;
     return rc;
 }
@@ -493,16 +493,16 @@ static btf_status raw_image(const btf_model *m, int subspace, const btf_synth_op
                             const btf_image *given, btf_image *cache, btf_error *err)
 {
     btf_synth_opts o;
-    if (btf_synth_resolve(opts, &o, err))
+    if (btf__synth_resolve(opts, &o, err))
         return BTF_E_ARG;
     int w, h;
     btf_status rc = check_subspace(m, subspace, err);
     if (rc == BTF_OK)
         rc = output_size(m, subspace, &o, &w, &h, err);
     if (rc == BTF_OK && o.tileable) /* refused before its image is allocated */
-        rc = btf_synth_check_tileable(w, h, m->subspaces[subspace].levels, err);
+        rc = btf__synth_check_tileable(w, h, m->subspaces[subspace].levels, err);
     if (rc == BTF_OK)
-        rc = btf_colour_match_wanted(m, subspace, o.match_colours, match, err);
+        rc = btf__colour_match_wanted(m, subspace, o.match_colours, match, err);
     const btf_image *albedo = NULL;
     if (rc == BTF_OK)
         rc = batch_albedo(m, w, h, o.seed, given, cache, &albedo, err);
@@ -528,14 +528,14 @@ static btf_status deliver(btf_image_fn fn, void *user, int i, btf_image *img, bt
  * (and so one of two CPUs) idle most of the time: image i - 1 is matched
  * by that helper in its idle time while image i is synthesised, and what
  * it leaves, with the last image, runs on the pool when the synthesis
- * returns. A pixel's bytes are those of btf_colour_match (the same jobs,
+ * returns. A pixel's bytes are those of btf__colour_match (the same jobs,
  * whoever runs them). */
 static btf_status synthesise_each(const btf_model *m, const int *subspaces, int n,
                                   const btf_synth_opts *opts, const btf_image *given,
                                   btf_image_fn fn, void *user, btf_error *err)
 {
     if (n < 0 || (n > 0 && (!subspaces || !fn)))
-        return btf_fail(err, BTF_E_ARG, "synthesis of %d images: no subspaces or no consumer", n);
+        return btf__fail(err, BTF_E_ARG, "synthesis of %d images: no subspaces or no consumer", n);
     btf_image cache = {0};          /* the structure layer's pattern (batch_albedo) */
     btf_image img[2] = {{0}, {0}}; /* image i in img[i & 1] */
     btf_match_task *pending = NULL; /* image i - 1's matching */
@@ -547,21 +547,21 @@ static btf_status synthesise_each(const btf_model *m, const int *subspaces, int 
                        &cache, err);
         if (pending) { /* after a failure its image is dropped: not finished */
             if (rc == BTF_OK)
-                rc = btf_match_task_finish(pending, err);
-            btf_match_task_free(pending);
+                rc = btf__match_task_finish(pending, err);
+            btf__match_task_free(pending);
             pending = NULL;
             if (rc == BTF_OK)
                 rc = deliver(fn, user, i - 1, prev, err);
         }
         if (rc == BTF_OK && match)
-            rc = btf_match_task_begin(&pending, m, subspaces[i], cur, err);
+            rc = btf__match_task_begin(&pending, m, subspaces[i], cur, err);
         else if (rc == BTF_OK)
             rc = deliver(fn, user, i, cur, err);
     }
     if (pending) {
         if (rc == BTF_OK)
-            rc = btf_match_task_finish(pending, err);
-        btf_match_task_free(pending);
+            rc = btf__match_task_finish(pending, err);
+        btf__match_task_free(pending);
         if (rc == BTF_OK)
             rc = deliver(fn, user, n - 1, &img[(n - 1) & 1], err);
     }
@@ -597,7 +597,7 @@ btf_status btf_synthesise_images(const btf_model *m, const int *subspaces, int n
                                  const btf_synth_opts *opts, btf_image *outs, btf_error *err)
 {
     if (n > 0 && !outs)
-        return btf_fail(err, BTF_E_ARG, "synthesis of %d images: no outputs", n);
+        return btf__fail(err, BTF_E_ARG, "synthesis of %d images: no outputs", n);
     for (int i = 0; i < n; i++)
         memset(&outs[i], 0, sizeof outs[i]);
     outs_sink s = {outs, 0};
@@ -613,9 +613,9 @@ btf_status btf_synthesise_image(const btf_model *m, int subspace, const btf_synt
     return btf_synthesise_images(m, &subspace, 1, opts, out, err);
 }
 
-btf_status btf_synthesise_image_albedo(const btf_model *m, int subspace,
-                                       const btf_synth_opts *opts, const btf_image *albedo,
-                                       btf_image *out, btf_error *err)
+btf_status btf__synthesise_image_albedo(const btf_model *m, int subspace,
+                                        const btf_synth_opts *opts, const btf_image *albedo,
+                                        btf_image *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
     outs_sink s = {out, 0};
@@ -632,10 +632,10 @@ btf_status btf_synth_margin(const btf_model *m, int subspace, int band, int leve
     if (rc)
         return rc;
     if (band < 0 || band > 2 || level < 0 || level >= m->subspaces[subspace].levels)
-        return btf_fail(err, BTF_E_ARG, "band %d, level %d: subspace %d has bands 0..2 and "
-                        "levels 0..%d", band, level, subspace, m->subspaces[subspace].levels - 1);
-    if ((*margin = btf_model_margin(m, subspace, band, level)) < 0)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+        return btf__fail(err, BTF_E_ARG, "band %d, level %d: subspace %d has bands 0..2 and "
+                         "levels 0..%d", band, level, subspace, m->subspaces[subspace].levels - 1);
+    if ((*margin = btf__model_margin(m, subspace, band, level)) < 0)
+        return btf__fail(err, BTF_E_NOMEM, "out of memory");
     return BTF_OK;
 }
 
@@ -650,43 +650,43 @@ btf_status btf_synth_missed_variance(const btf_model *m, int subspace, int band,
     const btf_car_band *b = &m->subspaces[subspace].bands[band][level];
     if (margin < BTF_SYNTH_MARGIN_MAX || b->n == 0 || !(b->sigma > 0.0f))
         return BTF_OK; /* the transient dies within the margin (car/margin.c) */
-    double stat = btf_car_stationary_variance(b), got = btf_car_synth_variance(b, margin);
+    double stat = btf__car_stationary_variance(b), got = btf__car_synth_variance(b, margin);
     if (got < 0.0)
-        return btf_fail(err, BTF_E_NOMEM, "out of memory");
+        return btf__fail(err, BTF_E_NOMEM, "out of memory");
     if (stat > 0.0 && isfinite(stat))
         *missed = got >= stat ? 0.0 : 1.0 - got / stat;
     return BTF_OK;
 }
 
-btf_status btf_car_synthesise_field(const btf_car_band *band, int margin, uint32_t stream,
-                                    const btf_synth_opts *opts, btf_rows_fn fn, void *user,
-                                    btf_error *err)
+btf_status btf__car_synthesise_field(const btf_car_band *band, int margin, uint32_t stream,
+                                     const btf_synth_opts *opts, btf_rows_fn fn, void *user,
+                                     btf_error *err)
 {
     btf_synth_opts o;
-    if (btf_synth_resolve(opts, &o, err))
+    if (btf__synth_resolve(opts, &o, err))
         return BTF_E_ARG;
     int width = o.width, height = o.height;
-    btf_status rc = btf_synth_check_size(width, height, err);
+    btf_status rc = btf__synth_check_size(width, height, err);
     if (rc == 0)
-        rc = btf_synth_check_band(band, 0, err);
-    if (rc == 0 && margin < 0 && (margin = btf_car_margin(band)) < 0)
-        rc = btf_fail(err, BTF_E_NOMEM, "out of memory");
+        rc = btf__synth_check_band(band, 0, err);
+    if (rc == 0 && margin < 0 && (margin = btf__car_margin(band)) < 0)
+        rc = btf__fail(err, BTF_E_NOMEM, "out of memory");
     if (rc == 0)
-        rc = btf_synth_check_band(band, margin, err);
+        rc = btf__synth_check_band(band, margin, err);
     if (rc)
         return rc;
     synth_paths paths = paths_of(&o);
     synth_field f;
     int pw = o.tileable ? width : 0, ph = o.tileable ? height : 0; /* one level */
     rc = synth_field_init(&f, band, margin, stream, 0, width, 0, height, pw, ph, &paths, err);
-    float *row = rc ? NULL : btf_alloc((size_t)width, sizeof(float), err);
+    float *row = rc ? NULL : btf__alloc((size_t)width, sizeof(float), err);
     if (!rc && !row)
         rc = BTF_E_NOMEM;
     for (int y = 0; rc == 0 && y < height; y++) {
         const float *v = synth_field_row(&f, y, (uint32_t)o.seed, (uint32_t)(o.seed >> 32));
         for (int x = 0; x < width; x++)
             row[x] = btf_add_mean(band->mean, v[x]);
-        rc = btf_check_finite_row(row, (size_t)width, 0, y, err);
+        rc = btf__check_finite_row(row, (size_t)width, 0, y, err);
         if (rc == 0) {
             int got = fn(user, y, 1, row, err);
             rc = got > 0 ? BTF_E_IO : (btf_status)got;

@@ -1,13 +1,13 @@
 /*
  * tileable.c — the exact reference of tileable synthesis (docs/synthesis.md,
  * "Tileable synthesis"), for tests only (synth_testing.h,
- * btf_synthesise_torus_dft): the pyramid of Haindl & Filip 2007, section
+ * btf__synthesise_torus_dft): the pyramid of Haindl & Filip 2007, section
  * II.C, on a torus. Production tileable synthesis is the streaming
  * recursion driven by periodic noise (field.c, rows.c), whose window
  * converges to these fields; tests/unit/test_synth_tileable.c measures how close. Every level l of every spectral band is a CAR field on the
  * (W >> l) x (H >> l) torus (torus.c); the pyramid collapses as in the
  * streaming path, G_l = mean_l + Y_l + up(G_{l+1}), with the same pyrUp
- * weights (btf_up_row, btf_level_sum_row) but coarse indices taken modulo
+ * weights (btf__up_row, btf__level_sum_row) but coarse indices taken modulo
  * the coarse size, so up-sampling a periodic level gives a periodic level;
  * the decorrelation is undone row by row (colour.c). Each output pixel then
  * depends on its neighbours across the right and bottom edges exactly as on
@@ -55,23 +55,23 @@ static int nearest_smooth(int side, int factor)
  * factor bounds. */
 static btf_status check_torus_size(int width, int height, int levels, btf_error *err)
 {
-    btf_status rc = btf_synth_check_tileable(width, height, levels, err);
+    btf_status rc = btf__synth_check_tileable(width, height, levels, err);
     if (rc)
         return rc;
     if ((uint64_t)width * (uint64_t)height > BTF_SYNTH_TILE_MAX_PIXELS)
-        return btf_fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: more than %llu pixels "
-                        "(it holds whole fields, about 85 bytes a pixel); the streaming "
-                        "synthesis has no such bound", width, height,
-                        (unsigned long long)BTF_SYNTH_TILE_MAX_PIXELS);
+        return btf__fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: more than %llu pixels "
+                         "(it holds whole fields, about 85 bytes a pixel); the streaming "
+                         "synthesis has no such bound", width, height,
+                         (unsigned long long)BTF_SYNTH_TILE_MAX_PIXELS);
     /* OpenCV's DFT costs a length-n transform about n p for a prime factor
      * p: a side of a large prime would take hours (docs/synthesis.md). */
     for (int k = 0; k < 2; k++) {
         int side = k ? height : width, p = largest_prime_factor(side);
         if (p > BTF_SYNTH_TILE_MAX_PRIME)
-            return btf_fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: %d has the prime "
-                            "factor %d, and the DFT that solves the torus is slow for primes "
-                            "above %d; %d would do", width, height, side, p,
-                            BTF_SYNTH_TILE_MAX_PRIME, nearest_smooth(side, 1 << (levels - 1)));
+            return btf__fail(err, BTF_E_ARG, "tileable synthesis of %dx%d: %d has the prime "
+                             "factor %d, and the DFT that solves the torus is slow for primes "
+                             "above %d; %d would do", width, height, side, p,
+                             BTF_SYNTH_TILE_MAX_PRIME, nearest_smooth(side, 1 << (levels - 1)));
     }
     return BTF_OK;
 }
@@ -86,7 +86,7 @@ static void up_rows_periodic(const float *coarse, int cw, int ch, float *row, fl
         row[0] = c[cw - 1]; /* coarse column -1 */
         memcpy(row + 1, c, (size_t)cw * sizeof(float));
         row[cw + 1] = c[0]; /* coarse column cw */
-        btf_up_row(row, -1, 0, 2 * cw, up + (size_t)r * 2 * cw);
+        btf__up_row(row, -1, 0, 2 * cw, up + (size_t)r * 2 * cw);
     }
 }
 
@@ -103,7 +103,7 @@ static void level_sum_periodic(float *g, int fw, int fh, float mean, const float
         const float *b = up + (size_t)i * fw, *c = up + (size_t)((i + 1) % ch) * fw;
         float *row = g + (size_t)y * fw;
         /* in place: each output sample reads its own field sample only */
-        btf_level_sum_row(fw, mean, row, (y & 1) ? NULL : a, b, c, row);
+        btf__level_sum_row(fw, mean, row, (y & 1) ? NULL : a, b, c, row);
     }
 }
 
@@ -126,7 +126,7 @@ static btf_status band_plane(const btf_subspace_model *sm, int subspace, int ban
         int fw = w >> l, fh = h >> l;
         char what[96];
         snprintf(what, sizeof what, "subspace %d, band %d, level %d", subspace, band, l);
-        float *g = l == 0 ? out : (fine = btf_alloc((size_t)fw * fh, sizeof(float), err));
+        float *g = l == 0 ? out : (fine = btf__alloc((size_t)fw * fh, sizeof(float), err));
         if (!g)
             rc = BTF_E_NOMEM;
         uint32_t stream = btf_noise_stream((uint32_t)subspace, (uint32_t)band, (uint32_t)l);
@@ -136,8 +136,8 @@ static btf_status band_plane(const btf_subspace_model *sm, int subspace, int ban
         if (rc == BTF_OK && l == top)
             add_mean(g, (size_t)fw * fh, sm->bands[band][l].mean);
         if (rc == BTF_OK && l < top) {
-            up = btf_alloc((size_t)fw * (fh / 2), sizeof(float), err);
-            row = up ? btf_alloc((size_t)fw / 2 + 2, sizeof(float), err) : NULL;
+            up = btf__alloc((size_t)fw * (fh / 2), sizeof(float), err);
+            row = up ? btf__alloc((size_t)fw / 2 + 2, sizeof(float), err) : NULL;
             if (!row)
                 rc = BTF_E_NOMEM;
         }
@@ -181,8 +181,8 @@ static int image_rows(void *user, int y, int nrows, const float *rows, btf_error
     return 0;
 }
 
-btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_synth_opts *o,
-                                   int w, int h, btf_rows_fn fn, void *user, btf_error *err)
+btf_status btf__synthesise_tileable(const btf_model *m, int subspace, const btf_synth_opts *o,
+                                    int w, int h, btf_rows_fn fn, void *user, btf_error *err)
 {
     const btf_subspace_model *sm = &m->subspaces[subspace];
     btf_status rc = check_torus_size(w, h, sm->levels, err);
@@ -190,45 +190,45 @@ btf_status btf_synthesise_tileable(const btf_model *m, int subspace, const btf_s
         return rc;
     size_t n = (size_t)w * h;
     btf_marginal_table mt;
-    btf_marginal_table_make(sm, &mt);
-    float *planes = btf_alloc(n * 3 + (size_t)w * (3 + BTF_UNMIX_SCRATCH), sizeof(float), err);
+    btf__marginal_table_make(sm, &mt);
+    float *planes = btf__alloc(n * 3 + (size_t)w * (3 + BTF_UNMIX_SCRATCH), sizeof(float), err);
     if (!planes)
         return BTF_E_NOMEM;
     float *rgb = planes + n * 3, *scratch = rgb + (size_t)w * 3;
     band_jobs jobs = {sm, subspace, w, h, !o->portable_noise, o->seed, planes};
     /* a band's plane depends on the band alone: the same bytes on any
      * number of threads (0: every CPU, at most 3 here) */
-    rc = btf_pool_run(3, 0, band_job, &jobs, NULL, err);
+    rc = btf__pool_run(3, 0, band_job, &jobs, NULL, err);
     for (int y = 0; rc == BTF_OK && y < h; y++) {
         size_t at = (size_t)y * w;
-        if (btf_unmix_row(sm, &mt, planes + at, planes + n + at, planes + 2 * n + at, w, scratch, rgb))
-            rc = btf_check_finite_row(rgb, (size_t)w * 3, subspace, y, err);
+        if (btf__unmix_row(sm, &mt, planes + at, planes + n + at, planes + 2 * n + at, w, scratch, rgb))
+            rc = btf__check_finite_row(rgb, (size_t)w * 3, subspace, y, err);
         if (rc == BTF_OK)
-            rc = btf_synth_emit_row(fn, user, y, rgb, err);
+            rc = btf__synth_emit_row(fn, user, y, rgb, err);
     }
     free(planes);
     return rc;
 }
 
-btf_status btf_synthesise_torus_dft(const btf_model *m, int subspace, const btf_synth_opts *opts,
-                                    btf_image *out, btf_error *err)
+btf_status btf__synthesise_torus_dft(const btf_model *m, int subspace, const btf_synth_opts *opts,
+                                     btf_image *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
     btf_synth_opts o;
-    if (btf_synth_resolve(opts, &o, err))
+    if (btf__synth_resolve(opts, &o, err))
         return BTF_E_ARG;
     if (!m || subspace < 0 || subspace >= m->n_subspaces)
-        return btf_fail(err, BTF_E_ARG, "subspace %d: the model has %d", subspace,
-                        m ? m->n_subspaces : 0);
+        return btf__fail(err, BTF_E_ARG, "subspace %d: the model has %d", subspace,
+                         m ? m->n_subspaces : 0);
     const btf_subspace_model *sm = &m->subspaces[subspace];
     int w = o.width ? o.width : sm->width, h = o.height ? o.height : sm->height;
-    btf_status rc = btf_synth_check_size(w, h, err);
+    btf_status rc = btf__synth_check_size(w, h, err);
     if (rc == BTF_OK)
         rc = check_torus_size(w, h, sm->levels, err);
     if (rc == BTF_OK)
         rc = btf_image_alloc(out, w, h, 3, err);
     if (rc == BTF_OK)
-        rc = btf_synthesise_tileable(m, subspace, &o, w, h, image_rows, out, err);
+        rc = btf__synthesise_tileable(m, subspace, &o, w, h, image_rows, out, err);
     if (rc)
         btf_image_free(out);
     return rc;

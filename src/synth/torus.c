@@ -20,7 +20,7 @@
  * The field is then exactly stationary on the torus: its covariance is the
  * stationary one's periodic sum, and its variance sigma^2 mean(1/|A|^2) over
  * the grid, which for a torus larger than the correlation length is the
- * model's stationary variance (btf_car_stationary_variance: the same mean
+ * model's stationary variance (btf__car_stationary_variance: the same mean
  * over the continuous frequency torus). A stable model (the validator's
  * check, car/stability.c) has A != 0 on the whole frequency torus; a grid
  * frequency with |A|^2 below SYNTH_TORUS_MIN_A2 is refused all the same.
@@ -70,13 +70,13 @@ static btf_status noise_field(const btf_car_band *b, uint32_t stream, int w, int
                               btf_error *err)
 {
     uint32_t blocks = (uint32_t)(w + 3) / 4;
-    float *e = btf_alloc((size_t)blocks * 4, sizeof(float), err);
+    float *e = btf__alloc((size_t)blocks * 4, sizeof(float), err);
     if (!e)
         return BTF_E_NOMEM;
     const uint32_t b0 = (uint32_t)BTF_NOISE_ORIGIN / 4u; /* column 0: ORIGIN is a multiple of 4 */
     for (int r = 0; r < h; r++) {
-        btf_noise_blocks((uint32_t)seed, (uint32_t)(seed >> 32), stream,
-                         (uint32_t)(r + BTF_NOISE_ORIGIN), b0, blocks, vector_noise, e);
+        btf__noise_blocks((uint32_t)seed, (uint32_t)(seed >> 32), stream,
+                          (uint32_t)(r + BTF_NOISE_ORIGIN), b0, blocks, vector_noise, e);
         double *row = re + (size_t)r * w;
         for (int c = 0; c < w; c++)
             row[c] = (double)b->sigma * (double)e[c];
@@ -104,7 +104,7 @@ static btf_status divide_by_a(const btf_car_band *b, int w, int h, double *re, d
             rows[nr++] = b->offsets[s].row;
     }
     /* unit roots of both sides, then Q_j's real and imaginary rows */
-    double *cw = btf_alloc((size_t)(w + h) * 2 + (size_t)nr * w * 2, sizeof(double), err);
+    double *cw = btf__alloc((size_t)(w + h) * 2 + (size_t)nr * w * 2, sizeof(double), err);
     if (!cw)
         return BTF_E_NOMEM;
     double *ch = cw + (size_t)w * 2, *q = ch + (size_t)h * 2;
@@ -152,9 +152,9 @@ static btf_status divide_by_a(const btf_car_band *b, int w, int h, double *re, d
     }
     free(cw);
     if (min_a2 < SYNTH_TORUS_MIN_A2 || isnan(min_a2))
-        return btf_fail(err, BTF_E_NUMERIC, "%s: the CAR model is singular on the %dx%d torus "
-                        "(|A|^2 = %.3g < %.0e at frequency (%d, %d)): its recursion is unstable",
-                        what, w, h, min_a2, SYNTH_TORUS_MIN_A2, min_k1, min_k2);
+        return btf__fail(err, BTF_E_NUMERIC, "%s: the CAR model is singular on the %dx%d torus "
+                         "(|A|^2 = %.3g < %.0e at frequency (%d, %d)): its recursion is unstable",
+                         what, w, h, min_a2, SYNTH_TORUS_MIN_A2, min_k1, min_k2);
     return BTF_OK;
 }
 
@@ -167,7 +167,7 @@ btf_status synth_torus_field(const btf_car_band *b, uint32_t stream, int w, int 
         memset(out, 0, n * sizeof(float));
         return BTF_OK;
     }
-    double *re = btf_alloc(n * 2, sizeof(double), err);
+    double *re = btf__alloc(n * 2, sizeof(double), err);
     if (!re)
         return BTF_E_NOMEM;
     double *im = re + n;
@@ -175,12 +175,12 @@ btf_status synth_torus_field(const btf_car_band *b, uint32_t stream, int w, int 
     char msg[256];
     if (rc == BTF_OK && b->n > 0) { /* white noise (no neighbours) is its own field */
         if (btfcv_dft2(re, im, w, h, 0, msg, sizeof msg) != 0)
-            rc = btf_fail(err, BTF_E_NUMERIC, "%s: DFT of %dx%d failed: %s", what, w, h, msg);
+            rc = btf__fail(err, BTF_E_NUMERIC, "%s: DFT of %dx%d failed: %s", what, w, h, msg);
         if (rc == BTF_OK)
             rc = divide_by_a(b, w, h, re, im, what, err);
         if (rc == BTF_OK && btfcv_dft2(re, im, w, h, 1, msg, sizeof msg) != 0)
-            rc = btf_fail(err, BTF_E_NUMERIC, "%s: inverse DFT of %dx%d failed: %s", what, w, h,
-                          msg);
+            rc = btf__fail(err, BTF_E_NUMERIC, "%s: inverse DFT of %dx%d failed: %s", what, w, h,
+                           msg);
     }
     if (rc == BTF_OK)
         for (size_t i = 0; i < n; i++)
@@ -189,12 +189,12 @@ btf_status synth_torus_field(const btf_car_band *b, uint32_t stream, int w, int 
     return rc;
 }
 
-btf_status btf_car_torus_field(const btf_car_band *band, uint32_t stream, int w, int h,
-                               uint64_t seed, float *out, btf_error *err)
+btf_status btf__car_torus_field(const btf_car_band *band, uint32_t stream, int w, int h,
+                                uint64_t seed, float *out, btf_error *err)
 {
     if (w < 1 || h < 1 || (uint64_t)w * (uint64_t)h > BTF_SYNTH_TILE_MAX_PIXELS)
-        return btf_fail(err, BTF_E_ARG, "torus field of %dx%d: sides 1.. and at most %llu pixels",
-                        w, h, (unsigned long long)BTF_SYNTH_TILE_MAX_PIXELS);
-    btf_status rc = btf_synth_check_band(band, 0, err);
+        return btf__fail(err, BTF_E_ARG, "torus field of %dx%d: sides 1.. and at most %llu pixels",
+                         w, h, (unsigned long long)BTF_SYNTH_TILE_MAX_PIXELS);
+    btf_status rc = btf__synth_check_band(band, 0, err);
     return rc ? rc : synth_torus_field(band, stream, w, h, seed, 1, "torus field", out, err);
 }

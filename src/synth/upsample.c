@@ -2,8 +2,8 @@
  * upsample.c — pyrUp on streamed rows, the step of the pyramid collapse
  * (Haindl & Filip 2007, section II.C: the synthesised sub-band levels are
  * recombined, G_l = mean_l + Y_l + up(G_{l+1})): a coarse row up-sampled
- * horizontally to the finer level's window (btf_up_row), and the vertical
- * pass that adds the coarse rows to a field row (btf_level_sum_row). The
+ * horizontally to the finer level's window (btf__up_row), and the vertical
+ * pass that adds the coarse rows to a field row (btf__level_sum_row). The
  * weights are those of btf_up_even and btf_up_odd (src/synth/btf_shared.h),
  * which the GPU shader gpu/synth_collapse.comp uses too: the same bits.
  */
@@ -16,7 +16,7 @@
 #pragma GCC target("avx2")
 #include <immintrin.h>
 
-/* btf_up_row's column pairs with AVX2: fine columns 2j and 2j + 1 from coarse
+/* btf__up_row's column pairs with AVX2: fine columns 2j and 2j + 1 from coarse
  * cc[j - 1 .. j + 1], 8 pairs at a time, btf_up_even and btf_up_odd in
  * their order (no FMA), interleaved by unpacks and lane permutes into whole
  * vector stores (a loop per parity stores one lane at a time). Returns the
@@ -44,7 +44,7 @@ static int up_pairs_avx2(const float *cc, int m, float *out)
 /* Fine column x reads coarse floor(x / 2); an even x is btf_up_even of
  * three coarse values, an odd x btf_up_odd of two. After an odd first
  * column, the rest goes in (even, odd) pairs. */
-void btf_up_row(const float *c, int cx0, int fx0, int n, float *o)
+void btf__up_row(const float *c, int cx0, int fx0, int n, float *o)
 {
     int x = 0;
     if ((fx0 & 1) && n > 0) {
@@ -69,8 +69,8 @@ void btf_up_row(const float *c, int cx0, int fx0, int n, float *o)
 /* Three loops, one per case, so that each is a plain loop the compiler
  * vectorises (clones for AVX2). */
 SYNTH_AVX2_CLONES
-void btf_level_sum_row(int w, float mean, const float *f, const float *a, const float *b,
-                       const float *c, float *out)
+void btf__level_sum_row(int w, float mean, const float *f, const float *a, const float *b,
+                        const float *c, float *out)
 {
     if (!b) {
         for (int k = 0; k < w; k++)

@@ -106,20 +106,20 @@ struct btf_wave {
 #endif
 };
 
-int btf_wave_available(void)
+int btf__wave_available(void)
 {
 #ifdef WAVE_AVAILABLE
-    return btf_noise_avx2_available();
+    return btf__noise_avx2_available();
 #else
     return 0;
 #endif
 }
 
-int btf_wave_supported(const btf_car_band *b, int fw)
+int btf__wave_supported(const btf_car_band *b, int fw)
 {
 #ifdef WAVE_AVAILABLE
     float gamma3[3];
-    if (!btf_noise_avx2_available() || btf_car_same_row_shape(b, gamma3) < 0)
+    if (!btf__noise_avx2_available() || btf__car_same_row_shape(b, gamma3) < 0)
         return 0;
     for (int s = 0; s < b->n; s++) {
         int d = -b->offsets[s].row, dc = b->offsets[s].col;
@@ -135,12 +135,12 @@ int btf_wave_supported(const btf_car_band *b, int fw)
 
 /* The ring padding a wave needs on each side of a row: the zero columns of
  * its laps are stored too. */
-int btf_wave_pad(void)
+int btf__wave_pad(void)
 {
     return 2 * WAVE_REACH_COL + 8;
 }
 
-void btf_wave_free(btf_wave *w)
+void btf__wave_free(btf_wave *w)
 {
     if (!w)
         return;
@@ -161,15 +161,15 @@ static float *wave_dst(const btf_wave *w, int k)
     return w->ring + (size_t)slot * w->stride + w->pad + (w->pos[k] - w->left_pad);
 }
 
-btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_t stream,
-                       float *ring, int depth, int pad, btf_error *err)
+btf_wave *btf__wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_t stream,
+                        float *ring, int depth, int pad, btf_error *err)
 {
-    if (depth < BTF_WAVE_DEPTH || pad < btf_wave_pad()) {
-        btf_fail(err, BTF_E_ARG, "wavefront ring of %d rows padded by %d: expected >= %d and %d",
-                 depth, pad, BTF_WAVE_DEPTH, btf_wave_pad());
+    if (depth < BTF_WAVE_DEPTH || pad < btf__wave_pad()) {
+        btf__fail(err, BTF_E_ARG, "wavefront ring of %d rows padded by %d: expected >= %d and %d",
+                  depth, pad, BTF_WAVE_DEPTH, btf__wave_pad());
         return NULL;
     }
-    btf_wave *w = btf_calloc(1, sizeof *w, err);
+    btf_wave *w = btf__calloc(1, sizeof *w, err);
     if (!w)
         return NULL;
     int left = 0, right = 0;
@@ -188,7 +188,7 @@ btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_
     w->row0 = row0;
     w->stream = stream;
     w->sigma = b->sigma;
-    w->same_row_shape = btf_car_same_row_shape(b, w->same_row_gamma3);
+    w->same_row_shape = btf__car_same_row_shape(b, w->same_row_gamma3);
     for (int s = 0; s < b->n; s++) {
         int d = -b->offsets[s].row, dc = b->offsets[s].col;
         if (d == 0)
@@ -223,8 +223,8 @@ btf_wave *btf_wave_new(const btf_car_band *b, int fw, int fx0, int row0, uint32_
     size_t history_size = ((size_t)w->lap + WAVE_MIRROR) * 8 * sizeof(float);
     w->history = aligned_alloc(32, history_size);
     if (!w->history) {
-        btf_wave_free(w);
-        btf_fail(err, BTF_E_NOMEM, "out of memory");
+        btf__wave_free(w);
+        btf__fail(err, BTF_E_NOMEM, "out of memory");
         return NULL;
     }
     memset(w->history, 0, history_size);
@@ -422,7 +422,7 @@ static void wave_group_any(btf_wave *w)
     }
 }
 
-void btf_wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi)
+void btf__wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi)
 {
     int64_t i = (int64_t)row - w->row0;
     int64_t lap_index = i / 8, lane = i % 8;
@@ -437,7 +437,7 @@ void btf_wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi)
 }
 #pragma GCC pop_options
 #else
-void btf_wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi)
+void btf__wave_run(btf_wave *w, int row, uint32_t seed_lo, uint32_t seed_hi)
 {
     (void)w, (void)row, (void)seed_lo, (void)seed_hi; /* never created */
 }

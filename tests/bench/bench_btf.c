@@ -6,7 +6,7 @@
  *
  * The file holds 151 views x 151 lights of SIZE^2 texels, half-float
  * components per channel (K, or KR,KG,KB per channel), colour model 11
- * (Ylog_UdivY_VdivY, UBO2014's), written by btf_ubo2014_write_factors. The
+ * (Ylog_UdivY_VdivY, UBO2014's), written by btf__ubo2014_write_factors. The
  * database's files (docs/datasets.md, "UBO2014 .btf files") are 82.9 to
  * 84.3 MB for 400^2, which the DFMF layout makes 226 to 230 components in
  * all, about 76 per channel: make bench uses 78,76,74 (228, 83,542,344
@@ -114,7 +114,7 @@ static int write_file(const char *path, int size, const int kreq[3], int src)
 {
     btf_dirset d;
     btf_error err = {0};
-    if (btf_dirset_ubo151(&d, &err))
+    if (btf__dirset_ubo151(&d, &err))
         return 1;
     int kmax = kreq[0] > kreq[1] ? kreq[0] : kreq[1];
     kmax = kreq[2] > kmax ? kreq[2] : kmax;
@@ -193,7 +193,7 @@ static int write_file(const char *path, int size, const int kreq[3], int src)
     btf_ubo2014_factors f = {.colour_model = 11, .components = {kc[0], kc[1], kc[2]},
                              .u = {u[0], u[1], u[2]}, .sxv = {s[0], s[1], s[2]}};
     t0 = tu_now();
-    int rc = btf_ubo2014_write_factors(path, &d, &d, size, size, &f, &err);
+    int rc = btf__ubo2014_write_factors(path, &d, &d, size, size, &f, &err);
     double tw = tu_now() - t0;
     for (int c = 0; c < 3; c++) {
         free(u[c]);

@@ -96,14 +96,14 @@ int main(void)
         for (int k = 0; k < 15; k++)
             many.subspaces[k] = which[w]->subspaces[0];
         /* margins kept, as in a fitted or read model: the figure is synthesis */
-        if (btf_model_keep_margins(&many, -1.0) != BTF_OK)
+        if (btf__model_keep_margins(&many, -1.0) != BTF_OK)
             return 1;
         /* 9 runs of each field generator, interleaved: this VM's timings
          * wander by 20 %; the median and the best run say how much, and
          * the ratio compares like with like. The wavefront (src/synth/wave.c) is
          * what synthesis uses; the row-by-row generator is its fallback. */
         double tw[2][9];
-        int have = btf_wave_available();
+        int have = btf__wave_available();
         for (int r = 0; r < 9; r++)
             for (int on = 1; on >= 0; on--) {
                 btf_synth_opts so = {.width = 512, .height = 512, .seed = 1, .row_by_row = !on};
@@ -139,7 +139,7 @@ int main(void)
                    med[1] / med[0]);
         else
             printf("   (row by row: this build or CPU has no wavefront)\n");
-        btf_model_internal_free(many.internal);
+        btf__model_internal_free(many.internal);
         free(many.subspaces);
     }
     for (int i = 0; i < 2; i++)
@@ -151,7 +151,7 @@ int main(void)
     btf_synth_opts fo = {.width = 1024, .height = 1024, .seed = 7};
     for (int r = 0; r < 5; r++) {
         double t0 = tu_now();
-        btf_car_synthesise_field(&white, -1, 1, &fo, sink, &acc, &e);
+        btf__car_synthesise_field(&white, -1, 1, &fo, sink, &acc, &e);
         t[r] = tu_now() - t0;
     }
     printf("white field: %.2f ns per pixel through the field pipeline (noise, row bookkeeping, "
@@ -161,7 +161,7 @@ int main(void)
     const btf_car_band *b0 = &m.subspaces[0].bands[0][0];
     for (int r = 0; r < 5; r++) {
         double t0 = tu_now();
-        btf_car_synthesise_field(b0, -1, 1, &fo, sink, &acc, &e);
+        btf__car_synthesise_field(b0, -1, 1, &fo, sink, &acc, &e);
         t[r] = tu_now() - t0;
     }
     printf("car field: %d neighbours, 1024x1024: %.2f ns per pixel (median of 5)\n", b0->n,

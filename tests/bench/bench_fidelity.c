@@ -55,7 +55,7 @@ static int read_pat(const char *path, btf_image *out)
             for (size_t p = 0; p < (size_t)w * ht; p++)
                 for (int c = 0; c < 3; c++) {
                     unsigned char s = px[p * b + (b >= 3 ? (uint32_t)c : 0)];
-                    out->data[3 * p + c] = btf_srgb_to_linear((float)s / 255.0f);
+                    out->data[3 * p + c] = btf__srgb_to_linear((float)s / 255.0f);
                 }
             rc = 0;
         }

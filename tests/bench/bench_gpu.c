@@ -7,7 +7,7 @@
  * choose its threads). The first job (pipeline creation and shader
  * compilation included) is reported apart from the medians. Never fails on
  * time. Then colour matching alone, on the device (gpu/match_gpu.c) and on
- * the host (btf_colour_match, the thread pool), on the same 15 images.
+ * the host (btf__colour_match, the thread pool), on the same 15 images.
  */
 #include "btfcar.h"
 #include "model/model.h"
@@ -28,7 +28,7 @@ static int drop(void *user, int y, int nrows, const float *rows, btf_error *err)
 
 /* Colour matching of 15 images of 512^2 already synthesised: on the device
  * (sample, sort, apply: the images never read back) against the host's
- * btf_colour_match on the same images, each the median of 3 runs. */
+ * btf__colour_match on the same images, each the median of 3 runs. */
 static void bench_matching(btf_gpu *g, const btf_model *m)
 {
     btf_error e = {0};
@@ -41,20 +41,20 @@ static void bench_matching(btf_gpu *g, const btf_model *m)
         fprintf(stderr, "bench_gpu: %s\n", e.msg);
         return;
     }
-    uint64_t floats = 512ull * 512 * 3, cap = btf_gpu_images_cap(g);
+    uint64_t floats = 512ull * 512 * 3, cap = btf__gpu_images_cap(g);
     btf_gpu_images dev;
-    if (btf_gpu_images_create(btf_gpu_vk(g), 15 * floats, cap, btf_gpu_images_buffers(g), "bench", &dev, &e)) {
+    if (btf__gpu_images_create(btf__gpu_vk(g), 15 * floats, cap, btf__gpu_images_buffers(g), "bench", &dev, &e)) {
         fprintf(stderr, "bench_gpu: %s\n", e.msg);
         return;
     }
     double td[3], th[3];
     for (int r = 0; r < 3; r++) {
         for (int k = 0; k < 15; k++)
-            btf_gpu_images_upload(btf_gpu_vk(g), &dev, k * floats, img[k].data, floats, &e);
+            btf__gpu_images_upload(btf__gpu_vk(g), &dev, k * floats, img[k].data, floats, &e);
         double t0 = tu_now();
         for (int k = 0; k < 15; k++)
-            if (btf_gpu_match_images(btf_gpu_vk(g), btf_gpu_match_pipes(g), m, k, 1, &dev,
-                                     k * floats, 512, 512, NULL, &e))
+            if (btf__gpu_match_images(btf__gpu_vk(g), btf__gpu_match_pipes(g), m, k, 1, &dev,
+                                      k * floats, 512, 512, NULL, &e))
                 fprintf(stderr, "bench_gpu: %s\n", e.msg);
         td[r] = tu_now() - t0;
     }
@@ -66,7 +66,7 @@ static void bench_matching(btf_gpu *g, const btf_model *m)
                 return;
             memcpy(copy.data, img[k].data, floats * sizeof(float));
             double t0 = tu_now();
-            btf_colour_match(m, k, &copy, &e);
+            btf__colour_match(m, k, &copy, &e);
             th[r] += tu_now() - t0;
             btf_image_free(&copy);
         }
@@ -74,7 +74,7 @@ static void bench_matching(btf_gpu *g, const btf_model *m)
     printf("colour matching alone, 15 x 512^2: on the device median %.0f ms, on the host (CPU "
            "code, thread pool) median %.0f ms: device/host time ratio %.2f\n",
            1e3 * tu_median(td, 3), 1e3 * tu_median(th, 3), tu_median(td, 3) / tu_median(th, 3));
-    btf_gpu_images_free(&dev);
+    btf__gpu_images_free(&dev);
     for (int k = 0; k < 15; k++)
         btf_image_free(&img[k]);
 }
@@ -104,7 +104,7 @@ int main(void)
         m.subspaces[k] = tex.subspaces[0];
         subs[k] = k;
     }
-    if (btf_model_keep_margins(&m, -1.0) != BTF_OK) /* as a fitted model keeps them */
+    if (btf__model_keep_margins(&m, -1.0) != BTF_OK) /* as a fitted model keeps them */
         return 1;
     const char *lp = getenv("LP_NUM_THREADS");
     double t0 = tu_now();
@@ -145,7 +145,7 @@ int main(void)
            tu_median(tg + 1, 3) / tu_median(tc, 3));
     bench_matching(g, &m);
     btf_gpu_close(g);
-    btf_model_internal_free(m.internal);
+    btf__model_internal_free(m.internal);
     free(m.subspaces);
     btf_model_free(&tex);
     btf_image_free(&img);

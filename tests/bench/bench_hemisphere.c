@@ -1,6 +1,6 @@
 /*
- * bench_hemisphere.c -- lookups per second of btf_hemisphere_lookup
- * (src/render/btf_hemisphere_lookup.h) on one core, for ubo81 and ubo151:
+ * bench_hemisphere.c -- lookups per second of btf__hemisphere_lookup
+ * (src/render/btf__hemisphere_lookup.h) on one core, for ubo81 and ubo151:
  * random upper-hemisphere directions (about a third beyond the outer ring,
  * where the hull rule runs) and a 1024^2 frame's worth of near-normal
  * ones. The renderer needs 2 lookups per pixel per light: 1024^2 at 10 fps
@@ -26,7 +26,7 @@ static double run(const btf_hemisphere *h, const float *v)
     for (int i = 0; i < N; i++) {
         int idx[3];
         float w[3];
-        btf_hemisphere_lookup(h, v + 3 * i, idx, w);
+        btf__hemisphere_lookup(h, v + 3 * i, idx, w);
         acc += w[0] + (float)idx[1];
     }
     double t = tu_now() - t0;
@@ -44,7 +44,7 @@ int main(void)
         btf_dirset s;
         btf_error e = {0};
         btf_hemisphere *h;
-        if ((which == 0 ? btf_dirset_ubo81(&s, &e) : btf_dirset_ubo151(&s, &e)) != 0 ||
+        if ((which == 0 ? btf_dirset_ubo81(&s, &e) : btf__dirset_ubo151(&s, &e)) != 0 ||
             btf_hemisphere_build(&s, &h, &e) != 0) {
             fprintf(stderr, "bench_hemisphere: %s\n", e.msg);
             return 1;

@@ -2,7 +2,7 @@
  * bench_noise.c -- speed of the CAR synthesis noise (src/synth/btf_noise.h) on one
  * core: ns per Gaussian through btf_noise4 (one Philox-4x32-7 call and two
  * Box-Muller pairs per 4 Gaussians), through btf_noise1, and Philox alone;
- * and the row generator CPU synthesis uses (btf_noise_blocks, AVX2 where
+ * and the row generator CPU synthesis uses (btf__noise_blocks, AVX2 where
  * the CPU has it), rows of 136 blocks as in a level-0 field of 512 + margins.
  * Median of 5 runs; prints figures, never fails on time.
  */
@@ -79,7 +79,7 @@ static double run_rows(void)
     uint32_t rows = CALLS / BLOCKS;
     double t0 = now();
     for (uint32_t r = 0; r < rows; r++) {
-        btf_noise_blocks(1u, 2u, 3u, r, 67108860u, BLOCKS, 1, row);
+        btf__noise_blocks(1u, 2u, 3u, r, 67108860u, BLOCKS, 1, row);
         acc += row[r % (4 * BLOCKS)];
     }
     double t = now() - t0;
@@ -104,7 +104,7 @@ int main(void)
     report("btf_noise4 (Philox + 2 Box-Muller pairs)", "Gaussian", run_noise4);
     report("btf_noise1 (Philox + 1 Box-Muller pair)", "Gaussian", run_noise1);
     report("btf_philox (Philox-4x32-7 alone)", "call", run_philox);
-    report(btf_noise_avx2_available() ? "btf_noise_blocks (rows, AVX2 path)"
+    report(btf__noise_avx2_available() ? "btf_noise_blocks (rows, AVX2 path)"
                                  : "btf_noise_blocks (rows, portable path)",
            "Gaussian", run_rows);
     return 0;

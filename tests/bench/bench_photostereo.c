@@ -46,18 +46,18 @@ static int render(btf_image *imgs, double *L, int *n, btf_error *err)
     if (rc)
         return rc;
     if ((rc = btf_dirset_ubo81(&set, err)) == 0) {
-        if ((rc = btf_view_map_make(&m, v, &vm, err)) == 0)
+        if ((rc = btf__view_map_make(&m, v, &vm, err)) == 0)
             for (int i = 0; i < set.count && rc == 0; i++) {
                 btf_light_map *lm;
-                if ((rc = btf_light_map_make(&m, set.dirs[i], &lm, err)) == 0)
-                    rc = btf_material_render_maps(&m, vm, lm, v, set.dirs[i], &imgs[i], err);
-                btf_light_map_free(lm);
+                if ((rc = btf__light_map_make(&m, set.dirs[i], &lm, err)) == 0)
+                    rc = btf__material_render_maps(&m, vm, lm, v, set.dirs[i], &imgs[i], err);
+                btf__light_map_free(lm);
                 btf_dir_to_vec(set.dirs[i], L + 3 * i);
             }
         *n = set.count;
         btf_dirset_free(&set);
     }
-    btf_view_map_free(vm);
+    btf__view_map_free(vm);
     btf_procedural_free(&m);
     return rc;
 }
@@ -74,7 +74,7 @@ int main(void)
     }
     double px = (double)SIZE * SIZE;
     printf("== photostereo: %dx%d pixels x %d lights, %d CPUs, median of %d runs\n", SIZE, SIZE,
-           n, btf_cpu_count(), RUNS);
+           n, btf__cpu_count(), RUNS);
     static const struct {
         const char *name;
         btf_integrate_method method;
@@ -118,7 +118,7 @@ int main(void)
             btf_integrate_opts o = {.method = ints[c].method};
             btf_image h;
             double t0 = now();
-            if (btf_integrate(&normals, NULL, &o, &h, &err) != 0) {
+            if (btf__integrate(&normals, NULL, &o, &h, &err) != 0) {
                 fprintf(stderr, "bench_photostereo: %s\n", err.msg);
                 return 1;
             }
@@ -141,7 +141,7 @@ int main(void)
         for (int r = 0; r < RUNS; r++) {
             btf_image h;
             double t0 = now();
-            if (btf_integrate(&normals, &mask, NULL, &h, &err) != 0) {
+            if (btf__integrate(&normals, &mask, NULL, &h, &err) != 0) {
                 fprintf(stderr, "bench_photostereo: %s\n", err.msg);
                 return 1;
             }

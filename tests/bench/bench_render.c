@@ -45,16 +45,16 @@ int main(int argc, char **argv)
         return bench_fail(&e);
     btf_gbuffer g;
     double t0 = tu_now();
-    if (btf_scene_trace(&s, w, h, 0, &g, &e))
+    if (btf__scene_trace(&s, w, h, 0, &g, &e))
         return bench_fail(&e);
     double t1 = tu_now();
     uint8_t *need = malloc((size_t)m.n_subspaces);
     int count = 0;
-    if (btf_render_needed(&m, &g, s.lights, s.n_lights, need, &count, &e))
+    if (btf__render_needed(&m, &g, s.lights, s.n_lights, need, &count, &e))
         return bench_fail(&e);
     double t2 = tu_now();
     btf_render_material *rm;
-    if (btf_render_material_build(&m, need, 512, 1, 0, &rm, &e))
+    if (btf__render_material_build(&m, need, 512, 1, 0, &rm, &e))
         return bench_fail(&e);
     double t3 = tu_now(), cpu2 = 0.0;
     printf("render %dx%d of %s: trace %.3f s, needed-subspace walk %.3f s (%d of %d), "
@@ -65,8 +65,8 @@ int main(int argc, char **argv)
         for (int r = 0; r < runs; r++) {
             btf_image img;
             double a = tu_now();
-            if (btf_render_shade(rm, &g, s.lights, s.n_lights, s.background, 1.0, threads, &img,
-                                 &e))
+            if (btf__render_shade(rm, &g, s.lights, s.n_lights, s.background, 1.0, threads, &img,
+                                  &e))
                 return bench_fail(&e);
             t[r] = tu_now() - a;
             btf_image_free(&img);
@@ -77,7 +77,7 @@ int main(int argc, char **argv)
                threads, threads == 1 ? "" : "s", med, runs, 1.0 / med, (double)w * h / med / 1e6,
                threads == 2 ? " (goal >= 10 frames/s)" : "");
     }
-    btf_render_material_free(rm);
+    btf__render_material_free(rm);
     btf_gpu_opts go = btf_gpu_defaults();
     go.allow_cpu = 1;
     btf_gpu *gpu = NULL;
@@ -105,7 +105,7 @@ int main(int argc, char **argv)
         btf_gpu_close(gpu);
     }
     free(need);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     btf_scene_free(&s);
     btf_model_free(&m);
     return 0;

@@ -86,7 +86,7 @@ static int bench_flat(const btf_rf_model *m, btf_gpu *gpu)
     btf_image img;
     for (int r = 0; r < RENDER_RUNS; r++) {
         double t0 = tu_now();
-        if (btf_rf_render_flat(m, v, l, 1024, 1024, 2, &img, &e))
+        if (btf__rf_render_flat(m, v, l, 1024, 1024, 2, &img, &e))
             return bench_fail(&e);
         tc[r] = tu_now() - t0;
         btf_image_free(&img);
@@ -94,7 +94,7 @@ static int bench_flat(const btf_rf_model *m, btf_gpu *gpu)
     double c = tu_median(tc, RENDER_RUNS);
     int idx[4], fields = 0;
     double w[4];
-    btf_rf_view_weights(&m->views, v, idx, w);
+    btf__rf_view_weights(&m->views, v, idx, w);
     for (int i = 0; i < 4; i++)
         fields += w[i] != 0.0;
     printf("  flat 1024^2 (%dx%d distinct texels, %d field%s blended), cpu 2 threads: median "
@@ -110,7 +110,7 @@ static int bench_flat(const btf_rf_model *m, btf_gpu *gpu)
     double up = 0.0;
     for (int r = 0; r < RENDER_RUNS; r++) {
         double t0 = tu_now();
-        if (btf_gpu_rf_render_flat(gpu, m, v, l, 1024, 1024, &img, &info, &e))
+        if (btf__gpu_rf_render_flat(gpu, m, v, l, 1024, 1024, &img, &info, &e))
             return bench_fail(&e);
         tg[r] = tu_now() - t0;
         up += info.synth_s / RENDER_RUNS;
@@ -141,7 +141,7 @@ static int bench_sphere(const btf_rf_model *m, btf_gpu *gpu)
     btf_render_info info;
     for (int r = 0; r < RENDER_RUNS; r++) {
         double t0 = tu_now();
-        if (btf_rf_render_scene(m, &s, 512, 512, 2, &img, &info, &e))
+        if (btf__rf_render_scene(m, &s, 512, 512, 2, &img, &info, &e))
             return bench_fail(&e);
         tc[r] = tu_now() - t0;
         trace += info.trace_s / RENDER_RUNS, shade += info.shade_s / RENDER_RUNS;
@@ -157,7 +157,7 @@ static int bench_sphere(const btf_rf_model *m, btf_gpu *gpu)
     double up = 0.0, pass = 0.0;
     for (int r = 0; r < RENDER_RUNS; r++) {
         double t0 = tu_now();
-        if (btf_gpu_rf_render_scene(gpu, m, &s, 512, 512, 2, &img, &info, &e))
+        if (btf__gpu_rf_render_scene(gpu, m, &s, 512, 512, 2, &img, &info, &e))
             return bench_fail(&e);
         tg[r] = tu_now() - t0;
         up += info.synth_s / RENDER_RUNS, pass += info.shade_s / RENDER_RUNS;

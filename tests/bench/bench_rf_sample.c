@@ -4,7 +4,7 @@
  * generated material, the whole reflectance-field fit against the fit of
  * an N x N sample with a quilted coordinate map: bytes (in memory and in
  * the file), fitting time, the pixel-wise error (mean |dY| over every image,
- * as the report computes it, btf_rf_error) and the texture distance
+ * as the report computes it, btf__rf_error) and the texture distance
  * (btf_texture_distance's combined figure, as `btfcar compare` prints it)
  * of the flat render against the measured image over 3 x 3 (view, light)
  * pairs; then (PTM) what the map costs on larger surfaces. Figures only;
@@ -42,8 +42,8 @@ static int texture_distance(const btf_dataset *ds, const btf_rf_model *m, double
             btf_image meas, img;
             if (btf_dataset_read(ds, v, l, &meas, e))
                 return 1;
-            if (btf_rf_render_flat(m, in->views->dirs[v], in->lights->dirs[l], in->width,
-                                   in->height, 2, &img, e)) {
+            if (btf__rf_render_flat(m, in->views->dirs[v], in->lights->dirs[l], in->width,
+                                    in->height, 2, &img, e)) {
                 btf_image_free(&meas);
                 return 1;
             }
@@ -81,7 +81,7 @@ static int measure(const btf_dataset *ds, int fit, int sample, figures *f, btf_r
     if (rc)
         return 1;
     f->fit_s = info.fit_s;
-    if (btf_rf_error(ds, &m, 2, &f->mae, NULL, e) || btf_rf_model_bytes(&m, &f->bytes, e) ||
+    if (btf__rf_error(ds, &m, 2, &f->mae, NULL, e) || btf_rf_model_bytes(&m, &f->bytes, e) ||
         texture_distance(ds, &m, &f->combined, e)) {
         btf_rf_model_free(&m);
         return 1;

@@ -2,7 +2,7 @@
  * bench_scene.c — ray casting speed (src/scene/, docs/scene.md): a
  * tessellated sphere of 114,688 triangles (written as OBJ, loaded through
  * assimp), its BVH build time and the rays per second of a 1024^2 G-buffer
- * on 1 and 2 threads (BVH build included in btf_scene_trace), against the
+ * on 1 and 2 threads (BVH build included in btf__scene_trace), against the
  * analytic sphere. Median of 3 runs; prints figures, never fails on time.
  */
 #include "testutil.h"
@@ -21,12 +21,12 @@ static double trace_median(const btf_scene *s, int side, int threads)
         btf_gbuffer g;
         btf_error err = {0};
         double t0 = tu_now();
-        if (btf_scene_trace(s, side, side, threads, &g, &err)) {
+        if (btf__scene_trace(s, side, side, threads, &g, &err)) {
             fprintf(stderr, "bench_scene: %s\n", err.msg);
             exit(1);
         }
         t[r] = tu_now() - t0;
-        btf_gbuffer_free(&g);
+        btf__gbuffer_free(&g);
     }
     return tu_median(t, RUNS);
 }

@@ -8,7 +8,7 @@
  *
  * Seeds (tests/fuzz/corpus/fuzz_btf/) are small files from the writers:
  * DFMF with half and float factors, colour models 0 and 11, the cosine
- * flag, and BDIF (btf_ubo2014_write, btf_ubo2014_write_factors); FMF under
+ * flag, and BDIF (btf_ubo2014_write, btf__ubo2014_write_factors); FMF under
  * each signature (half, float, double; header versions 0 and 2, the
  * dynamic-range flag, a height map, the transposed layout) and PVF (both
  * orientations, the legacy header), from tests/unit/test_btf_variants.c's

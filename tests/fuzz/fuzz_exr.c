@@ -45,10 +45,10 @@ static void check_read(const unsigned char *data, size_t size, int channels,
                        const btf_image_header *h)
 {
     btf_source src;
-    btf_source_memory(&src, data, size, NAME);
+    btf__source_memory(&src, data, size, NAME);
     btf_image img;
     btf_error e = {0};
-    int rc = btf_exr_read_source(&src, channels, 0, &img, &e);
+    int rc = btf__exr_read_source(&src, channels, 0, &img, &e);
     if (rc != 0) {
         check_error(rc, &e);
         if (img.data)
@@ -74,10 +74,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (size)
         memcpy(copy, data, size);
     btf_source src;
-    btf_source_memory(&src, copy, size, NAME);
+    btf__source_memory(&src, copy, size, NAME);
     btf_image_header h;
     btf_error e = {0};
-    int rc = btf_exr_probe_source(&src, &h, &e);
+    int rc = btf__exr_probe_source(&src, &h, &e);
     if (rc != 0) {
         check_error(rc, &e);
         free(copy);

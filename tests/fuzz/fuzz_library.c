@@ -17,7 +17,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     btf_library_row r;
     memset(&r, 0, sizeof r);
-    if (!btf_library_row_parse((const char *)data, size, &r))
+    if (!btf__library_row_parse((const char *)data, size, &r))
         return 0;
     double v[6] = {r.model_bytes, r.raw_bytes, r.ratio, r.mean, r.worst, r.seconds};
     for (int i = 0; i < 6; i++)

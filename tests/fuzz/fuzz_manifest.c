@@ -32,7 +32,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         memcpy(copy, data, size);
     btf_tsv t;
     btf_error e = {0};
-    int rc = btf_tsv_parse(copy, size, "fuzz", &t, &e);
+    int rc = btf__tsv_parse(copy, size, "fuzz", &t, &e);
     free(copy);
     check(rc, &e);
     if (rc < 0 && strncmp(e.msg, "fuzz", 4) != 0)
@@ -42,11 +42,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             for (int c = 0; c < t.ncols; c++) {
                 double v;
                 btf_error e2 = {0};
-                if (!btf_tsv_cell(&t, r, c))
+                if (!btf__tsv_cell(&t, r, c))
                     abort();
-                check(btf_tsv_number(&t, "fuzz", r, c, &v, &e2), &e2);
+                check(btf__tsv_number(&t, "fuzz", r, c, &v, &e2), &e2);
             }
-        btf_tsv_free(&t);
+        btf__tsv_free(&t);
     }
     const char *path = fuzz_input_path("tsv");
     fuzz_write_input(path, data, size);
@@ -57,7 +57,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     btf_dataset_close(ds);
     btf_ps_result ps;
     btf_photostereo_opts po = {.threads = 1};
-    rc = btf_photostereo_manifest(path, &po, &ps, &e);
+    rc = btf__photostereo_manifest(path, &po, &ps, &e);
     check(rc, &e);
     if (rc == 0)
         btf_ps_result_free(&ps);

@@ -198,14 +198,14 @@ static void run_rf_one(const unsigned char *data, size_t size)
         abort();
     /* every evaluation path reads the codes through the map */
     btf_image img;
-    if (btf_rf_render_flat(&m, m.views.dirs[0], m.lights.dirs[0], 5, 3, 1, &img, &e) != 0)
+    if (btf__rf_render_flat(&m, m.views.dirs[0], m.lights.dirs[0], 5, 3, 1, &img, &e) != 0)
         abort();
     for (int i = 0; i < 5 * 3 * 3; i++)
         if (!isfinite(img.data[i]))
             abort();
     btf_image_free(&img);
     float rgb[3];
-    btf_rf_eval(&m, m.views.dirs[m.views.count - 1], m.lights.dirs[0], -7, 1 << 20, rgb);
+    btf__rf_eval(&m, m.views.dirs[m.views.count - 1], m.lights.dirs[0], -7, 1 << 20, rgb);
     btf_rf_model_free(&r);
     btf_rf_model_free(&m);
     free(d1);
@@ -247,7 +247,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         abort();
     if (size)
         memcpy(copy, data, size);
-    if (btf_rf_sniff(copy, size))
+    if (btf__rf_sniff(copy, size))
         run_rf_one(copy, size);
     else
         run_one(copy, size);

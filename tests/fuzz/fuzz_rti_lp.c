@@ -31,7 +31,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         memcpy(copy, data, size);
     btf_dataset_entries l;
     btf_error e = {0};
-    int rc = btf_rti_lp_parse(copy, size, "fuzz", "base", 0, &l, &e);
+    int rc = btf__rti_lp_parse(copy, size, "fuzz", "base", 0, &l, &e);
     free(copy);
     check(rc, &e);
     if (rc < 0 && strncmp(e.msg, "fuzz", 4) != 0 && strncmp(e.msg, "base/", 5) != 0)
@@ -46,7 +46,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 abort();
         }
     }
-    btf_dataset_entries_free(&l);
+    btf__dataset_entries_free(&l);
     const char *path = fuzz_input_path("lp");
     fuzz_write_input(path, data, size);
     btf_dataset *ds = NULL;

@@ -29,7 +29,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (rc < 0)
         return 0;
     btf_gbuffer g;
-    rc = btf_scene_trace(&s, 4, 3, 1, &g, &e);
+    rc = btf__scene_trace(&s, 4, 3, 1, &g, &e);
     if (rc == 0) {
         for (int p = 0; p < 12; p++) {
             for (int k = 0; k < 9; k++)
@@ -41,7 +41,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             if (!isfinite(g.uv[2 * p]) || !isfinite(g.uv[2 * p + 1]))
                 abort();
         }
-        btf_gbuffer_free(&g);
+        btf__gbuffer_free(&g);
     } else if (strchr(e.msg, '\n')) {
         abort();
     }

@@ -20,7 +20,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     memset(&p, 0, sizeof p);
     p.setting.subspaces = 2;
     p.setting.levels = 1;
-    if (!btf_sweep_point_parse((const char *)data, size, "fp", &p))
+    if (!btf__sweep_point_parse((const char *)data, size, "fp", &p))
         return 0;
     if (p.k < 1 || p.k > 255 || p.bytes < 1 || !isfinite(p.mean_combined) ||
         p.worst_combined < p.mean_combined || !p.resumed)

@@ -99,7 +99,7 @@ static void check_tile(const char *manifest, int range_size, int want_w, int wan
 
     /* The tile's values against the height map binned here. */
     btf_ps_result ps;
-    TU_OK(btf_photostereo_dataset(ds, &o.photostereo, &ps, &e), &e);
+    TU_OK(btf__photostereo_dataset(ds, &o.photostereo, &ps, &e), &e);
     int tw = m.range_width, th = m.range_height, cells = tw * th;
     double *acc = calloc((size_t)cells, sizeof *acc);
     int *cnt = calloc((size_t)cells, sizeof *cnt);

@@ -77,7 +77,7 @@ static btf_status run(void *user, void *p, btf_error *err)
     r->runner = pthread_self();
     pthread_mutex_unlock(&r->lock);
     if (r->fail_from >= 0 && id >= r->fail_from)
-        return btf_fail(err, BTF_E_IO, "job %d failed", id);
+        return btf__fail(err, BTF_E_IO, "job %d failed", id);
     return BTF_OK;
 }
 
@@ -95,7 +95,7 @@ static btf_behind *start(record *r, int depth, btf_error *e)
 {
     btf_behind_spec spec = {.run = run, .done = done, .user = r, .job_size = sizeof(job),
                             .depth = depth};
-    btf_behind *b = btf_behind_start(&spec, e);
+    btf_behind *b = btf__behind_start(&spec, e);
     if (!b)
         print_error("start: %s\n", e->msg);
     assert_non_null(b);
@@ -129,8 +129,8 @@ static void jobs_in_order(void **state)
         btf_error e = {0};
         btf_behind *b = start(&r, depths[d], &e);
         for (int i = 0; i < 50; i++)
-            TU_OK(btf_behind_put(b, &(job){i}, &e), &e);
-        TU_OK(btf_behind_finish(b, &e), &e);
+            TU_OK(btf__behind_put(b, &(job){i}, &e), &e);
+        TU_OK(btf__behind_finish(b, &e), &e);
         assert_int_equal(r.ran, 50);
         assert_int_equal(r.n_done, 50);
         for (int i = 0; i < 50; i++) {
@@ -155,7 +155,7 @@ static void *put_one(void *arg)
 {
     putter *p = arg;
     btf_error e = {0};
-    p->status = btf_behind_put(p->b, &(job){p->id}, &e);
+    p->status = btf__behind_put(p->b, &(job){p->id}, &e);
     p->done_at_return = get(p->r, &p->r->n_done);
     atomic_store(&p->returned, 1);
     return NULL;
@@ -179,7 +179,7 @@ static void put_blocks_at_depth(void **state)
         btf_error e = {0};
         btf_behind *b = start(&r, depth, &e);
         for (int i = 0; i < depth; i++) /* job 0 runs and waits at the gate */
-            TU_OK(btf_behind_put(b, &(job){i}, &e), &e);
+            TU_OK(btf__behind_put(b, &(job){i}, &e), &e);
         putter p = {.b = b, .r = &r, .id = depth};
         pthread_t t;
         assert_int_equal(__real_pthread_create(&t, NULL, put_one, &p), 0);
@@ -191,7 +191,7 @@ static void put_blocks_at_depth(void **state)
         assert_int_equal(p.status, BTF_OK);
         assert_int_equal(p.done_at_return, 1);
         release_jobs(&r, MAX_JOBS);
-        TU_OK(btf_behind_finish(b, &e), &e);
+        TU_OK(btf__behind_finish(b, &e), &e);
         assert_int_equal(r.ran, depth + 1);
         for (int i = 0; i <= depth; i++)
             assert_int_equal(r.order[i], i);
@@ -213,7 +213,7 @@ static void first_failure_kept(void **state)
         int failed = 0;
         for (int i = 0; i < 20; i++) {
             memset(&e, 0, sizeof e);
-            btf_status rc = btf_behind_put(b, &(job){i}, &e);
+            btf_status rc = btf__behind_put(b, &(job){i}, &e);
             assert_true(rc == BTF_OK || rc == BTF_E_IO);
             if (failed) /* once failed, always failed */
                 assert_int_equal(rc, BTF_E_IO);
@@ -228,7 +228,7 @@ static void first_failure_kept(void **state)
         }
         assert_true(failed);
         memset(&e, 0, sizeof e);
-        assert_int_equal(btf_behind_finish(b, &e), BTF_E_IO);
+        assert_int_equal(btf__behind_finish(b, &e), BTF_E_IO);
         assert_string_equal(e.msg, "job 3 failed");
         assert_int_equal(r.ran, 4); /* 0, 1, 2 and the failing 3 */
         for (int i = 0; i < 4; i++)
@@ -255,10 +255,10 @@ static void finish_and_abort(void **state)
     record r;
     record_init(&r, 0, -1);
     btf_error e = {0};
-    TU_OK(btf_behind_finish(start(&r, 1, &e), &e), &e);
-    btf_behind_abort(start(&r, 3, &e));
-    assert_int_equal(btf_behind_finish(NULL, &e), BTF_OK);
-    btf_behind_abort(NULL);
+    TU_OK(btf__behind_finish(start(&r, 1, &e), &e), &e);
+    btf__behind_abort(start(&r, 3, &e));
+    assert_int_equal(btf__behind_finish(NULL, &e), BTF_OK);
+    btf__behind_abort(NULL);
     assert_int_equal(r.ran, 0);
     assert_int_equal(r.n_done, 0);
     record_free(&r);
@@ -266,14 +266,14 @@ static void finish_and_abort(void **state)
     record_init(&r, 1, -1);
     btf_behind *b = start(&r, 3, &e);
     for (int i = 0; i < 3; i++)
-        TU_OK(btf_behind_put(b, &(job){i}, &e), &e);
+        TU_OK(btf__behind_put(b, &(job){i}, &e), &e);
     pthread_mutex_lock(&r.lock);
     while (r.started < 1) /* job 0 runs (at the gate) */
         pthread_cond_wait(&r.cond, &r.lock);
     pthread_mutex_unlock(&r.lock);
     pthread_t t;
     assert_int_equal(__real_pthread_create(&t, NULL, release_later, &r), 0);
-    btf_behind_abort(b); /* waits for job 0, which the helper lets go */
+    btf__behind_abort(b); /* waits for job 0, which the helper lets go */
     pthread_join(t, NULL);
     assert_int_equal(r.ran, 1);
     assert_int_equal(r.order[0], 0);
@@ -294,24 +294,24 @@ static void failing_start(void **state)
     btf_error e = {0};
     btf_behind_spec spec = {.run = run, .done = done, .user = &r, .job_size = sizeof(job),
                             .depth = 0};
-    assert_null(btf_behind_start(&spec, &e));
+    assert_null(btf__behind_start(&spec, &e));
     assert_int_equal(e.code, BTF_E_ARG);
     spec.depth = 1, spec.run = NULL;
-    assert_null(btf_behind_start(&spec, &e));
-    assert_null(btf_behind_start(NULL, NULL));
+    assert_null(btf__behind_start(&spec, &e));
+    assert_null(btf__behind_start(NULL, NULL));
     spec.run = run;
     atomic_store(&refuse_threads, 1);
     memset(&e, 0, sizeof e);
-    assert_null(btf_behind_start(&spec, &e));
+    assert_null(btf__behind_start(&spec, &e));
     assert_int_equal(e.code, BTF_E_NOMEM);
     assert_non_null(strstr(e.msg, "cannot start the writer thread"));
     spec.run_here_without_thread = 1;
     atomic_store(&refuse_threads, 1);
-    btf_behind *b = btf_behind_start(&spec, &e);
+    btf_behind *b = btf__behind_start(&spec, &e);
     assert_non_null(b);
     assert_int_equal(atomic_load(&refuse_threads), 0); /* it did try */
     for (int i = 0; i < 5; i++) {
-        btf_status rc = btf_behind_put(b, &(job){i}, &e);
+        btf_status rc = btf__behind_put(b, &(job){i}, &e);
         assert_int_equal(rc, i < 2 ? BTF_OK : BTF_E_IO);
         assert_int_equal(r.ran, i < 2 ? i + 1 : 3); /* ran in the put itself */
         assert_int_equal(r.n_done, i + 1);
@@ -320,7 +320,7 @@ static void failing_start(void **state)
     }
     assert_true(pthread_equal(r.runner, pthread_self()));
     memset(&e, 0, sizeof e);
-    assert_int_equal(btf_behind_finish(b, &e), BTF_E_IO);
+    assert_int_equal(btf__behind_finish(b, &e), BTF_E_IO);
     assert_string_equal(e.msg, "job 2 failed");
     for (int i = 0; i < 3; i++)
         assert_int_equal(r.order[i], i);

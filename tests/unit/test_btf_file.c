@@ -270,8 +270,8 @@ static void test_colour_model_11(void **state)
                                  .sxv = {sxv[0], sxv[1], sxv[2]}};
         const char *p = tu_fmt("%s/m11_%d.btf", tu_dir, cosine);
         btf_error err = {0};
-        assert_int_equal(btf_ubo2014_write_factors(p, &tu_small_views, &tu_small_lights, W, H, &f,
-                                                   &err), 0);
+        assert_int_equal(btf__ubo2014_write_factors(p, &tu_small_views, &tu_small_lights, W, H, &f,
+                                                    &err), 0);
         btf_dataset *ds;
         assert_int_equal(btf_dataset_open(p, NULL, &ds, &err), 0);
         assert_int_equal(btf_dataset_ubo2014(ds)->colour_model, 11);
@@ -338,7 +338,7 @@ static void test_memory_bounded(void **state)
     btf_ubo2014_factors f = {.components = {k, k, k}, .scalar_size = 2,
                              .u = {u[0], u[1], u[2]}, .sxv = {sxv[0], sxv[1], sxv[2]}};
     const char *p = tu_fmt("%s/big.btf", tu_dir);
-    assert_int_equal(btf_ubo2014_write_factors(p, &d81, &d81, w, h, &f, NULL), 0);
+    assert_int_equal(btf__ubo2014_write_factors(p, &d81, &d81, w, h, &f, NULL), 0);
     for (int c = 0; c < 3; c++) {
         free(u[c]);
         free(sxv[c]);
@@ -475,11 +475,11 @@ static void test_generate_twin(void **state)
             assert_int_equal(btf_dataset_read(b, v, l, &y, NULL), 0);
             tu_material_image("fabric", 8, 3, ia->views->dirs[v], ia->lights->dirs[l], &t);
             for (int i = 0; i < 8 * 8 * 3; i++, cnt++) {
-                double tx = btf_linear_to_srgb(fminf(1, t.data[i]));
-                btf_err += fabs(btf_linear_to_srgb(fmaxf(0, fminf(1, x.data[i]))) - tx);
-                jpeg_err += fabs(btf_linear_to_srgb(y.data[i]) - tx);
-                between += fabs(btf_linear_to_srgb(fmaxf(0, fminf(1, x.data[i]))) -
-                                btf_linear_to_srgb(y.data[i]));
+                double tx = btf__linear_to_srgb(fminf(1, t.data[i]));
+                btf_err += fabs(btf__linear_to_srgb(fmaxf(0, fminf(1, x.data[i]))) - tx);
+                jpeg_err += fabs(btf__linear_to_srgb(y.data[i]) - tx);
+                between += fabs(btf__linear_to_srgb(fmaxf(0, fminf(1, x.data[i]))) -
+                                btf__linear_to_srgb(y.data[i]));
                 btf_max = fmax(btf_max, fabs(x.data[i] - t.data[i]));
             }
             btf_image_free(&x);
@@ -532,7 +532,7 @@ static void test_bonn_shape_length(void **state)
 {
     (void)state;
     btf_dirset d;
-    assert_int_equal(btf_dirset_ubo151(&d, NULL), 0);
+    assert_int_equal(btf__dirset_ubo151(&d, NULL), 0);
     assert_int_equal(d.count, 151);
     const int side = 400, k[3] = {78, 76, 74};
     const uint32_t pairs = 151 * 151, px = 400 * 400;

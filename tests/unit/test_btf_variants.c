@@ -198,11 +198,11 @@ static void test_generated_twins(void **state)
                 assert_int_equal(btf_dataset_read(b, v, l, &y, NULL), 0);
                 assert_int_equal(render_pair(&src, v, l, &t, NULL), 0);
                 for (int j = 0; j < 8 * 8 * 3; j++, cnt++) {
-                    double tx = btf_linear_to_srgb(fminf(1, t.data[j]));
-                    double xs = btf_linear_to_srgb(fmaxf(0, fminf(1, x.data[j])));
+                    double tx = btf__linear_to_srgb(fminf(1, t.data[j]));
+                    double xs = btf__linear_to_srgb(fmaxf(0, fminf(1, x.data[j])));
                     btf_err += fabs(xs - tx);
-                    jpeg_err += fabs(btf_linear_to_srgb(y.data[j]) - tx);
-                    between += fabs(xs - btf_linear_to_srgb(y.data[j]));
+                    jpeg_err += fabs(btf__linear_to_srgb(y.data[j]) - tx);
+                    between += fabs(xs - btf__linear_to_srgb(y.data[j]));
                     btf_max = fmax(btf_max, fabs(x.data[j] - t.data[j]));
                 }
                 btf_image_free(&x);
@@ -444,7 +444,7 @@ static void test_dfmf_transposed(void **state)
                              .u = {u[0], u[1], u[2]}, .sxv = {sxv[0], sxv[1], sxv[2]}};
     const char *p = tu_fmt("%s/dfmf_plain.btf", tu_dir);
     btf_error err = {0};
-    TU_OK(btf_ubo2014_write_factors(p, &tu_small_views, &tu_small_lights, W, H, &f, &err), &err);
+    TU_OK(btf__ubo2014_write_factors(p, &tu_small_views, &tu_small_lights, W, H, &f, &err), &err);
     size_t len;
     unsigned char *d = tu_slurp(p, &len), *t = malloc(len);
     /* rotations, num_components, color_model, color_mean, color_transform */

@@ -63,7 +63,7 @@ static double *field_with(const btf_car_band *b, int margin, int w, int h, uint6
     collect c = {.data = malloc((size_t)w * h * sizeof(double)), .width = w, .finite = 1};
     btf_error e = {0};
     btf_synth_opts o = {.width = w, .height = h, .seed = seed, .row_by_row = row_by_row};
-    TU_OK(btf_car_synthesise_field(b, margin, 7, &o, collect_rows, &c, &e), &e);
+    TU_OK(btf__car_synthesise_field(b, margin, 7, &o, collect_rows, &c, &e), &e);
     assert_true(c.finite);
     return c.data;
 }
@@ -127,16 +127,16 @@ static void decorrelation_and_pyramid(void **state)
     btf_image img;
     TU_OK(btf_image_alloc(&img, 37, 23, 3, &e), &e);
     btf_rng r;
-    btf_rng_seed(&r, 4);
+    btf__rng_seed(&r, 4);
     for (int i = 0; i < 37 * 23; i++) {
-        double a = btf_rng_uniform(&r), b = btf_rng_uniform(&r);
+        double a = btf__rng_uniform(&r), b = btf__rng_uniform(&r);
         img.data[3 * i] = (float)(0.5 * a + 0.1 * b);
         img.data[3 * i + 1] = (float)(0.4 * a + 0.05);
         img.data[3 * i + 2] = (float)(0.2 * b);
     }
     float mean[3], basis[9];
     double var[3];
-    TU_OK(btf_pca3(&img, mean, basis, var, &e), &e);
+    TU_OK(btf__pca3(&img, mean, basis, var, &e), &e);
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) {
             double d = 0;
@@ -149,7 +149,7 @@ static void decorrelation_and_pyramid(void **state)
     double *bands[3];
     for (int b = 0; b < 3; b++)
         bands[b] = malloc(37 * 23 * sizeof(double));
-    btf_decorrelate(&img, mean, basis, bands);
+    btf__decorrelate(&img, mean, basis, bands);
     double c01 = 0;
     for (int i = 0; i < 37 * 23; i++) {
         c01 += bands[0][i] * bands[1][i];
@@ -163,19 +163,19 @@ static void decorrelation_and_pyramid(void **state)
     /* The pyramid collapses back exactly, for odd sizes and every depth. */
     for (int levels = 1; levels <= 5; levels++) {
         btf_pyramid p;
-        TU_OK(btf_pyramid_build(bands[0], 37, 23, levels, &p, &e), &e);
+        TU_OK(btf__pyramid_build(bands[0], 37, 23, levels, &p, &e), &e);
         assert_int_equal(p.width[levels - 1], levels == 1 ? 37 : (37 + (1 << (levels - 1)) - 1) >> (levels - 1));
         double *back;
-        TU_OK(btf_pyramid_collapse(&p, &back, &e), &e);
+        TU_OK(btf__pyramid_collapse(&p, &back, &e), &e);
         for (int i = 0; i < 37 * 23; i++)
             assert_true(fabs(back[i] - bands[0][i]) < 1e-12);
         free(back);
-        btf_pyramid_free(&p);
+        btf__pyramid_free(&p);
     }
     /* A grey constant image: zero-variance bands, no division, finite basis. */
     for (int i = 0; i < 37 * 23 * 3; i++)
         img.data[i] = 0.25f;
-    TU_OK(btf_pca3(&img, mean, basis, var, &e), &e);
+    TU_OK(btf__pca3(&img, mean, basis, var, &e), &e);
     for (int i = 0; i < 9; i++)
         assert_true(isfinite(basis[i]));
     assert_true(var[0] == 0.0 && mean[1] == 0.25f);
@@ -202,14 +202,14 @@ static void estimates_recover_known_parameters(void **state)
     };
     for (int c = 0; c < 4; c++) {
         btf_car_band truth = model(cases[c].spec, cases[c].gamma, 0.7f, 2.0f);
-        assert_true(btf_car_is_stable(&truth));
+        assert_true(btf__car_is_stable(&truth));
         double *f = field(&truth, 512, 512, 100 + c);
         btf_car_fit_opts o = {.n_fixed = truth.n};
         memcpy(o.fixed, truth.offsets, sizeof o.fixed);
         btf_car_band fit;
         btf_car_fit_info info;
         btf_error e = {0};
-        TU_OK(btf_car_fit(f, 512, 512, &o, &fit, &info, &e), &e);
+        TU_OK(btf__car_fit(f, 512, 512, &o, &fit, &info, &e), &e);
         assert_int_equal(fit.n, truth.n);
         for (int i = 0; i < truth.n; i++)
             assert_true(fabsf(fit.gamma[i] - truth.gamma[i]) < 0.03f);
@@ -226,11 +226,11 @@ static void estimates_recover_known_parameters(void **state)
 static float *direct_field(const btf_car_band *b, int margin, int w, int h, uint64_t seed,
                            uint32_t stream)
 {
-    int m = margin < 0 ? btf_car_margin(b) : margin, fw = w + 2 * m, fh = h + m;
+    int m = margin < 0 ? btf__car_margin(b) : margin, fw = w + 2 * m, fh = h + m;
     float *f = calloc((size_t)fw * fh, sizeof(float)), *out = malloc((size_t)w * h * sizeof(float));
     assert_true(f && out);
     int same[BTF_CAR_MAX_NEIGHBOURS];
-    int nsame = btf_car_same_row_order(b, same);
+    int nsame = btf__car_same_row_order(b, same);
     for (int r = 0; r < fh; r++)
         for (int c = 0; c < fw; c++) {
             float a = 0.0f;
@@ -273,7 +273,7 @@ static size_t values_off_direct(const btf_car_band *b, int margin, int w, int h,
 }
 
 /* CPU synthesis steps two rows at once where it can (src/synth/rows.c,
- * btf_rows_pair), with row r + 1 trailing row r by a chunk plus its reach;
+ * btf__rows_pair), with row r + 1 trailing row r by a chunk plus its reach;
  * every value must still be the direct recursion's, bit for bit: the
  * family's shapes and others, same-row offsets only, no neighbours, reaches
  * past a chunk, widths on both sides of the pairing threshold (for the
@@ -344,7 +344,7 @@ static void row_pairs_of_three_bands(void **state)
                 btf_error e = {0};
                 TU_OK(btf_image_alloc(&img, w, h, 3, &e), &e);
                 btf_synth_opts o = {.width = w, .height = h, .seed = 42};
-                TU_OK(btf_synthesise_margins(&m, 0, margins, &o, rows_into_image, &img, &e), &e);
+                TU_OK(btf__synthesise_margins(&m, 0, margins, &o, rows_into_image, &img, &e), &e);
                 size_t diff = 0;
                 for (int b = 0; b < 3; b++) {
                     float *want = direct_field(&sm.bands[b][0], margins[b][0], w, h, 42,
@@ -392,8 +392,8 @@ static void wavefront_matches_direct_recursion(void **state)
                     int w = widths[wi], h = heights[hi];
                     int margin = b.n == 0 ? 0 : margins[(mi + wi + hi) % 3];
                     int fw = w + 2 * margin;
-                    if (btf_wave_available() && fw >= 136) {
-                        assert_true(btf_wave_supported(&b, fw));
+                    if (btf__wave_available() && fw >= 136) {
+                        assert_true(btf__wave_supported(&b, fw));
                         waved++;
                     }
                     size_t diff = values_off_direct(&b, margin, w, h, 99 + s);
@@ -409,10 +409,10 @@ static void wavefront_matches_direct_recursion(void **state)
     const char *outside[] = {"-4:0", "-1:5", "0:-2", "0:-1,0:-2,0:-3,0:-4"};
     for (int i = 0; i < 4; i++) {
         btf_car_band b = model(outside[i], g, 0.7f, 0.0f);
-        assert_false(btf_wave_supported(&b, 1000));
+        assert_false(btf__wave_supported(&b, 1000));
     }
     btf_car_band b = model("0:-1,-1:0", g, 0.7f, 0.0f);
-    assert_false(btf_wave_supported(&b, 135));
+    assert_false(btf__wave_supported(&b, 135));
 }
 
 /* Random bands within the wavefront's scope (same-row shapes 0..3, rows
@@ -472,13 +472,13 @@ static void wavefront_random_bands(void **state)
     for (int it = 0; it < 300; it++) {
         int margin;
         btf_car_band b = random_wave_band(&st, &margin);
-        int m = margin < 0 ? btf_car_margin(&b) : margin;
+        int m = margin < 0 ? btf__car_margin(&b) : margin;
         int w = rand_in(&st, 1, 500), h = rand_in(&st, 0, 3) ? rand_in(&st, 1, 45)
                                                             : rand_in(&st, 100, 400);
         if (rand_in(&st, 0, 2) == 0) /* fields at the threshold */
             w = rand_in(&st, 100, 160) - 2 * m > 0 ? rand_in(&st, 100, 160) - 2 * m : 1;
         uint64_t seed = xorshift(&st);
-        waved += btf_wave_supported(&b, w + 2 * m);
+        waved += btf__wave_supported(&b, w + 2 * m);
         double *on = field_with(&b, margin, w, h, seed, 0);
         double *off = field_with(&b, margin, w, h, seed, 1);
         size_t diff = 0;
@@ -491,7 +491,7 @@ static void wavefront_random_bands(void **state)
         free(off);
     }
     print_message("%d of 300 random fields ran as a wavefront\n", waved);
-    if (btf_wave_available())
+    if (btf__wave_available())
         assert_true(waved > 100);
 }
 
@@ -546,10 +546,10 @@ static void long_synthesis_is_stationary(void **state)
     collect c = {.width = side, .finite = 1};
     btf_error e = {0};
     btf_synth_opts o = {.width = side, .height = side, .seed = 2026};
-    TU_OK(btf_car_synthesise_field(&b, -1, 1, &o, collect_rows, &c, &e), &e);
+    TU_OK(btf__car_synthesise_field(&b, -1, 1, &o, collect_rows, &c, &e), &e);
     assert_true(c.finite);
     double mean = c.sum / c.n, var = c.sum2 / c.n - mean * mean;
-    double stat = btf_car_stationary_variance(&b);
+    double stat = btf__car_stationary_variance(&b);
     print_message("%ld pixels: sample variance %.5f, stationary %.5f (ratio %.4f)\n", c.n, var,
                   stat, var / stat);
     assert_true(fabs(var / stat - 1.0) < 0.05);
@@ -565,26 +565,26 @@ static void margins_follow_correlation(void **state)
     (void)state;
     btf_car_band white = model("0:-1", (const float[]){0.0f}, 1.0f, 0.0f);
     white.n = 0;
-    assert_int_equal(btf_car_margin(&white), 0);
+    assert_int_equal(btf__car_margin(&white), 0);
     btf_car_band weak = model("0:-1", (const float[]){0.2f}, 1.0f, 0.0f);
-    assert_int_equal(btf_car_margin(&weak), BTF_SYNTH_MARGIN_MIN);
+    assert_int_equal(btf__car_margin(&weak), BTF_SYNTH_MARGIN_MIN);
     const float strengths[] = {0.2f, 0.35f, 0.45f, 0.49f, 0.499f};
     int last = 0;
     for (int i = 0; i < 5; i++) {
         float g = strengths[i];
         btf_car_band b = model("0:-1,-1:0", (const float[]){g, g}, 1.0f, 0.0f);
-        int m = btf_car_margin(&b);
+        int m = btf__car_margin(&b);
         print_message("gamma %.3f %.3f: margin %d\n", g, g, m);
         assert_true(m >= last && m <= BTF_SYNTH_MARGIN_MAX);
         last = m;
     }
     assert_true(last > 64); /* a fixed margin of 64 would be too short */
     btf_car_band unstable = model("0:-1,-1:0", (const float[]){0.6f, 0.6f}, 1.0f, 0.0f);
-    assert_int_equal(btf_car_margin(&unstable), BTF_SYNTH_MARGIN_MAX);
+    assert_int_equal(btf__car_margin(&unstable), BTF_SYNTH_MARGIN_MAX);
 
     /* The first row's variance over many seeds, against the stationary one. */
     btf_car_band strong = model("0:-1,-1:0", (const float[]){0.45f, 0.45f}, 1.0f, 0.0f);
-    double stat = btf_car_stationary_variance(&strong);
+    double stat = btf__car_stationary_variance(&strong);
     int seeds = getenv("BTF_ASAN") ? 60 : 200, w = 2000;
     for (int pass = 0; pass < 2; pass++) {
         int margin = pass == 0 ? -1 : 2; /* its own, then far too short */
@@ -592,11 +592,11 @@ static void margins_follow_correlation(void **state)
         btf_error e = {0};
         for (int s = 0; s < seeds; s++) {
             btf_synth_opts o = {.width = w, .height = 1, .seed = 100 + s};
-            TU_OK(btf_car_synthesise_field(&strong, margin, 3, &o, collect_rows, &c, &e), &e);
+            TU_OK(btf__car_synthesise_field(&strong, margin, 3, &o, collect_rows, &c, &e), &e);
         }
         double ratio = (c.sum2 / c.n) / stat;
         print_message("margin %d: first-row variance / stationary = %.4f\n",
-                      pass == 0 ? btf_car_margin(&strong) : 2, ratio);
+                      pass == 0 ? btf__car_margin(&strong) : 2, ratio);
         if (pass == 0)
             assert_true(fabs(ratio - 1.0) < 0.05);
         else
@@ -606,8 +606,8 @@ static void margins_follow_correlation(void **state)
     btf_error e = {0};
     collect c = {.width = 4, .finite = 1};
     btf_synth_opts o = {.width = 4, .height = 4, .seed = 1};
-    assert_int_equal(btf_car_synthesise_field(&strong, BTF_SYNTH_MARGIN_MAX + 1, 3, &o,
-                                              collect_rows, &c, &e), BTF_E_ARG);
+    assert_int_equal(btf__car_synthesise_field(&strong, BTF_SYNTH_MARGIN_MAX + 1, 3, &o,
+                                               collect_rows, &c, &e), BTF_E_ARG);
 }
 
 /* A fitted model's margins follow from its coefficients, and reading its
@@ -633,7 +633,7 @@ static void fitted_and_read_models_carry_margins(void **state)
             TU_OK(btf_synth_margin(&m, 0, b, l, &mf, &e), &e);
             TU_OK(btf_synth_margin(&back, 0, b, l, &mb, &e), &e);
             assert_true(fit->n == 0 || mf >= BTF_SYNTH_MARGIN_MIN);
-            assert_int_equal(mf, btf_car_margin(fit));
+            assert_int_equal(mf, btf__car_margin(fit));
             assert_int_equal(mb, mf);
         }
     assert_non_null(back.internal); /* kept by the reader */
@@ -641,7 +641,7 @@ static void fitted_and_read_models_carry_margins(void **state)
     cb->n = 1, cb->offsets[0] = (btf_offset){0, -1}, cb->gamma[0] = 0.499f;
     int changed;
     TU_OK(btf_synth_margin(&back, 0, 0, 0, &changed, &e), &e);
-    assert_int_equal(changed, btf_car_margin(cb));
+    assert_int_equal(changed, btf__car_margin(cb));
     assert_int_equal(btf_synth_margin(&back, 0, 3, 0, &changed, &e), BTF_E_ARG);
     assert_int_equal(btf_synth_margin(&back, 0, 0, 2, &changed, &e), BTF_E_ARG);
     free(bytes);
@@ -654,7 +654,7 @@ static void fitted_and_read_models_carry_margins(void **state)
  * of thousands of nearly unstable bands (24 neighbours, gammas summing to
  * 0.998) reads in seconds, not minutes, its bands taking the safe largest
  * margin; a band whose correlation outreaches the largest margin is
- * reported by btf_car_margin_shortfall. */
+ * reported by btf__car_margin_shortfall. */
 static void margins_bounded_on_read(void **state)
 {
     (void)state;
@@ -700,12 +700,12 @@ static void margins_bounded_on_read(void **state)
     free(m.subspaces);
 
     btf_car_band edge = model("0:-1,-1:0", (const float[]){0.499f, 0.499f}, 1.0f, 0.0f);
-    assert_int_equal(btf_car_margin(&edge), BTF_SYNTH_MARGIN_MAX);
-    double short_by = btf_car_margin_shortfall(&edge, BTF_SYNTH_MARGIN_MAX);
+    assert_int_equal(btf__car_margin(&edge), BTF_SYNTH_MARGIN_MAX);
+    double short_by = btf__car_margin_shortfall(&edge, BTF_SYNTH_MARGIN_MAX);
     print_message("gamma 0.499, 0.499: %.3g of the variance beyond 256 pixels\n", short_by);
     assert_true(short_by > BTF_SYNTH_MARGIN_EPS);
     btf_car_band fine = model("0:-1,-1:0", (const float[]){0.45f, 0.45f}, 1.0f, 0.0f);
-    assert_true(btf_car_margin_shortfall(&fine, btf_car_margin(&fine)) <= BTF_SYNTH_MARGIN_EPS);
+    assert_true(btf__car_margin_shortfall(&fine, btf__car_margin(&fine)) <= BTF_SYNTH_MARGIN_EPS);
 }
 
 /* (c) The Bayesian choice finds the true neighbourhood (a member of the
@@ -728,7 +728,7 @@ static void selection_finds_true_neighbourhood(void **state)
             double *f = field(&truth, 192, 192, 1000 * t + k);
             btf_car_band fit;
             btf_error e = {0};
-            TU_OK(btf_car_fit(f, 192, 192, NULL, &fit, NULL, &e), &e);
+            TU_OK(btf__car_fit(f, 192, 192, NULL, &fit, NULL, &e), &e);
             if (fit.n == truth.n)
                 hits++;
             else
@@ -749,7 +749,7 @@ static void selection_finds_true_neighbourhood(void **state)
     double *f = field(&white, 128, 128, 5);
     btf_car_band fit;
     btf_error e = {0};
-    TU_OK(btf_car_fit(f, 128, 128, NULL, &fit, NULL, &e), &e);
+    TU_OK(btf__car_fit(f, 128, 128, NULL, &fit, NULL, &e), &e);
     assert_true(fit.n <= 2);
     free(f);
 }
@@ -773,18 +773,18 @@ static void degenerate_bands(void **state)
     /* Constant: no model beyond the mean. */
     for (int i = 0; i < 64 * 64; i++)
         band[i] = 3.5;
-    TU_OK(btf_car_fit(band, 64, 64, NULL, &fit, &info, &e), &e);
+    TU_OK(btf__car_fit(band, 64, 64, NULL, &fit, &info, &e), &e);
     assert_int_equal(fit.n, 0);
     assert_true(fit.sigma == 0.0f && fit.mean == 3.5f);
     /* 1x1, 1xN, Nx1: white noise of the band's spread. */
-    TU_OK(btf_car_fit(band, 1, 1, NULL, &fit, &info, &e), &e);
+    TU_OK(btf__car_fit(band, 1, 1, NULL, &fit, &info, &e), &e);
     assert_int_equal(fit.n, 0);
     for (int i = 0; i < 64; i++)
         band[i] = (i * 37) % 11;
-    TU_OK(btf_car_fit(band, 64, 1, NULL, &fit, &info, &e), &e);
+    TU_OK(btf__car_fit(band, 64, 1, NULL, &fit, &info, &e), &e);
     assert_true(isfinite(fit.sigma) && fit.sigma > 0);
-    assert_true(btf_car_is_stable(&fit));
-    TU_OK(btf_car_fit(band, 1, 64, NULL, &fit, &info, &e), &e);
+    assert_true(btf__car_is_stable(&fit));
+    TU_OK(btf__car_fit(band, 1, 64, NULL, &fit, &info, &e), &e);
     assert_true(isfinite(fit.sigma) && fit.sigma > 0);
     /* Scale: a field times 1e-30 and times 1e36 gives the same coefficients
      * and proportionally scaled sigma, all finite. */
@@ -792,13 +792,13 @@ static void degenerate_bands(void **state)
     btf_car_band truth = model("0:-1,-1:0", g, 1.0f, 0.0f);
     double *f = field(&truth, 64, 64, 3);
     btf_car_band ref, tiny, huge;
-    TU_OK(btf_car_fit(f, 64, 64, NULL, &ref, NULL, &e), &e);
+    TU_OK(btf__car_fit(f, 64, 64, NULL, &ref, NULL, &e), &e);
     for (int i = 0; i < 64 * 64; i++)
         band[i] = f[i] * 1e-30;
-    TU_OK(btf_car_fit(band, 64, 64, NULL, &tiny, NULL, &e), &e);
+    TU_OK(btf__car_fit(band, 64, 64, NULL, &tiny, NULL, &e), &e);
     for (int i = 0; i < 64 * 64; i++)
         band[i] = f[i] * 1e36;
-    TU_OK(btf_car_fit(band, 64, 64, NULL, &huge, NULL, &e), &e);
+    TU_OK(btf__car_fit(band, 64, 64, NULL, &huge, NULL, &e), &e);
     assert_int_equal(tiny.n, ref.n);
     assert_int_equal(huge.n, ref.n);
     for (int i = 0; i < ref.n; i++) {
@@ -810,7 +810,7 @@ static void degenerate_bands(void **state)
     /* Beyond the float range (|values| ~ 1e300): parameters clamp, finite. */
     for (int i = 0; i < 64 * 64; i++)
         band[i] = f[i] * 1e300;
-    TU_OK(btf_car_fit(band, 64, 64, NULL, &huge, NULL, &e), &e);
+    TU_OK(btf__car_fit(band, 64, 64, NULL, &huge, NULL, &e), &e);
     assert_true(isfinite(huge.sigma) && isfinite(huge.mean));
     /* A non-stationary ramp makes least squares predict a unit root: the
      * estimate is shrunk until stable, with a warning. */
@@ -819,15 +819,15 @@ static void degenerate_bands(void **state)
             band[y * 64 + x] = 3.0 * x + 2.0 * y + ((x * 7 + y * 13) % 5) * 0.01;
     warnings = 0;
     btf_car_fit_opts o = {.warn = count_warning};
-    TU_OK(btf_car_fit(band, 64, 64, &o, &fit, &info, &e), &e);
-    assert_true(btf_car_is_stable(&fit));
+    TU_OK(btf__car_fit(band, 64, 64, &o, &fit, &info, &e), &e);
+    assert_true(btf__car_is_stable(&fit));
     for (int i = 0; i < fit.n; i++)
         assert_true(isfinite(fit.gamma[i]));
     assert_true(info.shrink < 1.0);
     assert_true(warnings >= 1);
     /* NaN in the band is refused. */
     band[5] = NAN;
-    assert_int_equal(btf_car_fit(band, 64, 64, NULL, &fit, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__car_fit(band, 64, 64, NULL, &fit, NULL, &e), BTF_E_ARG);
     free(f);
     free(band);
 }
@@ -841,14 +841,14 @@ static void stability_check(void **state)
     const float stable[3] = {0.5f, 0.5f, -0.25f}, unstable[3] = {0.6f, 0.6f, 0.0f};
     btf_car_band s = model("-1:0,0:-1,-1:-1", stable, 1, 0);
     btf_car_band u = model("-1:0,0:-1,-1:-1", unstable, 1, 0);
-    assert_true(btf_car_is_stable(&s));
-    assert_false(btf_car_is_stable(&u));
+    assert_true(btf__car_is_stable(&s));
+    assert_false(btf__car_is_stable(&u));
     const float small[2] = {0.3f, 0.3f};
     btf_car_band w = model("0:-1,-1:1", small, 1, 0);
-    assert_true(btf_car_is_stable(&w));
+    assert_true(btf__car_is_stable(&w));
     const float big[1] = {1.2f};
     btf_car_band one = model("0:-1", big, 1, 0);
-    assert_false(btf_car_is_stable(&one));
+    assert_false(btf__car_is_stable(&one));
 }
 
 /* Synthesis of subspace images: sizes from 1x1 up, seeds, streaming. */
@@ -1034,7 +1034,7 @@ static void model_offsets_within_64(void **state)
     btf_synth_opts o = {.width = 4, .height = 4, .seed = 1};
     assert_int_equal(btf_synthesise_image(&m, 0, &o, &img, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "beyond 64"));
-    assert_int_equal(btf_car_synthesise_field(&sm.bands[1][0], -1, 0, &o, NULL, NULL, &e),
+    assert_int_equal(btf__car_synthesise_field(&sm.bands[1][0], -1, 0, &o, NULL, NULL, &e),
                      BTF_E_ARG);
     sm.bands[1][0].offsets[0] = (btf_offset){-1, 64};
     TU_OK(btf_synthesise_image(&m, 0, &o, &img, &e), &e);

@@ -289,13 +289,13 @@ static void test_complement_fit(void **state)
     vg /= w * h, vu /= w * h;
     btf_car_fit_opts o = btf_car_fit_defaults();
     btf_car_band b;
-    TU_OK(btf_car_fit_complement(g, u, w, h, &o, &b, NULL, &e), &e);
-    double v = btf_car_stationary_variance(&b);
+    TU_OK(btf__car_fit_complement(g, u, w, h, &o, &b, NULL, &e), &e);
+    double v = btf__car_stationary_variance(&b);
     printf("complement: model variance %.4g, G %.4g - sub %.4g = %.4g\n", v, vg, vu, vg - vu);
     assert_true(isfinite(v));
     assert_true(fabs(v - (vg - vu)) < 0.25 * (vg - vu));
     assert_true(fabs(b.mean - (mg - mu)) < 1e-6);
-    TU_OK(btf_car_fit_complement(u, u, w, h, &o, &b, NULL, &e), &e);
+    TU_OK(btf__car_fit_complement(u, u, w, h, &o, &b, NULL, &e), &e);
     assert_true(b.sigma == 0.0f);
     free(g);
     free(u);
@@ -310,17 +310,17 @@ static void test_choose_levels_extremes(void **state)
     double flat[64 * 64];
     for (int i = 0; i < 64 * 64; i++)
         flat[i] = 0.25;
-    assert_int_equal(btf_auto_levels(flat, 64, 64), 1);
-    assert_int_equal(btf_auto_levels(flat, 1, 1), 1);
-    assert_int_equal(btf_auto_levels(flat, 64, 1), 1);
-    assert_int_equal(btf_levels_cap(16, 16), 1);
-    assert_int_equal(btf_levels_cap(32, 32), 2);
-    assert_int_equal(btf_levels_cap(4096, 64), 3);
+    assert_int_equal(btf__auto_levels(flat, 64, 64), 1);
+    assert_int_equal(btf__auto_levels(flat, 1, 1), 1);
+    assert_int_equal(btf__auto_levels(flat, 64, 1), 1);
+    assert_int_equal(btf__levels_cap(16, 16), 1);
+    assert_int_equal(btf__levels_cap(32, 32), 2);
+    assert_int_equal(btf__levels_cap(4096, 64), 3);
     btf_error e = {0};
     double d[BTF_MAX_LEVELS];
     int levels = 0;
     btf_car_fit_opts o = btf_car_fit_defaults();
-    TU_OK(btf_choose_levels(flat, 64, 64, &o, 0, NULL, &levels, d, &e), &e);
+    TU_OK(btf__choose_levels(flat, 64, 64, &o, 0, NULL, &levels, d, &e), &e);
     assert_int_equal(levels, 1);
     /* wood's grain: structure at coarse scales */
     btf_image img;
@@ -329,14 +329,14 @@ static void test_choose_levels_extremes(void **state)
     assert_non_null(band);
     for (int i = 0; i < 128 * 128; i++)
         band[i] = img.data[3 * i] + img.data[3 * i + 1] + img.data[3 * i + 2];
-    TU_OK(btf_choose_levels(band, 128, 128, &o, 0, NULL, &levels, d, &e), &e);
+    TU_OK(btf__choose_levels(band, 128, 128, &o, 0, NULL, &levels, d, &e), &e);
     printf("wood: distances by depth %.3f %.3f %.3f, chose %d\n", d[0], d[1], d[2], levels);
     assert_true(levels >= 2);
     for (int l = 0; l < 3; l++)
         assert_true(isfinite(d[l]) && d[l] >= 0.0);
     assert_true(d[levels - 1] <= d[0]);
     /* a cap of 2 (the analysis' for a structured model) tries no third */
-    TU_OK(btf_choose_levels(band, 128, 128, &o, 2, NULL, &levels, d, &e), &e);
+    TU_OK(btf__choose_levels(band, 128, 128, &o, 2, NULL, &levels, d, &e), &e);
     assert_true(levels >= 1 && levels <= 2);
     assert_true(d[1] >= 0.0 && d[2] == -1.0);
     /* masked by a factor carrying the same pattern far stronger, no deeper
@@ -350,13 +350,13 @@ static void test_choose_levels_extremes(void **state)
     for (int i = 0; i < 128 * 128; i++)
         factor[i] = (float)(1.0 + 0.5 * band[i] / big);
     int unmasked;
-    TU_OK(btf_choose_levels(band, 128, 128, &o, 0, NULL, &unmasked, d, &e), &e);
+    TU_OK(btf__choose_levels(band, 128, 128, &o, 0, NULL, &unmasked, d, &e), &e);
     btf_levels_mask strong = {factor, 100.0 * big}, faint = {factor, 1e-6 * big};
-    TU_OK(btf_choose_levels(band, 128, 128, &o, 0, &strong, &levels, d, &e), &e);
+    TU_OK(btf__choose_levels(band, 128, 128, &o, 0, &strong, &levels, d, &e), &e);
     printf("wood masked: distances %.4f %.4f %.4f, chose %d\n", d[0], d[1], d[2], levels);
     assert_int_equal(levels, 1);
     assert_true(d[0] < 0.05 && d[1] < 0.05);
-    TU_OK(btf_choose_levels(band, 128, 128, &o, 0, &faint, &levels, d, &e), &e);
+    TU_OK(btf__choose_levels(band, 128, 128, &o, 0, &faint, &levels, d, &e), &e);
     assert_int_equal(levels, unmasked);
     free(factor);
     free(band);
@@ -385,7 +385,7 @@ static void test_choose_levels_margins(void **state)
                 band[i] = img.data[3 * i] + img.data[3 * i + 1] + img.data[3 * i + 2];
             btf_image_free(&img);
             int levels = 0;
-            TU_OK(btf_choose_levels(band, 64, 64, &o, 0, NULL, &levels, d, &e), &e);
+            TU_OK(btf__choose_levels(band, 64, 64, &o, 0, NULL, &levels, d, &e), &e);
             double best = d[0];
             int want = 1;
             for (int l = 2; l <= 3; l++)

@@ -163,7 +163,7 @@ static void check_band(const char *spec, const float *gamma, int stable, double 
 {
     btf_car_band b = band(spec, gamma);
     char why[256] = "";
-    int got = btf_car_stability_why(&b, why, sizeof why);
+    int got = btf__car_stability_why(&b, why, sizeof why);
     spread sp = run_recursion(&b, h, 3 * h);
     double root = largest_root_of_band(&b, 512);
     print_message("%-16s %9.6f %9.6f: %s, root %.6f, variance %.4g .. %.4g down the rows, %.4g "
@@ -201,8 +201,8 @@ static void one_neighbour_bands(void **state)
     for (int o = 0; o < 4; o++) {
         float in = 1.0f - 2e-6f, on = 1.0f - 5e-7f;
         btf_car_band a = band(OFFSETS[o], &in), c = band(OFFSETS[o], &on);
-        assert_true(btf_car_is_stable(&a));
-        assert_false(btf_car_is_stable(&c));
+        assert_true(btf__car_is_stable(&a));
+        assert_false(btf__car_is_stable(&c));
     }
 }
 
@@ -262,7 +262,7 @@ static void product_bands(void **state)
     for (int k = 0; k < 3; k++) {
         btf_car_band b = band("0:-1,-1:0,-1:-1", near[k]);
         assert_true((double)near[k][2] == -(double)near[k][0] * near[k][1]);
-        assert_int_equal(btf_car_is_stable(&b), k < 2);
+        assert_int_equal(btf__car_is_stable(&b), k < 2);
     }
     /* Rounded to float, a = b = 0.9999 is no product: -ab rounds by up to
      * 3e-8, and at w = 0 the root, (b - fl(ab)) / (1 - a), moves by that over
@@ -271,7 +271,7 @@ static void product_bands(void **state)
     double root0 = ((double)rounded[1] + rounded[2]) / (1.0 - rounded[0]);
     btf_car_band b = band("0:-1,-1:0,-1:-1", rounded);
     print_message("0.9999 x 0.9999 as floats: the root at w = 0 is %.9f\n", root0);
-    assert_int_equal(btf_car_is_stable(&b), root0 < 1.0 - MARGIN);
+    assert_int_equal(btf__car_is_stable(&b), root0 < 1.0 - MARGIN);
 }
 
 /* What the band was found to do, in words: the validator's and the fit's
@@ -282,17 +282,17 @@ static void reasons_name_the_recursion(void **state)
     char why[256];
     const float along = 1.002f, two[2] = {0.501f, 0.501f}, bad[1] = {NAN};
     btf_car_band b = band("0:-1", &along);
-    assert_int_equal(btf_car_stability_why(&b, why, sizeof why), 0);
+    assert_int_equal(btf__car_stability_why(&b, why, sizeof why), 0);
     assert_non_null(strstr(why, "along a row"));
     b = band("0:-1,-1:0", two);
-    assert_int_equal(btf_car_stability_why(&b, why, sizeof why), 0);
+    assert_int_equal(btf__car_stability_why(&b, why, sizeof why), 0);
     assert_non_null(strstr(why, "rows do not decay"));
     b = band("-1:0", bad);
-    assert_int_equal(btf_car_stability_why(&b, why, sizeof why), 0);
+    assert_int_equal(btf__car_stability_why(&b, why, sizeof why), 0);
     assert_non_null(strstr(why, "gamma[0]"));
     b = band("-1:0", &along);
     b.offsets[0] = (btf_offset){0, 1}; /* not causal: no recursion at all */
-    assert_int_equal(btf_car_stability_why(&b, why, sizeof why), 0);
+    assert_int_equal(btf__car_stability_why(&b, why, sizeof why), 0);
     assert_non_null(strstr(why, "not a causal offset"));
 }
 
@@ -323,7 +323,7 @@ static void generated_materials_bands(void **state)
                     for (int i = 0; i < b.n; i++)
                         sum += fabs(b.gamma[i]);
                     exact += sum >= 1.0;
-                    assert_true(btf_car_is_stable(&b));
+                    assert_true(btf__car_is_stable(&b));
                     worst = fmax(worst, largest_root_of_band(&b, 256));
                     bands++;
                 }
@@ -381,12 +381,12 @@ static void ramp_fit_is_stable(void **state)
     print_message("gamma %.6f, sigma %.4g; %s\n", b->gamma[0], b->sigma, w.text);
     assert_int_equal(b->n, 1);
     assert_true(fabsf(b->gamma[0]) < 1.0f - (float)MARGIN);
-    assert_true(btf_car_is_stable(b));
+    assert_true(btf__car_is_stable(b));
     assert_true(w.count >= 1);
     assert_non_null(strstr(w.text, "band 0 level 0: unstable estimate (its recursion along a row"));
     for (int c = 0; c < 3; c++)
         for (int l = 0; l < m.subspaces[0].levels; l++)
-            assert_true(btf_car_is_stable(&m.subspaces[0].bands[c][l]));
+            assert_true(btf__car_is_stable(&m.subspaces[0].bands[c][l]));
     m.subspaces[0].marginal.knots = 0;
     btf_synth_opts so = {.width = W, .height = 4, .seed = 5, .match_colours = -1};
     btf_image out;
@@ -453,13 +453,13 @@ static void validator_checks_distinct_bands(void **state)
     }
     btf_error e = {0};
     double t0 = tu_now();
-    TU_OK(btf_model_validate(&m, "copies", BTF_E_DATA, &e), &e);
+    TU_OK(btf__model_validate(&m, "copies", BTF_E_DATA, &e), &e);
     double took = tu_now() - t0;
     print_message("6120 copies validated in %.1f ms\n", 1e3 * took);
     assert_true(took < 0.5);
     m.subspaces[200].bands[1][3].gamma[1] = 0.5000001f;
     m.subspaces[17].bands[2][5].gamma[0] = 0.5000001f;
-    assert_int_equal(btf_model_validate(&m, "copies", BTF_E_DATA, &e), BTF_E_DATA);
+    assert_int_equal(btf__model_validate(&m, "copies", BTF_E_DATA, &e), BTF_E_DATA);
     print_message("%s\n", e.msg);
     assert_non_null(strstr(e.msg, "copies: subspace 17, band 2, level 5: the CAR coefficients "
                                   "are unstable: its rows do not decay"));

@@ -272,7 +272,7 @@ static void negative_exemplar(void **state)
 
 /* A frame whose G-buffer alone exceeds the memory this process may use is
  * refused at once with the estimate: ulimit -v bounds the address space
- * (RLIMIT_AS, which btf_memory_available honours) to 2 GB on any machine,
+ * (RLIMIT_AS, which btf__memory_available honours) to 2 GB on any machine,
  * and 8192^2 pixels need 6.7 GB at least. Without the check the trace
  * would run and then fail an allocation. */
 static void render_beyond_memory_refused(void **state)
@@ -283,7 +283,7 @@ static void render_beyond_memory_refused(void **state)
      * under it. The largest frame (16384^2, at least 26.8 GB) then, where
      * the machine has less than that. */
     const char *limit = "", *size = "16384x16384", *need = "needs at least 26.8 GB";
-    if (btf_memory_available() >= 26.8e9) {
+    if (btf__memory_available() >= 26.8e9) {
         print_message("skipped under ASan: this machine has room for a 16384^2 frame\n");
         skip();
     }

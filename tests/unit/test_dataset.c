@@ -82,8 +82,8 @@ static void check_small_set(const btf_dataset *ds, btf_layout layout)
         assert_int_equal(s->view, count / 2);
         assert_int_equal(s->light, count % 2);
         assert_true(s->light_dir.theta == LIGHTS[s->light][0]);
-        float want = btf_srgb_to_linear(
-            btf_linear_to_srgb(0.1f * (float)(1 + s->view + 3 * s->light)));
+        float want = btf__srgb_to_linear(
+            btf__linear_to_srgb(0.1f * (float)(1 + s->view + 3 * s->light)));
         assert_true(fabsf(s->image.data[0] - want) < 0.01f);
         assert_int_equal(s->image.channels, 3);
         count++;
@@ -130,7 +130,7 @@ static char *make_utia(const char *ext)
             } else {
                 /* EXR holds the linear value; make it equal to what 8 bits give. */
                 for (int i = 0; i < 12 * 10 * 3; i++)
-                    img.data[i] = btf_srgb_to_linear(btf_linear_to_srgb(img.data[i]));
+                    img.data[i] = btf__srgb_to_linear(btf__linear_to_srgb(img.data[i]));
                 TU_OK(btf_image_write_exr_opts(p, &img, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
             }
             btf_image_free(&img);
@@ -380,8 +380,8 @@ static void tsv_from_memory(void **state)
     const char *p = tu_fmt("%s/mem.tsv", dir);
     tu_write_file(p, text, sizeof text - 1);
     btf_tsv a, b;
-    TU_OK(btf_tsv_read(p, &a, &e), &e);
-    TU_OK(btf_tsv_parse(text, sizeof text - 1, "buf", &b, &e), &e);
+    TU_OK(btf__tsv_read(p, &a, &e), &e);
+    TU_OK(btf__tsv_parse(text, sizeof text - 1, "buf", &b, &e), &e);
     assert_int_equal(a.ncols, 3);
     assert_int_equal(a.nrows, 2);
     assert_int_equal(b.ncols, a.ncols);
@@ -391,31 +391,31 @@ static void tsv_from_memory(void **state)
     for (int r = 0; r < a.nrows; r++) {
         assert_int_equal(a.line_no[r], b.line_no[r]);
         for (int c = 0; c < a.ncols; c++)
-            assert_string_equal(btf_tsv_cell(&a, r, c), btf_tsv_cell(&b, r, c));
+            assert_string_equal(btf__tsv_cell(&a, r, c), btf__tsv_cell(&b, r, c));
     }
-    assert_string_equal(btf_tsv_cell(&b, 0, 0), "a b.png");
+    assert_string_equal(btf__tsv_cell(&b, 0, 0), "a b.png");
     assert_int_equal(b.line_no[1], 5);
     double v;
-    assert_int_equal(btf_tsv_number(&b, "buf", 1, 2, &v, &e), BTF_E_FORMAT);
+    assert_int_equal(btf__tsv_number(&b, "buf", 1, 2, &v, &e), BTF_E_FORMAT);
     assert_non_null(strstr(e.msg, "buf:5: phi_l 'x'"));
-    btf_tsv_free(&a);
-    btf_tsv_free(&b);
+    btf__tsv_free(&a);
+    btf__tsv_free(&b);
     tu_rmtree(dir);
     free(dir);
     /* The input is copied: the caller's buffer is left as it was. */
     char copy[sizeof text];
     memcpy(copy, text, sizeof text);
-    TU_OK(btf_tsv_parse(copy, sizeof copy - 1, NULL, &b, &e), &e);
+    TU_OK(btf__tsv_parse(copy, sizeof copy - 1, NULL, &b, &e), &e);
     assert_memory_equal(copy, text, sizeof text);
-    btf_tsv_free(&b);
+    btf__tsv_free(&b);
 
-    assert_int_equal(btf_tsv_parse("a\tb\n1\n", 6, "short", &b, &e), BTF_E_FORMAT);
+    assert_int_equal(btf__tsv_parse("a\tb\n1\n", 6, "short", &b, &e), BTF_E_FORMAT);
     assert_string_equal(e.msg, "short:2: 1 fields, the header names 2");
-    assert_int_equal(btf_tsv_parse("a\0b", 3, "nul", &b, &e), BTF_E_FORMAT);
+    assert_int_equal(btf__tsv_parse("a\0b", 3, "nul", &b, &e), BTF_E_FORMAT);
     assert_string_equal(e.msg, "nul: not a text file (contains NUL bytes)");
-    assert_int_equal(btf_tsv_parse("", 0, NULL, &b, &e), BTF_E_FORMAT);
+    assert_int_equal(btf__tsv_parse("", 0, NULL, &b, &e), BTF_E_FORMAT);
     assert_string_equal(e.msg, "manifest: empty manifest (no header line)");
-    assert_int_equal(btf_tsv_parse(NULL, 0, "none", &b, &e), BTF_E_FORMAT);
+    assert_int_equal(btf__tsv_parse(NULL, 0, "none", &b, &e), BTF_E_FORMAT);
     assert_null(b.text);
 }
 
@@ -427,20 +427,20 @@ static void tsv_numbers_are_decimal(void **state)
     btf_error e = {0};
     const char text[] = "v\n0x1e\n0X1E\ninf\nnan\n1e400\n 1\n1e-320\n-2.5e1\n+.5\n";
     btf_tsv t;
-    TU_OK(btf_tsv_parse(text, sizeof text - 1, "n.tsv", &t, &e), &e);
+    TU_OK(btf__tsv_parse(text, sizeof text - 1, "n.tsv", &t, &e), &e);
     assert_int_equal(t.nrows, 9);
     double v;
     for (int r = 0; r < 5; r++) {
-        assert_int_equal(btf_tsv_number(&t, "n.tsv", r, 0, &v, &e), BTF_E_FORMAT);
+        assert_int_equal(btf__tsv_number(&t, "n.tsv", r, 0, &v, &e), BTF_E_FORMAT);
         assert_non_null(strstr(e.msg, tu_fmt("n.tsv:%d: v '", r + 2)));
         assert_non_null(strstr(e.msg, "not a finite decimal number"));
     }
     const double want[] = {1, 1e-320, -25, 0.5}; /* " 1": cells are trimmed */
     for (int r = 5; r < 9; r++) {
-        TU_OK(btf_tsv_number(&t, "n.tsv", r, 0, &v, &e), &e);
+        TU_OK(btf__tsv_number(&t, "n.tsv", r, 0, &v, &e), &e);
         assert_true(v == want[r - 5]);
     }
-    btf_tsv_free(&t);
+    btf__tsv_free(&t);
 }
 
 /* A manifest saved with a UTF-8 byte order mark (Excel, Notepad) reads as
@@ -451,11 +451,11 @@ static void tsv_byte_order_mark(void **state)
     btf_error e = {0};
     const char text[] = "\xEF\xBB\xBFpath\ttheta_l\nx.png\t1\n";
     btf_tsv t;
-    TU_OK(btf_tsv_parse(text, sizeof text - 1, "bom.tsv", &t, &e), &e);
+    TU_OK(btf__tsv_parse(text, sizeof text - 1, "bom.tsv", &t, &e), &e);
     assert_string_equal(t.names[0], "path");
-    assert_int_equal(btf_tsv_column(&t, "path"), 0);
+    assert_int_equal(btf__tsv_column(&t, "path"), 0);
     assert_int_equal(t.line_no[0], 2);
-    btf_tsv_free(&t);
+    btf__tsv_free(&t);
     /* The whole dataset path: the BOM manifest opens as the plain one. */
     char *dir = make_ubo(1, -1, -1);
     FILE *f = fopen(tu_fmt("%s/bom.tsv", dir), "w");

@@ -276,12 +276,12 @@ static void png_layouts(void **state)
                     float want;
                     int d = cases[t].depth;
                     if (cases[t].ctype == PNG_COLOR_TYPE_PALETTE)
-                        want = btf_srgb_to_linear(pal[sample(x, y, 0, 2)][k] / 255.0f);
+                        want = btf__srgb_to_linear(pal[sample(x, y, 0, 2)][k] / 255.0f);
                     else if (d == 16)
                         want = (float)sample(x, y, k, 16) / 65535.0f;
                     else
-                        want = btf_srgb_to_linear((float)sample(x, y, k, d) /
-                                                  (float)((1u << d) - 1));
+                        want = btf__srgb_to_linear((float)sample(x, y, k, d) /
+                                                   (float)((1u << d) - 1));
                     float got = img.data[((size_t)y * w + x) * img.channels + k];
                     if (fabsf(got - want) > 1e-6f)
                         print_error("case %zu (%d, %d, %d): %g, expected %g\n", t, x, y, k,
@@ -331,7 +331,7 @@ static void cmyk_jpeg(void **state)
     const int want[3] = {200 * 128 / 255, 100 * 128 / 255, 50 * 128 / 255};
     for (int i = 0; i < 16 * 8; i++)
         for (int k = 0; k < 3; k++) {
-            float v = btf_linear_to_srgb(img.data[3 * i + k]) * 255.0f;
+            float v = btf__linear_to_srgb(img.data[3 * i + k]) * 255.0f;
             if (fabsf(v - want[k]) > 2.0f)
                 print_error("pixel %d channel %d: %g, expected %d\n", i, k, v, want[k]);
             assert_true(fabsf(v - want[k]) <= 2.0f);

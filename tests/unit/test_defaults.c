@@ -85,10 +85,10 @@ static float *cluster_points(int n, int dim)
     float *p = malloc((size_t)n * dim * sizeof *p);
     assert_non_null(p);
     btf_rng r;
-    btf_rng_seed(&r, 17);
+    btf__rng_seed(&r, 17);
     for (int i = 0; i < n; i++)
         for (int j = 0; j < dim; j++)
-            p[(size_t)i * dim + j] = (float)((i % 4) * 0.3 + 0.1 * btf_rng_uniform(&r) + 0.01 * j);
+            p[(size_t)i * dim + j] = (float)((i % 4) * 0.3 + 0.1 * btf__rng_uniform(&r) + 0.01 * j);
     return p;
 }
 
@@ -108,20 +108,20 @@ static void kmeans_and_segmentation(void **state)
     float *p = cluster_points(n, dim);
     btf_kmeans_opts kz = {0}, kd = btf_kmeans_defaults();
     btf_kmeans_result r0, r1, r2;
-    TU_OK(btf_kmeans(p, n, dim, 3, NULL, &r0, &e), &e);
-    TU_OK(btf_kmeans(p, n, dim, 3, &kz, &r1, &e), &e);
-    TU_OK(btf_kmeans(p, n, dim, 3, &kd, &r2, &e), &e);
+    TU_OK(btf__kmeans(p, n, dim, 3, NULL, &r0, &e), &e);
+    TU_OK(btf__kmeans(p, n, dim, 3, &kz, &r1, &e), &e);
+    TU_OK(btf__kmeans(p, n, dim, 3, &kd, &r2, &e), &e);
     same_kmeans(&r0, &r1, n, dim);
     same_kmeans(&r0, &r2, n, dim);
-    btf_kmeans_free(&r0);
-    btf_kmeans_free(&r1);
-    btf_kmeans_free(&r2);
+    btf__kmeans_free(&r0);
+    btf__kmeans_free(&r1);
+    btf__kmeans_free(&r2);
 
     btf_segment_opts sz = {0}, sd = btf_segment_defaults();
     btf_segmentation s0, s1, s2;
-    TU_OK(btf_segment_features(p, nv, nl, dim, NULL, &s0, &e), &e);
-    TU_OK(btf_segment_features(p, nv, nl, dim, &sz, &s1, &e), &e);
-    TU_OK(btf_segment_features(p, nv, nl, dim, &sd, &s2, &e), &e);
+    TU_OK(btf__segment_features(p, nv, nl, dim, NULL, &s0, &e), &e);
+    TU_OK(btf__segment_features(p, nv, nl, dim, &sz, &s1, &e), &e);
+    TU_OK(btf__segment_features(p, nv, nl, dim, &sd, &s2, &e), &e);
     const btf_segmentation *s[3] = {&s0, &s1, &s2};
     for (int i = 1; i < 3; i++) {
         assert_int_equal(s[i]->k, s0.k);
@@ -181,28 +181,28 @@ static void struct_size_layouts(void **state)
     int n = 48, dim = 5;
     float *p = cluster_points(n, dim);
     btf_kmeans_result r0, r1;
-    TU_OK(btf_kmeans(p, n, dim, 3, NULL, &r0, &e), &e);
+    TU_OK(btf__kmeans(p, n, dim, 3, NULL, &r0, &e), &e);
     /* An older caller's struct that ends before max_iter: the junk after it
      * is not read. */
     btf_kmeans_opts old;
     memset(&old, 0xA5, sizeof old);
     old.struct_size = offsetof(btf_kmeans_opts, max_iter);
     old.restarts = 0;
-    TU_OK(btf_kmeans(p, n, dim, 3, &old, &r1, &e), &e);
+    TU_OK(btf__kmeans(p, n, dim, 3, &old, &r1, &e), &e);
     same_kmeans(&r0, &r1, n, dim);
-    btf_kmeans_free(&r0);
-    btf_kmeans_free(&r1);
+    btf__kmeans_free(&r0);
+    btf__kmeans_free(&r1);
 
     btf_kmeans_opts newer = btf_kmeans_defaults();
     newer.struct_size = sizeof newer + 8;
-    assert_int_equal(btf_kmeans(p, n, dim, 3, &newer, &r1, &e), BTF_E_ARG);
+    assert_int_equal(btf__kmeans(p, n, dim, 3, &newer, &r1, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "btf_kmeans: options struct of"));
     newer.struct_size = 3;
-    assert_int_equal(btf_kmeans(p, n, dim, 3, &newer, &r1, &e), BTF_E_ARG);
+    assert_int_equal(btf__kmeans(p, n, dim, 3, &newer, &r1, &e), BTF_E_ARG);
     btf_segment_opts seg = btf_segment_defaults();
     seg.struct_size = 1u << 20;
     btf_segmentation s;
-    assert_int_equal(btf_segment_features(p, 6, 8, dim, &seg, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__segment_features(p, 6, 8, dim, &seg, &s, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "btf_segment"));
     free(p);
 }
@@ -213,13 +213,13 @@ static void texture(btf_image *img, int w, int h)
     btf_error e = {0};
     TU_OK(btf_image_alloc(img, w, h, 3, &e), &e);
     btf_rng r;
-    btf_rng_seed(&r, 3);
+    btf__rng_seed(&r, 3);
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++)
             for (int c = 0; c < 3; c++) {
                 float *v = &img->data[((size_t)y * w + x) * 3 + c];
                 float left = x ? v[-3] : 0.5f, up = y ? v[-(ptrdiff_t)w * 3] : 0.5f;
-                *v = 0.4f * left + 0.4f * up + 0.2f * (float)btf_rng_uniform(&r);
+                *v = 0.4f * left + 0.4f * up + 0.2f * (float)btf__rng_uniform(&r);
             }
 }
 
@@ -236,9 +236,9 @@ static void car_and_subspace_fits(void **state)
     btf_car_fit_opts cz = {0}, cd = btf_car_fit_defaults();
     btf_car_band b0, b1, b2;
     btf_car_fit_info i0, i1, i2;
-    TU_OK(btf_car_fit(band, 48, 40, NULL, &b0, &i0, &e), &e);
-    TU_OK(btf_car_fit(band, 48, 40, &cz, &b1, &i1, &e), &e);
-    TU_OK(btf_car_fit(band, 48, 40, &cd, &b2, &i2, &e), &e);
+    TU_OK(btf__car_fit(band, 48, 40, NULL, &b0, &i0, &e), &e);
+    TU_OK(btf__car_fit(band, 48, 40, &cz, &b1, &i1, &e), &e);
+    TU_OK(btf__car_fit(band, 48, 40, &cd, &b2, &i2, &e), &e);
     assert_memory_equal(&b0, &b1, sizeof b0);
     assert_memory_equal(&b0, &b2, sizeof b0);
     assert_memory_equal(&i0, &i1, sizeof i0);

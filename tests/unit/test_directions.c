@@ -1,6 +1,6 @@
 /* test_directions.c — direction sets and (theta, phi) <-> vector conversions. */
 #include "testutil.h"
-#include "core/core.h" /* btf_dirset_ubo151 */
+#include "core/core.h" /* btf__dirset_ubo151 */
 
 #include <math.h>
 #include <stdlib.h>
@@ -32,7 +32,7 @@ static void ubo151_rings(void **state)
     (void)state;
     btf_dirset s;
     btf_error e = {0};
-    TU_OK(btf_dirset_ubo151(&s, &e), &e);
+    TU_OK(btf__dirset_ubo151(&s, &e), &e);
     assert_int_equal(s.count, 151);
     /* Ring 1 (theta 11) starts at phi 15 and has 6 azimuths 60 degrees apart. */
     assert_true(s.dirs[1].theta == 11.0 && s.dirs[1].phi == 15.0);
@@ -109,7 +109,7 @@ static void find_and_custom_lists(void **state)
      * still recognised (the rounding moves a direction by up to 0.69 degree,
      * inside BTF_DIR_NAME_TOLERANCE). */
     btf_dirset u151;
-    TU_OK(btf_dirset_ubo151(&u151, &e), &e);
+    TU_OK(btf__dirset_ubo151(&u151, &e), &e);
     btf_dir rounded[151];
     for (int i = 0; i < 151; i++)
         rounded[i] = (btf_dir){floor(u151.dirs[i].theta + 0.5), floor(u151.dirs[i].phi + 0.5)};

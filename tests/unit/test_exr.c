@@ -67,7 +67,7 @@ static unsigned char *slurp(const char *path, size_t *n)
 {
     unsigned char *d = NULL;
     btf_error e = {0};
-    TU_OK(btf_read_file(path, (size_t)1 << 30, &d, n, &e), &e);
+    TU_OK(btf__read_file(path, (size_t)1 << 30, &d, n, &e), &e);
     return d;
 }
 
@@ -154,7 +154,7 @@ static void round_trip_sizes(void **state)
                     random_image(&a, w, h, c, (uint32_t)(s * 7 + c), -1000.0f, 1000.0f);
                 TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = half}, NULL, &e), &e);
                 btf_image_header hd;
-                TU_OK(btf_exr_probe(p, &hd, &e), &e);
+                TU_OK(btf__exr_probe(p, &hd, &e), &e);
                 assert_int_equal(hd.format, BTF_FILE_EXR);
                 assert_int_equal(hd.width, w);
                 assert_int_equal(hd.height, h);
@@ -164,7 +164,7 @@ static void round_trip_sizes(void **state)
                 /* Through the public API too: it dispatches on the signature. */
                 TU_OK(btf_image_probe(p, &hd, &e), &e);
                 assert_int_equal(hd.format, BTF_FILE_EXR);
-                TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+                TU_OK(btf__exr_read(p, 0, &b, &e), &e);
                 assert_same_image(&a, &b);
                 btf_image_free(&a);
                 btf_image_free(&b);
@@ -180,7 +180,7 @@ static void half_rounds_to_nearest(void **state)
     random_image(&a, 31, 9, 3, 5, 0.0f, 8.0f);
     const char *p = tu_fmt("%s/h.exr", tu_dir);
     TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
-    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 0, &b, &e), &e);
     for (size_t i = 0; i < (size_t)31 * 9 * 3; i++)
         assert_true(fabsf(a.data[i] - b.data[i]) <= a.data[i] * (1.0f / 2048.0f) + 1e-7f);
     btf_image_free(&a);
@@ -201,14 +201,14 @@ static void extreme_values(void **state)
 
     /* Float keeps every value bit for bit, subnormals and -0 included. */
     TU_OK(btf_image_write_exr_opts(p, &a, NULL, NULL, &e), &e);
-    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 0, &b, &e), &e);
     assert_memory_equal(a.data, b.data, sizeof in);
     btf_image_free(&b);
 
     /* Half clamps to +-65504 (never Inf); tiny values go to 0 or a half
      * subnormal, keeping their sign. */
     TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
-    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 0, &b, &e), &e);
     for (int i = 0; i < n; i++) {
         float v = b.data[i];
         assert_true(isfinite(v));
@@ -234,7 +234,7 @@ static void channel_conversion(void **state)
     random_image(&rgb, 9, 4, 3, 11, 0.0f, 10.0f);
     const char *p = tu_fmt("%s/c.exr", tu_dir);
     TU_OK(btf_image_write_exr_opts(p, &rgb, NULL, NULL, &e), &e);
-    TU_OK(btf_exr_read(p, 1, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 1, &b, &e), &e);
     assert_int_equal(b.channels, 1);
     for (int i = 0; i < 36; i++) {
         const float *q = rgb.data + 3 * i;
@@ -242,13 +242,13 @@ static void channel_conversion(void **state)
         assert_true(fabsf(b.data[i] - l) <= 1e-5f * (1.0f + l));
     }
     btf_image_free(&b);
-    TU_OK(btf_exr_read(p, 3, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 3, &b, &e), &e);
     assert_same_image(&rgb, &b);
     btf_image_free(&b);
 
     random_image(&grey, 5, 6, 1, 12, -5.0f, 5.0f);
     TU_OK(btf_image_write_exr_opts(p, &grey, &(btf_exr_opts){.half = 1}, NULL, &e), &e);
-    TU_OK(btf_exr_read(p, 3, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 3, &b, &e), &e);
     assert_int_equal(b.channels, 3);
     for (int i = 0; i < 30; i++) {
         assert_true(b.data[3 * i] == b.data[3 * i + 1] && b.data[3 * i] == b.data[3 * i + 2]);
@@ -259,11 +259,11 @@ static void channel_conversion(void **state)
     for (int i = 0; i < 36 * 3; i++)
         rgb.data[i] = FLT_MAX;
     TU_OK(btf_image_write_exr_opts(p, &rgb, NULL, NULL, &e), &e);
-    TU_OK(btf_exr_read(p, 1, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 1, &b, &e), &e);
     for (int i = 0; i < 36; i++)
         assert_true(isfinite(b.data[i]) && b.data[i] > 3e38f);
     btf_image_free(&b);
-    assert_int_equal(btf_exr_read(p, 2, &b, &e), BTF_E_ARG);
+    assert_int_equal(btf__exr_read(p, 2, &b, &e), BTF_E_ARG);
     assert_null(b.data);
     btf_image_free(&rgb);
     btf_image_free(&grey);
@@ -304,7 +304,7 @@ static void streaming_equals_one_shot(void **state)
         assert_memory_equal(d1, d2, n1);
         free(d1);
         free(d2);
-        TU_OK(btf_exr_read(p2, 0, &b, &e), &e);
+        TU_OK(btf__exr_read(p2, 0, &b, &e), &e);
         assert_int_equal(b.width, w);
         assert_int_equal(b.height, h);
         if (!half)
@@ -334,20 +334,20 @@ static void writer_options(void **state)
     for (int half = 0; half <= 1; half++) {
         const char *p = tu_fmt("%s/ref.exr", d);
         TU_OK(btf_image_write_exr_opts(p, &a, &(btf_exr_opts){.half = half}, NULL, &e), &e);
-        TU_OK(btf_exr_read(p, 0, &ref[half], &e), &e);
+        TU_OK(btf__exr_read(p, 0, &ref[half], &e), &e);
         remove(p);
     }
-    assert_string_equal(btf_exr_compression_name(BTF_EXR_PIZ), "piz");
-    assert_string_equal(btf_exr_compression_name(0), "zip");
-    assert_null(btf_exr_compression_name(BTF_EXR_PXR24 + 1));
-    assert_null(btf_exr_compression_name(-1));
+    assert_string_equal(btf__exr_compression_name(BTF_EXR_PIZ), "piz");
+    assert_string_equal(btf__exr_compression_name(0), "zip");
+    assert_null(btf__exr_compression_name(BTF_EXR_PXR24 + 1));
+    assert_null(btf__exr_compression_name(-1));
     for (int comp = BTF_EXR_ZIP; comp <= BTF_EXR_PXR24; comp++)
         for (int half = 0; half <= 1; half++) {
             char path[2][1024];
             btf_exr_times t = {0};
             for (int bg = 0; bg <= 1; bg++) {
                 snprintf(path[bg], sizeof path[bg], "%s/%s_%d_%d.exr", d,
-                         btf_exr_compression_name(comp), half, bg);
+                         btf__exr_compression_name(comp), half, bg);
                 btf_exr_opts o = btf_exr_defaults();
                 o.half = half, o.compression = comp, o.background = bg, o.times = &t;
                 btf_exr_writer *wr = NULL;
@@ -369,7 +369,7 @@ static void writer_options(void **state)
             assert_true(t.bytes == 2 * (uint64_t)n1);
             assert_true(t.write_s > 0 && t.convert_s > 0 && t.stage_s > 0);
             btf_image b;
-            TU_OK(btf_exr_read(path[1], 0, &b, &e), &e);
+            TU_OK(btf__exr_read(path[1], 0, &b, &e), &e);
             int lossless = comp <= BTF_EXR_PIZ || (comp == BTF_EXR_PXR24 && half);
             if (lossless)
                 assert_same_image(&ref[half], &b);
@@ -390,7 +390,7 @@ static void writer_options(void **state)
         btf_image small = {.width = w, .height = rows, .channels = c, .data = a.data};
         TU_OK(btf_image_write_exr_opts(p, &small, &o, NULL, &e), &e);
         btf_image b;
-        TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+        TU_OK(btf__exr_read(p, 0, &b, &e), &e);
         assert_int_equal(b.height, rows);
         assert_memory_equal(b.data, a.data, (size_t)w * rows * c * sizeof(float));
         btf_image_free(&b);
@@ -460,12 +460,12 @@ static void fast_pack_is_the_library_s(void **state)
                 char path[2][1024];
                 for (int lib = 0; lib <= 1; lib++) {
                     snprintf(path[lib], sizeof path[lib], "%s/p%d.exr", d, lib);
-                    btf_exr_library_pack = lib;
+                    btf__exr_library_pack = lib;
                     btf_exr_opts o = btf_exr_defaults();
                     o.half = half, o.compression = comp, o.background = lib;
                     TU_OK(btf_image_write_exr_opts(path[lib], &a, &o, NULL, &e), &e);
                 }
-                btf_exr_library_pack = 0;
+                btf__exr_library_pack = 0;
                 size_t n1, n2;
                 unsigned char *d1 = slurp(path[0], &n1), *d2 = slurp(path[1], &n2);
                 assert_int_equal(n1, n2);
@@ -580,13 +580,13 @@ static void writes_are_atomic(void **state)
     bad.data[100] = NAN;
     assert_int_equal(btf_image_write_exr_opts(p, &bad, NULL, NULL, &e), BTF_E_ARG);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
-    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 0, &b, &e), &e);
     assert_same_image(&a, &b);
     btf_image_free(&b);
     /* A successful rewrite replaces it. */
     bad.data[100] = 0.5f;
     TU_OK(btf_image_write_exr_opts(p, &bad, NULL, NULL, &e), &e);
-    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 0, &b, &e), &e);
     assert_same_image(&bad, &b);
     assert_int_equal(stray_files(d, "atomic.exr"), 0);
     btf_image_free(&a);
@@ -606,8 +606,8 @@ static void inf_and_nan_in_file(void **state)
     tu_exr_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 8, 6, 1, {"Y"},
                   {EXR_PIXEL_FLOAT}};
     tu_exr_write_raw(p, &s, inf_at_3_2);
-    TU_OK(btf_exr_probe(p, &(btf_image_header){0}, &e), &e); /* the header is fine */
-    assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_DATA);
+    TU_OK(btf__exr_probe(p, &(btf_image_header){0}, &e), &e); /* the header is fine */
+    assert_int_equal(btf__exr_read(p, 0, &b, &e), BTF_E_DATA);
     assert_string_equal(e.msg, tu_fmt("%s: NaN or Inf at pixel (3, 2)", p));
     assert_null(b.data);
     /* Through the public reader as well. */
@@ -617,7 +617,7 @@ static void inf_and_nan_in_file(void **state)
     tu_exr_spec s2 = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 5, 20, 3, {"B", "G", "R"},
                    {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
     tu_exr_write_raw(p, &s2, nan_at_0_4);
-    assert_int_equal(btf_exr_read(p, 1, &b, &e), BTF_E_DATA);
+    assert_int_equal(btf__exr_read(p, 1, &b, &e), BTF_E_DATA);
     assert_string_equal(e.msg, tu_fmt("%s: NaN or Inf at pixel (0, 4)", p));
     assert_null(b.data);
 }
@@ -634,12 +634,12 @@ static void other_layouts(void **state)
     tu_exr_spec t = {EXR_STORAGE_TILED, EXR_COMPRESSION_ZIP, 4, 0, 0, 10, 7, 3, {"B", "G", "R"},
                   {EXR_PIXEL_FLOAT, EXR_PIXEL_HALF, EXR_PIXEL_FLOAT}};
     tu_exr_write_raw(p, &t, pattern);
-    TU_OK(btf_exr_probe(p, &hd, &e), &e);
+    TU_OK(btf__exr_probe(p, &hd, &e), &e);
     assert_int_equal(hd.width, 10);
     assert_int_equal(hd.height, 7);
     assert_int_equal(hd.channels, 3);
     assert_int_equal(hd.bits, 32);
-    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 0, &b, &e), &e);
     assert_pattern(&b, &t, (const char *const[]){"R", "G", "B"});
     btf_image_free(&b);
 
@@ -648,10 +648,10 @@ static void other_layouts(void **state)
     tu_exr_spec o = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_PIZ, 0, -3, 5, 9, 40, 2, {"A", "Y"},
                   {EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
     tu_exr_write_raw(p, &o, pattern);
-    TU_OK(btf_exr_probe(p, &hd, &e), &e);
+    TU_OK(btf__exr_probe(p, &hd, &e), &e);
     assert_int_equal(hd.channels, 1);
     assert_int_equal(hd.bits, 16);
-    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 0, &b, &e), &e);
     assert_int_equal(b.width, 9);
     assert_int_equal(b.height, 40);
     assert_pattern(&b, &o, (const char *const[]){"Y"});
@@ -660,7 +660,7 @@ static void other_layouts(void **state)
     tu_exr_spec z = {EXR_STORAGE_TILED, EXR_COMPRESSION_NONE, 3, 2, 2, 8, 8, 1, {"Z"},
                   {EXR_PIXEL_FLOAT}};
     tu_exr_write_raw(p, &z, pattern);
-    TU_OK(btf_exr_read(p, 3, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 3, &b, &e), &e);
     assert_int_equal(b.channels, 3);
     assert_pattern(&b, &z, (const char *const[]){"Z", "Z", "Z"});
     btf_image_free(&b);
@@ -684,12 +684,12 @@ static void every_compression(void **state)
         tu_exr_write_raw(p, &s, pattern);
         btf_image b;
         if (comp[i] == EXR_COMPRESSION_B44 || comp[i] == EXR_COMPRESSION_B44A) {
-            assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
+            assert_int_equal(btf__exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
             assert_non_null(strstr(e.msg, "B44"));
             assert_non_null(strstr(e.msg, p));
             continue;
         }
-        TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+        TU_OK(btf__exr_read(p, 0, &b, &e), &e);
         assert_int_equal(b.channels, 3);
         /* Exact for the lossless ones (PXR24 is lossless on half); B44 and
          * DWA are lossy, worst at the pattern's jumps. Output R, G, B are
@@ -732,7 +732,7 @@ static void dwa_is_unsupported(void **state)
     at[sizeof key - 1] = EXR_COMPRESSION_DWAA;
     tu_write_file(p, d, n);
     free(d);
-    int rc = btf_exr_read(p, 0, &b, &e);
+    int rc = btf__exr_read(p, 0, &b, &e);
     if (rc != BTF_E_UNSUPPORTED)
         print_error("DWA read gave %d: %s\n", rc, e.msg);
     assert_int_equal(rc, BTF_E_UNSUPPORTED);
@@ -806,16 +806,16 @@ static void deep_is_unsupported(void **state)
     tu_exr_spec s = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 6, 5, 1, {"Y"},
                   {EXR_PIXEL_FLOAT}};
     tu_exr_write_raw(p, &s, pattern);
-    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 0, &b, &e), &e);
     btf_image_free(&b);
     relabel_as_deep(p, 5); /* NONE: one scanline per chunk */
-    int rc = btf_exr_read(p, 0, &b, &e);
+    int rc = btf__exr_read(p, 0, &b, &e);
     if (rc != BTF_E_UNSUPPORTED)
         print_error("deep read gave %d: %s\n", rc, e.msg);
     assert_int_equal(rc, BTF_E_UNSUPPORTED);
     assert_string_equal(e.msg, tu_fmt("%s: deep EXR images are not supported", p));
     assert_null(b.data);
-    assert_int_equal(btf_exr_probe(p, &(btf_image_header){0}, &e), BTF_E_UNSUPPORTED);
+    assert_int_equal(btf__exr_probe(p, &(btf_image_header){0}, &e), BTF_E_UNSUPPORTED);
 }
 
 static void unsupported_layouts(void **state)
@@ -829,29 +829,29 @@ static void unsupported_layouts(void **state)
     tu_exr_spec u = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 1, {"Y"},
                   {EXR_PIXEL_UINT}};
     tu_exr_write_raw(p, &u, pattern);
-    assert_int_equal(btf_exr_probe(p, &hd, &e), BTF_E_UNSUPPORTED);
-    assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
+    assert_int_equal(btf__exr_probe(p, &hd, &e), BTF_E_UNSUPPORTED);
+    assert_int_equal(btf__exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
     assert_non_null(strstr(e.msg, p));
     assert_non_null(strstr(e.msg, "UINT"));
 
     tu_exr_spec uv = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 2, {"U", "V"},
                    {EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
     tu_exr_write_raw(p, &uv, pattern);
-    assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
+    assert_int_equal(btf__exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
     assert_non_null(strstr(e.msg, "U, V"));
 
     /* Luminance/chroma: reading only Y would lose the colour. */
     tu_exr_spec yc = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_NONE, 0, 0, 0, 4, 4, 3,
                    {"BY", "RY", "Y"}, {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}};
     tu_exr_write_raw(p, &yc, pattern);
-    assert_int_equal(btf_exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
+    assert_int_equal(btf__exr_read(p, 0, &b, &e), BTF_E_UNSUPPORTED);
 
     /* A UINT channel beside R, G, B is merely skipped. */
     tu_exr_spec id = {EXR_STORAGE_SCANLINE, EXR_COMPRESSION_ZIP, 0, 0, 0, 6, 5, 4,
                    {"B", "G", "R", "id"},
                    {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_UINT}};
     tu_exr_write_raw(p, &id, pattern);
-    TU_OK(btf_exr_read(p, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p, 0, &b, &e), &e);
     for (int i = 0; i < 30; i++)
         assert_true(b.data[3 * i] == pattern(2, i % 6, i / 6));
     btf_image_free(&b);
@@ -865,14 +865,14 @@ static void assert_rejected(const char *p)
     btf_error e = {0};
     btf_image b;
     btf_image_header hd;
-    int rc = btf_exr_read(p, 0, &b, &e);
+    int rc = btf__exr_read(p, 0, &b, &e);
     if (rc != BTF_E_FORMAT && rc != BTF_E_IO)
         print_error("%s: read gave %d: %s\n", p, rc, e.msg);
     assert_true(rc == BTF_E_FORMAT || rc == BTF_E_IO);
     assert_null(b.data);
     assert_int_equal(strncmp(e.msg, p, strlen(p)), 0);
     assert_null(strchr(e.msg, '\n'));
-    rc = btf_exr_probe(p, &hd, &e);
+    rc = btf__exr_probe(p, &hd, &e);
     assert_true(rc == BTF_E_FORMAT || rc == BTF_E_IO);
 }
 
@@ -920,7 +920,7 @@ static void corrupt_bytes(void **state)
         for (int f = 0; f < flips; f++)
             m[rng_next(&s) % n] ^= (unsigned char)(1 + rng_next(&s) % 255);
         tu_write_file(bad, m, n);
-        int rc = btf_exr_read(bad, 0, &b, &e);
+        int rc = btf__exr_read(bad, 0, &b, &e);
         if (rc == 0) {
             assert_int_equal(b.width, 40);
             btf_image_free(&b);
@@ -929,7 +929,7 @@ static void corrupt_bytes(void **state)
             assert_int_equal(strncmp(e.msg, bad, strlen(bad)), 0);
         }
         btf_image_header hd;
-        btf_exr_probe(bad, &hd, &e);
+        btf__exr_probe(bad, &hd, &e);
     }
     free(m);
     free(d);
@@ -957,13 +957,13 @@ static void garbage_and_missing(void **state)
     assert_rejected(p);
 
     const char *missing = tu_fmt("%s/missing.exr", tu_dir);
-    assert_int_equal(btf_exr_read(missing, 0, &b, &e), BTF_E_IO);
+    assert_int_equal(btf__exr_read(missing, 0, &b, &e), BTF_E_IO);
     assert_null(b.data);
     assert_non_null(strstr(e.msg, missing));
-    assert_int_equal(btf_exr_probe(missing, &hd, &e), BTF_E_IO);
+    assert_int_equal(btf__exr_probe(missing, &hd, &e), BTF_E_IO);
     /* A folder is not a file. */
-    assert_int_equal(btf_exr_read(tu_dir, 0, &b, &e), BTF_E_IO);
-    assert_int_equal(btf_exr_read(NULL, 0, &b, &e), BTF_E_ARG);
+    assert_int_equal(btf__exr_read(tu_dir, 0, &b, &e), BTF_E_IO);
+    assert_int_equal(btf__exr_read(NULL, 0, &b, &e), BTF_E_ARG);
 }
 
 /* Rewrites the data window of an EXR file in place. */
@@ -1029,11 +1029,11 @@ static void library_is_silent(void **state)
     int rc2 = BTF_OK, rc3 = BTF_OK, rc4 = BTF_OK, rc5 = BTF_OK;
     if (d) {
         tu_write_file(p, d, n / 2);
-        rc2 = btf_exr_read(p, 0, &b, &e);
-        rc3 = btf_exr_probe(p, &(btf_image_header){0}, &e);
+        rc2 = btf__exr_read(p, 0, &b, &e);
+        rc3 = btf__exr_probe(p, &(btf_image_header){0}, &e);
         memset(d + 8, 0x7f, n - 8);
         tu_write_file(p, d, n);
-        rc4 = btf_exr_read(p, 0, &b, &e);
+        rc4 = btf__exr_read(p, 0, &b, &e);
     }
     rc5 = btf_image_write_exr_opts(tu_fmt("%s/no/such/folder.exr", tu_dir), &a,
                                    &(btf_exr_opts){.half = 1}, NULL, &e);
@@ -1067,8 +1067,8 @@ static void assert_same_pixels(const char *p1, const char *p2)
 {
     btf_error e = {0};
     btf_image a, b;
-    TU_OK(btf_exr_read(p1, 0, &a, &e), &e);
-    TU_OK(btf_exr_read(p2, 0, &b, &e), &e);
+    TU_OK(btf__exr_read(p1, 0, &a, &e), &e);
+    TU_OK(btf__exr_read(p2, 0, &b, &e), &e);
     assert_int_equal(a.width, b.width);
     assert_int_equal(a.height, b.height);
     assert_int_equal(a.channels, b.channels);

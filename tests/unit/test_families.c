@@ -179,7 +179,7 @@ static void test_render_is_the_family_render(void **state)
     btf_image_free(&x);
     btf_image_free(&y);
     TU_OK(btf_material_render_flat(b, NULL, view, light, &o, &x, NULL, &e), &e);
-    TU_OK(btf_rf_render_flat(&rf, view, light, 24, 20, 2, &y, &e), &e);
+    TU_OK(btf__rf_render_flat(&rf, view, light, 24, 20, 2, &y, &e), &e);
     assert_same_image(&x, &y);
     btf_material_render_note(b, NULL, view, &info, note, sizeof note);
     assert_non_null(strstr(note, "reflectance-field model"));

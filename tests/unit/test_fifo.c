@@ -220,7 +220,7 @@ static void open_regular(void **state)
     (void)state;
     btf_error e = {0};
     uint64_t size = 0;
-    int fd = btf_open_regular(tu_fmt("%s/tex.png", dir), &size, &e);
+    int fd = btf__open_regular(tu_fmt("%s/tex.png", dir), &size, &e);
     assert_true(fd >= 0);
     struct stat st;
     assert_int_equal(fstat(fd, &st), 0);
@@ -229,12 +229,12 @@ static void open_regular(void **state)
     const char *bad[] = {tu_fmt("%s/f.png", dir), "/dev/null", dir};
     for (int i = 0; i < 3; i++) {
         e = (btf_error){0};
-        assert_int_equal(btf_open_regular(bad[i], NULL, &e), -1);
+        assert_int_equal(btf__open_regular(bad[i], NULL, &e), -1);
         assert_int_equal(errno, EINVAL);
         assert_int_equal(e.code, BTF_E_IO);
         assert_string_equal(e.msg, tu_fmt("%s: not a regular file", bad[i]));
     }
-    assert_int_equal(btf_open_regular(tu_fmt("%s/nothere", dir), NULL, NULL), -1);
+    assert_int_equal(btf__open_regular(tu_fmt("%s/nothere", dir), NULL, NULL), -1);
     assert_int_equal(errno, ENOENT);
 }
 

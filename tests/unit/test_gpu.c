@@ -99,16 +99,16 @@ static void parity_colour_match(void **state)
     btf_image host, back, plain;
     TU_OK(btf_gpu_synthesise(gpu, &m, &zero, 1, &so, &host, &e), &e);
     int twice[2] = {0, 0};
-    TU_OK(btf_gpu_synthesise_device(gpu, &m, twice, 2, &so, &dev, off, &e), &e);
+    TU_OK(btf__gpu_synthesise_device(gpu, &m, twice, 2, &so, &dev, off, &e), &e);
     size_t bytes = (size_t)24 * 20 * 3 * sizeof(float);
     TU_OK(btf_image_alloc(&back, 24, 20, 3, &e), &e);
     for (int j = 0; j < 2; j++) {
         memset(back.data, 0, bytes);
-        TU_OK(btf_gpu_images_download(btf_gpu_vk(gpu), &dev, off[j], back.data, bytes / 4, &e),
+        TU_OK(btf__gpu_images_download(btf__gpu_vk(gpu), &dev, off[j], back.data, bytes / 4, &e),
               &e);
         assert_memory_equal(back.data, host.data, bytes);
     }
-    btf_gpu_images_free(&dev);
+    btf__gpu_images_free(&dev);
     so.match_colours = -1; /* and it did change them */
     TU_OK(btf_gpu_synthesise(gpu, &m, &zero, 1, &so, &plain, &e), &e);
     assert_memory_not_equal(plain.data, host.data, bytes);
@@ -159,7 +159,7 @@ static void parity_several_subspaces(void **state)
     m.subspaces = subs;
     compare(&m, 40, 31, 99);
     int batches, jobs;
-    btf_gpu_last_tiling(gpu, &batches, &jobs);
+    btf__gpu_last_tiling(gpu, &batches, &jobs);
     assert_int_equal(batches, 1); /* small: one batch, one job */
     assert_int_equal(jobs, 1);
     btf_model_free(&a);
@@ -204,12 +204,12 @@ static void parity_when_tiled(void **state)
         btf_gpu *small;
         btf_gpu_opts o = {.allow_cpu = 1, .validation = 1};
         TU_OK(btf_gpu_open(&o, &small, &e), &e);
-        btf_gpu_set_max_buffer_bytes(small, limits[i]);
+        btf__gpu_set_max_buffer_bytes(small, limits[i]);
         btf_gpu *keep = gpu;
         gpu = small;
         compare(&m, 300, 257, 11); /* needs ~14 MB untiled (wide margins) */
         int batches, jobs;
-        btf_gpu_last_tiling(small, &batches, &jobs);
+        btf__gpu_last_tiling(small, &batches, &jobs);
         print_message("limit %llu bytes: %d batch(es), %d jobs\n", (unsigned long long)limits[i],
                       batches, jobs);
         assert_true(jobs >= 2 * batches); /* strips of rows, not one job per batch */
@@ -220,7 +220,7 @@ static void parity_when_tiled(void **state)
     btf_gpu *tiny;
     btf_gpu_opts o = {.allow_cpu = 1};
     TU_OK(btf_gpu_open(&o, &tiny, &e), &e);
-    btf_gpu_set_max_buffer_bytes(tiny, 4096);
+    btf__gpu_set_max_buffer_bytes(tiny, 4096);
     btf_image out[1];
     int zero = 0;
     btf_synth_opts so = {.width = 300, .height = 10, .seed = 1};
@@ -331,7 +331,7 @@ static void devices_defaults_and_sizes(void **state)
     btf_image out[3];
     TU_OK(btf_gpu_synthesise(gpu, &m, which, 3, NULL, out, &e), &e);
     int batches, jobs;
-    btf_gpu_last_tiling(gpu, &batches, &jobs);
+    btf__gpu_last_tiling(gpu, &batches, &jobs);
     assert_int_equal(batches, 2);
     for (int k = 0; k < 3; k++) {
         btf_image cpu_out;
@@ -436,11 +436,11 @@ static void backend_auto_rule(void **state)
     assert_int_equal(pick >= 0, real);
     free(list);
     /* the budget of an open device: 8 buffers of its (here lowered) limit */
-    btf_gpu_set_max_buffer_bytes(gpu, 1 * MiB);
+    btf__gpu_set_max_buffer_bytes(gpu, 1 * MiB);
     assert_true(btf_gpu_memory_budget(gpu) <= 8 * MiB);
     assert_true(btf_gpu_auto_fits(gpu, 7 * MiB));
     assert_false(btf_gpu_auto_fits(gpu, 9 * MiB));
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     assert_true(btf_gpu_memory_budget(gpu) >= 128 * MiB);
 }
 

@@ -1,12 +1,12 @@
 /* test_gpu_match.c — colour matching and the structure layer's multiply on
  * the device (gpu/match_gpu.c; docs/gpu.md, "Colour matching on the
  * device") against the CPU's (src/synth/colour_match.c,
- * btf_structure_apply): bit for bit on lavapipe, the Khronos validation
+ * btf__structure_apply): bit for bit on lavapipe, the Khronos validation
  * layer on and silent, for images of every shape the sample grid takes
  * (1 x 1, smaller than the sample, strided), values at the extremes
  * (negative, zero, constant, near the float limit), images straddling the
  * device array's buffers (a small buffer cap), and whole syntheses left on
- * the device (btf_gpu_synthesise_device) against btf_synthesise_image. */
+ * the device (btf__gpu_synthesise_device) against btf_synthesise_image. */
 #include "model/model.h"
 #include "synth/synth.h"
 #include "synth/synth_testing.h"
@@ -73,18 +73,18 @@ static void compare(int w, int h, int kind, uint64_t off, uint64_t cap, const bt
     for (size_t i = 0; i < floats; i++)
         cpu.data[i] = value(kind, i, &s);
     btf_gpu_images dev;
-    TU_OK(btf_gpu_images_create(btf_gpu_vk(gpu), off + floats, cap, BTF_GPU_DEVICE_BUFFERS, "test", &dev, &e), &e);
-    TU_OK(btf_gpu_images_upload(btf_gpu_vk(gpu), &dev, off, cpu.data, floats, &e), &e);
-    TU_OK(btf_gpu_match_images(btf_gpu_vk(gpu), btf_gpu_match_pipes(gpu), &model, 0, match, &dev,
-                               off, w, h, pattern, &e),
+    TU_OK(btf__gpu_images_create(btf__gpu_vk(gpu), off + floats, cap, BTF_GPU_DEVICE_BUFFERS, "test", &dev, &e), &e);
+    TU_OK(btf__gpu_images_upload(btf__gpu_vk(gpu), &dev, off, cpu.data, floats, &e), &e);
+    TU_OK(btf__gpu_match_images(btf__gpu_vk(gpu), btf__gpu_match_pipes(gpu), &model, 0, match, &dev,
+                                off, w, h, pattern, &e),
           &e);
     float *back = malloc(floats * sizeof(float));
     assert_non_null(back);
-    TU_OK(btf_gpu_images_download(btf_gpu_vk(gpu), &dev, off, back, floats, &e), &e);
+    TU_OK(btf__gpu_images_download(btf__gpu_vk(gpu), &dev, off, back, floats, &e), &e);
     for (int y = 0; pattern && y < h; y++)
-        btf_structure_apply_row(pattern, y, cpu.data + (size_t)y * w * 3, w);
+        btf__structure_apply_row(pattern, y, cpu.data + (size_t)y * w * 3, w);
     if (match)
-        TU_OK(btf_match_synthesised(&model, 0, &cpu, &e), &e);
+        TU_OK(btf__match_synthesised(&model, 0, &cpu, &e), &e);
     size_t diff = 0, first = floats;
     for (size_t i = 0; i < floats; i++)
         if (memcmp(&back[i], &cpu.data[i], sizeof(float))) {
@@ -101,7 +101,7 @@ static void compare(int w, int h, int kind, uint64_t off, uint64_t cap, const bt
     for (size_t i = 0; i < floats; i++)
         assert_true(isfinite(back[i]));
     free(back);
-    btf_gpu_images_free(&dev);
+    btf__gpu_images_free(&dev);
     btf_image_free(&cpu);
     tu_gpu_no_validation_messages(gpu);
 }
@@ -160,10 +160,10 @@ static void synthesis_on_device(void **state)
     btf_synth_opts o = {.width = 200, .height = 150, .seed = 5, .match_colours = 1};
     for (int small = 0; small < 2; small++) {
         if (small) /* the two images over 3 buffers */
-            btf_gpu_set_max_buffer_bytes(gpu, 250000);
+            btf__gpu_set_max_buffer_bytes(gpu, 250000);
         btf_gpu_images dev;
         uint64_t off[2];
-        TU_OK(btf_gpu_synthesise_device(gpu, &model, subs, 2, &o, &dev, off, &e), &e);
+        TU_OK(btf__gpu_synthesise_device(gpu, &model, subs, 2, &o, &dev, off, &e), &e);
         btf_image cpu;
         o.seed = 5;
         TU_OK(btf_synthesise_image(&model, 0, &o, &cpu, &e), &e);
@@ -171,13 +171,13 @@ static void synthesis_on_device(void **state)
         float *back = malloc(floats * sizeof(float));
         assert_non_null(back);
         for (int k = 0; k < 2; k++) {
-            TU_OK(btf_gpu_images_download(btf_gpu_vk(gpu), &dev, off[k], back, floats, &e), &e);
+            TU_OK(btf__gpu_images_download(btf__gpu_vk(gpu), &dev, off[k], back, floats, &e), &e);
             assert_memory_equal(back, cpu.data, floats * sizeof(float));
         }
         free(back);
         btf_image_free(&cpu);
-        btf_gpu_images_free(&dev);
-        btf_gpu_set_max_buffer_bytes(gpu, 0);
+        btf__gpu_images_free(&dev);
+        btf__gpu_set_max_buffer_bytes(gpu, 0);
         tu_gpu_no_validation_messages(gpu);
     }
     print_message("200x150 synthesised and matched on the device (one buffer, then 3): the "
@@ -211,7 +211,7 @@ static void synthesis_past_budget(void **state)
     (void)state;
     btf_error e = {0};
     int subs[3] = {0, 0, 0};
-    btf_gpu_set_max_buffer_bytes(gpu, 250000);
+    btf__gpu_set_max_buffer_bytes(gpu, 250000);
     assert_int_equal(btf_gpu_memory_budget(gpu), 2000000);
     const int sizes[3][2] = {{200, 150}, {300, 400}, {300, 600}};
     for (int i = 0; i < 3; i++) {
@@ -221,7 +221,7 @@ static void synthesis_past_budget(void **state)
         TU_OK(btf_gpu_synthesise_each(gpu, &model, subs, 3, &o, check_image, &s, &e), &e);
         assert_int_equal(s.count, 3);
     }
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     tu_gpu_no_validation_messages(gpu);
     print_message("a 2 MB budget: 3 x 200x150 in one group, 3 x 300x400 one by one on the "
                   "device, 3 x 300x600 in strips to the host: the CPU's bits, in order\n");

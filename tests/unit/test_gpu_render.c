@@ -13,7 +13,7 @@
  * requires it.
  */
 #include "testutil.h"
-#include "synth/synth_testing.h" /* btf_gpu_set_max_buffer_bytes */
+#include "synth/synth_testing.h" /* btf__gpu_set_max_buffer_bytes */
 
 #include "scene_sphere_obj.h"
 #include "synth_gpu.h"
@@ -115,7 +115,7 @@ static void compare(const char *what, const btf_image *c, const btf_image *g)
     assert_true((double)beyond <= 0.001 * (double)n);
     /* On lavapipe (the CPU's own IEEE sqrt and division) the two paths are
      * bit for bit the same: reachable, so required there. */
-    if (btf_gpu_is_cpu(gpu))
+    if (btf__gpu_is_cpu(gpu))
         assert_int_equal(equal, n);
 }
 
@@ -333,9 +333,9 @@ static void test_bands(void **state)
     TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &one, NULL, &e), &e);
     /* 1 MiB: the subspace images still fit, the 3.5 MB G-buffer goes in 4
      * bands of 56 rows */
-    btf_gpu_set_max_buffer_bytes(gpu, 1u << 20);
+    btf__gpu_set_max_buffer_bytes(gpu, 1u << 20);
     TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &banded, NULL, &e), &e);
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     assert_memory_equal(one.data, banded.data, (size_t)256 * 192 * 3 * sizeof(float));
     btf_image_free(&one);
     btf_image_free(&banded);
@@ -368,12 +368,12 @@ static void test_split_maps(void **state)
     TU_OK(btf_render_flat(&m, view, light, &o, &c, &ic, &e), &e);
     assert_int_equal(ic.needed, 1);
     TU_OK(btf_gpu_render_flat(gpu, &m, view, light, &o, &one, NULL, &e), &e);
-    btf_gpu_set_max_buffer_bytes(gpu, 160000);
+    btf__gpu_set_max_buffer_bytes(gpu, 160000);
     TU_OK(btf_gpu_render_flat(gpu, &m, view, light, &o, &split, &ig, &e), &e);
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     size_t bytes = (size_t)128 * 128 * 3 * sizeof(float);
     assert_memory_equal(one.data, split.data, bytes);
-    if (btf_gpu_is_cpu(gpu))
+    if (btf__gpu_is_cpu(gpu))
         assert_memory_equal(c.data, split.data, bytes);
     print_message("maps over 7 buffers, the image over 5: the one-buffer render's bits\n");
     btf_image_free(&c);
@@ -403,34 +403,34 @@ static void test_split_textures(void **state)
     assert_int_equal(ic.needed, 4);
     /* 250 KB: about one image per buffer, four buffers; the G-buffer in
      * bands */
-    btf_gpu_set_max_buffer_bytes(gpu, 250000);
+    btf__gpu_set_max_buffer_bytes(gpu, 250000);
     TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &split, &ig, &e), &e);
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     assert_int_equal(ig.needed, 4);
     size_t bytes = (size_t)160 * 120 * 3 * sizeof(float);
     assert_memory_equal(one.data, split.data, bytes);
     compare("sphere, images over four buffers", &c, &split);
-    if (btf_gpu_is_cpu(gpu))
+    if (btf__gpu_is_cpu(gpu))
         assert_memory_equal(c.data, split.data, bytes);
     /* 200 KB: the images straddle the buffers' edges: the same bits */
     btf_image straddle = {0};
-    btf_gpu_set_max_buffer_bytes(gpu, 200000);
+    btf__gpu_set_max_buffer_bytes(gpu, 200000);
     TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &straddle, NULL, &e), &e);
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     assert_memory_equal(one.data, straddle.data, bytes);
     btf_image_free(&straddle);
     /* 150 KB: the images over six buffers (bindings 14 on): the same bits */
     btf_image six = {0};
-    btf_gpu_set_max_buffer_bytes(gpu, 150000);
+    btf__gpu_set_max_buffer_bytes(gpu, 150000);
     TU_OK(btf_gpu_render_scene(gpu, &m, &s, &o, &six, NULL, &e), &e);
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     assert_memory_equal(one.data, six.data, bytes);
     btf_image_free(&six);
     /* 90 KB: eight buffers cannot hold the four images: one clear error */
     btf_image none = {0};
-    btf_gpu_set_max_buffer_bytes(gpu, 90000);
+    btf__gpu_set_max_buffer_bytes(gpu, 90000);
     assert_int_equal(btf_gpu_render_scene(gpu, &m, &s, &o, &none, NULL, &e), BTF_E_UNSUPPORTED);
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     assert_non_null(strstr(e.msg, "more than 8 storage buffers"));
     assert_null(none.data);
     btf_image_free(&c);
@@ -454,9 +454,9 @@ static void test_limits(void **state)
     o.height = 64;
     btf_image img = {0};
     btf_dir v = {10, 0}, l = {30, 90};
-    btf_gpu_set_max_buffer_bytes(gpu, 4096);
+    btf__gpu_set_max_buffer_bytes(gpu, 4096);
     int rc = btf_gpu_render_flat(gpu, &m, v, l, &o, &img, NULL, &e);
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     assert_true(rc == BTF_E_UNSUPPORTED || rc == BTF_E_ARG);
     assert_null(strchr(e.msg, '\n'));
     assert_non_null(strstr(e.msg, "buffer"));
@@ -492,7 +492,7 @@ static void test_cli_backends(void **state)
     assert_int_equal(tu_run(tu_fmt("%s render -q %s --view 40,10 --light 30,250 --size 48x40 "
                                    "--backend cpu -o %s/c.png", tu_cli(), mp, dir), NULL), 0);
     assert_int_equal(tu_run(tu_fmt("cmp -s %s/g.png %s/c.png", dir, dir), NULL), 0);
-    if (btf_gpu_is_cpu(gpu)) {
+    if (btf__gpu_is_cpu(gpu)) {
         out = tu_capture(tu_fmt("%s render %s --view 40,10 --light 30,250 --size 8x8 "
                                 "--backend auto -o %s/a.png", tu_cli(), mp, dir), &st);
         assert_int_equal(st, 0);

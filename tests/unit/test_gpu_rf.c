@@ -19,7 +19,7 @@
  * ring, the light at grazing angles and on the horizon, 1 x 1 frames.
  */
 #include "testutil.h"
-#include "synth/synth_testing.h" /* btf_gpu_set_max_buffer_bytes */
+#include "synth/synth_testing.h" /* btf__gpu_set_max_buffer_bytes */
 #include "rf/rf.h"
 #include "synth_gpu.h"
 
@@ -81,7 +81,7 @@ static void make_model(btf_rf_model *m, int fit, int k, int w, int h, uint32_t s
     TU_OK(btf_dirset_ubo81(&m->lights, &e), &e);
     m->fit = fit, m->lobes = fit == BTF_RF_PTM ? 0 : k;
     m->width = w, m->height = h;
-    m->params = btf_rf_param_count(fit, m->lobes);
+    m->params = btf__rf_param_count(fit, m->lobes);
     m->slots = m->params + 3;
     m->fields = fit == BTF_RF_LAFORTUNE ? 1 : m->views.count;
     size_t planes = (size_t)m->fields * m->slots, codes = planes * w * h;
@@ -131,7 +131,7 @@ static void compare(const char *what, const btf_image *c, const btf_image *g)
     print_message("%s: max |cpu - gpu| %.3g of the range, %zu of %zu pixels beyond the "
                   "tolerance, %zu bit-identical\n", what, worst, beyond, n, equal);
     assert_true((double)beyond <= 0.001 * (double)n);
-    if (btf_gpu_is_cpu(gpu))
+    if (btf__gpu_is_cpu(gpu))
         assert_int_equal(equal, n);
 }
 
@@ -158,10 +158,10 @@ static void flat_parity_every_fit(void **state)
             for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
                 btf_image c = {0}, g = {0};
                 btf_render_info info;
-                TU_OK(btf_rf_render_flat(&m, pairs[i][0], pairs[i][1], sizes[s][0],
-                                         sizes[s][1], 2, &c, &e), &e);
-                TU_OK(btf_gpu_rf_render_flat(gpu, &m, pairs[i][0], pairs[i][1], sizes[s][0],
-                                             sizes[s][1], &g, &info, &e), &e);
+                TU_OK(btf__rf_render_flat(&m, pairs[i][0], pairs[i][1], sizes[s][0],
+                                          sizes[s][1], 2, &c, &e), &e);
+                TU_OK(btf__gpu_rf_render_flat(gpu, &m, pairs[i][0], pairs[i][1], sizes[s][0],
+                                              sizes[s][1], &g, &info, &e), &e);
                 assert_true(info.shade_s >= 0.0 && info.synth_s >= 0.0);
                 if (s == 0 || s == 2)
                     compare(tu_fmt("%s k %d, flat %dx%d, view %g,%g light %g,%g",
@@ -212,8 +212,8 @@ static void sphere_parity_every_fit(void **state)
         make_model(&m, fits[f][0], fits[f][1], 13, 11, 31u + (uint32_t)f, 0);
         btf_image c = {0}, g = {0};
         btf_render_info info;
-        TU_OK(btf_rf_render_scene(&m, &s, 96, 80, 2, &c, NULL, &e), &e);
-        TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 96, 80, 2, &g, &info, &e), &e);
+        TU_OK(btf__rf_render_scene(&m, &s, 96, 80, 2, &c, NULL, &e), &e);
+        TU_OK(btf__gpu_rf_render_scene(gpu, &m, &s, 96, 80, 2, &g, &info, &e), &e);
         assert_true(info.trace_s >= 0.0 && info.shade_s >= 0.0);
         compare(tu_fmt("%s k %d, sphere 96x80, three lights", btf_rf_fit_name(m.fit), m.lobes),
                 &c, &g);
@@ -221,8 +221,8 @@ static void sphere_parity_every_fit(void **state)
         assert_true(g.data[0] == 0.1f && g.data[1] == 0.0f && g.data[2] == 0.3f);
         btf_image_free(&c);
         btf_image_free(&g);
-        TU_OK(btf_rf_render_scene(&m, &s, 1, 1, 1, &c, NULL, &e), &e);
-        TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 1, 1, 1, &g, NULL, &e), &e);
+        TU_OK(btf__rf_render_scene(&m, &s, 1, 1, 1, &c, NULL, &e), &e);
+        TU_OK(btf__gpu_rf_render_scene(gpu, &m, &s, 1, 1, 1, &g, NULL, &e), &e);
         compare("", &c, &g);
         btf_image_free(&c);
         btf_image_free(&g);
@@ -254,8 +254,8 @@ static void grazing_plane(void **state)
         btf_rf_model m;
         make_model(&m, fits[f][0], fits[f][1], 9, 9, 77u + (uint32_t)f, 0);
         btf_image c = {0}, g = {0};
-        TU_OK(btf_rf_render_scene(&m, &s, 64, 48, 2, &c, NULL, &e), &e);
-        TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 64, 48, 2, &g, NULL, &e), &e);
+        TU_OK(btf__rf_render_scene(&m, &s, 64, 48, 2, &c, NULL, &e), &e);
+        TU_OK(btf__gpu_rf_render_scene(gpu, &m, &s, 64, 48, 2, &g, NULL, &e), &e);
         compare(tu_fmt("%s k %d, grazing plane", btf_rf_fit_name(m.fit), m.lobes), &c, &g);
         btf_image_free(&c);
         btf_image_free(&g);
@@ -277,15 +277,15 @@ static void wild_ranges_stay_finite(void **state)
         btf_rf_model m;
         make_model(&m, fits[f][0], fits[f][1], 5, 4, 99u + (uint32_t)f, 1);
         btf_image c = {0}, g = {0};
-        TU_OK(btf_rf_render_flat(&m, (btf_dir){37.5, 100}, (btf_dir){89.9, 20}, 0, 0, 1, &c,
-                                 &e), &e);
-        TU_OK(btf_gpu_rf_render_flat(gpu, &m, (btf_dir){37.5, 100}, (btf_dir){89.9, 20}, 0, 0,
-                                     &g, NULL, &e), &e);
+        TU_OK(btf__rf_render_flat(&m, (btf_dir){37.5, 100}, (btf_dir){89.9, 20}, 0, 0, 1, &c,
+                                  &e), &e);
+        TU_OK(btf__gpu_rf_render_flat(gpu, &m, (btf_dir){37.5, 100}, (btf_dir){89.9, 20}, 0, 0,
+                                      &g, NULL, &e), &e);
         compare("", &c, &g);
         btf_image_free(&c);
         btf_image_free(&g);
-        TU_OK(btf_rf_render_scene(&m, &s, 32, 24, 1, &c, NULL, &e), &e);
-        TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 32, 24, 1, &g, NULL, &e), &e);
+        TU_OK(btf__rf_render_scene(&m, &s, 32, 24, 1, &c, NULL, &e), &e);
+        TU_OK(btf__gpu_rf_render_scene(gpu, &m, &s, 32, 24, 1, &g, NULL, &e), &e);
         compare(tu_fmt("%s k %d, ranges of 1e30", btf_rf_fit_name(m.fit), m.lobes), &c, &g);
         btf_image_free(&c);
         btf_image_free(&g);
@@ -310,40 +310,40 @@ static void buffers_and_bands(void **state)
     sphere_scene(&s);
     btf_error e = {0};
     btf_image one = {0}, banded = {0}, t1 = {0}, t2 = {0};
-    TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 80, 60, 2, &one, NULL, &e), &e);
-    TU_OK(btf_gpu_rf_render_flat(gpu, &m, (btf_dir){40, 10}, (btf_dir){30, 250}, 0, 0, &t1,
-                                 NULL, &e), &e);
+    TU_OK(btf__gpu_rf_render_scene(gpu, &m, &s, 80, 60, 2, &one, NULL, &e), &e);
+    TU_OK(btf__gpu_rf_render_flat(gpu, &m, (btf_dir){40, 10}, (btf_dir){30, 250}, 0, 0, &t1,
+                                  NULL, &e), &e);
     /* 200 KB: 35 fields of 5.6 KB a buffer (3 buffers), G-buffer bands of
      * 34 rows */
-    btf_gpu_set_max_buffer_bytes(gpu, 200000);
-    TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 80, 60, 2, &banded, NULL, &e), &e);
+    btf__gpu_set_max_buffer_bytes(gpu, 200000);
+    TU_OK(btf__gpu_rf_render_scene(gpu, &m, &s, 80, 60, 2, &banded, NULL, &e), &e);
     /* 70 KB: 12 fields a buffer, the 81 fields over 7 buffers (bindings 8 on) */
     btf_image seven = {0};
-    btf_gpu_set_max_buffer_bytes(gpu, 70000);
-    TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 80, 60, 2, &seven, NULL, &e), &e);
+    btf__gpu_set_max_buffer_bytes(gpu, 70000);
+    TU_OK(btf__gpu_rf_render_scene(gpu, &m, &s, 80, 60, 2, &seven, NULL, &e), &e);
     assert_memory_equal(one.data, seven.data, (size_t)80 * 60 * 3 * sizeof(float));
     btf_image_free(&seven);
-    btf_gpu_set_max_buffer_bytes(gpu, 1200);
+    btf__gpu_set_max_buffer_bytes(gpu, 1200);
     btf_rf_model small;
     make_model(&small, BTF_RF_PTM, 0, 16, 16, 5u, 0); /* a field: 16 x 16 x 9 x 2 = 4.6 KB */
-    int rc = btf_gpu_rf_render_flat(gpu, &small, (btf_dir){40, 10}, (btf_dir){30, 250}, 0, 0,
-                                    &t2, NULL, &e);
+    int rc = btf__gpu_rf_render_flat(gpu, &small, (btf_dir){40, 10}, (btf_dir){30, 250}, 0, 0,
+                                     &t2, NULL, &e);
     assert_int_equal(rc, BTF_E_UNSUPPORTED); /* a field is larger than a buffer */
     assert_null(strchr(e.msg, '\n'));
     assert_non_null(strstr(e.msg, "--backend cpu"));
     assert_null(t2.data);
-    btf_gpu_set_max_buffer_bytes(gpu, 6000); /* one field a buffer: the flat render's 4 fit */
-    TU_OK(btf_gpu_rf_render_flat(gpu, &m, (btf_dir){40, 10}, (btf_dir){30, 250}, 0, 0, &t2,
-                                 NULL, &e), &e);
+    btf__gpu_set_max_buffer_bytes(gpu, 6000); /* one field a buffer: the flat render's 4 fit */
+    TU_OK(btf__gpu_rf_render_flat(gpu, &m, (btf_dir){40, 10}, (btf_dir){30, 250}, 0, 0, &t2,
+                                  NULL, &e), &e);
     btf_image img = {0};
-    rc = btf_gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e); /* 81 > 8 buffers */
+    rc = btf__gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e); /* 81 > 8 buffers */
     assert_int_equal(rc, BTF_E_UNSUPPORTED);
     assert_null(strchr(e.msg, '\n'));
     assert_null(img.data);
-    btf_gpu_set_max_buffer_bytes(gpu, 0);
+    btf__gpu_set_max_buffer_bytes(gpu, 0);
     assert_memory_equal(one.data, banded.data, (size_t)80 * 60 * 3 * sizeof(float));
     assert_memory_equal(t1.data, t2.data, (size_t)16 * 16 * 3 * sizeof(float));
-    TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e), &e);
+    TU_OK(btf__gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e), &e);
     btf_image_free(&img);
     btf_image_free(&one);
     btf_image_free(&banded);
@@ -386,10 +386,10 @@ static void sampled_parity(void **state)
         for (size_t i = 0; i < sizeof pairs / sizeof pairs[0]; i++)
             for (size_t z = 0; z < sizeof sizes / sizeof sizes[0]; z++) {
                 btf_image c = {0}, g = {0};
-                TU_OK(btf_rf_render_flat(&m, pairs[i][0], pairs[i][1], sizes[z][0],
-                                         sizes[z][1], 2, &c, &e), &e);
-                TU_OK(btf_gpu_rf_render_flat(gpu, &m, pairs[i][0], pairs[i][1], sizes[z][0],
-                                             sizes[z][1], &g, NULL, &e), &e);
+                TU_OK(btf__rf_render_flat(&m, pairs[i][0], pairs[i][1], sizes[z][0],
+                                          sizes[z][1], 2, &c, &e), &e);
+                TU_OK(btf__gpu_rf_render_flat(gpu, &m, pairs[i][0], pairs[i][1], sizes[z][0],
+                                              sizes[z][1], &g, NULL, &e), &e);
                 if (z == 0) {
                     assert_int_equal(g.width, SW);
                     assert_int_equal(g.height, SH);
@@ -402,8 +402,8 @@ static void sampled_parity(void **state)
                 btf_image_free(&g);
             }
         btf_image c = {0}, g = {0};
-        TU_OK(btf_rf_render_scene(&m, &s, 96, 80, 2, &c, NULL, &e), &e);
-        TU_OK(btf_gpu_rf_render_scene(gpu, &m, &s, 96, 80, 2, &g, NULL, &e), &e);
+        TU_OK(btf__rf_render_scene(&m, &s, 96, 80, 2, &c, NULL, &e), &e);
+        TU_OK(btf__gpu_rf_render_scene(gpu, &m, &s, 96, 80, 2, &g, NULL, &e), &e);
         compare(tu_fmt("sampled %s k %d, sphere 96x80", btf_rf_fit_name(m.fit), m.lobes), &c,
                 &g);
         btf_image_free(&c);
@@ -426,27 +426,27 @@ static void bad_input(void **state)
     btf_error e = {0};
     btf_image img;
     btf_dir v = {10, 0}, l = {30, 90};
-    assert_int_equal(btf_gpu_rf_render_flat(NULL, &m, v, l, 4, 4, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_rf_render_flat(NULL, &m, v, l, 4, 4, &img, NULL, &e), BTF_E_ARG);
     assert_null(img.data);
-    assert_int_equal(btf_gpu_rf_render_flat(gpu, NULL, v, l, 4, 4, &img, NULL, &e), BTF_E_ARG);
-    assert_int_equal(btf_gpu_rf_render_flat(gpu, &m, (btf_dir){91, 0}, l, 4, 4, &img, NULL, &e),
+    assert_int_equal(btf__gpu_rf_render_flat(gpu, NULL, v, l, 4, 4, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_rf_render_flat(gpu, &m, (btf_dir){91, 0}, l, 4, 4, &img, NULL, &e),
                      BTF_E_ARG);
-    assert_int_equal(btf_gpu_rf_render_flat(gpu, &m, v, (btf_dir){10, NAN}, 4, 4, &img, NULL,
-                                            &e), BTF_E_ARG);
-    assert_int_equal(btf_gpu_rf_render_flat(gpu, &m, v, l, -1, 4, &img, NULL, &e), BTF_E_ARG);
-    assert_int_equal(btf_gpu_rf_render_scene(gpu, &m, NULL, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
-    assert_int_equal(btf_gpu_rf_render_scene(gpu, &m, &s, 8, BTF_RENDER_MAX_SIDE + 1, 1, &img,
-                                             NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_rf_render_flat(gpu, &m, v, (btf_dir){10, NAN}, 4, 4, &img, NULL,
+                                             &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_rf_render_flat(gpu, &m, v, l, -1, 4, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_rf_render_scene(gpu, &m, NULL, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_rf_render_scene(gpu, &m, &s, 8, BTF_RENDER_MAX_SIDE + 1, 1, &img,
+                                              NULL, &e), BTF_E_ARG);
     m.slots = 30; /* inconsistent: not params + 3 */
-    assert_int_equal(btf_gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
     assert_null(strchr(e.msg, '\n'));
     assert_null(img.data);
     m.slots = m.params + 3;
     /* a sampled model's surface of 0 sides: refused, not read */
     uint16_t map1[2] = {0, 0};
     m.map = map1, m.surface_width = 0, m.surface_height = 1;
-    assert_int_equal(btf_gpu_rf_render_flat(gpu, &m, v, l, 4, 4, &img, NULL, &e), BTF_E_ARG);
-    assert_int_equal(btf_gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_rf_render_flat(gpu, &m, v, l, 4, 4, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_rf_render_scene(gpu, &m, &s, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
     assert_null(strchr(e.msg, '\n'));
     assert_null(img.data);
     m.map = NULL, m.surface_width = m.surface_height = 0;
@@ -488,10 +488,10 @@ static void command_line(void **state)
         free(out);
         assert_int_equal(tu_run(tu_fmt("%s render -q %s %s --backend cpu -o %s/c%d.exr",
                                        tu_cli(), mp, a, dir, k), NULL), 0);
-        if (btf_gpu_is_cpu(gpu))
+        if (btf__gpu_is_cpu(gpu))
             assert_int_equal(tu_run(tu_fmt("cmp -s %s/g%d.exr %s/c%d.exr", dir, k, dir, k),
                                     NULL), 0);
-        if (btf_gpu_is_cpu(gpu)) {
+        if (btf__gpu_is_cpu(gpu)) {
             out = tu_capture(tu_fmt("%s render %s %s --backend auto -o %s/a%d.png", tu_cli(), mp,
                                     a, dir, k), &st);
             assert_int_equal(st, 0);

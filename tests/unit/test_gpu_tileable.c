@@ -2,7 +2,7 @@
  * lavapipe, the Khronos validation layer on, no message allowed) against
  * the CPU (docs/synthesis.md, "Tileable synthesis"; docs/gpu.md): the same
  * bits at several sizes, models and buffer limits; images left on the
- * device (btf_gpu_synthesise_device, gpu/synth_gpu.h) are the downloaded
+ * device (btf__gpu_synthesise_device, gpu/synth_gpu.h) are the downloaded
  * images bit for bit, refused clearly where one buffer cannot hold them;
  * `btfcar synthesise --tileable --backend gpu` gives the CPU's pixels. */
 #include "synth/synth_testing.h"
@@ -132,10 +132,10 @@ static void tileable_parity_when_tiled(void **state)
     btf_gpu *small;
     btf_gpu_opts o = {.allow_cpu = 1, .validation = 1};
     TU_OK(btf_gpu_open(&o, &small, &e), &e);
-    btf_gpu_set_max_buffer_bytes(small, 4000000);
+    btf__gpu_set_max_buffer_bytes(small, 4000000);
     compare(small, &m, 300, 256, 11);
     int batches, jobs;
-    btf_gpu_last_tiling(small, &batches, &jobs);
+    btf__gpu_last_tiling(small, &batches, &jobs);
     print_message("limit 4000000 bytes: %d batch(es), %d jobs\n", batches, jobs);
     assert_true(jobs >= 2 * batches);
     btf_gpu_close(small);
@@ -161,7 +161,7 @@ static void tileable_bad_sizes(void **state)
     for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
         dev.buf[b] = (btf_vk_buffer *)&e; /* must be reset to NULL */
     uint64_t off[1];
-    assert_int_equal(btf_gpu_synthesise_device(gpu, &m, &zero, 1, &o, &dev, off, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_synthesise_device(gpu, &m, &zero, 1, &o, &dev, off, &e), BTF_E_ARG);
     for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
         assert_null(dev.buf[b]);
     assert_string_equal(e.msg, ce.msg);
@@ -183,9 +183,9 @@ static void device_images(void **state)
     btf_subspace_model subs3[3] = {a.subspaces[0], b.subspaces[0], a.subspaces[0]};
     m.n_subspaces = 3;
     m.subspaces = subs3;
-    btf_vk *vk = btf_gpu_vk(gpu);
+    btf_vk *vk = btf__gpu_vk(gpu);
     assert_non_null(vk);
-    assert_string_equal(btf_vk_info(vk)->name, btf_gpu_device_name(gpu));
+    assert_string_equal(btf__vk_info(vk)->name, btf_gpu_device_name(gpu));
     btf_error e = {0};
     int subs[3] = {0, 1, 2};
     btf_gpu *small;
@@ -197,16 +197,16 @@ static void device_images(void **state)
             btf_gpu *g = gs[gi];
             int w = gi ? 300 : 96, h = gi ? 256 : 64;
             if (gi) /* strips of rows; the device buffer itself still fits */
-                btf_gpu_set_max_buffer_bytes(g, 4000000);
+                btf__gpu_set_max_buffer_bytes(g, 4000000);
             btf_synth_opts o = {.width = w, .height = h, .seed = 9, .tileable = tileable};
             btf_gpu_images dev;
             uint64_t off[3];
-            TU_OK(btf_gpu_synthesise_device(g, &m, subs, 3, &o, &dev, off, &e), &e);
+            TU_OK(btf__gpu_synthesise_device(g, &m, subs, 3, &o, &dev, off, &e), &e);
             size_t floats = (size_t)w * h * 3;
-            assert_int_equal(btf_vk_buffer_size(dev.buf[0]), 4 * 3 * floats);
+            assert_int_equal(btf__vk_buffer_size(dev.buf[0]), 4 * 3 * floats);
             assert_null(dev.buf[1]);
             float *host = malloc(4 * 3 * floats);
-            TU_OK(btf_vk_buffer_download(btf_gpu_vk(g), dev.buf[0], 0, host, 4 * 3 * floats, &e),
+            TU_OK(btf__vk_buffer_download(btf__gpu_vk(g), dev.buf[0], 0, host, 4 * 3 * floats, &e),
                   &e);
             btf_image out[3];
             TU_OK(btf_gpu_synthesise(g, &m, subs, 3, &o, out, &e), &e);
@@ -220,17 +220,17 @@ static void device_images(void **state)
                           tileable ? "tileable" : "streaming", w, h,
                           gi ? "4 MB buffers: strips" : "one job");
             free(host);
-            btf_gpu_images_free(&dev);
+            btf__gpu_images_free(&dev);
             no_validation_messages(g);
         }
     /* 3 x 300 x 512 x 3 floats = 5.3 MiB over 3.2 MB buffers: the images
      * straddle two buffers (each 1.8 MiB: buffer 0 holds the first and
      * part of the second), each downloaded across them bit for bit */
-    btf_gpu_set_max_buffer_bytes(small, 3200000); /* the strips' working set: 3.0 MiB */
+    btf__gpu_set_max_buffer_bytes(small, 3200000); /* the strips' working set: 3.0 MiB */
     btf_synth_opts o = {.width = 300, .height = 512, .seed = 9, .tileable = 1};
     btf_gpu_images dev;
     uint64_t off[8]; /* offsets[j] for each of up to 8 images below */
-    TU_OK(btf_gpu_synthesise_device(small, &m, subs, 3, &o, &dev, off, &e), &e);
+    TU_OK(btf__gpu_synthesise_device(small, &m, subs, 3, &o, &dev, off, &e), &e);
     size_t floats = (size_t)300 * 512 * 3;
     assert_int_equal(dev.cap, 800000);
     assert_non_null(dev.buf[1]);
@@ -240,26 +240,26 @@ static void device_images(void **state)
     float *host = malloc(4 * floats);
     for (int k = 0; k < 3; k++) {
         assert_int_equal(off[k], k * floats);
-        TU_OK(btf_gpu_images_download(btf_gpu_vk(small), &dev, off[k], host, floats, &e), &e);
+        TU_OK(btf__gpu_images_download(btf__gpu_vk(small), &dev, off[k], host, floats, &e), &e);
         assert_memory_equal(host, out[k].data, floats * sizeof(float));
         btf_image_free(&out[k]);
     }
     free(host);
-    btf_gpu_images_free(&dev);
+    btf__gpu_images_free(&dev);
     no_validation_messages(small);
     /* more than the device's 8 buffers hold: BTF_E_UNSUPPORTED naming the sizes */
-    btf_gpu_set_max_buffer_bytes(small, 1000000);
+    btf__gpu_set_max_buffer_bytes(small, 1000000);
     o.tileable = 0;
     o.height = 64;
     o.width = 2000;
     int many[8] = {0, 1, 2, 0, 1, 2, 0, 1};
-    assert_int_equal(btf_gpu_synthesise_device(small, &m, many, 8, &o, &dev, off, &e),
+    assert_int_equal(btf__gpu_synthesise_device(small, &m, many, 8, &o, &dev, off, &e),
                      BTF_E_UNSUPPORTED);
     print_message("%s\n", e.msg);
     for (int b = 0; b < BTF_GPU_DEVICE_BUFFERS; b++)
         assert_null(dev.buf[b]);
     assert_non_null(strstr(e.msg, "more than 8 storage buffers"));
-    assert_int_equal(btf_gpu_synthesise_device(small, &m, subs, 0, &o, &dev, off, &e), BTF_E_ARG);
+    assert_int_equal(btf__gpu_synthesise_device(small, &m, subs, 0, &o, &dev, off, &e), BTF_E_ARG);
     btf_gpu_close(small);
     btf_model_free(&a);
     btf_model_free(&b);

@@ -118,7 +118,7 @@ static void range_of(const char *manifest, btf_model *m)
     btf_analyse_opts o = btf_analyse_defaults();
     o.photostereo.threads = 2;
     memset(m, 0, sizeof *m);
-    TU_OK(btf_analyse_range(ds, &o, m, &e), &e);
+    TU_OK(btf__analyse_range(ds, &o, m, &e), &e);
     btf_dataset_close(ds);
 }
 

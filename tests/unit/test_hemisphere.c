@@ -1,5 +1,5 @@
 /* test_hemisphere.c -- interpolation over the hemisphere (src/render/
- * hemisphere.c, delaunay.c, btf_hemisphere_lookup.h; docs/render.md): the
+ * hemisphere.c, delaunay.c, btf__hemisphere_lookup.h; docs/render.md): the
  * weight rules over thousands of random directions on ubo81, ubo151 and a
  * random custom set; measured directions, pole, edges, vertices, the hull
  * boundary and below the horizon; the grid against a brute-force search;
@@ -72,11 +72,11 @@ static void fixture_open(fixture *f, int which)
     if (which == 0)
         TU_OK(btf_dirset_ubo81(&f->set, &e), &e);
     else if (which == 1)
-        TU_OK(btf_dirset_ubo151(&f->set, &e), &e);
+        TU_OK(btf__dirset_ubo151(&f->set, &e), &e);
     else
         random_custom(&f->set);
     TU_OK(btf_hemisphere_build(&f->set, &f->h, &e), &e);
-    btf_hemisphere_get_table(f->h, &f->t);
+    btf__hemisphere_get_table(f->h, &f->t);
     f->xy = malloc(sizeof(double) * 2 * (size_t)f->set.count);
     assert_non_null(f->xy);
     for (int i = 0; i < f->set.count; i++) {
@@ -97,7 +97,7 @@ static void dense(const fixture *f, const float v[3], double *W)
 {
     int idx[3];
     float w[3];
-    btf_hemisphere_lookup(f->h, v, idx, w);
+    btf__hemisphere_lookup(f->h, v, idx, w);
     for (int i = 0; i < f->set.count; i++)
         W[i] = 0.0;
     for (int k = 0; k < 3; k++) {
@@ -406,7 +406,7 @@ static void delaunay_valid_and_covering(void **state)
             for (int p = 0; p < n; p++) {
                 if (p == v[0] || p == v[1] || p == v[2])
                     continue;
-                double bound, in = btf_incircle(a, b, c, f.xy + 2 * p, &bound);
+                double bound, in = btf__incircle(a, b, c, f.xy + 2 * p, &bound);
                 worst_in = fmax(worst_in, in / bound);
             }
         }
@@ -443,7 +443,7 @@ static void independent_of_floating_noise(void **state)
         fixture_open(&f, which);
         btf_dirset noisy;
         btf_error e = {0};
-        TU_OK(btf_dirset_copy(&noisy, &f.set, &e), &e);
+        TU_OK(btf__dirset_copy(&noisy, &f.set, &e), &e);
         for (int i = 0; i < noisy.count; i++) {
             noisy.dirs[i].theta = fmin(90.0, fmax(0.0, noisy.dirs[i].theta + 1e-12 * (urand() - 0.5)));
             noisy.dirs[i].phi += 1e-12 * (urand() - 0.5);
@@ -451,7 +451,7 @@ static void independent_of_floating_noise(void **state)
         btf_hemisphere *h2;
         TU_OK(btf_hemisphere_build(&noisy, &h2, &e), &e);
         btf_hemisphere_table t2;
-        btf_hemisphere_get_table(h2, &t2);
+        btf__hemisphere_get_table(h2, &t2);
         assert_int_equal(t2.n_triangles, f.t.n_triangles);
         assert_memory_equal(t2.triangles, f.t.triangles, sizeof(int32_t) * 3 * (size_t)t2.n_triangles);
         assert_int_equal(t2.n_hull, f.t.n_hull);
@@ -510,14 +510,14 @@ static void bad_sets(void **state)
     btf_dirset s3 = {"three", 3, three};
     TU_OK(btf_hemisphere_build(&s3, &h, &e), &e);
     btf_hemisphere_table t;
-    btf_hemisphere_get_table(h, &t);
+    btf__hemisphere_get_table(h, &t);
     assert_int_equal(t.n_triangles, 1);
     assert_int_equal(t.n_hull, 3);
     for (int r = 0; r < 1000; r++) {
         float v[3] = {(float)(urand() - 0.5), (float)(urand() - 0.5), (float)(urand() - 0.5)};
         int idx[3];
         float w[3];
-        btf_hemisphere_lookup(h, v, idx, w);
+        btf__hemisphere_lookup(h, v, idx, w);
         assert_true(w[0] >= 0.0f && w[1] >= 0.0f && w[2] >= 0.0f);
         assert_true(fabs(w[0] + w[1] + w[2] - 1.0) <= 1e-6);
     }

@@ -27,14 +27,14 @@ static void srgb_transfer(void **state)
     (void)state;
     for (int i = 0; i <= 1000; i++) {
         float v = i / 1000.0f;
-        assert_true(fabsf(btf_linear_to_srgb(btf_srgb_to_linear(v)) - v) < 1e-5f);
+        assert_true(fabsf(btf__linear_to_srgb(btf__srgb_to_linear(v)) - v) < 1e-5f);
     }
-    assert_true(btf_srgb_to_linear(0.0f) == 0.0f && btf_srgb_to_linear(1.0f) == 1.0f);
-    assert_true(fabsf(btf_srgb_to_linear(0.5f) - 0.2140f) < 1e-3f);
+    assert_true(btf__srgb_to_linear(0.0f) == 0.0f && btf__srgb_to_linear(1.0f) == 1.0f);
+    assert_true(fabsf(btf__srgb_to_linear(0.5f) - 0.2140f) < 1e-3f);
     /* Out of range, NaN and Inf clamp instead of propagating. */
-    assert_true(btf_srgb_to_linear(NAN) == 0.0f && btf_linear_to_srgb(NAN) == 0.0f);
-    assert_true(btf_linear_to_srgb(INFINITY) == 1.0f && btf_linear_to_srgb(-3.0f) == 0.0f);
-    assert_true(btf_linear_to_srgb(FLT_MAX) == 1.0f);
+    assert_true(btf__srgb_to_linear(NAN) == 0.0f && btf__linear_to_srgb(NAN) == 0.0f);
+    assert_true(btf__linear_to_srgb(INFINITY) == 1.0f && btf__linear_to_srgb(-3.0f) == 0.0f);
+    assert_true(btf__linear_to_srgb(FLT_MAX) == 1.0f);
 }
 
 static void alloc_limits(void **state)
@@ -91,7 +91,7 @@ static void jpeg_round_trip_and_channels(void **state)
             a.data[3 * i + k] = 0.1f + 0.6f * (float)(i % 33) / 32.0f + 0.1f * (float)k;
     const char *p = tu_fmt("%s/rt.jpg", tu_dir);
     TU_OK(btf_image_write_jpeg(p, &a, 100, &e), &e);
-    assert_int_equal(btf_file_format_of(p), BTF_FILE_JPEG);
+    assert_int_equal(btf__file_format_of(p), BTF_FILE_JPEG);
     TU_OK(btf_image_read(p, NULL, &b, &e), &e);
     double sum = 0;
     for (size_t i = 0; i < 33 * 17 * 3; i++)
@@ -106,7 +106,7 @@ static void jpeg_round_trip_and_channels(void **state)
     btf_read_opts lin = {.linear_8bit = 1};
     btf_image l;
     TU_OK(btf_image_read(p, &lin, &l, &e), &e);
-    assert_true(fabsf(btf_srgb_to_linear(l.data[5]) - b.data[5]) < 1e-5f);
+    assert_true(fabsf(btf__srgb_to_linear(l.data[5]) - b.data[5]) < 1e-5f);
     assert_int_equal(btf_image_write_jpeg(p, &a, 0, &e), BTF_E_ARG);
     btf_image_free(&a);
     btf_image_free(&b);

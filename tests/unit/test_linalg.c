@@ -35,7 +35,7 @@ static void jacobi_eigenpairs(void **state)
         double a0[25], a[25], val[5], vec[25];
         spd5(a0);
         memcpy(a, a0, sizeof a);
-        assert_int_equal(btf_linalg_sym_eigen(a, 5, rules[r], val, vec), 0);
+        assert_int_equal(btf__linalg_sym_eigen(a, 5, rules[r], val, vec), 0);
         for (int k = 0; k < 5; k++) {
             if (k > 0)
                 assert_true(val[k] <= val[k - 1]); /* descending */
@@ -53,7 +53,7 @@ static void jacobi_eigenpairs(void **state)
     /* Equal eigenvalues keep their index order; a diagonal matrix needs no
      * rotation and its eigenvectors are the unit vectors. */
     double d[9] = {2, 0, 0, 0, 5, 0, 0, 0, 2}, val[3], vec[9];
-    assert_int_equal(btf_linalg_sym_eigen(d, 3, &SQUARES, val, vec), 0);
+    assert_int_equal(btf__linalg_sym_eigen(d, 3, &SQUARES, val, vec), 0);
     assert_true(val[0] == 5 && val[1] == 2 && val[2] == 2);
     assert_true(vec[1 * 3 + 0] == 1 && vec[0 * 3 + 1] == 1 && vec[2 * 3 + 2] == 1);
 }
@@ -69,10 +69,10 @@ static void cholesky_triangles_and_solve(void **state)
     for (int i = 0; i < 5; i++)
         for (int j = 0; j < i; j++)
             upper[i * 5 + j] = lower[j * 5 + i] = -1e9;
-    assert_int_equal(btf_linalg_cholesky(lower, 5, 0, 5, l_lo), 0);
-    assert_int_equal(btf_linalg_cholesky(upper, 5, 1, 5, l_up), 0);
+    assert_int_equal(btf__linalg_cholesky(lower, 5, 0, 5, l_lo), 0);
+    assert_int_equal(btf__linalg_cholesky(upper, 5, 1, 5, l_up), 0);
     memcpy(in_place, lower, sizeof a);
-    assert_int_equal(btf_linalg_cholesky(in_place, 5, 0, 5, in_place), 0);
+    assert_int_equal(btf__linalg_cholesky(in_place, 5, 0, 5, in_place), 0);
     for (int i = 0; i < 5; i++)
         for (int j = 0; j <= i; j++) {
             assert_memory_equal(&l_lo[i * 5 + j], &l_up[i * 5 + j], sizeof(double));
@@ -80,7 +80,7 @@ static void cholesky_triangles_and_solve(void **state)
         }
     double b[5] = {1, -2, 3, 0.5, 4}, x[5];
     memcpy(x, b, sizeof b);
-    btf_linalg_cholesky_solve(l_lo, 5, x);
+    btf__linalg_cholesky_solve(l_lo, 5, x);
     for (int i = 0; i < 5; i++) {
         double ax = 0;
         for (int j = 0; j < 5; j++)
@@ -89,7 +89,7 @@ static void cholesky_triangles_and_solve(void **state)
     }
     /* A leading block of a larger matrix (row stride lda). */
     double l3[9];
-    assert_int_equal(btf_linalg_cholesky(a, 5, 0, 3, l3), 0);
+    assert_int_equal(btf__linalg_cholesky(a, 5, 0, 3, l3), 0);
     assert_memory_equal(&l3[2 * 3 + 1], &l_lo[2 * 5 + 1], sizeof(double));
 }
 
@@ -97,13 +97,13 @@ static void cholesky_refuses(void **state)
 {
     (void)state;
     double indefinite[4] = {1, 2, 2, 1}, zero[4] = {0}, nan[4] = {NAN, 0, 0, 1}, l[4];
-    assert_int_equal(btf_linalg_cholesky(indefinite, 2, 0, 2, l), -1);
-    assert_int_equal(btf_linalg_cholesky(zero, 2, 0, 2, l), -1);
-    assert_int_equal(btf_linalg_cholesky(nan, 2, 0, 2, l), -1);
+    assert_int_equal(btf__linalg_cholesky(indefinite, 2, 0, 2, l), -1);
+    assert_int_equal(btf__linalg_cholesky(zero, 2, 0, 2, l), -1);
+    assert_int_equal(btf__linalg_cholesky(nan, 2, 0, 2, l), -1);
     /* An infinite pivot is not refused here; it stays on the diagonal for
      * the callers that refuse it. */
     double inf[4] = {INFINITY, 0, 0, 1};
-    assert_int_equal(btf_linalg_cholesky(inf, 2, 0, 2, l), 0);
+    assert_int_equal(btf__linalg_cholesky(inf, 2, 0, 2, l), 0);
     assert_true(isinf(l[0]));
 }
 
@@ -116,18 +116,18 @@ static void sym3_closed_forms(void **state)
         btf_sym3_add_outer(&m, v[i]);
     double rhs[3] = {1, 2, 3}, x[3];
     btf_sym3 inv;
-    assert_int_equal(btf_sym3_solve(&m, rhs, 1e6, x, &inv), 1);
+    assert_int_equal(btf__sym3_solve(&m, rhs, 1e6, x, &inv), 1);
     assert_true(fabs(m.xx * x[0] + m.xy * x[1] + m.xz * x[2] - 1) < 1e-12);
     assert_true(fabs(m.xz * x[0] + m.yz * x[1] + m.zz * x[2] - 3) < 1e-12);
-    assert_true(btf_sym3_condition(&m) > 1);
+    assert_true(btf__sym3_condition(&m) > 1);
     /* Lights in one plane leave its normal undetermined. */
     btf_sym3 flat = {0};
     for (int i = 0; i < 2; i++)
         btf_sym3_add_outer(&flat, v[i]);
-    assert_true(isinf(btf_sym3_condition(&flat)));
-    assert_int_equal(btf_sym3_solve(&flat, rhs, 1e6, x, NULL), 0);
+    assert_true(isinf(btf__sym3_condition(&flat)));
+    assert_int_equal(btf__sym3_solve(&flat, rhs, 1e6, x, NULL), 0);
     double axis[3];
-    btf_sym3_weakest_axis(&flat, axis);
+    btf__sym3_weakest_axis(&flat, axis);
     assert_true(fabs(fabs(axis[2]) - 1) < 1e-12);
 }
 

@@ -47,7 +47,7 @@ static double model_map(const btf_marginal *mg, int b, double v)
 {
     double z[BTF_MARGIN_KNOTS];
     for (int j = 0; j < BTF_MARGIN_KNOTS; j++)
-        z[j] = (double)mg->synth_mean[b] + (double)mg->synth_sd[b] * btf_marginal_normal_knots[j];
+        z[j] = (double)mg->synth_mean[b] + (double)mg->synth_sd[b] * btf__marginal_normal_knots[j];
     if (v <= z[0])
         return mg->quantile[b][0];
     for (int j = 0; j + 1 < BTF_MARGIN_KNOTS; j++)
@@ -62,7 +62,7 @@ static void transfer_is_monotone_and_bounded(void **state)
     (void)state;
     btf_subspace_model sm = skewed_subspace();
     btf_marginal_table t;
-    btf_marginal_table_make(&sm, &t);
+    btf__marginal_table_make(&sm, &t);
     assert_true(t.on);
     enum { N = 20001 };
     static float v[N + 4], out[N + 4];
@@ -70,7 +70,7 @@ static void transfer_is_monotone_and_bounded(void **state)
         v[i] = -6.0f + 12.0f * (float)i / (float)(N - 1);
     v[N] = -FLT_MAX, v[N + 1] = FLT_MAX, v[N + 2] = -0.0f, v[N + 3] = 1e30f;
     for (int b = 0; b < 3; b++) {
-        assert_int_equal(btf_marginal_row(&t, b, v, N + 4, out), 0);
+        assert_int_equal(btf__marginal_row(&t, b, v, N + 4, out), 0);
         const float *q = sm.marginal.quantile[b];
         double worst = 0;
         for (int i = 0; i < N + 4; i++) {
@@ -89,16 +89,16 @@ static void transfer_is_monotone_and_bounded(void **state)
         /* at a point of the grid, its table value */
         for (int k = 0; k < BTF_MARGIN_SEGS; k++) {
             float z = t.origin[b] + (float)k / t.inv_h[b], o, x = (z - t.origin[b]) * t.inv_h[b];
-            btf_marginal_row(&t, b, &z, 1, &o);
+            btf__marginal_row(&t, b, &z, 1, &o);
             if (x == (float)k)
                 assert_true(o == t.q[b][k]);
         }
     }
     float inf = INFINITY;
-    assert_int_equal(btf_marginal_row(&t, 0, &inf, 1, out), 1); /* reported */
+    assert_int_equal(btf__marginal_row(&t, 0, &inf, 1, out), 1); /* reported */
     /* no transfer: the table is off */
     sm.marginal.knots = 0;
-    btf_marginal_table_make(&sm, &t);
+    btf__marginal_table_make(&sm, &t);
     assert_false(t.on);
 }
 
@@ -117,7 +117,7 @@ static void colour_step_paths_agree(void **state)
     for (int k = 0; k < 3; k++)
         sm.marginal.rgb_lo[k] = 0.02f * (float)k, sm.marginal.rgb_hi[k] = 0.45f - 0.1f * (float)k;
     btf_marginal_table t, tp;
-    btf_marginal_table_make(&sm, &t);
+    btf__marginal_table_make(&sm, &t);
     tp = t;
     tp.portable = 1;
     enum { W = 4099 };
@@ -130,14 +130,14 @@ static void colour_step_paths_agree(void **state)
         }
     b[0][5] = -0.0f, b[1][6] = FLT_MAX, b[2][7] = -FLT_MAX, b[0][8] = 1e-30f;
     int outside = 0;
-    assert_int_equal(btf_marginal_unmix_row(&sm, &t, b[0], b[1], b[2], W, ra), 0);
-    assert_int_equal(btf_marginal_unmix_row(&sm, &tp, b[0], b[1], b[2], W, rp), 0);
+    assert_int_equal(btf__marginal_unmix_row(&sm, &t, b[0], b[1], b[2], W, ra), 0);
+    assert_int_equal(btf__marginal_unmix_row(&sm, &tp, b[0], b[1], b[2], W, rp), 0);
     assert_memory_equal(ra, rp, sizeof ra);
     /* the colours before the gamut: the transfer's bands unmixed */
     for (int i = 0; i < W; i++) {
         float v[3];
         for (int k = 0; k < 3; k++)
-            btf_marginal_row(&t, k, &b[k][i], 1, &v[k]);
+            btf__marginal_row(&t, k, &b[k][i], 1, &v[k]);
         for (int k = 0; k < 3; k++)
             plain[3 * i + k] = sm.mean[k] + basis[k] * v[0] + basis[3 + k] * v[1] +
                                basis[6 + k] * v[2];
@@ -168,7 +168,7 @@ static void colour_step_paths_agree(void **state)
     print_message("%d of %d colours outside the box\n", outside, W);
     assert_true(outside > W / 10);
     /* Inf or NaN in a band, within the vector loop or its tail: reported on
-     * both paths, and btf_unmix_row then carries it into the colours, so
+     * both paths, and btf__unmix_row then carries it into the colours, so
      * that the finite test refuses the row (the GPU skips the transfer) */
     const float odd[2] = {INFINITY, NAN};
     const int at[3] = {100, W - 2, 0};
@@ -177,11 +177,11 @@ static void colour_step_paths_agree(void **state)
         for (int a = 0; a < 3; a++) {
             float keep = b[a][at[a]];
             b[a][at[a]] = odd[o];
-            assert_int_not_equal(btf_marginal_unmix_row(&sm, &t, b[0], b[1], b[2], W, ra), 0);
-            assert_int_not_equal(btf_marginal_unmix_row(&sm, &tp, b[0], b[1], b[2], W, rp), 0);
-            assert_int_not_equal(btf_unmix_row(&sm, &t, b[0], b[1], b[2], W, scratch, ra), 0);
+            assert_int_not_equal(btf__marginal_unmix_row(&sm, &t, b[0], b[1], b[2], W, ra), 0);
+            assert_int_not_equal(btf__marginal_unmix_row(&sm, &tp, b[0], b[1], b[2], W, rp), 0);
+            assert_int_not_equal(btf__unmix_row(&sm, &t, b[0], b[1], b[2], W, scratch, ra), 0);
             btf_error e = {0};
-            assert_int_equal(btf_check_finite_row(ra, 3 * W, 0, 0, &e), BTF_E_NUMERIC);
+            assert_int_equal(btf__check_finite_row(ra, 3 * W, 0, 0, &e), BTF_E_NUMERIC);
             b[a][at[a]] = keep;
         }
 }
@@ -436,11 +436,11 @@ static void lab_conversion_paths_agree(void **state)
         double u = rand() / (double)RAND_MAX;
         rgb[i] = i < 3 * 40 ? odd[(i * 7 + i / 3) % 8] : (float)(u * u * u * 1.5);
     }
-    btf_lab_row(rgb, N, 1.0f, lab[0], lab[1], lab[2]);
+    btf__lab_row(rgb, N, 1.0f, lab[0], lab[1], lab[2]);
     const float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {1.5f, 1.5f, 1.5f};
-    btf_rgb_row_from_lab(lab[0], lab[1], lab[2], N, 1.0f, lo, hi, back);
+    btf__rgb_row_from_lab(lab[0], lab[1], lab[2], N, 1.0f, lo, hi, back);
     for (int x = 0; x < N; x++) {
-        btf_lab_row(rgb + 3 * x, 1, 1.0f, &one[0], &one[1], &one[2]);
+        btf__lab_row(rgb + 3 * x, 1, 1.0f, &one[0], &one[1], &one[2]);
         double c[3], xyz[3], f[3];
         for (int k = 0; k < 3; k++) {
             assert_memory_equal(&one[k], &lab[k][x], sizeof(float));
@@ -455,7 +455,7 @@ static void lab_conversion_paths_agree(void **state)
         double tol = 1e-3 + 1e-6 * 500.0 * fmax(f[0], fmax(f[1], f[2]));
         for (int k = 0; k < 3; k++)
             assert_true(fabs(xyz[k] - lab[k][x]) <= tol);
-        btf_rgb_row_from_lab(&lab[0][x], &lab[1][x], &lab[2][x], 1, 1.0f, lo, hi, back1);
+        btf__rgb_row_from_lab(&lab[0][x], &lab[1][x], &lab[2][x], 1, 1.0f, lo, hi, back1);
         for (int k = 0; k < 3; k++) {
             assert_memory_equal(&back1[k], &back[3 * x + k], sizeof(float));
             assert_true(back[3 * x + k] >= lo[k] && back[3 * x + k] <= hi[k]);
@@ -466,7 +466,7 @@ static void lab_conversion_paths_agree(void **state)
     }
 }
 
-/* The quantiles of a colour match's sample (btf_lab_sample_quantiles:
+/* The quantiles of a colour match's sample (btf__lab_sample_quantiles:
  * order statistics from buckets, without a full sort) are exactly those of
  * a sorted copy, linear between order statistics at (n - 1) j / 31, for
  * spread values, heavy ties, two values, one value, and n of 1, 2, 9 and
@@ -487,7 +487,7 @@ static void sample_quantiles_are_exact(void **state)
             size_t n = sizes[si];
             btf_error e = {0};
             btf_lab_sample s;
-            TU_OK(btf_lab_sample_begin(&s, (int)n, 1, n, 1.0f, &e), &e);
+            TU_OK(btf__lab_sample_begin(&s, (int)n, 1, n, 1.0f, &e), &e);
             assert_int_equal(s.n, n);
             for (size_t i = 0; i < 3 * n; i++) {
                 double u = rand() / (double)RAND_MAX;
@@ -515,13 +515,13 @@ static void sample_quantiles_are_exact(void **state)
                 }
                 free(sorted);
             }
-            TU_OK(btf_lab_sample_quantiles(&s, got, &e), &e);
+            TU_OK(btf__lab_sample_quantiles(&s, got, &e), &e);
             assert_memory_equal(got, ref, sizeof ref);
-            btf_lab_sample_free(&s);
+            btf__lab_sample_free(&s);
         }
 }
 
-/* Colour matching (btf_synth_opts.match_colours, btf_colour_match) on the
+/* Colour matching (btf_synth_opts.match_colours, btf__colour_match) on the
  * generated materials: the first-order texture distance (CIE Lab histograms,
  * src/measure/first_order.c) of a 64 x 64 synthesis comes within 1.2 of the
  * material's own (fabric: a tenth of the unmatched) and below the unmatched
@@ -586,7 +586,7 @@ static void colour_match_keeps_lab_histograms(void **state)
         assert_memory_equal(streamed.data, matched.data, n * sizeof(float));
         /* matching twice changes little: the image has the histogram (but
          * for the box and the 32 knots' linear segments) */
-        TU_OK(btf_colour_match(&m, 0, &streamed, &e), &e);
+        TU_OK(btf__colour_match(&m, 0, &streamed, &e), &e);
         double moved = 0, first = 0;
         for (size_t i = 0; i < n; i++) {
             moved += fabs((double)streamed.data[i] - matched.data[i]);
@@ -664,10 +664,10 @@ static void colour_match_extremes(void **state)
     btf_model m;
     TU_OK(btf_texture_fit(&img, NULL, &m, &e), &e);
     btf_error be = {0};
-    assert_int_equal(btf_colour_match(&m, 1, &img, &be), BTF_E_ARG);
+    assert_int_equal(btf__colour_match(&m, 1, &img, &be), BTF_E_ARG);
     assert_non_null(strstr(be.msg, "subspace 1"));
     img.data[7] = NAN;
-    assert_int_equal(btf_colour_match(&m, 0, &img, &be), BTF_E_ARG);
+    assert_int_equal(btf__colour_match(&m, 0, &img, &be), BTF_E_ARG);
     assert_non_null(strstr(be.msg, "not finite"));
     btf_image_free(&img);
     btf_model_free(&m);

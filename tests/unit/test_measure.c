@@ -37,11 +37,11 @@ static void copy(const btf_image *src, btf_image *out)
 static void shuffle(btf_image *img, uint64_t seed)
 {
     btf_rng r;
-    btf_rng_seed(&r, seed);
+    btf__rng_seed(&r, seed);
     size_t n = (size_t)img->width * img->height;
     int c = img->channels;
     for (size_t i = n - 1; i > 0; i--) {
-        size_t j = (size_t)(btf_rng_uniform(&r) * (double)(i + 1));
+        size_t j = (size_t)(btf__rng_uniform(&r) * (double)(i + 1));
         for (int k = 0; k < c; k++) {
             float t = img->data[i * c + k];
             img->data[i * c + k] = img->data[j * c + k];
@@ -311,13 +311,13 @@ static void baseline_amplitudes_exact(void **state)
     TU_OK(btf_phase_randomise(&ex, 63, 50, 77, &out, &e), &e);
     size_t n = 63 * 50;
     float mean[3], basis[9];
-    TU_OK(btf_pca3(&ex, mean, basis, NULL, &e), &e);
+    TU_OK(btf__pca3(&ex, mean, basis, NULL, &e), &e);
     double *mem = calloc(10 * n, sizeof(double));
     assert_non_null(mem);
     double *be[3] = {mem, mem + n, mem + 2 * n}, *bo[3] = {mem + 3 * n, mem + 4 * n, mem + 5 * n};
     double *ri = mem + 6 * n, *oi = mem + 7 * n;
-    btf_decorrelate(&ex, mean, basis, be);
-    btf_decorrelate(&out, mean, basis, bo);
+    btf__decorrelate(&ex, mean, basis, be);
+    btf__decorrelate(&out, mean, basis, bo);
     char why[256];
     for (int c = 0; c < 3; c++) {
         TU_OK(ms_periodic_component(be[c], 63, 50, &e), &e);

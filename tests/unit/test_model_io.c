@@ -22,12 +22,12 @@
 
 static float urand(btf_rng *r, float lo, float hi)
 {
-    return lo + (hi - lo) * (float)btf_rng_uniform(r);
+    return lo + (hi - lo) * (float)btf__rng_uniform(r);
 }
 
 static int irand(btf_rng *r, int lo, int hi) /* [lo, hi] */
 {
-    return lo + (int)(btf_rng_next(r) % (uint64_t)(hi - lo + 1));
+    return lo + (int)(btf__rng_next(r) % (uint64_t)(hi - lo + 1));
 }
 
 /* Causal offsets in the order a neighbourhood search would grow them. */
@@ -42,7 +42,7 @@ static void random_basis(btf_rng *r, float basis[9])
     for (int i = 0; i < 3; i++) {
         for (;;) {
             for (int k = 0; k < 3; k++)
-                v[i][k] = btf_rng_uniform(r) * 2.0 - 1.0;
+                v[i][k] = btf__rng_uniform(r) * 2.0 - 1.0;
             for (int j = 0; j < i; j++) {
                 double d = v[i][0] * v[j][0] + v[i][1] * v[j][1] + v[i][2] * v[j][2];
                 for (int k = 0; k < 3; k++)
@@ -97,8 +97,8 @@ static void smooth_heights(float *h, int w, int ht, btf_rng *r)
     double amp[6], ph[6];
     int fx[6], fy[6];
     for (int i = 0; i < 6; i++) {
-        amp[i] = btf_rng_uniform(r) * 2.0;
-        ph[i] = btf_rng_uniform(r) * 2.0 * pi;
+        amp[i] = btf__rng_uniform(r) * 2.0;
+        ph[i] = btf__rng_uniform(r) * 2.0 * pi;
         fx[i] = irand(r, 0, 3);
         fy[i] = irand(r, 0, 3);
     }
@@ -148,7 +148,7 @@ static void make_model(btf_model *m, const model_spec *s)
     btf_error e = {0};
     memset(m, 0, sizeof *m);
     btf_rng r;
-    btf_rng_seed(&r, s->seed);
+    btf__rng_seed(&r, s->seed);
     if (s->directions == 1) {
         TU_OK(btf_dirset_ubo81(&m->views, &e), &e);
         TU_OK(btf_dirset_ubo81(&m->lights, &e), &e);

@@ -471,8 +471,8 @@ static void noise_rows_match_noise4(void **state)
         uint32_t b0 = i < 100 ? (uint32_t)(i - 50) : (uint32_t)(b >> 32);
         uint32_t row = (uint32_t)(a >> 32), stream = (uint32_t)b;
         fast[4 * n] = slow[4 * n] = 12345.0f; /* nothing written past the end */
-        btf_noise_blocks((uint32_t)(a >> 8), (uint32_t)(b >> 40), stream, row, b0, n, 1, fast);
-        btf_noise_blocks((uint32_t)(a >> 8), (uint32_t)(b >> 40), stream, row, b0, n, 0, slow);
+        btf__noise_blocks((uint32_t)(a >> 8), (uint32_t)(b >> 40), stream, row, b0, n, 1, fast);
+        btf__noise_blocks((uint32_t)(a >> 8), (uint32_t)(b >> 40), stream, row, b0, n, 0, slow);
         for (uint32_t k = 0; k < n; k++) {
             btf_vec4 v = btf_noise4((uint32_t)(a >> 8), (uint32_t)(b >> 40), stream, row, b0 + k);
             for (uint32_t c = 0; c < 4; c++) {
@@ -485,7 +485,7 @@ static void noise_rows_match_noise4(void **state)
         compared += 4 * (long)n;
     }
     printf("noise rows: %ld Gaussians identical on both paths (vector path: %s)\n", compared,
-           btf_noise_avx2_available() ? "AVX2" : "portable only on this CPU");
+           btf__noise_avx2_available() ? "AVX2" : "portable only on this CPU");
 }
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)

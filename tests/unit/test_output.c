@@ -66,7 +66,7 @@ static void read_back(const char *path, char *buf, size_t n)
 static void plant(const char *path, const char *target)
 {
     char id[BTF_TMP_IDENTITY_SIZE];
-    btf_tmp_identity(id);
+    btf__tmp_identity(id);
     for (int k = 1; k <= 400; k++) {
         const char *name = tu_fmt("%s.btfcar-tmp-%s-%ld-%d", path, id, (long)getpid(), k);
         assert_int_equal(symlink(target, name), 0);
@@ -76,7 +76,7 @@ static void plant(const char *path, const char *target)
 static void unplant(const char *path)
 {
     char id[BTF_TMP_IDENTITY_SIZE];
-    btf_tmp_identity(id);
+    btf__tmp_identity(id);
     for (int k = 1; k <= 400; k++)
         unlink(tu_fmt("%s.btfcar-tmp-%s-%ld-%d", path, id, (long)getpid(), k));
 }
@@ -181,7 +181,7 @@ static void stale_temporaries(void **state)
     waitpid(child, NULL, 0); /* a pid that no longer runs */
     long dead = (long)child;
     char id[BTF_TMP_IDENTITY_SIZE];
-    btf_tmp_identity(id);
+    btf__tmp_identity(id);
     tu_write_file(tu_fmt("%s/a.exr.btfcar-tmp-%s-%ld-1", root, id, dead), "x", 1);
     assert_int_equal(mkdir(tu_fmt("%s/set.btfcar-tmp-%s-%ld-2", root, id, dead), 0777), 0);
     tu_write_file(tu_fmt("%s/set.btfcar-tmp-%s-%ld-2/in.exr", root, id, dead), "x", 1);
@@ -462,14 +462,14 @@ static int hold_temporary(const char *dir)
     snprintf(path, sizeof path, "%s/held", dir);
     snprintf(ready, sizeof ready, "%s/ready", dir);
     snprintf(stop, sizeof stop, "%s/stop", dir);
-    if (btf_tmp_create(path, tmp, sizeof tmp, &fd, &e) != 0)
+    if (btf__tmp_create(path, tmp, sizeof tmp, &fd, &e) != 0)
         return 1;
     close(fd);
     if (btf_write_file_atomic(ready, tmp, strlen(tmp), &e) != 0)
         return 1;
     for (int i = 0; i < 6000 && access(stop, F_OK) != 0; i++)
         usleep(10000);
-    btf_abort_file(tmp);
+    btf__abort_file(tmp);
     return 0;
 }
 

@@ -131,7 +131,7 @@ static void scene_make(scene *s, const char *name, int size, int stride)
     btf_dirset set;
     TU_OK(btf_dirset_ubo81(&set, &err), &err);
     btf_view_map *vm;
-    TU_OK(btf_view_map_make(&s->m, dir(0, 0), &vm, &err), &err);
+    TU_OK(btf__view_map_make(&s->m, dir(0, 0), &vm, &err), &err);
     size_t wh = (size_t)size * size;
     s->img = calloc((size_t)set.count, sizeof *s->img);
     s->L = calloc((size_t)set.count * 3, sizeof(double));
@@ -139,8 +139,8 @@ static void scene_make(scene *s, const char *name, int size, int stride)
     memset(s->unshadowed, 1, wh);
     for (int i = 0; i < set.count; i += stride) {
         btf_light_map *lm;
-        TU_OK(btf_light_map_make(&s->m, set.dirs[i], &lm, &err), &err);
-        TU_OK(btf_material_render_maps(&s->m, vm, lm, dir(0, 0), set.dirs[i], &s->img[s->n], &err),
+        TU_OK(btf__light_map_make(&s->m, set.dirs[i], &lm, &err), &err);
+        TU_OK(btf__material_render_maps(&s->m, vm, lm, dir(0, 0), set.dirs[i], &s->img[s->n], &err),
               &err);
         double *l = s->L + 3 * s->n;
         btf_dir_to_vec(set.dirs[i], l);
@@ -149,10 +149,10 @@ static void scene_make(scene *s, const char *name, int size, int stride)
             if (nv[0] * l[0] + nv[1] * l[1] + nv[2] * l[2] > 0.0 && lm->vis[k] < 0.99f)
                 s->unshadowed[k] = 0;
         }
-        btf_light_map_free(lm);
+        btf__light_map_free(lm);
         s->n++;
     }
-    btf_view_map_free(vm);
+    btf__view_map_free(vm);
     btf_dirset_free(&set);
 }
 
@@ -236,7 +236,7 @@ static void check_material(const material_limits *lim)
     btf_error err = {0};
     btf_image hp;
     btf_integrate_opts io = {.method = BTF_INTEGRATE_POISSON};
-    TU_OK(btf_integrate(&r.normal, NULL, &io, &hp, &err), &err);
+    TU_OK(btf__integrate(&r.normal, NULL, &io, &hp, &err), &err);
     double hpe = height_error(hp.data, s.m.height, NULL, wh);
     double ae = albedo_error(&r, &s);
     print_message("%-8s normals: %.3f deg unshadowed, %.3f all (plain LS %.3f); height "
@@ -364,8 +364,8 @@ static void defaults_equal_zero(void **state)
     for (size_t k = 0; k < wh; k++)
         mask.data[k] = (k % 40 > 10 && k % 40 < 20 && k / 40 > 5 && k / 40 < 30) ? 0.0f : 1.0f;
     btf_integrate_opts iz = {0};
-    TU_OK(btf_integrate(&a.normal, &mask, &iz, &ha, &err), &err);
-    TU_OK(btf_integrate(&a.normal, &mask, &di, &hb, &err), &err);
+    TU_OK(btf__integrate(&a.normal, &mask, &iz, &ha, &err), &err);
+    TU_OK(btf__integrate(&a.normal, &mask, &di, &hb, &err), &err);
     assert_memory_equal(ha.data, hb.data, wh * sizeof(float));
     btf_image_free(&ha);
     btf_image_free(&hb);
@@ -869,11 +869,11 @@ static void integrate_periodic(void **state)
     normals_of(z, w, h, 1, nm.data);
     btf_image out;
     btf_integrate_opts o = {.method = BTF_INTEGRATE_FC};
-    TU_OK(btf_integrate(&nm, NULL, &o, &out, &err), &err);
+    TU_OK(btf__integrate(&nm, NULL, &o, &out, &err), &err);
     double efc = height_error(out.data, z, NULL, wh);
     btf_image_free(&out);
     o.method = BTF_INTEGRATE_DEFAULT;
-    TU_OK(btf_integrate(&nm, NULL, &o, &out, &err), &err);
+    TU_OK(btf__integrate(&nm, NULL, &o, &out, &err), &err);
     double ep = height_error(out.data, z, NULL, wh);
     double mean = 0.0;
     for (size_t k = 0; k < wh; k++)
@@ -910,12 +910,12 @@ static void integrate_nonperiodic(void **state)
         TU_OK(btf_image_alloc(&nm, w, h, 3, &err), &err);
         normals_of(z, w, h, 0, nm.data);
         btf_integrate_opts o = {0};
-        TU_OK(btf_integrate(&nm, NULL, &o, &out, &err), &err);
+        TU_OK(btf__integrate(&nm, NULL, &o, &out, &err), &err);
         assert_true(all_finite(&out));
         double ep = height_error(out.data, z, NULL, wh);
         btf_image_free(&out);
         o.method = BTF_INTEGRATE_FC;
-        TU_OK(btf_integrate(&nm, NULL, &o, &out, &err), &err);
+        TU_OK(btf__integrate(&nm, NULL, &o, &out, &err), &err);
         assert_true(all_finite(&out));
         double efc = height_error(out.data, z, NULL, wh);
         print_message("tilted bump %dx%d: Poisson %.4f, FC %.4f relative RMS\n", w, h, ep, efc);
@@ -953,14 +953,14 @@ static void integrate_masked(void **state)
     for (size_t k = 0; k < wh; k++)
         mask.data[k] = 1.0f;
     btf_integrate_opts o = {0};
-    TU_OK(btf_integrate(&nm, NULL, &o, &a, &err), &err);
+    TU_OK(btf__integrate(&nm, NULL, &o, &a, &err), &err);
     /* A full mask takes the direct path: the same answer as no mask. */
-    TU_OK(btf_integrate(&nm, &mask, &o, &b, &err), &err);
+    TU_OK(btf__integrate(&nm, &mask, &o, &b, &err), &err);
     assert_memory_equal(a.data, b.data, wh * sizeof(float));
     btf_image_free(&b);
     /* One corner pixel out: CG; the rest barely changes. */
     mask.data[0] = 0.0f;
-    TU_OK(btf_integrate(&nm, &mask, &o, &b, &err), &err);
+    TU_OK(btf__integrate(&nm, &mask, &o, &b, &err), &err);
     assert_true(b.data[0] == 0.0f);
     double md = 0.0;
     for (size_t k = 1; k < wh; k++)
@@ -982,7 +982,7 @@ static void integrate_masked(void **state)
             mask.data[(size_t)y * w + x] = in ? 1.0f : 0.0f;
             sel[(size_t)y * w + x] = (unsigned char)in;
         }
-    TU_OK(btf_integrate(&nm, &mask, &o, &b, &err), &err);
+    TU_OK(btf__integrate(&nm, &mask, &o, &b, &err), &err);
     assert_true(all_finite(&b));
     double er = height_error(b.data, z, sel, wh);
     print_message("ring mask: %.4f relative RMS\n", er);
@@ -993,7 +993,7 @@ static void integrate_masked(void **state)
     btf_image_free(&b);
     /* FC with the mask: zeros outside, finite. */
     o.method = BTF_INTEGRATE_FC;
-    TU_OK(btf_integrate(&nm, &mask, &o, &b, &err), &err);
+    TU_OK(btf__integrate(&nm, &mask, &o, &b, &err), &err);
     for (size_t k = 0; k < wh; k++)
         if (!sel[k])
             assert_true(b.data[k] == 0.0f);
@@ -1001,7 +1001,7 @@ static void integrate_masked(void **state)
     /* An all-zero mask: zeros. */
     memset(mask.data, 0, wh * sizeof(float));
     o.method = BTF_INTEGRATE_POISSON;
-    TU_OK(btf_integrate(&nm, &mask, &o, &b, &err), &err);
+    TU_OK(btf__integrate(&nm, &mask, &o, &b, &err), &err);
     for (size_t k = 0; k < wh; k++)
         assert_true(b.data[k] == 0.0f);
     btf_image_free(&b);
@@ -1032,15 +1032,15 @@ static void integrate_degenerate(void **state)
     }
     for (int m = 0; m < 2; m++) {
         btf_integrate_opts o = {.method = m ? BTF_INTEGRATE_FC : BTF_INTEGRATE_POISSON};
-        TU_OK(btf_integrate(&nm, NULL, &o, &out, &err), &err);
+        TU_OK(btf__integrate(&nm, NULL, &o, &out, &err), &err);
         assert_true(all_finite(&out));
         btf_image_free(&out);
     }
     btf_integrate_opts bad = {.method = (btf_integrate_method)7};
-    assert_int_equal(btf_integrate(&nm, NULL, &bad, &out, &err), BTF_E_ARG);
+    assert_int_equal(btf__integrate(&nm, NULL, &bad, &out, &err), BTF_E_ARG);
     btf_image one;
     TU_OK(btf_image_alloc(&one, w, h, 1, &err), &err);
-    assert_int_equal(btf_integrate(&one, NULL, NULL, &out, &err), BTF_E_ARG);
+    assert_int_equal(btf__integrate(&one, NULL, NULL, &out, &err), BTF_E_ARG);
     btf_image_free(&one);
     btf_image_free(&nm);
 }
@@ -1240,7 +1240,7 @@ static void manifest_formats(void **state)
     TU_OK(btf_image_read(tu_fmt("%s/mask.png", dir), NULL, &fmask, &err), &err);
     btf_ps_result r;
     btf_photostereo_opts mo = {.mask = &fmask};
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/lights.tsv", dir), &mo, &r, &err), &err);
+    TU_OK(btf__photostereo_manifest(tu_fmt("%s/lights.tsv", dir), &mo, &r, &err), &err);
     result_finite(&r);
     assert_int_equal(r.normal.width, 72);
     assert_int_equal(r.normal.height, 56);
@@ -1285,8 +1285,8 @@ static void manifest_formats(void **state)
     write_text(tu_fmt("%s/vec.tsv", dir), text);
     write_text(tu_fmt("%s/plain.tsv", dir), plain);
     btf_ps_result a, b;
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/vec.tsv", dir), NULL, &a, &err), &err);
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/plain.tsv", dir), NULL, &b, &err), &err);
+    TU_OK(btf__photostereo_manifest(tu_fmt("%s/vec.tsv", dir), NULL, &a, &err), &err);
+    TU_OK(btf__photostereo_manifest(tu_fmt("%s/plain.tsv", dir), NULL, &b, &err), &err);
     size_t wh = 72 * 56;
     assert_memory_equal(a.normal.data, b.normal.data, wh * 3 * sizeof(float));
     assert_memory_equal(a.albedo.data, b.albedo.data, wh * 3 * sizeof(float));
@@ -1305,7 +1305,7 @@ static void manifest_formats(void **state)
     write_text(tu_fmt("%s/unscaled.tsv", dir), text);
     btf_ps_result c;
     btf_photostereo_opts po = {.plain = 1};
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/unscaled.tsv", dir), &po, &c, &err), &err);
+    TU_OK(btf__photostereo_manifest(tu_fmt("%s/unscaled.tsv", dir), &po, &c, &err), &err);
     assert_true(sphere_error(&c.normal, L, n) > 0.1);
     btf_ps_result_free(&a);
     btf_ps_result_free(&b);
@@ -1348,7 +1348,7 @@ static void manifest_errors(void **state)
         write_text(path, cases[i].text);
         btf_ps_result r;
         btf_error err = {0};
-        int rc = btf_photostereo_manifest(path, NULL, &r, &err);
+        int rc = btf__photostereo_manifest(path, NULL, &r, &err);
         if (rc == 0 || !strstr(err.msg, cases[i].expect))
             print_error("case %zu: rc %d, message '%s', expected '%s'\n", i, rc, err.msg,
                         cases[i].expect);
@@ -1378,7 +1378,7 @@ static void linear_8bit(void **state)
         /* The writer encodes sRGB: pre-linearise so the file's bytes are
          * v * 255 (a linear 8-bit camera). */
         for (size_t k = 0; k < (size_t)72 * 56 * 3; k++)
-            imgs[i].data[k] = btf_srgb_to_linear(imgs[i].data[k]);
+            imgs[i].data[k] = btf__srgb_to_linear(imgs[i].data[k]);
         TU_OK(btf_image_write_png(tu_fmt("%s/l%02d.png", dir, i), &imgs[i], &err), &err);
         char line[256];
         snprintf(line, sizeof line, "l%02d.png\t%.17g\t%.17g\t%.17g\n", i, L[3 * i], L[3 * i + 1],
@@ -1388,10 +1388,10 @@ static void linear_8bit(void **state)
     write_text(tu_fmt("%s/m.tsv", dir), text);
     btf_ps_result r;
     btf_photostereo_opts o = {.read.linear_8bit = 1};
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/m.tsv", dir), &o, &r, &err), &err);
+    TU_OK(btf__photostereo_manifest(tu_fmt("%s/m.tsv", dir), &o, &r, &err), &err);
     double el = sphere_error(&r.normal, L, n);
     btf_ps_result_free(&r);
-    TU_OK(btf_photostereo_manifest(tu_fmt("%s/m.tsv", dir), NULL, &r, &err), &err);
+    TU_OK(btf__photostereo_manifest(tu_fmt("%s/m.tsv", dir), NULL, &r, &err), &err);
     double es = sphere_error(&r.normal, L, n);
     btf_ps_result_free(&r);
     /* Measured: 0.05 deg as linear, 10.7 deg misread as sRGB. */
@@ -1463,7 +1463,7 @@ static void dataset_entry(void **state)
     TU_OK(btf_dataset_open(ds_dir, &dopts, &ds, &err), &err);
     btf_ps_result r;
     btf_photostereo_opts o = {.integrate.method = BTF_INTEGRATE_FC};
-    TU_OK(btf_photostereo_dataset(ds, &o, &r, &err), &err);
+    TU_OK(btf__photostereo_dataset(ds, &o, &r, &err), &err);
     btf_dataset_close(ds);
     result_finite(&r);
     assert_true(r.view >= 0 && r.view_dir.theta == 0.0);

@@ -2,7 +2,7 @@
  * test_pool.c — the library's thread pool (src/core/pool.c), which the
  * segmentation features, photometric stereo and the generator share: every
  * job runs exactly once whatever the thread count, worker indices stay
- * below btf_pool_workers, the first failure is returned with its message
+ * below btf__pool_workers, the first failure is returned with its message
  * and stops the batch, and progress comes from the calling thread only,
  * in order, ending at its `to` fraction. The relay (btf_relay_*): every job
  * of every batch runs exactly once, while the caller works on, on worker 0
@@ -41,14 +41,14 @@ static btf_status job(void *user, int j, int worker, btf_error *err)
         h = (h ^ (unsigned)i) * 16777619u;
     b->results[j] = h;
     if (j == b->fail_at)
-        return btf_fail(err, BTF_E_DATA, "job %d failed on purpose", j);
+        return btf__fail(err, BTF_E_DATA, "job %d failed on purpose", j);
     return BTF_OK;
 }
 
 static void batch_init(batch *b, int threads, int fail_at)
 {
     memset(b, 0, sizeof *b);
-    b->workers = btf_pool_workers(threads, JOBS);
+    b->workers = btf__pool_workers(threads, JOBS);
     b->fail_at = fail_at;
 }
 
@@ -58,28 +58,28 @@ static void every_job_once(void **state)
     static batch ref, b;
     batch_init(&ref, 1, -1);
     btf_error err = {0};
-    TU_OK(btf_pool_run(JOBS, 1, job, &ref, NULL, &err), &err);
+    TU_OK(btf__pool_run(JOBS, 1, job, &ref, NULL, &err), &err);
     const int threads[] = {0, 2, 3, 7, 64, 1000};
     for (size_t t = 0; t < sizeof threads / sizeof threads[0]; t++) {
         batch_init(&b, threads[t], -1);
-        TU_OK(btf_pool_run(JOBS, threads[t], job, &b, NULL, &err), &err);
+        TU_OK(btf__pool_run(JOBS, threads[t], job, &b, NULL, &err), &err);
         for (int j = 0; j < JOBS; j++)
             assert_int_equal(atomic_load(&b.runs[j]), 1);
         assert_memory_equal(b.results, ref.results, sizeof b.results);
         assert_int_equal(atomic_load(&b.bad_worker), 0);
     }
     /* No job: nothing runs, no error. */
-    assert_int_equal(btf_pool_run(0, 4, job, &b, NULL, &err), BTF_OK);
+    assert_int_equal(btf__pool_run(0, 4, job, &b, NULL, &err), BTF_OK);
 }
 
 static void workers_clamped(void **state)
 {
     (void)state;
-    assert_int_equal(btf_pool_workers(5, 3), 3);
-    assert_int_equal(btf_pool_workers(1000, 1000), BTF_POOL_MAX_THREADS);
-    assert_int_equal(btf_pool_workers(4, 0), 1);
-    assert_int_equal(btf_pool_workers(0, 1000),
-                     btf_cpu_count() < BTF_POOL_MAX_THREADS ? btf_cpu_count()
+    assert_int_equal(btf__pool_workers(5, 3), 3);
+    assert_int_equal(btf__pool_workers(1000, 1000), BTF_POOL_MAX_THREADS);
+    assert_int_equal(btf__pool_workers(4, 0), 1);
+    assert_int_equal(btf__pool_workers(0, 1000),
+                     btf__cpu_count() < BTF_POOL_MAX_THREADS ? btf__cpu_count()
                                                             : BTF_POOL_MAX_THREADS);
 }
 
@@ -90,7 +90,7 @@ static void first_failure_wins(void **state)
     for (int threads = 1; threads <= 4; threads++) {
         batch_init(&b, threads, 10);
         btf_error err = {0};
-        assert_int_equal(btf_pool_run(JOBS, threads, job, &b, NULL, &err), BTF_E_DATA);
+        assert_int_equal(btf__pool_run(JOBS, threads, job, &b, NULL, &err), BTF_E_DATA);
         assert_int_equal(err.code, BTF_E_DATA);
         assert_string_equal(err.msg, "job 10 failed on purpose");
         /* The batch stops: with one thread exactly at the failure, with
@@ -101,7 +101,7 @@ static void first_failure_wins(void **state)
         assert_true(started < JOBS);
         /* err may be NULL. */
         batch_init(&b, threads, 10);
-        assert_int_equal(btf_pool_run(JOBS, threads, job, &b, NULL, NULL), BTF_E_DATA);
+        assert_int_equal(btf__pool_run(JOBS, threads, job, &b, NULL, NULL), BTF_E_DATA);
     }
 }
 
@@ -133,7 +133,7 @@ static void progress_from_caller(void **state)
         btf_pool_progress pp = {on_progress, &log, "testing", 0.25, 0.75, 100};
         batch_init(&b, threads, -1);
         btf_error err = {0};
-        TU_OK(btf_pool_run(JOBS, threads, job, &b, &pp, &err), &err);
+        TU_OK(btf__pool_run(JOBS, threads, job, &b, &pp, &err), &err);
         assert_int_equal(log.wrong_thread, 0);
         assert_int_equal(log.backwards, 0);
         assert_true(log.last == 0.75);
@@ -164,7 +164,7 @@ static btf_status relay_job(void *user, int j, int worker, btf_error *err)
     }
     atomic_fetch_add(&l->runs[j], 1);
     if (j == atomic_load(&l->fail_at))
-        return btf_fail(err, BTF_E_IO, "job %d failed", j);
+        return btf__fail(err, BTF_E_IO, "job %d failed", j);
     return BTF_OK;
 }
 
@@ -176,16 +176,16 @@ static void relay_runs_every_job_once(void **state)
     atomic_store(&l.fail_at, -1);
     l.caller = pthread_self();
     btf_error e = {0};
-    btf_relay *r = btf_relay_start(relay_job, &l, &e);
+    btf_relay *r = btf__relay_start(relay_job, &l, &e);
     assert_non_null(r);
     /* batches of 0..40 jobs, the caller busy meanwhile or not */
     int first = 0;
     for (int n = 0; first + n <= JOBS && n <= 40; first += n, n++) {
-        btf_relay_post(r, first, n);
+        btf__relay_post(r, first, n);
         volatile double x = 0;
         for (int i = 0; i < (n % 3) * 20000; i++)
             x += i;
-        assert_int_equal(btf_relay_wait(r, &e), BTF_OK);
+        assert_int_equal(btf__relay_wait(r, &e), BTF_OK);
         for (int j = first; j < first + n; j++)
             assert_int_equal(atomic_load(&l.runs[j]), 1);
     }
@@ -195,15 +195,15 @@ static void relay_runs_every_job_once(void **state)
     atomic_store(&l.slow, 1);
     atomic_store(&l.by_caller, 0);
     memset(l.runs, 0, sizeof l.runs);
-    btf_relay_post(r, 0, 200);
-    assert_int_equal(btf_relay_wait(r, &e), BTF_OK);
+    btf__relay_post(r, 0, 200);
+    assert_int_equal(btf__relay_wait(r, &e), BTF_OK);
     for (int j = 0; j < 200; j++)
         assert_int_equal(atomic_load(&l.runs[j]), 1);
-    if (btf_cpu_count() > 1)
+    if (btf__cpu_count() > 1)
         print_message("caller ran %d of 200 jobs beside a slow helper\n",
                       atomic_load(&l.by_caller));
     assert_true(atomic_load(&l.by_caller) > 0);
-    btf_relay_stop(r);
+    btf__relay_stop(r);
 }
 
 static void relay_first_failure(void **state)
@@ -214,10 +214,10 @@ static void relay_first_failure(void **state)
     l.caller = pthread_self();
     atomic_store(&l.fail_at, 57);
     btf_error e = {0};
-    btf_relay *r = btf_relay_start(relay_job, &l, &e);
+    btf_relay *r = btf__relay_start(relay_job, &l, &e);
     assert_non_null(r);
-    btf_relay_post(r, 0, 400);
-    assert_int_equal(btf_relay_wait(r, &e), BTF_E_IO);
+    btf__relay_post(r, 0, 400);
+    assert_int_equal(btf__relay_wait(r, &e), BTF_E_IO);
     assert_string_equal(e.msg, "job 57 failed");
     int ran = 0;
     for (int j = 0; j < 400; j++) {
@@ -229,12 +229,12 @@ static void relay_first_failure(void **state)
     atomic_store(&l.fail_at, -1);
     memset(l.runs, 0, sizeof l.runs);
     btf_error e2 = {0};
-    btf_relay_post(r, 500, 10);
-    assert_int_equal(btf_relay_wait(r, &e2), BTF_OK);
+    btf__relay_post(r, 500, 10);
+    assert_int_equal(btf__relay_wait(r, &e2), BTF_OK);
     for (int j = 500; j < 510; j++)
         assert_int_equal(atomic_load(&l.runs[j]), 1);
-    btf_relay_stop(r);
-    btf_relay_stop(NULL);
+    btf__relay_stop(r);
+    btf__relay_stop(NULL);
 }
 
 typedef struct bg_log {
@@ -252,10 +252,10 @@ static btf_status bg_job(void *user, int j, int worker, btf_error *err)
         atomic_store(&l->wrong, 1);
     int at = atomic_fetch_add(&l->ran, 1);
     if (at >= 64)
-        return btf_fail(err, BTF_E_ARG, "background job %d ran more than once", j);
+        return btf__fail(err, BTF_E_ARG, "background job %d ran more than once", j);
     atomic_store(&l->order[at], j);
     if (j == atomic_load(&l->fail_at))
-        return btf_fail(err, BTF_E_IO, "background job %d failed", j);
+        return btf__fail(err, BTF_E_IO, "background job %d failed", j);
     return BTF_OK;
 }
 
@@ -274,30 +274,30 @@ static void relay_background_in_order(void **state)
         atomic_store(&b.fail_at, fail);
         l.caller = b.caller = pthread_self();
         btf_error e = {0};
-        btf_relay *r = btf_relay_start(relay_job, &l, &e);
+        btf_relay *r = btf__relay_start(relay_job, &l, &e);
         assert_non_null(r);
         btf_background bg = {.fn = bg_job, .user = &b, .count = 40};
-        btf_relay_background(r, &bg);
+        btf__relay_background(r, &bg);
         /* batches meanwhile, idle time between them: 30 batches, then more
          * (each of its jobs again) until the background is through, or 5 s
          * on a loaded machine */
         int want = fail < 0 ? 40 : 21, posts = 0;
-        for (; posts < 30 || (btf_cpu_count() > 1 && atomic_load(&b.ran) < want &&
+        for (; posts < 30 || (btf__cpu_count() > 1 && atomic_load(&b.ran) < want &&
                               posts < 30 + 5000); posts++) {
             int k = posts % 30;
-            btf_relay_post(r, 10 * k, 10);
-            assert_int_equal(btf_relay_wait(r, &e), BTF_OK);
+            btf__relay_post(r, 10 * k, 10);
+            assert_int_equal(btf__relay_wait(r, &e), BTF_OK);
             struct timespec ts = {0, posts < 30 ? 300000 : 1000000};
             nanosleep(&ts, NULL);
         }
-        btf_relay_stop(r);
+        btf__relay_stop(r);
         for (int j = 0; j < 300; j++) /* once per post */
             assert_int_equal(atomic_load(&l.runs[j]), posts / 30 + (j / 10 < posts % 30));
         int ran = atomic_load(&b.ran);
         assert_int_equal(atomic_load(&b.wrong), 0);
         for (int i = 0; i < ran; i++)
             assert_int_equal(atomic_load(&b.order[i]), i);
-        if (btf_cpu_count() < 2) {
+        if (btf__cpu_count() < 2) {
             assert_int_equal(ran, 0);
             continue;
         }

@@ -198,14 +198,14 @@ static void test_all_pairs_finite(void **state)
         btf_view_map *vm[81];
         btf_light_map *lm[81];
         for (int d = 0; d < 81; d++) {
-            TU_OK(btf_view_map_make(&m, set.dirs[d], &vm[d], &err), &err);
-            TU_OK(btf_light_map_make(&m, set.dirs[d], &lm[d], &err), &err);
+            TU_OK(btf__view_map_make(&m, set.dirs[d], &vm[d], &err), &err);
+            TU_OK(btf__light_map_make(&m, set.dirs[d], &lm[d], &err), &err);
         }
         for (int v = 0; v < 81; v++) {
             for (int l = 0; l < 81; l++) {
                 btf_image img = {0};
-                TU_OK(btf_material_render_maps(&m, vm[v], lm[l], set.dirs[v], set.dirs[l], &img,
-                                               &err),
+                TU_OK(btf__material_render_maps(&m, vm[v], lm[l], set.dirs[v], set.dirs[l], &img,
+                                                &err),
                       &err);
                 assert_true(all_finite(img.data, 3 * 64));
                 if ((v * 81 + l) % 97 == 0 || (v == 80 && l == 80)) {
@@ -218,8 +218,8 @@ static void test_all_pairs_finite(void **state)
             }
         }
         for (int d = 0; d < 81; d++) {
-            btf_view_map_free(vm[d]);
-            btf_light_map_free(lm[d]);
+            btf__view_map_free(vm[d]);
+            btf__light_map_free(lm[d]);
         }
         btf_procedural_free(&m);
     }
@@ -249,11 +249,11 @@ static double shadow_fraction(const btf_procedural *m, btf_dir light)
 {
     btf_error err = {0};
     btf_light_map *lm = NULL;
-    TU_OK(btf_light_map_make(m, light, &lm, &err), &err);
+    TU_OK(btf__light_map_make(m, light, &lm, &err), &err);
     int n = m->size, dark = 0;
     for (int k = 0; k < n * n; k++)
         dark += lm->vis[k] < 0.5f;
-    btf_light_map_free(lm);
+    btf__light_map_free(lm);
     return (double)dark / (n * n);
 }
 
@@ -332,7 +332,7 @@ static void bump_material(btf_procedural *m, float *store)
                 m->albedo[3 * (r * n + c) + k] = h > 2.5f ? 1.0f : 0.1f;
         }
     }
-    btf_material_normals_from_height(m);
+    btf__material_normals_from_height(m);
 }
 
 static void bright_centroid(const btf_image *img, double *cx, double *cy)
@@ -386,10 +386,10 @@ static void test_axis_convention(void **state)
     /* A cast shadow of the bump, lit from the right, falls to its left. */
     btf_light_map *lm = NULL;
     btf_error err = {0};
-    TU_OK(btf_light_map_make(&m, dir(75, 0), &lm, &err), &err);
+    TU_OK(btf__light_map_make(&m, dir(75, 0), &lm, &err), &err);
     assert_true(lm->vis[16 * 32 + 8] < 0.5f);
     assert_true(lm->vis[16 * 32 + 26] > 0.99f);
-    btf_light_map_free(lm);
+    btf__light_map_free(lm);
     free(store);
 }
 
@@ -426,17 +426,17 @@ static void test_errors(void **state)
     make("wood", 9, 0, &big);
     btf_view_map *vm = NULL;
     btf_light_map *lm = NULL;
-    TU_OK(btf_view_map_make(&big, dir(0, 0), &vm, &err), &err);
-    TU_OK(btf_light_map_make(&m, dir(0, 0), &lm, &err), &err);
-    assert_int_equal(btf_material_render_maps(&m, vm, lm, dir(0, 0), dir(0, 0), &img, &err),
+    TU_OK(btf__view_map_make(&big, dir(0, 0), &vm, &err), &err);
+    TU_OK(btf__light_map_make(&m, dir(0, 0), &lm, &err), &err);
+    assert_int_equal(btf__material_render_maps(&m, vm, lm, dir(0, 0), dir(0, 0), &img, &err),
                      BTF_E_ARG);
-    btf_view_map_free(vm);
-    btf_light_map_free(lm);
+    btf__view_map_free(vm);
+    btf__light_map_free(lm);
     btf_procedural_free(&big);
 
     /* A non-finite height is reported, not marched. */
     m.height[3] = NAN;
-    assert_int_equal(btf_view_map_make(&m, dir(30, 0), &vm, &err), BTF_E_DATA);
+    assert_int_equal(btf__view_map_make(&m, dir(30, 0), &vm, &err), BTF_E_DATA);
     assert_null(vm);
     btf_procedural_free(&m);
 }
@@ -477,11 +477,11 @@ static void test_timing(void **state)
         btf_image_free(&img);
         btf_view_map *vm = NULL;
         btf_light_map *lm = NULL;
-        TU_OK(btf_view_map_make(&m, dir(45, 30), &vm, &err), &err);
-        TU_OK(btf_light_map_make(&m, dir(60, 120), &lm, &err), &err);
+        TU_OK(btf__view_map_make(&m, dir(45, 30), &vm, &err), &err);
+        TU_OK(btf__light_map_make(&m, dir(60, 120), &lm, &err), &err);
         t0 = now();
         for (int k = 0; k < 50; k++) {
-            TU_OK(btf_material_render_maps(&m, vm, lm, dir(45, 30), dir(60, 120), &img, &err),
+            TU_OK(btf__material_render_maps(&m, vm, lm, dir(45, 30), dir(60, 120), &img, &err),
                   &err);
             btf_image_free(&img);
         }
@@ -489,8 +489,8 @@ static void test_timing(void **state)
         print_message("%-8s 128^2: make %.1f ms, render %.2f ms (mean), %.2f ms (75/75), "
                       "render_maps %.3f ms\n",
                       names[i], 1e3 * t_make, 1e3 * t_render, 1e3 * t_worst, 1e3 * t_maps);
-        btf_view_map_free(vm);
-        btf_light_map_free(lm);
+        btf__view_map_free(vm);
+        btf__light_map_free(lm);
         btf_procedural_free(&m);
     }
     btf_dirset_free(&set);

@@ -1,7 +1,7 @@
 /*
  * test_range_map.c — the range tile made periodic (btf_range_make_periodic,
  * src/model/range_periodic.c) and enlarged to a seamless height and normal
- * map of any size (btf_range_map, btf_normal_map, src/range/range_map.c;
+ * map of any size (btf__range_map, btf__normal_map, src/range/range_map.c;
  * docs/render.md, "Range and normal map"): wrap-around differences no
  * larger than inside ones, the tile's content kept, exact samples at whole
  * periods, unit finite normals with the x-right, y-up convention, the
@@ -24,12 +24,12 @@ static float *rough_tile(int w, int h, unsigned seed)
     float *t = malloc(sizeof(float) * (size_t)w * h);
     assert_non_null(t);
     btf_rng r;
-    btf_rng_seed(&r, seed);
+    btf__rng_seed(&r, seed);
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++)
             t[(size_t)y * w + x] = (float)(1.5 * sin(0.7 * x + 0.3) * cos(0.45 * y) +
                                            0.002 * (x - 7.0) * (x - 7.0) + 0.03 * y +
-                                           0.2 * btf_rng_uniform(&r));
+                                           0.2 * btf__rng_uniform(&r));
     return t;
 }
 
@@ -89,7 +89,7 @@ static double correlation(const float *a, const float *b, size_t n)
 }
 
 /* A texture-less model holding a copy of the tile (one subspace is enough
- * for btf_range_map, which reads only the range fields). */
+ * for btf__range_map, which reads only the range fields). */
 static btf_model tile_model(const float *t, int w, int h, float texel)
 {
     btf_model m;
@@ -157,10 +157,10 @@ static void periodic_tile_keeps_content(void **state)
         int n = 48 * 40;
         float *r = malloc(sizeof(float) * n), *q = malloc(sizeof(float) * n);
         btf_rng g;
-        btf_rng_seed(&g, 11);
+        btf__rng_seed(&g, 11);
         double vr = 0, vq = 0;
         for (int i = 0; i < n; i++)
-            r[i] = q[i] = (float)btf_rng_uniform(&g) + 0.01f * (i % 48);
+            r[i] = q[i] = (float)btf__rng_uniform(&g) + 0.01f * (i % 48);
         TU_OK(btf_range_make_periodic(q, 48, 40, &e), &e);
         steps sq = measure_steps(q, 48, 40);
         double mr = 0, mq = 0;
@@ -228,7 +228,7 @@ static void enlarged_map_wraps(void **state)
     for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
         int w = sizes[k][0], h = sizes[k][1];
         btf_image hm, nm;
-        TU_OK(btf_range_map(&m, w, h, &hm, &nm, &e), &e);
+        TU_OK(btf__range_map(&m, w, h, &hm, &nm, &e), &e);
         assert_int_equal(hm.width, w);
         assert_int_equal(hm.height, h);
         assert_int_equal(hm.channels, 1);
@@ -272,9 +272,9 @@ static void texel_one_is_quilted(void **state)
      * sines repeat every 9 and 14 texels, which the lattice of
      * model/structure_lattice.c holds, leaving few blocks to draw from) */
     btf_rng r;
-    btf_rng_seed(&r, 9);
+    btf__rng_seed(&r, 9);
     for (int i = 0; i < tw * th; i++)
-        m.range[i] = (float)btf_rng_uniform(&r);
+        m.range[i] = (float)btf__rng_uniform(&r);
     btf_image_free(&hm);
     TU_OK(btf_structure_maps(&m, 2 * tw, 2 * th, 5, &hm, NULL, NULL, &e), &e);
     TU_OK(btf_structure_maps(&m, 2 * tw, 2 * th, 6, &other, NULL, NULL, &e), &e);
@@ -297,7 +297,7 @@ static void extreme_sizes(void **state)
     btf_model m = tile_model(t, tw, th, 2.0f);
     /* 1x1: the tile's average (one pixel spans a whole period) */
     btf_image hm, nm;
-    TU_OK(btf_range_map(&m, 1, 1, &hm, &nm, &e), &e);
+    TU_OK(btf__range_map(&m, 1, 1, &hm, &nm, &e), &e);
     double mean = 0;
     for (int i = 0; i < tw * th; i++)
         mean += t[i];
@@ -308,7 +308,7 @@ static void extreme_sizes(void **state)
     btf_image_free(&nm);
     /* 4097 x 3: 128 periods across (stretched by 4096/4097), one squeezed
      * period down */
-    TU_OK(btf_range_map(&m, 4097, 3, &hm, &nm, &e), &e);
+    TU_OK(btf__range_map(&m, 4097, 3, &hm, &nm, &e), &e);
     for (size_t i = 0; i < (size_t)4097 * 3; i++)
         assert_true(isfinite(hm.data[i]));
     steps s = measure_steps(hm.data, 4097, 3);
@@ -320,7 +320,7 @@ static void extreme_sizes(void **state)
     /* heights near FLT_MAX: finite heights and unit normals */
     float huge[4] = {FLT_MAX, -FLT_MAX, -FLT_MAX, FLT_MAX};
     m = tile_model(huge, 2, 2, 1.0f);
-    TU_OK(btf_range_map(&m, 13, 7, &hm, &nm, &e), &e);
+    TU_OK(btf__range_map(&m, 13, 7, &hm, &nm, &e), &e);
     for (size_t i = 0; i < 13 * 7; i++)
         assert_true(isfinite(hm.data[i]));
     assert_unit_normals(&nm);
@@ -331,7 +331,7 @@ static void extreme_sizes(void **state)
     float c[6] = {2.5f, 2.5f, 2.5f, 2.5f, 2.5f, 2.5f};
     for (int k = 0; k < 2; k++) {
         m = tile_model(c, k ? 1 : 3, k ? 1 : 2, 0.75f);
-        TU_OK(btf_range_map(&m, 31, 4, &hm, &nm, &e), &e);
+        TU_OK(btf__range_map(&m, 31, 4, &hm, &nm, &e), &e);
         for (size_t i = 0; i < 31 * 4; i++) {
             assert_float_equal(hm.data[i], 2.5f, 1e-6);
             assert_true(nm.data[3 * i] == 0.0f && nm.data[3 * i + 1] == 0.0f &&
@@ -343,7 +343,7 @@ static void extreme_sizes(void **state)
     }
     /* a tiny texel (many periods per pixel) stays bounded and finite */
     m = tile_model(t, tw, th, 1e-30f);
-    TU_OK(btf_range_map(&m, 5, 3, &hm, NULL, &e), &e);
+    TU_OK(btf__range_map(&m, 5, 3, &hm, NULL, &e), &e);
     for (int i = 0; i < 15; i++)
         assert_float_equal(hm.data[i], mean, 1e-4);
     btf_image_free(&hm);
@@ -357,7 +357,7 @@ static void no_range_is_flat(void **state)
     btf_model m = tile_model(NULL, 0, 0, 0.0f);
     btf_image hm, nm;
     btf_error e = {0};
-    TU_OK(btf_range_map(&m, 5, 4, &hm, &nm, &e), &e);
+    TU_OK(btf__range_map(&m, 5, 4, &hm, &nm, &e), &e);
     for (int i = 0; i < 20; i++) {
         assert_true(hm.data[i] == 0.0f);
         assert_true(nm.data[3 * i] == 0.0f && nm.data[3 * i + 1] == 0.0f &&
@@ -365,7 +365,7 @@ static void no_range_is_flat(void **state)
     }
     btf_image_free(&hm);
     btf_image_free(&nm);
-    TU_OK(btf_range_map(&m, 5, 4, NULL, &nm, &e), &e); /* normals alone */
+    TU_OK(btf__range_map(&m, 5, 4, NULL, &nm, &e), &e); /* normals alone */
     assert_int_equal(nm.width, 5);
     btf_image_free(&nm);
 }
@@ -376,18 +376,18 @@ static void bad_input(void **state)
     btf_error e = {0};
     btf_image hm = {0};
     btf_model m = tile_model(NULL, 0, 0, 0.0f);
-    assert_int_equal(btf_range_map(&m, 0, 4, &hm, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__range_map(&m, 0, 4, &hm, NULL, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "range map: size 0x4"));
     assert_null(hm.data);
-    assert_int_equal(btf_range_map(NULL, 4, 4, &hm, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__range_map(NULL, 4, 4, &hm, NULL, &e), BTF_E_ARG);
     float t[2] = {1.0f, INFINITY};
     m = tile_model(t, 2, 1, 1.0f);
-    assert_int_equal(btf_range_map(&m, 4, 4, &hm, NULL, &e), BTF_E_DATA);
+    assert_int_equal(btf__range_map(&m, 4, 4, &hm, NULL, &e), BTF_E_DATA);
     assert_non_null(strstr(e.msg, "expected finite heights"));
     assert_null(hm.data);
     m.range[1] = 0.0f;
     m.range_texel = NAN;
-    assert_int_equal(btf_range_map(&m, 4, 4, &hm, NULL, &e), BTF_E_DATA);
+    assert_int_equal(btf__range_map(&m, 4, 4, &hm, NULL, &e), BTF_E_DATA);
     assert_non_null(strstr(e.msg, "texel"));
     btf_model_free(&m);
 }
@@ -410,8 +410,8 @@ static void normals_of_known_slopes(void **state)
             hx.data[y * 8 + x] = (float)(a * x);
             hy.data[y * 8 + x] = (float)(b * y);
         }
-    TU_OK(btf_normal_map(&hx, 1.0, &nx, &e), &e);
-    TU_OK(btf_normal_map(&hy, 1.0, &ny, &e), &e);
+    TU_OK(btf__normal_map(&hx, 1.0, &nx, &e), &e);
+    TU_OK(btf__normal_map(&hy, 1.0, &ny, &e), &e);
     double lx = sqrt(a * a + 1.0), ly = sqrt(b * b + 1.0);
     for (int y = 1; y < 4; y++)
         for (int x = 1; x < 7; x++) {
@@ -430,15 +430,15 @@ static void normals_of_known_slopes(void **state)
     btf_image_free(&nx);
     btf_image_free(&ny);
     /* scale: relief x 2 doubles the slope; a huge scale stays finite */
-    TU_OK(btf_normal_map(&hx, 2.0, &nx, &e), &e);
+    TU_OK(btf__normal_map(&hx, 2.0, &nx, &e), &e);
     double l2 = sqrt(4 * a * a + 1.0);
     assert_float_equal(nx.data[3 * (2 * 8 + 3)], -2 * a / l2, 1e-6);
     btf_image_free(&nx);
-    TU_OK(btf_normal_map(&hx, 1e308, &nx, &e), &e);
+    TU_OK(btf__normal_map(&hx, 1e308, &nx, &e), &e);
     assert_unit_normals(&nx);
     btf_image_free(&nx);
-    assert_int_equal(btf_normal_map(&hx, NAN, &nx, &e), BTF_E_ARG);
-    assert_int_equal(btf_normal_map(&nx, 1.0, &ny, &e), BTF_E_ARG); /* no height map */
+    assert_int_equal(btf__normal_map(&hx, NAN, &nx, &e), BTF_E_ARG);
+    assert_int_equal(btf__normal_map(&nx, 1.0, &ny, &e), BTF_E_ARG); /* no height map */
     btf_image_free(&hx);
     btf_image_free(&hy);
 }
@@ -448,7 +448,7 @@ static void normals_of_known_slopes(void **state)
 #define OLD_MODEL "tests/data/model-v1.0.btfcar"
 
 /* btfcar synthesise --range writes range.exr and normal.exr beside the
- * subspace images, the same floats btf_range_map gives; --subspace none
+ * subspace images, the same floats btf__range_map gives; --subspace none
  * writes only them. */
 static void cli_writes_range_maps(void **state)
 {
@@ -465,7 +465,7 @@ static void cli_writes_range_maps(void **state)
     TU_OK(btf_model_read(OLD_MODEL, &m, &e), &e);
     assert_int_equal(tu_count_files(out), m.n_subspaces + 2);
     btf_image want_h, want_n, got_h, got_n;
-    TU_OK(btf_range_map(&m, 70, 45, &want_h, &want_n, &e), &e);
+    TU_OK(btf__range_map(&m, 70, 45, &want_h, &want_n, &e), &e);
     TU_OK(btf_image_read(tu_fmt("%s/range.exr", out), NULL, &got_h, &e), &e);
     TU_OK(btf_image_read(tu_fmt("%s/normal.exr", out), NULL, &got_n, &e), &e);
     assert_int_equal(got_h.channels, 1);

@@ -102,19 +102,19 @@ static void lp_directions(void **state)
     /* The parser on a buffer, files not checked: absolute paths are kept. */
     btf_dataset_entries l;
     const char *buf = "2\n/abs/x.png 1 0 0.0001\nrel.png 0.6 0 0.8\n";
-    TU_OK(btf_rti_lp_parse(buf, strlen(buf), "mem", "/base", 0, &l, &e), &e);
+    TU_OK(btf__rti_lp_parse(buf, strlen(buf), "mem", "/base", 0, &l, &e), &e);
     assert_int_equal(l.count, 2);
     assert_int_equal(l.layout, BTF_LAYOUT_RTI);
     assert_string_equal(l.items[0].path, "/abs/x.png");
     assert_string_equal(l.items[1].path, "/base/rel.png");
     assert_true(fabs(l.items[1].light.theta - acos(0.8) * 180.0 / M_PI) < 1e-9);
     assert_true(l.items[1].light.phi == 0.0);
-    btf_dataset_entries_free(&l);
-    assert_int_equal(btf_rti_lp_name("x/dirs.lp"), 1);
-    assert_int_equal(btf_rti_lp_name("x/dirs.LP"), 1);
-    assert_int_equal(btf_rti_lp_name("x/.lp"), 0);
-    assert_int_equal(btf_rti_lp_name("x/dirs.lpx"), 0);
-    assert_int_equal(btf_rti_lp_name("x/manifest.tsv"), 0);
+    btf__dataset_entries_free(&l);
+    assert_int_equal(btf__rti_lp_name("x/dirs.lp"), 1);
+    assert_int_equal(btf__rti_lp_name("x/dirs.LP"), 1);
+    assert_int_equal(btf__rti_lp_name("x/.lp"), 0);
+    assert_int_equal(btf__rti_lp_name("x/dirs.lpx"), 0);
+    assert_int_equal(btf__rti_lp_name("x/manifest.tsv"), 0);
 }
 
 /* Opening text as tu_dir/bad/bad.lp (images a.png, b.png, c.png beside it)
@@ -291,7 +291,7 @@ static void lp_frame_matches_truth(void **state)
         assert_int_equal(btf_dataset_get_info(ds)->n_lights, lights.count);
         btf_photostereo_opts o = btf_photostereo_defaults();
         btf_ps_result r;
-        TU_OK(btf_photostereo_dataset(ds, &o, &r, &e), &e);
+        TU_OK(btf__photostereo_dataset(ds, &o, &r, &e), &e);
         double s = 0.0;
         for (int p = 0; p < n * n; p++)
             s += angle_deg(r.normal.data + 3 * p, m.normal + 3 * p);

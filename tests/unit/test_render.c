@@ -263,26 +263,26 @@ static void test_needed(void **state)
     int count;
     btf_gbuffer g = {0};
     gbuffer_from(&g, 16, 16, 2.0, 10.0);
-    TU_OK(btf_render_needed(&m, &g, &sun, 1, need, &count, &e), &e);
+    TU_OK(btf__render_needed(&m, &g, &sun, 1, need, &count, &e), &e);
     assert_int_equal(count, 2);
     assert_true(need[0] && need[1]);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     memset(&g, 0, sizeof g);
     gbuffer_from(&g, 16, 16, 62.0, 12.0);
-    TU_OK(btf_render_needed(&m, &g, &sun, 1, need, &count, &e), &e);
+    TU_OK(btf__render_needed(&m, &g, &sun, 1, need, &count, &e), &e);
     assert_int_equal(count, 2);
     assert_true(need[4] && need[5]);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     memset(&g, 0, sizeof g);
     gbuffer_from(&g, 16, 16, 0.0, 90.0);
-    TU_OK(btf_render_needed(&m, &g, &sun, 1, need, &count, &e), &e);
+    TU_OK(btf__render_needed(&m, &g, &sun, 1, need, &count, &e), &e);
     assert_int_equal(count, RINGS);
     /* No light above the horizon: nothing is needed. */
     btf_light under = sun;
     under.direction[2] = -0.9;
-    TU_OK(btf_render_needed(&m, &g, &under, 1, need, &count, &e), &e);
+    TU_OK(btf__render_needed(&m, &g, &under, 1, need, &count, &e), &e);
     assert_int_equal(count, 0);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     btf_model_free(&m);
 }
 
@@ -300,24 +300,24 @@ static void test_shade_rules(void **state)
     g.object[5] = -1;
     uint8_t need[RINGS] = {1, 1, 1, 1, 1, 1};
     btf_render_material *rm;
-    TU_OK(btf_render_material_build(&m, need, 16, 3, 0, &rm, &e), &e);
+    TU_OK(btf__render_material_build(&m, need, 16, 3, 0, &rm, &e), &e);
     btf_light under = {.kind = BTF_LIGHT_DIRECTIONAL, .direction = {0.1, 0, -1},
                        .rgb = {1, 1, 1}};
     float bg[3] = {0.25f, 0.5f, 0.75f};
     btf_image img = {0};
-    TU_OK(btf_render_shade(rm, &g, &under, 1, bg, 1.0, 1, &img, &e), &e);
+    TU_OK(btf__render_shade(rm, &g, &under, 1, bg, 1.0, 1, &img, &e), &e);
     for (int p = 0; p < 64; p++)
         for (int c = 0; c < 3; c++)
             assert_true(img.data[3 * p + c] == (p == 5 ? bg[c] : 0.0f));
     btf_image_free(&img);
-    btf_render_material_free(rm);
+    btf__render_material_free(rm);
     uint8_t only0[RINGS] = {1, 0, 0, 0, 0, 0};
-    TU_OK(btf_render_material_build(&m, only0, 16, 3, 0, &rm, &e), &e);
+    TU_OK(btf__render_material_build(&m, only0, 16, 3, 0, &rm, &e), &e);
     btf_light sun = {.kind = BTF_LIGHT_DIRECTIONAL, .direction = {0, 0, 1}, .rgb = {1, 1, 1}};
-    assert_int_equal(btf_render_shade(rm, &g, &sun, 1, bg, 1.0, 1, &img, &e), BTF_E_ARG);
+    assert_int_equal(btf__render_shade(rm, &g, &sun, 1, bg, 1.0, 1, &img, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "subspace"));
-    btf_render_material_free(rm);
-    btf_gbuffer_free(&g);
+    btf__render_material_free(rm);
+    btf__gbuffer_free(&g);
     btf_model_free(&m);
 }
 
@@ -347,15 +347,15 @@ static void test_extremes(void **state)
     btf_gbuffer g = {0};
     gbuffer_from(&g, 4, 4, 10.0, 0.0);
     btf_render_material *rm;
-    TU_OK(btf_render_material_build(&m, NULL, 8, 3, 0, &rm, &e), &e);
+    TU_OK(btf__render_material_build(&m, NULL, 8, 3, 0, &rm, &e), &e);
     btf_light at = {.kind = BTF_LIGHT_POINT, .position = {0, 0, 0}, .rgb = {1e30f, 1, 1}};
     btf_image img = {0};
-    TU_OK(btf_render_shade(rm, &g, &at, 1, NULL, 1.0, 2, &img, &e), &e);
+    TU_OK(btf__render_shade(rm, &g, &at, 1, NULL, 1.0, 2, &img, &e), &e);
     for (size_t i = 0; i < 48; i++)
         assert_true(isfinite(img.data[i]));
     btf_image_free(&img);
-    btf_render_material_free(rm);
-    btf_gbuffer_free(&g);
+    btf__render_material_free(rm);
+    btf__gbuffer_free(&g);
     btf_model_free(&m);
 }
 

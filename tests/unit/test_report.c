@@ -67,7 +67,7 @@ static void test_spread(void **state)
     btf_dirset set;
     TU_OK(btf_dirset_ubo81(&set, &e), &e);
     int idx[81];
-    assert_int_equal(btf_spread_directions(&set, 9, idx), 9);
+    assert_int_equal(btf__spread_directions(&set, 9, idx), 9);
     assert_int_equal(idx[0], 0); /* the pole, and indices ascending */
     int rings_hit[6] = {0};
     for (int i = 0; i < 9; i++) {
@@ -78,11 +78,11 @@ static void test_spread(void **state)
     for (int r = 2; r < 6; r++) /* 15 deg holds 6 of 81: a stride of 9 may skip it */
         assert_true(rings_hit[r]);
     /* n beyond the set: all of it; n < 1: one. */
-    assert_int_equal(btf_spread_directions(&set, 500, idx), 81);
+    assert_int_equal(btf__spread_directions(&set, 500, idx), 81);
     for (int i = 0; i < 81; i++)
         assert_int_equal(idx[i], i);
-    assert_int_equal(btf_spread_directions(&set, 0, idx), 1);
-    assert_int_equal(btf_spread_directions(NULL, 3, idx), 0);
+    assert_int_equal(btf__spread_directions(&set, 0, idx), 1);
+    assert_int_equal(btf__spread_directions(NULL, 3, idx), 0);
     btf_dirset_free(&set);
 }
 
@@ -116,7 +116,7 @@ static void test_quality(void **state)
     o.on_pair = count_pair;
     o.on_pair_user = &seen;
     btf_quality q, q2;
-    TU_OK(btf_quality_measure(ds, &model, &o, &q, &e), &e);
+    TU_OK(btf__quality_measure(ds, &model, &o, &q, &e), &e);
     assert_int_equal(q.n_pairs, 12);
     assert_int_equal(seen.calls, 12);
     assert_int_equal(seen.bad, 0);
@@ -137,11 +137,11 @@ static void test_quality(void **state)
     assert_int_equal(q.texture_size, 32);
     o.threads = 2;
     o.on_pair = NULL;
-    TU_OK(btf_quality_measure(ds, &model, &o, &q2, &e), &e);
+    TU_OK(btf__quality_measure(ds, &model, &o, &q2, &e), &e);
     for (int i = 0; i < q.n_pairs; i++)
         assert_true(q.pairs[i].d.combined == q2.pairs[i].d.combined);
-    btf_quality_free(&q);
-    btf_quality_free(&q2);
+    btf__quality_free(&q);
+    btf__quality_free(&q2);
 }
 
 /* A model that is not of the dataset, and bad options, are errors. */
@@ -157,12 +157,12 @@ static void test_quality_errors(void **state)
         img.data[i] = 0.5f;
     btf_fit_opts fo = btf_fit_defaults();
     TU_OK(btf_texture_fit(&img, &fo, &tex, &e), &e);
-    assert_int_not_equal(btf_quality_measure(ds, &tex, NULL, &q, &e), BTF_OK);
+    assert_int_not_equal(btf__quality_measure(ds, &tex, NULL, &q, &e), BTF_OK);
     btf_quality_opts o = btf_quality_defaults();
     o.relief = NAN;
-    assert_int_equal(btf_quality_measure(ds, &model, &o, &q, &e), BTF_E_ARG);
+    assert_int_equal(btf__quality_measure(ds, &model, &o, &q, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "relief"));
-    assert_int_equal(btf_quality_measure(NULL, &model, NULL, &q, &e), BTF_E_ARG);
+    assert_int_equal(btf__quality_measure(NULL, &model, NULL, &q, &e), BTF_E_ARG);
     btf_model_free(&tex);
     btf_image_free(&img);
 }
@@ -175,10 +175,10 @@ static void test_analyse_shared(void **state)
     btf_analyse_opts o = quick();
     float *features;
     int dim;
-    TU_OK(btf_dataset_features(ds, &o.segment.features, &features, &dim, &e), &e);
+    TU_OK(btf__dataset_features(ds, &o.segment.features, &features, &dim, &e), &e);
     btf_model range;
     memset(&range, 0, sizeof range);
-    TU_OK(btf_analyse_range(ds, &o, &range, &e), &e);
+    TU_OK(btf__analyse_range(ds, &o, &range, &e), &e);
     o.features = features;
     o.feature_dim = dim;
     o.range_from = &range;
@@ -207,7 +207,7 @@ static void assert_sweep_resumes(const btf_sweep_opts *o, int n)
 {
     btf_error e = {0};
     btf_sweep again;
-    TU_OK(btf_sweep_run(ds, o, &again, &e), &e);
+    TU_OK(btf__sweep_run(ds, o, &again, &e), &e);
     assert_int_equal(again.resumed, n);
     btf_sweep_free(&again);
 }
@@ -239,7 +239,7 @@ static void test_sweep_resume(void **state)
     snprintf(dir, sizeof dir, "%s/sweep", tu_dir);
     o.state_dir = dir;
     btf_sweep s;
-    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    TU_OK(btf__sweep_run(ds, &o, &s, &e), &e);
     assert_int_equal(s.n_points, 4);
     assert_int_equal(s.resumed, 0);
     int fronts = 0, defaults = 0;
@@ -258,7 +258,7 @@ static void test_sweep_resume(void **state)
     assert_true(s.points[0].is_default);
     assert_int_equal(tu_count_files(dir), 4);
     btf_sweep again;
-    TU_OK(btf_sweep_run(ds, &o, &again, &e), &e);
+    TU_OK(btf__sweep_run(ds, &o, &again, &e), &e);
     assert_int_equal(again.resumed, 4);
     for (int i = 0; i < 4; i++) {
         /* cJSON keeps 15 significant digits unless that loses more than an ulp */
@@ -275,7 +275,7 @@ static void test_sweep_resume(void **state)
     btf_sweep_free(&s);
     /* Bad grids. */
     o.n_levels = 1, o.levels[0] = 99;
-    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__sweep_run(ds, &o, &s, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "levels 99"));
 }
 
@@ -296,14 +296,14 @@ static void test_sweep_shares(void **state)
     snprintf(shared, sizeof shared, "%s/sweep-shared", tu_dir);
     o.state_dir = whole;
     btf_sweep one;
-    TU_OK(btf_sweep_run(ds, &o, &one, &e), &e);
+    TU_OK(btf__sweep_run(ds, &o, &one, &e), &e);
     o.state_dir = shared;
     o.share_count = 3;
     int measured[4] = {0};
     for (int share = 0; share < 3; share++) {
         o.share_index = share;
         btf_sweep s;
-        TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+        TU_OK(btf__sweep_run(ds, &o, &s, &e), &e);
         int missing = 0;
         for (int i = 0; i < 4; i++) {
             const btf_sweep_point *p = &s.points[i];
@@ -326,7 +326,7 @@ static void test_sweep_shares(void **state)
     o.share_count = o.share_index = 0;
     o.resume_only = 1;
     btf_sweep merged;
-    TU_OK(btf_sweep_run(ds, &o, &merged, &e), &e);
+    TU_OK(btf__sweep_run(ds, &o, &merged, &e), &e);
     assert_int_equal(merged.resumed, 4);
     assert_int_equal(merged.n_missing, 0);
     for (int i = 0; i < 4; i++) {
@@ -340,16 +340,16 @@ static void test_sweep_shares(void **state)
     btf_sweep_free(&one);
     /* a point gone: the merge names it and measures nothing */
     assert_int_equal(remove(tu_fmt("%s/point-K2-L1-N4.json", shared)), 0);
-    assert_int_equal(btf_sweep_run(ds, &o, &merged, &e), BTF_E_DATA);
+    assert_int_equal(btf__sweep_run(ds, &o, &merged, &e), BTF_E_DATA);
     assert_non_null(strstr(e.msg, "1 of the sweep's 4 points are missing"));
     assert_non_null(strstr(e.msg, "K 2, levels 1, neighbours 4"));
     assert_int_equal(tu_count_files(shared), 3);
     /* bad shares */
     o.resume_only = 0;
     o.share_count = 2, o.share_index = 2;
-    assert_int_equal(btf_sweep_run(ds, &o, &merged, &e), BTF_E_ARG);
+    assert_int_equal(btf__sweep_run(ds, &o, &merged, &e), BTF_E_ARG);
     o.share_count = -1, o.share_index = 0;
-    assert_int_equal(btf_sweep_run(ds, &o, &merged, &e), BTF_E_ARG);
+    assert_int_equal(btf__sweep_run(ds, &o, &merged, &e), BTF_E_ARG);
     btf_report_opts ro = btf_report_defaults();
     ro.sweep = 1;
     ro.sweep_opts.share_count = 2;
@@ -502,7 +502,7 @@ static void test_sweep_structure(void **state)
     char dir[4096];
     btf_sweep_opts o = one_setting_sweep(0, 1, 0, "sweep-structure", dir, sizeof dir);
     btf_sweep s;
-    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    TU_OK(btf__sweep_run(ds, &o, &s, &e), &e);
     assert_int_equal(s.n_points, 2);
     assert_int_equal(s.points[0].setting.plain, 0);
     assert_int_equal(s.points[1].setting.plain, 1);
@@ -514,9 +514,9 @@ static void test_sweep_structure(void **state)
     assert_sweep_resumes(&o, 2);
     btf_sweep_free(&s);
     o.n_plain = 2, o.plain[0] = o.plain[1] = 1;
-    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__sweep_run(ds, &o, &s, &e), BTF_E_ARG);
     o.n_plain = 1, o.plain[0] = 7;
-    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__sweep_run(ds, &o, &s, &e), BTF_E_ARG);
 }
 
 /* The range-size axis: a layered setting at the analysed resolution and
@@ -531,7 +531,7 @@ static void test_sweep_range_size(void **state)
     btf_sweep_opts o = one_setting_sweep(2, 1, 4, "sweep-range", dir, sizeof dir);
     o.n_range_sizes = 2, o.range_sizes[0] = 0, o.range_sizes[1] = 8;
     btf_sweep s;
-    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    TU_OK(btf__sweep_run(ds, &o, &s, &e), &e);
     assert_int_equal(s.n_points, 3);
     assert_int_equal(s.points[0].setting.range_size, 0);
     assert_int_equal(s.points[1].setting.range_size, 8);
@@ -546,13 +546,13 @@ static void test_sweep_range_size(void **state)
     assert_sweep_resumes(&o, 3);
     btf_sweep_free(&s);
     o.range_sizes[1] = 3;
-    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__sweep_run(ds, &o, &s, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "range size 3"));
     o.range_sizes[1] = 5000;
-    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__sweep_run(ds, &o, &s, &e), BTF_E_ARG);
 }
 
-/* The point's quality over seeds: the mean of btf_quality_measure with
+/* The point's quality over seeds: the mean of btf__quality_measure with
  * seeds S and S + 1 on the setting's model, and their standard deviation;
  * another seed count measures again; a count out of range is refused. */
 static void test_sweep_seeds(void **state)
@@ -564,13 +564,13 @@ static void test_sweep_seeds(void **state)
     o.n_plain = 1, o.plain[0] = 0;
     o.seeds = 2;
     btf_sweep s;
-    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    TU_OK(btf__sweep_run(ds, &o, &s, &e), &e);
     assert_int_equal(s.n_points, 1);
     assert_int_equal(s.seeds, 2);
     btf_analyse_opts a = quick();
     a.segment.subspaces = 2;
     btf_offset fam[BTF_CAR_MAX_NEIGHBOURS];
-    btf_car_candidate_offsets(fam);
+    btf__car_candidate_offsets(fam);
     memcpy(a.fit.car.fixed, fam, 4 * sizeof fam[0]);
     a.fit.car.n_fixed = 4;
     btf_model m;
@@ -581,9 +581,9 @@ static void test_sweep_seeds(void **state)
         q.seed = o.quality.seed + (uint64_t)i;
         q.threads = 1;
         btf_quality r;
-        TU_OK(btf_quality_measure(ds, &m, &q, &r, &e), &e);
+        TU_OK(btf__quality_measure(ds, &m, &q, &r, &e), &e);
         d[i] = r.mean_combined;
-        btf_quality_free(&r);
+        btf__quality_free(&r);
     }
     btf_model_free(&m);
     assert_true(d[0] != d[1]); /* the seeds do move the figure */
@@ -593,13 +593,13 @@ static void test_sweep_seeds(void **state)
     assert_sweep_resumes(&o, 1);
     btf_sweep_free(&s);
     o.seeds = 1;
-    TU_OK(btf_sweep_run(ds, &o, &s, &e), &e);
+    TU_OK(btf__sweep_run(ds, &o, &s, &e), &e);
     assert_int_equal(s.resumed, 0);
     assert_true(s.points[0].seed_spread == 0.0);
     assert_true(fabs(s.points[0].mean_combined - d[0]) <= 1e-12 * d[0]);
     btf_sweep_free(&s);
     o.seeds = BTF_SWEEP_MAX_SEEDS + 1;
-    assert_int_equal(btf_sweep_run(ds, &o, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__sweep_run(ds, &o, &s, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "seeds"));
 }
 
@@ -628,7 +628,7 @@ static void test_presets(void **state)
         assert_int_equal(o.fit.car.n_fixed, want[i].n);
         if (want[i].n) { /* the family's first n */
             btf_offset fam[BTF_CAR_MAX_NEIGHBOURS];
-            btf_car_candidate_offsets(fam);
+            btf__car_candidate_offsets(fam);
             assert_memory_equal(o.fit.car.fixed, fam, (size_t)want[i].n * sizeof fam[0]);
         }
     }
@@ -637,7 +637,7 @@ static void test_presets(void **state)
     assert_int_equal(btf_analyse_preset(NULL, &o, &e), BTF_E_ARG);
     /* The family the fixed orders are cut from: causal, distinct. */
     btf_offset fam[BTF_CAR_MAX_NEIGHBOURS];
-    assert_int_equal(btf_car_candidate_offsets(fam), BTF_CAR_MAX_NEIGHBOURS);
+    assert_int_equal(btf__car_candidate_offsets(fam), BTF_CAR_MAX_NEIGHBOURS);
     for (int i = 0; i < BTF_CAR_MAX_NEIGHBOURS; i++) {
         assert_true(fam[i].row < 0 || (fam[i].row == 0 && fam[i].col < 0));
         for (int j = 0; j < i; j++)

@@ -66,12 +66,12 @@ static void good_page_passes(void **state)
     btf_heatmap h = {.rows = N, .cols = N, .values = v, .title = "ΔE per pair", .x_title = "light",
                      .y_title = "view", .legend_label = "ΔE", .row_labels = labels,
                      .col_labels = labels, .marked = &worst, .n_marked = 1, .marked_label = "worst"};
-    TU_OK(btf_svg_heatmap_write(tu_fmt("%s/heat.svg", tu_dir), &h, &e), &e);
+    TU_OK(btf__svg_heatmap_write(tu_fmt("%s/heat.svg", tu_dir), &h, &e), &e);
     double x[5] = {0.01, 0.03, 0.1, 0.2, 1}, y[5] = {5, 3, 3.5, 2, 1.5};
     const char *l[5] = {"a", "b", "c", "d", "e"};
     btf_scatter s = {.n = 5, .x = x, .y = y, .labels = l, .log_x = 1, .x_title = "time (s)",
                      .y_title = "ΔE", .marked_label = "default", .marked = 2};
-    TU_OK(btf_svg_scatter_write(tu_fmt("%s/sweep.svg", tu_dir), &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(tu_fmt("%s/sweep.svg", tu_dir), &s, &e), &e);
     btf_image img = {0};
     TU_OK(btf_image_alloc(&img, 64, 48, 3, &e), &e);
     for (int i = 0; i < 64 * 48 * 3; i++)
@@ -80,17 +80,17 @@ static void good_page_passes(void **state)
     btf_image_free(&img);
 
     btf_buf b = {0};
-    btf_buf_puts(&b, "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+    btf__buf_puts(&b, "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
                      "<title>btfcar report</title><style>body{font-family:sans-serif;margin:16px}"
                      "img{display:block;margin:8px 0}</style></head><body>\n<h1>");
-    btf_buf_html(&b, "Report: leather <sample> & \"friends\"");
-    btf_buf_puts(&b, "</h1>\n<img src=\"heat.svg\" alt=\"heat map\">\n"
+    btf__buf_html(&b, "Report: leather <sample> & \"friends\"");
+    btf__buf_puts(&b, "</h1>\n<img src=\"heat.svg\" alt=\"heat map\">\n"
                      "<img src=\"sweep.svg\" alt=\"sweep\">\n"
                      "<img src=\"render.png\" alt=\"render\" width=\"128\" height=\"96\">\n"
                      "<img src=\"render.png\" alt=\"lazy\" loading=\"lazy\" style=\"margin-top:3000px\">\n"
                      "</body></html>\n");
-    TU_OK(btf_buf_write(&b, tu_fmt("%s/index.html", tu_dir), &e), &e);
-    btf_buf_free(&b);
+    TU_OK(btf__buf_write(&b, tu_fmt("%s/index.html", tu_dir), &e), &e);
+    btf__buf_free(&b);
 
     char *msg = NULL;
     int rc = check("index.html", "shot.png", "1024x768", &msg);

@@ -147,7 +147,7 @@ static void breakdown_of_an_analysed_model(void **state)
     (void)state;
     btf_error e = {0};
     btf_model_bytes b;
-    TU_OK(btf_model_byte_breakdown(&gen_model, &b, &e), &e);
+    TU_OK(btf__model_byte_breakdown(&gen_model, &b, &e), &e);
     check_breakdown(&gen_model, &b);
     assert_true(b.deflated);
     assert_non_null(gen_model.range);
@@ -161,7 +161,7 @@ static void breakdown_of_an_analysed_model(void **state)
     assert_true(b.file[BTF_MODEL_PART_DIRECTIONS] < b.raw[BTF_MODEL_PART_DIRECTIONS] / 2);
     assert_true(b.file[BTF_MODEL_PART_INDEX] < b.raw[BTF_MODEL_PART_INDEX]);
     for (int p = 0; p < BTF_MODEL_PART_COUNT; p++)
-        print_message("%-15s %6llu of %6llu\n", btf_model_part_name(p),
+        print_message("%-15s %6llu of %6llu\n", btf__model_part_name(p),
                       (unsigned long long)b.file[p], (unsigned long long)b.raw[p]);
     /* float32 values do not deflate: at most a little over a byte each (a
      * literal's code can pass 8 bits where the other parts, the pair gains'
@@ -175,7 +175,7 @@ static void breakdown_of_an_analysed_model(void **state)
     TU_OK(btf_model_decode(data, size, "m", &back, &e), &e);
     free(data);
     btf_model_bytes b2;
-    TU_OK(btf_model_byte_breakdown(&back, &b2, &e), &e);
+    TU_OK(btf__model_byte_breakdown(&back, &b2, &e), &e);
     assert_memory_equal(&b, &b2, sizeof b);
     btf_model_free(&back);
 }
@@ -191,7 +191,7 @@ static void breakdown_of_a_texture_model(void **state)
     TU_OK(btf_texture_fit(&img, &fo, &m, &e), &e);
     btf_image_free(&img);
     btf_model_bytes b;
-    TU_OK(btf_model_byte_breakdown(&m, &b, &e), &e);
+    TU_OK(btf__model_byte_breakdown(&m, &b, &e), &e);
     check_breakdown(&m, &b);
     assert_int_equal(b.file[BTF_MODEL_PART_DIRECTIONS], 0);
     assert_int_equal(b.file[BTF_MODEL_PART_INDEX], 0);
@@ -231,7 +231,7 @@ static void breakdown_of_a_small_model(void **state)
     m.n_subspaces = 1;
     m.subspaces = &sm;
     btf_model_bytes b;
-    TU_OK(btf_model_byte_breakdown(&m, &b, &e), &e);
+    TU_OK(btf__model_byte_breakdown(&m, &b, &e), &e);
     check_breakdown(&m, &b);
     print_message("small model: %llu bytes, deflated %d\n", (unsigned long long)b.total,
                   b.deflated);
@@ -260,7 +260,7 @@ static void deflate_cost_accounts_for_every_bit(void **state)
             assert_int_equal(compress2(z, &zn, src, len, level), Z_OK);
             double bits[4] = {0}, over = 0;
             btf_error e = {0};
-            TU_OK(btf_deflate_cost(z, zn, src, lab, len, 4, bits, &over, "z", &e), &e);
+            TU_OK(btf__deflate_cost(z, zn, src, lab, len, 4, bits, &over, "z", &e), &e);
             double sum = over;
             for (int k = 0; k < 4; k++) {
                 assert_true(bits[k] >= 0);
@@ -274,10 +274,10 @@ static void deflate_cost_accounts_for_every_bit(void **state)
             unsigned char *other = malloc(len);
             memcpy(other, src, len);
             other[len / 2] ^= 1;
-            assert_int_equal(btf_deflate_cost(z, zn, other, lab, len, 4, bits, &over, "z", &e),
+            assert_int_equal(btf__deflate_cost(z, zn, other, lab, len, 4, bits, &over, "z", &e),
                              BTF_E_FORMAT);
             assert_non_null(strstr(e.msg, "z: "));
-            assert_int_equal(btf_deflate_cost(z, zn - 5, src, lab, len, 4, bits, &over, "z", &e),
+            assert_int_equal(btf__deflate_cost(z, zn - 5, src, lab, len, 4, bits, &over, "z", &e),
                              BTF_E_FORMAT);
             free(other);
             free(z);
@@ -316,7 +316,7 @@ static const char *make_manifest(const char *name, int views, int lights, int w,
                      * a whole level: the PCA's float path). */
                     img.data[p * 3 + c] =
                         exr == 1 ? (float)x / 50.0f
-                                 : btf_srgb_to_linear(((float)x + (exr == 2 ? 0.5f : 0.0f)) / 255.0f);
+                                 : btf__srgb_to_linear(((float)x + (exr == 2 ? 0.5f : 0.0f)) / 255.0f);
                 }
             const char *file = tu_fmt("v%d_l%d.%s", v, l, exr ? "exr" : "png");
             if (exr)
@@ -356,7 +356,7 @@ static void pca_finds_known_rank(void **state)
     TU_OK(btf_dataset_open(mf, NULL, &ds, &e), &e);
     btf_pca_result r, r1;
     btf_pca_opts o = {.threads = 2};
-    TU_OK(btf_pca_contrast(ds, &o, &r, &e), &e);
+    TU_OK(btf__pca_contrast(ds, &o, &r, &e), &e);
     assert_int_equal(r.views, 2);
     assert_int_equal(r.lights, 6);
     for (int v = 0; v < 2; v++) {
@@ -375,35 +375,35 @@ static void pca_finds_known_rank(void **state)
     assert_true(r.seconds >= 0 && isfinite(r.seconds));
     /* One thread: the same numbers. */
     o.threads = 1;
-    TU_OK(btf_pca_contrast(ds, &o, &r1, &e), &e);
+    TU_OK(btf__pca_contrast(ds, &o, &r1, &e), &e);
     assert_memory_equal(r.components, r1.components, 2 * sizeof *r.components);
     assert_memory_equal(r.view_rms, r1.view_rms, 2 * sizeof *r.view_rms);
-    btf_pca_result_free(&r1);
+    btf__pca_result_free(&r1);
     /* Capped at one component: the cap, and an error above the target. */
     o.max_components = 1;
-    TU_OK(btf_pca_contrast(ds, &o, &r1, &e), &e);
+    TU_OK(btf__pca_contrast(ds, &o, &r1, &e), &e);
     assert_int_equal(r1.components[0], 1);
     assert_true(r1.view_rms[0] > 2.0 && isfinite(r1.view_rms[0]));
-    btf_pca_result_free(&r1);
+    btf__pca_result_free(&r1);
     /* 8 bits a value: half the bytes (rounded up per view). */
     o = (btf_pca_opts){.bits = 8};
-    TU_OK(btf_pca_contrast(ds, &o, &r1, &e), &e);
+    TU_OK(btf__pca_contrast(ds, &o, &r1, &e), &e);
     assert_int_equal(r1.bytes, 2 * (d * 3 + 6 * 2));
-    btf_pca_result_free(&r1);
-    btf_pca_result_free(&r);
-    btf_pca_result_free(&r); /* twice: harmless */
+    btf__pca_result_free(&r1);
+    btf__pca_result_free(&r);
+    btf__pca_result_free(&r); /* twice: harmless */
     btf_dataset_close(ds);
 
     /* Levels between whole ones (float EXR): the same rank, a float-sized error. */
     mf = make_manifest("rank2_exr", 2, 6, 8, 6, rank2, 2);
     TU_OK(btf_dataset_open(mf, NULL, &ds, &e), &e);
-    TU_OK(btf_pca_contrast(ds, NULL, &r, &e), &e);
+    TU_OK(btf__pca_contrast(ds, NULL, &r, &e), &e);
     for (int v = 0; v < 2; v++) {
         print_message("EXR view %d: c %d, RMS %g\n", v, r.components[v], r.view_rms[v]);
         assert_int_equal(r.components[v], 2);
         assert_true(r.view_rms[v] < 1e-3);
     }
-    btf_pca_result_free(&r);
+    btf__pca_result_free(&r);
     btf_dataset_close(ds);
 }
 
@@ -431,13 +431,13 @@ static void pca_constant_and_saturated_images(void **state)
         btf_dataset *ds;
         TU_OK(btf_dataset_open(mf, NULL, &ds, &e), &e);
         btf_pca_result r;
-        TU_OK(btf_pca_contrast(ds, NULL, &r, &e), &e);
+        TU_OK(btf__pca_contrast(ds, NULL, &r, &e), &e);
         for (int v = 0; v < 2; v++) {
             assert_int_equal(r.components[v], i == 0 ? 0 : 1);
             assert_true(isfinite(r.view_rms[v]) && r.view_rms[v] < 1e-3);
         }
         assert_true(isfinite(r.rms) && isfinite(r.ratio) && r.ratio > 0);
-        btf_pca_result_free(&r);
+        btf__pca_result_free(&r);
         btf_dataset_close(ds);
     }
 }
@@ -456,16 +456,16 @@ static void pca_defaults_equal_zero(void **state)
     const char *mf = make_manifest("defaults", 1, 3, 4, 4, rank2, 0);
     btf_dataset *ds;
     TU_OK(btf_dataset_open(mf, NULL, &ds, &e), &e);
-    TU_OK(btf_pca_contrast(ds, &d, &a, &e), &e);
-    TU_OK(btf_pca_contrast(ds, &z, &b, &e), &e);
-    TU_OK(btf_pca_contrast(ds, NULL, &c, &e), &e);
+    TU_OK(btf__pca_contrast(ds, &d, &a, &e), &e);
+    TU_OK(btf__pca_contrast(ds, &z, &b, &e), &e);
+    TU_OK(btf__pca_contrast(ds, NULL, &c, &e), &e);
     assert_int_equal(a.components[0], b.components[0]);
     assert_int_equal(a.components[0], c.components[0]);
     assert_int_equal(a.bytes, b.bytes);
     assert_int_equal(a.bytes, c.bytes);
-    btf_pca_result_free(&a);
-    btf_pca_result_free(&b);
-    btf_pca_result_free(&c);
+    btf__pca_result_free(&a);
+    btf__pca_result_free(&b);
+    btf__pca_result_free(&c);
     btf_dataset_close(ds);
 }
 
@@ -483,7 +483,7 @@ static void pca_and_jpeg_on_a_generated_dataset(void **state)
     btf_error e = {0};
     const btf_dataset_info *info = btf_dataset_get_info(gen_ds);
     btf_raw_bytes raw;
-    TU_OK(btf_dataset_raw_bytes(gen_ds, &raw, &e), &e);
+    TU_OK(btf__dataset_raw_bytes(gen_ds, &raw, &e), &e);
     assert_int_equal(raw.raw, 81ull * 81 * 16 * 16 * 3);
     assert_int_equal(raw.on_disk, info->bytes_on_disk);
     assert_int_equal(raw.views, 81);
@@ -492,7 +492,7 @@ static void pca_and_jpeg_on_a_generated_dataset(void **state)
     btf_pca_opts o = {.progress = count_progress};
     btf_pca_result r;
     progress_calls = 0;
-    TU_OK(btf_pca_contrast(gen_ds, &o, &r, &e), &e);
+    TU_OK(btf__pca_contrast(gen_ds, &o, &r, &e), &e);
     assert_true(progress_calls > 0);
     assert_true(r.min_components >= 1 && r.max_components <= 81);
     assert_true(r.rms <= 2.0 && r.rms > 0);
@@ -502,10 +502,10 @@ static void pca_and_jpeg_on_a_generated_dataset(void **state)
     print_message("PCA: c %d..%d (mean %.2f), RMS %.3f, %llu bytes, 1 : %.2f, %.2f s\n",
                   r.min_components, r.max_components, r.mean_components, r.rms,
                   (unsigned long long)r.bytes, r.ratio, r.seconds);
-    btf_pca_result_free(&r);
+    btf__pca_result_free(&r);
 
     btf_jpeg_contrast j;
-    TU_OK(btf_jpeg_subspace_contrast(gen_ds, &gen_model, 0, &j, &e), &e);
+    TU_OK(btf__jpeg_subspace_contrast(gen_ds, &gen_model, 0, &j, &e), &e);
     assert_int_equal(j.images, gen_model.n_subspaces);
     assert_int_equal(j.quality, 90);
     assert_int_equal(j.index_bytes, 81 * 81);
@@ -515,7 +515,7 @@ static void pca_and_jpeg_on_a_generated_dataset(void **state)
     assert_true(fabs(j.ratio - (double)raw.raw / (double)j.bytes) < 1e-9);
     /* A lower quality: fewer bytes. */
     btf_jpeg_contrast j50;
-    TU_OK(btf_jpeg_subspace_contrast(gen_ds, &gen_model, 50, &j50, &e), &e);
+    TU_OK(btf__jpeg_subspace_contrast(gen_ds, &gen_model, 50, &j50, &e), &e);
     assert_true(j50.jpeg_bytes < j.jpeg_bytes);
 }
 
@@ -524,57 +524,57 @@ static void bad_arguments(void **state)
     (void)state;
     btf_error e = {0};
     btf_model_bytes b;
-    assert_int_equal(btf_model_byte_breakdown(NULL, &b, &e), BTF_E_ARG);
-    assert_int_equal(btf_model_byte_breakdown(&gen_model, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__model_byte_breakdown(NULL, &b, &e), BTF_E_ARG);
+    assert_int_equal(btf__model_byte_breakdown(&gen_model, NULL, &e), BTF_E_ARG);
     btf_model empty = {0};
-    assert_int_equal(btf_model_byte_breakdown(&empty, &b, &e), BTF_E_DATA);
+    assert_int_equal(btf__model_byte_breakdown(&empty, &b, &e), BTF_E_DATA);
     assert_non_null(strstr(e.msg, "model"));
     assert_null(strchr(e.msg, '\n'));
 
     btf_raw_bytes raw;
-    assert_int_equal(btf_dataset_raw_bytes(NULL, &raw, &e), BTF_E_ARG);
-    assert_int_equal(btf_dataset_raw_bytes(gen_ds, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__dataset_raw_bytes(NULL, &raw, &e), BTF_E_ARG);
+    assert_int_equal(btf__dataset_raw_bytes(gen_ds, NULL, &e), BTF_E_ARG);
 
     btf_pca_result r;
-    assert_int_equal(btf_pca_contrast(NULL, NULL, &r, &e), BTF_E_ARG);
-    assert_int_equal(btf_pca_contrast(gen_ds, NULL, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__pca_contrast(NULL, NULL, &r, &e), BTF_E_ARG);
+    assert_int_equal(btf__pca_contrast(gen_ds, NULL, NULL, &e), BTF_E_ARG);
     btf_pca_opts bad[] = {{.max_rms = -1},      {.max_rms = NAN}, {.max_rms = INFINITY},
                           {.bits = 33},         {.bits = -1},     {.max_components = 82},
                           {.max_components = -1}, {.threads = -2}};
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
         e.msg[0] = 0;
-        assert_int_equal(btf_pca_contrast(gen_ds, &bad[i], &r, &e), BTF_E_ARG);
+        assert_int_equal(btf__pca_contrast(gen_ds, &bad[i], &r, &e), BTF_E_ARG);
         assert_non_null(strstr(e.msg, gen_dir));
         assert_null(r.components);
     }
 
     btf_jpeg_contrast j;
-    assert_int_equal(btf_jpeg_subspace_contrast(gen_ds, &gen_model, 0, NULL, &e), BTF_E_ARG);
-    assert_int_equal(btf_jpeg_subspace_contrast(NULL, &gen_model, 0, &j, &e), BTF_E_ARG);
-    assert_int_equal(btf_jpeg_subspace_contrast(gen_ds, NULL, 0, &j, &e), BTF_E_ARG);
-    assert_int_equal(btf_jpeg_subspace_contrast(gen_ds, &gen_model, 101, &j, &e), BTF_E_ARG);
-    assert_int_equal(btf_jpeg_subspace_contrast(gen_ds, &gen_model, -5, &j, &e), BTF_E_ARG);
+    assert_int_equal(btf__jpeg_subspace_contrast(gen_ds, &gen_model, 0, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__jpeg_subspace_contrast(NULL, &gen_model, 0, &j, &e), BTF_E_ARG);
+    assert_int_equal(btf__jpeg_subspace_contrast(gen_ds, NULL, 0, &j, &e), BTF_E_ARG);
+    assert_int_equal(btf__jpeg_subspace_contrast(gen_ds, &gen_model, 101, &j, &e), BTF_E_ARG);
+    assert_int_equal(btf__jpeg_subspace_contrast(gen_ds, &gen_model, -5, &j, &e), BTF_E_ARG);
     /* A texture model, a model of another dataset: BTF_E_DATA. */
     btf_subspace_model sm = gen_model.subspaces[0];
     btf_model tex = {.n_subspaces = 1, .subspaces = &sm};
-    assert_int_equal(btf_jpeg_subspace_contrast(gen_ds, &tex, 0, &j, &e), BTF_E_DATA);
+    assert_int_equal(btf__jpeg_subspace_contrast(gen_ds, &tex, 0, &j, &e), BTF_E_DATA);
     assert_non_null(strstr(e.msg, gen_dir));
     btf_model other = gen_model;
     btf_subspace_model subs[256];
     memcpy(subs, gen_model.subspaces, (size_t)gen_model.n_subspaces * sizeof *subs);
     other.subspaces = subs;
     subs[0].view = 81;
-    assert_int_equal(btf_jpeg_subspace_contrast(gen_ds, &other, 0, &j, &e), BTF_E_DATA);
+    assert_int_equal(btf__jpeg_subspace_contrast(gen_ds, &other, 0, &j, &e), BTF_E_DATA);
     assert_non_null(strstr(e.msg, "subspace 0"));
 
     /* Part names. */
     for (int p = 0; p < BTF_MODEL_PART_COUNT; p++) {
-        assert_true(strlen(btf_model_part_name(p)) > 0);
+        assert_true(strlen(btf__model_part_name(p)) > 0);
         for (int q = 0; q < p; q++)
-            assert_string_not_equal(btf_model_part_name(p), btf_model_part_name(q));
+            assert_string_not_equal(btf__model_part_name(p), btf__model_part_name(q));
     }
-    assert_string_equal(btf_model_part_name(-1), "?");
-    assert_string_equal(btf_model_part_name(BTF_MODEL_PART_COUNT), "?");
+    assert_string_equal(btf__model_part_name(-1), "?");
+    assert_string_equal(btf__model_part_name(BTF_MODEL_PART_COUNT), "?");
 }
 
 int main(void)

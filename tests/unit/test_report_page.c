@@ -265,7 +265,7 @@ static void test_report_errors(void **state)
     free(d);
 }
 
-/* A reflectance-field model's report (btf_rf_report_write): its file
+/* A reflectance-field model's report (btf__rf_report_write): its file
  * against the raw BTF, per pair the texture distances and the pixel-wise
  * |dY|, the pictures, the page in Chromium; --sweep is a usage error. */
 static void test_report_rf(void **state)

@@ -230,7 +230,7 @@ static void heatmap_81x81(void **state)
     h.marked_label = "3 worst pairs";
     const char *path = tu_fmt("%s/heat81.svg", tu_dir);
     btf_error e = {0};
-    TU_OK(btf_svg_heatmap_write(path, &h, &e), &e);
+    TU_OK(btf__svg_heatmap_write(path, &h, &e), &e);
     char *s = check_svg(path);
     /* Labels thinned out: 81 rows of 7 px cells, one label per 2 rows. */
     int shown = count(s, "\xCE\xB8 ");
@@ -245,13 +245,13 @@ static void heatmap_81x81(void **state)
     /* With a tooltip per cell: one <title> for every measured cell. */
     h.tooltips = 1;
     btf_buf b = {0};
-    TU_OK(btf_svg_heatmap(&h, &b, &e), &e);
+    TU_OK(btf__svg_heatmap(&h, &b, &e), &e);
     int measured = 0;
     for (int i = 0; i < N * N; i++)
         measured += isfinite(v[i]);
     assert_int_equal(count(b.data, "<title>"), measured);
     assert_true(xml_check(b.data, "svg") > measured);
-    btf_buf_free(&b);
+    btf__buf_free(&b);
     free_labels(labels, N);
     free(v);
 }
@@ -264,17 +264,17 @@ static void heatmap_degenerate(void **state)
     /* One cell; all equal; all NaN; infinities; nasty labels. */
     double one = 3.25;
     btf_heatmap h = {.rows = 1, .cols = 1, .values = &one};
-    TU_OK(btf_svg_heatmap_write(path, &h, &e), &e);
+    TU_OK(btf__svg_heatmap_write(path, &h, &e), &e);
     free(check_svg(path));
 
     double eq[6] = {2, 2, 2, 2, 2, 2};
     h = (btf_heatmap){.rows = 2, .cols = 3, .values = eq, .legend_label = "equal"};
-    TU_OK(btf_svg_heatmap_write(path, &h, &e), &e);
+    TU_OK(btf__svg_heatmap_write(path, &h, &e), &e);
     free(check_svg(path));
 
     double nan4[4] = {NAN, NAN, NAN, NAN};
     h = (btf_heatmap){.rows = 2, .cols = 2, .values = nan4, .title = "nothing measured"};
-    TU_OK(btf_svg_heatmap_write(path, &h, &e), &e);
+    TU_OK(btf__svg_heatmap_write(path, &h, &e), &e);
     char *s = check_svg(path);
     assert_non_null(strstr(s, "no measured values"));
     free(s);
@@ -286,7 +286,7 @@ static void heatmap_degenerate(void **state)
     h = (btf_heatmap){.rows = 2, .cols = 2, .values = inf, .row_labels = rl, .col_labels = cl,
                       .marked = &mk, .n_marked = 1, .marked_label = "x < y & z", .reverse = 1,
                       .vmin = 5, .vmax = 5, .tooltips = 1};
-    TU_OK(btf_svg_heatmap_write(path, &h, &e), &e);
+    TU_OK(btf__svg_heatmap_write(path, &h, &e), &e);
     s = check_svg(path);
     assert_non_null(strstr(s, "&lt;b&gt;&amp;&quot;&#39;"));
     assert_non_null(strstr(s, "bad \xEF\xBF\xBD\xEF\xBF\xBD utf-8 \xEF\xBF\xBD"));
@@ -296,7 +296,7 @@ static void heatmap_degenerate(void **state)
     /* Given range: values outside it are clamped to the scale's ends. */
     double two[2] = {-100, 100};
     h = (btf_heatmap){.rows = 1, .cols = 2, .values = two, .vmin = 0, .vmax = 1, .cell_px = 30};
-    TU_OK(btf_svg_heatmap_write(path, &h, &e), &e);
+    TU_OK(btf__svg_heatmap_write(path, &h, &e), &e);
     free(check_svg(path));
 }
 
@@ -307,13 +307,13 @@ static void heatmap_bad_arguments(void **state)
     double v[4] = {1, 2, 3, 4};
     const char *path = tu_fmt("%s/heat-bad.svg", tu_dir);
     btf_heatmap h = {.rows = 0, .cols = 2, .values = v};
-    assert_int_equal(btf_svg_heatmap_write(path, &h, &e), BTF_E_ARG);
+    assert_int_equal(btf__svg_heatmap_write(path, &h, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, path));
     h = (btf_heatmap){.rows = 2, .cols = 2};
-    assert_int_equal(btf_svg_heatmap_write(path, &h, &e), BTF_E_ARG);
+    assert_int_equal(btf__svg_heatmap_write(path, &h, &e), BTF_E_ARG);
     btf_svg_cell out = {2, 0};
     h = (btf_heatmap){.rows = 2, .cols = 2, .values = v, .marked = &out, .n_marked = 1};
-    assert_int_equal(btf_svg_heatmap_write(path, &h, &e), BTF_E_ARG);
+    assert_int_equal(btf__svg_heatmap_write(path, &h, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "outside"));
     FILE *f = fopen(path, "r");
     assert_null(f); /* nothing written */
@@ -334,7 +334,7 @@ static void scatter_sweep(void **state)
                      .marked_label = "default", .marked = 8};
     const char *path = tu_fmt("%s/scatter.svg", tu_dir);
     btf_error e = {0};
-    TU_OK(btf_svg_scatter_write(path, &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(path, &s, &e), &e);
     char *t = check_svg(path);
     /* The front's labels are shown (and the default's); the others are
      * tooltips only. */
@@ -359,10 +359,10 @@ static void scatter_sweep(void **state)
     s.all_labels = 1;
     s.y_higher_better = 1;
     btf_buf b = {0};
-    TU_OK(btf_svg_scatter(&s, &b, &e), &e);
+    TU_OK(btf__svg_scatter(&s, &b, &e), &e);
     assert_true(xml_check(b.data, "svg") > 0);
     assert_non_null(strstr(b.data, ">L1 N8</text>"));
-    btf_buf_free(&b);
+    btf__buf_free(&b);
 }
 
 static void scatter_degenerate(void **state)
@@ -372,7 +372,7 @@ static void scatter_degenerate(void **state)
     const char *path = tu_fmt("%s/scatter-deg.svg", tu_dir);
     /* No points. */
     btf_scatter s = {.n = 0, .title = "empty", .log_x = 1};
-    TU_OK(btf_svg_scatter_write(path, &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(path, &s, &e), &e);
     char *t = check_svg(path);
     assert_non_null(strstr(t, "no data to plot"));
     free(t);
@@ -380,18 +380,18 @@ static void scatter_degenerate(void **state)
     double x1 = 0.5, y1 = 3;
     const char *l1 = "only";
     s = (btf_scatter){.n = 1, .x = &x1, .y = &y1, .labels = &l1, .marked_label = "default"};
-    TU_OK(btf_svg_scatter_write(path, &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(path, &s, &e), &e);
     free(check_svg(path));
     s.log_x = 1;
-    TU_OK(btf_svg_scatter_write(path, &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(path, &s, &e), &e);
     free(check_svg(path));
     /* All equal x; all equal y; all the same point. */
     double xe[4] = {2, 2, 2, 2}, ye[4] = {1, 2, 3, 4}, yq[4] = {7, 7, 7, 7};
     s = (btf_scatter){.n = 4, .x = xe, .y = ye};
-    TU_OK(btf_svg_scatter_write(path, &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(path, &s, &e), &e);
     free(check_svg(path));
     s = (btf_scatter){.n = 4, .x = xe, .y = yq, .log_x = 1};
-    TU_OK(btf_svg_scatter_write(path, &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(path, &s, &e), &e);
     free(check_svg(path));
     /* Zero and negative on a log axis, NaN and infinities, a marked point
      * that cannot be drawn. */
@@ -399,25 +399,25 @@ static void scatter_degenerate(void **state)
     double yb[6] = {1, 2, 3, 4, NAN, -INFINITY};
     s = (btf_scatter){.n = 6, .x = xb, .y = yb, .log_x = 1, .marked_label = "default", .marked = 0,
                       .x_title = "time", .y_title = "error"};
-    TU_OK(btf_svg_scatter_write(path, &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(path, &s, &e), &e);
     t = check_svg(path);
     assert_non_null(strstr(t, "6 of 6 not drawn"));
     free(t);
     /* Huge and tiny values. */
     double xh[3] = {1e-300, 1e300, 1}, yh[3] = {-1e308, 1e308, 0};
     s = (btf_scatter){.n = 3, .x = xh, .y = yh, .log_x = 1};
-    TU_OK(btf_svg_scatter_write(path, &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(path, &s, &e), &e);
     free(check_svg(path));
     s.log_x = 0;
-    TU_OK(btf_svg_scatter_write(path, &s, &e), &e);
+    TU_OK(btf__svg_scatter_write(path, &s, &e), &e);
     free(check_svg(path));
     /* Bad arguments. */
     s = (btf_scatter){.n = 2, .x = xh};
-    assert_int_equal(btf_svg_scatter_write(path, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__svg_scatter_write(path, &s, &e), BTF_E_ARG);
     s = (btf_scatter){.n = 2, .x = xh, .y = yh, .marked_label = "d", .marked = 2};
-    assert_int_equal(btf_svg_scatter_write(path, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__svg_scatter_write(path, &s, &e), BTF_E_ARG);
     s = (btf_scatter){.n = -1};
-    assert_int_equal(btf_svg_scatter_write(path, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__svg_scatter_write(path, &s, &e), BTF_E_ARG);
 }
 
 /* ------------------------------------------------------------ Pareto */
@@ -428,43 +428,43 @@ static void pareto_known_sets(void **state)
     int idx[16];
     /* Minimise both: (1,5) (2,3) (4,1) optimal; (3,4) (5,5) (4,2) not. */
     double x[6] = {3, 1, 5, 4, 2, 4}, y[6] = {4, 5, 5, 1, 3, 2};
-    int k = btf_pareto_front(x, y, 6, 0, 0, idx);
+    int k = btf__pareto_front(x, y, 6, 0, 0, idx);
     assert_int_equal(k, 3);
     assert_int_equal(idx[0], 1);
     assert_int_equal(idx[1], 4);
     assert_int_equal(idx[2], 3);
     /* Maximise y: (1,5) dominates all with x >= 1 and y <= 5 except (5,5)? (1,5)
      * beats (5,5) (smaller x, equal y): the front is (1,5) alone. */
-    k = btf_pareto_front(x, y, 6, 0, 1, idx);
+    k = btf__pareto_front(x, y, 6, 0, 1, idx);
     assert_int_equal(k, 1);
     assert_int_equal(idx[0], 1);
     /* Maximise both: (5,5) alone. */
-    k = btf_pareto_front(x, y, 6, 1, 1, idx);
+    k = btf__pareto_front(x, y, 6, 1, 1, idx);
     assert_int_equal(k, 1);
     assert_int_equal(idx[0], 2);
     /* Maximise x, minimise y: (4,1) and (5,5)? (4,1) vs (5,5): neither. */
-    k = btf_pareto_front(x, y, 6, 1, 0, idx);
+    k = btf__pareto_front(x, y, 6, 1, 0, idx);
     assert_int_equal(k, 2);
     assert_int_equal(idx[0], 3);
     assert_int_equal(idx[1], 2);
     /* Duplicates are all optimal; NaN and Inf take no part. */
     double xd[5] = {1, 1, NAN, 0, INFINITY}, yd[5] = {1, 1, 0, NAN, -INFINITY};
-    k = btf_pareto_front(xd, yd, 5, 0, 0, idx);
+    k = btf__pareto_front(xd, yd, 5, 0, 0, idx);
     assert_int_equal(k, 2);
     assert_int_equal(idx[0], 0);
     assert_int_equal(idx[1], 1);
     /* Equal x: only the smaller y; a chain: every point. */
     double xq[3] = {2, 2, 2}, yq[3] = {3, 1, 2};
-    k = btf_pareto_front(xq, yq, 3, 0, 0, idx);
+    k = btf__pareto_front(xq, yq, 3, 0, 0, idx);
     assert_int_equal(k, 1);
     assert_int_equal(idx[0], 1);
     double xc[4] = {4, 3, 2, 1}, yc[4] = {1, 2, 3, 4};
-    k = btf_pareto_front(xc, yc, 4, 0, 0, idx);
+    k = btf__pareto_front(xc, yc, 4, 0, 0, idx);
     assert_int_equal(k, 4);
     for (int i = 0; i < 4; i++)
         assert_int_equal(idx[i], 3 - i);
-    assert_int_equal(btf_pareto_front(xc, yc, 0, 0, 0, idx), 0);
-    assert_int_equal(btf_pareto_front(NULL, yc, 4, 0, 0, idx), 0);
+    assert_int_equal(btf__pareto_front(xc, yc, 0, 0, 0, idx), 0);
+    assert_int_equal(btf__pareto_front(NULL, yc, 4, 0, 0, idx), 0);
     /* Against brute force on random sets. */
     unsigned seed = 12345;
     for (int round = 0; round < 50; round++) {
@@ -475,7 +475,7 @@ static void pareto_known_sets(void **state)
             seed = seed * 1103515245u + 12345u;
             ry[i] = (seed >> 16) % 7;
         }
-        k = btf_pareto_front(rx, ry, 12, 0, 0, idx);
+        k = btf__pareto_front(rx, ry, 12, 0, 0, idx);
         int expect = 0;
         for (int i = 0; i < 12; i++) {
             int beaten = 0;
@@ -497,54 +497,54 @@ static void html_escaping(void **state)
 {
     (void)state;
     btf_buf b = {0};
-    assert_int_equal(btf_buf_html(&b, "a<b>&\"c'd"), 0);
+    assert_int_equal(btf__buf_html(&b, "a<b>&\"c'd"), 0);
     assert_string_equal(b.data, "a&lt;b&gt;&amp;&quot;c&#39;d");
-    btf_buf_free(&b);
-    btf_buf_html(&b, "\xCE\xB8 30 \xCF\x86 60 \xF0\x9F\x98\x80"); /* valid UTF-8 stays */
+    btf__buf_free(&b);
+    btf__buf_html(&b, "\xCE\xB8 30 \xCF\x86 60 \xF0\x9F\x98\x80"); /* valid UTF-8 stays */
     assert_string_equal(b.data, "\xCE\xB8 30 \xCF\x86 60 \xF0\x9F\x98\x80");
-    btf_buf_free(&b);
+    btf__buf_free(&b);
     /* Invalid UTF-8 (a lone continuation, an overlong '/', a surrogate, a
      * truncated sequence) and control characters become U+FFFD. */
-    btf_buf_html(&b, "\x80|\xC0\xAF|\xED\xA0\x80|\xE2\x82|\x07|\t\n");
+    btf__buf_html(&b, "\x80|\xC0\xAF|\xED\xA0\x80|\xE2\x82|\x07|\t\n");
     assert_string_equal(b.data, "\xEF\xBF\xBD|\xEF\xBF\xBD\xEF\xBF\xBD|"
                                 "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD|\xEF\xBF\xBD\xEF\xBF\xBD|"
                                 "\xEF\xBF\xBD|\t\n");
-    btf_buf_free(&b);
-    assert_int_equal(btf_buf_html(&b, NULL), 0);
-    assert_int_equal(btf_buf_printf(&b, "%d %s %.1f", 7, "x", 2.5), 0);
+    btf__buf_free(&b);
+    assert_int_equal(btf__buf_html(&b, NULL), 0);
+    assert_int_equal(btf__buf_printf(&b, "%d %s %.1f", 7, "x", 2.5), 0);
     assert_string_equal(b.data, "7 x 2.5");
     /* A long printf (past the small buffer). */
     char big[1000];
     memset(big, 'z', sizeof big - 1);
     big[sizeof big - 1] = '\0';
-    assert_int_equal(btf_buf_printf(&b, "[%s]", big), 0);
+    assert_int_equal(btf__buf_printf(&b, "[%s]", big), 0);
     assert_int_equal(b.len, 7 + 1001);
     btf_error e = {0};
-    assert_int_equal(btf_buf_check(&b, "page", &e), BTF_OK);
+    assert_int_equal(btf__buf_check(&b, "page", &e), BTF_OK);
     b.failed = 1; /* a failure is sticky and reported */
-    assert_int_equal(btf_buf_puts(&b, "more"), -1);
-    assert_int_equal(btf_buf_check(&b, "page", &e), BTF_E_NOMEM);
+    assert_int_equal(btf__buf_puts(&b, "more"), -1);
+    assert_int_equal(btf__buf_check(&b, "page", &e), BTF_E_NOMEM);
     assert_non_null(strstr(e.msg, "page"));
-    btf_buf_free(&b);
+    btf__buf_free(&b);
 
     /* The FILE form gives the same bytes. */
     const char *path = tu_fmt("%s/esc.html", tu_dir);
     FILE *f = fopen(path, "wb");
     assert_non_null(f);
-    assert_int_equal(btf_html_fputs(f, "<p class=\"x\">R&D \xff</p>"), 0);
+    assert_int_equal(btf__html_fputs(f, "<p class=\"x\">R&D \xff</p>"), 0);
     fclose(f);
     char *s = slurp(path);
     assert_string_equal(s, "&lt;p class=&quot;x&quot;&gt;R&amp;D \xEF\xBF\xBD&lt;/p&gt;");
     free(s);
     /* The whole buffer written atomically. */
-    btf_buf_puts(&b, "<!doctype html>");
-    TU_OK(btf_buf_write(&b, path, &e), &e);
+    btf__buf_puts(&b, "<!doctype html>");
+    TU_OK(btf__buf_write(&b, path, &e), &e);
     s = slurp(path);
     assert_string_equal(s, "<!doctype html>");
     free(s);
-    btf_buf_free(&b);
-    btf_buf_free(&b); /* twice is harmless */
-    btf_buf_free(NULL);
+    btf__buf_free(&b);
+    btf__buf_free(&b); /* twice is harmless */
+    btf__buf_free(NULL);
 }
 
 /* ------------------------------------------------------------ scale, axes */
@@ -561,18 +561,18 @@ static void colour_scale_is_monotone(void **state)
     double prev = -1;
     for (int i = 0; i <= 64; i++) {
         unsigned char c[3];
-        btf_colour_scale(i / 64.0, c);
+        btf__colour_scale(i / 64.0, c);
         double Y = 0.2126 * srgb_to_linear(c[0]) + 0.7152 * srgb_to_linear(c[1]) +
                    0.0722 * srgb_to_linear(c[2]);
         assert_true(Y > prev); /* brighter with every step */
         prev = Y;
     }
     unsigned char lo[3], hi[3], n[3], below[3], above[3];
-    btf_colour_scale(0, lo);
-    btf_colour_scale(1, hi);
-    btf_colour_scale(NAN, n);
-    btf_colour_scale(-5, below);
-    btf_colour_scale(5, above);
+    btf__colour_scale(0, lo);
+    btf__colour_scale(1, hi);
+    btf__colour_scale(NAN, n);
+    btf__colour_scale(-5, below);
+    btf__colour_scale(5, above);
     assert_memory_equal(lo, n, 3);
     assert_memory_equal(lo, below, 3);
     assert_memory_equal(hi, above, 3);
@@ -591,7 +591,7 @@ static void axes_ticks(void **state)
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         btf_axis a;
-        btf_axis_make(&a, cases[i][0], cases[i][1], (int)cases[i][2]);
+        btf__axis_make(&a, cases[i][0], cases[i][1], (int)cases[i][2]);
         assert_true(isfinite(a.lo) && isfinite(a.hi) && a.lo < a.hi);
         if (a.log)
             assert_true(a.lo > 0);
@@ -602,7 +602,7 @@ static void axes_ticks(void **state)
             assert_true(a.ticks[k] <= a.hi * (a.hi > 0 ? 1 + 1e-9 : 1 - 1e-9) + 1e-300);
             if (k)
                 assert_true(a.ticks[k] > a.ticks[k - 1]);
-            double p = btf_axis_pos(&a, a.ticks[k]);
+            double p = btf__axis_pos(&a, a.ticks[k]);
             assert_true(p >= -1e-9 && p <= 1 + 1e-9);
         }
         /* Mantissas 1, 2 or 5 for the plain cases. */
@@ -619,14 +619,14 @@ static void axes_ticks(void **state)
             }
     }
     char s[32];
-    assert_string_equal(btf_svg_num(s, NAN), "0");
-    assert_string_equal(btf_svg_num(s, -0.001), "0");
-    assert_string_equal(btf_svg_num(s, 12.5), "12.5");
-    assert_string_equal(btf_svg_num(s, 3.0), "3");
-    assert_string_equal(btf_svg_label(s, 0.30000000000000004), "0.3");
-    assert_string_equal(btf_svg_label(s, -0.0), "0");
-    assert_string_equal(btf_svg_label(s, INFINITY), "\xE2\x80\x93");
-    assert_string_equal(btf_svg_label(s, 1e-7), "1e-07");
+    assert_string_equal(btf__svg_num(s, NAN), "0");
+    assert_string_equal(btf__svg_num(s, -0.001), "0");
+    assert_string_equal(btf__svg_num(s, 12.5), "12.5");
+    assert_string_equal(btf__svg_num(s, 3.0), "3");
+    assert_string_equal(btf__svg_label(s, 0.30000000000000004), "0.3");
+    assert_string_equal(btf__svg_label(s, -0.0), "0");
+    assert_string_equal(btf__svg_label(s, INFINITY), "\xE2\x80\x93");
+    assert_string_equal(btf__svg_label(s, 1e-7), "1e-07");
 }
 
 int main(void)

@@ -10,7 +10,7 @@
 #include "testutil.h"
 
 #include "rf/rf.h"
-#include "report/report.h" /* btf_rf_report_write */
+#include "report/report.h" /* btf__rf_report_write */
 
 #include <math.h>
 #include <stdio.h>
@@ -274,7 +274,7 @@ static void view_weights_are_bilinear(void **state)
     double w[4];
     /* at every measured view: weight 1 on it */
     for (int v = 0; v < set.count; v++) {
-        btf_rf_view_weights(&set, set.dirs[v], idx, w);
+        btf__rf_view_weights(&set, set.dirs[v], idx, w);
         double on = 0.0;
         for (int i = 0; i < 4; i++)
             on += idx[i] == v ? w[i] : 0.0;
@@ -285,7 +285,7 @@ static void view_weights_are_bilinear(void **state)
      * two rings */
     for (double th = 0; th <= 90; th += 2.5)
         for (double ph = 0; ph < 360; ph += 7.3) {
-            btf_rf_view_weights(&set, (btf_dir){th, ph}, idx, w);
+            btf__rf_view_weights(&set, (btf_dir){th, ph}, idx, w);
             double s = 0.0;
             for (int i = 0; i < 4; i++) {
                 assert_true(w[i] >= 0.0 && w[i] <= 1.0);
@@ -295,15 +295,15 @@ static void view_weights_are_bilinear(void **state)
             assert_true(fabs(s - 1.0) < 1e-6);
         }
     /* halfway between rings 15 and 30 at phi 0: 1/2 on (15, 0) and (30, 0) */
-    btf_rf_view_weights(&set, (btf_dir){22.5, 0}, idx, w);
+    btf__rf_view_weights(&set, (btf_dir){22.5, 0}, idx, w);
     assert_true(fabs(set.dirs[idx[0]].theta - 15) < 1e-9 && fabs(w[0] - 0.5) < 1e-12);
     assert_true(fabs(set.dirs[idx[2]].theta - 30) < 1e-9 && fabs(w[2] - 0.5) < 1e-12);
     /* between two azimuths of ring 15 (60 degrees apart): linear in phi */
-    btf_rf_view_weights(&set, (btf_dir){15, 45}, idx, w);
+    btf__rf_view_weights(&set, (btf_dir){15, 45}, idx, w);
     assert_true(fabs(set.dirs[idx[0]].phi - 0) < 1e-9 && fabs(w[0] - 0.25) < 1e-12);
     assert_true(fabs(set.dirs[idx[1]].phi - 60) < 1e-9 && fabs(w[1] - 0.75) < 1e-12);
     /* past the last ring: that ring alone, wrapping around phi = 360 */
-    btf_rf_view_weights(&set, (btf_dir){85, 355}, idx, w);
+    btf__rf_view_weights(&set, (btf_dir){85, 355}, idx, w);
     assert_true(fabs(set.dirs[idx[0]].theta - 75) < 1e-9 && fabs(w[0] + w[1] - 1.0) < 1e-12);
     btf_dirset_free(&set);
 }
@@ -319,13 +319,13 @@ static void fits_are_finite_and_measured(void **state)
         const btf_rf_model *m = ms[k];
         assert_int_equal(m->width, 16);
         assert_int_equal(m->fields, k == 2 ? 1 : 81);
-        assert_int_equal(m->slots, btf_rf_param_count(m->fit, k ? 2 : 0) + 3);
+        assert_int_equal(m->slots, btf__rf_param_count(m->fit, k ? 2 : 0) + 3);
         for (int i = 0; i < m->fields * m->slots; i++)
             assert_true(isfinite(m->lo[i]) && m->lo[i] <= m->hi[i]);
-        /* the fit's own error equals btf_rf_error's on the same data */
+        /* the fit's own error equals btf__rf_error's on the same data */
         double e = -1, s = -1;
         btf_error err = {0};
-        TU_OK(btf_rf_error(ds, m, 2, &e, &s, &err), &err);
+        TU_OK(btf__rf_error(ds, m, 2, &e, &s, &err), &err);
         assert_true(fabs(e - is[k]->mean_abs_error) <= 1e-9 * (e + 1e-12));
         assert_true(fabs(s - is[k]->mean_luminance) <= 1e-9 * s);
         assert_true(e > 0.0 && e < s);
@@ -387,7 +387,7 @@ static void flat_render_at_a_measured_view_is_the_field(void **state)
         int v = 23, l = 47;
         btf_dir view = m->views.dirs[v], light = m->lights.dirs[l];
         btf_image img;
-        TU_OK(btf_rf_render_flat(m, view, light, 0, 0, 2, &img, &e), &e);
+        TU_OK(btf__rf_render_flat(m, view, light, 0, 0, 2, &img, &e), &e);
         assert_int_equal(img.width, 16);
         double lv[3], vv[3];
         btf_dir_to_vec(light, lv);
@@ -398,7 +398,7 @@ static void flat_render_at_a_measured_view_is_the_field(void **state)
                 int field = m->fit == BTF_RF_LAFORTUNE ? 0 : v;
                 rf_texel_params(m, field, (size_t)y * 16 + x, p);
                 double lum = rf_lum_eval(m->fit, m->lobes, p, lv, vv);
-                btf_rf_eval_field(m, field, view, light, x, y, rgb);
+                btf__rf_eval_field(m, field, view, light, x, y, rgb);
                 for (int c = 0; c < 3; c++) {
                     float want = (float)(lum * p[m->params + c]);
                     assert_true(img.data[(y * 16 + x) * 3 + c] == want);
@@ -407,9 +407,9 @@ static void flat_render_at_a_measured_view_is_the_field(void **state)
             }
         /* a larger frame repeats the texels; between views it blends them */
         btf_image big, mid;
-        TU_OK(btf_rf_render_flat(m, view, light, 40, 20, 1, &big, &e), &e);
+        TU_OK(btf__rf_render_flat(m, view, light, 40, 20, 1, &big, &e), &e);
         assert_true(big.data[(3 * 40 + 37) * 3 + 1] == img.data[(3 * 16 + 5) * 3 + 1]);
-        TU_OK(btf_rf_render_flat(m, (btf_dir){37.5, 100}, light, 0, 0, 2, &mid, &e), &e);
+        TU_OK(btf__rf_render_flat(m, (btf_dir){37.5, 100}, light, 0, 0, 2, &mid, &e), &e);
         for (size_t i = 0; i < (size_t)16 * 16 * 3; i++)
             assert_true(isfinite(mid.data[i]) && mid.data[i] >= 0.0f);
         btf_image_free(&img);
@@ -468,7 +468,7 @@ static int close_to(float a, float b, double rel)
     return isfinite(a) && fabs((double)a - b) <= rel * fabs((double)b) + 1e-7;
 }
 
-/* btf_rf_render_scene on a plane seen head-on under a light at a measured
+/* btf__rf_render_scene on a plane seen head-on under a light at a measured
  * direction is the flat render at the pole (texel for texel), for a
  * directional and a point light; a sphere renders finite, non-negative
  * pixels whatever the thread count; bad input is an error. */
@@ -491,8 +491,8 @@ static void scene_render_is_the_flat_render_head_on(void **state)
             head_on_scene(&sc, n, sun);
             btf_image flat, img;
             btf_render_info info;
-            TU_OK(btf_rf_render_flat(m, (btf_dir){0, 0}, light, n, n, 1, &flat, &e), &e);
-            TU_OK(btf_rf_render_scene(m, &sc, n, n, 2, &img, &info, &e), &e);
+            TU_OK(btf__rf_render_flat(m, (btf_dir){0, 0}, light, n, n, 1, &flat, &e), &e);
+            TU_OK(btf__rf_render_scene(m, &sc, n, n, 2, &img, &info, &e), &e);
             assert_int_equal(img.width, n);
             assert_int_equal(img.height, n);
             assert_true(info.trace_s >= 0 && info.shade_s >= 0);
@@ -520,7 +520,7 @@ static void scene_render_is_the_flat_render_head_on(void **state)
             l->kind = BTF_LIGHT_POINT;
             for (int c = 0; c < 3; c++)
                 l->position[c] = 1000.0 * l->direction[c], l->rgb[c] = 1e6f;
-            TU_OK(btf_rf_render_scene(m, &sc, n, n, 1, &pt, NULL, &e), &e);
+            TU_OK(btf__rf_render_scene(m, &sc, n, n, 1, &pt, NULL, &e), &e);
             size_t ci = ((size_t)(n / 2) * n + n / 2) * 3;
             for (int c = 0; c < 3; c++)
                 assert_true(close_to(pt.data[ci + c], flat.data[ci + c], 1e-5));
@@ -538,8 +538,8 @@ static void scene_render_is_the_flat_render_head_on(void **state)
     sp.background[0] = 0.5f, sp.background[1] = 0.25f, sp.background[2] = 0.125f;
     for (int k = 0; k < 3; k++) {
         btf_image a, b;
-        TU_OK(btf_rf_render_scene(ms[k], &sp, 48, 40, 1, &a, NULL, &e), &e);
-        TU_OK(btf_rf_render_scene(ms[k], &sp, 48, 40, 2, &b, NULL, &e), &e);
+        TU_OK(btf__rf_render_scene(ms[k], &sp, 48, 40, 1, &a, NULL, &e), &e);
+        TU_OK(btf__rf_render_scene(ms[k], &sp, 48, 40, 2, &b, NULL, &e), &e);
         assert_memory_equal(a.data, b.data, (size_t)48 * 40 * 3 * sizeof(float));
         int lit = 0;
         for (size_t i = 0; i < (size_t)48 * 40 * 3; i++) {
@@ -555,18 +555,18 @@ static void scene_render_is_the_flat_render_head_on(void **state)
     }
     /* bad input: errors, the output left empty */
     btf_image img;
-    assert_int_equal(btf_rf_render_scene(NULL, &sp, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_render_scene(NULL, &sp, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
     assert_null(img.data);
-    assert_int_equal(btf_rf_render_scene(&ptm, NULL, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
-    assert_int_equal(btf_rf_render_scene(&ptm, &sp, -1, 8, 1, &img, NULL, &e), BTF_E_ARG);
-    assert_int_equal(btf_rf_render_scene(&ptm, &sp, 8, BTF_RENDER_MAX_SIDE + 1, 1, &img, NULL,
-                                         &e), BTF_E_ARG);
-    assert_int_equal(btf_rf_render_scene(&ptm, &sp, 8, 8, 1, NULL, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_render_scene(&ptm, NULL, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_render_scene(&ptm, &sp, -1, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_render_scene(&ptm, &sp, 8, BTF_RENDER_MAX_SIDE + 1, 1, &img, NULL,
+                                          &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_render_scene(&ptm, &sp, 8, 8, 1, NULL, NULL, &e), BTF_E_ARG);
     btf_rf_model empty;
     memset(&empty, 0, sizeof empty);
-    assert_int_equal(btf_rf_render_scene(&empty, &sp, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_render_scene(&empty, &sp, 8, 8, 1, &img, NULL, &e), BTF_E_ARG);
     sp.objects[0].radius = 0.0;
-    assert_int_not_equal(btf_rf_render_scene(&ptm, &sp, 8, 8, 1, &img, NULL, &e), BTF_OK);
+    assert_int_not_equal(btf__rf_render_scene(&ptm, &sp, 8, 8, 1, &img, NULL, &e), BTF_OK);
     assert_null(img.data);
     btf_scene_free(&sp);
 }
@@ -601,7 +601,7 @@ static void file_round_trip(void **state)
         unsigned char *d1, *d2;
         size_t n1, n2;
         TU_OK(btf_rf_encode(ms[k], &d1, &n1, &e), &e);
-        assert_true(btf_rf_sniff(d1, n1));
+        assert_true(btf__rf_sniff(d1, n1));
         btf_rf_model back;
         TU_OK(btf_rf_decode(d1, n1, "m.rf", &back, &e), &e);
         assert_same_model(ms[k], &back);
@@ -611,7 +611,7 @@ static void file_round_trip(void **state)
         const char *path = tu_fmt("%s/m%d.btfcar", tu_dir, k);
         TU_OK(btf_rf_write(path, ms[k], &e), &e);
         btf_rf_model_free(&back);
-        TU_OK(btf_rf_read(path, &back, &e), &e);
+        TU_OK(btf__rf_read(path, &back, &e), &e);
         assert_same_model(ms[k], &back);
         btf_rf_model_free(&back);
         free(d1);
@@ -619,8 +619,8 @@ static void file_round_trip(void **state)
     }
 }
 
-/* btf_rf_report_write: the summary's numbers are the model file's bytes,
- * the raw BTF and btf_rf_error's; a sweep, a model of another dataset and
+/* btf__rf_report_write: the summary's numbers are the model file's bytes,
+ * the raw BTF and btf__rf_error's; a sweep, a model of another dataset and
  * missing arguments are errors that leave no folder. */
 static void rf_report(void **state)
 {
@@ -632,7 +632,7 @@ static void rf_report(void **state)
     btf_report_summary sum;
     char d[4096];
     snprintf(d, sizeof d, "%s/rf-report", tu_dir);
-    TU_OK(btf_rf_report_write(ds, &lobes, d, &o, &sum, &e), &e);
+    TU_OK(btf__rf_report_write(ds, &lobes, d, &o, &sum, &e), &e);
     unsigned char *data;
     size_t size;
     TU_OK(btf_rf_encode(&lobes, &data, &size, &e), &e);
@@ -642,22 +642,22 @@ static void rf_report(void **state)
     assert_true(fabs(sum.ratio - (double)sum.raw_bytes / size) < 1e-9 * sum.ratio);
     assert_int_equal(sum.pairs, 6);
     double mae, meany;
-    TU_OK(btf_rf_error(ds, &lobes, 2, &mae, &meany, &e), &e);
+    TU_OK(btf__rf_error(ds, &lobes, 2, &mae, &meany, &e), &e);
     assert_true(sum.mean_abs_error == mae && sum.mean_luminance == meany);
     assert_true(isfinite(sum.mean_combined) && sum.worst_combined >= sum.mean_combined);
     assert_int_equal(tu_count_files(d), 6 + 4); /* pairs, index, json, sphere, heat map */
     o.sweep = 1;
     snprintf(d, sizeof d, "%s/rf-report-2", tu_dir);
-    assert_int_equal(btf_rf_report_write(ds, &lobes, d, &o, &sum, &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_report_write(ds, &lobes, d, &o, &sum, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "sweep"));
     o.sweep = 0;
     btf_rf_model tiny;
     tu_rf_tiny_model(&tiny, 1, 2);
-    assert_int_equal(btf_rf_report_write(ds, &tiny, d, &o, &sum, &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_report_write(ds, &tiny, d, &o, &sum, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "does not describe"));
     btf_rf_model_free(&tiny);
-    assert_int_equal(btf_rf_report_write(NULL, &lobes, d, &o, &sum, &e), BTF_E_ARG);
-    assert_int_equal(btf_rf_report_write(ds, NULL, d, &o, &sum, &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_report_write(NULL, &lobes, d, &o, &sum, &e), BTF_E_ARG);
+    assert_int_equal(btf__rf_report_write(ds, NULL, d, &o, &sum, &e), BTF_E_ARG);
     assert_int_equal(access(d, F_OK), -1);
 }
 
@@ -757,7 +757,7 @@ static void command_line(void **state)
                                    "--threads 2 -o %s", cli, dataset_path, m), NULL), 0);
     btf_rf_model back;
     btf_error e = {0};
-    TU_OK(btf_rf_read(m, &back, &e), &e);
+    TU_OK(btf__rf_read(m, &back, &e), &e);
     assert_int_equal(back.fit, BTF_RF_LOBES);
     assert_int_equal(back.lobes, 1);
     btf_rf_model_free(&back);

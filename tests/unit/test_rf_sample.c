@@ -12,7 +12,7 @@
 #include "testutil.h"
 
 #include "rf/rf.h"
-#include "report/report.h" /* btf_rf_report_write */
+#include "report/report.h" /* btf__rf_report_write */
 #include "rf/rf_map.h"
 #include "rf/rf_sample.h"
 
@@ -104,7 +104,7 @@ static void map_stays_in_the_sample(void **state)
     assert_true(s8_info.sample_mean_abs_error > 0.0);
     double e, y;
     btf_error err = {0};
-    TU_OK(btf_rf_error(ds, &s8, 2, &e, &y, &err), &err);
+    TU_OK(btf__rf_error(ds, &s8, 2, &e, &y, &err), &err);
     assert_true(e == s8_info.mean_abs_error && y == s8_info.mean_luminance);
     /* the pixel correspondence is lost outside the sample: a larger error */
     assert_true(e > full_info.mean_abs_error);
@@ -195,7 +195,7 @@ static void whole_sample_is_the_whole_fit(void **state)
         assert_int_equal(m.map[2 * t], t % SIDE);
         assert_int_equal(m.map[2 * t + 1], t / SIDE);
     }
-    /* btf_rf_error adds per image, the fit per texel row: the same sum in
+    /* btf__rf_error adds per image, the fit per texel row: the same sum in
      * another order */
     assert_true(fabs(info.mean_abs_error - full_info.mean_abs_error) <=
                 1e-9 * full_info.mean_abs_error);
@@ -203,8 +203,8 @@ static void whole_sample_is_the_whole_fit(void **state)
     btf_dir views[3] = {{0, 0}, {37.5, 100}, {75, 345}}, light = {45, 20};
     for (int k = 0; k < 3; k++) {
         btf_image a, b;
-        TU_OK(btf_rf_render_flat(&m, views[k], light, 40, 23, 2, &a, &e), &e);
-        TU_OK(btf_rf_render_flat(&full, views[k], light, 40, 23, 2, &b, &e), &e);
+        TU_OK(btf__rf_render_flat(&m, views[k], light, 40, 23, 2, &a, &e), &e);
+        TU_OK(btf__rf_render_flat(&full, views[k], light, 40, 23, 2, &b, &e), &e);
         assert_memory_equal(a.data, b.data, (size_t)40 * 23 * 3 * sizeof(float));
         btf_image_free(&a);
         btf_image_free(&b);
@@ -226,7 +226,7 @@ static void one_texel_sample(void **state)
     for (int t = 0; t < 9 * 5; t++)
         assert_true(m.map[2 * t] == 0 && m.map[2 * t + 1] == 0);
     btf_image img;
-    TU_OK(btf_rf_render_flat(&m, (btf_dir){30, 60}, (btf_dir){45, 0}, 0, 0, 1, &img, &e), &e);
+    TU_OK(btf__rf_render_flat(&m, (btf_dir){30, 60}, (btf_dir){45, 0}, 0, 0, 1, &img, &e), &e);
     assert_int_equal(img.width, 9);
     assert_int_equal(img.height, 5);
     assert_image_finite(&img);
@@ -234,7 +234,7 @@ static void one_texel_sample(void **state)
         assert_true(img.data[i] == img.data[i % 3]);
     btf_image_free(&img);
     double err;
-    TU_OK(btf_rf_error(ds, &m, 2, &err, NULL, &e), &e);
+    TU_OK(btf__rf_error(ds, &m, 2, &err, NULL, &e), &e);
     assert_true(isfinite(err) && err > 0.0);
     btf_rf_model_free(&m);
 }
@@ -247,14 +247,14 @@ static void every_path_goes_through_the_map(void **state)
     btf_error e = {0};
     btf_dir view = {30, 60}, light = {45, 40};
     btf_image img;
-    TU_OK(btf_rf_render_flat(&s8, view, light, 0, 0, 2, &img, &e), &e);
+    TU_OK(btf__rf_render_flat(&s8, view, light, 0, 0, 2, &img, &e), &e);
     assert_int_equal(img.width, 24); /* the surface, not the sample */
     assert_int_equal(img.height, 20);
     assert_image_finite(&img);
     for (int y = 0; y < 20; y++)
         for (int x = 0; x < 24; x++) {
             float rgb[3];
-            btf_rf_eval(&s8, view, light, x + 48, y - 40, rgb); /* wrapped */
+            btf__rf_eval(&s8, view, light, x + 48, y - 40, rgb); /* wrapped */
             const float *p = img.data + 3 * ((size_t)y * 24 + x);
             for (int k = 0; k < 3; k++)
                 assert_true(fabsf(rgb[k] - p[k]) <= 1e-6f * (1.0f + fabsf(p[k])));
@@ -262,12 +262,12 @@ static void every_path_goes_through_the_map(void **state)
     btf_image_free(&img);
     /* at a measured pair, surface texel (x, y) is the field of its sample texel */
     btf_dir mv = s8.views.dirs[7], ml = s8.lights.dirs[9];
-    TU_OK(btf_rf_render_flat(&s8, mv, ml, 24, 20, 1, &img, &e), &e);
+    TU_OK(btf__rf_render_flat(&s8, mv, ml, 24, 20, 1, &img, &e), &e);
     btf_rf_model bare = s8; /* the sample alone, a model without a map */
     bare.map = NULL;
     for (int t = 0; t < 24 * 20; t++) {
         float want[3];
-        btf_rf_eval_field(&bare, 7, mv, ml, s8.map[2 * t], s8.map[2 * t + 1], want);
+        btf__rf_eval_field(&bare, 7, mv, ml, s8.map[2 * t], s8.map[2 * t + 1], want);
         for (int k = 0; k < 3; k++)
             assert_true(fabsf(img.data[3 * t + k] - want[k]) <= 1e-6f * (1.0f + want[k]));
     }
@@ -276,7 +276,7 @@ static void every_path_goes_through_the_map(void **state)
     btf_scene sc;
     TU_OK(btf_scene_sphere((btf_dir){45, 135}, 8.0, &sc, &e), &e);
     btf_render_info ri;
-    TU_OK(btf_rf_render_scene(&s8, &sc, 48, 40, 2, &img, &ri, &e), &e);
+    TU_OK(btf__rf_render_scene(&s8, &sc, 48, 40, 2, &img, &ri, &e), &e);
     assert_image_finite(&img);
     btf_image_free(&img);
     btf_scene_free(&sc);
@@ -502,12 +502,12 @@ static void report_of_a_sampled_model(void **state)
     btf_report_summary sum;
     char d[4096];
     snprintf(d, sizeof d, "%s/sampled-report", tu_dir);
-    TU_OK(btf_rf_report_write(ds, &m, d, &ro, &sum, &e), &e);
+    TU_OK(btf__rf_report_write(ds, &m, d, &ro, &sum, &e), &e);
     btf_rf_bytes b;
     TU_OK(btf_rf_model_bytes(&m, &b, &e), &e);
     assert_int_equal(sum.model_bytes, b.file);
     double mae;
-    TU_OK(btf_rf_error(ds, &m, 2, &mae, NULL, &e), &e);
+    TU_OK(btf__rf_error(ds, &m, 2, &mae, NULL, &e), &e);
     assert_true(sum.mean_abs_error == mae);
     int status;
     char *json = tu_capture(tu_fmt("cat %s/report.json", d), &status);
@@ -538,7 +538,7 @@ static void command_line(void **state)
     free(text);
     btf_rf_model back;
     btf_error e = {0};
-    TU_OK(btf_rf_read(m, &back, &e), &e);
+    TU_OK(btf__rf_read(m, &back, &e), &e);
     assert_int_equal(back.width, 8);
     assert_int_equal(back.surface_width, 20);
     assert_int_equal(back.surface_height, 12);

@@ -111,10 +111,10 @@ static void examples_load(void **state)
                 assert_true(fabs(v3_len(s.lights[l].direction) - 1.0) < 1e-12);
         TU_OK(btf_scene_check(&s, &err), &err);
         btf_gbuffer g;
-        TU_OK(btf_scene_trace(&s, 64, 48, 0, &g, &err), &err);
+        TU_OK(btf__scene_trace(&s, 64, 48, 0, &g, &err), &err);
         assert_true(count_hits(&g) > 64 * 48 / 20); /* every example shows its object */
         assert_gbuffer_sane(&g);
-        btf_gbuffer_free(&g);
+        btf__gbuffer_free(&g);
         btf_scene_free(&s);
     }
     /* Defaults: up +y, fov 45 where the file leaves them out; intensity
@@ -340,14 +340,14 @@ static void check_in_memory(void **state)
     assert_int_equal(btf_scene_check(&s, &err), BTF_E_DATA);
     assert_non_null(strstr(err.msg, "objects[0].file: index 2 is 3"));
     btf_gbuffer g;
-    assert_int_equal(btf_scene_trace(&s, 8, 8, 1, &g, &err), BTF_E_DATA);
+    assert_int_equal(btf__scene_trace(&s, 8, 8, 1, &g, &err), BTF_E_DATA);
     assert_null(g.object);
     idx[2] = 2;
-    TU_OK(btf_scene_trace(&s, 8, 8, 1, &g, &err), &err);
-    btf_gbuffer_free(&g);
-    assert_int_equal(btf_scene_trace(&s, 0, 8, 1, &g, &err), BTF_E_ARG);
+    TU_OK(btf__scene_trace(&s, 8, 8, 1, &g, &err), &err);
+    btf__gbuffer_free(&g);
+    assert_int_equal(btf__scene_trace(&s, 0, 8, 1, &g, &err), BTF_E_ARG);
     assert_int_equal(btf_scene_check(NULL, &err), BTF_E_ARG);
-    btf_gbuffer_free(NULL);
+    btf__gbuffer_free(NULL);
     btf_scene_free(NULL);
 }
 
@@ -378,7 +378,7 @@ static void sphere_trace(void **state)
     btf_scene s = one_object(sp, D, FOV, &ob, &l);
     btf_gbuffer g;
     btf_error err = {0};
-    TU_OK(btf_scene_trace(&s, W, H, 0, &g, &err), &err);
+    TU_OK(btf__scene_trace(&s, W, H, 0, &g, &err), &err);
     assert_gbuffer_sane(&g);
     /* The projected disk: angular radius asin(R / D), radius in pixels
      * tan(asin(R/D)) / tan(fov/2) * H/2. */
@@ -446,12 +446,12 @@ static void sphere_trace(void **state)
     assert_int_equal(jumps, 0);
     /* The same bytes on 1 and 2 threads. */
     btf_gbuffer g1;
-    TU_OK(btf_scene_trace(&s, W, H, 1, &g1, &err), &err);
+    TU_OK(btf__scene_trace(&s, W, H, 1, &g1, &err), &err);
     assert_memory_equal(g.frame, g1.frame, sizeof(float) * 9 * W * H);
     assert_memory_equal(g.uv, g1.uv, sizeof(float) * 2 * W * H);
     assert_memory_equal(g.object, g1.object, sizeof(int32_t) * W * H);
-    btf_gbuffer_free(&g1);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g1);
+    btf__gbuffer_free(&g);
 }
 
 /* A plane seen head-on: uv linear in the pixel position, the frame the
@@ -468,7 +468,7 @@ static void plane_head_on(void **state)
     btf_scene s = one_object(pl, D, FOV, &ob, &l);
     btf_gbuffer g;
     btf_error err = {0};
-    TU_OK(btf_scene_trace(&s, W, H, 0, &g, &err), &err);
+    TU_OK(btf__scene_trace(&s, W, H, 0, &g, &err), &err);
     assert_gbuffer_sane(&g);
     double px = 2.0 * D * tan(0.5 * FOV * M_PI / 180.0) / W; /* world units per pixel */
     int hits = 0;
@@ -488,10 +488,10 @@ static void plane_head_on(void **state)
                 assert_true(fabsf(g.frame[9 * p + i] - want[i]) < 1e-6f);
         }
     assert_true(hits > 0);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     /* From behind (the eye on -z): u = -(the front's u), T = -x, N = -z. */
     s.camera.position[2] = -D;
-    TU_OK(btf_scene_trace(&s, W, H, 0, &g, &err), &err);
+    TU_OK(btf__scene_trace(&s, W, H, 0, &g, &err), &err);
     assert_gbuffer_sane(&g);
     for (int p = 0; p < W * H; p++) {
         if (g.object[p] < 0)
@@ -500,7 +500,7 @@ static void plane_head_on(void **state)
         assert_true(fabs(g.uv[2 * p] + (wx + 1.0) * SCALE) < 1e-4);
         assert_true(fabsf(g.frame[9 * p] + 1.0f) < 1e-6f && fabsf(g.frame[9 * p + 8] + 1.0f) < 1e-6f);
     }
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
 }
 
 /* The two-triangle square mesh against the analytic plane of the same
@@ -524,8 +524,8 @@ static void mesh_square_matches_plane(void **state)
         memcpy(ms.camera.position, eye, sizeof eye);
         memcpy(ps.camera.position, eye, sizeof eye);
         btf_gbuffer gm, gp;
-        TU_OK(btf_scene_trace(&ms, W, H, 0, &gm, &err), &err);
-        TU_OK(btf_scene_trace(&ps, W, H, 0, &gp, &err), &err);
+        TU_OK(btf__scene_trace(&ms, W, H, 0, &gm, &err), &err);
+        TU_OK(btf__scene_trace(&ps, W, H, 0, &gp, &err), &err);
         assert_gbuffer_sane(&gm);
         int both = 0, differ = 0;
         for (int p = 0; p < W * H; p++) {
@@ -566,8 +566,8 @@ static void mesh_square_matches_plane(void **state)
                       both, differ);
         assert_true(both > W * H / 8);
         assert_true(differ <= 2);
-        btf_gbuffer_free(&gm);
-        btf_gbuffer_free(&gp);
+        btf__gbuffer_free(&gm);
+        btf__gbuffer_free(&gp);
     }
     btf_scene_free(&ms);
 }
@@ -592,14 +592,14 @@ static void big_mesh_matches_sphere(void **state)
     const int W = 256, H = 256;
     btf_gbuffer gm, gs;
     t0 = tu_now();
-    TU_OK(btf_scene_trace(&ms, W, H, 0, &gm, &err), &err);
+    TU_OK(btf__scene_trace(&ms, W, H, 0, &gm, &err), &err);
     double t_trace = tu_now() - t0;
     assert_gbuffer_sane(&gm);
     btf_object sp = sphere(1.0);
     sp.texture_scale = 50.0;
     btf_scene ss = ms;
     ss.objects = &sp;
-    TU_OK(btf_scene_trace(&ss, W, H, 0, &gs, &err), &err);
+    TU_OK(btf__scene_trace(&ss, W, H, 0, &gs, &err), &err);
     int agree = 0, differ = 0, uv_ok = 0, both = 0;
     double max_n = 0.0;
     for (int p = 0; p < W * H; p++) {
@@ -634,8 +634,8 @@ static void big_mesh_matches_sphere(void **state)
     assert_true(differ <= W * H / 1000);
     assert_true(max_n < 5e-3);
     assert_true(uv_ok >= both * 99 / 100);
-    btf_gbuffer_free(&gm);
-    btf_gbuffer_free(&gs);
+    btf__gbuffer_free(&gm);
+    btf__gbuffer_free(&gs);
     btf_scene_free(&ms);
 }
 
@@ -647,23 +647,23 @@ static void eye_inside_sphere(void **state)
     btf_scene s = one_object(sphere(2.0), 0.5, 90.0, &ob, &l);
     btf_gbuffer g;
     btf_error err = {0};
-    TU_OK(btf_scene_trace(&s, 48, 32, 0, &g, &err), &err);
+    TU_OK(btf__scene_trace(&s, 48, 32, 0, &g, &err), &err);
     assert_gbuffer_sane(&g);
     assert_int_equal(count_hits(&g), 48 * 32);
     for (int p = 0; p < 48 * 32; p++)
         for (int i = 0; i < 3; i++) /* N inward: towards the eye */
             assert_true(fabsf(g.frame[9 * p + 6 + i] + g.position[3 * p + i] / 2.0f) < 1e-5f);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     /* Inside an open cylinder, looking along its axis: the wall all around,
      * the open far end background. */
     btf_object cy = {.kind = BTF_OBJECT_CYLINDER, .axis = {0, 0, 1}, .radius = 1.0,
                      .height = 4.0, .texture_scale = 3.0};
     s = one_object(cy, 1.0, 90.0, &ob, &l);
-    TU_OK(btf_scene_trace(&s, 33, 33, 0, &g, &err), &err);
+    TU_OK(btf__scene_trace(&s, 33, 33, 0, &g, &err), &err);
     assert_gbuffer_sane(&g);
     assert_true(g.object[16 * 33 + 16] < 0); /* down the tube's axis */
     assert_true(g.object[0] == 0);           /* a corner sees the wall */
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
 }
 
 /* Rays that graze, run along an axis or parallel to a plane, and hits at
@@ -715,10 +715,10 @@ static void grazing_and_poles(void **state)
     btf_scene s = one_object(pl, 3.0, 60.0, &ob, &l);
     btf_gbuffer g;
     btf_error err = {0};
-    TU_OK(btf_scene_trace(&s, 31, 31, 0, &g, &err), &err);
+    TU_OK(btf__scene_trace(&s, 31, 31, 0, &g, &err), &err);
     assert_gbuffer_sane(&g);
     assert_int_equal(count_hits(&g), 0); /* edge-on: zero area */
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
 }
 
 /* 1x1 frames, huge and tiny scenes, a fov near 180: finite. */
@@ -730,10 +730,10 @@ static void extremes(void **state)
     btf_gbuffer g;
     btf_error err = {0};
     btf_scene s = one_object(sphere(1.0), 4.0, 40.0, &ob, &l);
-    TU_OK(btf_scene_trace(&s, 1, 1, 0, &g, &err), &err);
+    TU_OK(btf__scene_trace(&s, 1, 1, 0, &g, &err), &err);
     assert_int_equal(g.object[0], 0); /* the centre ray hits the sphere's front */
     assert_true(fabsf(g.frame[8] - 1.0f) < 1e-6f && fabsf(g.position[2] - 1.0f) < 1e-6f);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     const double radii[] = {1e-6, 1e5};
     const double dists[] = {4e-6, 9e5};
     for (int k = 0; k < 2; k++) {
@@ -741,22 +741,22 @@ static void extremes(void **state)
         sp.texture_scale = 1e6;
         s = one_object(sp, dists[k], 179.0, &ob, &l);
         /* Odd sides: the centre pixel's ray is the view direction. */
-        TU_OK(btf_scene_trace(&s, 41, 31, 0, &g, &err), &err);
+        TU_OK(btf__scene_trace(&s, 41, 31, 0, &g, &err), &err);
         assert_gbuffer_sane(&g);
         assert_true(g.object[15 * 41 + 20] == 0);
-        btf_gbuffer_free(&g);
+        btf__gbuffer_free(&g);
     }
     s = one_object(sphere(1.0), 4.0, 1e-4, &ob, &l);
-    TU_OK(btf_scene_trace(&s, 17, 1, 0, &g, &err), &err);
+    TU_OK(btf__scene_trace(&s, 17, 1, 0, &g, &err), &err);
     assert_gbuffer_sane(&g);
     assert_int_equal(count_hits(&g), 17);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
     /* No objects at all: background everywhere. */
     s.n_objects = 0;
-    TU_OK(btf_scene_trace(&s, 5, 3, 0, &g, &err), &err);
+    TU_OK(btf__scene_trace(&s, 5, 3, 0, &g, &err), &err);
     assert_gbuffer_sane(&g);
     assert_int_equal(count_hits(&g), 0);
-    btf_gbuffer_free(&g);
+    btf__gbuffer_free(&g);
 }
 
 /* Degenerate UVs (all one point) give some orthonormal frame around N;
@@ -777,7 +777,7 @@ static void degenerate_and_mirrored_uvs(void **state)
         btf_scene s = one_object(mo, 2.0, 45.0, &ob, &l);
         btf_gbuffer g;
         btf_error err = {0};
-        TU_OK(btf_scene_trace(&s, 32, 32, 0, &g, &err), &err);
+        TU_OK(btf__scene_trace(&s, 32, 32, 0, &g, &err), &err);
         assert_gbuffer_sane(&g);
         assert_true(count_hits(&g) > 100);
         for (int p = 0; p < 32 * 32; p++) {
@@ -791,7 +791,7 @@ static void degenerate_and_mirrored_uvs(void **state)
                 assert_true(fabsf(g.frame[9 * p] - 1.0f) < 1e-6f);
             }
         }
-        btf_gbuffer_free(&g);
+        btf__gbuffer_free(&g);
     }
 }
 

@@ -19,7 +19,7 @@ static void cumhist_properties(void **state)
     /* Constant mid grey: L's CDF steps once, a and b step at the middle. */
     for (int i = 0; i < 45; i++)
         img.data[i] = 0.18f;
-    TU_OK(btf_lab_cumhist(&img, 16, f, &e), &e);
+    TU_OK(btf__lab_cumhist(&img, 16, f, &e), &e);
     int steps = 0;
     for (int b = 0; b < 16; b++) {
         assert_true(f[b] == 0.0f || f[b] == 1.0f);
@@ -30,12 +30,12 @@ static void cumhist_properties(void **state)
     /* Random colours, black, saturated and super-white values: monotone, in
      * [0, 1], ending at 1. */
     btf_rng r;
-    btf_rng_seed(&r, 3);
+    btf__rng_seed(&r, 3);
     for (int i = 0; i < 45; i++)
-        img.data[i] = (float)btf_rng_uniform(&r) * 3.0f;
+        img.data[i] = (float)btf__rng_uniform(&r) * 3.0f;
     img.data[0] = img.data[1] = img.data[2] = 0.0f;
     img.data[3] = 1e30f;
-    TU_OK(btf_lab_cumhist(&img, 16, f, &e), &e);
+    TU_OK(btf__lab_cumhist(&img, 16, f, &e), &e);
     for (int c = 0; c < 3; c++) {
         assert_true(f[c * 16 + 15] == 1.0f);
         for (int b = 1; b < 16; b++)
@@ -44,8 +44,8 @@ static void cumhist_properties(void **state)
     /* A 1x1 image and bad arguments. */
     btf_image one;
     TU_OK(btf_image_alloc(&one, 1, 1, 3, &e), &e);
-    TU_OK(btf_lab_cumhist(&one, 2, f, &e), &e);
-    assert_int_equal(btf_lab_cumhist(&one, 1, f, &e), BTF_E_ARG);
+    TU_OK(btf__lab_cumhist(&one, 2, f, &e), &e);
+    assert_int_equal(btf__lab_cumhist(&one, 1, f, &e), BTF_E_ARG);
     btf_image_free(&one);
     btf_image_free(&img);
 }
@@ -56,7 +56,7 @@ static float *blobs(int n, btf_rng *r)
     float *x = malloc((size_t)n * 4 * sizeof(float));
     for (int i = 0; i < n; i++)
         for (int j = 0; j < 4; j++)
-            x[i * 4 + j] = (float)(10.0 * (i % 3) + 0.1 * btf_rng_uniform(r));
+            x[i * 4 + j] = (float)(10.0 * (i % 3) + 0.1 * btf__rng_uniform(r));
     return x;
 }
 
@@ -64,29 +64,29 @@ static void kmeans_recovers_blobs_deterministically(void **state)
 {
     (void)state;
     btf_rng r;
-    btf_rng_seed(&r, 11);
+    btf__rng_seed(&r, 11);
     float *x = blobs(300, &r);
     btf_kmeans_result a, b, c;
     btf_kmeans_opts o = {.seed = 5};
     btf_error e = {0};
-    TU_OK(btf_kmeans(x, 300, 4, 3, &o, &a, &e), &e);
+    TU_OK(btf__kmeans(x, 300, 4, 3, &o, &a, &e), &e);
     assert_int_equal(a.k, 3);
     for (int i = 0; i < 300; i++) /* canonical order: point 0 is in cluster 0 */
         assert_int_equal(a.labels[i], i % 3);
-    TU_OK(btf_kmeans(x, 300, 4, 3, &o, &b, &e), &e);
+    TU_OK(btf__kmeans(x, 300, 4, 3, &o, &b, &e), &e);
     assert_memory_equal(a.labels, b.labels, 300 * sizeof(int));
     assert_memory_equal(a.centres, b.centres, 3 * 4 * sizeof(float));
     assert_true(a.distortion == b.distortion);
     /* K = 1: the centre is the mean, the distortion the total scatter. */
-    TU_OK(btf_kmeans(x, 300, 4, 1, &o, &c, &e), &e);
+    TU_OK(btf__kmeans(x, 300, 4, 1, &o, &c, &e), &e);
     assert_int_equal(c.k, 1);
     double mean = 0;
     for (int i = 0; i < 300; i++)
         mean += x[i * 4];
     assert_true(fabs(c.centres[0] - mean / 300) < 1e-4);
-    btf_kmeans_free(&a);
-    btf_kmeans_free(&b);
-    btf_kmeans_free(&c);
+    btf__kmeans_free(&a);
+    btf__kmeans_free(&b);
+    btf__kmeans_free(&c);
     free(x);
 }
 
@@ -102,22 +102,22 @@ static void kmeans_degenerate_inputs(void **state)
         x[2 * i + 1] = -(float)(i % 3);
     }
     btf_kmeans_opts o = {.seed = 1};
-    TU_OK(btf_kmeans(x, 40, 2, 10, &o, &r, &e), &e);
+    TU_OK(btf__kmeans(x, 40, 2, 10, &o, &r, &e), &e);
     assert_int_equal(r.k, 3);
     assert_true(r.distortion == 0.0);
-    btf_kmeans_free(&r);
+    btf__kmeans_free(&r);
     /* All points identical. */
     float same[20];
     for (int i = 0; i < 20; i++)
         same[i] = 0.5f;
-    TU_OK(btf_kmeans(same, 10, 2, 4, &o, &r, &e), &e);
+    TU_OK(btf__kmeans(same, 10, 2, 4, &o, &r, &e), &e);
     assert_int_equal(r.k, 1);
     assert_true(r.centres[0] == 0.5f && r.centres[1] == 0.5f);
-    btf_kmeans_free(&r);
+    btf__kmeans_free(&r);
     /* One point; k larger than n. */
-    TU_OK(btf_kmeans(same, 1, 2, 3, &o, &r, &e), &e);
+    TU_OK(btf__kmeans(same, 1, 2, 3, &o, &r, &e), &e);
     assert_int_equal(r.k, 1);
-    btf_kmeans_free(&r);
+    btf__kmeans_free(&r);
     /* Many seeds on data made to empty clusters (a heavy duplicate mass and
      * far outliers): every cluster has members, no centre is NaN. */
     float y[200];
@@ -127,7 +127,7 @@ static void kmeans_degenerate_inputs(void **state)
     }
     for (uint64_t s = 0; s < 50; s++) {
         btf_kmeans_opts os = {.seed = s, .restarts = 2};
-        TU_OK(btf_kmeans(y, 100, 2, 8, &os, &r, &e), &e);
+        TU_OK(btf__kmeans(y, 100, 2, 8, &os, &r, &e), &e);
         int count[8] = {0};
         for (int i = 0; i < 100; i++) {
             assert_true(r.labels[i] >= 0 && r.labels[i] < r.k);
@@ -137,13 +137,13 @@ static void kmeans_degenerate_inputs(void **state)
             assert_true(count[c] > 0);
             assert_true(isfinite(r.centres[2 * c]) && isfinite(r.centres[2 * c + 1]));
         }
-        btf_kmeans_free(&r);
+        btf__kmeans_free(&r);
     }
     /* Bad arguments. */
-    assert_int_equal(btf_kmeans(x, 0, 2, 1, &o, &r, &e), BTF_E_ARG);
-    assert_int_equal(btf_kmeans(x, 4, 2, 0, &o, &r, &e), BTF_E_ARG);
+    assert_int_equal(btf__kmeans(x, 0, 2, 1, &o, &r, &e), BTF_E_ARG);
+    assert_int_equal(btf__kmeans(x, 4, 2, 0, &o, &r, &e), BTF_E_ARG);
     x[3] = NAN;
-    assert_int_equal(btf_kmeans(x, 4, 2, 2, &o, &r, &e), BTF_E_ARG);
+    assert_int_equal(btf__kmeans(x, 4, 2, 2, &o, &r, &e), BTF_E_ARG);
 }
 
 /* A generated dataset shared by the segmentation tests. */
@@ -251,7 +251,7 @@ static void constant_dataset_gives_one_subspace(void **state)
         f[i] = (float)(i % 9) / 8.0f;
     btf_segmentation s;
     btf_error e = {0};
-    TU_OK(btf_segment_features(f, 2, 3, 9, NULL, &s, &e), &e);
+    TU_OK(btf__segment_features(f, 2, 3, 9, NULL, &s, &e), &e);
     assert_int_equal(s.k, 1);
     assert_non_null(strstr(s.reason, "same feature"));
     btf_segmentation_free(&s);
@@ -268,7 +268,7 @@ static void split_gain_separates_close_groups(void **state)
     btf_segmentation s;
     btf_error e = {0};
     btf_segment_opts o = btf_segment_defaults();
-    TU_OK(btf_segment_features(f, 5, 8, 1, &o, &s, &e), &e);
+    TU_OK(btf__segment_features(f, 5, 8, 1, &o, &s, &e), &e);
     print_message("%s\n", s.reason);
     assert_int_equal(s.k, 3);
     assert_non_null(strstr(s.reason, "split"));
@@ -276,7 +276,7 @@ static void split_gain_separates_close_groups(void **state)
     assert_int_not_equal(s.index[20], s.index[30]);
     btf_segmentation_free(&s);
     o.split_gain = -1.0;
-    TU_OK(btf_segment_features(f, 5, 8, 1, &o, &s, &e), &e);
+    TU_OK(btf__segment_features(f, 5, 8, 1, &o, &s, &e), &e);
     assert_int_equal(s.k, 2);
     assert_int_equal(s.index[20], s.index[30]);
     btf_segmentation_free(&s);
@@ -286,7 +286,7 @@ static void split_gain_separates_close_groups(void **state)
     for (int i = 0; i < 200; i++)
         ramp[i] = (float)i;
     o.split_gain = 0.0; /* the default */
-    TU_OK(btf_segment_features(ramp, 10, 20, 1, &o, &s, &e), &e);
+    TU_OK(btf__segment_features(ramp, 10, 20, 1, &o, &s, &e), &e);
     print_message("ramp: %s\n", s.reason);
     int k_tau = 0;
     while (k_tau < s.k && !(s.distortion_by_k[k_tau + 1] > 0.0 &&
@@ -295,7 +295,7 @@ static void split_gain_separates_close_groups(void **state)
     assert_true(s.k > k_tau + 1 && s.k <= 2 * (k_tau + 1));
     btf_segmentation_free(&s);
     o.split_gain = 1.0;
-    assert_int_equal(btf_segment_features(f, 5, 8, 1, &o, &s, &e), BTF_E_ARG);
+    assert_int_equal(btf__segment_features(f, 5, 8, 1, &o, &s, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "split gain"));
 }
 

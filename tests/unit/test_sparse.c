@@ -464,7 +464,7 @@ static void sparse_refusals(void **state)
     btf_error err = {0};
     TU_OK(btf_dataset_open(BATH "/manifest.tsv", NULL, &ds, &err), &err);
     btf_ps_result ps;
-    assert_int_equal(btf_photostereo_dataset(ds, NULL, &ps, &err), BTF_E_DATA);
+    assert_int_equal(btf__photostereo_dataset(ds, NULL, &ps, &err), BTF_E_DATA);
     assert_non_null(strstr(err.msg, "at least 3 lights; the set holds at most 1"));
     btf_rf_model rm;
     assert_int_equal(btf_rf_fit(ds, NULL, &rm, &err), BTF_E_DATA);

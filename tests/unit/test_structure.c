@@ -20,16 +20,16 @@
 static void gain_codes(void **state)
 {
     (void)state;
-    assert_int_equal(btf_gain_code(1.0f), 0);
-    assert_int_equal(btf_gain_code(2.0f), 64);
-    assert_int_equal(btf_gain_code(0.25f), -128);
-    assert_int_equal(btf_gain_code(100.0f), 127); /* held at the grid's end */
-    assert_int_equal(btf_gain_code(1e-9f), -128);
-    assert_int_equal(btf_gain_code(NAN), 0);      /* nothing known: 1 */
-    assert_int_equal(btf_gain_code(-3.0f), 0);
-    assert_int_equal(btf_gain_code(INFINITY), 0);
+    assert_int_equal(btf__gain_code(1.0f), 0);
+    assert_int_equal(btf__gain_code(2.0f), 64);
+    assert_int_equal(btf__gain_code(0.25f), -128);
+    assert_int_equal(btf__gain_code(100.0f), 127); /* held at the grid's end */
+    assert_int_equal(btf__gain_code(1e-9f), -128);
+    assert_int_equal(btf__gain_code(NAN), 0);      /* nothing known: 1 */
+    assert_int_equal(btf__gain_code(-3.0f), 0);
+    assert_int_equal(btf__gain_code(INFINITY), 0);
     for (float g = 0.3f; g < 3.9f; g *= 1.013f) {
-        float back = btf_gain_value(btf_gain_code(g));
+        float back = btf__gain_value(btf__gain_code(g));
         assert_true(fabsf(back / g - 1.0f) < 0.0055f); /* half a 1/64-octave step */
     }
 }
@@ -55,8 +55,8 @@ static void horizon_of_a_wall(void **state)
     btf_error e = {0};
     float *h = wall();
     uint32_t *hz = NULL, *wrapped = NULL;
-    TU_OK(btf_horizon_map(h, 32, 8, 0, 1, &hz, &e), &e);
-    TU_OK(btf_horizon_map(h, 32, 8, 1, 2, &wrapped, &e), &e);
+    TU_OK(btf__horizon_map(h, 32, 8, 0, 1, &hz, &e), &e);
+    TU_OK(btf__horizon_map(h, 32, 8, 1, 2, &wrapped, &e), &e);
     /* two texels before the wall, towards it (+x, direction 0): tan 4/2 */
     assert_true(fabsf(horizon(hz, 14, 4, 0) - 2.0f) < 1.0f / 64);
     /* diagonally (direction 1, +x +y: one row up the image per column) the
@@ -70,7 +70,7 @@ static void horizon_of_a_wall(void **state)
     assert_true(fabsf(horizon(wrapped, 2, 4, 4) - 4.0f / 3.0f) < 1.0f / 64);
     /* the same threads count the same */
     uint32_t *again = NULL;
-    TU_OK(btf_horizon_map(h, 32, 8, 1, 1, &again, &e), &e);
+    TU_OK(btf__horizon_map(h, 32, 8, 1, 1, &again, &e), &e);
     assert_memory_equal(again, wrapped, 32 * 8 * 2 * sizeof(uint32_t));
     free(again);
     free(hz);
@@ -134,15 +134,15 @@ static void layered_model(btf_model *m)
     m->chroma = malloc((size_t)n * n * 3 * sizeof(float));
     for (int i = 0; i < n * n; i++) {
         m->range[i] = (float)(i % 7) / 32.0f;
-        m->albedo[i] = btf_albedo_value(100u + (unsigned)(i % 50));
+        m->albedo[i] = btf__albedo_value(100u + (unsigned)(i % 50));
         for (int c = 0; c < 3; c++)
-            m->chroma[3 * i + c] = btf_albedo_value(128u + (unsigned)((i + 3 * c) % 9) - 4u);
+            m->chroma[3 * i + c] = btf__albedo_value(128u + (unsigned)((i + 3 * c) % 9) - 4u);
     }
     m->ambient = 0.125f;
     m->shadows = 1;
     m->gain = malloc(6 * 3 * sizeof(float));
     for (int i = 0; i < 18; i++)
-        m->gain[i] = btf_gain_value(i * 13 - 100);
+        m->gain[i] = btf__gain_value(i * 13 - 100);
 }
 
 /* The payload of an encoded model (the tests' own unwrap of the container). */
@@ -225,12 +225,12 @@ static void lattice_model(btf_model *m, int noise)
     m->range = malloc((size_t)n * n * sizeof(float));
     m->albedo = malloc((size_t)n * n * sizeof(float));
     btf_rng r;
-    btf_rng_seed(&r, 5);
+    btf__rng_seed(&r, 5);
     for (int i = 0; i < n * n; i++) {
         double x = i % n, y = i / n, pi2 = 2.0 * 3.14159265358979 / 12.0;
         double c = cos(pi2 * x) * cos(pi2 * y);
-        m->range[i] = noise ? (float)btf_rng_uniform(&r) : (float)(2.0 * c);
-        m->albedo[i] = (float)(1.0 + 0.3 * (noise ? btf_rng_uniform(&r) : c));
+        m->range[i] = noise ? (float)btf__rng_uniform(&r) : (float)(2.0 * c);
+        m->albedo[i] = (float)(1.0 + 0.3 * (noise ? btf__rng_uniform(&r) : c));
     }
 }
 
@@ -240,10 +240,10 @@ static void lattice_keeps_the_repeat(void **state)
     btf_model m;
     lattice_model(&m, 1);
     int L[4];
-    assert_int_equal(btf_structure_lattice(&m, L), 0); /* noise: no repeat */
+    assert_int_equal(btf__structure_lattice(&m, L), 0); /* noise: no repeat */
     btf_model_free(&m);
     lattice_model(&m, 0);
-    assert_int_equal(btf_structure_lattice(&m, L), 1);
+    assert_int_equal(btf__structure_lattice(&m, L), 1);
     print_message("lattice (%d, %d) (%d, %d)\n", L[0], L[1], L[2], L[3]);
     assert_int_equal(abs(L[0] * L[3] - L[1] * L[2]), 72); /* the cell of (6,6), (6,-6) */
     for (int k = 0; k < 4; k += 2)
@@ -252,7 +252,7 @@ static void lattice_keeps_the_repeat(void **state)
      * from a block whose offset is a lattice vector */
     uint16_t *map = NULL;
     btf_error e = {0};
-    TU_OK(btf_structure_coords(&m, 192, 144, 3, &map, &e), &e);
+    TU_OK(btf__structure_coords(&m, 192, 144, 3, &map, &e), &e);
     int off = 0;
     for (int y = 0; y < 144; y++)
         for (int x = 0; x < 192; x++) {
@@ -290,8 +290,8 @@ static double mean_colour_error(const btf_model *m, const btf_dataset *ds, const
         ro.width = ro.height = 32;
         TU_OK(btf_render_flat(m, m->views.dirs[v], m->lights.dirs[l], &ro, &r, NULL, &e), &e);
         float a[3], b[3];
-        btf_image_mean_rgb(&meas, a);
-        btf_image_mean_rgb(&r, b);
+        btf__image_mean_rgb(&meas, a);
+        btf__image_mean_rgb(&r, b);
         for (int c = 0; c < 3; c++) {
             sum += fabs(b[c] / a[c] - 1.0);
             if (fabs(b[c] / a[c] - 1.0) >= bound)

@@ -11,7 +11,7 @@
  */
 #include "testutil.h"
 
-#include "car/car.h" /* btf_car_margin, BTF_SYNTH_MARGIN_MAX */
+#include "car/car.h" /* btf__car_margin, BTF_SYNTH_MARGIN_MAX */
 #include "synth/synth_testing.h"
 
 #include "btf_shared.h" /* btf_noise1, BTF_NOISE_ORIGIN: the noise the field must have used */
@@ -58,7 +58,7 @@ static void torus_field_solves_the_periodic_recursion(void **state)
             int w = sizes[si][0], h = sizes[si][1];
             float *y = malloc((size_t)w * h * sizeof(float));
             btf_error e = {0};
-            TU_OK(btf_car_torus_field(b, 77, w, h, seed, y, &e), &e);
+            TU_OK(btf__car_torus_field(b, 77, w, h, seed, y, &e), &e);
             double ymax = 0, worst = 0, sum2 = 0, gabs = 1;
             for (int s = 0; s < b->n; s++)
                 gabs += fabs(b->gamma[s]);
@@ -86,7 +86,7 @@ static void torus_field_solves_the_periodic_recursion(void **state)
 }
 
 /* On a large torus the field's sample variance is the model's stationary
- * variance (sigma^2 mean 1/|A|^2, btf_car_stationary_variance) within 5 %,
+ * variance (sigma^2 mean 1/|A|^2, btf__car_stationary_variance) within 5 %,
  * its mean near 0. */
 static void torus_field_has_the_stationary_variance(void **state)
 {
@@ -99,12 +99,12 @@ static void torus_field_has_the_stationary_variance(void **state)
     float *y = malloc((size_t)w * h * sizeof(float));
     for (int bi = 0; bi < 2; bi++) {
         btf_error e = {0};
-        TU_OK(btf_car_torus_field(&bands[bi], 3, w, h, 99, y, &e), &e);
+        TU_OK(btf__car_torus_field(&bands[bi], 3, w, h, 99, y, &e), &e);
         double s = 0, s2 = 0;
         for (int i = 0; i < w * h; i++)
             s += y[i], s2 += (double)y[i] * y[i];
         double mean = s / (w * h), var = s2 / (w * h) - mean * mean;
-        double stat = btf_car_stationary_variance(&bands[bi]);
+        double stat = btf__car_stationary_variance(&bands[bi]);
         print_message("band %d: torus variance %.4f, stationary %.4f (ratio %.4f), mean %.4f\n",
                       bi, var, stat, var / stat, mean);
         assert_true(fabs(var / stat - 1.0) < 0.05);
@@ -159,19 +159,19 @@ static void streamed_field_is_the_torus_field(void **state)
     const int sizes[][2] = {{4, 4}, {17, 6}, {64, 48}, {256, 192}};
     int fails = 0;
     for (int bi = 0; bi < 3; bi++) {
-        int margin = btf_car_margin(&bands[bi]);
-        double sigma_y = sqrt(btf_car_stationary_variance(&bands[bi]));
+        int margin = btf__car_margin(&bands[bi]);
+        double sigma_y = sqrt(btf__car_stationary_variance(&bands[bi]));
         for (int si = 0; si < 4; si++) {
             int w = sizes[si][0], h = sizes[si][1];
             float *ref = malloc((size_t)w * h * sizeof(float));
             float *got = malloc((size_t)w * h * sizeof(float));
             btf_error e = {0};
-            TU_OK(btf_car_torus_field(&bands[bi], 77, w, h, 123, ref, &e), &e);
+            TU_OK(btf__car_torus_field(&bands[bi], 77, w, h, 123, ref, &e), &e);
             for (int i = 0; i < w * h; i++)
                 ref[i] += bands[bi].mean;
             btf_synth_opts o = {.width = w, .height = h, .seed = 123, .tileable = 1};
             plane p = {got, w};
-            TU_OK(btf_car_synthesise_field(&bands[bi], -1, 77, &o, to_plane, &p, &e), &e);
+            TU_OK(btf__car_synthesise_field(&bands[bi], -1, 77, &o, to_plane, &p, &e), &e);
             double diff, sd;
             rms_diff(got, ref, (size_t)w * h, 1, &diff, &sd);
             print_message("band %d (margin %d), %dx%d: rms(streamed - torus) = %.2e sigma_Y "
@@ -206,7 +206,7 @@ static void fitted_model(int levels, btf_model *m)
     TU_OK(btf_image_alloc(&tex, w, h, 3, &e), &e);
     float *f = malloc((size_t)w * h * 3 * sizeof(float));
     for (int k = 0; k < 3; k++)
-        TU_OK(btf_car_torus_field(&b, 10 + k, w, h, 5, f + (size_t)k * w * h, &e), &e);
+        TU_OK(btf__car_torus_field(&b, 10 + k, w, h, 5, f + (size_t)k * w * h, &e), &e);
     for (int i = 0; i < w * h; i++) {
         tex.data[3 * i] = 0.5f + f[i];
         tex.data[3 * i + 1] = 0.3f + 0.5f * f[i] + 0.3f * f[w * h + i];
@@ -313,7 +313,7 @@ static void image_is_the_torus_reference(void **state)
         btf_synth_opts o = {.width = sizes[si][0], .height = sizes[si][1], .seed = 21,
                             .tileable = 1, .match_colours = -1}; /* the fields themselves */
         TU_OK(btf_synthesise_image(&m, 0, &o, &got, &e), &e);
-        TU_OK(btf_synthesise_torus_dft(&m, 0, &o, &ref, &e), &e);
+        TU_OK(btf__synthesise_torus_dft(&m, 0, &o, &ref, &e), &e);
         for (int k = 0; k < 3; k++) {
             double diff, sd;
             rms_diff(got.data + k, ref.data + k, (size_t)got.width * got.height, 3, &diff, &sd);
@@ -522,7 +522,7 @@ static void sizes_and_extremes(void **state)
     for (int i = 0; i < 4084 * 8 * 3; i++)
         assert_true(isfinite(img.data[i]));
     btf_image ref;
-    assert_int_equal(btf_synthesise_torus_dft(&m, 0, &o, &ref, &e), BTF_E_ARG);
+    assert_int_equal(btf__synthesise_torus_dft(&m, 0, &o, &ref, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "prime factor 1021"));
     btf_image_free(&img);
     o = (btf_synth_opts){.width = 4, .height = 4, .tileable = 1};
@@ -576,7 +576,7 @@ static void sizes_and_extremes(void **state)
         assert_null(img.data);
         assert_string_equal(e.msg, se.msg);
     }
-    assert_int_equal(btf_synthesise_torus_dft(&m, 0, &o, &img, &e), BTF_E_NUMERIC);
+    assert_int_equal(btf__synthesise_torus_dft(&m, 0, &o, &img, &e), BTF_E_NUMERIC);
     assert_non_null(strstr(e.msg, "singular"));
     assert_null(img.data);
     btf_model_free(&m);

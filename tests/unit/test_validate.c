@@ -287,17 +287,17 @@ static void photostereo_multiview_manifest(void **state)
     snprintf(mv, sizeof mv, "%s", multiview_manifest("mv", 0, -1));
     snprintf(single, sizeof single, "%s", multiview_manifest("mv0", 0, 0));
     snprintf(single45, sizeof single45, "%s", multiview_manifest("mv1", 0, 1));
-    TU_OK(btf_photostereo_manifest(mv, NULL, &all, &e), &e);
+    TU_OK(btf__photostereo_manifest(mv, NULL, &all, &e), &e);
     assert_int_equal(all.view, 0);
     assert_true(all.view_dir.theta == 0.0);
-    TU_OK(btf_photostereo_manifest(single, NULL, &one, &e), &e);
+    TU_OK(btf__photostereo_manifest(single, NULL, &one, &e), &e);
     assert_int_equal(one.view, -1);
     assert_true(same_image(&all.normal, &one.normal)); /* only view 0's images */
     const btf_dir want = {44, 91};
     TU_OK(btf_photostereo_manifest_view(mv, &want, NULL, &v45, &e), &e);
     assert_int_equal(v45.view, 1);
     assert_true(v45.view_dir.theta == 45.0 && v45.view_dir.phi == 90.0);
-    TU_OK(btf_photostereo_manifest(single45, NULL, &only45, &e), &e);
+    TU_OK(btf__photostereo_manifest(single45, NULL, &only45, &e), &e);
     assert_true(same_image(&v45.normal, &only45.normal));
     btf_ps_result_free(&all);
     btf_ps_result_free(&one);
@@ -311,7 +311,7 @@ static void photostereo_multiview_manifest(void **state)
     assert_int_equal(btf_photostereo_manifest_view(single, &want, NULL, &r, &e), BTF_E_ARG);
     assert_non_null(strstr(e.msg, "no theta_v and phi_v columns"));
     const char *dup = multiview_manifest("mvdup", 1, -1);
-    assert_int_equal(btf_photostereo_manifest(dup, NULL, &r, &e), BTF_E_FORMAT);
+    assert_int_equal(btf__photostereo_manifest(dup, NULL, &r, &e), BTF_E_FORMAT);
     assert_non_null(strstr(e.msg, "mv_v0_l0.png is listed again (first on line 2)"));
     /* The command: --view picks the view and the summary names it. */
     char *err = NULL;
@@ -449,7 +449,7 @@ static void variance_floor_is_relative(void **state)
     co.warn = collect_warning;
     co.warn_user = warned;
     btf_car_band out;
-    TU_OK(btf_car_fit(band, W, W, &co, &out, NULL, &e), &e);
+    TU_OK(btf__car_fit(band, W, W, &co, &out, NULL, &e), &e);
     assert_int_equal(out.n, 0);
     assert_non_null(strstr(warned, "treated as constant"));
 }

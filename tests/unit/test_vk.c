@@ -46,8 +46,8 @@ static btf_vk *open_vk(const btf_vk_opts *extra)
     o.allow_cpu = 1;
     btf_error err = {0};
     btf_vk *vk = NULL;
-    TU_OK(btf_vk_create(&o, &vk, &err), &err);
-    assert_true(btf_vk_validating(vk));
+    TU_OK(btf__vk_create(&o, &vk, &err), &err);
+    assert_true(btf__vk_validating(vk));
     return vk;
 }
 
@@ -55,9 +55,9 @@ static btf_vk *open_vk(const btf_vk_opts *extra)
  * included (objects never destroyed are reported there). */
 static void close_vk(btf_vk *vk)
 {
-    unsigned before = btf_vk_validation_errors(vk);
+    unsigned before = btf__vk_validation_errors(vk);
     char first[1024];
-    unsigned n = btf_vk_destroy_checked(vk, first, sizeof first);
+    unsigned n = btf__vk_destroy_checked(vk, first, sizeof first);
     if (n != 0)
         print_error("validation: %u message(s) (%u before teardown), the first: %s\n", n,
                     before, first);
@@ -117,7 +117,7 @@ static void list_devices(void **state)
     btf_vk_device_info *list;
     int n;
     btf_error err = {0};
-    TU_OK(btf_vk_list_devices(&list, &n, &err), &err);
+    TU_OK(btf__vk_list_devices(&list, &n, &err), &err);
     assert_true(n >= 1);
     int lavapipe = -1;
     for (int i = 0; i < n; i++) {
@@ -130,7 +130,7 @@ static void list_devices(void **state)
         assert_true(lavapipe >= 0);
         const btf_vk_device_info *d = &list[lavapipe];
         assert_int_equal(d->type, BTF_VK_TYPE_CPU);
-        assert_string_equal(btf_vk_type_name(d->type), "CPU");
+        assert_string_equal(btf__vk_type_name(d->type), "CPU");
         assert_true(d->usable);
         assert_true(d->api_version >= ((1u << 22) | (1u << 12))); /* 1.1 */
         assert_true(d->max_storage_buffer_range >= (1u << 27));    /* 128 MiB */
@@ -140,7 +140,7 @@ static void list_devices(void **state)
         assert_true(d->subgroup_size >= 1);
         assert_true(d->device_local_bytes > 0);
         char v[32];
-        btf_vk_version_text(d->api_version, v, sizeof v);
+        btf__vk_version_text(d->api_version, v, sizeof v);
         assert_true(v[0] == '1' && v[1] == '.');
     }
     free(list);
@@ -151,14 +151,14 @@ static void create_destroy_repeatedly(void **state)
     (void)state;
     for (int i = 0; i < 4; i++) {
         btf_vk *vk = open_vk(NULL);
-        const btf_vk_device_info *in = btf_vk_info(vk);
+        const btf_vk_device_info *in = btf__vk_info(vk);
         if (forced_lavapipe) {
             assert_true(in->is_cpu);
             assert_true(in->mapped_buffers);
         }
         close_vk(vk);
     }
-    btf_vk_destroy(NULL);
+    btf__vk_destroy(NULL);
 }
 
 static void device_choice_errors(void **state)
@@ -167,25 +167,25 @@ static void device_choice_errors(void **state)
     btf_error err = {0};
     btf_vk *vk = NULL;
     btf_vk_opts o = {.use_device = 1, .device = 99, .validation = 1};
-    assert_int_equal(btf_vk_create(&o, &vk, &err), BTF_E_ARG);
+    assert_int_equal(btf__vk_create(&o, &vk, &err), BTF_E_ARG);
     assert_null(vk);
     assert_true(contains(err.msg, "Vulkan device 99 does not exist"));
 
     /* The environment is the command's business: the library ignores it. */
     saved_env s = env_set("BTF_VK_DEVICE", "99");
     btf_vk_opts auto_opts = {.validation = 1, .allow_cpu = 1};
-    TU_OK(btf_vk_create(&auto_opts, &vk, &err), &err);
+    TU_OK(btf__vk_create(&auto_opts, &vk, &err), &err);
     close_vk(vk);
     env_restore(s);
 
     if (forced_lavapipe) {
         /* Only a CPU device: refused unless allowed or named. */
         btf_vk_opts strict = {.validation = 1};
-        assert_int_equal(btf_vk_create(&strict, &vk, &err), BTF_E_UNSUPPORTED);
+        assert_int_equal(btf__vk_create(&strict, &vk, &err), BTF_E_UNSUPPORTED);
         assert_true(contains(err.msg, "only a CPU Vulkan device"));
         btf_vk_opts named = {.use_device = 1, .device = 0, .validation = 1};
-        TU_OK(btf_vk_create(&named, &vk, &err), &err);
-        assert_int_equal(btf_vk_info(vk)->index, 0);
+        TU_OK(btf__vk_create(&named, &vk, &err), &err);
+        assert_int_equal(btf__vk_info(vk)->index, 0);
         close_vk(vk);
     }
 }
@@ -197,16 +197,16 @@ static void validation_switches(void **state)
     btf_vk *vk = NULL;
     btf_vk_opts o = {.allow_cpu = 1};
     saved_env s = env_set("BTF_VK_VALIDATION", "1"); /* the command's, not the library's */
-    TU_OK(btf_vk_create(&o, &vk, &err), &err);
-    assert_false(btf_vk_validating(vk));
-    btf_vk_destroy(vk);
+    TU_OK(btf__vk_create(&o, &vk, &err), &err);
+    assert_false(btf__vk_validating(vk));
+    btf__vk_destroy(vk);
     env_restore(s);
 
     /* No validation layer where the loader looks: a clear refusal. */
     s = env_set("VK_LAYER_PATH", "/nonexistent-btfcar-layers");
     saved_env s2 = env_set("VK_ADD_LAYER_PATH", NULL);
     o.validation = 1;
-    assert_int_equal(btf_vk_create(&o, &vk, &err), BTF_E_UNSUPPORTED);
+    assert_int_equal(btf__vk_create(&o, &vk, &err), BTF_E_UNSUPPORTED);
     assert_null(vk);
     assert_true(contains(err.msg, "VK_LAYER_KHRONOS_validation is not installed"));
     env_restore(s2);
@@ -221,14 +221,14 @@ static void no_driver(void **state)
     btf_error err = {0};
     btf_vk_device_info *list = NULL;
     int n = -1;
-    int rc = btf_vk_list_devices(&list, &n, &err);
+    int rc = btf__vk_list_devices(&list, &n, &err);
     assert_int_equal(rc, BTF_E_UNSUPPORTED);
     assert_null(list);
     assert_int_equal(n, 0);
     assert_true(contains(err.msg, "no Vulkan device found"));
     btf_vk *vk = NULL;
     btf_vk_opts o = {.allow_cpu = 1};
-    assert_int_equal(btf_vk_create(&o, &vk, &err), BTF_E_UNSUPPORTED);
+    assert_int_equal(btf__vk_create(&o, &vk, &err), BTF_E_UNSUPPORTED);
     assert_null(vk);
     assert_true(contains(err.msg, "install mesa-vulkan-drivers"));
     env_restore(b);
@@ -252,7 +252,7 @@ static void round_trips(int force_staging)
 {
     btf_vk_opts o = {.force_staging = force_staging};
     btf_vk *vk = open_vk(&o);
-    assert_int_equal(btf_vk_info(vk)->mapped_buffers, !force_staging);
+    assert_int_equal(btf__vk_info(vk)->mapped_buffers, !force_staging);
     static const uint64_t sizes[] = {1, 3, 4, 4093, 65536 + 12, 1 << 20, 64u << 20};
     btf_error err = {0};
     unsigned char *in = malloc(64u << 20), *out = malloc(64u << 20);
@@ -261,28 +261,28 @@ static void round_trips(int force_staging)
     for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
         uint64_t n = sizes[k];
         btf_vk_buffer *b;
-        TU_OK(btf_vk_buffer_create(vk, n, &b, &err), &err);
-        assert_int_equal(btf_vk_buffer_size(b), n);
-        assert_true((btf_vk_buffer_mapped(b) != NULL) == !force_staging);
+        TU_OK(btf__vk_buffer_create(vk, n, &b, &err), &err);
+        assert_int_equal(btf__vk_buffer_size(b), n);
+        assert_true((btf__vk_buffer_mapped(b) != NULL) == !force_staging);
         fill_pattern(in, n, (unsigned)k);
-        TU_OK(btf_vk_buffer_upload(vk, b, 0, in, n, &err), &err);
+        TU_OK(btf__vk_buffer_upload(vk, b, 0, in, n, &err), &err);
         memset(out, 0xAB, n);
-        TU_OK(btf_vk_buffer_download(vk, b, 0, out, n, &err), &err);
+        TU_OK(btf__vk_buffer_download(vk, b, 0, out, n, &err), &err);
         assert_memory_equal(in, out, n);
         if (n > 40) { /* a sub-range at odd offsets */
             uint64_t off = n / 3 + 1, len = n / 2 - 3;
             fill_pattern(in + off, len, 99u + (unsigned)k);
-            TU_OK(btf_vk_buffer_upload(vk, b, off, in + off, len, &err), &err);
-            TU_OK(btf_vk_buffer_download(vk, b, 7, out, n - 7, &err), &err);
+            TU_OK(btf__vk_buffer_upload(vk, b, off, in + off, len, &err), &err);
+            TU_OK(btf__vk_buffer_download(vk, b, 7, out, n - 7, &err), &err);
             assert_memory_equal(in + 7, out, n - 7);
         }
         /* Ranges beyond the end are refused; a zero-byte copy is fine. */
-        assert_int_equal(btf_vk_buffer_upload(vk, b, n, in, 1, &err), BTF_E_ARG);
+        assert_int_equal(btf__vk_buffer_upload(vk, b, n, in, 1, &err), BTF_E_ARG);
         assert_true(contains(err.msg, "outside the Vulkan buffer"));
-        assert_int_equal(btf_vk_buffer_download(vk, b, 1, out, n, &err), BTF_E_ARG);
-        assert_int_equal(btf_vk_buffer_download(vk, b, UINT64_MAX, out, 2, &err), BTF_E_ARG);
-        TU_OK(btf_vk_buffer_upload(vk, b, n, in, 0, &err), &err);
-        btf_vk_buffer_destroy(b);
+        assert_int_equal(btf__vk_buffer_download(vk, b, 1, out, n, &err), BTF_E_ARG);
+        assert_int_equal(btf__vk_buffer_download(vk, b, UINT64_MAX, out, 2, &err), BTF_E_ARG);
+        TU_OK(btf__vk_buffer_upload(vk, b, n, in, 0, &err), &err);
+        btf__vk_buffer_destroy(b);
     }
     free(in);
     free(out);
@@ -305,18 +305,18 @@ static void buffer_limits(void **state)
 {
     (void)state;
     btf_vk *vk = open_vk(NULL);
-    const btf_vk_device_info *in = btf_vk_info(vk);
+    const btf_vk_device_info *in = btf__vk_info(vk);
     btf_error err = {0};
     btf_vk_buffer *b = NULL;
-    assert_int_equal(btf_vk_buffer_create(vk, 0, &b, &err), BTF_E_ARG);
+    assert_int_equal(btf__vk_buffer_create(vk, 0, &b, &err), BTF_E_ARG);
     assert_null(b);
-    assert_int_equal(btf_vk_buffer_create(vk, in->max_storage_buffer_range + 1, &b, &err),
+    assert_int_equal(btf__vk_buffer_create(vk, in->max_storage_buffer_range + 1, &b, &err),
                      BTF_E_ARG);
     assert_true(contains(err.msg, "maxStorageBufferRange"));
     /* The largest one is fine (not touched, so cheap). */
-    TU_OK(btf_vk_buffer_create(vk, in->max_storage_buffer_range, &b, &err), &err);
-    btf_vk_buffer_destroy(b);
-    btf_vk_buffer_destroy(NULL);
+    TU_OK(btf__vk_buffer_create(vk, in->max_storage_buffer_range, &b, &err), &err);
+    btf__vk_buffer_destroy(b);
+    btf__vk_buffer_destroy(NULL);
     close_vk(vk);
 }
 
@@ -328,26 +328,26 @@ static void fill_and_copy(void **state)
         btf_vk *vk = open_vk(&o);
         btf_error err = {0};
         btf_vk_buffer *a, *b;
-        TU_OK(btf_vk_buffer_create(vk, 4096, &a, &err), &err);
-        TU_OK(btf_vk_buffer_create(vk, 4096, &b, &err), &err);
+        TU_OK(btf__vk_buffer_create(vk, 4096, &a, &err), &err);
+        TU_OK(btf__vk_buffer_create(vk, 4096, &b, &err), &err);
         btf_vk_job *job;
-        TU_OK(btf_vk_job_begin(vk, &job, &err), &err);
-        TU_OK(btf_vk_job_fill(job, a, 0, 4096, 0x11223344u, &err), &err);
-        TU_OK(btf_vk_job_fill(job, b, 0, 4096, 0, &err), &err);
-        TU_OK(btf_vk_job_fill(job, a, 1024, 1024, 0xDEADBEEFu, &err), &err);
-        TU_OK(btf_vk_job_copy(job, a, 1000, b, 3, 100, &err), &err);
-        TU_OK(btf_vk_job_copy(job, a, 0, a, 2048, 1024, &err), &err);
+        TU_OK(btf__vk_job_begin(vk, &job, &err), &err);
+        TU_OK(btf__vk_job_fill(job, a, 0, 4096, 0x11223344u, &err), &err);
+        TU_OK(btf__vk_job_fill(job, b, 0, 4096, 0, &err), &err);
+        TU_OK(btf__vk_job_fill(job, a, 1024, 1024, 0xDEADBEEFu, &err), &err);
+        TU_OK(btf__vk_job_copy(job, a, 1000, b, 3, 100, &err), &err);
+        TU_OK(btf__vk_job_copy(job, a, 0, a, 2048, 1024, &err), &err);
         /* Refused: unaligned fill, overlap, out of range; the job stays fine. */
-        assert_int_equal(btf_vk_job_fill(job, a, 2, 4, 0, &err), BTF_E_ARG);
+        assert_int_equal(btf__vk_job_fill(job, a, 2, 4, 0, &err), BTF_E_ARG);
         assert_true(contains(err.msg, "multiples of 4"));
-        assert_int_equal(btf_vk_job_copy(job, a, 0, a, 100, 200, &err), BTF_E_ARG);
+        assert_int_equal(btf__vk_job_copy(job, a, 0, a, 100, 200, &err), BTF_E_ARG);
         assert_true(contains(err.msg, "overlap"));
-        assert_int_equal(btf_vk_job_copy(job, a, 4000, b, 0, 200, &err), BTF_E_ARG);
-        TU_OK(btf_vk_job_submit_wait(job, &err), &err);
+        assert_int_equal(btf__vk_job_copy(job, a, 4000, b, 0, 200, &err), BTF_E_ARG);
+        TU_OK(btf__vk_job_submit_wait(job, &err), &err);
         uint32_t wa[1024];
         unsigned char wb[4096];
-        TU_OK(btf_vk_buffer_download(vk, a, 0, wa, sizeof wa, &err), &err);
-        TU_OK(btf_vk_buffer_download(vk, b, 0, wb, sizeof wb, &err), &err);
+        TU_OK(btf__vk_buffer_download(vk, a, 0, wa, sizeof wa, &err), &err);
+        TU_OK(btf__vk_buffer_download(vk, b, 0, wb, sizeof wb, &err), &err);
         for (int i = 0; i < 1024; i++) {
             uint32_t want = (i >= 256 && i < 512) ? 0xDEADBEEFu : 0x11223344u;
             assert_int_equal(wa[i], want);
@@ -364,14 +364,14 @@ static void fill_and_copy(void **state)
             assert_int_equal(wb[i], want);
         }
         /* An aborted job runs nothing. */
-        TU_OK(btf_vk_job_begin(vk, &job, &err), &err);
-        TU_OK(btf_vk_job_fill(job, a, 0, 4096, 0, &err), &err);
-        btf_vk_job_abort(job);
-        btf_vk_job_abort(NULL);
-        TU_OK(btf_vk_buffer_download(vk, a, 0, wa, 16, &err), &err);
+        TU_OK(btf__vk_job_begin(vk, &job, &err), &err);
+        TU_OK(btf__vk_job_fill(job, a, 0, 4096, 0, &err), &err);
+        btf__vk_job_abort(job);
+        btf__vk_job_abort(NULL);
+        TU_OK(btf__vk_buffer_download(vk, a, 0, wa, 16, &err), &err);
         assert_int_equal(wa[0], 0x11223344u);
-        btf_vk_buffer_destroy(a);
-        btf_vk_buffer_destroy(b);
+        btf__vk_buffer_destroy(a);
+        btf__vk_buffer_destroy(b);
         close_vk(vk);
     }
 }
@@ -395,23 +395,23 @@ static void noise_gpu_open(noise_gpu *g, int force_staging, uint32_t capacity)
     btf_error err = {0};
     g->vk = open_vk(&o);
     g->capacity = capacity;
-    TU_OK(btf_vk_pipeline_create(g->vk, noise_check_spv, sizeof noise_check_spv, 3,
-                                 sizeof(noise_params), NULL, 0, &g->pipe[0], &err),
+    TU_OK(btf__vk_pipeline_create(g->vk, noise_check_spv, sizeof noise_check_spv, 3,
+                                  sizeof(noise_params), NULL, 0, &g->pipe[0], &err),
           &err);
     const uint32_t local32 = 32;
-    TU_OK(btf_vk_pipeline_create(g->vk, noise_check_spv, sizeof noise_check_spv, 3,
-                                 sizeof(noise_params), &local32, 1, &g->pipe[1], &err),
+    TU_OK(btf__vk_pipeline_create(g->vk, noise_check_spv, sizeof noise_check_spv, 3,
+                                  sizeof(noise_params), &local32, 1, &g->pipe[1], &err),
           &err);
     for (int i = 0; i < 3; i++)
-        TU_OK(btf_vk_buffer_create(g->vk, (uint64_t)capacity * 16, &g->buf[i], &err), &err);
+        TU_OK(btf__vk_buffer_create(g->vk, (uint64_t)capacity * 16, &g->buf[i], &err), &err);
 }
 
 static void noise_gpu_close(noise_gpu *g)
 {
     for (int i = 0; i < 3; i++)
-        btf_vk_buffer_destroy(g->buf[i]);
-    btf_vk_pipeline_destroy(g->pipe[0]);
-    btf_vk_pipeline_destroy(g->pipe[1]);
+        btf__vk_buffer_destroy(g->buf[i]);
+    btf__vk_pipeline_destroy(g->pipe[0]);
+    btf__vk_pipeline_destroy(g->pipe[1]);
     close_vk(g->vk);
 }
 
@@ -424,17 +424,17 @@ static void noise_gpu_run(noise_gpu *g, const noise_params *p, int small_groups,
     btf_error err = {0};
     btf_vk_job *job;
     uint32_t local = small_groups ? 32 : 64;
-    TU_OK(btf_vk_job_begin(g->vk, &job, &err), &err);
+    TU_OK(btf__vk_job_begin(g->vk, &job, &err), &err);
     for (int i = 0; i < 3; i++)
-        TU_OK(btf_vk_job_fill(job, g->buf[i], 0, (uint64_t)g->capacity * 16, 0x7FC0DEADu, &err),
+        TU_OK(btf__vk_job_fill(job, g->buf[i], 0, (uint64_t)g->capacity * 16, 0x7FC0DEADu, &err),
               &err);
-    TU_OK(btf_vk_job_dispatch(job, g->pipe[small_groups], g->buf, 3, p, sizeof *p,
-                              (p->count + local - 1) / local, 1, 1, &err),
+    TU_OK(btf__vk_job_dispatch(job, g->pipe[small_groups], g->buf, 3, p, sizeof *p,
+                               (p->count + local - 1) / local, 1, 1, &err),
           &err);
-    TU_OK(btf_vk_job_submit_wait(job, &err), &err);
+    TU_OK(btf__vk_job_submit_wait(job, &err), &err);
     for (int i = 0; i < 3; i++)
-        TU_OK(btf_vk_buffer_download(g->vk, g->buf[i], 0, out[i], (uint64_t)g->capacity * 16,
-                                     &err),
+        TU_OK(btf__vk_buffer_download(g->vk, g->buf[i], 0, out[i], (uint64_t)g->capacity * 16,
+                                      &err),
               &err);
 }
 
@@ -530,36 +530,36 @@ static void dispatch_limits(void **state)
     (void)state;
     noise_gpu g;
     noise_gpu_open(&g, 0, 64);
-    const btf_vk_device_info *in = btf_vk_info(g.vk);
+    const btf_vk_device_info *in = btf__vk_info(g.vk);
     btf_error err = {0};
     btf_vk_job *job;
     noise_params p = {.nblocks = 1, .count = 0}; /* every invocation returns at once */
-    TU_OK(btf_vk_job_begin(g.vk, &job, &err), &err);
+    TU_OK(btf__vk_job_begin(g.vk, &job, &err), &err);
     const uint32_t *mx = in->max_workgroup_count;
-    assert_int_equal(btf_vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, mx[0] + 1, 1,
-                                         1, &err),
+    assert_int_equal(btf__vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, mx[0] + 1, 1,
+                                          1, &err),
                      BTF_E_ARG);
     assert_true(contains(err.msg, "maxComputeWorkGroupCount"));
-    assert_int_equal(btf_vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, 1, mx[1] + 1,
-                                         1, &err),
+    assert_int_equal(btf__vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, 1, mx[1] + 1,
+                                          1, &err),
                      BTF_E_ARG);
-    assert_int_equal(btf_vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, 1, 1,
-                                         mx[2] + 1, &err),
+    assert_int_equal(btf__vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, 1, 1,
+                                          mx[2] + 1, &err),
                      BTF_E_ARG);
     /* Wrong buffer count or push size: refused before Vulkan sees them. */
-    assert_int_equal(btf_vk_job_dispatch(job, g.pipe[0], g.buf, 2, &p, sizeof p, 1, 1, 1, &err),
+    assert_int_equal(btf__vk_job_dispatch(job, g.pipe[0], g.buf, 2, &p, sizeof p, 1, 1, 1, &err),
                      BTF_E_ARG);
     assert_true(contains(err.msg, "2 buffers given, the pipeline binds 3"));
-    assert_int_equal(btf_vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, 8, 1, 1, 1, &err),
+    assert_int_equal(btf__vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, 8, 1, 1, 1, &err),
                      BTF_E_ARG);
     btf_vk_buffer *with_null[3] = {g.buf[0], NULL, g.buf[2]};
-    assert_int_equal(btf_vk_job_dispatch(job, g.pipe[0], with_null, 3, &p, sizeof p, 1, 1, 1,
-                                         &err),
+    assert_int_equal(btf__vk_job_dispatch(job, g.pipe[0], with_null, 3, &p, sizeof p, 1, 1, 1,
+                                          &err),
                      BTF_E_ARG);
     /* The largest count is fine; a zero count records nothing. */
-    TU_OK(btf_vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, mx[0], 1, 1, &err), &err);
-    TU_OK(btf_vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, 0, 1, 1, &err), &err);
-    TU_OK(btf_vk_job_submit_wait(job, &err), &err);
+    TU_OK(btf__vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, mx[0], 1, 1, &err), &err);
+    TU_OK(btf__vk_job_dispatch(job, g.pipe[0], g.buf, 3, &p, sizeof p, 0, 1, 1, &err), &err);
+    TU_OK(btf__vk_job_submit_wait(job, &err), &err);
     noise_gpu_close(&g);
 }
 
@@ -567,28 +567,28 @@ static void pipeline_errors(void **state)
 {
     (void)state;
     btf_vk *vk = open_vk(NULL);
-    const btf_vk_device_info *in = btf_vk_info(vk);
+    const btf_vk_device_info *in = btf__vk_info(vk);
     btf_error err = {0};
     btf_vk_pipeline *p = NULL;
     static const uint32_t junk[8] = {1, 2, 3, 4, 5, 6, 7, 8};
-    assert_int_equal(btf_vk_pipeline_create(vk, junk, sizeof junk, 3, 28, NULL, 0, &p, &err),
+    assert_int_equal(btf__vk_pipeline_create(vk, junk, sizeof junk, 3, 28, NULL, 0, &p, &err),
                      BTF_E_ARG);
     assert_true(contains(err.msg, "not a SPIR-V module"));
-    assert_int_equal(btf_vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv - 2, 3,
-                                            28, NULL, 0, &p, &err),
+    assert_int_equal(btf__vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv - 2, 3,
+                                             28, NULL, 0, &p, &err),
                      BTF_E_ARG);
-    assert_int_equal(btf_vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3,
-                                            in->max_push_constants_bytes + 4, NULL, 0, &p, &err),
+    assert_int_equal(btf__vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3,
+                                             in->max_push_constants_bytes + 4, NULL, 0, &p, &err),
                      BTF_E_ARG);
     assert_true(contains(err.msg, "maxPushConstantsSize"));
-    assert_int_equal(btf_vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3, 30,
-                                            NULL, 0, &p, &err),
+    assert_int_equal(btf__vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3, 30,
+                                             NULL, 0, &p, &err),
                      BTF_E_ARG);
-    assert_int_equal(btf_vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv,
-                                            BTF_VK_MAX_BUFFERS + 1, 28, NULL, 0, &p, &err),
+    assert_int_equal(btf__vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv,
+                                             BTF_VK_MAX_BUFFERS + 1, 28, NULL, 0, &p, &err),
                      BTF_E_ARG);
-    assert_int_equal(btf_vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3, 28,
-                                            NULL, 2, &p, &err),
+    assert_int_equal(btf__vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3, 28,
+                                             NULL, 2, &p, &err),
                      BTF_E_ARG);
     assert_null(p);
     close_vk(vk);
@@ -603,17 +603,17 @@ static void validation_counts_errors(void **state)
     btf_vk *vk = open_vk(NULL);
     btf_error err = {0};
     btf_vk_pipeline *p = NULL;
-    assert_int_equal(btf_vk_validation_errors(vk), 0);
-    assert_string_equal(btf_vk_first_validation_message(vk), "");
-    btf_vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 2, 28, NULL, 0, &p,
-                           &err);
-    btf_vk_pipeline_destroy(p);
-    assert_true(btf_vk_validation_errors(vk) > 0);
-    const char *m = btf_vk_first_validation_message(vk);
+    assert_int_equal(btf__vk_validation_errors(vk), 0);
+    assert_string_equal(btf__vk_first_validation_message(vk), "");
+    btf__vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 2, 28, NULL, 0, &p,
+                            &err);
+    btf__vk_pipeline_destroy(p);
+    assert_true(btf__vk_validation_errors(vk) > 0);
+    const char *m = btf__vk_first_validation_message(vk);
     print_message("provoked validation message: %.200s...\n", m);
     assert_true(strlen(m) > 10);
     assert_null(strchr(m, '\n'));
-    btf_vk_destroy(vk);
+    btf__vk_destroy(vk);
 }
 
 /* A job far longer than its 1 ms limit: a clear error, the context refuses
@@ -627,32 +627,32 @@ static void job_timeout(void **state)
     btf_error err = {0};
     btf_vk_pipeline *pipe;
     btf_vk_buffer *buf[3];
-    TU_OK(btf_vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3,
-                                 sizeof(noise_params), NULL, 0, &pipe, &err),
+    TU_OK(btf__vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3,
+                                  sizeof(noise_params), NULL, 0, &pipe, &err),
           &err);
     for (int i = 0; i < 3; i++)
-        TU_OK(btf_vk_buffer_create(vk, (uint64_t)CAP * 16, &buf[i], &err), &err);
+        TU_OK(btf__vk_buffer_create(vk, (uint64_t)CAP * 16, &buf[i], &err), &err);
     noise_params p = {.seed_lo = 1, .nblocks = 1024, .count = CAP};
     btf_vk_job *job;
-    TU_OK(btf_vk_job_begin(vk, &job, &err), &err);
+    TU_OK(btf__vk_job_begin(vk, &job, &err), &err);
     for (int rep = 0; rep < 4; rep++)
-        TU_OK(btf_vk_job_dispatch(job, pipe, buf, 3, &p, sizeof p, CAP / 64, 1, 1, &err), &err);
-    int rc = btf_vk_job_submit_wait(job, &err);
-    if (rc == BTF_OK && !btf_vk_info(vk)->is_cpu) { /* a GPU may be that fast */
+        TU_OK(btf__vk_job_dispatch(job, pipe, buf, 3, &p, sizeof p, CAP / 64, 1, 1, &err), &err);
+    int rc = btf__vk_job_submit_wait(job, &err);
+    if (rc == BTF_OK && !btf__vk_info(vk)->is_cpu) { /* a GPU may be that fast */
         for (int i = 0; i < 3; i++)
-            btf_vk_buffer_destroy(buf[i]);
-        btf_vk_pipeline_destroy(pipe);
+            btf__vk_buffer_destroy(buf[i]);
+        btf__vk_pipeline_destroy(pipe);
         close_vk(vk);
         skip();
     }
     assert_int_equal(rc, BTF_E_UNSUPPORTED);
     assert_true(contains(err.msg, "did not finish within 1 ms"));
     assert_true(contains(err.msg, "VK_TIMEOUT"));
-    assert_int_equal(btf_vk_job_begin(vk, &job, &err), BTF_E_UNSUPPORTED);
+    assert_int_equal(btf__vk_job_begin(vk, &job, &err), BTF_E_UNSUPPORTED);
     assert_true(contains(err.msg, "unusable"));
     for (int i = 0; i < 3; i++)
-        btf_vk_buffer_destroy(buf[i]);
-    btf_vk_pipeline_destroy(pipe);
+        btf__vk_buffer_destroy(buf[i]);
+    btf__vk_pipeline_destroy(pipe);
     close_vk(vk);
 }
 
@@ -666,24 +666,24 @@ static void timings(void **state)
         btf_error err = {0};
         btf_vk *vk;
         double t0 = now_s();
-        TU_OK(btf_vk_create(&o, &vk, &err), &err);
+        TU_OK(btf__vk_create(&o, &vk, &err), &err);
         double t1 = now_s();
         btf_vk_pipeline *pipe;
-        TU_OK(btf_vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3,
-                                     sizeof(noise_params), NULL, 0, &pipe, &err),
+        TU_OK(btf__vk_pipeline_create(vk, noise_check_spv, sizeof noise_check_spv, 3,
+                                      sizeof(noise_params), NULL, 0, &pipe, &err),
               &err);
         double t2 = now_s();
         btf_vk_buffer *buf[3];
         for (int i = 0; i < 3; i++)
-            TU_OK(btf_vk_buffer_create(vk, 64 * 16, &buf[i], &err), &err);
+            TU_OK(btf__vk_buffer_create(vk, 64 * 16, &buf[i], &err), &err);
         noise_params p = {.nblocks = 8, .count = 64};
         double submit[21];
         for (int k = 0; k < 21; k++) {
             btf_vk_job *job;
             double a = now_s();
-            TU_OK(btf_vk_job_begin(vk, &job, &err), &err);
-            TU_OK(btf_vk_job_dispatch(job, pipe, buf, 3, &p, sizeof p, 1, 1, 1, &err), &err);
-            TU_OK(btf_vk_job_submit_wait(job, &err), &err);
+            TU_OK(btf__vk_job_begin(vk, &job, &err), &err);
+            TU_OK(btf__vk_job_dispatch(job, pipe, buf, 3, &p, sizeof p, 1, 1, 1, &err), &err);
+            TU_OK(btf__vk_job_submit_wait(job, &err), &err);
             submit[k] = now_s() - a;
         }
         double later = 0, best = 1e9;
@@ -696,8 +696,8 @@ static void timings(void **state)
                       validation ? "on" : "off", 1e3 * (t1 - t0), 1e3 * (t2 - t1),
                       1e3 * submit[0], 1e3 * later, 1e3 * best);
         for (int i = 0; i < 3; i++)
-            btf_vk_buffer_destroy(buf[i]);
-        btf_vk_pipeline_destroy(pipe);
+            btf__vk_buffer_destroy(buf[i]);
+        btf__vk_pipeline_destroy(pipe);
         close_vk(vk);
     }
 }

@@ -90,7 +90,7 @@ char *tu_tmpdir(void)
 
 void tu_rmtree(const char *path)
 {
-    btf_remove_tree(path);
+    btf__remove_tree(path);
 }
 
 const char *tu_fmt(const char *fmt, ...)

@@ -48,7 +48,9 @@ void btf__model_put_tables(btf_box_writer *w, const btf_model *m)
 }
 
 /* A body may go on after the directions (a later minor version's
- * fields); the names' bytes are left to btf__model_validate. */
+ * fields). The name's bytes are checked here, as read: btf__model_validate
+ * sees the name only up to a NUL, and a NUL inside would shorten the name
+ * written back (docs/model-format.md: printable ASCII). */
 static btf_status read_dirset(const btf_box_span *sp, int tag, btf_dirset *s, const char *name,
                               btf_error *err)
 {
@@ -60,6 +62,11 @@ static btf_status read_dirset(const btf_box_span *sp, int tag, btf_dirset *s, co
                      btf__model_tags[tag], h.name_len, BTF_MODEL_MAX_NAME);
     if (sp->n < h.head)
         return btf__model_short(tag, name, err);
+    size_t bad = btf__box_name_unprintable((const char *)h.name, h.name_len);
+    if (bad < h.name_len)
+        return failf(err, BTF_E_FORMAT, name,
+                     "section %s: set name has byte 0x%02x at %zu (expected printable ASCII)",
+                     btf__model_tags[tag], h.name[bad], bad);
     if (h.count < 1 || h.count > BTF_MODEL_MAX_DIRS)
         return failf(err, BTF_E_FORMAT, name, "section %s: %zu directions (expected 1..%d)",
                      btf__model_tags[tag], h.count, BTF_MODEL_MAX_DIRS);

@@ -1016,6 +1016,19 @@ static void sections(void **state)
     expect_format_error(f, fn, "set name of 40 bytes");
     free(f);
     free(t.p);
+    /* A NUL inside a set name ("t\0ny"): a name that would be written back
+     * shorter, so not the one read (found by fuzz_model's round trip). */
+    assert_int_equal(full.p[lght + 8], 4);
+    assert_memory_equal(full.p + lght + 9, "tiny", 4);
+    full.p[lght + 10] = 0;
+    f = tw_wrap(full.p, full.n, 1, 0, 0, &fn);
+    expect_format_error(f, fn, "section LGHT: set name has byte 0x00 at 1");
+    free(f);
+    full.p[lght + 10] = 0xc3;
+    f = tw_wrap(full.p, full.n, 1, 0, 0, &fn);
+    expect_format_error(f, fn, "set name has byte 0xc3 at 1 (expected printable ASCII)");
+    free(f);
+    full.p[lght + 10] = 'i';
     /* 257 subspaces. */
     full.p[subs + 8] = 1;
     full.p[subs + 9] = 1;

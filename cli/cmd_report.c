@@ -376,8 +376,9 @@ int cmd_report(int argc, char **argv)
                    "not measure\n", sum.mean_held_out, sum.held_out,
                    sum.held_out == 1 ? "" : "s");
         if (sum.mean_luminance > 0) /* a pixel-wise family's figure */
-            printf("pixel-wise    mean |dY| %.5f over every image (%.1f %% of the mean "
+            printf("pixel-wise    mean |dY| %.5f over every image %s(%.1f %% of the mean "
                    "luminance %.4f)\n", sum.mean_abs_error,
+                   sum.held_out ? "the model was fitted to " : "",
                    sum.mean_luminance > 0 ? 100.0 * sum.mean_abs_error / sum.mean_luminance
                                           : 0.0, sum.mean_luminance);
         if (ro.sweep)

@@ -7,8 +7,10 @@
  * against the model's flat render of that pair (btf__rf_render_flat, at a
  * measured pair the fitted field itself) by the texture distances the CAR
  * report uses, and — since this family keeps every texel — the pixel-wise
- * mean |dY|; over every image of the dataset the paper's Table 1 error
- * (btf__rf_error). Pictures of the sampled and the worst pairs, the preview
+ * mean |dY|; over every image the model was fitted to the paper's Table 1
+ * error (btf__rf_error_over). Directions of the dataset that the model does
+ * not hold were held out of its fit: their pairs are measured apart, as the
+ * CAR report does (leave-out tests). Pictures of the sampled and the worst pairs, the preview
  * sphere (btf__rf_render_scene). No sweep: an RF model has no CAR settings
  * to trade. A sampled model (the paper's section 6) is measured like any
  * other, its surface through the coordinate map, and its compression
@@ -26,27 +28,43 @@
 #include <stdlib.h>
 #include <string.h>
 
-static btf_status check_match(const btf_dataset_info *in, const btf_rf_model *m,
-                              btf_error *err)
+/* Where the model's directions are among the dataset's: of[i] is the
+ * model's index of the dataset's direction i, or -1 (held out of the fit).
+ * Every direction of the model must be one of the dataset's. */
+static btf_status map_dirs(const btf_dirset *model, const btf_dirset *data, const char *what,
+                           const char *root, int *of, btf_error *err)
 {
-    /* a sampled model's surface is compared as the flat render shows it */
-    if ((!m->map && (m->width != in->width || m->height != in->height)) ||
-        m->views.count != in->n_views || m->lights.count != in->n_lights)
+    for (int i = 0; i < data->count; i++)
+        of[i] = btf_dirset_find(model, data->dirs[i], BTF_DIR_NAME_TOLERANCE);
+    for (int j = 0; j < model->count; j++)
+        if (btf_dirset_find(data, model->dirs[j], BTF_DIR_NAME_TOLERANCE) < 0)
+            return btf__fail(err, BTF_E_ARG, "reflectance-field model's %s %d (theta %g, phi "
+                             "%g) is not one of dataset %s's: the model does not describe it",
+                             what, j, model->dirs[j].theta, model->dirs[j].phi, root);
+    return BTF_OK;
+}
+
+/* The model must be of this dataset: its texels (a sampled model's surface
+ * is compared as the flat render shows it) and its views and lights among
+ * the dataset's. The dataset's other directions were held out of the fit,
+ * as the CAR report allows (leave-out tests): their pairs, rendered at the
+ * exact directions, are measured apart. */
+static btf_status check_match(const btf_dataset_info *in, btf_rf_report *d, btf_error *err)
+{
+    const btf_rf_model *m = d->m;
+    if (!m->map && (m->width != in->width || m->height != in->height))
         return btf__fail(err, BTF_E_ARG, "reflectance-field model of %d views x %d lights of "
                          "%dx%d texels does not describe dataset %s (%d views x %d lights of "
                          "%dx%d)", m->views.count, m->lights.count, m->width, m->height,
                          in->root, in->n_views, in->n_lights, in->width, in->height);
-    for (int i = 0; i < in->n_views + in->n_lights; i++) {
-        btf_dir a = i < in->n_views ? m->views.dirs[i] : m->lights.dirs[i - in->n_views];
-        btf_dir b = i < in->n_views ? in->views->dirs[i] : in->lights->dirs[i - in->n_views];
-        if (btf_dir_angle(a, b) > BTF_DIR_NAME_TOLERANCE)
-            return btf__fail(err, BTF_E_ARG, "reflectance-field model's %s %d (theta %g, phi "
-                             "%g) is not dataset %s's (theta %g, phi %g)",
-                             i < in->n_views ? "view" : "light",
-                             i < in->n_views ? i : i - in->n_views, a.theta, a.phi, in->root,
-                             b.theta, b.phi);
-    }
-    return BTF_OK;
+    d->view_of = btf__alloc((size_t)in->n_views + in->n_lights, sizeof(int), err);
+    if (!d->view_of)
+        return BTF_E_NOMEM;
+    d->light_of = d->view_of + in->n_views;
+    btf_status rc = map_dirs(&m->views, in->views, "view", in->root, d->view_of, err);
+    if (rc == BTF_OK)
+        rc = map_dirs(&m->lights, in->lights, "light", in->root, d->light_of, err);
+    return rc;
 }
 
 static double lum(const float *p)
@@ -78,6 +96,7 @@ static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
     btf_report_base *r = &J->d->r;
     const btf_report_pair *rp = &r->pairs[job];
     btf_rf_pair *p = &J->d->pairs[job];
+    p->held_out = J->d->view_of[rp->view] < 0 || J->d->light_of[rp->light] < 0;
     btf_image meas = {0}, model = {0};
     btf_status rc = btf_dataset_read(J->ds, rp->view, rp->light, &meas, err);
     if (rc == BTF_OK)
@@ -132,22 +151,43 @@ static btf_status choose_pairs(btf_rf_report *d, btf_error *err)
     return rc;
 }
 
-/* Means and worsts; the pairs ranked by the pixel-wise error. */
+/* Means and worsts over the pairs the model was fitted to (every pair,
+ * unless some directions were held out); the held-out pairs' means apart;
+ * every pair ranked by its pixel-wise error. */
 static void summarise_pairs(btf_rf_report *d)
 {
-    int n = d->r.n_pairs;
-    for (int i = 0; i < n; i++) {
+    int n = 0;
+    double held = 0.0, held_dy = 0.0;
+    for (int i = 0; i < d->r.n_pairs; i++) {
         const btf_rf_pair *p = &d->pairs[i];
-        d->mean_combined += p->d.combined / n;
-        d->mean_spectrum += p->d.spectrum.normalised / n;
-        d->mean_first_order += p->d.first_order.normalised / n;
-        d->mean_structure += p->d.structure.normalised / n;
-        d->mean_pair_dy += p->mean_abs_dy / n;
+        d->r.pairs[i].rank = p->mean_abs_dy;
+        if (p->held_out) {
+            d->n_held_out++;
+            held += p->d.combined;
+            held_dy += p->mean_abs_dy;
+            continue;
+        }
+        n++;
+        d->mean_combined += p->d.combined;
+        d->mean_spectrum += p->d.spectrum.normalised;
+        d->mean_first_order += p->d.first_order.normalised;
+        d->mean_structure += p->d.structure.normalised;
+        d->mean_pair_dy += p->mean_abs_dy;
         if (p->d.combined > d->worst_combined)
             d->worst_combined = p->d.combined;
         if (p->mean_abs_dy > d->worst_pair_dy)
             d->worst_pair_dy = p->mean_abs_dy;
-        d->r.pairs[i].rank = p->mean_abs_dy;
+    }
+    if (n > 0) {
+        d->mean_combined /= n;
+        d->mean_spectrum /= n;
+        d->mean_first_order /= n;
+        d->mean_structure /= n;
+        d->mean_pair_dy /= n;
+    }
+    if (d->n_held_out) {
+        d->mean_held_out = held / d->n_held_out;
+        d->mean_held_out_dy = held_dy / d->n_held_out;
     }
 }
 
@@ -165,6 +205,8 @@ static void summarise(const btf_report_base *r, btf_report_summary *s)
     s->worst_combined = d->worst_combined;
     s->mean_abs_error = d->mean_abs_error;
     s->mean_luminance = d->mean_luminance;
+    s->held_out = d->n_held_out;
+    s->mean_held_out = d->mean_held_out;
 }
 
 static btf_status measure(btf_report_base *r, const btf_dataset *ds, const char *dir,
@@ -204,7 +246,8 @@ static btf_status measure(btf_report_base *r, const btf_dataset *ds, const char 
     if (rc == BTF_OK && o->progress)
         o->progress(o->progress_user, 0.05, "pixel-wise error over every image");
     if (rc == BTF_OK)
-        rc = btf__rf_error(ds, d->m, o->threads, &d->mean_abs_error, &d->mean_luminance, err);
+        rc = btf__rf_error_over(ds, d->m, d->view_of, d->light_of, o->threads,
+                                &d->mean_abs_error, &d->mean_luminance, err);
     if (rc == BTF_OK)
         rc = btf__report_pictures_begin(r, &want, err);
     if (rc == BTF_OK)
@@ -249,10 +292,11 @@ btf_status btf__rf_report_write(const btf_dataset *ds, const btf_rf_model *m, co
     memset(&d, 0, sizeof d);
     d.m = m;
     btf__report_begin(&d.r, ds, &o);
-    rc = check_match(d.r.in, m, err);
+    rc = check_match(d.r.in, &d, err);
     if (rc == BTF_OK)
         rc = btf__report_run(&d.r, &rf_family, ds, dir, summary, err);
     free(d.pairs);
+    free(d.view_of);
     btf__report_base_free(&d.r);
     return rc;
 }

@@ -15,11 +15,16 @@
 typedef struct btf_rf_pair {
     btf_texture_distances d;   /* measured image (reference) against the flat render */
     double mean_abs_dy;        /* mean |Y measured - Y render| over the pair's texels */
+    int held_out;              /* 1: the model was not fitted to this pair's view or light
+                                  (left out of its analysis): its render interpolates */
 } btf_rf_pair;
 
 typedef struct btf_rf_report {
     btf_report_base r;         /* first: a section's base pointer is this */
     const btf_rf_model *m;
+    /* the dataset's view v and light l are the model's view_of[v] and
+     * light_of[l], or -1: held out of the model's fit */
+    int *view_of, *light_of;
     /* compression: r.model_bytes is btf_rf_encode's file */
     btf_rf_bytes bytes;        /* coefficients and coordinate map (section 6) */
     /* pixel-wise error over every image (btf__rf_error, the paper's Table 1) */
@@ -28,6 +33,9 @@ typedef struct btf_rf_report {
     btf_rf_pair *pairs;        /* r.n_pairs, as r.pairs */
     double mean_combined, worst_combined, mean_pair_dy, worst_pair_dy;
     double mean_spectrum, mean_first_order, mean_structure;
+    /* the held-out pairs, apart: the means above are over the fitted ones */
+    int n_held_out;
+    double mean_held_out, mean_held_out_dy;
 } btf_rf_report;
 
 /* The reflectance-field report's sections (rf_report_page.c): the model

@@ -78,7 +78,13 @@ static void top_html(btf_buf *b, const btf_report_base *r)
                    d->mean_luminance);
     btf__buf_printf(b, BTF_HTML_CARD("%.2f", "mean combined distance over %d pairs (1.0: as "
                                             "close as the material is to itself)"),
-                   d->mean_combined, r->n_pairs);
+                   d->mean_combined, r->n_pairs - d->n_held_out);
+    if (d->n_held_out)
+        btf__buf_printf(b, BTF_HTML_CARD("%.2f", "mean combined distance over %d pair%s held "
+                                                "out of the fit (rendered at their exact "
+                                                "directions; mean |ΔY| %.5f)"),
+                       d->mean_held_out, d->n_held_out, d->n_held_out == 1 ? "" : "s",
+                       d->mean_held_out_dy);
     btf__report_top_end(b);
 }
 
@@ -187,8 +193,8 @@ static void pair_caption(btf_buf *b, const btf_report_base *r, int i)
 static void pair_cells(btf_buf *b, const btf_report_base *r, int i)
 {
     const btf_rf_pair *p = &rf(r)->pairs[i];
-    btf__buf_printf(b, "<td><b>%.5f</b></td><td>%.2f</td><td>%.2f</td><td>%.2f</td><td>%.2f</td>",
-                    p->mean_abs_dy, p->d.spectrum.normalised, p->d.first_order.normalised,
+    btf__buf_printf(b, "<td>%s</td><td><b>%.5f</b></td><td>%.2f</td><td>%.2f</td><td>%.2f</td>"
+                       "<td>%.2f</td>", p->held_out ? "held out" : "fitted", p->mean_abs_dy, p->d.spectrum.normalised, p->d.first_order.normalised,
                     p->d.structure.normalised, p->d.combined);
 }
 
@@ -204,17 +210,26 @@ static void quality_html(btf_buf *b, const btf_report_base *r)
                    r->n_pairs, d->mean_pair_dy, d->worst_pair_dy, d->mean_abs_error,
                    d->mean_spectrum, d->mean_first_order, d->mean_structure, d->mean_combined,
                    d->worst_combined);
+    if (d->n_held_out)
+        btf__buf_printf(b, "<p>%d of these pairs have a view or light held out of the fit (the "
+                          "table's \"held out\"): the model renders them at their exact "
+                          "directions (the fit is a function of the light; between views it "
+                          "blends the closest fitted ones, docs/rf.md); their mean |ΔY| is "
+                          "<b>%.5f</b> and mean combined distance <b>%.2f</b>, not counted in the "
+                          "figures above, which are over the fitted pairs and images.</p>\n",
+                       d->n_held_out, d->mean_held_out_dy, d->mean_held_out);
     btf__report_heatmap_figure(b, "pixel-wise error per pair", NULL);
     /* every picture larger when small: the pixel-wise error is what to look at */
     btf__report_galleries(b, r, "The worst pairs (by |ΔY|)", "The pictured pairs", 1,
                           pair_caption);
-    btf__report_pair_table(b, r, "<th>|ΔY|</th><th>spectrum</th><th>first order</th>"
+    btf__report_pair_table(b, r, "<th></th><th>|ΔY|</th><th>spectrum</th><th>first order</th>"
                                 "<th>structure</th><th>combined</th>", pair_cells);
 }
 
 static void pair_json(cJSON *o, const btf_report_base *r, int i)
 {
     const btf_rf_pair *p = &rf(r)->pairs[i];
+    cJSON_AddBoolToObject(o, "held_out", p->held_out);
     cJSON_AddNumberToObject(o, "mean_abs_dy", p->mean_abs_dy);
     cJSON_AddNumberToObject(o, "spectrum", p->d.spectrum.normalised);
     cJSON_AddNumberToObject(o, "first_order", p->d.first_order.normalised);
@@ -226,6 +241,9 @@ static void quality_json(cJSON *root, const btf_report_base *r)
 {
     const btf_rf_report *d = rf(r);
     cJSON *q = btf__report_json_quality(root, r, d->mean_combined);
+    cJSON_AddNumberToObject(q, "held_out", d->n_held_out);
+    cJSON_AddNumberToObject(q, "mean_held_out", d->mean_held_out);
+    cJSON_AddNumberToObject(q, "mean_held_out_abs_dy", d->mean_held_out_dy);
     cJSON_AddNumberToObject(q, "worst_combined", d->worst_combined);
     cJSON_AddNumberToObject(q, "mean_spectrum", d->mean_spectrum);
     cJSON_AddNumberToObject(q, "mean_first_order", d->mean_first_order);

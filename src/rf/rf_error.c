@@ -21,6 +21,7 @@
 typedef struct err_ctx {
     const btf_dataset *ds;
     const btf_rf_model *m;
+    const int *view_of, *light_of; /* dataset -> model index, -1: held out; NULL: the same */
     int nl;
     double *e, *s; /* per image */
 } err_ctx;
@@ -31,6 +32,9 @@ static btf_status image_job(void *user, int i, int worker, btf_error *err)
     err_ctx *c = user;
     const btf_rf_model *m = c->m;
     int v = i / c->nl, l = i % c->nl;
+    int mv = c->view_of ? c->view_of[v] : v, ml = c->light_of ? c->light_of[l] : l;
+    if (mv < 0 || ml < 0) /* held out of the fit: not part of its error */
+        return BTF_OK;
     btf_image img = {0};
     btf_status rc = btf_dataset_read(c->ds, v, l, &img, err);
     if (rc)
@@ -44,9 +48,9 @@ static btf_status image_job(void *user, int i, int worker, btf_error *err)
         return rc;
     }
     double lv[3], vv[3], e = 0.0, s = 0.0;
-    btf_dir_to_vec(m->lights.dirs[l], lv);
-    btf_dir_to_vec(m->views.dirs[v], vv);
-    int field = m->fit == BTF_RF_LAFORTUNE ? 0 : v;
+    btf_dir_to_vec(m->lights.dirs[ml], lv);
+    btf_dir_to_vec(m->views.dirs[mv], vv);
+    int field = m->fit == BTF_RF_LAFORTUNE ? 0 : mv;
     float p[BTF_RF_MAX_SLOTS];
     int sw = rf_surface_w(m), sh = rf_surface_h(m);
     for (int y = 0; y < img.height; y++)
@@ -71,21 +75,44 @@ btf_status btf__rf_error(const btf_dataset *ds, const btf_rf_model *m, int threa
     if (!ds || !m || !m->codes)
         return btf__fail(err, BTF_E_ARG, "btf_rf_error: no dataset or no model");
     const btf_dataset_info *in = btf_dataset_get_info(ds);
-    if (in->n_views != m->views.count || in->n_lights != m->lights.count ||
+    if (in->n_views != m->views.count || in->n_lights != m->lights.count)
+        return btf__fail(err, BTF_E_DATA, "%s: %d views x %d lights of %dx%d (expected the "
+                         "model's %d x %d of %dx%d)", in->root, in->n_views, in->n_lights,
+                         in->width, in->height, m->views.count, m->lights.count, m->width,
+                         m->height);
+    return btf__rf_error_over(ds, m, NULL, NULL, threads, mean_abs_error, mean_luminance, err);
+}
+
+btf_status btf__rf_error_over(const btf_dataset *ds, const btf_rf_model *m, const int *view_of,
+                              const int *light_of, int threads, double *mean_abs_error,
+                              double *mean_luminance, btf_error *err)
+{
+    if (!ds || !m || !m->codes)
+        return btf__fail(err, BTF_E_ARG, "btf_rf_error: no dataset or no model");
+    const btf_dataset_info *in = btf_dataset_get_info(ds);
+    if ((!view_of && in->n_views != m->views.count) ||
+        (!light_of && in->n_lights != m->lights.count) ||
         (!m->map && (in->width != m->width || in->height != m->height)))
         return btf__fail(err, BTF_E_DATA, "%s: %d views x %d lights of %dx%d (expected the "
                          "model's %d x %d of %dx%d)", in->root, in->n_views, in->n_lights,
                          in->width, in->height, m->views.count, m->lights.count, m->width,
                          m->height);
-    int n = in->n_views * in->n_lights;
-    err_ctx c = {ds, m, in->n_lights, btf__calloc((size_t)n, sizeof(double), err),
+    int n = in->n_views * in->n_lights, fitted = 0;
+    for (int i = 0; i < n; i++)
+        fitted += (!view_of || view_of[i / in->n_lights] >= 0) &&
+                  (!light_of || light_of[i % in->n_lights] >= 0);
+    if (fitted == 0)
+        return btf__fail(err, BTF_E_DATA, "%s: none of its images is one the model was "
+                         "fitted to", in->root);
+    err_ctx c = {ds, m, view_of, light_of, in->n_lights,
+                 btf__calloc((size_t)n, sizeof(double), err),
                  btf__calloc((size_t)n, sizeof(double), err)};
     btf_status rc = c.e && c.s ? btf__pool_run(n, threads, image_job, &c, NULL, err) : BTF_E_NOMEM;
     if (rc == BTF_OK) {
         double e = 0.0, s = 0.0;
         for (int i = 0; i < n; i++)
             e += c.e[i], s += c.s[i];
-        double count = (double)n * in->width * in->height;
+        double count = (double)fitted * in->width * in->height;
         if (mean_abs_error)
             *mean_abs_error = e / count;
         if (mean_luminance)

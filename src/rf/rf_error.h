@@ -18,4 +18,12 @@
 btf_status btf__rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
                          double *mean_abs_error, double *mean_luminance, btf_error *err);
 
+/* The same over the images the model measured of a dataset that holds more
+ * (some directions held out of the analysis): view_of[v] and light_of[l]
+ * give the model's index of the dataset's view v and light l, or -1 for a
+ * held-out one, whose images are skipped. NULL maps: btf__rf_error. */
+btf_status btf__rf_error_over(const btf_dataset *ds, const btf_rf_model *m, const int *view_of,
+                              const int *light_of, int threads, double *mean_abs_error,
+                              double *mean_luminance, btf_error *err);
+
 #endif

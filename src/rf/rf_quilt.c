@@ -25,10 +25,15 @@
  * place in the surface, the blocks that lie on it (spaced evenly so that
  * they cover it exactly) come first and copy it unchanged (the identity
  * candidate, no draw), and the other blocks, spaced evenly round the rest
- * of the torus, join it along cuts like any other neighbour. So the data's
- * pixel correspondence holds on the sample's place except where such a
- * cut runs into its border, within one overlap of its edges; a sample of
- * the whole image on a surface of its size is exactly the identity.
+ * of the torus, join it along cuts like any other neighbour. Where the rest
+ * of a side is shorter than a block less two overlaps (a surface a little
+ * larger than the place: a 64 x 43 capture on a 64 x 64 texture), its one
+ * block is shortened to the rest and one overlap at each end; a whole
+ * block would wrap round deep into the place (15 of the 43 rows there).
+ * So the data's pixel correspondence holds on the sample's place except
+ * where such a cut runs into its border, within one overlap of its edges;
+ * a sample of the whole image on a surface of its size is exactly the
+ * identity.
  * Candidates of a block are
  * scored in parallel (one job per candidate row, each score depending only
  * on its position), so the map does not depend on the thread count.
@@ -49,8 +54,18 @@
  * blocks of its own. */
 typedef struct axis {
     int n, len, count, inside, origin, wraps;
+    /* > 0: the length of the one block after the place's own, where the
+     * rest of the side is shorter than a block less two overlaps (a whole
+     * block there would reach deeper than one overlap into the place) */
+    int rest_len;
     int *pos;
 } axis;
+
+/* The length of block i along the axis. */
+static int block_len(const axis *a, int i)
+{
+    return i >= a->inside && a->rest_len > 0 ? a->rest_len : a->len;
+}
 
 /* count positions from a to b (the last block starting at b), evenly. */
 static void spread(int *pos, int count, int a, int b)
@@ -83,6 +98,8 @@ static btf_status axis_init(axis *a, int n, int start, int fe, int block, int ov
             int others = span > 0 ? 1 + (span + step - 1) / step : 1;
             spread(a->pos + a->inside, others, fe - overlap, fe - overlap + (span > 0 ? span : 0));
             a->count = a->inside + others;
+            if (span < 0) /* one shorter block: exactly one overlap at each end */
+                a->rest_len = n - fe + 2 * overlap;
         } else {
             a->count = a->inside;
             a->wraps = 0; /* the place covers the side: it ends where it starts */
@@ -98,8 +115,8 @@ static btf_status axis_init(axis *a, int n, int start, int fe, int block, int ov
 /* The overlaps of block i along an axis: before it and (the wrap) after it. */
 static void axis_overlaps(const axis *a, int i, int *before, int *after)
 {
-    *before = i > 0 ? a->pos[i - 1] + a->len - a->pos[i] : 0;
-    *after = a->wraps && i == a->count - 1 ? a->pos[i] + a->len - a->n : 0;
+    *before = i > 0 ? a->pos[i - 1] + block_len(a, i - 1) - a->pos[i] : 0;
+    *after = a->wraps && i == a->count - 1 ? a->pos[i] + block_len(a, i) - a->n : 0;
     *after = *after > 0 ? *after : 0;
 }
 
@@ -300,11 +317,11 @@ static btf_status run(quilt *Q, btf_error *err)
     btf_status rc = e && take && path ? BTF_OK : BTF_E_NOMEM;
     btf_rng rng;
     btf__rng_seed(&rng, q->seed);
-    Q->bw = Q->ax.len, Q->bh = Q->ay.len;
-    Q->nu = q->sw - Q->bw + 1, Q->nv = q->sh - Q->bh + 1;
     for (int j = 0; rc == BTF_OK && j < Q->ay.count; j++)
         for (int i = 0; rc == BTF_OK && i < Q->ax.count; i++) {
             Q->bx = Q->ax.origin + Q->ax.pos[i], Q->by = Q->ay.origin + Q->ay.pos[j];
+            Q->bw = block_len(&Q->ax, i), Q->bh = block_len(&Q->ay, j);
+            Q->nu = q->sw - Q->bw + 1, Q->nv = q->sh - Q->bh + 1;
             axis_overlaps(&Q->ax, i, &Q->ov[0], &Q->ov[2]);
             axis_overlaps(&Q->ay, j, &Q->ov[1], &Q->ov[3]);
             int pick = 0;

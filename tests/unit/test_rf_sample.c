@@ -171,6 +171,42 @@ static void same_seed_same_model(void **state)
     free(a), free(b), free(feat);
 }
 
+/* A place that covers most of a side (a 64 x 43 sample on a 64 x 64
+ * torus: 21 rows left, less than a block of 43 less two overlaps of 7)
+ * keeps its texels beyond one overlap of its edges: the one block of the
+ * rest is shortened to the rest and an overlap at each end. A whole block
+ * there wrapped 15 rows into the place. */
+static void short_rest_keeps_the_place(void **state)
+{
+    (void)state;
+    enum { W = 64, H = 43, N = 64, BLOCK = 43, OV = 7 };
+    float *feat = malloc((size_t)W * H * RF_FEATURES * sizeof(float));
+    uint16_t *map = malloc((size_t)N * N * 2 * sizeof(uint16_t));
+    assert_non_null(feat);
+    assert_non_null(map);
+    uint64_t x = 12345;
+    for (size_t i = 0; i < (size_t)W * H * RF_FEATURES; i++) {
+        x = x * 6364136223846793005ull + 1442695040888963407ull;
+        feat[i] = (float)(x >> 40) / (float)(1u << 24);
+    }
+    for (int seed = 1; seed <= 4; seed++) {
+        rf_quilt_args q = {feat, W, 0, 0, W, H, N, N, BLOCK, OV, 0.0, (uint64_t)seed, 1, 96,
+                           {0, 0, 0, 0}};
+        btf_error e = {0};
+        TU_OK(rf_quilt(&q, map, &e), &e);
+        for (int y = OV; y < H - OV; y++)
+            for (int c = 0; c < W; c++) {
+                size_t s = (size_t)y * N + c;
+                assert_int_equal(map[2 * s], c);
+                assert_int_equal(map[2 * s + 1], y);
+            }
+        for (size_t s = 0; s < (size_t)N * N; s++)
+            assert_true(map[2 * s] < W && map[2 * s + 1] < H);
+    }
+    free(feat);
+    free(map);
+}
+
 /* A sample of the whole image on a surface of its size is the whole fit:
  * the same codes, the identity map, the same renders and error. */
 static void whole_sample_is_the_whole_fit(void **state)
@@ -588,6 +624,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(map_stays_in_the_sample),
         cmocka_unit_test(sample_keeps_its_place),
+        cmocka_unit_test(short_rest_keeps_the_place),
         cmocka_unit_test(same_seed_same_model),
         cmocka_unit_test(whole_sample_is_the_whole_fit),
         cmocka_unit_test(one_texel_sample),

@@ -192,9 +192,10 @@ static void pair_cells(btf_buf *b, const btf_report_base *r, int i)
         snprintf(sub, sizeof sub, "held out");
     else
         snprintf(sub, sizeof sub, "%d", p->subspace);
-    btf__buf_printf(b, "<td>%s</td><td>%.2f</td><td>%.2f</td><td>%.2f</td><td><b>%.2f</b></td>",
-                    sub, p->d.spectrum.normalised, p->d.first_order.normalised,
-                    p->d.structure.normalised, p->d.combined);
+    btf__buf_printf(b, "<td>%s</td><td>%.2f</td><td>%.2f</td><td>%.2f</td><td><b>%.2f</b></td>"
+                       "<td>%.5f</td>", sub, p->d.spectrum.normalised,
+                    p->d.first_order.normalised, p->d.structure.normalised, p->d.combined,
+                    p->mean_abs_dy);
 }
 
 static void quality_html(btf_buf *b, const btf_report_base *r)
@@ -233,8 +234,24 @@ static void quality_html(btf_buf *b, const btf_report_base *r)
     snprintf(worst, sizeof worst, "The %d worst pairs (measured | model)", r->n_worst);
     btf__report_galleries(b, r, worst, "Pairs with pictures (measured | model)", 0,
                           pair_caption);
+    btf__buf_printf(b, "<p>Pixel by pixel: mean |ΔY| <b>%.5f</b> over the pairs the model "
+                      "measured (%.1f %% of their mean luminance %.4f)",
+                   q->mean_abs_dy, q->mean_luminance > 0 ? 100.0 * q->mean_abs_dy /
+                                                               q->mean_luminance : 0.0,
+                   q->mean_luminance);
+    if (q->n_held_out)
+        btf__buf_printf(b, ", %.5f over the %d held out", q->mean_held_out_abs_dy,
+                        q->n_held_out);
+    btf__buf_printf(b, ". The render has the "
+                      "capture's size and a structure layer is registered with it, so "
+                      "where the layout is the appearance (an object, a mosaic: "
+                      "docs/examples/rti-lion/) this figure sees what the distances above, "
+                      "which need no pixel correspondence, do not; for a texture the CAR "
+                      "fields are a new sample of it and the distances are the fairer "
+                      "figure.</p>\n");
     btf__report_pair_table(b, r, "<th>subspace</th><th>spectrum</th><th>first order</th>"
-                                "<th>structure</th><th>combined</th>", pair_cells);
+                                "<th>structure</th><th>combined</th><th>|ΔY|</th>",
+                           pair_cells);
 }
 
 static void add_component(cJSON *o, const char *key, const btf_distance_component *c)
@@ -250,6 +267,7 @@ static void pair_json(cJSON *j, const btf_report_base *r, int i)
     const btf_pair_quality *p = &car(r)->q.pairs[i];
     cJSON_AddNumberToObject(j, "subspace", p->subspace);
     cJSON_AddBoolToObject(j, "held_out", p->held_out);
+    cJSON_AddNumberToObject(j, "mean_abs_dy", p->mean_abs_dy);
     add_component(j, "spectrum", &p->d.spectrum);
     add_component(j, "first_order", &p->d.first_order);
     add_component(j, "structure", &p->d.structure);
@@ -263,6 +281,9 @@ static void quality_json(cJSON *root, const btf_report_base *r)
     cJSON *o = btf__report_json_quality(root, r, q->mean_combined);
     cJSON_AddNumberToObject(o, "held_out", q->n_held_out);
     cJSON_AddNumberToObject(o, "mean_held_out", q->mean_held_out);
+    cJSON_AddNumberToObject(o, "mean_abs_dy", q->mean_abs_dy);
+    cJSON_AddNumberToObject(o, "mean_held_out_abs_dy", q->mean_held_out_abs_dy);
+    cJSON_AddNumberToObject(o, "mean_luminance", q->mean_luminance);
     cJSON_AddNumberToObject(o, "median_combined", q->median_combined);
     cJSON_AddNumberToObject(o, "worst_combined", q->worst_combined);
     cJSON_AddNumberToObject(o, "mean_spectrum", q->mean_spectrum);

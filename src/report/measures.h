@@ -95,6 +95,10 @@ typedef struct btf_pair_quality {
     int held_out;             /* 1: the model did not measure the pair (left out
                                  of its analysis): its render interpolates */
     btf_texture_distances d;  /* measured image (reference) against the flat render */
+    double mean_abs_dy;       /* pixel by pixel: mean |Y measured - Y render| (Rec. 709
+                                 luminance of linear RGB); the render is at the
+                                 capture's size, its structure layer registered */
+    double luminance;         /* the measured image's mean luminance */
 } btf_pair_quality;
 
 typedef struct btf_quality {
@@ -106,6 +110,9 @@ typedef struct btf_quality {
     double mean_spectrum, mean_first_order, mean_structure; /* normalised, over pairs */
     int n_held_out;           /* pairs the model did not measure, measured apart */
     double mean_held_out;     /* their mean combined distance (0 without) */
+    double mean_abs_dy;       /* the pairs' mean_abs_dy over the measured pairs, */
+    double mean_held_out_abs_dy; /* over the held-out ones (0 without), */
+    double mean_luminance;    /* and the measured images' mean luminance */
     int texture_size;         /* side of the synthesised tileable subspace images */
     double seconds;           /* the whole measurement */
 } btf_quality;

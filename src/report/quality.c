@@ -111,6 +111,35 @@ typedef struct measure_job {
     btf_quality *q;
 } measure_job;
 
+static double luminance(const float *p)
+{
+    return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+}
+
+/* Pixel by pixel (the flat render has the capture's size and its structure
+ * layer is registered with it): the mean |dY| and the capture's mean
+ * luminance; non-finite measured values count as 0, as everywhere. */
+static void pixelwise(const btf_image *meas, const btf_image *model, double *mean_abs_dy,
+                      double *mean_y)
+{
+    size_t n = (size_t)meas->width * meas->height;
+    double s = 0.0, y = 0.0;
+    *mean_abs_dy = *mean_y = 0.0;
+    if (meas->channels != 3 || model->channels != 3 || model->width != meas->width ||
+        model->height != meas->height || n == 0)
+        return;
+    for (size_t k = 0; k < n; k++) {
+        float m[3];
+        for (int c = 0; c < 3; c++)
+            m[c] = isfinite(meas->data[3 * k + c]) ? meas->data[3 * k + c] : 0.0f;
+        double a = luminance(m), b = luminance(model->data + 3 * k);
+        s += fabs(a - b);
+        y += a;
+    }
+    *mean_abs_dy = s / (double)n;
+    *mean_y = y / (double)n;
+}
+
 /* One pair: read the measured image, shade the flat patch as btf_render_flat
  * does (a unit white directional light, black background), measure. */
 static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
@@ -144,6 +173,8 @@ static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
         d.image_name = "the model's flat render";
         rc = btf_texture_distance(&meas, &model, &d, &pq->d, err);
     }
+    if (rc == BTF_OK)
+        pixelwise(&meas, &model, &pq->mean_abs_dy, &pq->luminance);
     if (rc == BTF_OK && J->o->on_pair)
         rc = J->o->on_pair(J->o->on_pair_user, job, pq->view, pq->light, &meas, &model, err);
     btf__gbuffer_free(&g);
@@ -164,15 +195,18 @@ static void summarise(btf_quality *q)
 {
     int n = 0, worst = -1;
     double *c = malloc((size_t)(q->n_pairs > 0 ? q->n_pairs : 1) * sizeof *c);
-    double s = 0, sp = 0, fo = 0, st = 0, held = 0;
+    double s = 0, sp = 0, fo = 0, st = 0, held = 0, dy = 0, held_dy = 0, lum = 0;
     q->n_held_out = 0;
     for (int i = 0; i < q->n_pairs; i++) {
         const btf_texture_distances *d = &q->pairs[i].d;
         if (q->pairs[i].held_out) {
             q->n_held_out++;
             held += d->combined;
+            held_dy += q->pairs[i].mean_abs_dy;
             continue;
         }
+        dy += q->pairs[i].mean_abs_dy;
+        lum += q->pairs[i].luminance;
         s += d->combined;
         sp += d->spectrum.normalised;
         fo += d->first_order.normalised;
@@ -184,6 +218,9 @@ static void summarise(btf_quality *q)
         n++;
     }
     q->mean_held_out = q->n_held_out ? held / q->n_held_out : 0.0;
+    q->mean_held_out_abs_dy = q->n_held_out ? held_dy / q->n_held_out : 0.0;
+    q->mean_abs_dy = n ? dy / n : q->mean_held_out_abs_dy;
+    q->mean_luminance = n ? lum / n : 0.0;
     q->worst = worst < 0 ? 0 : worst;
     if (n == 0) { /* only held-out pairs were sampled */
         free(c);

@@ -491,6 +491,37 @@ static double json_number(const cJSON *o, const char *name)
     return v->valuedouble;
 }
 
+/* Runs cmd; on failure prints its standard error and fails the test. */
+static void run_ok(const char *cmd)
+{
+    char *err = NULL;
+    int rc = tu_run(cmd, &err);
+    if (rc)
+        print_error("%s", err);
+    free(err);
+    assert_int_equal(rc, 0);
+}
+
+/* Analyses lp (with the extra options) into dir/name.btfcar, reports the
+ * whole capture against it with every pair into dir/name-report, and
+ * returns the parsed report.json (cJSON_Delete it). */
+static cJSON *lion_analyse_report(const char *dir, const char *lp, const char *name,
+                                  const char *opts)
+{
+    char model[4096], rep[4096];
+    snprintf(model, sizeof model, "%s/%s.btfcar", dir, name);
+    snprintf(rep, sizeof rep, "%s/%s-report", dir, name);
+    run_ok(tu_fmt("%s analyse %s %s -o %s --quiet", tu_cli(), lp, opts, model));
+    run_ok(tu_fmt("%s report %s %s --all -o %s --quiet", tu_cli(), lion_lp(), model, rep));
+    size_t n;
+    unsigned char *text = tu_slurp(tu_fmt("%s/report.json", rep), &n);
+    assert_non_null(text);
+    cJSON *j = cJSON_ParseWithLength((const char *)text, n);
+    free(text);
+    assert_non_null(j);
+    return j;
+}
+
 /* The pixel-wise family on the lion with 24 of its lights held out of the
  * fit: the report of the whole capture measures those pairs apart (the RF
  * model renders them at their exact lights), its Table 1 error over the
@@ -500,30 +531,11 @@ static double json_number(const cJSON *o, const char *name)
 static void lion_rf_held_out(void **state)
 {
     (void)state;
-    char dir[4096], lp[4096], model[4096], rep[4096];
+    char dir[4096], lp[4096];
     snprintf(dir, sizeof dir, "%s/lion-rf", tu_dir);
     assert_int_equal(mkdir(dir, 0755), 0);
     snprintf(lp, sizeof lp, "%s", write_held_out_lp(dir));
-    snprintf(model, sizeof model, "%s/lion-rf.btfcar", dir);
-    snprintf(rep, sizeof rep, "%s/report", dir);
-    char *err = NULL;
-    int rc = tu_run(tu_fmt("%s analyse %s --family rf -o %s --quiet", tu_cli(), lp, model), &err);
-    if (rc)
-        print_error("%s", err);
-    free(err);
-    assert_int_equal(rc, 0);
-    rc = tu_run(tu_fmt("%s report %s %s --all -o %s --quiet", tu_cli(), lion_lp(), model, rep),
-                &err);
-    if (rc)
-        print_error("%s", err);
-    free(err);
-    assert_int_equal(rc, 0);
-    size_t n;
-    unsigned char *text = tu_slurp(tu_fmt("%s/report.json", rep), &n);
-    assert_non_null(text);
-    cJSON *j = cJSON_ParseWithLength((const char *)text, n);
-    free(text);
-    assert_non_null(j);
+    cJSON *j = lion_analyse_report(dir, lp, "lion-rf", "--family rf");
     const cJSON *q = cJSON_GetObjectItem(j, "quality");
     const cJSON *pw = cJSON_GetObjectItem(j, "pixelwise");
     assert_non_null(q);
@@ -562,10 +574,7 @@ static void lion_rf_held_out(void **state)
     const char *full = tu_fmt("%s/lion-all.btfcar", dir);
     char fullp[4096];
     snprintf(fullp, sizeof fullp, "%s", full);
-    rc = tu_run(tu_fmt("%s analyse %s --family rf -o %s --quiet", tu_cli(), lion_lp(), fullp),
-                &err);
-    free(err);
-    assert_int_equal(rc, 0);
+    run_ok(tu_fmt("%s analyse %s --family rf -o %s --quiet", tu_cli(), lion_lp(), fullp));
     int st;
     char *out = tu_capture(tu_fmt("%s report %s %s -o %s/report-2 --quiet 2>&1", tu_cli(), lp,
                                   fullp, dir), &st);
@@ -583,24 +592,7 @@ static void lion_rf_held_out(void **state)
 static void lion_report_dy(const char *dir, const char *lp, const char *name, const char *opts,
                            double *dy, double *held_dy, double *combined)
 {
-    char model[4096], rep[4096];
-    snprintf(model, sizeof model, "%s/%s.btfcar", dir, name);
-    snprintf(rep, sizeof rep, "%s/%s-report", dir, name);
-    char *err = NULL;
-    int rc = tu_run(tu_fmt("%s analyse %s %s -o %s --quiet", tu_cli(), lp, opts, model), &err);
-    if (rc == 0)
-        rc = tu_run(tu_fmt("%s report %s %s --all -o %s --quiet", tu_cli(), lion_lp(), model,
-                           rep), &err);
-    if (rc)
-        print_error("%s", err);
-    free(err);
-    assert_int_equal(rc, 0);
-    size_t n;
-    unsigned char *text = tu_slurp(tu_fmt("%s/report.json", rep), &n);
-    assert_non_null(text);
-    cJSON *j = cJSON_ParseWithLength((const char *)text, n);
-    free(text);
-    assert_non_null(j);
+    cJSON *j = lion_analyse_report(dir, lp, name, opts);
     const cJSON *q = cJSON_GetObjectItem(j, "quality");
     const cJSON *pw = cJSON_GetObjectItem(j, "pixelwise"); /* the RF family's */
     assert_non_null(q);

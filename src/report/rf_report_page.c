@@ -72,10 +72,10 @@ static void top_html(btf_buf *b, const btf_report_base *r)
 {
     const btf_rf_report *d = rf(r);
     btf__report_top_begin(b, r, NULL);
-    btf__buf_printf(b, BTF_HTML_CARD("%.5f", "mean |ΔY| over every image (%.1f %% of the mean "
-                                            "luminance %.4f)"),
-                   d->mean_abs_error, percent(d->mean_abs_error, d->mean_luminance),
-                   d->mean_luminance);
+    btf__buf_printf(b, BTF_HTML_CARD("%.5f", "mean |ΔY| over every image%s (%.1f %% of the "
+                                            "mean luminance %.4f)"),
+                   d->mean_abs_error, d->n_held_out ? " the model was fitted to" : "",
+                   percent(d->mean_abs_error, d->mean_luminance), d->mean_luminance);
     btf__buf_printf(b, BTF_HTML_CARD("%.2f", "mean combined distance over %d pairs (1.0: as "
                                             "close as the material is to itself)"),
                    d->mean_combined, r->n_pairs - d->n_held_out);
@@ -204,8 +204,8 @@ static void quality_html(btf_buf *b, const btf_report_base *r)
     btf__buf_printf(b, "<h2>Quality per direction</h2>\n<p class=\"note\">%d (view, light) "
                       "pairs: each measured image against the model's flat render of that "
                       "pair (at a measured pair the fitted field itself). Pixel-wise: mean "
-                      "|ΔY| %.5f over the pairs, worst %.5f; over every image of the dataset "
-                      "%.5f. Texture distances (normalised): spectrum %.2f · first order "
+                      "|ΔY| %.5f over the pairs, worst %.5f; over every image the model was "
+                      "fitted to %.5f. Texture distances (normalised): spectrum %.2f · first order "
                       "%.2f · structure %.2f · combined %.2f, worst %.2f.</p>\n",
                    r->n_pairs, d->mean_pair_dy, d->worst_pair_dy, d->mean_abs_error,
                    d->mean_spectrum, d->mean_first_order, d->mean_structure, d->mean_combined,

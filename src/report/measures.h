@@ -127,6 +127,14 @@ typedef struct btf_quality {
 btf_status btf__quality_measure(const btf_dataset *ds, const btf_model *m,
                                 const btf_quality_opts *opts, btf_quality *out, btf_error *err);
 void btf__quality_free(btf_quality *q);
+/* Pixel by pixel, measured image against a render of its size (both
+ * families' reports: the CAR render's structure layer is registered with
+ * the capture, the reflectance field keeps every texel): the mean |dY| of
+ * Rec. 709 luminance of linear RGB and the measured image's mean luminance;
+ * a non-finite measured value counts as 0; both 0 when the images are not
+ * two RGB images of one size. */
+void btf__pixelwise_dy(const btf_image *meas, const btf_image *model, double *mean_abs_dy,
+                       double *mean_y);
 /* The spread: indices of n directions of set, evenly strided through the
  * set's order (ring by ring from the pole, phi ascending in a ring):
  * idx[i] = floor(i count / n), so every ring gets its share and the

@@ -116,11 +116,8 @@ static double luminance(const float *p)
     return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
 }
 
-/* Pixel by pixel (the flat render has the capture's size and its structure
- * layer is registered with it): the mean |dY| and the capture's mean
- * luminance; non-finite measured values count as 0, as everywhere. */
-static void pixelwise(const btf_image *meas, const btf_image *model, double *mean_abs_dy,
-                      double *mean_y)
+void btf__pixelwise_dy(const btf_image *meas, const btf_image *model, double *mean_abs_dy,
+                       double *mean_y)
 {
     size_t n = (size_t)meas->width * meas->height;
     double s = 0.0, y = 0.0;
@@ -174,7 +171,7 @@ static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
         rc = btf_texture_distance(&meas, &model, &d, &pq->d, err);
     }
     if (rc == BTF_OK)
-        pixelwise(&meas, &model, &pq->mean_abs_dy, &pq->luminance);
+        btf__pixelwise_dy(&meas, &model, &pq->mean_abs_dy, &pq->luminance);
     if (rc == BTF_OK && J->o->on_pair)
         rc = J->o->on_pair(J->o->on_pair_user, job, pq->view, pq->light, &meas, &model, err);
     btf__gbuffer_free(&g);

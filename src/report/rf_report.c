@@ -23,7 +23,6 @@
 #include "rf/rf_render.h"
 #include "rf/rf_error.h"
 
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -67,11 +66,6 @@ static btf_status check_match(const btf_dataset_info *in, btf_rf_report *d, btf_
     return rc;
 }
 
-static double lum(const float *p)
-{
-    return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-}
-
 typedef struct pair_job {
     const btf_dataset *ds;
     btf_rf_report *d;
@@ -106,11 +100,8 @@ static btf_status measure_pair(void *user, int job, int worker, btf_error *err)
         o.reference_name = btf_dataset_path(J->ds, rp->view, rp->light);
         o.image_name = "the reflectance-field model's flat render";
         rc = btf_texture_distance(&meas, &model, &o, &p->d, err);
-        size_t n = (size_t)meas.width * meas.height;
-        double s = 0.0;
-        for (size_t k = 0; k < n && meas.channels == 3; k++)
-            s += fabs(lum(meas.data + 3 * k) - lum(model.data + 3 * k));
-        p->mean_abs_dy = n ? s / (double)n : 0.0;
+        double mean_y; /* the Table 1 pass has the data's luminance */
+        btf__pixelwise_dy(&meas, &model, &p->mean_abs_dy, &mean_y);
     }
     if (rc == BTF_OK && J->want[(size_t)rp->view * r->in->n_lights + rp->light])
         rc = btf__report_picture(r, J->dir, job, rp->view, rp->light, &meas, &model, err);

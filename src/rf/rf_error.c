@@ -72,14 +72,7 @@ static btf_status image_job(void *user, int i, int worker, btf_error *err)
 btf_status btf__rf_error(const btf_dataset *ds, const btf_rf_model *m, int threads,
                          double *mean_abs_error, double *mean_luminance, btf_error *err)
 {
-    if (!ds || !m || !m->codes)
-        return btf__fail(err, BTF_E_ARG, "btf_rf_error: no dataset or no model");
-    const btf_dataset_info *in = btf_dataset_get_info(ds);
-    if (in->n_views != m->views.count || in->n_lights != m->lights.count)
-        return btf__fail(err, BTF_E_DATA, "%s: %d views x %d lights of %dx%d (expected the "
-                         "model's %d x %d of %dx%d)", in->root, in->n_views, in->n_lights,
-                         in->width, in->height, m->views.count, m->lights.count, m->width,
-                         m->height);
+    /* without maps the dataset must have the model's direction sets (checked there) */
     return btf__rf_error_over(ds, m, NULL, NULL, threads, mean_abs_error, mean_luminance, err);
 }
 

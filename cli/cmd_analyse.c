@@ -435,6 +435,10 @@ int cmd_analyse(int argc, char **argv)
          .help = "no pair gains: every pair of a subspace shares its image's mean\n"
                  "colour (as format 1.4)",
          .tag = TAG_LATER},
+        {.name = "--no-cells", .kind = CLI_FLAG, .dest = &ao.no_cells,
+         .help = "no periodic cells: where the structure repeats on a lattice (a\n"
+                 "weave), the CAR fields model the whole remainder (as format 1.6)",
+         .tag = TAG_LATER},
         CLI_MAX_PIXELS_OPTION(&ao.photostereo.read.max_pixels),
         {0}};
     cli_spec spec = {.cmd = "analyse", .args = "DATASET",

@@ -639,7 +639,7 @@ static btf_status finish_on_host(const btf_model *m, int subspace, const btf_syn
                                  btf_image *img, btf_image *pattern, btf_error *err)
 {
     int match = 0;
-    btf_status rc = btf__structure_apply(m, o->seed, img, pattern, err);
+    btf_status rc = btf__structure_apply(m, subspace, o->seed, img, pattern, err);
     if (rc == BTF_OK)
         rc = btf__colour_match_wanted(m, subspace, o->match_colours, &match, err);
     if (rc == BTF_OK && match)
@@ -786,10 +786,19 @@ static btf_status match_image(btf_gpu *g, const btf_model *m, int subspace,
         return rc;
     if (layer && (rc = btf__structure_pattern(m, width, height, o->seed, pattern, err)))
         return rc;
-    uint64_t pat_bytes = layer ? 4ull * pattern->width * pattern->height * pattern->channels : 0;
-    if (pat_bytes <= btf__gpu_max_buffer_bytes(g))
-        return btf__gpu_match_images(g->vk, g->matcher, m, subspace, match, im, offset, width,
-                                     height, layer ? pattern : NULL, err);
+    /* with periodic cells, the subspace's own pattern: the CPU's bits */
+    btf_image own = {0};
+    const btf_image *use = NULL;
+    if (layer && (rc = btf__structure_for(m, subspace, pattern, &own, &use, err)))
+        return rc;
+    uint64_t pat_bytes = layer ? 4ull * use->width * use->height * use->channels : 0;
+    if (pat_bytes <= btf__gpu_max_buffer_bytes(g)) {
+        rc = btf__gpu_match_images(g->vk, g->matcher, m, subspace, match, im, offset, width,
+                                   height, layer ? use : NULL, err);
+        btf_image_free(&own);
+        return rc;
+    }
+    btf_image_free(&own);
     btf_image img;
     if ((rc = btf_image_alloc(&img, width, height, 3, err)))
         return rc;

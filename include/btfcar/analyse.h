@@ -326,6 +326,9 @@ typedef struct btf_analyse_opts {
                                          btf_segmentation.means); NULL: read again */
     const btf_model *range_from;
     int no_gains;                     /* 1: no pair gains (before format 1.5) */
+    int no_cells;                     /* 1: no periodic cells of the remainders where
+                                         the structure repeats on a lattice (before
+                                         format 1.7; docs/model.md, "Periodic cells") */
 } btf_analyse_opts;
 /* The defaults: those of each stage's options, a range map with a 64-texel
  * tile, no progress, no report. */

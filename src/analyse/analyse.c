@@ -326,7 +326,7 @@ static void masking_factor(const btf_image *img, float *factor)
  * shading only (what synthesis gives before matching). */
 static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *m, int k,
                           const btf_structure_geom *g, btf_dir light, double *tex_mean,
-                          btf_error *err)
+                          btf_cells *cells, double *explained, btf_error *err)
 {
     char what[64];
     snprintf(what, sizeof what, "subspace %d", k);
@@ -366,6 +366,13 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     for (size_t i = 0; factor && i < n; i++) /* the exemplar's luminance, before division */
         factor[i] = (float)pixel_luminance(img, i);
     btf__structure_divide(img, m, g, light, 1, NULL);
+    /* what repeats on the lattice is the cell's, not the fields' */
+    rc = cells ? btf__cells_fit(img, cells, k, explained, err) : BTF_OK;
+    if (rc) {
+        free(factor);
+        btf_image_free(&shaded);
+        return rc;
+    }
     if (factor) {
         masking_factor(img, factor);
         fo.masking = factor;
@@ -410,8 +417,37 @@ static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg
     return rc;
 }
 
+/* Cells of 1s on the lattice of m's structure layer (NULL where it does
+ * not repeat, or its cell is too large to keep). */
+static btf_status new_cells(const btf_model *m, int k, btf_cells **out, btf_error *err)
+{
+    int lattice[4], w, h, shift;
+    *out = NULL;
+    if (!btf__structure_lattice(m, lattice) || !btf__cells_from_lattice(lattice, &w, &h, &shift))
+        return BTF_OK;
+    *out = btf__cells_new(w, h, shift, k, err);
+    return *out ? BTF_OK : BTF_E_NOMEM;
+}
+
+/* "; periodic cells ..." for the analysis' structure line. */
+static void cells_note(const btf_cells *c, const double *explained, char *note, size_t n)
+{
+    int kept = 0;
+    double lo = 1.0, hi = 0.0;
+    for (int k = 0; k < c->n_subspaces; k++)
+        if (c->kept[k]) {
+            kept++;
+            lo = explained[k] < lo ? explained[k] : lo;
+            hi = explained[k] > hi ? explained[k] : hi;
+        }
+    snprintf(note, n, "; periodic cells of %d x %d texels for %d of %d subspaces (each explains "
+             "%.0f-%.0f %% of its remainder's variance)", c->w, c->h, kept, c->n_subspaces,
+             100.0 * lo, 100.0 * hi);
+}
+
 static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
-                            const btf_analyse_opts *o, btf_model *m, btf_error *err)
+                            const btf_analyse_opts *o, btf_model *m, char *note, size_t note_size,
+                            btf_error *err)
 {
     m->subspaces = btf__calloc((size_t)seg->k, sizeof(btf_subspace_model), err);
     if (!m->subspaces)
@@ -426,6 +462,8 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         return BTF_E_NOMEM;
     uint32_t *horizon = NULL; /* the relief's shadows (btf_horizon.h), on the sample */
     btf_structure_geom *geoms = NULL; /* per exemplar: what its shading reads */
+    btf_cells *cells = NULL; /* the remainders' periodic cells, where a lattice is */
+    double *explained = NULL; /* [k]: the share of its remainder k's cell explains */
     m->shadows = m->albedo && !o->no_shadows;
     if (m->albedo && ((rc = btf__structure_normals(m, &normal, err)) ||
                       (m->shadows &&
@@ -434,6 +472,13 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
                       (rc = read_exemplars(ds, seg, &imgs, err)) ||
                       (rc = exemplar_geoms(imgs, seg, m, &normal, horizon, &geoms, err)) ||
                       (rc = fit_ambient(imgs, seg, m, geoms, err))))
+        goto done;
+    explained = btf__calloc((size_t)seg->k, sizeof(double), err);
+    if (!explained) {
+        rc = BTF_E_NOMEM;
+        goto done;
+    }
+    if (m->albedo && !o->no_cells && (rc = new_cells(m, seg->k, &cells, err)))
         goto done;
     for (int k = 0; k < seg->k; k++) {
         btf_image img = {0};
@@ -444,7 +489,7 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         int structured = normal.data && m->albedo && on_grid(&img, m);
         rc = fit_one(&img, o, m, k, structured ? &geoms[k] : NULL,
                      m->lights.dirs[seg->rep_light[k]], tex_mean ? tex_mean + 3 * k : NULL,
-                     err);
+                     structured ? cells : NULL, &explained[k], err);
         btf_image_free(&img);
         if (rc == BTF_OK && !structured && m->albedo) {
             free(m->albedo); /* an exemplar off the grid: the layer cannot hold */
@@ -453,6 +498,8 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
             m->chroma = NULL;
             m->ambient = 0.0f;
             m->shadows = 0;
+            btf__cells_free(cells);
+            cells = NULL;
             rc = k ? btf__fail(err, BTF_E_DATA, "subspace %d: exemplar not on the range map's "
                                "grid", k) : BTF_OK;
         }
@@ -463,9 +510,19 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         if (o->progress)
             o->progress(o->progress_user, (double)(k + 1) / seg->k, "fitting CAR models");
     }
+    if (rc == BTF_OK && btf__cells_any(cells)) {
+        cells_note(cells, explained, note, note_size);
+        rc = btf__model_set_cells(m, cells, err); /* taken over */
+        cells = NULL;
+    } else if (rc == BTF_OK && cells) {
+        snprintf(note, note_size, "; no periodic cells (none explains %.0f %% of a "
+                 "remainder's variance)", 100.0 * BTF_CELLS_MIN_EXPLAINED);
+    }
     if (rc == BTF_OK && tex_mean)
         rc = stage_gains(ds, seg, o, tex_mean, &normal, horizon, m, err);
 done:
+    btf__cells_free(cells);
+    free(explained);
     free(tex_mean);
     free(horizon);
     free_geoms(geoms, seg->k);
@@ -567,6 +624,7 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
             rc = BTF_E_NOMEM;
     }
     double spread = -1.0; /* the colour layer's measure; -1: not measured */
+    char cells[200] = ""; /* the periodic cells' clause of the structure line */
     /* A sparse set may hold no view with the 3 lights photometric stereo
      * needs (a flash capture: one light per view): the model then has no
      * range map, and says why (docs/datasets.md, "Sparse pair sets"). */
@@ -576,7 +634,7 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
     else if (rc == 0 && no_ps && !o.no_structure) /* a flat map holds nothing else */
         rc = registered_mean(ds, &o, out, &spread, err);
     if (rc == 0)
-        rc = stage_fit(ds, &seg, &o, out, err);
+        rc = stage_fit(ds, &seg, &o, out, cells, sizeof cells, err);
     if (rc == 0 && btf__model_keep_margins(out, -1.0) != BTF_OK) /* for synthesis */
         rc = btf__fail(err, BTF_E_NOMEM, "out of memory");
     if (rc == 0 && o.report) {
@@ -584,6 +642,9 @@ btf_status btf_analyse(const btf_dataset *ds, const btf_analyse_opts *opts, btf_
         snprintf(o.report->segment_reason, sizeof o.report->segment_reason, "%s", seg.reason);
         structure_reason(out, &o, spread, o.report->structure_reason,
                          sizeof o.report->structure_reason);
+        size_t used = strlen(o.report->structure_reason);
+        snprintf(o.report->structure_reason + used, sizeof o.report->structure_reason - used,
+                 "%s", out->albedo ? cells : "");
         if (no_ps && o.no_structure)
             snprintf(o.report->structure_reason, sizeof o.report->structure_reason,
                      "none: no range map (photometric stereo needs one view with at least 3 "

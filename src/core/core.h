@@ -19,6 +19,10 @@
 /* Image sides beyond this are refused before any allocation: 2^16 keeps
  * width*height*3 floats far from size_t overflow and matches EXR practice. */
 #define BTF_MAX_SIDE 65536
+/* btf_image_alloc for the library's own images of 1 to 4 channels (the
+ * structure pattern's base: RGB and a cell index, model/structure_map.c). */
+btf_status btf__image_alloc_any(btf_image *img, int width, int height, int channels,
+                                btf_error *err);
 /* The decoding cap (btf_read_opts.max_pixels; 0: BTF_DEFAULT_MAX_PIXELS):
  * BTF_E_UNSUPPORTED naming the file, its size and the cap when width x
  * height exceeds it (core/image.c). */

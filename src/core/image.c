@@ -12,11 +12,21 @@ btf_status btf_image_alloc(btf_image *img, int width, int height, int channels,
 {
     img->data = NULL;
     img->width = img->height = img->channels = 0;
+    if (channels != 1 && channels != 3)
+        return btf__fail(err, BTF_E_ARG, "image channels %d: expected 1 or 3", channels);
+    return btf__image_alloc_any(img, width, height, channels, err);
+}
+
+btf_status btf__image_alloc_any(btf_image *img, int width, int height, int channels,
+                                btf_error *err)
+{
+    img->data = NULL;
+    img->width = img->height = img->channels = 0;
     if (width < 1 || height < 1 || width > BTF_MAX_SIDE || height > BTF_MAX_SIDE)
         return btf__fail(err, BTF_E_ARG, "image size %dx%d out of range 1..%d", width,
                          height, BTF_MAX_SIDE);
-    if (channels != 1 && channels != 3)
-        return btf__fail(err, BTF_E_ARG, "image channels %d: expected 1 or 3", channels);
+    if (channels < 1 || channels > 4)
+        return btf__fail(err, BTF_E_ARG, "image channels %d: expected 1 to 4", channels);
     float *d = btf__calloc((size_t)width * (size_t)height * (size_t)channels, sizeof(float), err);
     if (!d)
         return BTF_E_NOMEM;

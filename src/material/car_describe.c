@@ -109,6 +109,21 @@ static void text_subspace(FILE *f, const btf_model *m, int s)
                 mg->lab_quantile[2][mg->lab_knots - 1]);
 }
 
+/* The remainders' periodic cells, when the model keeps them. */
+static void text_cells(FILE *f, const btf_model *m)
+{
+    const btf_cells *c = btf__model_cells(m);
+    if (!btf__cells_any(c))
+        return;
+    int kept = 0;
+    for (int k = 0; k < c->n_subspaces; k++)
+        kept += c->kept[k];
+    fprintf(f, "cells       the structure repeats on a lattice: a periodic cell of %d x %d texels "
+            "(shift %d) for %d of %d subspaces divides their remainders; the CAR fields model "
+            "what is left (docs/model.md, \"Periodic cells\")\n", c->w, c->h, c->shift, kept,
+            c->n_subspaces);
+}
+
 static void model_text(FILE *f, const btf_model *m, const describe_file *mf)
 {
     char views[128], lights[128];
@@ -179,6 +194,7 @@ static void model_text(FILE *f, const btf_model *m, const describe_file *mf)
                 "resolution holds no albedo)" : "");
     if (m->shadows)
         fprintf(f, "shadows     the relief casts them (horizon map of the range map)\n");
+    text_cells(f, m);
     fprintf(f, "pair gains  %s\n", m->gain ? "one colour per measured pair: each keeps its mean "
             "colour" : "none (format 1.4 or older, or analysed without them)");
     for (int s = 0; s < m->n_subspaces; s++)
@@ -310,6 +326,16 @@ static void model_json(FILE *f, const btf_model *m, const describe_file *mf)
         fputs("}", f);
     } else {
         fputs("null", f);
+    }
+    const btf_cells *c = btf__model_cells(m);
+    if (btf__cells_any(c)) {
+        fprintf(f, ",\n \"cells\": {\"width\": %d, \"height\": %d, \"shift\": %d, \"kept\": [",
+                c->w, c->h, c->shift);
+        for (int k = 0; k < c->n_subspaces; k++)
+            fprintf(f, "%s%s", k ? ", " : "", c->kept[k] ? "true" : "false");
+        fputs("]}", f);
+    } else {
+        fputs(",\n \"cells\": null", f);
     }
     fprintf(f, ",\n \"pair_gains\": %s", m->gain ? "true" : "false");
     fputs("}\n", f);

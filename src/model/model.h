@@ -31,6 +31,7 @@ typedef enum btf_model_part {
     BTF_MODEL_PART_RANGE,         /* RANG: the range/normal tile, all of its body */
     BTF_MODEL_PART_STRUCTURE,     /* STRC: the albedo pattern and the shading's ambient */
     BTF_MODEL_PART_GAINS,         /* GAIN: the pair gains */
+    BTF_MODEL_PART_CELLS,         /* CELL: the remainders' periodic cells */
     BTF_MODEL_PART_COUNT
 } btf_model_part;
 
@@ -58,6 +59,42 @@ btf_status btf__model_validate(const btf_model *m, const char *name, btf_status 
  * memory. */
 btf_status btf__model_keep_margins(btf_model *m, double budget);
 void btf__model_internal_free(struct btf_model_internal *in);
+
+/* The remainders' periodic cells (model/structure_cells.c, docs/model.md,
+ * "Periodic cells"): on a lattice's cell in Hermite normal form (w x h
+ * texels; texel (x, y) of the range grid is cell texel
+ * ((x - t shift) mod w, y - t h), t = floor(y / h)), per subspace three
+ * factors per cell texel, each channel of mean 1, on the albedo pattern's
+ * one-byte grid; a subspace not kept holds 1s. Kept in m->internal (the
+ * public struct's layout is the ABI's). */
+#define BTF_CELLS_MAX_TEXELS 4096
+/* A subspace keeps its cell when it explains this share of the remainder's
+ * variance. */
+#define BTF_CELLS_MIN_EXPLAINED 0.2
+typedef struct btf_cells {
+    int w, h, shift, n_subspaces;
+    unsigned char *kept; /* [k] 1: subspace k has a cell */
+    float *value;        /* [k][h][w][3] */
+} btf_cells;
+/* The cell of a lattice (x0, y0, x1, y1) in Hermite normal form; 0 when
+ * degenerate or larger than BTF_CELLS_MAX_TEXELS. */
+int btf__cells_from_lattice(const int lattice[4], int *w, int *h, int *shift);
+int btf__cell_index(const btf_cells *c, int x, int y);
+/* Cells of 1s (none kept) for n subspaces; NULL (err set) when the geometry
+ * is out of bounds or out of memory. */
+btf_cells *btf__cells_new(int w, int h, int shift, int n_subspaces, btf_error *err);
+void btf__cells_free(btf_cells *c);
+const float *btf__cells_of(const btf_cells *c, int k);
+int btf__cells_any(const btf_cells *c);
+/* The model's cells (NULL: none) and setting them (taking c over). */
+const btf_cells *btf__model_cells(const btf_model *m);
+btf_status btf__model_set_cells(btf_model *m, btf_cells *c, btf_error *err);
+/* The structure pattern of subspace k: base as btf__structure_albedo makes
+ * it (with cells: RGB and the cell index per texel) times k's cell, into
+ * tmp (allocated here when used; the caller frees it); *use is base itself
+ * when it has no cell index. */
+btf_status btf__structure_for(const btf_model *m, int k, const btf_image *base, btf_image *tmp,
+                              const btf_image **use, btf_error *err);
 /* The margin synthesis uses for band b, level l of subspace k: the kept
  * one while the band's neighbourhood and coefficients are those it was
  * computed for, else btf__car_margin; -1 when out of memory. */
@@ -90,7 +127,8 @@ btf_status btf__structure_coords(const btf_model *m, int pw, int ph, uint64_t se
 /* Channels of the albedo pattern: 3 with a colour layer, else 1. */
 int btf__structure_channels(const btf_model *m);
 /* The albedo pattern over width x height, as its period (periodic: read
- * (x mod width, y mod height) of out). */
+ * (x mod width, y mod height) of out); with periodic cells the base of
+ * every subspace's pattern (btf__structure_for). */
 btf_status btf__structure_albedo(const btf_model *m, int width, int height, uint64_t seed,
                                  btf_image *out, btf_error *err);
 /* cache holds the pattern of width x height (btf__structure_albedo) when
@@ -103,13 +141,21 @@ void btf__structure_apply_row(const btf_image *a, int y, float *rgb, int width);
 /* A whole synthesised image times the pattern; nothing without one. cache
  * (NULL: none) keeps the pattern between calls of one seed: it is quilted
  * again only for another size; the caller frees it. */
-btf_status btf__structure_apply(const btf_model *m, uint64_t seed, btf_image *img,
+btf_status btf__structure_apply(const btf_model *m, int subspace, uint64_t seed, btf_image *img,
                                 btf_image *cache, btf_error *err);
 /* The quilted layers over width x height, placed by one quilting map:
  * heights and albedo (each NULL or width x height floats of the caller's;
- * albedo 1 without a pattern). */
+ * albedo 1 without a pattern). The albedo has btf__structure_channels(m)
+ * channels, or with with_cells btf__structure_base_channels(m): 4 (RGB and
+ * the cell index) when the model keeps periodic cells. */
 btf_status btf__structure_layers(const btf_model *m, int width, int height, uint64_t seed,
-                                 float *heights, float *albedo, btf_error *err);
+                                 float *heights, float *albedo, int with_cells, btf_error *err);
+int btf__structure_base_channels(const btf_model *m);
+/* btf_structure_maps, whose albedo with with_cells is the base pattern
+ * (btf__structure_base_channels; src/range/range_map.c). */
+btf_status btf__structure_maps(const btf_model *m, int width, int height, uint64_t seed,
+                               btf_image *height_out, btf_image *normal_out,
+                               btf_image *albedo_out, int with_cells, btf_error *err);
 
 /* The largest ambient term a model may hold (the analysis clamps its fit
  * there; the validator refuses more). */
@@ -176,6 +222,12 @@ float btf__structure_vis(const uint32_t *horizon, size_t i, const double l[3]);
  * (a + l_z) (held at 0.1 and above) and, with albedo, by the pattern. */
 void btf__structure_divide(btf_image *img, const btf_model *m, const btf_structure_geom *g,
                            btf_dir light, int albedo, double *mean_shade);
+/* Subspace k's cell from its remainder img (the exemplar after
+ * btf__structure_divide, on the range map's grid), in the exemplar's own
+ * pixels: *explained the share of img's variance it explains; when that
+ * reaches BTF_CELLS_MIN_EXPLAINED, img is divided by it and c keeps it for
+ * k (docs/model.md, "Periodic cells"). */
+btf_status btf__cells_fit(btf_image *img, btf_cells *c, int k, double *explained, btf_error *err);
 /* btf__fit_marginals with the Lab histogram of lab_img (the exemplar as
  * synthesis gives it before colour matching: with the albedo pattern). */
 btf_status btf__fit_marginals_lab(const btf_image *img, const btf_image *lab_img, btf_model *m,

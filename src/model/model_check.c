@@ -416,6 +416,31 @@ static btf_status check_range(const btf_model *m, const char *name, btf_status c
 /* Every rule of docs/model-format.md that a model in memory must meet. code
  * is BTF_E_DATA when writing (the caller's model is wrong) and BTF_E_FORMAT
  * when reading (the file is). */
+/* The periodic cells: with the structure layer, one per subspace, their
+ * geometry in bounds, their factors positive and finite. */
+static btf_status check_cells(const btf_model *m, const char *name, btf_status code,
+                              btf_error *err)
+{
+    const btf_cells *c = btf__model_cells(m);
+    if (!c)
+        return BTF_OK;
+    if (!m->albedo || !btf__structure_quilted(m))
+        return failf(err, code, name, "periodic cells without a structure layer at texel 1");
+    if (c->w < 1 || c->h < 1 || (long)c->w * c->h > BTF_CELLS_MAX_TEXELS || c->shift < 0 ||
+        c->shift >= c->w || c->n_subspaces != m->n_subspaces)
+        return failf(err, code, name, "periodic cells of %d x %d texels, shift %d, for %d "
+                     "subspaces (expected 1..%d texels, a shift below the width, %d subspaces)",
+                     c->w, c->h, c->shift, c->n_subspaces, BTF_CELLS_MAX_TEXELS,
+                     m->n_subspaces);
+    size_t n = (size_t)c->n_subspaces * c->w * c->h * 3;
+    for (size_t i = 0; i < n; i++)
+        if (!(c->value[i] > 0.0f) || !isfinite(c->value[i]))
+            return failf(err, code, name, "periodic cell of subspace %zu: factor %g (expected "
+                         "positive and finite)", i / ((size_t)c->w * c->h * 3),
+                         (double)c->value[i]);
+    return BTF_OK;
+}
+
 btf_status btf__model_validate(const btf_model *m, const char *name, btf_status code,
                                btf_error *err)
 {
@@ -454,7 +479,8 @@ btf_status btf__model_validate(const btf_model *m, const char *name, btf_status 
     for (int s = 0; s < m->n_subspaces; s++)
         if ((rc = check_subspace(m, s, name, code, err)))
             return rc;
-    if ((rc = check_range(m, name, code, err)) || (rc = check_gains(m, name, code, err)))
+    if ((rc = check_range(m, name, code, err)) || (rc = check_gains(m, name, code, err)) ||
+        (rc = check_cells(m, name, code, err)))
         return rc;
     return check_stability(m, name, code, err);
 }

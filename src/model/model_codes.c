@@ -1,7 +1,8 @@
 /*
  * model_codes.c — the quantised values the model file keeps
  * (docs/model-format.md): each Lab quantile as a 16-bit code ("LABQ") and
- * each pair gain as a signed byte ("GAIN"). The analysis rounds what it
+ * each pair gain as a signed byte ("GAIN"), the albedo pattern's and the
+ * periodic cells' factors as one byte ("STRC", "CELL"). The analysis rounds what it
  * fits through the same codes, so the model in memory is the one the file
  * gives back; they live with the model, below both the analysis and the
  * synthesis that use them.
@@ -48,4 +49,20 @@ int btf__gain_code(float g)
 float btf__gain_value(int q)
 {
     return (float)exp2((double)q / GAIN_STEPS_PER_OCTAVE);
+}
+
+/* The albedo pattern is kept on a log2 grid of 1/32 over [-4, 4]: 2.2 %
+ * steps, one byte a texel (docs/model-format.md, "STRC"). */
+#define ALBEDO_LOG_MIN (-4.0)
+#define ALBEDO_STEPS_PER_OCTAVE 32.0
+unsigned btf__albedo_code(float a)
+{
+    double l = log2(a > 0.0f && isfinite(a) ? (double)a : 1.0);
+    double q = floor((l - ALBEDO_LOG_MIN) * ALBEDO_STEPS_PER_OCTAVE + 0.5);
+    return q < 0.0 ? 0u : q > 255.0 ? 255u : (unsigned)q;
+}
+
+float btf__albedo_value(unsigned q)
+{
+    return (float)exp2((double)q / ALBEDO_STEPS_PER_OCTAVE + ALBEDO_LOG_MIN);
 }

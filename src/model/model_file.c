@@ -54,6 +54,10 @@ static const btf_box_format FORMAT = {SIGNATURE, MAX_BYTES, 9, "bytes in all"};
  * measure. Only such a model is written as 1.6; an older reader refuses
  * it (an index beyond the subspaces), never misreads it. */
 #define FMT_MINOR_SPARSE 6
+/* 1.7 added the CELL section (the remainders' periodic cells, docs/model.md
+ * "Periodic cells"); an older reader skips it and synthesises the fields
+ * without the cells. Only a model with cells is written as 1.7. */
+#define FMT_MINOR_CELLS 7
 
 /* -------------------------------------------------------------- encoding */
 
@@ -71,7 +75,8 @@ static int has_unmeasured(const btf_model *m)
  * "Versions"). */
 static unsigned minor_version(const btf_model *m)
 {
-    return has_unmeasured(m)                      ? FMT_MINOR_SPARSE
+    return btf__cells_any(btf__model_cells(m))    ? FMT_MINOR_CELLS
+           : has_unmeasured(m)                    ? FMT_MINOR_SPARSE
            : m->gain || m->shadows || m->chroma   ? FMT_MINOR_GAINS
            : m->albedo                            ? FMT_MINOR_STRUCTURE
            : btf__model_has_lab(m)                 ? FMT_MINOR_LAB
@@ -98,6 +103,8 @@ static btf_status build_payload(const btf_model *m, btf_box_writer *w, const cha
         rc = btf__model_put_structure(w, m, name, err);
     if (rc == BTF_OK && m->gain)
         rc = btf__model_put_gains(w, m, name, err);
+    if (rc == BTF_OK && btf__cells_any(btf__model_cells(m)))
+        rc = btf__model_put_cells(w, m, name, err);
     if (rc == BTF_OK && w->failed)
         rc = failf(err, BTF_E_NOMEM, name, "out of memory encoding the model");
     return rc;
@@ -279,11 +286,12 @@ static btf_status check_presence(const btf_box_span *sec, const char *name, btf_
 
 /* The readers of the sections after the tables, in the order their checks
  * need whatever their order in the file: STRC after RANG, MARG and LABQ
- * after SUBS, GAIN after INDX. */
+ * after SUBS, GAIN after INDX, CELL after STRC. */
 static btf_model_section_reader *const READERS[S_COUNT] = {
     [S_SUBS] = btf__model_read_subspaces, [S_RANG] = btf__model_read_range,
     [S_MARG] = btf__model_read_marginals, [S_LABQ] = btf__model_read_lab,
-    [S_STRC] = btf__model_read_structure, [S_GAIN] = btf__model_read_gains};
+    [S_STRC] = btf__model_read_structure, [S_GAIN] = btf__model_read_gains,
+    [S_CELL] = btf__model_read_cells};
 
 static btf_status read_payload(const btf_box_payload *pl, btf_model *m, const char *name,
                                btf_error *err)

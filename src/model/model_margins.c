@@ -25,7 +25,10 @@ typedef struct kept_margin {
 
 struct btf_model_internal {
     int n_subspaces;
-    kept_margin *margins; /* [(k * 3 + band) * BTF_MAX_LEVELS + level] */
+    kept_margin *margins; /* [(k * 3 + band) * BTF_MAX_LEVELS + level]; NULL: none kept */
+    /* the remainders' periodic cells (model/structure_cells.c): model data
+     * kept here, not in btf_model, whose layout the library's ABI fixes */
+    btf_cells *cells;
 };
 
 static size_t kept_index(int k, int b, int l)
@@ -37,8 +40,25 @@ void btf__model_internal_free(struct btf_model_internal *in)
 {
     if (!in)
         return;
+    btf__cells_free(in->cells);
     free(in->margins);
     free(in);
+}
+
+const btf_cells *btf__model_cells(const btf_model *m)
+{
+    return m && m->internal ? m->internal->cells : NULL;
+}
+
+btf_status btf__model_set_cells(btf_model *m, btf_cells *cells, btf_error *err)
+{
+    if (!m->internal && !(m->internal = btf__calloc(1, sizeof *m->internal, err))) {
+        btf__cells_free(cells);
+        return BTF_E_NOMEM;
+    }
+    btf__cells_free(m->internal->cells);
+    m->internal->cells = cells;
+    return BTF_OK;
 }
 
 /* The bands in the order the budget is spent: subspace, band, level. */
@@ -81,17 +101,27 @@ static btf_status margin_job(void *user, int j, int worker, btf_error *err)
  * and the work at most the budget plus one band per CPU. */
 btf_status btf__model_keep_margins(btf_model *m, double budget)
 {
+    btf_cells *cells = m->internal ? m->internal->cells : NULL; /* kept as they are */
+    if (m->internal)
+        m->internal->cells = NULL;
     btf__model_internal_free(m->internal);
     m->internal = NULL;
-    if (m->n_subspaces <= 0)
+    if (m->n_subspaces <= 0) {
+        btf__cells_free(cells);
         return BTF_OK;
+    }
     struct btf_model_internal *in = calloc(1, sizeof *in);
+    if (in)
+        in->cells = cells;
+    else
+        btf__cells_free(cells);
     size_t nkept = (size_t)m->n_subspaces * 3 * BTF_MAX_LEVELS;
     kept_margin *kept = calloc(nkept, sizeof *kept);
     margin_jobs mj = {m, kept, calloc(nkept, sizeof(int)), calloc(nkept, sizeof(double)), budget,
                       0};
     if (!in || !kept || !mj.band || !mj.work) {
-        BTF_FREE_ALL(in, kept, mj.band, mj.work);
+        btf__model_internal_free(in); /* and the cells */
+        BTF_FREE_ALL(kept, mj.band, mj.work);
         return BTF_E_NOMEM;
     }
     in->n_subspaces = m->n_subspaces;
@@ -145,7 +175,7 @@ int btf__model_margin(const btf_model *m, int k, int b, int l)
 {
     const btf_car_band *cb = &m->subspaces[k].bands[b][l];
     const struct btf_model_internal *in = m->internal;
-    if (in && k < in->n_subspaces && l < BTF_MAX_LEVELS) {
+    if (in && in->margins && k < in->n_subspaces && l < BTF_MAX_LEVELS) {
         const kept_margin *e = &in->margins[kept_index(k, b, l)];
         if (kept_for(e, cb))
             return e->margin;

@@ -17,7 +17,7 @@
 #include <string.h>
 
 const char btf__model_tags[S_COUNT][5] = {"VIEW", "LGHT", "INDX", "SUBS", "RANG",
-                                         "MARG", "LABQ", "STRC", "GAIN"};
+                                         "MARG", "LABQ", "STRC", "GAIN", "CELL"};
 
 void *btf__model_alloc(size_t count, size_t size, int zero, const char *name, btf_error *err)
 {

@@ -31,22 +31,6 @@
 /* The quilting map's own seed stream, apart from the fields'. */
 #define STRUCT_SEED_SALT 0x5354524355435455ull
 
-/* The albedo pattern is kept on a log2 grid of 1/32 over [-4, 4]: 2.2 %
- * steps, one byte a texel (docs/model-format.md, "STRC"). */
-#define ALBEDO_LOG_MIN (-4.0)
-#define ALBEDO_STEPS_PER_OCTAVE 32.0
-unsigned btf__albedo_code(float a)
-{
-    double l = log2(a > 0.0f && isfinite(a) ? (double)a : 1.0);
-    double q = floor((l - ALBEDO_LOG_MIN) * ALBEDO_STEPS_PER_OCTAVE + 0.5);
-    return q < 0.0 ? 0u : q > 255.0 ? 255u : (unsigned)q;
-}
-
-float btf__albedo_value(unsigned q)
-{
-    return (float)exp2((double)q / ALBEDO_STEPS_PER_OCTAVE + ALBEDO_LOG_MIN);
-}
-
 int btf__structure_quilted(const btf_model *m)
 {
     return m && m->range && m->range_texel == 1.0f && m->range_width > 0 &&
@@ -146,15 +130,27 @@ int btf__structure_channels(const btf_model *m)
     return m && m->albedo && m->chroma ? 3 : 1;
 }
 
+/* The periodic cells a pattern carries: those of a model that keeps one. */
+static const btf_cells *pattern_cells(const btf_model *m)
+{
+    const btf_cells *c = m && m->albedo ? btf__model_cells(m) : NULL;
+    return btf__cells_any(c) ? c : NULL;
+}
+
+int btf__structure_base_channels(const btf_model *m)
+{
+    return pattern_cells(m) ? 4 : btf__structure_channels(m);
+}
+
 btf_status btf__structure_albedo(const btf_model *m, int width, int height, uint64_t seed,
                                  btf_image *out, btf_error *err)
 {
     memset(out, 0, sizeof *out);
     /* the period's own map is the whole surface's (its period is itself) */
     int pw = btf__structure_period(width), ph = btf__structure_period(height);
-    btf_status rc = btf_image_alloc(out, pw, ph, btf__structure_channels(m), err);
+    btf_status rc = btf__image_alloc_any(out, pw, ph, btf__structure_base_channels(m), err);
     if (rc == BTF_OK)
-        rc = btf__structure_layers(m, pw, ph, seed, NULL, out->data, err);
+        rc = btf__structure_layers(m, pw, ph, seed, NULL, out->data, 1, err);
     if (rc)
         btf_image_free(out);
     return rc;
@@ -185,26 +181,29 @@ void btf__structure_apply_row(const btf_image *a, int y, float *rgb, int width)
     }
 }
 
-btf_status btf__structure_apply(const btf_model *m, uint64_t seed, btf_image *img,
+btf_status btf__structure_apply(const btf_model *m, int subspace, uint64_t seed, btf_image *img,
                                 btf_image *cache, btf_error *err)
 {
     if (!m->albedo || !btf__structure_quilted(m))
         return BTF_OK;
-    btf_image own = {0}, *a = cache ? cache : &own;
+    btf_image own = {0}, *a = cache ? cache : &own, tmp = {0};
+    const btf_image *use = NULL;
     btf_status rc = btf__structure_pattern(m, img->width, img->height, seed, a, err);
-    if (rc)
-        return rc;
-    for (int y = 0; y < img->height; y++)
-        btf__structure_apply_row(a, y, img->data + (size_t)y * img->width * 3, img->width);
+    if (rc == BTF_OK)
+        rc = btf__structure_for(m, subspace, a, &tmp, &use, err);
+    for (int y = 0; rc == BTF_OK && y < img->height; y++)
+        btf__structure_apply_row(use, y, img->data + (size_t)y * img->width * 3, img->width);
+    btf_image_free(&tmp);
     btf_image_free(&own);
-    return BTF_OK;
+    return rc;
 }
 
 btf_status btf__structure_layers(const btf_model *m, int width, int height, uint64_t seed,
-                                 float *heights, float *albedo, btf_error *err)
+                                 float *heights, float *albedo, int with_cells, btf_error *err)
 {
     uint16_t *map;
     int pw = btf__structure_period(width), ph = btf__structure_period(height);
+    const btf_cells *cells = with_cells ? pattern_cells(m) : NULL;
     int ch = btf__structure_channels(m);
     btf_status rc = btf__structure_coords(m, pw, ph, seed, &map, err);
     if (rc)
@@ -215,12 +214,39 @@ btf_status btf__structure_layers(const btf_model *m, int width, int height, uint
             size_t src = (size_t)map[2 * i + 1] * m->range_width + map[2 * i];
             if (heights)
                 heights[o] = m->range[src];
-            if (albedo && ch == 3)
+            if (albedo && cells) { /* RGB, then the cell index (exact in a float) */
+                for (int c = 0; c < 3; c++)
+                    albedo[4 * o + c] = ch == 3 ? m->albedo[src] * m->chroma[3 * src + c]
+                                                : m->albedo[src];
+                albedo[4 * o + 3] = (float)btf__cell_index(cells, map[2 * i], map[2 * i + 1]);
+            } else if (albedo && ch == 3)
                 for (int c = 0; c < 3; c++)
                     albedo[3 * o + c] = m->albedo[src] * m->chroma[3 * src + c];
             else if (albedo)
                 albedo[o] = m->albedo ? m->albedo[src] : 1.0f;
         }
     free(map);
+    return BTF_OK;
+}
+
+btf_status btf__structure_for(const btf_model *m, int k, const btf_image *base, btf_image *tmp,
+                              const btf_image **use, btf_error *err)
+{
+    *use = base;
+    if (!base || base->channels != 4)
+        return BTF_OK;
+    const btf_cells *c = btf__model_cells(m);
+    btf_status rc = btf_image_alloc(tmp, base->width, base->height, 3, err);
+    if (rc)
+        return rc;
+    const float *v = c && k >= 0 && k < c->n_subspaces && c->kept[k] ? btf__cells_of(c, k) : NULL;
+    size_t n = (size_t)base->width * base->height;
+    for (size_t i = 0; i < n; i++) {
+        const float *b = base->data + 4 * i;
+        const float *f = v ? v + 3 * (size_t)b[3] : NULL;
+        for (int ch = 0; ch < 3; ch++)
+            tmp->data[3 * i + ch] = f ? b[ch] * f[ch] : b[ch];
+    }
+    *use = tmp;
     return BTF_OK;
 }

@@ -238,9 +238,9 @@ btf_status btf__normal_map(const btf_image *height, double scale, btf_image *nor
     return BTF_OK;
 }
 
-btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_t seed,
-                              btf_image *height_out, btf_image *normal_out,
-                              btf_image *albedo_out, btf_error *err)
+btf_status btf__structure_maps(const btf_model *m, int width, int height, uint64_t seed,
+                               btf_image *height_out, btf_image *normal_out,
+                               btf_image *albedo_out, int with_cells, btf_error *err)
 {
     btf_image none = {0}, *hm = height_out ? height_out : &none;
     if (height_out)
@@ -263,11 +263,13 @@ btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_
         return BTF_OK;
     btf_status rc = btf_image_alloc(hm, width, height, 1, err); /* zeros: flat */
     if (rc == BTF_OK && albedo_out)
-        rc = btf_image_alloc(albedo_out, width, height, btf__structure_channels(m), err);
+        rc = btf__image_alloc_any(albedo_out, width, height,
+                                  with_cells ? btf__structure_base_channels(m)
+                                             : btf__structure_channels(m), err);
     int layers = btf__structure_quilted(m);
     if (rc == BTF_OK && layers) /* one quilting map places both layers */
         rc = btf__structure_layers(m, width, height, seed, hm->data,
-                                   albedo_out ? albedo_out->data : NULL, err);
+                                   albedo_out ? albedo_out->data : NULL, with_cells, err);
     else if (rc == BTF_OK && m->range)
         rc = resample(m, width, height, hm, err);
     for (size_t i = 0; rc == BTF_OK && albedo_out && !layers &&
@@ -283,6 +285,14 @@ btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_
     if (!height_out)
         btf_image_free(&none);
     return rc;
+}
+
+btf_status btf_structure_maps(const btf_model *m, int width, int height, uint64_t seed,
+                              btf_image *height_out, btf_image *normal_out,
+                              btf_image *albedo_out, btf_error *err)
+{
+    return btf__structure_maps(m, width, height, seed, height_out, normal_out, albedo_out, 0,
+                               err);
 }
 
 btf_status btf__range_map(const btf_model *m, int width, int height, btf_image *height_out,

@@ -7,6 +7,7 @@
  */
 #include "render/shade.h"
 #include "core/core.h"
+#include "model/model.h"
 #include "synth/synth.h"
 
 #include <math.h>
@@ -129,8 +130,8 @@ btf_status btf__render_material_build(const btf_model *m, const uint8_t *needed,
     int *which = NULL;
     btf_image albedo = {0}; /* quilted once with the range map, for every texture */
     if ((rc = build_tables(m, rm, err)) ||
-        (rc = btf_structure_maps(m, side, side, seed, &rm->height, &rm->normal,
-                                 m->albedo ? &albedo : NULL, err)))
+        (rc = btf__structure_maps(m, side, side, seed, &rm->height, &rm->normal,
+                                  m->albedo ? &albedo : NULL, 1, err)))
         goto fail;
     float bounds[2];
     if ((rc = btf__render_relief(m, &rm->height, threads, &rm->horizon, bounds, err)))

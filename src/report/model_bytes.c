@@ -20,7 +20,7 @@
 static const char *const PART_NAMES[BTF_MODEL_PART_COUNT] = {
     "container",  "deflate", "framing", "directions", "index",      "spectral", "levels",
     "neighbourhoods", "gammas", "sigmas", "band means", "marginals", "range",
-    "structure", "pair gains"};
+    "structure", "pair gains", "periodic cells"};
 
 const char *btf__model_part_name(int part)
 {

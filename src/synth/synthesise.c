@@ -240,11 +240,17 @@ static btf_status structured_rows(const btf_model *m, int subspace,
                                   const btf_image *albedo, btf_error *err)
 {
     structured s = {.albedo = albedo, .width = width, .fn = fn, .user = user};
-    btf_status rc = albedo ? BTF_OK : btf__structure_albedo(m, width, height, o->seed, &s.own, err);
-    if (rc)
+    btf_image base = {0}; /* with periodic cells: the base, made the subspace's in own */
+    btf_status rc = albedo ? BTF_OK : btf__structure_albedo(m, width, height, o->seed, &base, err);
+    if (rc == BTF_OK)
+        rc = btf__structure_for(m, subspace, albedo ? albedo : &base, &s.own, &s.albedo, err);
+    if (rc == BTF_OK && s.albedo == &base) /* no cells: the base is the pattern, kept in own */
+        s.own = base, s.albedo = &s.own, base = (btf_image){0};
+    btf_image_free(&base);
+    if (rc) {
+        btf_image_free(&s.own);
         return rc;
-    if (!albedo)
-        s.albedo = &s.own;
+    }
     s.row = btf__alloc((size_t)width * 3, sizeof(float), err);
     rc = s.row ? plain_rows(m, subspace, margins, o, width, height, structured_cb, &s, bg, err)
                : BTF_E_NOMEM;

@@ -13,6 +13,7 @@
  * requires it.
  */
 #include "testutil.h"
+#include "model/model.h" /* periodic cells */
 #include "synth/synth_testing.h" /* btf__gpu_set_max_buffer_bytes */
 
 #include "scene_sphere_obj.h"
@@ -174,16 +175,33 @@ static void structured_model(btf_model *m)
         m->gain[i] = 0.6f + 0.1f * (float)(i % 9);
 }
 
-static void test_structured_parity(void **state)
+/* Periodic cells (format 1.7) on structured_model's layers: a cell of
+ * 8 x 4 texels, shift 3, for every subspace but the first. */
+static void add_cells(btf_model *m)
 {
-    (void)state;
+    btf_error e = {0};
+    btf_cells *c = btf__cells_new(8, 4, 3, m->n_subspaces, &e);
+    assert_non_null(c);
+    for (int k = 1; k < m->n_subspaces; k++) {
+        c->kept[k] = 1;
+        for (int i = 0; i < 8 * 4 * 3; i++)
+            c->value[(size_t)k * 96 + (size_t)i] =
+                btf__albedo_value(118u + (unsigned)((i * 5 + k * 3) % 21));
+    }
+    TU_OK(btf__model_set_cells(m, c, &e), &e);
+}
+
+static void structured_parity(int cells)
+{
     btf_model m;
     structured_model(&m);
+    if (cells)
+        add_cells(&m);
     btf_error e = {0};
     unsigned char *bytes = NULL;
     size_t nbytes = 0;
-    TU_OK(btf_model_encode(&m, &bytes, &nbytes, &e), &e); /* a valid 1.5 model */
-    assert_int_equal(bytes[13], 5);
+    TU_OK(btf_model_encode(&m, &bytes, &nbytes, &e), &e); /* a valid 1.5 (1.7) model */
+    assert_int_equal(bytes[13], cells ? 7 : 5);
     free(bytes);
     /* a grazing view (the march runs many steps) and a grazing light (shadows) */
     btf_dir pairs[][2] = {{{30, 60}, {45, 0}}, {{75, 225}, {75, 45}}, {{0, 0}, {80, 200}},
@@ -197,7 +215,8 @@ static void test_structured_parity(void **state)
         btf_render_info ic, ig;
         TU_OK(btf_render_flat(&m, pairs[i][0], pairs[i][1], &o, &c, &ic, &e), &e);
         TU_OK(btf_gpu_render_flat(gpu, &m, pairs[i][0], pairs[i][1], &o, &g, &ig, &e), &e);
-        compare(tu_fmt("structured view %g,%g light %g,%g", pairs[i][0].theta,
+        compare(tu_fmt("structured%s view %g,%g light %g,%g", cells ? " with cells" : "",
+                       pairs[i][0].theta,
                        pairs[i][0].phi, pairs[i][1].theta, pairs[i][1].phi), &c, &g);
         /* the relief acts: at relief 0 (no shadows, no march) the picture differs */
         o.relief = 0.0;
@@ -212,6 +231,13 @@ static void test_structured_parity(void **state)
     }
     no_validation_messages();
     btf_model_free(&m);
+}
+
+static void test_structured_parity(void **state)
+{
+    (void)state;
+    structured_parity(0);
+    structured_parity(1);
 }
 
 static void sphere_scene(btf_scene *s)

@@ -241,18 +241,21 @@ echo "== structure layers (docs/model.md): before and after on the three 81 x 81
 # Three model formats' worth of analysis, each the whole command: 1.3
 # (--no-structure --range-size 64 --no-gains: the CAR fields model every
 # exemplar whole), 1.4 (--no-shadows --no-gains: the structure layer alone)
-# and 1.5 (the default: shadows, masking, registered exemplars, pair gains).
+# 1.5 (--no-cells: shadows, masking, registered exemplars, pair gains) and
+# 1.7 (the default: with a weave's periodic cells; leather and wood have no
+# lattice, so their 1.7 row is their 1.5 model).
 # Per row: analysis and 512^2 flat render times (medians of 3, whole
 # process), model bytes, the report's mean combined distance.
 for mat in leather fabric wood; do
     D=$TMP/s$mat
     [ -d "$D" ] || "$BTFCAR" generate -q --material $mat --size 128 --seed 1 "$D" ||
         { echo "bench: generate $mat failed"; continue; }
-    for fmt in 1.3 1.4 1.5; do
+    for fmt in 1.3 1.4 1.5 1.7; do
         case $fmt in
-        1.3) opts="--no-structure --range-size 64 --no-gains" ;;
-        1.4) opts="--no-shadows --no-gains" ;;
-        1.5) opts="" ;;
+        1.3) opts="--no-structure --range-size 64 --no-gains --no-cells" ;;
+        1.4) opts="--no-shadows --no-gains --no-cells" ;;
+        1.5) opts="--no-cells" ;;
+        1.7) opts="" ;;
         esac
         timed "   $mat $fmt: analyse" "$BTFCAR" analyse -q "$D" -o "$D-$fmt.btfcar" $opts >/dev/null || continue
         an=$med

@@ -256,6 +256,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 }
 
 #else /* the seed writer */
+#include "model/model.h" /* the periodic cells (library-private) */
 
 static btf_offset causal[] = {{0, -1}, {-1, 0}, {-1, -1}, {-1, 1}, {0, -2}, {-2, 0}};
 
@@ -461,6 +462,27 @@ int main(int argc, char **argv)
             mg->lab_quantile[c][j] = (float)(low + span * (double)(20000 + 700 * j) / 65535.0);
         }
     write_seeds(argv[1], "lab", &m);
+    btf_model_free(&m);
+    /* format 1.7: a structure layer (STRC) with periodic cells (CELL) for
+     * subspace 1 of 2 */
+    small_model(&m, 1, 1);
+    m.range_width = m.range_height = 8;
+    m.range_texel = 1.0f;
+    free(m.range);
+    m.range = calloc(64, sizeof(float));
+    m.albedo = malloc(64 * sizeof(float));
+    for (int i = 0; i < 64; i++)
+        m.albedo[i] = btf__albedo_value(120u + (unsigned)(i % 9));
+    btf_error ce = {0};
+    btf_cells *cells = btf__cells_new(4, 2, 1, 2, &ce);
+    if (!cells)
+        exit(1);
+    cells->kept[1] = 1;
+    for (int i = 0; i < 24; i++)
+        cells->value[24 + i] = btf__albedo_value(112u + (unsigned)((i * 7) % 33));
+    if (btf__model_set_cells(&m, cells, &ce))
+        exit(1);
+    write_seeds(argv[1], "cells-1.7", &m);
     btf_model_free(&m);
     /* reflectance fields: format 1.0, and a sampled model (format 2.0, RFMP) */
     btf_rf_model rm;

@@ -85,13 +85,13 @@ btf_cells *btf__cells_new(int w, int h, int shift, int n_subspaces, btf_error *e
         return NULL;
     }
     btf_cells *c = btf__calloc(1, sizeof *c, err);
+    if (!c)
+        return NULL;
     size_t n = (size_t)n_subspaces * w * h * 3;
-    if (c) {
-        c->w = w, c->h = h, c->shift = shift, c->n_subspaces = n_subspaces;
-        c->kept = btf__calloc((size_t)n_subspaces, 1, err);
-        c->value = c->kept ? btf__alloc(n, sizeof(float), err) : NULL;
-    }
-    if (c && !c->value) {
+    c->w = w, c->h = h, c->shift = shift, c->n_subspaces = n_subspaces;
+    c->kept = btf__calloc((size_t)n_subspaces, 1, err);
+    c->value = c->kept ? btf__alloc(n, sizeof(float), err) : NULL;
+    if (!c->value) {
         btf__cells_free(c);
         return NULL;
     }

@@ -650,6 +650,21 @@ static void model_decode(void **state)
     fault_loop(&e);
 }
 
+/* A model of format 1.7 with periodic cells (the fuzz corpus' seed):
+ * its CELL section's reader under every failing allocation. */
+static void model_decode_cells(void **state)
+{
+    (void)state;
+    size_t n = 0;
+    unsigned char *bytes = tu_slurp("tests/fuzz/corpus/fuzz_model/cells-1.7.btfcar", &n);
+    assert_non_null(bytes);
+    assert_int_equal(bytes[13], 7);
+    model_ctx c = {.want = bytes, .want_size = n};
+    entry e = {"btf_model_decode (cells)", run_decode, model_same, model_done, &c, ~0ul, 1};
+    fault_loop(&e);
+    free(bytes);
+}
+
 typedef struct encode_ctx {
     unsigned char *data;
     size_t size;
@@ -840,7 +855,8 @@ static void synthesise(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(model_decode), cmocka_unit_test(model_encode),
+        cmocka_unit_test(model_decode), cmocka_unit_test(model_decode_cells),
+        cmocka_unit_test(model_encode),
         cmocka_unit_test(model_write),  cmocka_unit_test(texture_fit),
         cmocka_unit_test(dataset_open), cmocka_unit_test(analyse),
         cmocka_unit_test(synthesise),

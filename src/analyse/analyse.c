@@ -326,7 +326,8 @@ static void masking_factor(const btf_image *img, float *factor)
  * shading only (what synthesis gives before matching). */
 static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *m, int k,
                           const btf_structure_geom *g, btf_dir light, double *tex_mean,
-                          btf_cells *cells, double *explained, btf_error *err)
+                          btf_cells *cells, const btf_image *probe, double *explained,
+                          btf_error *err)
 {
     char what[64];
     snprintf(what, sizeof what, "subspace %d", k);
@@ -367,7 +368,7 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
         factor[i] = (float)pixel_luminance(img, i);
     btf__structure_divide(img, m, g, light, 1, NULL);
     /* what repeats on the lattice is the cell's, not the fields' */
-    rc = cells ? btf__cells_fit(img, cells, k, explained, err) : BTF_OK;
+    rc = cells ? btf__cells_fit(img, probe, cells, k, explained, err) : BTF_OK;
     if (rc) {
         free(factor);
         btf_image_free(&shaded);
@@ -417,6 +418,40 @@ static btf_status stage_gains(const btf_dataset *ds, const btf_segmentation *seg
     return rc;
 }
 
+/* The member of subspace k at its exemplar's view whose light is farthest
+ * from the exemplar's (the pair there a cell fitted to the exemplar
+ * serves worst), read and divided by the structure as the exemplar is,
+ * into probe; nothing when the view has no other member. (Other views see
+ * the cell shifted by their parallax, which no test of one member can
+ * judge: docs/model.md, "Periodic cells".) */
+static btf_status cell_probe(const btf_dataset *ds, const btf_segmentation *seg, int k,
+                             const btf_model *m, const btf_structure_geom *exemplar,
+                             btf_image *probe, btf_error *err)
+{
+    double l0[3], best = 2.0;
+    btf_dir_to_vec(m->lights.dirs[seg->rep_light[k]], l0);
+    int pv = -1, pl = -1, nl = m->lights.count;
+    for (int v = 0; v < m->views.count; v++)
+        for (int l = 0; l < nl; l++) {
+            if (seg->index[(size_t)v * nl + l] != k || v != seg->rep_view[k])
+                continue;
+            double d[3];
+            btf_dir_to_vec(m->lights.dirs[l], d);
+            double c = d[0] * l0[0] + d[1] * l0[1] + d[2] * l0[2];
+            if (c < best)
+                best = c, pv = v, pl = l;
+        }
+    if (pv < 0 || (pv == seg->rep_view[k] && pl == seg->rep_light[k]))
+        return BTF_OK;
+    btf_status rc = btf_dataset_read(ds, pv, pl, probe, err);
+    if (rc || !on_grid(probe, m)) {
+        btf_image_free(probe);
+        return rc;
+    }
+    btf__structure_divide(probe, m, exemplar, m->lights.dirs[pl], 1, NULL);
+    return BTF_OK;
+}
+
 /* Cells of 1s on the lattice of m's structure layer (NULL where it does
  * not repeat, or its cell is too large to keep). */
 static btf_status new_cells(const btf_model *m, int k, btf_cells **out, btf_error *err)
@@ -437,12 +472,13 @@ static void cells_note(const btf_cells *c, const double *explained, char *note, 
     for (int k = 0; k < c->n_subspaces; k++)
         if (c->kept[k]) {
             kept++;
-            lo = explained[k] < lo ? explained[k] : lo;
-            hi = explained[k] > hi ? explained[k] : hi;
+            lo = explained[2 * k] < lo ? explained[2 * k] : lo;
+            hi = explained[2 * k] > hi ? explained[2 * k] : hi;
         }
-    snprintf(note, n, "; periodic cells of %d x %d texels for %d of %d subspaces (each explains "
-             "%.0f-%.0f %% of its remainder's variance)", c->w, c->h, kept, c->n_subspaces,
-             100.0 * lo, 100.0 * hi);
+    snprintf(note, n, "; periodic cells of %d x %d texels for %d of %d subspaces (explaining "
+             "%.0f-%.0f %%; kept where >= %.0f %% and no worse on the farthest-lit member)",
+             c->w, c->h, kept, c->n_subspaces, 100.0 * lo, 100.0 * hi,
+             100.0 * BTF_CELLS_MIN_EXPLAINED);
 }
 
 static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
@@ -473,7 +509,7 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
                       (rc = exemplar_geoms(imgs, seg, m, &normal, horizon, &geoms, err)) ||
                       (rc = fit_ambient(imgs, seg, m, geoms, err))))
         goto done;
-    explained = btf__calloc((size_t)seg->k, sizeof(double), err);
+    explained = btf__calloc((size_t)seg->k * 2, sizeof(double), err);
     if (!explained) {
         rc = BTF_E_NOMEM;
         goto done;
@@ -487,9 +523,15 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         else if ((rc = btf_dataset_read(ds, seg->rep_view[k], seg->rep_light[k], &img, err)))
             break;
         int structured = normal.data && m->albedo && on_grid(&img, m);
-        rc = fit_one(&img, o, m, k, structured ? &geoms[k] : NULL,
-                     m->lights.dirs[seg->rep_light[k]], tex_mean ? tex_mean + 3 * k : NULL,
-                     structured ? cells : NULL, &explained[k], err);
+        btf_image probe = {0};
+        if (structured && cells)
+            rc = cell_probe(ds, seg, k, m, &geoms[k], &probe, err);
+        if (rc == BTF_OK)
+            rc = fit_one(&img, o, m, k, structured ? &geoms[k] : NULL,
+                         m->lights.dirs[seg->rep_light[k]], tex_mean ? tex_mean + 3 * k : NULL,
+                         structured ? cells : NULL, probe.data ? &probe : NULL,
+                         &explained[2 * k], err);
+        btf_image_free(&probe);
         btf_image_free(&img);
         if (rc == BTF_OK && !structured && m->albedo) {
             free(m->albedo); /* an exemplar off the grid: the layer cannot hold */
@@ -515,8 +557,9 @@ static btf_status stage_fit(const btf_dataset *ds, const btf_segmentation *seg,
         rc = btf__model_set_cells(m, cells, err); /* taken over */
         cells = NULL;
     } else if (rc == BTF_OK && cells) {
-        snprintf(note, note_size, "; no periodic cells (none explains %.0f %% of a "
-                 "remainder's variance)", 100.0 * BTF_CELLS_MIN_EXPLAINED);
+        snprintf(note, note_size, "; no periodic cells (none explains %.0f %% of its "
+                 "exemplar's remainder without making its farthest-lit member worse)",
+                 100.0 * BTF_CELLS_MIN_EXPLAINED);
     }
     if (rc == BTF_OK && tex_mean)
         rc = stage_gains(ds, seg, o, tex_mean, &normal, horizon, m, err);

@@ -71,6 +71,9 @@ void btf__model_internal_free(struct btf_model_internal *in);
 /* A subspace keeps its cell when it explains this share of the remainder's
  * variance. */
 #define BTF_CELLS_MIN_EXPLAINED 0.2
+/* ... and does no harm to the member of its subspace it serves worst at
+ * the exemplar's view (the share it explains there is not negative). */
+#define BTF_CELLS_PROBE_MIN 0.0
 typedef struct btf_cells {
     int w, h, shift, n_subspaces;
     unsigned char *kept; /* [k] 1: subspace k has a cell */
@@ -224,10 +227,14 @@ void btf__structure_divide(btf_image *img, const btf_model *m, const btf_structu
                            btf_dir light, int albedo, double *mean_shade);
 /* Subspace k's cell from its remainder img (the exemplar after
  * btf__structure_divide, on the range map's grid), in the exemplar's own
- * pixels: *explained the share of img's variance it explains; when that
- * reaches BTF_CELLS_MIN_EXPLAINED, img is divided by it and c keeps it for
- * k (docs/model.md, "Periodic cells"). */
-btf_status btf__cells_fit(btf_image *img, btf_cells *c, int k, double *explained, btf_error *err);
+ * pixels: explained[0] the share of img's variance it explains,
+ * explained[1] the share of probe's (the remainder of the subspace's
+ * member at the exemplar's view whose light is farthest from the
+ * exemplar's; NULL: img's). When the first reaches BTF_CELLS_MIN_EXPLAINED
+ * and the second BTF_CELLS_PROBE_MIN, img is divided by the cell and c
+ * keeps it for k (docs/model.md, "Periodic cells"). */
+btf_status btf__cells_fit(btf_image *img, const btf_image *probe, btf_cells *c, int k,
+                          double explained[2], btf_error *err);
 /* btf__fit_marginals with the Lab histogram of lab_img (the exemplar as
  * synthesis gives it before colour matching: with the albedo pattern). */
 btf_status btf__fit_marginals_lab(const btf_image *img, const btf_image *lab_img, btf_model *m,

@@ -143,20 +143,11 @@ static btf_status cell_means(const btf_image *img, const btf_cells *c, float *v,
     return BTF_OK;
 }
 
-btf_status btf__cells_fit(btf_image *img, btf_cells *c, int k, double *explained, btf_error *err)
+/* The share of img's variance that the cell v explains: img's channel
+ * means times the factor against the means alone. */
+static double explained_by(const btf_image *img, const btf_cells *c, const float *v)
 {
-    *explained = 0.0;
-    size_t cells = (size_t)c->w * c->h, n = (size_t)img->width * img->height;
-    float *v = btf__alloc(cells * 3, sizeof(float), err);
-    if (!v)
-        return BTF_E_NOMEM;
-    btf_status rc = cell_means(img, c, v, err);
-    if (rc) {
-        free(v);
-        return rc;
-    }
-    /* the share of the remainder's variance the cell explains: mean x
-     * factor against the mean alone */
+    size_t n = (size_t)img->width * img->height;
     double mean[3] = {0, 0, 0}, total = 0.0, left = 0.0;
     for (size_t i = 0; i < n; i++)
         for (int ch = 0; ch < 3; ch++)
@@ -167,8 +158,29 @@ btf_status btf__cells_fit(btf_image *img, btf_cells *c, int k, double *explained
             double e = x - mean[ch] * factor_at(c, v, img->width, i, ch);
             total += d * d, left += e * e;
         }
-    *explained = total > 0.0 ? 1.0 - left / total : 0.0;
-    if (*explained >= BTF_CELLS_MIN_EXPLAINED) {
+    return total > 0.0 ? 1.0 - left / total : 0.0;
+}
+
+btf_status btf__cells_fit(btf_image *img, const btf_image *probe, btf_cells *c, int k,
+                          double explained[2], btf_error *err)
+{
+    explained[0] = explained[1] = 0.0;
+    size_t cells = (size_t)c->w * c->h, n = (size_t)img->width * img->height;
+    float *v = btf__alloc(cells * 3, sizeof(float), err);
+    if (!v)
+        return BTF_E_NOMEM;
+    btf_status rc = cell_means(img, c, v, err);
+    if (rc) {
+        free(v);
+        return rc;
+    }
+    explained[0] = explained_by(img, c, v);
+    /* a cell serves every pair of its subspace: it must not make the
+     * member lit farthest from the exemplar (at the exemplar's view) worse */
+    explained[1] = probe && probe->width == img->width && probe->height == img->height
+                       ? explained_by(probe, c, v)
+                       : explained[0];
+    if (explained[0] >= BTF_CELLS_MIN_EXPLAINED && explained[1] >= BTF_CELLS_PROBE_MIN) {
         for (size_t i = 0; i < n; i++)
             for (int ch = 0; ch < 3; ch++)
                 img->data[3 * i + ch] = (float)(img->data[3 * i + ch] /

@@ -4,16 +4,18 @@
  * layer's maps repeat on a lattice (a weave, model/structure_lattice.c),
  * the remainder the CAR fields would model after the relief's shading and
  * the albedo pattern are divided out still repeats with it: on the
- * generated fabric 77-91 % of its variance is the lattice's mean cell (the
+ * generated fabric 78-90 % of its variance is the lattice's mean cell (the
  * shading the Lambertian fit misses at each thread's edge, the yarns' sheen).
  * A stationary CAR field cannot place that (Haindl & Filip 2007 model
  * textures, not lattices) and turned it into speckle over the weave. So the
  * analysis keeps, per subspace, the remainder's mean over the lattice's
- * cell as three factors per cell texel (mean 1 per channel), divides them
- * out before the CAR fit, and synthesis multiplies them back through the
- * same quilting map as the albedo pattern: the quilting draws only blocks
- * whose offset from their own place is a lattice vector, so a cell texel
- * stays in step across every joint.
+ * cell as three factors per cell texel (mean 1 per channel), taken in the
+ * exemplar's own pixels (registering it through the parallax measured
+ * worse), where it holds (btf__cells_fit's two tests), divides them out
+ * before the CAR fit, and synthesis multiplies them back through the same
+ * quilting map as the albedo pattern: the quilting draws only blocks whose
+ * offset from their own place is a lattice vector, so a cell texel stays in
+ * step across every joint.
  *
  * The cell is the lattice's in Hermite normal form: a lattice of integer
  * vectors has a basis (w, 0), (shift, h) with 0 <= shift < w, so texel

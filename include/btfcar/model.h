@@ -126,9 +126,12 @@ typedef struct btf_model {
      * first-order statistics a subspace shares); the renderer interpolates
      * them with the images' weights. NULL: 1 everywhere. */
     float *gain;
-    /* The library's own data about a model it read (the synthesis margins
-     * computed then, docs/synthesis.md): opaque, freed by btf_model_free;
-     * NULL in a model built by hand, which is fine. */
+    /* The library's own data about a model it read or fitted (the
+     * synthesis margins computed then, docs/synthesis.md) and, since
+     * format 1.7, the remainders' periodic cells (docs/model.md, "Periodic
+     * cells"): opaque, freed by btf_model_free; NULL in a model built by
+     * hand, which is fine. A copy of the struct that sets it to NULL
+     * drops the cells (the copy then synthesises without them). */
     struct btf_model_internal *internal;
 } btf_model;
 

@@ -92,6 +92,12 @@ int btf__cells_any(const btf_cells *c);
 /* The model's cells (NULL: none) and setting them (taking c over). */
 const btf_cells *btf__model_cells(const btf_model *m);
 btf_status btf__model_set_cells(btf_model *m, btf_cells *c, btf_error *err);
+/* btf__structure_apply_row for subspace k: a base pattern of 4 channels
+ * (RGB and the cell index) times k's cell, texel by texel, with the bits
+ * btf__structure_for gives (the product first), so that the CPU's rows
+ * need no whole pattern per subspace; any other pattern as it is. */
+void btf__structure_apply_row_for(const btf_model *m, int k, const btf_image *a, int y,
+                                  float *rgb, int width);
 /* The structure pattern of subspace k: base as btf__structure_albedo makes
  * it (with cells: RGB and the cell index per texel) times k's cell, into
  * tmp (allocated here when used; the caller frees it); *use is base itself

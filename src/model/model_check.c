@@ -413,9 +413,6 @@ static btf_status check_range(const btf_model *m, const char *name, btf_status c
     return BTF_OK;
 }
 
-/* Every rule of docs/model-format.md that a model in memory must meet. code
- * is BTF_E_DATA when writing (the caller's model is wrong) and BTF_E_FORMAT
- * when reading (the file is). */
 /* The periodic cells: with the structure layer, one per subspace, their
  * geometry in bounds, their factors positive and finite. */
 static btf_status check_cells(const btf_model *m, const char *name, btf_status code,
@@ -441,6 +438,9 @@ static btf_status check_cells(const btf_model *m, const char *name, btf_status c
     return BTF_OK;
 }
 
+/* Every rule of docs/model-format.md that a model in memory must meet. code
+ * is BTF_E_DATA when writing (the caller's model is wrong) and BTF_E_FORMAT
+ * when reading (the file is). */
 btf_status btf__model_validate(const btf_model *m, const char *name, btf_status code,
                                btf_error *err)
 {

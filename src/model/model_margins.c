@@ -101,27 +101,21 @@ static btf_status margin_job(void *user, int j, int worker, btf_error *err)
  * and the work at most the budget plus one band per CPU. */
 btf_status btf__model_keep_margins(btf_model *m, double budget)
 {
-    btf_cells *cells = m->internal ? m->internal->cells : NULL; /* kept as they are */
-    if (m->internal)
-        m->internal->cells = NULL;
-    btf__model_internal_free(m->internal);
-    m->internal = NULL;
+    /* the model's own data (its cells) moves to the new internal part only
+     * when that is whole: on failure the old one stays as it was (its
+     * margins are checked against the bands before use) */
     if (m->n_subspaces <= 0) {
-        btf__cells_free(cells);
+        btf__model_internal_free(m->internal);
+        m->internal = NULL;
         return BTF_OK;
     }
     struct btf_model_internal *in = calloc(1, sizeof *in);
-    if (in)
-        in->cells = cells;
-    else
-        btf__cells_free(cells);
     size_t nkept = (size_t)m->n_subspaces * 3 * BTF_MAX_LEVELS;
     kept_margin *kept = calloc(nkept, sizeof *kept);
     margin_jobs mj = {m, kept, calloc(nkept, sizeof(int)), calloc(nkept, sizeof(double)), budget,
                       0};
     if (!in || !kept || !mj.band || !mj.work) {
-        btf__model_internal_free(in); /* and the cells */
-        BTF_FREE_ALL(kept, mj.band, mj.work);
+        BTF_FREE_ALL(in, kept, mj.band, mj.work);
         return BTF_E_NOMEM;
     }
     in->n_subspaces = m->n_subspaces;
@@ -158,6 +152,11 @@ btf_status btf__model_keep_margins(btf_model *m, double budget)
         btf__model_internal_free(in);
         return BTF_E_NOMEM;
     }
+    if (m->internal) { /* the cells go on; the old margins are replaced */
+        in->cells = m->internal->cells;
+        m->internal->cells = NULL;
+    }
+    btf__model_internal_free(m->internal);
     m->internal = in;
     return BTF_OK;
 }

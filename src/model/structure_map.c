@@ -186,14 +186,11 @@ btf_status btf__structure_apply(const btf_model *m, int subspace, uint64_t seed,
 {
     if (!m->albedo || !btf__structure_quilted(m))
         return BTF_OK;
-    btf_image own = {0}, *a = cache ? cache : &own, tmp = {0};
-    const btf_image *use = NULL;
+    btf_image own = {0}, *a = cache ? cache : &own;
     btf_status rc = btf__structure_pattern(m, img->width, img->height, seed, a, err);
-    if (rc == BTF_OK)
-        rc = btf__structure_for(m, subspace, a, &tmp, &use, err);
     for (int y = 0; rc == BTF_OK && y < img->height; y++)
-        btf__structure_apply_row(use, y, img->data + (size_t)y * img->width * 3, img->width);
-    btf_image_free(&tmp);
+        btf__structure_apply_row_for(m, subspace, a, y, img->data + (size_t)y * img->width * 3,
+                                     img->width);
     btf_image_free(&own);
     return rc;
 }
@@ -229,6 +226,34 @@ btf_status btf__structure_layers(const btf_model *m, int width, int height, uint
     return BTF_OK;
 }
 
+/* The factors of cell texel index (channel 3 of a base pattern) of subspace
+ * k, or NULL (no cell, or an index outside the cell). */
+static const float *cell_factor(const btf_cells *c, int k, float index)
+{
+    if (!c || k < 0 || k >= c->n_subspaces || !c->kept[k] || !(index >= 0.0f) ||
+        index >= (float)c->w * (float)c->h)
+        return NULL;
+    return btf__cells_of(c, k) + 3 * (size_t)index;
+}
+
+void btf__structure_apply_row_for(const btf_model *m, int k, const btf_image *a, int y,
+                                  float *rgb, int width)
+{
+    if (a->channels != 4) {
+        btf__structure_apply_row(a, y, rgb, width);
+        return;
+    }
+    const btf_cells *c = btf__model_cells(m);
+    const float *row = a->data + (size_t)(y % a->height) * a->width * 4;
+    for (int x = 0, px = 0; x < width; x++, px = px + 1 == a->width ? 0 : px + 1) {
+        const float *b = row + (size_t)px * 4, *f = cell_factor(c, k, b[3]);
+        for (int ch = 0; ch < 3; ch++) { /* the product first: btf__structure_for's bits */
+            float p = f ? b[ch] * f[ch] : b[ch];
+            rgb[3 * x + ch] = rgb[3 * x + ch] * p;
+        }
+    }
+}
+
 btf_status btf__structure_for(const btf_model *m, int k, const btf_image *base, btf_image *tmp,
                               const btf_image **use, btf_error *err)
 {
@@ -239,11 +264,9 @@ btf_status btf__structure_for(const btf_model *m, int k, const btf_image *base, 
     btf_status rc = btf_image_alloc(tmp, base->width, base->height, 3, err);
     if (rc)
         return rc;
-    const float *v = c && k >= 0 && k < c->n_subspaces && c->kept[k] ? btf__cells_of(c, k) : NULL;
     size_t n = (size_t)base->width * base->height;
     for (size_t i = 0; i < n; i++) {
-        const float *b = base->data + 4 * i;
-        const float *f = v ? v + 3 * (size_t)b[3] : NULL;
+        const float *b = base->data + 4 * i, *f = cell_factor(c, k, b[3]);
         for (int ch = 0; ch < 3; ch++)
             tmp->data[3 * i + ch] = f ? b[ch] * f[ch] : b[ch];
     }

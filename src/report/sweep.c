@@ -143,12 +143,12 @@ static void make_fingerprint(sweep_ctx *c)
     const btf_sweep_opts *o = c->o;
     snprintf(c->fingerprint, sizeof c->fingerprint,
              "btfcar %s; dataset %s %dx%d views x lights %dx%d, %llu bytes; seed %llu; "
-             "quality %s %dx%d relief %g, %d seeds; synth %d; render %d; range %s",
+             "quality %s %dx%d relief %g, %d seeds; synth %d; render %d; range %s; cells %s",
              BTF_VERSION_STRING, in->root, in->width, in->height, in->n_views, in->n_lights,
              (unsigned long long)in->bytes_on_disk, (unsigned long long)o->quality.seed,
              o->quality.all ? "all" : "spread", o->quality.views, o->quality.lights,
              o->quality.relief, o->seeds, o->synth_size, o->render_size,
-             o->analyse.no_range ? "none" : "yes");
+             o->analyse.no_range ? "none" : "yes", o->analyse.no_cells ? "none" : "yes");
 }
 
 static void point_name(const btf_sweep_setting *s, char *buf, size_t n)

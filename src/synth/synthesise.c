@@ -213,6 +213,8 @@ static btf_status plain_rows(const btf_model *m, int subspace,
 typedef struct structured {
     btf_image own;           /* one period of the pattern, made here */
     const btf_image *albedo; /* the pattern used: own, or the caller's */
+    const btf_model *m;      /* and the subspace whose periodic cell it carries */
+    int subspace;
     float *row;
     int width;
     btf_rows_fn fn;
@@ -225,7 +227,7 @@ static int structured_cb(void *user, int y, int nrows, const float *rows, btf_er
     size_t n = (size_t)s->width * 3;
     for (int r = 0; r < nrows; r++) {
         memcpy(s->row, rows + (size_t)r * n, n * sizeof(float));
-        btf__structure_apply_row(s->albedo, y + r, s->row, s->width);
+        btf__structure_apply_row_for(s->m, s->subspace, s->albedo, y + r, s->row, s->width);
         int got = s->fn(s->user, y + r, 1, s->row, err);
         if (got)
             return got;
@@ -239,18 +241,13 @@ static btf_status structured_rows(const btf_model *m, int subspace,
                                   btf_rows_fn fn, void *user, btf_background *bg,
                                   const btf_image *albedo, btf_error *err)
 {
-    structured s = {.albedo = albedo, .width = width, .fn = fn, .user = user};
-    btf_image base = {0}; /* with periodic cells: the base, made the subspace's in own */
-    btf_status rc = albedo ? BTF_OK : btf__structure_albedo(m, width, height, o->seed, &base, err);
-    if (rc == BTF_OK)
-        rc = btf__structure_for(m, subspace, albedo ? albedo : &base, &s.own, &s.albedo, err);
-    if (rc == BTF_OK && s.albedo == &base) /* no cells: the base is the pattern, kept in own */
-        s.own = base, s.albedo = &s.own, base = (btf_image){0};
-    btf_image_free(&base);
-    if (rc) {
-        btf_image_free(&s.own);
+    structured s = {.albedo = albedo, .m = m, .subspace = subspace, .width = width, .fn = fn,
+                    .user = user};
+    btf_status rc = albedo ? BTF_OK : btf__structure_albedo(m, width, height, o->seed, &s.own, err);
+    if (rc)
         return rc;
-    }
+    if (!albedo)
+        s.albedo = &s.own;
     s.row = btf__alloc((size_t)width * 3, sizeof(float), err);
     rc = s.row ? plain_rows(m, subspace, margins, o, width, height, structured_cb, &s, bg, err)
                : BTF_E_NOMEM;

@@ -51,6 +51,7 @@
  *   /tmp/seeds tests/fuzz/corpus/fuzz_model
  */
 #include "btfcar.h"
+#include "model/model.h" /* the periodic cells (btf__model_cells) */
 #include "rf/rf_render.h"
 
 #include <math.h>
@@ -96,7 +97,17 @@ static int models_equal(const btf_model *a, const btf_model *b)
         return 0;
     if (a->chroma && memcmp(a->chroma, b->chroma, sizeof *a->chroma * 3 * nr))
         return 0;
-    return !a->gain || !memcmp(a->gain, b->gain, sizeof *a->gain * 3 * ni);
+    if (a->gain && memcmp(a->gain, b->gain, sizeof *a->gain * 3 * ni))
+        return 0;
+    /* the periodic cells (CELL, format 1.7), kept in the private part */
+    const btf_cells *ca = btf__model_cells(a), *cb = btf__model_cells(b);
+    if (!ca != !cb)
+        return 0;
+    return !ca || (ca->w == cb->w && ca->h == cb->h && ca->shift == cb->shift &&
+                   ca->n_subspaces == cb->n_subspaces &&
+                   !memcmp(ca->kept, cb->kept, (size_t)ca->n_subspaces) &&
+                   !memcmp(ca->value, cb->value,
+                           sizeof *ca->value * 3 * (size_t)ca->w * ca->h * ca->n_subspaces));
 }
 
 static int model_empty(const btf_model *m)
@@ -256,7 +267,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 }
 
 #else /* the seed writer */
-#include "model/model.h" /* the periodic cells (library-private) */
 
 static btf_offset causal[] = {{0, -1}, {-1, 0}, {-1, -1}, {-1, 1}, {0, -2}, {-2, 0}};
 

@@ -71,11 +71,8 @@ int btf__cell_index(const btf_cells *c, int x, int y)
 
 void btf__cells_free(btf_cells *c)
 {
-    if (!c)
-        return;
-    free(c->kept);
-    free(c->value);
-    free(c);
+    if (c)
+        BTF_FREE_ALL(c->kept, c->value, c);
 }
 
 btf_cells *btf__cells_new(int w, int h, int shift, int n_subspaces, btf_error *err)

@@ -14,7 +14,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <zlib.h>
 
 /* Every lattice translate of a texel lies in the same cell texel, and the
  * cell texels are exactly w x h. */
@@ -89,28 +88,6 @@ static void model_with_cells(btf_model *m)
     TU_OK(btf__model_set_cells(m, c, &e), &e);
 }
 
-/* The CELL section of an encoded model (its tag) in payload p. */
-static unsigned char *find_tag(unsigned char *p, size_t n, const char *tag)
-{
-    for (size_t i = 0; i + 4 <= n; i++)
-        if (!memcmp(p + i, tag, 4))
-            return p + i;
-    return NULL;
-}
-
-static unsigned char *payload_of(const unsigned char *f, size_t *n)
-{
-    uLongf raw = f[18] | f[19] << 8 | f[20] << 16 | (uLong)f[21] << 24;
-    uLong stored = f[22] | f[23] << 8 | f[24] << 16 | (uLong)f[25] << 24;
-    unsigned char *p = malloc(raw);
-    if (f[17] == 1)
-        assert_int_equal(uncompress(p, &raw, f + 26, stored), Z_OK);
-    else
-        memcpy(p, f + 26, raw);
-    *n = raw;
-    return p;
-}
-
 /* One byte of CELL's body changed: the decoder refuses the file naming
  * the section, on one line. */
 static void refused(const unsigned char *p, size_t pn, size_t at, unsigned char v,
@@ -152,10 +129,9 @@ static void file_round_trip(void **state)
     btf_model_free(&back);
 
     size_t pn;
-    unsigned char *p = payload_of(f, &pn);
-    unsigned char *cell = find_tag(p, pn, "CELL");
-    assert_non_null(cell);
-    size_t body = (size_t)(cell - p) + 8; /* tag and length */
+    unsigned char *p = tu_model_payload(f, &pn);
+    size_t body = tu_rf_section(p, pn, "CELL"); /* after its tag and length */
+    assert_true(body > 0);
     refused(p, pn, body + 4, 4, "shift at the width");   /* shift (u16 LE) = w */
     refused(p, pn, body + 6, 2, "subspaces");            /* 2 of SUBS's 3 */
     refused(p, pn, body + 8 + 1, 1, "flag of a cell");   /* a kept flag: 1 more cell's bytes */

@@ -15,7 +15,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <zlib.h>
 
 static void gain_codes(void **state)
 {
@@ -145,20 +144,6 @@ static void layered_model(btf_model *m)
         m->gain[i] = btf__gain_value(i * 13 - 100);
 }
 
-/* The payload of an encoded model (the tests' own unwrap of the container). */
-static unsigned char *payload_of(const unsigned char *f, size_t *n)
-{
-    uLongf raw = f[18] | f[19] << 8 | f[20] << 16 | (uLong)f[21] << 24;
-    uLong stored = f[22] | f[23] << 8 | f[24] << 16 | (uLong)f[25] << 24;
-    unsigned char *p = malloc(raw);
-    if (f[17] == 1)
-        assert_int_equal(uncompress(p, &raw, f + 26, stored), Z_OK);
-    else
-        memcpy(p, f + 26, raw);
-    *n = raw;
-    return p;
-}
-
 static void file_round_trip(void **state)
 {
     (void)state;
@@ -180,7 +165,7 @@ static void file_round_trip(void **state)
 
     /* an unknown flag bit in STRC, and a colour layer cut short */
     size_t pn;
-    unsigned char *p = payload_of(f, &pn);
+    unsigned char *p = tu_model_payload(f, &pn);
     unsigned char *strc = NULL;
     for (size_t i = 0; i + 4 <= pn && !strc; i++)
         if (!memcmp(p + i, "STRC", 4))

@@ -444,6 +444,15 @@ size_t tu_rf_payload(const unsigned char *d, unsigned char *payload, size_t cap)
     return plen;
 }
 
+unsigned char *tu_model_payload(const unsigned char *d, size_t *n)
+{
+    size_t raw = d[18] | d[19] << 8 | d[20] << 16 | (size_t)d[21] << 24;
+    unsigned char *p = malloc(raw ? raw : 1);
+    assert_non_null(p);
+    *n = tu_rf_payload(d, p, raw);
+    return p;
+}
+
 size_t tu_rf_section(const unsigned char *payload, size_t n, const char *tag)
 {
     size_t at = 0, found = 0;

@@ -118,6 +118,9 @@ void tu_rf_tiny_model(btf_rf_model *m, int width, int height);
 /* The payload of an encoded model file (after its 26-byte container head,
  * inflated when stored compressed) into payload, of cap bytes; its length. */
 size_t tu_rf_payload(const unsigned char *d, unsigned char *payload, size_t cap);
+/* The payload of a model file d (either family: one container), inflated
+ * when deflated, malloc'd; its size in *n. */
+unsigned char *tu_model_payload(const unsigned char *d, size_t *n);
 /* Where the content of the payload's section tag ("RFHD", ...) starts, past
  * its 8-byte head; 0 when there is none, the last when there are several. */
 size_t tu_rf_section(const unsigned char *payload, size_t n, const char *tag);

@@ -128,13 +128,12 @@ void cli_show_neighbourhood(const void *dest, char *buf, size_t n);
 #define CLI_MODEL_OPTIONS(fo, tag_)                                                        \
     {.name = "--levels", .kind = CLI_INT, .dest = &(fo)->levels, .meta = "L|auto",         \
      .help = "pyramid levels; auto: from the image size and its correlation length,\n"    \
-             "at most 3; 1 beside a structure layer (docs/model.md)",                     \
+             "at most 3, 2 beside a structure layer (docs/model.md)",                      \
      .lo = 1, .hi = BTF_MAX_LEVELS, .word = "auto", .word_value = 0, .tag = (tag_)},       \
     {.name = "--neighbourhood", .kind = CLI_CUSTOM, .dest = &(fo)->car, .meta = "SPEC|auto", \
      .help = "causal offsets row:col, comma-separated, e.g. 0:-1,-1:0,-1:-1,-1:1;\n"      \
              "auto chooses per sub-band by each candidate's posterior probability\n"      \
-             "(beside a structure layer each coefficient pays 32 bits over 3 x its\n"     \
-             "band's share of the variance)",                                             \
+             "(beside a structure layer each coefficient pays its 32 bits)",               \
      .parse = cli_parse_neighbourhood, .show = cli_show_neighbourhood, .tag = (tag_)},     \
     {.name = "--neighborhood", .kind = CLI_CUSTOM, .dest = &(fo)->car, .meta = "SPEC|auto", \
      .help = "the same as --neighbourhood", .parse = cli_parse_neighbourhood,              \

@@ -260,10 +260,7 @@ typedef struct btf_car_fit_opts {
     int max_neighbours;                   /* auto: largest candidate; 0: 24 */
     double coefficient_bits;              /* auto: prior odds 2^-bits per
                                              coefficient (what the file pays
-                                             for it); 0: equal odds. The
-                                             subspace fit scales it per band
-                                             by 1 / (3 x the band's share of
-                                             the variance), 0..1e6 */
+                                             for it); 0: equal odds */
     btf_warning_fn warn;
     void *warn_user;
     const char *what;                     /* names the sub-band in warnings */
@@ -275,8 +272,7 @@ btf_car_fit_opts btf_car_fit_defaults(void);
 typedef struct btf_fit_opts {
     size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int levels;               /* pyramid levels 1..BTF_MAX_LEVELS; 0: auto (docs/model.md) */
-    int max_auto_levels;      /* auto: at most this many; 0: 3 (the paper's bound;
-                                 the analysis sets 1 beside a structure layer) */
+    int max_auto_levels;      /* auto: at most this many; 0: 3 (the paper's bound) */
     const float *masking;     /* auto: NULL, or (the image's size) the factor the
                                  render multiplies this image's luminance by
                                  (its structure layer); the levels are then

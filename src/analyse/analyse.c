@@ -298,7 +298,7 @@ static void image_mean(const btf_image *img, double *mean)
         mean[c] = f[c];
 }
 
-#define STRUCTURED_AUTO_LEVELS 1
+#define STRUCTURED_AUTO_LEVELS 2
 #define STRUCTURED_COEFFICIENT_BITS 32.0 /* a float gamma in the file */
 
 /* Pixel i's luminance, as the masking factor compares it: R + G + B. */
@@ -333,16 +333,14 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     snprintf(what, sizeof what, "subspace %d", k);
     btf_fit_opts fo = o->fit;
     fo.car.what = what;
-    /* The structure layer holds the coarse pattern: a second pyramid level
-     * measured no closer on the rendered material (leather, wood) or
-     * 0.1 % closer for 1 % more bytes (fabric), a third cost 1-2 KB for
-     * nothing (docs/model.md, "Choosing the levels"). */
+    /* The structure layer holds the coarse pattern: a third pyramid level
+     * measured no closer on the rendered material and cost 1-2 KB
+     * (docs/model.md, "Choosing the levels"). */
     if (g && !fo.max_auto_levels)
         fo.max_auto_levels = STRUCTURED_AUTO_LEVELS;
     /* Beside a structure layer the remainder's extra neighbours bought
      * likelihood the render did not show: each must pay for its 32 bits
-     * in the file, more on a band that carries little of the variance
-     * (docs/model.md, "Choosing the neighbourhood"). */
+     * in the file (docs/model.md, "Choosing the neighbourhood"). */
     if (g && !fo.car.coefficient_bits)
         fo.car.coefficient_bits = STRUCTURED_COEFFICIENT_BITS;
     if (!g) {
@@ -358,8 +356,7 @@ static btf_status fit_one(btf_image *img, const btf_analyse_opts *o, btf_model *
     size_t n = (size_t)img->width * img->height;
     /* the levels' mask: only where they are chosen and none was given */
     float *factor = NULL;
-    if (!fo.levels && fo.max_auto_levels != 1 && !fo.masking &&
-        !(factor = btf__alloc(n, sizeof(float), err))) {
+    if (!fo.levels && !fo.masking && !(factor = btf__alloc(n, sizeof(float), err))) {
         btf_image_free(&shaded);
         return BTF_E_NOMEM;
     }

@@ -22,8 +22,8 @@
  *
  * The cap: at most 3 levels (the paper's bound), and no more than keep the
  * coarsest level 16 pixels wide (a CAR model of 24 neighbours needs rows
- * and columns to fit on); the caller may lower it (1 beside a structure
- * layer, analyse/analyse.c: there the depth is not measured).
+ * and columns to fit on); the caller may lower it (2 beside a structure
+ * layer, analyse/analyse.c).
  *
  * With a mask (the structure layer's factor the render multiplies the band's
  * image by), the octaves are those of the rendered product: the mask's

@@ -19,38 +19,6 @@ btf_fit_opts btf_fit_defaults(void)
                           .levels = 0, .car = btf_car_fit_defaults()};
 }
 
-/* The variance of each of the three bands, into var; their sum. */
-static double band_variances(double *const bands[3], size_t n, double var[3])
-{
-    double total = 0.0;
-    for (int b = 0; b < 3; b++) {
-        double m = 0.0, v = 0.0;
-        for (size_t i = 0; i < n; i++)
-            m += bands[b][i];
-        m /= (double)n;
-        for (size_t i = 0; i < n; i++)
-            v += (bands[b][i] - m) * (bands[b][i] - m);
-        var[b] = v;
-        total += v;
-    }
-    return total;
-}
-
-/* A coefficient's price (car.coefficient_bits, set beside a structure
- * layer) on a band that carries share of the subspace's variance: the
- * price at equal shares (1/3) over 3 share. A rate-distortion rule: the
- * likelihood a coefficient buys on a band is worth to the rendered material
- * what the band's share of the variance is, so the band that carries 90 %
- * gets the large neighbourhood and one that carries 1 % a small one
- * (docs/model.md, "Choosing the neighbourhood"). 0 (equal odds) stays 0. */
-static double band_price(double bits, double share)
-{
-    if (!(bits > 0.0))
-        return bits;
-    double price = bits / (3.0 * (share > 1e-6 ? share : 1e-6));
-    return price < BTF_CAR_MAX_COEFFICIENT_BITS ? price : BTF_CAR_MAX_COEFFICIENT_BITS;
-}
-
 btf_status btf__fit_subspace(const btf_image *img, const btf_fit_opts *opts,
                              btf_subspace_model *out, btf_error *err)
 {
@@ -107,14 +75,10 @@ btf_status btf__fit_subspace(const btf_image *img, const btf_fit_opts *opts,
                  levels, img->width, img->height);
         o.car.warn(o.car.warn_user, msg);
     }
-    double var[3], total = band_variances(bands, n, var);
     for (int b = 0; rc == 0 && b < 3; b++) {
         char what[128];
         snprintf(what, sizeof what, "%s band %d", base, b);
-        btf_car_fit_opts car = o.car;
-        if (total > 0.0 && isfinite(total))
-            car.coefficient_bits = band_price(car.coefficient_bits, var[b] / total);
-        rc = btf__fit_band_levels(bands[b], img->width, img->height, levels, &car, what,
+        rc = btf__fit_band_levels(bands[b], img->width, img->height, levels, &o.car, what,
                                   out->bands[b], err);
     }
     for (int b = 0; b < 3; b++)

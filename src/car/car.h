@@ -11,8 +11,6 @@
 /* The CAR fit of one sub-band (car/car_fit.c) and its parts; the public
  * entry is btf_texture_fit (btfcar/analyse.h). */
 #define BTF_CAR_MAX_CANDIDATES 16
-/* The largest price of a coefficient (btf_car_fit_opts.coefficient_bits). */
-#define BTF_CAR_MAX_COEFFICIENT_BITS 1e6
 typedef struct btf_car_fit_info {
     int candidates;                       /* evaluated */
     int size[BTF_CAR_MAX_CANDIDATES];     /* their neighbour counts */

@@ -754,50 +754,6 @@ static void selection_finds_true_neighbourhood(void **state)
     free(f);
 }
 
-/* Beside a structure layer a coefficient's price is divided by 3 x its
- * band's share of the variance (docs/model.md, "Choosing the
- * neighbourhood"): three independent fields of the same 6-neighbour
- * structure at scales 1, 0.1 and 0.01 give band 0 (99 % of the variance)
- * its neighbourhood and band 2 (0.01 %) the smallest, where at equal odds
- * band 2 finds the structure as well. */
-static void band_price_follows_variance_share(void **state)
-{
-    (void)state;
-    const float g[6] = {0.4f, 0.3f, -0.1f, 0.1f, -0.2f, 0.15f};
-    btf_car_band truth = model("0:-1,-1:0,-1:-1,-1:1,0:-2,-2:0", g, 1.0f, 0.0f);
-    int w = 128, h = 128, n = w * h;
-    double *f[3];
-    for (int c = 0; c < 3; c++)
-        f[c] = field(&truth, w, h, 77 + (uint64_t)c);
-    btf_image img;
-    btf_error e = {0};
-    TU_OK(btf_image_alloc(&img, w, h, 3, &e), &e);
-    const double scale[3] = {1.0, 0.1, 0.01}, level[3] = {4.0, 2.0, 1.0};
-    for (int i = 0; i < n; i++)
-        for (int c = 0; c < 3; c++)
-            img.data[3 * i + c] = (float)(level[c] + scale[c] * f[c][i]);
-    int chosen[2][3];
-    for (int priced = 0; priced < 2; priced++) {
-        btf_fit_opts o = btf_fit_defaults();
-        o.levels = 1;
-        o.car.coefficient_bits = priced ? 32.0 : 0.0;
-        btf_subspace_model m;
-        TU_OK(btf__fit_subspace(&img, &o, &m, &e), &e);
-        for (int b = 0; b < 3; b++) {
-            chosen[priced][b] = m.bands[b][0].n;
-            assert_true(isfinite(m.bands[b][0].sigma));
-        }
-        print_message("%s: band neighbourhoods %d %d %d\n", priced ? "priced" : "equal odds",
-                      chosen[priced][0], chosen[priced][1], chosen[priced][2]);
-    }
-    assert_true(chosen[0][2] >= 4); /* equal odds: the structure is there */
-    assert_true(chosen[1][0] >= 6); /* 11 bits a coefficient: band 0 keeps it */
-    assert_true(chosen[1][2] <= 2); /* 100,000 bits: band 2 the smallest */
-    for (int c = 0; c < 3; c++)
-        free(f[c]);
-    btf_image_free(&img);
-}
-
 static int warnings;
 static void count_warning(void *user, const char *msg)
 {
@@ -1101,7 +1057,6 @@ int main(void)
         cmocka_unit_test(fitted_and_read_models_carry_margins),
         cmocka_unit_test(margins_bounded_on_read),
         cmocka_unit_test(selection_finds_true_neighbourhood),
-        cmocka_unit_test(band_price_follows_variance_share),
         cmocka_unit_test(degenerate_bands),
         cmocka_unit_test(stability_check),
         cmocka_unit_test(synthesis_sizes_and_seeds),

@@ -83,9 +83,7 @@ static void demo_model_file_is_unchanged(void **state)
     (void)state;
     uint64_t h = hash_file(model_path);
     print_message("model file: 0x%016llx\n", (unsigned long long)h);
-    /* beside the structure layer 1 pyramid level and the coefficients'
-     * price by band share (docs/model.md, "Choosing the neighbourhood");
-     * 0x55882430cf58549b before. Format 1.5 with the structure layer's third round (the split gain of
+    /* format 1.5 with the structure layer's third round (the split gain of
      * --subspaces auto; beside the structure layer 2 levels chosen for the
      * rendered product and the coefficients' prior); 0xe8be646f4de2918a
      * without the masked levels, 0x4049c37a683658e7 before the round. Format
@@ -99,7 +97,7 @@ static void demo_model_file_is_unchanged(void **state)
      * family with complement levels and the measured --levels auto),
      * 0x466160cca9c7fc78 in format 1.1 (the periodic range tile
      * and its RANG flags byte) and 0x5941461f4c59f500 in format 1.0 */
-    assert_true(h == 0x2cc3d336a46e8f36ull);
+    assert_true(h == 0x55882430cf58549bull);
 }
 
 /* Expected pixel hashes of subspace_00 .. subspace_05. */
@@ -128,12 +126,10 @@ static void cpu_synthesis_is_unchanged(void **state)
     /* the synthesis itself, before colour matching (matched_synthesis_is_
      * unchanged below); changed deliberately: the marginal transfer on a uniform
      * grid (14 segments plus the model's end segments) and the closed-form
-     * gamut step; then the model's 1 level and band-share prices (was
-     * 0x97da75461c0363b6, 0x94dfe388e0f84c42, 0x399300d66646c078,
-     * 0x54bb963a786f6741, 0x477f102e16971b7b, 0x4eb26c68efea6afa) */
+     * gamut step */
     static const uint64_t expect[6] = {
-        0x330ea8a7b3ec9e30ull, 0x8fd9d5f61f91da10ull, 0xb3682ce31ad97463ull,
-        0x0e3e79a2333e1c0bull, 0x7f41cef26da9d0c5ull, 0x3c9bb7970fbf921aull,
+        0x97da75461c0363b6ull, 0x94dfe388e0f84c42ull, 0x399300d66646c078ull,
+        0x54bb963a786f6741ull, 0x477f102e16971b7bull, 0x4eb26c68efea6afaull,
     };
     check_images(dir, expect, 6, 256, 256);
 }
@@ -192,13 +188,10 @@ static void gpu_synthesis_is_unchanged(void **state)
      * that 130 leaves beyond the 128-row sample get one block of 2 + 2 x 8
      * rows, where a 48-row block wrapped 38 rows deep into the sample's place
      * (was 0x9058c29fa377ee59, 0xd17893b8fc228963, 0x69c12d80f2ad2f72,
-     * 0x2dbc5422d1b16d4f, 0xaf1ea5ef3308537a, 0xcab24d57c20e6bf1); then the
-     * model's 1 level and band-share prices (was 0x6933e7154c058efe,
-     * 0xc51413573731f784, 0x06b7d8d8df5537cc, 0xdb5f5f6a78eab858,
-     * 0x50cbff5bcacd280b, 0xef6464b5635dd227) */
+     * 0x2dbc5422d1b16d4f, 0xaf1ea5ef3308537a, 0xcab24d57c20e6bf1) */
     static const uint64_t expect[6] = {
-        0x5994d35d8a3a2f1aull, 0xe65b4afed0a90152ull, 0xb433bd7f00f02ddfull,
-        0xda73e79d6c7db17cull, 0x15152424002007acull, 0x7b7469ce5878cec3ull,
+        0x6933e7154c058efeull, 0xc51413573731f784ull, 0x06b7d8d8df5537ccull,
+        0xdb5f5f6a78eab858ull, 0x50cbff5bcacd280bull, 0xef6464b5635dd227ull,
     };
     check_images(dir, expect, 6, 200, 130);
 }
@@ -225,11 +218,10 @@ static void tileable_synthesis_is_unchanged(void **state)
 {
     (void)state;
     /* changed deliberately (the uniform-grid marginal transfer and the
-     * closed-form gamut step; then the model's 1 level and band-share
-     * prices), as above */
+     * closed-form gamut step), as above */
     static const uint64_t expect[6] = {
-        0x6bef0639f5015c7dull, 0x0009723d702b2f57ull, 0xe1f4c8aa80bcde29ull,
-        0x1240b0a38f839e74ull, 0x5328345afb346842ull, 0xfcf38847ca6f5c49ull,
+        0x47b4ddcd9152dc46ull, 0xa2b2aebd51cfad04ull, 0xacc028ca77098dd4ull,
+        0xa2b3471acfb4b5c9ull, 0x8b7180eb755040e5ull, 0xbd2ca24a944f2129ull,
     };
     both_backends_give("tile", "--seed 5 --tileable --no-match-colours", expect, 128, 96);
 }
@@ -240,10 +232,9 @@ static void tileable_synthesis_is_unchanged(void **state)
 static void matched_synthesis_is_unchanged(void **state)
 {
     (void)state;
-    /* changed with the model (1 level, band-share prices) */
     static const uint64_t expect[6] = {
-        0xa2bf11c13abe0fddull, 0xd6f7ba7ede31dfc9ull, 0xb08557eb042c36f4ull,
-        0x209f24427367dd4full, 0xb6db57bf8a0f6b0aull, 0x4bab8d9ce1b0d03dull,
+        0x69d09eb41bbcc4c7ull, 0x68cd61673fba1fbbull, 0xe7d365c815ceddf6ull,
+        0x981b538cca4ba773ull, 0xc88253073759319dull, 0x35d94ee5cdb1fd36ull,
     };
     both_backends_give("match", "--seed 9", expect, 160, 120);
 }

@@ -448,7 +448,14 @@ static unsigned char *tw_wrap(const unsigned char *payload, size_t n, unsigned m
     return f;
 }
 
-/* The payload of a file (inflated if need be), for editing. */
+/* The payload of a file of size bytes (inflated if need be), for editing:
+ * the container's 26-byte head and CRC lie around it. */
+static unsigned char *payload_of_file(const unsigned char *f, size_t size, size_t *n)
+{
+    assert_true(size >= 30);
+    return tu_model_payload(f, n);
+}
+
 static void free_model(btf_model *m)
 {
     btf_model_free(m);
@@ -614,8 +621,7 @@ static void layout_matches_document(void **state)
     assert_int_equal(b[11] | b[12] << 8, 1); /* major */
     assert_int_equal(b[13] | b[14] << 8, 0); /* minor */
     assert_int_equal(b[15] | b[16] << 8, 26);
-    assert_true(n >= 30); /* the container's head and CRC around the payload */
-    unsigned char *p = tu_model_payload(b, &pn);
+    unsigned char *p = payload_of_file(b, n, &pn);
     tbuf t = {0};
     tw_payload(&t, &m);
     assert_int_equal(t.n, pn);
@@ -704,8 +710,7 @@ static void versions(void **state)
     (void)state;
     size_t n, pn, fn;
     unsigned char *b = small_file(&n);
-    assert_true(n >= 30); /* the container's head and CRC around the payload */
-    unsigned char *p = tu_model_payload(b, &pn);
+    unsigned char *p = payload_of_file(b, n, &pn);
     /* A future major version: rejected with a clear message, even though
      * the CRC is right. */
     unsigned char *f = tw_wrap(p, pn, 2, 0, 0, &fn);
@@ -753,8 +758,7 @@ static void container_rules(void **state)
     (void)state;
     size_t n, pn, fn;
     unsigned char *b = small_file(&n);
-    assert_true(n >= 30); /* the container's head and CRC around the payload */
-    unsigned char *p = tu_model_payload(b, &pn);
+    unsigned char *p = payload_of_file(b, n, &pn);
     unsigned char *f = tw_wrap(p, pn, 1, 0, 0, &fn);
     /* Unknown compression method. */
     f[17] = 7;
@@ -1254,8 +1258,7 @@ static void range_layout_1_1(void **state)
     size_t n, pn;
     unsigned char *b = encode_ok(&m, &n);
     assert_int_equal(b[13] | b[14] << 8, 1);
-    assert_true(n >= 30); /* the container's head and CRC around the payload */
-    unsigned char *p = tu_model_payload(b, &pn);
+    unsigned char *p = payload_of_file(b, n, &pn);
     size_t pos = 0, found = 0;
     while (pos + 8 <= pn) {
         size_t len = p[pos + 4] | p[pos + 5] << 8 | p[pos + 6] << 16 | (size_t)p[pos + 7] << 24;
@@ -1356,8 +1359,7 @@ static void realistic_size(void **state)
     size_t n;
     unsigned char *b = encode_ok(&m, &n);
     size_t pn;
-    assert_true(n >= 30); /* the container's head and CRC around the payload */
-    unsigned char *p = tu_model_payload(b, &pn);
+    unsigned char *p = payload_of_file(b, n, &pn);
     /* The part of the range map alone, for the record. */
     btf_model nr = m;
     nr.range = NULL;

@@ -166,12 +166,9 @@ static void file_round_trip(void **state)
     /* an unknown flag bit in STRC, and a colour layer cut short */
     size_t pn;
     unsigned char *p = tu_model_payload(f, &pn);
-    unsigned char *strc = NULL;
-    for (size_t i = 0; i + 4 <= pn && !strc; i++)
-        if (!memcmp(p + i, "STRC", 4))
-            strc = p + i;
-    assert_non_null(strc);
-    unsigned char *flags = strc + 8 + 8 + n; /* tag, length, w h ambient, the codes */
+    size_t strc = tu_rf_section(p, pn, "STRC"); /* after its tag and length */
+    assert_true(strc > 0);
+    unsigned char *flags = p + strc + 8 + n; /* w h ambient, the codes */
     assert_int_equal(*flags, 3);
     *flags = 0x83;
     size_t bad_n;

@@ -160,6 +160,12 @@ btf_status btf__structure_apply(const btf_model *m, int subspace, uint64_t seed,
 btf_status btf__structure_layers(const btf_model *m, int width, int height, uint64_t seed,
                                  float *heights, float *albedo, int with_cells, btf_error *err);
 int btf__structure_base_channels(const btf_model *m);
+/* The heights of the pw x ph torus placed by the quilting map (from
+ * btf__structure_coords) into out, the quilting's joins relaxed in the
+ * gradient domain (model/structure_seams.c); the identity map gives the
+ * range map itself. */
+btf_status btf__structure_heights(const btf_model *m, const uint16_t *map, int pw, int ph,
+                                  float *out, btf_error *err);
 /* btf_structure_maps, whose albedo with with_cells is the base pattern
  * (btf__structure_base_channels; src/range/range_map.c). */
 btf_status btf__structure_maps(const btf_model *m, int width, int height, uint64_t seed,

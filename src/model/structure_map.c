@@ -205,12 +205,18 @@ btf_status btf__structure_layers(const btf_model *m, int width, int height, uint
     btf_status rc = btf__structure_coords(m, pw, ph, seed, &map, err);
     if (rc)
         return rc;
+    /* the period's heights with the quilting's joins relaxed */
+    float *period = heights ? btf__alloc((size_t)pw * ph, sizeof(float), err) : NULL;
+    if (heights && (!period || (rc = btf__structure_heights(m, map, pw, ph, period, err)))) {
+        BTF_FREE_ALL(map, period);
+        return period ? rc : BTF_E_NOMEM;
+    }
     for (int y = 0; y < height; y++)
         for (int x = 0; x < width; x++) {
             size_t i = (size_t)(y % ph) * pw + (size_t)(x % pw), o = (size_t)y * width + x;
             size_t src = (size_t)map[2 * i + 1] * m->range_width + map[2 * i];
             if (heights)
-                heights[o] = m->range[src];
+                heights[o] = period[i];
             if (albedo && cells) { /* RGB, then the cell index (exact in a float) */
                 for (int c = 0; c < 3; c++)
                     albedo[4 * o + c] = ch == 3 ? m->albedo[src] * m->chroma[3 * src + c]
@@ -222,7 +228,7 @@ btf_status btf__structure_layers(const btf_model *m, int width, int height, uint
             else if (albedo)
                 albedo[o] = m->albedo ? m->albedo[src] : 1.0f;
         }
-    free(map);
+    BTF_FREE_ALL(map, period);
     return BTF_OK;
 }
 

@@ -197,7 +197,7 @@ typedef struct btf_sweep_point {
 } btf_sweep_point;
 
 #define BTF_SWEEP_MAX_VALUES 8
-#define BTF_SWEEP_MAX_SEEDS 16
+#define BTF_SWEEP_MAX_SEEDS 128
 typedef struct btf_sweep_opts {
     size_t struct_size; /* sizeof the struct (set by the defaults); 0: this header's */
     int n_subspaces, subspaces[BTF_SWEEP_MAX_VALUES];  /* values of K (0: auto);
@@ -214,7 +214,7 @@ typedef struct btf_sweep_opts {
     int seeds;                 /* each point's quality measured with synthesis seeds
                                   quality.seed .. + seeds - 1 and averaged (one seed's
                                   figure moves by about 1 %: more than many of the
-                                  grid's steps); 0: 3; 1..16 */
+                                  grid's steps); 0: 3; 1..128 */
     int synth_size;            /* 0: 512 */
     int render_size;           /* 0: 256 */
     btf_gpu *gpu;              /* NULL: no GPU times */

@@ -852,6 +852,64 @@ static void synthesise(void **state)
     free(c.want);
 }
 
+/* ------------------------------------------------------- structure maps */
+
+/* The quilted structure layer of the cells-1.7 model (the range map at the
+ * analysed resolution, its albedo and colour), placed on a surface twice
+ * its size: the quilting, the joins' relaxation (model/structure_seams.c)
+ * and the normals under every failing allocation. */
+typedef struct maps_ctx {
+    btf_model m;
+    btf_image h, n, a;
+    btf_image want_h, want_a;
+} maps_ctx;
+
+static int run_maps(void *p, btf_error *err)
+{
+    maps_ctx *c = p;
+    return btf_structure_maps(&c->m, 2 * c->m.range_width, 2 * c->m.range_height, 3, &c->h,
+                              &c->n, &c->a, err);
+}
+
+static int maps_same(void *p)
+{
+    maps_ctx *c = p;
+    size_t n = (size_t)c->h.width * c->h.height;
+    return memcmp(c->h.data, c->want_h.data, n * sizeof(float)) == 0 &&
+           memcmp(c->a.data, c->want_a.data, n * c->a.channels * sizeof(float)) == 0;
+}
+
+static void maps_done(void *p)
+{
+    maps_ctx *c = p;
+    btf_image_free(&c->h);
+    btf_image_free(&c->n);
+    btf_image_free(&c->a);
+}
+
+static void structure_maps(void **state)
+{
+    (void)state;
+    size_t size = 0;
+    unsigned char *bytes = tu_slurp("tests/fuzz/corpus/fuzz_model/cells-1.7.btfcar", &size);
+    assert_non_null(bytes);
+    maps_ctx c;
+    memset(&c, 0, sizeof c);
+    btf_error e = {0};
+    TU_OK(btf_model_decode(bytes, size, "cells-1.7.btfcar", &c.m, &e), &e);
+    free(bytes);
+    assert_true(c.m.range && c.m.range_texel == 1.0f && c.m.albedo);
+    btf_image nm;
+    TU_OK(btf_structure_maps(&c.m, 2 * c.m.range_width, 2 * c.m.range_height, 3, &c.want_h,
+                             &nm, &c.want_a, &e), &e);
+    btf_image_free(&nm);
+    entry en = {"btf_structure_maps", run_maps, maps_same, maps_done, &c, ~0ul, 1};
+    fault_loop(&en);
+    btf_image_free(&c.want_h);
+    btf_image_free(&c.want_a);
+    btf_model_free(&c.m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -859,7 +917,7 @@ int main(void)
         cmocka_unit_test(model_encode),
         cmocka_unit_test(model_write),  cmocka_unit_test(texture_fit),
         cmocka_unit_test(dataset_open), cmocka_unit_test(analyse),
-        cmocka_unit_test(synthesise),
+        cmocka_unit_test(synthesise),   cmocka_unit_test(structure_maps),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

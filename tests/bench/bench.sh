@@ -268,6 +268,16 @@ for mat in leather fabric wood; do
     done
 done
 
+echo "== the structure map placed on larger surfaces (synthesise --range): quilting, the joins' relaxation, normals"
+# docs/render.md, "The structure map (texel 1)": the 128^2 leather's range
+# map quilted to 512^2 and 2048^2, the whole command (EXR writing included).
+if [ -f "$TMP/sleather-1.7.btfcar" ]; then
+    for n in 512 2048; do
+        timed "   leather range map ${n}x${n}" sh -c "rm -rf $TMP/rng && $BTFCAR synthesise -q $TMP/sleather-1.7.btfcar --size ${n}x${n} --range --subspace none -o $TMP/rng" || continue
+        echo "structure map ${n}^2: $med s, peak RSS $rss MB"
+    done
+fi
+
 echo "== presets (btfcar analyse --preset): cost and quality on the 128^2 leather"
 for p in fast balanced accurate; do
     /usr/bin/time -f "%e" -o "$TMP/time" "$BTFCAR" analyse -q "$R" -o "$TMP/$p.btfcar" --preset $p ||

@@ -108,8 +108,9 @@ static void relax_texel(double *h, const float *right, const float *down, size_t
 
 /* Successive over-relaxation on the marked texels, red-black (the texels
  * with x + y even, then the odd ones: no update in a pass reads another's,
- * so the passes run at the memory's pace, not the additions' latency), a
- * fixed number of sweeps; the marked runs of each row listed once. */
+ * but across the wrap of an odd period, so the passes run at the memory's
+ * pace, not the additions' latency), a fixed number of sweeps in a fixed
+ * order (deterministic); the marked runs of each row listed once. */
 static btf_status relax(double *h, const float *right, const float *down, const uint8_t *mark,
                         int pw, int ph, btf_error *err)
 {

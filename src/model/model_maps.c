@@ -44,11 +44,8 @@ btf_status btf__model_put_range(btf_box_writer *w, const btf_model *m, const cha
                                 btf_error *err)
 {
     size_t n = (size_t)m->range_width * m->range_height;
-    float lo = m->range[0], hi = m->range[0];
-    for (size_t i = 1; i < n; i++) {
-        lo = m->range[i] < lo ? m->range[i] : lo;
-        hi = m->range[i] > hi ? m->range[i] : hi;
-    }
+    float lo, hi;
+    btf__range_extremes(m->range, n, &lo, &hi);
     int e;
     int32_t k;
     if (btf__range_grid_choose(lo, hi, &e, &k) != 0)

@@ -31,15 +31,21 @@ int btf__range_grid_choose(double lo, double hi, int *e, int32_t *k)
     return -1;
 }
 
+void btf__range_extremes(const float *h, size_t n, float *lo, float *hi)
+{
+    *lo = *hi = h[0];
+    for (size_t i = 1; i < n; i++) {
+        *lo = h[i] < *lo ? h[i] : *lo;
+        *hi = h[i] > *hi ? h[i] : *hi;
+    }
+}
+
 int btf__range_snap(float *h, size_t n)
 {
     if (n == 0)
         return 0;
-    float lo = h[0], hi = h[0];
-    for (size_t i = 1; i < n; i++) {
-        lo = h[i] < lo ? h[i] : lo;
-        hi = h[i] > hi ? h[i] : hi;
-    }
+    float lo, hi;
+    btf__range_extremes(h, n, &lo, &hi);
     int e;
     int32_t k;
     if (btf__range_grid_choose(lo, hi, &e, &k) != 0)

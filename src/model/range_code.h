@@ -25,6 +25,8 @@
 int btf__range_grid_choose(double lo, double hi, int *e, int32_t *k);
 /* The height of grid value q: (k + q + 1/2) 2^e as a float. */
 float btf__range_grid_value(int e, int32_t k, unsigned q);
+/* The lowest and highest of n >= 1 heights. */
+void btf__range_extremes(const float *h, size_t n, float *lo, float *hi);
 /* Moves n finite heights onto their canonical grid, as writing and reading
  * them would (a tile on its grid is a fixed point of the file); -1 when
  * their span fits no grid (they stay). */

@@ -24,6 +24,7 @@
  * size, the identity map, is the measured range map unchanged.
  */
 #include "model/model.h"
+#include "model/range_code.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -148,12 +149,7 @@ static btf_status relax(double *h, const float *right, const float *down, const 
 /* The range grid's extremes, and the unit the relaxation works in. */
 static void extremes(const btf_model *m, float *lo, float *hi, double *unit)
 {
-    size_t n = (size_t)m->range_width * m->range_height;
-    *lo = *hi = m->range[0];
-    for (size_t i = 1; i < n; i++) {
-        *lo = m->range[i] < *lo ? m->range[i] : *lo;
-        *hi = m->range[i] > *hi ? m->range[i] : *hi;
-    }
+    btf__range_extremes(m->range, (size_t)m->range_width * m->range_height, lo, hi);
     double big = fmax(fabs((double)*lo), fabs((double)*hi));
     *unit = big > 0.0 ? big : 1.0;
 }
